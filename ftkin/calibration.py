@@ -1,0 +1,135 @@
+"""Static calibration of a wrist F/T sensor: :func:`calibrate` and its result.
+
+From readings at several static poses, estimate the sensor bias (``F0``,
+``M0``), the tool's weight vector in the base frame (``a``, which carries the
+base tilt ``U``, ``V``) and the tool's centre of mass ``P`` in the sensor frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .exceptions import InvalidInput
+from .information import standard_errors
+from .linear import fit_linear
+from .model import STANDARD_GRAVITY, SensorModel
+from .samples import Samples
+from .validation import as_positive
+
+METHODS = ("linear",)
+"""Estimators :func:`calibrate` accepts."""
+
+
+@dataclass(frozen=True)
+class CalibrationResult(SensorModel):
+    """A calibrated sensor model plus how it was obtained and how well it fits.
+
+    Inherits the parameters of :class:`~ftkin.model.SensorModel`
+    (``force_offset`` [N], ``torque_offset`` [N·m], ``gravity_in_base`` [N],
+    ``center_of_mass`` [m, sensor frame], ``g`` [m/s²]) and the derived
+    ``tool_weight`` [N], ``tool_mass`` [kg], ``base_tilt`` (U, V) [rad].
+
+    Attributes:
+        method: Estimator used (``"linear"``, ...).
+        pose_ids: ``(P,)`` pose identifiers.
+        pose_wrenches: ``(P, 6)`` mean measured raw wrench per pose [N, N·m].
+        residuals: ``(P, 6)`` measured minus predicted per pose [N, N·m].
+        sample_count: Raw readings used (≥ number of poses).
+        urdf: URDF used for forward kinematics, if joint angles were given.
+        sensor_frame: Its sensor frame name.
+        covariance: ``(12, 12)`` covariance of ``θ = [a, F0, M0, P]`` when
+            the estimator provides one, else None.
+    """
+
+    method: str = "linear"
+    pose_ids: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    pose_wrenches: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    residuals: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    sample_count: int = 0
+    urdf: str | None = None
+    sensor_frame: str | None = None
+    covariance: np.ndarray | None = None
+
+    @property
+    def pose_count(self) -> int:
+        """Number of distinct static poses."""
+        return len(self.pose_ids)
+
+    @property
+    def model(self) -> SensorModel:
+        """The bare parameters, without provenance."""
+        return SensorModel(self.force_offset, self.torque_offset, self.gravity_in_base, self.center_of_mass, self.g)
+
+    @property
+    def residual_rms(self) -> np.ndarray:
+        """``(6,)`` RMS of the per-pose residuals per channel [N, N·m]."""
+        if len(self.residuals) == 0:
+            return np.full(6, np.nan)
+        return np.sqrt(np.mean(self.residuals**2, axis=0))
+
+    @property
+    def mean_relative_error(self) -> np.ndarray:
+        """``(6,)`` mean over poses of ``|residual| / |measured|`` per channel (the paper's Table 3) [-]."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.mean(np.abs(self.residuals) / np.abs(self.pose_wrenches), axis=0)
+
+    @property
+    def std_errors(self) -> dict | None:
+        """Standard errors per parameter (see :func:`ftkin.information.standard_errors`), or None."""
+        if self.covariance is None:
+            return None
+        return standard_errors(self, self.covariance)
+
+    def summary(self) -> str:
+        """Human-readable summary with units."""
+        from .summary import format_summary
+
+        return format_summary(self)
+
+
+_ESTIMATORS = {"linear": fit_linear}
+
+
+def calibrate(samples: Samples, *, method: str = "linear", g: float = STANDARD_GRAVITY) -> CalibrationResult:
+    """Estimate bias, tool gravity and base tilt from static-pose readings.
+
+    Args:
+        samples: Raw readings with sensor orientations (see :class:`Samples`);
+            readings sharing a pose id are averaged first.
+        method: ``"linear"``: the paper's two-step least squares.
+        g: Gravity used to report the tool mass [m/s²] (the paper used 9.8).
+
+    Returns:
+        A frozen :class:`CalibrationResult`.
+
+    Raises:
+        UnobservableParameters: the poses cannot determine the parameters
+            (fewer than three, orientations alike, gravity along one sensor
+            direction); the error names them.
+        InvalidInput: unknown method or bad ``g``.
+    """
+    if not isinstance(samples, Samples):
+        raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
+    if method not in _ESTIMATORS:
+        raise InvalidInput(f"unknown calibration method {method!r}; expected one of {', '.join(METHODS)}")
+    g = as_positive(g, "g")
+    poses = samples.pose_averages()
+    model = _ESTIMATORS[method](poses, g)
+    residuals = poses.wrenches - model.predict(poses.rotations)
+    return CalibrationResult(
+        force_offset=model.force_offset,
+        torque_offset=model.torque_offset,
+        gravity_in_base=model.gravity_in_base,
+        center_of_mass=model.center_of_mass,
+        g=g,
+        method=method,
+        pose_ids=poses.pose_ids,
+        pose_wrenches=poses.wrenches,
+        residuals=residuals,
+        sample_count=len(samples),
+        urdf=samples.urdf,
+        sensor_frame=samples.sensor_frame,
+    )
+

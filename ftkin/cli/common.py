@@ -1,0 +1,33 @@
+"""Arguments and helpers several subcommands share."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..arm import Arm
+
+
+def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--urdf``, ``--sensor-frame``, ``--tool-frame`` (default: the bundled arm)."""
+    group = parser.add_argument_group("robot model (for joint-angle columns)")
+    group.add_argument("--urdf", metavar="PATH", help="URDF of the arm (default: the bundled six-axis arm)")
+    group.add_argument("--sensor-frame", default="ft_sensor", metavar="NAME", help="sensor frame name (default: ft_sensor)")
+    group.add_argument("--tool-frame", default=None, metavar="NAME", help="tool / control-point frame name")
+
+
+def arm_from_args(args: argparse.Namespace) -> Arm | None:
+    """The arm the arguments name, or None when no URDF was given (bundled arm used on demand)."""
+    if getattr(args, "urdf", None):
+        return Arm.from_urdf(args.urdf, args.sensor_frame, args.tool_frame)
+    return None
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite positive number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite positive number, got {text!r}")
+    return value

@@ -1,0 +1,43 @@
+"""``ftkin compensate CALIB.json LOG.csv -o OUT.csv``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..calibration_file import load_calibration
+from ..compensation import Compensator
+from ..csv_io import load_samples, write_csv
+from ..model import WRENCH_CHANNELS
+from .common import add_arm_arguments, arm_from_args
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "compensate",
+        help="remove bias and tool gravity from a log of raw readings",
+        description="Write the contact wrench (fx..mz, sensor frame, N and N·m) of every row of LOG.csv, "
+        "keeping its other columns. LOG.csv has the same columns as a calibration samples file.",
+    )
+    parser.add_argument("calibration", metavar="CALIB.json")
+    parser.add_argument("log", metavar="LOG.csv")
+    parser.add_argument("-o", "--output", metavar="OUT.csv", required=True)
+    add_arm_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    calibration = load_calibration(args.calibration)
+    loaded = load_samples(args.log, arm_from_args(args))
+    contact = Compensator(calibration).compensate_samples(loaded.samples)
+    table = loaded.table
+    wrench_columns = [table.column_index(name) for name in WRENCH_CHANNELS]
+    rows = []
+    for row, wrench in zip(table.rows, contact):
+        out = list(row)
+        for column, value in zip(wrench_columns, wrench):
+            out[column] = float(value)
+        rows.append(out)
+    write_csv(args.output, table.header, rows)
+    weights = Compensator.payload_weight(contact)
+    print(f"wrote {len(rows)} compensated rows to {args.output} (median contact force |F'| {np.median(weights):.4f} N)")
+    return 0

@@ -1,0 +1,245 @@
+"""Sample tables in CSV: read with line-accurate errors, write atomically.
+
+A samples CSV has a header row (lines starting with ``#`` are comments), the
+raw wrench columns ``fx,fy,fz,mx,my,mz`` [N, N·m], and the sensor orientation
+in exactly one convention:
+
+* joint columns: the URDF's joint names, or ``q1..qn`` in joint order [rad];
+* ``alpha,beta,gamma``: the paper's commanded Euler angles [deg],
+  ``R_BS = Rz(α) Ry(β) Rx(γ)``;
+* ``qw,qx,qy,qz``: unit quaternion of the sensor frame in the base frame.
+
+An optional integer ``pose`` column groups repeated readings of one pose.
+Other columns are carried along untouched (``ftkin compensate`` copies them).
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import io
+import logging
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .atomic import atomic_write_text
+from .exceptions import InvalidSamples
+from .model import WRENCH_CHANNELS
+from .samples import Samples
+
+logger = logging.getLogger(__name__)
+
+EULER_COLUMNS = ("alpha", "beta", "gamma")
+QUATERNION_COLUMNS = ("qw", "qx", "qy", "qz")
+POSE_COLUMN = "pose"
+_GENERIC_JOINT = re.compile(r"^q(\d+)$")
+_DEGREES_THRESHOLD = 2.0 * np.pi + 0.01
+
+
+@dataclass(frozen=True)
+class Table:
+    """A parsed CSV: header, string cells and the file line of each row."""
+
+    source: str
+    header: list[str]
+    rows: list[list[str]]
+    lines: list[int]
+
+    def column_index(self, name: str) -> int:
+        return self.header.index(name)
+
+    def floats(self, names) -> np.ndarray:
+        """The named columns as an ``(N, k)`` float array (finite), or :class:`InvalidSamples`."""
+        indices = [self.column_index(name) for name in names]
+        out = np.empty((len(self.rows), len(indices)))
+        for r, (row, line) in enumerate(zip(self.rows, self.lines)):
+            for c, (index, name) in enumerate(zip(indices, names)):
+                cell = row[index].strip()
+                try:
+                    value = float(cell)
+                except ValueError:
+                    raise InvalidSamples(f"column {name!r}: {cell!r} is not a number", self.source, line) from None
+                if not np.isfinite(value):
+                    raise InvalidSamples(f"column {name!r}: {cell!r} is not finite; expected a finite number", self.source, line)
+                out[r, c] = value
+        return out
+
+
+def read_table(path) -> Table:
+    """Read a CSV with a header row; ``#`` lines are comments.
+
+    Raises:
+        InvalidSamples: missing or empty file, no data rows, duplicated
+            columns, or a row with the wrong number of cells.
+    """
+    path = Path(path)
+    source = str(path)
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise InvalidSamples("file not found", source) from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise InvalidSamples(f"cannot read: {error}", source) from None
+    header, rows, lines = None, [], []
+    for number, record in enumerate(csv.reader(io.StringIO(text)), start=1):
+        if not record or not "".join(record).strip() or record[0].lstrip().startswith("#"):
+            continue
+        if header is None:
+            header = [cell.strip() for cell in record]
+            duplicates = sorted({name for name in header if header.count(name) > 1})
+            if duplicates:
+                raise InvalidSamples(f"duplicated column(s) {duplicates} in the header", source, number)
+            continue
+        if len(record) != len(header):
+            raise InvalidSamples(f"{len(record)} cells but the header has {len(header)} columns", source, number)
+        rows.append(record)
+        lines.append(number)
+    if header is None:
+        raise InvalidSamples("file is empty; expected a header row and data rows", source)
+    if not rows:
+        raise InvalidSamples("no data rows after the header", source)
+    return Table(source, header, rows, lines)
+
+
+def _missing(table: Table, wanted, what: str) -> None:
+    missing = [name for name in wanted if name not in table.header]
+    if missing:
+        hints = []
+        for name in missing:
+            close = difflib.get_close_matches(name, table.header, n=1)
+            if close:
+                hints.append(f"{close[0]!r} for {name!r}?")
+        hint = (" (did you mean " + ", ".join(hints) + ")") if hints else ""
+        raise InvalidSamples(
+            f"missing {what} column(s) {missing}{hint}; the header has {table.header}", table.source, table.lines[0] - 1
+        )
+
+
+def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
+    """Which orientation convention the table uses: ``("joints"|"euler"|"quaternion", columns)``.
+
+    Raises:
+        InvalidSamples: none found, several mixed, or an incomplete set.
+    """
+    header = table.header
+    found = {}
+    euler = [name for name in EULER_COLUMNS if name in header]
+    if euler:
+        found["euler"] = euler
+    quaternion = [name for name in QUATERNION_COLUMNS if name in header]
+    if quaternion:
+        found["quaternion"] = quaternion
+    generic = sorted((name for name in header if _GENERIC_JOINT.match(name)), key=lambda n: int(n[1:]))
+    named = [name for name in (joint_names or []) if name in header]
+    if named and generic:
+        raise InvalidSamples(
+            f"both URDF joint-name columns {named} and generic columns {generic}; use one", table.source
+        )
+    if named or generic:
+        found["joints"] = named or generic
+    if len(found) > 1:
+        raise InvalidSamples(
+            "mixed orientation conventions: "
+            + "; ".join(f"{kind} columns {columns}" for kind, columns in found.items())
+            + "; give exactly one of joint angles, alpha/beta/gamma or qw/qx/qy/qz",
+            table.source,
+        )
+    if not found:
+        _missing(table, list(EULER_COLUMNS), "orientation (or joint or quaternion)")
+    kind, columns = next(iter(found.items()))
+    if kind == "euler":
+        _missing(table, EULER_COLUMNS, "Euler angle")
+        return kind, list(EULER_COLUMNS)
+    if kind == "quaternion":
+        _missing(table, QUATERNION_COLUMNS, "quaternion")
+        return kind, list(QUATERNION_COLUMNS)
+    if named:
+        _missing(table, joint_names, "joint")
+        return kind, list(joint_names)
+    if joint_names is not None:
+        expected = [f"q{i + 1}" for i in range(len(joint_names))]
+        if generic != expected:
+            raise InvalidSamples(
+                f"joint columns {generic} do not match the arm's {len(joint_names)} joints; "
+                f"expected {expected} or the URDF names {list(joint_names)}",
+                table.source,
+            )
+    return kind, generic
+
+
+def check_radians(table: Table, columns, values: np.ndarray) -> None:
+    """Refuse joint angles that can only be degrees (|q| > 2π)."""
+    bad = np.argwhere(np.abs(values) > _DEGREES_THRESHOLD)
+    if bad.size:
+        row, column = bad[0]
+        raise InvalidSamples(
+            f"joint column {columns[column]!r} holds {values[row, column]:g}, outside ±2π: joint angles "
+            "must be in radians (these look like degrees)",
+            table.source,
+            table.lines[row],
+        )
+
+
+@dataclass(frozen=True)
+class LoadedSamples:
+    """Samples read from a CSV, with the table they came from."""
+
+    samples: Samples
+    table: Table
+    orientation: str
+    orientation_columns: list[str]
+
+
+def samples_from_table(table: Table, arm=None) -> LoadedSamples:
+    """Build :class:`Samples` from a table; ``arm`` is needed for joint columns.
+
+    When the table has joint columns and ``arm`` is None, the bundled arm is used.
+    """
+    _missing(table, WRENCH_CHANNELS, "wrench")
+    if arm is None and not any(name in table.header for name in EULER_COLUMNS + QUATERNION_COLUMNS):
+        from .arm import Arm
+
+        arm = Arm.default()
+    kind, columns = detect_orientation(table, arm.joint_names if arm is not None else None)
+    wrenches = table.floats(WRENCH_CHANNELS)
+    pose_ids = table.floats([POSE_COLUMN])[:, 0] if POSE_COLUMN in table.header else None
+    if pose_ids is not None and np.any(pose_ids != np.round(pose_ids)):
+        row = int(np.flatnonzero(pose_ids != np.round(pose_ids))[0])
+        raise InvalidSamples(f"pose id {pose_ids[row]!r} is not an integer", table.source, table.lines[row])
+    values = table.floats(columns)
+    try:
+        if kind == "euler":
+            samples = Samples.from_euler_zyx_deg(values, wrenches, pose_ids)
+        elif kind == "quaternion":
+            samples = Samples.from_quaternions(values, wrenches, pose_ids)
+        else:
+            check_radians(table, columns, values)
+            samples = Samples.from_joint_positions(arm, values, wrenches, pose_ids)
+    except InvalidSamples:
+        raise
+    except ValueError as error:  # InvalidInput from the converters
+        raise InvalidSamples(str(error), table.source) from None
+    return LoadedSamples(samples, table, kind, columns)
+
+
+def load_samples(path, arm=None) -> LoadedSamples:
+    """Read a samples CSV (see the module docstring for its columns)."""
+    return samples_from_table(read_table(path), arm)
+
+
+def format_float(value: float) -> str:
+    """Shortest text that reads back as the same float."""
+    return repr(float(value))
+
+
+def write_csv(path, header, rows) -> Path:
+    """Write rows (sequences of str or numbers) under a header, atomically."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(header)
+    for row in rows:
+        writer.writerow([format_float(cell) if isinstance(cell, (float, np.floating)) else cell for cell in row])
+    return atomic_write_text(path, buffer.getvalue())

@@ -1,0 +1,121 @@
+"""Exceptions raised by ftkin.
+
+Every error ftkin raises on purpose derives from :class:`FtkinError`, so a
+caller (a control loop, a CLI) can catch one type. Subclasses carry the data a
+program needs to react (the unknown name, the list of valid ones, ...), and
+their message says what was wrong and what was expected.
+
+Errors from numpy, Pinocchio or the file system are wrapped at ftkin's
+boundary; they should never reach a user as a bare traceback.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+
+class FtkinError(Exception):
+    """Base class of every error ftkin raises on purpose."""
+
+
+class InvalidInput(FtkinError, ValueError):
+    """An argument has the wrong shape, type, range, or is not finite."""
+
+
+class InvalidSamples(InvalidInput):
+    """A samples table (CSV or arrays) cannot be used.
+
+    Attributes:
+        source: File name or description of where the samples came from.
+        line: 1-based line number in the file when known, else None.
+    """
+
+    def __init__(self, message: str, source: str | None = None, line: int | None = None):
+        where = ""
+        if source is not None:
+            where = f"{source}"
+            if line is not None:
+                where += f", line {line}"
+            where += ": "
+        super().__init__(where + message)
+        self.source = source
+        self.line = line
+
+
+class FrameNotFound(FtkinError, KeyError):
+    """A frame name is not in the robot model.
+
+    Attributes:
+        name: The name that was asked for.
+        available: Names of the frames the model has.
+    """
+
+    def __init__(self, name: str, available: Sequence[str]):
+        self.name = name
+        self.available = list(available)
+        super().__init__(name)
+
+    def __str__(self) -> str:
+        return f"frame {self.name!r} not found in the model; available frames: " + ", ".join(
+            self.available
+        )
+
+
+class UrdfError(FtkinError):
+    """A URDF cannot be loaded; the message gives the real reason.
+
+    Attributes:
+        path: Path (or description) of the URDF.
+        reasons: Individual problems found (XML errors, invalid fields,
+            missing mesh files, Pinocchio's own message).
+    """
+
+    def __init__(self, path: str, reasons: Sequence[str]):
+        self.path = path
+        self.reasons = list(reasons)
+        super().__init__(f"cannot load URDF {path}: " + "; ".join(self.reasons))
+
+
+class UnobservableParameters(FtkinError):
+    """The poses cannot determine some calibration parameters.
+
+    Attributes:
+        names: Parameters (or parameter groups) that are not determined.
+        singular_values: Singular values of the (normalized) regressor or
+            information matrix, largest first, when available.
+    """
+
+    def __init__(self, names: Sequence[str], reason: str, singular_values=None):
+        self.names = list(names)
+        self.reason = reason
+        self.singular_values = singular_values
+        super().__init__(
+            "the poses cannot determine " + ", ".join(self.names) + f": {reason}"
+        )
+
+
+class CalibrationFileError(FtkinError):
+    """A calibration file cannot be read: wrong format, version, or content.
+
+    Attributes:
+        path: The file.
+        key: The offending key when one is to blame, else None.
+    """
+
+    def __init__(self, path: str, message: str, key: str | None = None):
+        self.path = path
+        self.key = key
+        where = f"{path}" + (f", key {key!r}" if key is not None else "")
+        super().__init__(f"{where}: {message}")
+
+
+class MissingDependency(FtkinError, ImportError):
+    """An optional dependency is not installed; the message says which extra."""
+
+    def __init__(self, package: str, extra: str, purpose: str):
+        self.package = package
+        self.extra = extra
+        super().__init__(
+            f"{purpose} needs the optional package {package!r}; "
+            f"install it with: pip install 'ftkin[{extra}]'"
+        )

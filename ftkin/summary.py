@@ -1,0 +1,50 @@
+"""Readable text summaries of a calibration (what the CLI prints)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .model import WRENCH_CHANNELS
+
+
+def _vector(values, decimals: int, errors=None) -> str:
+    text = "[" + ", ".join(f"{value:+.{decimals}f}" for value in values) + "]"
+    if errors is not None:
+        text += " ± [" + ", ".join(f"{value:.{decimals}f}" for value in errors) + "]"
+    return text
+
+
+def _scalar(value, decimals: int, error=None) -> str:
+    return f"{value:.{decimals}f}" + (f" ± {error:.{decimals}f}" if error is not None else "")
+
+
+def format_summary(result) -> str:
+    """Parameters with units (± standard error when known), fit quality and provenance."""
+    errors = result.std_errors or {}
+    tilt_u, tilt_v = result.base_tilt_deg
+    tilt_errors = np.rad2deg(errors["base_tilt"]) if "base_tilt" in errors else (None, None)
+    lines = [
+        f"ftkin calibration: method {result.method}, {result.pose_count} poses, {result.sample_count} readings",
+        f"  force_offset    F0 = {_vector(result.force_offset, 4, errors.get('force_offset'))} N (sensor frame)",
+        f"  torque_offset   M0 = {_vector(result.torque_offset, 4, errors.get('torque_offset'))} N·m (sensor frame)",
+        f"  center_of_mass  P  = {_vector(result.center_of_mass, 4, errors.get('center_of_mass'))} m (sensor frame)",
+        f"  gravity_in_base a  = {_vector(result.gravity_in_base, 4, errors.get('gravity_in_base'))} N (base frame)",
+        f"  tool_weight     G  = {_scalar(result.tool_weight, 3, errors.get('tool_weight'))} N",
+        f"  tool_mass       m  = {_scalar(result.tool_mass, 4, errors.get('tool_mass'))} kg (g = {result.g:g} m/s²)",
+        f"  base_tilt       U  = {_scalar(tilt_u, 3, tilt_errors[0])}°, V = {_scalar(tilt_v, 3, tilt_errors[1])}°",
+    ]
+    if result.pose_count:
+        rms = result.residual_rms
+        lines.append(
+            "  residual RMS per pose: "
+            + ", ".join(f"{name} {value:.4f}" for name, value in zip(WRENCH_CHANNELS, rms))
+            + " (N, N·m)"
+        )
+        relative = 100.0 * result.mean_relative_error
+        lines.append(
+            "  mean relative compensation error: "
+            + ", ".join(f"{name} {value:.2f}%" for name, value in zip(WRENCH_CHANNELS, relative))
+        )
+    if result.urdf:
+        lines.append(f"  kinematics: {result.urdf} (sensor frame {result.sensor_frame})")
+    return "\n".join(lines)
