@@ -5,20 +5,27 @@ from __future__ import annotations
 import argparse
 
 from ..arm import Arm
+from ..exceptions import InvalidInput
+from ..robots import DEFAULT_ROBOT, load_robot
 
 
 def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
     """``--urdf``, ``--sensor-frame``, ``--tool-frame`` (default: the bundled arm)."""
     group = parser.add_argument_group("robot model (for joint-angle columns)")
+    group.add_argument("--robot", metavar="NAME", help=f"robot by name (default: {DEFAULT_ROBOT}, the bundled arm)")
     group.add_argument("--urdf", metavar="PATH", help="URDF of the arm (default: the bundled six-axis arm)")
     group.add_argument("--sensor-frame", default="ft_sensor", metavar="NAME", help="sensor frame name (default: ft_sensor)")
     group.add_argument("--tool-frame", default=None, metavar="NAME", help="tool / control-point frame name")
 
 
 def arm_from_args(args: argparse.Namespace) -> Arm | None:
-    """The arm the arguments name, or None when no URDF was given (bundled arm used on demand)."""
+    """The arm the arguments name, or None when none was named (bundled arm used on demand)."""
+    if getattr(args, "urdf", None) and getattr(args, "robot", None):
+        raise InvalidInput("give either --urdf or --robot, not both")
     if getattr(args, "urdf", None):
         return Arm.from_urdf(args.urdf, args.sensor_frame, args.tool_frame)
+    if getattr(args, "robot", None):
+        return load_robot(args.robot)
     return None
 
 
