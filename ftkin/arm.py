@@ -115,7 +115,7 @@ class Arm:
         sensor_mount: SensorMount | None = None,
         package_dirs: Sequence[str] = (),
         locked_joints: Mapping[str, float] | None = None,
-    ) -> "Arm":
+    ) -> Arm:
         """Load any URDF.
 
         Args:
@@ -142,7 +142,7 @@ class Arm:
         return cls(model, sensor_frame, tool_frame, path.resolve(), package_dirs, full_model, locked_ids, reference)
 
     @classmethod
-    def default(cls, tool_frame: str | None = "tool") -> "Arm":
+    def default(cls, tool_frame: str | None = "tool") -> Arm:
         """The bundled six-axis arm, sensor frame ``ft_sensor``, tool frame ``tool``."""
         return cls.from_urdf(bundled_urdf_path(), "ft_sensor", tool_frame)
 

@@ -81,7 +81,7 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         },
         "covariance": result.covariance,
         "std_errors": result.std_errors,
-        "created": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "ftkin_version": __version__,
     }
     return _jsonable(document)

@@ -44,7 +44,7 @@ class SensorNoise:
         return np.concatenate([self.force_std, self.torque_std])
 
     @classmethod
-    def paper(cls) -> "SensorNoise":
+    def paper(cls) -> SensorNoise:
         """Noise of the paper's Leptrino sensor class: 0.02 N and 0.002 N·m per reading."""
         return cls(0.02, 0.002)
 

@@ -94,7 +94,7 @@ class SensorModel:
         torque_offset=(0.0, 0.0, 0.0),
         base_tilt=(0.0, 0.0),
         g: float = STANDARD_GRAVITY,
-    ) -> "SensorModel":
+    ) -> SensorModel:
         """Build from a tool mass [kg], COM [m, sensor frame], biases and base tilt (U, V) [rad]."""
         weight = as_positive(tool_mass, "tool_mass") * as_positive(g, "g")
         gravity = gravity_in_base_from_tilt(weight, float(base_tilt[0]), float(base_tilt[1]))
@@ -133,7 +133,7 @@ class SensorModel:
         )
 
     @classmethod
-    def from_vector(cls, theta, g: float = STANDARD_GRAVITY) -> "SensorModel":
+    def from_vector(cls, theta, g: float = STANDARD_GRAVITY) -> SensorModel:
         """Inverse of :meth:`to_vector`."""
         theta = as_vector(theta, 12, "theta")
         return cls(theta[3:6], theta[6:9], theta[0:3], theta[9:12], g)

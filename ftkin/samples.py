@@ -93,12 +93,12 @@ class Samples:
 
     # ---------------------------------------------------------- constructors
     @classmethod
-    def from_rotations(cls, rotation_sensor_to_base, wrenches, pose_ids=None) -> "Samples":
+    def from_rotations(cls, rotation_sensor_to_base, wrenches, pose_ids=None) -> Samples:
         """From ``(N, 3, 3)`` sensor orientations ``R_BS``."""
         return cls(wrenches, rotation_sensor_to_base, pose_ids)
 
     @classmethod
-    def from_joint_positions(cls, arm, joint_positions, wrenches, pose_ids=None) -> "Samples":
+    def from_joint_positions(cls, arm, joint_positions, wrenches, pose_ids=None) -> Samples:
         """From ``(N, nq)`` joint angles [rad] through the arm's forward kinematics."""
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
         urdf = str(arm.urdf_path) if arm.urdf_path is not None else None
@@ -107,13 +107,13 @@ class Samples:
         )
 
     @classmethod
-    def from_quaternions(cls, quaternions_wxyz, wrenches, pose_ids=None) -> "Samples":
+    def from_quaternions(cls, quaternions_wxyz, wrenches, pose_ids=None) -> Samples:
         """From ``(N, 4)`` unit quaternions ``[qw, qx, qy, qz]`` of the sensor in the base frame."""
         rotations = quaternion_to_matrix(quaternions_wxyz)
         return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids)
 
     @classmethod
-    def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None) -> "Samples":
+    def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None) -> Samples:
         """From the paper's commanded ``(N, 3)`` Euler angles ``[α, β, γ]`` [deg], ``R = Rz Ry Rx``."""
         rotations = euler_zyx_deg_to_matrix(angles_deg)
         return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids)

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from ..calibration import METHODS, calibrate
 from ..calibration_file import save_calibration
-from ..csv_io import load_samples
 from ..model import STANDARD_GRAVITY
-from .common import add_arm_arguments, arm_from_args, positive_float
+from .common import add_samples_arguments, load_samples_from_args, positive_float
 
 
 def register(subparsers) -> None:
@@ -21,12 +20,12 @@ def register(subparsers) -> None:
     parser.add_argument("-o", "--output", metavar="CALIB.json", help="write the calibration file here")
     parser.add_argument("--method", choices=METHODS, default=METHODS[0], help="estimator (default: %(default)s)")
     parser.add_argument("--g", type=positive_float, default=STANDARD_GRAVITY, help="gravity for the mass [m/s²] (default: %(default)s)")
-    add_arm_arguments(parser)
+    add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
-    loaded = load_samples(args.samples, arm_from_args(args))
+    loaded = load_samples_from_args(args.samples, args)
     result = calibrate(loaded.samples, method=args.method, g=args.g)
     print(result.summary())
     if args.output:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..arm import Arm
+from ..csv_io import load_samples
 from ..exceptions import InvalidInput
 from ..robots import DEFAULT_ROBOT, load_robot
 
@@ -38,3 +39,13 @@ def positive_float(text: str) -> float:
     if not value > 0 or value == float("inf"):
         raise argparse.ArgumentTypeError(f"expected a finite positive number, got {text!r}")
     return value
+
+
+def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments about how a samples/recording file is read (extended for bag files)."""
+    add_arm_arguments(parser)
+
+
+def load_samples_from_args(path: str, args: argparse.Namespace):
+    """Read a samples file named on the command line; returns a :class:`~ftkin.csv_io.LoadedSamples`."""
+    return load_samples(path, arm_from_args(args))

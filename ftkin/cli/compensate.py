@@ -6,9 +6,9 @@ import numpy as np
 
 from ..calibration_file import load_calibration
 from ..compensation import Compensator
-from ..csv_io import load_samples, write_csv
+from ..csv_io import write_csv
 from ..model import WRENCH_CHANNELS
-from .common import add_arm_arguments, arm_from_args
+from .common import add_samples_arguments, load_samples_from_args
 
 
 def register(subparsers) -> None:
@@ -21,13 +21,13 @@ def register(subparsers) -> None:
     parser.add_argument("calibration", metavar="CALIB.json")
     parser.add_argument("log", metavar="LOG.csv")
     parser.add_argument("-o", "--output", metavar="OUT.csv", required=True)
-    add_arm_arguments(parser)
+    add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
-    loaded = load_samples(args.log, arm_from_args(args))
+    loaded = load_samples_from_args(args.log, args)
     contact = Compensator(calibration).compensate_samples(loaded.samples)
     table = loaded.table
     wrench_columns = [table.column_index(name) for name in WRENCH_CHANNELS]

@@ -59,7 +59,7 @@ def run(args) -> int:
     print("\nCompensation at a new pose with a known contact wrench [N, N·m]:")
     print("  injected  " + " ".join(f"{v:+.4f}" for v in contact))
     print("  recovered " + " ".join(f"{v:+.4f}" for v in recovered))
-    print(f"  raw       " + " ".join(f"{v:+.4f}" for v in raw))
+    print("  raw       " + " ".join(f"{v:+.4f}" for v in raw))
     print(f"  max error {np.max(np.abs(recovered - contact)):.4f} (noise of one reading: 0.02 N, 0.002 N·m)")
     if args.output:
         save_calibration(result, args.output)
