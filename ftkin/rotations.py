@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .exceptions import InvalidInput
-from .validation import as_batch
+from .validation import as_batch, as_rotation_batch
 
 
 def _stack_rotation(c1, s1, c2, s2, c3, s3) -> np.ndarray:
@@ -58,8 +58,13 @@ def euler_zyx_deg_to_matrix(angles_deg) -> np.ndarray:
 
 
 def matrix_to_euler_zyx(rotation) -> np.ndarray:
-    """Inverse of :func:`euler_zyx_to_matrix`, ``[α, β, γ]`` [rad], β in [-π/2, π/2]."""
-    r = np.asarray(rotation, dtype=float)
+    """Inverse of :func:`euler_zyx_to_matrix`, ``[α, β, γ]`` [rad], β in [-π/2, π/2].
+
+    Raises:
+        InvalidInput: not a ``(3, 3)`` / ``(N, 3, 3)`` finite rotation matrix.
+    """
+    r, single = as_rotation_batch(rotation, "rotation")
+    r = r[0] if single else r
     alpha = np.arctan2(r[..., 1, 0], r[..., 0, 0])
     beta = np.arcsin(np.clip(-r[..., 2, 0], -1.0, 1.0))
     gamma = np.arctan2(r[..., 2, 1], r[..., 2, 2])
@@ -99,10 +104,12 @@ def quaternion_to_matrix(quaternion_wxyz, atol: float = 1e-3) -> np.ndarray:
 
 
 def matrix_to_quaternion(rotation) -> np.ndarray:
-    """Rotation matrices to unit quaternions ``[w, x, y, z]`` with ``w >= 0``."""
-    r = np.asarray(rotation, dtype=float)
-    single = r.ndim == 2
-    r = r.reshape(-1, 3, 3)
+    """Rotation matrices to unit quaternions ``[w, x, y, z]`` with ``w >= 0``.
+
+    Raises:
+        InvalidInput: not a ``(3, 3)`` / ``(N, 3, 3)`` finite rotation matrix.
+    """
+    r, single = as_rotation_batch(rotation, "rotation")
     out = np.empty((len(r), 4))
     for i, m in enumerate(r):  # conversion at the file edge only, not a hot path
         trace = np.trace(m)
