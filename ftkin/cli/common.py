@@ -7,26 +7,52 @@ import argparse
 from ..arm import Arm
 from ..csv_io import load_samples
 from ..exceptions import InvalidInput
-from ..robots import DEFAULT_ROBOT, load_robot
+from ..robots import DEFAULT_ROBOT, ROBOTS, load_robot, sensor_mount_from_offset
 
 
 def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
     """``--urdf``, ``--sensor-frame``, ``--tool-frame`` (default: the bundled arm)."""
     group = parser.add_argument_group("robot model (for joint-angle columns)")
-    group.add_argument("--robot", metavar="NAME", help=f"robot by name (default: {DEFAULT_ROBOT}, the bundled arm)")
+    group.add_argument("--robot", metavar="NAME", help=f"robot by name: {', '.join(ROBOTS)} (default: {DEFAULT_ROBOT}, the bundled arm)")
     group.add_argument("--urdf", metavar="PATH", help="URDF of the arm (default: the bundled six-axis arm)")
     group.add_argument("--sensor-frame", default="ft_sensor", metavar="NAME", help="sensor frame name (default: ft_sensor)")
     group.add_argument("--tool-frame", default=None, metavar="NAME", help="tool / control-point frame name")
+    group.add_argument(
+        "--sensor-offset",
+        type=float,
+        nargs="+",
+        metavar="X",
+        help="with --robot: sensor origin in the flange frame, X Y Z [m] and optionally ROLL PITCH YAW [rad] "
+        "(with --urdf and --sensor-parent: the same, relative to that frame)",
+    )
+    group.add_argument(
+        "--sensor-parent",
+        metavar="FRAME",
+        help="with --urdf: add the sensor frame at this existing frame (for URDFs without one)",
+    )
 
 
 def arm_from_args(args: argparse.Namespace) -> Arm | None:
     """The arm the arguments name, or None when none was named (bundled arm used on demand)."""
     if getattr(args, "urdf", None) and getattr(args, "robot", None):
         raise InvalidInput("give either --urdf or --robot, not both")
+    offset = getattr(args, "sensor_offset", None)
+    parent = getattr(args, "sensor_parent", None)
+    if offset is not None and len(offset) not in (3, 6):
+        raise InvalidInput(f"--sensor-offset takes 3 numbers (X Y Z [m]) or 6 (and ROLL PITCH YAW [rad]), got {len(offset)}")
     if getattr(args, "urdf", None):
-        return Arm.from_urdf(args.urdf, args.sensor_frame, args.tool_frame)
+        mount = None
+        if parent is not None:
+            mount = sensor_mount_from_offset(parent, offset)
+        elif offset is not None:
+            raise InvalidInput("--sensor-offset with --urdf needs --sensor-parent FRAME (the frame the sensor is bolted to)")
+        return Arm.from_urdf(args.urdf, args.sensor_frame, args.tool_frame, sensor_mount=mount)
+    if parent is not None:
+        raise InvalidInput("--sensor-parent is for --urdf; with --robot the sensor is mounted at the robot's flange")
     if getattr(args, "robot", None):
-        return load_robot(args.robot)
+        return load_robot(args.robot, offset)
+    if offset is not None:
+        raise InvalidInput("--sensor-offset needs --robot NAME (or --urdf with --sensor-parent)")
     return None
 
 
