@@ -151,7 +151,12 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     poses = reader.get("poses", required=False) or {}
     if not isinstance(poses, dict):
         reader.fail("expected an object with ids, measured, residuals", "poses")
-    pose_ids = np.array(poses.get("ids", []), dtype=np.int64) if poses.get("ids") is not None else np.zeros(0, np.int64)
+    raw_ids = poses.get("ids")
+    if raw_ids is None:
+        raw_ids = []
+    if not isinstance(raw_ids, list) or not all(isinstance(i, int) and not isinstance(i, bool) for i in raw_ids):
+        reader.fail(f"expected a list of integer pose ids, got {raw_ids!r}", "poses.ids")
+    pose_ids = np.array(raw_ids, dtype=np.int64)
     count = len(pose_ids)
     measured = reader.array("poses.measured", (count, 6), source=poses.get("measured", np.zeros((0, 6))))
     residuals = reader.array("poses.residuals", (count, 6), source=poses.get("residuals", np.zeros((0, 6))))
@@ -176,6 +181,8 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
         )
     except (ValueError, TypeError) as error:
         raise CalibrationFileError(path, str(error)) from None
+    if not (np.isfinite(result.tool_weight) and result.tool_weight > 0.0):
+        reader.fail(f"|gravity_in_base| must be finite and positive, got {result.tool_weight}", "gravity_in_base")
     if "tool_weight" in document:
         stated = reader.number("tool_weight")
         if not math.isclose(stated, result.tool_weight, rel_tol=1e-9, abs_tol=1e-12):

@@ -102,8 +102,9 @@ class SensorModel:
 
     @property
     def tool_weight(self) -> float:
-        """Tool weight ``G = |a|`` [N]."""
-        return float(np.linalg.norm(self.gravity_in_base))
+        """Tool weight ``G = |a|`` [N] (computed without overflow for huge finite values)."""
+        scale = float(np.abs(self.gravity_in_base).max())
+        return scale * float(np.linalg.norm(self.gravity_in_base / scale)) if scale > 0.0 else 0.0
 
     @property
     def tool_mass(self) -> float:

@@ -1,0 +1,147 @@
+"""Fuzz ftkin's file readers for a fixed budget and print how many inputs were tried.
+
+Mutates valid files (byte edits, truncation, duplicated or dropped lines,
+structured JSON edits) and feeds them to the readers. Every input must end in a
+result with finite numbers or an ``ftkin.FtkinError``; anything else (a numpy,
+Pinocchio or Python traceback) is a bug: the script prints it and exits 1.
+
+    python benchmarks/fuzz_readers.py [--seconds 60] [--seed 0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import random
+import sys
+import tempfile
+import time
+import traceback
+from pathlib import Path
+
+import numpy as np
+
+import ftkin
+from ftkin.calibration_file import calibration_to_dict, load_calibration
+from ftkin.csv_io import load_samples
+from ftkin.paper import paper_calibration, paper_csv_path
+
+ALPHABET = list(",\n\r#.-+eE0123456789 \t\"'") + ["nan", "inf", "-inf", "1e999", "\x00", "é", "pose", "fx", "q1", "alpha"]
+
+
+def mutate_text(text: str, rng: random.Random) -> str:
+    """One to four random edits of a text."""
+    for _ in range(rng.randint(1, 4)):
+        if not text:
+            return rng.choice(ALPHABET)
+        kind = rng.randrange(7)
+        i = rng.randrange(len(text))
+        if kind == 0:
+            text = text[:i] + text[i + 1 :]
+        elif kind == 1:
+            text = text[:i] + rng.choice(ALPHABET) + text[i:]
+        elif kind == 2:
+            text = text[:i]
+        elif kind == 3:
+            lines = text.splitlines(keepends=True)
+            j = rng.randrange(len(lines))
+            lines.insert(j, lines[rng.randrange(len(lines))])
+            text = "".join(lines)
+        elif kind == 4:
+            lines = text.splitlines(keepends=True)
+            del lines[rng.randrange(len(lines))]
+            text = "".join(lines)
+        elif kind == 5:
+            text = text[:i] + rng.choice(ALPHABET) + text[i + 1 :]
+        else:
+            j = rng.randrange(len(text))
+            text = text[: min(i, j)] + text[max(i, j) :]
+    return text
+
+
+def mutate_document(document, rng: random.Random):
+    """A structured edit of a JSON document: drop, retype or corrupt one value."""
+    document = json.loads(json.dumps(document))
+    keys = list(document)
+    key = rng.choice(keys)
+    replacements = [None, "text", -1, 0, 1e308, [], {}, [1.0], [[1.0, 2.0]], True, float("nan"), 99]
+    kind = rng.randrange(3)
+    if kind == 0:
+        del document[key]
+    elif kind == 1:
+        document[key] = rng.choice(replacements)
+    elif isinstance(document[key], list) and document[key]:
+        document[key][rng.randrange(len(document[key]))] = rng.choice(replacements)
+    else:
+        document[key] = rng.choice(replacements)
+    return document
+
+
+def check_samples(loaded) -> None:
+    samples = loaded.samples
+    assert np.all(np.isfinite(samples.wrenches)) and np.all(np.isfinite(samples.rotations)), "non-finite samples"
+
+
+def check_calibration(result) -> None:
+    assert np.all(np.isfinite(result.to_vector())), "non-finite calibration"
+
+
+def run(seconds: float, seed: int) -> int:
+    rng = random.Random(seed)
+    workdir = Path(tempfile.mkdtemp(prefix="ftkin-fuzz-"))
+    csv_seeds = [paper_csv_path().read_text()]
+    arm = ftkin.Arm.default()
+    q = np.random.default_rng(seed).uniform(-1, 1, (4, arm.nq))
+    joint_lines = [",".join(arm.joint_names + ["pose", "fx", "fy", "fz", "mx", "my", "mz"])]
+    for i, row in enumerate(q):
+        joint_lines.append(",".join(f"{v:.6f}" for v in row) + f",{i},0.1,0.2,3.1,0.01,0.02,0.03")
+    csv_seeds.append("\n".join(joint_lines) + "\n")
+    quat_seed = "qw,qx,qy,qz,fx,fy,fz,mx,my,mz\n1,0,0,0,0,0,3,0,0,0\n0,1,0,0,0,0,-3,0,0,0\n0.7071,0.7071,0,0,0,3,0,0,0,0\n"
+    csv_seeds.append(quat_seed)
+    calibration_document = calibration_to_dict(paper_calibration())
+    json_seed = json.dumps(calibration_document, indent=2)
+
+    counts = {"csv": 0, "json-text": 0, "json-structured": 0}
+    outcomes = {"ok": 0, "ftkin error": 0}
+    deadline = time.monotonic() + seconds
+    path = workdir / "input"
+    while time.monotonic() < deadline:
+        target = rng.choice(list(counts))
+        if target == "csv":
+            path.write_text(mutate_text(rng.choice(csv_seeds), rng), errors="surrogateescape")
+            reader, check = (lambda p: load_samples(p, arm)), check_samples
+        elif target == "json-text":
+            path.write_text(mutate_text(json_seed, rng))
+            reader, check = load_calibration, check_calibration
+        else:
+            path.write_text(json.dumps(mutate_document(calibration_document, rng)))
+            reader, check = load_calibration, check_calibration
+        counts[target] += 1
+        try:
+            check(reader(path))
+            outcomes["ok"] += 1
+        except ftkin.FtkinError:
+            outcomes["ftkin error"] += 1
+        except Exception:
+            print(f"BUG: {target} input raised a non-ftkin error; input kept at {path}")
+            traceback.print_exc()
+            return 1
+    total = sum(counts.values())
+    print(f"{'reader':<20}{'inputs':>10}")
+    for name, count in counts.items():
+        print(f"{name:<20}{count:>10}")
+    print(f"{'total':<20}{total:>10}   ({total / seconds:.0f}/s, seed {seed})")
+    print(f"outcomes: {outcomes['ok']} accepted with finite values, {outcomes['ftkin error']} refused with an ftkin error, 0 other")
+    return 0
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=60.0, help="time budget (default: %(default)s)")
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    return run(args.seconds, args.seed)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
