@@ -52,8 +52,11 @@ class Compensator:
         vector operations, no allocation of large arrays.
         """
         arm = self._require_arm()
-        q = np.asarray(q, dtype=np.float64)
-        raw = np.asarray(raw_wrench, dtype=np.float64)
+        try:
+            q = np.asarray(q, dtype=np.float64)
+            raw = np.asarray(raw_wrench, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise InvalidInput(f"q and raw_wrench must be numeric: {error}") from None
         if q.shape != self._q_shape or raw.shape != (6,):
             raise InvalidInput(f"expected q of shape {self._q_shape} and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
         if not (np.isfinite(q).all() and np.isfinite(raw).all()):
@@ -111,7 +114,7 @@ class Compensator:
 
     @staticmethod
     def payload_weight(contact_wrench) -> np.ndarray | float:
-        """Weight of a held load ``|F'|`` [N] from contact wrench(es) (arm still)."""
-        wrench = np.asarray(contact_wrench, dtype=float)
-        norms = np.linalg.norm(wrench[..., :3], axis=-1)
-        return float(norms) if norms.ndim == 0 else norms
+        """Weight of a held load ``|F'|`` [N] from contact wrench ``(6,)`` → float or ``(N, 6)`` → ``(N,)`` (arm still)."""
+        wrench, single = as_batch(contact_wrench, 6, "contact_wrench")
+        norms = np.linalg.norm(wrench[:, :3], axis=1)
+        return float(norms[0]) if single else norms
