@@ -19,6 +19,9 @@ COMMAND_MODULES = (
     "compensate",
     "paper",
     "demo",
+    "extract",
+    "plan",
+    "evaluate-poses",
 )
 """Subcommand modules of ``ftkin.cli``, in the order ``--help`` lists them."""
 

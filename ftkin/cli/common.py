@@ -67,11 +67,71 @@ def positive_float(text: str) -> float:
     return value
 
 
+def non_negative_float(text: str) -> float:
+    """argparse type: a finite number ≥ 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not value >= 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number ≥ 0, got {text!r}")
+    return value
+
+
 def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
-    """Arguments about how a samples/recording file is read (extended for bag files)."""
+    """Arguments about how a samples file or a ROS 2 bag is read."""
     add_arm_arguments(parser)
+    from ..static_segments import SegmentParameters
+
+    defaults = SegmentParameters()
+    group = parser.add_argument_group(
+        "ROS 2 bags (a rosbag2 folder, .mcap or .db3 instead of a CSV; needs ftkin[bags])"
+    )
+    group.add_argument("--joint-topic", metavar="TOPIC", help="sensor_msgs/JointState topic (default: the only one)")
+    group.add_argument("--wrench-topic", metavar="TOPIC", help="geometry_msgs/WrenchStamped topic (default: the only one)")
+    group.add_argument(
+        "--speed-threshold", type=positive_float, default=defaults.speed_threshold, metavar="RAD_S",
+        help="static when every joint is slower than this [rad/s] (default: %(default)s)",
+    )
+    group.add_argument(
+        "--min-static-duration", type=positive_float, default=defaults.min_duration, metavar="S",
+        help="shortest usable static segment after settling [s] (default: %(default)s)",
+    )
+    group.add_argument(
+        "--settle-time", type=non_negative_float, default=defaults.settle_time, metavar="S",
+        help="time skipped at the start of each static segment [s] (default: %(default)s)",
+    )
+    group.add_argument(
+        "--speed-window", type=positive_float, default=defaults.speed_window, metavar="S",
+        help="time span of the joint-speed finite difference [s] (default: %(default)s)",
+    )
 
 
-def load_samples_from_args(path: str, args: argparse.Namespace):
-    """Read a samples file named on the command line; returns a :class:`~ftkin.csv_io.LoadedSamples`."""
-    return load_samples(path, arm_from_args(args))
+def load_samples_from_args(path: str, args: argparse.Namespace, *, static_only: bool = True):
+    """Read a samples CSV or a ROS 2 bag named on the command line.
+
+    Returns a :class:`~ftkin.csv_io.LoadedSamples` (a :class:`~ftkin.bags.BagSamples`
+    for a bag). ``static_only`` applies to bags: True keeps the readings of the
+    static segments (calibration), False every reading (compensation).
+    """
+    from ..bags import bag_samples, is_bag_path
+
+    if not is_bag_path(path):
+        return load_samples(path, arm_from_args(args))
+    from ..static_segments import SegmentParameters
+
+    defaults = SegmentParameters()
+    parameters = SegmentParameters(
+        speed_threshold=getattr(args, "speed_threshold", defaults.speed_threshold),
+        min_duration=getattr(args, "min_static_duration", defaults.min_duration),
+        settle_time=getattr(args, "settle_time", defaults.settle_time),
+        speed_window=getattr(args, "speed_window", defaults.speed_window),
+    )
+    return bag_samples(
+        path,
+        arm_from_args(args),
+        joint_topic=getattr(args, "joint_topic", None),
+        wrench_topic=getattr(args, "wrench_topic", None),
+        parameters=parameters,
+        static_only=static_only,
+    )

@@ -27,7 +27,7 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
-    loaded = load_samples_from_args(args.log, args)
+    loaded = load_samples_from_args(args.log, args, static_only=False)
     contact = Compensator(calibration).compensate_samples(loaded.samples)
     table = loaded.table
     wrench_columns = [table.column_index(name) for name in WRENCH_CHANNELS]

@@ -1,0 +1,38 @@
+"""``ftkin extract RECORDING -o SAMPLES.csv``: the samples a bag yields, as a CSV to inspect."""
+
+from __future__ import annotations
+
+from ..csv_io import write_csv
+from .common import add_samples_arguments, load_samples_from_args
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "extract",
+        help="write the samples extracted from a ROS 2 bag (or a samples CSV) as a CSV",
+        description="Read a ROS 2 bag (rosbag2 folder, .mcap or .db3), align joint states to the wrench "
+        "stamps, find the static segments and write one row per reading: t [s], pose (static segment "
+        "number), the arm's joint angles [rad] and fx..mz [N, N·m]. The CSV is a valid input of "
+        "'ftkin calibrate'. With --all, every reading (no pose column) is written.",
+    )
+    parser.add_argument("recording", metavar="RECORDING")
+    parser.add_argument("-o", "--output", metavar="SAMPLES.csv", required=True)
+    parser.add_argument("--all", action="store_true", help="every reading, not only the static segments")
+    add_samples_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    loaded = load_samples_from_args(args.recording, args, static_only=not args.all)
+    write_csv(args.output, loaded.table.header, loaded.table.rows)
+    search = getattr(loaded, "search", None)
+    poses = len(set(loaded.samples.pose_ids.tolist()))
+    print(f"wrote {len(loaded.table.rows)} readings" + (f" in {poses} static poses" if search is not None else "") + f" to {args.output}")
+    recording = getattr(loaded, "recording", None)
+    if recording is not None:
+        print(f"  topics: {recording.joint_topic} (joints), {recording.wrench_topic} (wrench, frame {recording.wrench_frame_id or '?'})")
+        if recording.dropped:
+            print(f"  {recording.dropped} wrench readings outside the joint-state time range were dropped")
+    if search is not None:
+        print(f"  {search.describe()}")
+    return 0
