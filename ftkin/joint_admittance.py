@@ -1,0 +1,198 @@
+"""One control tick from joint angles and a raw reading to joint velocities.
+
+:meth:`JointAdmittance.step` does, for a 1 kHz joint-velocity controller:
+
+1. forward kinematics and the sensor-frame Jacobian (Pinocchio, one call);
+2. compensation (:class:`~ftkin.compensation.Compensator`: bias and tool
+   weight removed), or nothing when no compensator is given;
+3. the wrench moved to the control frame and the admittance law
+   (:class:`~ftkin.admittance.Admittance`), giving the control-point twist;
+4. that twist moved to the sensor origin and mapped to joints by damped least
+   squares ``dq = Jᵀ(J Jᵀ + λ² I)⁻¹ V`` (through the SVD), the damping growing
+   as the smallest singular value ``σ_min`` drops below a threshold:
+   ``λ² = λ_max² (1 − (σ_min/σ_0)²)``;
+5. joint limits: each joint's velocity bound shrinks with its distance to the
+   position limit (``gain · distance`` [rad/s]) and is capped by the velocity
+   limit; ``dq`` is scaled uniformly (direction kept) to fit;
+6. safety: a contact force [N] or torque [N·m] beyond the user limit commands
+   ``dq = 0`` and latches until :meth:`JointAdmittance.reset`.
+
+Each tick leaves a :class:`StepStatus` in ``last_status``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .admittance import Admittance, ControlFrame
+from .arm import Arm
+from .compensation import Compensator
+from .exceptions import InvalidInput
+
+
+@dataclass(frozen=True)
+class StepStatus:
+    """What one :meth:`JointAdmittance.step` did.
+
+    Attributes:
+        dq: Commanded joint velocities ``(nq,)`` [rad/s].
+        contact_wrench: Compensated wrench in the sensor frame [N, N·m].
+        twist: Admittance output at the control point, control-frame axes [m/s, rad/s].
+        smallest_singular_value: ``σ_min`` of the sensor Jacobian.
+        damping: ``λ`` used in the least-squares inverse.
+        limit_scale: Uniform factor applied for joint velocity/position limits (1 = none).
+        safety_stop: True when the contact exceeded the limit (this tick or latched).
+        event: ``""`` or a short description of why the arm was stopped.
+    """
+
+    dq: np.ndarray
+    contact_wrench: np.ndarray
+    twist: np.ndarray
+    smallest_singular_value: float
+    damping: float
+    limit_scale: float
+    safety_stop: bool
+    event: str
+
+
+class JointAdmittance:
+    """Admittance control output as joint velocities.
+
+    Args:
+        arm: Kinematics (sensor frame, and tool frame for a tool control point).
+        admittance: The Cartesian law; its ``frame`` picks the control frame.
+        compensator: Removes bias and tool weight; None passes raw readings
+            through (the "uncompensated" experiment).
+        control_point: ``"tool"`` (the arm's tool frame, rigidly attached to the
+            sensor) or ``"sensor"``. Default: tool if the arm has one.
+        force_limit: Contact force norm [N] that stops the arm.
+        torque_limit: Contact torque norm [N·m] that stops the arm.
+        singular_threshold: ``σ_0`` below which damping starts.
+        max_damping: ``λ_max``.
+        velocity_scale: Fraction of the arm's joint velocity limits to use.
+        limit_gain: Joint velocity bound per radian to the position limit [1/s].
+    """
+
+    def __init__(self, arm: Arm, admittance: Admittance, compensator: Compensator | None = None, *,
+                 control_point: str | None = None, force_limit: float = 50.0, torque_limit: float = 5.0,
+                 singular_threshold: float = 0.05, max_damping: float = 0.05, velocity_scale: float = 1.0,
+                 limit_gain: float = 5.0):
+        if not isinstance(arm, Arm) or not isinstance(admittance, Admittance):
+            raise InvalidInput("JointAdmittance needs an ftkin Arm and an ftkin Admittance")
+        if compensator is not None and not isinstance(compensator, Compensator):
+            raise InvalidInput(f"compensator must be an ftkin Compensator or None, got {type(compensator).__name__}")
+        numbers = np.array([force_limit, torque_limit, singular_threshold, max_damping, velocity_scale, limit_gain], dtype=float)
+        if not np.all(np.isfinite(numbers)) or np.any(numbers <= 0):
+            raise InvalidInput(f"limits, thresholds and gains must be finite and > 0, got {numbers}")
+        self.arm, self.admittance, self.compensator = arm, admittance, compensator
+        self.frame = control_frame_for(arm, admittance.frame, control_point)
+        self.force_limit, self.torque_limit = float(force_limit), float(torque_limit)
+        self.singular_threshold, self.max_damping = float(singular_threshold), float(max_damping)
+        self.limit_gain = float(limit_gain)
+        self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
+        self._lower, self._upper = arm.lower_limits, arm.upper_limits
+        self._velocity_limits = arm.velocity_limits * float(velocity_scale)
+        self._nq = arm.nq
+        self.reset()
+
+    def reset(self) -> None:
+        """Clear the admittance filter and the safety latch."""
+        self.admittance.reset()
+        self.safety_latched = False
+        self.last_status: StepStatus | None = None
+
+    def step(self, q, raw_wrench, dt: float) -> np.ndarray:
+        """Joint velocities ``(nq,)`` [rad/s] for this tick.
+
+        Args:
+            q: Joint positions ``(nq,)`` [rad].
+            raw_wrench: Raw sensor reading ``(6,)`` [N, N·m], sensor frame.
+            dt: Time since the previous tick [s].
+        """
+        q = np.asarray(q, dtype=np.float64)
+        raw = np.asarray(raw_wrench, dtype=np.float64)
+        if q.shape != (self._nq,) or raw.shape != (6,) or not math.isfinite(float(q.sum() + raw.sum())):
+            raise InvalidInput(f"expected finite q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
+        if not (dt > 0.0 and math.isfinite(dt)):
+            raise InvalidInput(f"dt must be a finite positive time step [s], got {dt!r}")
+        jacobian = pin.computeFrameJacobian(self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED)
+        rotation = self._data.oMf[self._sensor_id].rotation
+        contact = raw.copy() if self.compensator is None else self.compensator._compensate_one(rotation, raw)
+        fx, fy, fz, mx, my, mz = contact.tolist()
+        force, torque = math.sqrt(fx * fx + fy * fy + fz * fz), math.sqrt(mx * mx + my * my + mz * mz)
+        if self.safety_latched or force > self.force_limit or torque > self.torque_limit:
+            return self._stop(contact, force, torque)
+        twist = self.admittance.update(self.frame.wrench_from_sensor(contact, rotation), dt)
+        sensor_twist = self.frame.twist_to_sensor_origin(twist, rotation)
+        dq, sigma_min, damping = damped_least_squares(jacobian, sensor_twist, self.singular_threshold, self.max_damping)
+        scale = self._limit_scale(q, dq)
+        if scale < 1.0:
+            dq *= scale
+        self.last_status = StepStatus(dq, contact, twist, sigma_min, damping, scale, False, "")
+        return dq
+
+    def _stop(self, contact: np.ndarray, force: float, torque: float) -> np.ndarray:
+        if self.safety_latched and self.last_status is not None and self.last_status.safety_stop:
+            event = self.last_status.event
+        else:
+            event = (f"contact {force:.3g} N / {torque:.3g} N·m exceeded the limit "
+                     f"{self.force_limit:.3g} N / {self.torque_limit:.3g} N·m: stopped (reset() to resume)")
+        self.safety_latched = True
+        dq = np.zeros(self._nq)
+        self.last_status = StepStatus(dq, contact, np.zeros(6), math.nan, math.nan, 0.0, True, event)
+        return dq
+
+    def _limit_scale(self, q: np.ndarray, dq: np.ndarray) -> float:
+        """Largest ``s ≤ 1`` with ``lower_bound ≤ s·dq ≤ upper_bound`` per joint."""
+        upper = np.minimum(self._velocity_limits, np.maximum(self.limit_gain * (self._upper - q), 0.0))
+        lower = np.maximum(-self._velocity_limits, np.minimum(self.limit_gain * (self._lower - q), 0.0))
+        bound = np.where(dq > 0.0, upper, -lower)
+        magnitude = np.abs(dq)
+        over = magnitude > bound
+        if not over.any():
+            return 1.0
+        return float((bound[over] / magnitude[over]).min())
+
+
+def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, singular_threshold: float = 0.05,
+                         max_damping: float = 0.05) -> tuple[np.ndarray, float, float]:
+    """``dq = Jᵀ(J Jᵀ + λ² I)⁻¹ V`` via the SVD, λ growing near singularities.
+
+    Returns:
+        ``dq`` ``(nq,)``, the smallest singular value ``σ_min`` and ``λ``.
+    """
+    u, sigma, vt = np.linalg.svd(jacobian, full_matrices=False)
+    sigma_min = float(sigma[-1]) if len(sigma) == 6 else 0.0
+    ratio = sigma_min / singular_threshold
+    damping_sq = 0.0 if ratio >= 1.0 else max_damping * max_damping * (1.0 - ratio * ratio)
+    gains = sigma / (sigma * sigma + damping_sq) if damping_sq > 0.0 else 1.0 / sigma
+    return vt.T @ (gains * (u.T @ twist)), sigma_min, math.sqrt(damping_sq)
+
+
+def control_frame_for(arm: Arm, frame: str, control_point: str | None = None) -> ControlFrame:
+    """The :class:`ControlFrame` for an arm: tool point and axes taken from its tool frame.
+
+    Raises:
+        InvalidInput: the tool frame is not rigidly attached to the sensor (not
+            on the same joint), or a tool control point is asked of an arm without one.
+    """
+    if control_point is None:
+        control_point = "sensor" if frame == "sensor" or arm.tool_frame_id is None else "tool"
+    if control_point not in ("sensor", "tool"):
+        raise InvalidInput(f"control_point must be 'sensor' or 'tool', got {control_point!r}")
+    if frame == "tool" and control_point != "tool":
+        raise InvalidInput("frame 'tool' needs the tool control point")
+    if control_point == "sensor" or frame == "sensor":
+        return ControlFrame(frame)
+    if arm.tool_frame_id is None:
+        raise InvalidInput("this Arm has no tool frame: load it with tool_frame= or use control_point='sensor'")
+    sensor, tool = arm.model.frames[arm.sensor_frame_id], arm.model.frames[arm.tool_frame_id]
+    if sensor.parentJoint != tool.parentJoint:
+        raise InvalidInput(f"tool frame {arm.tool_frame!r} is not on the same joint as sensor frame {arm.sensor_frame!r}; "
+                           "the control point must be rigidly attached to the sensor")
+    relative = sensor.placement.inverse() * tool.placement
+    return ControlFrame(frame, relative.translation.copy(), relative.rotation.copy())
