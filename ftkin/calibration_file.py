@@ -4,7 +4,7 @@ Keys (units): ``force_offset`` [N], ``torque_offset`` [N·m],
 ``gravity_in_base`` [N, base frame], ``tool_weight`` [N], ``tool_mass`` [kg],
 ``center_of_mass`` [m, sensor frame], ``base_tilt_deg`` [U, V] in degrees,
 ``g`` [m/s²]; provenance: ``method``, ``pose_count``, ``sample_count``,
-``residual_rms`` (per channel fx..mz [N, N·m]), ``urdf``, ``sensor_frame``,
+``residual_rms`` (per channel fx..mz [N, N·m], null without poses), ``urdf``, ``sensor_frame``,
 ``poses`` (ids, mean measured wrench and residual per pose), ``covariance``
 (12×12 over ``[a, F0, M0, P]`` or null), ``std_errors`` (same keys as the
 values), ``created`` (UTC, ISO 8601), ``ftkin_version``.
@@ -71,7 +71,7 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         "method": result.method,
         "pose_count": result.pose_count,
         "sample_count": result.sample_count,
-        "residual_rms": result.residual_rms,
+        "residual_rms": result.residual_rms if result.pose_count else None,
         "urdf": result.urdf,
         "sensor_frame": result.sensor_frame,
         "poses": {
@@ -89,7 +89,10 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
 
 def save_calibration(result: CalibrationResult, path) -> Path:
     """Write a calibration file atomically (the old file survives a crash)."""
-    text = json.dumps(calibration_to_dict(result), indent=2, allow_nan=False) + "\n"
+    try:
+        text = json.dumps(calibration_to_dict(result), indent=2, allow_nan=False) + "\n"
+    except ValueError as error:  # NaN or infinity in a hand-built result
+        raise CalibrationFileError(str(path), f"cannot write: {error}") from None
     return atomic_write_text(path, text)
 
 
