@@ -1,0 +1,163 @@
+"""Arrow geometry for meshcat, which has no arrow primitive (pure numpy).
+
+An arrow is a cylinder shaft plus a cone head (a cylinder with
+``radiusTop=0``). meshcat cylinders run along their local +Y axis, centred on
+the origin, so an arrow from ``origin`` along ``vector`` is built from unit
+shapes placed by a rigid transform and a per-axis scale:
+
+* the shaft: a cylinder of height 1 scaled to the shaft length along Y,
+  centred halfway between the origin and the base of the head;
+* the head: a cone of height ``head_length``, uniformly shrunk when the arrow
+  is shorter than ``2 × head_length``, its tip at ``origin + vector``.
+
+A :class:`NodePose` keeps the rigid part and the scale apart: a live viewer
+gets the product (:meth:`NodePose.matrix`), an animation track gets
+position/quaternion and scale separately (meshcat's animation frames record
+no scale in ``set_transform``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import InvalidInput
+from ..validation import as_positive, as_vector
+
+MIN_SCALE = 1e-6
+"""Smallest scale factor sent to the viewer (a zero scale makes a singular matrix)."""
+
+
+@dataclass(frozen=True)
+class NodePose:
+    """Placement of one scene node: rigid transform ``(4, 4)`` and scale ``(3,)``."""
+
+    rigid: np.ndarray
+    scale: np.ndarray
+
+    def matrix(self) -> np.ndarray:
+        """The transform a live viewer gets: ``rigid @ diag(scale, 1)``."""
+        out = self.rigid.copy()
+        out[:3, :3] = self.rigid[:3, :3] * self.scale[None, :]
+        return out
+
+
+@dataclass(frozen=True)
+class ArrowStyle:
+    """Sizes of an arrow [m].
+
+    Attributes:
+        shaft_radius: Radius of the shaft [m].
+        head_radius: Radius of the cone's base [m].
+        head_length: Height of the cone [m] (shrunk for short arrows).
+    """
+
+    shaft_radius: float = 0.007
+    head_radius: float = 0.018
+    head_length: float = 0.045
+
+    def __post_init__(self):
+        for name in ("shaft_radius", "head_radius", "head_length"):
+            object.__setattr__(self, name, as_positive(getattr(self, name), f"ArrowStyle.{name}"))
+
+
+def rigid_transform(rotation: np.ndarray, translation) -> np.ndarray:
+    """``(4, 4)`` homogeneous transform from a rotation ``(3, 3)`` and a translation ``(3,)`` [m]."""
+    out = np.eye(4)
+    out[:3, :3] = rotation
+    out[:3, 3] = translation
+    return out
+
+
+def rotation_y_to(direction) -> np.ndarray:
+    """A rotation whose second column (the image of +Y) is the unit ``direction``.
+
+    The other two axes are chosen continuously away from ``±Y``; any choice
+    is right for a rotationally symmetric arrow.
+
+    Raises:
+        InvalidInput: ``direction`` is not a finite non-zero 3-vector.
+    """
+    direction = as_vector(direction, 3, "arrow direction")
+    norm = np.linalg.norm(direction)
+    if norm == 0.0:
+        raise InvalidInput("arrow direction must be non-zero")
+    y_axis = direction / norm
+    helper = np.array([1.0, 0.0, 0.0]) if abs(y_axis[0]) < 0.9 else np.array([0.0, 0.0, 1.0])
+    x_axis = helper - y_axis * (helper @ y_axis)
+    x_axis /= np.linalg.norm(x_axis)
+    z_axis = np.array(
+        [
+            x_axis[1] * y_axis[2] - x_axis[2] * y_axis[1],
+            x_axis[2] * y_axis[0] - x_axis[0] * y_axis[2],
+            x_axis[0] * y_axis[1] - x_axis[1] * y_axis[0],
+        ]
+    )
+    return np.column_stack([x_axis, y_axis, z_axis])
+
+
+@dataclass(frozen=True)
+class ArrowPlacement:
+    """Where the unit shaft and the cone head of one arrow go (base frame).
+
+    Attributes:
+        shaft: Pose of the unit-height cylinder (scale ``[1, shaft_length, 1]``).
+        head: Pose of the cone of height ``style.head_length`` (uniform scale).
+        length: Drawn length ``|vector| × scale`` [m].
+    """
+
+    shaft: NodePose
+    head: NodePose
+    length: float
+
+
+def arrow_placement(origin, vector, scale: float, style: ArrowStyle | None = None) -> ArrowPlacement:
+    """Place an arrow from ``origin`` [m] along ``vector`` (any unit) × ``scale`` [m per unit].
+
+    A zero vector gives a vanishing arrow (scale :data:`MIN_SCALE`) pointing up.
+    """
+    style = style or ArrowStyle()
+    origin = as_vector(origin, 3, "arrow origin")
+    vector = as_vector(vector, 3, "arrow vector")
+    scale = as_positive(scale, "arrow scale")
+    length = float(np.linalg.norm(vector)) * scale
+    if length > 0.0:
+        direction = vector / np.linalg.norm(vector)
+    else:
+        direction = np.array([0.0, 0.0, 1.0])
+    rotation = rotation_y_to(direction)
+    head_length = min(style.head_length, 0.5 * length)
+    head_factor = max(head_length / style.head_length, MIN_SCALE)
+    shaft_length = max(length - head_length, MIN_SCALE)
+    shaft = NodePose(
+        rigid_transform(rotation, origin + direction * (0.5 * (length - head_length))),
+        np.array([1.0, shaft_length, 1.0]),
+    )
+    head = NodePose(
+        rigid_transform(rotation, origin + direction * (length - 0.5 * head_length)),
+        np.full(3, head_factor),
+    )
+    return ArrowPlacement(shaft, head, length)
+
+
+def exaggerate_tilt(gravity_direction, factor: float) -> np.ndarray:
+    """Unit gravity direction with its angle from ``-z`` multiplied by ``factor``.
+
+    Used to make a base tilt of a fraction of a degree visible. The rotation
+    axis is ``-z × direction``; the angle is capped at 180°.
+    """
+    direction = as_vector(gravity_direction, 3, "gravity direction")
+    norm = np.linalg.norm(direction)
+    if norm == 0.0:
+        raise InvalidInput("gravity direction must be non-zero")
+    direction = direction / norm
+    down = np.array([0.0, 0.0, -1.0])
+    axis = np.array([direction[1], -direction[0], 0.0])  # down × direction
+    sin_angle = np.linalg.norm(axis)
+    if sin_angle < 1e-12:
+        return direction
+    angle = min(np.arctan2(sin_angle, down @ direction) * factor, np.pi)
+    axis /= sin_angle
+    perpendicular = np.array([axis[1] * down[2] - axis[2] * down[1], axis[2] * down[0] - axis[0] * down[2], 0.0])
+    return np.cos(angle) * down + np.sin(angle) * perpendicular

@@ -1,0 +1,281 @@
+"""A meshcat view of the arm, the sensor frame and the force vectors of a calibration.
+
+:class:`CalibrationViewer` draws, in the base frame B:
+
+* the arm (Pinocchio's ``MeshcatVisualizer``, visual geometry; collision
+  geometry loaded hidden), when an :class:`~ftkin.arm.Arm` is given;
+* the sensor frame triad (x, y, z = red, green, blue);
+* arrows anchored at the sensor origin, scaled ``scale`` [m per N]: the
+  measured force minus the bias (magenta), the predicted tool gravity (cyan),
+  the compensated contact force (yellow) — see :mod:`ftkin.viz.vectors`;
+* the tool's centre of mass (green sphere);
+* beside the base: the gravity direction the calibration estimates (purple),
+  its tilt from the base's −z (dark grey) multiplied by ``tilt_exaggeration``.
+
+At a calibration pose without contact the magenta and cyan arrows lie on top
+of each other and the yellow one vanishes.
+"""
+
+from __future__ import annotations
+
+import atexit
+from pathlib import Path
+
+import numpy as np
+
+from ..arm import Arm
+from ..atomic import atomic_write_text
+from ..exceptions import InvalidInput
+from ..model import SensorModel
+from ..validation import as_batch, as_positive, as_vector
+from .arrows import ArrowStyle, NodePose, arrow_placement, exaggerate_tilt, rigid_transform
+from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, LAYERS, VERTICAL, add_legend, legend_html
+from .server import import_meshcat, import_pinocchio_visualizer, start_visualizer, stop_server
+from .vectors import PoseVectors, pose_vectors
+
+ROOT = "ftkin"
+"""Scene folder of everything ftkin draws besides the arm."""
+
+DEFAULT_ARROW_LENGTH = 0.25
+"""Drawn length of the tool-weight arrow when no scale is given [m]."""
+
+
+class CalibrationViewer:
+    """Show a calibration at poses of an arm in meshcat.
+
+    Args:
+        calibration: Calibration (or any :class:`~ftkin.model.SensorModel`) to show.
+        arm: The arm; ``None`` draws the sensor frame at the base origin without an arm.
+        zmq_url: Attach to a running meshcat server (``meshcat-server``) instead
+            of starting one; an attached server is left running on :meth:`close`.
+        visualizer: An existing ``meshcat.Visualizer`` to draw into (left running).
+        scale: Arrow scale [m per N]; default: the tool weight is drawn
+            :data:`DEFAULT_ARROW_LENGTH` long.
+        tilt_exaggeration: Factor applied to the base tilt angle when drawing
+            the gravity direction (1 = true angle).
+        style: Arrow sizes [m].
+        gravity_anchor: Where the gravity-direction arrow starts (base frame) [m].
+    """
+
+    def __init__(
+        self,
+        calibration: SensorModel,
+        arm: Arm | None = None,
+        *,
+        zmq_url: str | None = None,
+        visualizer=None,
+        scale: float | None = None,
+        tilt_exaggeration: float = 1.0,
+        style: ArrowStyle | None = None,
+        gravity_anchor=(-0.25, -0.3, 0.4),
+    ):
+        if not isinstance(calibration, SensorModel):
+            raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
+        if arm is not None and not isinstance(arm, Arm):
+            raise InvalidInput(f"arm must be an ftkin Arm or None, got {type(arm).__name__}")
+        self.calibration = calibration
+        self.arm = arm
+        weight = calibration.tool_weight
+        self.scale = as_positive(scale, "scale [m/N]") if scale is not None else DEFAULT_ARROW_LENGTH / max(weight, 1e-9)
+        self.tilt_exaggeration = as_positive(tilt_exaggeration, "tilt_exaggeration")
+        self.style = style or ArrowStyle()
+        self.gravity_anchor = as_vector(gravity_anchor, 3, "gravity_anchor [m]")
+        self._meshcat = import_meshcat()
+        self._owns_server = visualizer is None and zmq_url is None
+        self.visualizer = visualizer if visualizer is not None else start_visualizer(zmq_url)
+        self._closed = False
+        self._robot = None
+        self._animation = None
+        atexit.register(self.close)
+        try:
+            self._build_scene()
+        except BaseException:
+            self.close()
+            raise
+
+    # ------------------------------------------------------------- lifecycle
+    @property
+    def url(self) -> str:
+        """Web address of the live viewer."""
+        return self.visualizer.url()
+
+    @property
+    def server_process(self):
+        """The meshcat server subprocess this viewer started, or None."""
+        return getattr(self.visualizer.window, "server_proc", None) if self._owns_server else None
+
+    def close(self) -> None:
+        """Stop the server this viewer started (kill and wait); idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        atexit.unregister(self.close)
+        if self._owns_server:
+            stop_server(self.visualizer)
+
+    def __enter__(self) -> CalibrationViewer:
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()
+
+    # ----------------------------------------------------------------- scene
+    def _build_scene(self) -> None:
+        geometry = self._meshcat.geometry
+        vis = self.visualizer
+        if self.arm is not None:
+            visualizer_class = import_pinocchio_visualizer()
+            self._robot = visualizer_class(self.arm.model, self.arm.geometry("collision"), self.arm.geometry("visual"))
+            self._robot.initViewer(viewer=vis)
+            self._robot.loadViewerModel(rootNodeName="pinocchio")
+        vis[f"{ROOT}/sensor"].set_object(geometry.triad(0.12))
+        for layer in (*ARROWS, BASE_GRAVITY, VERTICAL):
+            radius_factor = 0.5 if layer is VERTICAL else 1.0
+            material = geometry.MeshBasicMaterial(color=layer.color)
+            vis[f"{ROOT}/{layer.name}/shaft"].set_object(geometry.Cylinder(1.0, self.style.shaft_radius * radius_factor), material)
+            vis[f"{ROOT}/{layer.name}/head"].set_object(
+                geometry.Cylinder(self.style.head_length, radiusTop=0.0, radiusBottom=self.style.head_radius * radius_factor),
+                material,
+            )
+        vis[f"{ROOT}/{CENTER_OF_MASS.name}"].set_object(
+            geometry.Sphere(0.7 * self.style.head_radius),
+            geometry.MeshBasicMaterial(color=CENTER_OF_MASS.color, depthTest=False),  # seen through the tool
+        )
+        self._frame_view()
+
+    def _frame_view(self) -> None:
+        """Centre the orbit target on the arm and place the camera (meshcat 0.3.2 way)."""
+        if self.arm is not None:
+            q = np.clip(np.zeros(self.arm.nq), self.arm.lower_limits, self.arm.upper_limits)
+            origins = np.array([self.arm.frame_placement(q, name)[1] for name in self.arm.frame_names])
+            low, high = origins.min(axis=0), origins.max(axis=0)
+            target, extent = 0.5 * (low + high), float(np.max(high - low))
+        else:
+            target, extent = np.zeros(3), 0.6
+        shift = rigid_transform(np.eye(3), -target)
+        self.visualizer["/meshcat"].set_transform(shift)
+        self.visualizer["/Axes"].set_transform(shift)
+        # meshcat's own grid does not follow a transform; hide it, draw a floor plate under the arm instead.
+        self.visualizer["/Grid"].set_property("visible", False)
+        size = 2.0 * max(extent, 0.5)
+        floor = self.visualizer[f"{ROOT}/floor"]
+        floor.set_object(self._meshcat.geometry.Box([size, size, 0.004]), self._meshcat.geometry.MeshLambertMaterial(color=0xD8D8D8))
+        floor.set_transform(rigid_transform(np.eye(3), [target[0], target[1], -0.003]))
+        distance = 1.25 * max(extent, 0.5)
+        self.set_camera(distance * np.array([0.55, -0.75, 0.35]) / np.linalg.norm([0.55, -0.75, 0.35]))
+
+    def set_camera(self, position) -> None:
+        """Camera position relative to the orbit target, base axes [m]."""
+        x, y, z = as_vector(position, 3, "camera position [m]")
+        self.visualizer["/Cameras/default/rotated/<object>"].set_property("position", [float(x), float(z), float(-y)])
+
+    def set_visible(self, name: str, visible: bool) -> None:
+        """Show or hide a layer (``measured``, ``gravity``, ``contact``, ``center_of_mass``,
+        ``base_gravity``, ``vertical``, ``sensor``, ``arm``)."""
+        names = [layer.name for layer in LAYERS] + ["sensor", "arm"]
+        if name not in names:
+            raise InvalidInput(f"unknown layer {name!r}; layers: {', '.join(names)}")
+        path = "pinocchio" if name == "arm" else f"{ROOT}/{name}"
+        self.visualizer[path].set_property("visible", bool(visible))
+
+    # ----------------------------------------------------------------- poses
+    def show_pose(self, q, raw_wrench) -> PoseVectors:
+        """Draw the arm at joint angles ``q`` [rad] with the vectors of one raw reading [N, N·m]."""
+        return self._draw(self.visualizer, q, None, raw_wrench, animated=False)
+
+    def show_rotation(self, rotation_sensor_to_base, raw_wrench, sensor_origin=(0.0, 0.0, 0.0)) -> PoseVectors:
+        """Draw the vectors for an orientation ``R_BS`` without joint angles (sensor at ``sensor_origin`` [m])."""
+        return self._draw(self.visualizer, None, (rotation_sensor_to_base, sensor_origin), raw_wrench, animated=False)
+
+    def animate(self, raw_wrenches, *, configurations=None, rotations=None, times=None, hold: float = 1.0, fps: int = 30,
+                repetitions: int = 1000, play: bool = True) -> list[PoseVectors]:
+        """Store a meshcat animation through several poses (kept in :meth:`static_html`).
+
+        Args:
+            raw_wrenches: ``(N, 6)`` raw readings [N, N·m].
+            configurations: ``(N, nq)`` joint angles [rad] (needs an arm), or
+            rotations: ``(N, 3, 3)`` ``R_BS`` (sensor drawn at the base origin).
+            times: ``(N,)`` increasing times [s] (a recorded run); default:
+                each pose held ``hold`` seconds (calibration poses).
+            fps: Animation frame rate [1/s].
+            repetitions: How many times the page plays it.
+        """
+        raw, _ = as_batch(raw_wrenches, 6, "raw wrenches")
+        count = len(raw)
+        if (configurations is None) == (rotations is None):
+            raise InvalidInput("give exactly one of configurations= (joint angles) or rotations=")
+        if times is None:
+            step = max(int(round(as_positive(hold, "hold [s]") * fps)), 1)
+            starts = np.arange(count) * step
+            frames = [(int(s), int(s + step - 1)) for s in starts]
+        else:
+            times = np.asarray(times, dtype=float).reshape(-1)
+            if times.shape != (count,) or not np.all(np.isfinite(times)) or np.any(np.diff(times) < 0):
+                raise InvalidInput(f"times must be {count} finite non-decreasing values [s]")
+            frames = [(int(round(f)),) for f in (times - times[0]) * fps]
+        animation = self._meshcat.animation.Animation(default_framerate=fps)
+        out = []
+        for k in range(count):
+            for frame in frames[k]:
+                sink = animation.at_frame(self.visualizer, frame)
+                if configurations is not None:
+                    vectors = self._draw(sink, configurations[k], None, raw[k], animated=True)
+                else:
+                    vectors = self._draw(sink, None, (rotations[k], (0.0, 0.0, 0.0)), raw[k], animated=True)
+            out.append(vectors)
+        self.visualizer.set_animation(animation, play=play, repetitions=repetitions)
+        self._animation = animation
+        return out
+
+    def _draw(self, sink, q, rotation_and_origin, raw_wrench, animated: bool) -> PoseVectors:
+        if q is not None:
+            if self.arm is None:
+                raise InvalidInput("this viewer has no arm: use show_rotation(R_BS, raw_wrench) or pass arm=")
+            q = self.arm.check_configuration(q)
+            rotation, origin = self.arm.frame_placement(q, "sensor")
+            if self._robot is not None:
+                self._robot.viewer = sink
+                try:
+                    self._robot.display(q)
+                finally:
+                    self._robot.viewer = self.visualizer
+        else:
+            rotation, origin = rotation_and_origin
+        vectors = pose_vectors(self.calibration, rotation, origin, raw_wrench)
+        place = _place_animated if animated else _place_live
+        place(sink, f"{ROOT}/sensor", NodePose(rigid_transform(vectors.rotation_sensor_to_base, vectors.sensor_origin), np.ones(3)))
+        for layer, force in zip(ARROWS, (vectors.measured_force, vectors.gravity_force, vectors.contact_force)):
+            arrow = arrow_placement(vectors.sensor_origin, force, self.scale, self.style)
+            place(sink, f"{ROOT}/{layer.name}/shaft", arrow.shaft)
+            place(sink, f"{ROOT}/{layer.name}/head", arrow.head)
+        place(sink, f"{ROOT}/{CENTER_OF_MASS.name}", NodePose(rigid_transform(np.eye(3), vectors.center_of_mass), np.ones(3)))
+        drawn_direction = exaggerate_tilt(vectors.gravity_direction, self.tilt_exaggeration)
+        for layer, direction in ((BASE_GRAVITY, drawn_direction), (VERTICAL, np.array([0.0, 0.0, -1.0]))):
+            arrow = arrow_placement(self.gravity_anchor, direction, 0.3, self.style)
+            place(sink, f"{ROOT}/{layer.name}/shaft", arrow.shaft)
+            place(sink, f"{ROOT}/{layer.name}/head", arrow.head)
+        return vectors
+
+    # ---------------------------------------------------------------- export
+    def legend(self, caption: str = "") -> str:
+        """The HTML legend: colours, scale [cm per N] and the estimated tilt."""
+        return legend_html(self.scale, self.calibration.base_tilt_deg, self.tilt_exaggeration, caption)
+
+    def static_html(self, legend: bool = True, caption: str = "") -> str:
+        """A self-contained page of the current scene (and animation), optionally with the legend."""
+        page = self.visualizer.static_html()
+        return add_legend(page, self.legend(caption)) if legend else page
+
+    def save_html(self, path, legend: bool = True, caption: str = "") -> Path:
+        """Write :meth:`static_html` to ``path`` atomically; returns the path."""
+        return atomic_write_text(path, self.static_html(legend, caption))
+
+
+def _place_live(sink, path: str, pose: NodePose) -> None:
+    sink[path].set_transform(pose.matrix())
+
+
+def _place_animated(sink, path: str, pose: NodePose) -> None:
+    node = sink[path]
+    node.set_transform(pose.rigid)
+    node.set_property("scale", "vector3", [float(v) for v in pose.scale])
