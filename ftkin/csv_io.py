@@ -41,12 +41,13 @@ _DEGREES_THRESHOLD = 2.0 * np.pi + 0.01
 
 @dataclass(frozen=True)
 class Table:
-    """A parsed CSV: header, string cells and the file line of each row."""
+    """A parsed CSV: header, string cells and the file line of each row (and of the header)."""
 
     source: str
     header: list[str]
     rows: list[list[str]]
     lines: list[int]
+    header_line: int | None = None
 
     def column_index(self, name: str) -> int:
         return self.header.index(name)
@@ -83,12 +84,12 @@ def read_table(path) -> Table:
         raise InvalidSamples("file not found", source) from None
     except (OSError, UnicodeDecodeError) as error:
         raise InvalidSamples(f"cannot read: {error}", source) from None
-    header, rows, lines = None, [], []
+    header, header_line, rows, lines = None, None, [], []
     for number, record in enumerate(csv.reader(io.StringIO(text)), start=1):
         if not record or not "".join(record).strip() or record[0].lstrip().startswith("#"):
             continue
         if header is None:
-            header = [cell.strip() for cell in record]
+            header, header_line = [cell.strip() for cell in record], number
             duplicates = sorted({name for name in header if header.count(name) > 1})
             if duplicates:
                 raise InvalidSamples(f"duplicated column(s) {duplicates} in the header", source, number)
@@ -101,7 +102,7 @@ def read_table(path) -> Table:
         raise InvalidSamples("file is empty; expected a header row and data rows", source)
     if not rows:
         raise InvalidSamples("no data rows after the header", source)
-    return Table(source, header, rows, lines)
+    return Table(source, header, rows, lines, header_line)
 
 
 def _missing(table: Table, wanted, what: str) -> None:
@@ -109,12 +110,15 @@ def _missing(table: Table, wanted, what: str) -> None:
     if missing:
         hints = []
         for name in missing:
-            close = difflib.get_close_matches(name, table.header, n=1)
+            close = [column for column in table.header if column.lower() == name.lower()]
+            close = close or difflib.get_close_matches(name, table.header, n=1)
             if close:
                 hints.append(f"{close[0]!r} for {name!r}?")
         hint = (" (did you mean " + ", ".join(hints) + ")") if hints else ""
         raise InvalidSamples(
-            f"missing {what} column(s) {missing}{hint}; the header has {table.header}", table.source, table.lines[0] - 1
+            f"missing {what} column(s) {missing}{hint}; the header has {table.header}",
+            table.source,
+            table.header_line if table.header_line is not None else table.lines[0] - 1,
         )
 
 
@@ -208,7 +212,7 @@ def samples_from_table(table: Table, arm=None) -> LoadedSamples:
     pose_ids = table.floats([POSE_COLUMN])[:, 0] if POSE_COLUMN in table.header else None
     if pose_ids is not None and np.any(pose_ids != np.round(pose_ids)):
         row = int(np.flatnonzero(pose_ids != np.round(pose_ids))[0])
-        raise InvalidSamples(f"pose id {pose_ids[row]!r} is not an integer", table.source, table.lines[row])
+        raise InvalidSamples(f"pose id {float(pose_ids[row])!r} is not an integer", table.source, table.lines[row])
     values = table.floats(columns)
     try:
         if kind == "euler":
