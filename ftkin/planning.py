@@ -26,10 +26,11 @@ import numpy as np
 from .design import d_optimal_selection, information_factors, log_det
 from .evaluation import PoseEvaluation, evaluate_poses, expected_tool
 from .exceptions import InvalidInput, UnobservableParameters
-from .information import SensorNoise, covariance_from_information
+from .information import SensorNoise
+from .model import COMPONENT_NAMES
 from .observability import check_pose_count
 from .pose_constraints import DEFAULT_MARGIN, FeasibilityChecker, PoseConstraints
-from .pose_order import short_travel_order
+from .pose_order import revolute_mask, short_travel_order, unwind_revolute
 from .progress import Progress
 from .rotations import euler_zyx_to_matrix
 
@@ -154,6 +155,7 @@ def plan_poses(
     chosen, _ = d_optimal_selection(pool_factors, n)
     q, rotations = pool_q[chosen].copy(), pool_rotations[chosen].copy()
     q, rotations = _refine(checker, q, rotations, factors, rng, progress)
+    q = unwind_revolute(q, checker.lower, checker.upper, revolute_mask(arm.model))
     order = short_travel_order(q)
     q, rotations = q[order], rotations[order]
     evaluation = evaluate_poses(rotations, tool_weight=model.tool_weight, center_of_mass=model.center_of_mass,
@@ -212,18 +214,22 @@ def _check_pool_observability(pool_factors, constraints):
     _check_information(pool_factors, constraints)
 
 
-def _check_information(factors, constraints):
+def _check_information(factors, constraints, rcond: float = 1e-10):
+    """Refuse when the summed information of ``factors`` is singular; name every weak parameter."""
     information = np.einsum("nki,nkj->ij", factors, factors)
-    try:
-        covariance_from_information(information, rcond=1e-10)
-    except UnobservableParameters as error:
-        raise UnobservableParameters(
-            error.names,
-            f"every sensor orientation these constraints allow ({constraints.describe()}) sees gravity "
-            "along (nearly) the same sensor direction, so the tool's weight cannot be told apart from "
-            "the force bias nor its centre of mass along that direction; allow more tilt",
-            singular_values=error.singular_values,
-        ) from None
+    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
+    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
+    weak = eigenvalues <= rcond * eigenvalues[-1]
+    if not np.any(weak):
+        return
+    involved = np.any(np.abs(eigenvectors[:, weak]) > 0.3, axis=1) | (np.diag(information) <= rcond * information.max())
+    raise UnobservableParameters(
+        [COMPONENT_NAMES[i] for i in np.flatnonzero(involved)],
+        f"every sensor orientation these constraints allow ({constraints.describe()}) sees gravity "
+        "along (nearly) the same sensor direction, so the tool's weight cannot be told apart from "
+        "the force bias, nor its centre of mass along that direction; allow more tilt or wider joint ranges",
+        singular_values=eigenvalues[::-1],
+    )
 
 
 def _refine(checker, q, rotations, factors, rng, progress):

@@ -1,0 +1,166 @@
+"""``ftkin plan --n 12 -o poses.csv``: plan calibration poses for an arm."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+
+from ..atomic import atomic_write_text
+from ..csv_io import POSE_COLUMN, write_csv
+from ..evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT
+from ..exceptions import InvalidInput
+from ..information import SensorNoise
+from ..planning import plan_poses
+from ..pose_constraints import DEFAULT_MARGIN
+from .common import add_arm_arguments, arm_from_args, non_negative_float, positive_float
+
+FORMATS = ("csv", "yaml", "json")
+
+
+def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
+    """Expected tool and sensor noise the predicted standard errors are for."""
+    group = parser.add_argument_group("expected tool and sensor noise (defaults: the paper's)")
+    group.add_argument("--tool-weight", type=positive_float, default=PAPER_TOOL_WEIGHT, metavar="N",
+                       help="tool weight [N] (default: %(default)s)")
+    group.add_argument("--com", type=float, nargs=3, default=list(PAPER_CENTER_OF_MASS), metavar=("X", "Y", "Z"),
+                       help="tool centre of mass in the sensor frame [m] (default: 0 0 0.047)")
+    noise = SensorNoise.paper()
+    group.add_argument("--noise-force", type=positive_float, default=float(noise.force_std[0]), metavar="N",
+                       help="force noise per reading [N] (default: %(default)s)")
+    group.add_argument("--noise-torque", type=positive_float, default=float(noise.torque_std[0]), metavar="NM",
+                       help="torque noise per reading [N·m] (default: %(default)s)")
+    group.add_argument("--readings-per-pose", type=int, default=1, metavar="K",
+                       help="independent readings averaged at each pose (default: %(default)s)")
+
+
+def expectation_from_args(args) -> dict:
+    """Keyword arguments for :func:`ftkin.planning.plan_poses` / :func:`ftkin.evaluation.evaluate_poses`."""
+    if args.readings_per_pose < 1:
+        raise InvalidInput(f"--readings-per-pose must be at least 1, got {args.readings_per_pose}")
+    return {
+        "tool_weight": args.tool_weight,
+        "center_of_mass": args.com,
+        "noise": SensorNoise(args.noise_force, args.noise_torque),
+        "readings_per_pose": args.readings_per_pose,
+    }
+
+
+def joint_range(text: str) -> tuple[str, float, float]:
+    """argparse type: ``NAME:LO:HI`` [rad]."""
+    parts = text.rsplit(":", 2)
+    try:
+        if len(parts) != 3 or not parts[0]:
+            raise ValueError
+        return parts[0], float(parts[1]), float(parts[2])
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected NAME:LO:HI with LO, HI in radians, got {text!r}") from None
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "plan",
+        help="plan calibration poses (joint configurations) for the most accurate calibration",
+        description="Choose N joint configurations (D-optimal: largest log det of the Fisher information) "
+        "within joint limits, free of self-collision and above the floor, ordered for short joint travel; "
+        "print the predicted standard error of every calibration parameter.",
+    )
+    parser.add_argument("--n", type=int, required=True, help="number of poses (at least 3)")
+    parser.add_argument("-o", "--output", metavar="POSES.csv", help="write the poses here")
+    parser.add_argument("--format", choices=FORMATS, default=None, help="output format (default: from the file name, else csv)")
+    group = parser.add_argument_group("constraints")
+    group.add_argument("--margin", type=non_negative_float, default=DEFAULT_MARGIN, metavar="RAD",
+                       help="distance kept from the joint limits [rad] (default: %(default)s)")
+    group.add_argument("--floor-height", type=float, default=None, metavar="M",
+                       help="sensor and tool origins stay above this height in the base frame [m]")
+    group.add_argument("--max-tilt-deg", type=non_negative_float, default=None, metavar="DEG",
+                       help="largest angle of the tool axis from pointing straight down [deg]")
+    group.add_argument("--joint-range", type=joint_range, action="append", default=[], metavar="NAME:LO:HI",
+                       help="extra range for one joint [rad]; repeat for several joints")
+    group.add_argument("--no-self-collision", action="store_true", help="do not check self-collision")
+    group.add_argument("--package-dir", action="append", default=[], metavar="DIR",
+                       help="folder that package:// mesh URIs of --urdf resolve against (repeatable)")
+    parser.add_argument("--seed", type=int, default=0, help="random seed; the same seed gives the same plan (default: 0)")
+    add_expectation_arguments(parser)
+    add_arm_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def load_arm(args):
+    """The arm named on the command line (the bundled arm by default)."""
+    from ..arm import Arm
+
+    arm = arm_from_args(args) or Arm.default()
+    if getattr(args, "package_dir", None):
+        arm.package_dirs = list(arm.package_dirs) + list(args.package_dir)
+    return arm
+
+
+def run(args) -> int:
+    arm = load_arm(args)
+    max_tilt = None if args.max_tilt_deg is None else float(np.deg2rad(args.max_tilt_deg))
+    plan = plan_poses(
+        arm, args.n, margin=args.margin, floor_height=args.floor_height, max_tilt=max_tilt,
+        joint_ranges=args.joint_range, self_collision=not args.no_self_collision, seed=args.seed,
+        **expectation_from_args(args),
+    )
+    print(plan.report())
+    print(_pose_lines(plan))
+    if args.output:
+        fmt = args.format or _format_from_name(args.output)
+        write_plan(plan, args.output, fmt)
+        print(f"wrote {args.output} ({fmt})")
+    return 0
+
+
+def _format_from_name(path: str) -> str:
+    lowered = path.lower()
+    if lowered.endswith((".yaml", ".yml")):
+        return "yaml"
+    return "json" if lowered.endswith(".json") else "csv"
+
+
+def _pose_lines(plan) -> str:
+    header = f"{POSE_COLUMN:>4} " + " ".join(f"{name[:12]:>12}" for name in plan.joint_names)
+    rows = [f"{i:>4} " + " ".join(f"{value:>12.4f}" for value in q) for i, q in enumerate(plan.joint_positions)]
+    return "joint positions [rad], in visiting order:\n" + "\n".join([header, *rows])
+
+
+def plan_document(plan) -> dict:
+    """The plan as plain data (YAML/JSON output)."""
+    errors = {key: np.atleast_1d(value).tolist() for key, value in plan.standard_errors.items()}
+    return {
+        "joint_names": list(plan.joint_names),
+        "joint_positions_rad": plan.joint_positions.tolist(),
+        "seed": plan.seed,
+        "constraints": plan.constraints.describe(),
+        "criterion": plan.criterion,
+        "criterion_value": plan.criterion_value,
+        "predicted_standard_errors": errors,
+    }
+
+
+def write_plan(plan, path: str, fmt: str) -> None:
+    """Write the poses as CSV (``pose`` plus one column per joint [rad]), YAML or JSON."""
+    if fmt == "csv":
+        rows = [[i, *map(float, q)] for i, q in enumerate(plan.joint_positions)]
+        write_csv(path, [POSE_COLUMN, *plan.joint_names], rows)
+    elif fmt == "json":
+        atomic_write_text(path, json.dumps(plan_document(plan), indent=2) + "\n")
+    else:
+        atomic_write_text(path, _to_yaml(plan_document(plan)))
+
+
+def _to_yaml(document: dict) -> str:
+    lines = []
+    for key, value in document.items():
+        if isinstance(value, dict):
+            lines.append(f"{key}:")
+            lines += [f"  {name}: {json.dumps(item)}" for name, item in value.items()]
+        elif isinstance(value, list) and value and isinstance(value[0], list):
+            lines.append(f"{key}:")
+            lines += [f"  - {json.dumps(row)}" for row in value]
+        else:
+            lines.append(f"{key}: {json.dumps(value)}")
+    return "\n".join(lines) + "\n"
