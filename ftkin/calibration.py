@@ -12,14 +12,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .exceptions import InvalidInput
-from .information import standard_errors
+from .fit_quality import FitDiagnostics, diagnose
+from .information import SensorNoise, standard_errors
 from .linear import fit_linear
+from .ml import LOSSES, fit_ml
 from .model import STANDARD_GRAVITY, SensorModel
-from .samples import Samples
+from .samples import PoseAverages, Samples
 from .validation import as_positive
 
-METHODS = ("linear",)
-"""Estimators :func:`calibrate` accepts."""
+METHODS = ("ml", "linear")
+"""Estimators :func:`calibrate` accepts; the first is the default."""
 
 
 @dataclass(frozen=True)
@@ -40,7 +42,9 @@ class CalibrationResult(SensorModel):
         urdf: URDF used for forward kinematics, if joint angles were given.
         sensor_frame: Its sensor frame name.
         covariance: ``(12, 12)`` covariance of ``θ = [a, F0, M0, P]`` when
-            the estimator provides one, else None.
+            the estimator provides one (``ml``), else None.
+        diagnostics: Fit quality, outlier poses, observability and warnings
+            (:class:`~ftkin.fit_quality.FitDiagnostics`) for ``ml``, else None.
     """
 
     method: str = "linear"
@@ -51,6 +55,7 @@ class CalibrationResult(SensorModel):
     urdf: str | None = None
     sensor_frame: str | None = None
     covariance: np.ndarray | None = None
+    diagnostics: FitDiagnostics | None = None
 
     @property
     def pose_count(self) -> int:
@@ -82,6 +87,11 @@ class CalibrationResult(SensorModel):
             return None
         return standard_errors(self, self.covariance)
 
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """Warnings about fit quality, outlier poses and poorly determined parameters."""
+        return self.diagnostics.warnings if self.diagnostics is not None else ()
+
     def summary(self) -> str:
         """Human-readable summary with units."""
         from .summary import format_summary
@@ -89,17 +99,35 @@ class CalibrationResult(SensorModel):
         return format_summary(self)
 
 
-_ESTIMATORS = {"linear": fit_linear}
+def _subset(poses: PoseAverages, keep: np.ndarray) -> PoseAverages:
+    return PoseAverages(poses.pose_ids[keep], poses.rotations[keep], poses.wrenches[keep], poses.counts[keep], poses.spread[keep])
 
 
-def calibrate(samples: Samples, *, method: str = "linear", g: float = STANDARD_GRAVITY) -> CalibrationResult:
+def calibrate(
+    samples: Samples,
+    *,
+    method: str = "ml",
+    g: float = STANDARD_GRAVITY,
+    noise: SensorNoise | None = None,
+    loss: str = "linear",
+    drop_outliers: bool = False,
+) -> CalibrationResult:
     """Estimate bias, tool gravity and base tilt from static-pose readings.
 
     Args:
         samples: Raw readings with sensor orientations (see :class:`Samples`);
             readings sharing a pose id are averaged first.
-        method: ``"linear"``: the paper's two-step least squares.
+        method: ``"ml"`` (default): joint maximum-likelihood fit of all six
+            channels with standard errors and diagnostics (:mod:`ftkin.ml`);
+            ``"linear"``: the paper's two-step least squares.
         g: Gravity used to report the tool mass [m/s²] (the paper used 9.8).
+        noise: ``ml`` only: noise of one raw reading [N, N·m]. None estimates
+            it from the spread of repeated readings per pose, else from the
+            residuals.
+        loss: ``ml`` only: ``"linear"`` (Gaussian likelihood), ``"soft_l1"``
+            or ``"huber"`` (robust to outlying poses).
+        drop_outliers: ``ml`` only: refit once without the poses flagged as
+            outliers (see :mod:`ftkin.fit_quality`).
 
     Returns:
         A frozen :class:`CalibrationResult`.
@@ -108,15 +136,33 @@ def calibrate(samples: Samples, *, method: str = "linear", g: float = STANDARD_G
         UnobservableParameters: the poses cannot determine the parameters
             (fewer than three, orientations alike, gravity along one sensor
             direction); the error names them.
-        InvalidInput: unknown method or bad ``g``.
+        InvalidInput: unknown method or loss, bad ``g`` or ``noise``, or ml
+            options with ``method="linear"``.
     """
     if not isinstance(samples, Samples):
         raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
-    if method not in _ESTIMATORS:
+    if method not in METHODS:
         raise InvalidInput(f"unknown calibration method {method!r}; expected one of {', '.join(METHODS)}")
+    if loss not in LOSSES:
+        raise InvalidInput(f"unknown loss {loss!r}; expected one of {', '.join(LOSSES)}")
+    if noise is not None and not isinstance(noise, SensorNoise):
+        raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
+    if method == "linear" and (noise is not None or loss != "linear" or drop_outliers):
+        raise InvalidInput("noise, loss and drop_outliers apply to method='ml' only")
     g = as_positive(g, "g")
     poses = samples.pose_averages()
-    model = _ESTIMATORS[method](poses, g)
+    covariance = diagnostics = None
+    if method == "linear":
+        model = fit_linear(poses, g)
+    else:
+        fit = fit_ml(poses, g, noise, loss)
+        diagnostics, covariance = diagnose(fit, poses.pose_ids)
+        if drop_outliers and diagnostics.outlier_pose_ids:
+            dropped = diagnostics.outlier_pose_ids
+            poses = _subset(poses, ~np.isin(poses.pose_ids, dropped))
+            fit = fit_ml(poses, g, noise, loss)
+            diagnostics, covariance = diagnose(fit, poses.pose_ids, dropped)
+        model = fit.model
     residuals = poses.wrenches - model.predict(poses.rotations)
     return CalibrationResult(
         force_offset=model.force_offset,
@@ -128,8 +174,9 @@ def calibrate(samples: Samples, *, method: str = "linear", g: float = STANDARD_G
         pose_ids=poses.pose_ids,
         pose_wrenches=poses.wrenches,
         residuals=residuals,
-        sample_count=len(samples),
+        sample_count=int(np.sum(poses.counts)),
         urdf=samples.urdf,
         sensor_frame=samples.sensor_frame,
+        covariance=covariance,
+        diagnostics=diagnostics,
     )
-

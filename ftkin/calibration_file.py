@@ -7,7 +7,11 @@ Keys (units): ``force_offset`` [N], ``torque_offset`` [N·m],
 ``residual_rms`` (per channel fx..mz [N, N·m], null without poses), ``urdf``, ``sensor_frame``,
 ``poses`` (ids, mean measured wrench and residual per pose), ``covariance``
 (12×12 over ``[a, F0, M0, P]`` or null), ``std_errors`` (same keys as the
-values), ``created`` (UTC, ISO 8601), ``ftkin_version``.
+values), ``diagnostics`` (``ml`` only, else absent: noise used, chi-square,
+per-pose normalized residuals, outliers, condition number, warnings; see
+:class:`~ftkin.fit_quality.FitDiagnostics`), ``created`` (UTC, ISO 8601),
+``ftkin_version``. Files without ``covariance``/``diagnostics`` (written by
+``linear`` or an older ftkin) load with those set to None.
 
 Floats are written with Python's shortest round-trip repr, so
 save → load gives back the same numbers bit for bit.
@@ -24,7 +28,8 @@ import numpy as np
 
 from .atomic import atomic_write_text
 from .calibration import CalibrationResult
-from .exceptions import CalibrationFileError
+from .exceptions import CalibrationFileError, FtkinError
+from .fit_quality import FitDiagnostics
 
 FORMAT_NAME = "ftkin-calibration"
 FORMAT_VERSION = 1
@@ -50,6 +55,14 @@ def _jsonable(value):
     if isinstance(value, (np.floating, np.integer)):
         return value.item()
     return value
+
+
+def _std_errors_document(result: CalibrationResult) -> dict | None:
+    """Standard errors under the keys of the values (``base_tilt_deg`` in degrees; ``base_tilt`` kept, rad)."""
+    errors = result.std_errors
+    if errors is None:
+        return None
+    return {**errors, "base_tilt_deg": np.rad2deg(errors["base_tilt"])}
 
 
 def calibration_to_dict(result: CalibrationResult) -> dict:
@@ -80,7 +93,8 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
             "residuals": result.residuals,
         },
         "covariance": result.covariance,
-        "std_errors": result.std_errors,
+        "std_errors": _std_errors_document(result),
+        **({"diagnostics": result.diagnostics.to_dict()} if result.diagnostics is not None else {}),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "ftkin_version": __version__,
     }
@@ -133,6 +147,20 @@ class _Reader:
         return float(value)
 
 
+def _diagnostics(reader: _Reader) -> FitDiagnostics | None:
+    data = reader.get("diagnostics", required=False)
+    if data is None:
+        return None
+    if not isinstance(data, dict):
+        reader.fail(f"expected an object, got {type(data).__name__}", "diagnostics")
+    try:
+        return FitDiagnostics.from_dict(data)
+    except KeyError as error:
+        reader.fail(f"missing {error.args[0]!r}", "diagnostics")
+    except (TypeError, ValueError, FtkinError) as error:
+        reader.fail(f"malformed: {error}", "diagnostics")
+
+
 def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationResult:
     """Rebuild a :class:`CalibrationResult` from a parsed calibration document."""
     if not isinstance(document, dict):
@@ -181,6 +209,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             urdf=urdf,
             sensor_frame=sensor_frame,
             covariance=reader.array("covariance", (12, 12), required=False),
+            diagnostics=_diagnostics(reader),
         )
     except (ValueError, TypeError) as error:
         raise CalibrationFileError(path, str(error)) from None

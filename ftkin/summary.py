@@ -45,6 +45,51 @@ def format_summary(result) -> str:
             "  mean relative compensation error: "
             + ", ".join(f"{name} {value:.2f}%" for name, value in zip(WRENCH_CHANNELS, relative))
         )
+    if getattr(result, "diagnostics", None) is not None:
+        lines.extend(_diagnostics_lines(result.diagnostics))
     if result.urdf:
         lines.append(f"  kinematics: {result.urdf} (sensor frame {result.sensor_frame})")
     return "\n".join(lines)
+
+
+_NOISE_SOURCE_TEXT = {
+    "given": "given",
+    "spread": "from the spread of repeated readings",
+    "residuals": "from the residuals",
+}
+
+
+def _diagnostics_lines(diagnostics) -> list[str]:
+    """Noise, goodness of fit, outliers, observability and warnings of an ml fit."""
+    noise = diagnostics.noise
+    lines = [
+        f"  noise per reading ({_NOISE_SOURCE_TEXT.get(diagnostics.noise_source, diagnostics.noise_source)}): "
+        f"force {_vector(noise.force_std, 4).replace('+', '')} N, torque {_vector(noise.torque_std, 5).replace('+', '')} N·m"
+        + (f"; loss {diagnostics.loss}" if diagnostics.loss != "linear" else "")
+    ]
+    if diagnostics.noise_source == "residuals":
+        fit = "not testable (noise estimated from the same residuals)"
+    elif diagnostics.fit_ok:
+        fit = "consistent with the noise"
+    else:
+        fit = f"DOES NOT FIT the noise; standard errors scaled by {diagnostics.covariance_scale ** 0.5:.2f}"
+    p_text = f", p = {diagnostics.p_value:.2g}" if np.isfinite(diagnostics.p_value) else ""
+    lines.append(f"  goodness of fit: chi-square {diagnostics.chi_square:.1f} for {diagnostics.dof} dof{p_text}: {fit}")
+    lines.append(
+        "  reduced chi-square per channel: "
+        + ", ".join(f"{name} {value:.2f}" for name, value in zip(WRENCH_CHANNELS, diagnostics.channel_chi_square))
+    )
+    worst = int(np.nanargmax(diagnostics.pose_normalized_residuals)) if len(diagnostics.pose_ids) else None
+    if worst is not None and np.isfinite(diagnostics.pose_normalized_residuals[worst]):
+        lines.append(
+            f"  largest pose residual: pose {diagnostics.pose_ids[worst]} "
+            f"{diagnostics.pose_normalized_residuals[worst]:.2f}σ (p = {diagnostics.pose_p_values[worst]:.2g})"
+        )
+    if diagnostics.outlier_pose_ids:
+        lines.append("  OUTLIER poses: " + ", ".join(str(i) for i in diagnostics.outlier_pose_ids))
+    if diagnostics.dropped_pose_ids:
+        lines.append("  dropped as outliers before the final fit: poses " + ", ".join(str(i) for i in diagnostics.dropped_pose_ids))
+    weakest = ", ".join(f"{weight:+.2f} {name}" for name, weight in diagnostics.weakest_components)
+    lines.append(f"  observability: condition number {diagnostics.condition_number:.3g}, weakest direction {weakest}")
+    lines.extend(f"  WARNING: {message}" for message in diagnostics.warnings)
+    return lines
