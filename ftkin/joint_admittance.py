@@ -121,7 +121,7 @@ class JointAdmittance:
             raise InvalidInput(f"dt must be a finite positive time step [s], got {dt!r}")
         jacobian = pin.computeFrameJacobian(self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED)
         rotation = self._data.oMf[self._sensor_id].rotation
-        contact = raw.copy() if self.compensator is None else self.compensator._compensate_one(rotation, raw)
+        contact = raw.copy() if self.compensator is None else self.compensator.compensate_rotation_unchecked(rotation, raw)
         fx, fy, fz, mx, my, mz = contact.tolist()
         force, torque = math.sqrt(fx * fx + fy * fy + fz * fz), math.sqrt(mx * mx + my * my + mz * mz)
         if self.safety_latched or force > self.force_limit or torque > self.torque_limit:

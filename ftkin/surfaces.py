@@ -1,0 +1,65 @@
+"""Surfaces for the placement simulation: horizontal spring–dampers.
+
+A surface is the plane ``z = height`` in the base frame. An object pressed
+``penetration`` [m] into it (rate ``penetration_rate`` [m/s]) feels the upward
+normal force ``N = max(0, k·δ + c·δ̇)`` for ``δ > 0`` and nothing otherwise: it
+pushes, it never pulls. ``k`` and ``c`` are *effective* values: the surface in
+series with the gripper's and the object's own compliance, which is why even
+the book is only tens of kN/m.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from .exceptions import InvalidInput
+from .validation import as_positive
+
+
+@dataclass(frozen=True)
+class Surface:
+    """A compliant horizontal surface.
+
+    Attributes:
+        name: Label used in reports and plots.
+        stiffness: ``k`` [N/m].
+        damping: ``c`` [N·s/m].
+        height: Top of the surface along base z [m].
+    """
+
+    name: str
+    stiffness: float
+    damping: float
+    height: float = 0.0
+
+    def __post_init__(self):
+        as_positive(self.stiffness, "surface stiffness [N/m]")
+        if not self.damping >= 0.0:
+            raise InvalidInput(f"surface damping [N·s/m] must be >= 0, got {self.damping!r}")
+
+    def normal_force(self, penetration: float, penetration_rate: float) -> float:
+        """Upward force [N] on an object ``penetration`` [m] deep, moving in at ``penetration_rate`` [m/s]."""
+        if penetration <= 0.0:
+            return 0.0
+        return max(0.0, self.stiffness * penetration + self.damping * penetration_rate)
+
+    def at_height(self, height: float) -> Surface:
+        """The same surface with its top at ``height`` [m]."""
+        return replace(self, height=float(height))
+
+
+SPONGE = Surface("sponge", stiffness=2.0e3, damping=20.0)
+"""A sponge pad: soft, 2 kN/m, 20 N·s/m."""
+
+BOOK = Surface("book", stiffness=2.0e4, damping=100.0)
+"""A book on a table (with the gripper's compliance): stiff, 20 kN/m, 100 N·s/m."""
+
+SURFACES = {surface.name: surface for surface in (SPONGE, BOOK)}
+"""Surfaces by name."""
+
+
+def surface_by_name(name: str) -> Surface:
+    """:data:`SPONGE` or :data:`BOOK` by name; :class:`InvalidInput` lists the names."""
+    if name not in SURFACES:
+        raise InvalidInput(f"unknown surface {name!r}; expected one of {sorted(SURFACES)}")
+    return SURFACES[name]
