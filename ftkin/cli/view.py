@@ -1,0 +1,168 @@
+"""``ftkin view CALIB.json SAMPLES.csv`` / ``ftkin view CALIB.json --replay LOG.csv``: see the calibration in 3D."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..arm import Arm
+from ..calibration_file import load_calibration
+from ..exceptions import InvalidInput
+from .common import add_samples_arguments, arm_from_args, load_samples_from_args, positive_float
+
+TIME_COLUMN = "t"
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "view",
+        help="3D view (meshcat) of the arm, sensor frame and force vectors at the calibration poses",
+        description="Show the arm at each calibration pose with arrows from the sensor origin: measured force minus "
+        "bias (magenta), predicted tool gravity (cyan), compensated contact force (yellow); the tool's centre of mass "
+        "(green) and the estimated gravity direction of the base (purple). At a good calibration magenta lies on cyan. "
+        "Starts a meshcat server and prints its URL (Ctrl-C stops it), or writes --html / --png.",
+    )
+    parser.add_argument("calibration", metavar="CALIB.json")
+    parser.add_argument("samples", metavar="SAMPLES.csv", nargs="?", help="the calibration samples (poses to step through)")
+    parser.add_argument("--replay", metavar="LOG.csv", help="play a recorded run instead: joint columns, fx..mz, optional t [s]")
+    parser.add_argument("--html", metavar="OUT.html", help="write a self-contained page (animated unless --pose is given)")
+    parser.add_argument("--png", metavar="OUT.png", help="write a screenshot with headless Chromium (1024×768)")
+    parser.add_argument("--pose", type=int, metavar="K", help="only this pose: pose id of SAMPLES.csv, or row index of the replay log")
+    parser.add_argument("--scale", type=positive_float, metavar="M_PER_N", help="arrow length per newton [m/N] (default: tool weight = 25 cm)")
+    parser.add_argument("--tilt-exaggeration", type=positive_float, default=1.0, metavar="K", help="draw the base tilt K times larger")
+    parser.add_argument("--hold", type=positive_float, default=1.0, metavar="S", help="seconds per calibration pose in the animation")
+    parser.add_argument("--max-frames", type=int, default=1500, metavar="N", help="replay: keep at most N rows (evenly spaced)")
+    parser.add_argument("--no-wait", action="store_true", help="do not keep the live viewer running (scripts, tests)")
+    add_samples_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+@dataclass(frozen=True)
+class Frames:
+    """What to show: one entry per pose (or log row)."""
+
+    labels: list[str]
+    raw_wrenches: np.ndarray
+    configurations: np.ndarray | None
+    rotations: np.ndarray
+    times: np.ndarray | None
+
+
+def _calibration_poses(loaded) -> Frames:
+    samples = loaded.samples
+    averages = samples.pose_averages()
+    configurations = None
+    if samples.joint_positions is not None:
+        configurations = np.array([samples.joint_positions[samples.pose_ids == pid].mean(axis=0) for pid in averages.pose_ids])
+    labels = [f"pose {int(pid)}" for pid in averages.pose_ids]
+    return Frames(labels, averages.wrenches, configurations, averages.rotations, None)
+
+
+def _replay_rows(loaded, max_frames: int) -> Frames:
+    samples, table = loaded.samples, loaded.table
+    times = table.floats([TIME_COLUMN])[:, 0] if TIME_COLUMN in table.header else None
+    if times is not None and np.any(np.diff(times) < 0):
+        raise InvalidInput(f"{table.source}: column {TIME_COLUMN!r} must not decrease (seconds since the start)")
+    rows = np.arange(len(samples))
+    if max_frames < 1:
+        raise InvalidInput(f"--max-frames must be at least 1, got {max_frames}")
+    if len(rows) > max_frames:
+        rows = np.unique(np.linspace(0, len(samples) - 1, max_frames).round().astype(int))
+    if times is None:
+        times = rows / 30.0  # no clock: 30 rows per second
+    else:
+        times = times[rows]
+    configurations = samples.joint_positions[rows] if samples.joint_positions is not None else None
+    labels = [f"row {int(r)}" for r in rows]
+    return Frames(labels, np.array(samples.wrenches)[rows], configurations, samples.rotations[rows], times)
+
+
+def _pick(frames: Frames, pose: int, replay: bool) -> int:
+    if replay:
+        wanted = f"row {pose}"
+    else:
+        wanted = f"pose {pose}"
+    if wanted not in frames.labels:
+        shown = ", ".join(frames.labels[:12]) + (" ..." if len(frames.labels) > 12 else "")
+        raise InvalidInput(f"--pose {pose}: no {wanted}; available: {shown}")
+    return frames.labels.index(wanted)
+
+
+def _show(viewer, frames: Frames, k: int):
+    if frames.configurations is not None:
+        return viewer.show_pose(frames.configurations[k], frames.raw_wrenches[k])
+    return viewer.show_rotation(frames.rotations[k], frames.raw_wrenches[k])
+
+
+def _animate(viewer, frames: Frames, hold: float):
+    kind = {"configurations": frames.configurations} if frames.configurations is not None else {"rotations": frames.rotations}
+    return viewer.animate(frames.raw_wrenches, times=frames.times, hold=hold, **kind)
+
+
+def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
+    na, nb = np.linalg.norm(a), np.linalg.norm(b)
+    if na == 0 or nb == 0:
+        return math.nan
+    return math.degrees(math.atan2(np.linalg.norm(np.cross(a, b)), float(a @ b)))
+
+
+def _print_table(frames: Frames, vectors) -> None:
+    print(f"  {'':<10}{'|F-F0| N':>10}{'|Gs| N':>10}{'angle deg':>11}{'|F′| N':>10}{'|M′| N·m':>10}")
+    for label, v in list(zip(frames.labels, vectors))[:40]:
+        print(
+            f"  {label:<10}{np.linalg.norm(v.measured_force):>10.4f}{np.linalg.norm(v.gravity_force):>10.4f}"
+            f"{_angle_deg(v.measured_force, v.gravity_force):>11.3f}{np.linalg.norm(v.contact_wrench[:3]):>10.4f}"
+            f"{np.linalg.norm(v.contact_wrench[3:]):>10.4f}"
+        )
+    if len(frames.labels) > 40:
+        print(f"  ... {len(frames.labels) - 40} more")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..viz import CalibrationViewer  # meshcat is optional: imported only here
+
+    if (args.samples is None) == (args.replay is None):
+        raise InvalidInput("give SAMPLES.csv (calibration poses) or --replay LOG.csv, exactly one")
+    calibration = load_calibration(args.calibration)
+    source = args.replay or args.samples
+    loaded = load_samples_from_args(source, args)
+    frames = _replay_rows(loaded, args.max_frames) if args.replay else _calibration_poses(loaded)
+    arm = None
+    if frames.configurations is not None:
+        arm = arm_from_args(args) or Arm.default()
+        if arm.nq != frames.configurations.shape[1]:
+            raise InvalidInput(f"{source} has {frames.configurations.shape[1]} joint columns but the arm has {arm.nq} joints")
+    chosen = _pick(frames, args.pose, bool(args.replay)) if args.pose is not None else None
+    caption = f"{source}: " + (frames.labels[chosen] if chosen is not None else f"{len(frames.labels)} poses, animated")
+
+    with CalibrationViewer(calibration, arm, scale=args.scale, tilt_exaggeration=args.tilt_exaggeration) as viewer:
+        vectors = _show(viewer, frames, chosen if chosen is not None else 0)
+        print(f"scale: 1 N = {100 * viewer.scale:.3g} cm; magenta = measured force − bias, cyan = predicted tool gravity, "
+              "yellow = contact force, green = tool COM, purple = base gravity direction")
+        if args.png:
+            from ..browser import screenshot_html
+
+            shown = frames.labels[chosen if chosen is not None else 0]
+            screenshot_html(viewer.static_html(caption=f"{source}: {shown}"), args.png)
+            print(f"wrote {args.png} ({shown})")
+        if chosen is None:
+            all_vectors = _animate(viewer, frames, args.hold)
+            _print_table(frames, all_vectors)
+        else:
+            _print_table(Frames([frames.labels[chosen]], frames.raw_wrenches[chosen:chosen + 1], None, frames.rotations, None), [vectors])
+        if args.html:
+            viewer.save_html(args.html, caption=caption)
+            print(f"wrote {args.html}")
+        if args.no_wait or args.html or args.png:
+            return 0
+        print(f"meshcat viewer: {viewer.url}  (animation controls: Open Controls > Animations; Ctrl-C to stop)")
+        try:
+            while True:
+                time.sleep(1.0)
+        except KeyboardInterrupt:
+            print("stopped the viewer")
+    return 0
