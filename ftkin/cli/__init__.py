@@ -20,8 +20,11 @@ COMMAND_MODULES = (
     "paper",
     "demo",
     "extract",
+    "export",
+    "report",
     "plan",
     "evaluate-poses",
+    "view",
 )
 """Subcommand modules of ``ftkin.cli``, in the order ``--help`` lists them."""
 
