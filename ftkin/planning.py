@@ -25,14 +25,19 @@ import numpy as np
 
 from .design import d_optimal_selection, information_factors, log_det
 from .evaluation import PoseEvaluation, evaluate_poses, expected_tool
-from .exceptions import InvalidInput, UnobservableParameters
+from .exceptions import InvalidInput
 from .information import SensorNoise
-from .model import COMPONENT_NAMES
 from .observability import check_pose_count
-from .pose_constraints import DEFAULT_MARGIN, FeasibilityChecker, PoseConstraints
+from .pose_constraints import (
+    DEFAULT_MARGIN,
+    FeasibilityChecker,
+    PoseConstraints,
+    check_information,
+    check_tilt_observability,
+)
 from .pose_order import revolute_mask, short_travel_order, unwind_revolute
 from .progress import Progress
-from .rotations import euler_zyx_to_matrix
+from .validation import as_positive
 
 CRITERION = "D-optimality: log det of the Fisher information of θ = [a, F0, M0, P] (SI units)"
 REFINE_STEPS = (0.2, 0.08, 0.03, 0.01)
@@ -139,6 +144,10 @@ def plan_poses(
         raise InvalidInput(f"n (number of poses) must be an integer, got {n!r}")
     check_pose_count(int(n))
     n = int(n)
+    readings_per_pose = int(as_positive(readings_per_pose, "readings_per_pose"))
+    candidates = max(int(as_positive(candidates, "candidates")), n)
+    if noise is not None and not isinstance(noise, SensorNoise):
+        raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
     constraints = PoseConstraints(margin, floor_height, max_tilt, joint_ranges or (), self_collision)
     model = expected_tool(tool_weight, center_of_mass)
     noise = noise if noise is not None else SensorNoise.paper()
@@ -148,10 +157,10 @@ def plan_poses(
     def factors(rotations):
         return information_factors(rotations, model.gravity_in_base, model.center_of_mass, noise.channel_std, readings_per_pose)
 
-    _check_tilt_observability(checker, constraints, factors)
+    check_tilt_observability(checker, factors)
     pool_q, pool_rotations, sampled = _candidate_pool(checker, rng, candidates, max_samples, n, progress)
     pool_factors = factors(pool_rotations)
-    _check_pool_observability(pool_factors, constraints)
+    check_information(pool_factors, constraints)
     chosen, _ = d_optimal_selection(pool_factors, n)
     q, rotations = pool_q[chosen].copy(), pool_rotations[chosen].copy()
     q, rotations = _refine(checker, q, rotations, factors, rng, progress)
@@ -178,8 +187,8 @@ def _candidate_pool(checker, rng, wanted, max_samples, n, progress):
     with Progress(wanted, "sampling poses", enabled=progress) as bar:
         while len(kept_q) < wanted and sampled < max_samples:
             batch = checker.sample(min(SAMPLE_BATCH, max_samples - sampled), rng)
-            sampled += len(batch)
             for q in batch:
+                sampled += 1
                 rotation = checker.check(q)
                 if rotation is not None:
                     kept_q.append(q)
@@ -195,41 +204,6 @@ def _candidate_pool(checker, rng, wanted, max_samples, n, progress):
             "Loosen the floor height, tilt limit or joint ranges"
         )
     return np.array(kept_q), np.array(kept_rotations), sampled
-
-
-def _check_tilt_observability(checker, constraints, factors):
-    """Refuse a tilt limit that leaves every allowed orientation alike."""
-    if constraints.max_tilt is None:
-        return
-    tool_to_sensor = checker.tool_to_sensor_rotation()
-    grid = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
-    # Tool orientations R_BT = Rz(α) Ry(β) Rx(π) Rz(ψ): tool z tilted by β from straight down.
-    tilted = euler_zyx_to_matrix([[alpha, beta, np.pi] for alpha in grid for beta in (0.0, constraints.max_tilt)])
-    spins = euler_zyx_to_matrix([[psi, 0.0, 0.0] for psi in grid])
-    rotations = np.einsum("aij,bjk,kl->abil", tilted, spins, tool_to_sensor).reshape(-1, 3, 3)
-    _check_information(factors(rotations), constraints)
-
-
-def _check_pool_observability(pool_factors, constraints):
-    _check_information(pool_factors, constraints)
-
-
-def _check_information(factors, constraints, rcond: float = 1e-10):
-    """Refuse when the summed information of ``factors`` is singular; name every weak parameter."""
-    information = np.einsum("nki,nkj->ij", factors, factors)
-    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
-    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
-    weak = eigenvalues <= rcond * eigenvalues[-1]
-    if not np.any(weak):
-        return
-    involved = np.any(np.abs(eigenvectors[:, weak]) > 0.3, axis=1) | (np.diag(information) <= rcond * information.max())
-    raise UnobservableParameters(
-        [COMPONENT_NAMES[i] for i in np.flatnonzero(involved)],
-        f"every sensor orientation these constraints allow ({constraints.describe()}) sees gravity "
-        "along (nearly) the same sensor direction, so the tool's weight cannot be told apart from "
-        "the force bias, nor its centre of mass along that direction; allow more tilt or wider joint ranges",
-        singular_values=eigenvalues[::-1],
-    )
 
 
 def _refine(checker, q, rotations, factors, rng, progress):

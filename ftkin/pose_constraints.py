@@ -10,6 +10,10 @@ applies them to configurations, cheapest test first:
 3. tilt: the tool axis (z axis of the tool frame, else of the sensor frame)
    within ``max_tilt`` [rad] of pointing straight down (base −z);
 4. no self-collision (:class:`~ftkin.collision.SelfCollision`).
+
+:func:`check_tilt_observability` and :func:`check_information` refuse, before
+any optimization, constraint sets under which no pose set could determine
+every parameter, naming the parameters.
 """
 
 from __future__ import annotations
@@ -21,7 +25,9 @@ import numpy as np
 import pinocchio as pin
 
 from .collision import SelfCollision
-from .exceptions import InvalidInput
+from .exceptions import InvalidInput, UnobservableParameters
+from .model import COMPONENT_NAMES
+from .rotations import euler_zyx_to_matrix
 from .validation import as_float_array
 
 DEFAULT_MARGIN = 0.05
@@ -157,3 +163,38 @@ class FeasibilityChecker:
         tool = pin.updateFramePlacement(self.arm.model, self.data, self.axis_frame_id).rotation.copy()
         sensor = pin.updateFramePlacement(self.arm.model, self.data, self.arm.sensor_frame_id).rotation
         return tool.T @ sensor
+
+
+def check_tilt_observability(checker, factors) -> None:
+    """Refuse a tilt limit that leaves every allowed orientation alike (names the parameters).
+
+    ``factors(rotations)`` gives the weighted Jacobians ``(N, 6, 12)`` of :mod:`ftkin.design`.
+    """
+    constraints = checker.constraints
+    if constraints.max_tilt is None:
+        return
+    tool_to_sensor = checker.tool_to_sensor_rotation()
+    grid = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
+    # Tool orientations R_BT = Rz(α) Ry(β) Rx(π) Rz(ψ): tool z tilted by β from straight down.
+    tilted = euler_zyx_to_matrix([[alpha, beta, np.pi] for alpha in grid for beta in (0.0, constraints.max_tilt)])
+    spins = euler_zyx_to_matrix([[psi, 0.0, 0.0] for psi in grid])
+    rotations = np.einsum("aij,bjk,kl->abil", tilted, spins, tool_to_sensor).reshape(-1, 3, 3)
+    check_information(factors(rotations), constraints)
+
+
+def check_information(factors, constraints, rcond: float = 1e-10):
+    """Refuse when the summed information of ``factors`` is singular; name every weak parameter."""
+    information = np.einsum("nki,nkj->ij", factors, factors)
+    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
+    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
+    weak = eigenvalues <= rcond * eigenvalues[-1]
+    if not np.any(weak):
+        return
+    involved = np.any(np.abs(eigenvectors[:, weak]) > 0.3, axis=1) | (np.diag(information) <= rcond * information.max())
+    raise UnobservableParameters(
+        [COMPONENT_NAMES[i] for i in np.flatnonzero(involved)],
+        f"every sensor orientation these constraints allow ({constraints.describe()}) sees gravity "
+        "along (nearly) the same sensor direction, so the tool's weight cannot be told apart from "
+        "the force bias, nor its centre of mass along that direction; allow more tilt or wider joint ranges",
+        singular_values=eigenvalues[::-1],
+    )
