@@ -12,6 +12,7 @@ import contextlib
 import io
 import logging
 import os
+import re
 import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -96,6 +97,16 @@ def read_urdf_text(path: Path) -> str:
         raise UrdfError(str(path), [f"cannot read file: {error}"]) from None
 
 
+_SOURCE_LOCATION = re.compile(r"^at line \d+ in \S+\.(cpp|hpp|h|cc)$")
+
+
+def _parser_lines(stderr: list[str]) -> list[str]:
+    """The parser's messages without its source-code locations ("at line 262 in model.cpp"),
+    which read like lines of the user's URDF."""
+    lines = (" ".join(line.split()) for line in "".join(stderr).splitlines())
+    return [line for line in lines if line and not _SOURCE_LOCATION.match(line)]
+
+
 def build_model(path: Path) -> pin.Model:
     """Build the kinematic model of a URDF file with Pinocchio.
 
@@ -115,7 +126,7 @@ def build_model(path: Path) -> pin.Model:
             model, error = None, caught
     if error is None:
         return model
-    reasons = [f"Pinocchio: {line.strip()}" for line in "".join(stderr).splitlines() if line.strip()]
+    reasons = [f"Pinocchio: {line}" for line in _parser_lines(stderr)]
     reasons += yourdfpy_reasons(text)
     if not reasons:
         reasons = [f"Pinocchio: {error}"]
@@ -134,6 +145,6 @@ def build_geometry(model: pin.Model, path: Path, kind: str, package_dirs: list[s
     if error is None:
         return geometry
     reasons = [f"Pinocchio: {error}"]
-    reasons += [line.strip() for line in "".join(stderr).splitlines() if line.strip()]
+    reasons += _parser_lines(stderr)
     reasons += yourdfpy_reasons(read_urdf_text(path), check_meshes=True)
     raise UrdfError(str(path), reasons) from None

@@ -337,3 +337,33 @@ def test_missing_mesh_detected_when_geometry_requested(tmp_path):
         with pytest.raises(ftkin.UrdfError, match="meshes/base.stl") as info:
             arm.geometry(kind)
         assert info.value.path == str(path.resolve())
+
+
+@pytest.mark.parametrize(
+    ("change", "pattern"),
+    [
+        (lambda links, joint: (links, joint.replace('type="revolute"', 'type="revolut"')), r"no known type \[revolut\]"),
+        (lambda links, joint: (links, joint.replace('<parent link="base"/>', "")), r"\[j1\] is missing a parent"),
+        (lambda links, joint: (links + '\n  <link name="l1"/>', joint), "link 'l1' is not unique"),
+        (lambda links, joint: (links, joint.replace(LIMIT, "")), "REVOLUTE but it does not specify limits"),
+    ],
+)
+def test_pinocchio_refusals_carry_the_parser_reason(tmp_path, change, pattern):
+    path = _write(tmp_path, _urdf(*change(GOOD_LINKS, GOOD_JOINT)))
+    with pytest.raises(ftkin.UrdfError, match=pattern) as info:
+        Arm.from_urdf(path, "l1")
+    # regression: the parser's own source locations ("at line 262 in model.cpp") read like URDF lines
+    assert ".cpp" not in str(info.value)
+    assert all(reason.strip() for reason in info.value.reasons)
+
+
+def test_sensor_mount_with_locked_joints(arm, rng):
+    mounted = Arm.from_urdf(
+        bundled_urdf_path(),
+        "copy",
+        sensor_mount=SensorMount("flange", (0, 0, 0.02), (0, 0, 1.570796327)),
+        locked_joints={"joint6": 0.3},
+    )
+    for q in arm.random_configurations(5, rng):
+        q[5] = 0.3
+        np.testing.assert_allclose(mounted.rotation_sensor_to_base(q[:5]), arm.rotation_sensor_to_base(q), atol=1e-14)
