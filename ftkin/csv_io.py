@@ -79,7 +79,7 @@ def read_table(path) -> Table:
     path = Path(path)
     source = str(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark (Excel) is not part of the header
     except FileNotFoundError:
         raise InvalidSamples("file not found", source) from None
     except (OSError, UnicodeDecodeError) as error:

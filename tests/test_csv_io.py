@@ -203,3 +203,12 @@ def test_missing_column_points_at_the_header_line(tmp_path):
     # regression: the line was the one before the first data row, a comment here
     text = "# c1\n" + HEADER.replace("my", "My") + "\n# c2\n# c3\n" + ROW + "\n"
     _assert_error(tmp_path, text, r"missing wrench column\(s\) \['my'\] \(did you mean 'My'", line=2)
+
+
+def test_excel_byte_order_mark_and_crlf(tmp_path):
+    # regression: the UTF-8 byte-order mark stuck to the first column name
+    path = tmp_path / "excel.csv"
+    path.write_bytes(("\ufeff" + HEADER + "\r\n" + ROW + "\r\n0,30,180,1,2,3,4,5,6\r\n").encode("utf-8"))
+    loaded = load_samples(path)
+    assert loaded.table.header[0] == "alpha"
+    np.testing.assert_allclose(loaded.samples.rotations[1], ftkin.euler_zyx_deg_to_matrix([0, 30, 180]), atol=1e-15)
