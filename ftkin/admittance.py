@@ -160,11 +160,12 @@ class Admittance:
         if frame not in FRAMES:
             raise InvalidInput(f"frame must be one of {FRAMES}, got {frame!r}")
         self.frame = frame
+        names = ("force_deadband", "torque_deadband", "derivative_cutoff", "max_linear_velocity", "max_angular_velocity")
         limits = as_vector([force_deadband, torque_deadband, derivative_cutoff, max_linear_velocity, max_angular_velocity],
                            5, "deadbands, cutoff and velocity limits")
         if np.any(limits[:2] < 0) or np.any(limits[2:] <= 0):
             raise InvalidInput("deadbands must be >= 0; derivative_cutoff and velocity limits must be > 0, "
-                               f"got {dict(zip(('force_deadband', 'torque_deadband', 'derivative_cutoff', 'max_linear_velocity', 'max_angular_velocity'), limits))}")
+                               f"got {dict(zip(names, limits.tolist()))}")
         self.deadband = np.repeat(limits[:2], 3)
         self.derivative_cutoff = float(limits[2])
         self.max_linear_velocity = float(limits[3])

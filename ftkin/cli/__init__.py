@@ -25,6 +25,7 @@ COMMAND_MODULES = (
     "plan",
     "evaluate-poses",
     "view",
+    "simulate",
 )
 """Subcommand modules of ``ftkin.cli``, in the order ``--help`` lists them."""
 

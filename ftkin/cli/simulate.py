@@ -1,0 +1,111 @@
+"""``ftkin simulate placement``: the paper's placement experiment on the bundled arm.
+
+Gains are given as in the paper, k13 [mm/N] and k23 [mm/(s·N)], and converted
+to SI. The CSV has one row per control tick: ``t`` [s], ``displacement`` (tool
+z from the start) [m], ``velocity`` [m/s], ``force`` (true compensated F'z,
+sensor z pointing down) [N], ``measured_force`` (what the controller saw) [N],
+``penetration`` [m], ``normal_force`` [N]; with ``--sweep`` a first column
+``gain`` holds the swept value [mm/N or mm/(s·N)].
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from ..csv_io import write_csv
+from ..exceptions import InvalidInput
+from ..placement import MODES, PlacementRun, PlacementScenario, simulate_placement, sweep
+from ..surfaces import SURFACES, surface_by_name
+from .common import positive_float
+
+_DEFAULT = PlacementScenario()
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser("simulate", help="simulated experiments (the paper's placement test)")
+    experiments = parser.add_subparsers(dest="experiment", metavar="EXPERIMENT", required=True)
+    placement = experiments.add_parser(
+        "placement", help="lower a grasped object onto a sponge or a book: position vs admittance control",
+        description="Lower a grasped object onto a surface with position control, admittance control with "
+        "compensation, or admittance control on raw readings (METHOD.md §6).",
+    )
+    placement.add_argument("--surface", choices=sorted(SURFACES), default="sponge")
+    placement.add_argument("--mode", choices=MODES, default="admittance")
+    placement.add_argument("--k1", type=_non_negative, default=_DEFAULT.k1 * 1e3, metavar="MM_PER_N",
+                           help="position gain k13 [mm/N] (default: %(default)g)")
+    placement.add_argument("--k2", type=_non_negative, default=_DEFAULT.k2 * 1e3, metavar="MM_PER_S_N",
+                           help="velocity gain k23 [mm/(s·N)] (default: %(default)g; the paper swept around 0.1)")
+    placement.add_argument("--weight", type=positive_float, default=_DEFAULT.object_weight, help="object weight [N] (default: %(default)g)")
+    placement.add_argument("--gap", type=_non_negative, default=_DEFAULT.start_gap * 1e3,
+                           help="object bottom above the surface at the start [mm] (default: %(default)g)")
+    placement.add_argument("--duration", type=positive_float, default=_DEFAULT.duration, help="simulated time [s] (default: %(default)g)")
+    placement.add_argument("--dt", type=positive_float, default=_DEFAULT.dt, help="control period [s] (default: %(default)g)")
+    placement.add_argument("--seed", type=int, default=0, help="random seed of the sensor noise (default: %(default)s)")
+    placement.add_argument("--sweep", choices=("k1", "k2"), help="repeat the run over --values of this gain")
+    placement.add_argument("--values", type=_value_list, metavar="V1,V2,...",
+                           help="gain values for --sweep, in the paper's mm units (e.g. 0.05,0.1,0.2)")
+    placement.add_argument("-o", "--output", metavar="RUN.csv", help="write the time series")
+    placement.add_argument("--plot", metavar="RUN.png", help="write displacement, velocity and force plots (needs matplotlib)")
+    placement.set_defaults(func=run)
+
+
+def _non_negative(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (value >= 0 and np.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return value
+
+
+def _value_list(text: str) -> list[float]:
+    return [_non_negative(part) for part in text.split(",") if part.strip()]
+
+
+def _summary(run: PlacementRun) -> str:
+    settle = run.settle_time
+    placed = f"placed at t = {settle:.3f} s" if np.isfinite(settle) else "not placed (|F'z| >= 0.05 N or still moving at the end)"
+    return (f"peak contact force {run.peak_contact_force:.3f} N, final F'z {run.final_force:+.3f} N, "
+            f"final penetration {run.penetration[-1] * 1e3:.3f} mm; {placed}")
+
+
+def run(args) -> int:
+    scenario = PlacementScenario(
+        surface=surface_by_name(args.surface), mode=args.mode, k1=args.k1 * 1e-3, k2=args.k2 * 1e-3,
+        object_weight=args.weight, start_gap=args.gap * 1e-3, duration=args.duration, dt=args.dt, seed=args.seed,
+    )
+    if args.sweep:
+        if not args.values:
+            raise InvalidInput("--sweep needs --values, e.g. --values 0.05,0.1,0.2 (mm units)")
+        if args.mode == "position":
+            raise InvalidInput("--sweep varies admittance gains; use --mode admittance or admittance-uncompensated")
+        runs = sweep(scenario, args.sweep, [value * 1e-3 for value in args.values])
+    else:
+        if args.values:
+            raise InvalidInput("--values needs --sweep k1 or --sweep k2")
+        runs = [simulate_placement(scenario)]
+    for one in runs:
+        prefix = f"{'k13' if args.sweep == 'k1' else 'k23'} = {getattr(one.scenario, args.sweep) * 1e3:g}: " if args.sweep else ""
+        print(f"{args.surface}, {args.mode}: {prefix}{_summary(one)}")
+    if args.output:
+        header = list(PlacementRun.COLUMNS)
+        if args.sweep:
+            header = ["gain"] + header
+            rows = [[value, *row] for value, one in zip(args.values, runs) for row in one.rows().tolist()]
+        else:
+            rows = runs[0].rows().tolist()
+        write_csv(args.output, header, rows)
+        print(f"wrote {args.output}")
+    if args.plot:
+        from ..placement_plots import plot_runs, plot_sweep
+
+        title = f"Placement on the {args.surface}, {args.mode}"
+        if args.sweep:
+            plot_sweep(runs, args.sweep, args.plot, title)
+        else:
+            plot_runs(runs, args.plot, title)
+        print(f"wrote {args.plot}")
+    return 0
