@@ -71,6 +71,13 @@ class Compensator:
             raise InvalidInput("compensate_rotation takes one (3, 3) rotation and one (6,) wrench; use compensate_batch")
         return self._compensate_one(rotations[0], raw[0])
 
+    def compensate_rotation_unchecked(self, rotation: np.ndarray, raw: np.ndarray) -> np.ndarray:
+        """:meth:`compensate_rotation` without validation: ``R_BS`` ``(3, 3)`` and ``raw`` ``(6,)`` float arrays.
+
+        For control loops that validated their inputs already; returns a new array.
+        """
+        return self._compensate_one(rotation, raw)
+
     def _compensate_one(self, rotation: np.ndarray, raw: np.ndarray) -> np.ndarray:
         a = self._gravity_in_base
         gx = rotation[0, 0] * a[0] + rotation[1, 0] * a[1] + rotation[2, 0] * a[2]
