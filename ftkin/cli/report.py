@@ -1,0 +1,32 @@
+"""``ftkin report CALIB.json SAMPLES -o report.png``: measured vs predicted per pose, residuals."""
+
+from __future__ import annotations
+
+from ..calibration_file import load_calibration
+from ..report import save_report
+from .common import add_samples_arguments, load_samples_from_args
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "report",
+        help="plot measured vs predicted wrench per pose and the residuals (needs ftkin[plots])",
+        description="Draw a one-page report (PNG, PDF or SVG): per channel fx..mz the per-pose mean "
+        "measured reading (± standard error) against the calibration's prediction, the residuals, and "
+        "the parameters with standard errors when the calibration has them. SAMPLES is a samples CSV or "
+        "a ROS 2 bag (same options as 'ftkin calibrate'; give the same --robot/--urdf).",
+    )
+    parser.add_argument("calibration", metavar="CALIB.json")
+    parser.add_argument("samples", metavar="SAMPLES")
+    parser.add_argument("-o", "--output", required=True, metavar="report.png")
+    parser.add_argument("--title", help="figure title")
+    add_samples_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    calibration = load_calibration(args.calibration)
+    loaded = load_samples_from_args(args.samples, args)
+    save_report(calibration, loaded.samples, args.output, args.title)
+    print(f"wrote report of {len(set(loaded.samples.pose_ids.tolist()))} poses to {args.output}")
+    return 0
