@@ -164,6 +164,12 @@ class CalibrationViewer:
         distance = 1.25 * max(extent, 0.5)
         self.set_camera(distance * np.array([0.55, -0.75, 0.35]) / np.linalg.norm([0.55, -0.75, 0.35]))
 
+    def set_calibration(self, calibration: SensorModel) -> None:
+        """Show another calibration from the next pose on (the arrow scale stays)."""
+        if not isinstance(calibration, SensorModel):
+            raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
+        self.calibration = calibration
+
     def set_camera(self, position) -> None:
         """Camera position relative to the orbit target, base axes [m]."""
         x, y, z = as_vector(position, 3, "camera position [m]")
