@@ -37,7 +37,7 @@ FIT_ALPHA = 1e-3
 OUTLIER_ALPHA = 1e-3
 """Family-wise false-alarm rate of the outlier test (per pose: ``OUTLIER_ALPHA / P``)."""
 
-RELATIVE_STD_ERROR_WARNING = 0.1
+RELATIVE_STD_ERROR_WARNING = 0.02
 """Warn when a parameter's standard error exceeds this fraction of its block's scale."""
 
 MIN_COM_SCALE = 0.01
