@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import logging
+from pathlib import Path
 
-from ..arm import Arm
+from ..arm import Arm, bundled_urdf_path
 from ..csv_io import load_samples
-from ..exceptions import InvalidInput
+from ..exceptions import FrameNotFound, InvalidInput
 from ..robots import DEFAULT_ROBOT, ROBOTS, load_robot, sensor_mount_from_offset
+
+logger = logging.getLogger("ftkin.cli")
 
 
 def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
@@ -107,17 +111,56 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def load_samples_from_args(path: str, args: argparse.Namespace, *, static_only: bool = True):
+def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:
+    """The arm to read joint angles with when applying ``calibration``.
+
+    The options given win; without any, the URDF and sensor frame recorded in
+    the calibration file are used (when that file still exists), so a log is
+    compensated with the kinematics it was calibrated with. Returns None when
+    nothing is named or recorded (the bundled arm is then used on demand).
+    """
+    arm = arm_from_args(args)
+    if arm is not None or not calibration.urdf:
+        return arm
+    recorded = Path(calibration.urdf)
+    if not recorded.is_file() or recorded.resolve() == bundled_urdf_path().resolve():
+        return None
+    try:
+        return Arm.from_urdf(recorded, calibration.sensor_frame or "ft_sensor")
+    except FrameNotFound:
+        raise InvalidInput(
+            f"the calibration was made with {recorded} and a sensor frame {calibration.sensor_frame!r} that the URDF "
+            "does not contain (it was added with --robot or --sensor-parent): give the same robot options as for "
+            "the calibration"
+        ) from None
+
+
+def warn_if_kinematics_differ(loaded, calibration) -> None:
+    """Log a warning when samples were read with another URDF or sensor frame than the calibration's."""
+    samples = loaded.samples
+    if samples.urdf is None or calibration.urdf is None:
+        return
+    if Path(samples.urdf).name != Path(calibration.urdf).name or samples.sensor_frame != calibration.sensor_frame:
+        logger.warning(
+            "the calibration was made with %s (sensor frame %s) but these samples were read with %s (sensor frame %s)",
+            calibration.urdf, calibration.sensor_frame, samples.urdf, samples.sensor_frame,
+        )
+
+
+def load_samples_from_args(path: str, args: argparse.Namespace, *, static_only: bool = True, arm: Arm | None = None):
     """Read a samples CSV or a ROS 2 bag named on the command line.
 
     Returns a :class:`~ftkin.csv_io.LoadedSamples` (a :class:`~ftkin.bags.BagSamples`
     for a bag). ``static_only`` applies to bags: True keeps the readings of the
-    static segments (calibration), False every reading (compensation).
+    static segments (calibration), False every reading (compensation). ``arm``
+    overrides the arm the options name (see :func:`arm_for_calibration`).
     """
     from ..bags import bag_samples, is_bag_path
 
+    if arm is None:
+        arm = arm_from_args(args)
     if not is_bag_path(path):
-        return load_samples(path, arm_from_args(args))
+        return load_samples(path, arm)
     from ..static_segments import SegmentParameters
 
     defaults = SegmentParameters()
@@ -129,7 +172,7 @@ def load_samples_from_args(path: str, args: argparse.Namespace, *, static_only: 
     )
     return bag_samples(
         path,
-        arm_from_args(args),
+        arm,
         joint_topic=getattr(args, "joint_topic", None),
         wrench_topic=getattr(args, "wrench_topic", None),
         parameters=parameters,

@@ -8,7 +8,7 @@ from ..calibration_file import load_calibration
 from ..compensation import Compensator
 from ..csv_io import write_csv
 from ..model import WRENCH_CHANNELS
-from .common import add_samples_arguments, load_samples_from_args
+from .common import add_samples_arguments, arm_for_calibration, load_samples_from_args, warn_if_kinematics_differ
 
 
 def register(subparsers) -> None:
@@ -27,7 +27,8 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
-    loaded = load_samples_from_args(args.log, args, static_only=False)
+    loaded = load_samples_from_args(args.log, args, static_only=False, arm=arm_for_calibration(args, calibration))
+    warn_if_kinematics_differ(loaded, calibration)
     contact = Compensator(calibration).compensate_samples(loaded.samples)
     table = loaded.table
     wrench_columns = [table.column_index(name) for name in WRENCH_CHANNELS]
