@@ -66,33 +66,38 @@ class ControlFrame:
             raise InvalidInput(f"rotation_tool_to_sensor must be a (3, 3) rotation matrix, got {rotation!r}")
         self.rotation_tool_to_sensor = rotation if frame == "tool" else np.eye(3)
         self._r = self.point_in_sensor.tolist()
+        self._rotation_rows = self.rotation_tool_to_sensor.tolist()
+        self._inverse_rows = self.rotation_tool_to_sensor.T.tolist()
 
     def wrench_from_sensor(self, wrench_in_sensor: np.ndarray, rotation_sensor_to_base: np.ndarray) -> np.ndarray:
         """``(6,)`` wrench at the control point in this frame's axes, from the sensor's ``(6,)``."""
         fx, fy, fz, mx, my, mz = wrench_in_sensor.tolist()
         rx, ry, rz = self._r
-        moment = np.array([mx - (ry * fz - rz * fy), my - (rz * fx - rx * fz), mz - (rx * fy - ry * fx)])
-        force = wrench_in_sensor[:3]
-        if self.frame == "base":
-            return np.concatenate((rotation_sensor_to_base @ force, rotation_sensor_to_base @ moment))
-        if self.frame == "tool":
-            rotation = self.rotation_tool_to_sensor.T
-            return np.concatenate((rotation @ force, rotation @ moment))
-        return np.concatenate((force, moment))
+        mx, my, mz = mx - (ry * fz - rz * fy), my - (rz * fx - rx * fz), mz - (rx * fy - ry * fx)
+        if self.frame != "sensor":
+            rows = rotation_sensor_to_base.tolist() if self.frame == "base" else self._inverse_rows
+            fx, fy, fz = _rotate(rows, fx, fy, fz)
+            mx, my, mz = _rotate(rows, mx, my, mz)
+        return np.array([fx, fy, fz, mx, my, mz])
 
     def twist_to_sensor_origin(self, twist: np.ndarray, rotation_sensor_to_base: np.ndarray) -> np.ndarray:
         """Twist ``[v; ω]`` of the sensor origin in base axes, from a control-point twist in this frame's axes."""
-        if self.frame == "base":
-            axes = None
-        elif self.frame == "tool":
-            axes = rotation_sensor_to_base @ self.rotation_tool_to_sensor
-        else:
-            axes = rotation_sensor_to_base
-        linear, angular = (twist[:3], twist[3:]) if axes is None else (axes @ twist[:3], axes @ twist[3:])
-        px, py, pz = (rotation_sensor_to_base @ self.point_in_sensor).tolist()
-        wx, wy, wz = angular.tolist()
-        vx, vy, vz = linear.tolist()
+        vx, vy, vz, wx, wy, wz = twist.tolist()
+        rows = rotation_sensor_to_base.tolist()
+        if self.frame != "base":
+            if self.frame == "tool":
+                vx, vy, vz = _rotate(self._rotation_rows, vx, vy, vz)
+                wx, wy, wz = _rotate(self._rotation_rows, wx, wy, wz)
+            vx, vy, vz = _rotate(rows, vx, vy, vz)
+            wx, wy, wz = _rotate(rows, wx, wy, wz)
+        px, py, pz = _rotate(rows, *self._r)
         return np.array([vx - (wy * pz - wz * py), vy - (wz * px - wx * pz), vz - (wx * py - wy * px), wx, wy, wz])
+
+
+def _rotate(rows, x: float, y: float, z: float) -> tuple[float, float, float]:
+    """``R @ (x, y, z)`` on Python floats, ``rows`` = ``R.tolist()``."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rows
+    return r00 * x + r01 * y + r02 * z, r10 * x + r11 * y + r12 * z, r20 * x + r21 * y + r22 * z
 
 
 def _diagonal(value, name: str, nonnegative: bool = True) -> np.ndarray:
@@ -184,7 +189,7 @@ class Admittance:
     def force_error(self, contact_wrench) -> np.ndarray:
         """``ΔF = F_desired + F'`` with the deadband applied, ``(6,)`` [N, N·m], in ``frame``."""
         error = self.desired_wrench + contact_wrench
-        return np.sign(error) * np.maximum(np.abs(error) - self.deadband, 0.0)
+        return error - np.minimum(np.maximum(error, -self.deadband), self.deadband)
 
     def displacement(self, contact_wrench) -> np.ndarray:
         """Position form ``ΔX = S·K1·ΔF`` [m, rad] (stateless)."""

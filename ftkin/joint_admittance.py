@@ -8,9 +8,9 @@
 3. the wrench moved to the control frame and the admittance law
    (:class:`~ftkin.admittance.Admittance`), giving the control-point twist;
 4. that twist moved to the sensor origin and mapped to joints by damped least
-   squares ``dq = Jᵀ(J Jᵀ + λ² I)⁻¹ V`` (through the SVD), the damping growing
-   as the smallest singular value ``σ_min`` drops below a threshold:
-   ``λ² = λ_max² (1 − (σ_min/σ_0)²)``;
+   squares ``dq = Jᵀ(J Jᵀ + λ² I)⁻¹ V`` (Cholesky), the damping growing as
+   the manipulability ``w = sqrt(det(J Jᵀ))`` drops below a threshold:
+   ``λ = λ_max (1 − w/w₀)`` (Nakamura–Hanafusa);
 5. joint limits: each joint's velocity bound shrinks with its distance to the
    position limit (``gain · distance`` [rad/s]) and is capped by the velocity
    limit; ``dq`` is scaled uniformly (direction kept) to fit;
@@ -27,11 +27,14 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg import lapack
 
 from .admittance import Admittance, ControlFrame
 from .arm import Arm
 from .compensation import Compensator
 from .exceptions import InvalidInput
+
+_potrf, _potrs, _posv = lapack.dpotrf, lapack.dpotrs, lapack.dposv
 
 
 @dataclass(frozen=True)
@@ -42,7 +45,7 @@ class StepStatus:
         dq: Commanded joint velocities ``(nq,)`` [rad/s].
         contact_wrench: Compensated wrench in the sensor frame [N, N·m].
         twist: Admittance output at the control point, control-frame axes [m/s, rad/s].
-        smallest_singular_value: ``σ_min`` of the sensor Jacobian.
+        manipulability: ``w = sqrt(det(J Jᵀ))`` of the sensor Jacobian.
         damping: ``λ`` used in the least-squares inverse.
         limit_scale: Uniform factor applied for joint velocity/position limits (1 = none).
         safety_stop: True when the contact exceeded the limit (this tick or latched).
@@ -52,7 +55,7 @@ class StepStatus:
     dq: np.ndarray
     contact_wrench: np.ndarray
     twist: np.ndarray
-    smallest_singular_value: float
+    manipulability: float
     damping: float
     limit_scale: float
     safety_stop: bool
@@ -71,7 +74,8 @@ class JointAdmittance:
             sensor) or ``"sensor"``. Default: tool if the arm has one.
         force_limit: Contact force norm [N] that stops the arm.
         torque_limit: Contact torque norm [N·m] that stops the arm.
-        singular_threshold: ``σ_0`` below which damping starts.
+        manipulability_threshold: ``w₀`` below which damping starts (the
+            bundled arm has w ≈ 0.06 tool-down, → 0 at the wrist singularity).
         max_damping: ``λ_max``.
         velocity_scale: Fraction of the arm's joint velocity limits to use.
         limit_gain: Joint velocity bound per radian to the position limit [1/s].
@@ -79,22 +83,22 @@ class JointAdmittance:
 
     def __init__(self, arm: Arm, admittance: Admittance, compensator: Compensator | None = None, *,
                  control_point: str | None = None, force_limit: float = 50.0, torque_limit: float = 5.0,
-                 singular_threshold: float = 0.05, max_damping: float = 0.05, velocity_scale: float = 1.0,
+                 manipulability_threshold: float = 0.005, max_damping: float = 0.05, velocity_scale: float = 1.0,
                  limit_gain: float = 5.0):
         if not isinstance(arm, Arm) or not isinstance(admittance, Admittance):
             raise InvalidInput("JointAdmittance needs an ftkin Arm and an ftkin Admittance")
         if compensator is not None and not isinstance(compensator, Compensator):
             raise InvalidInput(f"compensator must be an ftkin Compensator or None, got {type(compensator).__name__}")
-        numbers = np.array([force_limit, torque_limit, singular_threshold, max_damping, velocity_scale, limit_gain], dtype=float)
+        numbers = np.array([force_limit, torque_limit, manipulability_threshold, max_damping, velocity_scale, limit_gain], dtype=float)
         if not np.all(np.isfinite(numbers)) or np.any(numbers <= 0):
             raise InvalidInput(f"limits, thresholds and gains must be finite and > 0, got {numbers}")
         self.arm, self.admittance, self.compensator = arm, admittance, compensator
         self.frame = control_frame_for(arm, admittance.frame, control_point)
         self.force_limit, self.torque_limit = float(force_limit), float(torque_limit)
-        self.singular_threshold, self.max_damping = float(singular_threshold), float(max_damping)
+        self.manipulability_threshold, self.max_damping = float(manipulability_threshold), float(max_damping)
         self.limit_gain = float(limit_gain)
         self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
-        self._lower, self._upper = arm.lower_limits, arm.upper_limits
+        self._gain_lower, self._gain_upper = self.limit_gain * arm.lower_limits, self.limit_gain * arm.upper_limits
         self._velocity_limits = arm.velocity_limits * float(velocity_scale)
         self._nq = arm.nq
         self.reset()
@@ -128,11 +132,11 @@ class JointAdmittance:
             return self._stop(contact, force, torque)
         twist = self.admittance.update(self.frame.wrench_from_sensor(contact, rotation), dt)
         sensor_twist = self.frame.twist_to_sensor_origin(twist, rotation)
-        dq, sigma_min, damping = damped_least_squares(jacobian, sensor_twist, self.singular_threshold, self.max_damping)
+        dq, manipulability, damping = damped_least_squares(jacobian, sensor_twist, self.manipulability_threshold, self.max_damping)
         scale = self._limit_scale(q, dq)
         if scale < 1.0:
             dq *= scale
-        self.last_status = StepStatus(dq, contact, twist, sigma_min, damping, scale, False, "")
+        self.last_status = StepStatus(dq, contact, twist, manipulability, damping, scale, False, "")
         return dq
 
     def _stop(self, contact: np.ndarray, force: float, torque: float) -> np.ndarray:
@@ -147,30 +151,42 @@ class JointAdmittance:
         return dq
 
     def _limit_scale(self, q: np.ndarray, dq: np.ndarray) -> float:
-        """Largest ``s ≤ 1`` with ``lower_bound ≤ s·dq ≤ upper_bound`` per joint."""
-        upper = np.minimum(self._velocity_limits, np.maximum(self.limit_gain * (self._upper - q), 0.0))
-        lower = np.maximum(-self._velocity_limits, np.minimum(self.limit_gain * (self._lower - q), 0.0))
-        bound = np.where(dq > 0.0, upper, -lower)
-        magnitude = np.abs(dq)
-        over = magnitude > bound
-        if not over.any():
+        """Largest ``s ≤ 1`` with ``lower_bound ≤ s·dq ≤ upper_bound`` per joint (0 if a bound is crossed)."""
+        upper = np.minimum(self._velocity_limits, self._gain_upper - self.limit_gain * q)
+        lower = np.maximum(-self._velocity_limits, self._gain_lower - self.limit_gain * q)
+        if np.maximum(dq - upper, lower - dq).max() <= 0.0:
             return 1.0
-        return float((bound[over] / magnitude[over]).min())
+        upper, lower = np.maximum(upper, 0.0), np.minimum(lower, 0.0)
+        moving = dq != 0.0
+        ratios = np.where(dq[moving] > 0.0, upper[moving], lower[moving]) / dq[moving]
+        return float(min(1.0, ratios.min()))
 
 
-def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, singular_threshold: float = 0.05,
+def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, manipulability_threshold: float = 0.005,
                          max_damping: float = 0.05) -> tuple[np.ndarray, float, float]:
-    """``dq = Jᵀ(J Jᵀ + λ² I)⁻¹ V`` via the SVD, λ growing near singularities.
+    """``dq = Jᵀ(J Jᵀ + λ² I)⁻¹ V`` with λ growing near singularities.
+
+    The damping follows Nakamura and Hanafusa: with the manipulability
+    ``w = sqrt(det(J Jᵀ))``, ``λ² = λ_max² (1 − w/w₀)²`` for ``w < w₀``, else 0.
+    ``w`` comes free from the Cholesky factor of ``J Jᵀ`` (no SVD on the hot path).
+
+    Args:
+        jacobian: ``(6, nq)`` [m/rad, 1] (``[v; ω] = J dq``).
+        twist: ``(6,)`` ``[v; ω]`` wanted [m/s, rad/s].
+        manipulability_threshold: ``w₀``.
+        max_damping: ``λ_max``.
 
     Returns:
-        ``dq`` ``(nq,)``, the smallest singular value ``σ_min`` and ``λ``.
+        ``dq`` ``(nq,)`` [rad/s], the manipulability ``w`` and ``λ``.
     """
-    u, sigma, vt = np.linalg.svd(jacobian, full_matrices=False)
-    sigma_min = float(sigma[-1]) if len(sigma) == 6 else 0.0
-    ratio = sigma_min / singular_threshold
-    damping_sq = 0.0 if ratio >= 1.0 else max_damping * max_damping * (1.0 - ratio * ratio)
-    gains = sigma / (sigma * sigma + damping_sq) if damping_sq > 0.0 else 1.0 / sigma
-    return vt.T @ (gains * (u.T @ twist)), sigma_min, math.sqrt(damping_sq)
+    gram = jacobian @ jacobian.T
+    factor, info = _potrf(gram)
+    manipulability = math.prod(factor.diagonal().tolist()) if info == 0 else 0.0
+    if manipulability >= manipulability_threshold:
+        return jacobian.T @ _potrs(factor, twist)[0], manipulability, 0.0
+    damping = max_damping * (1.0 - manipulability / manipulability_threshold)
+    gram.flat[::7] += damping * damping
+    return jacobian.T @ _posv(gram, twist)[1], manipulability, damping
 
 
 def control_frame_for(arm: Arm, frame: str, control_point: str | None = None) -> ControlFrame:
