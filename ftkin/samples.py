@@ -18,6 +18,9 @@ from .exceptions import InvalidSamples
 from .rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from .validation import as_batch, as_float_array, as_rotation_batch
 
+MAX_POSE_SPREAD = np.deg2rad(2.0)
+"""Largest accepted angle [rad] between a reading's orientation and its pose's mean."""
+
 
 @dataclass(frozen=True)
 class PoseAverages:
@@ -145,4 +148,14 @@ class Samples:
         u, _, vt = np.linalg.svd(rotation_sums)
         det = np.linalg.det(u @ vt)
         u[:, :, 2] *= det[:, None]
-        return PoseAverages(unique[order], u @ vt, means, counts, spread)
+        mean_rotations = u @ vt
+        cosines = (np.einsum("nij,nij->n", mean_rotations[group], self.rotations) - 1.0) / 2.0
+        deviation = np.arccos(np.clip(cosines, -1.0, 1.0))
+        worst = int(np.argmax(deviation))
+        if deviation[worst] > MAX_POSE_SPREAD:
+            raise InvalidSamples(
+                f"the readings of pose {self.pose_ids[worst]} differ in orientation by up to "
+                f"{np.rad2deg(deviation[worst]):.2f}° (more than {np.rad2deg(MAX_POSE_SPREAD):.0f}°): a pose id must "
+                "group readings of one static pose; check the pose column"
+            )
+        return PoseAverages(unique[order], mean_rotations, means, counts, spread)

@@ -229,3 +229,15 @@ def test_bad_samples_are_refused(build, pattern):
     rotations = ftkin.euler_zyx_deg_to_matrix([[0, 0, 180], [0, 60, 180], [0, 0, 120]])
     with pytest.raises(ftkin.InvalidInput, match=pattern):
         build(rotations)
+
+
+def test_a_pose_id_grouping_different_orientations_is_refused(arm, rng):
+    from ftkin import InvalidSamples, Samples
+
+    q = arm.random_configurations(4, rng, margin=0.3)
+    wrenches = np.zeros((4, 6))
+    with pytest.raises(InvalidSamples, match="differ in orientation by up to"):
+        Samples.from_joint_positions(arm, q, wrenches, pose_ids=[0, 0, 1, 1]).pose_averages()
+    # encoder jitter within a pose is fine
+    jitter = np.repeat(q[:2], 2, axis=0) + rng.normal(0, 1e-4, (4, arm.nq))
+    assert len(Samples.from_joint_positions(arm, jitter, wrenches, pose_ids=[0, 0, 1, 1]).pose_averages()) == 2

@@ -57,6 +57,7 @@ def test_joint_columns_without_arm_use_the_bundled_arm(arm, poses, tmp_path):
 
 def test_pose_column_groups_readings(arm, poses, tmp_path):
     configurations, _, wrenches = poses
+    configurations = np.repeat(configurations[::2], 2, axis=0)  # repeated readings of three static poses
     pose = np.array([4, 4, 9, 9, 2, 2])
     path = _write(tmp_path / "grouped.csv", ["pose"] + arm.joint_names + WRENCH, np.column_stack([pose, configurations, wrenches]))
     samples = load_samples(path, arm).samples
