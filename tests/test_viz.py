@@ -51,7 +51,7 @@ class Recorder:
     def set_object(self, geometry, material=None):
         self.store["object"][self.key] = (geometry, material)
 
-    def set_transform(self, matrix=np.eye(4)):
+    def set_transform(self, matrix):
         self.store["transform"][self.key] = np.array(matrix)
 
     def set_property(self, key, value):

@@ -32,7 +32,9 @@ def register(subparsers) -> None:
     parser.add_argument("--html", metavar="OUT.html", help="write a self-contained page (animated unless --pose is given)")
     parser.add_argument("--png", metavar="OUT.png", help="write a screenshot with headless Chromium (1024×768)")
     parser.add_argument("--pose", type=int, metavar="K", help="only this pose: pose id of SAMPLES.csv, or row index of the replay log")
-    parser.add_argument("--scale", type=positive_float, metavar="M_PER_N", help="arrow length per newton [m/N] (default: tool weight = 25 cm)")
+    parser.add_argument(
+        "--scale", type=positive_float, metavar="M_PER_N", help="arrow length per newton [m/N] (default: tool weight drawn 25 cm long)"
+    )
     parser.add_argument("--tilt-exaggeration", type=positive_float, default=1.0, metavar="K", help="draw the base tilt K times larger")
     parser.add_argument("--hold", type=positive_float, default=1.0, metavar="S", help="seconds per calibration pose in the animation")
     parser.add_argument("--max-frames", type=int, default=1500, metavar="N", help="replay: keep at most N rows (evenly spaced)")

@@ -159,7 +159,8 @@ class CalibrationViewer:
         self.visualizer["/Grid"].set_property("visible", False)
         size = 2.0 * max(extent, 0.5)
         floor = self.visualizer[f"{ROOT}/floor"]
-        floor.set_object(self._meshcat.geometry.Box([size, size, 0.004]), self._meshcat.geometry.MeshLambertMaterial(color=0xD8D8D8))
+        floor_material = self._meshcat.geometry.MeshLambertMaterial(color=0xD8D8D8, transparent=True, opacity=0.45)  # arm may go below
+        floor.set_object(self._meshcat.geometry.Box([size, size, 0.004]), floor_material)
         floor.set_transform(rigid_transform(np.eye(3), [target[0], target[1], -0.003]))
         distance = 1.25 * max(extent, 0.5)
         self.set_camera(distance * np.array([0.55, -0.75, 0.35]) / np.linalg.norm([0.55, -0.75, 0.35]))
