@@ -11,8 +11,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .diagnostics import FitDiagnostics
 from .exceptions import InvalidInput
-from .fit_quality import FitDiagnostics, diagnose
+from .fit_quality import diagnose
 from .information import SensorNoise, standard_errors
 from .linear import fit_linear
 from .ml import LOSSES, fit_ml
@@ -44,7 +45,7 @@ class CalibrationResult(SensorModel):
         covariance: ``(12, 12)`` covariance of ``θ = [a, F0, M0, P]`` when
             the estimator provides one (``ml``), else None.
         diagnostics: Fit quality, outlier poses, observability and warnings
-            (:class:`~ftkin.fit_quality.FitDiagnostics`) for ``ml``, else None.
+            (:class:`~ftkin.diagnostics.FitDiagnostics`) for ``ml``, else None.
     """
 
     method: str = "linear"

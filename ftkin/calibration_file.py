@@ -9,7 +9,7 @@ Keys (units): ``force_offset`` [N], ``torque_offset`` [N·m],
 (12×12 over ``[a, F0, M0, P]`` or null), ``std_errors`` (same keys as the
 values), ``diagnostics`` (``ml`` only, else absent: noise used, chi-square,
 per-pose normalized residuals, outliers, condition number, warnings; see
-:class:`~ftkin.fit_quality.FitDiagnostics`), ``created`` (UTC, ISO 8601),
+:class:`~ftkin.diagnostics.FitDiagnostics`), ``created`` (UTC, ISO 8601),
 ``ftkin_version``. Files without ``covariance``/``diagnostics`` (written by
 ``linear`` or an older ftkin) load with those set to None.
 
@@ -28,8 +28,8 @@ import numpy as np
 
 from .atomic import atomic_write_text
 from .calibration import CalibrationResult
+from .diagnostics import FitDiagnostics
 from .exceptions import CalibrationFileError, FtkinError
-from .fit_quality import FitDiagnostics
 
 FORMAT_NAME = "ftkin-calibration"
 FORMAT_VERSION = 1

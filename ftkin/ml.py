@@ -153,6 +153,14 @@ def noise_from_spread(poses: PoseAverages) -> tuple[np.ndarray, float] | None:
     return np.sqrt(variance), dof
 
 
+def _inverse(gram: np.ndarray) -> np.ndarray:
+    """Inverse of a symmetric positive (semi)definite matrix, pseudo-inverse if singular."""
+    try:
+        return np.linalg.inv(gram)
+    except np.linalg.LinAlgError:
+        return np.linalg.pinv(gram, hermitian=True)
+
+
 def noise_from_residuals(problem: WeightedProblem, theta: np.ndarray, robust: bool = False) -> tuple[np.ndarray, float]:
     """Per-reading noise ``(6,)`` from the fit residuals, force and torque channels pooled.
 
@@ -164,8 +172,7 @@ def noise_from_residuals(problem: WeightedProblem, theta: np.ndarray, robust: bo
     """
     residuals = problem.residuals(theta)
     jac = problem.whitened_jacobian(theta)
-    gram_inv = np.linalg.pinv(jac.T @ jac, hermitian=True)
-    leverage = np.clip(np.einsum("ij,jk,ik->i", jac, gram_inv, jac).reshape(-1, 6), 0.0, 1.0 - 1e-9)
+    leverage = np.clip(np.sum((jac @ _inverse(jac.T @ jac)) * jac, axis=1).reshape(-1, 6), 0.0, 1.0 - 1e-9)
     scaled = residuals * np.sqrt(problem.counts)[:, None]
     std = np.empty(6)
     dofs = []

@@ -9,7 +9,8 @@ import pytest
 
 from ftkin import Samples, SensorModel, SensorNoise, SimulatedSensor, calibrate
 from ftkin.cli import main
-from ftkin.fit_quality import OUTLIER_ALPHA, FitDiagnostics, diagnose
+from ftkin.diagnostics import OUTLIER_ALPHA, FitDiagnostics
+from ftkin.fit_quality import diagnose
 from ftkin.ml import fit_ml
 
 NOISE = SensorNoise(0.03, 0.0015)  # per reading [N], [N·m]
