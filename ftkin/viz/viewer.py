@@ -30,11 +30,9 @@ from ..model import SensorModel
 from ..validation import as_batch, as_positive, as_vector
 from .arrows import ArrowStyle, NodePose, arrow_placement, exaggerate_tilt, rigid_transform
 from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, LAYERS, VERTICAL, add_legend, legend_html
+from .scene import ROOT, add_markers, frame_view, set_camera
 from .server import import_meshcat, import_pinocchio_visualizer, start_visualizer, stop_server
 from .vectors import PoseVectors, pose_vectors
-
-ROOT = "ftkin"
-"""Scene folder of everything ftkin draws besides the arm."""
 
 DEFAULT_ARROW_LENGTH = 0.25
 """Drawn length of the tool-weight arrow when no scale is given [m]."""
@@ -121,49 +119,13 @@ class CalibrationViewer:
 
     # ----------------------------------------------------------------- scene
     def _build_scene(self) -> None:
-        geometry = self._meshcat.geometry
-        vis = self.visualizer
         if self.arm is not None:
             visualizer_class = import_pinocchio_visualizer()
             self._robot = visualizer_class(self.arm.model, self.arm.geometry("collision"), self.arm.geometry("visual"))
-            self._robot.initViewer(viewer=vis)
+            self._robot.initViewer(viewer=self.visualizer)
             self._robot.loadViewerModel(rootNodeName="pinocchio")
-        vis[f"{ROOT}/sensor"].set_object(geometry.triad(0.12))
-        for layer in (*ARROWS, BASE_GRAVITY, VERTICAL):
-            radius_factor = 0.5 if layer is VERTICAL else 1.0
-            material = geometry.MeshBasicMaterial(color=layer.color)
-            vis[f"{ROOT}/{layer.name}/shaft"].set_object(geometry.Cylinder(1.0, self.style.shaft_radius * radius_factor), material)
-            vis[f"{ROOT}/{layer.name}/head"].set_object(
-                geometry.Cylinder(self.style.head_length, radiusTop=0.0, radiusBottom=self.style.head_radius * radius_factor),
-                material,
-            )
-        vis[f"{ROOT}/{CENTER_OF_MASS.name}"].set_object(
-            geometry.Sphere(0.7 * self.style.head_radius),
-            geometry.MeshBasicMaterial(color=CENTER_OF_MASS.color, depthTest=False),  # seen through the tool
-        )
-        self._frame_view()
-
-    def _frame_view(self) -> None:
-        """Centre the orbit target on the arm and place the camera (meshcat 0.3.2 way)."""
-        if self.arm is not None:
-            q = np.clip(np.zeros(self.arm.nq), self.arm.lower_limits, self.arm.upper_limits)
-            origins = np.array([self.arm.frame_placement(q, name)[1] for name in self.arm.frame_names])
-            low, high = origins.min(axis=0), origins.max(axis=0)
-            target, extent = 0.5 * (low + high), float(np.max(high - low))
-        else:
-            target, extent = np.zeros(3), 0.6
-        shift = rigid_transform(np.eye(3), -target)
-        self.visualizer["/meshcat"].set_transform(shift)
-        self.visualizer["/Axes"].set_transform(shift)
-        # meshcat's own grid does not follow a transform; hide it, draw a floor plate under the arm instead.
-        self.visualizer["/Grid"].set_property("visible", False)
-        size = 2.0 * max(extent, 0.5)
-        floor = self.visualizer[f"{ROOT}/floor"]
-        floor_material = self._meshcat.geometry.MeshLambertMaterial(color=0xD8D8D8, transparent=True, opacity=0.45)  # arm may go below
-        floor.set_object(self._meshcat.geometry.Box([size, size, 0.004]), floor_material)
-        floor.set_transform(rigid_transform(np.eye(3), [target[0], target[1], -0.003]))
-        distance = 1.25 * max(extent, 0.5)
-        self.set_camera(distance * np.array([0.55, -0.75, 0.35]) / np.linalg.norm([0.55, -0.75, 0.35]))
+        add_markers(self.visualizer, self._meshcat.geometry, self.style)
+        frame_view(self.visualizer, self._meshcat.geometry, self.arm)
 
     def set_calibration(self, calibration: SensorModel) -> None:
         """Show another calibration from the next pose on (the arrow scale stays)."""
@@ -173,8 +135,7 @@ class CalibrationViewer:
 
     def set_camera(self, position) -> None:
         """Camera position relative to the orbit target, base axes [m]."""
-        x, y, z = as_vector(position, 3, "camera position [m]")
-        self.visualizer["/Cameras/default/rotated/<object>"].set_property("position", [float(x), float(z), float(-y)])
+        set_camera(self.visualizer, position)
 
     def set_visible(self, name: str, visible: bool) -> None:
         """Show or hide a layer (``measured``, ``gravity``, ``contact``, ``center_of_mass``,

@@ -1,0 +1,70 @@
+"""Static parts of the meshcat scene: the markers' shapes, the floor and the camera.
+
+meshcat 0.3.2 cannot move the camera's orbit target, so the whole scene
+(``/meshcat``, ``/Axes``) is shifted to put the arm's centre at the origin,
+and the camera is placed through ``/Cameras/default/rotated/<object>``
+(three.js axes: ``[x, z, -y]``). meshcat's grid does not follow a transform;
+it is hidden and a translucent floor plate is drawn under the arm instead.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..arm import Arm
+from ..validation import as_vector
+from .arrows import ArrowStyle, rigid_transform
+from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, VERTICAL
+
+ROOT = "ftkin"
+"""Scene folder of everything ftkin draws besides the arm."""
+
+CAMERA_DIRECTION = np.array([0.55, -0.75, 0.35]) / np.linalg.norm([0.55, -0.75, 0.35])
+"""From the orbit target towards the camera (base axes): front right, above."""
+
+
+def add_markers(visualizer, geometry, style: ArrowStyle) -> None:
+    """Sensor triad, arrows (unit shaft + cone head, unlit) and the COM sphere."""
+    visualizer[f"{ROOT}/sensor"].set_object(geometry.triad(0.12))
+    for layer in (*ARROWS, BASE_GRAVITY, VERTICAL):
+        radius_factor = 0.5 if layer is VERTICAL else 1.0
+        material = geometry.MeshBasicMaterial(color=layer.color)
+        visualizer[f"{ROOT}/{layer.name}/shaft"].set_object(geometry.Cylinder(1.0, style.shaft_radius * radius_factor), material)
+        visualizer[f"{ROOT}/{layer.name}/head"].set_object(
+            geometry.Cylinder(style.head_length, radiusTop=0.0, radiusBottom=style.head_radius * radius_factor), material
+        )
+    visualizer[f"{ROOT}/{CENTER_OF_MASS.name}"].set_object(
+        geometry.Sphere(0.7 * style.head_radius),
+        geometry.MeshBasicMaterial(color=CENTER_OF_MASS.color, depthTest=False),  # seen through the tool
+    )
+
+
+def arm_bounds(arm: Arm | None) -> tuple[np.ndarray, float]:
+    """Centre [m] and largest extent [m] of the arm's frame origins at ``q = 0`` (clipped to the limits)."""
+    if arm is None:
+        return np.zeros(3), 0.6
+    q = np.clip(np.zeros(arm.nq), arm.lower_limits, arm.upper_limits)
+    origins = np.array([arm.frame_placement(q, name)[1] for name in arm.frame_names])
+    low, high = origins.min(axis=0), origins.max(axis=0)
+    return 0.5 * (low + high), float(np.max(high - low))
+
+
+def frame_view(visualizer, geometry, arm: Arm | None) -> None:
+    """Centre the scene on the arm, draw the floor and place the camera."""
+    target, extent = arm_bounds(arm)
+    shift = rigid_transform(np.eye(3), -target)
+    visualizer["/meshcat"].set_transform(shift)
+    visualizer["/Axes"].set_transform(shift)
+    visualizer["/Grid"].set_property("visible", False)
+    size = 2.0 * max(extent, 0.5)
+    floor = visualizer[f"{ROOT}/floor"]
+    material = geometry.MeshLambertMaterial(color=0xD8D8D8, transparent=True, opacity=0.45)  # the arm may reach below
+    floor.set_object(geometry.Box([size, size, 0.004]), material)
+    floor.set_transform(rigid_transform(np.eye(3), [target[0], target[1], -0.003]))
+    set_camera(visualizer, 1.25 * max(extent, 0.5) * CAMERA_DIRECTION)
+
+
+def set_camera(visualizer, position) -> None:
+    """Camera position relative to the orbit target, base axes [m]."""
+    x, y, z = as_vector(position, 3, "camera position [m]")
+    visualizer["/Cameras/default/rotated/<object>"].set_property("position", [float(x), float(z), float(-y)])
