@@ -38,6 +38,9 @@ __all__ = ["FIT_ALPHA", "OUTLIER_ALPHA", "RELATIVE_STD_ERROR_WARNING", "FitDiagn
 
 logger = logging.getLogger(__name__)
 
+MIN_NOISE_DOF = 8
+"""Fewest degrees of freedom of a residual-based noise estimate before the standard errors are called rough."""
+
 _UNITS = {"gravity_in_base": "N", "force_offset": "N", "torque_offset": "N·m", "center_of_mass": "m"}
 
 
@@ -147,6 +150,11 @@ def diagnose(fit, pose_ids, dropped_pose_ids=()) -> tuple[FitDiagnostics, np.nda
                 f"sensor directions (condition number {eigenvalues[-1] / eigenvalues[0]:.3g}, weakest direction "
                 + ", ".join(f"{weight:+.2f} {label}" for label, weight in main_components(weakest)) + ")"
             )
+    if fit.noise_source == "residuals" and fit.noise_dof < MIN_NOISE_DOF:
+        messages.append(
+            f"the noise levels come from the residuals with only {fit.noise_dof:.1f} degrees of freedom, so the "
+            "standard errors are rough; record several readings per pose (pose column), add poses, or give the noise"
+        )
     for message in messages:
         logger.warning(message)
     diagnostics = FitDiagnostics(

@@ -163,3 +163,4 @@ def test_diagnostics_survive_a_dict_round_trip_with_missing_values(tool, rotatio
     again = FitDiagnostics.from_dict(diagnostics.to_dict())
     assert again.to_dict() == diagnostics.to_dict()
     assert again.noise_source == "residuals" and again.fit_ok
+    assert any("standard errors are rough" in message for message in diagnostics.warnings)  # 3 poses: few dof
