@@ -45,9 +45,10 @@ def plot_runs(runs: Sequence[PlacementRun], path, title: str | None = None, labe
     labels = list(labels) if labels is not None else [run_label(run) for run in runs]
     figure, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 8))
     for run, label in zip(runs, labels):
-        axes[0].plot(run.time, run.displacement * 1e3, label=label)
-        axes[1].plot(run.time, run.mean_speed() * 1e3, label=label)
-        axes[2].plot(run.time, run.force, label=label)
+        style = {"label": label, "linestyle": "--" if run.scenario.mode == "position" else "-"}
+        axes[0].plot(run.time, run.displacement * 1e3, **style)
+        axes[1].plot(run.time, run.mean_speed() * 1e3, **style)
+        axes[2].plot(run.time, run.force, **style)
     axes[0].set_ylabel("tool z displacement [mm]")
     axes[1].set_ylabel("tool z velocity [mm/s]\n(0.1 s mean)")
     axes[2].set_ylabel("F'z (sensor z, down) [N]")
