@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import random
 import sys
 import tempfile
@@ -77,6 +78,65 @@ def mutate_document(document, rng: random.Random):
     return document
 
 
+def write_small_bag(path: Path, arm, seed: int) -> Path:
+    """A bare .mcap with three static poses (joint states 50 Hz, wrenches 100 Hz), 6 s in all."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    from ftkin.information import SensorNoise
+    from ftkin.simulation import SimulatedSensor, paper_like_truth
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    types = store.types
+    rng = np.random.default_rng(seed)
+    poses = arm.random_configurations(3, rng, margin=0.3)
+    sensor = SimulatedSensor(paper_like_truth(), SensorNoise.paper())
+
+    def header(t):
+        ns = int(t * 1e9)
+        return types["std_msgs/msg/Header"](stamp=types["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9), frame_id="ft_sensor")
+
+    folder = path.parent / "bag"
+    with Writer(folder, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        joints = writer.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=store)
+        wrench = writer.add_connection("/ft_sensor/wrench", "geometry_msgs/msg/WrenchStamped", typestore=store)
+        for t in np.arange(0.0, 6.0, 0.02):
+            q = poses[min(int(t // 2.0), 2)]
+            message = types["sensor_msgs/msg/JointState"](
+                header=header(100.0 + t), name=list(arm.joint_names), position=q, velocity=np.zeros(0), effort=np.zeros(0)
+            )
+            writer.write(joints, int((100.0 + t) * 1e9), store.serialize_cdr(message, "sensor_msgs/msg/JointState"))
+        for t in np.arange(0.005, 6.0, 0.01):
+            w = sensor.read(arm.rotation_sensor_to_base(poses[min(int(t // 2.0), 2)]), rng)[0]
+            vector = lambda v: types["geometry_msgs/msg/Vector3"](x=float(v[0]), y=float(v[1]), z=float(v[2]))  # noqa: E731
+            message = types["geometry_msgs/msg/WrenchStamped"](
+                header=header(100.0 + t), wrench=types["geometry_msgs/msg/Wrench"](force=vector(w[:3]), torque=vector(w[3:]))
+            )
+            writer.write(wrench, int((100.0 + t) * 1e9), store.serialize_cdr(message, "geometry_msgs/msg/WrenchStamped"))
+    return next(folder.glob("*.mcap"))
+
+
+def mutate_bytes(data: bytes, rng: random.Random) -> bytes:
+    """One to four byte edits: flip, overwrite, delete a run, duplicate a run, truncate."""
+    data = bytearray(data)
+    for _ in range(rng.randint(1, 4)):
+        if not data:
+            break
+        i = rng.randrange(len(data))
+        kind = rng.randrange(5)
+        if kind == 0:
+            data[i] ^= 1 << rng.randrange(8)
+        elif kind == 1:
+            data[i] = rng.randrange(256)
+        elif kind == 2:
+            del data[i : i + rng.randint(1, 64)]
+        elif kind == 3:
+            data[i:i] = data[i : i + rng.randint(1, 64)]
+        else:
+            del data[i:]
+    return bytes(data)
+
+
 def check_samples(loaded) -> None:
     samples = loaded.samples
     assert np.all(np.isfinite(samples.wrenches)) and np.all(np.isfinite(samples.rotations)), "non-finite samples"
@@ -86,7 +146,14 @@ def check_calibration(result) -> None:
     assert np.all(np.isfinite(result.to_vector())), "non-finite calibration"
 
 
+def _read_bag_quietly(path: Path, arm):
+    from ftkin.bags import bag_samples
+
+    return bag_samples(path, arm, progress=False)
+
+
 def run(seconds: float, seed: int) -> int:
+    logging.disable(logging.WARNING)  # readers log warnings about odd but accepted input; not the point here
     rng = random.Random(seed)
     workdir = Path(tempfile.mkdtemp(prefix="ftkin-fuzz-"))
     csv_seeds = [paper_csv_path().read_text()]
@@ -102,6 +169,12 @@ def run(seconds: float, seed: int) -> int:
     json_seed = json.dumps(calibration_document, indent=2)
 
     counts = {"csv": 0, "json-text": 0, "json-structured": 0}
+    bag_seed = None
+    try:
+        bag_seed = write_small_bag(workdir / "seed.mcap", arm, seed).read_bytes()
+        counts["bag"] = 0
+    except ImportError:
+        print("rosbags not installed: bag reader not fuzzed (pip install 'ftkin[bags]')")
     outcomes = {"ok": 0, "ftkin error": 0}
     deadline = time.monotonic() + seconds
     path = workdir / "input"
@@ -110,6 +183,10 @@ def run(seconds: float, seed: int) -> int:
         if target == "csv":
             path.write_text(mutate_text(rng.choice(csv_seeds), rng), errors="surrogateescape")
             reader, check = (lambda p: load_samples(p, arm)), check_samples
+        elif target == "bag":
+            bag_path = workdir / "input.mcap"
+            bag_path.write_bytes(mutate_bytes(bag_seed, rng))
+            reader, check = (lambda p: _read_bag_quietly(bag_path, arm)), check_samples
         elif target == "json-text":
             path.write_text(mutate_text(json_seed, rng))
             reader, check = load_calibration, check_calibration

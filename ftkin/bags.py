@@ -186,6 +186,10 @@ def read_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None
                     bar.advance()
     except AnyReaderError as error:
         raise InvalidSamples(f"cannot read the bag: {error}", source) from None
+    except InvalidSamples:
+        raise
+    except Exception as error:  # a corrupt bag makes rosbags raise struct, decode, index or memory errors
+        raise InvalidSamples(f"cannot read the bag (corrupt or truncated?): {type(error).__name__}: {error}", source) from None
     joint_topic_name, wrench_topic_name = joints[0].topic, wrench[0].topic
     missing = [name for name in expected if name not in series]
     if missing:

@@ -275,3 +275,27 @@ def test_cli_error_is_one_line(session, capsys):
     assert main(["calibrate", str(session["mcap"]), "--wrench-topic", "/nope"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("ftkin: error:") and "no topic '/nope'" in err and err.count("\n") == 1
+
+
+def test_corrupt_bags_end_in_an_ftkin_error(session, arm, tmp_path):
+    """Byte-level corruption of a valid .mcap (a mini fuzz run): a result or an ftkin error, nothing else."""
+    import random
+
+    from ftkin.exceptions import FtkinError
+
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[1] / "benchmarks"))
+    from fuzz_readers import mutate_bytes
+
+    original = session["bare"].read_bytes()
+    rng = random.Random(7)
+    outcomes = {"ok": 0, "error": 0}
+    for _ in range(150):
+        corrupt = tmp_path / "corrupt.mcap"
+        corrupt.write_bytes(mutate_bytes(original, rng))
+        try:
+            loaded = bag_samples(corrupt, arm, progress=False)
+            assert np.all(np.isfinite(loaded.samples.wrenches))
+            outcomes["ok"] += 1
+        except FtkinError:
+            outcomes["error"] += 1
+    assert outcomes["error"] > 0
