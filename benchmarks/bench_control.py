@@ -4,6 +4,9 @@ Prints median and 99th-percentile time per call, each beside the bare
 Pinocchio forward kinematics (``forwardKinematics`` + ``updateFramePlacement``,
 the floor) as a ratio, and batch compensation throughput.
 
+The step is fed noisy readings (paper noise): a constant reading would be a
+stuck sensor and time the held path, which has its own row (a NaN sample).
+
 Targets (2-core machine): compensation from q <= 15 µs median, full step
 <= 60 µs median, batch from rotations >= 5 million samples/s.
 
@@ -62,6 +65,11 @@ def main() -> None:
     model, data, frame = arm.model, arm.data, arm.sensor_frame_id
     admittance = Admittance(k1=1e-4, k2=1e-3, selection=[0, 0, 1, 0, 0, 0], frame="tool", force_deadband=0.02)
     controller = JointAdmittance(arm, admittance, compensator)
+    noisy = raw + rng.standard_normal((CALLS + 500, 6)) * np.array([0.02, 0.02, 0.02, 0.002, 0.002, 0.002])
+    noisy_rows = iter(np.tile(noisy, (2, 1)))
+    nan_raw = raw.copy()
+    nan_raw[2] = np.nan
+    held = JointAdmittance(arm, Admittance(k1=1e-4, k2=1e-3, frame="tool"), compensator)
 
     def floor():
         pin.forwardKinematics(model, data, q)
@@ -70,7 +78,8 @@ def main() -> None:
     rows = [
         ("pin FK + updateFramePlacement (floor)", per_call(floor)),
         ("Compensator.compensate(q, raw)", per_call(lambda: compensator.compensate(q, raw))),
-        ("JointAdmittance.step(q, raw, dt)", per_call(lambda: controller.step(q, raw, 1e-3))),
+        ("JointAdmittance.step(q, raw, dt)", per_call(lambda: controller.step(q, next(noisy_rows), 1e-3))),
+        ("step on a NaN sample (held)", per_call(lambda: held.step(q, nan_raw, 1e-3))),
     ]
     floor_median = float(np.median(rows[0][1]))
     print(f"single sample ({CALLS} calls each)")

@@ -17,6 +17,17 @@
 6. safety: a contact force [N] or torque [N·m] beyond the user limit commands
    ``dq = 0`` and latches until :meth:`JointAdmittance.reset`.
 
+Before all that, a :class:`~ftkin.sensor_faults.FaultMonitor` checks the tick
+(NaN/inf in ``q`` or the reading, a ``dt`` jump, a saturated channel, a stuck
+sensor). A faulty tick commands ``dq = 0``, names the fault in
+``last_status.fault`` and leaves the admittance filter untouched, so no bad
+sample enters the state; faults are not latched: after
+``SensorLimits.recovery_ticks`` good ticks the arm moves again, its derivative
+filter restarted from the current force error (no kick from the jump in ΔF).
+``step`` neither raises nor returns NaN for inputs of the right shape; wrong
+shapes or non-numeric inputs are programming errors and raise
+:class:`~ftkin.exceptions.InvalidInput`.
+
 Each tick leaves a :class:`StepStatus` in ``last_status``.
 """
 
@@ -33,6 +44,7 @@ from .admittance import Admittance, ControlFrame
 from .arm import Arm
 from .compensation import Compensator
 from .exceptions import InvalidInput
+from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
 
 _potrf, _potrs, _posv = lapack.dpotrf, lapack.dpotrs, lapack.dposv
 
@@ -43,13 +55,15 @@ class StepStatus:
 
     Attributes:
         dq: Commanded joint velocities ``(nq,)`` [rad/s].
-        contact_wrench: Compensated wrench in the sensor frame [N, N·m].
+        contact_wrench: Compensated wrench in the sensor frame [N, N·m] (NaN on a sensor-fault tick).
         twist: Admittance output at the control point, control-frame axes [m/s, rad/s].
         manipulability: ``w = sqrt(det(J Jᵀ))`` of the sensor Jacobian.
         damping: ``λ`` used in the least-squares inverse.
         limit_scale: Uniform factor applied for joint velocity/position limits (1 = none).
         safety_stop: True when the contact exceeded the limit (this tick or latched).
         event: ``""`` or a short description of why the arm was stopped.
+        fault: The sensor fault holding the arm this tick (or being recovered
+            from), :attr:`SensorFault.NONE` when there is none.
     """
 
     dq: np.ndarray
@@ -60,6 +74,12 @@ class StepStatus:
     limit_scale: float
     safety_stop: bool
     event: str
+    fault: SensorFault = SensorFault.NONE
+
+    @property
+    def held(self) -> bool:
+        """True when ``dq`` is zero because of a safety stop or a sensor fault."""
+        return self.safety_stop or self.fault is not SensorFault.NONE
 
 
 class JointAdmittance:
@@ -79,12 +99,16 @@ class JointAdmittance:
         max_damping: ``λ_max``.
         velocity_scale: Fraction of the arm's joint velocity limits to use.
         limit_gain: Joint velocity bound per radian to the position limit [1/s].
+        sensor_limits: Fault thresholds (:class:`~ftkin.sensor_faults.SensorLimits`;
+            default: the paper's sensor range ±250 N / ±6 N·m, stuck after 10
+            identical ticks or 50 ms, dropped tick at 5x the nominal dt,
+            5 good ticks to recover).
     """
 
     def __init__(self, arm: Arm, admittance: Admittance, compensator: Compensator | None = None, *,
                  control_point: str | None = None, force_limit: float = 50.0, torque_limit: float = 5.0,
                  manipulability_threshold: float = 0.005, max_damping: float = 0.05, velocity_scale: float = 1.0,
-                 limit_gain: float = 5.0):
+                 limit_gain: float = 5.0, sensor_limits: SensorLimits | None = None):
         if not isinstance(arm, Arm) or not isinstance(admittance, Admittance):
             raise InvalidInput("JointAdmittance needs an ftkin Arm and an ftkin Admittance")
         if compensator is not None and not isinstance(compensator, Compensator):
@@ -101,12 +125,15 @@ class JointAdmittance:
         self._gain_lower, self._gain_upper = self.limit_gain * arm.lower_limits, self.limit_gain * arm.upper_limits
         self._velocity_limits = arm.velocity_limits * float(velocity_scale)
         self._nq = arm.nq
+        self.monitor = FaultMonitor(sensor_limits)
         self.reset()
 
     def reset(self) -> None:
-        """Clear the admittance filter and the safety latch."""
+        """Clear the admittance filter, the safety latch and the fault monitor's state."""
         self.admittance.reset()
+        self.monitor.reset()
         self.safety_latched = False
+        self._holding = False
         self.last_status: StepStatus | None = None
 
     def step(self, q, raw_wrench, dt: float) -> np.ndarray:
@@ -116,13 +143,22 @@ class JointAdmittance:
             q: Joint positions ``(nq,)`` [rad].
             raw_wrench: Raw sensor reading ``(6,)`` [N, N·m], sensor frame.
             dt: Time since the previous tick [s].
+
+        Raises:
+            InvalidInput: ``q``, ``raw_wrench`` or ``dt`` of the wrong shape or not numbers
+                (NaN, inf, a bad ``dt`` are sensor faults: held and reported, not raised).
         """
-        q = np.asarray(q, dtype=np.float64)
-        raw = np.asarray(raw_wrench, dtype=np.float64)
-        if q.shape != (self._nq,) or raw.shape != (6,) or not math.isfinite(float(q.sum() + raw.sum())):
-            raise InvalidInput(f"expected finite q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
-        if not (dt > 0.0 and math.isfinite(dt)):
-            raise InvalidInput(f"dt must be a finite positive time step [s], got {dt!r}")
+        try:
+            q = np.asarray(q, dtype=np.float64)
+            raw = np.asarray(raw_wrench, dtype=np.float64)
+            dt = float(dt)
+        except (TypeError, ValueError) as error:
+            raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
+        if q.shape != (self._nq,) or raw.shape != (6,):
+            raise InvalidInput(f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
+        fault, event = self.monitor.check(q, raw.tolist(), dt)
+        if fault is not SensorFault.NONE:
+            return self._hold(fault, event)
         jacobian = pin.computeFrameJacobian(self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED)
         rotation = self._data.oMf[self._sensor_id].rotation
         contact = raw.copy() if self.compensator is None else self.compensator.compensate_rotation_unchecked(rotation, raw)
@@ -130,7 +166,10 @@ class JointAdmittance:
         force, torque = math.sqrt(fx * fx + fy * fy + fz * fz), math.sqrt(mx * mx + my * my + mz * mz)
         if self.safety_latched or force > self.force_limit or torque > self.torque_limit:
             return self._stop(contact, force, torque)
-        twist = self.admittance.update(self.frame.wrench_from_sensor(contact, rotation), dt)
+        wrench = self.frame.wrench_from_sensor(contact, rotation)
+        if self._holding:
+            self._restart_derivative(wrench)
+        twist = self.admittance.update(wrench, dt)
         sensor_twist = self.frame.twist_to_sensor_origin(twist, rotation)
         dq, manipulability, damping = damped_least_squares(jacobian, sensor_twist, self.manipulability_threshold, self.max_damping)
         scale = self._limit_scale(q, dq)
@@ -138,6 +177,26 @@ class JointAdmittance:
             dq *= scale
         self.last_status = StepStatus(dq, contact, twist, manipulability, damping, scale, False, "")
         return dq
+
+    def _hold(self, fault: SensorFault, event: str) -> np.ndarray:
+        """``dq = 0`` for a sensor fault; the filter and the latch are left alone.
+
+        The status's contact wrench is NaN (not measured: a supervisor's
+        ``|F'| < threshold`` test must not pass on a faulty tick), its twist zero.
+        """
+        self._holding = True
+        dq = np.zeros(self._nq)
+        self.last_status = StepStatus(dq, np.full(6, math.nan), np.zeros(6), math.nan, math.nan, 0.0,
+                                      self.safety_latched, event, fault)
+        return dq
+
+    def _restart_derivative(self, wrench: np.ndarray) -> None:
+        """After a hold: take this tick's force error as the previous one and zero the filtered derivative."""
+        self._holding = False
+        state = self.admittance.state
+        if state.started:
+            state.previous_error = self.admittance.force_error(wrench)
+            state.filtered_derivative = np.zeros(6)
 
     def _stop(self, contact: np.ndarray, force: float, torque: float) -> np.ndarray:
         if self.safety_latched and self.last_status is not None and self.last_status.safety_stop:

@@ -152,13 +152,27 @@ def test_contact_beyond_the_limit_stops_and_latches(arm):
     "q, raw, dt, match",
     [
         (np.zeros(5), np.zeros(6), 1e-3, "shape"),
-        (np.full(6, np.nan), np.zeros(6), 1e-3, "finite"),
-        (np.zeros(6), np.zeros(6), 0.0, "dt"),
+        (np.zeros(6), np.zeros((1, 6)), 1e-3, "shape"),
+        (np.zeros(6), ["a"] * 6, 1e-3, "numeric"),
+        (np.zeros(6), np.zeros(6), None, "numeric"),
     ],
 )
 def test_bad_step_inputs_are_refused(arm, q, raw, dt, match):
     with pytest.raises(InvalidInput, match=match):
         _controller(arm).step(q, raw, dt)
+
+
+@pytest.mark.parametrize(
+    "q, raw, dt, fault",
+    [
+        (np.full(6, np.nan), np.zeros(6), 1e-3, "not_finite"),
+        (Q_DOWN, np.zeros(6), 0.0, "dt_jump"),
+    ],
+)
+def test_non_finite_input_and_bad_dt_hold_instead_of_raising(arm, q, raw, dt, fault):
+    controller = _controller(arm)
+    dq = controller.step(q, raw, dt)
+    assert np.all(dq == 0.0) and controller.last_status.fault == fault and controller.last_status.held
 
 
 def test_tool_control_point_must_be_rigid_with_the_sensor():
