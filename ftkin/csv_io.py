@@ -152,7 +152,15 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
             table.source,
         )
     if not found:
-        _missing(table, list(EULER_COLUMNS), "orientation (or joint or quaternion)")
+        joints = f"the arm's joint names {list(joint_names)} or q1..q{len(joint_names)}" if joint_names else "joint columns"
+        unknown = [name for name in header if "joint" in name.lower()]
+        hint = f"; columns {unknown} look like joint names but are not this arm's (wrong --urdf/--robot?)" if unknown else ""
+        raise InvalidSamples(
+            f"no orientation columns: expected {joints} [rad], or alpha,beta,gamma [deg], or qw,qx,qy,qz{hint}; "
+            f"the header has {header}",
+            table.source,
+            table.header_line,
+        )
     kind, columns = next(iter(found.items()))
     if kind == "euler":
         _missing(table, EULER_COLUMNS, "Euler angle")

@@ -123,7 +123,13 @@ def test_missing_orientation_columns(tmp_path):
 
 def test_no_orientation_at_all(tmp_path, arm):
     text = "fx,fy,fz,mx,my,mz,time\n1,2,3,4,5,6,0\n"
-    _assert_error(tmp_path, text, r"missing orientation \(or joint or quaternion\) column\(s\)", arm=arm)
+    _assert_error(tmp_path, text, r"no orientation columns: expected the arm's joint names \['joint1'.*alpha,beta,gamma", arm=arm)
+
+
+def test_joint_columns_of_another_robot(tmp_path, arm):
+    names = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
+    text = ",".join(names) + ",fx,fy,fz,mx,my,mz\n" + ",".join(["0"] * 12) + "\n"
+    _assert_error(tmp_path, text, r"columns \['shoulder_pan_joint'.* look like joint names but are not this arm's", arm=arm)
 
 
 def test_incomplete_quaternion(tmp_path):
