@@ -94,7 +94,8 @@ def write_small_bag(path: Path, arm, seed: int) -> Path:
 
     def header(t):
         ns = int(t * 1e9)
-        return types["std_msgs/msg/Header"](stamp=types["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9), frame_id="ft_sensor")
+        stamp = types["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9)
+        return types["std_msgs/msg/Header"](stamp=stamp, frame_id="ft_sensor")
 
     folder = path.parent / "bag"
     with Writer(folder, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
@@ -180,13 +181,15 @@ def run(seconds: float, seed: int) -> int:
     path = workdir / "input"
     while time.monotonic() < deadline:
         target = rng.choice(list(counts))
+        target_path = path
         if target == "csv":
             path.write_text(mutate_text(rng.choice(csv_seeds), rng), errors="surrogateescape")
             reader, check = (lambda p: load_samples(p, arm)), check_samples
         elif target == "bag":
             bag_path = workdir / "input.mcap"
             bag_path.write_bytes(mutate_bytes(bag_seed, rng))
-            reader, check = (lambda p: _read_bag_quietly(bag_path, arm)), check_samples
+            target_path = bag_path
+            reader, check = (lambda p: _read_bag_quietly(p, arm)), check_samples
         elif target == "json-text":
             path.write_text(mutate_text(json_seed, rng))
             reader, check = load_calibration, check_calibration
@@ -195,7 +198,7 @@ def run(seconds: float, seed: int) -> int:
             reader, check = load_calibration, check_calibration
         counts[target] += 1
         try:
-            check(reader(path))
+            check(reader(target_path))
             outcomes["ok"] += 1
         except ftkin.FtkinError:
             outcomes["ftkin error"] += 1
