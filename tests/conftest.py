@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftkin import Arm
+from ftkin import Arm, SensorModel
 from ftkin.simulation import paper_like_truth
 
 
@@ -25,3 +25,18 @@ def rng() -> np.random.Generator:
 def truth():
     """Simulation truth close to the paper's setup (3.15 N tool, COM 47 mm on z, small tilt)."""
     return paper_like_truth()
+
+
+@pytest.fixture(scope="module")
+def tool() -> SensorModel:
+    """A 15 N tool, COM a few cm off the sensor axis, biases, a small base tilt (the estimator benchmark's)."""
+    return SensorModel.from_tool(
+        15.0 / 9.80665, [0.03, -0.02, 0.08], [2.0, -1.5, 3.0], [0.10, -0.05, 0.02], base_tilt=np.deg2rad([0.3, -0.2])
+    )
+
+
+@pytest.fixture(scope="module")
+def rotations(arm) -> np.ndarray:
+    """Twelve sensor orientations ``(12, 3, 3)`` of random joint configurations of the bundled arm."""
+    rng = np.random.default_rng(7)
+    return arm.rotation_sensor_to_base(arm.random_configurations(12, rng, margin=0.3))

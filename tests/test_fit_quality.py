@@ -7,7 +7,7 @@ import logging
 import numpy as np
 import pytest
 
-from ftkin import Samples, SensorModel, SensorNoise, SimulatedSensor, calibrate
+from ftkin import Samples, SensorNoise, SimulatedSensor, calibrate
 from ftkin.cli import main
 from ftkin.diagnostics import OUTLIER_ALPHA, FitDiagnostics
 from ftkin.fit_quality import diagnose
@@ -17,17 +17,6 @@ NOISE = SensorNoise(0.03, 0.0015)  # per reading [N], [N·m]
 CABLE = np.array([0.0, 0.4, -0.3, 0.02, 0.0, 0.0])  # a cable pulling on the tool at one pose [N, N·m]
 
 
-@pytest.fixture(scope="module")
-def tool():
-    return SensorModel.from_tool(
-        15.0 / 9.80665, [0.03, -0.02, 0.08], [2.0, -1.5, 3.0], [0.10, -0.05, 0.02], base_tilt=np.deg2rad([0.3, -0.2])
-    )
-
-
-@pytest.fixture(scope="module")
-def rotations(arm):
-    rng = np.random.default_rng(7)
-    return arm.rotation_sensor_to_base(arm.random_configurations(12, rng, margin=0.3))
 
 
 def _with_cable(tool, rotations, rng, readings, pose=5):

@@ -60,26 +60,24 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     return None
 
 
-def positive_float(text: str) -> float:
-    """argparse type: a finite positive number."""
+def _number(text: str, accept, expected: str) -> float:
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value > 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a finite positive number, got {text!r}")
+    if not (accept(value) and value != float("inf")):
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
     return value
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite positive number."""
+    return _number(text, lambda value: value > 0, "a finite positive number")
 
 
 def non_negative_float(text: str) -> float:
     """argparse type: a finite number ≥ 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value >= 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a finite number ≥ 0, got {text!r}")
-    return value
+    return _number(text, lambda value: value >= 0, "a finite number ≥ 0")
 
 
 def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
