@@ -25,14 +25,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 
 import numpy as np
 
 from .exceptions import InvalidInput
 
 
-class SensorFault(str, Enum):
+class SensorFault(StrEnum):
     """Why a tick was held (``NONE``: it was not)."""
 
     NONE = ""
@@ -166,7 +166,8 @@ class FaultMonitor:
         elif self.limits.nominal_dt is None:
             self._reference_dt = reference + _ALPHA * (min(dt, self._ratio * reference) - reference)
         if dt > self._ratio * reference:
-            return SensorFault.DT_JUMP, f"dt = {dt:.4g} s is more than {self._ratio:g} x the nominal {reference:.4g} s (dropped ticks): holding"
+            return SensorFault.DT_JUMP, (f"dt = {dt:.4g} s is more than {self._ratio:g} x the nominal "
+                                         f"{reference:.4g} s (dropped ticks): holding")
         if self._check_range:
             for channel, (value, limit) in enumerate(zip(raw, self._ranges)):
                 if not -limit < value < limit:
