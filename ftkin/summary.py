@@ -7,7 +7,17 @@ import numpy as np
 from .model import WRENCH_CHANNELS
 
 
+def _decimals(errors, decimals: int) -> int:
+    """Enough decimals to show two significant digits of the smallest standard error."""
+    errors = np.atleast_1d(np.asarray(errors, dtype=float)) if errors is not None else np.zeros(0)
+    positive = errors[np.isfinite(errors) & (errors > 0)]
+    if positive.size == 0:
+        return decimals
+    return int(min(max(decimals, np.ceil(-np.log10(positive.min())) + 1), 9))
+
+
 def _vector(values, decimals: int, errors=None) -> str:
+    decimals = _decimals(errors, decimals)
     text = "[" + ", ".join(f"{value:+.{decimals}f}" for value in values) + "]"
     if errors is not None:
         text += " ± [" + ", ".join(f"{value:.{decimals}f}" for value in errors) + "]"
@@ -15,6 +25,7 @@ def _vector(values, decimals: int, errors=None) -> str:
 
 
 def _scalar(value, decimals: int, error=None) -> str:
+    decimals = _decimals(error, decimals)
     return f"{value:.{decimals}f}" + (f" ± {error:.{decimals}f}" if error is not None else "")
 
 

@@ -75,7 +75,7 @@ def test_calibrate_with_quaternion_csv_and_explicit_urdf(arm, rng, truth, tmp_pa
 def test_demo_prints_truth_beside_estimate(capsys):
     assert main(["demo", "--readings", "20", "--poses", "8", "--seed", "3"]) == 0
     out = capsys.readouterr().out
-    assert re.search(r"parameter\s+truth\s+estimate\s+max error", out)
+    assert re.search(r"parameter\s+truth\s+estimate\s+max \|error\|\s+max \|error\| / std error", out)
     for name in ("force_offset", "torque_offset", "center_of_mass", "gravity_in_base", "base_tilt_deg"):
         assert re.search(rf"^\s+{name}\s+\[", out, flags=re.MULTILINE), name
     injected = [float(v) for v in re.search(r"injected\s+(.*)", out).group(1).split()]
