@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test install lint bench fuzz clean
+.PHONY: demo test install lint bench fuzz soak clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -31,6 +31,9 @@ bench: $(STAMP)
 
 fuzz: $(STAMP)
 	$(PY) benchmarks/fuzz_readers.py --seconds $${FUZZ_SECONDS:-60}
+
+soak: $(STAMP)
+	$(PY) benchmarks/soak_control.py
 
 clean:
 	rm -rf $(VENV) build dist *.egg-info .pytest_cache

@@ -36,6 +36,7 @@ from .pose_constraints import PoseConstraints
 from .robots import ROBOTS, load_robot
 from .rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from .samples import Samples
+from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
 from .simulation import SimulatedSensor
 from .surfaces import Surface
 
@@ -48,6 +49,7 @@ __all__ = [
     "CalibrationResult",
     "Compensator",
     "ControlFrame",
+    "FaultMonitor",
     "FitDiagnostics",
     "FrameNotFound",
     "FtkinError",
@@ -64,6 +66,8 @@ __all__ = [
     "ROBOTS",
     "STANDARD_GRAVITY",
     "Samples",
+    "SensorFault",
+    "SensorLimits",
     "SensorModel",
     "SensorMount",
     "SensorNoise",
