@@ -28,6 +28,7 @@ import numpy as np
 from .atomic import atomic_write_text
 from .exceptions import InvalidSamples
 from .model import WRENCH_CHANNELS
+from .rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from .samples import Samples
 
 logger = logging.getLogger(__name__)
@@ -196,6 +197,66 @@ def check_radians(table: Table, columns, values: np.ndarray) -> None:
 
 
 @dataclass(frozen=True)
+class TableOrientations:
+    """Sensor orientations read from a table's orientation columns.
+
+    Attributes:
+        rotations: ``(N, 3, 3)`` ``R_BS``, one per row.
+        kind: ``"joints"``, ``"euler"`` or ``"quaternion"``.
+        columns: The columns they came from.
+        joint_positions: ``(N, nq)`` [rad] for joint columns, else None.
+        arm: The arm used for joint columns, else None.
+    """
+
+    rotations: np.ndarray
+    kind: str
+    columns: list[str]
+    joint_positions: np.ndarray | None = None
+    arm: object = None
+
+
+def orientations_from_table(table: Table, arm=None) -> TableOrientations:
+    """The sensor orientation of every row, in whichever convention the table uses.
+
+    Joint columns go through ``arm``'s forward kinematics (the bundled arm when
+    ``arm`` is None); Euler angles [deg] and quaternions need no arm.
+
+    Raises:
+        InvalidSamples: no, mixed or incomplete orientation columns, non-numbers,
+            joint angles in degrees, non-unit quaternions (with file and line).
+    """
+    if arm is None and not any(name in table.header for name in EULER_COLUMNS + QUATERNION_COLUMNS):
+        from .arm import Arm
+
+        arm = Arm.default()
+    kind, columns = detect_orientation(table, arm.joint_names if arm is not None else None)
+    values = table.floats(columns)
+    try:
+        if kind == "euler":
+            return TableOrientations(euler_zyx_deg_to_matrix(values).reshape(-1, 3, 3), kind, columns)
+        if kind == "quaternion":
+            return TableOrientations(quaternion_to_matrix(values).reshape(-1, 3, 3), kind, columns)
+        check_radians(table, columns, values)
+        return TableOrientations(arm.rotation_sensor_to_base(values), kind, columns, values, arm)
+    except InvalidSamples:
+        raise
+    except ValueError as error:  # InvalidInput from the converters
+        raise InvalidSamples(str(error), table.source) from None
+
+
+def pose_ids_from_table(table: Table) -> np.ndarray | None:
+    """The integer ``pose`` column ``(N,)``, or None when the table has none."""
+    if POSE_COLUMN not in table.header:
+        return None
+    pose_ids = table.floats([POSE_COLUMN])[:, 0]
+    fractional = np.flatnonzero(pose_ids != np.round(pose_ids))
+    if fractional.size:
+        row = int(fractional[0])
+        raise InvalidSamples(f"pose id {float(pose_ids[row])!r} is not an integer", table.source, table.lines[row])
+    return pose_ids.astype(np.int64)
+
+
+@dataclass(frozen=True)
 class LoadedSamples:
     """Samples read from a CSV, with the table they came from."""
 
@@ -211,30 +272,19 @@ def samples_from_table(table: Table, arm=None) -> LoadedSamples:
     When the table has joint columns and ``arm`` is None, the bundled arm is used.
     """
     _missing(table, WRENCH_CHANNELS, "wrench")
-    if arm is None and not any(name in table.header for name in EULER_COLUMNS + QUATERNION_COLUMNS):
-        from .arm import Arm
-
-        arm = Arm.default()
-    kind, columns = detect_orientation(table, arm.joint_names if arm is not None else None)
+    orientations = orientations_from_table(table, arm)
     wrenches = table.floats(WRENCH_CHANNELS)
-    pose_ids = table.floats([POSE_COLUMN])[:, 0] if POSE_COLUMN in table.header else None
-    if pose_ids is not None and np.any(pose_ids != np.round(pose_ids)):
-        row = int(np.flatnonzero(pose_ids != np.round(pose_ids))[0])
-        raise InvalidSamples(f"pose id {float(pose_ids[row])!r} is not an integer", table.source, table.lines[row])
-    values = table.floats(columns)
-    try:
-        if kind == "euler":
-            samples = Samples.from_euler_zyx_deg(values, wrenches, pose_ids)
-        elif kind == "quaternion":
-            samples = Samples.from_quaternions(values, wrenches, pose_ids)
-        else:
-            check_radians(table, columns, values)
-            samples = Samples.from_joint_positions(arm, values, wrenches, pose_ids)
-    except InvalidSamples:
-        raise
-    except ValueError as error:  # InvalidInput from the converters
-        raise InvalidSamples(str(error), table.source) from None
-    return LoadedSamples(samples, table, kind, columns)
+    pose_ids = pose_ids_from_table(table)
+    used = orientations.arm
+    samples = Samples(
+        wrenches,
+        orientations.rotations,
+        pose_ids,
+        orientations.joint_positions,
+        str(used.urdf_path) if used is not None and used.urdf_path is not None else None,
+        used.sensor_frame if used is not None else None,
+    )
+    return LoadedSamples(samples, table, orientations.kind, orientations.columns)
 
 
 def load_samples(path, arm=None) -> LoadedSamples:

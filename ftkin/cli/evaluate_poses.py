@@ -4,12 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..csv_io import EULER_COLUMNS, POSE_COLUMN, QUATERNION_COLUMNS, check_radians, detect_orientation, read_table
+from ..csv_io import orientations_from_table, pose_ids_from_table, read_table
 from ..evaluation import evaluate_poses
-from ..exceptions import InvalidSamples
-from ..rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
-from .common import add_arm_arguments
-from .plan import add_expectation_arguments, expectation_from_args, load_arm
+from .common import add_arm_arguments, arm_from_args
+from .plan import add_expectation_arguments, expectation_from_args
 
 
 def register(subparsers) -> None:
@@ -27,25 +25,13 @@ def register(subparsers) -> None:
 
 
 def pose_rotations(table, args) -> np.ndarray:
-    """``R_BS`` ``(N, 3, 3)`` of the table's poses, one per distinct ``pose`` id."""
-    needs_arm = not any(name in table.header for name in EULER_COLUMNS + QUATERNION_COLUMNS)
-    arm = load_arm(args) if needs_arm or args.urdf or args.robot else None
-    kind, columns = detect_orientation(table, arm.joint_names if arm is not None else None)
-    values = table.floats(columns)
-    if POSE_COLUMN in table.header:
-        _, first_rows = np.unique(table.floats([POSE_COLUMN])[:, 0], return_index=True)
-        values = values[np.sort(first_rows)]
-    try:
-        if kind == "euler":
-            return euler_zyx_deg_to_matrix(values)
-        if kind == "quaternion":
-            return quaternion_to_matrix(values)
-        check_radians(table, columns, values)
-        return arm.rotation_sensor_to_base(values)
-    except InvalidSamples:
-        raise
-    except ValueError as error:  # InvalidInput from the converters
-        raise InvalidSamples(str(error), table.source) from None
+    """``R_BS`` ``(N, 3, 3)`` of the table's poses, one per distinct ``pose`` id (its first row)."""
+    rotations = orientations_from_table(table, arm_from_args(args)).rotations  # joint columns: bundled arm by default
+    pose_ids = pose_ids_from_table(table)
+    if pose_ids is None:
+        return rotations
+    _, first_rows = np.unique(pose_ids, return_index=True)
+    return rotations[np.sort(first_rows)]
 
 
 def run(args) -> int:
