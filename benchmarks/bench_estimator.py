@@ -33,7 +33,7 @@ import time
 import numpy as np
 
 from ftkin import Arm, Samples, SensorModel, SensorNoise, SimulatedSensor, calibrate, fisher_information
-from ftkin.information import covariance_from_information, standard_errors
+from ftkin.information import covariance_from_information, extended_parameters, extended_standard_errors
 
 POSES = 12
 READINGS_PER_POSE = 10
@@ -50,28 +50,16 @@ LABELS = [f"{block}[{axis}]" for block in ("a", "F0", "M0", "P") for axis in "xy
 UNITS = ["N"] * 6 + ["N·m"] * 3 + ["m"] * 3 + ["N", "rad", "rad"]
 
 
-def extended(model) -> np.ndarray:
-    """θ followed by the derived G [N], U, V [rad] (15,)."""
-    return np.concatenate([model.to_vector(), [model.tool_weight], model.base_tilt])
-
-
-def extended_std(model, covariance) -> np.ndarray:
-    """Standard errors in the order of :func:`extended`."""
-    errors = standard_errors(model, covariance)
-    blocks = [errors[k] for k in ("gravity_in_base", "force_offset", "torque_offset", "center_of_mass")]
-    return np.concatenate(blocks + [[errors["tool_weight"]], errors["base_tilt"]])
-
-
 def monte_carlo(trials: int, rng: np.random.Generator, arm: Arm):
     configurations = arm.random_configurations(POSES, rng, margin=MARGIN)
     rotations = arm.rotation_sensor_to_base(configurations)
-    crlb = extended_std(TRUTH, covariance_from_information(
+    crlb = extended_standard_errors(TRUTH, covariance_from_information(
         fisher_information(TRUTH, rotations, NOISE, READINGS_PER_POSE)))
     sensor = SimulatedSensor(TRUTH, NOISE)
     names = ("linear", "ml known", "ml spread", "ml resid")
     errors = {name: np.empty((trials, 15)) for name in names}
     reported = {name: np.empty((trials, 15)) for name in names[1:]}
-    truth = extended(TRUTH)
+    truth = extended_parameters(TRUTH)
     for trial in range(trials):
         samples = sensor.samples(rotations, rng, READINGS_PER_POSE)
         poses = samples.pose_averages()
@@ -83,9 +71,9 @@ def monte_carlo(trials: int, rng: np.random.Generator, arm: Arm):
             "ml resid": calibrate(means),
         }
         for name, result in results.items():
-            errors[name][trial] = extended(result) - truth
+            errors[name][trial] = extended_parameters(result) - truth
             if name in reported:
-                reported[name][trial] = extended_std(result, result.covariance)
+                reported[name][trial] = extended_standard_errors(result, result.covariance)
     return crlb, errors, reported
 
 

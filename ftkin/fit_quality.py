@@ -63,12 +63,12 @@ def _block_scales(theta: np.ndarray) -> np.ndarray:
     return np.repeat(np.maximum(scales, 1e-300), 3)
 
 
-def _pose_statistics(whitened, jac, fit_ok, source, noise_dof):
-    """Per-pose studentized statistics: normalized residual [σ] and p-value."""
+def _pose_statistics(whitened, hat, fit_ok, source, noise_dof):
+    """Per-pose studentized statistics: normalized residual [σ], p-value and channel leverages.
+
+    ``hat`` holds the ``(P, 6, 6)`` diagonal blocks of the hat matrix.
+    """
     count = len(whitened)
-    blocks = jac.reshape(count, 6, 12)
-    gram_inv = np.linalg.pinv(jac.T @ jac, hermitian=True)
-    hat = blocks @ gram_inv @ np.transpose(blocks, (0, 2, 1))
     eigenvalues, eigenvectors = np.linalg.eigh(np.eye(6) - hat)
     kept = eigenvalues > 1e-8
     projected = np.einsum("pi,pij->pj", whitened, eigenvectors)
@@ -101,7 +101,6 @@ def diagnose(fit, pose_ids, dropped_pose_ids=()) -> tuple[FitDiagnostics, np.nda
     theta = fit.model.to_vector()
     problem = fit.problem
     whitened = problem.whitened_residuals(theta).reshape(-1, 6)
-    jac = problem.whitened_jacobian(theta)
     count = len(whitened)
     dof = 6 * count - 12
     chi_square = float(np.sum(whitened**2))
@@ -110,7 +109,7 @@ def diagnose(fit, pose_ids, dropped_pose_ids=()) -> tuple[FitDiagnostics, np.nda
     else:
         p_value = float(_f_sf(chi_square / dof, dof, fit.noise_dof))
     fit_ok = not (p_value < FIT_ALPHA)
-    normalized, pose_p, leverage = _pose_statistics(whitened, jac, fit_ok, fit.noise_source, fit.noise_dof)
+    normalized, pose_p, leverage = _pose_statistics(whitened, problem.hat_blocks(theta), fit_ok, fit.noise_source, fit.noise_dof)
     with np.errstate(invalid="ignore", divide="ignore"):
         channel_chi_square = np.sum(whitened**2, axis=0) / np.sum(1.0 - leverage, axis=0)
     scale = chi_square / dof if (not fit_ok and chi_square > dof) else 1.0

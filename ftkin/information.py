@@ -15,7 +15,7 @@ import numpy as np
 
 from .exceptions import InvalidInput, UnobservableParameters
 from .model import COMPONENT_NAMES, SensorModel
-from .validation import as_float_array, as_rotation_batch
+from .validation import as_float_array, as_rotation_batch, check_finite
 
 
 @dataclass(frozen=True)
@@ -57,18 +57,38 @@ def fisher_information(model: SensorModel, rotation_sensor_to_base, noise: Senso
         rotation_sensor_to_base: ``(N, 3, 3)`` sensor orientations ``R_BS``.
         noise: Per-reading noise; ``W = diag(1/σ²)``.
         readings_per_pose: Number of independent readings averaged at each
-            pose (scalar or ``(N,)``).
+            pose (positive; scalar or ``(N,)``).
+
+    Raises:
+        InvalidInput: not a rotation batch, ``noise`` not a :class:`SensorNoise`,
+            or readings per pose not positive or of the wrong shape.
     """
     rotations, _ = as_rotation_batch(rotation_sensor_to_base)
-    counts = np.broadcast_to(as_float_array(readings_per_pose, "readings_per_pose"), (len(rotations),))
+    if not isinstance(noise, SensorNoise):
+        raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
+    counts = as_float_array(readings_per_pose, "readings_per_pose")
+    if counts.ndim > 1 or counts.size not in (1, len(rotations)):
+        raise InvalidInput(f"readings_per_pose must be a scalar or have shape ({len(rotations)},), got {counts.shape}")
+    if not np.all(np.isfinite(counts) & (counts > 0)):
+        raise InvalidInput(f"readings_per_pose must be finite and positive, got {counts}")
     jac = model.parameter_jacobian(rotations)
-    weighted = jac / noise.channel_std[None, :, None] * np.sqrt(counts)[:, None, None]
+    weighted = jac / noise.channel_std[None, :, None] * np.sqrt(np.broadcast_to(counts, (len(rotations),)))[:, None, None]
     stacked = weighted.reshape(-1, 12)
     return stacked.T @ stacked
 
 
+def _as_parameter_matrix(value, name: str) -> np.ndarray:
+    """A finite ``(12, 12)`` matrix over ``θ`` or :class:`InvalidInput`."""
+    matrix = as_float_array(value, name)
+    if matrix.shape != (12, 12):
+        raise InvalidInput(f"{name} must have shape (12, 12) over θ = [a, F0, M0, P], got {matrix.shape}")
+    check_finite(matrix, name)
+    return matrix
+
+
 def covariance_from_information(information: np.ndarray, rcond: float = 1e-12) -> np.ndarray:
-    """Invert an information matrix; raise :class:`UnobservableParameters` if singular."""
+    """Invert a ``(12, 12)`` information matrix; raise :class:`UnobservableParameters` if singular."""
+    information = _as_parameter_matrix(information, "information")
     scale = np.sqrt(np.diag(information))
     if np.any(scale == 0):
         names = [COMPONENT_NAMES[i] for i in np.flatnonzero(scale == 0)]
@@ -110,26 +130,45 @@ def derived_gradients(gravity_in_base) -> dict[str, np.ndarray]:
     return {"tool_weight": grad_weight, "base_tilt_u": grad_u, "base_tilt_v": grad_v}
 
 
-def standard_errors(model: SensorModel, covariance: np.ndarray) -> dict[str, np.ndarray | float]:
+EXTENDED_NAMES = COMPONENT_NAMES + ("tool_weight", "base_tilt[u]", "base_tilt[v]")
+"""Names of the 15 entries of :func:`extended_parameters`: ``θ``, then ``G``, ``U``, ``V``."""
+
+
+def extended_parameters(model: SensorModel) -> np.ndarray:
+    """``(15,)`` ``θ = [a, F0, M0, P]`` followed by the tool weight ``G`` [N] and base tilt ``U``, ``V`` [rad]."""
+    return np.concatenate([model.to_vector(), [model.tool_weight], model.base_tilt])
+
+
+def extended_standard_errors(model: SensorModel, covariance) -> np.ndarray:
+    """``(15,)`` standard errors of :func:`extended_parameters` from the ``(12, 12)`` covariance of ``θ``.
+
+    ``G``, ``U`` and ``V`` get theirs by the delta method (:func:`derived_gradients`).
+
+    Raises:
+        InvalidInput: ``covariance`` is not a finite ``(12, 12)`` matrix.
+    """
+    covariance = _as_parameter_matrix(covariance, "covariance")
+    grads = derived_gradients(model.gravity_in_base)
+    jacobian = np.vstack([np.eye(12), grads["tool_weight"], grads["base_tilt_u"], grads["base_tilt_v"]])
+    return np.sqrt(np.clip(np.einsum("ij,jk,ik->i", jacobian, covariance, jacobian), 0.0, None))
+
+
+def standard_errors(model: SensorModel, covariance) -> dict[str, np.ndarray | float]:
     """Standard errors of every parameter from the ``(12, 12)`` covariance of ``θ``.
 
     Returns a dict with the keys of the calibration file: ``gravity_in_base``,
     ``force_offset``, ``torque_offset``, ``center_of_mass`` (``(3,)`` each, in
     the parameter's unit), ``tool_weight`` [N], ``tool_mass`` [kg] and
-    ``base_tilt`` ``(2,)`` [rad].
+    ``base_tilt`` ``(2,)`` [rad]. The same numbers as
+    :func:`extended_standard_errors`, by name.
     """
-    sigma = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
-    grads = derived_gradients(model.gravity_in_base)
-    weight_std = float(np.sqrt(grads["tool_weight"] @ covariance @ grads["tool_weight"]))
-    tilt_std = np.array(
-        [np.sqrt(grads[key] @ covariance @ grads[key]) for key in ("base_tilt_u", "base_tilt_v")]
-    )
+    sigma = extended_standard_errors(model, covariance)
     return {
         "gravity_in_base": sigma[0:3],
         "force_offset": sigma[3:6],
         "torque_offset": sigma[6:9],
         "center_of_mass": sigma[9:12],
-        "tool_weight": weight_std,
-        "tool_mass": weight_std / model.g,
-        "base_tilt": tilt_std,
+        "tool_weight": float(sigma[12]),
+        "tool_mass": float(sigma[12]) / model.g,
+        "base_tilt": sigma[13:15],
     }

@@ -42,15 +42,15 @@ MIN_SPREAD_DOF = 5
 RESIDUAL_NOISE_PASSES = 3
 """Most re-estimations of residual-based noise (each followed by a refit) until it settles to 1 %."""
 
-RESIDUAL_NOISE_GROUPS = (slice(0, 3), slice(3, 6))
+_FORCE, _TORQUE = slice(0, 3), slice(3, 6)
+
+RESIDUAL_NOISE_GROUPS = (_FORCE, _TORQUE)
 """Channels that share one noise level when it is estimated from the residuals:
 forces and torques. (Per-channel levels from 12 poses are too noisy as weights:
 they cost a quarter of the efficiency in ``benchmarks/bench_estimator.py``.)"""
 
 NOISE_SOURCES = ("given", "spread", "residuals")
 """Where the noise levels of a fit came from."""
-
-_FORCE, _TORQUE = slice(0, 3), slice(3, 6)
 
 
 @dataclass(frozen=True)
@@ -91,6 +91,15 @@ class WeightedProblem:
         jac = parameter_jacobian(self.rotations, theta[0:3], theta[9:12])
         return (jac * self.weights[:, :, None]).reshape(-1, 12)
 
+    def hat_blocks(self, theta: np.ndarray) -> np.ndarray:
+        """``(P, 6, 6)`` per-pose diagonal blocks of the hat matrix ``J (JᵀJ)⁺ Jᵀ`` of the whitened fit.
+
+        Their diagonals are the leverages of the readings' channels.
+        """
+        jac = self.whitened_jacobian(theta)
+        blocks = jac.reshape(-1, 6, 12)
+        return blocks @ np.linalg.pinv(jac.T @ jac, hermitian=True) @ np.transpose(blocks, (0, 2, 1))
+
 
 @dataclass(frozen=True)
 class MlFit:
@@ -99,8 +108,7 @@ class MlFit:
     Attributes:
         model: The estimated parameters.
         start: The two-step linear estimate the fit started from.
-        problem: The whitened problem at the final noise levels.
-        noise: Per-reading noise used [N, N·m].
+        problem: The whitened problem at the final noise levels (see :attr:`noise`).
         noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
         noise_dof: Degrees of freedom of the noise estimate (``inf`` if given).
         loss: Loss function used.
@@ -112,13 +120,17 @@ class MlFit:
     model: SensorModel
     start: SensorModel
     problem: WeightedProblem
-    noise: SensorNoise
     noise_source: str
     noise_dof: float
     loss: str
     robust_weights: np.ndarray
     information: np.ndarray
     iterations: int
+
+    @property
+    def noise(self) -> SensorNoise:
+        """Per-reading noise used [N, N·m] (the problem's channel levels)."""
+        return SensorNoise(self.problem.channel_std[_FORCE], self.problem.channel_std[_TORQUE])
 
     @property
     def covariance(self) -> np.ndarray:
@@ -153,14 +165,6 @@ def noise_from_spread(poses: PoseAverages) -> tuple[np.ndarray, float] | None:
     return np.sqrt(variance), dof
 
 
-def _inverse(gram: np.ndarray) -> np.ndarray:
-    """Inverse of a symmetric positive (semi)definite matrix, pseudo-inverse if singular."""
-    try:
-        return np.linalg.inv(gram)
-    except np.linalg.LinAlgError:
-        return np.linalg.pinv(gram, hermitian=True)
-
-
 def noise_from_residuals(problem: WeightedProblem, theta: np.ndarray, robust: bool = False) -> tuple[np.ndarray, float]:
     """Per-reading noise ``(6,)`` from the fit residuals, force and torque channels pooled.
 
@@ -171,8 +175,7 @@ def noise_from_residuals(problem: WeightedProblem, theta: np.ndarray, robust: bo
     group's degrees of freedom.
     """
     residuals = problem.residuals(theta)
-    jac = problem.whitened_jacobian(theta)
-    leverage = np.clip(np.sum((jac @ _inverse(jac.T @ jac)) * jac, axis=1).reshape(-1, 6), 0.0, 1.0 - 1e-9)
+    leverage = np.clip(np.diagonal(problem.hat_blocks(theta), axis1=1, axis2=2), 0.0, 1.0 - 1e-9)
     scaled = residuals * np.sqrt(problem.counts)[:, None]
     std = np.empty(6)
     dofs = []
@@ -189,20 +192,13 @@ def noise_from_residuals(problem: WeightedProblem, theta: np.ndarray, robust: bo
     return std, min(dofs)
 
 
-def _solve(problem: WeightedProblem, start: np.ndarray, loss: str):
-    def fun(theta):
-        return problem.whitened_residuals(theta)
-
-    def jac(theta):
-        return -problem.whitened_jacobian(theta)
-
-    if loss == "linear":
-        solution = least_squares(fun, start, jac=jac, method="lm", x_scale="jac", xtol=1e-13, ftol=1e-13, gtol=1e-13)
-    else:
-        solution = least_squares(
-            fun, start, jac=jac, method="trf", loss=loss, f_scale=ROBUST_LOSS_SCALE, x_scale="jac",
-            xtol=1e-13, ftol=1e-13, gtol=1e-13,
-        )
+def _solve(problem: WeightedProblem, start: np.ndarray, loss: str) -> tuple[np.ndarray, int]:
+    """Minimize the (robust) whitened residuals from ``start``; ``θ`` and the function evaluations used."""
+    robust = {"method": "lm"} if loss == "linear" else {"method": "trf", "loss": loss, "f_scale": ROBUST_LOSS_SCALE}
+    solution = least_squares(
+        problem.whitened_residuals, start, jac=lambda theta: -problem.whitened_jacobian(theta),
+        x_scale="jac", xtol=1e-13, ftol=1e-13, gtol=1e-13, **robust,
+    )
     return solution.x, int(solution.nfev)
 
 
@@ -229,6 +225,7 @@ def fit_ml(
     start = fit_linear(poses, g)
     theta0 = start.to_vector()
     counts = np.asarray(poses.counts, dtype=float)
+    problem = WeightedProblem(poses.rotations, poses.wrenches, counts, np.ones(6))
     if noise is not None:
         channel_std, dof, source = noise.channel_std, np.inf, "given"
     else:
@@ -237,12 +234,12 @@ def fit_ml(
             (channel_std, dof), source = spread, "spread"
         else:
             source = "residuals"
-            rms = np.sqrt(np.mean((poses.wrenches - start.predict(poses.rotations)) ** 2 * counts[:, None], axis=0))
+            # rough levels (no leverage correction) to weight the channels for the leverages
+            rms = np.sqrt(np.mean(problem.residuals(theta0) ** 2 * counts[:, None], axis=0))
             rough = np.concatenate([np.full(3, rms[_FORCE].mean()), np.full(3, rms[_TORQUE].mean())])
             rough = np.maximum(rough, 1e-12 * np.maximum(1.0, np.abs(poses.wrenches).max(axis=0)))
-            rough_problem = WeightedProblem(poses.rotations, poses.wrenches, counts, rough)
-            channel_std, dof = noise_from_residuals(rough_problem, theta0, robust=loss != "linear")
-    problem = WeightedProblem(poses.rotations, poses.wrenches, counts, channel_std)
+            channel_std, dof = noise_from_residuals(replace(problem, channel_std=rough), theta0, robust=loss != "linear")
+    problem = replace(problem, channel_std=channel_std)
     theta, evaluations = _solve(problem, theta0, loss)
     for _ in range(RESIDUAL_NOISE_PASSES if source == "residuals" else 0):
         channel_std, dof = noise_from_residuals(problem, theta, robust=loss != "linear")
@@ -259,7 +256,6 @@ def fit_ml(
         model=SensorModel.from_vector(theta, g),
         start=start,
         problem=problem,
-        noise=SensorNoise(channel_std[_FORCE], channel_std[_TORQUE]),
         noise_source=source,
         noise_dof=float(dof),
         loss=loss,

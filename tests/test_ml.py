@@ -27,23 +27,18 @@ from ftkin import (
 from ftkin.calibration_file import calibration_to_dict
 from ftkin.cli import main
 from ftkin.csv_io import write_csv
-from ftkin.information import covariance_from_information, derived_gradients, standard_errors
+from ftkin.information import (
+    EXTENDED_NAMES,
+    covariance_from_information,
+    derived_gradients,
+    extended_parameters,
+    extended_standard_errors,
+    standard_errors,
+)
 from ftkin.ml import WeightedProblem, _solve, fit_ml, noise_from_spread
 from ftkin.paper import PAPER_G, paper_samples
 
 NOISE = SensorNoise(0.03, 0.0015)  # per reading [N], [N·m]
-
-
-
-
-def _extended(model) -> np.ndarray:
-    return np.concatenate([model.to_vector(), [model.tool_weight], model.base_tilt])
-
-
-def _extended_std(model, covariance) -> np.ndarray:
-    errors = standard_errors(model, covariance)
-    blocks = [errors[k] for k in ("gravity_in_base", "force_offset", "torque_offset", "center_of_mass")]
-    return np.concatenate(blocks + [[errors["tool_weight"]], errors["base_tilt"]])
 
 
 # ------------------------------------------------------------------ truth
@@ -97,9 +92,9 @@ def test_paper_data_agree_with_the_linear_method_within_the_standard_errors():
     by more than the printed digits; they agree to within half a standard error."""
     linear = calibrate(paper_samples(), method="linear", g=PAPER_G)
     ml = calibrate(paper_samples(), g=PAPER_G)
-    sigma = _extended_std(ml, ml.covariance)
+    sigma = extended_standard_errors(ml, ml.covariance)
     assert np.all(np.isfinite(sigma)) and np.all(sigma > 0)
-    assert np.all(np.abs(_extended(ml) - _extended(linear)) < 0.6 * sigma)
+    assert np.all(np.abs(extended_parameters(ml) - extended_parameters(linear)) < 0.6 * sigma)
     assert ml.diagnostics.noise_source == "residuals"
     assert ml.std_errors["tool_weight"] == pytest.approx(sigma[12])
     assert "3.154 ± 0.022 N" in ml.summary()
@@ -130,6 +125,40 @@ def test_delta_method_gradients_match_finite_differences(tool):
     np.testing.assert_allclose(analytic, numeric, rtol=1e-6, atol=1e-9)
 
 
+def test_extended_standard_errors_are_the_named_ones_and_the_delta_method(tool, rotations):
+    covariance = covariance_from_information(fisher_information(tool, rotations, NOISE))
+    sigma = extended_standard_errors(tool, covariance)
+    named = standard_errors(tool, covariance)
+    np.testing.assert_array_equal(sigma[:12], np.sqrt(np.diag(covariance)))
+    np.testing.assert_array_equal(
+        sigma, np.concatenate([named[key] for key in ("gravity_in_base", "force_offset", "torque_offset",
+                                                      "center_of_mass")] + [[named["tool_weight"]], named["base_tilt"]])
+    )
+    assert named["tool_mass"] == pytest.approx(named["tool_weight"] / tool.g)
+    grads = derived_gradients(tool.gravity_in_base)
+    for index, key in zip((12, 13, 14), ("tool_weight", "base_tilt_u", "base_tilt_v")):
+        assert sigma[index] == pytest.approx(np.sqrt(grads[key] @ covariance @ grads[key]), rel=1e-12)
+    assert len(EXTENDED_NAMES) == 15 and EXTENDED_NAMES[12:] == ("tool_weight", "base_tilt[u]", "base_tilt[v]")
+    np.testing.assert_array_equal(extended_parameters(tool)[12:], [tool.tool_weight, *tool.base_tilt])
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda m, r: standard_errors(m, np.eye(3)), r"covariance must have shape \(12, 12\)"),
+        (lambda m, r: extended_standard_errors(m, np.full((12, 12), np.nan)), "covariance must be finite"),
+        (lambda m, r: covariance_from_information(np.eye(3)), r"information must have shape \(12, 12\)"),
+        (lambda m, r: covariance_from_information("x"), "information must be numeric"),
+        (lambda m, r: fisher_information(m, r, (0.03, 0.0015)), "noise must be an ftkin.SensorNoise, got tuple"),
+        (lambda m, r: fisher_information(m, r, NOISE, [1, 2]), r"readings_per_pose must be a scalar or have shape \(12,\)"),
+        (lambda m, r: fisher_information(m, r, NOISE, 0), "readings_per_pose must be finite and positive"),
+    ],
+)
+def test_information_functions_refuse_bad_input(tool, rotations, call, message):
+    with pytest.raises(InvalidInput, match=message):
+        call(tool, rotations)
+
+
 @pytest.mark.parametrize("readings, given", [(1, True), (4, False)], ids=["noise given", "noise from spread"])
 def test_standard_errors_match_the_monte_carlo_spread(tool, rotations, readings, given):
     rng = np.random.default_rng(2024)
@@ -138,15 +167,15 @@ def test_standard_errors_match_the_monte_carlo_spread(tool, rotations, readings,
     estimates, reported = np.empty((trials, 15)), np.empty((trials, 15))
     for trial in range(trials):
         result = calibrate(sensor.samples(rotations, rng, readings), noise=NOISE if given else None)
-        estimates[trial] = _extended(result)
-        reported[trial] = _extended_std(result, result.covariance)
+        estimates[trial] = extended_parameters(result)
+        reported[trial] = extended_standard_errors(result, result.covariance)
     spread = np.std(estimates, axis=0, ddof=1)
     mean_reported = np.mean(reported, axis=0)
     np.testing.assert_allclose(mean_reported, spread, rtol=0.2)
     # and the reported errors are the Cramér–Rao bound (ml is efficient)
-    crlb = _extended_std(tool, covariance_from_information(fisher_information(tool, rotations, NOISE, readings)))
+    crlb = extended_standard_errors(tool, covariance_from_information(fisher_information(tool, rotations, NOISE, readings)))
     np.testing.assert_allclose(mean_reported, crlb, rtol=0.05)
-    assert np.all(np.abs(np.mean(estimates, axis=0) - _extended(tool)) < 0.3 * crlb)  # unbiased (σ/√300 = 0.06σ)
+    assert np.all(np.abs(np.mean(estimates, axis=0) - extended_parameters(tool)) < 0.3 * crlb)  # unbiased (σ/√300 = 0.06σ)
 
 
 # ---------------------------------------------------------------- noise levels
