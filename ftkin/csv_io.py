@@ -275,15 +275,12 @@ def samples_from_table(table: Table, arm=None) -> LoadedSamples:
     orientations = orientations_from_table(table, arm)
     wrenches = table.floats(WRENCH_CHANNELS)
     pose_ids = pose_ids_from_table(table)
-    used = orientations.arm
-    samples = Samples(
-        wrenches,
-        orientations.rotations,
-        pose_ids,
-        orientations.joint_positions,
-        str(used.urdf_path) if used is not None and used.urdf_path is not None else None,
-        used.sensor_frame if used is not None else None,
-    )
+    if orientations.arm is None:
+        samples = Samples(wrenches, orientations.rotations, pose_ids)
+    else:
+        samples = Samples.from_joint_positions(
+            orientations.arm, orientations.joint_positions, wrenches, pose_ids, orientations.rotations
+        )
     return LoadedSamples(samples, table, orientations.kind, orientations.columns)
 
 

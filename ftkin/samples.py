@@ -101,13 +101,17 @@ class Samples:
         return cls(wrenches, rotation_sensor_to_base, pose_ids)
 
     @classmethod
-    def from_joint_positions(cls, arm, joint_positions, wrenches, pose_ids=None) -> Samples:
-        """From ``(N, nq)`` joint angles [rad] through the arm's forward kinematics."""
+    def from_joint_positions(cls, arm, joint_positions, wrenches, pose_ids=None, rotations=None) -> Samples:
+        """From ``(N, nq)`` joint angles [rad] through the arm's forward kinematics.
+
+        ``rotations``: their ``R_BS`` ``(N, 3, 3)`` when the caller computed them
+        already (forward kinematics is then skipped).
+        """
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
+        if rotations is None:
+            rotations = arm.rotation_sensor_to_base(configurations)
         urdf = str(arm.urdf_path) if arm.urdf_path is not None else None
-        return cls(
-            wrenches, arm.rotation_sensor_to_base(configurations), pose_ids, configurations, urdf, arm.sensor_frame
-        )
+        return cls(wrenches, rotations, pose_ids, configurations, urdf, arm.sensor_frame)
 
     @classmethod
     def from_quaternions(cls, quaternions_wxyz, wrenches, pose_ids=None) -> Samples:

@@ -73,7 +73,7 @@ class SimulatedSensor:
     def samples_at_configurations(self, arm, joint_positions, rng: np.random.Generator, readings_per_pose: int = 1) -> Samples:
         """Like :meth:`samples` with orientations from joint angles ``(N, nq)`` [rad]."""
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
-        repeated = np.repeat(configurations, readings_per_pose, axis=0)
+        rotations = np.repeat(arm.rotation_sensor_to_base(configurations), readings_per_pose, axis=0)  # FK once per pose
         pose_ids = np.repeat(np.arange(len(configurations)), readings_per_pose)
-        rotations = arm.rotation_sensor_to_base(repeated)
-        return Samples.from_joint_positions(arm, repeated, self.read(rotations, rng), pose_ids)
+        repeated = np.repeat(configurations, readings_per_pose, axis=0)
+        return Samples.from_joint_positions(arm, repeated, self.read(rotations, rng), pose_ids, rotations)
