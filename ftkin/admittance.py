@@ -20,7 +20,8 @@ K1 [m/N, rad/(N·m)] and K2 [m/(s·N), rad/(s·N·m)] are diagonal (6-vectors),
 S is a 0/1 diagonal: 0 keeps that axis still. A deadband shrinks each force
 (torque) error component towards zero by ``force_deadband`` [N]
 (``torque_deadband`` [N·m]), continuously. ``frame`` names the axes (and the
-point) in which ``ΔF`` and ``ΔV`` are expressed; :class:`ControlFrame` does the
+point) in which ``ΔF`` and ``ΔV`` are expressed;
+:class:`~ftkin.control_frame.ControlFrame` (re-exported here) does the
 rotations and the lever arm.
 """
 
@@ -31,73 +32,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .control_frame import FRAMES, ControlFrame
 from .exceptions import InvalidInput
 from .validation import as_float_array, as_vector, check_finite
 
-FRAMES = ("sensor", "tool", "base")
-"""Frames an admittance can work in (see :class:`ControlFrame`)."""
-
-
-class ControlFrame:
-    """Where ``ΔF`` and ``ΔV`` live, and the conversions from/to the sensor.
-
-    * ``"sensor"``: sensor origin, sensor axes;
-    * ``"tool"``: the tool point ``r`` (sensor frame) [m], tool axes (``R_ST``, tool to sensor);
-    * ``"base"``: the control point ``r``, base axes.
-
-    Wrench transport to the control point: ``M_p = M_s − r × F`` (moment about
-    the new point), then a rotation of both parts. Twist transport back to the
-    sensor origin for the sensor Jacobian: ``v_s = v_p − ω × r`` (base axes).
-
-    Args:
-        frame: One of :data:`FRAMES`.
-        point_in_sensor: Control point in the sensor frame [m] (ignored for ``"sensor"``).
-        rotation_tool_to_sensor: ``R_ST`` ``(3, 3)``, only used for ``"tool"``.
-    """
-
-    def __init__(self, frame: str = "sensor", point_in_sensor=(0.0, 0.0, 0.0), rotation_tool_to_sensor=None):
-        if frame not in FRAMES:
-            raise InvalidInput(f"frame must be one of {FRAMES}, got {frame!r}")
-        self.frame = frame
-        point = as_vector(point_in_sensor, 3, "control point in the sensor frame")
-        self.point_in_sensor = np.zeros(3) if frame == "sensor" else point
-        rotation = np.eye(3) if rotation_tool_to_sensor is None else as_float_array(rotation_tool_to_sensor, "R_ST")
-        if rotation.shape != (3, 3) or not np.allclose(rotation.T @ rotation, np.eye(3), atol=1e-6) or np.linalg.det(rotation) < 0:
-            raise InvalidInput(f"rotation_tool_to_sensor must be a (3, 3) rotation matrix, got {rotation!r}")
-        self.rotation_tool_to_sensor = rotation if frame == "tool" else np.eye(3)
-        self._r = self.point_in_sensor.tolist()
-        self._rotation_rows = self.rotation_tool_to_sensor.tolist()
-        self._inverse_rows = self.rotation_tool_to_sensor.T.tolist()
-
-    def wrench_from_sensor(self, wrench_in_sensor: np.ndarray, rotation_sensor_to_base: np.ndarray) -> np.ndarray:
-        """``(6,)`` wrench at the control point in this frame's axes, from the sensor's ``(6,)``."""
-        fx, fy, fz, mx, my, mz = wrench_in_sensor.tolist()
-        rx, ry, rz = self._r
-        mx, my, mz = mx - (ry * fz - rz * fy), my - (rz * fx - rx * fz), mz - (rx * fy - ry * fx)
-        if self.frame != "sensor":
-            rows = rotation_sensor_to_base.tolist() if self.frame == "base" else self._inverse_rows
-            fx, fy, fz = _rotate(rows, fx, fy, fz)
-            mx, my, mz = _rotate(rows, mx, my, mz)
-        return np.array([fx, fy, fz, mx, my, mz])
-
-    def twist_to_sensor_origin(self, twist: np.ndarray, rotation_sensor_to_base: np.ndarray) -> np.ndarray:
-        """Twist ``[v; ω]`` of the sensor origin in base axes, from a control-point twist in this frame's axes."""
-        vx, vy, vz, wx, wy, wz = twist.tolist()
-        rows = rotation_sensor_to_base.tolist()
-        if self.frame != "base":
-            if self.frame == "tool":
-                vx, vy, vz = _rotate(self._rotation_rows, vx, vy, vz)
-                wx, wy, wz = _rotate(self._rotation_rows, wx, wy, wz)
-            vx, vy, vz = _rotate(rows, vx, vy, vz)
-            wx, wy, wz = _rotate(rows, wx, wy, wz)
-        px, py, pz = _rotate(rows, *self._r)
-        return np.array([vx - (wy * pz - wz * py), vy - (wz * px - wx * pz), vz - (wx * py - wy * px), wx, wy, wz])
-
-
-def _rotate(rows, x: float, y: float, z: float) -> tuple[float, float, float]:
-    """``R @ (x, y, z)`` on Python floats, ``rows`` = ``R.tolist()``."""
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rows
-    return r00 * x + r01 * y + r02 * z, r10 * x + r11 * y + r12 * z, r20 * x + r21 * y + r22 * z
+__all__ = ["FRAMES", "Admittance", "AdmittanceState", "ControlFrame"]
 
 
 def _diagonal(value, name: str, nonnegative: bool = True) -> np.ndarray:

@@ -40,9 +40,10 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg import lapack
 
-from .admittance import Admittance, ControlFrame
+from .admittance import Admittance
 from .arm import Arm
 from .compensation import Compensator
+from .control_frame import control_frame_for
 from .exceptions import InvalidInput
 from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
 
@@ -122,8 +123,8 @@ class JointAdmittance:
         self.manipulability_threshold, self.max_damping = float(manipulability_threshold), float(max_damping)
         self.limit_gain = float(limit_gain)
         self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
-        self._gain_lower, self._gain_upper = self.limit_gain * arm.lower_limits, self.limit_gain * arm.upper_limits
-        self._velocity_limits = arm.velocity_limits * float(velocity_scale)
+        self._joint_limits = list(zip(arm.lower_limits.tolist(), arm.upper_limits.tolist(),
+                                      (arm.velocity_limits * float(velocity_scale)).tolist()))
         self._nq = arm.nq
         self.monitor = FaultMonitor(sensor_limits)
         self.reset()
@@ -210,15 +211,18 @@ class JointAdmittance:
         return dq
 
     def _limit_scale(self, q: np.ndarray, dq: np.ndarray) -> float:
-        """Largest ``s ≤ 1`` with ``lower_bound ≤ s·dq ≤ upper_bound`` per joint (0 if a bound is crossed)."""
-        upper = np.minimum(self._velocity_limits, self._gain_upper - self.limit_gain * q)
-        lower = np.maximum(-self._velocity_limits, self._gain_lower - self.limit_gain * q)
-        if np.maximum(dq - upper, lower - dq).max() <= 0.0:
-            return 1.0
-        upper, lower = np.maximum(upper, 0.0), np.minimum(lower, 0.0)
-        moving = dq != 0.0
-        ratios = np.where(dq[moving] > 0.0, upper[moving], lower[moving]) / dq[moving]
-        return float(min(1.0, ratios.min()))
+        """Largest ``s ≤ 1`` keeping every joint's ``s·dq`` within its bound (0 if one is at or past its limit).
+
+        A joint moving towards its position limit may go at most ``limit_gain · distance``
+        [rad/s], and never beyond its (scaled) velocity limit.
+        """
+        gain, scale = self.limit_gain, 1.0
+        for position, velocity, (lower, upper, speed) in zip(q.tolist(), dq.tolist(), self._joint_limits):
+            if velocity > 0.0:
+                scale = min(scale, max(0.0, min(speed, gain * (upper - position))) / velocity)
+            elif velocity < 0.0:
+                scale = min(scale, min(0.0, max(-speed, gain * (lower - position))) / velocity)
+        return scale
 
 
 def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, manipulability_threshold: float = 0.005,
@@ -246,28 +250,3 @@ def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, manipulability
     damping = max_damping * (1.0 - manipulability / manipulability_threshold)
     gram.flat[::7] += damping * damping
     return jacobian.T @ _posv(gram, twist)[1], manipulability, damping
-
-
-def control_frame_for(arm: Arm, frame: str, control_point: str | None = None) -> ControlFrame:
-    """The :class:`ControlFrame` for an arm: tool point and axes taken from its tool frame.
-
-    Raises:
-        InvalidInput: the tool frame is not rigidly attached to the sensor (not
-            on the same joint), or a tool control point is asked of an arm without one.
-    """
-    if control_point is None:
-        control_point = "sensor" if frame == "sensor" or arm.tool_frame_id is None else "tool"
-    if control_point not in ("sensor", "tool"):
-        raise InvalidInput(f"control_point must be 'sensor' or 'tool', got {control_point!r}")
-    if frame == "tool" and control_point != "tool":
-        raise InvalidInput("frame 'tool' needs the tool control point")
-    if control_point == "sensor" or frame == "sensor":
-        return ControlFrame(frame)
-    if arm.tool_frame_id is None:
-        raise InvalidInput("this Arm has no tool frame: load it with tool_frame= or use control_point='sensor'")
-    sensor, tool = arm.model.frames[arm.sensor_frame_id], arm.model.frames[arm.tool_frame_id]
-    if sensor.parentJoint != tool.parentJoint:
-        raise InvalidInput(f"tool frame {arm.tool_frame!r} is not on the same joint as sensor frame {arm.sensor_frame!r}; "
-                           "the control point must be rigidly attached to the sensor")
-    relative = sensor.placement.inverse() * tool.placement
-    return ControlFrame(frame, relative.translation.copy(), relative.rotation.copy())

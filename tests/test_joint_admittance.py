@@ -179,3 +179,12 @@ def test_tool_control_point_must_be_rigid_with_the_sensor():
     arm = Arm.default(tool_frame="link3")
     with pytest.raises(InvalidInput, match="same joint"):
         JointAdmittance(arm, Admittance(frame="tool"))
+
+
+def test_a_still_command_past_a_joint_limit_does_not_raise(arm):
+    # regression: dq exactly 0 with a joint past its limit raised numpy's "zero-size array" ValueError
+    controller = JointAdmittance(arm, Admittance(k2=0.0, frame="tool"), Compensator(paper_like_truth(), arm))
+    q = Q_DOWN.copy()
+    q[0] = arm.lower_limits[0] - 0.01
+    dq = controller.step(q, _raw(arm, q, np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0])), 1e-3)
+    assert np.all(dq == 0.0) and controller.last_status.limit_scale == 1.0
