@@ -19,6 +19,7 @@ from .linear import fit_linear
 from .ml import LOSSES, fit_ml
 from .model import STANDARD_GRAVITY, SensorModel
 from .samples import PoseAverages, Samples
+from .summary import format_summary
 from .validation import as_positive
 
 METHODS = ("ml", "linear")
@@ -95,8 +96,6 @@ class CalibrationResult(SensorModel):
 
     def summary(self) -> str:
         """Human-readable summary with units."""
-        from .summary import format_summary
-
         return format_summary(self)
 
 

@@ -29,7 +29,7 @@ import numpy as np
 from .atomic import atomic_write_text
 from .calibration import CalibrationResult
 from .diagnostics import FitDiagnostics
-from .exceptions import CalibrationFileError, FtkinError
+from .exceptions import CalibrationFileError, FtkinError, InvalidInput
 
 FORMAT_NAME = "ftkin-calibration"
 FORMAT_VERSION = 1
@@ -102,7 +102,16 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
 
 
 def save_calibration(result: CalibrationResult, path) -> Path:
-    """Write a calibration file atomically (the old file survives a crash)."""
+    """Write a calibration file atomically (the old file survives a crash).
+
+    Raises:
+        InvalidInput: ``result`` is not a :class:`CalibrationResult`.
+        CalibrationFileError: it holds NaN or infinite numbers.
+    """
+    if not isinstance(result, CalibrationResult):
+        raise InvalidInput(
+            f"result must be an ftkin.CalibrationResult (from calibrate or load_calibration), got {type(result).__name__}"
+        )
     try:
         text = json.dumps(calibration_to_dict(result), indent=2, allow_nan=False) + "\n"
     except ValueError as error:  # NaN or infinity in a hand-built result
@@ -125,6 +134,15 @@ class _Reader:
                 self.fail("missing", key)
             return None
         return self.document[key]
+
+    def optional(self, key: str, kind: type, default=None):
+        """An optional value of JSON type ``kind`` (``str``, ``int``), ``default`` when absent or null."""
+        value = self.get(key, required=False)
+        if value is None:
+            return default
+        if isinstance(value, bool) or not isinstance(value, kind):
+            self.fail(f"expected {kind.__name__} or null, got {value!r}", key)
+        return value
 
     def array(self, key: str, shape: tuple, required: bool = True, source=None):
         value = self.get(key, required) if source is None else source
@@ -191,9 +209,9 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     count = len(pose_ids)
     measured = reader.array("poses.measured", (count, 6), source=poses.get("measured", np.zeros((0, 6))))
     residuals = reader.array("poses.residuals", (count, 6), source=poses.get("residuals", np.zeros((0, 6))))
-    method = reader.get("method", required=False) or "unknown"
-    urdf, sensor_frame = reader.get("urdf", required=False), reader.get("sensor_frame", required=False)
-    sample_count = reader.get("sample_count", required=False) or count
+    method = reader.optional("method", str, "unknown")
+    urdf, sensor_frame = reader.optional("urdf", str), reader.optional("sensor_frame", str)
+    sample_count = reader.optional("sample_count", int, count)
     try:
         result = CalibrationResult(
             force_offset=reader.array("force_offset", (3,)),
@@ -201,11 +219,11 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             gravity_in_base=reader.array("gravity_in_base", (3,)),
             center_of_mass=reader.array("center_of_mass", (3,)),
             g=reader.number("g"),
-            method=str(method),
+            method=method,
             pose_ids=pose_ids,
             pose_wrenches=measured,
             residuals=residuals,
-            sample_count=int(sample_count),
+            sample_count=sample_count,
             urdf=urdf,
             sensor_frame=sensor_frame,
             covariance=reader.array("covariance", (12, 12), required=False),

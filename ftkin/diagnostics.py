@@ -132,7 +132,7 @@ class FitDiagnostics:
             noise_dof=np.inf if data["noise_dof"] is None else float(data["noise_dof"]),
             chi_square=number("chi_square"),
             dof=int(data["dof"]),
-            p_value=np.nan if data["p_value"] is None else float(data["p_value"]),
+            p_value=number("p_value"),
             channel_chi_square=floats("channel_chi_square").reshape(6),
             covariance_scale=number("covariance_scale"),
             pose_ids=np.array(data["pose_ids"], dtype=np.int64),

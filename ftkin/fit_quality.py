@@ -118,7 +118,8 @@ def diagnose(fit, pose_ids, dropped_pose_ids=()) -> tuple[FitDiagnostics, np.nda
     diagonal = np.sqrt(np.diag(information))
     eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(diagonal, diagonal))
     weakest = eigenvectors[:, 0] * np.sign(eigenvectors[np.argmax(np.abs(eigenvectors[:, 0])), 0])
-    relative = np.sqrt(np.clip(np.diag(covariance), 0.0, None)) / _block_scales(theta)
+    sigma, scales = np.sqrt(np.clip(np.diag(covariance), 0.0, None)), _block_scales(theta)
+    relative = sigma / scales
     pose_ids = np.asarray(pose_ids)
     outliers = tuple(int(i) for i in pose_ids[pose_p < OUTLIER_ALPHA / max(count, 1)])
 
@@ -141,11 +142,10 @@ def diagnose(fit, pose_ids, dropped_pose_ids=()) -> tuple[FitDiagnostics, np.nda
     for block, name in enumerate(PARAMETER_NAMES):
         part = slice(3 * block, 3 * block + 3)
         if np.any(relative[part] > RELATIVE_STD_ERROR_WARNING):
-            sigma = np.sqrt(np.diag(covariance))[part]
             messages.append(
-                f"{name} is poorly determined: standard errors [{', '.join(f'{s:.3g}' for s in sigma)}] "
+                f"{name} is poorly determined: standard errors [{', '.join(f'{s:.3g}' for s in sigma[part])}] "
                 f"{_UNITS[name]} are up to {100 * relative[part].max():.0f} % of its scale "
-                f"{_block_scales(theta)[3 * block]:.3g} {_UNITS[name]}; add poses that turn gravity into other "
+                f"{scales[3 * block]:.3g} {_UNITS[name]}; add poses that turn gravity into other "
                 f"sensor directions (condition number {eigenvalues[-1] / eigenvalues[0]:.3g}, weakest direction "
                 + ", ".join(f"{weight:+.2f} {label}" for label, weight in main_components(weakest)) + ")"
             )

@@ -30,7 +30,7 @@ def _scalar(value, decimals: int, error=None) -> str:
 
 
 def format_summary(result) -> str:
-    """Parameters with units (± standard error when known), fit quality and provenance."""
+    """Text of a :class:`~ftkin.calibration.CalibrationResult`: parameters with units (± standard error), fit and provenance."""
     errors = result.std_errors or {}
     tilt_u, tilt_v = result.base_tilt_deg
     tilt_errors = np.rad2deg(errors["base_tilt"]) if "base_tilt" in errors else (None, None)
@@ -56,7 +56,7 @@ def format_summary(result) -> str:
             "  mean relative compensation error: "
             + ", ".join(f"{name} {value:.2f}%" for name, value in zip(WRENCH_CHANNELS, relative))
         )
-    if getattr(result, "diagnostics", None) is not None:
+    if result.diagnostics is not None:
         lines.extend(_diagnostics_lines(result.diagnostics))
     if result.urdf:
         lines.append(f"  kinematics: {result.urdf} (sensor frame {result.sensor_frame})")

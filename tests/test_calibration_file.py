@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import re
 
 import numpy as np
 import pytest
@@ -223,6 +224,19 @@ def test_covariance_of_wrong_shape(saved):
 def test_pose_arrays_must_match_ids(saved):
     _edit(saved, lambda d: d["poses"].update(residuals=d["poses"]["residuals"][:-1]))
     _assert_error(saved, r"expected shape \(7, 6\), got \(6, 6\)", key="poses.residuals")
+
+
+@pytest.mark.parametrize(
+    "key, value, expected", [("method", 5, "str"), ("urdf", ["a.urdf"], "str"), ("sample_count", "x", "int")]
+)
+def test_provenance_of_the_wrong_type(saved, key, value, expected):
+    _edit(saved, lambda d: d.update({key: value}))
+    _assert_error(saved, re.escape(f"expected {expected} or null, got {value!r}"), key=key)
+
+
+def test_saving_a_bare_sensor_model_is_refused(tmp_path, truth):
+    with pytest.raises(ftkin.InvalidInput, match="result must be an ftkin.CalibrationResult .*got SensorModel"):
+        save_calibration(truth, tmp_path / "model.json")
 
 
 def test_non_finite_residuals_are_refused_when_saving(result, tmp_path):

@@ -57,12 +57,9 @@ def run(args) -> int:
     if args.method == "linear" and (noise is not None or args.loss != "linear" or args.drop_outliers):
         raise InvalidInput("--noise-force/--noise-torque, --loss and --drop-outliers apply to --method ml only")
     loaded = load_samples_from_args(args.samples, args)
-    if args.method == "linear":
-        result = calibrate(loaded.samples, method="linear", g=args.g)
-    else:
-        result = calibrate(
-            loaded.samples, method="ml", g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers
-        )
+    result = calibrate(
+        loaded.samples, method=args.method, g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers
+    )
     print(result.summary())
     if args.output:
         save_calibration(result, args.output)
