@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .exceptions import InvalidInput
 from .information import SensorNoise, covariance_from_information, fisher_information, standard_errors
 from .model import STANDARD_GRAVITY, SensorModel
 from .observability import check_pose_count
@@ -26,11 +27,12 @@ PAPER_CENTER_OF_MASS = (0.0, 0.0, 0.047)
 """The paper's tool centre of mass in the sensor frame [m]."""
 
 _ROWS = (
-    ("gravity_in_base", ("ax", "ay", "az"), "N"),
-    ("force_offset", ("fx0", "fy0", "fz0"), "N"),
-    ("torque_offset", ("mx0", "my0", "mz0"), "N·m"),
-    ("center_of_mass", ("px", "py", "pz"), "m"),
+    (("ax", "ay", "az"), "N"),
+    (("fx0", "fy0", "fz0"), "N"),
+    (("mx0", "my0", "mz0"), "N·m"),
+    (("px", "py", "pz"), "m"),
 )
+"""Short names and unit of each block of ``θ`` in :meth:`PoseEvaluation.report`."""
 
 
 def expected_tool(tool_weight: float | None = None, center_of_mass=None, g: float = STANDARD_GRAVITY) -> SensorModel:
@@ -87,7 +89,7 @@ class PoseEvaluation:
             f"noise {self.noise.force_std[0]:g} N / {self.noise.torque_std[0]:g} N·m",
             f"{'parameter':<10}{'std error':>14}  {'unit':<5}{'bound σ/√N':>14}{'ratio':>8}",
         ]
-        for block, (_, names, unit) in enumerate(_ROWS):
+        for block, (names, unit) in enumerate(_ROWS):
             for axis, name in enumerate(names):
                 row = f"{name:<10}{std[block, axis]:>14.3e}  {unit:<5}"
                 if block in (1, 2):
@@ -121,12 +123,18 @@ def evaluate_poses(
     Raises:
         UnobservableParameters: fewer than three poses, or orientations that
             leave parameters undetermined (named).
+        InvalidInput: not rotation matrices, or a bad tool, noise or reading count.
     """
     rotations, _ = as_rotation_batch(rotation_sensor_to_base)
     check_pose_count(len(rotations))
     model = expected_tool(tool_weight, center_of_mass)
+    if noise is not None and not isinstance(noise, SensorNoise):
+        raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
     noise = noise if noise is not None else SensorNoise.paper()
-    readings = int(as_positive(readings_per_pose, "readings_per_pose"))
+    readings = as_positive(readings_per_pose, "readings_per_pose")
+    if readings != int(readings):
+        raise InvalidInput(f"readings_per_pose must be a whole number, got {readings_per_pose!r}")
+    readings = int(readings)
     information = fisher_information(model, rotations, noise, readings)
     covariance = covariance_from_information(information)
     return PoseEvaluation(

@@ -37,7 +37,6 @@ from .pose_constraints import (
 )
 from .pose_order import revolute_mask, short_travel_order, unwind_revolute
 from .progress import Progress
-from .validation import as_positive
 
 CRITERION = "D-optimality: log det of the Fisher information of θ = [a, F0, M0, P] (SI units)"
 REFINE_STEPS = (0.2, 0.08, 0.03, 0.01)
@@ -140,12 +139,12 @@ def plan_poses(
         InvalidInput: bad arguments, or too few feasible configurations
             (the message names the constraints and what rejected them).
     """
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
-        raise InvalidInput(f"n (number of poses) must be an integer, got {n!r}")
-    check_pose_count(int(n))
-    n = int(n)
-    readings_per_pose = int(as_positive(readings_per_pose, "readings_per_pose"))
-    candidates = max(int(as_positive(candidates, "candidates")), n)
+    n = _integer(n, "n (number of poses)")
+    check_pose_count(n)
+    readings_per_pose = _integer(readings_per_pose, "readings_per_pose", minimum=1)
+    candidates = max(_integer(candidates, "candidates", minimum=1), n)
+    max_samples = _integer(max_samples, "max_samples", minimum=1)
+    seed = _integer(seed, "seed", minimum=0)
     if noise is not None and not isinstance(noise, SensorNoise):
         raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
     constraints = PoseConstraints(margin, floor_height, max_tilt, joint_ranges or (), self_collision)
@@ -167,7 +166,7 @@ def plan_poses(
     q = unwind_revolute(q, checker.lower, checker.upper, revolute_mask(arm.model))
     order = short_travel_order(q)
     q, rotations = q[order], rotations[order]
-    evaluation = evaluate_poses(rotations, tool_weight=model.tool_weight, center_of_mass=model.center_of_mass,
+    evaluation = evaluate_poses(rotations, tool_weight=tool_weight, center_of_mass=center_of_mass,
                                 noise=noise, readings_per_pose=readings_per_pose)
     return PosePlan(
         joint_positions=q,
@@ -175,11 +174,20 @@ def plan_poses(
         evaluation=evaluation,
         criterion=CRITERION,
         criterion_value=log_det(evaluation.information),
-        seed=int(seed),
+        seed=seed,
         constraints=constraints,
         candidate_count=len(pool_q),
         sampled_count=sampled,
     )
+
+
+def _integer(value, name: str, minimum: int | None = None) -> int:
+    """``value`` as an int (no bools, no fractions), at least ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise InvalidInput(f"{name} must be an integer, got {value!r}")
+    if minimum is not None and value < minimum:
+        raise InvalidInput(f"{name} must be at least {minimum}, got {value}")
+    return int(value)
 
 
 def _candidate_pool(checker, rng, wanted, max_samples, n, progress):

@@ -195,6 +195,6 @@ def check_information(factors, constraints, rcond: float = 1e-10):
         [COMPONENT_NAMES[i] for i in np.flatnonzero(involved)],
         f"every sensor orientation these constraints allow ({constraints.describe()}) sees gravity "
         "along (nearly) the same sensor direction, so the tool's weight cannot be told apart from "
-        "the force bias, nor its centre of mass along that direction; allow more tilt or wider joint ranges",
+        "the force bias, nor its centre of mass from the torque bias; allow more tilt or wider joint ranges",
         singular_values=eigenvalues[::-1],
     )

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import itertools
 import json
 
@@ -206,3 +207,39 @@ def test_cli_formats_and_orientation_columns(tmp_path, capsys, arm):
     assert f"{expected[0]:>14.3e}" in capsys.readouterr().out
     assert main(["plan", "--n", "2"]) == 2
     assert "at least 3" in capsys.readouterr().err
+
+
+def test_bad_counts_and_seed_refused(arm):
+    with pytest.raises(InvalidInput, match="seed must be at least 0, got -1"):
+        plan_poses(arm, 4, seed=-1)
+    with pytest.raises(InvalidInput, match="readings_per_pose must be an integer"):
+        plan_poses(arm, 4, readings_per_pose=2.5)
+    with pytest.raises(InvalidInput, match="readings_per_pose must be a whole number"):
+        evaluate_poses(paper_samples().rotations, readings_per_pose=0.5)
+    with pytest.raises(InvalidInput, match="noise must be an ftkin.SensorNoise"):
+        evaluate_poses(paper_samples().rotations, noise=0.02)
+
+
+def test_cli_plan_refusals(capsys):
+    assert main(["plan", "--n", "4", "--format", "yaml"]) == 2
+    assert "--format yaml needs -o" in capsys.readouterr().err
+    assert main(["plan", "--n", "4", "--max-tilt-deg", "200"]) == 2
+    assert "between 0 and 180 [deg], got 200" in capsys.readouterr().err
+    assert main(["plan", "--n", "4", "--seed", "-1"]) == 2
+    assert "seed must be at least 0" in capsys.readouterr().err
+    assert main(["plan", "--n", "9", "--joint-range", "joint9:0:1"]) == 2
+    assert "unknown joint 'joint9'; joints: joint1" in capsys.readouterr().err
+
+
+def test_cli_package_dir_resolves_meshes(capsys):
+    from ftkin.cli.plan import load_arm
+    from ftkin.robots import example_robot_data_share
+
+    share = example_robot_data_share()
+    urdf = share / "example-robot-data" / "robots" / "ur_description" / "urdf" / "ur5_robot.urdf"
+    assert main(["plan", "--n", "3", "--urdf", str(urdf), "--sensor-frame", "tool0"]) == 2
+    assert "give --package-dir DIR" in capsys.readouterr().err
+    args = argparse.Namespace(urdf=str(urdf), sensor_frame="tool0", tool_frame=None, package_dir=[str(share)])
+    arm = load_arm(args)
+    assert arm.package_dirs == [str(share)]
+    assert arm.geometry("collision").ngeoms > 0

@@ -7,10 +7,11 @@ import json
 
 import numpy as np
 
+from ..arm import Arm
 from ..atomic import atomic_write_text
 from ..csv_io import POSE_COLUMN, write_csv
 from ..evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT
-from ..exceptions import InvalidInput
+from ..exceptions import InvalidInput, UrdfError
 from ..information import SensorNoise
 from ..planning import plan_poses
 from ..pose_constraints import DEFAULT_MARGIN
@@ -80,31 +81,40 @@ def register(subparsers) -> None:
                        help="extra range for one joint [rad]; repeat for several joints")
     group.add_argument("--no-self-collision", action="store_true", help="do not check self-collision")
     group.add_argument("--package-dir", action="append", default=[], metavar="DIR",
-                       help="folder that package:// mesh URIs of --urdf resolve against (repeatable)")
+                       help="folder that package:// mesh URIs resolve against, for the self-collision check (repeatable)")
     parser.add_argument("--seed", type=int, default=0, help="random seed; the same seed gives the same plan (default: 0)")
     add_expectation_arguments(parser)
     add_arm_arguments(parser)
     parser.set_defaults(func=run)
 
 
-def load_arm(args):
-    """The arm named on the command line (the bundled arm by default)."""
-    from ..arm import Arm
+def load_arm(args) -> Arm:
+    """The arm named on the command line (the bundled arm by default), with any ``--package-dir``.
 
+    The folders only matter for the collision geometry, which the arm loads on
+    first use, so adding them after loading is enough.
+    """
     arm = arm_from_args(args) or Arm.default()
-    if getattr(args, "package_dir", None):
-        arm.package_dirs = list(arm.package_dirs) + list(args.package_dir)
+    arm.package_dirs += getattr(args, "package_dir", None) or []
     return arm
 
 
 def run(args) -> int:
+    if args.format is not None and not args.output:
+        raise InvalidInput(f"--format {args.format} needs -o/--output FILE (the plan is printed as a table otherwise)")
+    if args.max_tilt_deg is not None and args.max_tilt_deg > 180.0:
+        raise InvalidInput(f"--max-tilt-deg must be between 0 and 180 [deg], got {args.max_tilt_deg:g}")
     arm = load_arm(args)
     max_tilt = None if args.max_tilt_deg is None else float(np.deg2rad(args.max_tilt_deg))
-    plan = plan_poses(
-        arm, args.n, margin=args.margin, floor_height=args.floor_height, max_tilt=max_tilt,
-        joint_ranges=args.joint_range, self_collision=not args.no_self_collision, seed=args.seed,
-        **expectation_from_args(args),
-    )
+    try:
+        plan = plan_poses(
+            arm, args.n, margin=args.margin, floor_height=args.floor_height, max_tilt=max_tilt,
+            joint_ranges=args.joint_range, self_collision=not args.no_self_collision, seed=args.seed,
+            **expectation_from_args(args),
+        )
+    except UrdfError as error:  # only the collision geometry is loaded here: meshes not found
+        hint = "give --package-dir DIR (the folder holding the package:// packages) or --no-self-collision"
+        raise UrdfError(error.path, [*error.reasons, hint]) from None
     print(plan.report())
     print(_pose_lines(plan))
     if args.output:
