@@ -30,6 +30,7 @@ as comments in the file.
 
 from __future__ import annotations
 
+import json
 import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -48,19 +49,14 @@ DEFAULT_WORLD_FRAME = "base_link"
 _TILT_NOTE_DEG = 0.01  # tilts smaller than this [deg] are not worth a note
 
 
-def _number(value: float) -> str:
-    value = float(value)
-    if not math.isfinite(value):
-        raise InvalidInput(f"cannot export a non-finite value {value!r}")
-    return repr(value)
-
-
 def _scalar(value) -> str:
+    """A YAML flow scalar: a double-quoted string (JSON escapes), a number or a list of numbers."""
     if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return "[" + ", ".join(_number(v) for v in value) + "]"
-    return _number(value)
+        return json.dumps(value)
+    numbers = np.asarray(value, dtype=float)
+    if not np.all(np.isfinite(numbers)):
+        raise InvalidInput(f"cannot export a non-finite value {value!r}")
+    return json.dumps(numbers.tolist())
 
 
 def _yaml(tree: dict, indent: int = 0) -> list[str]:
@@ -146,6 +142,8 @@ def export_tree(calibration: SensorModel, fmt: str, frame_id: str | None = None,
         }
     mass = float(calibration.tool_mass)
     if fmt == "gravity-compensation":
+        if mass <= 0.0:
+            raise InvalidInput("the calibration has no tool weight (a = 0): gravity_field = a / mass is undefined")
         if world_frame is None:
             urdf = getattr(calibration, "urdf", None)
             world_frame = (urdf_root_link(urdf) if urdf else None) or DEFAULT_WORLD_FRAME
@@ -177,8 +175,15 @@ def export_text(
     ``node_name`` is the ROS 2 node the parameters belong to (``admittance``:
     default ``admittance_controller``; ``gravity-compensation``: default
     ``/**``, any node, with the filter as ``sensor_filter_chain.filter1``).
-    ``ft-calib`` is a flat ROS 1 parameter file (``rosparam load``).
+    ``ft-calib`` is a flat ROS 1 parameter file (``rosparam load``) and takes
+    no ``node_name``.
+
+    Raises:
+        InvalidInput: unknown format, ``node_name`` with ``ft-calib``, or a
+            non-finite parameter.
     """
+    if fmt == "ft-calib" and node_name is not None:
+        raise InvalidInput("ft-calib is a flat ROS 1 parameter file without a node name; drop node_name (--node-name)")
     tree = export_tree(calibration, fmt, frame_id, world_frame)
     header = [
         f"# ftkin calibration exported for {fmt}",

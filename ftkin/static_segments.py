@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .exceptions import InvalidInput
-from .validation import as_float_array
+from .validation import as_float_array, as_positive
 
 
 @dataclass(frozen=True)
@@ -43,11 +43,14 @@ class SegmentParameters:
 
     def __post_init__(self):
         for name in ("speed_threshold", "min_duration", "speed_window"):
-            value = getattr(self, name)
-            if not np.isfinite(value) or value <= 0:
-                raise InvalidInput(f"{name} must be a finite positive number, got {value!r}")
-        if not np.isfinite(self.settle_time) or self.settle_time < 0:
+            object.__setattr__(self, name, as_positive(getattr(self, name), name))
+        try:
+            settle_time = float(self.settle_time)
+        except (TypeError, ValueError):
+            settle_time = float("nan")
+        if not (np.isfinite(settle_time) and settle_time >= 0):
             raise InvalidInput(f"settle_time must be a finite number ≥ 0 [s], got {self.settle_time!r}")
+        object.__setattr__(self, "settle_time", settle_time)
 
 
 @dataclass(frozen=True)
@@ -141,9 +144,15 @@ def find_static_segments(times, joint_positions, parameters: SegmentParameters |
 
 
 def segment_index(times, segments: list[StaticSegment]) -> np.ndarray:
-    """``(M,)`` index of the segment each time falls in, ``-1`` outside every segment."""
+    """``(M,)`` index of the segment each time falls in, ``-1`` outside every segment.
+
+    ``segments`` are disjoint and in time order (as :func:`find_static_segments` returns them).
+    """
     times = as_float_array(times, "times")
-    out = np.full(len(times), -1, dtype=np.int64)
-    for index, segment in enumerate(segments):
-        out[(times >= segment.start) & (times <= segment.end)] = index
-    return out
+    if not segments:
+        return np.full(len(times), -1, dtype=np.int64)
+    starts = np.array([segment.start for segment in segments])
+    ends = np.array([segment.end for segment in segments])
+    index = np.searchsorted(starts, times, side="right") - 1  # last segment starting at or before each time
+    inside = (index >= 0) & (times <= ends[index])
+    return np.where(inside, index, -1).astype(np.int64)

@@ -114,6 +114,20 @@ def test_unknown_format(truth):
         export_text(truth, "yaml")
 
 
+def test_bad_options_and_weightless_tool(truth):
+    with pytest.raises(InvalidInput, match="ft-calib is a flat ROS 1 parameter file"):
+        export_text(truth, "ft-calib", node_name="ft_node")
+    weightless = SensorModel(truth.force_offset, truth.torque_offset, [0.0, 0.0, 0.0], truth.center_of_mass)
+    with pytest.raises(InvalidInput, match="no tool weight"):
+        export_text(weightless, "gravity-compensation")
+
+
+def test_frame_names_are_quoted_for_yaml(truth):
+    name = 'odd "frame"\\ with: colon'
+    params = yaml.safe_load(export_text(truth, "admittance", frame_id=name))
+    assert params["admittance_controller"]["ros__parameters"]["gravity_compensation"]["frame"]["id"] == name
+
+
 def test_world_frame_from_urdf_root(arm):
     assert urdf_root_link(arm.urdf_path) == "base_link"
     assert urdf_root_link("/no/such.urdf") is None

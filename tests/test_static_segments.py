@@ -83,10 +83,25 @@ def test_no_segment_when_too_short_and_describe():
 def test_segment_index():
     segments = [StaticSegment(1.0, 2.0), StaticSegment(3.0, 4.0)]
     np.testing.assert_array_equal(segment_index([0.5, 1.0, 1.5, 2.5, 3.5, 4.0, 5.0], segments), [-1, 0, 0, -1, 1, 1, -1])
+    np.testing.assert_array_equal(segment_index([0.5, 1.0], []), [-1, -1])
+
+
+def test_segment_index_matches_a_scan_of_every_segment(rng):
+    bounds = np.sort(rng.uniform(0.0, 100.0, 40))
+    segments = [StaticSegment(float(a), float(b)) for a, b in zip(bounds[::2], bounds[1::2])]
+    times = np.concatenate([rng.uniform(-1.0, 101.0, 500), bounds])
+    expected = np.full(len(times), -1)
+    for index, segment in enumerate(segments):
+        expected[(times >= segment.start) & (times <= segment.end)] = index
+    np.testing.assert_array_equal(segment_index(times, segments), expected)
 
 
 @pytest.mark.parametrize(
-    "kwargs", [{"speed_threshold": 0.0}, {"min_duration": -1.0}, {"settle_time": -0.1}, {"speed_window": float("nan")}]
+    "kwargs",
+    [
+        {"speed_threshold": 0.0}, {"min_duration": -1.0}, {"settle_time": -0.1}, {"speed_window": float("nan")},
+        {"speed_threshold": "fast"}, {"settle_time": None},
+    ],
 )
 def test_parameters_validated(kwargs):
     with pytest.raises(InvalidInput):

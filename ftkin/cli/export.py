@@ -20,16 +20,15 @@ def register(subparsers) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="OUT.yaml")
     parser.add_argument("--frame-id", metavar="NAME", help="sensor frame name in ROS (default: the calibration's sensor frame)")
     parser.add_argument("--world-frame", metavar="NAME", help="gravity-compensation: fixed frame (default: the URDF root link)")
-    parser.add_argument("--node-name", metavar="NAME", help="ROS 2 node the parameters belong to")
+    parser.add_argument("--node-name", metavar="NAME", help="ROS 2 node the parameters belong to (admittance, gravity-compensation)")
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
-    options = {"frame_id": args.frame_id, "world_frame": args.world_frame}
-    if args.fmt != "ft-calib":
-        options["node_name"] = args.node_name
-    export_calibration(calibration, args.output, args.fmt, **options)
+    export_calibration(
+        calibration, args.output, args.fmt, frame_id=args.frame_id, world_frame=args.world_frame, node_name=args.node_name
+    )
     print(f"wrote {args.fmt} parameters to {args.output}")
     for note in export_notes(calibration, args.fmt):
         print(f"  note: {note}")
