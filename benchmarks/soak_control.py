@@ -1,8 +1,9 @@
 """Soak of the control path: ``JointAdmittance.step`` for a million ticks of placement cycles.
 
 The bundled arm holds the paper's object (2.214 N, 40 mm below the tool
-point) over a compliant surface, as in :mod:`ftkin.placement`: the
-admittance (tool z only, desired force 0) lowers the object onto the surface
+point) over a compliant surface, with :mod:`ftkin.placement`'s default
+scenario, controller and contact model: the admittance (tool z only,
+desired force 0) lowers the object onto the surface
 until it carries the weight ("place", 4 s), then a desired force of -8 N
 along the tool z lifts it back to the cycle's start height ("lift"); the
 next cycle puts a new surface (sponge and book in turn) 1-4 mm below the
@@ -40,16 +41,14 @@ import tracemalloc
 import numpy as np
 
 from ftkin import Arm, Compensator
-from ftkin.admittance import Admittance
-from ftkin.information import SensorNoise
-from ftkin.joint_admittance import JointAdmittance
-from ftkin.placement import Q_DOWN
+from ftkin.placement import Q_DOWN, PlacementScenario, admittance_controller
 from ftkin.sensor_faults import SensorFault
 from ftkin.simulation import paper_like_truth
-from ftkin.surfaces import BOOK, SPONGE
+from ftkin.surfaces import BOOK, SPONGE, held_object_wrench
 
-DT = 1e-3                 # control period [s]
-WEIGHT, HEIGHT = 2.214, 0.04  # object weight [N], object bottom below the tool point [m]
+SCENARIO = PlacementScenario()  # the paper's object, gains, deadband and noise
+DT = SCENARIO.dt          # control period [s]
+WEIGHT, HEIGHT = SCENARIO.object_weight, SCENARIO.object_height  # [N], object bottom below the tool point [m]
 PLACE_TICKS = 4000        # ticks of the place phase
 LIFT_FORCE = -8.0         # desired tool-z force while lifting [N]
 WARMUP = 20_000           # ticks before the memory baseline
@@ -75,11 +74,10 @@ class PlacementCycles:
         self.arm = arm = Arm.default()
         truth = paper_like_truth()
         self.rng = np.random.default_rng(seed)
-        self.noise_std = SensorNoise.paper().channel_std
-        law = Admittance(1e-4, 1e-3, selection=[0, 0, 1, 0, 0, 0], frame="tool", force_deadband=0.02,
-                         derivative_cutoff=5.0, bumpless=False)
-        self.controller = JointAdmittance(arm, law, Compensator(truth, arm), control_point="tool")
+        self.noise_std = SCENARIO.noise.channel_std
+        self.controller = admittance_controller(SCENARIO, arm, truth)
         self.unloaded = Compensator(truth)  # -compensate(R, 0) = bias + tool gravity
+        self._zero = np.zeros(6)
         self.q = np.array(Q_DOWN)
         rotation, origin = arm.frame_placement(self.q, "sensor")
         _, tool = arm.frame_placement(self.q, "tool")
@@ -100,17 +98,12 @@ class PlacementCycles:
     def reading(self, noise: np.ndarray) -> np.ndarray:
         """Raw reading [N, N·m] at the current pose (the pose of the last computed step)."""
         rotation, origin = self.rotation, self.origin
-        axis = rotation[:, 2]
         tool = origin + rotation @ self.tool_in_sensor
-        penetration = max(0.0, self.surface.height - (tool[2] + axis[2] * HEIGHT))
+        penetration = max(0.0, self.surface.height - (tool[2] + rotation[2, 2] * HEIGHT))
         normal = self.surface.normal_force(penetration, (penetration - self.penetration_before) / DT)
         self.penetration_before, self.normal = penetration, normal
-        lever_bottom = tool + axis * HEIGHT - origin
-        lever_middle = tool + axis * (0.5 * HEIGHT) - origin
-        moment = np.array([lever_bottom[1] * normal - lever_middle[1] * WEIGHT,
-                           -lever_bottom[0] * normal + lever_middle[0] * WEIGHT, 0.0])
-        contact = np.concatenate((rotation[2] * (normal - WEIGHT), rotation.T @ moment))
-        return contact - self.unloaded.compensate_rotation_unchecked(rotation, np.zeros(6)) + noise
+        contact = held_object_wrench(rotation, origin, tool, HEIGHT, WEIGHT, normal)
+        return contact - self.unloaded.compensate_rotation_unchecked(rotation, self._zero) + noise
 
     def advance(self, dq: np.ndarray) -> None:
         """Integrate ``dq`` and run the cycle's phase logic."""

@@ -46,8 +46,9 @@ from .compensation import Compensator
 from .exceptions import InvalidInput
 from .information import SensorNoise
 from .joint_admittance import JointAdmittance, damped_least_squares
+from .model import SensorModel
 from .simulation import SimulatedSensor, paper_like_truth
-from .surfaces import SPONGE, Surface
+from .surfaces import SPONGE, Surface, held_object_wrench
 
 MODES = ("position", "admittance", "admittance-uncompensated")
 """Scenarios :func:`simulate_placement` runs."""
@@ -197,11 +198,7 @@ def simulate_placement(scenario: PlacementScenario, arm: Arm | None = None) -> P
     surface = scenario.surface.at_height((tool_start + rotation[:, 2] * scenario.object_height)[2] - scenario.start_gap)
     controller = None
     if scenario.mode != "position":
-        admittance = Admittance(scenario.k1, scenario.k2, selection=[0, 0, 1, 0, 0, 0], frame="tool",
-                                force_deadband=scenario.force_deadband, derivative_cutoff=scenario.derivative_cutoff,
-                                bumpless=False)
-        compensator = Compensator(sensor.truth, arm) if scenario.mode == "admittance" else None
-        controller = JointAdmittance(arm, admittance, compensator, control_point="tool")
+        controller = admittance_controller(scenario, arm, sensor.truth if scenario.mode == "admittance" else None)
     # The sensor's no-contact reading (bias + tool gravity) is -compensate(R, 0): same model as SimulatedSensor.read.
     unloaded = Compensator(sensor.truth)
     zero = np.zeros(6)
@@ -216,13 +213,10 @@ def simulate_placement(scenario: PlacementScenario, arm: Arm | None = None) -> P
         tool_point = data.oMf[tool_id].translation
         placement = pin.updateFramePlacement(model, data, sensor_id)
         rotation, sensor_origin = placement.rotation, placement.translation
-        axis = rotation[:, 2]
-        bottom = tool_point + axis * height
-        penetration = max(0.0, surface.height - bottom[2])
+        penetration = max(0.0, surface.height - (tool_point[2] + rotation[2, 2] * height))
         normal = surface.normal_force(penetration, (penetration - penetration_before) / scenario.dt)
         penetration_before = penetration
-        moment_base = _cross_z(bottom - sensor_origin, normal) + _cross_z(tool_point + axis * (0.5 * height) - sensor_origin, -weight)
-        contact = np.concatenate((rotation[2] * (normal - weight), rotation.T @ moment_base))
+        contact = held_object_wrench(rotation, sensor_origin, tool_point, height, weight, normal)
         raw = contact - unloaded.compensate_rotation_unchecked(rotation, zero) + noise[i]
         if controller is None:
             speed = max(-scenario.lowering_speed, (z_target - tool_point[2]) / scenario.dt)
@@ -237,9 +231,16 @@ def simulate_placement(scenario: PlacementScenario, arm: Arm | None = None) -> P
     return PlacementRun(scenario, *out.T, safety_stop=safety)
 
 
-def _cross_z(r: np.ndarray, fz: float) -> np.ndarray:
-    """``r × (0, 0, fz)``."""
-    return np.array([r[1] * fz, -r[0] * fz, 0.0])
+def admittance_controller(scenario: PlacementScenario, arm: Arm, calibration: SensorModel | None) -> JointAdmittance:
+    """The experiment's controller: tool z only, desired force 0, started before the weight is taken.
+
+    ``calibration`` compensates the readings; None feeds the raw readings through.
+    """
+    admittance = Admittance(scenario.k1, scenario.k2, selection=[0, 0, 1, 0, 0, 0], frame="tool",
+                            force_deadband=scenario.force_deadband, derivative_cutoff=scenario.derivative_cutoff,
+                            bumpless=False)
+    compensator = None if calibration is None else Compensator(calibration, arm)
+    return JointAdmittance(arm, admittance, compensator, control_point="tool")
 
 
 def sweep(scenario: PlacementScenario, gain: str, values, arm: Arm | None = None) -> list[PlacementRun]:

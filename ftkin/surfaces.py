@@ -5,14 +5,18 @@ A surface is the plane ``z = height`` in the base frame. An object pressed
 normal force ``N = max(0, k·δ + c·δ̇)`` for ``δ > 0`` and nothing otherwise: it
 pushes, it never pulls. ``k`` and ``c`` are *effective* values: the surface in
 series with the gripper's and the object's own compliance, which is why even
-the book is only tens of kN/m.
+the book is only tens of kN/m. :func:`held_object_wrench` is what the
+sensor feels of a held object pressed on a surface.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+import numpy as np
+
 from .exceptions import InvalidInput
+from .model import cross_rows
 from .validation import as_positive
 
 
@@ -63,3 +67,22 @@ def surface_by_name(name: str) -> Surface:
     if name not in SURFACES:
         raise InvalidInput(f"unknown surface {name!r}; expected one of {sorted(SURFACES)}")
     return SURFACES[name]
+
+
+_UP = np.array([0.0, 0.0, 1.0])
+
+
+def held_object_wrench(rotation, sensor_origin, tool_point, object_height: float, object_weight: float,
+                       normal_force: float) -> np.ndarray:
+    """Contact wrench ``(6,)`` [N, N·m] in the sensor frame of a held object pressed on a horizontal surface.
+
+    The object hangs along the sensor z axis (``rotation`` = ``R_BS``): its
+    weight [N] acts ``object_height / 2`` [m] below the tool point, the
+    surface's upward ``normal_force`` [N] at its bottom ``object_height``
+    below; moments about the sensor origin. Positions in the base frame [m].
+    """
+    axis = rotation[:, 2]
+    bottom, middle = tool_point + axis * object_height, tool_point + axis * (0.5 * object_height)
+    # r_b × (N ẑ) + r_m × (−W ẑ) = (N r_b − W r_m) × ẑ
+    moment_base = cross_rows(normal_force * (bottom - sensor_origin) - object_weight * (middle - sensor_origin), _UP)
+    return np.concatenate((rotation[2] * (normal_force - object_weight), rotation.T @ moment_base))

@@ -6,6 +6,7 @@ import sys
 from dataclasses import replace
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from ftkin.cli import main
@@ -14,7 +15,7 @@ from ftkin.exceptions import InvalidInput, MissingDependency
 from ftkin.information import SensorNoise
 from ftkin.placement import Q_DOWN, PlacementRun, PlacementScenario, simulate_placement, sweep
 from ftkin.simulation import paper_like_truth
-from ftkin.surfaces import BOOK, SPONGE, Surface, surface_by_name
+from ftkin.surfaces import BOOK, SPONGE, Surface, held_object_wrench, surface_by_name
 
 FAST = PlacementScenario(dt=2e-3, k2=2e-3)
 """Coarser tick and a larger k23 than the default so each run takes a fraction of a second."""
@@ -159,3 +160,12 @@ def test_plots_without_matplotlib_raise_missing_dependency(monkeypatch, tmp_path
     monkeypatch.setitem(sys.modules, "matplotlib", None)
     with pytest.raises(MissingDependency, match="plots"):
         plot_runs([runs["sponge", "position"]], tmp_path / "x.png")
+
+
+def test_held_object_wrench_matches_np_cross(rng):
+    rotation, origin, tool = pin.exp3(rng.normal(size=3)), rng.normal(size=3), rng.normal(size=3)
+    height, weight, normal = 0.04, 2.214, 1.3  # m, N, N
+    axis = rotation[:, 2]
+    moment = np.cross(tool + axis * height - origin, [0, 0, normal]) + np.cross(tool + axis * height / 2 - origin, [0, 0, -weight])
+    expected = np.concatenate([rotation.T @ [0, 0, normal - weight], rotation.T @ moment])
+    np.testing.assert_allclose(held_object_wrench(rotation, origin, tool, height, weight, normal), expected, atol=1e-14)
