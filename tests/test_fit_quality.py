@@ -17,8 +17,6 @@ NOISE = SensorNoise(0.03, 0.0015)  # per reading [N], [N·m]
 CABLE = np.array([0.0, 0.4, -0.3, 0.02, 0.0, 0.0])  # a cable pulling on the tool at one pose [N, N·m]
 
 
-
-
 def _with_cable(tool, rotations, rng, readings, pose=5):
     """Noisy samples with a constant contact wrench added at one pose (ids 0..11)."""
     samples = SimulatedSensor(tool, NOISE).samples(rotations, rng, readings)
