@@ -17,7 +17,7 @@ import numpy as np
 
 from .atomic import atomic_write_bytes
 from .exceptions import InvalidInput, MissingDependency
-from .model import WRENCH_CHANNELS
+from .model import WRENCH_CHANNELS, SensorModel
 from .samples import Samples
 
 _UNITS = ("N", "N", "N", "N·m", "N·m", "N·m")
@@ -42,10 +42,12 @@ def report_data(calibration, samples: Samples) -> dict[str, np.ndarray]:
     mean orientation), ``residuals`` = measured − predicted, and
     ``standard_error`` ``(P, 6)`` (spread / √count; NaN for single readings).
     """
+    if not isinstance(calibration, SensorModel):
+        raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
     if not isinstance(samples, Samples):
         raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
     poses = samples.pose_averages()
-    predicted = np.asarray(calibration.predict(poses.rotations)).reshape(-1, 6)
+    predicted = calibration.predict(poses.rotations)
     return {
         "pose_ids": poses.pose_ids,
         "measured": poses.wrenches,

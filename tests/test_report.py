@@ -59,6 +59,10 @@ def test_save_png_and_bad_suffix(calibrated, tmp_path):
     assert path.read_bytes()[:8] == PNG_SIGNATURE
     with pytest.raises(InvalidInput, match=r"\.png, \.pdf or \.svg"):
         save_report(result, samples, tmp_path / "report.jpg")
+    with pytest.raises(InvalidInput, match="calibration must be an ftkin SensorModel"):
+        report_data({"force_offset": [0, 0, 0]}, samples)
+    with pytest.raises(InvalidInput, match="samples must be an ftkin.Samples"):
+        report_data(result, samples.wrenches)
 
 
 def test_missing_matplotlib(calibrated, monkeypatch):

@@ -123,6 +123,26 @@ def test_cli_calibrate_with_robot_and_offset(tmp_path, truth, rng):
     assert wrong.residual_rms[:3].max() > 10 * loaded.residual_rms[:3].max()
 
 
+def test_cli_report_and_view_read_samples_with_the_calibration_robot(tmp_path, truth, rng, capsys):
+    pytest.importorskip("matplotlib")
+    pytest.importorskip("meshcat")
+    arm = load_robot("ur5")
+    q = arm.random_configurations(8, rng, margin=0.05)
+    samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, q, rng, 3)
+    csv_path = tmp_path / "ur5.csv"
+    rows = [[int(p), *map(float, c), *map(float, w)] for p, c, w in zip(samples.pose_ids, samples.joint_positions, samples.wrenches)]
+    write_csv(csv_path, ["pose", *[f"q{i + 1}" for i in range(arm.nq)], *WRENCH_CHANNELS], rows)
+    calib = tmp_path / "calib.json"
+    assert main(["calibrate", str(csv_path), "--robot", "ur5", "-o", str(calib)]) == 0
+    capsys.readouterr()
+    # q1..q6 fit the bundled arm too: without --robot the calibration's UR5 is not silently swapped for it.
+    for command in (["report", str(calib), str(csv_path), "-o", str(tmp_path / "r.png")], ["view", str(calib), str(csv_path), "--no-wait"]):
+        assert main(command) == 2
+        error = capsys.readouterr().err
+        assert error.startswith("ftkin: error: the calibration was made with") and "same robot options" in error
+    assert main(["report", str(calib), str(csv_path), "-o", str(tmp_path / "r.png"), "--robot", "ur5"]) == 0
+
+
 def test_cli_offset_errors(capsys):
     assert main(["calibrate", "x.csv", "--sensor-offset", "0", "0", "0.1"]) == 2
     assert "needs --robot" in capsys.readouterr().err

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ..calibration_file import load_calibration
 from ..report import save_report
-from .common import add_samples_arguments, load_samples_from_args
+from .common import add_samples_arguments, arm_for_calibration, load_samples_from_args, warn_if_kinematics_differ
 
 
 def register(subparsers) -> None:
@@ -14,7 +14,8 @@ def register(subparsers) -> None:
         description="Draw a one-page report (PNG, PDF or SVG): per channel fx..mz the per-pose mean "
         "measured reading (± standard error) against the calibration's prediction, the residuals, and "
         "the parameters with standard errors when the calibration has them. SAMPLES is a samples CSV or "
-        "a ROS 2 bag (same options as 'ftkin calibrate'; give the same --robot/--urdf).",
+        "a ROS 2 bag (same options as 'ftkin calibrate'; without --robot/--urdf the URDF recorded in the "
+        "calibration file is used).",
     )
     parser.add_argument("calibration", metavar="CALIB.json")
     parser.add_argument("samples", metavar="SAMPLES")
@@ -26,7 +27,8 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
-    loaded = load_samples_from_args(args.samples, args)
+    loaded = load_samples_from_args(args.samples, args, arm=arm_for_calibration(args, calibration))
+    warn_if_kinematics_differ(loaded, calibration)
     save_report(calibration, loaded.samples, args.output, args.title)
     print(f"wrote report of {len(set(loaded.samples.pose_ids.tolist()))} poses to {args.output}")
     return 0

@@ -10,11 +10,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..arm import Arm
+from ..bags import TIME_COLUMN
 from ..calibration_file import load_calibration
 from ..exceptions import InvalidInput
-from .common import add_samples_arguments, arm_from_args, load_samples_from_args, positive_float
-
-TIME_COLUMN = "t"
+from .common import (
+    add_samples_arguments,
+    arm_for_calibration,
+    load_samples_from_args,
+    positive_float,
+    warn_if_kinematics_differ,
+)
 
 
 def register(subparsers) -> None:
@@ -70,8 +75,6 @@ def _replay_rows(loaded, max_frames: int) -> Frames:
     if times is not None and np.any(np.diff(times) < 0):
         raise InvalidInput(f"{table.source}: column {TIME_COLUMN!r} must not decrease (seconds since the start)")
     rows = np.arange(len(samples))
-    if max_frames < 1:
-        raise InvalidInput(f"--max-frames must be at least 1, got {max_frames}")
     if len(rows) > max_frames:
         rows = np.unique(np.linspace(0, len(samples) - 1, max_frames).round().astype(int))
     if times is None:
@@ -80,14 +83,11 @@ def _replay_rows(loaded, max_frames: int) -> Frames:
         times = times[rows]
     configurations = samples.joint_positions[rows] if samples.joint_positions is not None else None
     labels = [f"row {int(r)}" for r in rows]
-    return Frames(labels, np.array(samples.wrenches)[rows], configurations, samples.rotations[rows], times)
+    return Frames(labels, samples.wrenches[rows], configurations, samples.rotations[rows], times)
 
 
 def _pick(frames: Frames, pose: int, replay: bool) -> int:
-    if replay:
-        wanted = f"row {pose}"
-    else:
-        wanted = f"pose {pose}"
+    wanted = f"row {pose}" if replay else f"pose {pose}"
     if wanted not in frames.labels:
         shown = ", ".join(frames.labels[:12]) + (" ..." if len(frames.labels) > 12 else "")
         raise InvalidInput(f"--pose {pose}: no {wanted}; available: {shown}")
@@ -112,16 +112,16 @@ def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
     return math.degrees(math.atan2(np.linalg.norm(np.cross(a, b)), float(a @ b)))
 
 
-def _print_table(frames: Frames, vectors) -> None:
+def _print_table(labels: list[str], vectors) -> None:
     print(f"  {'':<10}{'|F-F0| N':>10}{'|Gs| N':>10}{'angle deg':>11}{'|F′| N':>10}{'|M′| N·m':>10}")
-    for label, v in list(zip(frames.labels, vectors))[:40]:
+    for label, v in list(zip(labels, vectors))[:40]:
         print(
             f"  {label:<10}{np.linalg.norm(v.measured_force):>10.4f}{np.linalg.norm(v.gravity_force):>10.4f}"
             f"{_angle_deg(v.measured_force, v.gravity_force):>11.3f}{np.linalg.norm(v.contact_wrench[:3]):>10.4f}"
             f"{np.linalg.norm(v.contact_wrench[3:]):>10.4f}"
         )
-    if len(frames.labels) > 40:
-        print(f"  ... {len(frames.labels) - 40} more")
+    if len(labels) > 40:
+        print(f"  ... {len(labels) - 40} more")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -129,15 +129,16 @@ def run(args: argparse.Namespace) -> int:
 
     if (args.samples is None) == (args.replay is None):
         raise InvalidInput("give SAMPLES.csv (calibration poses) or --replay LOG.csv, exactly one")
+    if args.max_frames < 1:
+        raise InvalidInput(f"--max-frames must be at least 1, got {args.max_frames}")
     calibration = load_calibration(args.calibration)
     source = args.replay or args.samples
-    loaded = load_samples_from_args(source, args)
+    arm = arm_for_calibration(args, calibration) or Arm.default()
+    loaded = load_samples_from_args(source, args, static_only=not args.replay, arm=arm)
+    warn_if_kinematics_differ(loaded, calibration)
     frames = _replay_rows(loaded, args.max_frames) if args.replay else _calibration_poses(loaded)
-    arm = None
-    if frames.configurations is not None:
-        arm = arm_from_args(args) or Arm.default()
-        if arm.nq != frames.configurations.shape[1]:
-            raise InvalidInput(f"{source} has {frames.configurations.shape[1]} joint columns but the arm has {arm.nq} joints")
+    if frames.configurations is None:
+        arm = None  # orientations without joint angles: no arm to draw
     chosen = _pick(frames, args.pose, bool(args.replay)) if args.pose is not None else None
     caption = f"{source}: " + (frames.labels[chosen] if chosen is not None else f"{len(frames.labels)} poses, animated")
 
@@ -153,9 +154,9 @@ def run(args: argparse.Namespace) -> int:
             print(f"wrote {args.png} ({shown})")
         if chosen is None:
             all_vectors = _animate(viewer, frames, args.hold)
-            _print_table(frames, all_vectors)
+            _print_table(frames.labels, all_vectors)
         else:
-            _print_table(Frames([frames.labels[chosen]], frames.raw_wrenches[chosen:chosen + 1], None, frames.rotations, None), [vectors])
+            _print_table([frames.labels[chosen]], [vectors])
         if args.html:
             viewer.save_html(args.html, caption=caption)
             print(f"wrote {args.html}")
