@@ -87,14 +87,7 @@ def rotation_y_to(direction) -> np.ndarray:
     helper = np.array([1.0, 0.0, 0.0]) if abs(y_axis[0]) < 0.9 else np.array([0.0, 0.0, 1.0])
     x_axis = helper - y_axis * (helper @ y_axis)
     x_axis /= np.linalg.norm(x_axis)
-    z_axis = np.array(
-        [
-            x_axis[1] * y_axis[2] - x_axis[2] * y_axis[1],
-            x_axis[2] * y_axis[0] - x_axis[0] * y_axis[2],
-            x_axis[0] * y_axis[1] - x_axis[1] * y_axis[0],
-        ]
-    )
-    return np.column_stack([x_axis, y_axis, z_axis])
+    return np.column_stack([x_axis, y_axis, np.cross(x_axis, y_axis)])
 
 
 @dataclass(frozen=True)
@@ -159,5 +152,5 @@ def exaggerate_tilt(gravity_direction, factor: float) -> np.ndarray:
         return direction
     angle = min(np.arctan2(sin_angle, down @ direction) * factor, np.pi)
     axis /= sin_angle
-    perpendicular = np.array([axis[1] * down[2] - axis[2] * down[1], axis[2] * down[0] - axis[0] * down[2], 0.0])
+    perpendicular = np.cross(axis, down)  # horizontal, towards ``direction``
     return np.cos(angle) * down + np.sin(angle) * perpendicular

@@ -67,8 +67,7 @@ class CalibrationViewer:
         style: ArrowStyle | None = None,
         gravity_anchor=(-0.25, -0.3, 0.4),
     ):
-        if not isinstance(calibration, SensorModel):
-            raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
+        _check_calibration(calibration)
         if arm is not None and not isinstance(arm, Arm):
             raise InvalidInput(f"arm must be an ftkin Arm or None, got {type(arm).__name__}")
         self.calibration = calibration
@@ -129,8 +128,7 @@ class CalibrationViewer:
 
     def set_calibration(self, calibration: SensorModel) -> None:
         """Show another calibration from the next pose on (the arrow scale stays)."""
-        if not isinstance(calibration, SensorModel):
-            raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
+        _check_calibration(calibration)
         self.calibration = calibration
 
     def set_camera(self, position) -> None:
@@ -237,6 +235,11 @@ class CalibrationViewer:
     def save_html(self, path, legend: bool = True, caption: str = "") -> Path:
         """Write :meth:`static_html` to ``path`` atomically; returns the path."""
         return atomic_write_text(path, self.static_html(legend, caption))
+
+
+def _check_calibration(calibration) -> None:
+    if not isinstance(calibration, SensorModel):
+        raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
 
 
 def _place_live(sink, path: str, pose: NodePose) -> None:
