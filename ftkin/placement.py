@@ -35,7 +35,9 @@ Scenarios (``mode``):
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
+from numbers import Real
 
 import numpy as np
 import pinocchio as pin
@@ -105,13 +107,17 @@ class PlacementScenario:
     def __post_init__(self):
         if self.mode not in MODES:
             raise InvalidInput(f"mode must be one of {MODES}, got {self.mode!r}")
-        if not (self.k1 >= 0 and self.k2 >= 0):
-            raise InvalidInput(f"gains must be >= 0, got k1={self.k1!r} m/N, k2={self.k2!r} m/(s·N)")
+        if not (_finite(self.k1) and self.k1 >= 0 and _finite(self.k2) and self.k2 >= 0):
+            raise InvalidInput(f"gains must be finite numbers >= 0, got k1={self.k1!r} m/N, k2={self.k2!r} m/(s·N)")
         for name in ("object_weight", "object_height", "lowering_speed", "target_depth", "duration", "dt"):
-            if not getattr(self, name) > 0:
-                raise InvalidInput(f"{name} must be > 0, got {getattr(self, name)!r}")
-        if not self.start_gap >= 0:
-            raise InvalidInput(f"start_gap must be >= 0, got {self.start_gap!r}")
+            if not (_finite(getattr(self, name)) and getattr(self, name) > 0):
+                raise InvalidInput(f"{name} must be a finite number > 0, got {getattr(self, name)!r}")
+        if not (_finite(self.start_gap) and self.start_gap >= 0):
+            raise InvalidInput(f"start_gap must be a finite number >= 0 [m], got {self.start_gap!r}")
+
+
+def _finite(value) -> bool:
+    return isinstance(value, Real) and math.isfinite(value)
 
 
 @dataclass(frozen=True)

@@ -26,10 +26,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import StrEnum
+from numbers import Real
 
 import numpy as np
 
 from .exceptions import InvalidInput
+from .validation import as_float_array
 
 
 class SensorFault(StrEnum):
@@ -71,19 +73,28 @@ class SensorLimits:
     def __post_init__(self):
         for name in ("stuck_time", "dt_ratio", "nominal_dt"):
             value = getattr(self, name)
-            if value is not None and not (math.isfinite(value) and value > 0):
+            if value is not None and not _is_number(value, lambda x: math.isfinite(x) and x > 0):
                 raise InvalidInput(f"{name} must be a finite number > 0 or None, got {value!r}")
         if self.dt_ratio is not None and self.dt_ratio <= 1.0:
             raise InvalidInput(f"dt_ratio must be > 1 (a multiple of the nominal step), got {self.dt_ratio!r}")
-        if self.stuck_ticks is not None and not (int(self.stuck_ticks) == self.stuck_ticks and self.stuck_ticks >= 1):
+        if self.stuck_ticks is not None and not _is_number(self.stuck_ticks, _is_count):
             raise InvalidInput(f"stuck_ticks must be an integer >= 1 or None, got {self.stuck_ticks!r}")
-        if not (int(self.recovery_ticks) == self.recovery_ticks and self.recovery_ticks >= 1):
+        if not _is_number(self.recovery_ticks, _is_count):
             raise InvalidInput(f"recovery_ticks must be an integer >= 1, got {self.recovery_ticks!r}")
         self.ranges()
 
     def ranges(self) -> np.ndarray:
         """Saturation limits ``(6,)`` [N, N·m] per channel (``inf`` where disabled)."""
         return np.concatenate([_range(self.force_range, "force_range", "N"), _range(self.torque_range, "torque_range", "N·m")])
+
+
+def _is_number(value, test) -> bool:
+    """``test(value)`` for a real number, False for anything else."""
+    return isinstance(value, Real) and bool(test(value))
+
+
+def _is_count(x) -> bool:
+    return x >= 1 and math.isfinite(x) and x == int(x)
 
 
 def _range(value, name: str, unit: str) -> np.ndarray:
@@ -135,9 +146,14 @@ class FaultMonitor:
 
         Args:
             q: Joint positions ``(nq,)`` float array [rad] (shape already checked).
-            raw: The six raw channels as Python floats [N, N·m].
+            raw: The six raw channels [N, N·m], best as a list of Python floats
+                (the control-loop path); an array is converted.
             dt: Time step [s].
         """
+        if type(raw) is not list:
+            raw = as_float_array(raw, "raw reading").tolist()
+            if len(raw) != 6 or not all(isinstance(value, float) for value in raw):
+                raise InvalidInput(f"raw reading must have shape (6,), got {np.shape(raw)}")
         fault, event = self._detect(q, raw, dt)
         if fault is not SensorFault.NONE:
             self.fault, self.good_ticks = fault, 0

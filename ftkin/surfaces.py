@@ -11,13 +11,14 @@ sensor feels of a held object pressed on a surface.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
+from numbers import Real
 
 import numpy as np
 
 from .exceptions import InvalidInput
 from .model import cross_rows
-from .validation import as_positive
 
 
 @dataclass(frozen=True)
@@ -37,9 +38,10 @@ class Surface:
     height: float = 0.0
 
     def __post_init__(self):
-        as_positive(self.stiffness, "surface stiffness [N/m]")
-        if not self.damping >= 0.0:
-            raise InvalidInput(f"surface damping [N·s/m] must be >= 0, got {self.damping!r}")
+        if not (isinstance(self.stiffness, Real) and 0.0 < self.stiffness < math.inf):
+            raise InvalidInput(f"surface stiffness [N/m] must be a finite number > 0, got {self.stiffness!r}")
+        if not (isinstance(self.damping, Real) and 0.0 <= self.damping < math.inf):
+            raise InvalidInput(f"surface damping [N·s/m] must be a finite number >= 0, got {self.damping!r}")
 
     def normal_force(self, penetration: float, penetration_rate: float) -> float:
         """Upward force [N] on an object ``penetration`` [m] deep, moving in at ``penetration_rate`` [m/s]."""

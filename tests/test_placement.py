@@ -117,6 +117,15 @@ def test_scenario_and_surface_validation():
         surface_by_name("carpet")
     with pytest.raises(InvalidInput, match="gain"):
         sweep(FAST, "k3", [1.0])
+    # regression: numpy/TypeError leaked for non-numbers, inf duration overflowed
+    with pytest.raises(InvalidInput, match="gains"):
+        PlacementScenario(k1="0.1")
+    with pytest.raises(InvalidInput, match="dt"):
+        PlacementScenario(dt=None)
+    with pytest.raises(InvalidInput, match="duration"):
+        PlacementScenario(duration=float("inf"))
+    with pytest.raises(InvalidInput, match="damping"):
+        Surface("jelly", stiffness=1.0, damping="soft")
 
 
 def test_surface_pushes_but_never_pulls():

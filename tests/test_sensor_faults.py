@@ -225,6 +225,9 @@ def test_faults_do_not_clear_a_latched_safety_stop(arm, rng):
         ({"dt_ratio": 1.0}, "dt_ratio"),
         ({"nominal_dt": 0.0}, "nominal_dt"),
         ({"recovery_ticks": 0}, "recovery_ticks"),
+        ({"stuck_time": "long"}, "stuck_time"),  # regression: a TypeError leaked
+        ({"recovery_ticks": "5"}, "recovery_ticks"),  # regression: a ValueError leaked / a str slipped through
+        ({"stuck_ticks": float("inf")}, "stuck_ticks"),
     ],
 )
 def test_bad_limits_are_refused(kwargs, match):
@@ -235,3 +238,13 @@ def test_bad_limits_are_refused(kwargs, match):
 def test_monitor_refuses_other_limits_objects():
     with pytest.raises(InvalidInput, match="SensorLimits"):
         FaultMonitor({"force_range": 1.0})
+
+
+def test_monitor_check_takes_an_array_reading_and_refuses_a_wrong_shape():
+    monitor = FaultMonitor()
+    # regression: an array reading raised numpy's "truth value of an array is ambiguous"
+    for _ in range(3):
+        assert monitor.check(np.zeros(6), np.array([1.0, 2.0, 3.0, 0.1, 0.2, 0.3]), DT) == (SensorFault.NONE, "")
+    assert monitor.check(np.zeros(6), np.array([np.nan, 0, 0, 0, 0, 0]), DT)[0] is SensorFault.NOT_FINITE
+    with pytest.raises(InvalidInput, match=r"shape \(6,\)"):
+        monitor.check(np.zeros(6), np.zeros(5), DT)
