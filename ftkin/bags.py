@@ -153,7 +153,7 @@ def read_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None
     if path.suffix.lower() == ".db3":
         path = path.parent
     expected = list(arm.joint_names)
-    series: dict[str, tuple[list[float], list[float], list[float]]] = {}
+    series: dict[str, tuple[list[int], list[float]]] = {}  # joint name -> (message indices, positions)
     joint_header, joint_log, wrench_header, wrench_log, wrench_rows = [], [], [], [], []
     frame_id = ""
     try:
@@ -180,9 +180,9 @@ def read_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None
                         joint_header.append(_seconds(message.header.stamp))
                         joint_log.append(log_time)
                         for name, value in zip(message.name, message.position):
-                            series.setdefault(name, ([], [], []))
-                            series[name][0].append(index)
-                            series[name][1].append(float(value))
+                            indices, positions = series.setdefault(name, ([], []))
+                            indices.append(index)
+                            positions.append(float(value))
                     bar.advance()
     except AnyReaderError as error:
         raise InvalidSamples(f"cannot read the bag: {error}", source) from None

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..csv_io import write_csv
 from .common import add_samples_arguments, load_samples_from_args
 
@@ -26,7 +28,7 @@ def run(args) -> int:
     loaded = load_samples_from_args(args.recording, args, static_only=not args.all)
     write_csv(args.output, loaded.table.header, loaded.table.rows)
     search = getattr(loaded, "search", None)
-    poses = len(set(loaded.samples.pose_ids.tolist()))
+    poses = len(np.unique(loaded.samples.pose_ids))
     print(f"wrote {len(loaded.table.rows)} readings" + (f" in {poses} static poses" if search is not None else "") + f" to {args.output}")
     recording = getattr(loaded, "recording", None)
     if recording is not None:
