@@ -26,6 +26,7 @@ import numpy as np
 
 from .arm import Arm, SensorMount
 from .exceptions import InvalidInput, MissingDependency, UrdfError
+from .validation import as_float_array
 
 DEFAULT_ROBOT = "ftkin_c4"
 SENSOR_FRAME = "ft_sensor"
@@ -97,10 +98,10 @@ def sensor_mount_from_offset(parent_frame: str, sensor_offset=None) -> SensorMou
         return SensorMount(parent_frame)
     if isinstance(sensor_offset, SensorMount):
         return sensor_offset
-    values = np.asarray(sensor_offset, dtype=float).ravel()
+    values = as_float_array(sensor_offset, "sensor offset").ravel()
     if values.shape not in ((3,), (6,)) or not np.all(np.isfinite(values)):
         raise InvalidInput(
-            f"sensor offset must be 3 numbers (x y z [m]) or 6 (x y z [m] roll pitch yaw [rad]), got {list(values)}"
+            f"sensor offset must be 3 numbers (x y z [m]) or 6 (x y z [m] roll pitch yaw [rad]), got {sensor_offset!r}"
         )
     rpy = values[3:] if len(values) == 6 else np.zeros(3)
     return SensorMount(parent_frame, tuple(values[:3]), tuple(rpy))

@@ -85,6 +85,10 @@ def test_unknown_robot_lists_known_names():
 def test_bad_offset_and_offset_on_bundled_arm():
     with pytest.raises(InvalidInput, match="3 numbers"):
         load_robot("ur5", [0.0, 0.1])
+    with pytest.raises(InvalidInput, match="sensor offset must be numeric"):
+        load_robot("ur5", ["a", "b", "c"])
+    with pytest.raises(InvalidInput, match="3 numbers"):
+        load_robot("ur5", [0.0, 0.1, float("nan")])
     with pytest.raises(InvalidInput, match="already has its ft_sensor"):
         load_robot(DEFAULT_ROBOT, [0.0, 0.0, 0.1])
 
