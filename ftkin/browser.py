@@ -69,9 +69,12 @@ def screenshot_file(page, png_path, window_size=(1024, 768), timeout: float = 60
     page = Path(page).resolve()
     if not page.is_file():
         raise InvalidInput(f"cannot screenshot {page}: no such file")
-    width, height = (int(v) for v in window_size)
+    try:
+        width, height = (int(v) for v in window_size)
+    except (TypeError, ValueError):
+        width = height = 0
     if width <= 0 or height <= 0:
-        raise InvalidInput(f"window_size must be two positive pixel counts, got {window_size}")
+        raise InvalidInput(f"window_size must be two positive pixel counts (width, height), got {window_size!r}")
     executable = find_chromium()
     if executable is None:
         raise BrowserError(

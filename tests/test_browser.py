@@ -14,6 +14,7 @@ import pytest
 
 from ftkin import SensorModel
 from ftkin.browser import BrowserError, find_chromium, screenshot_file, screenshot_html
+from ftkin.exceptions import InvalidInput
 from ftkin.viz.legend import BASE_GRAVITY, CENTER_OF_MASS, CONTACT, GRAVITY, LAYERS, MEASURED
 
 pytest.importorskip("meshcat")
@@ -110,6 +111,9 @@ def test_screenshot_errors(tmp_path, monkeypatch):
         screenshot_file(tmp_path / "missing.html", tmp_path / "out.png")
     page = tmp_path / "page.html"
     page.write_text("<html><body>hi</body></html>")
+    for size in (("wide", 480), (640,), (0, 480)):
+        with pytest.raises(InvalidInput, match="two positive pixel counts"):
+            screenshot_file(page, tmp_path / "out.png", window_size=size)
     monkeypatch.setenv("FTKIN_CHROMIUM", str(tmp_path / "no-such-browser"))
     with pytest.raises(BrowserError, match="apt-get install chromium"):
         screenshot_file(page, tmp_path / "out.png")
