@@ -107,13 +107,13 @@ def sensor_mount_from_offset(parent_frame: str, sensor_offset=None) -> SensorMou
     return SensorMount(parent_frame, tuple(values[:3]), tuple(rpy))
 
 
-def _bundled(sensor_offset=None) -> Arm:
+def _bundled(sensor_offset=None, tool_frame: str | None = None) -> Arm:
     if sensor_offset is not None:
         raise InvalidInput("the bundled arm already has its ft_sensor frame; --sensor-offset is for robots without one")
-    return Arm.default()
+    return Arm.default(tool_frame or "tool")
 
 
-def _load_spec(spec: RobotSpec, sensor_offset=None) -> Arm:
+def _load_spec(spec: RobotSpec, sensor_offset=None, tool_frame: str | None = None) -> Arm:
     share = example_robot_data_share()
     path = share / "example-robot-data" / "robots" / spec.urdf
     if not path.is_file():
@@ -121,6 +121,7 @@ def _load_spec(spec: RobotSpec, sensor_offset=None) -> Arm:
     return Arm.from_urdf(
         path,
         SENSOR_FRAME,
+        tool_frame,
         sensor_mount=sensor_mount_from_offset(spec.flange_frame, sensor_offset),
         package_dirs=[str(share)],
         locked_joints=spec.locked_joints or None,
@@ -131,10 +132,10 @@ ROBOTS: dict[str, Callable[..., Arm]] = {
     DEFAULT_ROBOT: _bundled,
     **{name: functools.partial(_load_spec, spec) for name, spec in ROBOT_SPECS.items()},
 }
-"""Loaders by robot name; each takes an optional sensor offset (see :func:`load_robot`)."""
+"""Loaders by robot name; each takes an optional sensor offset and tool frame (see :func:`load_robot`)."""
 
 
-def load_robot(name: str, sensor_offset: Sequence[float] | SensorMount | None = None) -> Arm:
+def load_robot(name: str, sensor_offset: Sequence[float] | SensorMount | None = None, tool_frame: str | None = None) -> Arm:
     """Load a robot by name (see :data:`ROBOTS`), sensor frame ``ft_sensor``.
 
     Args:
@@ -143,11 +144,14 @@ def load_robot(name: str, sensor_offset: Sequence[float] | SensorMount | None = 
             ``[x, y, z]`` [m] or ``[x, y, z, roll, pitch, yaw]`` [m, rad]
             (URDF rpy, ``R = Rz(yaw) Ry(pitch) Rx(roll)``); default: at the
             flange with its axes.
+        tool_frame: Tool (control point) frame of the model, or None
+            (the bundled arm: its ``tool`` frame).
 
     Raises:
         InvalidInput: unknown name (the message lists the known ones) or a bad offset.
+        FrameNotFound: ``tool_frame`` is not a frame of the model.
         MissingDependency: example-robot-data is not installed (extra ``robots``).
     """
     if name not in ROBOTS:
         raise InvalidInput(f"unknown robot {name!r}; known robots: {', '.join(sorted(ROBOTS))}")
-    return ROBOTS[name](sensor_offset)
+    return ROBOTS[name](sensor_offset, tool_frame)

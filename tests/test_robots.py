@@ -12,7 +12,7 @@ from ftkin import calibrate
 from ftkin.calibration_file import load_calibration
 from ftkin.cli import main
 from ftkin.csv_io import write_csv
-from ftkin.exceptions import InvalidInput, MissingDependency
+from ftkin.exceptions import FrameNotFound, InvalidInput, MissingDependency
 from ftkin.information import SensorNoise, covariance_from_information, fisher_information
 from ftkin.model import WRENCH_CHANNELS
 from ftkin.robots import DEFAULT_ROBOT, ROBOT_SPECS, ROBOTS, example_robot_data_share, load_robot
@@ -91,6 +91,19 @@ def test_bad_offset_and_offset_on_bundled_arm():
         load_robot("ur5", [0.0, 0.1, float("nan")])
     with pytest.raises(InvalidInput, match="already has its ft_sensor"):
         load_robot(DEFAULT_ROBOT, [0.0, 0.0, 0.1])
+
+
+def test_tool_frame_by_name():
+    assert load_robot(DEFAULT_ROBOT).tool_frame == "tool"
+    assert load_robot("ur5").tool_frame is None
+    arm = load_robot("ur5", [0.0, 0.0, 0.05], tool_frame="tool0")
+    q = np.zeros(arm.nq)
+    # the sensor sits 5 cm out along the flange z; the tool frame is the flange itself
+    _, sensor = arm.frame_placement(q, "sensor")
+    rotation, flange = arm.frame_placement(q, "tool")
+    np.testing.assert_allclose(sensor - flange, rotation @ [0.0, 0.0, 0.05], atol=1e-12)
+    with pytest.raises(FrameNotFound, match="'no_such_frame' not found"):
+        load_robot("ur5", tool_frame="no_such_frame")
 
 
 def test_missing_example_robot_data(monkeypatch):
