@@ -30,7 +30,6 @@ as comments in the file.
 
 from __future__ import annotations
 
-import json
 import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -40,6 +39,7 @@ import numpy as np
 from .atomic import atomic_write_text
 from .exceptions import InvalidInput
 from .model import SensorModel
+from .yaml_text import yaml_lines
 
 EXPORT_FORMATS = ("admittance", "gravity-compensation", "ft-calib")
 """Targets :func:`export_text` knows."""
@@ -47,28 +47,6 @@ EXPORT_FORMATS = ("admittance", "gravity-compensation", "ft-calib")
 DEFAULT_SENSOR_FRAME = "ft_sensor"
 DEFAULT_WORLD_FRAME = "base_link"
 _TILT_NOTE_DEG = 0.01  # tilts smaller than this [deg] are not worth a note
-
-
-def _scalar(value) -> str:
-    """A YAML flow scalar: a double-quoted string (JSON escapes), a number or a list of numbers."""
-    if isinstance(value, str):
-        return json.dumps(value)
-    numbers = np.asarray(value, dtype=float)
-    if not np.all(np.isfinite(numbers)):
-        raise InvalidInput(f"cannot export a non-finite value {value!r}")
-    return json.dumps(numbers.tolist())
-
-
-def _yaml(tree: dict, indent: int = 0) -> list[str]:
-    """Block-style YAML of nested dicts whose leaves are strings, numbers or number lists."""
-    lines = []
-    for key, value in tree.items():
-        if isinstance(value, dict):
-            lines.append(" " * indent + f"{key}:")
-            lines.extend(_yaml(value, indent + 2))
-        else:
-            lines.append(" " * indent + f"{key}: {_scalar(value)}")
-    return lines
 
 
 def _short(values) -> str:
@@ -200,7 +178,7 @@ def export_text(
     else:
         header.append("# bias = [fx, fy, fz, tx, ty, tz] subtracted from the raw reading; the model is")
         header.append("# raw = bias + [m·g_S; com × m·g_S] with g_S the gravity acceleration (pointing down) in the sensor frame")
-    return "\n".join(header + _yaml(tree)) + "\n"
+    return "\n".join(header + yaml_lines(tree)) + "\n"
 
 
 def export_calibration(calibration: SensorModel, path, fmt: str, **options) -> Path:

@@ -51,3 +51,29 @@ def test_compensate_uses_the_recorded_urdf(tmp_path, rng, caplog):
     wrong = read_table(tmp_path / "wrong.csv").floats(WRENCH_CHANNELS)
     assert np.abs(wrong - contact).max() > 0.1
     assert "the calibration was made with" in caplog.text and "turned.urdf" in caplog.text
+
+
+def test_frame_options_are_checked_for_every_way_of_naming_the_arm(tmp_path, capsys):
+    samples = tmp_path / "s.csv"
+    samples.write_text("alpha,beta,gamma,fx,fy,fz,mx,my,mz\n0,0,0,0,0,3,0,0,0\n")
+    # bundled arm: a frame it lacks is an error listing its frames, not silently ignored
+    assert main(["calibrate", str(samples), "--tool-frame", "nope"]) == 2
+    assert "frame 'nope' not found" in capsys.readouterr().err
+    assert main(["calibrate", str(samples), "--sensor-frame", "ft_sensr"]) == 2
+    assert "available frames: universe, base_link" in capsys.readouterr().err
+    # --robot names its sensor frame itself
+    assert main(["calibrate", str(samples), "--robot", "ftkin_c4", "--sensor-frame", "flange"]) == 2
+    assert "--sensor-frame is for --urdf" in capsys.readouterr().err
+
+
+def test_bundled_arm_with_other_frames(tmp_path):
+    import argparse
+
+    from ftkin.cli.common import add_arm_arguments, arm_from_args
+
+    parser = argparse.ArgumentParser()
+    add_arm_arguments(parser)
+    assert arm_from_args(parser.parse_args([])) is None  # bundled arm, loaded on demand
+    arm = arm_from_args(parser.parse_args(["--sensor-frame", "flange", "--tool-frame", "gripper"]))
+    assert (arm.sensor_frame, arm.tool_frame) == ("flange", "gripper")
+    assert arm.urdf_path == bundled_urdf_path().resolve()

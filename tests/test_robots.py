@@ -157,6 +157,7 @@ def test_cli_report_and_view_read_samples_with_the_calibration_robot(tmp_path, t
         assert main(command) == 2
         error = capsys.readouterr().err
         assert error.startswith("ftkin: error: the calibration was made with") and "same robot options" in error
+        assert "--robot ur5" in error  # the recorded URDF names the robot to give
     assert main(["report", str(calib), str(csv_path), "-o", str(tmp_path / "r.png"), "--robot", "ur5"]) == 0
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 from ..arm import Arm, bundled_urdf_path
 from ..csv_io import load_samples
 from ..exceptions import FrameNotFound, InvalidInput
-from ..robots import DEFAULT_ROBOT, ROBOTS, load_robot, sensor_mount_from_offset
+from ..robots import DEFAULT_ROBOT, ROBOT_SPECS, ROBOTS, load_robot, sensor_mount_from_offset
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -34,14 +34,26 @@ def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FRAME",
         help="with --urdf: add the sensor frame at this existing frame (for URDFs without one)",
     )
+    group.add_argument(
+        "--package-dir", action="append", default=[], metavar="DIR",
+        help="folder that package:// mesh URIs resolve against (collision checks, 3D view; repeatable)",
+    )
 
 
 def arm_from_args(args: argparse.Namespace) -> Arm | None:
-    """The arm the arguments name, or None when none was named (bundled arm used on demand)."""
+    """The arm the arguments name, or None when none was named (bundled arm used on demand).
+
+    Frame options are checked against the arm whichever way it is named: a
+    ``--sensor-frame`` or ``--tool-frame`` that the model lacks is a
+    :class:`~ftkin.exceptions.FrameNotFound` listing its frames.
+    """
     if getattr(args, "urdf", None) and getattr(args, "robot", None):
         raise InvalidInput("give either --urdf or --robot, not both")
     offset = getattr(args, "sensor_offset", None)
     parent = getattr(args, "sensor_parent", None)
+    sensor_frame = getattr(args, "sensor_frame", "ft_sensor")
+    tool_frame = getattr(args, "tool_frame", None)
+    package_dirs = list(getattr(args, "package_dir", None) or [])
     if offset is not None and len(offset) not in (3, 6):
         raise InvalidInput(f"--sensor-offset takes 3 numbers (X Y Z [m]) or 6 (and ROLL PITCH YAW [rad]), got {len(offset)}")
     if getattr(args, "urdf", None):
@@ -50,13 +62,19 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
             mount = sensor_mount_from_offset(parent, offset)
         elif offset is not None:
             raise InvalidInput("--sensor-offset with --urdf needs --sensor-parent FRAME (the frame the sensor is bolted to)")
-        return Arm.from_urdf(args.urdf, args.sensor_frame, args.tool_frame, sensor_mount=mount)
+        return Arm.from_urdf(args.urdf, sensor_frame, tool_frame, sensor_mount=mount, package_dirs=package_dirs)
     if parent is not None:
         raise InvalidInput("--sensor-parent is for --urdf; with --robot the sensor is mounted at the robot's flange")
     if getattr(args, "robot", None):
-        return load_robot(args.robot, offset)
+        if sensor_frame != "ft_sensor":
+            raise InvalidInput("--sensor-frame is for --urdf; --robot names its sensor frame ft_sensor (move it with --sensor-offset)")
+        arm = load_robot(args.robot, offset, tool_frame)
+        arm.package_dirs += package_dirs
+        return arm
     if offset is not None:
         raise InvalidInput("--sensor-offset needs --robot NAME (or --urdf with --sensor-parent)")
+    if sensor_frame != "ft_sensor" or tool_frame is not None:
+        return Arm.from_urdf(bundled_urdf_path(), sensor_frame, tool_frame or "tool")
     return None
 
 
@@ -126,10 +144,11 @@ def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:
     try:
         return Arm.from_urdf(recorded, calibration.sensor_frame or "ft_sensor")
     except FrameNotFound:
+        names = [name for name, spec in ROBOT_SPECS.items() if recorded.as_posix().endswith(spec.urdf)]
+        hint = f"--robot {names[0]} (and the --sensor-offset used, if any)" if names else "--urdf with --sensor-parent"
         raise InvalidInput(
             f"the calibration was made with {recorded} and a sensor frame {calibration.sensor_frame!r} that the URDF "
-            "does not contain (it was added with --robot or --sensor-parent): give the same robot options as for "
-            "the calibration"
+            f"does not contain (it was added when calibrating): give the same robot options as for the calibration: {hint}"
         ) from None
 
 

@@ -15,6 +15,7 @@ from ..exceptions import InvalidInput, UrdfError
 from ..information import SensorNoise
 from ..planning import plan_poses
 from ..pose_constraints import DEFAULT_MARGIN
+from ..yaml_text import yaml_text
 from .common import add_arm_arguments, arm_from_args, non_negative_float, positive_float
 
 FORMATS = ("csv", "yaml", "json")
@@ -80,8 +81,6 @@ def register(subparsers) -> None:
     group.add_argument("--joint-range", type=joint_range, action="append", default=[], metavar="NAME:LO:HI",
                        help="extra range for one joint [rad]; repeat for several joints")
     group.add_argument("--no-self-collision", action="store_true", help="do not check self-collision")
-    group.add_argument("--package-dir", action="append", default=[], metavar="DIR",
-                       help="folder that package:// mesh URIs resolve against, for the self-collision check (repeatable)")
     parser.add_argument("--seed", type=int, default=0, help="random seed; the same seed gives the same plan (default: 0)")
     add_expectation_arguments(parser)
     add_arm_arguments(parser)
@@ -89,14 +88,8 @@ def register(subparsers) -> None:
 
 
 def load_arm(args) -> Arm:
-    """The arm named on the command line (the bundled arm by default), with any ``--package-dir``.
-
-    The folders only matter for the collision geometry, which the arm loads on
-    first use, so adding them after loading is enough.
-    """
-    arm = arm_from_args(args) or Arm.default()
-    arm.package_dirs += getattr(args, "package_dir", None) or []
-    return arm
+    """The arm named on the command line (the bundled arm by default)."""
+    return arm_from_args(args) or Arm.default()
 
 
 def run(args) -> int:
@@ -159,18 +152,4 @@ def write_plan(plan, path: str, fmt: str) -> None:
     elif fmt == "json":
         atomic_write_text(path, json.dumps(plan_document(plan), indent=2) + "\n")
     else:
-        atomic_write_text(path, _to_yaml(plan_document(plan)))
-
-
-def _to_yaml(document: dict) -> str:
-    lines = []
-    for key, value in document.items():
-        if isinstance(value, dict):
-            lines.append(f"{key}:")
-            lines += [f"  {name}: {json.dumps(item)}" for name, item in value.items()]
-        elif isinstance(value, list) and value and isinstance(value[0], list):
-            lines.append(f"{key}:")
-            lines += [f"  - {json.dumps(row)}" for row in value]
-        else:
-            lines.append(f"{key}: {json.dumps(value)}")
-    return "\n".join(lines) + "\n"
+        atomic_write_text(path, yaml_text(plan_document(plan)))
