@@ -21,9 +21,9 @@ import numpy as np
 import pinocchio as pin
 
 from ftkin import Arm, Compensator
-from ftkin.admittance import Admittance
-from ftkin.joint_admittance import JointAdmittance
-from ftkin.simulation import paper_like_truth
+from ftkin.control.admittance import Admittance
+from ftkin.control.joint_admittance import JointAdmittance
+from ftkin.sim.sensor import paper_like_truth
 
 CALLS = 20000
 """Timed calls per single-sample entry (each timed on its own)."""

@@ -33,7 +33,7 @@ import time
 import numpy as np
 
 from ftkin import Arm, Samples, SensorModel, SensorNoise, SimulatedSensor, calibrate, fisher_information
-from ftkin.information import covariance_from_information, extended_parameters, extended_standard_errors
+from ftkin.calibration.information import covariance_from_information, extended_parameters, extended_standard_errors
 
 POSES = 12
 READINGS_PER_POSE = 10

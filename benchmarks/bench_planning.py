@@ -18,11 +18,11 @@ import time
 import numpy as np
 
 from ftkin import Arm
-from ftkin.evaluation import evaluate_poses
-from ftkin.paper import paper_samples
-from ftkin.planning import plan_poses
-from ftkin.pose_constraints import FeasibilityChecker, PoseConstraints
-from ftkin.robots import load_robot
+from ftkin.kinematics.robots import load_robot
+from ftkin.planning.constraints import FeasibilityChecker, PoseConstraints
+from ftkin.planning.evaluation import evaluate_poses
+from ftkin.planning.plan import plan_poses
+from ftkin.sim.paper import paper_samples
 
 NAMES = ("ax", "ay", "az", "fx0", "fy0", "fz0", "mx0", "my0", "mz0", "px", "py", "pz")
 SEEDS = (0, 1, 2)

@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 
 import ftkin
-from ftkin.calibration_file import calibration_to_dict, load_calibration
-from ftkin.csv_io import load_samples
-from ftkin.paper import paper_calibration, paper_csv_path
+from ftkin.io.calibration_file import calibration_to_dict, load_calibration
+from ftkin.io.samples_csv import load_samples
+from ftkin.sim.paper import paper_calibration, paper_csv_path
 
 ALPHABET = list(",\n\r#.-+eE0123456789 \t\"'") + ["nan", "inf", "-inf", "1e999", "\x00", "é", "pose", "fx", "q1", "alpha"]
 
@@ -83,8 +83,8 @@ def write_small_bag(path: Path, arm, seed: int) -> Path:
     from rosbags.rosbag2 import StoragePlugin, Writer
     from rosbags.typesys import Stores, get_typestore
 
-    from ftkin.information import SensorNoise
-    from ftkin.simulation import SimulatedSensor, paper_like_truth
+    from ftkin.calibration.information import SensorNoise
+    from ftkin.sim.sensor import SimulatedSensor, paper_like_truth
 
     store = get_typestore(Stores.ROS2_HUMBLE)
     types = store.types
@@ -148,7 +148,7 @@ def check_calibration(result) -> None:
 
 
 def _read_bag_quietly(path: Path, arm):
-    from ftkin.bags import bag_samples
+    from ftkin.io.bags import bag_samples
 
     return bag_samples(path, arm, progress=False)
 

@@ -1,7 +1,7 @@
 """Soak of the control path: ``JointAdmittance.step`` for a million ticks of placement cycles.
 
 The bundled arm holds the paper's object (2.214 N, 40 mm below the tool
-point) over a compliant surface, with :mod:`ftkin.placement`'s default
+point) over a compliant surface, with :mod:`ftkin.sim.placement`'s default
 scenario, controller and contact model: the admittance (tool z only,
 desired force 0) lowers the object onto the surface
 until it carries the weight ("place", 4 s), then a desired force of -8 N
@@ -41,10 +41,10 @@ import tracemalloc
 import numpy as np
 
 from ftkin import Arm, Compensator
-from ftkin.placement import Q_DOWN, PlacementScenario, admittance_controller
-from ftkin.sensor_faults import SensorFault
-from ftkin.simulation import paper_like_truth
-from ftkin.surfaces import BOOK, SPONGE, held_object_wrench
+from ftkin.control.sensor_faults import SensorFault
+from ftkin.sim.placement import Q_DOWN, PlacementScenario, admittance_controller
+from ftkin.sim.sensor import paper_like_truth
+from ftkin.sim.surfaces import BOOK, SPONGE, held_object_wrench
 
 SCENARIO = PlacementScenario()  # the paper's object, gains, deadband and noise
 DT = SCENARIO.dt          # control period [s]

@@ -9,14 +9,16 @@ Optional extras are imported lazily: importing ftkin needs only pin, numpy
 and scipy.
 """
 
-from .admittance import Admittance, ControlFrame
-from .arm import Arm, SensorMount, bundled_urdf_path
-from .calibration import METHODS, CalibrationResult, calibrate
-from .calibration_file import load_calibration, save_calibration
-from .compensation import Compensator
-from .csv_io import load_samples
-from .diagnostics import FitDiagnostics
-from .evaluation import PoseEvaluation, evaluate_poses
+from ._version import __version__  # noqa: F401  (re-exported: ftkin.__version__)
+from .calibration.diagnostics import FitDiagnostics
+from .calibration.estimate import METHODS, CalibrationResult, calibrate
+from .calibration.information import SensorNoise, fisher_information
+from .calibration.model import STANDARD_GRAVITY, SensorModel
+from .calibration.samples import Samples
+from .control.admittance import Admittance, ControlFrame
+from .control.compensation import Compensator
+from .control.joint_admittance import JointAdmittance, StepStatus
+from .control.sensor_faults import FaultMonitor, SensorFault, SensorLimits
 from .exceptions import (
     CalibrationFileError,
     FrameNotFound,
@@ -27,20 +29,17 @@ from .exceptions import (
     UnobservableParameters,
     UrdfError,
 )
-from .information import SensorNoise, fisher_information
-from .joint_admittance import JointAdmittance, StepStatus
-from .model import STANDARD_GRAVITY, SensorModel
-from .placement import PlacementRun, PlacementScenario, simulate_placement
-from .planning import PosePlan, plan_poses
-from .pose_constraints import PoseConstraints
-from .robots import ROBOTS, load_robot
-from .rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
-from .samples import Samples
-from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
-from .simulation import SimulatedSensor
-from .surfaces import Surface
-
-__version__ = "0.1.0"
+from .io.calibration_file import load_calibration, save_calibration
+from .io.samples_csv import load_samples
+from .kinematics.arm import Arm, SensorMount, bundled_urdf_path
+from .kinematics.robots import ROBOTS, load_robot
+from .kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
+from .planning.constraints import PoseConstraints
+from .planning.evaluation import PoseEvaluation, evaluate_poses
+from .planning.plan import PosePlan, plan_poses
+from .sim.placement import PlacementRun, PlacementScenario, simulate_placement
+from .sim.sensor import SimulatedSensor
+from .sim.surfaces import Surface
 
 __all__ = [
     "Admittance",

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ftkin import Arm, SensorModel
-from ftkin.simulation import paper_like_truth
+from ftkin.sim.sensor import paper_like_truth
 
 
 @pytest.fixture(scope="session")

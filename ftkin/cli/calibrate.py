@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from ..calibration import METHODS, calibrate
-from ..calibration_file import save_calibration
+from ..calibration.estimate import METHODS, calibrate
+from ..calibration.information import SensorNoise
+from ..calibration.ml import LOSSES
+from ..calibration.model import STANDARD_GRAVITY
 from ..exceptions import InvalidInput
-from ..information import SensorNoise
-from ..ml import LOSSES
-from ..model import STANDARD_GRAVITY
+from ..io.calibration_file import save_calibration
 from .common import add_samples_arguments, load_samples_from_args, positive_float
 
 

@@ -6,10 +6,10 @@ import argparse
 import logging
 from pathlib import Path
 
-from ..arm import Arm, bundled_urdf_path
-from ..csv_io import load_samples
 from ..exceptions import FrameNotFound, InvalidInput
-from ..robots import DEFAULT_ROBOT, ROBOT_SPECS, ROBOTS, load_robot, sensor_mount_from_offset
+from ..io.samples_csv import load_samples
+from ..kinematics.arm import Arm, bundled_urdf_path
+from ..kinematics.robots import DEFAULT_ROBOT, ROBOT_SPECS, ROBOTS, load_robot, sensor_mount_from_offset
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -101,7 +101,7 @@ def non_negative_float(text: str) -> float:
 def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments about how a samples file or a ROS 2 bag is read."""
     add_arm_arguments(parser)
-    from ..static_segments import SegmentParameters
+    from ..io.static_segments import SegmentParameters
 
     defaults = SegmentParameters()
     group = parser.add_argument_group(
@@ -167,18 +167,18 @@ def warn_if_kinematics_differ(loaded, calibration) -> None:
 def load_samples_from_args(path: str, args: argparse.Namespace, *, static_only: bool = True, arm: Arm | None = None):
     """Read a samples CSV or a ROS 2 bag named on the command line.
 
-    Returns a :class:`~ftkin.csv_io.LoadedSamples` (a :class:`~ftkin.bags.BagSamples`
+    Returns a :class:`~ftkin.io.samples_csv.LoadedSamples` (a :class:`~ftkin.io.bags.BagSamples`
     for a bag). ``static_only`` applies to bags: True keeps the readings of the
     static segments (calibration), False every reading (compensation). ``arm``
     overrides the arm the options name (see :func:`arm_for_calibration`).
     """
-    from ..bags import bag_samples, is_bag_path
+    from ..io.bags import bag_samples, is_bag_path
 
     if arm is None:
         arm = arm_from_args(args)
     if not is_bag_path(path):
         return load_samples(path, arm)
-    from ..static_segments import SegmentParameters
+    from ..io.static_segments import SegmentParameters
 
     defaults = SegmentParameters()
     parameters = SegmentParameters(

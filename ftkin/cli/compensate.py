@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..calibration_file import load_calibration
-from ..compensation import Compensator
-from ..csv_io import write_csv
-from ..model import WRENCH_CHANNELS
+from ..calibration.model import WRENCH_CHANNELS
+from ..control.compensation import Compensator
+from ..io.calibration_file import load_calibration
+from ..io.csv_table import write_csv
 from .common import add_samples_arguments, arm_for_calibration, load_samples_from_args, warn_if_kinematics_differ
 
 

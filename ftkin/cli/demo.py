@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..arm import Arm
-from ..calibration import METHODS, calibrate
-from ..calibration_file import save_calibration
-from ..compensation import Compensator
-from ..information import SensorNoise
-from ..simulation import SimulatedSensor, paper_like_truth
+from ..calibration.estimate import METHODS, calibrate
+from ..calibration.information import SensorNoise
+from ..control.compensation import Compensator
+from ..io.calibration_file import save_calibration
+from ..kinematics.arm import Arm
+from ..sim.sensor import SimulatedSensor, paper_like_truth
 
 
 def register(subparsers) -> None:

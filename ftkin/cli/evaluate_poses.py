@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..csv_io import orientations_from_table, pose_ids_from_table, read_table
-from ..evaluation import evaluate_poses
+from ..io.samples_csv import orientations_from_table, pose_ids_from_table, read_table
+from ..planning.evaluation import evaluate_poses
 from .common import add_arm_arguments, arm_from_args
 from .plan import add_expectation_arguments, expectation_from_args
 

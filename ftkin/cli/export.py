@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from ..calibration_file import load_calibration
-from ..export import EXPORT_FORMATS, export_calibration, export_notes
+from ..io.calibration_file import load_calibration
+from ..io.export import EXPORT_FORMATS, export_calibration, export_notes
 
 
 def register(subparsers) -> None:

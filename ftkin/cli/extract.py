@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..csv_io import write_csv
+from ..io.csv_table import write_csv
 from .common import add_samples_arguments, load_samples_from_args
 
 

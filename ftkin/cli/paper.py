@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from ..calibration import METHODS
-from ..paper import comparison_table, paper_calibration
+from ..calibration.estimate import METHODS
+from ..sim.paper import comparison_table, paper_calibration
 
 
 def register(subparsers) -> None:

@@ -7,15 +7,16 @@ import json
 
 import numpy as np
 
-from ..arm import Arm
-from ..atomic import atomic_write_text
-from ..csv_io import POSE_COLUMN, write_csv
-from ..evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT
+from ..calibration.information import SensorNoise
 from ..exceptions import InvalidInput, UrdfError
-from ..information import SensorNoise
-from ..planning import plan_poses
-from ..pose_constraints import DEFAULT_MARGIN
-from ..yaml_text import yaml_text
+from ..io.atomic import atomic_write_text
+from ..io.csv_table import write_csv
+from ..io.samples_csv import POSE_COLUMN
+from ..io.yaml_text import yaml_text
+from ..kinematics.arm import Arm
+from ..planning.constraints import DEFAULT_MARGIN
+from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT
+from ..planning.plan import plan_poses
 from .common import add_arm_arguments, arm_from_args, non_negative_float, positive_float
 
 FORMATS = ("csv", "yaml", "json")
@@ -38,7 +39,7 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def expectation_from_args(args) -> dict:
-    """Keyword arguments for :func:`ftkin.planning.plan_poses` / :func:`ftkin.evaluation.evaluate_poses`."""
+    """Keyword arguments for :func:`ftkin.planning.plan_poses` / :func:`ftkin.planning.evaluation.evaluate_poses`."""
     if args.readings_per_pose < 1:
         raise InvalidInput(f"--readings-per-pose must be at least 1, got {args.readings_per_pose}")
     return {

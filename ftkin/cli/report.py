@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from ..calibration_file import load_calibration
-from ..report import save_report
+from ..io.calibration_file import load_calibration
+from ..viz.report import save_report
 from .common import add_samples_arguments, arm_for_calibration, load_samples_from_args, warn_if_kinematics_differ
 
 

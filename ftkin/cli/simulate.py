@@ -14,10 +14,10 @@ import argparse
 
 import numpy as np
 
-from ..csv_io import write_csv
 from ..exceptions import InvalidInput
-from ..placement import MODES, PlacementRun, PlacementScenario, simulate_placement, sweep
-from ..surfaces import SURFACES, surface_by_name
+from ..io.csv_table import write_csv
+from ..sim.placement import MODES, PlacementRun, PlacementScenario, simulate_placement, sweep
+from ..sim.surfaces import SURFACES, surface_by_name
 from .common import positive_float
 
 _DEFAULT = PlacementScenario()
@@ -100,7 +100,7 @@ def run(args) -> int:
         write_csv(args.output, header, rows)
         print(f"wrote {args.output}")
     if args.plot:
-        from ..placement_plots import plot_runs, plot_sweep
+        from ..sim.placement_plots import plot_runs, plot_sweep
 
         title = f"Placement on the {args.surface}, {args.mode}"
         if args.sweep:

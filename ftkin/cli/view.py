@@ -9,10 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..arm import Arm
-from ..bags import TIME_COLUMN
-from ..calibration_file import load_calibration
 from ..exceptions import InvalidInput
+from ..io.bags import TIME_COLUMN
+from ..io.calibration_file import load_calibration
+from ..kinematics.arm import Arm
 from .common import (
     add_samples_arguments,
     arm_for_calibration,
@@ -147,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"scale: 1 N = {100 * viewer.scale:.3g} cm; magenta = measured force − bias, cyan = predicted tool gravity, "
               "yellow = contact force, green = tool COM, purple = base gravity direction")
         if args.png:
-            from ..browser import screenshot_html
+            from ..viz.browser import screenshot_html
 
             shown = frames.labels[chosen if chosen is not None else 0]
             screenshot_html(viewer.static_html(caption=f"{source}: {shown}"), args.png)

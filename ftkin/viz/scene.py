@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..arm import Arm
+from ..kinematics.arm import Arm
 from ..validation import as_vector
 from .arrows import ArrowStyle, rigid_transform
 from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, VERTICAL

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..compensation import Compensator
+from ..calibration.model import SensorModel
+from ..control.compensation import Compensator
 from ..exceptions import InvalidInput
-from ..model import SensorModel
 from ..validation import as_rotation_batch, as_vector
 
 

@@ -3,7 +3,7 @@
 :class:`CalibrationViewer` draws, in the base frame B:
 
 * the arm (Pinocchio's ``MeshcatVisualizer``, visual geometry; collision
-  geometry loaded hidden), when an :class:`~ftkin.arm.Arm` is given;
+  geometry loaded hidden), when an :class:`~ftkin.kinematics.arm.Arm` is given;
 * the sensor frame triad (x, y, z = red, green, blue);
 * arrows anchored at the sensor origin, scaled ``scale`` [m per N]: the
   measured force minus the bias (magenta), the predicted tool gravity (cyan),
@@ -23,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..arm import Arm
-from ..atomic import atomic_write_text
+from ..calibration.model import SensorModel
 from ..exceptions import InvalidInput
-from ..model import SensorModel
+from ..io.atomic import atomic_write_text
+from ..kinematics.arm import Arm
 from ..validation import as_batch, as_positive, as_vector
 from .arrows import ArrowStyle, NodePose, arrow_placement, exaggerate_tilt, rigid_transform
 from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, LAYERS, VERTICAL, add_legend, legend_html
@@ -42,7 +42,7 @@ class CalibrationViewer:
     """Show a calibration at poses of an arm in meshcat.
 
     Args:
-        calibration: Calibration (or any :class:`~ftkin.model.SensorModel`) to show.
+        calibration: Calibration (or any :class:`~ftkin.calibration.model.SensorModel`) to show.
         arm: The arm; ``None`` draws the sensor frame at the base origin without an arm.
         zmq_url: Attach to a running meshcat server (``meshcat-server``) instead
             of starting one; an attached server is left running on :meth:`close`.

@@ -1,0 +1,179 @@
+"""How far to trust a maximum-likelihood calibration: fit, outliers, observability.
+
+* **Goodness of fit.** ``χ² = Σ r²`` over the whitened residuals of all poses
+  and channels has ``ν = 6P − 12`` degrees of freedom when the model is right
+  and the noise is known; ``p < FIT_ALPHA`` flags readings that the model does
+  not explain (crosstalk, a contact, noise underestimated). The covariance is
+  then scaled by ``χ² / ν`` (Birge ratio) so the standard errors stay honest.
+  With noise estimated from the residuals the test does not apply (``χ² = ν``
+  by construction).
+* **Outlier poses.** Each pose's ``z_i = r_iᵀ (I − H_ii)⁻¹ r_i`` (``H_ii`` its
+  6×6 block of the hat matrix) is ``χ²(6)`` under the model. When the noise is
+  not known independently (or the fit fails) it is compared with the scatter
+  of the *other* poses (an F test), so one bad pose cannot hide itself. A pose
+  whose p-value is below ``OUTLIER_ALPHA / P`` is named (family-wise 0.1 %).
+* **Observability.** Condition number and weakest direction of the
+  information matrix normalized to unit diagonal, and a warning for every
+  parameter whose standard error exceeds ``RELATIVE_STD_ERROR_WARNING`` of its
+  scale.
+"""
+
+
+import logging
+
+import numpy as np
+from scipy import special
+
+from .diagnostics import (
+    FIT_ALPHA,
+    MIN_COM_SCALE,
+    OUTLIER_ALPHA,
+    RELATIVE_STD_ERROR_WARNING,
+    FitDiagnostics,
+    main_components,
+)
+from .model import PARAMETER_NAMES
+
+__all__ = ["FIT_ALPHA", "OUTLIER_ALPHA", "RELATIVE_STD_ERROR_WARNING", "FitDiagnostics", "diagnose"]
+
+logger = logging.getLogger(__name__)
+
+MIN_NOISE_DOF = 8
+"""Fewest degrees of freedom of a residual-based noise estimate before the standard errors are called rough."""
+
+_UNITS = {"gravity_in_base": "N", "force_offset": "N", "torque_offset": "N·m", "center_of_mass": "m"}
+
+
+def _f_sf(ratio, dfn, dfd):
+    """Survival function of F(dfn, dfd) (vectorized), the chi-square limit for infinite ``dfd``."""
+    ratio, dfn, dfd = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (ratio, dfn, dfd)))
+    large = ~np.isfinite(dfd) | (dfd > 1e7)
+    with np.errstate(invalid="ignore"):
+        finite_dfd = np.where(large, 1.0, dfd)
+        out = np.where(large, special.chdtrc(dfn, ratio * dfn), special.fdtrc(dfn, finite_dfd, ratio))
+    return out
+
+
+def _block_scales(theta: np.ndarray) -> np.ndarray:
+    """``(12,)`` scale each parameter's standard error is judged against."""
+    weight = float(np.linalg.norm(theta[0:3]))
+    com = max(float(np.linalg.norm(theta[9:12])), MIN_COM_SCALE)
+    scales = [weight, max(float(np.linalg.norm(theta[3:6])), weight),
+              max(float(np.linalg.norm(theta[6:9])), weight * com), com]
+    return np.repeat(np.maximum(scales, 1e-300), 3)
+
+
+def _pose_statistics(whitened, hat, fit_ok, source, noise_dof):
+    """Per-pose studentized statistics: normalized residual [σ], p-value and channel leverages.
+
+    ``hat`` holds the ``(P, 6, 6)`` diagonal blocks of the hat matrix.
+    """
+    count = len(whitened)
+    eigenvalues, eigenvectors = np.linalg.eigh(np.eye(6) - hat)
+    kept = eigenvalues > 1e-8
+    projected = np.einsum("pi,pij->pj", whitened, eigenvectors)
+    z = np.sum(np.where(kept, projected**2 / np.where(kept, eigenvalues, 1.0), 0.0), axis=1)
+    rank = np.maximum(np.sum(kept, axis=1).astype(float), 1.0)
+    total, dof = float(np.sum(whitened**2)), 6 * count - 12
+    leave_out_dof = dof - rank
+    if source == "residuals" or not fit_ok:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            scale = (total - z) / leave_out_dof
+        if source != "residuals":
+            scale = np.maximum(scale, 1.0)
+        scale = np.where(leave_out_dof > 0, np.maximum(scale, 1e-300), np.nan)
+        denominator_dof = leave_out_dof
+    else:
+        scale = np.ones(count)
+        denominator_dof = np.full(count, noise_dof)
+    normalized = np.sqrt(z / rank / scale)
+    valid = np.isfinite(normalized) & (denominator_dof > 0)
+    p_values = np.where(valid, _f_sf(np.where(valid, normalized, 0.0) ** 2, rank, np.where(valid, denominator_dof, 1.0)), np.nan)
+    leverage = np.diagonal(hat, axis1=1, axis2=2)
+    return normalized, p_values, leverage
+
+
+def diagnose(fit, pose_ids, dropped_pose_ids=()) -> tuple[FitDiagnostics, np.ndarray]:
+    """Assess an :class:`~ftkin.calibration.ml.MlFit`; returns its diagnostics and the (scaled) covariance.
+
+    Warnings are also sent to the ``ftkin.calibration.fit_quality`` logger.
+    """
+    theta = fit.model.to_vector()
+    problem = fit.problem
+    whitened = problem.whitened_residuals(theta).reshape(-1, 6)
+    count = len(whitened)
+    dof = 6 * count - 12
+    chi_square = float(np.sum(whitened**2))
+    if fit.noise_source == "residuals" or dof <= 0:
+        p_value = np.nan
+    else:
+        p_value = float(_f_sf(chi_square / dof, dof, fit.noise_dof))
+    fit_ok = not (p_value < FIT_ALPHA)
+    normalized, pose_p, leverage = _pose_statistics(whitened, problem.hat_blocks(theta), fit_ok, fit.noise_source, fit.noise_dof)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        channel_chi_square = np.sum(whitened**2, axis=0) / np.sum(1.0 - leverage, axis=0)
+    scale = chi_square / dof if (not fit_ok and chi_square > dof) else 1.0
+    covariance = fit.covariance * scale
+    information = fit.information
+    diagonal = np.sqrt(np.diag(information))
+    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(diagonal, diagonal))
+    weakest = eigenvectors[:, 0] * np.sign(eigenvectors[np.argmax(np.abs(eigenvectors[:, 0])), 0])
+    sigma, scales = np.sqrt(np.clip(np.diag(covariance), 0.0, None)), _block_scales(theta)
+    relative = sigma / scales
+    pose_ids = np.asarray(pose_ids)
+    outliers = tuple(int(i) for i in pose_ids[pose_p < OUTLIER_ALPHA / max(count, 1)])
+
+    messages = []
+    if not fit_ok:
+        messages.append(
+            f"the readings do not fit the model within their noise (chi-square {chi_square:.1f} for {dof} "
+            f"degrees of freedom, p = {p_value:.1e}): sensor crosstalk, a contact or cable at some poses, or "
+            f"noise underestimated; standard errors scaled by {np.sqrt(scale):.2f}"
+        )
+    if outliers:
+        worst = ", ".join(
+            f"{i} ({normalized[pose_ids == i][0]:.1f}σ, p = {pose_p[pose_ids == i][0]:.1e})" for i in outliers
+        )
+        messages.append(
+            f"outlier pose(s), far outside the noise: {worst} (RMS normalized residual over the six channels; "
+            f"threshold p < {OUTLIER_ALPHA / count:.1e}); check them or refit without them "
+            "(drop_outliers=True, --drop-outliers)"
+        )
+    for block, name in enumerate(PARAMETER_NAMES):
+        part = slice(3 * block, 3 * block + 3)
+        if np.any(relative[part] > RELATIVE_STD_ERROR_WARNING):
+            messages.append(
+                f"{name} is poorly determined: standard errors [{', '.join(f'{s:.3g}' for s in sigma[part])}] "
+                f"{_UNITS[name]} are up to {100 * relative[part].max():.0f} % of its scale "
+                f"{scales[3 * block]:.3g} {_UNITS[name]}; add poses that turn gravity into other "
+                f"sensor directions (condition number {eigenvalues[-1] / eigenvalues[0]:.3g}, weakest direction "
+                + ", ".join(f"{weight:+.2f} {label}" for label, weight in main_components(weakest)) + ")"
+            )
+    if fit.noise_source == "residuals" and fit.noise_dof < MIN_NOISE_DOF:
+        messages.append(
+            f"the noise levels come from the residuals with only {fit.noise_dof:.1f} degrees of freedom, so the "
+            "standard errors are rough; record several readings per pose (pose column), add poses, or give the noise"
+        )
+    for message in messages:
+        logger.warning(message)
+    diagnostics = FitDiagnostics(
+        loss=fit.loss,
+        noise=fit.noise,
+        noise_source=fit.noise_source,
+        noise_dof=fit.noise_dof,
+        chi_square=chi_square,
+        dof=dof,
+        p_value=p_value,
+        channel_chi_square=channel_chi_square,
+        covariance_scale=float(scale),
+        pose_ids=pose_ids,
+        pose_normalized_residuals=normalized,
+        pose_p_values=pose_p,
+        outlier_pose_ids=outliers,
+        dropped_pose_ids=tuple(int(i) for i in dropped_pose_ids),
+        condition_number=float(eigenvalues[-1] / eigenvalues[0]),
+        weakest_direction=weakest,
+        relative_std_errors=relative,
+        warnings=tuple(messages),
+    )
+    return diagnostics, covariance

@@ -1,0 +1,265 @@
+"""Joint maximum-likelihood calibration, ``method="ml"`` (ftkin's default).
+
+One weighted nonlinear least-squares fit of all six channels of all poses over
+``θ = [a, F0, M0, P]``, started from the paper's two-step answer
+(:mod:`ftkin.calibration.linear`). The readings of pose ``i`` are averaged first: with
+``n_i`` readings of per-reading noise ``σ_c`` on channel ``c``, the mean
+``ȳ_i`` has variance ``σ_c² / n_i``, so the whitened residual
+
+    r_ic = sqrt(n_i) · (ȳ_ic − f_c(θ, R_i)) / σ_c
+
+gives exactly the fit on every raw reading (the within-pose scatter is a
+constant), at the cost of the number of poses rather than readings.
+
+The noise ``σ`` comes, in this order of preference, from the user
+(``noise=``), from the pooled spread of repeated readings per pose, or from the
+residuals of the fit (force and torque channels pooled, corrected for the
+degrees of freedom the parameters take).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..exceptions import InvalidInput
+from .information import SensorNoise, covariance_from_information
+from .linear import fit_linear
+from .model import STANDARD_GRAVITY, SensorModel, cross_rows, parameter_jacobian
+from .samples import PoseAverages
+
+LOSSES = ("linear", "soft_l1", "huber")
+"""Loss functions of the fit; ``soft_l1`` and ``huber`` down-weight outliers."""
+
+ROBUST_LOSS_SCALE = 1.5
+"""Whitened residual [σ] beyond which a robust loss stops growing quadratically."""
+
+MIN_SPREAD_DOF = 5
+"""Fewest degrees of freedom (``Σ (n_i − 1)``) for a noise estimate from repeated readings."""
+
+RESIDUAL_NOISE_PASSES = 3
+"""Most re-estimations of residual-based noise (each followed by a refit) until it settles to 1 %."""
+
+_FORCE, _TORQUE = slice(0, 3), slice(3, 6)
+
+RESIDUAL_NOISE_GROUPS = (_FORCE, _TORQUE)
+"""Channels that share one noise level when it is estimated from the residuals:
+forces and torques. (Per-channel levels from 12 poses are too noisy as weights:
+they cost a quarter of the efficiency in ``benchmarks/bench_estimator.py``.)"""
+
+NOISE_SOURCES = ("given", "spread", "residuals")
+"""Where the noise levels of a fit came from."""
+
+
+@dataclass(frozen=True)
+class WeightedProblem:
+    """The whitened least-squares problem on per-pose means (inspectable on its own).
+
+    Attributes:
+        rotations: ``(P, 3, 3)`` sensor orientations ``R_BS``.
+        wrenches: ``(P, 6)`` mean raw reading per pose [N, N·m].
+        counts: ``(P,)`` readings averaged at each pose.
+        channel_std: ``(6,)`` per-reading noise ``σ`` [N, N·m].
+    """
+
+    rotations: np.ndarray
+    wrenches: np.ndarray
+    counts: np.ndarray
+    channel_std: np.ndarray
+
+    @property
+    def weights(self) -> np.ndarray:
+        """``(P, 6)`` whitening factors ``sqrt(n_i) / σ_c``."""
+        return np.sqrt(self.counts)[:, None] / self.channel_std[None, :]
+
+    def residuals(self, theta: np.ndarray) -> np.ndarray:
+        """``(P, 6)`` measured minus predicted [N, N·m] (unchecked, hot path)."""
+        gravity_in_sensor = np.einsum("nji,j->ni", self.rotations, theta[0:3])
+        predicted = np.empty_like(self.wrenches)
+        predicted[:, _FORCE] = gravity_in_sensor + theta[3:6]
+        predicted[:, _TORQUE] = cross_rows(theta[9:12], gravity_in_sensor) + theta[6:9]
+        return self.wrenches - predicted
+
+    def whitened_residuals(self, theta: np.ndarray) -> np.ndarray:
+        """``(6P,)`` residuals in units of their standard deviation."""
+        return (self.residuals(theta) * self.weights).reshape(-1)
+
+    def whitened_jacobian(self, theta: np.ndarray) -> np.ndarray:
+        """``(6P, 12)`` derivative of the whitened *prediction* with respect to ``θ``."""
+        jac = parameter_jacobian(self.rotations, theta[0:3], theta[9:12])
+        return (jac * self.weights[:, :, None]).reshape(-1, 12)
+
+    def hat_blocks(self, theta: np.ndarray) -> np.ndarray:
+        """``(P, 6, 6)`` per-pose diagonal blocks of the hat matrix ``J (JᵀJ)⁺ Jᵀ`` of the whitened fit.
+
+        Their diagonals are the leverages of the readings' channels.
+        """
+        jac = self.whitened_jacobian(theta)
+        blocks = jac.reshape(-1, 6, 12)
+        return blocks @ np.linalg.pinv(jac.T @ jac, hermitian=True) @ np.transpose(blocks, (0, 2, 1))
+
+
+@dataclass(frozen=True)
+class MlFit:
+    """What :func:`fit_ml` found.
+
+    Attributes:
+        model: The estimated parameters.
+        start: The two-step linear estimate the fit started from.
+        problem: The whitened problem at the final noise levels (see :attr:`noise`).
+        noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
+        noise_dof: Degrees of freedom of the noise estimate (``inf`` if given).
+        loss: Loss function used.
+        robust_weights: ``(P, 6)`` final weights of the robust loss (ones for ``"linear"``).
+        information: ``(12, 12)`` Fisher information of ``θ`` (robust weights included).
+        iterations: Function evaluations the solver used.
+    """
+
+    model: SensorModel
+    start: SensorModel
+    problem: WeightedProblem
+    noise_source: str
+    noise_dof: float
+    loss: str
+    robust_weights: np.ndarray
+    information: np.ndarray
+    iterations: int
+
+    @property
+    def noise(self) -> SensorNoise:
+        """Per-reading noise used [N, N·m] (the problem's channel levels)."""
+        return SensorNoise(self.problem.channel_std[_FORCE], self.problem.channel_std[_TORQUE])
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """``(12, 12)`` covariance of ``θ`` from the noise used (before any goodness-of-fit scaling)."""
+        return covariance_from_information(self.information)
+
+
+def _robust_weights(whitened: np.ndarray, loss: str) -> np.ndarray:
+    """IRLS weights ``ρ'(z)`` of scipy's losses at ``z = (r / scale)²``."""
+    z = (whitened / ROBUST_LOSS_SCALE) ** 2
+    if loss == "soft_l1":
+        return 1.0 / np.sqrt(1.0 + z)
+    if loss == "huber":
+        return np.where(z <= 1.0, 1.0, 1.0 / np.sqrt(np.maximum(z, 1.0)))
+    return np.ones_like(whitened)
+
+
+def noise_from_spread(poses: PoseAverages) -> tuple[np.ndarray, float] | None:
+    """Pooled per-channel spread of repeated readings ``(6,)`` [N, N·m] and its dof, or None.
+
+    None when fewer than :data:`MIN_SPREAD_DOF` repeated readings exist or a
+    channel never varies (e.g. readings that were averaged or quantized).
+    """
+    repeated = poses.counts > 1
+    dof = float(np.sum(poses.counts[repeated] - 1))
+    if dof < MIN_SPREAD_DOF:
+        return None
+    variance = np.sum((poses.counts[repeated] - 1)[:, None] * poses.spread[repeated] ** 2, axis=0) / dof
+    scale = np.maximum(np.abs(poses.wrenches).max(axis=0), 1e-300)
+    if not np.all(np.isfinite(variance)) or np.any(np.sqrt(variance) <= 1e-12 * scale):
+        return None
+    return np.sqrt(variance), dof
+
+
+def noise_from_residuals(problem: WeightedProblem, theta: np.ndarray, robust: bool = False) -> tuple[np.ndarray, float]:
+    """Per-reading noise ``(6,)`` from the fit residuals, force and torque channels pooled.
+
+    ``σ_g² = Σ n_i e_ic² / Σ (1 − h_ic)`` over the channels of group ``g``
+    (``h`` the leverages at the problem's current weights), so the twelve
+    fitted parameters do not make the estimate too small. With ``robust`` a
+    median-based estimate ignores outlying poses. Returns also the smaller
+    group's degrees of freedom.
+    """
+    residuals = problem.residuals(theta)
+    leverage = np.clip(np.diagonal(problem.hat_blocks(theta), axis1=1, axis2=2), 0.0, 1.0 - 1e-9)
+    scaled = residuals * np.sqrt(problem.counts)[:, None]
+    std = np.empty(6)
+    dofs = []
+    for group in RESIDUAL_NOISE_GROUPS:
+        dof = float(np.sum(1.0 - leverage[:, group]))
+        if robust:
+            studentized = np.abs(scaled[:, group]) / np.sqrt(1.0 - leverage[:, group])
+            value = 1.4826 * float(np.median(studentized))
+        else:
+            value = float(np.sqrt(np.sum(scaled[:, group] ** 2) / max(dof, 1e-12)))
+        floor = 1e-12 * max(1.0, float(np.abs(problem.wrenches[:, group]).max()))
+        std[group] = max(value, floor)
+        dofs.append(dof)
+    return std, min(dofs)
+
+
+def _solve(problem: WeightedProblem, start: np.ndarray, loss: str) -> tuple[np.ndarray, int]:
+    """Minimize the (robust) whitened residuals from ``start``; ``θ`` and the function evaluations used."""
+    robust = {"method": "lm"} if loss == "linear" else {"method": "trf", "loss": loss, "f_scale": ROBUST_LOSS_SCALE}
+    solution = least_squares(
+        problem.whitened_residuals, start, jac=lambda theta: -problem.whitened_jacobian(theta),
+        x_scale="jac", xtol=1e-13, ftol=1e-13, gtol=1e-13, **robust,
+    )
+    return solution.x, int(solution.nfev)
+
+
+def fit_ml(
+    poses: PoseAverages,
+    g: float = STANDARD_GRAVITY,
+    noise: SensorNoise | None = None,
+    loss: str = "linear",
+) -> MlFit:
+    """Maximum-likelihood fit of all channels on per-pose mean readings.
+
+    Args:
+        poses: Readings averaged per pose (with counts and spread).
+        g: Gravity for the reported mass [m/s²].
+        noise: Per-reading noise; None estimates it (spread, else residuals).
+        loss: One of :data:`LOSSES`.
+
+    Raises:
+        UnobservableParameters: the poses cannot determine the parameters.
+        InvalidInput: unknown loss.
+    """
+    if loss not in LOSSES:
+        raise InvalidInput(f"unknown loss {loss!r}; expected one of {', '.join(LOSSES)}")
+    start = fit_linear(poses, g)
+    theta0 = start.to_vector()
+    counts = np.asarray(poses.counts, dtype=float)
+    problem = WeightedProblem(poses.rotations, poses.wrenches, counts, np.ones(6))
+    if noise is not None:
+        channel_std, dof, source = noise.channel_std, np.inf, "given"
+    else:
+        spread = noise_from_spread(poses)
+        if spread is not None:
+            (channel_std, dof), source = spread, "spread"
+        else:
+            source = "residuals"
+            # rough levels (no leverage correction) to weight the channels for the leverages
+            rms = np.sqrt(np.mean(problem.residuals(theta0) ** 2 * counts[:, None], axis=0))
+            rough = np.concatenate([np.full(3, rms[_FORCE].mean()), np.full(3, rms[_TORQUE].mean())])
+            rough = np.maximum(rough, 1e-12 * np.maximum(1.0, np.abs(poses.wrenches).max(axis=0)))
+            channel_std, dof = noise_from_residuals(replace(problem, channel_std=rough), theta0, robust=loss != "linear")
+    problem = replace(problem, channel_std=channel_std)
+    theta, evaluations = _solve(problem, theta0, loss)
+    for _ in range(RESIDUAL_NOISE_PASSES if source == "residuals" else 0):
+        channel_std, dof = noise_from_residuals(problem, theta, robust=loss != "linear")
+        converged = np.allclose(channel_std, problem.channel_std, rtol=1e-2, atol=0.0)
+        problem = replace(problem, channel_std=channel_std)
+        if converged:
+            break
+        theta, more = _solve(problem, theta, loss)
+        evaluations += more
+    whitened = problem.whitened_residuals(theta).reshape(-1, 6)
+    robust_weights = _robust_weights(whitened, loss)
+    jac = problem.whitened_jacobian(theta) * np.sqrt(robust_weights).reshape(-1, 1)
+    return MlFit(
+        model=SensorModel.from_vector(theta, g),
+        start=start,
+        problem=problem,
+        noise_source=source,
+        noise_dof=float(dof),
+        loss=loss,
+        robust_weights=robust_weights,
+        information=jac.T @ jac,
+        iterations=evaluations,
+    )

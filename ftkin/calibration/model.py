@@ -1,0 +1,183 @@
+"""The static sensor model of METHOD.md §1–3: what a wrist F/T sensor reads.
+
+For a sensor orientation ``R_BS`` (sensor to base) the reading without contact is
+
+    F = F0 + Gs,        M = M0 + P × Gs,        Gs = R_BS^T · a
+
+with ``a = gravity_in_base`` the tool's weight vector in the base frame [N],
+``F0``/``M0`` the sensor bias [N]/[N·m] and ``P`` the tool's centre of mass in
+the sensor frame [m]. The twelve parameters, in this order, form the vector
+``θ = [a, F0, M0, P]`` used by the estimators and the Fisher information.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kinematics.rotations import gravity_in_base_from_tilt, tilt_from_gravity_in_base
+from ..validation import as_positive, as_rotation_batch, as_vector
+
+STANDARD_GRAVITY = 9.80665
+"""Standard acceleration of gravity [m/s²] used to turn weight into mass."""
+
+PARAMETER_NAMES = (
+    "gravity_in_base",
+    "force_offset",
+    "torque_offset",
+    "center_of_mass",
+)
+"""Names of the parameter blocks of ``θ``, three components each."""
+
+COMPONENT_NAMES = tuple(f"{block}[{axis}]" for block in PARAMETER_NAMES for axis in "xyz")
+"""Names of the twelve entries of ``θ``."""
+
+WRENCH_CHANNELS = ("fx", "fy", "fz", "mx", "my", "mz")
+"""Wrench component order used everywhere in ftkin."""
+
+
+def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of ``(N, 3)`` (or broadcastable) arrays, written out.
+
+    Faster than ``np.cross`` for small inputs and explicit about broadcasting.
+    """
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
+def skew(v: np.ndarray) -> np.ndarray:
+    """Skew-symmetric matrices ``[v]×`` with ``[v]× w = v × w``; ``(..., 3) -> (..., 3, 3)``."""
+    v = np.asarray(v, dtype=float)
+    out = np.zeros(v.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
+@dataclass(frozen=True)
+class SensorModel:
+    """Bias and tool gravity of a wrist F/T sensor (the calibration parameters).
+
+    Attributes:
+        force_offset: Sensor force bias ``F0`` in the sensor frame [N].
+        torque_offset: Sensor torque bias ``M0`` in the sensor frame [N·m].
+        gravity_in_base: Tool weight vector ``a`` in the base frame [N]
+            (points down; it differs from ``[0, 0, -G]`` by the base tilt).
+        center_of_mass: Tool centre of mass ``P`` in the sensor frame [m].
+        g: Acceleration of gravity used to report the mass [m/s²].
+    """
+
+    force_offset: np.ndarray
+    torque_offset: np.ndarray
+    gravity_in_base: np.ndarray
+    center_of_mass: np.ndarray
+    g: float = STANDARD_GRAVITY
+
+    def __post_init__(self):
+        for name in ("force_offset", "torque_offset", "gravity_in_base", "center_of_mass"):
+            vector = as_vector(getattr(self, name), 3, name)
+            vector.setflags(write=False)
+            object.__setattr__(self, name, vector)
+        object.__setattr__(self, "g", as_positive(self.g, "g"))
+
+    @classmethod
+    def from_tool(
+        cls,
+        tool_mass: float,
+        center_of_mass,
+        force_offset=(0.0, 0.0, 0.0),
+        torque_offset=(0.0, 0.0, 0.0),
+        base_tilt=(0.0, 0.0),
+        g: float = STANDARD_GRAVITY,
+    ) -> SensorModel:
+        """Build from a tool mass [kg], COM [m, sensor frame], biases and base tilt (U, V) [rad]."""
+        weight = as_positive(tool_mass, "tool_mass") * as_positive(g, "g")
+        gravity = gravity_in_base_from_tilt(weight, float(base_tilt[0]), float(base_tilt[1]))
+        return cls(force_offset, torque_offset, gravity, center_of_mass, g)
+
+    @property
+    def tool_weight(self) -> float:
+        """Tool weight ``G = |a|`` [N] (computed without overflow for huge finite values)."""
+        scale = float(np.abs(self.gravity_in_base).max())
+        return scale * float(np.linalg.norm(self.gravity_in_base / scale)) if scale > 0.0 else 0.0
+
+    @property
+    def tool_mass(self) -> float:
+        """Tool mass ``G / g`` [kg]."""
+        return self.tool_weight / self.g
+
+    @property
+    def base_tilt(self) -> tuple[float, float]:
+        """Base tilt ``(U, V)`` [rad]: ``R_WB = Rx(U) Ry(V)``."""
+        return tilt_from_gravity_in_base(self.gravity_in_base)
+
+    @property
+    def base_tilt_deg(self) -> tuple[float, float]:
+        """Base tilt ``(U, V)`` [deg]."""
+        tilt_u, tilt_v = self.base_tilt
+        return float(np.rad2deg(tilt_u)), float(np.rad2deg(tilt_v))
+
+    @property
+    def bias(self) -> np.ndarray:
+        """Sensor bias as a wrench ``[F0, M0]`` [N, N·m]."""
+        return np.concatenate([self.force_offset, self.torque_offset])
+
+    def to_vector(self) -> np.ndarray:
+        """Parameter vector ``θ = [a, F0, M0, P]`` (12,)."""
+        return np.concatenate(
+            [self.gravity_in_base, self.force_offset, self.torque_offset, self.center_of_mass]
+        )
+
+    @classmethod
+    def from_vector(cls, theta, g: float = STANDARD_GRAVITY) -> SensorModel:
+        """Inverse of :meth:`to_vector`."""
+        theta = as_vector(theta, 12, "theta")
+        return cls(theta[3:6], theta[6:9], theta[0:3], theta[9:12], g)
+
+    def tool_gravity_wrench(self, rotation_sensor_to_base) -> np.ndarray:
+        """Tool gravity wrench ``[Gs, P × Gs]`` in the sensor frame [N, N·m].
+
+        Args:
+            rotation_sensor_to_base: ``(3, 3)`` or ``(N, 3, 3)`` ``R_BS``.
+
+        Returns:
+            ``(6,)`` or ``(N, 6)``.
+        """
+        rotations, single = as_rotation_batch(rotation_sensor_to_base)
+        gravity_in_sensor = np.einsum("nji,j->ni", rotations, self.gravity_in_base)
+        out = np.empty((len(rotations), 6))
+        out[:, :3] = gravity_in_sensor
+        out[:, 3:] = cross_rows(self.center_of_mass, gravity_in_sensor)
+        return out[0] if single else out
+
+    def predict(self, rotation_sensor_to_base) -> np.ndarray:
+        """Reading without contact, ``bias + tool gravity`` [N, N·m]; ``(6,)`` or ``(N, 6)``."""
+        return self.tool_gravity_wrench(rotation_sensor_to_base) + self.bias
+
+    def parameter_jacobian(self, rotation_sensor_to_base) -> np.ndarray:
+        """Derivative of :meth:`predict` with respect to ``θ``, ``(N, 6, 12)``.
+
+        Blocks: ``∂F/∂a = R^T``, ``∂F/∂F0 = I``, ``∂M/∂a = [P]× R^T``,
+        ``∂M/∂M0 = I``, ``∂M/∂P = -[Gs]×``.
+        """
+        rotations, _ = as_rotation_batch(rotation_sensor_to_base)
+        return parameter_jacobian(rotations, self.gravity_in_base, self.center_of_mass)
+
+
+def parameter_jacobian(rotations: np.ndarray, gravity_in_base: np.ndarray, center_of_mass: np.ndarray) -> np.ndarray:
+    """Unchecked core of :meth:`SensorModel.parameter_jacobian` for validated ``(N, 3, 3)`` input."""
+    count = len(rotations)
+    rotations_t = np.transpose(rotations, (0, 2, 1))
+    gravity_in_sensor = rotations_t @ gravity_in_base
+    jac = np.zeros((count, 6, 12))
+    jac[:, 0:3, 0:3] = rotations_t
+    jac[:, 0:3, 3:6] = np.eye(3)
+    jac[:, 3:6, 0:3] = skew(center_of_mass) @ rotations_t
+    jac[:, 3:6, 6:9] = np.eye(3)
+    jac[:, 3:6, 9:12] = -skew(gravity_in_sensor)
+    return jac

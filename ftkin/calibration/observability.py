@@ -1,0 +1,102 @@
+"""Can a pose set determine the calibration parameters? (METHOD.md §3)
+
+* ``gravity_in_base`` and ``force_offset`` need sensor orientations that are
+  not all alike, and not all related by a rotation about gravity only.
+* ``center_of_mass`` needs gravity seen along at least two non-parallel sensor
+  directions (three distinct gravity directions in the sensor frame).
+
+Both are checked on the column-normalized regressors of the two linear steps:
+a relative singular value below :data:`MIN_RELATIVE_SINGULAR_VALUE` means the
+poses leave a direction of the parameters undetermined, and the error names the
+parameters that direction involves.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..exceptions import UnobservableParameters
+
+MIN_POSES = 3
+"""Fewest distinct static poses a calibration accepts."""
+
+MIN_RELATIVE_SINGULAR_VALUE = 1e-3
+"""Smallest accepted singular value of a normalized regressor, relative to the
+largest (about the smallest angle, in radians, by which the poses must differ)."""
+
+FORCE_STEP_NAMES = ("gravity_in_base", "gravity_in_base", "gravity_in_base", "force_offset", "force_offset", "force_offset")
+TORQUE_STEP_NAMES = ("center_of_mass",) * 3 + ("torque_offset",) * 3
+
+
+def force_regressor(rotations: np.ndarray) -> np.ndarray:
+    """Step-1 regressor ``[R_iᵀ  I]`` stacked, ``(3N, 6)``, for ``[a; F0]``."""
+    count = len(rotations)
+    regressor = np.empty((count, 3, 6))
+    regressor[:, :, :3] = np.transpose(rotations, (0, 2, 1))
+    regressor[:, :, 3:] = np.eye(3)
+    return regressor.reshape(3 * count, 6)
+
+
+def torque_regressor(forces: np.ndarray) -> np.ndarray:
+    """Step-2 regressor ``[-[F_i]×  I]`` stacked, ``(3N, 6)``, for ``[P; b]``."""
+    count = len(forces)
+    fx, fy, fz = forces.T
+    regressor = np.zeros((count, 3, 6))
+    regressor[:, 0, 1], regressor[:, 0, 2] = fz, -fy
+    regressor[:, 1, 0], regressor[:, 1, 2] = -fz, fx
+    regressor[:, 2, 0], regressor[:, 2, 1] = fy, -fx
+    regressor[:, :, 3:] = np.eye(3)
+    return regressor.reshape(3 * count, 6)
+
+
+def _check_rank(regressor: np.ndarray, names: tuple[str, ...], reason: str) -> None:
+    scale = np.linalg.norm(regressor, axis=0)
+    scale[scale == 0] = 1.0
+    _, singular_values, vt = np.linalg.svd(regressor / scale, full_matrices=False)
+    relative = singular_values / singular_values[0]
+    if relative[-1] < MIN_RELATIVE_SINGULAR_VALUE:
+        weakest = np.abs(vt[-1]) / np.abs(vt[-1]).max()
+        involved = sorted({names[i] for i in np.flatnonzero(weakest > 0.3)})
+        raise UnobservableParameters(
+            involved,
+            f"{reason} (smallest relative singular value {relative[-1]:.1e}, "
+            f"need at least {MIN_RELATIVE_SINGULAR_VALUE:.0e})",
+            singular_values=relative,
+        )
+
+
+def check_pose_count(pose_count: int) -> None:
+    """Refuse fewer than :data:`MIN_POSES` poses."""
+    if pose_count < MIN_POSES:
+        raise UnobservableParameters(
+            ["gravity_in_base", "force_offset", "torque_offset", "center_of_mass"],
+            f"only {pose_count} distinct pose(s); at least {MIN_POSES} static poses with "
+            "different orientations are needed",
+        )
+
+
+def check_orientations(rotations: np.ndarray) -> None:
+    """Refuse pose orientations that cannot separate gravity from the force bias."""
+    _check_rank(
+        force_regressor(rotations),
+        FORCE_STEP_NAMES,
+        "the sensor orientations are all alike (or differ only by rotations about one axis), "
+        "so the tool's weight cannot be told apart from the force bias; tilt the sensor about "
+        "at least two different axes",
+    )
+
+
+def check_gravity_directions(rotations: np.ndarray, gravity_in_base: np.ndarray) -> None:
+    """Refuse poses in which gravity is seen along one sensor direction only."""
+    weight = np.linalg.norm(gravity_in_base)
+    if weight == 0.0:
+        raise UnobservableParameters(
+            ["center_of_mass"], "the estimated tool weight is zero, so its centre of mass has no effect"
+        )
+    directions = np.transpose(rotations, (0, 2, 1)) @ (gravity_in_base / weight)
+    _check_rank(
+        torque_regressor(directions),
+        TORQUE_STEP_NAMES,
+        "gravity is seen along one sensor direction only (poses differ only by rotation about "
+        "the gravity axis); use at least three poses with gravity along different sensor directions",
+    )

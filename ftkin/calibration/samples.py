@@ -1,0 +1,165 @@
+"""Calibration samples: raw wrenches paired with sensor orientations.
+
+A :class:`Samples` holds ``N`` raw readings ``[fx, fy, fz, mx, my, mz]`` [N, N·m]
+in the sensor frame, the sensor orientation ``R_BS`` of each (canonical
+``(N, 3, 3)`` form), and an optional pose id grouping repeated readings of one
+static pose. Build it from whichever orientation input you have: joint angles
+through an :class:`~ftkin.kinematics.arm.Arm`, rotation matrices, quaternions, or the
+paper's commanded Euler angles.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import InvalidSamples
+from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
+from ..validation import as_batch, as_float_array, as_rotation_batch
+
+MAX_POSE_SPREAD = np.deg2rad(2.0)
+"""Largest accepted angle [rad] between a reading's orientation and its pose's mean."""
+
+
+@dataclass(frozen=True)
+class PoseAverages:
+    """Readings averaged per static pose.
+
+    Attributes:
+        pose_ids: ``(P,)`` pose identifiers, in order of first appearance.
+        rotations: ``(P, 3, 3)`` mean sensor orientation ``R_BS`` per pose.
+        wrenches: ``(P, 6)`` mean raw wrench per pose [N, N·m].
+        counts: ``(P,)`` readings per pose.
+        spread: ``(P, 6)`` sample standard deviation of the readings per pose
+            and channel (NaN for a pose with a single reading).
+    """
+
+    pose_ids: np.ndarray
+    rotations: np.ndarray
+    wrenches: np.ndarray
+    counts: np.ndarray
+    spread: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.pose_ids)
+
+
+@dataclass(frozen=True)
+class Samples:
+    """Raw readings with their sensor orientations.
+
+    Attributes:
+        wrenches: ``(N, 6)`` raw readings in the sensor frame [N, N·m].
+        rotations: ``(N, 3, 3)`` sensor orientations ``R_BS``.
+        pose_ids: ``(N,)`` integer pose id of each reading (each reading is its
+            own pose when not given).
+        joint_positions: ``(N, nq)`` joint angles [rad] when the orientations
+            came from an arm, else None.
+        urdf: The URDF of that arm, recorded in the calibration file.
+        sensor_frame: The arm's sensor frame, recorded likewise.
+    """
+
+    wrenches: np.ndarray
+    rotations: np.ndarray
+    pose_ids: np.ndarray | None = None
+    joint_positions: np.ndarray | None = None
+    urdf: str | None = None
+    sensor_frame: str | None = None
+
+    def __post_init__(self):
+        wrenches, _ = as_batch(self.wrenches, 6, "wrenches [fx, fy, fz, mx, my, mz]")
+        rotations, _ = as_rotation_batch(self.rotations)
+        if len(rotations) != len(wrenches):
+            raise InvalidSamples(f"{len(wrenches)} wrenches but {len(rotations)} orientations; expected one each")
+        if len(wrenches) == 0:
+            raise InvalidSamples("no samples")
+        pose_ids = self.pose_ids
+        if pose_ids is None:
+            pose_ids = np.arange(len(wrenches))
+        pose_ids = np.asarray(pose_ids)
+        if pose_ids.shape != (len(wrenches),):
+            raise InvalidSamples(f"pose_ids must have shape ({len(wrenches)},), got {pose_ids.shape}")
+        if not np.issubdtype(pose_ids.dtype, np.integer):
+            as_float = as_float_array(pose_ids, "pose_ids")
+            if not np.all(np.isfinite(as_float)) or np.any(as_float != np.round(as_float)):
+                raise InvalidSamples("pose ids must be integers")
+            pose_ids = as_float.astype(np.int64)
+        for array in (wrenches, rotations, pose_ids):
+            array.setflags(write=False)
+        object.__setattr__(self, "wrenches", wrenches)
+        object.__setattr__(self, "rotations", rotations)
+        object.__setattr__(self, "pose_ids", pose_ids)
+
+    def __len__(self) -> int:
+        return len(self.wrenches)
+
+    # ---------------------------------------------------------- constructors
+    @classmethod
+    def from_rotations(cls, rotation_sensor_to_base, wrenches, pose_ids=None) -> Samples:
+        """From ``(N, 3, 3)`` sensor orientations ``R_BS``."""
+        return cls(wrenches, rotation_sensor_to_base, pose_ids)
+
+    @classmethod
+    def from_joint_positions(cls, arm, joint_positions, wrenches, pose_ids=None, rotations=None) -> Samples:
+        """From ``(N, nq)`` joint angles [rad] through the arm's forward kinematics.
+
+        ``rotations``: their ``R_BS`` ``(N, 3, 3)`` when the caller computed them
+        already (forward kinematics is then skipped).
+        """
+        configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
+        if rotations is None:
+            rotations = arm.rotation_sensor_to_base(configurations)
+        urdf = str(arm.urdf_path) if arm.urdf_path is not None else None
+        return cls(wrenches, rotations, pose_ids, configurations, urdf, arm.sensor_frame)
+
+    @classmethod
+    def from_quaternions(cls, quaternions_wxyz, wrenches, pose_ids=None) -> Samples:
+        """From ``(N, 4)`` unit quaternions ``[qw, qx, qy, qz]`` of the sensor in the base frame."""
+        rotations = quaternion_to_matrix(quaternions_wxyz)
+        return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids)
+
+    @classmethod
+    def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None) -> Samples:
+        """From the paper's commanded ``(N, 3)`` Euler angles ``[α, β, γ]`` [deg], ``R = Rz Ry Rx``."""
+        rotations = euler_zyx_deg_to_matrix(angles_deg)
+        return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids)
+
+    # -------------------------------------------------------------- grouping
+    def pose_averages(self) -> PoseAverages:
+        """Average the readings of each pose (vectorized).
+
+        The mean orientation is the rotation nearest (Frobenius) to the mean
+        matrix, so small joint-encoder jitter inside a pose averages out.
+        """
+        unique, first, inverse, counts = np.unique(
+            self.pose_ids, return_index=True, return_inverse=True, return_counts=True
+        )
+        order = np.argsort(first)  # keep order of first appearance
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        group = rank[inverse]
+        counts = counts[order]
+        sums = np.zeros((len(unique), 6))
+        np.add.at(sums, group, self.wrenches)
+        means = sums / counts[:, None]
+        squares = np.zeros((len(unique), 6))
+        np.add.at(squares, group, (self.wrenches - means[group]) ** 2)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            spread = np.sqrt(squares / (counts[:, None] - 1))
+        rotation_sums = np.zeros((len(unique), 3, 3))
+        np.add.at(rotation_sums, group, self.rotations)
+        u, _, vt = np.linalg.svd(rotation_sums)
+        det = np.linalg.det(u @ vt)
+        u[:, :, 2] *= det[:, None]
+        mean_rotations = u @ vt
+        cosines = (np.einsum("nij,nij->n", mean_rotations[group], self.rotations) - 1.0) / 2.0
+        deviation = np.arccos(np.clip(cosines, -1.0, 1.0))
+        worst = int(np.argmax(deviation))
+        if deviation[worst] > MAX_POSE_SPREAD:
+            raise InvalidSamples(
+                f"the readings of pose {self.pose_ids[worst]} differ in orientation by up to "
+                f"{np.rad2deg(deviation[worst]):.2f}° (more than {np.rad2deg(MAX_POSE_SPREAD):.0f}°): a pose id must "
+                "group readings of one static pose; check the pose column"
+            )
+        return PoseAverages(unique[order], mean_rotations, means, counts, spread)

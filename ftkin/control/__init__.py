@@ -1,0 +1,29 @@
+"""Control: raw readings in, contact wrench and joint velocities out.
+
+:class:`Compensator` turns a raw reading [N, N·m, sensor frame] and the pose
+(``q`` or ``R_BS``) into the contact wrench (raw − bias − tool gravity, what
+the environment exerts on the tool, in the sensor frame). :class:`Admittance`
+turns the contact-force error into a twist [m/s, rad/s] in its control frame;
+:class:`JointAdmittance` maps that twist through the frame Jacobian to joint
+velocities ``dq`` [rad/s] for a joint-velocity controller, with sensor-fault
+handling (:class:`FaultMonitor`) and a safety stop.
+
+Depends on :mod:`ftkin.calibration` (the sensor model) and :mod:`ftkin.kinematics`.
+"""
+
+from .admittance import Admittance
+from .compensation import Compensator
+from .control_frame import ControlFrame
+from .joint_admittance import JointAdmittance, StepStatus
+from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
+
+__all__ = [
+    "Admittance",
+    "Compensator",
+    "ControlFrame",
+    "FaultMonitor",
+    "JointAdmittance",
+    "SensorFault",
+    "SensorLimits",
+    "StepStatus",
+]

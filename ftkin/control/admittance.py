@@ -1,0 +1,173 @@
+"""Cartesian admittance control (METHOD.md §5): force error in, velocity out.
+
+Sign convention. ftkin's compensated wrench ``F'`` is what the environment
+exerts on the tool. The wrench the tool *applies* to the environment is
+``-F'``, and that is the wrench METHOD.md's error refers to, so that positive
+gains make the tool yield::
+
+    ΔF = F_desired − (−F') = F_desired + F'
+
+* position form ``ΔX = S·K1·ΔF``  (:meth:`Admittance.displacement`) [m, rad];
+* velocity form ``ΔV = S·K2·ΔF``  (:meth:`Admittance.velocity`) [m/s, rad/s];
+* combined ``ΔV = S·(K1·dΔF/dt + K2·ΔF)`` (:meth:`Admittance.update`), with
+  the derivative low-pass filtered (first order, cutoff [Hz]) and ``ΔV``
+  saturated (linear norm [m/s], angular norm [rad/s]).
+
+With ``F_desired = 0`` a held weight ``W`` gives ``ΔF = W`` along gravity and
+the tool moves down at ``K2·W`` until a surface carries the weight.
+
+K1 [m/N, rad/(N·m)] and K2 [m/(s·N), rad/(s·N·m)] are diagonal (6-vectors),
+S is a 0/1 diagonal: 0 keeps that axis still. A deadband shrinks each force
+(torque) error component towards zero by ``force_deadband`` [N]
+(``torque_deadband`` [N·m]), continuously. ``frame`` names the axes (and the
+point) in which ``ΔF`` and ``ΔV`` are expressed;
+:class:`~ftkin.control.control_frame.ControlFrame` (re-exported here) does the
+rotations and the lever arm.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..exceptions import InvalidInput
+from ..validation import as_float_array, as_vector, check_finite
+from .control_frame import FRAMES, ControlFrame
+
+__all__ = ["FRAMES", "Admittance", "AdmittanceState", "ControlFrame"]
+
+
+def _diagonal(value, name: str, nonnegative: bool = True) -> np.ndarray:
+    """A 6-vector from a scalar, a 6-vector or a 6×6 diagonal matrix."""
+    array = as_float_array(value, name)
+    if array.shape == ():
+        array = np.full(6, float(array))
+    elif array.shape == (6, 6):
+        if np.any(array - np.diag(np.diag(array))):
+            raise InvalidInput(f"{name} must be diagonal; got off-diagonal entries in a (6, 6) matrix")
+        array = np.diag(array).copy()
+    elif array.shape != (6,):
+        raise InvalidInput(f"{name} must be a scalar, a 6-vector or a (6, 6) diagonal matrix, got shape {array.shape}")
+    check_finite(array, name)
+    if nonnegative and np.any(array < 0):
+        raise InvalidInput(f"{name} must be non-negative (a negative gain pushes into the contact), got {array}")
+    return array.astype(np.float64, copy=True)
+
+
+@dataclass
+class AdmittanceState:
+    """The filter memory of an :class:`Admittance` (explicit, resettable).
+
+    Attributes:
+        previous_error: ΔF at the previous update [N, N·m].
+        filtered_derivative: Low-passed dΔF/dt [N/s, N·m/s].
+        started: False until the first update after a reset.
+    """
+
+    previous_error: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    filtered_derivative: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    started: bool = False
+
+
+class Admittance:
+    """The admittance law of METHOD.md §5 with its practical safeguards.
+
+    Args:
+        k1: Position gain K1 (scalar, 6-vector or 6×6 diagonal) [m/N, rad/(N·m)].
+        k2: Velocity gain K2 [m/(s·N), rad/(s·N·m)].
+        selection: Diagonal of S (0 or 1 per axis); default all ones.
+        desired_wrench: Wrench to apply to the environment [N, N·m], in ``frame``.
+        frame: ``"sensor"`` (sensor origin and axes), ``"tool"`` (tool point and
+            axes) or ``"base"`` (control point, base axes).
+        force_deadband: Force error ignored per component [N].
+        torque_deadband: Torque error ignored per component [N·m].
+        derivative_cutoff: Cutoff of the derivative's low-pass filter [Hz].
+        max_linear_velocity: Saturation of ``|ΔV[:3]|`` [m/s].
+        max_angular_velocity: Saturation of ``|ΔV[3:]|`` [rad/s].
+        bumpless: If True the first update after a reset takes its error as the
+            previous one (no derivative kick). If False the filter starts from
+            ΔF = 0, so a force present at switch-on moves the tool by the
+            position form's ``K1·ΔF`` (a weight taken up while the loop runs).
+    """
+
+    def __init__(self, k1=0.0, k2=0.0, *, selection=1.0, desired_wrench=0.0, frame: str = "sensor",
+                 force_deadband: float = 0.0, torque_deadband: float = 0.0, derivative_cutoff: float = 10.0,
+                 max_linear_velocity: float = 0.05, max_angular_velocity: float = 0.5, bumpless: bool = True):
+        self.k1 = _diagonal(k1, "k1")
+        self.k2 = _diagonal(k2, "k2")
+        self.selection = _diagonal(selection, "selection")
+        if np.any((self.selection != 0.0) & (self.selection != 1.0)):
+            raise InvalidInput(f"selection must hold 0 or 1 per axis, got {self.selection}")
+        self.desired_wrench = _diagonal(desired_wrench, "desired_wrench", nonnegative=False)
+        if frame not in FRAMES:
+            raise InvalidInput(f"frame must be one of {FRAMES}, got {frame!r}")
+        self.frame = frame
+        names = ("force_deadband", "torque_deadband", "derivative_cutoff", "max_linear_velocity", "max_angular_velocity")
+        limits = as_vector([force_deadband, torque_deadband, derivative_cutoff, max_linear_velocity, max_angular_velocity],
+                           5, "deadbands, cutoff and velocity limits")
+        if np.any(limits[:2] < 0) or np.any(limits[2:] <= 0):
+            raise InvalidInput("deadbands must be >= 0; derivative_cutoff and velocity limits must be > 0, "
+                               f"got {dict(zip(names, limits.tolist()))}")
+        self.deadband = np.repeat(limits[:2], 3)
+        self.derivative_cutoff = float(limits[2])
+        self.max_linear_velocity = float(limits[3])
+        self.max_angular_velocity = float(limits[4])
+        self.bumpless = bool(bumpless)
+        self._time_constant = 1.0 / (2.0 * math.pi * self.derivative_cutoff)
+        self._k1s = self.selection * self.k1
+        self._k2s = self.selection * self.k2
+        self.state = AdmittanceState()
+
+    def reset(self) -> None:
+        """Forget the filter memory (call when the loop (re)starts)."""
+        self.state = AdmittanceState()
+
+    # ------------------------------------------------------------ the law
+    def force_error(self, contact_wrench) -> np.ndarray:
+        """``ΔF = F_desired + F'`` with the deadband applied, ``(6,)`` [N, N·m], in ``frame``."""
+        error = self.desired_wrench + contact_wrench
+        return error - np.minimum(np.maximum(error, -self.deadband), self.deadband)
+
+    def displacement(self, contact_wrench) -> np.ndarray:
+        """Position form ``ΔX = S·K1·ΔF`` [m, rad] (stateless)."""
+        return self._k1s * self.force_error(np.asarray(contact_wrench, dtype=float))
+
+    def velocity(self, contact_wrench) -> np.ndarray:
+        """Velocity form ``ΔV = S·K2·ΔF`` [m/s, rad/s] (stateless, saturated)."""
+        return self.saturate(self._k2s * self.force_error(np.asarray(contact_wrench, dtype=float)))
+
+    def update(self, contact_wrench: np.ndarray, dt: float) -> np.ndarray:
+        """Combined law ``ΔV = S·(K1·dΔF/dt + K2·ΔF)``, saturated; advances the filter.
+
+        Args:
+            contact_wrench: ``F'`` ``(6,)`` float array in ``frame`` [N, N·m]
+                (environment on the tool), already validated.
+            dt: Time since the previous update [s], > 0.
+        """
+        state = self.state
+        error = self.force_error(contact_wrench)
+        if not state.started:
+            state.started = True
+            if self.bumpless:
+                state.previous_error = error
+        alpha = dt / (dt + self._time_constant)
+        raw_derivative = (error - state.previous_error) / dt
+        state.filtered_derivative = state.filtered_derivative + alpha * (raw_derivative - state.filtered_derivative)
+        state.previous_error = error
+        return self.saturate(self._k1s * state.filtered_derivative + self._k2s * error)
+
+    def saturate(self, twist: np.ndarray) -> np.ndarray:
+        """Scale the linear and angular parts of a twist to their norm limits (direction kept)."""
+        v0, v1, v2, w0, w1, w2 = twist.tolist()
+        linear = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+        angular = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+        if linear <= self.max_linear_velocity and angular <= self.max_angular_velocity:
+            return twist
+        out = twist.copy()
+        if linear > self.max_linear_velocity:
+            out[:3] *= self.max_linear_velocity / linear
+        if angular > self.max_angular_velocity:
+            out[3:] *= self.max_angular_velocity / angular
+        return out

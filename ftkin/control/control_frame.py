@@ -1,0 +1,110 @@
+"""Where an admittance works: the control frame and the wrench/twist transports.
+
+:class:`ControlFrame` moves the compensated wrench from the sensor to the
+control point (lever arm and axes) and the admittance's twist back to the
+sensor origin, on Python floats (a few µs per tick; the 3-vector arithmetic
+is written out on purpose). :func:`control_frame_for` builds one from an
+arm's sensor and tool frames.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..exceptions import InvalidInput
+from ..kinematics.arm import Arm
+from ..validation import as_rotation_batch, as_vector
+
+FRAMES = ("sensor", "tool", "base")
+"""Frames an admittance can work in (see :class:`ControlFrame`)."""
+
+
+class ControlFrame:
+    """Where ``ΔF`` and ``ΔV`` live, and the conversions from/to the sensor.
+
+    * ``"sensor"``: sensor origin, sensor axes;
+    * ``"tool"``: the tool point ``r`` (sensor frame) [m], tool axes (``R_ST``, tool to sensor);
+    * ``"base"``: the control point ``r``, base axes.
+
+    Wrench transport to the control point: ``M_p = M_s − r × F`` (moment about
+    the new point), then a rotation of both parts. Twist transport back to the
+    sensor origin for the sensor Jacobian: ``v_s = v_p − ω × r`` (base axes).
+
+    Args:
+        frame: One of :data:`FRAMES`.
+        point_in_sensor: Control point in the sensor frame [m] (ignored for ``"sensor"``).
+        rotation_tool_to_sensor: ``R_ST`` ``(3, 3)``, only used for ``"tool"``.
+    """
+
+    def __init__(self, frame: str = "sensor", point_in_sensor=(0.0, 0.0, 0.0), rotation_tool_to_sensor=None):
+        if frame not in FRAMES:
+            raise InvalidInput(f"frame must be one of {FRAMES}, got {frame!r}")
+        self.frame = frame
+        point = as_vector(point_in_sensor, 3, "control point in the sensor frame")
+        self.point_in_sensor = np.zeros(3) if frame == "sensor" else point.copy()
+        self.rotation_tool_to_sensor = np.eye(3)
+        if rotation_tool_to_sensor is not None:
+            rotations, single = as_rotation_batch(rotation_tool_to_sensor, "rotation_tool_to_sensor")
+            if not single:
+                raise InvalidInput(f"rotation_tool_to_sensor must be one (3, 3) rotation matrix, got shape {rotations.shape}")
+            if frame == "tool":
+                self.rotation_tool_to_sensor = rotations[0].copy()
+        # The transports' constants as Python floats (the arrays above are copies: the caller's stay theirs).
+        self._r = self.point_in_sensor.tolist()
+        self._rotation_rows = self.rotation_tool_to_sensor.tolist()
+        self._inverse_rows = self.rotation_tool_to_sensor.T.tolist()
+
+    def wrench_from_sensor(self, wrench_in_sensor: np.ndarray, rotation_sensor_to_base: np.ndarray) -> np.ndarray:
+        """``(6,)`` wrench at the control point in this frame's axes, from the sensor's ``(6,)``."""
+        fx, fy, fz, mx, my, mz = wrench_in_sensor.tolist()
+        rx, ry, rz = self._r
+        mx, my, mz = mx - (ry * fz - rz * fy), my - (rz * fx - rx * fz), mz - (rx * fy - ry * fx)
+        if self.frame != "sensor":
+            rows = rotation_sensor_to_base.tolist() if self.frame == "base" else self._inverse_rows
+            fx, fy, fz = _rotate(rows, fx, fy, fz)
+            mx, my, mz = _rotate(rows, mx, my, mz)
+        return np.array([fx, fy, fz, mx, my, mz])
+
+    def twist_to_sensor_origin(self, twist: np.ndarray, rotation_sensor_to_base: np.ndarray) -> np.ndarray:
+        """Twist ``[v; ω]`` of the sensor origin in base axes, from a control-point twist in this frame's axes."""
+        vx, vy, vz, wx, wy, wz = twist.tolist()
+        rows = rotation_sensor_to_base.tolist()
+        if self.frame != "base":
+            if self.frame == "tool":
+                vx, vy, vz = _rotate(self._rotation_rows, vx, vy, vz)
+                wx, wy, wz = _rotate(self._rotation_rows, wx, wy, wz)
+            vx, vy, vz = _rotate(rows, vx, vy, vz)
+            wx, wy, wz = _rotate(rows, wx, wy, wz)
+        px, py, pz = _rotate(rows, *self._r)
+        return np.array([vx - (wy * pz - wz * py), vy - (wz * px - wx * pz), vz - (wx * py - wy * px), wx, wy, wz])
+
+
+def _rotate(rows, x: float, y: float, z: float) -> tuple[float, float, float]:
+    """``R @ (x, y, z)`` on Python floats, ``rows`` = ``R.tolist()``."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rows
+    return r00 * x + r01 * y + r02 * z, r10 * x + r11 * y + r12 * z, r20 * x + r21 * y + r22 * z
+
+
+def control_frame_for(arm: Arm, frame: str, control_point: str | None = None) -> ControlFrame:
+    """The :class:`ControlFrame` for an arm: tool point and axes taken from its tool frame.
+
+    Raises:
+        InvalidInput: the tool frame is not rigidly attached to the sensor (not
+            on the same joint), or a tool control point is asked of an arm without one.
+    """
+    if control_point is None:
+        control_point = "sensor" if frame == "sensor" or arm.tool_frame_id is None else "tool"
+    if control_point not in ("sensor", "tool"):
+        raise InvalidInput(f"control_point must be 'sensor' or 'tool', got {control_point!r}")
+    if frame == "tool" and control_point != "tool":
+        raise InvalidInput("frame 'tool' needs the tool control point")
+    if control_point == "sensor" or frame == "sensor":
+        return ControlFrame(frame)
+    if arm.tool_frame_id is None:
+        raise InvalidInput("this Arm has no tool frame: load it with tool_frame= or use control_point='sensor'")
+    sensor, tool = arm.model.frames[arm.sensor_frame_id], arm.model.frames[arm.tool_frame_id]
+    if sensor.parentJoint != tool.parentJoint:
+        raise InvalidInput(f"tool frame {arm.tool_frame!r} is not on the same joint as sensor frame {arm.sensor_frame!r}; "
+                           "the control point must be rigidly attached to the sensor")
+    relative = sensor.placement.inverse() * tool.placement
+    return ControlFrame(frame, relative.translation, relative.rotation)

@@ -1,0 +1,252 @@
+"""One control tick from joint angles and a raw reading to joint velocities.
+
+:meth:`JointAdmittance.step` does, for a 1 kHz joint-velocity controller:
+
+1. forward kinematics and the sensor-frame Jacobian (Pinocchio, one call);
+2. compensation (:class:`~ftkin.control.compensation.Compensator`: bias and tool
+   weight removed), or nothing when no compensator is given;
+3. the wrench moved to the control frame and the admittance law
+   (:class:`~ftkin.control.admittance.Admittance`), giving the control-point twist;
+4. that twist moved to the sensor origin and mapped to joints by damped least
+   squares ``dq = Jᵀ(J Jᵀ + λ² I)⁻¹ V`` (Cholesky), the damping growing as
+   the manipulability ``w = sqrt(det(J Jᵀ))`` drops below a threshold:
+   ``λ = λ_max (1 − w/w₀)`` (Nakamura–Hanafusa);
+5. joint limits: each joint's velocity bound shrinks with its distance to the
+   position limit (``gain · distance`` [rad/s]) and is capped by the velocity
+   limit; ``dq`` is scaled uniformly (direction kept) to fit;
+6. safety: a contact force [N] or torque [N·m] beyond the user limit commands
+   ``dq = 0`` and latches until :meth:`JointAdmittance.reset`.
+
+Before all that, a :class:`~ftkin.control.sensor_faults.FaultMonitor` checks the tick
+(NaN/inf in ``q`` or the reading, a ``dt`` jump, a saturated channel, a stuck
+sensor). A faulty tick commands ``dq = 0``, names the fault in
+``last_status.fault`` and leaves the admittance filter untouched, so no bad
+sample enters the state; faults are not latched: after
+``SensorLimits.recovery_ticks`` good ticks the arm moves again, its derivative
+filter restarted from the current force error (no kick from the jump in ΔF).
+``step`` neither raises nor returns NaN for inputs of the right shape; wrong
+shapes or non-numeric inputs are programming errors and raise
+:class:`~ftkin.exceptions.InvalidInput`.
+
+Each tick leaves a :class:`StepStatus` in ``last_status``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from scipy.linalg import lapack
+
+from ..exceptions import InvalidInput
+from ..kinematics.arm import Arm
+from .admittance import Admittance
+from .compensation import Compensator
+from .control_frame import control_frame_for
+from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
+
+_potrf, _potrs, _posv = lapack.dpotrf, lapack.dpotrs, lapack.dposv
+
+
+@dataclass(frozen=True)
+class StepStatus:
+    """What one :meth:`JointAdmittance.step` did.
+
+    Attributes:
+        dq: Commanded joint velocities ``(nq,)`` [rad/s].
+        contact_wrench: Compensated wrench in the sensor frame [N, N·m] (NaN on a sensor-fault tick).
+        twist: Admittance output at the control point, control-frame axes [m/s, rad/s].
+        manipulability: ``w = sqrt(det(J Jᵀ))`` of the sensor Jacobian.
+        damping: ``λ`` used in the least-squares inverse.
+        limit_scale: Uniform factor applied for joint velocity/position limits (1 = none).
+        safety_stop: True when the contact exceeded the limit (this tick or latched).
+        event: ``""`` or a short description of why the arm was stopped.
+        fault: The sensor fault holding the arm this tick (or being recovered
+            from), :attr:`SensorFault.NONE` when there is none.
+    """
+
+    dq: np.ndarray
+    contact_wrench: np.ndarray
+    twist: np.ndarray
+    manipulability: float
+    damping: float
+    limit_scale: float
+    safety_stop: bool
+    event: str
+    fault: SensorFault = SensorFault.NONE
+
+    @property
+    def held(self) -> bool:
+        """True when ``dq`` is zero because of a safety stop or a sensor fault."""
+        return self.safety_stop or self.fault is not SensorFault.NONE
+
+
+class JointAdmittance:
+    """Admittance control output as joint velocities.
+
+    Args:
+        arm: Kinematics (sensor frame, and tool frame for a tool control point).
+        admittance: The Cartesian law; its ``frame`` picks the control frame.
+        compensator: Removes bias and tool weight; None passes raw readings
+            through (the "uncompensated" experiment).
+        control_point: ``"tool"`` (the arm's tool frame, rigidly attached to the
+            sensor) or ``"sensor"``. Default: tool if the arm has one.
+        force_limit: Contact force norm [N] that stops the arm.
+        torque_limit: Contact torque norm [N·m] that stops the arm.
+        manipulability_threshold: ``w₀`` below which damping starts (the
+            bundled arm has w ≈ 0.06 tool-down, → 0 at the wrist singularity).
+        max_damping: ``λ_max``.
+        velocity_scale: Fraction of the arm's joint velocity limits to use.
+        limit_gain: Joint velocity bound per radian to the position limit [1/s].
+        sensor_limits: Fault thresholds (:class:`~ftkin.control.sensor_faults.SensorLimits`;
+            default: the paper's sensor range ±250 N / ±6 N·m, stuck after 10
+            identical ticks or 50 ms, dropped tick at 5x the nominal dt,
+            5 good ticks to recover).
+    """
+
+    def __init__(self, arm: Arm, admittance: Admittance, compensator: Compensator | None = None, *,
+                 control_point: str | None = None, force_limit: float = 50.0, torque_limit: float = 5.0,
+                 manipulability_threshold: float = 0.005, max_damping: float = 0.05, velocity_scale: float = 1.0,
+                 limit_gain: float = 5.0, sensor_limits: SensorLimits | None = None):
+        if not isinstance(arm, Arm) or not isinstance(admittance, Admittance):
+            raise InvalidInput("JointAdmittance needs an ftkin Arm and an ftkin Admittance")
+        if compensator is not None and not isinstance(compensator, Compensator):
+            raise InvalidInput(f"compensator must be an ftkin Compensator or None, got {type(compensator).__name__}")
+        numbers = np.array([force_limit, torque_limit, manipulability_threshold, max_damping, velocity_scale, limit_gain], dtype=float)
+        if not np.all(np.isfinite(numbers)) or np.any(numbers <= 0):
+            raise InvalidInput(f"limits, thresholds and gains must be finite and > 0, got {numbers}")
+        self.arm, self.admittance, self.compensator = arm, admittance, compensator
+        self.frame = control_frame_for(arm, admittance.frame, control_point)
+        self.force_limit, self.torque_limit = float(force_limit), float(torque_limit)
+        self.manipulability_threshold, self.max_damping = float(manipulability_threshold), float(max_damping)
+        self.limit_gain = float(limit_gain)
+        self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
+        self._joint_limits = list(zip(arm.lower_limits.tolist(), arm.upper_limits.tolist(),
+                                      (arm.velocity_limits * float(velocity_scale)).tolist()))
+        self._nq = arm.nq
+        self.monitor = FaultMonitor(sensor_limits)
+        self.reset()
+
+    def reset(self) -> None:
+        """Clear the admittance filter, the safety latch and the fault monitor's state."""
+        self.admittance.reset()
+        self.monitor.reset()
+        self.safety_latched = False
+        self._holding = False
+        self.last_status: StepStatus | None = None
+
+    def step(self, q, raw_wrench, dt: float) -> np.ndarray:
+        """Joint velocities ``(nq,)`` [rad/s] for this tick.
+
+        Args:
+            q: Joint positions ``(nq,)`` [rad].
+            raw_wrench: Raw sensor reading ``(6,)`` [N, N·m], sensor frame.
+            dt: Time since the previous tick [s].
+
+        Raises:
+            InvalidInput: ``q``, ``raw_wrench`` or ``dt`` of the wrong shape or not numbers
+                (NaN, inf, a bad ``dt`` are sensor faults: held and reported, not raised).
+        """
+        try:
+            q = np.asarray(q, dtype=np.float64)
+            raw = np.asarray(raw_wrench, dtype=np.float64)
+            dt = float(dt)
+        except (TypeError, ValueError) as error:
+            raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
+        if q.shape != (self._nq,) or raw.shape != (6,):
+            raise InvalidInput(f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
+        fault, event = self.monitor.check(q, raw.tolist(), dt)
+        if fault is not SensorFault.NONE:
+            return self._hold(fault, event)
+        jacobian = pin.computeFrameJacobian(self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED)
+        rotation = self._data.oMf[self._sensor_id].rotation
+        contact = raw.copy() if self.compensator is None else self.compensator.compensate_rotation_unchecked(rotation, raw)
+        fx, fy, fz, mx, my, mz = contact.tolist()
+        force, torque = math.sqrt(fx * fx + fy * fy + fz * fz), math.sqrt(mx * mx + my * my + mz * mz)
+        if self.safety_latched or force > self.force_limit or torque > self.torque_limit:
+            return self._stop(contact, force, torque)
+        wrench = self.frame.wrench_from_sensor(contact, rotation)
+        if self._holding:
+            self._restart_derivative(wrench)
+        twist = self.admittance.update(wrench, dt)
+        sensor_twist = self.frame.twist_to_sensor_origin(twist, rotation)
+        dq, manipulability, damping = damped_least_squares(jacobian, sensor_twist, self.manipulability_threshold, self.max_damping)
+        scale = self._limit_scale(q, dq)
+        if scale < 1.0:
+            dq *= scale
+        self.last_status = StepStatus(dq, contact, twist, manipulability, damping, scale, False, "")
+        return dq
+
+    def _hold(self, fault: SensorFault, event: str) -> np.ndarray:
+        """``dq = 0`` for a sensor fault; the filter and the latch are left alone.
+
+        The status's contact wrench is NaN (not measured: a supervisor's
+        ``|F'| < threshold`` test must not pass on a faulty tick), its twist zero.
+        """
+        self._holding = True
+        dq = np.zeros(self._nq)
+        self.last_status = StepStatus(dq, np.full(6, math.nan), np.zeros(6), math.nan, math.nan, 0.0,
+                                      self.safety_latched, event, fault)
+        return dq
+
+    def _restart_derivative(self, wrench: np.ndarray) -> None:
+        """After a hold: take this tick's force error as the previous one and zero the filtered derivative."""
+        self._holding = False
+        state = self.admittance.state
+        if state.started:
+            state.previous_error = self.admittance.force_error(wrench)
+            state.filtered_derivative = np.zeros(6)
+
+    def _stop(self, contact: np.ndarray, force: float, torque: float) -> np.ndarray:
+        if self.safety_latched and self.last_status is not None and self.last_status.safety_stop:
+            event = self.last_status.event
+        else:
+            event = (f"contact {force:.3g} N / {torque:.3g} N·m exceeded the limit "
+                     f"{self.force_limit:.3g} N / {self.torque_limit:.3g} N·m: stopped (reset() to resume)")
+        self.safety_latched = True
+        dq = np.zeros(self._nq)
+        self.last_status = StepStatus(dq, contact, np.zeros(6), math.nan, math.nan, 0.0, True, event)
+        return dq
+
+    def _limit_scale(self, q: np.ndarray, dq: np.ndarray) -> float:
+        """Largest ``s ≤ 1`` keeping every joint's ``s·dq`` within its bound (0 if one is at or past its limit).
+
+        A joint moving towards its position limit may go at most ``limit_gain · distance``
+        [rad/s], and never beyond its (scaled) velocity limit.
+        """
+        gain, scale = self.limit_gain, 1.0
+        for position, velocity, (lower, upper, speed) in zip(q.tolist(), dq.tolist(), self._joint_limits):
+            if velocity > 0.0:
+                scale = min(scale, max(0.0, min(speed, gain * (upper - position))) / velocity)
+            elif velocity < 0.0:
+                scale = min(scale, min(0.0, max(-speed, gain * (lower - position))) / velocity)
+        return scale
+
+
+def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, manipulability_threshold: float = 0.005,
+                         max_damping: float = 0.05) -> tuple[np.ndarray, float, float]:
+    """``dq = Jᵀ(J Jᵀ + λ² I)⁻¹ V`` with λ growing near singularities.
+
+    The damping follows Nakamura and Hanafusa: with the manipulability
+    ``w = sqrt(det(J Jᵀ))``, ``λ² = λ_max² (1 − w/w₀)²`` for ``w < w₀``, else 0.
+    ``w`` comes free from the Cholesky factor of ``J Jᵀ`` (no SVD on the hot path).
+
+    Args:
+        jacobian: ``(6, nq)`` [m/rad, 1] (``[v; ω] = J dq``).
+        twist: ``(6,)`` ``[v; ω]`` wanted [m/s, rad/s].
+        manipulability_threshold: ``w₀``.
+        max_damping: ``λ_max``.
+
+    Returns:
+        ``dq`` ``(nq,)`` [rad/s], the manipulability ``w`` and ``λ``.
+    """
+    gram = jacobian @ jacobian.T
+    factor, info = _potrf(gram)
+    manipulability = math.prod(factor.diagonal().tolist()) if info == 0 else 0.0
+    if manipulability >= manipulability_threshold:
+        return jacobian.T @ _potrs(factor, twist)[0], manipulability, 0.0
+    damping = max_damping * (1.0 - manipulability / manipulability_threshold)
+    gram.flat[::7] += damping * damping
+    return jacobian.T @ _posv(gram, twist)[1], manipulability, damping

@@ -1,0 +1,198 @@
+"""Sensor faults seen from the control loop: detect, hold, recover.
+
+A control loop must not crash on bad data, and must not move on it either.
+:class:`FaultMonitor` looks at each tick's joint positions ``q`` [rad], raw
+reading [N, N·m] and time step ``dt`` [s] and names the first fault it finds:
+
+* :attr:`SensorFault.NOT_FINITE`: a NaN or inf in ``q`` or in the reading;
+* :attr:`SensorFault.DT_JUMP`: ``dt`` not finite, ``<= 0``, or more than
+  ``dt_ratio`` times the nominal step (dropped ticks; the nominal step is
+  ``nominal_dt`` or a running average of the accepted steps);
+* :attr:`SensorFault.SATURATED`: ``|raw_i| >= range_i`` on any channel
+  (the paper's sensor reads ±250 N / ±6 N·m);
+* :attr:`SensorFault.STUCK`: the reading bit-identical on all six channels
+  for more than ``stuck_ticks`` ticks or ``stuck_time`` [s] (a live sensor
+  always has noise; a frozen driver or a dead cable repeats the last value).
+
+Faults are not latched: after ``recovery_ticks`` consecutive good ticks the
+monitor reports :attr:`SensorFault.NONE` again. The caller (``JointAdmittance``)
+holds the arm (``dq = 0``) while :meth:`FaultMonitor.check` reports a fault and
+keeps the bad sample out of its filter. Wrong shapes are programming errors,
+not sensor faults, and stay :class:`~ftkin.exceptions.InvalidInput`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import StrEnum
+from numbers import Real
+
+import numpy as np
+
+from ..exceptions import InvalidInput
+from ..validation import as_float_array
+
+
+class SensorFault(StrEnum):
+    """Why a tick was held (``NONE``: it was not)."""
+
+    NONE = ""
+    NOT_FINITE = "not_finite"
+    DT_JUMP = "dt_jump"
+    SATURATED = "saturated"
+    STUCK = "stuck"
+
+
+@dataclass(frozen=True)
+class SensorLimits:
+    """Fault thresholds; None disables a check (NaN/inf and ``dt <= 0`` are always faults).
+
+    Attributes:
+        force_range: Saturation per force channel [N] (scalar or 3-vector): ``|F_i| >= range`` is a fault.
+        torque_range: Saturation per torque channel [N·m] (scalar or 3-vector).
+        stuck_ticks: A reading repeated bit for bit on more than this many
+            consecutive ticks is a stuck sensor. Must exceed the number of
+            control ticks per sensor update if the sensor is slower than the loop.
+        stuck_time: The same, as a duration [s].
+        dt_ratio: ``dt > dt_ratio · nominal`` is a dropped tick.
+        nominal_dt: Fixed nominal step [s]; None: a running average of the
+            accepted steps (starting from the first one, so a bogus first
+            ``dt`` after a reset is believed for a while: pass this if that matters).
+        recovery_ticks: Consecutive good ticks after a fault before the arm may move (the last one moves it).
+    """
+
+    force_range: object = 250.0
+    torque_range: object = 6.0
+    stuck_ticks: int | None = 10
+    stuck_time: float | None = 0.05
+    dt_ratio: float | None = 5.0
+    nominal_dt: float | None = None
+    recovery_ticks: int = 5
+
+    def __post_init__(self):
+        for name in ("stuck_time", "dt_ratio", "nominal_dt"):
+            value = getattr(self, name)
+            if value is not None and not _is_number(value, lambda x: math.isfinite(x) and x > 0):
+                raise InvalidInput(f"{name} must be a finite number > 0 or None, got {value!r}")
+        if self.dt_ratio is not None and self.dt_ratio <= 1.0:
+            raise InvalidInput(f"dt_ratio must be > 1 (a multiple of the nominal step), got {self.dt_ratio!r}")
+        if self.stuck_ticks is not None and not _is_number(self.stuck_ticks, _is_count):
+            raise InvalidInput(f"stuck_ticks must be an integer >= 1 or None, got {self.stuck_ticks!r}")
+        if not _is_number(self.recovery_ticks, _is_count):
+            raise InvalidInput(f"recovery_ticks must be an integer >= 1, got {self.recovery_ticks!r}")
+        self.ranges()
+
+    def ranges(self) -> np.ndarray:
+        """Saturation limits ``(6,)`` [N, N·m] per channel (``inf`` where disabled)."""
+        return np.concatenate([_range(self.force_range, "force_range", "N"), _range(self.torque_range, "torque_range", "N·m")])
+
+
+def _is_number(value, test) -> bool:
+    """``test(value)`` for a real number, False for anything else."""
+    return isinstance(value, Real) and bool(test(value))
+
+
+def _is_count(x) -> bool:
+    return x >= 1 and math.isfinite(x) and x == int(x)
+
+
+def _range(value, name: str, unit: str) -> np.ndarray:
+    """A ``(3,)`` saturation limit from None (``inf``), a number or a 3-vector, all > 0."""
+    if value is None:
+        return np.full(3, np.inf)
+    try:
+        array = np.broadcast_to(np.asarray(value, dtype=np.float64), (3,)).copy()
+    except (TypeError, ValueError):
+        array = None
+    if array is None or np.isnan(array).any() or np.any(array <= 0):
+        raise InvalidInput(f"{name} must be None, or a number or 3-vector > 0 [{unit}], got {value!r}")
+    return array
+
+
+_ALPHA = 0.01
+"""Weight of a new step in the running average of ``dt`` (about 100 ticks of memory)."""
+
+
+class FaultMonitor:
+    """Per-tick fault detection with the state it needs (previous reading, counters).
+
+    Attributes:
+        limits: The thresholds.
+        counts: Ticks held so far per fault (not cleared by :meth:`reset`).
+    """
+
+    def __init__(self, limits: SensorLimits | None = None):
+        self.limits = SensorLimits() if limits is None else limits
+        if not isinstance(self.limits, SensorLimits):
+            raise InvalidInput(f"limits must be an ftkin SensorLimits or None, got {type(limits).__name__}")
+        self._ranges = self.limits.ranges().tolist()
+        self._check_range = any(math.isfinite(r) for r in self._ranges)
+        self._stuck_ticks = math.inf if self.limits.stuck_ticks is None else int(self.limits.stuck_ticks)
+        self._stuck_time = math.inf if self.limits.stuck_time is None else float(self.limits.stuck_time)
+        self._ratio = math.inf if self.limits.dt_ratio is None else float(self.limits.dt_ratio)
+        self.counts = {fault: 0 for fault in SensorFault if fault is not SensorFault.NONE}
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the previous reading, the dt estimate and any fault in progress."""
+        self._previous: list | None = None
+        self._repeats, self._stale_time = 0, 0.0
+        self._reference_dt = self.limits.nominal_dt
+        self.fault, self.good_ticks = SensorFault.NONE, 0
+
+    def check(self, q: np.ndarray, raw: list, dt: float) -> tuple[SensorFault, str]:
+        """The fault holding this tick and a description (``(NONE, "")`` when the arm may move).
+
+        Args:
+            q: Joint positions ``(nq,)`` float array [rad] (shape already checked).
+            raw: The six raw channels [N, N·m], best as a list of Python floats
+                (the control-loop path); an array is converted.
+            dt: Time step [s].
+        """
+        if type(raw) is not list:
+            raw = as_float_array(raw, "raw reading").tolist()
+            if len(raw) != 6 or not all(isinstance(value, float) for value in raw):
+                raise InvalidInput(f"raw reading must have shape (6,), got {np.shape(raw)}")
+        fault, event = self._detect(q, raw, dt)
+        if fault is not SensorFault.NONE:
+            self.fault, self.good_ticks = fault, 0
+            self.counts[fault] += 1
+            return fault, event
+        if self.fault is SensorFault.NONE:
+            return fault, event
+        self.good_ticks += 1
+        if self.good_ticks >= self.limits.recovery_ticks:
+            self.fault = SensorFault.NONE
+            return SensorFault.NONE, ""
+        self.counts[self.fault] += 1
+        return self.fault, f"recovering from {self.fault.value}: {self.good_ticks}/{self.limits.recovery_ticks} good ticks"
+
+    def _detect(self, q: np.ndarray, raw: list, dt: float) -> tuple[SensorFault, str]:
+        dt_ok = math.isfinite(dt) and dt > 0.0
+        if not math.isfinite(sum(raw)) and not all(map(math.isfinite, raw)):
+            return SensorFault.NOT_FINITE, f"raw_wrench not finite: {raw}: holding"
+        if not math.isfinite(sum(q.tolist())) and not np.isfinite(q).all():
+            return SensorFault.NOT_FINITE, f"q not finite: {q.tolist()}: holding"
+        if not dt_ok:
+            return SensorFault.DT_JUMP, f"dt = {dt!r} s is not a positive time step: holding"
+        reference = self._reference_dt
+        if reference is None:
+            reference = self._reference_dt = dt
+        elif self.limits.nominal_dt is None:
+            self._reference_dt = reference + _ALPHA * (min(dt, self._ratio * reference) - reference)
+        if dt > self._ratio * reference:
+            return SensorFault.DT_JUMP, (f"dt = {dt:.4g} s is more than {self._ratio:g} x the nominal "
+                                         f"{reference:.4g} s (dropped ticks): holding")
+        if self._check_range:
+            for channel, (value, limit) in enumerate(zip(raw, self._ranges)):
+                if not -limit < value < limit:
+                    return SensorFault.SATURATED, f"channel {channel} reads {value:.4g}, at or beyond the range ±{limit:g}: holding"
+        if raw == self._previous:
+            self._repeats += 1
+            self._stale_time += dt
+            if self._repeats >= self._stuck_ticks or self._stale_time > self._stuck_time:
+                return SensorFault.STUCK, f"reading unchanged for {self._repeats + 1} ticks ({self._stale_time:.4g} s): holding"
+        else:
+            self._previous, self._repeats, self._stale_time = raw, 0, 0.0
+        return SensorFault.NONE, ""

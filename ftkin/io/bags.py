@@ -1,0 +1,297 @@
+"""Calibration samples straight from a ROS 2 bag (optional extra ``bags``).
+
+Reads a bag (a rosbag2 folder with sqlite3 or MCAP storage, or a bare
+``.mcap`` file) with the pure-Python ``rosbags`` library, no ROS install:
+
+* a ``sensor_msgs/msg/JointState`` topic and a ``geometry_msgs/msg/WrenchStamped``
+  topic, named or auto-detected by message type;
+* times from the messages' header stamps [s] (the bag's receive time when a
+  topic's stamps are all zero);
+* joint positions matched to the arm's joints **by name** (extra joints are
+  ignored; each joint may come from different messages) and linearly
+  interpolated to each wrench stamp; wrench samples outside the joint-state
+  time range are dropped;
+* static segments found from the joint trajectory
+  (:mod:`ftkin.io.static_segments`), each becoming one pose id whose readings are
+  the wrenches inside it.
+
+Wrenches are the raw sensor readings ``[fx, fy, fz, mx, my, mz]`` [N, N·m] in
+the sensor frame (the message's ``frame_id`` is recorded, not used).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..calibration.model import WRENCH_CHANNELS
+from ..calibration.samples import Samples
+from ..exceptions import InvalidSamples, MissingDependency
+from ..progress import Progress
+from .csv_table import Table, format_float
+from .samples_csv import POSE_COLUMN, LoadedSamples
+from .static_segments import SegmentParameters, SegmentSearch, find_static_segments, segment_index
+
+logger = logging.getLogger(__name__)
+
+JOINT_STATE_TYPE = "sensor_msgs/msg/JointState"
+WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
+BAG_SUFFIXES = (".mcap", ".db3")
+TIME_COLUMN = "t"
+
+
+def is_bag_path(path) -> bool:
+    """True for a rosbag2 folder (with ``metadata.yaml``), a ``.mcap`` or a ``.db3`` file."""
+    path = Path(path)
+    return path.suffix.lower() in BAG_SUFFIXES or (path.is_dir() and (path / "metadata.yaml").is_file())
+
+
+@dataclass(frozen=True)
+class BagRecording:
+    """Wrench readings with joint positions interpolated to their stamps.
+
+    Attributes:
+        source: The bag path.
+        joint_topic, wrench_topic: Topics read.
+        wrench_frame_id: ``header.frame_id`` of the first wrench message.
+        joint_names: The arm's joint names, in ``q`` order.
+        joint_times: ``(K,)`` joint-state stamps [s].
+        joint_trajectory: ``(K, nq)`` joint positions at those stamps [rad or m].
+        times: ``(M,)`` wrench stamps [s] inside the joint-state time range.
+        wrenches: ``(M, 6)`` raw readings [N, N·m], sensor frame.
+        joint_positions: ``(M, nq)`` joint positions interpolated to ``times``.
+        dropped: Wrench messages outside the joint-state time range.
+    """
+
+    source: str
+    joint_topic: str
+    wrench_topic: str
+    wrench_frame_id: str
+    joint_names: list[str]
+    joint_times: np.ndarray
+    joint_trajectory: np.ndarray
+    times: np.ndarray
+    wrenches: np.ndarray
+    joint_positions: np.ndarray
+    dropped: int
+
+
+@dataclass(frozen=True)
+class BagSamples(LoadedSamples):
+    """:class:`~ftkin.io.samples_csv.LoadedSamples` from a bag, with what was found in it."""
+
+    recording: BagRecording
+    search: SegmentSearch | None
+
+
+def _rosbags():
+    try:
+        from rosbags.highlevel import AnyReader
+        from rosbags.typesys import Stores, get_typestore
+    except ImportError:
+        raise MissingDependency("rosbags", "bags", "reading ROS 2 bags") from None
+    return AnyReader, get_typestore(Stores.ROS2_HUMBLE)
+
+
+def _topic_listing(connections) -> str:
+    return ", ".join(sorted({f"{c.topic} ({c.msgtype})" for c in connections})) or "none"
+
+
+def _pick_topic(connections, topic, msgtype, flag, source):
+    if topic is not None:
+        chosen = [c for c in connections if c.topic == topic]
+        if not chosen:
+            raise InvalidSamples(f"no topic {topic!r} in the bag; topics found: {_topic_listing(connections)}", source)
+        if chosen[0].msgtype != msgtype:
+            raise InvalidSamples(f"topic {topic!r} carries {chosen[0].msgtype}, expected {msgtype}", source)
+        return chosen
+    topics = sorted({c.topic for c in connections if c.msgtype == msgtype})
+    if not topics:
+        raise InvalidSamples(f"no {msgtype} topic in the bag; topics found: {_topic_listing(connections)}", source)
+    if len(topics) > 1:
+        raise InvalidSamples(f"several {msgtype} topics: {topics}; choose one with {flag}", source)
+    return [c for c in connections if c.topic == topics[0]]
+
+
+def _seconds(stamp) -> float:
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def _stamps(header_times: list[float], log_times: list[float], topic: str) -> np.ndarray:
+    stamps = np.asarray(header_times, dtype=float)
+    if len(stamps) and not np.any(stamps):
+        logger.warning("%s: all header stamps are zero; using the bag's receive times", topic)
+        stamps = np.asarray(log_times, dtype=float) * 1e-9
+    return stamps
+
+
+def read_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None = None, progress: bool | None = None) -> BagRecording:
+    """Read the joint and wrench topics of a bag and align them in time.
+
+    Args:
+        path: rosbag2 folder, ``.mcap`` file, or a ``.db3`` file (its folder is read).
+        arm: The :class:`~ftkin.kinematics.arm.Arm` whose joints to extract, by name.
+        joint_topic, wrench_topic: Topic names; None to pick the only topic of
+            the right type.
+        progress: Progress bar on stderr (default: when it is a terminal).
+
+    Raises:
+        InvalidSamples: unreadable bag, missing or ambiguous topic, joint
+            names not matching the arm (lists found vs expected), or no
+            wrench inside the joint-state time range.
+        MissingDependency: ``rosbags`` is not installed.
+    """
+    any_reader, typestore = _rosbags()
+    from rosbags.highlevel import AnyReaderError
+
+    path = Path(path)
+    source = str(path)
+    if not path.exists():
+        raise InvalidSamples("file not found", source)
+    if path.suffix.lower() == ".db3":
+        path = path.parent
+    expected = list(arm.joint_names)
+    series: dict[str, tuple[list[int], list[float]]] = {}  # joint name -> (message indices, positions)
+    joint_header, joint_log, wrench_header, wrench_log, wrench_rows = [], [], [], [], []
+    frame_id = ""
+    try:
+        with any_reader([path], default_typestore=typestore) as reader:
+            joints = _pick_topic(reader.connections, joint_topic, JOINT_STATE_TYPE, "--joint-topic", source)
+            wrench = _pick_topic(reader.connections, wrench_topic, WRENCH_TYPE, "--wrench-topic", source)
+            total = sum(c.msgcount for c in joints + wrench)
+            with Progress(total, "reading bag", enabled=progress) as bar:
+                for connection, log_time, raw in reader.messages(connections=joints + wrench):
+                    message = reader.deserialize(raw, connection.msgtype)
+                    if connection.msgtype == WRENCH_TYPE:
+                        force, torque = message.wrench.force, message.wrench.torque
+                        wrench_rows.append((force.x, force.y, force.z, torque.x, torque.y, torque.z))
+                        wrench_header.append(_seconds(message.header.stamp))
+                        wrench_log.append(log_time)
+                        frame_id = frame_id or message.header.frame_id
+                    else:
+                        if len(message.position) != len(message.name):
+                            raise InvalidSamples(
+                                f"{connection.topic}: a JointState has {len(message.name)} names but "
+                                f"{len(message.position)} positions", source
+                            )
+                        index = len(joint_header)
+                        joint_header.append(_seconds(message.header.stamp))
+                        joint_log.append(log_time)
+                        for name, value in zip(message.name, message.position):
+                            indices, positions = series.setdefault(name, ([], []))
+                            indices.append(index)
+                            positions.append(float(value))
+                    bar.advance()
+    except AnyReaderError as error:
+        raise InvalidSamples(f"cannot read the bag: {error}", source) from None
+    except InvalidSamples:
+        raise
+    except Exception as error:  # a corrupt bag makes rosbags raise struct, decode, index or memory errors
+        raise InvalidSamples(f"cannot read the bag (corrupt or truncated?): {type(error).__name__}: {error}", source) from None
+    joint_topic_name, wrench_topic_name = joints[0].topic, wrench[0].topic
+    missing = [name for name in expected if name not in series]
+    if missing:
+        raise InvalidSamples(
+            f"joint names on {joint_topic_name} do not match the arm: missing {missing}; "
+            f"the bag has {sorted(series)}; the arm ({arm.urdf_path}) expects {expected}", source
+        )
+    if not wrench_rows:
+        raise InvalidSamples(f"no messages on {wrench_topic_name}", source)
+    message_times = _stamps(joint_header, joint_log, joint_topic_name)
+    joint_times = np.unique(np.concatenate([message_times[series[name][0]] for name in expected]))
+    trajectory = np.empty((len(joint_times), len(expected)))
+    for column, name in enumerate(expected):
+        times = message_times[series[name][0]]
+        order = np.argsort(times, kind="stable")
+        trajectory[:, column] = np.interp(joint_times, times[order], np.asarray(series[name][1])[order])
+    times = _stamps(wrench_header, wrench_log, wrench_topic_name)
+    order = np.argsort(times, kind="stable")
+    times, wrenches = times[order], np.asarray(wrench_rows, dtype=float)[order]
+    inside = (times >= joint_times[0]) & (times <= joint_times[-1])
+    if not np.any(inside):
+        raise InvalidSamples(
+            f"no {wrench_topic_name} stamp falls inside the {joint_topic_name} time range "
+            f"[{joint_times[0]:.3f}, {joint_times[-1]:.3f}] s (wrench stamps [{times[0]:.3f}, {times[-1]:.3f}] s)",
+            source,
+        )
+    times, wrenches = times[inside], wrenches[inside]
+    positions = np.column_stack([np.interp(times, joint_times, trajectory[:, j]) for j in range(len(expected))])
+    return BagRecording(
+        source, joint_topic_name, wrench_topic_name, frame_id, expected, joint_times, trajectory,
+        times, wrenches, positions, int(np.count_nonzero(~inside)),
+    )
+
+
+def _table(source: str, header: list[str], columns: list[np.ndarray]) -> Table:
+    """A :class:`Table` of text cells (integers as integers, floats round-tripping exactly)."""
+    cells = [
+        [str(int(v)) for v in column] if np.issubdtype(column.dtype, np.integer) else [format_float(v) for v in column]
+        for column in columns
+    ]
+    rows = [list(row) for row in zip(*cells)]
+    return Table(source, header, rows, list(range(1, len(rows) + 1)))
+
+
+def bag_samples(
+    path,
+    arm=None,
+    *,
+    joint_topic: str | None = None,
+    wrench_topic: str | None = None,
+    parameters: SegmentParameters | None = None,
+    static_only: bool = True,
+    progress: bool | None = None,
+) -> BagSamples:
+    """Calibration (or compensation) samples from a bag.
+
+    Args:
+        path, joint_topic, wrench_topic, progress: See :func:`read_bag`.
+        arm: The arm (default: the bundled one).
+        parameters: Static-segment thresholds (see :class:`SegmentParameters`).
+        static_only: True: only readings inside static segments, pose id =
+            segment number (for calibration). False: every reading, one pose
+            each, no segment search (for compensation).
+
+    Returns:
+        :class:`BagSamples` whose ``table`` has columns ``t`` [s], ``pose``
+        (static only), the arm's joint names [rad] and ``fx..mz``.
+
+    Raises:
+        InvalidSamples: see :func:`read_bag`; also no static segment found
+            (the message says what was seen and which thresholds were used).
+    """
+    if arm is None:
+        from ..kinematics.arm import Arm
+
+        arm = Arm.default()
+    recording = read_bag(path, arm, joint_topic, wrench_topic, progress)
+    times, wrenches, positions = recording.times, recording.wrenches, recording.joint_positions
+    search, pose_ids = None, None
+    header = [TIME_COLUMN, *recording.joint_names, *WRENCH_CHANNELS]
+    if static_only:
+        search = find_static_segments(recording.joint_times, recording.joint_trajectory, parameters)
+        index = segment_index(times, search.segments)
+        keep = index >= 0
+        if not np.any(keep):
+            duration = recording.joint_times[-1] - recording.joint_times[0]
+            raise InvalidSamples(
+                f"no static segments with wrench readings in {duration:.3g} s of {recording.joint_topic}: "
+                f"{search.describe()}; lower --min-static-duration/--settle-time or raise --speed-threshold",
+                recording.source,
+            )
+        used = np.unique(index[keep])
+        if len(used) < len(search.segments):
+            logger.warning("%d static segment(s) hold no wrench reading", len(search.segments) - len(used))
+        times, wrenches, positions = times[keep], wrenches[keep], positions[keep]
+        pose_ids = np.searchsorted(used, index[keep])
+        header.insert(1, POSE_COLUMN)
+    logger.info(
+        "%s: %d readings%s", recording.source, len(times), f", {search.describe()}" if search is not None else ""
+    )
+    columns = [times] + ([pose_ids] if pose_ids is not None else []) + list(positions.T) + list(wrenches.T)
+    table = _table(recording.source, header, columns)
+    samples = Samples.from_joint_positions(arm, positions, wrenches, pose_ids)
+    return BagSamples(samples, table, "joints", list(recording.joint_names), recording, search)

@@ -1,0 +1,202 @@
+"""Samples CSV: the columns of a calibration table and how they become :class:`Samples`.
+
+A samples CSV has a header row (lines starting with ``#`` are comments), the
+raw wrench columns ``fx,fy,fz,mx,my,mz`` [N, N·m], and the sensor orientation
+in exactly one convention:
+
+* joint columns: the URDF's joint names, or ``q1..qn`` in joint order [rad];
+* ``alpha,beta,gamma``: the paper's commanded Euler angles [deg],
+  ``R_BS = Rz(α) Ry(β) Rx(γ)``;
+* ``qw,qx,qy,qz``: unit quaternion of the sensor frame in the base frame.
+
+An optional integer ``pose`` column groups repeated readings of one pose.
+Other columns are carried along untouched (``ftkin compensate`` copies them).
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..calibration.model import WRENCH_CHANNELS
+from ..calibration.samples import Samples
+from ..exceptions import InvalidSamples
+from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
+from .csv_table import Table, missing_columns, read_table
+
+logger = logging.getLogger(__name__)
+
+EULER_COLUMNS = ("alpha", "beta", "gamma")
+QUATERNION_COLUMNS = ("qw", "qx", "qy", "qz")
+POSE_COLUMN = "pose"
+_GENERIC_JOINT = re.compile(r"^q(\d+)$")
+_DEGREES_THRESHOLD = 2.0 * np.pi + 0.01
+
+
+def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
+    """Which orientation convention the table uses: ``("joints"|"euler"|"quaternion", columns)``.
+
+    Raises:
+        InvalidSamples: none found, several mixed, or an incomplete set.
+    """
+    header = table.header
+    found = {}
+    euler = [name for name in EULER_COLUMNS if name in header]
+    if euler:
+        found["euler"] = euler
+    quaternion = [name for name in QUATERNION_COLUMNS if name in header]
+    if quaternion:
+        found["quaternion"] = quaternion
+    generic = sorted((name for name in header if _GENERIC_JOINT.match(name)), key=lambda n: int(n[1:]))
+    named = [name for name in (joint_names or []) if name in header]
+    if named and generic:
+        raise InvalidSamples(
+            f"both URDF joint-name columns {named} and generic columns {generic}; use one", table.source
+        )
+    if named or generic:
+        found["joints"] = named or generic
+    if len(found) > 1:
+        raise InvalidSamples(
+            "mixed orientation conventions: "
+            + "; ".join(f"{kind} columns {columns}" for kind, columns in found.items())
+            + "; give exactly one of joint angles, alpha/beta/gamma or qw/qx/qy/qz",
+            table.source,
+        )
+    if not found:
+        joints = f"the arm's joint names {list(joint_names)} or q1..q{len(joint_names)}" if joint_names else "joint columns"
+        unknown = [name for name in header if "joint" in name.lower()]
+        hint = f"; columns {unknown} look like joint names but are not this arm's (wrong --urdf/--robot?)" if unknown else ""
+        raise InvalidSamples(
+            f"no orientation columns: expected {joints} [rad], or alpha,beta,gamma [deg], or qw,qx,qy,qz{hint}; "
+            f"the header has {header}",
+            table.source,
+            table.header_line,
+        )
+    kind, columns = next(iter(found.items()))
+    if kind == "euler":
+        missing_columns(table, EULER_COLUMNS, "Euler angle")
+        return kind, list(EULER_COLUMNS)
+    if kind == "quaternion":
+        missing_columns(table, QUATERNION_COLUMNS, "quaternion")
+        return kind, list(QUATERNION_COLUMNS)
+    if named:
+        missing_columns(table, joint_names, "joint")
+        return kind, list(joint_names)
+    if joint_names is not None:
+        expected = [f"q{i + 1}" for i in range(len(joint_names))]
+        if generic != expected:
+            raise InvalidSamples(
+                f"joint columns {generic} do not match the arm's {len(joint_names)} joints; "
+                f"expected {expected} or the URDF names {list(joint_names)}",
+                table.source,
+            )
+    return kind, generic
+
+
+def check_radians(table: Table, columns, values: np.ndarray) -> None:
+    """Refuse joint angles that can only be degrees (|q| > 2π)."""
+    bad = np.argwhere(np.abs(values) > _DEGREES_THRESHOLD)
+    if bad.size:
+        row, column = bad[0]
+        raise InvalidSamples(
+            f"joint column {columns[column]!r} holds {values[row, column]:g}, outside ±2π: joint angles "
+            "must be in radians (these look like degrees)",
+            table.source,
+            table.lines[row],
+        )
+
+
+@dataclass(frozen=True)
+class TableOrientations:
+    """Sensor orientations read from a table's orientation columns.
+
+    Attributes:
+        rotations: ``(N, 3, 3)`` ``R_BS``, one per row.
+        kind: ``"joints"``, ``"euler"`` or ``"quaternion"``.
+        columns: The columns they came from.
+        joint_positions: ``(N, nq)`` [rad] for joint columns, else None.
+        arm: The arm used for joint columns, else None.
+    """
+
+    rotations: np.ndarray
+    kind: str
+    columns: list[str]
+    joint_positions: np.ndarray | None = None
+    arm: object = None
+
+
+def orientations_from_table(table: Table, arm=None) -> TableOrientations:
+    """The sensor orientation of every row, in whichever convention the table uses.
+
+    Joint columns go through ``arm``'s forward kinematics (the bundled arm when
+    ``arm`` is None); Euler angles [deg] and quaternions need no arm.
+
+    Raises:
+        InvalidSamples: no, mixed or incomplete orientation columns, non-numbers,
+            joint angles in degrees, non-unit quaternions (with file and line).
+    """
+    if arm is None and not any(name in table.header for name in EULER_COLUMNS + QUATERNION_COLUMNS):
+        from ..kinematics.arm import Arm
+
+        arm = Arm.default()
+    kind, columns = detect_orientation(table, arm.joint_names if arm is not None else None)
+    values = table.floats(columns)
+    try:
+        if kind == "euler":
+            return TableOrientations(euler_zyx_deg_to_matrix(values).reshape(-1, 3, 3), kind, columns)
+        if kind == "quaternion":
+            return TableOrientations(quaternion_to_matrix(values).reshape(-1, 3, 3), kind, columns)
+        check_radians(table, columns, values)
+        return TableOrientations(arm.rotation_sensor_to_base(values), kind, columns, values, arm)
+    except InvalidSamples:
+        raise
+    except ValueError as error:  # InvalidInput from the converters
+        raise InvalidSamples(str(error), table.source) from None
+
+
+def pose_ids_from_table(table: Table) -> np.ndarray | None:
+    """The integer ``pose`` column ``(N,)``, or None when the table has none."""
+    if POSE_COLUMN not in table.header:
+        return None
+    pose_ids = table.floats([POSE_COLUMN])[:, 0]
+    fractional = np.flatnonzero(pose_ids != np.round(pose_ids))
+    if fractional.size:
+        row = int(fractional[0])
+        raise InvalidSamples(f"pose id {float(pose_ids[row])!r} is not an integer", table.source, table.lines[row])
+    return pose_ids.astype(np.int64)
+
+
+@dataclass(frozen=True)
+class LoadedSamples:
+    """Samples read from a CSV, with the table they came from."""
+
+    samples: Samples
+    table: Table
+    orientation: str
+    orientation_columns: list[str]
+
+
+def samples_from_table(table: Table, arm=None) -> LoadedSamples:
+    """Build :class:`Samples` from a table; ``arm`` is needed for joint columns.
+
+    When the table has joint columns and ``arm`` is None, the bundled arm is used.
+    """
+    missing_columns(table, WRENCH_CHANNELS, "wrench")
+    orientations = orientations_from_table(table, arm)
+    wrenches = table.floats(WRENCH_CHANNELS)
+    pose_ids = pose_ids_from_table(table)
+    if orientations.arm is None:
+        samples = Samples(wrenches, orientations.rotations, pose_ids)
+    else:
+        samples = Samples.from_joint_positions(
+            orientations.arm, orientations.joint_positions, wrenches, pose_ids, orientations.rotations
+        )
+    return LoadedSamples(samples, table, orientations.kind, orientations.columns)
+
+
+def load_samples(path, arm=None) -> LoadedSamples:
+    """Read a samples CSV (see the module docstring for its columns)."""
+    return samples_from_table(read_table(path), arm)

@@ -1,0 +1,158 @@
+"""Find the stretches of a recording where the arm stands still.
+
+A recording (e.g. a ROS 2 bag) holds joint positions over time while the arm
+moves from pose to pose. Static calibration needs the readings taken while
+the arm is still, after vibrations have died out. :func:`find_static_segments`
+finds them from the joint positions alone:
+
+1. joint speed at each joint sample: ``max_j |q_j(t + w/2) - q_j(t - w/2)| / w``
+   over a window ``w`` (``speed_window`` [s]; positions linearly interpolated),
+   which is robust to encoder jitter at high sample rates;
+2. still where that speed is below ``speed_threshold`` [rad/s or m/s];
+3. each maximal still stretch loses its first ``settle_time`` [s]; what is
+   left becomes a :class:`StaticSegment` when it lasts at least
+   ``min_duration`` [s].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import InvalidInput
+from ..validation import as_float_array, as_positive
+
+
+@dataclass(frozen=True)
+class SegmentParameters:
+    """How still, for how long, and how much settling to skip.
+
+    Attributes:
+        speed_threshold: Largest joint speed counted as still [rad/s or m/s].
+        min_duration: Shortest usable still time after settling [s].
+        settle_time: Time skipped at the start of each still stretch [s]
+            (vibrations and controller settling after a move).
+        speed_window: Time span of the finite difference for the speed [s].
+    """
+
+    speed_threshold: float = 0.01
+    min_duration: float = 1.0
+    settle_time: float = 0.5
+    speed_window: float = 0.1
+
+    def __post_init__(self):
+        for name in ("speed_threshold", "min_duration", "speed_window"):
+            object.__setattr__(self, name, as_positive(getattr(self, name), name))
+        try:
+            settle_time = float(self.settle_time)
+        except (TypeError, ValueError):
+            settle_time = float("nan")
+        if not (np.isfinite(settle_time) and settle_time >= 0):
+            raise InvalidInput(f"settle_time must be a finite number ≥ 0 [s], got {self.settle_time!r}")
+        object.__setattr__(self, "settle_time", settle_time)
+
+
+@dataclass(frozen=True)
+class StaticSegment:
+    """A time interval where the arm was still (settling already skipped).
+
+    Attributes:
+        start: First usable time [s] (same clock as the input times).
+        end: Last still time [s].
+    """
+
+    start: float
+    end: float
+
+    @property
+    def duration(self) -> float:
+        """Length of the segment [s]."""
+        return self.end - self.start
+
+
+@dataclass(frozen=True)
+class SegmentSearch:
+    """Segments found plus what was seen, for messages when none qualify.
+
+    Attributes:
+        segments: The static segments, in time order.
+        still_stretches: Durations of every still stretch before settling [s].
+        parameters: The parameters used.
+    """
+
+    segments: list[StaticSegment]
+    still_stretches: list[float]
+    parameters: SegmentParameters
+
+    def describe(self) -> str:
+        """One line: how many stretches, the longest, and the parameters."""
+        p = self.parameters
+        longest = max(self.still_stretches, default=0.0)
+        return (
+            f"{len(self.segments)} static segment(s) from {len(self.still_stretches)} still stretch(es) "
+            f"(longest {longest:.3g} s); still = joint speed < {p.speed_threshold:g} rad/s, "
+            f"usable ≥ {p.min_duration:g} s after skipping {p.settle_time:g} s of settling"
+        )
+
+
+def joint_speed(times, joint_positions, window: float) -> np.ndarray:
+    """``(N,)`` largest joint speed at each sample [rad/s], central difference over ``window`` [s]."""
+    times = as_float_array(times, "times")
+    q = as_float_array(joint_positions, "joint positions")
+    if q.ndim != 2 or len(q) != len(times):
+        raise InvalidInput(f"joint positions must be (N, nq) with N = {len(times)} times, got shape {q.shape}")
+    if len(times) < 2:
+        return np.zeros(len(times))
+    if np.any(np.diff(times) < 0):
+        raise InvalidInput("times must be sorted (non-decreasing)")
+    ahead = np.clip(times + window / 2, times[0], times[-1])
+    behind = np.clip(times - window / 2, times[0], times[-1])
+    span = np.maximum(ahead - behind, 1e-12)
+    speed = np.zeros(len(times))
+    for column in q.T:
+        change = np.abs(np.interp(ahead, times, column) - np.interp(behind, times, column))
+        speed = np.maximum(speed, change / span)
+    return speed
+
+
+def find_static_segments(times, joint_positions, parameters: SegmentParameters | None = None) -> SegmentSearch:
+    """Static segments of a joint trajectory.
+
+    Args:
+        times: ``(N,)`` sample times [s], sorted.
+        joint_positions: ``(N, nq)`` joint positions [rad or m].
+        parameters: Thresholds (default :class:`SegmentParameters`).
+
+    Returns:
+        A :class:`SegmentSearch` (possibly with no segments; callers decide
+        whether that is an error).
+    """
+    parameters = parameters or SegmentParameters()
+    times = as_float_array(times, "times")
+    speed = joint_speed(times, joint_positions, parameters.speed_window)
+    still = speed < parameters.speed_threshold
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], still.astype(np.int8), [0]])))
+    segments, stretches = [], []
+    for first, stop in zip(edges[::2], edges[1::2]):
+        start_time, end_time = times[first], times[stop - 1]
+        stretches.append(float(end_time - start_time))
+        usable_start = start_time + parameters.settle_time
+        if end_time - usable_start >= parameters.min_duration:
+            segments.append(StaticSegment(float(usable_start), float(end_time)))
+    return SegmentSearch(segments, stretches, parameters)
+
+
+def segment_index(times, segments: list[StaticSegment]) -> np.ndarray:
+    """``(M,)`` index of the segment each time falls in, ``-1`` outside every segment.
+
+    ``segments`` are disjoint and in time order (as :func:`find_static_segments` returns them).
+    """
+    times = as_float_array(times, "times")
+    if not segments:
+        return np.full(len(times), -1, dtype=np.int64)
+    starts = np.array([segment.start for segment in segments])
+    ends = np.array([segment.end for segment in segments])
+    index = np.searchsorted(starts, times, side="right") - 1  # last segment starting at or before each time
+    inside = (index >= 0) & (times <= ends[index])
+    return np.where(inside, index, -1).astype(np.int64)

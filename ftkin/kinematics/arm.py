@@ -1,0 +1,285 @@
+"""Kinematics of an arm carrying a wrist F/T sensor, on Pinocchio.
+
+:class:`Arm` turns joint angles ``q`` [rad] into the sensor orientation
+``R_BS`` (``rotation_sensor_to_base``) and frame Jacobians. The base frame B is
+the URDF's root (Pinocchio's world frame).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import FrameNotFound, InvalidInput, UrdfError
+from ..validation import as_batch, as_vector
+from .urdf_loading import build_geometry, build_model
+
+BUNDLED_URDF_NAME = "ftkin_c4.urdf"
+
+_REFERENCE_FRAMES = {
+    "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
+    "local": pin.ReferenceFrame.LOCAL,
+    "world": pin.ReferenceFrame.WORLD,
+}
+
+
+def bundled_urdf_path() -> Path:
+    """Path of the bundled six-axis arm (modelled on the EPSON C4-A901S).
+
+    Looks in the installed package (``ftkin/urdf/``, wheels) and then in the
+    source checkout (``urdf/`` beside the ``ftkin`` folder, editable installs).
+    """
+    package_dir = Path(__file__).resolve().parent.parent
+    for candidate in (package_dir / "urdf" / BUNDLED_URDF_NAME, package_dir.parent / "urdf" / BUNDLED_URDF_NAME):
+        if candidate.is_file():
+            return candidate
+    raise UrdfError(BUNDLED_URDF_NAME, ["the bundled URDF is missing from this installation"])
+
+
+@dataclass(frozen=True)
+class SensorMount:
+    """Where to add a sensor frame when the URDF has none.
+
+    Attributes:
+        parent_frame: Existing frame (link) the sensor is bolted to, e.g. ``tool0``.
+        translation: Sensor origin in the parent frame [m].
+        rpy: Sensor orientation in the parent frame, roll-pitch-yaw [rad]
+            (``R = Rz(yaw) Ry(pitch) Rx(roll)``, the URDF convention).
+    """
+
+    parent_frame: str
+    translation: Sequence[float] = (0.0, 0.0, 0.0)
+    rpy: Sequence[float] = (0.0, 0.0, 0.0)
+
+    def placement(self) -> pin.SE3:
+        """Sensor placement relative to the parent frame."""
+        translation = as_vector(self.translation, 3, "sensor mount translation")
+        rpy = as_vector(self.rpy, 3, "sensor mount rpy")
+        return pin.SE3(pin.rpy.rpyToMatrix(*rpy), translation)
+
+
+class Arm:
+    """A serial arm with a wrist F/T sensor frame (and optionally a tool frame).
+
+    Attributes:
+        model: Pinocchio model (kinematics only).
+        sensor_frame: Name of the sensor frame.
+        tool_frame: Name of the tool (control point) frame, or None.
+        urdf_path: The URDF the model came from.
+        joint_names: Names of the configuration's joints, in ``q`` order.
+    """
+
+    def __init__(
+        self,
+        model: pin.Model,
+        sensor_frame: str,
+        tool_frame: str | None = None,
+        urdf_path: Path | None = None,
+        package_dirs: Sequence[str] = (),
+        full_model: pin.Model | None = None,
+        locked_joint_ids: Sequence[int] = (),
+        reference_configuration: np.ndarray | None = None,
+    ):
+        if model.nq != model.nv:
+            kinds = sorted({model.joints[i].shortname() for i in range(1, model.njoints) if model.joints[i].nq != model.joints[i].nv})
+            raise InvalidInput(
+                "ftkin needs one coordinate per joint (revolute or prismatic); "
+                f"this model has joints of kinds {kinds} (e.g. continuous): lock them or give them limits"
+            )
+        self.model = model
+        self.data = model.createData()
+        self.sensor_frame = sensor_frame
+        self.sensor_frame_id = self.frame_id(sensor_frame)
+        self.tool_frame = tool_frame
+        self.tool_frame_id = self.frame_id(tool_frame) if tool_frame is not None else None
+        self.urdf_path = urdf_path
+        self.package_dirs = list(package_dirs)
+        self._full_model = full_model
+        self._locked_joint_ids = list(locked_joint_ids)
+        self._reference_configuration = reference_configuration
+        self.joint_names = [model.names[i] for i in range(1, model.njoints)]
+        self._geometry: dict[str, pin.GeometryModel] = {}
+
+    # ----------------------------------------------------------------- loading
+    @classmethod
+    def from_urdf(
+        cls,
+        path,
+        sensor_frame: str = "ft_sensor",
+        tool_frame: str | None = None,
+        *,
+        sensor_mount: SensorMount | None = None,
+        package_dirs: Sequence[str] = (),
+        locked_joints: Mapping[str, float] | None = None,
+    ) -> Arm:
+        """Load any URDF.
+
+        Args:
+            path: URDF file.
+            sensor_frame: Frame of the sensor's measuring origin and axes.
+            tool_frame: Optional control-point frame (e.g. the gripper tip).
+            sensor_mount: Add ``sensor_frame`` at this offset from an existing
+                frame (for URDFs without a sensor frame).
+            package_dirs: Folders that ``package://`` mesh URIs resolve against.
+            locked_joints: Joints to fix at a value [rad or m] (e.g. gripper
+                fingers), removed from ``q``.
+
+        Raises:
+            UrdfError: the file is missing or Pinocchio refuses it (with the reason).
+            FrameNotFound: a frame name is not in the model (lists the frames).
+        """
+        path = Path(path)
+        model = build_model(path)
+        if sensor_mount is not None:
+            _add_frame(model, sensor_frame, sensor_mount)
+        full_model, locked_ids, reference = None, [], None
+        if locked_joints:
+            full_model, model, locked_ids, reference = _lock_joints(model, locked_joints)
+        return cls(model, sensor_frame, tool_frame, path.resolve(), package_dirs, full_model, locked_ids, reference)
+
+    @classmethod
+    def default(cls, tool_frame: str | None = "tool") -> Arm:
+        """The bundled six-axis arm, sensor frame ``ft_sensor``, tool frame ``tool``."""
+        return cls.from_urdf(bundled_urdf_path(), "ft_sensor", tool_frame)
+
+    # ------------------------------------------------------------ properties
+    @property
+    def nq(self) -> int:
+        """Number of joint coordinates."""
+        return self.model.nq
+
+    @property
+    def lower_limits(self) -> np.ndarray:
+        """Lower joint position limits [rad or m]."""
+        return self.model.lowerPositionLimit.copy()
+
+    @property
+    def upper_limits(self) -> np.ndarray:
+        """Upper joint position limits [rad or m]."""
+        return self.model.upperPositionLimit.copy()
+
+    @property
+    def velocity_limits(self) -> np.ndarray:
+        """Joint velocity limits [rad/s or m/s]."""
+        return self.model.velocityLimit.copy()
+
+    @property
+    def frame_names(self) -> list[str]:
+        """Names of all frames in the model."""
+        return [frame.name for frame in self.model.frames]
+
+    def frame_id(self, name: str) -> int:
+        """Index of a frame; raises :class:`FrameNotFound` listing the frames."""
+        if not isinstance(name, str) or not self.model.existFrame(name):
+            raise FrameNotFound(str(name), self.frame_names)
+        return self.model.getFrameId(name)
+
+    def _resolve_frame(self, frame: str) -> int:
+        if frame == "sensor":
+            return self.sensor_frame_id
+        if frame == "tool":
+            if self.tool_frame_id is None:
+                raise InvalidInput("this Arm has no tool frame: pass tool_frame= when loading it")
+            return self.tool_frame_id
+        return self.frame_id(frame)
+
+    def check_configuration(self, q) -> np.ndarray:
+        """A finite ``(nq,)`` joint vector or :class:`InvalidInput`."""
+        return as_vector(q, self.nq, f"joint positions q (joints {', '.join(self.joint_names)})")
+
+    # ------------------------------------------------------------ kinematics
+    def sensor_rotation_unchecked(self, q: np.ndarray) -> np.ndarray:
+        """``R_BS`` for a validated ``(nq,)`` float array (the control-loop path)."""
+        pin.forwardKinematics(self.model, self.data, q)
+        return pin.updateFramePlacement(self.model, self.data, self.sensor_frame_id).rotation
+
+    def rotation_sensor_to_base(self, q) -> np.ndarray:
+        """Sensor orientation ``R_BS`` for ``q`` ``(nq,)`` → ``(3, 3)`` or ``(N, nq)`` → ``(N, 3, 3)``."""
+        configurations, single = as_batch(q, self.nq, "joint positions q")
+        out = np.empty((len(configurations), 3, 3))
+        for i, configuration in enumerate(configurations):
+            out[i] = self.sensor_rotation_unchecked(configuration)
+        return out[0] if single else out
+
+    def frame_placement(self, q, frame: str = "sensor") -> tuple[np.ndarray, np.ndarray]:
+        """Rotation ``(3, 3)`` (frame to base) and position ``(3,)`` [m] of a frame in the base frame.
+
+        ``frame`` is ``"sensor"``, ``"tool"`` or any frame name of the model.
+        """
+        frame_id = self._resolve_frame(frame)
+        pin.forwardKinematics(self.model, self.data, self.check_configuration(q))
+        placement = pin.updateFramePlacement(self.model, self.data, frame_id)
+        return placement.rotation.copy(), placement.translation.copy()
+
+    def jacobian(self, q, frame: str = "sensor", reference: str = "local_world_aligned") -> np.ndarray:
+        """Frame Jacobian ``(6, nq)``: ``[v; ω] = J dq``.
+
+        Args:
+            q: Joint positions ``(nq,)`` [rad].
+            frame: ``"sensor"``, ``"tool"`` or a frame name.
+            reference: ``"local_world_aligned"`` (default: the frame origin's
+                linear velocity and the angular velocity, both in base axes),
+                ``"local"`` (both in the frame's own axes) or ``"world"``.
+        """
+        if reference not in _REFERENCE_FRAMES:
+            raise InvalidInput(f"reference must be one of {sorted(_REFERENCE_FRAMES)}, got {reference!r}")
+        frame_id = self._resolve_frame(frame)
+        q = self.check_configuration(q)
+        return pin.computeFrameJacobian(self.model, self.data, q, frame_id, _REFERENCE_FRAMES[reference])
+
+    def random_configurations(self, count: int, rng: np.random.Generator, margin: float = 0.0) -> np.ndarray:
+        """Uniform random configurations within the joint limits shrunk by ``margin`` [rad]."""
+        lower, upper = self.lower_limits + margin, self.upper_limits - margin
+        return rng.uniform(lower, upper, size=(count, self.nq))
+
+    # -------------------------------------------------------------- geometry
+    def geometry(self, kind: str = "collision") -> pin.GeometryModel:
+        """Collision or visual geometry from the URDF (built once, cached).
+
+        Raises:
+            UrdfError: a mesh file is missing or unreadable.
+        """
+        if kind not in ("collision", "visual"):
+            raise InvalidInput(f"kind must be 'collision' or 'visual', got {kind!r}")
+        if kind not in self._geometry:
+            if self.urdf_path is None:
+                raise InvalidInput("this Arm was not loaded from a URDF file: no geometry")
+            base_model = self._full_model if self._full_model is not None else self.model
+            geometry = build_geometry(base_model, self.urdf_path, kind, self.package_dirs)
+            if self._full_model is not None:
+                _, geometry = pin.buildReducedModel(
+                    self._full_model, geometry, self._locked_joint_ids, self._reference_configuration
+                )
+            self._geometry[kind] = geometry
+        return self._geometry[kind]
+
+
+def _add_frame(model: pin.Model, name: str, mount: SensorMount) -> None:
+    if model.existFrame(name):
+        raise InvalidInput(f"frame {name!r} already exists in the model; choose another sensor frame name")
+    if not model.existFrame(mount.parent_frame):
+        raise FrameNotFound(mount.parent_frame, [frame.name for frame in model.frames])
+    parent_id = model.getFrameId(mount.parent_frame)
+    parent = model.frames[parent_id]
+    placement = parent.placement * mount.placement()
+    model.addFrame(pin.Frame(name, parent.parentJoint, parent_id, placement, pin.FrameType.OP_FRAME), False)
+
+
+def _lock_joints(model: pin.Model, locked_joints: Mapping[str, float]):
+    reference = pin.neutral(model)
+    ids = []
+    for name, value in locked_joints.items():
+        if not model.existJointName(name):
+            raise InvalidInput(
+                f"cannot lock joint {name!r}: not in the model; joints: "
+                + ", ".join(model.names[i] for i in range(1, model.njoints))
+            )
+        joint_id = model.getJointId(name)
+        reference[model.joints[joint_id].idx_q] = float(value)
+        ids.append(joint_id)
+    reduced = pin.buildReducedModel(model, ids, reference)
+    return model, reduced, ids, reference

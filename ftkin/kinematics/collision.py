@@ -1,0 +1,104 @@
+"""Self-collision checks from a URDF's collision geometry (Pinocchio + coal).
+
+:class:`SelfCollision` builds the pair list the way motion planners usually
+do (MoveIt's setup assistant, Pinocchio's SRDF ``disable_collisions``):
+
+1. every pair of collision objects (``addAllCollisionPairs``), then remove
+2. pairs whose objects hang on the **same joint** (one rigid body, including
+   links merged through fixed joints: flange, sensor, gripper, tool);
+3. pairs whose joints are **parent and child** (adjacent links touch at
+   their shared joint by construction);
+4. pairs already in contact at the **reference configuration** (the middle
+   of the joint limits clipped to zero where zero is allowed, i.e. the
+   URDF's home pose): MoveIt's "collision by default" rule. Such pairs touch
+   because of how the meshes were drawn (e.g. a motor housing overlapping
+   the next link), not because of the configuration.
+
+The geometry model is a copy, so the arm's cached model stays untouched.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+
+@dataclass(frozen=True)
+class RemovedPair:
+    """A collision pair left out of the checks, and why."""
+
+    first: str
+    second: str
+    reason: str
+
+
+class SelfCollision:
+    """Self-collision test of an :class:`~ftkin.kinematics.arm.Arm` at joint configurations.
+
+    Attributes:
+        geometry_model: The (copied) collision geometry with the active pairs.
+        removed: Pairs left out, with the rule that removed each.
+    """
+
+    def __init__(self, arm, reference_configuration=None):
+        self.model = arm.model
+        self.data = arm.model.createData()
+        self.geometry_model = pin.GeometryModel(arm.geometry("collision"))
+        self.geometry_model.addAllCollisionPairs()
+        reference = (
+            default_reference_configuration(arm)
+            if reference_configuration is None
+            else arm.check_configuration(reference_configuration)
+        )
+        self.reference_configuration = reference
+        self.removed = self._remove_pairs(reference)
+        self.geometry_data = pin.GeometryData(self.geometry_model)
+
+    @property
+    def pair_names(self) -> list[tuple[str, str]]:
+        """Names of the object pairs that are checked."""
+        objects = self.geometry_model.geometryObjects
+        return [(objects[p.first].name, objects[p.second].name) for p in self.geometry_model.collisionPairs]
+
+    def _remove_pairs(self, reference: np.ndarray) -> list[RemovedPair]:
+        objects = self.geometry_model.geometryObjects
+        parents = self.model.parents
+        # Copy the index pairs first: removing while iterating skips pairs.
+        pairs = [(p.first, p.second) for p in self.geometry_model.collisionPairs]
+        removed = []
+        for first, second in pairs:
+            joint_a, joint_b = objects[first].parentJoint, objects[second].parentJoint
+            if joint_a == joint_b:
+                reason = "same rigid body"
+            elif parents[joint_a] == joint_b or parents[joint_b] == joint_a:
+                reason = "adjacent links"
+            else:
+                continue
+            removed.append(RemovedPair(objects[first].name, objects[second].name, reason))
+            self.geometry_model.removeCollisionPair(pin.CollisionPair(first, second))
+        data = pin.GeometryData(self.geometry_model)
+        pin.computeCollisions(self.model, self.data, self.geometry_model, data, reference, False)
+        touching = [
+            (pair.first, pair.second)
+            for pair, result in zip(self.geometry_model.collisionPairs, data.collisionResults)
+            if result.isCollision()
+        ]
+        for first, second in touching:
+            removed.append(RemovedPair(objects[first].name, objects[second].name, "in contact at the reference configuration"))
+            self.geometry_model.removeCollisionPair(pin.CollisionPair(first, second))
+        return removed
+
+    def in_collision(self, q: np.ndarray) -> bool:
+        """True when any checked pair collides at the validated ``(nq,)`` configuration ``q`` [rad]."""
+        return bool(
+            pin.computeCollisions(self.model, self.data, self.geometry_model, self.geometry_data, q, True)
+        )
+
+
+def default_reference_configuration(arm) -> np.ndarray:
+    """Zero where the limits allow it, else the middle of the limits [rad]."""
+    lower, upper = arm.lower_limits, arm.upper_limits
+    middle = 0.5 * (lower + upper)
+    return np.where((lower <= 0.0) & (upper >= 0.0), 0.0, middle)

@@ -1,0 +1,157 @@
+"""Robot models by name: ``--robot NAME`` on the command line.
+
+``ftkin_c4`` is the bundled six-axis arm (default, sensor frame ``ft_sensor``
+already in its URDF). The other names load a URDF from the
+``example-robot-data`` wheel (optional extra ``robots``) and add the sensor
+frame ``ft_sensor`` at the robot's flange (``tool0`` for the UR arms,
+``panda_link8`` for the Panda, ...), optionally offset by a translation [m] and
+roll-pitch-yaw [rad] in the flange frame. Grippers' finger joints are locked so
+``q`` holds only the arm joints.
+
+The wheel ships no Python loader: its files are found through the installed
+distribution's file list (``share/example-robot-data/package.xml``), and the
+``share`` folder is the package directory ``package://`` mesh URIs resolve
+against.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.metadata
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..exceptions import InvalidInput, MissingDependency, UrdfError
+from ..validation import as_float_array
+from .arm import Arm, SensorMount
+
+DEFAULT_ROBOT = "ftkin_c4"
+SENSOR_FRAME = "ft_sensor"
+_DISTRIBUTION = "example-robot-data"
+_PACKAGE_XML = "share/example-robot-data/package.xml"
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    """Where an example-robot-data arm's URDF and flange are.
+
+    Attributes:
+        name: The ``--robot`` name.
+        urdf: URDF path relative to ``share/example-robot-data/robots``.
+        flange_frame: Frame the sensor is bolted to (z out of the flange).
+        locked_joints: Joints fixed at a value [rad or m] (gripper fingers).
+        description: One line for listings.
+    """
+
+    name: str
+    urdf: str
+    flange_frame: str
+    locked_joints: dict[str, float] = field(default_factory=dict)
+    description: str = ""
+
+
+ROBOT_SPECS: dict[str, RobotSpec] = {
+    spec.name: spec
+    for spec in (
+        RobotSpec("ur3", "ur_description/urdf/ur3_robot.urdf", "tool0", description="Universal Robots UR3"),
+        RobotSpec("ur5", "ur_description/urdf/ur5_robot.urdf", "tool0", description="Universal Robots UR5"),
+        RobotSpec("ur10", "ur_description/urdf/ur10_robot.urdf", "tool0", description="Universal Robots UR10"),
+        RobotSpec(
+            "panda",
+            "panda_description/urdf/panda.urdf",
+            "panda_link8",
+            {"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0},
+            "Franka Emika Panda (7 joints; fingers locked)",
+        ),
+        RobotSpec("xarm7", "xarm_description/urdf/xarm7.urdf", "link_eef", description="UFactory xArm7"),
+        RobotSpec("z1", "z1_description/urdf/z1.urdf", "link06", {"jointGripper": 0.0}, "Unitree Z1 (gripper locked)"),
+    )
+}
+"""The example-robot-data arms ftkin knows, by ``--robot`` name."""
+
+
+@functools.lru_cache(maxsize=1)
+def example_robot_data_share() -> Path:
+    """The ``share`` folder of the installed example-robot-data (cached).
+
+    Raises:
+        MissingDependency: example-robot-data is not installed.
+    """
+    try:
+        distribution = importlib.metadata.distribution(_DISTRIBUTION)
+    except importlib.metadata.PackageNotFoundError:
+        raise MissingDependency(_DISTRIBUTION, "robots", "loading a robot by name") from None
+    for entry in distribution.files or ():
+        if str(entry).replace("\\", "/").endswith(_PACKAGE_XML):
+            package_xml = Path(distribution.locate_file(entry))
+            if package_xml.is_file():
+                return package_xml.parent.parent
+    raise MissingDependency(_DISTRIBUTION, "robots", "loading a robot by name (its files were not found; reinstall it)")
+
+
+def sensor_mount_from_offset(parent_frame: str, sensor_offset=None) -> SensorMount:
+    """A :class:`SensorMount` at ``parent_frame`` from ``[x, y, z]`` [m] or ``[x, y, z, roll, pitch, yaw]`` [m, rad]."""
+    if sensor_offset is None:
+        return SensorMount(parent_frame)
+    if isinstance(sensor_offset, SensorMount):
+        return sensor_offset
+    values = as_float_array(sensor_offset, "sensor offset").ravel()
+    if values.shape not in ((3,), (6,)) or not np.all(np.isfinite(values)):
+        raise InvalidInput(
+            f"sensor offset must be 3 numbers (x y z [m]) or 6 (x y z [m] roll pitch yaw [rad]), got {sensor_offset!r}"
+        )
+    rpy = values[3:] if len(values) == 6 else np.zeros(3)
+    return SensorMount(parent_frame, tuple(values[:3]), tuple(rpy))
+
+
+def _bundled(sensor_offset=None, tool_frame: str | None = None) -> Arm:
+    if sensor_offset is not None:
+        raise InvalidInput("the bundled arm already has its ft_sensor frame; --sensor-offset is for robots without one")
+    return Arm.default(tool_frame or "tool")
+
+
+def _load_spec(spec: RobotSpec, sensor_offset=None, tool_frame: str | None = None) -> Arm:
+    share = example_robot_data_share()
+    path = share / "example-robot-data" / "robots" / spec.urdf
+    if not path.is_file():
+        raise UrdfError(str(path), [f"robot {spec.name!r}: this example-robot-data has no such file"])
+    return Arm.from_urdf(
+        path,
+        SENSOR_FRAME,
+        tool_frame,
+        sensor_mount=sensor_mount_from_offset(spec.flange_frame, sensor_offset),
+        package_dirs=[str(share)],
+        locked_joints=spec.locked_joints or None,
+    )
+
+
+ROBOTS: dict[str, Callable[..., Arm]] = {
+    DEFAULT_ROBOT: _bundled,
+    **{name: functools.partial(_load_spec, spec) for name, spec in ROBOT_SPECS.items()},
+}
+"""Loaders by robot name; each takes an optional sensor offset and tool frame (see :func:`load_robot`)."""
+
+
+def load_robot(name: str, sensor_offset: Sequence[float] | SensorMount | None = None, tool_frame: str | None = None) -> Arm:
+    """Load a robot by name (see :data:`ROBOTS`), sensor frame ``ft_sensor``.
+
+    Args:
+        name: ``ftkin_c4`` (bundled) or an example-robot-data arm (``ur5``, ``panda``, ...).
+        sensor_offset: Sensor origin and orientation in the flange frame:
+            ``[x, y, z]`` [m] or ``[x, y, z, roll, pitch, yaw]`` [m, rad]
+            (URDF rpy, ``R = Rz(yaw) Ry(pitch) Rx(roll)``); default: at the
+            flange with its axes.
+        tool_frame: Tool (control point) frame of the model, or None
+            (the bundled arm: its ``tool`` frame).
+
+    Raises:
+        InvalidInput: unknown name (the message lists the known ones) or a bad offset.
+        FrameNotFound: ``tool_frame`` is not a frame of the model.
+        MissingDependency: example-robot-data is not installed (extra ``robots``).
+    """
+    if name not in ROBOTS:
+        raise InvalidInput(f"unknown robot {name!r}; known robots: {', '.join(sorted(ROBOTS))}")
+    return ROBOTS[name](sensor_offset, tool_frame)

@@ -1,0 +1,155 @@
+"""Orientation conversions, all to the canonical ``(N, 3, 3)`` form ``R_BS``.
+
+``R_BS`` (``rotation_sensor_to_base``) maps a vector expressed in the sensor
+frame S into the robot base frame B: ``v_B = R_BS @ v_S``.
+
+Also the base tilt of METHOD.md §2: the world-to-base rotation
+``R_WB = Rx(U) Ry(V)`` and its link to gravity expressed in the base frame,
+``a = [G cosU sinV, -G sinU, -G cosU cosV]``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..exceptions import InvalidInput
+from ..validation import as_batch, as_rotation_batch
+
+
+def _stack_rotation(c1, s1, c2, s2, c3, s3) -> np.ndarray:
+    """``Rz(1) Ry(2) Rx(3)`` from cosines and sines, vectorized."""
+    out = np.empty(c1.shape + (3, 3))
+    out[..., 0, 0] = c1 * c2
+    out[..., 0, 1] = c1 * s2 * s3 - s1 * c3
+    out[..., 0, 2] = c1 * s2 * c3 + s1 * s3
+    out[..., 1, 0] = s1 * c2
+    out[..., 1, 1] = s1 * s2 * s3 + c1 * c3
+    out[..., 1, 2] = s1 * s2 * c3 - c1 * s3
+    out[..., 2, 0] = -s2
+    out[..., 2, 1] = c2 * s3
+    out[..., 2, 2] = c2 * c3
+    return out
+
+
+def euler_zyx_to_matrix(angles_rad) -> np.ndarray:
+    """Intrinsic Z-Y-X Euler angles to rotation matrices, ``R = Rz(α) Ry(β) Rx(γ)``.
+
+    Args:
+        angles_rad: ``(3,)`` or ``(N, 3)`` array of ``[α, β, γ]`` [rad].
+
+    Returns:
+        ``(3, 3)`` or ``(N, 3, 3)`` rotation matrices.
+    """
+    angles, single = as_batch(angles_rad, 3, "euler angles [alpha, beta, gamma]")
+    c, s = np.cos(angles), np.sin(angles)
+    out = _stack_rotation(c[:, 0], s[:, 0], c[:, 1], s[:, 1], c[:, 2], s[:, 2])
+    return out[0] if single else out
+
+
+def euler_zyx_deg_to_matrix(angles_deg) -> np.ndarray:
+    """The paper's commanded Euler angles ``[α, β, γ]`` [deg] to ``R_BS``.
+
+    This is the convention of the EPSON controller used in the paper
+    (intrinsic Z-Y-X, ``Rz(α) Ry(β) Rx(γ)``), in degrees as its Table 1 gives.
+    """
+    angles, single = as_batch(angles_deg, 3, "euler angles [alpha, beta, gamma] (deg)")
+    out = euler_zyx_to_matrix(np.deg2rad(angles))
+    return out[0] if single else out
+
+
+def matrix_to_euler_zyx(rotation) -> np.ndarray:
+    """Inverse of :func:`euler_zyx_to_matrix`, ``[α, β, γ]`` [rad], β in [-π/2, π/2].
+
+    Raises:
+        InvalidInput: not a ``(3, 3)`` / ``(N, 3, 3)`` finite rotation matrix.
+    """
+    r, single = as_rotation_batch(rotation, "rotation")
+    r = r[0] if single else r
+    alpha = np.arctan2(r[..., 1, 0], r[..., 0, 0])
+    beta = np.arcsin(np.clip(-r[..., 2, 0], -1.0, 1.0))
+    gamma = np.arctan2(r[..., 2, 1], r[..., 2, 2])
+    return np.stack([alpha, beta, gamma], axis=-1)
+
+
+def quaternion_to_matrix(quaternion_wxyz, atol: float = 1e-3) -> np.ndarray:
+    """Unit quaternions ``[w, x, y, z]`` (sensor orientation in base) to ``R_BS``.
+
+    Args:
+        quaternion_wxyz: ``(4,)`` or ``(N, 4)``, scalar first. Norms must be
+            within ``atol`` of 1 (they are then normalized), so that a
+            quaternion written in ``[x, y, z, w]`` order or a typo is caught
+            only by luck; the order is the caller's responsibility.
+        atol: Allowed deviation of the norm from 1.
+    """
+    quats, single = as_batch(quaternion_wxyz, 4, "quaternion [qw, qx, qy, qz]")
+    norms = np.linalg.norm(quats, axis=1)
+    bad = np.flatnonzero(np.abs(norms - 1.0) > atol)
+    if bad.size:
+        i = int(bad[0])
+        raise InvalidInput(
+            f"quaternion [qw, qx, qy, qz] #{i} has norm {norms[i]:.6f}; expected a unit quaternion"
+        )
+    w, x, y, z = (quats / norms[:, None]).T
+    out = np.empty((len(quats), 3, 3))
+    out[:, 0, 0] = 1 - 2 * (y * y + z * z)
+    out[:, 0, 1] = 2 * (x * y - z * w)
+    out[:, 0, 2] = 2 * (x * z + y * w)
+    out[:, 1, 0] = 2 * (x * y + z * w)
+    out[:, 1, 1] = 1 - 2 * (x * x + z * z)
+    out[:, 1, 2] = 2 * (y * z - x * w)
+    out[:, 2, 0] = 2 * (x * z - y * w)
+    out[:, 2, 1] = 2 * (y * z + x * w)
+    out[:, 2, 2] = 1 - 2 * (x * x + y * y)
+    return out[0] if single else out
+
+
+def matrix_to_quaternion(rotation) -> np.ndarray:
+    """Rotation matrices to unit quaternions ``[w, x, y, z]`` with ``w >= 0``.
+
+    Raises:
+        InvalidInput: not a ``(3, 3)`` / ``(N, 3, 3)`` finite rotation matrix.
+    """
+    r, single = as_rotation_batch(rotation, "rotation")
+    out = np.empty((len(r), 4))
+    for i, m in enumerate(r):  # conversion at the file edge only, not a hot path
+        trace = np.trace(m)
+        if trace > 0:
+            s = 2.0 * np.sqrt(1.0 + trace)
+            q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+        else:
+            k = int(np.argmax(np.diag(m)))
+            i1, i2 = (k + 1) % 3, (k + 2) % 3
+            s = 2.0 * np.sqrt(1.0 + m[k, k] - m[i1, i1] - m[i2, i2])
+            q = np.empty(4)
+            q[0] = (m[i2, i1] - m[i1, i2]) / s
+            q[1 + k] = 0.25 * s
+            q[1 + i1] = (m[i1, k] + m[k, i1]) / s
+            q[1 + i2] = (m[i2, k] + m[k, i2]) / s
+        q = np.asarray(q)
+        out[i] = q if q[0] >= 0 else -q
+    return out[0] if single else out
+
+
+def gravity_in_base_from_tilt(weight: float, tilt_u: float, tilt_v: float) -> np.ndarray:
+    """Tool gravity in the base frame ``a`` [N] from weight G [N] and tilt U, V [rad].
+
+    ``a = [G cosU sinV, -G sinU, -G cosU cosV]`` (METHOD.md §3), i.e.
+    ``R_WB^T [0, 0, -G]`` with ``R_WB = Rx(U) Ry(V)``.
+    """
+    cu, su, cv, sv = np.cos(tilt_u), np.sin(tilt_u), np.cos(tilt_v), np.sin(tilt_v)
+    return weight * np.array([cu * sv, -su, -cu * cv])
+
+
+def tilt_from_gravity_in_base(gravity_in_base) -> tuple[float, float]:
+    """Base tilt ``(U, V)`` [rad] from gravity in the base frame.
+
+    ``U = asin(-ay / G)``, ``V = atan2(ax, -az)`` (the paper's
+    ``atan(-ax / az)`` for an upright base, and also right for an inverted one).
+    """
+    a = np.asarray(gravity_in_base, dtype=float)
+    weight = float(np.linalg.norm(a))
+    if weight == 0.0:
+        raise InvalidInput("gravity_in_base is zero: the tilt of the base is undefined")
+    tilt_u = float(np.arcsin(np.clip(-a[1] / weight, -1.0, 1.0)))
+    tilt_v = float(np.arctan2(a[0], -a[2]))
+    return tilt_u, tilt_v

@@ -1,0 +1,150 @@
+"""Load a URDF into Pinocchio and, when it refuses, say why.
+
+Pinocchio's URDF parser raises a generic "does not contain a valid URDF model"
+and prints the real reason on the C-level stderr. This module captures that
+stream and adds the reasons of an XML parse and of yourdfpy's validation, so
+the :class:`~ftkin.exceptions.UrdfError` a user sees names the problem.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import logging
+import os
+import re
+import tempfile
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pinocchio as pin
+
+from ..exceptions import UrdfError
+
+logger = logging.getLogger(__name__)
+
+
+@contextlib.contextmanager
+def captured_c_stderr():
+    """Redirect file descriptor 2 (C/C++ stderr) into a buffer for the block.
+
+    Yields a list that holds the captured text after the block ends.
+    """
+    captured: list[str] = []
+    try:
+        saved = os.dup(2)
+    except OSError:  # no usable stderr (embedded interpreter): capture nothing
+        yield captured
+        return
+    with tempfile.TemporaryFile(mode="w+b") as sink:
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield captured
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            sink.seek(0)
+            captured.append(sink.read().decode(errors="replace"))
+
+
+def xml_reasons(text: str) -> list[str]:
+    """Problems an XML parser finds (empty list when the XML is well formed)."""
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as error:
+        line, column = error.position
+        return [f"not well-formed XML at line {line}, column {column}: {error}"]
+    if root.tag != "robot":
+        return [f"root element is <{root.tag}>, expected <robot>"]
+    return []
+
+
+def yourdfpy_reasons(text: str, check_meshes: bool = False) -> list[str]:
+    """Per-field problems found by yourdfpy (empty if it is not installed or finds none)."""
+    try:
+        import yourdfpy
+    except ImportError:
+        return []
+    messages = io.StringIO()
+    handler = logging.StreamHandler(messages)
+    yourdfpy_logger = logging.getLogger("yourdfpy")
+    yourdfpy_logger.addHandler(handler)
+    reasons = []
+    try:
+        robot = yourdfpy.URDF.load(
+            io.BytesIO(text.encode()), build_scene_graph=False, load_meshes=False
+        )
+        valid = robot.validate()
+        if check_meshes and not robot.validate_filenames():
+            valid = False
+    except Exception as error:  # yourdfpy raises many types on bad input
+        reasons.append(f"yourdfpy: {error}")
+        valid = True
+    finally:
+        yourdfpy_logger.removeHandler(handler)
+    if not valid:
+        reasons.extend(line.strip() for line in messages.getvalue().splitlines() if line.strip())
+    return reasons
+
+
+def read_urdf_text(path: Path) -> str:
+    """Read a URDF file or raise :class:`UrdfError` (missing, unreadable, not text)."""
+    if not path.is_file():
+        raise UrdfError(str(path), ["file not found"])
+    try:
+        return path.read_text()
+    except (OSError, UnicodeDecodeError) as error:
+        raise UrdfError(str(path), [f"cannot read file: {error}"]) from None
+
+
+_SOURCE_LOCATION = re.compile(r"^at line \d+ in \S+\.(cpp|hpp|h|cc)$")
+
+
+def _parser_lines(stderr: list[str]) -> list[str]:
+    """The parser's messages without its source-code locations ("at line 262 in model.cpp"),
+    which read like lines of the user's URDF."""
+    lines = (" ".join(line.split()) for line in "".join(stderr).splitlines())
+    return [line for line in lines if line and not _SOURCE_LOCATION.match(line)]
+
+
+def build_model(path: Path) -> pin.Model:
+    """Build the kinematic model of a URDF file with Pinocchio.
+
+    Raises:
+        UrdfError: with the reasons from the XML parser, yourdfpy's validation
+            and Pinocchio's own stderr.
+    """
+    text = read_urdf_text(path)
+    reasons = xml_reasons(text)
+    if reasons:
+        raise UrdfError(str(path), reasons)
+    with captured_c_stderr() as stderr:
+        try:
+            model = pin.buildModelFromUrdf(str(path))
+            error = None
+        except (RuntimeError, ValueError) as caught:
+            model, error = None, caught
+    if error is None:
+        return model
+    reasons = [f"Pinocchio: {line}" for line in _parser_lines(stderr)]
+    reasons += yourdfpy_reasons(text)
+    if not reasons:
+        reasons = [f"Pinocchio: {error}"]
+    raise UrdfError(str(path), reasons) from None
+
+
+def build_geometry(model: pin.Model, path: Path, kind: str, package_dirs: list[str]) -> pin.GeometryModel:
+    """Collision or visual geometry of a URDF; missing meshes raise :class:`UrdfError`."""
+    geometry_type = {"collision": pin.GeometryType.COLLISION, "visual": pin.GeometryType.VISUAL}[kind]
+    with captured_c_stderr() as stderr:
+        try:
+            geometry = pin.buildGeomFromUrdf(model, str(path), geometry_type, package_dirs=package_dirs)
+            error = None
+        except (RuntimeError, ValueError, OSError) as caught:
+            geometry, error = None, caught
+    if error is None:
+        return geometry
+    reasons = [f"Pinocchio: {error}"]
+    reasons += _parser_lines(stderr)
+    reasons += yourdfpy_reasons(read_urdf_text(path), check_meshes=True)
+    raise UrdfError(str(path), reasons) from None

@@ -1,0 +1,200 @@
+"""Which joint configurations a calibration pose may use.
+
+:class:`PoseConstraints` holds the user's limits; :class:`FeasibilityChecker`
+applies them to configurations, cheapest test first:
+
+1. joint limits shrunk by ``margin`` [rad], intersected with optional
+   per-joint ranges (e.g. for cable dress) taken as given;
+2. floor: the sensor origin and the tool origin (when the arm has a tool
+   frame) at least ``floor_height`` [m] above the base frame's origin (base z);
+3. tilt: the tool axis (z axis of the tool frame, else of the sensor frame)
+   within ``max_tilt`` [rad] of pointing straight down (base −z);
+4. no self-collision (:class:`~ftkin.kinematics.collision.SelfCollision`).
+
+:func:`check_tilt_observability` and :func:`check_information` refuse, before
+any optimization, constraint sets under which no pose set could determine
+every parameter, naming the parameters.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..calibration.model import COMPONENT_NAMES
+from ..exceptions import InvalidInput, UnobservableParameters
+from ..kinematics.collision import SelfCollision
+from ..kinematics.rotations import euler_zyx_to_matrix
+from ..validation import as_float_array
+
+DEFAULT_MARGIN = 0.05
+"""Default distance kept from every joint limit [rad] (about 3°)."""
+
+
+@dataclass(frozen=True)
+class PoseConstraints:
+    """Limits on calibration poses.
+
+    Attributes:
+        margin: Distance kept from the URDF joint limits [rad].
+        floor_height: Lowest allowed height of the sensor and tool origins
+            in the base frame [m], or None.
+        max_tilt: Largest angle between the tool axis and straight down
+            [rad], or None.
+        joint_ranges: ``((joint name, lower, upper), ...)`` extra ranges [rad].
+        self_collision: Whether to reject self-colliding configurations.
+    """
+
+    margin: float = DEFAULT_MARGIN
+    floor_height: float | None = None
+    max_tilt: float | None = None
+    joint_ranges: tuple = ()
+    self_collision: bool = True
+
+    def __post_init__(self):
+        margin = float(as_float_array(self.margin, "margin"))
+        if not np.isfinite(margin) or margin < 0:
+            raise InvalidInput(f"margin must be a finite number ≥ 0 [rad], got {self.margin!r}")
+        object.__setattr__(self, "margin", margin)
+        if self.floor_height is not None:
+            floor = float(as_float_array(self.floor_height, "floor_height"))
+            if not np.isfinite(floor):
+                raise InvalidInput(f"floor_height must be finite [m], got {self.floor_height!r}")
+            object.__setattr__(self, "floor_height", floor)
+        if self.max_tilt is not None:
+            tilt = float(as_float_array(self.max_tilt, "max_tilt"))
+            if not (0.0 <= tilt <= np.pi):
+                raise InvalidInput(f"max_tilt must be between 0 and π [rad], got {self.max_tilt!r}")
+            object.__setattr__(self, "max_tilt", tilt)
+        if isinstance(self.joint_ranges, Mapping):
+            ranges = [(name, *bounds) for name, bounds in self.joint_ranges.items()]
+        else:
+            ranges = list(self.joint_ranges)
+        cleaned = []
+        for entry in ranges:
+            if len(entry) != 3:
+                raise InvalidInput(f"a joint range must be (name, lower, upper) [rad], got {entry!r}")
+            try:
+                name, lower, upper = str(entry[0]), float(entry[1]), float(entry[2])
+            except (TypeError, ValueError):
+                raise InvalidInput(f"a joint range must be (name, lower, upper) [rad], got {entry!r}") from None
+            if not (np.isfinite(lower) and np.isfinite(upper) and lower < upper):
+                raise InvalidInput(f"joint range for {name!r} must be finite with lower < upper [rad], got ({lower}, {upper})")
+            cleaned.append((name, lower, upper))
+        object.__setattr__(self, "joint_ranges", tuple(cleaned))
+
+    def describe(self) -> str:
+        """One line naming every active constraint (for reports and errors)."""
+        parts = [f"joint limits with a {self.margin:g} rad margin"]
+        parts += [f"{name} in [{lower:g}, {upper:g}] rad" for name, lower, upper in self.joint_ranges]
+        if self.floor_height is not None:
+            parts.append(f"sensor and tool above {self.floor_height:g} m (base z)")
+        if self.max_tilt is not None:
+            parts.append(f"tool axis within {np.rad2deg(self.max_tilt):g}° of straight down")
+        parts.append("no self-collision" if self.self_collision else "self-collision not checked")
+        return "; ".join(parts)
+
+
+class FeasibilityChecker:
+    """Apply :class:`PoseConstraints` to configurations of an arm.
+
+    Attributes:
+        lower, upper: Effective joint bounds ``(nq,)`` [rad].
+        rejected: Count of configurations rejected per constraint.
+    """
+
+    def __init__(self, arm, constraints: PoseConstraints):
+        self.arm = arm
+        self.constraints = constraints
+        self.data = arm.model.createData()
+        lower, upper = arm.lower_limits + constraints.margin, arm.upper_limits - constraints.margin
+        for name, low, high in constraints.joint_ranges:
+            if name not in arm.joint_names:
+                raise InvalidInput(f"joint range for unknown joint {name!r}; joints: {', '.join(arm.joint_names)}")
+            index = arm.joint_names.index(name)
+            lower[index], upper[index] = max(lower[index], low), min(upper[index], high)
+        empty = [arm.joint_names[i] for i in np.flatnonzero(lower >= upper)]
+        if empty:
+            raise InvalidInput(
+                f"no joint values left for {', '.join(empty)} between the URDF limits shrunk by the "
+                f"{constraints.margin:g} rad margin and the given joint ranges"
+            )
+        self.lower, self.upper = lower, upper
+        self.axis_frame_id = arm.tool_frame_id if arm.tool_frame_id is not None else arm.sensor_frame_id
+        self.height_frame_ids = [arm.sensor_frame_id] + ([arm.tool_frame_id] if arm.tool_frame_id is not None else [])
+        self.collision = SelfCollision(arm) if constraints.self_collision else None
+        self.rejected = {"floor": 0, "tilt": 0, "self-collision": 0}
+
+    def sample(self, count: int, rng: np.random.Generator) -> np.ndarray:
+        """Uniform random configurations ``(count, nq)`` within the effective bounds [rad]."""
+        return rng.uniform(self.lower, self.upper, size=(count, len(self.lower)))
+
+    def within_bounds(self, q: np.ndarray) -> bool:
+        """True when ``q`` lies within the effective joint bounds."""
+        return bool(np.all(q >= self.lower) and np.all(q <= self.upper))
+
+    def check(self, q: np.ndarray) -> np.ndarray | None:
+        """``R_BS`` ``(3, 3)`` of a bounded configuration ``q`` if it meets the other constraints, else None."""
+        model, data, limits = self.arm.model, self.data, self.constraints
+        pin.forwardKinematics(model, data, q)
+        if limits.floor_height is not None:
+            for frame_id in self.height_frame_ids:
+                if pin.updateFramePlacement(model, data, frame_id).translation[2] < limits.floor_height:
+                    self.rejected["floor"] += 1
+                    return None
+        if limits.max_tilt is not None:
+            axis_z = pin.updateFramePlacement(model, data, self.axis_frame_id).rotation[2, 2]
+            if np.arccos(np.clip(-axis_z, -1.0, 1.0)) > limits.max_tilt:
+                self.rejected["tilt"] += 1
+                return None
+        rotation = pin.updateFramePlacement(model, data, self.arm.sensor_frame_id).rotation.copy()
+        if self.collision is not None and self.collision.in_collision(q):
+            self.rejected["self-collision"] += 1
+            return None
+        return rotation
+
+    def tool_to_sensor_rotation(self) -> np.ndarray:
+        """Fixed rotation from the tilt-axis frame to the sensor frame, ``R_TS`` ``(3, 3)``."""
+        q = np.clip(np.zeros(self.arm.nq), self.lower, self.upper)
+        pin.forwardKinematics(self.arm.model, self.data, q)
+        tool = pin.updateFramePlacement(self.arm.model, self.data, self.axis_frame_id).rotation.copy()
+        sensor = pin.updateFramePlacement(self.arm.model, self.data, self.arm.sensor_frame_id).rotation
+        return tool.T @ sensor
+
+
+def check_tilt_observability(checker, factors) -> None:
+    """Refuse a tilt limit that leaves every allowed orientation alike (names the parameters).
+
+    ``factors(rotations)`` gives the weighted Jacobians ``(N, 6, 12)`` of :mod:`ftkin.planning.design`.
+    """
+    constraints = checker.constraints
+    if constraints.max_tilt is None:
+        return
+    tool_to_sensor = checker.tool_to_sensor_rotation()
+    grid = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
+    # Tool orientations R_BT = Rz(α) Ry(β) Rx(π) Rz(ψ): tool z tilted by β from straight down.
+    tilted = euler_zyx_to_matrix([[alpha, beta, np.pi] for alpha in grid for beta in (0.0, constraints.max_tilt)])
+    spins = euler_zyx_to_matrix([[psi, 0.0, 0.0] for psi in grid])
+    rotations = np.einsum("aij,bjk,kl->abil", tilted, spins, tool_to_sensor).reshape(-1, 3, 3)
+    check_information(factors(rotations), constraints)
+
+
+def check_information(factors, constraints, rcond: float = 1e-10):
+    """Refuse when the summed information of ``factors`` is singular; name every weak parameter."""
+    information = np.einsum("nki,nkj->ij", factors, factors)
+    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
+    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
+    weak = eigenvalues <= rcond * eigenvalues[-1]
+    if not np.any(weak):
+        return
+    involved = np.any(np.abs(eigenvectors[:, weak]) > 0.3, axis=1) | (np.diag(information) <= rcond * information.max())
+    raise UnobservableParameters(
+        [COMPONENT_NAMES[i] for i in np.flatnonzero(involved)],
+        f"every sensor orientation these constraints allow ({constraints.describe()}) sees gravity "
+        "along (nearly) the same sensor direction, so the tool's weight cannot be told apart from "
+        "the force bias, nor its centre of mass from the torque bias; allow more tilt or wider joint ranges",
+        singular_values=eigenvalues[::-1],
+    )

@@ -1,0 +1,148 @@
+"""Predicted accuracy of a calibration pose set, before any reading is taken.
+
+:func:`evaluate_poses` gives the standard error of every calibration parameter
+that a set of sensor orientations will yield, from the Fisher information the
+maximum-likelihood estimator uses (:mod:`ftkin.calibration.information`), for an expected
+tool (weight, centre of mass) and sensor noise. The biases cannot do better
+than ``σ/√(N r)`` per channel (``N`` poses, ``r`` readings per pose); the
+report shows how close a set comes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..calibration.information import SensorNoise, covariance_from_information, fisher_information, standard_errors
+from ..calibration.model import STANDARD_GRAVITY, SensorModel
+from ..calibration.observability import check_pose_count
+from ..exceptions import InvalidInput
+from ..validation import as_positive, as_rotation_batch, as_vector
+
+PAPER_TOOL_WEIGHT = 3.15
+"""The paper's tool weight [N] (gripper plus the sensor's sensitive end)."""
+
+PAPER_CENTER_OF_MASS = (0.0, 0.0, 0.047)
+"""The paper's tool centre of mass in the sensor frame [m]."""
+
+_ROWS = (
+    (("ax", "ay", "az"), "N"),
+    (("fx0", "fy0", "fz0"), "N"),
+    (("mx0", "my0", "mz0"), "N·m"),
+    (("px", "py", "pz"), "m"),
+)
+"""Short names and unit of each block of ``θ`` in :meth:`PoseEvaluation.report`."""
+
+
+def expected_tool(tool_weight: float | None = None, center_of_mass=None, g: float = STANDARD_GRAVITY) -> SensorModel:
+    """The tool a plan is made for: weight [N] hanging straight down the base z axis, COM [m, sensor frame]."""
+    weight = PAPER_TOOL_WEIGHT if tool_weight is None else as_positive(tool_weight, "tool_weight")
+    com = as_vector(PAPER_CENTER_OF_MASS if center_of_mass is None else center_of_mass, 3, "center_of_mass")
+    return SensorModel.from_tool(weight / g, com, g=g)
+
+
+@dataclass(frozen=True)
+class PoseEvaluation:
+    """Predicted information and standard errors of a pose set.
+
+    Attributes:
+        rotations: ``(N, 3, 3)`` sensor orientations ``R_BS``.
+        model: Expected tool the prediction is for (biases play no role).
+        noise: Per-reading sensor noise.
+        readings_per_pose: Readings averaged at each pose.
+        information: ``(12, 12)`` Fisher information of ``θ = [a, F0, M0, P]``.
+        covariance: Its inverse.
+        standard_errors: Per parameter, see :func:`ftkin.calibration.information.standard_errors`.
+    """
+
+    rotations: np.ndarray
+    model: SensorModel
+    noise: SensorNoise
+    readings_per_pose: int
+    information: np.ndarray
+    covariance: np.ndarray
+    standard_errors: dict
+
+    @property
+    def pose_count(self) -> int:
+        """Number of poses."""
+        return len(self.rotations)
+
+    @property
+    def vector_std(self) -> np.ndarray:
+        """``(12,)`` standard errors of ``θ = [a, F0, M0, P]`` [N, N, N·m, m]."""
+        return np.sqrt(np.diag(self.covariance))
+
+    @property
+    def bias_bound(self) -> np.ndarray:
+        """``(6,)`` lowest possible bias standard errors ``σ/√(N r)`` [N, N·m]."""
+        return self.noise.channel_std / np.sqrt(self.pose_count * self.readings_per_pose)
+
+    def report(self) -> str:
+        """Table of predicted standard errors (and, for biases, the ratio to the bound)."""
+        std = self.vector_std.reshape(4, 3)
+        bound = self.bias_bound.reshape(2, 3)
+        lines = [
+            f"predicted standard errors for {self.pose_count} poses × {self.readings_per_pose} reading(s), "
+            f"tool {self.model.tool_weight:.3g} N with COM {np.round(self.model.center_of_mass, 4).tolist()} m, "
+            f"noise {self.noise.force_std[0]:g} N / {self.noise.torque_std[0]:g} N·m",
+            f"{'parameter':<10}{'std error':>14}  {'unit':<5}{'bound σ/√N':>14}{'ratio':>8}",
+        ]
+        for block, (names, unit) in enumerate(_ROWS):
+            for axis, name in enumerate(names):
+                row = f"{name:<10}{std[block, axis]:>14.3e}  {unit:<5}"
+                if block in (1, 2):
+                    limit = bound[block - 1, axis]
+                    row += f"{limit:>14.3e}{std[block, axis] / limit:>8.3f}"
+                lines.append(row)
+        errors = self.standard_errors
+        lines.append(f"{'weight G':<10}{errors['tool_weight']:>14.3e}  N")
+        tilt_deg = np.rad2deg(errors["base_tilt"])
+        lines.append(f"{'tilt U, V':<10}{tilt_deg[0]:>14.3e}, {tilt_deg[1]:.3e} deg")
+        return "\n".join(lines)
+
+
+def evaluate_poses(
+    rotation_sensor_to_base,
+    *,
+    tool_weight: float | None = None,
+    center_of_mass=None,
+    noise: SensorNoise | None = None,
+    readings_per_pose: int = 1,
+) -> PoseEvaluation:
+    """Predict the calibration's standard errors for sensor orientations ``(N, 3, 3)``.
+
+    Args:
+        rotation_sensor_to_base: ``R_BS`` of each pose.
+        tool_weight: Expected tool weight [N] (default 3.15 N, the paper's).
+        center_of_mass: Expected COM in the sensor frame [m] (default 47 mm along z).
+        noise: Per-reading noise (default :meth:`SensorNoise.paper`: 0.02 N, 0.002 N·m).
+        readings_per_pose: Independent readings averaged at each pose.
+
+    Raises:
+        UnobservableParameters: fewer than three poses, or orientations that
+            leave parameters undetermined (named).
+        InvalidInput: not rotation matrices, or a bad tool, noise or reading count.
+    """
+    rotations, _ = as_rotation_batch(rotation_sensor_to_base)
+    check_pose_count(len(rotations))
+    model = expected_tool(tool_weight, center_of_mass)
+    if noise is not None and not isinstance(noise, SensorNoise):
+        raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
+    noise = noise if noise is not None else SensorNoise.paper()
+    readings = as_positive(readings_per_pose, "readings_per_pose")
+    if readings != int(readings):
+        raise InvalidInput(f"readings_per_pose must be a whole number, got {readings_per_pose!r}")
+    readings = int(readings)
+    information = fisher_information(model, rotations, noise, readings)
+    covariance = covariance_from_information(information)
+    return PoseEvaluation(
+        rotations=rotations,
+        model=model,
+        noise=noise,
+        readings_per_pose=readings,
+        information=information,
+        covariance=covariance,
+        standard_errors=standard_errors(model, covariance),
+    )

@@ -1,0 +1,22 @@
+"""Simulation: known truth in, readings and closed-loop runs out.
+
+:class:`SimulatedSensor` produces raw readings [N, N·m] from known calibration
+parameters at given ``R_BS`` (bias + tool gravity + contact + noise).
+:func:`simulate_placement` runs the paper's placement experiment (METHOD.md §6)
+with :class:`~ftkin.control.JointAdmittance` in the loop against a
+:class:`Surface`. :mod:`ftkin.sim.paper` reproduces the paper's calibration.
+
+Depends on :mod:`ftkin.control`, :mod:`ftkin.io`, :mod:`ftkin.calibration` and below.
+"""
+
+from .placement import PlacementRun, PlacementScenario, simulate_placement
+from .sensor import SimulatedSensor
+from .surfaces import Surface
+
+__all__ = [
+    "PlacementRun",
+    "PlacementScenario",
+    "SimulatedSensor",
+    "Surface",
+    "simulate_placement",
+]

@@ -1,0 +1,105 @@
+"""A one-page calibration report as a figure (optional extra ``plots``: matplotlib).
+
+Like the paper's Fig. 5: for each channel ``fx..mz`` the per-pose mean of the
+measured raw readings (with the standard error of that mean as error bars,
+when a pose has several readings) against the calibrated model's prediction,
+and below it the residual (measured − predicted) per pose. A text panel gives
+the parameters with their standard errors when the calibration has a
+covariance. Drawn with the non-interactive Agg backend (no display needed).
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from ..calibration.model import WRENCH_CHANNELS, SensorModel
+from ..calibration.samples import Samples
+from ..exceptions import InvalidInput, MissingDependency
+from ..io.atomic import atomic_write_bytes
+
+_UNITS = ("N", "N", "N", "N·m", "N·m", "N·m")
+
+
+def _pyplot_free_figure():
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise MissingDependency("matplotlib", "plots", "plotting a calibration report") from None
+    figure = Figure(figsize=(14, 10), layout="constrained")
+    FigureCanvasAgg(figure)
+    return figure
+
+
+def report_data(calibration, samples: Samples) -> dict[str, np.ndarray]:
+    """Per-pose arrays the report plots.
+
+    Returns a dict with ``pose_ids`` ``(P,)``, ``measured`` ``(P, 6)`` (mean raw
+    wrench [N, N·m]), ``predicted`` ``(P, 6)`` (model prediction at the pose's
+    mean orientation), ``residuals`` = measured − predicted, and
+    ``standard_error`` ``(P, 6)`` (spread / √count; NaN for single readings).
+    """
+    if not isinstance(calibration, SensorModel):
+        raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
+    if not isinstance(samples, Samples):
+        raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
+    poses = samples.pose_averages()
+    predicted = calibration.predict(poses.rotations)
+    return {
+        "pose_ids": poses.pose_ids,
+        "measured": poses.wrenches,
+        "predicted": predicted,
+        "residuals": poses.wrenches - predicted,
+        "standard_error": poses.spread / np.sqrt(poses.counts)[:, None],
+    }
+
+
+def report_figure(calibration, samples: Samples, title: str | None = None):
+    """A matplotlib ``Figure`` (not attached to pyplot) with the report.
+
+    Raises:
+        MissingDependency: matplotlib is not installed (extra ``plots``).
+    """
+    data = report_data(calibration, samples)
+    figure = _pyplot_free_figure()
+    grid = figure.add_gridspec(5, 3, height_ratios=[3, 1.4, 3, 1.4, 2.6])
+    x = np.arange(len(data["pose_ids"]))
+    error = np.nan_to_num(data["standard_error"], nan=0.0)
+    for channel, (name, unit) in enumerate(zip(WRENCH_CHANNELS, _UNITS)):
+        row, column = 2 * (channel // 3), channel % 3
+        top = figure.add_subplot(grid[row, column])
+        top.errorbar(x, data["measured"][:, channel], yerr=error[:, channel], fmt="o", ms=3, label="measured")
+        top.plot(x, data["predicted"][:, channel], "-", lw=1, label="predicted")
+        top.set_ylabel(f"{name} [{unit}]")
+        top.set_title(name)
+        top.tick_params(labelbottom=False)
+        if channel == 0:
+            top.legend(loc="best", fontsize="small")
+        bottom = figure.add_subplot(grid[row + 1, column], sharex=top)
+        bottom.axhline(0.0, color="0.5", lw=0.8)
+        bottom.errorbar(x, data["residuals"][:, channel], yerr=error[:, channel], fmt=".", ms=3, color="C3")
+        bottom.set_ylabel(f"residual [{unit}]")
+        bottom.set_xlabel("pose")
+    text = figure.add_subplot(grid[4, :])
+    text.axis("off")
+    summary = calibration.summary() if hasattr(calibration, "summary") else repr(calibration)
+    if getattr(calibration, "std_errors", None) is None:
+        summary += "\n  (no standard errors: the calibration has no covariance)"
+    text.text(0.0, 1.0, summary, family="monospace", fontsize=8, va="top", ha="left", transform=text.transAxes)
+    figure.suptitle(title or f"ftkin calibration report: {len(x)} poses, {len(samples)} readings")
+    return figure
+
+
+def save_report(calibration, samples: Samples, path, title: str | None = None, dpi: int = 100) -> Path:
+    """Draw :func:`report_figure` and write it (format from the suffix: .png, .pdf, .svg) atomically."""
+    path = Path(path)
+    fmt = path.suffix.lstrip(".").lower() or "png"
+    if fmt not in ("png", "pdf", "svg"):
+        raise InvalidInput(f"report file must end in .png, .pdf or .svg, got {path.name!r}")
+    figure = report_figure(calibration, samples, title)
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format=fmt, dpi=dpi)
+    return atomic_write_bytes(path, buffer.getvalue())

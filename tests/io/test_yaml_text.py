@@ -1,0 +1,29 @@
+"""ftkin's YAML writer, read back with PyYAML."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ftkin import InvalidInput
+from ftkin.io.yaml_text import yaml_text
+
+yaml = pytest.importorskip("yaml")
+
+
+def test_nested_blocks_rows_and_escaped_strings_read_back():
+    tree = {
+        "name": 'a "quoted": name',
+        "params": {"mass": np.float64(0.3215), "cog": np.array([0.0, -0.0003, 0.047]), "flag": True, "none": None},
+        "rows": [[0.1, 0.2], [0.3, 0.4]],
+    }
+    parsed = yaml.safe_load(yaml_text(tree))
+    assert parsed["name"] == tree["name"]
+    assert parsed["params"] == {"mass": 0.3215, "cog": [0.0, -0.0003, 0.047], "flag": True, "none": None}
+    assert parsed["rows"] == tree["rows"]
+
+
+@pytest.mark.parametrize("bad", [float("nan"), np.array([1.0, np.inf]), object()])
+def test_non_finite_or_unknown_values_are_refused(bad):
+    with pytest.raises(InvalidInput, match="cannot write"):
+        yaml_text({"x": bad})
