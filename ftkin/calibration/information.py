@@ -110,7 +110,7 @@ def covariance_from_information(information: np.ndarray, rcond: float = 1e-12) -
 def derived_gradients(gravity_in_base) -> dict[str, np.ndarray]:
     """Gradients of the derived quantities with respect to ``θ`` (12,) each.
 
-    Keys: ``tool_weight`` (G = |a|), ``base_tilt_u``, ``base_tilt_v``.
+    Keys: ``tool_weight`` (``G = |a|``), ``base_tilt_u``, ``base_tilt_v``.
     """
     ax, ay, az = np.asarray(gravity_in_base, dtype=float)
     weight = np.sqrt(ax * ax + ay * ay + az * az)
