@@ -230,6 +230,35 @@ def check_mount_observable(problem: MountedProblem, x: np.ndarray) -> None:
     )
 
 
+def mount_jacobian(rotations: np.ndarray, gravity_in_base, center_of_mass, mode: str, mount=None) -> np.ndarray:
+    """``(N, 6, 12 + k)`` derivative of the prediction with respect to ``[θ, δ]`` at ``δ = 0``.
+
+    ``rotations`` are the URDF's ``R_BS``; ``mount`` is ``R_M`` (default the
+    identity, what a plan assumes before the mount is known). ``mode="none"``
+    gives the ``(N, 6, 12)`` Jacobian of :func:`~ftkin.calibration.model.parameter_jacobian`.
+    """
+    mount = np.eye(3) if mount is None else np.asarray(mount, dtype=float)
+    gravity, com = np.asarray(gravity_in_base, dtype=float), np.asarray(center_of_mass, dtype=float)
+    jac = parameter_jacobian(rotations @ mount.T, gravity, com)
+    if check_mount_mode(mode) == "none":
+        return jac
+    d_gravity = -mount @ skew(np.einsum("nji,j->ni", rotations, gravity)) @ _AXES[mode]
+    return np.concatenate([jac, np.concatenate([d_gravity, skew(com) @ d_gravity], axis=1)], axis=2)
+
+
+def check_information_observable(information: np.ndarray, mode: str, rcond: float = 1e-10) -> None:
+    """Refuse a singular ``(12 + k)`` information matrix, naming the weak parameters (and the poses a mount needs)."""
+    names = COMPONENT_NAMES + MOUNT_NAMES[mode]
+    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
+    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
+    if eigenvalues[0] > rcond * eigenvalues[-1]:
+        return
+    involved = [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)]
+    mount_names = [name for name in involved if name.startswith("mount")]
+    reason = POSES_NEEDED[mode] if mount_names else "the information matrix is singular along a combination of them"
+    raise UnobservableParameters(involved, reason, singular_values=eigenvalues[::-1])
+
+
 def split_information(information: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Split a ``(12 + k)`` information matrix into θ's marginal information and the mount covariance.
 
@@ -237,6 +266,7 @@ def split_information(information: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     inverse is θ's covariance with the mount estimated, and the ``(k, k)``
     covariance of the mount increments [rad²] (the mount block of the inverse).
     """
+    check_information_observable(information, "yaw" if information.shape[0] == 13 else "full")
     theta, mount = information[:12, :12], information[12:, 12:]
     cross = information[:12, 12:]
     marginal = theta - cross @ np.linalg.solve(mount, cross.T)
