@@ -219,3 +219,21 @@ def check_conventions(check: ConventionCheck, sensor_sign: int = 1, base_mount: 
             fixes=[sign_fix, f"--base-mount {other}"],
             sensor_sign=-sensor_sign,
         )
+
+
+def as_real_sensor(samples: Samples, calibration) -> Samples:
+    """``samples`` as the calibrated real sensor sees them: readings corrected, rotations mounted.
+
+    Multiplies every reading by the calibration's ``reading_signs`` and, for
+    samples read from joint angles, turns the URDF's ``R_BS`` into the real
+    sensor's ``R_BS · R_Mᵀ``. A :class:`~ftkin.calibration.model.SensorModel`
+    without these attributes returns ``samples`` unchanged.
+    """
+    signs = getattr(calibration, "reading_signs", np.ones(6))
+    mount = getattr(calibration, "mount_rotation", np.eye(3))
+    rotations = samples.rotations
+    if samples.joint_positions is not None and not np.array_equal(mount, np.eye(3)):
+        rotations = rotations @ np.asarray(mount).T
+    if np.all(signs == 1.0) and rotations is samples.rotations:
+        return samples
+    return replace(samples, wrenches=samples.wrenches * signs, rotations=rotations)

@@ -26,12 +26,12 @@ import pinocchio as pin
 
 from ..calibration.model import COMPONENT_NAMES
 from ..calibration.mount import MOUNT_NAMES
-
-_MOUNT_MODE_BY_SIZE = {12: "none", 13: "yaw", 15: "full"}
 from ..exceptions import InvalidInput, UnobservableParameters
 from ..kinematics.collision import SelfCollision
 from ..kinematics.rotations import euler_zyx_to_matrix
 from ..validation import as_float_array
+
+_MOUNT_MODE_BY_SIZE = {12: "none", 13: "yaw", 15: "full"}
 
 DEFAULT_MARGIN = 0.05
 """Default distance kept from every joint limit [rad] (about 3°)."""
