@@ -7,6 +7,7 @@ base tilt ``U``, ``V``) and the tool's centre of mass ``P`` in the sensor frame.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -20,9 +21,14 @@ from .information import SensorNoise, standard_errors
 from .linear import fit_linear
 from .ml import LOSSES, fit_ml
 from .model import STANDARD_GRAVITY, SensorModel
-from .mount import MOUNT_NAMES, check_mount_mode, rotation_to_rpy
+from .mount import MOUNT_NAMES, POSES_NEEDED, check_mount_mode, rotation_to_rpy
 from .samples import PoseAverages, Samples
 from .summary import format_summary
+
+logger = logging.getLogger(__name__)
+
+MOUNT_STD_WARNING_DEG = 1.0
+"""Standard error [deg] of a mount angle above which the calibration warns."""
 
 METHODS = ("ml", "linear")
 """Estimators :func:`calibrate` accepts; the first is the default."""
@@ -154,6 +160,17 @@ class CalibrationResult(SensorModel):
         return format_summary(self)
 
 
+def _with_mount_warning(diagnostics: FitDiagnostics, mode: str, covariance: np.ndarray) -> FitDiagnostics:
+    """Add a warning for mount angles with a standard error above :data:`MOUNT_STD_WARNING_DEG`."""
+    sigma = np.rad2deg(np.sqrt(np.clip(np.diag(covariance), 0.0, None)))
+    weak = [f"{name} ± {value:.2g}°" for name, value in zip(MOUNT_NAMES[mode], sigma) if value > MOUNT_STD_WARNING_DEG]
+    if not weak:
+        return diagnostics
+    message = f"the mount is poorly determined ({', '.join(weak)}): {POSES_NEEDED[mode]}"
+    logger.warning(message)
+    return replace(diagnostics, warnings=diagnostics.warnings + (message,))
+
+
 def _subset(poses: PoseAverages, keep: np.ndarray) -> PoseAverages:
     return PoseAverages(poses.pose_ids[keep], poses.rotations[keep], poses.wrenches[keep], poses.counts[keep], poses.spread[keep])
 
@@ -252,6 +269,9 @@ def calibrate(
             fit = fit_ml(poses, g, noise, loss, estimate_mount)
             diagnostics, covariance = diagnose(fit, poses.pose_ids, dropped)
         model, mount, mount_covariance = fit.model, fit.mount_rotation, fit.mount_covariance
+        if mount_covariance is not None:
+            mount_covariance = mount_covariance * diagnostics.covariance_scale  # the same goodness-of-fit scaling as θ
+            diagnostics = _with_mount_warning(diagnostics, estimate_mount, mount_covariance)
     residuals = poses.wrenches - model.predict(poses.rotations @ mount.T)
     return CalibrationResult(
         force_offset=model.force_offset,
