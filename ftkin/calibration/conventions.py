@@ -105,6 +105,7 @@ class ConventionCheck:
         gravity_in_base: The tool weight [N, base frame] of the linear fit with the assumed convention.
         equivalent_flips: Other axes whose reversal the data cannot tell from
             ``best_flip`` (with a yaw mount estimated, x and y).
+        estimate_mount: The mount mode the alternatives were fitted with.
     """
 
     flip_costs: dict
@@ -113,6 +114,7 @@ class ConventionCheck:
     gravity_angle_deg: float
     gravity_in_base: np.ndarray
     equivalent_flips: tuple = ()
+    estimate_mount: str = "none"
 
     @property
     def flip_suspected(self) -> bool:
@@ -183,7 +185,7 @@ def detect_sign_and_handedness(
     equivalent = ()
     if estimate_mount != "none" and best in ("x", "y"):
         equivalent = ("y",) if best == "x" else ("x",)
-    return ConventionCheck(costs, flip_axis, best, angle, gravity, equivalent)
+    return ConventionCheck(costs, flip_axis, best, angle, gravity, equivalent, estimate_mount)
 
 
 def check_conventions(check: ConventionCheck, sensor_sign: int = 1, base_mount: str = "floor") -> None:
@@ -208,6 +210,9 @@ def check_conventions(check: ConventionCheck, sensor_sign: int = 1, base_mount: 
         weight = ", ".join(f"{value:+.3g}" for value in check.gravity_in_base)
         other = "ceiling" if base_mount == "floor" else "floor"
         sign_fix = f"--sensor-sign {-sensor_sign}"
+        if check.estimate_mount != "none" and check.assumed_flip is None:
+            # −I = diag(1, 1, −1) · Rz(π): with the yaw estimated, a reversed z axis reads the same
+            sign_fix += " (or, the same readings with the mount turned 180° about z, --flip-axis z)"
         raise SuspectConvention(
             f"the fitted tool weight gravity_in_base = [{weight}] N points {check.gravity_angle_deg:.0f}° away from "
             f"the expected gravity direction (base -z for a floor mount, +z for a ceiling mount). Either the sensor "

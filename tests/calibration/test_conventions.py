@@ -19,9 +19,9 @@ def poses(arm):
     return q, arm.rotation_sensor_to_base(q)
 
 
-def _samples(arm, q, rotations, model, factors, seed=0, mount=np.eye(3)):
+def _samples(arm, q, rotations, model, factors, seed=0, mount=None):
     rng = np.random.default_rng(seed)
-    clean = model.predict(rotations @ mount.T)
+    clean = model.predict(rotations if mount is None else rotations @ mount.T)
     return Samples.from_joint_positions(arm, q, (clean + rng.normal(size=clean.shape) * NOISE.channel_std) * factors)
 
 

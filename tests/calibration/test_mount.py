@@ -86,7 +86,7 @@ def test_yaw_mount_recovered_within_three_sigma(arm, tool):
 def test_full_mount_recovered_within_three_sigma_and_det_plus_one(arm, tool):
     rng = np.random.default_rng(4)
     misses = 0
-    for trial in range(12):
+    for _ in range(12):
         q = arm.random_configurations(14, rng, margin=0.3)
         truth = exp_so3(np.deg2rad([rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-170, 170)]))
         samples = _joint_samples(arm, q, _readings(tool, arm.rotation_sensor_to_base(q), truth, rng))
