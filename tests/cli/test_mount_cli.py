@@ -60,3 +60,14 @@ def test_flip_axis_and_base_mount_flags(arm, tool, configurations, tmp_path, cap
     assert "z axis reversed" in capsys.readouterr().out
     assert main(["calibrate", str(plain), "--method", "linear", "--estimate-mount", "yaw"]) == 2
     assert "--method ml only" in capsys.readouterr().err
+
+
+def test_evaluate_poses_plans_for_the_mount(arm, configurations, tmp_path, capsys):
+    header = [f"q{i + 1}" for i in range(arm.nq)]
+    poses = write_csv(tmp_path / "poses.csv", header, [list(map(float, q)) for q in configurations])
+    assert main(["evaluate-poses", str(poses)]) == 0
+    assert "mount" not in capsys.readouterr().out
+    assert main(["evaluate-poses", str(poses), "--estimate-mount", "full"]) == 0
+    lines = [line.split() for line in capsys.readouterr().out.splitlines() if line.startswith("mount[")]
+    assert [line[0] for line in lines] == ["mount[x]", "mount[y]", "mount[z]"]
+    assert all(0.0 < float(line[1]) < 1.0 for line in lines)  # [deg] for 10 poses of the paper's tool
