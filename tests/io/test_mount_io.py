@@ -149,3 +149,11 @@ def test_base_frame_wrenches_are_converted(arm, caplog):
     with caplog.at_level(logging.WARNING):
         wrenches_in_sensor_frame(in_sensor, rotations, "ft_sensor", arm)
     assert caplog.text == ""
+
+
+def test_ros_exports_note_the_mount_and_the_sign(mounted):
+    from ftkin.io.export import export_notes
+
+    result, _ = mounted
+    notes = " ".join(export_notes(result, "admittance"))
+    assert "estimated mount" in notes and "sensor_sign -1 and the x axis reversed" in notes
