@@ -10,10 +10,12 @@ and scipy.
 """
 
 from ._version import __version__  # noqa: F401  (re-exported: ftkin.__version__)
+from .calibration.conventions import ConventionCheck, detect_sign_and_handedness
 from .calibration.diagnostics import FitDiagnostics
 from .calibration.estimate import METHODS, CalibrationResult, calibrate
 from .calibration.information import SensorNoise, fisher_information
 from .calibration.model import STANDARD_GRAVITY, SensorModel
+from .calibration.mount import MOUNT_MODES
 from .calibration.samples import Samples
 from .control.admittance import Admittance, ControlFrame
 from .control.compensation import Compensator
@@ -26,12 +28,15 @@ from .exceptions import (
     InvalidInput,
     InvalidSamples,
     MissingDependency,
+    SuspectConvention,
     UnobservableParameters,
     UrdfError,
 )
 from .io.calibration_file import load_calibration, save_calibration
+from .io.payload_export import Payload, export_payload, payload_in_flange
 from .io.samples_csv import load_samples
 from .kinematics.arm import Arm, SensorMount, bundled_urdf_path
+from .kinematics.mounting import mounted_arm
 from .kinematics.robots import ROBOTS, load_robot
 from .kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from .planning.constraints import PoseConstraints
@@ -48,6 +53,7 @@ __all__ = [
     "CalibrationResult",
     "Compensator",
     "ControlFrame",
+    "ConventionCheck",
     "FaultMonitor",
     "FitDiagnostics",
     "FrameNotFound",
@@ -56,7 +62,9 @@ __all__ = [
     "InvalidSamples",
     "JointAdmittance",
     "METHODS",
+    "MOUNT_MODES",
     "MissingDependency",
+    "Payload",
     "PlacementRun",
     "PlacementScenario",
     "PoseConstraints",
@@ -73,16 +81,21 @@ __all__ = [
     "SimulatedSensor",
     "StepStatus",
     "Surface",
+    "SuspectConvention",
     "UnobservableParameters",
     "UrdfError",
     "bundled_urdf_path",
     "calibrate",
+    "detect_sign_and_handedness",
     "euler_zyx_deg_to_matrix",
     "evaluate_poses",
+    "export_payload",
     "fisher_information",
     "load_calibration",
     "load_robot",
     "load_samples",
+    "mounted_arm",
+    "payload_in_flange",
     "plan_poses",
     "quaternion_to_matrix",
     "save_calibration",

@@ -119,3 +119,27 @@ class MissingDependency(FtkinError, ImportError):
             f"{purpose} needs the optional package {package!r}; "
             f"install it with: pip install 'ftkin[{extra}]'"
         )
+
+
+class SuspectConvention(FtkinError):
+    """The readings fit only with a sign or axis convention other than the one assumed.
+
+    Raised by calibration when the fitted tool weight points more than 90°
+    away from the expected gravity direction (a sensor reporting the reaction
+    instead of the load, or a robot not standing on the floor), or when the
+    data fit far better with one sensor axis reversed (a left-handed sensor).
+
+    Attributes:
+        explanations: The likely causes, one sentence each.
+        fixes: The options (CLI flags and keywords) that would fix each cause.
+        sensor_sign: The sign that fits (``-1`` when a reversed sign is suspected), else None.
+        flip_axis: The axis whose reversal fits (``"x"``, ``"y"`` or ``"z"``), else None.
+    """
+
+    def __init__(self, message: str, explanations: Sequence[str] = (), fixes: Sequence[str] = (),
+                 sensor_sign: int | None = None, flip_axis: str | None = None):
+        self.explanations = list(explanations)
+        self.fixes = list(fixes)
+        self.sensor_sign = sensor_sign
+        self.flip_axis = flip_axis
+        super().__init__(message)

@@ -11,20 +11,25 @@ Fisher information here also serves pose planning.
 Depends on the bottom layer and :mod:`ftkin.kinematics` (rotations).
 """
 
+from .conventions import ConventionCheck, detect_sign_and_handedness
 from .diagnostics import FitDiagnostics
 from .estimate import METHODS, CalibrationResult, calibrate
 from .information import SensorNoise, fisher_information
 from .model import STANDARD_GRAVITY, SensorModel
+from .mount import MOUNT_MODES
 from .samples import Samples
 
 __all__ = [
-    "METHODS",
-    "STANDARD_GRAVITY",
     "CalibrationResult",
+    "ConventionCheck",
     "FitDiagnostics",
+    "METHODS",
+    "MOUNT_MODES",
+    "STANDARD_GRAVITY",
     "Samples",
     "SensorModel",
     "SensorNoise",
     "calibrate",
+    "detect_sign_and_handedness",
     "fisher_information",
 ]

@@ -7,20 +7,28 @@ base tilt ``U``, ``V``) and the tool's centre of mass ``P`` in the sensor frame.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import logging
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..exceptions import InvalidInput
 from ..validation import as_positive
+from .conventions import check_conventions, check_flip_axis, check_sensor_sign, detect_sign_and_handedness, reading_signs
 from .diagnostics import FitDiagnostics
 from .fit_quality import diagnose
 from .information import SensorNoise, standard_errors
 from .linear import fit_linear
 from .ml import LOSSES, fit_ml
 from .model import STANDARD_GRAVITY, SensorModel
+from .mount import MOUNT_NAMES, POSES_NEEDED, check_mount_mode, rotation_to_rpy
 from .samples import PoseAverages, Samples
 from .summary import format_summary
+
+logger = logging.getLogger(__name__)
+
+MOUNT_STD_WARNING_DEG = 1.0
+"""Standard error [deg] of a mount angle above which the calibration warns."""
 
 METHODS = ("ml", "linear")
 """Estimators :func:`calibrate` accepts; the first is the default."""
@@ -47,6 +55,20 @@ class CalibrationResult(SensorModel):
             the estimator provides one (``ml``), else None.
         diagnostics: Fit quality, outlier poses, observability and warnings
             (:class:`~ftkin.calibration.diagnostics.FitDiagnostics`) for ``ml``, else None.
+        mount_rotation: ``R_M`` ``(3, 3)``: coordinates in the URDF's sensor
+            frame → the real sensor frame; the real orientation is
+            ``R_BS = R_BS_urdf · R_Mᵀ`` (identity unless estimated).
+        mount_mode: ``"none"``, ``"yaw"`` or ``"full"`` (how ``R_M`` was estimated).
+        mount_covariance: ``(k, k)`` covariance [rad²] of the mount angles
+            (:data:`~ftkin.calibration.mount.MOUNT_NAMES`), else None.
+        sensor_sign: ``+1`` (the sensor reports the load on it) or ``-1`` (the
+            reaction): applied to every raw reading.
+        flip_axis: None, or the sensor axis (``"x"``, ``"y"``, ``"z"``) whose
+            force and torque channels are negated in every raw reading.
+
+    The parameters are those of the real sensor frame: :meth:`predict` and
+    :meth:`tool_gravity_wrench` take the real ``R_BS`` (with the mount) and
+    give corrected readings (:attr:`reading_signs` applied).
     """
 
     method: str = "linear"
@@ -58,6 +80,45 @@ class CalibrationResult(SensorModel):
     sensor_frame: str | None = None
     covariance: np.ndarray | None = None
     diagnostics: FitDiagnostics | None = None
+    mount_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+    mount_mode: str = "none"
+    mount_covariance: np.ndarray | None = None
+    sensor_sign: int = 1
+    flip_axis: str | None = None
+
+    def __post_init__(self):
+        super().__post_init__()
+        rotation = np.array(self.mount_rotation, dtype=float)
+        if rotation.shape != (3, 3) or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) or np.linalg.det(rotation) <= 0:
+            raise InvalidInput(f"mount_rotation must be a (3, 3) rotation matrix (orthonormal, det = +1), got {rotation.tolist()}")
+        rotation.setflags(write=False)
+        object.__setattr__(self, "mount_rotation", rotation)
+        object.__setattr__(self, "mount_mode", check_mount_mode(self.mount_mode))
+        object.__setattr__(self, "sensor_sign", check_sensor_sign(self.sensor_sign))
+        check_flip_axis(self.flip_axis)
+
+    @property
+    def has_mount(self) -> bool:
+        """True when ``R_M`` is not the identity."""
+        return not np.array_equal(self.mount_rotation, np.eye(3))
+
+    @property
+    def mount_rpy_deg(self) -> np.ndarray:
+        """``(3,)`` roll, pitch, yaw [deg] of ``R_M`` (``R_M = Rz(yaw) Ry(pitch) Rx(roll)``)."""
+        return np.rad2deg(rotation_to_rpy(self.mount_rotation))
+
+    @property
+    def mount_std_deg(self) -> dict[str, float]:
+        """Standard errors [deg] of the estimated mount angles by name (empty without a mount estimate)."""
+        if self.mount_covariance is None:
+            return {}
+        sigma = np.rad2deg(np.sqrt(np.clip(np.diag(self.mount_covariance), 0.0, None)))
+        return dict(zip(MOUNT_NAMES[self.mount_mode], (float(value) for value in sigma)))
+
+    @property
+    def reading_signs(self) -> np.ndarray:
+        """``(6,)`` factors ``±1`` applied to every raw reading (``sensor_sign`` and ``flip_axis``)."""
+        return reading_signs(self.sensor_sign, self.flip_axis)
 
     @property
     def pose_count(self) -> int:
@@ -99,6 +160,17 @@ class CalibrationResult(SensorModel):
         return format_summary(self)
 
 
+def _with_mount_warning(diagnostics: FitDiagnostics, mode: str, covariance: np.ndarray) -> FitDiagnostics:
+    """Add a warning for mount angles with a standard error above :data:`MOUNT_STD_WARNING_DEG`."""
+    sigma = np.rad2deg(np.sqrt(np.clip(np.diag(covariance), 0.0, None)))
+    weak = [f"{name} ± {value:.2g}°" for name, value in zip(MOUNT_NAMES[mode], sigma) if value > MOUNT_STD_WARNING_DEG]
+    if not weak:
+        return diagnostics
+    message = f"the mount is poorly determined ({', '.join(weak)}): {POSES_NEEDED[mode]}"
+    logger.warning(message)
+    return replace(diagnostics, warnings=diagnostics.warnings + (message,))
+
+
 def _subset(poses: PoseAverages, keep: np.ndarray) -> PoseAverages:
     return PoseAverages(poses.pose_ids[keep], poses.rotations[keep], poses.wrenches[keep], poses.counts[keep], poses.spread[keep])
 
@@ -111,6 +183,11 @@ def calibrate(
     noise: SensorNoise | None = None,
     loss: str = "linear",
     drop_outliers: bool = False,
+    estimate_mount: str = "none",
+    sensor_sign: int = 1,
+    flip_axis: str | None = None,
+    base_mount: str = "floor",
+    expected_gravity=None,
 ) -> CalibrationResult:
     """Estimate bias, tool gravity and base tilt from static-pose readings.
 
@@ -128,6 +205,17 @@ def calibrate(
             or ``"huber"`` (robust to outlying poses).
         drop_outliers: ``ml`` only: refit once without the poses flagged as
             outliers (see :mod:`ftkin.calibration.fit_quality`).
+        estimate_mount: ``ml`` only: ``"none"`` (default), ``"yaw"`` (the
+            sensor turned about its z axis on the flange) or ``"full"`` (any
+            rotation): estimate the mount ``R_M`` jointly (samples from joint
+            angles only; :mod:`ftkin.calibration.mount`).
+        sensor_sign: ``+1`` (default) or ``-1``: negate every reading (a sensor
+            reporting the reaction); see :mod:`ftkin.calibration.conventions`.
+        flip_axis: None or ``"x"``, ``"y"``, ``"z"``: negate that axis's force
+            and torque channels (a mirrored axis).
+        base_mount: ``"floor"`` (default: gravity along base −z),
+            ``"ceiling"`` (+z) or ``"wall"`` (no direction check).
+        expected_gravity: Expected gravity direction [base frame]; overrides ``base_mount``.
 
     Returns:
         A frozen :class:`CalibrationResult`.
@@ -136,8 +224,11 @@ def calibrate(
         UnobservableParameters: the poses cannot determine the parameters
             (fewer than three, orientations alike, gravity along one sensor
             direction); the error names them.
-        InvalidInput: unknown method or loss, bad ``g`` or ``noise``, or ml
-            options with ``method="linear"``.
+        InvalidInput: unknown method or loss, bad ``g`` or ``noise``, ml
+            options with ``method="linear"``, or a mount for samples whose
+            rotations were given directly.
+        SuspectConvention: the data fit with an axis reversed, or the tool
+            weight points more than 90° from the expected gravity direction.
     """
     if not isinstance(samples, Samples):
         raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
@@ -149,21 +240,39 @@ def calibrate(
         raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
     if method == "linear" and (noise is not None or loss != "linear" or drop_outliers):
         raise InvalidInput("noise, loss and drop_outliers apply to method='ml' only")
+    if check_mount_mode(estimate_mount) != "none" and method != "ml":
+        raise InvalidInput("estimate_mount applies to method='ml' only")
+    if estimate_mount != "none" and samples.joint_positions is None:
+        raise InvalidInput(
+            "estimate_mount needs samples from joint angles (Samples.from_joint_positions): rotations given "
+            "directly are taken as the real sensor orientation, so any mount is already in them (absorbed)"
+        )
     g = as_positive(g, "g")
-    poses = samples.pose_averages()
-    covariance = diagnostics = None
+    signs = reading_signs(sensor_sign, flip_axis)
+    raw_poses = samples.pose_averages()
+    poses = replace(raw_poses, wrenches=raw_poses.wrenches * signs)
+    check = detect_sign_and_handedness(
+        raw_poses, sensor_sign=sensor_sign, flip_axis=flip_axis, estimate_mount=estimate_mount,
+        base_mount=base_mount, expected_gravity=expected_gravity, g=g,
+    )
+    check_conventions(check, sensor_sign, base_mount)
+    covariance = diagnostics = mount_covariance = None
+    mount = np.eye(3)
     if method == "linear":
         model = fit_linear(poses, g)
     else:
-        fit = fit_ml(poses, g, noise, loss)
+        fit = fit_ml(poses, g, noise, loss, estimate_mount)
         diagnostics, covariance = diagnose(fit, poses.pose_ids)
         if drop_outliers and diagnostics.outlier_pose_ids:
             dropped = diagnostics.outlier_pose_ids
             poses = _subset(poses, ~np.isin(poses.pose_ids, dropped))
-            fit = fit_ml(poses, g, noise, loss)
+            fit = fit_ml(poses, g, noise, loss, estimate_mount)
             diagnostics, covariance = diagnose(fit, poses.pose_ids, dropped)
-        model = fit.model
-    residuals = poses.wrenches - model.predict(poses.rotations)
+        model, mount, mount_covariance = fit.model, fit.mount_rotation, fit.mount_covariance
+        if mount_covariance is not None:
+            mount_covariance = mount_covariance * diagnostics.covariance_scale  # the same goodness-of-fit scaling as θ
+            diagnostics = _with_mount_warning(diagnostics, estimate_mount, mount_covariance)
+    residuals = poses.wrenches - model.predict(poses.rotations @ mount.T)
     return CalibrationResult(
         force_offset=model.force_offset,
         torque_offset=model.torque_offset,
@@ -179,4 +288,9 @@ def calibrate(
         sensor_frame=samples.sensor_frame,
         covariance=covariance,
         diagnostics=diagnostics,
+        mount_rotation=mount,
+        mount_mode=estimate_mount,
+        mount_covariance=mount_covariance,
+        sensor_sign=sensor_sign,
+        flip_axis=flip_axis,
     )

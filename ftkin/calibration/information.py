@@ -16,6 +16,7 @@ import numpy as np
 from ..exceptions import InvalidInput, UnobservableParameters
 from ..validation import as_float_array, as_rotation_batch, check_finite
 from .model import COMPONENT_NAMES, SensorModel
+from .mount import mount_jacobian
 
 
 @dataclass(frozen=True)
@@ -49,8 +50,14 @@ class SensorNoise:
         return cls(0.02, 0.002)
 
 
-def fisher_information(model: SensorModel, rotation_sensor_to_base, noise: SensorNoise, readings_per_pose=1) -> np.ndarray:
+def fisher_information(model: SensorModel, rotation_sensor_to_base, noise: SensorNoise, readings_per_pose=1,
+                       estimate_mount: str = "none", mount_rotation=None) -> np.ndarray:
     """Fisher information ``Σ_i n_i J_iᵀ W J_i`` of ``θ`` for a pose set, ``(12, 12)``.
+
+    With ``estimate_mount="yaw"`` or ``"full"`` it is the ``(12 + k)``
+    information of ``[θ, δ]``, ``δ`` the mount angles of
+    :mod:`ftkin.calibration.mount` (``k`` = 1 or 3), the rotations then being the
+    URDF's ``R_BS`` and ``mount_rotation`` the mount ``R_M`` (default identity).
 
     Args:
         model: Parameters at which to evaluate (the truth or an estimate).
@@ -71,9 +78,9 @@ def fisher_information(model: SensorModel, rotation_sensor_to_base, noise: Senso
         raise InvalidInput(f"readings_per_pose must be a scalar or have shape ({len(rotations)},), got {counts.shape}")
     if not np.all(np.isfinite(counts) & (counts > 0)):
         raise InvalidInput(f"readings_per_pose must be finite and positive, got {counts}")
-    jac = model.parameter_jacobian(rotations)
+    jac = mount_jacobian(rotations, model.gravity_in_base, model.center_of_mass, estimate_mount, mount_rotation)
     weighted = jac / noise.channel_std[None, :, None] * np.sqrt(np.broadcast_to(counts, (len(rotations),)))[:, None, None]
-    stacked = weighted.reshape(-1, 12)
+    stacked = weighted.reshape(-1, jac.shape[2])
     return stacked.T @ stacked
 
 

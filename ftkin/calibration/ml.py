@@ -19,7 +19,7 @@ degrees of freedom the parameters take).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -28,6 +28,7 @@ from ..exceptions import InvalidInput
 from .information import SensorNoise, covariance_from_information
 from .linear import fit_linear
 from .model import STANDARD_GRAVITY, SensorModel, cross_rows, parameter_jacobian
+from .mount import MountedProblem, check_mount_mode, check_mount_observable, mount_start, split_information
 from .samples import PoseAverages
 
 LOSSES = ("linear", "soft_l1", "huber")
@@ -97,7 +98,7 @@ class WeightedProblem:
         Their diagonals are the leverages of the readings' channels.
         """
         jac = self.whitened_jacobian(theta)
-        blocks = jac.reshape(-1, 6, 12)
+        blocks = jac.reshape(-1, 6, jac.shape[1])
         return blocks @ np.linalg.pinv(jac.T @ jac, hermitian=True) @ np.transpose(blocks, (0, 2, 1))
 
 
@@ -113,8 +114,14 @@ class MlFit:
         noise_dof: Degrees of freedom of the noise estimate (``inf`` if given).
         loss: Loss function used.
         robust_weights: ``(P, 6)`` final weights of the robust loss (ones for ``"linear"``).
-        information: ``(12, 12)`` Fisher information of ``θ`` (robust weights included).
+        information: ``(12, 12)`` Fisher information of ``θ`` (robust weights
+            included; with a mount, the marginal information, mount estimated).
         iterations: Function evaluations the solver used.
+        mount_rotation: ``R_M`` ``(3, 3)``, URDF sensor frame → real sensor frame
+            (identity unless estimated; :mod:`ftkin.calibration.mount`).
+        mount_mode: ``"none"``, ``"yaw"`` or ``"full"``.
+        mount_covariance: ``(k, k)`` covariance of the mount angles [rad²] about
+            the real sensor's axes (``k`` = 1 for yaw, 3 for full), else None.
     """
 
     model: SensorModel
@@ -126,6 +133,9 @@ class MlFit:
     robust_weights: np.ndarray
     information: np.ndarray
     iterations: int
+    mount_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+    mount_mode: str = "none"
+    mount_covariance: np.ndarray | None = None
 
     @property
     def noise(self) -> SensorNoise:
@@ -207,6 +217,7 @@ def fit_ml(
     g: float = STANDARD_GRAVITY,
     noise: SensorNoise | None = None,
     loss: str = "linear",
+    estimate_mount: str = "none",
 ) -> MlFit:
     """Maximum-likelihood fit of all channels on per-pose mean readings.
 
@@ -215,17 +226,24 @@ def fit_ml(
         g: Gravity for the reported mass [m/s²].
         noise: Per-reading noise; None estimates it (spread, else residuals).
         loss: One of :data:`LOSSES`.
+        estimate_mount: ``"none"``, ``"yaw"`` or ``"full"``: also fit the mount
+            ``R_M`` (``poses.rotations`` are then the URDF's ``R_BS``).
 
     Raises:
-        UnobservableParameters: the poses cannot determine the parameters.
-        InvalidInput: unknown loss.
+        UnobservableParameters: the poses cannot determine the parameters (or the mount).
+        InvalidInput: unknown loss or mount mode.
     """
     if loss not in LOSSES:
         raise InvalidInput(f"unknown loss {loss!r}; expected one of {', '.join(LOSSES)}")
-    start = fit_linear(poses, g)
-    theta0 = start.to_vector()
     counts = np.asarray(poses.counts, dtype=float)
-    problem = WeightedProblem(poses.rotations, poses.wrenches, counts, np.ones(6))
+    if check_mount_mode(estimate_mount) == "none":
+        start = fit_linear(poses, g)
+        problem = WeightedProblem(poses.rotations, poses.wrenches, counts, np.ones(6))
+        theta0 = start.to_vector()
+    else:
+        mount0, start = mount_start(poses, g)
+        problem = MountedProblem(poses.rotations, poses.wrenches, counts, np.ones(6), mount0, estimate_mount)
+        theta0 = np.concatenate([start.to_vector(), np.zeros(problem.parameter_count - 12)])
     if noise is not None:
         channel_std, dof, source = noise.channel_std, np.inf, "given"
     else:
@@ -240,6 +258,8 @@ def fit_ml(
             rough = np.maximum(rough, 1e-12 * np.maximum(1.0, np.abs(poses.wrenches).max(axis=0)))
             channel_std, dof = noise_from_residuals(replace(problem, channel_std=rough), theta0, robust=loss != "linear")
     problem = replace(problem, channel_std=channel_std)
+    if estimate_mount != "none":
+        check_mount_observable(problem, theta0)
     theta, evaluations = _solve(problem, theta0, loss)
     for _ in range(RESIDUAL_NOISE_PASSES if source == "residuals" else 0):
         channel_std, dof = noise_from_residuals(problem, theta, robust=loss != "linear")
@@ -249,9 +269,15 @@ def fit_ml(
             break
         theta, more = _solve(problem, theta, loss)
         evaluations += more
+    mount_covariance = None
+    if estimate_mount != "none":
+        problem, theta = problem.recentred(theta)
     whitened = problem.whitened_residuals(theta).reshape(-1, 6)
     robust_weights = _robust_weights(whitened, loss)
     jac = problem.whitened_jacobian(theta) * np.sqrt(robust_weights).reshape(-1, 1)
+    information = jac.T @ jac
+    if estimate_mount != "none":
+        information, mount_covariance = split_information(information)
     return MlFit(
         model=SensorModel.from_vector(theta, g),
         start=start,
@@ -260,6 +286,9 @@ def fit_ml(
         noise_dof=float(dof),
         loss=loss,
         robust_weights=robust_weights,
-        information=jac.T @ jac,
+        information=information,
         iterations=evaluations,
+        mount_rotation=problem.mount(theta) if estimate_mount != "none" else np.eye(3),
+        mount_mode=estimate_mount,
+        mount_covariance=mount_covariance,
     )

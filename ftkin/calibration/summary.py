@@ -44,6 +44,7 @@ def format_summary(result) -> str:
         f"  tool_mass       m  = {_scalar(result.tool_mass, 4, errors.get('tool_mass'))} kg (g = {result.g:g} m/s²)",
         f"  base_tilt       U  = {_scalar(tilt_u, 3, tilt_errors[0])}°, V = {_scalar(tilt_v, 3, tilt_errors[1])}°",
     ]
+    lines.extend(_mount_lines(result))
     if result.pose_count:
         rms = result.residual_rms
         lines.append(
@@ -61,6 +62,21 @@ def format_summary(result) -> str:
     if result.urdf:
         lines.append(f"  kinematics: {result.urdf} (sensor frame {result.sensor_frame})")
     return "\n".join(lines)
+
+
+def _mount_lines(result) -> list[str]:
+    """The estimated mount and a non-default reading convention, if any."""
+    lines = []
+    if getattr(result, "mount_mode", "none") != "none":
+        errors = ", ".join(f"{name} ± {value:.3f}°" for name, value in result.mount_std_deg.items())
+        lines.append(
+            f"  mount_rpy_deg   R_M = {_vector(result.mount_rpy_deg, 3)}° (roll, pitch, yaw; URDF sensor frame → "
+            f"real sensor frame, estimated: {result.mount_mode}; {errors})"
+        )
+    if getattr(result, "sensor_sign", 1) != 1 or getattr(result, "flip_axis", None) is not None:
+        flip = f", {result.flip_axis} axis reversed" if result.flip_axis else ""
+        lines.append(f"  readings: sensor_sign {result.sensor_sign:+d}{flip} (applied to every reading)")
+    return lines
 
 
 _NOISE_SOURCE_TEXT = {

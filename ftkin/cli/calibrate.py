@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from ..calibration.conventions import BASE_MOUNTS
 from ..calibration.estimate import METHODS, calibrate
 from ..calibration.information import SensorNoise
 from ..calibration.ml import LOSSES
 from ..calibration.model import STANDARD_GRAVITY
+from ..calibration.mount import MOUNT_MODES
 from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
 from .common import add_samples_arguments, load_samples_from_args, positive_float
@@ -40,6 +42,29 @@ def register(subparsers) -> None:
         help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
     )
     ml.add_argument("--drop-outliers", action="store_true", help="refit without the poses flagged as outliers")
+    ml.add_argument(
+        "--estimate-mount", choices=MOUNT_MODES[1:], metavar="yaw|full",
+        help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or full (any rotation); "
+        "needs joint-angle samples (default: the URDF's sensor frame is right)",
+    )
+    conventions = parser.add_argument_group("sensor and robot conventions (stored in the calibration file)")
+    conventions.add_argument(
+        "--sensor-sign", type=int, choices=(1, -1), default=1,
+        help="-1: the sensor reports the reaction, negate every reading (default: %(default)s, the load on the sensor)",
+    )
+    conventions.add_argument(
+        "--flip-axis", choices=("x", "y", "z"),
+        help="negate this axis's force and torque channels in every reading (a mirrored, left-handed sensor axis)",
+    )
+    conventions.add_argument(
+        "--base-mount", choices=BASE_MOUNTS, default="floor",
+        help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall (no check); a fitted "
+        "weight more than 90° off the expected direction is refused as a suspect sign (default: %(default)s)",
+    )
+    conventions.add_argument(
+        "--expected-gravity", type=float, nargs=3, metavar=("GX", "GY", "GZ"),
+        help="expected gravity direction in the base frame (overrides --base-mount)",
+    )
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -57,8 +82,12 @@ def run(args) -> int:
     if args.method == "linear" and (noise is not None or args.loss != "linear" or args.drop_outliers):
         raise InvalidInput("--noise-force/--noise-torque, --loss and --drop-outliers apply to --method ml only")
     loaded = load_samples_from_args(args.samples, args)
+    if args.method == "linear" and args.estimate_mount:
+        raise InvalidInput("--estimate-mount applies to --method ml only")
     result = calibrate(
-        loaded.samples, method=args.method, g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers
+        loaded.samples, method=args.method, g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers,
+        estimate_mount=args.estimate_mount or "none", sensor_sign=args.sensor_sign, flip_axis=args.flip_axis,
+        base_mount=args.base_mount, expected_gravity=args.expected_gravity,
     )
     print(result.summary())
     if args.output:

@@ -110,6 +110,11 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--joint-topic", metavar="TOPIC", help="sensor_msgs/JointState topic (default: the only one)")
     group.add_argument("--wrench-topic", metavar="TOPIC", help="geometry_msgs/WrenchStamped topic (default: the only one)")
     group.add_argument(
+        "--wrench-frame", choices=("sensor", "base"), default="sensor",
+        help="frame the bag's wrenches are expressed in; base: rotate them into the sensor frame (a UR TCP force) "
+        "(default: %(default)s)",
+    )
+    group.add_argument(
         "--speed-threshold", type=positive_float, default=defaults.speed_threshold, metavar="RAD_S",
         help="static when every joint is slower than this [rad/s] (default: %(default)s)",
     )
@@ -194,4 +199,5 @@ def load_samples_from_args(path: str, args: argparse.Namespace, *, static_only: 
         wrench_topic=getattr(args, "wrench_topic", None),
         parameters=parameters,
         static_only=static_only,
+        wrench_frame=getattr(args, "wrench_frame", "sensor"),
     )

@@ -36,6 +36,8 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
                        help="torque noise per reading [N·m] (default: %(default)s)")
     group.add_argument("--readings-per-pose", type=int, default=1, metavar="K",
                        help="independent readings averaged at each pose (default: %(default)s)")
+    group.add_argument("--estimate-mount", choices=("yaw", "full"), default=None, metavar="yaw|full",
+                       help="the calibration will also estimate the sensor's mount on the flange: plan and predict for it")
 
 
 def expectation_from_args(args) -> dict:
@@ -47,6 +49,7 @@ def expectation_from_args(args) -> dict:
         "center_of_mass": args.com,
         "noise": SensorNoise(args.noise_force, args.noise_torque),
         "readings_per_pose": args.readings_per_pose,
+        "estimate_mount": args.estimate_mount or "none",
     }
 
 

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..calibration.conventions import as_real_sensor
 from ..exceptions import InvalidInput
 from ..io.bags import TIME_COLUMN
 from ..io.calibration_file import load_calibration
 from ..kinematics.arm import Arm
+from ..kinematics.mounting import mounted_arm
 from .common import (
     add_samples_arguments,
     arm_for_calibration,
@@ -136,6 +139,9 @@ def run(args: argparse.Namespace) -> int:
     arm = arm_for_calibration(args, calibration) or Arm.default()
     loaded = load_samples_from_args(source, args, static_only=not args.replay, arm=arm)
     warn_if_kinematics_differ(loaded, calibration)
+    # the real sensor: stored sign and axis flip applied to the readings, the mount to the sensor frame
+    loaded = dataclasses.replace(loaded, samples=as_real_sensor(loaded.samples, calibration))
+    arm = mounted_arm(arm, calibration.mount_rotation)
     frames = _replay_rows(loaded, args.max_frames) if args.replay else _calibration_poses(loaded)
     if frames.configurations is None:
         arm = None  # orientations without joint angles: no arm to draw

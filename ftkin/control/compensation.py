@@ -6,6 +6,13 @@ contact wrench = raw − bias − tool gravity::
 
 All wrenches are ``[fx, fy, fz, mx, my, mz]`` [N, N·m] in the sensor frame.
 Positive contact force is what the environment exerts on the tool.
+
+A calibration that estimated the sensor's mount ``R_M`` is applied by folding
+it into the arm's sensor frame (:func:`~ftkin.kinematics.mounting.mounted_arm`):
+the joint-angle entry points see the real sensor at no extra cost, and
+``R_BS`` given directly is taken as the real sensor's orientation. A stored
+sensor sign or reversed axis (:mod:`ftkin.calibration.conventions`) multiplies
+every raw reading by ``±1`` first; without one the hot path is unchanged.
 """
 
 from __future__ import annotations
@@ -16,6 +23,7 @@ from ..calibration.model import SensorModel, cross_rows
 from ..calibration.samples import Samples
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
+from ..kinematics.mounting import mounted_arm
 from ..validation import as_batch, as_rotation_batch
 
 
@@ -26,14 +34,22 @@ class Compensator:
         calibration: Parameters (a :class:`~ftkin.calibration.CalibrationResult`
             or any :class:`~ftkin.calibration.model.SensorModel`).
         arm: Kinematics for the joint-angle entry points; not needed when the
-            caller supplies ``R_BS`` itself.
+            caller supplies ``R_BS`` itself. With a calibration that carries a
+            mount, :attr:`arm` is a copy with the real sensor frame.
     """
 
     def __init__(self, calibration: SensorModel, arm: Arm | None = None):
         if not isinstance(calibration, SensorModel):
             raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
         self.calibration = calibration
-        self.arm = arm
+        mount = getattr(calibration, "mount_rotation", None)
+        self.arm = mounted_arm(arm, mount) if arm is not None and mount is not None else arm
+        signs = getattr(calibration, "reading_signs", None)
+        self._reading_signs = None if signs is None or np.all(signs == 1.0) else np.array(signs)
+        if self._reading_signs is not None:
+            # Shadow the unchecked entry points (which every other path calls) with ones that apply the signs.
+            self.compensate_rotation_unchecked = self._signed_rotation_unchecked
+            self.compensate_batch_unchecked = self._signed_batch_unchecked
         self._gravity_in_base = np.array(calibration.gravity_in_base)
         self._bias = np.array(calibration.bias)
         self._com = np.array(calibration.center_of_mass)
@@ -42,6 +58,12 @@ class Compensator:
         self._com_floats = tuple(self._com.tolist())
         self._bias_floats = tuple(self._bias.tolist())
         self._q_shape = (arm.nq,) if arm is not None else None
+
+    def _signed_rotation_unchecked(self, rotation: np.ndarray, raw: np.ndarray) -> np.ndarray:
+        return Compensator.compensate_rotation_unchecked(self, rotation, raw * self._reading_signs)
+
+    def _signed_batch_unchecked(self, rotations: np.ndarray, raw: np.ndarray) -> np.ndarray:
+        return Compensator.compensate_batch_unchecked(self, rotations, raw * self._reading_signs)
 
     def _require_arm(self) -> Arm:
         if self.arm is None:
@@ -121,8 +143,15 @@ class Compensator:
         return self.compensate_batch(rotations, raw_wrenches)
 
     def compensate_samples(self, samples: Samples) -> np.ndarray:
-        """Contact wrenches ``(N, 6)`` of a :class:`~ftkin.calibration.samples.Samples`."""
-        return self.compensate_batch_unchecked(samples.rotations, samples.wrenches)
+        """Contact wrenches ``(N, 6)`` of a :class:`~ftkin.calibration.samples.Samples`.
+
+        Samples read from joint angles hold the URDF's ``R_BS``: the calibration's mount is applied to them.
+        """
+        rotations = samples.rotations
+        mount = getattr(self.calibration, "mount_rotation", None)
+        if samples.joint_positions is not None and mount is not None:
+            rotations = rotations @ mount.T
+        return self.compensate_batch_unchecked(rotations, samples.wrenches)
 
     @staticmethod
     def payload_weight(contact_wrench) -> np.ndarray | float:

@@ -42,6 +42,7 @@ from scipy.linalg import lapack
 
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
+from ..kinematics.mounting import mounted_arm
 from .admittance import Admittance
 from .compensation import Compensator
 from .control_frame import control_frame_for
@@ -117,6 +118,9 @@ class JointAdmittance:
         numbers = np.array([force_limit, torque_limit, manipulability_threshold, max_damping, velocity_scale, limit_gain], dtype=float)
         if not np.all(np.isfinite(numbers)) or np.any(numbers <= 0):
             raise InvalidInput(f"limits, thresholds and gains must be finite and > 0, got {numbers}")
+        mount = getattr(compensator.calibration, "mount_rotation", None) if compensator is not None else None
+        if mount is not None:
+            arm = mounted_arm(arm, mount)  # the real sensor frame, folded into the model: no work per tick
         self.arm, self.admittance, self.compensator = arm, admittance, compensator
         self.frame = control_frame_for(arm, admittance.frame, control_point)
         self.force_limit, self.torque_limit = float(force_limit), float(torque_limit)

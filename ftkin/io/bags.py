@@ -16,7 +16,8 @@ Reads a bag (a rosbag2 folder with sqlite3 or MCAP storage, or a bare
   the wrenches inside it.
 
 Wrenches are the raw sensor readings ``[fx, fy, fz, mx, my, mz]`` [N, N·m] in
-the sensor frame (the message's ``frame_id`` is recorded, not used).
+the sensor frame; the messages' ``frame_id`` is checked against the sensor
+frame, and a base-frame wrench is converted on request (:mod:`ftkin.io.wrench_frames`).
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from ..progress import Progress
 from .csv_table import Table, format_float
 from .samples_csv import POSE_COLUMN, LoadedSamples
 from .static_segments import SegmentParameters, SegmentSearch, find_static_segments, segment_index
+from .wrench_frames import wrenches_in_sensor_frame
 
 logger = logging.getLogger(__name__)
 
@@ -155,8 +157,7 @@ def read_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None
         path = path.parent
     expected = list(arm.joint_names)
     series: dict[str, tuple[list[int], list[float]]] = {}  # joint name -> (message indices, positions)
-    joint_header, joint_log, wrench_header, wrench_log, wrench_rows = [], [], [], [], []
-    frame_id = ""
+    joint_header, joint_log, wrench_header, wrench_log, wrench_rows, frame_id = [], [], [], [], [], ""
     try:
         with any_reader([path], default_typestore=typestore) as reader:
             joints = _pick_topic(reader.connections, joint_topic, JOINT_STATE_TYPE, "--joint-topic", source)
@@ -214,9 +215,7 @@ def read_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None
     if not np.any(inside):
         raise InvalidSamples(
             f"no {wrench_topic_name} stamp falls inside the {joint_topic_name} time range "
-            f"[{joint_times[0]:.3f}, {joint_times[-1]:.3f}] s (wrench stamps [{times[0]:.3f}, {times[-1]:.3f}] s)",
-            source,
-        )
+            f"[{joint_times[0]:.3f}, {joint_times[-1]:.3f}] s (wrench stamps [{times[0]:.3f}, {times[-1]:.3f}] s)", source)
     times, wrenches = times[inside], wrenches[inside]
     positions = np.column_stack([np.interp(times, joint_times, trajectory[:, j]) for j in range(len(expected))])
     return BagRecording(
@@ -244,6 +243,7 @@ def bag_samples(
     parameters: SegmentParameters | None = None,
     static_only: bool = True,
     progress: bool | None = None,
+    wrench_frame: str = "sensor",
 ) -> BagSamples:
     """Calibration (or compensation) samples from a bag.
 
@@ -254,6 +254,7 @@ def bag_samples(
         static_only: True: only readings inside static segments, pose id =
             segment number (for calibration). False: every reading, one pose
             each, no segment search (for compensation).
+        wrench_frame: ``"sensor"`` or ``"base"`` (see :func:`~ftkin.io.wrench_frames.wrenches_in_sensor_frame`).
 
     Returns:
         :class:`BagSamples` whose ``table`` has columns ``t`` [s], ``pose``
@@ -265,10 +266,11 @@ def bag_samples(
     """
     if arm is None:
         from ..kinematics.arm import Arm
-
         arm = Arm.default()
     recording = read_bag(path, arm, joint_topic, wrench_topic, progress)
-    times, wrenches, positions = recording.times, recording.wrenches, recording.joint_positions
+    times, positions = recording.times, recording.joint_positions
+    wrenches = wrenches_in_sensor_frame(recording.wrenches, arm.rotation_sensor_to_base(positions),
+                                        recording.wrench_frame_id, arm, wrench_frame, recording.source)
     search, pose_ids = None, None
     header = [TIME_COLUMN, *recording.joint_names, *WRENCH_CHANNELS]
     if static_only:

@@ -13,6 +13,13 @@ per-pose normalized residuals, outliers, condition number, warnings; see
 ``ftkin_version``. Files without ``covariance``/``diagnostics`` (written by
 ``linear`` or an older ftkin) load with those set to None.
 
+The sensor as it is really mounted (:mod:`ftkin.calibration.mount`,
+:mod:`ftkin.calibration.conventions`): ``mount_rotation`` (3×3 ``R_M``, URDF
+sensor frame → real sensor frame), ``mount_rpy_deg`` (its roll, pitch, yaw
+[deg], for reading), ``mount_mode``, ``mount_covariance`` (k×k [rad²] or
+null), ``sensor_sign`` (+1 or −1) and ``flip_axis`` (null, "x", "y", "z").
+Files without them load with the identity mount, sign +1 and no flip.
+
 Floats are written with Python's shortest round-trip repr, so
 save → load gives back the same numbers bit for bit.
 """
@@ -44,6 +51,10 @@ UNITS = {
     "base_tilt_deg": "deg, [U about base x, V about new y]",
     "g": "m/s^2",
     "residual_rms": "N (fx, fy, fz), N*m (mx, my, mz)",
+    "mount_rotation": "URDF sensor frame -> real sensor frame; real R_BS = R_BS_urdf * mount_rotation^T",
+    "mount_rpy_deg": "deg, roll-pitch-yaw of mount_rotation (R = Rz(yaw) Ry(pitch) Rx(roll))",
+    "sensor_sign": "+1: readings are the load on the sensor, -1: the reaction (all readings negated)",
+    "flip_axis": "sensor axis whose force and torque channels are negated in every reading, or null",
 }
 
 
@@ -94,6 +105,13 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         },
         "covariance": result.covariance,
         "std_errors": _std_errors_document(result),
+        "mount_rotation": result.mount_rotation,
+        "mount_rpy_deg": result.mount_rpy_deg,
+        "mount_mode": result.mount_mode,
+        "mount_covariance": result.mount_covariance,
+        "mount_std_deg": result.mount_std_deg,
+        "sensor_sign": result.sensor_sign,
+        "flip_axis": result.flip_axis,
         **({"diagnostics": result.diagnostics.to_dict()} if result.diagnostics is not None else {}),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "ftkin_version": __version__,
@@ -212,6 +230,11 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     method = reader.optional("method", str, "unknown")
     urdf, sensor_frame = reader.optional("urdf", str), reader.optional("sensor_frame", str)
     sample_count = reader.optional("sample_count", int, count)
+    mount = reader.array("mount_rotation", (3, 3), required=False)
+    mount_mode = reader.optional("mount_mode", str, "none")
+    mount_size = {"yaw": 1, "full": 3}.get(mount_mode, 0)
+    mount_covariance = reader.array("mount_covariance", (mount_size, mount_size), required=False) if mount_size else None
+    sensor_sign = reader.optional("sensor_sign", int, 1)
     try:
         result = CalibrationResult(
             force_offset=reader.array("force_offset", (3,)),
@@ -228,6 +251,11 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             sensor_frame=sensor_frame,
             covariance=reader.array("covariance", (12, 12), required=False),
             diagnostics=_diagnostics(reader),
+            mount_rotation=np.eye(3) if mount is None else mount,
+            mount_mode=mount_mode,
+            mount_covariance=mount_covariance,
+            sensor_sign=sensor_sign,
+            flip_axis=reader.optional("flip_axis", str),
         )
     except (ValueError, TypeError) as error:
         raise CalibrationFileError(path, str(error)) from None

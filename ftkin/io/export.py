@@ -89,6 +89,19 @@ def export_notes(calibration: SensorModel, fmt: str) -> list[str]:
             f"the base tilt U = {tilt_deg[0]:.4f}°, V = {tilt_deg[1]:.4f}° is not representable ({where}); "
             f"ignoring it leaves up to {error:.4f} N of force error"
         )
+    if getattr(calibration, "has_mount", False):
+        rpy = ", ".join(f"{value:.3f}" for value in calibration.mount_rpy_deg)
+        notes.append(
+            f"the real sensor frame is turned from the URDF's by the estimated mount (R_M roll, pitch, yaw = {rpy}°): the "
+            "values are in the real sensor frame; the ROS sensor frame must be the real one (fix the URDF's sensor joint "
+            "rpy by R_M^T)"
+        )
+    if getattr(calibration, "sensor_sign", 1) != 1 or getattr(calibration, "flip_axis", None):
+        notes.append(
+            f"the readings need sensor_sign {calibration.sensor_sign:+d}"
+            + (f" and the {calibration.flip_axis} axis reversed" if calibration.flip_axis else "")
+            + " before these parameters apply: fix the sign in the sensor driver"
+        )
     return notes
 
 

@@ -10,15 +10,17 @@ Depends only on the bottom layer (:mod:`ftkin.exceptions`, :mod:`ftkin.validatio
 """
 
 from .arm import Arm, SensorMount, bundled_urdf_path
+from .mounting import mounted_arm
 from .robots import ROBOTS, load_robot
 from .rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 
 __all__ = [
-    "ROBOTS",
     "Arm",
+    "ROBOTS",
     "SensorMount",
     "bundled_urdf_path",
     "euler_zyx_deg_to_matrix",
     "load_robot",
+    "mounted_arm",
     "quaternion_to_matrix",
 ]

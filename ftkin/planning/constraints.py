@@ -25,10 +25,13 @@ import numpy as np
 import pinocchio as pin
 
 from ..calibration.model import COMPONENT_NAMES
+from ..calibration.mount import MOUNT_NAMES
 from ..exceptions import InvalidInput, UnobservableParameters
 from ..kinematics.collision import SelfCollision
 from ..kinematics.rotations import euler_zyx_to_matrix
 from ..validation import as_float_array
+
+_MOUNT_MODE_BY_SIZE = {12: "none", 13: "yaw", 15: "full"}
 
 DEFAULT_MARGIN = 0.05
 """Default distance kept from every joint limit [rad] (about 3°)."""
@@ -192,7 +195,7 @@ def check_information(factors, constraints, rcond: float = 1e-10):
         return
     involved = np.any(np.abs(eigenvectors[:, weak]) > 0.3, axis=1) | (np.diag(information) <= rcond * information.max())
     raise UnobservableParameters(
-        [COMPONENT_NAMES[i] for i in np.flatnonzero(involved)],
+        [(COMPONENT_NAMES + MOUNT_NAMES[_MOUNT_MODE_BY_SIZE[len(information)]])[i] for i in np.flatnonzero(involved)],
         f"every sensor orientation these constraints allow ({constraints.describe()}) sees gravity "
         "along (nearly) the same sensor direction, so the tool's weight cannot be told apart from "
         "the force bias, nor its centre of mass from the torque bias; allow more tilt or wider joint ranges",

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..calibration.model import parameter_jacobian
+from ..calibration.mount import mount_jacobian
 
 REGULARIZATION = 1e-9
 """Ridge added to the (scale-normalized) information so that designs with
@@ -27,9 +27,13 @@ fewer poses than needed for full rank can still be compared while the
 greedy start builds up."""
 
 
-def information_factors(rotations: np.ndarray, gravity_in_base, center_of_mass, channel_std, readings_per_pose=1):
-    """Weighted Jacobians ``L_i`` ``(N, 6, 12)`` so that the information of pose ``i`` is ``L_iᵀ L_i``."""
-    jac = parameter_jacobian(rotations, np.asarray(gravity_in_base, float), np.asarray(center_of_mass, float))
+def information_factors(rotations: np.ndarray, gravity_in_base, center_of_mass, channel_std, readings_per_pose=1,
+                        estimate_mount: str = "none"):
+    """Weighted Jacobians ``L_i`` ``(N, 6, 12 + k)`` so that the information of pose ``i`` is ``L_iᵀ L_i``.
+
+    ``k`` is 0, or the number of mount angles when ``estimate_mount`` is ``"yaw"`` (1) or ``"full"`` (3).
+    """
+    jac = mount_jacobian(rotations, gravity_in_base, center_of_mass, estimate_mount)
     return jac / np.asarray(channel_std, float)[None, :, None] * np.sqrt(readings_per_pose)
 
 

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..calibration.information import SensorNoise, covariance_from_information, fisher_information, standard_errors
 from ..calibration.model import STANDARD_GRAVITY, SensorModel
+from ..calibration.mount import MOUNT_NAMES, check_mount_mode, split_information
 from ..calibration.observability import check_pose_count
 from ..exceptions import InvalidInput
 from ..validation import as_positive, as_rotation_batch, as_vector
@@ -54,6 +55,9 @@ class PoseEvaluation:
         information: ``(12, 12)`` Fisher information of ``θ = [a, F0, M0, P]``.
         covariance: Its inverse.
         standard_errors: Per parameter, see :func:`ftkin.calibration.information.standard_errors`.
+        mount_mode: ``"none"``, or the mount estimated with the parameters
+            (``information`` is then θ's marginal information, mount estimated).
+        mount_covariance: ``(k, k)`` covariance of the mount angles [rad²], else None.
     """
 
     rotations: np.ndarray
@@ -63,6 +67,16 @@ class PoseEvaluation:
     information: np.ndarray
     covariance: np.ndarray
     standard_errors: dict
+    mount_mode: str = "none"
+    mount_covariance: np.ndarray | None = None
+
+    @property
+    def mount_std_deg(self) -> dict[str, float]:
+        """Predicted standard errors [deg] of the mount angles by name (empty without a mount)."""
+        if self.mount_covariance is None:
+            return {}
+        sigma = np.rad2deg(np.sqrt(np.diag(self.mount_covariance)))
+        return dict(zip(MOUNT_NAMES[self.mount_mode], (float(value) for value in sigma)))
 
     @property
     def pose_count(self) -> int:
@@ -100,6 +114,7 @@ class PoseEvaluation:
         lines.append(f"{'weight G':<10}{errors['tool_weight']:>14.3e}  N")
         tilt_deg = np.rad2deg(errors["base_tilt"])
         lines.append(f"{'tilt U, V':<10}{tilt_deg[0]:>14.3e}, {tilt_deg[1]:.3e} deg")
+        lines.extend(f"{name:<10}{value:>14.3e}  deg" for name, value in self.mount_std_deg.items())
         return "\n".join(lines)
 
 
@@ -110,6 +125,7 @@ def evaluate_poses(
     center_of_mass=None,
     noise: SensorNoise | None = None,
     readings_per_pose: int = 1,
+    estimate_mount: str = "none",
 ) -> PoseEvaluation:
     """Predict the calibration's standard errors for sensor orientations ``(N, 3, 3)``.
 
@@ -119,6 +135,9 @@ def evaluate_poses(
         center_of_mass: Expected COM in the sensor frame [m] (default 47 mm along z).
         noise: Per-reading noise (default :meth:`SensorNoise.paper`: 0.02 N, 0.002 N·m).
         readings_per_pose: Independent readings averaged at each pose.
+        estimate_mount: ``"yaw"`` or ``"full"``: the calibration will also
+            estimate the sensor's mount (:mod:`ftkin.calibration.mount`; the
+            rotations are the URDF's, the mount assumed near identity).
 
     Raises:
         UnobservableParameters: fewer than three poses, or orientations that
@@ -135,7 +154,10 @@ def evaluate_poses(
     if readings != int(readings):
         raise InvalidInput(f"readings_per_pose must be a whole number, got {readings_per_pose!r}")
     readings = int(readings)
-    information = fisher_information(model, rotations, noise, readings)
+    information = fisher_information(model, rotations, noise, readings, check_mount_mode(estimate_mount))
+    mount_covariance = None
+    if estimate_mount != "none":
+        information, mount_covariance = split_information(information)
     covariance = covariance_from_information(information)
     return PoseEvaluation(
         rotations=rotations,
@@ -145,4 +167,6 @@ def evaluate_poses(
         information=information,
         covariance=covariance,
         standard_errors=standard_errors(model, covariance),
+        mount_mode=estimate_mount,
+        mount_covariance=mount_covariance,
     )

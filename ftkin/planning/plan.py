@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..calibration.information import SensorNoise
+from ..calibration.mount import check_mount_mode
 from ..calibration.observability import check_pose_count
 from ..exceptions import InvalidInput
 from ..progress import Progress
@@ -38,7 +39,7 @@ from .design import d_optimal_selection, information_factors, log_det
 from .evaluation import PoseEvaluation, evaluate_poses, expected_tool
 from .order import revolute_mask, short_travel_order, unwind_revolute
 
-CRITERION = "D-optimality: log det of the Fisher information of θ = [a, F0, M0, P] (SI units)"
+CRITERION = "D-optimality: log det of the Fisher information of θ = [a, F0, M0, P] (and the mount angles, if estimated; SI units)"
 REFINE_STEPS = (0.2, 0.08, 0.03, 0.01)
 """Standard deviations [rad] of the joint perturbations in the refinement rounds."""
 SAMPLE_BATCH = 2000
@@ -113,6 +114,7 @@ def plan_poses(
     candidates: int = 3000,
     max_samples: int = 200_000,
     progress: bool | None = None,
+    estimate_mount: str = "none",
 ) -> PosePlan:
     """Plan ``n`` calibration poses for ``arm``.
 
@@ -132,6 +134,9 @@ def plan_poses(
         candidates: Feasible configurations to collect for the pool.
         max_samples: Give up after drawing this many random configurations.
         progress: Draw a progress bar (default: when stderr is a terminal).
+        estimate_mount: ``"yaw"`` or ``"full"``: plan for a calibration that
+            also estimates the sensor's mount (D-optimality over ``[θ, mount
+            angles]``, the mount assumed near identity).
 
     Raises:
         UnobservableParameters: ``n < 3``, or the constraints leave a
@@ -147,6 +152,7 @@ def plan_poses(
     seed = _integer(seed, "seed", minimum=0)
     if noise is not None and not isinstance(noise, SensorNoise):
         raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
+    check_mount_mode(estimate_mount)
     constraints = PoseConstraints(margin, floor_height, max_tilt, joint_ranges or (), self_collision)
     model = expected_tool(tool_weight, center_of_mass)
     noise = noise if noise is not None else SensorNoise.paper()
@@ -154,7 +160,8 @@ def plan_poses(
     rng = np.random.default_rng(seed)
 
     def factors(rotations):
-        return information_factors(rotations, model.gravity_in_base, model.center_of_mass, noise.channel_std, readings_per_pose)
+        return information_factors(rotations, model.gravity_in_base, model.center_of_mass, noise.channel_std,
+                                   readings_per_pose, estimate_mount)
 
     check_tilt_observability(checker, factors)
     pool_q, pool_rotations, sampled = _candidate_pool(checker, rng, candidates, max_samples, n, progress)
@@ -167,13 +174,14 @@ def plan_poses(
     order = short_travel_order(q)
     q, rotations = q[order], rotations[order]
     evaluation = evaluate_poses(rotations, tool_weight=tool_weight, center_of_mass=center_of_mass,
-                                noise=noise, readings_per_pose=readings_per_pose)
+                                noise=noise, readings_per_pose=readings_per_pose, estimate_mount=estimate_mount)
+    full_information = np.einsum("nki,nkj->ij", *(2 * (factors(rotations),)))
     return PosePlan(
         joint_positions=q,
         joint_names=tuple(arm.joint_names),
         evaluation=evaluation,
         criterion=CRITERION,
-        criterion_value=log_det(evaluation.information),
+        criterion_value=log_det(full_information),
         seed=seed,
         constraints=constraints,
         candidate_count=len(pool_q),

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..calibration.conventions import as_real_sensor
 from ..calibration.model import WRENCH_CHANNELS, SensorModel
 from ..calibration.samples import Samples
 from ..exceptions import InvalidInput, MissingDependency
@@ -46,7 +47,7 @@ def report_data(calibration, samples: Samples) -> dict[str, np.ndarray]:
         raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
     if not isinstance(samples, Samples):
         raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
-    poses = samples.pose_averages()
+    poses = as_real_sensor(samples, calibration).pose_averages()  # the stored sign, axis flip and mount applied
     predicted = calibration.predict(poses.rotations)
     return {
         "pose_ids": poses.pose_ids,

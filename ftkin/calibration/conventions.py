@@ -1,0 +1,244 @@
+"""Sign and handedness of the readings: catch a reversed sign or a reversed axis.
+
+Vendors disagree on sign: some sensors report the load on the sensor (ftkin's
+convention), others the reaction. A calibration on reaction-sign readings fits
+perfectly, with the tool's weight pointing *up*; admittance control would then
+move toward a contact instead of away from it. An axis can also be wired
+mirrored (a left-handed sensor frame): no rotation of the model explains those
+readings, but the same data with that axis reversed fit.
+
+Two settings describe the convention, stored in the calibration file and
+applied to every raw reading at calibration and at run time (the corrected
+reading is ``signs · raw``, :func:`reading_signs`):
+
+* ``sensor_sign`` (``+1`` or ``-1``): ``-1`` negates all six channels;
+* ``flip_axis`` (None, ``"x"``, ``"y"`` or ``"z"``): negates that axis's force
+  and torque channels.
+
+:func:`detect_sign_and_handedness` fits the reflected alternatives (each axis
+reversed) and measures the angle between the fitted weight and the expected
+gravity direction; :func:`check_conventions` raises
+:class:`~ftkin.exceptions.SuspectConvention` naming the cause and the fix.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..exceptions import InvalidInput, SuspectConvention
+from ..validation import as_vector
+from .linear import fit_linear
+from .model import STANDARD_GRAVITY
+from .mount import check_mount_mode, force_step_cost, mount_start
+from .samples import Samples
+
+FLIP_AXES = (None, "x", "y", "z")
+"""Values of ``flip_axis``: no axis reversed, or the one reversed."""
+
+BASE_MOUNTS = ("floor", "ceiling", "wall")
+"""How the robot base is mounted; sets the expected gravity direction (wall: none)."""
+
+MAX_GRAVITY_ANGLE_DEG = 90.0
+"""Largest accepted angle [deg] between the fitted tool weight and the expected gravity direction."""
+
+FLIP_COST_RATIO = 0.1
+"""A reversed axis is named when its force residual sum of squares is below this fraction of the assumed one's."""
+
+MIN_POSES_FOR_FLIP = 6
+"""Fewest poses for the reversed-axis test (fewer leave too few degrees of freedom to compare fits)."""
+
+_EXPECTED = {"floor": np.array([0.0, 0.0, -1.0]), "ceiling": np.array([0.0, 0.0, 1.0]), "wall": None}
+
+
+def check_sensor_sign(sensor_sign) -> int:
+    """``sensor_sign`` as ``+1`` or ``-1``, else :class:`InvalidInput`."""
+    if isinstance(sensor_sign, bool) or sensor_sign not in (1, -1):
+        raise InvalidInput(f"sensor_sign must be +1 (load on the sensor) or -1 (the reaction), got {sensor_sign!r}")
+    return int(sensor_sign)
+
+
+def check_flip_axis(flip_axis) -> str | None:
+    """``flip_axis`` if it is one of :data:`FLIP_AXES`, else :class:`InvalidInput`."""
+    if flip_axis not in FLIP_AXES:
+        raise InvalidInput(f"flip_axis must be None, 'x', 'y' or 'z', got {flip_axis!r}")
+    return flip_axis
+
+
+def reading_signs(sensor_sign: int = 1, flip_axis: str | None = None) -> np.ndarray:
+    """``(6,)`` factors ``±1`` that turn a raw reading into ftkin's convention (``signs · raw``)."""
+    signs = np.full(6, float(check_sensor_sign(sensor_sign)))
+    if check_flip_axis(flip_axis) is not None:
+        axis = "xyz".index(flip_axis)
+        signs[[axis, axis + 3]] *= -1.0
+    return signs
+
+
+def expected_gravity_direction(base_mount: str = "floor", expected_gravity=None) -> np.ndarray | None:
+    """Unit vector [base frame] the tool weight should point along, or None (a wall mount without a direction).
+
+    ``expected_gravity`` (any non-zero 3-vector in the base frame) overrides ``base_mount``.
+    """
+    if base_mount not in BASE_MOUNTS:
+        raise InvalidInput(f"base_mount must be one of {', '.join(BASE_MOUNTS)}, got {base_mount!r}")
+    if expected_gravity is not None:
+        direction = as_vector(expected_gravity, 3, "expected_gravity")
+        norm = float(np.linalg.norm(direction))
+        if norm == 0.0:
+            raise InvalidInput("expected_gravity must be a non-zero direction in the base frame")
+        return direction / norm
+    return _EXPECTED[base_mount]
+
+
+@dataclass(frozen=True)
+class ConventionCheck:
+    """What :func:`detect_sign_and_handedness` found.
+
+    Attributes:
+        flip_costs: Force residual sum of squares [N²] of the force step with
+            each ``flip_axis`` alternative (keys None, ``"x"``, ``"y"``, ``"z"``).
+        assumed_flip: The ``flip_axis`` the readings were taken with.
+        best_flip: The alternative with the smallest cost.
+        gravity_angle_deg: Angle [deg] between the fitted tool weight and the
+            expected gravity direction (NaN when none is expected).
+        gravity_in_base: The tool weight [N, base frame] of the linear fit with the assumed convention.
+        equivalent_flips: Other axes whose reversal the data cannot tell from
+            ``best_flip`` (with a yaw mount estimated, x and y).
+        estimate_mount: The mount mode the alternatives were fitted with.
+    """
+
+    flip_costs: dict
+    assumed_flip: str | None
+    best_flip: str | None
+    gravity_angle_deg: float
+    gravity_in_base: np.ndarray
+    equivalent_flips: tuple = ()
+    estimate_mount: str = "none"
+
+    @property
+    def flip_suspected(self) -> bool:
+        """True when another axis reversal fits far better (:data:`FLIP_COST_RATIO`)."""
+        return (
+            self.best_flip != self.assumed_flip
+            and self.flip_costs[self.best_flip] < FLIP_COST_RATIO * self.flip_costs[self.assumed_flip]
+        )
+
+    @property
+    def sign_suspected(self) -> bool:
+        """True when the tool weight points more than :data:`MAX_GRAVITY_ANGLE_DEG` away from the expected gravity."""
+        return bool(self.gravity_angle_deg > MAX_GRAVITY_ANGLE_DEG)
+
+
+def detect_sign_and_handedness(
+    samples,
+    *,
+    sensor_sign: int = 1,
+    flip_axis: str | None = None,
+    estimate_mount: str = "none",
+    base_mount: str = "floor",
+    expected_gravity=None,
+    g: float = STANDARD_GRAVITY,
+) -> ConventionCheck:
+    """Fit the reflected alternatives and compare the fitted weight with the expected gravity.
+
+    Cheap (linear force steps only), so :func:`~ftkin.calibration.estimate.calibrate`
+    runs it before its maximum-likelihood fit; other checks (a general
+    "doctor") can call it on their own.
+
+    Args:
+        samples: :class:`~ftkin.calibration.samples.Samples` (or their
+            :class:`~ftkin.calibration.samples.PoseAverages`) with the readings
+            **as the sensor gave them** (no sign or flip applied).
+        sensor_sign: The assumed sign (see :func:`reading_signs`).
+        flip_axis: The assumed reversed axis.
+        estimate_mount: ``"none"``, or a mount mode: the alternatives are then
+            scored with the best yaw mount of a grid, and a reversed x axis
+            cannot be told from a reversed y axis (a 180° yaw turns one into the other).
+        base_mount: ``"floor"`` (gravity along base −z), ``"ceiling"`` (+z) or ``"wall"`` (no check).
+        expected_gravity: Expected gravity direction in the base frame; overrides ``base_mount``.
+        g: Gravity [m/s²] (for the linear fit's reported mass only).
+
+    Raises:
+        UnobservableParameters: the poses cannot determine the tool weight at all.
+    """
+    poses = samples.pose_averages() if isinstance(samples, Samples) else samples
+    check_sensor_sign(sensor_sign)
+    check_flip_axis(flip_axis)
+    check_mount_mode(estimate_mount)
+    expected = expected_gravity_direction(base_mount, expected_gravity)
+    costs = {}
+    alternatives = FLIP_AXES if len(poses) >= MIN_POSES_FOR_FLIP else (flip_axis,)
+    for alternative in alternatives:
+        forces = poses.wrenches[:, :3] * reading_signs(sensor_sign, alternative)[:3]
+        costs[alternative], _ = force_step_cost(poses.rotations, forces, estimate_mount)
+    best = min(costs, key=costs.get)
+    corrected = replace(poses, wrenches=poses.wrenches * reading_signs(sensor_sign, flip_axis))
+    if estimate_mount == "none":
+        gravity = fit_linear(corrected, g).gravity_in_base
+    else:
+        gravity = mount_start(corrected, g)[1].gravity_in_base
+    angle = np.nan
+    if expected is not None and np.linalg.norm(gravity) > 0.0:
+        cosine = float(gravity @ expected / np.linalg.norm(gravity))
+        angle = float(np.rad2deg(np.arccos(np.clip(cosine, -1.0, 1.0))))
+    equivalent = ()
+    if estimate_mount != "none" and best in ("x", "y"):
+        equivalent = ("y",) if best == "x" else ("x",)
+    return ConventionCheck(costs, flip_axis, best, angle, gravity, equivalent, estimate_mount)
+
+
+def check_conventions(check: ConventionCheck, sensor_sign: int = 1, base_mount: str = "floor") -> None:
+    """Raise :class:`~ftkin.exceptions.SuspectConvention` for a suspected reversed axis or sign."""
+    if check.flip_suspected:
+        rms = {key: float(np.sqrt(value)) for key, value in check.flip_costs.items()}
+        found = f"the sensor's {check.best_flip} axis reversed" if check.best_flip else "no axis reversed"
+        flag = f"--flip-axis {check.best_flip}" if check.best_flip else "no --flip-axis"
+        if check.equivalent_flips:
+            found += " (or, the same readings with the mount turned 180° about z, the " + \
+                " or ".join(check.equivalent_flips) + " axis)"
+        keyword = f"flip_axis={check.best_flip!r}"
+        raise SuspectConvention(
+            f"the data fit with {found}: {flag} ({keyword}); force residual {rms[check.best_flip]:.3g} N against "
+            f"{rms[check.assumed_flip]:.3g} N as assumed (root sum of squares over the poses). A mirrored axis "
+            "(left-handed sensor frame) fits no rotation of the model; recalibrate with that setting",
+            explanations=[f"the sensor's {check.best_flip} axis is reversed" if check.best_flip else "no axis is reversed"],
+            fixes=[flag],
+            flip_axis=check.best_flip,
+        )
+    if check.sign_suspected:
+        weight = ", ".join(f"{value:+.3g}" for value in check.gravity_in_base)
+        other = "ceiling" if base_mount == "floor" else "floor"
+        sign_fix = f"--sensor-sign {-sensor_sign}"
+        if check.estimate_mount != "none" and check.assumed_flip is None:
+            # −I = diag(1, 1, −1) · Rz(π): with the yaw estimated, a reversed z axis reads the same
+            sign_fix += " (or, the same readings with the mount turned 180° about z, --flip-axis z)"
+        raise SuspectConvention(
+            f"the fitted tool weight gravity_in_base = [{weight}] N points {check.gravity_angle_deg:.0f}° away from "
+            f"the expected gravity direction (base -z for a floor mount, +z for a ceiling mount). Either the sensor "
+            f"reports the reaction instead of the load on the sensor: recalibrate with {sign_fix} "
+            f"(sensor_sign={-sensor_sign}), which negates every reading; or the robot is mounted on the {other}: "
+            f"--base-mount {other} (base_mount={other!r}), or give the expected gravity direction. Admittance "
+            "control with a reversed sign moves toward a contact instead of away from it",
+            explanations=["the sensor reports the reaction (opposite sign)", f"the robot is mounted on the {other}"],
+            fixes=[sign_fix, f"--base-mount {other}"],
+            sensor_sign=-sensor_sign,
+        )
+
+
+def as_real_sensor(samples: Samples, calibration) -> Samples:
+    """``samples`` as the calibrated real sensor sees them: readings corrected, rotations mounted.
+
+    Multiplies every reading by the calibration's ``reading_signs`` and, for
+    samples read from joint angles, turns the URDF's ``R_BS`` into the real
+    sensor's ``R_BS · R_Mᵀ``. A :class:`~ftkin.calibration.model.SensorModel`
+    without these attributes returns ``samples`` unchanged.
+    """
+    signs = getattr(calibration, "reading_signs", np.ones(6))
+    mount = getattr(calibration, "mount_rotation", np.eye(3))
+    rotations = samples.rotations
+    if samples.joint_positions is not None and not np.array_equal(mount, np.eye(3)):
+        rotations = rotations @ np.asarray(mount).T
+    if np.all(signs == 1.0) and rotations is samples.rotations:
+        return samples
+    return replace(samples, wrenches=samples.wrenches * signs, rotations=rotations)

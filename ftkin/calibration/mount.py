@@ -1,0 +1,284 @@
+"""The sensor's real rotation on the flange: the mount ``R_M`` in the ML fit.
+
+A URDF rarely knows how the sensor is clocked on its adapter plate. With
+``R_M`` the rotation taking coordinates in the URDF's sensor frame to the real
+sensor frame, the real orientation is ``R_BS = R_BS_urdf · R_Mᵀ`` and the model
+of :mod:`ftkin.calibration.model` reads, per pose ``i`` with ``u_i = R_iᵀ a``
+(gravity in the URDF sensor frame),
+
+    Gs_i = R_M u_i,    F_i = F0 + Gs_i,    M_i = M0 + P × Gs_i.
+
+``R_M`` lives on SO(3) (det = +1 always): ``R_M = R_M0 · Exp(E δ)`` with
+``R_M0`` the current estimate and ``δ`` a local increment, ``E = e_z`` for
+``"yaw"`` (one angle about the sensor z axis) or ``E = I`` for ``"full"`` (a
+rotation vector, axes of the real sensor frame). Derivatives use the right
+Jacobian of the exponential map, ``∂(Exp(w) u)/∂w = −Exp(w) [u]× J_r(w)``.
+
+Observability: a change ``δ`` of the mount can be traded for a change of the
+gravity direction ``a`` and bias ``F0`` when the part of ``R_i δ`` (the mount
+axis in base coordinates) perpendicular to gravity is the same at every pose.
+For ``"yaw"`` that happens when gravity lies along the sensor z axis at every
+pose (tool straight down or up): turning the sensor about z then changes no
+reading. :func:`check_mount_observable` refuses such pose sets by name.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..exceptions import InvalidInput, UnobservableParameters
+from .linear import fit_linear
+from .model import COMPONENT_NAMES, cross_rows, parameter_jacobian, skew
+from .observability import MIN_RELATIVE_SINGULAR_VALUE, force_regressor
+from .samples import PoseAverages
+
+MOUNT_MODES = ("none", "yaw", "full")
+"""Values of ``estimate_mount``: no mount, a rotation about the sensor z axis, any rotation."""
+
+MOUNT_NAMES = {"none": (), "yaw": ("mount[z]",), "full": ("mount[x]", "mount[y]", "mount[z]")}
+"""Names of the mount increments ``δ`` [rad] per mode (rotation about the real sensor's axes)."""
+
+YAW_START_GRID = np.deg2rad(np.arange(0.0, 360.0, 15.0))
+"""Yaw angles [rad] tried for the starting point (the linear fit's force residual picks one)."""
+
+_AXES = {"yaw": np.array([[0.0], [0.0], [1.0]]), "full": np.eye(3)}
+
+POSES_NEEDED = {
+    "yaw": (
+        "turning the sensor about its z axis changes no reading while gravity lies along that axis: use poses "
+        "with the tool tilted 30° or more from vertical, about at least two different horizontal axes"
+    ),
+    "full": (
+        "use poses that turn gravity into every sensor direction: the tool tilted 30° or more about at least "
+        "two different horizontal axes, and the wrist turned so gravity is seen along the sensor's x, y and z axes"
+    ),
+}
+"""What pose sets each mode needs (said when a mount is refused as unobservable)."""
+
+
+def check_mount_mode(estimate_mount: str) -> str:
+    """``estimate_mount`` if it is one of :data:`MOUNT_MODES`, else :class:`InvalidInput`."""
+    if estimate_mount not in MOUNT_MODES:
+        raise InvalidInput(f"unknown estimate_mount {estimate_mount!r}; expected one of {', '.join(MOUNT_MODES)}")
+    return estimate_mount
+
+
+def exp_so3(rotation_vector) -> np.ndarray:
+    """``Exp(w)``: rotation matrix of a rotation vector ``w`` [rad] (Rodrigues)."""
+    w = np.asarray(rotation_vector, dtype=float)
+    angle = float(np.linalg.norm(w))
+    k = skew(w)
+    if angle < 1e-8:
+        return np.eye(3) + k + 0.5 * k @ k
+    return np.eye(3) + np.sin(angle) / angle * k + (1.0 - np.cos(angle)) / angle**2 * k @ k
+
+
+def right_jacobian_so3(rotation_vector) -> np.ndarray:
+    """Right Jacobian ``J_r(w)`` of SO(3): ``Exp(w + dw) ≈ Exp(w) Exp(J_r(w) dw)``."""
+    w = np.asarray(rotation_vector, dtype=float)
+    angle = float(np.linalg.norm(w))
+    k = skew(w)
+    if angle < 1e-6:
+        return np.eye(3) - 0.5 * k + k @ k / 6.0
+    return np.eye(3) - (1.0 - np.cos(angle)) / angle**2 * k + (angle - np.sin(angle)) / angle**3 * k @ k
+
+
+def mount_rotation(base: np.ndarray, mode: str, increment) -> np.ndarray:
+    """``R_M = base · Exp(E δ)`` for the mode's axes ``E``."""
+    return base @ exp_so3(_AXES[mode] @ np.asarray(increment, dtype=float))
+
+
+@dataclass(frozen=True)
+class MountedProblem:
+    """The whitened problem of :class:`~ftkin.calibration.ml.WeightedProblem` with the mount increment appended to ``θ``.
+
+    The parameter vector is ``x = [θ (12), δ (k)]``; a bare 12-vector ``θ``
+    means ``δ = 0`` (the mount at :attr:`mount_base`).
+
+    Attributes:
+        rotations: ``(P, 3, 3)`` sensor orientations from the URDF, ``R_BS_urdf``.
+        wrenches: ``(P, 6)`` mean raw reading per pose [N, N·m].
+        counts: ``(P,)`` readings averaged at each pose.
+        channel_std: ``(6,)`` per-reading noise ``σ`` [N, N·m].
+        mount_base: ``R_M0`` ``(3, 3)``, the mount at ``δ = 0``.
+        mode: ``"yaw"`` (``k = 1``) or ``"full"`` (``k = 3``).
+    """
+
+    rotations: np.ndarray
+    wrenches: np.ndarray
+    counts: np.ndarray
+    channel_std: np.ndarray
+    mount_base: np.ndarray = field(default_factory=lambda: np.eye(3))
+    mode: str = "yaw"
+
+    @property
+    def weights(self) -> np.ndarray:
+        """``(P, 6)`` whitening factors ``sqrt(n_i) / σ_c``."""
+        return np.sqrt(self.counts)[:, None] / self.channel_std[None, :]
+
+    def whitened_residuals(self, x: np.ndarray) -> np.ndarray:
+        """``(6P,)`` residuals in units of their standard deviation."""
+        return (self.residuals(x) * self.weights).reshape(-1)
+
+    @property
+    def parameter_count(self) -> int:
+        """``12 + k``."""
+        return 12 + _AXES[self.mode].shape[1]
+
+    def _full(self, x: np.ndarray) -> np.ndarray:
+        return x if len(x) == self.parameter_count else np.concatenate([x, np.zeros(self.parameter_count - len(x))])
+
+    def mount(self, x: np.ndarray) -> np.ndarray:
+        """``R_M`` at parameters ``x``."""
+        return mount_rotation(self.mount_base, self.mode, self._full(x)[12:])
+
+    def residuals(self, x: np.ndarray) -> np.ndarray:
+        """``(P, 6)`` measured minus predicted [N, N·m]."""
+        x = self._full(x)
+        gravity_in_sensor = np.einsum("nji,j->ni", self.rotations, x[0:3]) @ self.mount(x).T
+        predicted = np.empty_like(self.wrenches)
+        predicted[:, 0:3] = gravity_in_sensor + x[3:6]
+        predicted[:, 3:6] = cross_rows(x[9:12], gravity_in_sensor) + x[6:9]
+        return self.wrenches - predicted
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """``(P, 6, 12 + k)`` derivative of the prediction (not whitened)."""
+        x = self._full(x)
+        axes = _AXES[self.mode]
+        rotation = self.mount(x)
+        rotations = self.rotations @ rotation.T
+        jac = np.empty((len(rotations), 6, self.parameter_count))
+        jac[:, :, :12] = parameter_jacobian(rotations, x[0:3], x[9:12])
+        gravity_urdf = np.einsum("nji,j->ni", self.rotations, x[0:3])
+        d_gravity = -rotation @ skew(gravity_urdf) @ right_jacobian_so3(axes @ x[12:]) @ axes
+        jac[:, 0:3, 12:] = d_gravity
+        jac[:, 3:6, 12:] = skew(x[9:12]) @ d_gravity
+        return jac
+
+    def whitened_jacobian(self, x: np.ndarray) -> np.ndarray:
+        """``(6P, 12 + k)`` derivative of the whitened prediction."""
+        return (self.jacobian(x) * self.weights[:, :, None]).reshape(-1, self.parameter_count)
+
+    def hat_blocks(self, x: np.ndarray) -> np.ndarray:
+        """``(P, 6, 6)`` diagonal blocks of the hat matrix, mount columns included."""
+        jac = self.whitened_jacobian(x)
+        blocks = jac.reshape(-1, 6, self.parameter_count)
+        return blocks @ np.linalg.pinv(jac.T @ jac, hermitian=True) @ np.transpose(blocks, (0, 2, 1))
+
+    def recentred(self, x: np.ndarray) -> tuple[MountedProblem, np.ndarray]:
+        """The same problem with ``R_M0`` moved to ``x``'s mount, and ``θ`` (12,)."""
+        return replace(self, mount_base=self.mount(x)), np.asarray(x[:12], dtype=float)
+
+
+def force_step_cost(rotations: np.ndarray, forces: np.ndarray, mode: str = "none") -> tuple[float, np.ndarray]:
+    """Smallest force residual sum of squares [N²] of the paper's force step, and the mount it took.
+
+    ``mode="none"``: the mount is the identity; otherwise the best yaw of
+    :data:`YAW_START_GRID` (a fixed mount keeps the force step linear, with
+    rotations ``R_i R_Mᵀ``).
+    """
+    values = forces.reshape(-1)
+    grid = YAW_START_GRID if mode != "none" else np.zeros(1)
+    best_cost, best_rotation = np.inf, np.eye(3)
+    for yaw in grid:
+        rotation = mount_rotation(np.eye(3), "yaw", [yaw])
+        regressor = force_regressor(rotations @ rotation.T)
+        solution, *_ = np.linalg.lstsq(regressor, values, rcond=None)
+        cost = float(np.sum((values - regressor @ solution) ** 2))
+        if cost < best_cost:
+            best_cost, best_rotation = cost, rotation
+    return best_cost, best_rotation
+
+
+def mount_start(poses: PoseAverages, g: float):
+    """Starting mount ``R_M0`` (a yaw from :data:`YAW_START_GRID`) and the two-step linear fit there.
+
+    The yaw is the one of :func:`force_step_cost`; the full two-step fit (with
+    its observability checks) then runs at that yaw.
+    """
+    _, rotation = force_step_cost(poses.rotations, poses.wrenches[:, :3], "yaw")
+    return rotation, fit_linear(replace(poses, rotations=poses.rotations @ rotation.T), g)
+
+
+def check_mount_observable(problem: MountedProblem, x: np.ndarray) -> None:
+    """Refuse pose sets that cannot determine the mount (see the module docstring).
+
+    The whitened Jacobian with unit-norm columns must have a smallest singular
+    value of at least :data:`~ftkin.calibration.observability.MIN_RELATIVE_SINGULAR_VALUE`
+    relative to its largest; the error names the mount angles (and any other
+    parameter) in the weakest direction and says which poses are needed.
+    """
+    jac = problem.whitened_jacobian(x)
+    scale = np.linalg.norm(jac, axis=0)
+    scale[scale == 0] = 1.0
+    _, singular_values, vt = np.linalg.svd(jac / scale, full_matrices=False)
+    relative = singular_values / singular_values[0]
+    if relative[-1] >= MIN_RELATIVE_SINGULAR_VALUE:
+        return
+    names = COMPONENT_NAMES + MOUNT_NAMES[problem.mode]
+    weakest = np.abs(vt[-1]) / np.abs(vt[-1]).max()
+    involved = [names[i] for i in np.flatnonzero(weakest > 0.3)]
+    mount_involved = [name for name in involved if name.startswith("mount")] or list(MOUNT_NAMES[problem.mode])
+    others = [name for name in involved if not name.startswith("mount")]
+    raise UnobservableParameters(
+        mount_involved,
+        f"{POSES_NEEDED[problem.mode]} (smallest relative singular value {relative[-1]:.1e}, need at least "
+        f"{MIN_RELATIVE_SINGULAR_VALUE:.0e}" + (f"; traded against {', '.join(others)}" if others else "") + ")",
+        singular_values=relative,
+    )
+
+
+def mount_jacobian(rotations: np.ndarray, gravity_in_base, center_of_mass, mode: str, mount=None) -> np.ndarray:
+    """``(N, 6, 12 + k)`` derivative of the prediction with respect to ``[θ, δ]`` at ``δ = 0``.
+
+    ``rotations`` are the URDF's ``R_BS``; ``mount`` is ``R_M`` (default the
+    identity, what a plan assumes before the mount is known). ``mode="none"``
+    gives the ``(N, 6, 12)`` Jacobian of :func:`~ftkin.calibration.model.parameter_jacobian`.
+    """
+    mount = np.eye(3) if mount is None else np.asarray(mount, dtype=float)
+    gravity, com = np.asarray(gravity_in_base, dtype=float), np.asarray(center_of_mass, dtype=float)
+    jac = parameter_jacobian(rotations @ mount.T, gravity, com)
+    if check_mount_mode(mode) == "none":
+        return jac
+    d_gravity = -mount @ skew(np.einsum("nji,j->ni", rotations, gravity)) @ _AXES[mode]
+    return np.concatenate([jac, np.concatenate([d_gravity, skew(com) @ d_gravity], axis=1)], axis=2)
+
+
+def check_information_observable(information: np.ndarray, mode: str, rcond: float = 1e-10) -> None:
+    """Refuse a singular ``(12 + k)`` information matrix, naming the weak parameters (and the poses a mount needs)."""
+    names = COMPONENT_NAMES + MOUNT_NAMES[mode]
+    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
+    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
+    if eigenvalues[0] > rcond * eigenvalues[-1]:
+        return
+    involved = [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)]
+    mount_names = [name for name in involved if name.startswith("mount")]
+    reason = POSES_NEEDED[mode] if mount_names else "the information matrix is singular along a combination of them"
+    raise UnobservableParameters(involved, reason, singular_values=eigenvalues[::-1])
+
+
+def split_information(information: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Split a ``(12 + k)`` information matrix into θ's marginal information and the mount covariance.
+
+    Returns the Schur complement ``I_θθ − I_θm I_mm⁻¹ I_mθ`` (12, 12), whose
+    inverse is θ's covariance with the mount estimated, and the ``(k, k)``
+    covariance of the mount increments [rad²] (the mount block of the inverse).
+    """
+    check_information_observable(information, "yaw" if information.shape[0] == 13 else "full")
+    theta, mount = information[:12, :12], information[12:, 12:]
+    cross = information[:12, 12:]
+    marginal = theta - cross @ np.linalg.solve(mount, cross.T)
+    marginal = 0.5 * (marginal + marginal.T)
+    mount_marginal = mount - cross.T @ np.linalg.solve(theta, cross)
+    return marginal, np.linalg.inv(0.5 * (mount_marginal + mount_marginal.T))
+
+
+def rotation_to_rpy(rotation) -> np.ndarray:
+    """URDF roll-pitch-yaw [rad] of a rotation ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
+    r = np.asarray(rotation, dtype=float)
+    pitch = np.arctan2(-r[2, 0], np.hypot(r[0, 0], r[1, 0]))
+    roll = np.arctan2(r[2, 1], r[2, 2])
+    yaw = np.arctan2(r[1, 0], r[0, 0])
+    return np.array([roll, pitch, yaw])
