@@ -10,13 +10,17 @@ and scipy.
 """
 
 from ._version import __version__  # noqa: F401  (re-exported: ftkin.__version__)
+from .calibration.derivatives import CausalDifferentiator, joint_derivatives
 from .calibration.diagnostics import FitDiagnostics
+from .calibration.dynamic import DynamicCalibrationResult, calibrate_dynamic
 from .calibration.estimate import METHODS, CalibrationResult, calibrate
 from .calibration.information import SensorNoise, fisher_information
 from .calibration.model import STANDARD_GRAVITY, SensorModel
+from .calibration.regressor import MotionSamples
 from .calibration.samples import Samples
 from .control.admittance import Admittance, ControlFrame
 from .control.compensation import Compensator
+from .control.dynamic_compensation import DynamicCompensator
 from .control.joint_admittance import JointAdmittance, StepStatus
 from .control.sensor_faults import FaultMonitor, SensorFault, SensorLimits
 from .exceptions import (
@@ -30,13 +34,16 @@ from .exceptions import (
     UrdfError,
 )
 from .io.calibration_file import load_calibration, save_calibration
+from .io.motion_recording import MotionRecording, load_motion_bag, load_motion_csv
 from .io.samples_csv import load_samples
 from .kinematics.arm import Arm, SensorMount, bundled_urdf_path
 from .kinematics.robots import ROBOTS, load_robot
 from .kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from .planning.constraints import PoseConstraints
 from .planning.evaluation import PoseEvaluation, evaluate_poses
+from .planning.excitation import ExcitationPlan, FourierTrajectory, plan_excitation
 from .planning.plan import PosePlan, plan_poses
+from .sim.mujoco_recording import MujocoRecorder, ToolInertia
 from .sim.placement import PlacementRun, PlacementScenario, simulate_placement
 from .sim.sensor import SimulatedSensor
 from .sim.surfaces import Surface
@@ -46,10 +53,15 @@ __all__ = [
     "Arm",
     "CalibrationFileError",
     "CalibrationResult",
+    "CausalDifferentiator",
     "Compensator",
     "ControlFrame",
+    "DynamicCalibrationResult",
+    "DynamicCompensator",
+    "ExcitationPlan",
     "FaultMonitor",
     "FitDiagnostics",
+    "FourierTrajectory",
     "FrameNotFound",
     "FtkinError",
     "InvalidInput",
@@ -57,6 +69,9 @@ __all__ = [
     "JointAdmittance",
     "METHODS",
     "MissingDependency",
+    "MotionRecording",
+    "MotionSamples",
+    "MujocoRecorder",
     "PlacementRun",
     "PlacementScenario",
     "PoseConstraints",
@@ -73,16 +88,22 @@ __all__ = [
     "SimulatedSensor",
     "StepStatus",
     "Surface",
+    "ToolInertia",
     "UnobservableParameters",
     "UrdfError",
     "bundled_urdf_path",
     "calibrate",
+    "calibrate_dynamic",
     "euler_zyx_deg_to_matrix",
     "evaluate_poses",
     "fisher_information",
+    "joint_derivatives",
     "load_calibration",
+    "load_motion_bag",
+    "load_motion_csv",
     "load_robot",
     "load_samples",
+    "plan_excitation",
     "plan_poses",
     "quaternion_to_matrix",
     "save_calibration",

@@ -11,20 +11,28 @@ Fisher information here also serves pose planning.
 Depends on the bottom layer and :mod:`ftkin.kinematics` (rotations).
 """
 
+from .derivatives import CausalDifferentiator, joint_derivatives
 from .diagnostics import FitDiagnostics
+from .dynamic import DynamicCalibrationResult, calibrate_dynamic
 from .estimate import METHODS, CalibrationResult, calibrate
 from .information import SensorNoise, fisher_information
 from .model import STANDARD_GRAVITY, SensorModel
+from .regressor import MotionSamples
 from .samples import Samples
 
 __all__ = [
-    "METHODS",
-    "STANDARD_GRAVITY",
     "CalibrationResult",
+    "CausalDifferentiator",
+    "DynamicCalibrationResult",
     "FitDiagnostics",
+    "METHODS",
+    "MotionSamples",
+    "STANDARD_GRAVITY",
     "Samples",
     "SensorModel",
     "SensorNoise",
     "calibrate",
+    "calibrate_dynamic",
     "fisher_information",
+    "joint_derivatives",
 ]

@@ -12,10 +12,14 @@ Depends on :mod:`ftkin.calibration` and :mod:`ftkin.kinematics`.
 """
 
 from .calibration_file import load_calibration, save_calibration
+from .motion_recording import MotionRecording, load_motion_bag, load_motion_csv
 from .samples_csv import load_samples
 
 __all__ = [
+    "MotionRecording",
     "load_calibration",
+    "load_motion_bag",
+    "load_motion_csv",
     "load_samples",
     "save_calibration",
 ]

@@ -10,7 +10,9 @@ Keys (units): ``force_offset`` [N], ``torque_offset`` [N·m],
 values), ``diagnostics`` (``ml`` only, else absent: noise used, chi-square,
 per-pose normalized residuals, outliers, condition number, warnings; see
 :class:`~ftkin.calibration.diagnostics.FitDiagnostics`), ``created`` (UTC, ISO 8601),
-``ftkin_version``. Files without ``covariance``/``diagnostics`` (written by
+``ftkin_version``; a dynamic calibration adds ``inertia`` (3×3 about the
+centre of mass, sensor axes [kg·m²]) and ``std_errors.inertia`` and loads as a
+:class:`~ftkin.calibration.dynamic.DynamicCalibrationResult`. Files without ``covariance``/``diagnostics`` (written by
 ``linear`` or an older ftkin) load with those set to None.
 
 Floats are written with Python's shortest round-trip repr, so
@@ -30,6 +32,7 @@ from ..calibration.diagnostics import FitDiagnostics
 from ..calibration.estimate import CalibrationResult
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from .atomic import atomic_write_text
+from .calibration_inertia import inertia_document, with_inertia
 
 FORMAT_NAME = "ftkin-calibration"
 FORMAT_VERSION = 1
@@ -44,6 +47,7 @@ UNITS = {
     "base_tilt_deg": "deg, [U about base x, V about new y]",
     "g": "m/s^2",
     "residual_rms": "N (fx, fy, fz), N*m (mx, my, mz)",
+    "inertia": "kg*m^2, about the centre of mass, sensor axes",
 }
 
 
@@ -62,7 +66,11 @@ def _std_errors_document(result: CalibrationResult) -> dict | None:
     errors = result.std_errors
     if errors is None:
         return None
-    return {**errors, "base_tilt_deg": np.rad2deg(errors["base_tilt"])}
+    document = {**errors, "base_tilt_deg": np.rad2deg(errors["base_tilt"])}
+    inertia_errors = getattr(result, "inertia_std_errors", None)
+    if inertia_errors is not None:
+        document["inertia"] = inertia_errors
+    return document
 
 
 def calibration_to_dict(result: CalibrationResult) -> dict:
@@ -81,6 +89,7 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         "center_of_mass": result.center_of_mass,
         "base_tilt_deg": list(result.base_tilt_deg),
         "g": result.g,
+        **inertia_document(result),
         "method": result.method,
         "pose_count": result.pose_count,
         "sample_count": result.sample_count,
@@ -212,6 +221,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     method = reader.optional("method", str, "unknown")
     urdf, sensor_frame = reader.optional("urdf", str), reader.optional("sensor_frame", str)
     sample_count = reader.optional("sample_count", int, count)
+    inertia = reader.array("inertia", (3, 3), required=False)
     try:
         result = CalibrationResult(
             force_offset=reader.array("force_offset", (3,)),
@@ -233,6 +243,8 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
         raise CalibrationFileError(path, str(error)) from None
     if not (np.isfinite(result.tool_weight) and result.tool_weight > 0.0):
         reader.fail(f"|gravity_in_base| must be finite and positive, got {result.tool_weight}", "gravity_in_base")
+    if inertia is not None:
+        result = with_inertia(reader, result, inertia)
     if "tool_weight" in document:
         stated = reader.number("tool_weight")
         if not math.isclose(stated, result.tool_weight, rel_tol=1e-9, abs_tol=1e-12):

@@ -21,6 +21,7 @@ checked on a fine grid.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,7 +29,7 @@ import numpy as np
 from ..calibration.dynamic_fit import DynamicProblem
 from ..calibration.information import SensorNoise
 from ..calibration.model import STANDARD_GRAVITY
-from ..calibration.regressor import sensor_motion
+from ..calibration.regressor import body_regressor, sensor_motion
 from ..exceptions import InvalidInput
 from ..validation import as_positive
 from .constraints import FeasibilityChecker, PoseConstraints
@@ -107,9 +108,8 @@ class ExcitationPlan:
 
 def _information(arm, q, dq, ddq, noise: SensorNoise) -> np.ndarray:
     rotations, velocities, accelerations = sensor_motion(arm, q, dq, ddq)
-    from ..calibration.regressor import body_regressor
-
-    problem = DynamicProblem(np.zeros((len(q), 6)), rotations, body_regressor(velocities, accelerations), noise.channel_std, STANDARD_GRAVITY)
+    regressor = body_regressor(velocities, accelerations)
+    problem = DynamicProblem(np.zeros((len(q), 6)), rotations, regressor, noise.channel_std, STANDARD_GRAVITY)
     x = np.zeros(18)
     x[8] = 1.0
     jac = problem.whitened_jacobian(x)
@@ -225,7 +225,7 @@ def plan_excitation(
         raise InvalidInput(f"harmonics must be at least 2, got {harmonics}")
     constraints = constraints if constraints is not None else PoseConstraints()
     if constraints.max_tilt is not None:
-        constraints = PoseConstraints(constraints.margin, constraints.floor_height, None, constraints.joint_ranges, constraints.self_collision)
+        constraints = dataclasses.replace(constraints, max_tilt=None)
     noise = noise if noise is not None else SensorNoise.paper()
     checker = FeasibilityChecker(arm, constraints)
     velocity_limits = as_positive(velocity_fraction, "velocity_fraction") * arm.velocity_limits
@@ -243,7 +243,8 @@ def plan_excitation(
     def cost(x):
         trajectory = design.trajectory(x)
         value, _ = _log_det(_information(arm, *trajectory.evaluate(grid), noise))
-        penalty = _PENALTY * design.violations(trajectory, check_grid) if constraints.self_collision or constraints.floor_height is not None else 0.0
+        checked = constraints.self_collision or constraints.floor_height is not None
+        penalty = _PENALTY * design.violations(trajectory, check_grid) if checked else 0.0
         return (-value if np.isfinite(value) else 1e6) + penalty
 
     rng = np.random.default_rng(seed)
