@@ -215,8 +215,7 @@ def calibrate_dynamic(
     values = _outputs(problem, x, phi_space)
     covariance = _covariance(problem, x, phi_space)
     theta = values[12:22]
-    mass, com, about_com = body_from_parameters(theta)
-    del mass, com
+    about_com = body_from_parameters(theta)[2]
     residuals = problem.wrenches - problem.predict(np.concatenate([x[:8], theta[list(free)]]))
     errors = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
     return DynamicCalibrationResult(

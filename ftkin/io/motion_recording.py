@@ -9,7 +9,10 @@ stamps) and resampled to a uniform grid at the wrench rate when its stamps
 jitter.
 
 :meth:`MotionRecording.motion_samples` differentiates the joint positions with
-the zero-phase Savitzky–Golay filter (:mod:`ftkin.calibration.derivatives`)
+the zero-phase Savitzky–Golay filter, which assumes a uniform grid: a CSV must
+be sampled uniformly (steps within 5 % of the median, else an error asks to
+resample it), a bag is resampled linearly whenever its steps vary by more than
+0.1 % (wrench stamps jitter on a real system). The filter (:mod:`ftkin.calibration.derivatives`)
 and runs the kinematics: :class:`~ftkin.calibration.regressor.MotionSamples` out.
 """
 
@@ -27,8 +30,8 @@ from .csv_table import Table, missing_columns, read_table
 from .samples_csv import check_radians, detect_orientation
 
 TIME_COLUMN = "t"
-JITTER_TOLERANCE = 0.05
-"""Largest deviation of a time step from the median step [fraction] accepted without resampling."""
+JITTER_TOLERANCE = 1e-3
+"""Largest deviation of a bag's time step from the median step [fraction] accepted without resampling."""
 
 
 @dataclass(frozen=True)
