@@ -95,7 +95,8 @@ class DynamicCalibrationResult(CalibrationResult):
 
     def summary(self) -> str:
         """Static summary plus the inertia (± standard errors) and the fit over the motion."""
-        lines = [super().summary()]
+        lines = super().summary().split("\n")
+        lines[0] = f"ftkin calibration: method {self.method}, moving recording of {self.sample_count} readings"
         if self.has_inertia:
             errors = self.inertia_std_errors if self.inertia_std_errors is not None else np.full((3, 3), np.nan)
             lines.append("  inertia_about_com_in_sensor [kg·m²] (± standard error):")

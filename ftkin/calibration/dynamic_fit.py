@@ -143,13 +143,14 @@ def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
     names = problem.names
     if np.any(scale == 0.0):
         raise UnobservableParameters([names[i] for i in np.flatnonzero(scale == 0.0)], "the recording carries no information about them")
-    singular, vectors = np.linalg.svd(jac / scale, full_matrices=False)[1:]
-    if singular[-1] ** 2 <= rcond * singular[0] ** 2:
-        weakest = vectors[-1]
+    normalized = jac / scale
+    eigenvalues, eigenvectors = np.linalg.eigh(normalized.T @ normalized)  # the normal matrix: cheap for tall regressors
+    if eigenvalues[0] <= rcond * eigenvalues[-1]:
+        weakest = eigenvectors[:, 0]
         raise UnobservableParameters(
             [names[i] for i in np.flatnonzero(np.abs(weakest) > 0.3)],
             "the regressor is singular along a combination of them (too few distinct orientations or motions)",
-            singular_values=singular,
+            singular_values=np.sqrt(np.clip(eigenvalues[::-1], 0.0, None)),
         )
 
 

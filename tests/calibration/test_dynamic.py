@@ -93,6 +93,10 @@ def test_static_data_reports_inertia_unobservable(arm, recorder):
     with pytest.raises(UnobservableParameters, match="inertia") as error:
         calibrate_dynamic(samples)
     assert "inertia_about_com_in_sensor" in error.value.names
+    # Without the inertia, one orientation still cannot separate weight from bias.
+    single = Samples.from_joint_positions(arm, np.repeat(q[:1], 5, axis=0), recorder.wrenches(np.repeat(q[:1], 5, axis=0)))
+    with pytest.raises(UnobservableParameters, match="force_offset|mass|base_tilt"):
+        calibrate_dynamic(single, estimate_inertia=False)
 
 
 def test_static_special_case_agrees_with_static_calibration(arm, recorder):
