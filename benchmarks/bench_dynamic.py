@@ -34,6 +34,7 @@ import numpy as np
 from ftkin import Arm, Compensator
 from ftkin.calibration.derivatives import joint_derivatives
 from ftkin.calibration.dynamic import calibrate_dynamic
+from ftkin.calibration.log_cholesky import is_physically_consistent
 from ftkin.calibration.regressor import MotionSamples
 from ftkin.control.dynamic_compensation import DynamicCompensator
 from ftkin.kinematics.rotations import euler_zyx_to_matrix
@@ -148,7 +149,8 @@ def main() -> None:
     print(f"| mass error, 30 s planned excitation | {100 * mass_error:.3f} % | ≤ 0.5 % |")
     print(f"| COM error | {1000 * com_error:.3f} mm | ≤ 1 mm |")
     print(f"| worst inertia element error / largest principal moment | {100 * inertia_error:.2f} % | ≤ 5 % |")
-    print(f"| physically consistent (unconstrained LS consistent) | yes ({result.unconstrained_consistent}) | yes |")
+    consistent = "yes" if is_physically_consistent(result.inertial_parameters) else "NO"
+    print(f"| physically consistent (unconstrained LS consistent) | {consistent} ({result.unconstrained_consistent}) | yes |")
     print(f"| validation motion: peak joint speed, acceleration | {peak_speed:.2f} rad/s, {peak_acceleration:.1f} rad/s² | ≥ 1.5, ≥ 8 |")
     print(f"| compensated force RMS, static / dynamic (noise floor) | {rms(static_contact, force):.4f} / "
           f"{rms(dynamic_contact, force):.4f} N ({noise_force:.4f}) | dynamic ≥ 10× lower |")
