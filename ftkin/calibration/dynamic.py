@@ -81,6 +81,16 @@ class DynamicCalibrationResult(CalibrationResult):
     unconstrained_parameters: np.ndarray | None = None
     unconstrained_consistent: bool | None = None
 
+    def __post_init__(self):
+        super().__post_init__()
+        for name in ("inertia_about_com_in_sensor", "inertia_std_errors", "inertial_parameters", "inertial_covariance",
+                     "motion_residual_rms", "channel_std", "unconstrained_parameters"):
+            value = getattr(self, name)
+            if value is not None:
+                value = np.array(value, dtype=float)
+                value.setflags(write=False)
+                object.__setattr__(self, name, value)
+
     @property
     def has_inertia(self) -> bool:
         """True when the inertia was identified (compensation may then remove inertial forces)."""
