@@ -11,14 +11,18 @@ and scipy.
 
 from ._version import __version__  # noqa: F401  (re-exported: ftkin.__version__)
 from .calibration.conventions import ConventionCheck, detect_sign_and_handedness
+from .calibration.derivatives import CausalDifferentiator, joint_derivatives
 from .calibration.diagnostics import FitDiagnostics
+from .calibration.dynamic import DynamicCalibrationResult, calibrate_dynamic
 from .calibration.estimate import METHODS, CalibrationResult, calibrate
 from .calibration.information import SensorNoise, fisher_information
 from .calibration.model import STANDARD_GRAVITY, SensorModel
 from .calibration.mount import MOUNT_MODES
+from .calibration.regressor import MotionSamples
 from .calibration.samples import Samples
 from .control.admittance import Admittance, ControlFrame
 from .control.compensation import Compensator
+from .control.dynamic_compensation import DynamicCompensator
 from .control.joint_admittance import JointAdmittance, StepStatus
 from .control.sensor_faults import FaultMonitor, SensorFault, SensorLimits
 from .exceptions import (
@@ -33,6 +37,7 @@ from .exceptions import (
     UrdfError,
 )
 from .io.calibration_file import load_calibration, save_calibration
+from .io.motion_recording import MotionRecording, load_motion_bag, load_motion_csv
 from .io.payload_export import Payload, export_payload, payload_in_flange
 from .io.samples_csv import load_samples
 from .kinematics.arm import Arm, SensorMount, bundled_urdf_path
@@ -41,7 +46,9 @@ from .kinematics.robots import ROBOTS, load_robot
 from .kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from .planning.constraints import PoseConstraints
 from .planning.evaluation import PoseEvaluation, evaluate_poses
+from .planning.excitation import ExcitationPlan, FourierTrajectory, plan_excitation
 from .planning.plan import PosePlan, plan_poses
+from .sim.mujoco_recording import MujocoRecorder, ToolInertia
 from .sim.placement import PlacementRun, PlacementScenario, simulate_placement
 from .sim.sensor import SimulatedSensor
 from .sim.surfaces import Surface
@@ -51,11 +58,16 @@ __all__ = [
     "Arm",
     "CalibrationFileError",
     "CalibrationResult",
+    "CausalDifferentiator",
     "Compensator",
     "ControlFrame",
     "ConventionCheck",
+    "DynamicCalibrationResult",
+    "DynamicCompensator",
+    "ExcitationPlan",
     "FaultMonitor",
     "FitDiagnostics",
+    "FourierTrajectory",
     "FrameNotFound",
     "FtkinError",
     "InvalidInput",
@@ -64,6 +76,9 @@ __all__ = [
     "METHODS",
     "MOUNT_MODES",
     "MissingDependency",
+    "MotionRecording",
+    "MotionSamples",
+    "MujocoRecorder",
     "Payload",
     "PlacementRun",
     "PlacementScenario",
@@ -82,20 +97,26 @@ __all__ = [
     "StepStatus",
     "Surface",
     "SuspectConvention",
+    "ToolInertia",
     "UnobservableParameters",
     "UrdfError",
     "bundled_urdf_path",
     "calibrate",
+    "calibrate_dynamic",
     "detect_sign_and_handedness",
     "euler_zyx_deg_to_matrix",
     "evaluate_poses",
     "export_payload",
     "fisher_information",
+    "joint_derivatives",
     "load_calibration",
+    "load_motion_bag",
+    "load_motion_csv",
     "load_robot",
     "load_samples",
     "mounted_arm",
     "payload_in_flange",
+    "plan_excitation",
     "plan_poses",
     "quaternion_to_matrix",
     "save_calibration",

@@ -12,24 +12,32 @@ Depends on the bottom layer and :mod:`ftkin.kinematics` (rotations).
 """
 
 from .conventions import ConventionCheck, detect_sign_and_handedness
+from .derivatives import CausalDifferentiator, joint_derivatives
 from .diagnostics import FitDiagnostics
+from .dynamic import DynamicCalibrationResult, calibrate_dynamic
 from .estimate import METHODS, CalibrationResult, calibrate
 from .information import SensorNoise, fisher_information
 from .model import STANDARD_GRAVITY, SensorModel
 from .mount import MOUNT_MODES
+from .regressor import MotionSamples
 from .samples import Samples
 
 __all__ = [
     "CalibrationResult",
+    "CausalDifferentiator",
     "ConventionCheck",
+    "DynamicCalibrationResult",
     "FitDiagnostics",
     "METHODS",
     "MOUNT_MODES",
+    "MotionSamples",
     "STANDARD_GRAVITY",
     "Samples",
     "SensorModel",
     "SensorNoise",
     "calibrate",
+    "calibrate_dynamic",
     "detect_sign_and_handedness",
     "fisher_information",
+    "joint_derivatives",
 ]

@@ -1,4 +1,4 @@
-"""``ftkin calibrate SAMPLES.csv [-o CALIB.json]``."""
+"""``ftkin calibrate SAMPLES.csv [-o CALIB.json]`` (``--dynamic`` for a moving recording)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,8 @@ from ..calibration.model import STANDARD_GRAVITY
 from ..calibration.mount import MOUNT_MODES
 from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
-from .common import add_samples_arguments, load_samples_from_args, positive_float
+from .common import add_samples_arguments, arm_from_args, load_samples_from_args, positive_float
+from .motion import add_derivative_arguments, calibrate_motion
 
 
 def register(subparsers) -> None:
@@ -65,6 +66,11 @@ def register(subparsers) -> None:
         "--expected-gravity", type=float, nargs=3, metavar=("GX", "GY", "GZ"),
         help="expected gravity direction in the base frame (overrides --base-mount)",
     )
+    dynamic = parser.add_argument_group("dynamic calibration (a moving recording: columns t, joints, fx..mz, or a bag)")
+    dynamic.add_argument("--dynamic", action="store_true",
+                         help="identify mass, centre of mass, inertia, bias and tilt from a moving recording")
+    dynamic.add_argument("--no-inertia", action="store_true", help="with --dynamic: fit the static parameters only")
+    add_derivative_arguments(dynamic)
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -79,6 +85,17 @@ def _noise(args) -> SensorNoise | None:
 
 def run(args) -> int:
     noise = _noise(args)
+    if args.dynamic:
+        if args.method != METHODS[0] or args.loss != "linear" or args.drop_outliers:
+            raise InvalidInput("--method, --loss and --drop-outliers apply to static calibration, not to --dynamic")
+        if args.estimate_mount or args.sensor_sign != 1 or args.flip_axis:
+            raise InvalidInput(
+                "--estimate-mount, --sensor-sign and --flip-axis apply to static calibration, not yet to --dynamic; "
+                "calibrate the mount and sign from static poses first"
+            )
+        return _report(calibrate_motion(args, arm_from_args(args), noise), args)
+    if args.no_inertia or args.sg_window is not None:
+        raise InvalidInput("--no-inertia and --sg-window apply to --dynamic only")
     if args.method == "linear" and (noise is not None or args.loss != "linear" or args.drop_outliers):
         raise InvalidInput("--noise-force/--noise-torque, --loss and --drop-outliers apply to --method ml only")
     loaded = load_samples_from_args(args.samples, args)
@@ -89,6 +106,10 @@ def run(args) -> int:
         estimate_mount=args.estimate_mount or "none", sensor_sign=args.sensor_sign, flip_axis=args.flip_axis,
         base_mount=args.base_mount, expected_gravity=args.expected_gravity,
     )
+    return _report(result, args)
+
+
+def _report(result, args) -> int:
     print(result.summary())
     if args.output:
         save_calibration(result, args.output)

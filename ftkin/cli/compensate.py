@@ -6,9 +6,11 @@ import numpy as np
 
 from ..calibration.model import WRENCH_CHANNELS
 from ..control.compensation import Compensator
+from ..exceptions import InvalidInput
 from ..io.calibration_file import load_calibration
 from ..io.csv_table import write_csv
 from .common import add_samples_arguments, arm_for_calibration, load_samples_from_args, warn_if_kinematics_differ
+from .motion import add_derivative_arguments, compensate_motion
 
 
 def register(subparsers) -> None:
@@ -16,18 +18,28 @@ def register(subparsers) -> None:
         "compensate",
         help="remove bias and tool gravity from a log of raw readings",
         description="Write the contact wrench (fx..mz, sensor frame, N and N·m) of every row of LOG.csv, "
-        "keeping its other columns. LOG.csv has the same columns as a calibration samples file.",
+        "keeping its other columns. LOG.csv has the same columns as a calibration samples file. When the "
+        "calibration has an inertia (calibrate --dynamic) and the log has a time column t and joint columns, "
+        "the tool's inertial wrench is removed too (joint derivatives from the log, zero-phase).",
     )
     parser.add_argument("calibration", metavar="CALIB.json")
     parser.add_argument("log", metavar="LOG.csv")
     parser.add_argument("-o", "--output", metavar="OUT.csv", required=True)
+    add_derivative_arguments(parser)
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
-    loaded = load_samples_from_args(args.log, args, static_only=False, arm=arm_for_calibration(args, calibration))
+    arm = arm_for_calibration(args, calibration)
+    if getattr(calibration, "has_inertia", False):
+        done = compensate_motion(args, calibration, arm)
+        if done is not None:
+            return done
+    elif args.sg_window is not None:
+        raise InvalidInput("--sg-window applies to a calibration with an inertia (ftkin calibrate --dynamic)")
+    loaded = load_samples_from_args(args.log, args, static_only=False, arm=arm)
     warn_if_kinematics_differ(loaded, calibration)
     contact = Compensator(calibration).compensate_samples(loaded.samples)
     table = loaded.table

@@ -18,6 +18,7 @@ from ..planning.constraints import DEFAULT_MARGIN
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT
 from ..planning.plan import plan_poses
 from .common import add_arm_arguments, arm_from_args, non_negative_float, positive_float
+from .motion import add_excitation_arguments, run_excitation
 
 FORMATS = ("csv", "yaml", "json")
 
@@ -72,7 +73,7 @@ def register(subparsers) -> None:
         "within joint limits, free of self-collision and above the floor, ordered for short joint travel; "
         "print the predicted standard error of every calibration parameter.",
     )
-    parser.add_argument("--n", type=int, required=True, help="number of poses (at least 3)")
+    parser.add_argument("--n", type=int, default=None, help="number of poses (at least 3; required without --excitation)")
     parser.add_argument("-o", "--output", metavar="POSES.csv", help="write the poses here")
     parser.add_argument("--format", choices=FORMATS, default=None, help="output format (default: from the file name, else csv)")
     group = parser.add_argument_group("constraints")
@@ -87,6 +88,7 @@ def register(subparsers) -> None:
     group.add_argument("--no-self-collision", action="store_true", help="do not check self-collision")
     parser.add_argument("--seed", type=int, default=0, help="random seed; the same seed gives the same plan (default: 0)")
     add_expectation_arguments(parser)
+    add_excitation_arguments(parser)
     add_arm_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -101,6 +103,12 @@ def run(args) -> int:
         raise InvalidInput(f"--format {args.format} needs -o/--output FILE (the plan is printed as a table otherwise)")
     if args.max_tilt_deg is not None and args.max_tilt_deg > 180.0:
         raise InvalidInput(f"--max-tilt-deg must be between 0 and 180 [deg], got {args.max_tilt_deg:g}")
+    if args.excitation:
+        if args.n is not None or args.max_tilt_deg is not None or (args.format not in (None, "csv")):
+            raise InvalidInput("--excitation plans a trajectory: --n, --max-tilt-deg and --format yaml/json do not apply")
+        return run_excitation(args, load_arm(args))
+    if args.n is None:
+        raise InvalidInput("give --n N (the number of poses), or --excitation for a trajectory")
     arm = load_arm(args)
     max_tilt = None if args.max_tilt_deg is None else float(np.deg2rad(args.max_tilt_deg))
     try:

@@ -14,6 +14,7 @@ Depends on :mod:`ftkin.calibration` (the sensor model) and :mod:`ftkin.kinematic
 from .admittance import Admittance
 from .compensation import Compensator
 from .control_frame import ControlFrame
+from .dynamic_compensation import DynamicCompensator
 from .joint_admittance import JointAdmittance, StepStatus
 from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
 
@@ -21,6 +22,7 @@ __all__ = [
     "Admittance",
     "Compensator",
     "ControlFrame",
+    "DynamicCompensator",
     "FaultMonitor",
     "JointAdmittance",
     "SensorFault",

@@ -13,13 +13,17 @@ Depends on :mod:`ftkin.calibration` and :mod:`ftkin.kinematics`.
 """
 
 from .calibration_file import load_calibration, save_calibration
+from .motion_recording import MotionRecording, load_motion_bag, load_motion_csv
 from .payload_export import Payload, export_payload, payload_in_flange
 from .samples_csv import load_samples
 
 __all__ = [
+    "MotionRecording",
     "Payload",
     "export_payload",
     "load_calibration",
+    "load_motion_bag",
+    "load_motion_csv",
     "load_samples",
     "payload_in_flange",
     "save_calibration",

@@ -10,7 +10,9 @@ Keys (units): ``force_offset`` [N], ``torque_offset`` [N·m],
 values), ``diagnostics`` (``ml`` only, else absent: noise used, chi-square,
 per-pose normalized residuals, outliers, condition number, warnings; see
 :class:`~ftkin.calibration.diagnostics.FitDiagnostics`), ``created`` (UTC, ISO 8601),
-``ftkin_version``. Files without ``covariance``/``diagnostics`` (written by
+``ftkin_version``; a dynamic calibration adds ``inertia`` (3×3 about the
+centre of mass, sensor axes [kg·m²]) and ``std_errors.inertia`` and loads as a
+:class:`~ftkin.calibration.dynamic.DynamicCalibrationResult`. Files without ``covariance``/``diagnostics`` (written by
 ``linear`` or an older ftkin) load with those set to None.
 
 The sensor as it is really mounted (:mod:`ftkin.calibration.mount`,
@@ -37,6 +39,8 @@ from ..calibration.diagnostics import FitDiagnostics
 from ..calibration.estimate import CalibrationResult
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from .atomic import atomic_write_text
+from .calibration_inertia import inertia_document, with_inertia
+from .json_reader import DocumentReader
 
 FORMAT_NAME = "ftkin-calibration"
 FORMAT_VERSION = 1
@@ -55,6 +59,7 @@ UNITS = {
     "mount_rpy_deg": "deg, roll-pitch-yaw of mount_rotation (R = Rz(yaw) Ry(pitch) Rx(roll))",
     "sensor_sign": "+1: readings are the load on the sensor, -1: the reaction (all readings negated)",
     "flip_axis": "sensor axis whose force and torque channels are negated in every reading, or null",
+    "inertia": "kg*m^2, about the centre of mass, sensor axes",
 }
 
 
@@ -73,7 +78,11 @@ def _std_errors_document(result: CalibrationResult) -> dict | None:
     errors = result.std_errors
     if errors is None:
         return None
-    return {**errors, "base_tilt_deg": np.rad2deg(errors["base_tilt"])}
+    document = {**errors, "base_tilt_deg": np.rad2deg(errors["base_tilt"])}
+    inertia_errors = getattr(result, "inertia_std_errors", None)
+    if inertia_errors is not None:
+        document["inertia"] = inertia_errors
+    return document
 
 
 def calibration_to_dict(result: CalibrationResult) -> dict:
@@ -92,6 +101,7 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         "center_of_mass": result.center_of_mass,
         "base_tilt_deg": list(result.base_tilt_deg),
         "g": result.g,
+        **inertia_document(result),
         "method": result.method,
         "pose_count": result.pose_count,
         "sample_count": result.sample_count,
@@ -137,53 +147,7 @@ def save_calibration(result: CalibrationResult, path) -> Path:
     return atomic_write_text(path, text)
 
 
-class _Reader:
-    """Typed access to a parsed document, raising CalibrationFileError with the key."""
-
-    def __init__(self, path: str, document: dict):
-        self.path, self.document = path, document
-
-    def fail(self, message: str, key: str | None = None):
-        raise CalibrationFileError(self.path, message, key)
-
-    def get(self, key: str, required: bool = True):
-        if key not in self.document:
-            if required:
-                self.fail("missing", key)
-            return None
-        return self.document[key]
-
-    def optional(self, key: str, kind: type, default=None):
-        """An optional value of JSON type ``kind`` (``str``, ``int``), ``default`` when absent or null."""
-        value = self.get(key, required=False)
-        if value is None:
-            return default
-        if isinstance(value, bool) or not isinstance(value, kind):
-            self.fail(f"expected {kind.__name__} or null, got {value!r}", key)
-        return value
-
-    def array(self, key: str, shape: tuple, required: bool = True, source=None):
-        value = self.get(key, required) if source is None else source
-        if value is None:
-            return None
-        try:
-            array = np.array(value, dtype=np.float64)
-        except (TypeError, ValueError):
-            self.fail(f"expected numbers of shape {shape}, got {value!r}", key)
-        if array.shape != shape and not (array.size == 0 and 0 in shape):
-            self.fail(f"expected shape {shape}, got {array.shape}", key)
-        if not np.all(np.isfinite(array)):
-            self.fail("contains NaN or infinite values", key)
-        return array.reshape(shape)
-
-    def number(self, key: str) -> float:
-        value = self.get(key)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            self.fail(f"expected a finite number, got {value!r}", key)
-        return float(value)
-
-
-def _diagnostics(reader: _Reader) -> FitDiagnostics | None:
+def _diagnostics(reader: DocumentReader) -> FitDiagnostics | None:
     data = reader.get("diagnostics", required=False)
     if data is None:
         return None
@@ -201,7 +165,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     """Rebuild a :class:`CalibrationResult` from a parsed calibration document."""
     if not isinstance(document, dict):
         raise CalibrationFileError(path, f"expected a JSON object, got {type(document).__name__}")
-    reader = _Reader(path, document)
+    reader = DocumentReader(path, document)
     if document.get("format") != FORMAT_NAME:
         reader.fail(f"not an ftkin calibration file (format {document.get('format')!r}, expected {FORMAT_NAME!r})", "format")
     version = document.get("version")
@@ -235,6 +199,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     mount_size = {"yaw": 1, "full": 3}.get(mount_mode, 0)
     mount_covariance = reader.array("mount_covariance", (mount_size, mount_size), required=False) if mount_size else None
     sensor_sign = reader.optional("sensor_sign", int, 1)
+    inertia = reader.array("inertia", (3, 3), required=False)
     try:
         result = CalibrationResult(
             force_offset=reader.array("force_offset", (3,)),
@@ -261,6 +226,8 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
         raise CalibrationFileError(path, str(error)) from None
     if not (np.isfinite(result.tool_weight) and result.tool_weight > 0.0):
         reader.fail(f"|gravity_in_base| must be finite and positive, got {result.tool_weight}", "gravity_in_base")
+    if inertia is not None:
+        result = with_inertia(reader, result, inertia)
     if "tool_weight" in document:
         stated = reader.number("tool_weight")
         if not math.isclose(stated, result.tool_weight, rel_tol=1e-9, abs_tol=1e-12):

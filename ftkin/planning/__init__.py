@@ -12,12 +12,16 @@ Depends on :mod:`ftkin.calibration` (information) and :mod:`ftkin.kinematics`.
 
 from .constraints import PoseConstraints
 from .evaluation import PoseEvaluation, evaluate_poses
+from .excitation import ExcitationPlan, FourierTrajectory, plan_excitation
 from .plan import PosePlan, plan_poses
 
 __all__ = [
+    "ExcitationPlan",
+    "FourierTrajectory",
     "PoseConstraints",
     "PoseEvaluation",
     "PosePlan",
     "evaluate_poses",
+    "plan_excitation",
     "plan_poses",
 ]

@@ -9,14 +9,17 @@ with :class:`~ftkin.control.JointAdmittance` in the loop against a
 Depends on :mod:`ftkin.control`, :mod:`ftkin.io`, :mod:`ftkin.calibration` and below.
 """
 
+from .mujoco_recording import MujocoRecorder, ToolInertia
 from .placement import PlacementRun, PlacementScenario, simulate_placement
 from .sensor import SimulatedSensor
 from .surfaces import Surface
 
 __all__ = [
+    "MujocoRecorder",
     "PlacementRun",
     "PlacementScenario",
     "SimulatedSensor",
     "Surface",
+    "ToolInertia",
     "simulate_placement",
 ]

@@ -1,0 +1,251 @@
+"""Dynamic calibration: the tool's full inertia from a moving recording, :func:`calibrate_dynamic`.
+
+Estimates, from raw readings along a motion (:class:`~ftkin.calibration.regressor.MotionSamples`),
+the sensor bias, the gravity direction (base tilt ``U``, ``V``), and the ten
+inertial parameters of the tool in the sensor frame: mass, centre of mass and
+inertia tensor. The fit (:mod:`ftkin.calibration.dynamic_fit`) runs weighted
+least squares first, then the maximum-likelihood fit restricted to physically
+consistent bodies through log-Cholesky coordinates; standard errors come from
+the Gauss–Newton covariance by the delta method.
+
+Static calibration is the special case ``estimate_inertia=False`` (mass and
+centre of mass only). Static data with ``estimate_inertia=True`` raise
+:class:`~ftkin.exceptions.UnobservableParameters` naming the inertia: it is
+never invented.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..exceptions import InvalidInput, UnobservableParameters
+from ..kinematics.rotations import gravity_in_base_from_tilt
+from ..validation import as_positive
+from .dynamic_fit import (
+    ALL_INDICES,
+    STATIC_INDICES,
+    DynamicProblem,
+    check_observability,
+    fit_consistent,
+    fit_linear,
+    fit_unconstrained,
+    theta_from_phi,
+)
+from .estimate import CalibrationResult
+from .information import SensorNoise
+from .log_cholesky import (
+    body_from_parameters,
+    inertia_entries,
+    inertia_matrix,
+    is_physically_consistent,
+    log_cholesky_from_parameters,
+    nearest_consistent,
+)
+from .model import STANDARD_GRAVITY
+from .regressor import MotionSamples
+from .samples import Samples
+
+NOISE_FLOOR = 1e-12
+"""Smallest noise level [relative to the channel's RMS] used as a weight (noise-free data)."""
+
+
+@dataclass(frozen=True)
+class DynamicCalibrationResult(CalibrationResult):
+    """A :class:`~ftkin.calibration.CalibrationResult` plus the tool's inertia.
+
+    The inherited static parameters (bias, ``gravity_in_base``, ``center_of_mass``,
+    ``g``) and their ``(12, 12)`` ``covariance`` come from the same fit, so this
+    result compensates statically like any calibration.
+
+    Attributes:
+        inertia_about_com_in_sensor: ``(3, 3)`` inertia about the COM, sensor axes [kg·m²],
+            or None when the inertia was not estimated.
+        inertia_std_errors: ``(3, 3)`` its standard errors [kg·m²], or None.
+        inertial_parameters: ``(10,)`` θ in the sensor frame (see :mod:`ftkin.calibration.log_cholesky`).
+        inertial_covariance: ``(10, 10)`` covariance of θ, or None.
+        motion_residual_rms: ``(6,)`` RMS of measured minus predicted per channel [N, N·m].
+        channel_std: ``(6,)`` noise per reading used as weights [N, N·m].
+        unconstrained_parameters: θ of the unconstrained least squares (before
+            the consistency constraint), or None.
+        unconstrained_consistent: Whether that θ was physically consistent.
+    """
+
+    inertia_about_com_in_sensor: np.ndarray | None = None
+    inertia_std_errors: np.ndarray | None = None
+    inertial_parameters: np.ndarray | None = None
+    inertial_covariance: np.ndarray | None = None
+    motion_residual_rms: np.ndarray | None = None
+    channel_std: np.ndarray | None = None
+    unconstrained_parameters: np.ndarray | None = None
+    unconstrained_consistent: bool | None = None
+
+    def __post_init__(self):
+        super().__post_init__()
+        for name in ("inertia_about_com_in_sensor", "inertia_std_errors", "inertial_parameters", "inertial_covariance",
+                     "motion_residual_rms", "channel_std", "unconstrained_parameters"):
+            value = getattr(self, name)
+            if value is not None:
+                value = np.array(value, dtype=float)
+                value.setflags(write=False)
+                object.__setattr__(self, name, value)
+
+    @property
+    def has_inertia(self) -> bool:
+        """True when the inertia was identified (compensation may then remove inertial forces)."""
+        return self.inertia_about_com_in_sensor is not None
+
+    @property
+    def dynamic_parameters(self) -> np.ndarray:
+        """θ (10,) for compensation: the identified one, or ``[m, m·c, 0…]`` without inertia."""
+        if self.inertial_parameters is not None:
+            return np.array(self.inertial_parameters)
+        return np.concatenate([[self.tool_mass], self.tool_mass * self.center_of_mass, np.zeros(6)])
+
+    def summary(self) -> str:
+        """Static summary plus the inertia (± standard errors) and the fit over the motion."""
+        lines = super().summary().split("\n")
+        lines[0] = f"ftkin calibration: method {self.method}, moving recording of {self.sample_count} readings"
+        if self.has_inertia:
+            errors = self.inertia_std_errors if self.inertia_std_errors is not None else np.full((3, 3), np.nan)
+            lines.append("  inertia_about_com_in_sensor [kg·m²] (± standard error):")
+            for row, error in zip(self.inertia_about_com_in_sensor, errors):
+                lines.append("    [" + ", ".join(f"{v:+.6f} ± {e:.6f}" for v, e in zip(row, error)) + "]")
+            moments = np.linalg.eigvalsh(self.inertia_about_com_in_sensor)
+            lines.append("  principal moments: " + ", ".join(f"{m:.6f}" for m in moments) + " kg·m²")
+        if self.unconstrained_consistent is False:
+            lines.append("  NOTE: the unconstrained least squares was not physically consistent; the ML fit is")
+        if self.motion_residual_rms is not None:
+            lines.append("  residual RMS over the motion: " + ", ".join(f"{v:.4g}" for v in self.motion_residual_rms) + " (N, N·m)")
+        return "\n".join(lines)
+
+
+def _estimate_noise(problem: DynamicProblem, x: np.ndarray, dof: int) -> np.ndarray:
+    residuals = problem.wrenches - problem.predict(x)
+    count = len(residuals)
+    std = np.sqrt(np.sum(residuals**2, axis=0) / max(count - dof / 6.0, 1.0))
+    floor = NOISE_FLOOR * np.maximum(np.sqrt(np.mean(problem.wrenches**2, axis=0)), 1e-300)
+    return np.maximum(std, floor)
+
+
+def _with_std(problem: DynamicProblem, std: np.ndarray) -> DynamicProblem:
+    return DynamicProblem(problem.wrenches, problem.rotations, problem.inertial_regressor, std, problem.g, problem.free)
+
+
+def _outputs(problem: DynamicProblem, x: np.ndarray, phi_space: bool) -> np.ndarray:
+    """``[a (3), F0, M0, P, θ (10), I_com entries (6)]`` (28,) at ``x``."""
+    theta = theta_from_phi(x[8:]) if phi_space else problem.theta(x[8:])
+    mass = theta[0]
+    com = theta[1:4] / mass
+    gravity = gravity_in_base_from_tilt(mass * problem.g, x[6], x[7])
+    about_com = inertia_matrix(theta[4:10]) - mass * (float(com @ com) * np.eye(3) - np.outer(com, com))
+    return np.concatenate([gravity, x[:6], com, theta, inertia_entries(about_com)])
+
+
+def _covariance(problem: DynamicProblem, x: np.ndarray, phi_space: bool) -> np.ndarray:
+    """Covariance of :func:`_outputs` by the delta method from the Gauss–Newton covariance of ``x``."""
+    jac = problem.whitened_jacobian(np.concatenate([x[:8], theta_from_phi(x[8:])]) if phi_space else x)
+    if phi_space:
+        from .log_cholesky import log_cholesky_jacobian
+
+        jac[:, 8:] = jac[:, 8:] @ log_cholesky_jacobian(x[8:])
+    information = jac.T @ jac
+    scale = np.sqrt(np.diag(information))
+    values, vectors = np.linalg.eigh(information / np.outer(scale, scale))
+    if values[0] <= 1e-14 * values[-1]:
+        raise UnobservableParameters(
+            [problem.names[i] for i in np.flatnonzero(np.abs(vectors[:, 0]) > 0.3)],
+            "the information at the solution is singular (the estimate sits on the boundary of physical consistency "
+            "or the motion does not excite these parameters)",
+        )
+    cov_x = ((vectors / values) @ vectors.T) / np.outer(scale, scale)
+    gradient = np.empty((28, len(x)))
+    for i in range(len(x)):
+        step = 1e-6 * max(1.0, abs(x[i]))
+        up, down = x.copy(), x.copy()
+        up[i] += step
+        down[i] -= step
+        gradient[:, i] = (_outputs(problem, up, phi_space) - _outputs(problem, down, phi_space)) / (2 * step)
+    return gradient @ cov_x @ gradient.T
+
+
+def calibrate_dynamic(
+    motion: MotionSamples | Samples,
+    *,
+    estimate_inertia: bool = True,
+    g: float = STANDARD_GRAVITY,
+    noise: SensorNoise | None = None,
+) -> DynamicCalibrationResult:
+    """Identify bias, base tilt, mass, centre of mass and (optionally) inertia from readings along a motion.
+
+    Args:
+        motion: Readings with the sensor frame's orientation, velocity and
+            acceleration (:meth:`MotionSamples.from_joint_trajectory`); static
+            :class:`Samples` count as a motion at rest.
+        estimate_inertia: False fits the static model only (bias, tilt, mass, COM):
+            static calibration as the special case.
+        g: Magnitude of gravity [m/s²] (known; its direction is estimated).
+        noise: Per-reading noise [N, N·m]; None estimates it per channel from the residuals.
+
+    Returns:
+        A frozen :class:`DynamicCalibrationResult`.
+
+    Raises:
+        UnobservableParameters: the motion cannot determine the parameters (static
+            data with ``estimate_inertia=True`` names the inertia).
+        InvalidInput: bad arguments, or a non-positive mass estimate.
+    """
+    if isinstance(motion, Samples):
+        motion = MotionSamples.from_static(motion)
+    if not isinstance(motion, MotionSamples):
+        raise InvalidInput(f"motion must be an ftkin MotionSamples or Samples, got {type(motion).__name__}")
+    if noise is not None and not isinstance(noise, SensorNoise):
+        raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
+    g = as_positive(g, "g")
+    free = ALL_INDICES if estimate_inertia else STATIC_INDICES
+    initial_std = noise.channel_std if noise is not None else np.array([1.0, 1.0, 1.0, 0.1, 0.1, 0.1])
+    problem = DynamicProblem(motion.wrenches, motion.rotations, motion.regressor(), initial_std, g, free)
+    check_observability(problem)
+    x = fit_linear(problem)
+    if noise is None:
+        problem = _with_std(problem, _estimate_noise(problem, x, len(x)))
+        x = fit_linear(problem)
+    x = fit_unconstrained(problem, x)
+    theta_unconstrained = problem.theta(x[8:])
+    if theta_unconstrained[0] <= 0.0:
+        raise InvalidInput(f"the estimated tool mass is {theta_unconstrained[0]:.4g} kg (not positive): is there a tool on the sensor?")
+    consistent = is_physically_consistent(theta_unconstrained) if estimate_inertia else None
+    phi_space = estimate_inertia
+    if estimate_inertia:
+        start = theta_unconstrained if consistent else nearest_consistent(theta_unconstrained)
+        x = fit_consistent(problem, np.concatenate([x[:8], log_cholesky_from_parameters(start)]))
+    if noise is None:
+        x_theta = np.concatenate([x[:8], theta_from_phi(x[8:])]) if phi_space else x
+        problem = _with_std(problem, _estimate_noise(problem, x_theta, len(x)))
+    values = _outputs(problem, x, phi_space)
+    covariance = _covariance(problem, x, phi_space)
+    theta = values[12:22]
+    about_com = body_from_parameters(theta)[2]
+    residuals = problem.wrenches - problem.predict(np.concatenate([x[:8], theta[list(free)]]))
+    errors = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    return DynamicCalibrationResult(
+        force_offset=values[3:6],
+        torque_offset=values[6:9],
+        gravity_in_base=values[0:3],
+        center_of_mass=values[9:12],
+        g=g,
+        method="dynamic" if estimate_inertia else "dynamic-static",
+        sample_count=len(motion),
+        urdf=motion.urdf,
+        sensor_frame=motion.sensor_frame,
+        covariance=covariance[:12, :12],
+        inertia_about_com_in_sensor=about_com if estimate_inertia else None,
+        inertia_std_errors=inertia_matrix(errors[22:28]) if estimate_inertia else None,
+        inertial_parameters=theta if estimate_inertia else None,
+        inertial_covariance=covariance[12:22, 12:22] if estimate_inertia else None,
+        motion_residual_rms=np.sqrt(np.mean(residuals**2, axis=0)),
+        channel_std=problem.channel_std,
+        unconstrained_parameters=theta_unconstrained if estimate_inertia else None,
+        unconstrained_consistent=consistent,
+    )

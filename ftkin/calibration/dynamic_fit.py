@@ -1,0 +1,196 @@
+"""The dynamic identification problem and its solvers (used by :func:`~ftkin.calibration.dynamic.calibrate_dynamic`).
+
+Parameters ``x = [F0 (3), M0 (3), U, V, θ_free]``: the sensor bias [N, N·m], the
+base tilt [rad] (gravity ``|g|`` is known, its direction is not) and the free
+inertial parameters (all ten of θ, or the four static ones ``[m, m·c]``).
+Prediction of one raw reading (:mod:`ftkin.calibration.regressor`)::
+
+    raw = bias − (Y(v, a) + Y_g(R_BSᵀ γ(U, V))) θ
+
+Residuals are whitened per channel by the noise ``σ_c``. Three stages:
+
+1. linear weighted least squares at zero tilt (the regressor is then linear);
+2. the unconstrained nonlinear fit over ``[bias, U, V, θ]``, which adds the tilt;
+3. the maximum-likelihood fit under physical consistency over
+   ``[bias, U, V, φ]`` with φ the log-Cholesky coordinates of θ
+   (:mod:`ftkin.calibration.log_cholesky`); stage 2 when only ``[m, m·c]`` is free.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..exceptions import UnobservableParameters
+from .log_cholesky import INERTIAL_PARAMETER_NAMES, log_cholesky_jacobian, parameters_from_log_cholesky
+from .model import cross_rows
+from .regressor import gravity_regressor
+
+BIAS_NAMES = tuple(f"{block}[{axis}]" for block in ("force_offset", "torque_offset") for axis in "xyz")
+TILT_NAMES = ("base_tilt[u]", "base_tilt[v]")
+THETA_NAMES = ("mass", "first_moment[x]", "first_moment[y]", "first_moment[z]") + tuple(
+    f"inertia_about_sensor[{name[1:].lower()}]" for name in INERTIAL_PARAMETER_NAMES[4:]
+)
+"""Names of the ten inertial parameters θ (inertia about the sensor origin)."""
+
+STATIC_INDICES = (0, 1, 2, 3)
+ALL_INDICES = tuple(range(10))
+MIN_INERTIAL_EXCITATION = 1e-6
+"""RMS of an inertia column of the regressor [rad/s²] below which the recording counts as static."""
+
+
+def upward_gravity(g: float, tilt_u: float, tilt_v: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``γ`` (base frame, [m/s²], pointing up) and its derivatives with respect to ``U`` and ``V``."""
+    cu, su, cv, sv = np.cos(tilt_u), np.sin(tilt_u), np.cos(tilt_v), np.sin(tilt_v)
+    gamma = -g * np.array([cu * sv, -su, -cu * cv])
+    d_u = -g * np.array([-su * sv, -cu, su * cv])
+    d_v = -g * np.array([cu * cv, 0.0, cu * sv])
+    return gamma, d_u, d_v
+
+
+@dataclass(frozen=True)
+class DynamicProblem:
+    """Whitened least squares of the dynamic calibration, inspectable on its own.
+
+    Attributes:
+        wrenches: ``(N, 6)`` raw readings [N, N·m].
+        rotations: ``(N, 3, 3)`` ``R_BS``.
+        inertial_regressor: ``(N, 6, 10)`` ``Y(v, a)`` (gravity excluded).
+        channel_std: ``(6,)`` noise per channel [N, N·m] (the whitening).
+        g: Magnitude of gravity [m/s²].
+        free: Indices of θ that are estimated (the others are zero).
+    """
+
+    wrenches: np.ndarray
+    rotations: np.ndarray
+    inertial_regressor: np.ndarray
+    channel_std: np.ndarray
+    g: float
+    free: tuple[int, ...] = ALL_INDICES
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Names of ``x = [bias, tilt, θ_free]``."""
+        return BIAS_NAMES + TILT_NAMES + tuple(THETA_NAMES[i] for i in self.free)
+
+    def theta(self, theta_free: np.ndarray) -> np.ndarray:
+        """The full θ (10,) from its free entries."""
+        theta = np.zeros(10)
+        theta[list(self.free)] = theta_free
+        return theta
+
+    def _gravity_in_sensor(self, gamma: np.ndarray) -> np.ndarray:
+        return np.einsum("nji,j->ni", self.rotations, gamma)
+
+    def predict(self, x: np.ndarray) -> np.ndarray:
+        """``(N, 6)`` predicted raw readings at ``x`` (θ-space)."""
+        theta = self.theta(x[8:])
+        gamma, _, _ = upward_gravity(self.g, x[6], x[7])
+        gravity = self._gravity_in_sensor(gamma)
+        out = -(self.inertial_regressor @ theta)
+        out[:, :3] -= theta[0] * gravity
+        out[:, 3:] -= cross_rows(theta[1:4], gravity)
+        out += x[:6]
+        return out
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """``(N, 6, len(x))`` derivative of :meth:`predict` with respect to ``x`` (θ-space)."""
+        theta = self.theta(x[8:])
+        gamma, d_u, d_v = upward_gravity(self.g, x[6], x[7])
+        out = np.zeros((len(self.wrenches), 6, len(x)))
+        out[:, :, :6] = np.eye(6)
+        for column, direction in ((6, d_u), (7, d_v)):
+            e = self._gravity_in_sensor(direction)
+            out[:, :3, column] = -theta[0] * e
+            out[:, 3:, column] = -cross_rows(theta[1:4], e)
+        full = self.inertial_regressor + gravity_regressor(self._gravity_in_sensor(gamma))
+        out[:, :, 8:] = -full[:, :, list(self.free)]
+        return out
+
+    def whitened_residuals(self, x: np.ndarray) -> np.ndarray:
+        """``(6N,)`` ``(measured − predicted) / σ``."""
+        return ((self.wrenches - self.predict(x)) / self.channel_std).ravel()
+
+    def whitened_jacobian(self, x: np.ndarray) -> np.ndarray:
+        """``(6N, len(x))`` derivative of :meth:`whitened_residuals`."""
+        return (-self.jacobian(x) / self.channel_std[None, :, None]).reshape(-1, len(x))
+
+
+def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
+    """Refuse a recording that cannot determine the free parameters.
+
+    Raises:
+        UnobservableParameters: the recording is static while the inertia is
+            free (its columns of the regressor vanish), or the normalized
+            information at zero tilt is singular along some parameters.
+    """
+    count = len(problem.wrenches)
+    inertia = [i for i in problem.free if i >= 4]
+    if inertia:
+        rms = np.sqrt(np.sum(problem.inertial_regressor[:, :, inertia] ** 2, axis=(0, 1)) / count)
+        if np.all(rms < MIN_INERTIAL_EXCITATION):
+            raise UnobservableParameters(
+                ["inertia_about_com_in_sensor"] + [THETA_NAMES[i] for i in inertia],
+                "the recording has no angular velocity or acceleration (static data): the inertia cannot be "
+                "identified; record a moving excitation (ftkin plan --excitation) or calibrate without the inertia",
+            )
+    x = np.zeros(8 + len(problem.free))
+    x[8] = 1.0  # a unit mass: the tilt and moment columns need weight to act on
+    jac = problem.whitened_jacobian(x)
+    scale = np.linalg.norm(jac, axis=0)
+    names = problem.names
+    if np.any(scale == 0.0):
+        raise UnobservableParameters([names[i] for i in np.flatnonzero(scale == 0.0)], "the recording carries no information about them")
+    normalized = jac / scale
+    eigenvalues, eigenvectors = np.linalg.eigh(normalized.T @ normalized)  # the normal matrix: cheap for tall regressors
+    if eigenvalues[0] <= rcond * eigenvalues[-1]:
+        weakest = eigenvectors[:, 0]
+        raise UnobservableParameters(
+            [names[i] for i in np.flatnonzero(np.abs(weakest) > 0.3)],
+            "the regressor is singular along a combination of them (too few distinct orientations or motions)",
+            singular_values=np.sqrt(np.clip(eigenvalues[::-1], 0.0, None)),
+        )
+
+
+def fit_linear(problem: DynamicProblem) -> np.ndarray:
+    """Stage 1: weighted linear least squares at zero tilt; returns ``x`` (θ-space, tilt zero)."""
+    x0 = np.zeros(8 + len(problem.free))
+    jac = problem.whitened_jacobian(x0)
+    columns = [i for i in range(len(x0)) if i not in (6, 7)]
+    target = (problem.wrenches / problem.channel_std).ravel()
+    # At fixed tilt the prediction is linear in [bias, θ]: residual = target + J x.
+    x0[columns] = np.linalg.lstsq(jac[:, columns], -target, rcond=None)[0]
+    return x0
+
+
+def fit_unconstrained(problem: DynamicProblem, x0: np.ndarray) -> np.ndarray:
+    """Stage 2: nonlinear weighted least squares over ``[bias, U, V, θ_free]``."""
+    solution = least_squares(
+        problem.whitened_residuals, x0, jac=problem.whitened_jacobian, method="lm", xtol=1e-14, ftol=1e-14, gtol=1e-14
+    )
+    return solution.x
+
+
+def theta_from_phi(phi: np.ndarray) -> np.ndarray:
+    """θ (10,) of log-Cholesky φ."""
+    return parameters_from_log_cholesky(phi)
+
+
+def fit_consistent(problem: DynamicProblem, x0_phi: np.ndarray) -> np.ndarray:
+    """Stage 3: maximum likelihood over ``[bias, U, V, φ]`` (all ten θ free); returns the φ-space ``x``."""
+
+    def to_theta_space(x):
+        return np.concatenate([x[:8], theta_from_phi(x[8:])])
+
+    def residuals(x):
+        return problem.whitened_residuals(to_theta_space(x))
+
+    def jacobian(x):
+        jac = problem.whitened_jacobian(to_theta_space(x))
+        jac[:, 8:] = jac[:, 8:] @ log_cholesky_jacobian(x[8:])
+        return jac
+
+    solution = least_squares(residuals, x0_phi, jac=jacobian, method="lm", xtol=1e-14, ftol=1e-14, gtol=1e-14, max_nfev=2000)
+    return solution.x

@@ -1,0 +1,188 @@
+"""Compensation during motion: remove bias, tool gravity and the tool's inertial wrench.
+
+A moving tool loads the sensor with its weight and with the d'Alembert
+(inertial) wrench ``−(I a + v ×* I v)`` (:mod:`ftkin.calibration.regressor`)::
+
+    raw = bias + gravity wrench − Y(v, a) θ + contact
+    contact = raw − bias − (gravity wrench + inertial wrench),   inertial wrench = −Y(v, a) θ
+
+with ``v, a`` the sensor frame's spatial velocity and acceleration in its own
+axes (from ``q, dq, ddq`` by Pinocchio) and θ the tool's ten inertial
+parameters in the sensor frame. All wrenches are ``[fx, fy, fz, mx, my, mz]``
+[N, N·m] in the sensor frame.
+
+This is a separate entry point from :meth:`Compensator.compensate` (the static
+hot path). A calibration without an inertia (static) still removes the
+translational inertial force of its mass and centre of mass (a point-mass
+tool); only the rotational inertia about the COM is then missing.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+import numpy as np
+import pinocchio as pin
+
+from ..calibration.derivatives import CausalDifferentiator
+from ..calibration.model import SensorModel
+from ..calibration.regressor import MotionSamples
+from ..exceptions import InvalidInput
+from ..kinematics.arm import Arm
+from ..validation import as_vector
+from .compensation import Compensator
+
+
+def _dynamic_parameters(calibration: SensorModel, inertial_parameters) -> np.ndarray:
+    if inertial_parameters is not None:
+        return as_vector(inertial_parameters, 10, "inertial_parameters")
+    if hasattr(calibration, "dynamic_parameters"):
+        return np.asarray(calibration.dynamic_parameters, dtype=float)
+    mass = calibration.tool_mass
+    return np.concatenate([[mass], mass * calibration.center_of_mass, np.zeros(6)])
+
+
+class DynamicCompensator:
+    """Contact wrench of a moving arm from ``(q, dq, ddq)`` and a raw reading.
+
+    Args:
+        calibration: A :class:`~ftkin.calibration.dynamic.DynamicCalibrationResult`
+            (uses its inertia) or any :class:`SensorModel` (point-mass tool).
+        arm: Kinematics (Pinocchio) of the arm carrying the sensor.
+        inertial_parameters: Override θ (10,) in the sensor frame (see
+            :mod:`ftkin.calibration.log_cholesky`).
+    """
+
+    def __init__(self, calibration: SensorModel, arm: Arm, inertial_parameters=None):
+        if not isinstance(arm, Arm):
+            raise InvalidInput(f"arm must be an ftkin Arm, got {type(arm).__name__}")
+        self.static = Compensator(calibration, arm)
+        self.calibration = calibration
+        self.arm = arm
+        self.inertial_parameters = _dynamic_parameters(calibration, inertial_parameters)
+        self._data = arm.model.createData()
+        theta = self.inertial_parameters.tolist()
+        self._mass = theta[0]
+        self._moment = tuple(theta[1:4])
+        self._inertia = tuple(theta[4:10])
+        self._local = pin.ReferenceFrame.LOCAL
+        self._nq = arm.nq
+        self._q_shape = (arm.nq,)
+        self._zeros = np.zeros(arm.nq)
+        self._zeros6 = np.zeros(6)
+        self._gravity_floats = tuple(np.asarray(calibration.gravity_in_base, dtype=float).tolist())
+        self._com_floats = tuple(np.asarray(calibration.center_of_mass, dtype=float).tolist())
+        self._bias_floats = tuple(np.asarray(calibration.bias, dtype=float).tolist())
+        self._stream: CausalDifferentiator | None = None
+        self._raw_buffer: deque = deque()
+
+    # ------------------------------------------------------------ one sample
+    def inertial_wrench_unchecked(self, velocity: np.ndarray, acceleration: np.ndarray) -> tuple:
+        """``Y(v, a) θ`` as six floats (minus the inertial wrench) for LOCAL ``v``, ``a`` ``(6,)`` arrays."""
+        vx, vy, vz, wx, wy, wz = velocity.tolist()
+        ax, ay, az, bx, by, bz = acceleration.tolist()
+        m = self._mass
+        hx, hy, hz = self._moment
+        ixx, ixy, iyy, ixz, iyz, izz = self._inertia
+        # α = a_lin + ω × v_lin
+        px = ax + wy * vz - wz * vy
+        py = ay + wz * vx - wx * vz
+        pz = az + wx * vy - wy * vx
+        # ω × h, then ω × (ω × h)
+        cx, cy, cz = wy * hz - wz * hy, wz * hx - wx * hz, wx * hy - wy * hx
+        # Ī ω and Ī ω̇
+        lx, ly, lz = ixx * wx + ixy * wy + ixz * wz, ixy * wx + iyy * wy + iyz * wz, ixz * wx + iyz * wy + izz * wz
+        return (
+            m * px + (by * hz - bz * hy) + (wy * cz - wz * cy),
+            m * py + (bz * hx - bx * hz) + (wz * cx - wx * cz),
+            m * pz + (bx * hy - by * hx) + (wx * cy - wy * cx),
+            ixx * bx + ixy * by + ixz * bz + (wy * lz - wz * ly) - (py * hz - pz * hy),
+            ixy * bx + iyy * by + iyz * bz + (wz * lx - wx * lz) - (pz * hx - px * hz),
+            ixz * bx + iyz * by + izz * bz + (wx * ly - wy * lx) - (px * hy - py * hx),
+        )
+
+    def compensate_moving(self, q, dq, ddq, raw_wrench) -> np.ndarray:
+        """Contact wrench ``(6,)`` [N, N·m] from ``q`` [rad], ``dq`` [rad/s], ``ddq`` [rad/s²] ``(nq,)`` and one raw reading.
+
+        The control-loop path: one forward-kinematics call with velocities and
+        accelerations, three frame queries and scalar arithmetic.
+        """
+        try:
+            q = np.asarray(q, dtype=np.float64)
+            dq = np.asarray(dq, dtype=np.float64)
+            ddq = np.asarray(ddq, dtype=np.float64)
+            raw = np.asarray(raw_wrench, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise InvalidInput(f"q, dq, ddq and raw_wrench must be numeric: {error}") from None
+        shape = self._q_shape
+        if q.shape != shape or dq.shape != shape or ddq.shape != shape or raw.shape != (6,):
+            raise InvalidInput(
+                f"expected q, dq, ddq of shape {shape} and raw_wrench of shape (6,), got {q.shape}, {dq.shape}, {ddq.shape}, {raw.shape}"
+            )
+        # x · 0 is NaN exactly when x holds a NaN or an infinity: one cheap test for all four arrays.
+        zeros = self._zeros
+        if math.isnan(q.dot(zeros) + dq.dot(zeros) + ddq.dot(zeros) + raw.dot(self._zeros6)):
+            raise InvalidInput(f"q, dq, ddq and raw_wrench must be finite, got q={q} dq={dq} ddq={ddq} raw_wrench={raw}")
+        return self.compensate_moving_unchecked(q, dq, ddq, raw)
+
+    def compensate_moving_unchecked(self, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, raw: np.ndarray) -> np.ndarray:
+        """:meth:`compensate_moving` without validation (float arrays of the right shapes); returns a new array."""
+        model, data, frame = self.arm.model, self._data, self.arm.sensor_frame_id
+        pin.forwardKinematics(model, data, q, dq, ddq)
+        rotation = pin.updateFramePlacement(model, data, frame).rotation
+        i0, i1, i2, i3, i4, i5 = self.inertial_wrench_unchecked(
+            pin.getFrameVelocity(model, data, frame, self._local).vector,
+            pin.getFrameAcceleration(model, data, frame, self._local).vector,
+        )
+        # The static part, as in Compensator.compensate_rotation_unchecked (scalar floats, same IEEE results).
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation.tolist()
+        ax, ay, az = self._gravity_floats
+        px, py, pz = self._com_floats
+        b0, b1, b2, b3, b4, b5 = self._bias_floats
+        w0, w1, w2, w3, w4, w5 = raw.tolist()
+        gx = r00 * ax + r10 * ay + r20 * az
+        gy = r01 * ax + r11 * ay + r21 * az
+        gz = r02 * ax + r12 * ay + r22 * az
+        return np.array([
+            (w0 - b0) - gx + i0,
+            (w1 - b1) - gy + i1,
+            (w2 - b2) - gz + i2,
+            (w3 - b3) - (py * gz - pz * gy) + i3,
+            (w4 - b4) - (pz * gx - px * gz) + i4,
+            (w5 - b5) - (px * gy - py * gx) + i5,
+        ])
+
+    # ---------------------------------------------------------------- stream
+    def start_stream(self, sample_period: float, window: int | None = None, polyorder: int = 4) -> float:
+        """Estimate ``dq, ddq`` online from the stream of ``q`` (:class:`CausalDifferentiator`); returns its delay [s]."""
+        self._stream = CausalDifferentiator(self._nq, sample_period, window, polyorder)
+        self._raw_buffer = deque(maxlen=self._stream.window)
+        return self._stream.delay
+
+    def compensate_stream(self, q, raw_wrench) -> np.ndarray | None:
+        """Push one ``(q, raw)``; the contact wrench of the sample ``delay`` seconds ago, or None while filling.
+
+        The raw readings are delayed with the joint estimates, so each output
+        is consistent (same instant); call :meth:`start_stream` first.
+        """
+        if self._stream is None:
+            raise InvalidInput("call start_stream(sample_period) before compensate_stream")
+        raw = as_vector(raw_wrench, 6, "raw_wrench")
+        self._raw_buffer.append(raw)
+        estimate = self._stream.update(q)
+        if estimate is None:
+            return None
+        centre = self._raw_buffer[(self._stream.window - 1) // 2]
+        return self.compensate_moving_unchecked(estimate[0], estimate[1], estimate[2], centre)
+
+    # ----------------------------------------------------------------- batch
+    def compensate_motion(self, motion: MotionSamples) -> np.ndarray:
+        """Contact wrenches ``(N, 6)`` of :class:`~ftkin.calibration.regressor.MotionSamples` (vectorized)."""
+        static = self.static.compensate_batch_unchecked(motion.rotations, motion.wrenches)
+        return static + motion.regressor() @ self.inertial_parameters
+
+    def compensate_trajectory(self, joint_positions, joint_velocities, joint_accelerations, raw_wrenches) -> np.ndarray:
+        """Contact wrenches ``(N, 6)`` from ``(N, nq)`` ``q, dq, ddq`` and ``(N, 6)`` raw readings."""
+        motion = MotionSamples.from_joint_trajectory(self.arm, joint_positions, joint_velocities, joint_accelerations, raw_wrenches)
+        return self.compensate_motion(motion)

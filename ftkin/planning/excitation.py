@@ -1,0 +1,267 @@
+"""Excitation trajectories for the dynamic calibration (Swevers et al. 1997).
+
+Each joint follows a periodic finite Fourier series of base frequency
+``ω = 2π / period`` [rad/s] with ``K`` harmonics::
+
+    dq_j(t) = Σ_k a_jk cos(kωt) + b_jk sin(kωt)
+    q_j(t)  = q0_j + Σ_k (a_jk sin(kωt) − b_jk cos(kωt)) / (kω)
+
+with ``Σ_k a_jk = 0`` and ``Σ_k k b_jk = 0`` so that the motion starts (and, being
+periodic, ends every period) at rest. :func:`plan_excitation` chooses the
+coefficients that maximise ``log det`` of the whitened information of the
+linear identification problem (bias and the ten inertial parameters,
+:mod:`ftkin.calibration.dynamic_fit`), over random starts followed by a
+local search (a (1+1) evolution strategy: the limit scaling and the
+collision penalty make the cost non-smooth, which stalls gradient methods). Joint position, velocity and acceleration limits hold by
+construction (every candidate is scaled into them); the floor and
+self-collision are checked on a grid (:class:`~ftkin.planning.constraints.FeasibilityChecker`),
+violations cost a penalty during the search, and the returned plan is
+checked on a fine grid.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..calibration.dynamic_fit import DynamicProblem
+from ..calibration.information import SensorNoise
+from ..calibration.model import STANDARD_GRAVITY
+from ..calibration.regressor import body_regressor, sensor_motion
+from ..exceptions import InvalidInput
+from ..validation import as_positive
+from .constraints import FeasibilityChecker, PoseConstraints
+
+DEFAULT_ACCELERATION_LIMIT = 10.0
+"""Default joint acceleration limit [rad/s²] (URDFs carry none)."""
+
+DEFAULT_AMPLITUDE = 0.8
+"""Default largest excursion of each joint from the centre configuration [rad]."""
+
+DEFAULT_VELOCITY_FRACTION = 0.5
+"""Default fraction of the URDF velocity limits used."""
+
+_PENALTY = 1e3
+
+
+@dataclass(frozen=True)
+class FourierTrajectory:
+    """A periodic joint trajectory; see the module docstring.
+
+    Attributes:
+        period: [s].
+        offsets: ``(nq,)`` ``q0`` [rad].
+        cosine: ``(nq, K)`` ``a`` [rad/s].
+        sine: ``(nq, K)`` ``b`` [rad/s].
+    """
+
+    period: float
+    offsets: np.ndarray
+    cosine: np.ndarray
+    sine: np.ndarray
+
+    def evaluate(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``q`` [rad], ``dq`` [rad/s], ``ddq`` [rad/s²], each ``(N, nq)``, at ``(N,)`` times [s]."""
+        times = np.asarray(times, dtype=float)
+        omega = 2.0 * np.pi / self.period
+        k = np.arange(1, self.cosine.shape[1] + 1)
+        phase = omega * np.outer(times, k)
+        cos, sin = np.cos(phase), np.sin(phase)
+        q = self.offsets + (sin / (k * omega)) @ self.cosine.T - (cos / (k * omega)) @ self.sine.T
+        dq = cos @ self.cosine.T + sin @ self.sine.T
+        ddq = (-sin * k * omega) @ self.cosine.T + (cos * k * omega) @ self.sine.T
+        return q, dq, ddq
+
+
+@dataclass(frozen=True)
+class ExcitationPlan:
+    """A sampled excitation trajectory and its predicted information.
+
+    Attributes:
+        trajectory: The Fourier series.
+        joint_names: In ``q`` order.
+        times: ``(N,)`` [s], at the requested rate.
+        joint_positions, joint_velocities, joint_accelerations: ``(N, nq)`` [rad, rad/s, rad/s²].
+        log_det: ``log det`` of the normalized whitened information per period.
+        condition_number: Of that information (normalized).
+        optimized: False for a random (unoptimized) Fourier trajectory.
+    """
+
+    trajectory: FourierTrajectory
+    joint_names: list[str]
+    times: np.ndarray
+    joint_positions: np.ndarray
+    joint_velocities: np.ndarray
+    joint_accelerations: np.ndarray
+    log_det: float
+    condition_number: float
+    optimized: bool
+
+    def table(self) -> tuple[list[str], np.ndarray]:
+        """Header and ``(N, 1 + 3 nq)`` rows: ``t``, joint positions, then ``<joint>_vel`` and ``<joint>_acc``."""
+        header = ["t", *self.joint_names, *(f"{n}_vel" for n in self.joint_names), *(f"{n}_acc" for n in self.joint_names)]
+        rows = np.column_stack([self.times, self.joint_positions, self.joint_velocities, self.joint_accelerations])
+        return header, rows
+
+
+def _information(arm, q, dq, ddq, noise: SensorNoise) -> np.ndarray:
+    rotations, velocities, accelerations = sensor_motion(arm, q, dq, ddq)
+    regressor = body_regressor(velocities, accelerations)
+    problem = DynamicProblem(np.zeros((len(q), 6)), rotations, regressor, noise.channel_std, STANDARD_GRAVITY)
+    x = np.zeros(18)
+    x[8] = 1.0
+    jac = problem.whitened_jacobian(x)
+    jac = np.delete(jac, [6, 7], axis=1)  # tilt: needs the (unknown) mass; the rest is linear
+    return jac.T @ jac
+
+
+def _log_det(information: np.ndarray) -> tuple[float, float]:
+    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
+    values = np.linalg.eigvalsh(information / np.outer(scale, scale))
+    if values[0] <= 0.0:
+        return -np.inf, np.inf
+    return float(np.sum(np.log(values)) + 2.0 * np.sum(np.log(scale))), float(values[-1] / values[0])
+
+
+class _Design:
+    """Maps free coefficients to a trajectory inside the joint limits."""
+
+    def __init__(self, arm, checker, period, harmonics, velocity_limits, acceleration_limits, grid, center, amplitude):
+        self.arm, self.checker, self.period, self.harmonics = arm, checker, period, harmonics
+        self.center, self.amplitude = center, amplitude
+        self.velocity_limits, self.acceleration_limits, self.grid = velocity_limits, acceleration_limits, grid
+        self.nq = arm.nq
+
+    @property
+    def size(self) -> int:
+        return self.nq * (2 * self.harmonics - 2) + self.nq
+
+    def trajectory(self, x: np.ndarray) -> FourierTrajectory:
+        nq, free = self.nq, self.harmonics - 1
+        a = x[: nq * free].reshape(nq, free)
+        b = x[nq * free : 2 * nq * free].reshape(nq, free)
+        k = np.arange(1, self.harmonics + 1)
+        cosine = np.column_stack([a, -a.sum(axis=1)])  # Σ a_k = 0: dq(0) = 0
+        sine = np.column_stack([b, -(b * k[:-1]).sum(axis=1) / k[-1]])  # Σ k b_k = 0: ddq(0) = 0
+        unscaled = FourierTrajectory(self.period, np.zeros(nq), cosine, sine)
+        q, dq, ddq = unscaled.evaluate(self.grid)
+        span = np.maximum(q.max(axis=0) - q.min(axis=0), 1e-12)
+        scale = np.minimum.reduce([
+            self.velocity_limits / np.maximum(np.abs(dq).max(axis=0), 1e-12),
+            self.acceleration_limits / np.maximum(np.abs(ddq).max(axis=0), 1e-12),
+            np.minimum(self.checker.upper - self.checker.lower, 2.0 * self.amplitude) / span,
+        ]) * 0.98
+        low, high = scale * q.min(axis=0), scale * q.max(axis=0)
+        offsets = np.clip(self.center + x[2 * nq * free :] - 0.5 * (low + high), self.checker.lower - low, self.checker.upper - high)
+        return FourierTrajectory(self.period, offsets, cosine * scale[:, None], sine * scale[:, None])
+
+    def violations(self, trajectory: FourierTrajectory, times) -> int:
+        q, _, _ = trajectory.evaluate(times)
+        return sum(self.checker.check(row) is None for row in q)
+
+
+def _evolve(cost, x: np.ndarray, iterations: int, rng: np.random.Generator, step: float = 0.3) -> np.ndarray:
+    """(1+1) evolution strategy with the 1/5 success rule: robust to the kinks of the limit scaling and penalties."""
+    best = cost(x)
+    for _ in range(iterations):
+        candidate = x + rng.normal(0.0, step, x.shape)
+        value = cost(candidate)
+        if value < best:
+            x, best, step = candidate, value, step * 1.5
+        else:
+            step *= 0.9
+    return x
+
+
+def plan_excitation(
+    arm,
+    duration: float,
+    *,
+    rate: float = 1000.0,
+    period: float | None = None,
+    harmonics: int = 5,
+    velocity_fraction: float = DEFAULT_VELOCITY_FRACTION,
+    acceleration_limit=DEFAULT_ACCELERATION_LIMIT,
+    center=None,
+    amplitude=DEFAULT_AMPLITUDE,
+    constraints: PoseConstraints | None = None,
+    noise: SensorNoise | None = None,
+    candidates: int = 8,
+    optimize: bool = True,
+    max_iterations: int = 150,
+    seed: int = 0,
+) -> ExcitationPlan:
+    """Plan a periodic excitation trajectory for :func:`~ftkin.calibration.dynamic.calibrate_dynamic`.
+
+    Args:
+        arm: The arm (:class:`~ftkin.kinematics.Arm`).
+        duration: Length of the recording [s].
+        rate: Sample rate of the written trajectory [Hz].
+        period: Period of the Fourier series [s] (default: ``duration``).
+        harmonics: Number of harmonics ``K`` (≥ 2).
+        velocity_fraction: Fraction of the URDF joint velocity limits allowed.
+        acceleration_limit: Joint acceleration limit [rad/s²], scalar or ``(nq,)``.
+        center: Configuration the motion swings about [rad] (default: the zero
+            configuration clipped into the joint bounds); the optimiser may shift it.
+        amplitude: Largest excursion of each joint from the centre [rad], scalar or ``(nq,)``.
+        constraints: Joint margin, floor height, self-collision (:class:`PoseConstraints`;
+            the tilt limit does not apply to a moving tool and is ignored).
+        noise: Sensor noise weighting the information (default the paper's sensor).
+        candidates: Random starts.
+        optimize: False returns the first random candidate that meets the
+            constraints, unranked and unoptimised (a random Fourier trajectory, for comparisons).
+        max_iterations: Cost evaluations of the local optimisation ((1+1) evolution strategy).
+        seed: Random seed.
+
+    Raises:
+        InvalidInput: bad arguments, or no candidate meets the floor and self-collision constraints.
+    """
+    duration = as_positive(duration, "duration")
+    rate = as_positive(rate, "rate")
+    period = duration if period is None else as_positive(period, "period")
+    if harmonics < 2:
+        raise InvalidInput(f"harmonics must be at least 2, got {harmonics}")
+    constraints = constraints if constraints is not None else PoseConstraints()
+    if constraints.max_tilt is not None:
+        constraints = dataclasses.replace(constraints, max_tilt=None)
+    noise = noise if noise is not None else SensorNoise.paper()
+    checker = FeasibilityChecker(arm, constraints)
+    velocity_limits = as_positive(velocity_fraction, "velocity_fraction") * arm.velocity_limits
+    acceleration_limits = np.broadcast_to(np.asarray(acceleration_limit, dtype=float), (arm.nq,)).copy()
+    if not np.all(np.isfinite(acceleration_limits) & (acceleration_limits > 0)):
+        raise InvalidInput(f"acceleration_limit must be positive [rad/s²], got {acceleration_limit!r}")
+    grid = np.linspace(0.0, period, 120, endpoint=False)
+    check_grid = np.linspace(0.0, period, 60, endpoint=False)
+    center = np.clip(np.zeros(arm.nq) if center is None else arm.check_configuration(center), checker.lower, checker.upper)
+    amplitude = np.broadcast_to(np.asarray(amplitude, dtype=float), (arm.nq,)).copy()
+    if not np.all(np.isfinite(amplitude) & (amplitude > 0)):
+        raise InvalidInput(f"amplitude must be positive [rad], got {amplitude!r}")
+    design = _Design(arm, checker, period, harmonics, velocity_limits, acceleration_limits, grid, center, amplitude)
+
+    def cost(x):
+        trajectory = design.trajectory(x)
+        value, _ = _log_det(_information(arm, *trajectory.evaluate(grid), noise))
+        checked = constraints.self_collision or constraints.floor_height is not None
+        penalty = _PENALTY * design.violations(trajectory, check_grid) if checked else 0.0
+        return (-value if np.isfinite(value) else 1e6) + penalty
+
+    rng = np.random.default_rng(seed)
+    starts = [np.concatenate([rng.normal(size=design.size - arm.nq), rng.normal(0.0, 0.05, arm.nq)]) for _ in range(candidates)]
+    # Optimising: best start first. Not optimising: seed order, i.e. a random feasible Fourier trajectory.
+    scored = sorted(((cost(x), i) for i, x in enumerate(starts))) if optimize else [(0.0, i) for i in range(len(starts))]
+    fine_grid = np.arange(0.0, period, min(0.01, period / 200))
+    for _, index in scored:
+        x = starts[index]
+        if optimize:
+            x = _evolve(cost, x, max_iterations, rng)
+        trajectory = design.trajectory(x)
+        if design.violations(trajectory, fine_grid) == 0:
+            break
+    else:
+        raise InvalidInput(f"no excitation candidate meets the constraints ({constraints.describe()}); widen them or try more candidates")
+    times = np.arange(int(round(duration * rate))) / rate
+    q, dq, ddq = trajectory.evaluate(times)
+    log_det, condition = _log_det(_information(arm, *trajectory.evaluate(grid), noise))
+    return ExcitationPlan(trajectory, list(arm.joint_names), times, q, dq, ddq, log_det, condition, optimize)
