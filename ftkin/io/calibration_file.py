@@ -13,6 +13,15 @@ per-pose normalized residuals, outliers, condition number, warnings; see
 ``ftkin_version``. Files without ``covariance``/``diagnostics`` (written by
 ``linear`` or an older ftkin) load with those set to None.
 
+Format version 2 adds ``drift`` (null when the samples had no times): the bias
+trajectory of :class:`~ftkin.calibration.drift.BiasDrift`, ``model``,
+``selected_by``, ``times`` [s], ``bias`` and ``bias_std`` (one ``[F0, M0]``
+row per time [N, N·m]), ``rate`` [N/√s, N·m/√s] or null, ``coefficients`` and
+``time_scale`` [s] of a polynomial or null, ``criteria`` (BIC per candidate);
+and ``rezero`` (null, or the last re-zero: ``q`` [rad] or ``rotation``,
+``wrench``, ``previous_bias``, ``time``; informative, written by ``ftkin
+rezero`` and not read back). Version 1 files load with ``drift`` None.
+
 Floats are written with Python's shortest round-trip repr, so
 save → load gives back the same numbers bit for bit.
 """
@@ -30,9 +39,11 @@ from ..calibration.diagnostics import FitDiagnostics
 from ..calibration.estimate import CalibrationResult
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from .atomic import atomic_write_text
+from .drift_file import drift_from_document, drift_to_document
+from .json_reader import JsonReader
 
 FORMAT_NAME = "ftkin-calibration"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 UNITS = {
     "force_offset": "N, sensor frame",
@@ -95,6 +106,7 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         "covariance": result.covariance,
         "std_errors": _std_errors_document(result),
         **({"diagnostics": result.diagnostics.to_dict()} if result.diagnostics is not None else {}),
+        "drift": drift_to_document(result.drift),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "ftkin_version": __version__,
     }
@@ -119,53 +131,7 @@ def save_calibration(result: CalibrationResult, path) -> Path:
     return atomic_write_text(path, text)
 
 
-class _Reader:
-    """Typed access to a parsed document, raising CalibrationFileError with the key."""
-
-    def __init__(self, path: str, document: dict):
-        self.path, self.document = path, document
-
-    def fail(self, message: str, key: str | None = None):
-        raise CalibrationFileError(self.path, message, key)
-
-    def get(self, key: str, required: bool = True):
-        if key not in self.document:
-            if required:
-                self.fail("missing", key)
-            return None
-        return self.document[key]
-
-    def optional(self, key: str, kind: type, default=None):
-        """An optional value of JSON type ``kind`` (``str``, ``int``), ``default`` when absent or null."""
-        value = self.get(key, required=False)
-        if value is None:
-            return default
-        if isinstance(value, bool) or not isinstance(value, kind):
-            self.fail(f"expected {kind.__name__} or null, got {value!r}", key)
-        return value
-
-    def array(self, key: str, shape: tuple, required: bool = True, source=None):
-        value = self.get(key, required) if source is None else source
-        if value is None:
-            return None
-        try:
-            array = np.array(value, dtype=np.float64)
-        except (TypeError, ValueError):
-            self.fail(f"expected numbers of shape {shape}, got {value!r}", key)
-        if array.shape != shape and not (array.size == 0 and 0 in shape):
-            self.fail(f"expected shape {shape}, got {array.shape}", key)
-        if not np.all(np.isfinite(array)):
-            self.fail("contains NaN or infinite values", key)
-        return array.reshape(shape)
-
-    def number(self, key: str) -> float:
-        value = self.get(key)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            self.fail(f"expected a finite number, got {value!r}", key)
-        return float(value)
-
-
-def _diagnostics(reader: _Reader) -> FitDiagnostics | None:
+def _diagnostics(reader: JsonReader) -> FitDiagnostics | None:
     data = reader.get("diagnostics", required=False)
     if data is None:
         return None
@@ -183,7 +149,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     """Rebuild a :class:`CalibrationResult` from a parsed calibration document."""
     if not isinstance(document, dict):
         raise CalibrationFileError(path, f"expected a JSON object, got {type(document).__name__}")
-    reader = _Reader(path, document)
+    reader = JsonReader(path, document)
     if document.get("format") != FORMAT_NAME:
         reader.fail(f"not an ftkin calibration file (format {document.get('format')!r}, expected {FORMAT_NAME!r})", "format")
     version = document.get("version")
@@ -228,6 +194,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             sensor_frame=sensor_frame,
             covariance=reader.array("covariance", (12, 12), required=False),
             diagnostics=_diagnostics(reader),
+            drift=drift_from_document(reader),
         )
     except (ValueError, TypeError) as error:
         raise CalibrationFileError(path, str(error)) from None
