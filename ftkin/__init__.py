@@ -11,11 +11,13 @@ and scipy.
 
 from ._version import __version__  # noqa: F401  (re-exported: ftkin.__version__)
 from .calibration.diagnostics import FitDiagnostics
+from .calibration.drift import DRIFT_CHOICES, BiasDrift
 from .calibration.estimate import METHODS, CalibrationResult, calibrate
 from .calibration.information import SensorNoise, fisher_information
 from .calibration.model import STANDARD_GRAVITY, SensorModel
 from .calibration.samples import Samples
 from .control.admittance import Admittance, ControlFrame
+from .control.bias_tracker import BiasTracker
 from .control.compensation import Compensator
 from .control.joint_admittance import JointAdmittance, StepStatus
 from .control.sensor_faults import FaultMonitor, SensorFault, SensorLimits
@@ -44,10 +46,13 @@ from .sim.surfaces import Surface
 __all__ = [
     "Admittance",
     "Arm",
+    "BiasDrift",
+    "BiasTracker",
     "CalibrationFileError",
     "CalibrationResult",
     "Compensator",
     "ControlFrame",
+    "DRIFT_CHOICES",
     "FaultMonitor",
     "FitDiagnostics",
     "FrameNotFound",

@@ -12,14 +12,17 @@ Depends on the bottom layer and :mod:`ftkin.kinematics` (rotations).
 """
 
 from .diagnostics import FitDiagnostics
+from .drift import DRIFT_CHOICES, BiasDrift
 from .estimate import METHODS, CalibrationResult, calibrate
 from .information import SensorNoise, fisher_information
 from .model import STANDARD_GRAVITY, SensorModel
 from .samples import Samples
 
 __all__ = [
+    "DRIFT_CHOICES",
     "METHODS",
     "STANDARD_GRAVITY",
+    "BiasDrift",
     "CalibrationResult",
     "FitDiagnostics",
     "Samples",

@@ -12,6 +12,7 @@ Depends on :mod:`ftkin.calibration` (the sensor model) and :mod:`ftkin.kinematic
 """
 
 from .admittance import Admittance
+from .bias_tracker import BiasTracker
 from .compensation import Compensator
 from .control_frame import ControlFrame
 from .joint_admittance import JointAdmittance, StepStatus
@@ -19,6 +20,7 @@ from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
 
 __all__ = [
     "Admittance",
+    "BiasTracker",
     "Compensator",
     "ControlFrame",
     "FaultMonitor",
