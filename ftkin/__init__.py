@@ -40,7 +40,8 @@ from .planning.constraints import PoseConstraints
 from .planning.evaluation import PoseEvaluation, evaluate_poses
 from .planning.plan import PosePlan, plan_poses
 from .sim.placement import PlacementRun, PlacementScenario, simulate_placement
-from .sim.sensor import SimulatedSensor
+from .sim.drift import SensorDrift
+from .sim.sensor import SimulatedSensor, recording_times
 from .sim.surfaces import Surface
 
 __all__ = [
@@ -73,6 +74,7 @@ __all__ = [
     "SensorFault",
     "SensorLimits",
     "SensorModel",
+    "SensorDrift",
     "SensorMount",
     "SensorNoise",
     "SimulatedSensor",
@@ -90,6 +92,7 @@ __all__ = [
     "load_samples",
     "plan_poses",
     "quaternion_to_matrix",
+    "recording_times",
     "save_calibration",
     "simulate_placement",
 ]
