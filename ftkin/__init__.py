@@ -39,8 +39,8 @@ from .kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from .planning.constraints import PoseConstraints
 from .planning.evaluation import PoseEvaluation, evaluate_poses
 from .planning.plan import PosePlan, plan_poses
-from .sim.placement import PlacementRun, PlacementScenario, simulate_placement
 from .sim.drift import SensorDrift
+from .sim.placement import PlacementRun, PlacementScenario, simulate_placement
 from .sim.sensor import SimulatedSensor, recording_times
 from .sim.surfaces import Surface
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..calibration.drift import DRIFT_CHOICES
 from ..calibration.estimate import METHODS, calibrate
 from ..calibration.information import SensorNoise
 from ..calibration.ml import LOSSES
@@ -18,7 +19,8 @@ def register(subparsers) -> None:
         description="Calibrate from a samples CSV: wrench columns fx,fy,fz,mx,my,mz [N, N·m] and the "
         "orientation as joint columns (URDF names or q1..qn, rad), alpha,beta,gamma (deg, "
         "R = Rz Ry Rx) or qw,qx,qy,qz; optional integer 'pose' column groups repeated readings "
-        "(their spread then gives the noise levels of the ml fit).",
+        "(their spread then gives the noise levels of the ml fit); optional 't' column [s] (bags: the stamps) "
+        "lets the bias drift with time (--drift).",
     )
     parser.add_argument("samples", metavar="SAMPLES.csv")
     parser.add_argument("-o", "--output", metavar="CALIB.json", help="write the calibration file here")
@@ -40,6 +42,11 @@ def register(subparsers) -> None:
         help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
     )
     ml.add_argument("--drop-outliers", action="store_true", help="refit without the poses flagged as outliers")
+    ml.add_argument(
+        "--drift", default="auto", metavar="MODEL",
+        help=f"bias drift over time, with a 't' column: {'|'.join(DRIFT_CHOICES)} (poly:N a polynomial of degree N; "
+        "random-walk estimates the rate; auto picks by BIC and says which; default: %(default)s)",
+    )
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -58,7 +65,8 @@ def run(args) -> int:
         raise InvalidInput("--noise-force/--noise-torque, --loss and --drop-outliers apply to --method ml only")
     loaded = load_samples_from_args(args.samples, args)
     result = calibrate(
-        loaded.samples, method=args.method, g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers
+        loaded.samples, method=args.method, g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers,
+        drift=args.drift,
     )
     print(result.summary())
     if args.output:

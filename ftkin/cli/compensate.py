@@ -16,7 +16,9 @@ def register(subparsers) -> None:
         "compensate",
         help="remove bias and tool gravity from a log of raw readings",
         description="Write the contact wrench (fx..mz, sensor frame, N and N·m) of every row of LOG.csv, "
-        "keeping its other columns. LOG.csv has the same columns as a calibration samples file.",
+        "keeping its other columns. LOG.csv has the same columns as a calibration samples file; with a 't' "
+        "column [s] and a drifting calibration, rows inside the calibration's recording use the bias at their "
+        "time, later rows the calibration's last bias.",
     )
     parser.add_argument("calibration", metavar="CALIB.json")
     parser.add_argument("log", metavar="LOG.csv")
@@ -41,4 +43,9 @@ def run(args) -> int:
     write_csv(args.output, table.header, rows)
     weights = Compensator.payload_weight(contact)
     print(f"wrote {len(rows)} compensated rows to {args.output} (median contact force |F'| {np.median(weights):.4f} N)")
+    drift = calibration.drift
+    if loaded.samples.times is not None and drift is not None and drift.model != "none":
+        inside = int(np.sum(loaded.samples.times <= drift.end_time))
+        print(f"bias drift {drift.model}: {inside} rows at or before the end of the calibration recording "
+              f"(t = {drift.end_time:.6g} s) used the bias at their time, {len(rows) - inside} the last bias")
     return 0

@@ -18,7 +18,7 @@ trajectory of :class:`~ftkin.calibration.drift.BiasDrift`, ``model``,
 ``selected_by``, ``times`` [s], ``bias`` and ``bias_std`` (one ``[F0, M0]``
 row per time [N, N·m]), ``rate`` [N/√s, N·m/√s] or null, ``coefficients`` and
 ``time_scale`` [s] of a polynomial or null, ``criteria`` (BIC per candidate);
-and ``rezero`` (null, or the last re-zero: ``q`` [rad] or ``rotation``,
+and ``rezero`` (absent, or the last re-zero: ``q`` [rad] or ``rotation``,
 ``wrench``, ``previous_bias``, ``time``; informative, written by ``ftkin
 rezero`` and not read back). Version 1 files load with ``drift`` None.
 
@@ -113,8 +113,11 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
     return _jsonable(document)
 
 
-def save_calibration(result: CalibrationResult, path) -> Path:
+def save_calibration(result: CalibrationResult, path, *, rezero: dict | None = None) -> Path:
     """Write a calibration file atomically (the old file survives a crash).
+
+    ``rezero``: a record of the re-zero that produced this bias, stored under
+    ``rezero`` (informative; see ``ftkin rezero``).
 
     Raises:
         InvalidInput: ``result`` is not a :class:`CalibrationResult`.
@@ -125,7 +128,10 @@ def save_calibration(result: CalibrationResult, path) -> Path:
             f"result must be an ftkin.CalibrationResult (from calibrate or load_calibration), got {type(result).__name__}"
         )
     try:
-        text = json.dumps(calibration_to_dict(result), indent=2, allow_nan=False) + "\n"
+        document = calibration_to_dict(result)
+        if rezero is not None:
+            document["rezero"] = _jsonable(rezero)
+        text = json.dumps(document, indent=2, allow_nan=False) + "\n"
     except ValueError as error:  # NaN or infinity in a hand-built result
         raise CalibrationFileError(str(path), f"cannot write: {error}") from None
     return atomic_write_text(path, text)
