@@ -92,7 +92,7 @@ def fit_random_walk(poses: PoseAverages, theta0: np.ndarray, channel_std: np.nda
     noise_part = log_noise if estimate_noise else np.zeros(0)
     grid = [objective(np.concatenate([reference + np.log(factor), noise_part])) for factor in RATE_GRID]
     start = np.concatenate([reference + np.log(RATE_GRID[int(np.argmin(grid))]), noise_part])
-    solution = minimize(objective, start, method="Nelder-Mead", options={"xatol": 0.02, "fatol": 1e-3, "maxfev": 60 * len(start)})
+    solution = minimize(objective, start, method="Nelder-Mead", options={"xatol": 0.05, "fatol": 0.01, "maxfev": 40 * len(start)})
     rate, std = unpack(solution.x)
     log_l, theta, residuals, whitened_jacobian, gains = _profile(data, best["theta"], rate, std, FINAL_ITERATIONS)
     covariance = invert_information(whitened_jacobian.reshape(-1, 12).T @ whitened_jacobian.reshape(-1, 12), list(COMPONENT_NAMES))
