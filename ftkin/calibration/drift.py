@@ -12,8 +12,11 @@ tool weight ``a`` and centre of mass ``P`` stay constant:
   drift rate ``q`` [N/√s] shared by the forces and one [N·m/√s] by the torques,
   estimated by maximum marginal likelihood (Kalman filter and
   Rauch–Tung–Striebel smoother, :mod:`ftkin.calibration.random_walk`);
+* ``"random-walk+poly:N"``: a random walk around a polynomial trend (a
+  warm-up plus wandering);
 * ``"auto"``: the candidate with the lowest Bayesian information criterion
-  among none, poly:1..3 and random-walk (see :mod:`ftkin.calibration.drift_fit`).
+  among none, poly:1..3, random-walk and random-walk+poly:1..2 (see
+  :mod:`ftkin.calibration.drift_fit`).
 
 In every model the bias reported as ``force_offset``/``torque_offset`` is the
 bias at the end of the recording ``T`` (the last pose time): the one to use
@@ -33,14 +36,14 @@ from ..validation import as_float_array
 MAX_POLY_DEGREE = 5
 """Highest polynomial degree accepted for ``drift="poly:N"``."""
 
-DRIFT_CHOICES = ("auto", "none", "poly:N", "random-walk")
+DRIFT_CHOICES = ("auto", "none", "poly:N", "random-walk", "random-walk+poly:N")
 """The ``drift=`` values :func:`~ftkin.calibration.calibrate` accepts (``N`` a degree)."""
 
-_POLY = re.compile(r"^poly:(\d+)$")
+_POLY = re.compile(r"^(random-walk\+)?poly:(\d+)$")
 
 
 def parse_drift(drift: str) -> tuple[str, int]:
-    """``("auto"|"none"|"poly"|"random-walk", degree)`` from a ``drift=`` value.
+    """``("auto"|"none"|"poly"|"random-walk", degree)`` from a ``drift=`` value (degree > 0 with a walk: its trend).
 
     Raises:
         InvalidInput: anything else, or a degree outside ``1..MAX_POLY_DEGREE``.
@@ -52,10 +55,10 @@ def parse_drift(drift: str) -> tuple[str, int]:
     match = _POLY.match(drift)
     if match is None:
         raise InvalidInput(f"unknown drift model {drift!r}; expected one of {', '.join(DRIFT_CHOICES)}")
-    degree = int(match.group(1))
+    degree = int(match.group(2))
     if not 1 <= degree <= MAX_POLY_DEGREE:
         raise InvalidInput(f"drift polynomial degree must be 1..{MAX_POLY_DEGREE}, got {degree} (poly:0 is drift='none')")
-    return "poly", degree
+    return ("random-walk" if match.group(1) else "poly"), degree
 
 
 @dataclass(frozen=True)
@@ -63,7 +66,7 @@ class BiasDrift:
     """The bias trajectory a drift-aware calibration found.
 
     Attributes:
-        model: ``"none"``, ``"poly:N"`` or ``"random-walk"``.
+        model: ``"none"``, ``"poly:N"``, ``"random-walk"`` or ``"random-walk+poly:N"``.
         selected_by: ``"auto"`` (chosen by the information criterion) or ``"given"``.
         times: ``(P,)`` pose times, ascending [s] (mean time of each pose's readings).
         bias: ``(P, 6)`` bias ``[F0, M0]`` at those times [N, N·m, sensor frame].
@@ -71,7 +74,8 @@ class BiasDrift:
             uncertainty at each time plus that of the end bias) [N, N·m].
         rate: ``(2,)`` random-walk rate [N/√s, N·m/√s] (``"random-walk"``), else None.
         coefficients: ``(N, 6)`` polynomial coefficients ``c_1..c_N`` [N, N·m]
-            of ``((t − T) / time_scale)^k`` (``"poly:N"``), else None.
+            of ``((t − T) / time_scale)^k`` (``"poly:N"``, or the trend under a
+            walk), else None.
         time_scale: ``span`` of the polynomial's time variable [s] (the recording's length).
         criteria: BIC of each candidate model ``auto`` compared (empty otherwise).
     """
@@ -133,7 +137,7 @@ class BiasDrift:
         times = as_float_array(times, "times")
         single = times.ndim == 0
         times = np.clip(times.reshape(-1), self.times[0], self.times[-1])
-        if self.coefficients is not None:
+        if self.coefficients is not None and self.rate is None:
             tau = (times - self.times[-1]) / self.time_scale
             powers = tau[:, None] ** np.arange(1, len(self.coefficients) + 1)[None, :]
             out = self.end_bias + powers @ self.coefficients

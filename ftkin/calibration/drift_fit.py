@@ -16,7 +16,10 @@ of the recording:
   maximize the marginal likelihood (Nelder–Mead on their logarithms). The
   covariance of ``θ`` is conditional on the rates.
 
-``auto`` compares none, poly:1..3 and random-walk by the Bayesian information
+``random-walk+poly:N`` is the walk around a polynomial trend (its
+coefficients join ``θ`` in the generalized least squares).
+
+``auto`` compares none, poly:1..3, random-walk and random-walk+poly:1..2 by the Bayesian information
 criterion ``BIC = −2 log L + k log(6P)`` (``k`` parameters including the
 estimated noise levels and rates, ``P`` poses): a drift must pay for itself, so
 on a constant bias ``none`` wins (a slightly looser penalty than cross-validation,
@@ -35,7 +38,7 @@ from .information import SensorNoise
 from .model import COMPONENT_NAMES, SensorModel, cross_rows, parameter_jacobian
 from .samples import PoseAverages
 
-AUTO_CANDIDATES = ("none", "poly:1", "poly:2", "poly:3", "random-walk")
+AUTO_CANDIDATES = ("none", "poly:1", "poly:2", "poly:3", "random-walk", "random-walk+poly:1", "random-walk+poly:2")
 """Models ``drift="auto"`` compares."""
 
 _GROUPS = (slice(0, 3), slice(3, 6))
@@ -173,18 +176,36 @@ def finish_fit(data: SortedPoses, theta, channel_std, source, whitened, jacobian
                     source, dof if source == "residuals" else np.inf, information, count, log_l, drift)
 
 
+def polynomial_columns(data: SortedPoses, degree: int) -> tuple[np.ndarray, np.ndarray, float, list[str]]:
+    """Powers ``((t − T)/span)^k`` ``(P, K)``, their Jacobian columns ``(P, 6, 6K)``, the span [s] and the parameter names."""
+    scale = data.span if data.span > 0 else 1.0
+    powers = ((data.times - data.times[-1]) / scale)[:, None] ** np.arange(1, degree + 1)[None, :]
+    columns = np.zeros((len(data.times), 6, 6 * degree))
+    for k in range(degree):
+        columns[:, :, 6 * k: 6 * k + 6] = powers[:, k, None, None] * np.eye(6)
+    names = list(COMPONENT_NAMES) + [f"drift c{k + 1}[{c}]" for k in range(degree) for c in range(6)]
+    return powers, columns, scale, names
+
+
+def trend_std(powers: np.ndarray, covariance: np.ndarray) -> np.ndarray:
+    """``(P, 6)`` standard deviation of ``b(T) + Σ c_k τ^k`` from the covariance of ``[θ, c]``."""
+    degree = powers.shape[1]
+    rows = np.column_stack([np.ones(len(powers)), powers])
+    out = np.empty((len(powers), 6))
+    for c in range(6):
+        indices = [3 + c] + [12 + 6 * k + c for k in range(degree)]
+        block = covariance[np.ix_(indices, indices)]
+        out[:, c] = np.sqrt(np.clip(np.einsum("ni,ij,nj->n", rows, block, rows), 0.0, None))
+    return out
+
+
 def fit_polynomial(poses: PoseAverages, theta0: np.ndarray, channel_std: np.ndarray, source: str, degree: int,
                    selected_by: str = "given") -> DriftFit:
     """Fit ``θ`` and a degree-``degree`` polynomial bias drift (noise re-estimated from the residuals if ``source`` says so)."""
     data = SortedPoses(poses)
-    scale = data.span if data.span > 0 else 1.0
-    powers = ((data.times - data.times[-1]) / scale)[:, None] ** np.arange(1, degree + 1)[None, :]
+    powers, drift_jacobian, scale, names = polynomial_columns(data, degree)
     count = 12 + 6 * degree
-    drift_jacobian = np.zeros((len(data.times), 6, 6 * degree))
-    for k in range(degree):
-        drift_jacobian[:, :, 6 * k: 6 * k + 6] = powers[:, k, None, None] * np.eye(6)
     phi = np.concatenate([theta0, np.zeros(6 * degree)])
-    names = list(COMPONENT_NAMES) + [f"drift c{k + 1}[{c}]" for k in range(degree) for c in range(6)]
     std = np.array(channel_std, dtype=float)
     for _ in range(4 if source == "residuals" else 1):
         weights = np.sqrt(data.counts)[:, None] / std[None, :]
@@ -215,13 +236,7 @@ def fit_polynomial(poses: PoseAverages, theta0: np.ndarray, channel_std: np.ndar
     log_l_std = _profiled_std(residuals, data.counts) if estimated else std
     log_l = _gaussian_log_likelihood(residuals, log_l_std[None, :] ** 2 / data.counts[:, None])
     bias = phi[3:9] + powers @ phi[12:].reshape(degree, 6)
-    bias_std = np.empty_like(bias)
-    rows = np.column_stack([np.ones(len(powers)), powers])
-    for c in range(6):
-        indices = [3 + c] + [12 + 6 * k + c for k in range(degree)]
-        block = covariance[np.ix_(indices, indices)]
-        bias_std[:, c] = np.sqrt(np.clip(np.einsum("ni,ij,nj->n", rows, block, rows), 0.0, None))
-    drift = BiasDrift(f"poly:{degree}", selected_by, data.times, bias, bias_std,
+    drift = BiasDrift(f"poly:{degree}", selected_by, data.times, bias, trend_std(powers, covariance),
                       coefficients=phi[12:].reshape(degree, 6), time_scale=scale)
     return finish_fit(data, phi[:12], std, source, residuals * weights, full, covariance,
                    count + 2 * estimated, log_l, drift)

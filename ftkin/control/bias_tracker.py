@@ -17,10 +17,13 @@ where that innovation is the bias error and nothing else:
 
 Ticks are gathered in blocks of ``window`` seconds; a block is used only when
 all its ticks passed, and (when detected, not declared) when its mean stays
-within ``k`` standard deviations of the prediction, so the slow onset of a
-contact is not absorbed into the bias. A block is one Kalman measurement
+within ``k`` standard deviations of the prediction and the ``guard`` seconds
+after it passed too; after any failed tick the first ``guard`` seconds are
+skipped. So the small first and last ticks of a contact (its ramps, below
+``k σ``) are never absorbed into the bias. A block is one Kalman measurement
 update with the block mean (noise ``σ² / n``). Between updates the bias
-variance grows by ``q² dt``. Any failed tick throws the partial block away.
+variance grows by ``q² dt``. Any failed tick throws the partial and the
+pending block away.
 """
 
 from __future__ import annotations
@@ -53,24 +56,31 @@ class BiasTracker:
         rate: Drift rate ``q`` [N/√s, N·m/√s]: ``[force, torque]`` or ``(6,)``.
         noise: Noise of one reading ``σ`` [N, N·m]: ``[force, torque]`` or ``(6,)`` (positive).
         window: Length of a block of consistent ticks before an update [s].
+        guard: Consistent time needed after a detected block before it is used [s].
         k: Consistency threshold in standard deviations (per channel).
         still_speed: Fastest joint speed [rad/s] at which the arm counts as still (detection).
         max_speed: Fastest joint speed [rad/s] at which even a declared-free tick is used.
         initial_std: Standard deviation of the initial bias [N, N·m] (``[force, torque]`` or ``(6,)``).
+
+    Attributes:
+        update_count: Measurement updates made so far.
+        last_update_span: Ticks from the last update's tick back to the first
+            reading it used (to audit which readings moved the bias).
     """
 
-    def __init__(self, rate, noise, *, window: float = 0.5, k: float = 4.0, still_speed: float = 0.01,
+    def __init__(self, rate, noise, *, window: float = 0.5, guard: float = 0.25, k: float = 4.0, still_speed: float = 0.01,
                  max_speed: float = 0.2, initial_std=0.0):
         self.rate = _positive_six(rate, "rate")
         self.noise = _positive_six(noise, "noise")
         if np.any(self.noise <= 0):
             raise InvalidInput(f"noise must be positive, got {self.noise}")
-        numbers = np.array([window, k, still_speed, max_speed], dtype=float)
-        if not np.all(np.isfinite(numbers)) or np.any(numbers <= 0):
-            raise InvalidInput(f"window, k, still_speed and max_speed must be finite and > 0, got {numbers}")
-        self.window, self.k, self.still_speed, self.max_speed = (float(v) for v in numbers)
+        numbers = np.array([window, guard, k, still_speed, max_speed], dtype=float)
+        if not np.all(np.isfinite(numbers)) or np.any(numbers[[0, 2, 3, 4]] <= 0) or numbers[1] < 0:
+            raise InvalidInput(f"window, k, still_speed and max_speed must be finite and > 0, guard ≥ 0, got {numbers}")
+        self.window, self.guard, self.k, self.still_speed, self.max_speed = (float(v) for v in numbers)
         self._initial_std = _positive_six(initial_std, "initial_std")
         self.update_count = 0
+        self.last_update_span = 0
         self.reset(np.zeros(6))
 
     @classmethod
@@ -111,7 +121,13 @@ class BiasTracker:
         self.interrupt()
 
     def interrupt(self) -> None:
-        """Throw the current block away (a fault, a contact, a jump)."""
+        """Throw the current and the pending block away (a fault, a contact, a jump)."""
+        self._start_block()
+        self._pending = None
+        self._settle = 0.0
+        self._settle_ticks = 0
+
+    def _start_block(self) -> None:
         self._sum = np.zeros(6)
         self._count = 0
         self._elapsed = 0.0
@@ -157,18 +173,36 @@ class BiasTracker:
         if free is None and np.any(np.abs(contact) > self.k * np.sqrt(self.noise**2 + self._variance)):
             self.interrupt()
             return False
+        if not free and self._settle < self.guard:
+            self._settle += dt
+            return False
         self._sum += contact
         self._count += 1
         self._elapsed += dt
-        if self._elapsed < self.window:
-            return False
-        mean, count = self._sum / self._count, self._count
-        self.interrupt()
+        updated = False
+        if self._pending is not None:
+            self._pending[2] += dt
+            self._pending[3] += 1
+            if self._pending[2] >= self.guard:
+                updated = self._update(self._pending[0], self._pending[1], self._pending[1] + self._pending[3] - 1)
+                self._pending = None
+        if self._elapsed >= self.window:
+            mean, count = self._sum / self._count, self._count
+            self._start_block()
+            if free:
+                updated = self._update(mean, count, count - 1) or updated
+            elif np.all(np.abs(mean) <= self.k * np.sqrt(self.noise**2 / count + self._variance)):
+                self._pending = [mean, count, 0.0, 0]
+        return updated
+
+    def _update(self, mean: np.ndarray, count: int, span: int) -> bool:
+        """Kalman measurement update with a block mean of ``count`` ticks (the first ``span`` ticks ago)."""
         measurement_variance = self.noise**2 / count
-        if free is None and np.any(np.abs(mean) > self.k * np.sqrt(measurement_variance + self._variance)):
-            return False
         gain = self._variance / (self._variance + measurement_variance)
-        self._bias = self._bias + gain * mean
+        step = gain * mean
+        self._bias = self._bias + step
+        self._sum -= step * self._count  # the ticks gathered since were compensated with the old bias
         self._variance = (1.0 - gain) * self._variance
         self.update_count += 1
+        self.last_update_span = span
         return True

@@ -33,7 +33,7 @@ def drift_from_document(reader: JsonReader) -> BiasDrift | None:
         reader.fail(f"expected an object or null, got {type(data).__name__}", "drift")
     sub = NestedReader(reader.path, data, "drift")
     model = sub.get("model")
-    if not isinstance(model, str) or not (model in ("none", "random-walk") or model.startswith("poly:")):
+    if not isinstance(model, str) or not (model in ("none", "random-walk") or model.startswith(("poly:", "random-walk+poly:"))):
         reader.fail(f"unknown drift model {model!r}", "drift.model")
     times = sub.array("times", (len(data.get("times") or []),))
     count = len(times)

@@ -73,8 +73,8 @@ class SensorDrift:
 
     @classmethod
     def typical(cls) -> SensorDrift:
-        """The benchmark's drift: warm-up 0.5 N / 0.01 N·m with τ = 5 min, random walk 0.002 N/√s, 4e-5 N·m/√s."""
-        return cls(warmup=[0.5, -0.3, 0.4, 0.01, -0.006, 0.008], warmup_time_constant=300.0, random_walk=[0.002, 0.00004])
+        """The benchmark's drift: warm-up ±0.5 N / ±0.01 N·m per channel with τ = 5 min, random walk 0.002 N/√s, 4e-5 N·m/√s."""
+        return cls(warmup=[0.5, -0.5, 0.5, 0.01, -0.01, 0.01], warmup_time_constant=300.0, random_walk=[0.002, 0.00004])
 
     def deterministic(self, times) -> np.ndarray:
         """Warm-up plus temperature part ``(N, 6)`` at ``times`` [s] (no randomness)."""
