@@ -122,6 +122,13 @@ def fit_drift(poses: PoseAverages, ml_fit, kind: str, degree: int = 0) -> tuple[
     ``auto``, the BIC of every candidate tried (a candidate the poses cannot
     determine is left out).
     """
+    fit, criteria = _fit_drift(poses, ml_fit, kind, degree)
+    if fit is not None and ml_fit.noise_source == "spread":
+        fit = replace(fit, noise_dof=ml_fit.noise_dof)  # the spread's degrees of freedom, as for the constant fit
+    return fit, criteria
+
+
+def _fit_drift(poses: PoseAverages, ml_fit, kind: str, degree: int) -> tuple[DriftFit | None, dict[str, float]]:
     theta0, std, source = ml_fit.model.to_vector(), np.asarray(ml_fit.problem.channel_std), ml_fit.noise_source
     if kind == "poly":
         return fit_polynomial(poses, theta0, std, source, degree), {}
