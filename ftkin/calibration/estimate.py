@@ -124,7 +124,9 @@ class CalibrationResult(SensorModel):
 
 
 def _subset(poses: PoseAverages, keep: np.ndarray) -> PoseAverages:
-    return PoseAverages(poses.pose_ids[keep], poses.rotations[keep], poses.wrenches[keep], poses.counts[keep], poses.spread[keep])
+    times = poses.times[keep] if poses.times is not None else None
+    return PoseAverages(poses.pose_ids[keep], poses.rotations[keep], poses.wrenches[keep], poses.counts[keep], poses.spread[keep],
+                        times)
 
 
 def calibrate(

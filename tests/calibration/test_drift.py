@@ -151,6 +151,11 @@ def test_drift_options_are_checked(tool, rotations, rng):
         calibrate(Samples(timed.wrenches, timed.rotations, timed.pose_ids, times=np.zeros(24)), drift="poly:1")
     # auto quietly keeps the constant model where a drift does not apply
     assert calibrate(timed, loss="huber").drift.model == "none"
+    assert calibrate(timed, method="linear").drift.model == "none"
+    outlying = Samples(timed.wrenches + np.where(timed.pose_ids[:, None] == 3, 5.0, 0.0), timed.rotations, timed.pose_ids,
+                       times=timed.times)
+    dropped = calibrate(outlying, drop_outliers=True)
+    assert dropped.diagnostics.dropped_pose_ids == (3,) and len(dropped.drift.times) == 11
     assert calibrate(untimed).drift is None
 
 
