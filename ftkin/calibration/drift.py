@@ -78,6 +78,8 @@ class BiasDrift:
             walk), else None.
         time_scale: ``span`` of the polynomial's time variable [s] (the recording's length).
         criteria: BIC of each candidate model ``auto`` compared (empty otherwise).
+        recorded_span: ``(2,)`` first and last reading time of the recording [s]
+            (the pose times are means, inside it), or None (the pose times' span).
     """
 
     model: str
@@ -89,6 +91,7 @@ class BiasDrift:
     coefficients: np.ndarray | None = None
     time_scale: float = 1.0
     criteria: dict = field(default_factory=dict)
+    recorded_span: np.ndarray | None = None
 
     def __post_init__(self):
         times = as_float_array(self.times, "times").reshape(-1)
@@ -104,6 +107,11 @@ class BiasDrift:
         object.__setattr__(self, "times", times)
         if self.rate is not None:
             object.__setattr__(self, "rate", as_float_array(self.rate, "rate").reshape(2))
+        if self.recorded_span is not None:
+            span = as_float_array(self.recorded_span, "recorded_span").reshape(-1)
+            if span.shape != (2,) or not np.all(np.isfinite(span)) or span[0] > span[1]:
+                raise InvalidInput(f"recorded_span must be [first, last] reading time [s], got {span}")
+            object.__setattr__(self, "recorded_span", span)
         if self.coefficients is not None:
             object.__setattr__(self, "coefficients", as_float_array(self.coefficients, "coefficients").reshape(-1, 6))
 
@@ -116,6 +124,12 @@ class BiasDrift:
     def end_time(self) -> float:
         """Last pose time ``T`` [s]: the bias there is the calibration's ``force_offset``/``torque_offset``."""
         return float(self.times[-1])
+
+    def covers(self, times) -> np.ndarray:
+        """``(N,)`` True where ``times`` [s] fall inside the recording (:attr:`recorded_span`, else the pose times)."""
+        first, last = self.recorded_span if self.recorded_span is not None else (self.times[0], self.times[-1])
+        times = as_float_array(times, "times").reshape(-1)
+        return (times >= first) & (times <= last)
 
     @property
     def end_bias(self) -> np.ndarray:

@@ -209,6 +209,8 @@ def calibrate(
             trajectory = _constant_trajectory(model, poses, covariance, criteria)
     elif samples.times is not None:
         trajectory = _constant_trajectory(model, poses, covariance, {})
+    if trajectory is not None:
+        trajectory = replace(trajectory, recorded_span=np.array([np.min(samples.times), np.max(samples.times)]))
     if trajectory is None or trajectory.model == "none":
         residuals = poses.wrenches - model.predict(poses.rotations)
     else:

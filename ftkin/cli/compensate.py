@@ -45,7 +45,7 @@ def run(args) -> int:
     print(f"wrote {len(rows)} compensated rows to {args.output} (median contact force |F'| {np.median(weights):.4f} N)")
     drift = calibration.drift
     if loaded.samples.times is not None and drift is not None and drift.model != "none":
-        inside = int(np.sum(loaded.samples.times <= drift.end_time))
-        print(f"bias drift {drift.model}: {inside} rows at or before the end of the calibration recording "
-              f"(t = {drift.end_time:.6g} s) used the bias at their time, {len(rows) - inside} the last bias")
+        inside = int(np.sum(drift.covers(loaded.samples.times)))
+        print(f"bias drift {drift.model}: {inside} rows inside the calibration recording used the bias at their time, "
+              f"{len(rows) - inside} the last bias")
     return 0

@@ -176,16 +176,17 @@ class Compensator:
     def bias_at(self, times) -> np.ndarray:
         """Bias ``(N, 6)`` [N, N·m] for readings at ``times`` ``(N,)`` [s].
 
-        Inside (or before) the recording of a drifting calibration: its
-        trajectory (:meth:`~ftkin.calibration.drift.BiasDrift.bias_at`); after its
-        end, or without a drift model: the current bias (calibration's last,
-        or as re-zeroed or tracked since).
+        Inside the recording of a drifting calibration: its trajectory
+        (:meth:`~ftkin.calibration.drift.BiasDrift.bias_at`). Outside it (after
+        its end, or before its start, e.g. a log on another clock), or without
+        a drift model: the current bias (calibration's last, or as re-zeroed
+        or tracked since).
         """
         times = as_float_array(times, "times").reshape(-1)
         out = np.tile(self._bias, (len(times), 1))
         drift = getattr(self.calibration, "drift", None)
         if drift is not None and drift.model != "none":
-            inside = times <= drift.end_time
+            inside = drift.covers(times)
             out[inside] = drift.bias_at(times[inside])
         return out
 

@@ -17,7 +17,8 @@ Format version 2 adds ``drift`` (null when the samples had no times): the bias
 trajectory of :class:`~ftkin.calibration.drift.BiasDrift`, ``model``,
 ``selected_by``, ``times`` [s], ``bias`` and ``bias_std`` (one ``[F0, M0]``
 row per time [N, N·m]), ``rate`` [N/√s, N·m/√s] or null, ``coefficients`` and
-``time_scale`` [s] of a polynomial or null, ``criteria`` (BIC per candidate);
+``time_scale`` [s] of a polynomial or null, ``criteria`` (BIC per candidate),
+``recorded_span`` (first and last reading time [s]);
 and ``rezero`` (absent, or the last re-zero: ``q`` [rad] or ``rotation``,
 ``wrench``, ``previous_bias``, ``time``; informative, written by ``ftkin
 rezero`` and not read back). Version 1 files load with ``drift`` None.

@@ -21,6 +21,7 @@ def drift_to_document(drift: BiasDrift | None) -> dict | None:
         "coefficients": drift.coefficients,
         "time_scale": drift.time_scale,
         "criteria": {name: float(value) for name, value in drift.criteria.items()},
+        "recorded_span": drift.recorded_span,
     }
 
 
@@ -52,6 +53,7 @@ def drift_from_document(reader: JsonReader) -> BiasDrift | None:
             coefficients=None if coefficients is None else sub.array("coefficients", (len(coefficients), 6)),
             time_scale=sub.number("time_scale") if "time_scale" in data else 1.0,
             criteria={str(name): float(value) for name, value in criteria.items()},
+            recorded_span=sub.array("recorded_span", (2,), required=False),
         )
     except (FtkinError, TypeError, ValueError) as error:
         reader.fail(f"malformed: {error}", "drift")

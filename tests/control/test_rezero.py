@@ -66,7 +66,7 @@ def test_bias_at_reading_times_inside_and_after_a_drifting_recording(arm, truth,
     inside = np.array([10.0, 300.0, 500.0])
     np.testing.assert_allclose(compensator.bias_at(inside), result.drift.bias_at(inside))
     compensator.set_bias(result.bias + 0.05)
-    np.testing.assert_allclose(compensator.bias_at([10_000.0]), [result.bias + 0.05])
+    np.testing.assert_allclose(compensator.bias_at([10_000.0, -5.0]), [result.bias + 0.05] * 2)  # outside: the current bias
     contact = compensator.compensate_samples(samples)
     np.testing.assert_allclose(np.sqrt(np.mean(contact[:, :3] ** 2)), 0.02, rtol=0.25)  # the noise alone
     batch = compensator.compensate_batch(samples.rotations, samples.wrenches, times=samples.times)

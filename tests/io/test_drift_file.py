@@ -43,7 +43,7 @@ def test_the_bias_trajectory_round_trips_bit_for_bit(drifting, tmp_path, drift):
     save_calibration(result, tmp_path / "c.json")
     loaded = load_calibration(tmp_path / "c.json")
     assert loaded.drift.model == result.drift.model
-    for name in ("times", "bias", "bias_std"):
+    for name in ("times", "bias", "bias_std", "recorded_span"):
         np.testing.assert_array_equal(getattr(loaded.drift, name), getattr(result.drift, name))
     probe = np.linspace(-10.0, 600.0, 23)
     np.testing.assert_array_equal(loaded.bias_at(probe), result.bias_at(probe))
