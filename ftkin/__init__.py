@@ -13,6 +13,7 @@ from ._version import __version__  # noqa: F401  (re-exported: ftkin.__version__
 from .calibration.conventions import ConventionCheck, detect_sign_and_handedness
 from .calibration.derivatives import CausalDifferentiator, joint_derivatives
 from .calibration.diagnostics import FitDiagnostics
+from .calibration.drift import DRIFT_CHOICES, BiasDrift
 from .calibration.dynamic import DynamicCalibrationResult, calibrate_dynamic
 from .calibration.estimate import METHODS, CalibrationResult, calibrate
 from .calibration.information import SensorNoise, fisher_information
@@ -21,6 +22,7 @@ from .calibration.mount import MOUNT_MODES
 from .calibration.regressor import MotionSamples
 from .calibration.samples import Samples
 from .control.admittance import Admittance, ControlFrame
+from .control.bias_tracker import BiasTracker
 from .control.compensation import Compensator
 from .control.dynamic_compensation import DynamicCompensator
 from .control.joint_admittance import JointAdmittance, StepStatus
@@ -48,20 +50,24 @@ from .planning.constraints import PoseConstraints
 from .planning.evaluation import PoseEvaluation, evaluate_poses
 from .planning.excitation import ExcitationPlan, FourierTrajectory, plan_excitation
 from .planning.plan import PosePlan, plan_poses
+from .sim.drift import SensorDrift
 from .sim.mujoco_recording import MujocoRecorder, ToolInertia
 from .sim.placement import PlacementRun, PlacementScenario, simulate_placement
-from .sim.sensor import SimulatedSensor
+from .sim.sensor import SimulatedSensor, recording_times
 from .sim.surfaces import Surface
 
 __all__ = [
     "Admittance",
     "Arm",
+    "BiasDrift",
+    "BiasTracker",
     "CalibrationFileError",
     "CalibrationResult",
     "CausalDifferentiator",
     "Compensator",
     "ControlFrame",
     "ConventionCheck",
+    "DRIFT_CHOICES",
     "DynamicCalibrationResult",
     "DynamicCompensator",
     "ExcitationPlan",
@@ -88,6 +94,7 @@ __all__ = [
     "ROBOTS",
     "STANDARD_GRAVITY",
     "Samples",
+    "SensorDrift",
     "SensorFault",
     "SensorLimits",
     "SensorModel",
@@ -119,6 +126,7 @@ __all__ = [
     "plan_excitation",
     "plan_poses",
     "quaternion_to_matrix",
+    "recording_times",
     "save_calibration",
     "simulate_placement",
 ]

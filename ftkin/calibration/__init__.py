@@ -14,6 +14,7 @@ Depends on the bottom layer and :mod:`ftkin.kinematics` (rotations).
 from .conventions import ConventionCheck, detect_sign_and_handedness
 from .derivatives import CausalDifferentiator, joint_derivatives
 from .diagnostics import FitDiagnostics
+from .drift import DRIFT_CHOICES, BiasDrift
 from .dynamic import DynamicCalibrationResult, calibrate_dynamic
 from .estimate import METHODS, CalibrationResult, calibrate
 from .information import SensorNoise, fisher_information
@@ -23,9 +24,11 @@ from .regressor import MotionSamples
 from .samples import Samples
 
 __all__ = [
+    "BiasDrift",
     "CalibrationResult",
     "CausalDifferentiator",
     "ConventionCheck",
+    "DRIFT_CHOICES",
     "DynamicCalibrationResult",
     "FitDiagnostics",
     "METHODS",

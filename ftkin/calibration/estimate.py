@@ -8,22 +8,24 @@ base tilt ``U``, ``V``) and the tool's centre of mass ``P`` in the sensor frame.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 
 from ..exceptions import InvalidInput
 from ..validation import as_positive
-from .conventions import check_conventions, check_flip_axis, check_sensor_sign, detect_sign_and_handedness, reading_signs
+from .conventions import check_conventions, detect_sign_and_handedness, reading_signs
 from .diagnostics import FitDiagnostics
-from .fit_quality import diagnose
-from .information import SensorNoise, standard_errors
+from .drift import BiasDrift, parse_drift
+from .drift_select import fit_drift
+from .fit_quality import diagnose, log_warnings
+from .information import SensorNoise
 from .linear import fit_linear
 from .ml import LOSSES, fit_ml
 from .model import STANDARD_GRAVITY, SensorModel
-from .mount import MOUNT_NAMES, POSES_NEEDED, check_mount_mode, rotation_to_rpy
+from .mount import MOUNT_NAMES, POSES_NEEDED, check_mount_mode
+from .result import CalibrationResult
 from .samples import PoseAverages, Samples
-from .summary import format_summary
 
 logger = logging.getLogger(__name__)
 
@@ -32,132 +34,6 @@ MOUNT_STD_WARNING_DEG = 1.0
 
 METHODS = ("ml", "linear")
 """Estimators :func:`calibrate` accepts; the first is the default."""
-
-
-@dataclass(frozen=True)
-class CalibrationResult(SensorModel):
-    """A calibrated sensor model plus how it was obtained and how well it fits.
-
-    Inherits the parameters of :class:`~ftkin.calibration.model.SensorModel`
-    (``force_offset`` [N], ``torque_offset`` [N·m], ``gravity_in_base`` [N],
-    ``center_of_mass`` [m, sensor frame], ``g`` [m/s²]) and the derived
-    ``tool_weight`` [N], ``tool_mass`` [kg], ``base_tilt`` (U, V) [rad].
-
-    Attributes:
-        method: Estimator used (``"linear"``, ...).
-        pose_ids: ``(P,)`` pose identifiers.
-        pose_wrenches: ``(P, 6)`` mean measured raw wrench per pose [N, N·m].
-        residuals: ``(P, 6)`` measured minus predicted per pose [N, N·m].
-        sample_count: Raw readings used (≥ number of poses).
-        urdf: URDF used for forward kinematics, if joint angles were given.
-        sensor_frame: Its sensor frame name.
-        covariance: ``(12, 12)`` covariance of ``θ = [a, F0, M0, P]`` when
-            the estimator provides one (``ml``), else None.
-        diagnostics: Fit quality, outlier poses, observability and warnings
-            (:class:`~ftkin.calibration.diagnostics.FitDiagnostics`) for ``ml``, else None.
-        mount_rotation: ``R_M`` ``(3, 3)``: coordinates in the URDF's sensor
-            frame → the real sensor frame; the real orientation is
-            ``R_BS = R_BS_urdf · R_Mᵀ`` (identity unless estimated).
-        mount_mode: ``"none"``, ``"yaw"`` or ``"full"`` (how ``R_M`` was estimated).
-        mount_covariance: ``(k, k)`` covariance [rad²] of the mount angles
-            (:data:`~ftkin.calibration.mount.MOUNT_NAMES`), else None.
-        sensor_sign: ``+1`` (the sensor reports the load on it) or ``-1`` (the
-            reaction): applied to every raw reading.
-        flip_axis: None, or the sensor axis (``"x"``, ``"y"``, ``"z"``) whose
-            force and torque channels are negated in every raw reading.
-
-    The parameters are those of the real sensor frame: :meth:`predict` and
-    :meth:`tool_gravity_wrench` take the real ``R_BS`` (with the mount) and
-    give corrected readings (:attr:`reading_signs` applied).
-    """
-
-    method: str = "linear"
-    pose_ids: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
-    pose_wrenches: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
-    residuals: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
-    sample_count: int = 0
-    urdf: str | None = None
-    sensor_frame: str | None = None
-    covariance: np.ndarray | None = None
-    diagnostics: FitDiagnostics | None = None
-    mount_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
-    mount_mode: str = "none"
-    mount_covariance: np.ndarray | None = None
-    sensor_sign: int = 1
-    flip_axis: str | None = None
-
-    def __post_init__(self):
-        super().__post_init__()
-        rotation = np.array(self.mount_rotation, dtype=float)
-        if rotation.shape != (3, 3) or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) or np.linalg.det(rotation) <= 0:
-            raise InvalidInput(f"mount_rotation must be a (3, 3) rotation matrix (orthonormal, det = +1), got {rotation.tolist()}")
-        rotation.setflags(write=False)
-        object.__setattr__(self, "mount_rotation", rotation)
-        object.__setattr__(self, "mount_mode", check_mount_mode(self.mount_mode))
-        object.__setattr__(self, "sensor_sign", check_sensor_sign(self.sensor_sign))
-        check_flip_axis(self.flip_axis)
-
-    @property
-    def has_mount(self) -> bool:
-        """True when ``R_M`` is not the identity."""
-        return not np.array_equal(self.mount_rotation, np.eye(3))
-
-    @property
-    def mount_rpy_deg(self) -> np.ndarray:
-        """``(3,)`` roll, pitch, yaw [deg] of ``R_M`` (``R_M = Rz(yaw) Ry(pitch) Rx(roll)``)."""
-        return np.rad2deg(rotation_to_rpy(self.mount_rotation))
-
-    @property
-    def mount_std_deg(self) -> dict[str, float]:
-        """Standard errors [deg] of the estimated mount angles by name (empty without a mount estimate)."""
-        if self.mount_covariance is None:
-            return {}
-        sigma = np.rad2deg(np.sqrt(np.clip(np.diag(self.mount_covariance), 0.0, None)))
-        return dict(zip(MOUNT_NAMES[self.mount_mode], (float(value) for value in sigma)))
-
-    @property
-    def reading_signs(self) -> np.ndarray:
-        """``(6,)`` factors ``±1`` applied to every raw reading (``sensor_sign`` and ``flip_axis``)."""
-        return reading_signs(self.sensor_sign, self.flip_axis)
-
-    @property
-    def pose_count(self) -> int:
-        """Number of distinct static poses."""
-        return len(self.pose_ids)
-
-    @property
-    def model(self) -> SensorModel:
-        """The bare parameters, without provenance."""
-        return SensorModel(self.force_offset, self.torque_offset, self.gravity_in_base, self.center_of_mass, self.g)
-
-    @property
-    def residual_rms(self) -> np.ndarray:
-        """``(6,)`` RMS of the per-pose residuals per channel [N, N·m]."""
-        if len(self.residuals) == 0:
-            return np.full(6, np.nan)
-        return np.sqrt(np.mean(self.residuals**2, axis=0))
-
-    @property
-    def mean_relative_error(self) -> np.ndarray:
-        """``(6,)`` mean over poses of ``|residual| / |measured|`` per channel (the paper's Table 3) [-]."""
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.mean(np.abs(self.residuals) / np.abs(self.pose_wrenches), axis=0)
-
-    @property
-    def std_errors(self) -> dict | None:
-        """Standard errors per parameter (see :func:`ftkin.calibration.information.standard_errors`), or None."""
-        if self.covariance is None:
-            return None
-        return standard_errors(self, self.covariance)
-
-    @property
-    def warnings(self) -> tuple[str, ...]:
-        """Warnings about fit quality, outlier poses and poorly determined parameters."""
-        return self.diagnostics.warnings if self.diagnostics is not None else ()
-
-    def summary(self) -> str:
-        """Human-readable summary with units."""
-        return format_summary(self)
 
 
 def _with_mount_warning(diagnostics: FitDiagnostics, mode: str, covariance: np.ndarray) -> FitDiagnostics:
@@ -172,7 +48,9 @@ def _with_mount_warning(diagnostics: FitDiagnostics, mode: str, covariance: np.n
 
 
 def _subset(poses: PoseAverages, keep: np.ndarray) -> PoseAverages:
-    return PoseAverages(poses.pose_ids[keep], poses.rotations[keep], poses.wrenches[keep], poses.counts[keep], poses.spread[keep])
+    times = poses.times[keep] if poses.times is not None else None
+    return PoseAverages(poses.pose_ids[keep], poses.rotations[keep], poses.wrenches[keep], poses.counts[keep], poses.spread[keep],
+                        times)
 
 
 def calibrate(
@@ -188,6 +66,7 @@ def calibrate(
     flip_axis: str | None = None,
     base_mount: str = "floor",
     expected_gravity=None,
+    drift: str = "auto",
 ) -> CalibrationResult:
     """Estimate bias, tool gravity and base tilt from static-pose readings.
 
@@ -216,6 +95,12 @@ def calibrate(
         base_mount: ``"floor"`` (default: gravity along base −z),
             ``"ceiling"`` (+z) or ``"wall"`` (no direction check).
         expected_gravity: Expected gravity direction [base frame]; overrides ``base_mount``.
+        drift: How the bias may change with time when the samples carry
+            times (:mod:`ftkin.calibration.drift`): ``"auto"`` (default: the
+            model the information criterion prefers; the constant bias without
+            times, with ``method="linear"``, a robust loss or ``drop_outliers``),
+            ``"none"`` (constant), ``"poly:N"`` or ``"random-walk"`` (these two
+            need times and the plain ``ml`` fit).
 
     Returns:
         A frozen :class:`CalibrationResult`.
@@ -224,9 +109,10 @@ def calibrate(
         UnobservableParameters: the poses cannot determine the parameters
             (fewer than three, orientations alike, gravity along one sensor
             direction); the error names them.
-        InvalidInput: unknown method or loss, bad ``g`` or ``noise``, ml
-            options with ``method="linear"``, or a mount for samples whose
-            rotations were given directly.
+        InvalidInput: unknown method, loss or drift model, bad ``g`` or
+            ``noise``, ml options with ``method="linear"``, a mount for samples
+            whose rotations were given directly, a drift model without times or
+            with options it does not support (a mount estimate among them).
         SuspectConvention: the data fit with an axis reversed, or the tool
             weight points more than 90° from the expected gravity direction.
     """
@@ -248,6 +134,12 @@ def calibrate(
             "directly are taken as the real sensor orientation, so any mount is already in them (absorbed)"
         )
     g = as_positive(g, "g")
+    drift_kind, degree = _drift_kind(drift, samples, method, loss, drop_outliers)
+    if drift_kind != "none" and estimate_mount != "none":
+        if drift != "auto":
+            raise InvalidInput(f"drift={drift!r} and estimate_mount={estimate_mount!r} cannot be fitted together yet: "
+                               "estimate the mount from a short recording (drift='none'), then the drift")
+        drift_kind = "none"  # documented: with a mount estimate, auto keeps the constant bias
     signs = reading_signs(sensor_sign, flip_axis)
     raw_poses = samples.pose_averages()
     poses = replace(raw_poses, wrenches=raw_poses.wrenches * signs)
@@ -262,7 +154,7 @@ def calibrate(
         model = fit_linear(poses, g)
     else:
         fit = fit_ml(poses, g, noise, loss, estimate_mount)
-        diagnostics, covariance = diagnose(fit, poses.pose_ids)
+        diagnostics, covariance = diagnose(fit, poses.pose_ids, log=drift_kind == "none")
         if drop_outliers and diagnostics.outlier_pose_ids:
             dropped = diagnostics.outlier_pose_ids
             poses = _subset(poses, ~np.isin(poses.pose_ids, dropped))
@@ -272,7 +164,23 @@ def calibrate(
         if mount_covariance is not None:
             mount_covariance = mount_covariance * diagnostics.covariance_scale  # the same goodness-of-fit scaling as θ
             diagnostics = _with_mount_warning(diagnostics, estimate_mount, mount_covariance)
-    residuals = poses.wrenches - model.predict(poses.rotations @ mount.T)
+    trajectory = None
+    if samples.times is not None and method == "ml" and drift_kind != "none":
+        drift_fit, criteria = fit_drift(poses, fit, drift_kind, degree)
+        if drift_fit is not None:
+            diagnostics, covariance = diagnose(drift_fit, poses.pose_ids, parameter_count=drift_fit.parameter_count)
+            model, trajectory = SensorModel.from_vector(drift_fit.model.to_vector(), g), drift_fit.drift
+        else:
+            log_warnings(diagnostics)
+            trajectory = _constant_trajectory(model, poses, covariance, criteria)
+    elif samples.times is not None:
+        trajectory = _constant_trajectory(model, poses, covariance, {})
+    if trajectory is not None:
+        trajectory = replace(trajectory, recorded_span=np.array([np.min(samples.times), np.max(samples.times)]))
+    if trajectory is None or trajectory.model == "none":
+        residuals = poses.wrenches - model.predict(poses.rotations @ mount.T)
+    else:
+        residuals = poses.wrenches - model.tool_gravity_wrench(poses.rotations @ mount.T) - trajectory.bias_at(poses.times)
     return CalibrationResult(
         force_offset=model.force_offset,
         torque_offset=model.torque_offset,
@@ -293,4 +201,30 @@ def calibrate(
         mount_covariance=mount_covariance,
         sensor_sign=sensor_sign,
         flip_axis=flip_axis,
+        drift=trajectory,
     )
+
+
+def _drift_kind(drift, samples: Samples, method: str, loss: str, drop_outliers: bool) -> tuple[str, int]:
+    """The drift model to fit: ``("none"|"auto"|"poly"|"random-walk", degree)`` after checking the options."""
+    kind, degree = parse_drift(drift)
+    if kind in ("none", "auto"):
+        unsupported = method != "ml" or loss != "linear" or drop_outliers
+        if kind == "auto" and (samples.times is None or unsupported or np.ptp(samples.times) <= 0.0):
+            return "none", 0
+        return kind, degree
+    if samples.times is None:
+        raise InvalidInput(f"drift={drift!r} needs the time of each reading (Samples.times, a 't' column in the CSV)")
+    if method != "ml" or loss != "linear" or drop_outliers:
+        raise InvalidInput(f"drift={drift!r} needs method='ml' with loss='linear' and no drop_outliers")
+    if np.ptp(samples.times) <= 0.0:
+        raise InvalidInput(f"drift={drift!r}: all readings have the same time; a drift needs readings spread over time")
+    return kind, degree
+
+
+def _constant_trajectory(model: SensorModel, poses: PoseAverages, covariance, criteria: dict) -> BiasDrift:
+    """The constant bias as a :class:`BiasDrift` (``"none"``), for samples that had times."""
+    times = np.sort(poses.times)
+    std = np.sqrt(np.diag(covariance)[3:9]) if covariance is not None else np.zeros(6)
+    return BiasDrift("none", "auto" if criteria else "given", times, np.tile(model.bias, (len(times), 1)),
+                     np.tile(std, (len(times), 1)), criteria=criteria)

@@ -34,7 +34,7 @@ from .diagnostics import (
 )
 from .model import PARAMETER_NAMES
 
-__all__ = ["FIT_ALPHA", "OUTLIER_ALPHA", "RELATIVE_STD_ERROR_WARNING", "FitDiagnostics", "diagnose"]
+__all__ = ["FIT_ALPHA", "OUTLIER_ALPHA", "RELATIVE_STD_ERROR_WARNING", "FitDiagnostics", "diagnose", "log_warnings"]
 
 logger = logging.getLogger(__name__)
 
@@ -93,8 +93,14 @@ def _pose_statistics(whitened, hat, fit_ok, source, noise_dof, parameter_count=1
     return normalized, p_values, leverage
 
 
-def diagnose(fit, pose_ids, dropped_pose_ids=()) -> tuple[FitDiagnostics, np.ndarray]:
+def diagnose(fit, pose_ids, dropped_pose_ids=(), parameter_count: int | None = None, log: bool = True) -> tuple[FitDiagnostics, np.ndarray]:
     """Assess an :class:`~ftkin.calibration.ml.MlFit`; returns its diagnostics and the (scaled) covariance.
+
+    ``parameter_count``: parameters fitted (default: the problem's, 12 for ``θ``
+    plus any mount angles; more with a drift
+    model, :class:`~ftkin.calibration.drift_fit.DriftFit`), for the degrees of freedom.
+    ``log``: False keeps the warnings out of the log (for a fit that may be
+    replaced; :func:`log_warnings` sends them later).
 
     Warnings are also sent to the ``ftkin.calibration.fit_quality`` logger.
     """
@@ -102,7 +108,8 @@ def diagnose(fit, pose_ids, dropped_pose_ids=()) -> tuple[FitDiagnostics, np.nda
     problem = fit.problem
     whitened = problem.whitened_residuals(theta).reshape(-1, 6)
     count = len(whitened)
-    parameter_count = getattr(problem, "parameter_count", 12)  # 12 + mount angles when a mount is estimated
+    if parameter_count is None:  # 12 for θ, plus the mount angles when a mount is estimated
+        parameter_count = getattr(problem, "parameter_count", 12)
     dof = 6 * count - parameter_count
     chi_square = float(np.sum(whitened**2))
     if fit.noise_source == "residuals" or dof <= 0:
@@ -110,8 +117,8 @@ def diagnose(fit, pose_ids, dropped_pose_ids=()) -> tuple[FitDiagnostics, np.nda
     else:
         p_value = float(_f_sf(chi_square / dof, dof, fit.noise_dof))
     fit_ok = not (p_value < FIT_ALPHA)
-    normalized, pose_p, leverage = _pose_statistics(whitened, problem.hat_blocks(theta), fit_ok, fit.noise_source, fit.noise_dof,
-                                                  parameter_count)
+    normalized, pose_p, leverage = _pose_statistics(
+        whitened, problem.hat_blocks(theta), fit_ok, fit.noise_source, fit.noise_dof, parameter_count)
     with np.errstate(invalid="ignore", divide="ignore"):
         channel_chi_square = np.sum(whitened**2, axis=0) / np.sum(1.0 - leverage, axis=0)
     scale = chi_square / dof if (not fit_ok and chi_square > dof) else 1.0
@@ -156,8 +163,6 @@ def diagnose(fit, pose_ids, dropped_pose_ids=()) -> tuple[FitDiagnostics, np.nda
             f"the noise levels come from the residuals with only {fit.noise_dof:.1f} degrees of freedom, so the "
             "standard errors are rough; record several readings per pose (pose column), add poses, or give the noise"
         )
-    for message in messages:
-        logger.warning(message)
     diagnostics = FitDiagnostics(
         loss=fit.loss,
         noise=fit.noise,
@@ -178,4 +183,12 @@ def diagnose(fit, pose_ids, dropped_pose_ids=()) -> tuple[FitDiagnostics, np.nda
         relative_std_errors=relative,
         warnings=tuple(messages),
     )
+    if log:
+        log_warnings(diagnostics)
     return diagnostics, covariance
+
+
+def log_warnings(diagnostics: FitDiagnostics) -> None:
+    """Send the diagnostics' warnings to the ``ftkin.calibration.fit_quality`` logger."""
+    for message in diagnostics.warnings:
+        logger.warning(message)

@@ -3,7 +3,8 @@
 A :class:`Samples` holds ``N`` raw readings ``[fx, fy, fz, mx, my, mz]`` [N, N·m]
 in the sensor frame, the sensor orientation ``R_BS`` of each (canonical
 ``(N, 3, 3)`` form), and an optional pose id grouping repeated readings of one
-static pose. Build it from whichever orientation input you have: joint angles
+static pose, and optional reading times ``t`` [s] (needed to model a
+bias that drifts, :mod:`ftkin.calibration.drift`). Build it from whichever orientation input you have: joint angles
 through an :class:`~ftkin.kinematics.arm.Arm`, rotation matrices, quaternions, or the
 paper's commanded Euler angles.
 """
@@ -33,6 +34,8 @@ class PoseAverages:
         counts: ``(P,)`` readings per pose.
         spread: ``(P, 6)`` sample standard deviation of the readings per pose
             and channel (NaN for a pose with a single reading).
+        times: ``(P,)`` mean time of each pose's readings [s], or None when
+            the samples carry no times.
     """
 
     pose_ids: np.ndarray
@@ -40,6 +43,7 @@ class PoseAverages:
     wrenches: np.ndarray
     counts: np.ndarray
     spread: np.ndarray
+    times: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.pose_ids)
@@ -58,6 +62,8 @@ class Samples:
             came from an arm, else None.
         urdf: The URDF of that arm, recorded in the calibration file.
         sensor_frame: The arm's sensor frame, recorded likewise.
+        times: ``(N,)`` time of each reading [s] (any origin; need not be
+            sorted), or None when not recorded.
     """
 
     wrenches: np.ndarray
@@ -66,6 +72,7 @@ class Samples:
     joint_positions: np.ndarray | None = None
     urdf: str | None = None
     sensor_frame: str | None = None
+    times: np.ndarray | None = None
 
     def __post_init__(self):
         wrenches, _ = as_batch(self.wrenches, 6, "wrenches [fx, fy, fz, mx, my, mz]")
@@ -85,6 +92,15 @@ class Samples:
             if not np.all(np.isfinite(as_float)) or np.any(as_float != np.round(as_float)):
                 raise InvalidSamples("pose ids must be integers")
             pose_ids = as_float.astype(np.int64)
+        times = self.times
+        if times is not None:
+            times = as_float_array(times, "times [s]").copy()
+            if times.shape != (len(wrenches),):
+                raise InvalidSamples(f"times must have shape ({len(wrenches)},) (one per reading) [s], got {times.shape}")
+            if not np.all(np.isfinite(times)):
+                raise InvalidSamples(f"times must be finite [s]; reading {int(np.argmin(np.isfinite(times)))} is not")
+            times.setflags(write=False)
+            object.__setattr__(self, "times", times)
         for array in (wrenches, rotations, pose_ids):
             array.setflags(write=False)
         object.__setattr__(self, "wrenches", wrenches)
@@ -96,34 +112,34 @@ class Samples:
 
     # ---------------------------------------------------------- constructors
     @classmethod
-    def from_rotations(cls, rotation_sensor_to_base, wrenches, pose_ids=None) -> Samples:
-        """From ``(N, 3, 3)`` sensor orientations ``R_BS``."""
-        return cls(wrenches, rotation_sensor_to_base, pose_ids)
+    def from_rotations(cls, rotation_sensor_to_base, wrenches, pose_ids=None, times=None) -> Samples:
+        """From ``(N, 3, 3)`` sensor orientations ``R_BS`` (and optional times ``(N,)`` [s])."""
+        return cls(wrenches, rotation_sensor_to_base, pose_ids, times=times)
 
     @classmethod
-    def from_joint_positions(cls, arm, joint_positions, wrenches, pose_ids=None, rotations=None) -> Samples:
+    def from_joint_positions(cls, arm, joint_positions, wrenches, pose_ids=None, rotations=None, times=None) -> Samples:
         """From ``(N, nq)`` joint angles [rad] through the arm's forward kinematics.
 
         ``rotations``: their ``R_BS`` ``(N, 3, 3)`` when the caller computed them
-        already (forward kinematics is then skipped).
+        already (forward kinematics is then skipped). ``times``: ``(N,)`` [s].
         """
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
         if rotations is None:
             rotations = arm.rotation_sensor_to_base(configurations)
         urdf = str(arm.urdf_path) if arm.urdf_path is not None else None
-        return cls(wrenches, rotations, pose_ids, configurations, urdf, arm.sensor_frame)
+        return cls(wrenches, rotations, pose_ids, configurations, urdf, arm.sensor_frame, times)
 
     @classmethod
-    def from_quaternions(cls, quaternions_wxyz, wrenches, pose_ids=None) -> Samples:
+    def from_quaternions(cls, quaternions_wxyz, wrenches, pose_ids=None, times=None) -> Samples:
         """From ``(N, 4)`` unit quaternions ``[qw, qx, qy, qz]`` of the sensor in the base frame."""
         rotations = quaternion_to_matrix(quaternions_wxyz)
-        return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids)
+        return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids, times=times)
 
     @classmethod
-    def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None) -> Samples:
+    def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None, times=None) -> Samples:
         """From the paper's commanded ``(N, 3)`` Euler angles ``[α, β, γ]`` [deg], ``R = Rz Ry Rx``."""
         rotations = euler_zyx_deg_to_matrix(angles_deg)
-        return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids)
+        return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids, times=times)
 
     # -------------------------------------------------------------- grouping
     def pose_averages(self) -> PoseAverages:
@@ -162,4 +178,9 @@ class Samples:
                 f"{np.rad2deg(deviation[worst]):.2f}° (more than {np.rad2deg(MAX_POSE_SPREAD):.0f}°): a pose id must "
                 "group readings of one static pose; check the pose column"
             )
-        return PoseAverages(unique[order], mean_rotations, means, counts, spread)
+        pose_times = None
+        if self.times is not None:
+            time_sums = np.zeros(len(unique))
+            np.add.at(time_sums, group, self.times)
+            pose_times = time_sums / counts
+        return PoseAverages(unique[order], mean_rotations, means, counts, spread, pose_times)

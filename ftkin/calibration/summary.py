@@ -45,6 +45,12 @@ def format_summary(result) -> str:
         f"  base_tilt       U  = {_scalar(tilt_u, 3, tilt_errors[0])}°, V = {_scalar(tilt_v, 3, tilt_errors[1])}°",
     ]
     lines.extend(_mount_lines(result))
+    if result.drift is not None:
+        lines.append(f"  bias drift: {result.drift.describe()}")
+        if result.drift.model != "none":
+            lines.append(f"    F0, M0 above are the bias at the end of the recording (t = {result.drift.end_time:.6g} s)")
+        if result.drift.criteria:
+            lines.append("    BIC: " + ", ".join(f"{name} {value:.1f}" for name, value in result.drift.criteria.items()))
     if result.pose_count:
         rms = result.residual_rms
         lines.append(

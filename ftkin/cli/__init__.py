@@ -17,6 +17,7 @@ from ..exceptions import FtkinError
 COMMAND_MODULES = (
     "calibrate",
     "compensate",
+    "rezero",
     "paper",
     "demo",
     "extract",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ..calibration.conventions import BASE_MOUNTS
+from ..calibration.drift import DRIFT_CHOICES
 from ..calibration.estimate import METHODS, calibrate
 from ..calibration.information import SensorNoise
 from ..calibration.ml import LOSSES
@@ -21,7 +22,8 @@ def register(subparsers) -> None:
         description="Calibrate from a samples CSV: wrench columns fx,fy,fz,mx,my,mz [N, N·m] and the "
         "orientation as joint columns (URDF names or q1..qn, rad), alpha,beta,gamma (deg, "
         "R = Rz Ry Rx) or qw,qx,qy,qz; optional integer 'pose' column groups repeated readings "
-        "(their spread then gives the noise levels of the ml fit).",
+        "(their spread then gives the noise levels of the ml fit); optional 't' column [s] (bags: the stamps) "
+        "lets the bias drift with time (--drift).",
     )
     parser.add_argument("samples", metavar="SAMPLES.csv")
     parser.add_argument("-o", "--output", metavar="CALIB.json", help="write the calibration file here")
@@ -43,6 +45,11 @@ def register(subparsers) -> None:
         help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
     )
     ml.add_argument("--drop-outliers", action="store_true", help="refit without the poses flagged as outliers")
+    ml.add_argument(
+        "--drift", default="auto", metavar="MODEL",
+        help=f"bias drift over time, with a 't' column: {'|'.join(DRIFT_CHOICES)} (poly:N a polynomial of degree N; "
+        "random-walk estimates the rate; auto picks by BIC and says which; default: %(default)s)",
+    )
     ml.add_argument(
         "--estimate-mount", choices=MOUNT_MODES[1:], metavar="yaw|full",
         help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or full (any rotation); "
@@ -88,9 +95,10 @@ def run(args) -> int:
     if args.dynamic:
         if args.method != METHODS[0] or args.loss != "linear" or args.drop_outliers:
             raise InvalidInput("--method, --loss and --drop-outliers apply to static calibration, not to --dynamic")
-        if args.estimate_mount or args.sensor_sign != 1 or args.flip_axis:
+        if args.estimate_mount or args.sensor_sign != 1 or args.flip_axis or args.drift != "auto":
             raise InvalidInput(
-                "--estimate-mount, --sensor-sign and --flip-axis apply to static calibration, not yet to --dynamic; "
+                "--estimate-mount, --sensor-sign, --flip-axis and --drift apply to static calibration, not yet to "
+                "--dynamic; "
                 "calibrate the mount and sign from static poses first"
             )
         return _report(calibrate_motion(args, arm_from_args(args), noise), args)
@@ -105,6 +113,7 @@ def run(args) -> int:
         loaded.samples, method=args.method, g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers,
         estimate_mount=args.estimate_mount or "none", sensor_sign=args.sensor_sign, flip_axis=args.flip_axis,
         base_mount=args.base_mount, expected_gravity=args.expected_gravity,
+        drift=args.drift,
     )
     return _report(result, args)
 

@@ -18,9 +18,11 @@ def register(subparsers) -> None:
         "compensate",
         help="remove bias and tool gravity from a log of raw readings",
         description="Write the contact wrench (fx..mz, sensor frame, N and N·m) of every row of LOG.csv, "
-        "keeping its other columns. LOG.csv has the same columns as a calibration samples file. When the "
-        "calibration has an inertia (calibrate --dynamic) and the log has a time column t and joint columns, "
-        "the tool's inertial wrench is removed too (joint derivatives from the log, zero-phase).",
+        "keeping its other columns. LOG.csv has the same columns as a calibration samples file. With a 't' "
+        "column [s] and a drifting calibration, rows inside the calibration's recording use the bias at their "
+        "time, later rows the calibration's last bias. When the calibration has an inertia (calibrate --dynamic) "
+        "and the log has a time column t and joint columns, the tool's inertial wrench is removed too (joint "
+        "derivatives from the log, zero-phase).",
     )
     parser.add_argument("calibration", metavar="CALIB.json")
     parser.add_argument("log", metavar="LOG.csv")
@@ -53,4 +55,9 @@ def run(args) -> int:
     write_csv(args.output, table.header, rows)
     weights = Compensator.payload_weight(contact)
     print(f"wrote {len(rows)} compensated rows to {args.output} (median contact force |F'| {np.median(weights):.4f} N)")
+    drift = calibration.drift
+    if loaded.samples.times is not None and drift is not None and drift.model != "none":
+        inside = int(np.sum(drift.covers(loaded.samples.times)))
+        print(f"bias drift {drift.model}: {inside} rows inside the calibration recording used the bias at their time, "
+              f"{len(rows) - inside} the last bias")
     return 0

@@ -12,6 +12,7 @@ Depends on :mod:`ftkin.calibration` (the sensor model) and :mod:`ftkin.kinematic
 """
 
 from .admittance import Admittance
+from .bias_tracker import BiasTracker
 from .compensation import Compensator
 from .control_frame import ControlFrame
 from .dynamic_compensation import DynamicCompensator
@@ -20,6 +21,7 @@ from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
 
 __all__ = [
     "Admittance",
+    "BiasTracker",
     "Compensator",
     "ControlFrame",
     "DynamicCompensator",

@@ -13,6 +13,13 @@ the joint-angle entry points see the real sensor at no extra cost, and
 ``R_BS`` given directly is taken as the real sensor's orientation. A stored
 sensor sign or reversed axis (:mod:`ftkin.calibration.conventions`) multiplies
 every raw reading by ``±1`` first; without one the hot path is unchanged.
+
+The bias used is an attribute the caller can move without slowing the
+control path: :meth:`Compensator.rezero` (bias from one reading at a known pose,
+keeping the tool weight), :meth:`Compensator.driver_zeroed_at` (readings a driver
+zeroed at a pose), an attached :class:`~ftkin.control.bias_tracker.BiasTracker`
+(:meth:`Compensator.compensate_tracked`), and, for logs with times inside a
+drifting calibration's recording, :meth:`Compensator.bias_at`.
 """
 
 from __future__ import annotations
@@ -24,7 +31,8 @@ from ..calibration.samples import Samples
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
 from ..kinematics.mounting import mounted_arm
-from ..validation import as_batch, as_rotation_batch
+from ..validation import as_batch, as_float_array, as_rotation_batch, as_vector
+from .bias_tracker import BiasTracker
 
 
 class Compensator:
@@ -36,11 +44,15 @@ class Compensator:
         arm: Kinematics for the joint-angle entry points; not needed when the
             caller supplies ``R_BS`` itself. With a calibration that carries a
             mount, :attr:`arm` is a copy with the real sensor frame.
+        tracker: Optional :class:`~ftkin.control.bias_tracker.BiasTracker`
+            (off by default); it is restarted from the calibration's bias.
     """
 
-    def __init__(self, calibration: SensorModel, arm: Arm | None = None):
+    def __init__(self, calibration: SensorModel, arm: Arm | None = None, tracker: BiasTracker | None = None):
         if not isinstance(calibration, SensorModel):
             raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
+        if tracker is not None and not isinstance(tracker, BiasTracker):
+            raise InvalidInput(f"tracker must be an ftkin BiasTracker or None, got {type(tracker).__name__}")
         self.calibration = calibration
         mount = getattr(calibration, "mount_rotation", None)
         self.arm = mounted_arm(arm, mount) if arm is not None and mount is not None else arm
@@ -58,12 +70,15 @@ class Compensator:
         self._com_floats = tuple(self._com.tolist())
         self._bias_floats = tuple(self._bias.tolist())
         self._q_shape = (arm.nq,) if arm is not None else None
+        self.tracker = tracker
+        if tracker is not None:
+            tracker.reset(self._bias, tracker.std)
 
     def _signed_rotation_unchecked(self, rotation: np.ndarray, raw: np.ndarray) -> np.ndarray:
         return Compensator.compensate_rotation_unchecked(self, rotation, raw * self._reading_signs)
 
-    def _signed_batch_unchecked(self, rotations: np.ndarray, raw: np.ndarray) -> np.ndarray:
-        return Compensator.compensate_batch_unchecked(self, rotations, raw * self._reading_signs)
+    def _signed_batch_unchecked(self, rotations: np.ndarray, raw: np.ndarray, bias: np.ndarray | None = None) -> np.ndarray:
+        return Compensator.compensate_batch_unchecked(self, rotations, raw * self._reading_signs, bias)
 
     def _require_arm(self) -> Arm:
         if self.arm is None:
@@ -120,19 +135,123 @@ class Compensator:
             (w5 - b5) - (px * gy - py * gx),
         ])
 
+    # ------------------------------------------------------------------ bias
+    @property
+    def bias(self) -> np.ndarray:
+        """The bias ``[F0, M0]`` [N, N·m] subtracted now (a copy)."""
+        return self._bias.copy()
+
+    def _apply_bias(self, bias: np.ndarray) -> None:
+        self._bias = np.array(bias, dtype=float)
+        self._bias_floats = tuple(self._bias.tolist())
+
+    def set_bias(self, bias) -> None:
+        """Use ``bias`` ``(6,)`` [N, N·m] from now on (the tracker, if any, restarts from it)."""
+        bias = as_vector(bias, 6, "bias [F0, M0]")
+        self._apply_bias(bias)
+        if self.tracker is not None:
+            self.tracker.reset(bias)
+
+    def rezero_rotation(self, rotation_sensor_to_base, raw_wrench) -> np.ndarray:
+        """:meth:`rezero` from ``R_BS`` ``(3, 3)``; returns the new bias ``(6,)``."""
+        rotations, _ = as_rotation_batch(rotation_sensor_to_base)
+        raw = as_vector(raw_wrench, 6, "raw_wrench")
+        if len(rotations) != 1:
+            raise InvalidInput("rezero takes one (3, 3) rotation")
+        if self._reading_signs is not None:  # a stored sensor sign or reversed axis applies to this reading too
+            raw = raw * self._reading_signs
+        bias = raw - self.calibration.tool_gravity_wrench(rotations[0])
+        self.set_bias(bias)
+        return bias
+
+    def rezero(self, q, raw_wrench) -> np.ndarray:
+        """Re-zero at joint angles ``q`` [rad]: the contact wrench of ``raw_wrench`` becomes zero.
+
+        The new bias is the reading minus the predicted tool gravity at ``q``
+        (not the whole reading, which would subtract the tool's weight at
+        this pose and make it appear at every other). The tool must be free
+        of contact and the arm still. Returns the new bias ``(6,)`` [N, N·m].
+        """
+        arm = self._require_arm()
+        q = as_vector(q, arm.nq, "q")
+        return self.rezero_rotation(arm.sensor_rotation_unchecked(q), raw_wrench)
+
+    def driver_zeroed_at_rotation(self, rotation_sensor_to_base) -> np.ndarray:
+        """:meth:`driver_zeroed_at` from ``R_BS`` ``(3, 3)``; returns the new bias ``(6,)``."""
+        rotations, _ = as_rotation_batch(rotation_sensor_to_base)
+        if len(rotations) != 1:
+            raise InvalidInput("driver_zeroed_at takes one (3, 3) rotation")
+        bias = -self.calibration.tool_gravity_wrench(rotations[0])
+        self.set_bias(bias)
+        return bias
+
+    def driver_zeroed_at(self, q0) -> np.ndarray:
+        """The sensor driver was zeroed (tool on, no contact) at joint angles ``q0`` [rad].
+
+        Its readings are then ``raw − raw(q0)``: the true bias and the tool
+        gravity at ``q0`` are gone. The bias to subtract from them is minus the
+        tool gravity wrench at ``q0`` (``−[Gs(q0), P × Gs(q0)]``), after which
+        the contact wrenches are right at every pose. Returns that bias ``(6,)``.
+        """
+        arm = self._require_arm()
+        q0 = as_vector(q0, arm.nq, "q0")
+        return self.driver_zeroed_at_rotation(arm.sensor_rotation_unchecked(q0))
+
+    def bias_at(self, times) -> np.ndarray:
+        """Bias ``(N, 6)`` [N, N·m] for readings at ``times`` ``(N,)`` [s].
+
+        Inside the recording of a drifting calibration: its trajectory
+        (:meth:`~ftkin.calibration.drift.BiasDrift.bias_at`). Outside it (after
+        its end, or before its start, e.g. a log on another clock), or without
+        a drift model: the current bias (calibration's last, or as re-zeroed
+        or tracked since).
+        """
+        times = as_float_array(times, "times").reshape(-1)
+        out = np.tile(self._bias, (len(times), 1))
+        drift = getattr(self.calibration, "drift", None)
+        if drift is not None and drift.model != "none":
+            inside = drift.covers(times)
+            out[inside] = drift.bias_at(times[inside])
+        return out
+
+    def compensate_tracked(self, q, raw_wrench, dt: float, *, free: bool | None = None) -> np.ndarray:
+        """:meth:`compensate`, then feed the tracker (if any) with the result; see :meth:`observe_bias`."""
+        contact = self.compensate(q, raw_wrench)
+        self.observe_bias(contact, dt, q=q, free=free)
+        return contact
+
+    def observe_bias(self, contact_wrench, dt: float, *, q=None, free: bool | None = None, fault: bool = False) -> bool:
+        """Give the tracker this tick's contact wrench; True when it moved the bias (used from the next call)."""
+        tracker = self.tracker
+        if tracker is None or not tracker.observe(contact_wrench, dt, q=q, free=free, fault=fault):
+            return False
+        self._apply_bias(tracker.bias)
+        return True
+
     # ----------------------------------------------------------------- batch
-    def compensate_batch(self, rotation_sensor_to_base, raw_wrenches) -> np.ndarray:
-        """Contact wrenches ``(N, 6)`` from ``(N, 3, 3)`` ``R_BS`` and ``(N, 6)`` raw readings (vectorized)."""
+    def compensate_batch(self, rotation_sensor_to_base, raw_wrenches, times=None) -> np.ndarray:
+        """Contact wrenches ``(N, 6)`` from ``(N, 3, 3)`` ``R_BS`` and ``(N, 6)`` raw readings (vectorized).
+
+        ``times``: ``(N,)`` reading times [s]; the bias is then :meth:`bias_at` those times.
+        """
         rotations, _ = as_rotation_batch(rotation_sensor_to_base)
         raw, _ = as_batch(raw_wrenches, 6, "raw_wrenches")
         if len(rotations) != len(raw):
             raise InvalidInput(f"{len(rotations)} rotations but {len(raw)} wrenches; expected one each")
-        return self.compensate_batch_unchecked(rotations, raw)
+        bias = None
+        if times is not None:
+            bias = self.bias_at(times)
+            if len(bias) != len(raw):
+                raise InvalidInput(f"{len(bias)} times but {len(raw)} wrenches; expected one each")
+        return self.compensate_batch_unchecked(rotations, raw, bias)
 
-    def compensate_batch_unchecked(self, rotations: np.ndarray, raw: np.ndarray) -> np.ndarray:
-        """:meth:`compensate_batch` without validation, for callers that validated already."""
+    def compensate_batch_unchecked(self, rotations: np.ndarray, raw: np.ndarray, bias: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`compensate_batch` without validation, for callers that validated already.
+
+        ``bias``: ``(N, 6)`` per-reading bias [N, N·m] (default: the current one).
+        """
         gravity_in_sensor = np.einsum("nji,j->ni", rotations, self._gravity_in_base)
-        out = raw - self._bias
+        out = raw - (self._bias if bias is None else bias)
         out[:, :3] -= gravity_in_sensor
         out[:, 3:] -= cross_rows(self._com, gravity_in_sensor)
         return out
@@ -143,7 +262,7 @@ class Compensator:
         return self.compensate_batch(rotations, raw_wrenches)
 
     def compensate_samples(self, samples: Samples) -> np.ndarray:
-        """Contact wrenches ``(N, 6)`` of a :class:`~ftkin.calibration.samples.Samples`.
+        """Contact wrenches ``(N, 6)`` of a :class:`~ftkin.calibration.samples.Samples` (at their times, if any).
 
         Samples read from joint angles hold the URDF's ``R_BS``: the calibration's mount is applied to them.
         """
@@ -151,7 +270,8 @@ class Compensator:
         mount = getattr(self.calibration, "mount_rotation", None)
         if samples.joint_positions is not None and mount is not None:
             rotations = rotations @ mount.T
-        return self.compensate_batch_unchecked(rotations, samples.wrenches)
+        bias = self.bias_at(samples.times) if samples.times is not None else None
+        return self.compensate_batch_unchecked(rotations, samples.wrenches, bias)
 
     @staticmethod
     def payload_weight(contact_wrench) -> np.ndarray | float:

@@ -141,13 +141,17 @@ class JointAdmittance:
         self._holding = False
         self.last_status: StepStatus | None = None
 
-    def step(self, q, raw_wrench, dt: float) -> np.ndarray:
+    def step(self, q, raw_wrench, dt: float, free: bool | None = None) -> np.ndarray:
         """Joint velocities ``(nq,)`` [rad/s] for this tick.
 
         Args:
             q: Joint positions ``(nq,)`` [rad].
             raw_wrench: Raw sensor reading ``(6,)`` [N, N·m], sensor frame.
             dt: Time since the previous tick [s].
+            free: For the compensator's bias tracker, if it has one
+                (:class:`~ftkin.control.bias_tracker.BiasTracker`): True when the
+                tool is known free of contact, False in contact, None to let
+                it detect. A faulty tick never reaches the tracker.
 
         Raises:
             InvalidInput: ``q``, ``raw_wrench`` or ``dt`` of the wrong shape or not numbers
@@ -163,10 +167,14 @@ class JointAdmittance:
             raise InvalidInput(f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
         fault, event = self.monitor.check(q, raw.tolist(), dt)
         if fault is not SensorFault.NONE:
+            if self.compensator is not None and self.compensator.tracker is not None:
+                self.compensator.tracker.interrupt()
             return self._hold(fault, event)
         jacobian = pin.computeFrameJacobian(self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED)
         rotation = self._data.oMf[self._sensor_id].rotation
         contact = raw.copy() if self.compensator is None else self.compensator.compensate_rotation_unchecked(rotation, raw)
+        if self.compensator is not None and self.compensator.tracker is not None:
+            self.compensator.observe_bias(contact, dt, q=q, free=free)
         fx, fy, fz, mx, my, mz = contact.tolist()
         force, torque = math.sqrt(fx * fx + fy * fy + fz * fz), math.sqrt(mx * mx + my * my + mz * mz)
         if self.safety_latched or force > self.force_limit or torque > self.torque_limit:

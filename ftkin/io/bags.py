@@ -295,5 +295,5 @@ def bag_samples(
     )
     columns = [times] + ([pose_ids] if pose_ids is not None else []) + list(positions.T) + list(wrenches.T)
     table = _table(recording.source, header, columns)
-    samples = Samples.from_joint_positions(arm, positions, wrenches, pose_ids)
+    samples = Samples.from_joint_positions(arm, positions, wrenches, pose_ids, times=times)
     return BagSamples(samples, table, "joints", list(recording.joint_names), recording, search)

@@ -22,6 +22,16 @@ sensor frame → real sensor frame), ``mount_rpy_deg`` (its roll, pitch, yaw
 null), ``sensor_sign`` (+1 or −1) and ``flip_axis`` (null, "x", "y", "z").
 Files without them load with the identity mount, sign +1 and no flip.
 
+Format version 2 adds ``drift`` (null when the samples had no times): the bias
+trajectory of :class:`~ftkin.calibration.drift.BiasDrift`, ``model``,
+``selected_by``, ``times`` [s], ``bias`` and ``bias_std`` (one ``[F0, M0]``
+row per time [N, N·m]), ``rate`` [N/√s, N·m/√s] or null, ``coefficients`` and
+``time_scale`` [s] of a polynomial or null, ``criteria`` (BIC per candidate),
+``recorded_span`` (first and last reading time [s]);
+and ``rezero`` (absent, or the last re-zero: ``q`` [rad] or ``rotation``,
+``wrench``, ``previous_bias``, ``time``; informative, written by ``ftkin
+rezero`` and not read back). Version 1 files load with ``drift`` None.
+
 Floats are written with Python's shortest round-trip repr, so
 save → load gives back the same numbers bit for bit.
 """
@@ -40,10 +50,11 @@ from ..calibration.estimate import CalibrationResult
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from .atomic import atomic_write_text
 from .calibration_inertia import inertia_document, with_inertia
-from .json_reader import DocumentReader
+from .drift_file import drift_from_document, drift_to_document
+from .json_reader import JsonReader
 
 FORMAT_NAME = "ftkin-calibration"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 UNITS = {
     "force_offset": "N, sensor frame",
@@ -123,14 +134,18 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         "sensor_sign": result.sensor_sign,
         "flip_axis": result.flip_axis,
         **({"diagnostics": result.diagnostics.to_dict()} if result.diagnostics is not None else {}),
+        "drift": drift_to_document(result.drift),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "ftkin_version": __version__,
     }
     return _jsonable(document)
 
 
-def save_calibration(result: CalibrationResult, path) -> Path:
+def save_calibration(result: CalibrationResult, path, *, rezero: dict | None = None) -> Path:
     """Write a calibration file atomically (the old file survives a crash).
+
+    ``rezero``: a record of the re-zero that produced this bias, stored under
+    ``rezero`` (informative; see ``ftkin rezero``).
 
     Raises:
         InvalidInput: ``result`` is not a :class:`CalibrationResult`.
@@ -141,13 +156,16 @@ def save_calibration(result: CalibrationResult, path) -> Path:
             f"result must be an ftkin.CalibrationResult (from calibrate or load_calibration), got {type(result).__name__}"
         )
     try:
-        text = json.dumps(calibration_to_dict(result), indent=2, allow_nan=False) + "\n"
+        document = calibration_to_dict(result)
+        if rezero is not None:
+            document["rezero"] = _jsonable(rezero)
+        text = json.dumps(document, indent=2, allow_nan=False) + "\n"
     except ValueError as error:  # NaN or infinity in a hand-built result
         raise CalibrationFileError(str(path), f"cannot write: {error}") from None
     return atomic_write_text(path, text)
 
 
-def _diagnostics(reader: DocumentReader) -> FitDiagnostics | None:
+def _diagnostics(reader: JsonReader) -> FitDiagnostics | None:
     data = reader.get("diagnostics", required=False)
     if data is None:
         return None
@@ -165,7 +183,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     """Rebuild a :class:`CalibrationResult` from a parsed calibration document."""
     if not isinstance(document, dict):
         raise CalibrationFileError(path, f"expected a JSON object, got {type(document).__name__}")
-    reader = DocumentReader(path, document)
+    reader = JsonReader(path, document)
     if document.get("format") != FORMAT_NAME:
         reader.fail(f"not an ftkin calibration file (format {document.get('format')!r}, expected {FORMAT_NAME!r})", "format")
     version = document.get("version")
@@ -221,6 +239,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             mount_covariance=mount_covariance,
             sensor_sign=sensor_sign,
             flip_axis=reader.optional("flip_axis", str),
+            drift=drift_from_document(reader),
         )
     except (ValueError, TypeError) as error:
         raise CalibrationFileError(path, str(error)) from None

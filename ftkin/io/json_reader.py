@@ -1,4 +1,4 @@
-"""Typed access to a parsed JSON document, with errors that name the file and the key."""
+"""Typed access to a parsed JSON document, failing with :class:`~ftkin.exceptions.CalibrationFileError` naming the key."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 from ..exceptions import CalibrationFileError
 
 
-class DocumentReader:
+class JsonReader:
     """Typed access to a parsed document, raising CalibrationFileError with the key."""
 
     def __init__(self, path: str, document: dict):
@@ -53,3 +53,14 @@ class DocumentReader:
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             self.fail(f"expected a finite number, got {value!r}", key)
         return float(value)
+
+
+class NestedReader(JsonReader):
+    """A :class:`JsonReader` for an object inside the document; keys are reported as ``prefix.key``."""
+
+    def __init__(self, path: str, document: dict, prefix: str):
+        super().__init__(path, document)
+        self.prefix = prefix
+
+    def fail(self, message: str, key: str | None = None):
+        super().fail(message, f"{self.prefix}.{key}" if key else self.prefix)

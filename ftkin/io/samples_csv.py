@@ -9,7 +9,9 @@ in exactly one convention:
   ``R_BS = Rz(α) Ry(β) Rx(γ)``;
 * ``qw,qx,qy,qz``: unit quaternion of the sensor frame in the base frame.
 
-An optional integer ``pose`` column groups repeated readings of one pose.
+An optional integer ``pose`` column groups repeated readings of one pose; an
+optional ``t`` column gives each reading's time [s] (a drifting bias is then
+modelled, see :mod:`ftkin.calibration.drift`).
 Other columns are carried along untouched (``ftkin compensate`` copies them).
 """
 
@@ -32,6 +34,7 @@ logger = logging.getLogger(__name__)
 EULER_COLUMNS = ("alpha", "beta", "gamma")
 QUATERNION_COLUMNS = ("qw", "qx", "qy", "qz")
 POSE_COLUMN = "pose"
+TIME_COLUMN = "t"
 _GENERIC_JOINT = re.compile(r"^q(\d+)$")
 _DEGREES_THRESHOLD = 2.0 * np.pi + 0.01
 
@@ -169,6 +172,13 @@ def pose_ids_from_table(table: Table) -> np.ndarray | None:
     return pose_ids.astype(np.int64)
 
 
+def times_from_table(table: Table) -> np.ndarray | None:
+    """The ``t`` column ``(N,)`` [s], or None when the table has none."""
+    if TIME_COLUMN not in table.header:
+        return None
+    return table.floats([TIME_COLUMN])[:, 0]
+
+
 @dataclass(frozen=True)
 class LoadedSamples:
     """Samples read from a CSV, with the table they came from."""
@@ -188,11 +198,12 @@ def samples_from_table(table: Table, arm=None) -> LoadedSamples:
     orientations = orientations_from_table(table, arm)
     wrenches = table.floats(WRENCH_CHANNELS)
     pose_ids = pose_ids_from_table(table)
+    times = times_from_table(table)
     if orientations.arm is None:
-        samples = Samples(wrenches, orientations.rotations, pose_ids)
+        samples = Samples(wrenches, orientations.rotations, pose_ids, times=times)
     else:
         samples = Samples.from_joint_positions(
-            orientations.arm, orientations.joint_positions, wrenches, pose_ids, orientations.rotations
+            orientations.arm, orientations.joint_positions, wrenches, pose_ids, orientations.rotations, times
         )
     return LoadedSamples(samples, table, orientations.kind, orientations.columns)
 

@@ -1,7 +1,8 @@
 """Simulation: known truth in, readings and closed-loop runs out.
 
 :class:`SimulatedSensor` produces raw readings [N, N·m] from known calibration
-parameters at given ``R_BS`` (bias + tool gravity + contact + noise).
+parameters at given ``R_BS`` (bias + drift + tool gravity + contact + noise;
+the drift, :class:`SensorDrift`, warms up, wanders and follows temperature).
 :func:`simulate_placement` runs the paper's placement experiment (METHOD.md §6)
 with :class:`~ftkin.control.JointAdmittance` in the loop against a
 :class:`Surface`. :mod:`ftkin.sim.paper` reproduces the paper's calibration.
@@ -9,17 +10,20 @@ with :class:`~ftkin.control.JointAdmittance` in the loop against a
 Depends on :mod:`ftkin.control`, :mod:`ftkin.io`, :mod:`ftkin.calibration` and below.
 """
 
+from .drift import SensorDrift
 from .mujoco_recording import MujocoRecorder, ToolInertia
 from .placement import PlacementRun, PlacementScenario, simulate_placement
-from .sensor import SimulatedSensor
+from .sensor import SimulatedSensor, recording_times
 from .surfaces import Surface
 
 __all__ = [
     "MujocoRecorder",
     "PlacementRun",
     "PlacementScenario",
+    "SensorDrift",
     "SimulatedSensor",
     "Surface",
     "ToolInertia",
+    "recording_times",
     "simulate_placement",
 ]

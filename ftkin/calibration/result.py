@@ -1,0 +1,171 @@
+"""The result of a static calibration: :class:`CalibrationResult`.
+
+A frozen :class:`~ftkin.calibration.model.SensorModel` (bias, tool gravity in
+the base frame, centre of mass) with what the fit knows about itself: per-pose
+residuals, covariance and standard errors, diagnostics, the sensor's mount and
+reading signs, and the bias trajectory of a drifting sensor.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..exceptions import InvalidInput
+from ..validation import as_vector
+from .conventions import check_flip_axis, check_sensor_sign, reading_signs
+from .diagnostics import FitDiagnostics
+from .drift import BiasDrift
+from .information import standard_errors
+from .model import SensorModel
+from .mount import MOUNT_NAMES, check_mount_mode, rotation_to_rpy
+from .summary import format_summary
+
+
+@dataclass(frozen=True)
+class CalibrationResult(SensorModel):
+    """A calibrated sensor model plus how it was obtained and how well it fits.
+
+    Inherits the parameters of :class:`~ftkin.calibration.model.SensorModel`
+    (``force_offset`` [N], ``torque_offset`` [N·m], ``gravity_in_base`` [N],
+    ``center_of_mass`` [m, sensor frame], ``g`` [m/s²]) and the derived
+    ``tool_weight`` [N], ``tool_mass`` [kg], ``base_tilt`` (U, V) [rad].
+
+    Attributes:
+        method: Estimator used (``"linear"``, ...).
+        pose_ids: ``(P,)`` pose identifiers.
+        pose_wrenches: ``(P, 6)`` mean measured raw wrench per pose [N, N·m].
+        residuals: ``(P, 6)`` measured minus predicted per pose [N, N·m].
+        sample_count: Raw readings used (≥ number of poses).
+        urdf: URDF used for forward kinematics, if joint angles were given.
+        sensor_frame: Its sensor frame name.
+        covariance: ``(12, 12)`` covariance of ``θ = [a, F0, M0, P]`` when
+            the estimator provides one (``ml``), else None.
+        diagnostics: Fit quality, outlier poses, observability and warnings
+            (:class:`~ftkin.calibration.diagnostics.FitDiagnostics`) for ``ml``, else None.
+        mount_rotation: ``R_M`` ``(3, 3)``: coordinates in the URDF's sensor
+            frame → the real sensor frame; the real orientation is
+            ``R_BS = R_BS_urdf · R_Mᵀ`` (identity unless estimated).
+        mount_mode: ``"none"``, ``"yaw"`` or ``"full"`` (how ``R_M`` was estimated).
+        mount_covariance: ``(k, k)`` covariance [rad²] of the mount angles
+            (:data:`~ftkin.calibration.mount.MOUNT_NAMES`), else None.
+        sensor_sign: ``+1`` (the sensor reports the load on it) or ``-1`` (the
+            reaction): applied to every raw reading.
+        flip_axis: None, or the sensor axis (``"x"``, ``"y"``, ``"z"``) whose
+            force and torque channels are negated in every raw reading.
+
+    The parameters are those of the real sensor frame: :meth:`predict` and
+    :meth:`tool_gravity_wrench` take the real ``R_BS`` (with the mount) and
+    give corrected readings (:attr:`reading_signs` applied).
+        drift: The bias over time (:class:`~ftkin.calibration.drift.BiasDrift`)
+            when the samples had times, else None. With a drift model the
+            ``force_offset``/``torque_offset`` are the bias at the end of the
+            recording and ``residuals`` are taken against the bias at each
+            pose's time.
+    """
+
+    method: str = "linear"
+    pose_ids: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    pose_wrenches: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    residuals: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    sample_count: int = 0
+    urdf: str | None = None
+    sensor_frame: str | None = None
+    covariance: np.ndarray | None = None
+    diagnostics: FitDiagnostics | None = None
+    mount_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+    mount_mode: str = "none"
+    mount_covariance: np.ndarray | None = None
+    sensor_sign: int = 1
+    flip_axis: str | None = None
+
+    def __post_init__(self):
+        super().__post_init__()
+        rotation = np.array(self.mount_rotation, dtype=float)
+        if rotation.shape != (3, 3) or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) or np.linalg.det(rotation) <= 0:
+            raise InvalidInput(f"mount_rotation must be a (3, 3) rotation matrix (orthonormal, det = +1), got {rotation.tolist()}")
+        rotation.setflags(write=False)
+        object.__setattr__(self, "mount_rotation", rotation)
+        object.__setattr__(self, "mount_mode", check_mount_mode(self.mount_mode))
+        object.__setattr__(self, "sensor_sign", check_sensor_sign(self.sensor_sign))
+        check_flip_axis(self.flip_axis)
+
+    @property
+    def has_mount(self) -> bool:
+        """True when ``R_M`` is not the identity."""
+        return not np.array_equal(self.mount_rotation, np.eye(3))
+
+    @property
+    def mount_rpy_deg(self) -> np.ndarray:
+        """``(3,)`` roll, pitch, yaw [deg] of ``R_M`` (``R_M = Rz(yaw) Ry(pitch) Rx(roll)``)."""
+        return np.rad2deg(rotation_to_rpy(self.mount_rotation))
+
+    @property
+    def mount_std_deg(self) -> dict[str, float]:
+        """Standard errors [deg] of the estimated mount angles by name (empty without a mount estimate)."""
+        if self.mount_covariance is None:
+            return {}
+        sigma = np.rad2deg(np.sqrt(np.clip(np.diag(self.mount_covariance), 0.0, None)))
+        return dict(zip(MOUNT_NAMES[self.mount_mode], (float(value) for value in sigma)))
+
+    @property
+    def reading_signs(self) -> np.ndarray:
+        """``(6,)`` factors ``±1`` applied to every raw reading (``sensor_sign`` and ``flip_axis``)."""
+        return reading_signs(self.sensor_sign, self.flip_axis)
+    drift: BiasDrift | None = None
+
+    @property
+    def pose_count(self) -> int:
+        """Number of distinct static poses."""
+        return len(self.pose_ids)
+
+    @property
+    def model(self) -> SensorModel:
+        """The bare parameters, without provenance."""
+        return SensorModel(self.force_offset, self.torque_offset, self.gravity_in_base, self.center_of_mass, self.g)
+
+    @property
+    def residual_rms(self) -> np.ndarray:
+        """``(6,)`` RMS of the per-pose residuals per channel [N, N·m]."""
+        if len(self.residuals) == 0:
+            return np.full(6, np.nan)
+        return np.sqrt(np.mean(self.residuals**2, axis=0))
+
+    @property
+    def mean_relative_error(self) -> np.ndarray:
+        """``(6,)`` mean over poses of ``|residual| / |measured|`` per channel (the paper's Table 3) [-]."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.mean(np.abs(self.residuals) / np.abs(self.pose_wrenches), axis=0)
+
+    @property
+    def std_errors(self) -> dict | None:
+        """Standard errors per parameter (see :func:`ftkin.calibration.information.standard_errors`), or None."""
+        if self.covariance is None:
+            return None
+        return standard_errors(self, self.covariance)
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """Warnings about fit quality, outlier poses and poorly determined parameters."""
+        return self.diagnostics.warnings if self.diagnostics is not None else ()
+
+    def bias_at(self, times) -> np.ndarray:
+        """Bias ``[F0, M0]`` [N, N·m] at ``times`` [s]: ``(N, 6)``, or ``(6,)`` for a scalar time.
+
+        From the drift trajectory inside the recorded span (held at its first
+        or last value outside); the constant bias without a drift model.
+        """
+        if self.drift is not None:
+            return self.drift.bias_at(times)
+        times = np.asarray(times, dtype=float)
+        return self.bias.copy() if times.ndim == 0 else np.tile(self.bias, (times.size, 1))
+
+    def with_bias(self, bias) -> CalibrationResult:
+        """A copy with the sensor bias ``[F0, M0]`` [N, N·m] replaced (after a re-zero); the rest is kept."""
+        bias = as_vector(bias, 6, "bias [F0, M0]")
+        return replace(self, force_offset=bias[:3], torque_offset=bias[3:])
+
+    def summary(self) -> str:
+        """Human-readable summary with units."""
+        return format_summary(self)

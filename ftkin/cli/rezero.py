@@ -1,0 +1,64 @@
+"""``ftkin rezero CALIB.json --q Q1 .. Qn --wrench FX .. MZ [-o OUT.json]``: a safe re-zero.
+
+The new bias is the reading minus the tool gravity the calibration predicts at
+that pose (:meth:`~ftkin.control.compensation.Compensator.rezero`), so the tool's
+weight stays compensated at every other pose. Without ``-o`` the calibration
+file itself is updated, atomically: re-zeroing it is this command's purpose
+(the one place where ftkin writes over an input). ``-o`` writes elsewhere and
+leaves CALIB.json untouched.
+"""
+
+from __future__ import annotations
+
+import datetime
+
+import numpy as np
+
+from ..control.compensation import Compensator
+from ..exceptions import InvalidInput
+from ..io.calibration_file import load_calibration, save_calibration
+from ..kinematics.arm import Arm
+from .common import add_arm_arguments, arm_for_calibration
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "rezero",
+        help="re-zero the sensor bias from one contact-free reading at a known pose (tool weight kept)",
+        description="Set the bias so that the contact wrench of the given raw reading is zero at the given joint "
+        "angles: bias = reading − predicted tool gravity (not the whole reading, which would subtract the tool's "
+        "weight at this pose). The tool must be free of contact and the arm still. Updates CALIB.json in place "
+        "(atomically) unless -o is given.",
+    )
+    parser.add_argument("calibration", metavar="CALIB.json")
+    parser.add_argument("--q", type=float, nargs="+", required=True, metavar="Q", help="joint angles of the pose [rad]")
+    parser.add_argument(
+        "--wrench", type=float, nargs=6, required=True, metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
+        help="raw reading at that pose [N, N·m], sensor frame (average a few hundred readings)",
+    )
+    parser.add_argument("-o", "--output", metavar="OUT.json", help="write the re-zeroed calibration here instead of in place")
+    add_arm_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    calibration = load_calibration(args.calibration)
+    arm = arm_for_calibration(args, calibration) or Arm.default()
+    if len(args.q) != arm.nq:
+        raise InvalidInput(f"--q takes the arm's {arm.nq} joint angles [rad] ({', '.join(arm.joint_names)}), got {len(args.q)}")
+    compensator = Compensator(calibration, arm)
+    previous = calibration.bias
+    bias = compensator.rezero(np.array(args.q), np.array(args.wrench))
+    record = {
+        "q": args.q,
+        "wrench": args.wrench,
+        "previous_bias": previous,
+        "time": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+    }
+    output = args.output or args.calibration
+    save_calibration(calibration.with_bias(bias), output, rezero=record)
+    change = bias - previous
+    print(f"bias F0 = [{', '.join(f'{v:+.4f}' for v in bias[:3])}] N, M0 = [{', '.join(f'{v:+.5f}' for v in bias[3:])}] N·m "
+          f"(changed by {np.linalg.norm(change[:3]):.4f} N, {np.linalg.norm(change[3:]):.5f} N·m)")
+    print(f"wrote {output}" + (" (updated in place)" if args.output is None else ""))
+    return 0

@@ -1,0 +1,59 @@
+"""The ``drift`` entry of a calibration file (format version 2): the bias trajectory."""
+
+from __future__ import annotations
+
+from ..calibration.drift import BiasDrift
+from ..exceptions import FtkinError
+from .json_reader import JsonReader, NestedReader
+
+
+def drift_to_document(drift: BiasDrift | None) -> dict | None:
+    """The ``drift`` entry of a calibration file (None without a trajectory)."""
+    if drift is None:
+        return None
+    return {
+        "model": drift.model,
+        "selected_by": drift.selected_by,
+        "times": drift.times,
+        "bias": drift.bias,
+        "bias_std": drift.bias_std,
+        "rate": drift.rate,
+        "coefficients": drift.coefficients,
+        "time_scale": drift.time_scale,
+        "criteria": {name: float(value) for name, value in drift.criteria.items()},
+        "recorded_span": drift.recorded_span,
+    }
+
+
+def drift_from_document(reader: JsonReader) -> BiasDrift | None:
+    """The :class:`BiasDrift` of a parsed calibration document (None when absent or null)."""
+    data = reader.get("drift", required=False)
+    if data is None:
+        return None
+    if not isinstance(data, dict):
+        reader.fail(f"expected an object or null, got {type(data).__name__}", "drift")
+    sub = NestedReader(reader.path, data, "drift")
+    model = sub.get("model")
+    if not isinstance(model, str) or not (model in ("none", "random-walk") or model.startswith(("poly:", "random-walk+poly:"))):
+        reader.fail(f"unknown drift model {model!r}", "drift.model")
+    times = sub.array("times", (len(data.get("times") or []),))
+    count = len(times)
+    coefficients = data.get("coefficients")
+    criteria = data.get("criteria") or {}
+    if not isinstance(criteria, dict):
+        reader.fail("expected an object of numbers", "drift.criteria")
+    try:
+        return BiasDrift(
+            model=model,
+            selected_by=sub.optional("selected_by", str, "given"),
+            times=times,
+            bias=sub.array("bias", (count, 6)),
+            bias_std=sub.array("bias_std", (count, 6)),
+            rate=sub.array("rate", (2,), required=False),
+            coefficients=None if coefficients is None else sub.array("coefficients", (len(coefficients), 6)),
+            time_scale=sub.number("time_scale") if "time_scale" in data else 1.0,
+            criteria={str(name): float(value) for name, value in criteria.items()},
+            recorded_span=sub.array("recorded_span", (2,), required=False),
+        )
+    except (FtkinError, TypeError, ValueError) as error:
+        reader.fail(f"malformed: {error}", "drift")

@@ -1,0 +1,63 @@
+"""CLI: calibrate --drift, compensate with a 't' column, rezero in place or to -o."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from ftkin import Arm, SensorDrift, SensorNoise, SimulatedSensor, load_calibration
+from ftkin.cli import main
+from ftkin.io.csv_table import write_csv
+from ftkin.sim.sensor import paper_like_truth, recording_times
+
+
+@pytest.fixture(scope="module")
+def samples_csv(tmp_path_factory):
+    arm = Arm.default()
+    rng = np.random.default_rng(21)
+    configurations = arm.random_configurations(24, rng, margin=0.3)
+    times = recording_times(24, 4, 1200.0, 0.01)
+    sensor = SimulatedSensor(paper_like_truth(), SensorNoise.paper(), SensorDrift.typical())
+    samples = sensor.samples_at_configurations(arm, configurations, rng, 4, times=times)
+    header = ["t", "pose", *[f"q{i + 1}" for i in range(6)], "fx", "fy", "fz", "mx", "my", "mz"]
+    rows = [[t, int(p), *q, *w] for t, p, q, w in zip(samples.times, samples.pose_ids, samples.joint_positions, samples.wrenches)]
+    path = tmp_path_factory.mktemp("drift") / "samples.csv"
+    write_csv(path, header, rows)
+    return path
+
+
+def test_calibrate_with_drift_then_compensate_at_the_reading_times(samples_csv, tmp_path, capsys):
+    assert main(["calibrate", str(samples_csv), "--drift", "poly:3", "-o", str(tmp_path / "c.json")]) == 0
+    out = capsys.readouterr().out
+    assert "bias drift: poly:3 (given)" in out and "end of the recording" in out
+    assert json.loads((tmp_path / "c.json").read_text())["drift"]["model"] == "poly:3"
+    assert main(["compensate", str(tmp_path / "c.json"), str(samples_csv), "-o", str(tmp_path / "out.csv")]) == 0
+    assert "used the bias at their time" in capsys.readouterr().out
+    assert main(["calibrate", str(samples_csv), "--drift", "poly:7"]) == 2
+    assert "degree must be 1..5" in capsys.readouterr().err
+
+
+def test_rezero_updates_the_file_in_place_or_writes_elsewhere(samples_csv, tmp_path, capsys):
+    calibration_path = tmp_path / "c.json"
+    assert main(["calibrate", str(samples_csv), "--drift", "none", "-o", str(calibration_path)]) == 0
+    before = calibration_path.read_text()
+    original = load_calibration(calibration_path)
+    q = [0.2, -1.1, 1.3, 0.4, 1.2, -0.3]
+    arm = Arm.default()
+    rotation = arm.rotation_sensor_to_base(np.array([q]))[0]
+    wrench = original.tool_gravity_wrench(rotation) + [0.1, -0.2, 0.3, 0.01, 0.0, -0.01]
+    args = ["rezero", str(calibration_path), "--q", *map(str, q), "--wrench", *map(str, wrench)]
+    assert main([*args, "-o", str(tmp_path / "other.json")]) == 0
+    assert calibration_path.read_text() == before  # -o leaves the input alone
+    other = load_calibration(tmp_path / "other.json")
+    np.testing.assert_allclose(other.bias, [0.1, -0.2, 0.3, 0.01, 0.0, -0.01], atol=1e-12)
+    np.testing.assert_array_equal(other.gravity_in_base, original.gravity_in_base)
+    assert main(args) == 0
+    assert "updated in place" in capsys.readouterr().out
+    document = json.loads(calibration_path.read_text())
+    assert document["rezero"]["previous_bias"] == original.bias.tolist()
+    np.testing.assert_allclose(load_calibration(calibration_path).bias, other.bias)
+    assert main(["rezero", str(calibration_path), "--q", "0", "1", "--wrench", *["0"] * 6]) == 2
+    assert "6 joint angles" in capsys.readouterr().err
