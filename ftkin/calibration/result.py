@@ -54,15 +54,15 @@ class CalibrationResult(SensorModel):
             reaction): applied to every raw reading.
         flip_axis: None, or the sensor axis (``"x"``, ``"y"``, ``"z"``) whose
             force and torque channels are negated in every raw reading.
-
-    The parameters are those of the real sensor frame: :meth:`predict` and
-    :meth:`tool_gravity_wrench` take the real ``R_BS`` (with the mount) and
-    give corrected readings (:attr:`reading_signs` applied).
         drift: The bias over time (:class:`~ftkin.calibration.drift.BiasDrift`)
             when the samples had times, else None. With a drift model the
             ``force_offset``/``torque_offset`` are the bias at the end of the
             recording and ``residuals`` are taken against the bias at each
             pose's time.
+
+    The parameters are those of the real sensor frame: :meth:`predict` and
+    :meth:`tool_gravity_wrench` take the real ``R_BS`` (with the mount) and
+    give corrected readings (:attr:`reading_signs` applied).
     """
 
     method: str = "linear"
