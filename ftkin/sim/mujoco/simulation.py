@@ -44,7 +44,7 @@ class ArmSimulation:
     Build it with :func:`build_arm_model`. Attributes: ``model`` (``MjModel``),
     ``data`` (``MjData``), ``arm`` (the ftkin :class:`~ftkin.kinematics.arm.Arm`),
     ``sensor_site_id``, ``force_sensor_id``, ``torque_sensor_id``,
-    ``object_body_id`` (or -1), ``surfaces`` (name → :class:`Surface`),
+    ``object_body_id`` (or -1), ``tool_body_id`` (the tool link's body, else the measured one), ``surfaces`` (name → :class:`Surface`),
     ``surface_under`` (the pad below the object), ``base_tilt`` [rad], ``g`` [m/s²].
     """
 
@@ -59,6 +59,8 @@ class ArmSimulation:
         self._force_adr = int(model.sensor_adr[self.force_sensor_id])
         self._torque_adr = int(model.sensor_adr[self.torque_sensor_id])
         self.object_body_id = name_id(mujoco.mjtObj.mjOBJ_BODY, "ftkin_object")
+        tool = name_id(mujoco.mjtObj.mjOBJ_BODY, arm.tool_frame) if arm.tool_frame else -1
+        self.tool_body_id = tool if tool >= 0 else int(model.site_bodyid[self.sensor_site_id])
         self._object_geom = name_id(mujoco.mjtObj.mjOBJ_GEOM, "ftkin_object")
         self.surfaces, self.surface_under = surfaces, surface_under
         self._pad_qpos = {name: int(model.jnt_qposadr[name_id(mujoco.mjtObj.mjOBJ_JOINT, f"{name}_pad")]) for name in surfaces}
