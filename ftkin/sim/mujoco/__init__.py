@@ -8,7 +8,9 @@ the physics with a controller (e.g. :class:`~ftkin.control.JointAdmittance`) in
 the loop. ``mujoco`` is imported only when a model is built.
 """
 
+from .loop import ClosedLoopRun, run_closed_loop
 from .model import GraspedObject, build_arm_model
+from .sensor import MujocoSensor
 from .simulation import ArmSimulation, ToolInertia
 
-__all__ = ["ArmSimulation", "GraspedObject", "ToolInertia", "build_arm_model"]
+__all__ = ["ArmSimulation", "ClosedLoopRun", "GraspedObject", "MujocoSensor", "ToolInertia", "build_arm_model", "run_closed_loop"]
