@@ -90,7 +90,7 @@ def run_closed_loop(sim: ArmSimulation, controller, duration: float, dt: float, 
     sensor = MujocoSensor() if sensor is None else sensor
     sensor.reset()
     truth = Compensator(sim.tool_sensor_model()) if truth_compensator is None else truth_compensator
-    arm, nq = sim.arm, sim.arm.nq
+    nq = sim.arm.nq
     tool_body = sim.tool_body_id
     columns = PLACEMENT_COLUMNS + tuple(f"q{i + 1}" for i in range(nq)) + tuple(f"dq{i + 1}" for i in range(nq)) \
         + tuple(f"cmd{i + 1}" for i in range(nq)) + WRENCH_COLUMNS + ("held",)
