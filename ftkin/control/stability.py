@@ -16,9 +16,16 @@ the unit circle. :func:`max_stable_k1` finds the K1 where the spectral radius
 reaches 1. Saturation, the deadband and lifting off the surface are left out
 (they bound an unstable loop into a limit cycle: chatter, not divergence).
 
-With a one-tick delay (``d = 1``), 20 kN/m, 100 N·s/m and ``K2 = 0``:
-0.26 mm/N at 1 kHz with a 5 Hz filter, 0.13 mm/N with 10 Hz, 0.13 mm/N at
+With a one-tick delay (``d = 1``), 20 kN/m, 100 N·s/m and ``K2`` = 1 mm/(s·N):
+0.26 mm/N at 1 kHz with a 5 Hz filter, 0.13 mm/N with 10 Hz, 0.11 mm/N at
 100 Hz with 5 Hz.
+
+Not in the model: the payload's inertia. The sensor also feels ``m·a`` of the
+gripper and object, and K1 feeds it back; with an arm that followed commands
+instantly that loop would limit K1 to a few µm/N at 1 kHz. A real arm's servo
+filters the commanded velocity, which breaks that loop at high frequency; the
+MuJoCo simulation (:mod:`ftkin.sim.mujoco`, servos of 60 Hz) shows where it
+bites: a K1 of about 0.5 mm/N oscillates in free air with the paper's 0.55 kg payload.
 """
 
 from __future__ import annotations
