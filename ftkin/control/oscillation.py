@@ -9,9 +9,10 @@ below it. :class:`OscillationDetector` watches the scalar contact signal
 control path anyway) and its tick-to-tick step ``δ = s[n] − s[n−1]``:
 
 * a *reversal* is a step against the previous one (``δ[n]·δ[n−1] < 0``)
-  larger than ``force_step`` [N] (sensor noise makes small reversals every
-  tick; the default 0.3 N is ten times the increments of the paper's
-  0.02 N noise);
+  that ends a swing (the sum of the steps since the last reversal) larger
+  than ``force_step`` [N] (sensor noise reverses the step every other tick,
+  but its swings are small: the default 0.3 N is ten times the increments of
+  the paper's 0.02 N noise);
 * reversals are counted with exponential forgetting over ``window`` [s], and so is the
   step *energy* ``mean(δ²)``;
 * the loop oscillates when at least ``reversals`` counted reversals and an
@@ -56,8 +57,8 @@ class OscillationLimits:
 class OscillationDetector:
     """Per-tick detection with constant memory (see the module docstring)."""
 
-    __slots__ = ("limits", "count", "energy", "_previous", "_step", "_dt", "_decay", "_threshold", "_energy_floor",
-                 "_inverse_lever")
+    __slots__ = ("limits", "count", "energy", "_previous", "_step", "_swing", "_dt", "_decay", "_threshold",
+                 "_energy_floor", "_inverse_lever")
 
     def __init__(self, limits: OscillationLimits | None = None):
         self.limits = OscillationLimits() if limits is None else limits
@@ -71,7 +72,7 @@ class OscillationDetector:
     def reset(self) -> None:
         """Forget the signal, the counts and the energy."""
         self.count, self.energy = 0.0, 0.0
-        self._previous, self._step = math.nan, 0.0
+        self._previous, self._step, self._swing = math.nan, 0.0, 0.0
         self._dt, self._decay = math.nan, 0.0
 
     def update(self, force: float, torque: float, dt: float) -> bool:
@@ -85,8 +86,12 @@ class OscillationDetector:
             self._dt, self._decay = dt, math.exp(-dt / self.limits.window)
         decay = self._decay
         count = self.count * decay
-        if step * self._step < 0.0 and abs(step) > self._threshold:
-            count += 1.0
+        if step * self._step < 0.0:  # a reversal: count the swing it ends if that was large
+            if abs(self._swing) > self._threshold:
+                count += 1.0
+            self._swing = step
+        else:
+            self._swing += step
         self.count, self._step = count, step
         self.energy = energy = self.energy * decay + (1.0 - decay) * step * step
         return count >= self.limits.reversals and energy >= self._energy_floor

@@ -159,6 +159,7 @@ def build_arm_model(arm: Arm | None = None, *, measured_body: str | None = None,
     sim = ArmSimulation(mujoco, model, arm, q0, {s.name: s for s in surfaces}, surface_under if surfaces else None,
                         (float(base_tilt[0]), float(base_tilt[1])), float(g))
     _tune_servos(sim, 2.0 * math.pi * servo_bandwidth)
+    sim.reset()  # again: the equilibrium targets depend on the servo gains
     return sim
 
 

@@ -74,13 +74,20 @@ class ArmSimulation:
 
     # --------------------------------------------------------------- state
     def reset(self, q=None) -> None:
-        """Arm at rest at ``q`` [rad] (default: the build pose), servo targets there, pads at rest."""
+        """Arm in static equilibrium at ``q`` [rad] (default: the build pose), pads at rest.
+
+        Each servo's target is offset from ``q`` by the sag that balances the
+        load it holds (``τ / kp``, ``τ`` from MuJoCo's inverse dynamics at rest),
+        so the run starts without a transient, as a robot standing still does.
+        """
+        mujoco, model, data = self.mujoco, self.model, self.data
         q = self.q0 if q is None else self.arm.check_configuration(q)
-        self.mujoco.mj_resetData(self.model, self.data)
-        self.data.qpos[self._arm_qpos] = q
-        self.data.act[:] = q
-        self.data.ctrl[:] = 0.0
-        self.mujoco.mj_forward(self.model, self.data)
+        mujoco.mj_resetData(model, data)
+        data.qpos[self._arm_qpos] = q
+        mujoco.mj_inverse(model, data)
+        data.act[:] = q + data.qfrc_inverse[self._arm_dof] / model.actuator_gainprm[:len(q), 0]
+        data.ctrl[:] = 0.0
+        mujoco.mj_forward(model, data)
 
     @property
     def q(self) -> np.ndarray:
