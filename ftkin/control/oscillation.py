@@ -19,8 +19,9 @@ control path anyway) and its tick-to-tick step ``δ = s[n] − s[n−1]``:
   energy of at least ``(force_step / 2)²`` coincide.
 
 So an oscillation of at least ``reversals / (2·window)`` Hz (30 Hz with the
-defaults) is caught within about a window once its steps exceed
-``force_step``; a single impact, a push by hand or noise is not. Cost: a
+defaults) is caught within about a window once its swings exceed
+``force_step``; a single impact, a push by hand, noise or the short ring-down
+after a jolt (a handful of reversals) is not. Cost: a
 dozen float operations per tick, no array.
 """
 
@@ -44,8 +45,8 @@ class OscillationLimits:
     """
 
     force_step: float = 0.3
-    reversals: float = 6.0
-    window: float = 0.1
+    reversals: float = 12.0
+    window: float = 0.2
     lever: float = 0.1
 
     def __post_init__(self):
