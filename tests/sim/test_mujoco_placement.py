@@ -62,3 +62,20 @@ def test_the_record_has_joint_states_and_the_ideal_wrench(runs):
         assert name in full.columns
     # in the air at rest the ideal load is the tool plus the object: 3.15 N + 2.214 N along the sensor z (down)
     assert full.column("ideal_fz")[0] == pytest.approx(3.15 + 2.214, abs=0.05)
+
+
+def test_cli_runs_all_modes_in_mujoco(tmp_path, capsys):
+    from ftkin.cli import main
+    from ftkin.io.csv_table import read_table
+
+    csv_path, png_path = tmp_path / "all.csv", tmp_path / "all.png"
+    assert main(["simulate", "placement", "--engine", "mujoco", "--mode", "all", "--surface", "book", "--duration", "0.3",
+                 "--dt", "0.002", "-o", str(csv_path), "--plot", str(png_path)]) == 0
+    out = capsys.readouterr().out
+    assert out.count("(mujoco)") == 3 and "admittance-uncompensated" in out
+    table = read_table(csv_path)
+    assert table.header[:8] == ["mode", "t", "displacement", "velocity", "force", "measured_force", "penetration", "normal_force"]
+    assert "ideal_fz" in table.header and "q6" in table.header
+    modes = table.floats(["mode"])[:, 0]
+    assert sorted(set(modes)) == [0.0, 1.0, 2.0] and len(modes) == 3 * 150
+    assert png_path.read_bytes()[:4] == b"\x89PNG"
