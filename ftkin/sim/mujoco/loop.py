@@ -92,38 +92,47 @@ def run_closed_loop(sim: ArmSimulation, controller, duration: float, dt: float, 
     truth = Compensator(sim.tool_sensor_model()) if truth_compensator is None else truth_compensator
     nq = sim.arm.nq
     tool_body = sim.tool_body_id
+    if getattr(controller, "step", None) is None:
+        raise InvalidInput(f"controller must have a step(q, raw_wrench, dt) method, got {type(controller).__name__}")
     columns = PLACEMENT_COLUMNS + tuple(f"q{i + 1}" for i in range(nq)) + tuple(f"dq{i + 1}" for i in range(nq)) \
         + tuple(f"cmd{i + 1}" for i in range(nq)) + WRENCH_COLUMNS + ("held",)
     ticks = int(round(duration / dt))
     table = np.zeros((ticks, len(columns)))
     events, last_event, first_hold = [], "", math.inf
-    z_start = z_before = float(sim.data.xpos[tool_body][2])
+    data, site, surface = sim.data, sim.sensor_site_id, sim.surface_under
+    z_start = z_before = float(data.xpos[tool_body][2])
     compensate = truth.compensate_rotation_unchecked
+    q_columns, dq_columns = slice(7, 7 + nq), slice(7 + nq, 7 + 2 * nq)
+    cmd_columns, wrench_columns = slice(7 + 2 * nq, 7 + 3 * nq), slice(7 + 3 * nq, 13 + 3 * nq)
     for i in range(ticks):
         ideal = sim.ideal_wrench_in_sensor()
-        rotation = sim.data.site_xmat[sim.sensor_site_id].reshape(3, 3)
         q = sim.q
         raw = sensor.read(ideal, dt)
-        dq = np.asarray(controller.step(q, raw, dt), dtype=float)
+        dq = controller.step(q, raw, dt)
         status = getattr(controller, "last_status", None)
-        held = bool(status is not None and getattr(status, "held", False))
-        measured = float(status.contact_wrench[2]) if status is not None else float(raw[2])
-        if status is not None:
-            event = status.event or str(getattr(status, "fault", ""))
-            if event != last_event:
-                events.append((i * dt, event))
-                last_event = event
-        if held and first_hold == math.inf:
-            first_hold = i * dt
-        z = float(sim.data.xpos[tool_body][2])
         row = table[i]
-        row[:7] = (i * dt, z - z_start, (z - z_before) / dt, compensate(rotation, ideal)[2], measured,
-                   sim.surface_depth() if sim.surface_under else 0.0, sim.normal_force())
-        row[7:7 + nq] = q
-        row[7 + nq:7 + 2 * nq] = sim.dq
-        row[7 + 2 * nq:7 + 3 * nq] = dq
-        row[7 + 3 * nq:13 + 3 * nq] = ideal
-        row[-1] = held
+        if status is not None:
+            measured = status.contact_wrench[2]
+            event = status.event or status.fault
+            if event != last_event:
+                events.append((i * dt, str(event)))
+                last_event = event
+            if status.held:
+                row[-1] = 1.0
+                if first_hold == math.inf:
+                    first_hold = i * dt
+        else:
+            measured = raw[2]
+        z = data.xpos[tool_body][2]
+        row[0], row[1], row[2] = i * dt, z - z_start, (z - z_before) / dt
+        row[3] = compensate(data.site_xmat[site].reshape(3, 3), ideal)[2]
+        row[4] = measured
+        if surface is not None:
+            row[5], row[6] = sim.surface_depth(), sim.normal_force()
+        row[q_columns] = q
+        row[dq_columns] = data.qvel[sim._dq_index]
+        row[cmd_columns] = dq
+        row[wrench_columns] = ideal
         z_before = z
         sim.step(dq, dt)
     return ClosedLoopRun(columns, table, float(dt), tuple(events), first_hold)

@@ -52,6 +52,7 @@ class MujocoSensor:
         self.range = np.array([force_range] * 3 + [torque_range] * 3, dtype=float)
         self.sample_rate, self.delay_ticks, self.seed = sample_rate, delay_ticks, seed
         self._std = np.zeros(6) if noise is None else noise.channel_std
+        self._negative_range = -self.range
         self.reset()
 
     @classmethod
@@ -62,6 +63,7 @@ class MujocoSensor:
     def reset(self) -> None:
         """Restart time, the noise stream and the delay line."""
         self._rng = np.random.default_rng(self.seed)
+        self._noise, self._noise_row = np.empty((0, 6)), 0
         self._time, self._next_sample = 0.0, 0.0
         self._sample: np.ndarray | None = None
         self._line: deque = deque()
@@ -74,8 +76,13 @@ class MujocoSensor:
             dt: Control period [s] (advances the sensor's clock).
         """
         if self._sample is None or self.sample_rate is None or self._time >= self._next_sample - 1e-12:
-            sample = ideal_wrench + self.bias + self._rng.standard_normal(6) * self._std
-            self._sample = np.minimum(np.maximum(sample, -self.range), self.range)
+            if self._noise_row == len(self._noise):  # noise drawn in blocks: one generator call per 1024 samples
+                self._noise, self._noise_row = self._rng.standard_normal((1024, 6)) * self._std, 0
+            sample = ideal_wrench + self.bias
+            sample += self._noise[self._noise_row]
+            self._noise_row += 1
+            np.minimum(sample, self.range, out=sample)  # saturation (ufuncs: np.clip's wrapper costs more)
+            self._sample = np.maximum(sample, self._negative_range, out=sample)
             if self.sample_rate is not None:
                 self._next_sample += 1.0 / self.sample_rate
         self._time += dt

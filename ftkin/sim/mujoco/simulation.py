@@ -69,7 +69,12 @@ class ArmSimulation:
         self._arm_dof = np.array([model.jnt_dofadr[name_id(mujoco.mjtObj.mjOBJ_JOINT, n)] for n in arm.joint_names])
         self.base_tilt, self.g = base_tilt, g
         self.q0 = q0
-        self._force6 = np.zeros(6)
+        # contiguous addresses (the usual case) read as one slice: cheaper than fancy indexing per tick
+        self._q_index = _as_slice(self._arm_qpos)
+        self._dq_index = _as_slice(self._arm_dof)
+        adr = (self._force_adr, self._torque_adr)
+        self._wrench_index = slice(adr[0], adr[0] + 6) if adr[1] == adr[0] + 3 else np.r_[adr[0]:adr[0] + 3, adr[1]:adr[1] + 3]
+        self._substeps: dict[float, int] = {}
         self.reset()
 
     # --------------------------------------------------------------- state
@@ -92,27 +97,25 @@ class ArmSimulation:
     @property
     def q(self) -> np.ndarray:
         """Joint positions [rad] in the arm's ``q`` order (copy)."""
-        return self.data.qpos[self._arm_qpos]
+        return self.data.qpos[self._q_index].copy()
 
     @property
     def dq(self) -> np.ndarray:
         """Joint velocities [rad/s] (copy)."""
-        return self.data.qvel[self._arm_dof]
+        return self.data.qvel[self._dq_index].copy()
 
     def step(self, dq_command, duration: float) -> None:
         """Command joint velocities [rad/s] (speedJ-like) and advance the physics by ``duration`` [s]."""
         self.data.ctrl[:] = dq_command
-        substeps = max(1, int(round(duration / self.model.opt.timestep)))
+        substeps = self._substeps.get(duration)
+        if substeps is None:
+            substeps = self._substeps[duration] = max(1, int(round(duration / self.model.opt.timestep)))
         self.mujoco.mj_step(self.model, self.data, substeps)
 
     # ------------------------------------------------------------- readings
     def ideal_wrench_in_sensor(self) -> np.ndarray:
         """Load on the sensor ``(6,)`` [N, N·m], sensor frame, ftkin's sign (``-`` MuJoCo's sensors), no bias or noise."""
-        data = self.data.sensordata
-        out = self._force6
-        out[:3] = data[self._force_adr:self._force_adr + 3]
-        out[3:] = data[self._torque_adr:self._torque_adr + 3]
-        return -out
+        return -self.data.sensordata[self._wrench_index]
 
     def sensor_rotation(self) -> np.ndarray:
         """``R_BS`` ``(3, 3)`` of the sensor site (base = MuJoCo world)."""
@@ -164,6 +167,12 @@ class ArmSimulation:
         tool = self.tool_inertia()
         bias = np.asarray(bias, dtype=float)
         return SensorModel.from_tool(tool.mass, tool.center_of_mass, bias[:3], bias[3:], self.base_tilt, self.g)
+
+
+def _as_slice(indices: np.ndarray):
+    """``indices`` as a slice when they run consecutively, else unchanged."""
+    start = int(indices[0])
+    return slice(start, start + len(indices)) if np.array_equal(indices, np.arange(start, start + len(indices))) else indices
 
 
 def _in_subtree(model, body: int, root: int) -> bool:
