@@ -18,7 +18,9 @@ from .calibration.samples import Samples
 from .control.admittance import Admittance, ControlFrame
 from .control.compensation import Compensator
 from .control.joint_admittance import JointAdmittance, StepStatus
+from .control.oscillation import OscillationDetector, OscillationLimits
 from .control.sensor_faults import FaultMonitor, SensorFault, SensorLimits
+from .control.stability import max_stable_k1
 from .exceptions import (
     CalibrationFileError,
     FrameNotFound,
@@ -37,6 +39,15 @@ from .kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from .planning.constraints import PoseConstraints
 from .planning.evaluation import PoseEvaluation, evaluate_poses
 from .planning.plan import PosePlan, plan_poses
+from .sim.mujoco import (
+    ArmSimulation,
+    ClosedLoopRun,
+    GraspedObject,
+    MujocoSensor,
+    build_arm_model,
+    run_closed_loop,
+    simulate_placement_mujoco,
+)
 from .sim.placement import PlacementRun, PlacementScenario, simulate_placement
 from .sim.sensor import SimulatedSensor
 from .sim.surfaces import Surface
@@ -44,19 +55,25 @@ from .sim.surfaces import Surface
 __all__ = [
     "Admittance",
     "Arm",
+    "ArmSimulation",
     "CalibrationFileError",
     "CalibrationResult",
+    "ClosedLoopRun",
     "Compensator",
     "ControlFrame",
     "FaultMonitor",
     "FitDiagnostics",
     "FrameNotFound",
     "FtkinError",
+    "GraspedObject",
     "InvalidInput",
     "InvalidSamples",
     "JointAdmittance",
     "METHODS",
     "MissingDependency",
+    "MujocoSensor",
+    "OscillationDetector",
+    "OscillationLimits",
     "PlacementRun",
     "PlacementScenario",
     "PoseConstraints",
@@ -75,6 +92,7 @@ __all__ = [
     "Surface",
     "UnobservableParameters",
     "UrdfError",
+    "build_arm_model",
     "bundled_urdf_path",
     "calibrate",
     "euler_zyx_deg_to_matrix",
@@ -83,8 +101,11 @@ __all__ = [
     "load_calibration",
     "load_robot",
     "load_samples",
+    "max_stable_k1",
     "plan_poses",
     "quaternion_to_matrix",
+    "run_closed_loop",
     "save_calibration",
     "simulate_placement",
+    "simulate_placement_mujoco",
 ]

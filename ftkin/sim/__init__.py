@@ -5,10 +5,14 @@ parameters at given ``R_BS`` (bias + tool gravity + contact + noise).
 :func:`simulate_placement` runs the paper's placement experiment (METHOD.md §6)
 with :class:`~ftkin.control.JointAdmittance` in the loop against a
 :class:`Surface`. :mod:`ftkin.sim.paper` reproduces the paper's calibration.
+:mod:`ftkin.sim.mujoco` (extra ``sim``) closes the loop in the MuJoCo physics
+engine: :func:`build_arm_model`, :func:`run_closed_loop`,
+:func:`simulate_placement_mujoco`.
 
 Depends on :mod:`ftkin.control`, :mod:`ftkin.io`, :mod:`ftkin.calibration` and below.
 """
 
+from .mujoco import build_arm_model, run_closed_loop, simulate_placement_mujoco
 from .placement import PlacementRun, PlacementScenario, simulate_placement
 from .sensor import SimulatedSensor
 from .surfaces import Surface
@@ -18,5 +22,8 @@ __all__ = [
     "PlacementScenario",
     "SimulatedSensor",
     "Surface",
+    "build_arm_model",
+    "run_closed_loop",
     "simulate_placement",
+    "simulate_placement_mujoco",
 ]

@@ -106,3 +106,13 @@ def test_bad_arguments_are_invalid_input(arm):
         build_arm_model(arm, measured_body="nope")
     with pytest.raises(InvalidInput, match="sample_rate"):
         MujocoSensor(sample_rate=0.0)
+
+
+def test_without_mujoco_the_error_names_the_extra(monkeypatch, arm):
+    import sys
+
+    from ftkin import MissingDependency
+
+    monkeypatch.setitem(sys.modules, "mujoco", None)
+    with pytest.raises(MissingDependency, match=r"ftkin\[sim\]"):
+        build_arm_model(arm)

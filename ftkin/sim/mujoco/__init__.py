@@ -10,7 +10,9 @@ the loop. ``mujoco`` is imported only when a model is built.
 
 from .loop import ClosedLoopRun, run_closed_loop
 from .model import GraspedObject, build_arm_model
+from .placement import simulate_placement_mujoco
 from .sensor import MujocoSensor
 from .simulation import ArmSimulation, ToolInertia
 
-__all__ = ["ArmSimulation", "ClosedLoopRun", "GraspedObject", "MujocoSensor", "ToolInertia", "build_arm_model", "run_closed_loop"]
+__all__ = ["ArmSimulation", "ClosedLoopRun", "GraspedObject", "MujocoSensor", "ToolInertia", "build_arm_model", "run_closed_loop",
+           "simulate_placement_mujoco"]
