@@ -66,26 +66,70 @@ def loop_matrix(k1: float, stiffness: float, damping: float, dt: float, cutoff: 
     return matrix
 
 
-def spectral_radius(k1: float, stiffness: float, damping: float, dt: float, cutoff: float, k2: float = 0.0,
-                    delay_ticks: int = 0) -> float:
-    """Largest ``|eigenvalue|`` of :func:`loop_matrix` (< 1: stable).
+def servo_loop_matrix(k1: float, stiffness: float, damping: float, dt: float, cutoff: float, k2: float = 0.0,
+                      delay_ticks: int = 0, servo_bandwidth: float = 60.0, mass: float = 0.0) -> np.ndarray:
+    """The loop with a servoed arm and a payload (see :func:`max_stable_k1`'s ``servo_bandwidth``).
 
-    With ``k2 = 0`` the position form holds the tool wherever it is: a constant
+    The commanded velocity ``V`` (held over a tick) integrates into a position
+    target ``r``; the tool follows it through a critically damped servo of
+    natural frequency ``ω = 2π·servo_bandwidth``: ``p̈ = ω²(r − p) − 2ω ṗ``.
+    The sensor feels ``N = k p + c ṗ + m p̈`` at each tick. Continuous state
+    ``z = (r, p, ṗ)`` discretised exactly (zero-order hold on ``V``).
+    State ``s[n] = (z[n], N[n−1], …, N[n−d−1], D[n−1])``.
+    """
+    from scipy.linalg import expm
+
+    d, omega = int(delay_ticks), 2.0 * math.pi * servo_bandwidth
+    continuous = np.zeros((4, 4))
+    continuous[1, 2] = 1.0
+    continuous[2, :3] = (omega * omega, -omega * omega, -2.0 * omega)
+    continuous[0, 3] = 1.0  # dr/dt = V
+    discrete = expm(continuous * dt)
+    phi, gamma = discrete[:3, :3], discrete[:3, 3]
+    felt = np.array([mass * omega * omega, stiffness - mass * omega * omega, damping - 2.0 * omega * mass])
+    alpha = derivative_alpha(dt, cutoff)
+    size = 3 + (d + 1) + 1
+    matrix = np.zeros((size, size))
+    for column in range(size):
+        state = np.zeros(size)
+        state[column] = 1.0
+        z, history, filtered = state[:3], state[3:4 + d], state[-1]
+        forces = np.concatenate(([felt @ z], history))  # N[n], N[n-1], ..., N[n-d-1]
+        error, error_before = -forces[d], -forces[d + 1]
+        derivative = filtered + alpha * ((error - error_before) / dt - filtered)
+        velocity = k1 * derivative + k2 * error
+        matrix[:3, column] = phi @ z + gamma * velocity
+        matrix[3:4 + d, column] = forces[:d + 1]
+        matrix[-1, column] = derivative
+    return matrix
+
+
+def spectral_radius(k1: float, stiffness: float, damping: float, dt: float, cutoff: float, k2: float = 0.0,
+                    delay_ticks: int = 0, servo_bandwidth: float | None = None, mass: float = 0.0) -> float:
+    """Largest ``|eigenvalue|`` of :func:`loop_matrix` (or :func:`servo_loop_matrix`) (< 1: stable).
+
+    With ``k2 = 0`` (or no spring) the tool may rest anywhere: a constant
     penetration is a fixed point, an eigenvalue exactly 1 for every K1. That
     neutral mode is left out (the one eigenvalue nearest 1).
     """
-    eigenvalues = np.linalg.eigvals(loop_matrix(k1, stiffness, damping, dt, cutoff, k2, delay_ticks))
-    if k2 == 0.0:
+    if servo_bandwidth is None:
+        matrix = loop_matrix(k1, stiffness, damping, dt, cutoff, k2, delay_ticks)
+    else:
+        matrix = servo_loop_matrix(k1, stiffness, damping, dt, cutoff, k2, delay_ticks, servo_bandwidth, mass)
+    eigenvalues = np.linalg.eigvals(matrix)
+    if k2 == 0.0 or stiffness == 0.0:
         eigenvalues = np.delete(eigenvalues, int(np.argmin(np.abs(eigenvalues - 1.0))))
     return float(np.abs(eigenvalues).max())
 
 
 def max_stable_k1(stiffness: float, damping: float, dt: float, cutoff: float, *, k2: float = 0.0,
-                  delay_ticks: int = 1, upper: float = 1.0) -> float:
+                  delay_ticks: int = 1, servo_bandwidth: float | None = None, mass: float = 0.0,
+                  upper: float = 1.0) -> float:
     """The K1 [m/N] at which the loop of the module docstring becomes unstable.
 
     Args:
-        stiffness: Contact stiffness ``k`` [N/m] (the surface in series with the gripper and object).
+        stiffness: Contact stiffness ``k`` [N/m] (the surface in series with the gripper and
+            object); 0 (with ``damping`` 0) for free air.
         damping: Contact damping ``c`` [N·s/m].
         dt: Control period [s].
         cutoff: Derivative filter cutoff [Hz] (``Admittance.derivative_cutoff``).
@@ -93,6 +137,12 @@ def max_stable_k1(stiffness: float, damping: float, dt: float, cutoff: float, *,
         delay_ticks: Ticks between the contact force and the controller seeing it (beyond the
             one tick the command needs to act); 1 for a sensor read at the start of the tick
             and used in the next, as :class:`~ftkin.sim.mujoco.MujocoSensor` does by default.
+        servo_bandwidth: None: the arm follows the command exactly (the model above). A number
+            [Hz]: the arm follows through a critically damped position servo of that natural
+            frequency (:func:`servo_loop_matrix`, as :mod:`ftkin.sim.mujoco` builds them), and
+            ``mass`` counts.
+        mass: Payload beyond the sensor [kg] (gripper and object): the sensor feels its ``m·a``,
+            which K1 feeds back. With ``stiffness = damping = 0`` this gives the free-air limit.
         upper: Search no further than this K1 [m/N]; returned if the loop is still stable there.
 
     Returns:
@@ -102,13 +152,16 @@ def max_stable_k1(stiffness: float, damping: float, dt: float, cutoff: float, *,
     Raises:
         InvalidInput: a non-positive stiffness, period or cutoff, a negative damping, gain or delay.
     """
-    numbers = (stiffness, dt, cutoff, upper)
-    if not all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in numbers) or not (
-            math.isfinite(damping) and damping >= 0 and math.isfinite(k2) and k2 >= 0) or not (
-            isinstance(delay_ticks, int) and delay_ticks >= 0):
-        raise InvalidInput("max_stable_k1 needs stiffness, dt, cutoff > 0, damping, k2 >= 0 and an integer "
-                           f"delay_ticks >= 0; got {stiffness!r}, {damping!r}, {dt!r}, {cutoff!r}, {k2!r}, {delay_ticks!r}")
-    radius = lambda k1: spectral_radius(k1, stiffness, damping, dt, cutoff, k2, delay_ticks)
+    real = lambda v: isinstance(v, (int, float)) and math.isfinite(v)
+    servo_ok = servo_bandwidth is None and mass == 0 or servo_bandwidth is not None and real(servo_bandwidth) and servo_bandwidth > 0
+    felt = stiffness + damping + (mass if servo_bandwidth is not None else 0.0) if real(mass) else 0.0
+    if not (all(real(v) and v > 0 for v in (dt, cutoff, upper)) and all(real(v) and v >= 0 for v in (stiffness, damping, k2, mass))
+            and servo_ok and felt > 0 and isinstance(delay_ticks, int) and delay_ticks >= 0):
+        raise InvalidInput("max_stable_k1 needs dt, cutoff > 0; stiffness, damping, k2, mass >= 0, something felt (k, c, or m "
+                           "with a servo_bandwidth > 0; mass needs a servo_bandwidth) and an integer delay_ticks >= 0; got "
+                           f"k={stiffness!r}, c={damping!r}, dt={dt!r}, cutoff={cutoff!r}, k2={k2!r}, delay_ticks={delay_ticks!r}, "
+                           f"servo_bandwidth={servo_bandwidth!r}, mass={mass!r}")
+    radius = lambda k1: spectral_radius(k1, stiffness, damping, dt, cutoff, k2, delay_ticks, servo_bandwidth, mass)
     if radius(0.0) >= 1.0:
         return 0.0
     # scan up in factors of 1.25 from a tiny gain (the radius need not be monotonic far past the bound)

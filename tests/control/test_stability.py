@@ -93,3 +93,46 @@ def test_bad_arguments_are_invalid_input():
         max_stable_k1(-1.0, 100.0, 1e-3, 5.0)
     with pytest.raises(InvalidInput, match="max_stable_k1"):
         max_stable_k1(*BOOK, 1e-3, 5.0, delay_ticks=-1)
+
+
+def _servo_growth(k1: float, dt: float, bandwidth: float, mass: float, stiffness: float = 0.0, damping: float = 0.0,
+                  ticks: int = 1000, substeps: int = 5) -> float:
+    """Like :func:`_peak_growth` with the arm behind a critically damped servo, integrated by RK4 (not a matrix exponential)."""
+    law = Admittance(k1, 1e-3, selection=[0, 0, 1, 0, 0, 0], derivative_cutoff=5.0, max_linear_velocity=1e9,
+                     max_angular_velocity=1e9)
+    omega, h = 2 * math.pi * bandwidth, dt / substeps
+    w2, w1 = omega * omega, 2 * omega
+    r, p, v = 1e-4, 0.0, 0.0  # target, position, velocity: a kick
+    forces, swings, wrench = [0.0], [], np.zeros(6)
+    for _ in range(ticks):
+        forces.append(stiffness * p + damping * v + mass * (w2 * (r - p) - w1 * v))
+        wrench[2] = -forces[-2]  # one tick late
+        u = float(law.update(wrench, dt)[2])
+        for _ in range(substeps):  # RK4 of r' = u, p' = v, v' = ω²(r − p) − 2ω v
+            a = (v, w2 * (r - p) - w1 * v)
+            r2, p2, v2 = r + 0.5 * h * u, p + 0.5 * h * a[0], v + 0.5 * h * a[1]
+            b = (v2, w2 * (r2 - p2) - w1 * v2)
+            p3, v3 = p + 0.5 * h * b[0], v + 0.5 * h * b[1]
+            c = (v3, w2 * (r2 - p3) - w1 * v3)
+            r4, p4, v4 = r + h * u, p + h * c[0], v + h * c[1]
+            e = (v4, w2 * (r4 - p4) - w1 * v4)
+            r, p, v = r4, p + h / 6 * (a[0] + 2 * b[0] + 2 * c[0] + e[0]), v + h / 6 * (a[1] + 2 * b[1] + 2 * c[1] + e[1])
+        swings.append(abs(forces[-1] - forces[-2]))
+        if not math.isfinite(p) or abs(p) > 1e3:
+            return math.inf
+    swings = np.array(swings)
+    return swings[-200:].max() / swings[100:300].max()
+
+
+@pytest.mark.parametrize("dt, bandwidth, mass, stiffness, damping", [(1e-3, 60.0, 0.55, 0.0, 0.0), (2e-3, 60.0, 0.75, *BOOK)])
+def test_servo_and_payload_bound_against_a_direct_simulation(dt, bandwidth, mass, stiffness, damping):
+    bound = max_stable_k1(stiffness, damping, dt, 5.0, k2=1e-3, servo_bandwidth=bandwidth, mass=mass)
+    assert _servo_growth(0.95 * bound, dt, bandwidth, mass, stiffness, damping) < 0.5
+    assert _servo_growth(1.05 * bound, dt, bandwidth, mass, stiffness, damping) > 2.0
+
+
+def test_a_fast_servo_gives_the_ideal_arm_bound():
+    ideal = max_stable_k1(*BOOK, 1e-3, 5.0, k2=1e-3)
+    assert max_stable_k1(*BOOK, 1e-3, 5.0, k2=1e-3, servo_bandwidth=1e5) == pytest.approx(ideal, rel=0.01)
+    with pytest.raises(InvalidInput, match="servo_bandwidth"):
+        max_stable_k1(*BOOK, 1e-3, 5.0, mass=0.5)  # a payload's inertia needs a servo model
