@@ -39,7 +39,10 @@ class ClosedLoopRun:
     """What a closed-loop run recorded, one row per control tick.
 
     Attributes:
-        columns: Column names: :data:`PLACEMENT_COLUMNS`, then ``q1..qn`` [rad],
+        columns: Column names: :data:`PLACEMENT_COLUMNS` (``force`` is the true compensated
+            ``F'z``: the ideal wrench minus the tool's modelled weight; ``measured_force`` the
+            controller's compensated ``F'z`` from its ``last_status``, or the raw ``fz`` for a
+            controller without one), then ``q1..qn`` [rad],
             ``dq1..dqn`` [rad/s] (measured), ``cmd1..cmdn`` [rad/s] (commanded),
             :data:`WRENCH_COLUMNS` and ``held`` (1 when the controller held the arm).
         table: ``(ticks, len(columns))``.
