@@ -104,6 +104,8 @@ def test_bad_arguments_are_invalid_input(arm):
         build_arm_model(arm, surface_under="granite")
     with pytest.raises(InvalidInput, match="measured_body"):
         build_arm_model(arm, measured_body="nope")
+    with pytest.raises(InvalidInput, match="child link of the sensor"):
+        build_arm_model(arm, measured_body="tool")
     with pytest.raises(InvalidInput, match="sample_rate"):
         MujocoSensor(sample_rate=0.0)
 

@@ -167,6 +167,8 @@ def _measured_body(spec, bodies: dict, sensor: str, name: str | None):
     if name is not None:
         if name not in bodies:
             raise InvalidInput(f"measured_body {name!r} is not a link; links: {sorted(bodies)}")
+        if bodies[name].parent is None or bodies[name].parent.name != sensor:
+            raise InvalidInput(f"measured_body {name!r} must be a child link of the sensor link {sensor!r}")
         return bodies[name]
     children = [body for body in bodies.values() if body.parent is not None and body.parent.name == sensor]
     if len(children) != 1:
