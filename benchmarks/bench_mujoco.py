@@ -89,14 +89,7 @@ def stability_rows(arm: Arm, factors, duration: float) -> list[tuple]:
     return rows
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="shorter runs (speed 2 s x 3, placement 5 s, fewer stability runs)")
-    parser.add_argument("--repeats", type=int, default=5)
-    args = parser.parse_args()
-    arm = Arm.default()
-    repeats = 3 if args.quick else args.repeats
-    print(f"mujoco {mujoco.__version__}; bundled arm, MuJoCo timestep 0.5 ms, servos 60 Hz")
+def print_speed(arm: Arm, repeats: int) -> None:
     print("\n1. speed: simulated seconds per wall second (median of", repeats, "runs of 3 s)")
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores (a shared machine slows every column)")
     print(f"{'rate':<8}{'closed loop':>13}{'(CPU time)':>12}{'physics only':>14}{'controller only':>17}  target")
@@ -105,6 +98,8 @@ def main() -> None:
         target = ">= 5x" if dt == 1e-3 else ""
         print(f"{1 / dt:>5.0f} Hz{loop:>12.1f}x{cpu:>11.1f}x{physics:>13.1f}x{control:>16.1f}x  {target}")
 
+
+def print_placement(arm: Arm) -> None:
     print("\n2. placement, 1 kHz, 5 s (MuJoCo | simple engine)")
     print(f"{'surface':<8}{'mode':<26}{'peak N [N]':>18}{'settle [s]':>18}{'depth [mm]':>18}{'final Fz [N]':>20}{'held':>7}")
     for surface, mode, run, simple, hold in placement_rows(arm, 5.0):
@@ -114,7 +109,8 @@ def main() -> None:
               f"{pair(run.penetration[-1] * 1e3, simple.penetration[-1] * 1e3, '6.3f'):>18}"
               f"{pair(run.final_force, simple.final_force, '+7.3f'):>20}{'yes' if np.isfinite(hold) else 'no':>7}")
 
-    factors = (0.5, 1.5, 2.0) if args.quick else (0.5, 0.9, 1.1, 1.3, 1.5, 2.0)
+
+def print_stability(arm: Arm, factors) -> None:
     print("\n3. stability on the book (k23 1 mm/(s·N), 5 Hz filter, one-tick sensor delay), 2 s runs")
     print("bounds [mm/N]: ideal arm | 60 Hz servos with the payload in contact (0.75 kg) | in free air (0.55 kg)")
     for dt in (1e-3, 2e-3, 8e-3):
@@ -131,6 +127,24 @@ def main() -> None:
         else:
             verdict = f"held {hold - touch:.3f} s after contact"
         print(f"{1 / dt:>5.0f} Hz{bound * 1e3:>13.3f}{factor:>12.1f}{touch:>11.3f}{hold:>10.3f}  {verdict}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="shorter runs (speed 2 s x 3, placement 5 s, fewer stability runs)")
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--only", choices=("speed", "placement", "stability"), help="run one section")
+    args = parser.parse_args()
+    arm = Arm.default()
+    repeats = 3 if args.quick else args.repeats
+    print(f"mujoco {mujoco.__version__}; bundled arm, MuJoCo timestep 0.5 ms, servos 60 Hz")
+    run = lambda section: args.only in (None, section)  # noqa: E731
+    if run("speed"):
+        print_speed(arm, repeats)
+    if run("placement"):
+        print_placement(arm)
+    if run("stability"):
+        print_stability(arm, (0.5, 1.5, 2.0) if args.quick else (0.5, 0.9, 1.1, 1.3, 1.5, 2.0))
 
 
 if __name__ == "__main__":
