@@ -61,10 +61,8 @@ class ArmSimulation:
         self.object_body_id = name_id(mujoco.mjtObj.mjOBJ_BODY, "ftkin_object")
         tool = name_id(mujoco.mjtObj.mjOBJ_BODY, arm.tool_frame) if arm.tool_frame else -1
         self.tool_body_id = tool if tool >= 0 else int(model.site_bodyid[self.sensor_site_id])
-        self._object_geom = name_id(mujoco.mjtObj.mjOBJ_GEOM, "ftkin_object")
         self.surfaces, self.surface_under = surfaces, surface_under
         self._pad_qpos = {name: int(model.jnt_qposadr[name_id(mujoco.mjtObj.mjOBJ_JOINT, f"{name}_pad")]) for name in surfaces}
-        self._pad_geom = {name: name_id(mujoco.mjtObj.mjOBJ_GEOM, f"{name}_pad") for name in surfaces}
         self._arm_qpos = np.array([model.jnt_qposadr[name_id(mujoco.mjtObj.mjOBJ_JOINT, n)] for n in arm.joint_names])
         self._arm_dof = np.array([model.jnt_dofadr[name_id(mujoco.mjtObj.mjOBJ_JOINT, n)] for n in arm.joint_names])
         self.base_tilt, self.g = base_tilt, g
@@ -75,6 +73,7 @@ class ArmSimulation:
         adr = (self._force_adr, self._torque_adr)
         self._wrench_index = slice(adr[0], adr[0] + 6) if adr[1] == adr[0] + 3 else np.r_[adr[0]:adr[0] + 3, adr[1]:adr[1] + 3]
         self._substeps: dict[float, int] = {}
+        self._contact_force = np.zeros(6)
         self.reset()
 
     # --------------------------------------------------------------- state
@@ -131,15 +130,17 @@ class ArmSimulation:
         return -float(self.data.qpos[self._pad_qpos[name]])
 
     def normal_force(self) -> float:
-        """Total normal force [N] of the contacts between the object and any pad."""
-        total, force = 0.0, np.zeros(6)
-        pads = set(self._pad_geom.values())
-        for i in range(self.data.ncon):
-            contact = self.data.contact[i]
-            pair = {int(contact.geom1), int(contact.geom2)}
-            if self._object_geom in pair and pair & pads:
-                self.mujoco.mj_contactForce(self.model, self.data, i, force)
-                total += force[0]
+        """Total normal force [N] of the contacts between the object and the pads.
+
+        The scene lets nothing else collide (:func:`~ftkin.sim.mujoco.build_arm_model`),
+        so every contact is one of them: no walk through the contact list's
+        geometry ids. Like the sensor, it is MuJoCo's value at the start of the
+        last integration step.
+        """
+        total, force, model, data = 0.0, self._contact_force, self.model, self.data
+        for i in range(data.ncon):
+            self.mujoco.mj_contactForce(model, data, i, force)
+            total += force[0]
         return total
 
     # ------------------------------------------------------------ the truth
