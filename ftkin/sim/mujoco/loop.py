@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...control.compensation import Compensator
+from ...calibration.model import SensorModel
 from ...exceptions import InvalidInput
 from .sensor import MujocoSensor
 from .simulation import ArmSimulation
@@ -69,7 +69,7 @@ class ClosedLoopRun:
 
 
 def run_closed_loop(sim: ArmSimulation, controller, duration: float, dt: float, *, sensor: MujocoSensor | None = None,
-                    truth_compensator: Compensator | None = None, reset: bool = True) -> ClosedLoopRun:
+                    tool_model: SensorModel | None = None, reset: bool = True) -> ClosedLoopRun:
     """Step MuJoCo with ``controller`` in the loop for ``duration`` [s] at period ``dt`` [s].
 
     Args:
@@ -79,8 +79,8 @@ def run_closed_loop(sim: ArmSimulation, controller, duration: float, dt: float, 
         duration: Simulated time [s].
         dt: Control period [s] (e.g. 1/125, 1/500, 1/1000); a multiple of the MuJoCo timestep.
         sensor: Sensor model; default: noiseless, unbiased, one-tick delay.
-        truth_compensator: Removes the true tool weight for the ``force`` column (default: from the model's
-            tool inertia, no bias): ``force`` is the true compensated ``F'z``.
+        tool_model: The tool's true weight for the ``force`` column, ``F'z = ideal fz − (R_BSᵀ a)_z``
+            (default: :meth:`ArmSimulation.tool_sensor_model`, from the model's tool inertia; its bias is ignored).
         reset: Start from ``sim``'s build pose at rest (else continue from the current state).
     """
     if not (math.isfinite(duration) and duration > 0 and math.isfinite(dt) and dt > 0):
@@ -92,7 +92,8 @@ def run_closed_loop(sim: ArmSimulation, controller, duration: float, dt: float, 
         sim.reset()
     sensor = MujocoSensor() if sensor is None else sensor
     sensor.reset()
-    truth = Compensator(sim.tool_sensor_model()) if truth_compensator is None else truth_compensator
+    tool_model = sim.tool_sensor_model() if tool_model is None else tool_model
+    ax, ay, az = np.asarray(tool_model.gravity_in_base, dtype=float).tolist()
     nq = sim.arm.nq
     tool_body = sim.tool_body_id
     if getattr(controller, "step", None) is None:
@@ -104,7 +105,6 @@ def run_closed_loop(sim: ArmSimulation, controller, duration: float, dt: float, 
     events, last_event, first_hold = [], "", math.inf
     data, site, surface = sim.data, sim.sensor_site_id, sim.surface_under
     z_start = z_before = float(data.xpos[tool_body][2])
-    compensate = truth.compensate_rotation_unchecked
     q_columns, dq_columns = slice(7, 7 + nq), slice(7 + nq, 7 + 2 * nq)
     cmd_columns, wrench_columns = slice(7 + 2 * nq, 7 + 3 * nq), slice(7 + 3 * nq, 13 + 3 * nq)
     for i in range(ticks):
@@ -128,7 +128,8 @@ def run_closed_loop(sim: ArmSimulation, controller, duration: float, dt: float, 
             measured = raw[2]
         z = data.xpos[tool_body][2]
         row[0], row[1], row[2] = i * dt, z - z_start, (z - z_before) / dt
-        row[3] = compensate(data.site_xmat[site].reshape(3, 3), ideal)[2]
+        r02, r12, r22 = data.site_xmat[site][2::3].tolist()  # R_BS's third column: the sensor z axis in the base
+        row[3] = ideal[2] - (r02 * ax + r12 * ay + r22 * az)
         row[4] = measured
         if surface is not None:
             row[5], row[6] = sim.surface_depth(), sim.normal_force()
