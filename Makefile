@@ -40,6 +40,7 @@ fuzz: $(STAMP)
 
 soak: $(STAMP)
 	$(PY) benchmarks/soak_control.py
+	$(PY) benchmarks/soak_mujoco_stability.py
 
 clean:
 	rm -rf $(VENV) build dist *.egg-info .pytest_cache docs/_build

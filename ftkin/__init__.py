@@ -26,7 +26,9 @@ from .control.bias_tracker import BiasTracker
 from .control.compensation import Compensator
 from .control.dynamic_compensation import DynamicCompensator
 from .control.joint_admittance import JointAdmittance, StepStatus
+from .control.oscillation import OscillationDetector, OscillationLimits
 from .control.sensor_faults import FaultMonitor, SensorFault, SensorLimits
+from .control.stability import max_stable_k1
 from .exceptions import (
     CalibrationFileError,
     FrameNotFound,
@@ -51,6 +53,15 @@ from .planning.evaluation import PoseEvaluation, evaluate_poses
 from .planning.excitation import ExcitationPlan, FourierTrajectory, plan_excitation
 from .planning.plan import PosePlan, plan_poses
 from .sim.drift import SensorDrift
+from .sim.mujoco import (
+    ArmSimulation,
+    ClosedLoopRun,
+    GraspedObject,
+    MujocoSensor,
+    build_arm_model,
+    run_closed_loop,
+    simulate_placement_mujoco,
+)
 from .sim.mujoco_recording import MujocoRecorder, ToolInertia
 from .sim.placement import PlacementRun, PlacementScenario, simulate_placement
 from .sim.sensor import SimulatedSensor, recording_times
@@ -59,11 +70,13 @@ from .sim.surfaces import Surface
 __all__ = [
     "Admittance",
     "Arm",
+    "ArmSimulation",
     "BiasDrift",
     "BiasTracker",
     "CalibrationFileError",
     "CalibrationResult",
     "CausalDifferentiator",
+    "ClosedLoopRun",
     "Compensator",
     "ControlFrame",
     "ConventionCheck",
@@ -76,6 +89,7 @@ __all__ = [
     "FourierTrajectory",
     "FrameNotFound",
     "FtkinError",
+    "GraspedObject",
     "InvalidInput",
     "InvalidSamples",
     "JointAdmittance",
@@ -85,6 +99,9 @@ __all__ = [
     "MotionRecording",
     "MotionSamples",
     "MujocoRecorder",
+    "MujocoSensor",
+    "OscillationDetector",
+    "OscillationLimits",
     "Payload",
     "PlacementRun",
     "PlacementScenario",
@@ -107,6 +124,7 @@ __all__ = [
     "ToolInertia",
     "UnobservableParameters",
     "UrdfError",
+    "build_arm_model",
     "bundled_urdf_path",
     "calibrate",
     "calibrate_dynamic",
@@ -121,12 +139,15 @@ __all__ = [
     "load_motion_csv",
     "load_robot",
     "load_samples",
+    "max_stable_k1",
     "mounted_arm",
     "payload_in_flange",
     "plan_excitation",
     "plan_poses",
     "quaternion_to_matrix",
     "recording_times",
+    "run_closed_loop",
     "save_calibration",
     "simulate_placement",
+    "simulate_placement_mujoco",
 ]

@@ -5,18 +5,30 @@ to SI. The CSV has one row per control tick: ``t`` [s], ``displacement`` (tool
 z from the start) [m], ``velocity`` [m/s], ``force`` (true compensated F'z,
 sensor z pointing down) [N], ``measured_force`` (what the controller saw) [N],
 ``penetration`` [m], ``normal_force`` [N]; with ``--sweep`` a first column
-``gain`` holds the swept value [mm/N or mm/(s·N)].
+``gain`` holds the swept value [mm/N or mm/(s·N)], with ``--mode all`` a first
+column ``mode`` the index of the mode in ``position, admittance,
+admittance-uncompensated``.
+
+``--engine mujoco`` (the default when the ``sim`` extra is installed) runs the
+experiment in MuJoCo (:mod:`ftkin.sim.mujoco`): servoed arm, inertia, a
+spring-loaded pad, a sensor with bias, noise and a one-tick delay. Its CSV adds
+the joint states ``q1..`` [rad], ``dq1..`` [rad/s], the commands ``cmd1..``
+[rad/s], the ideal load on the sensor ``ideal_fx..ideal_mz`` [N, N·m] and
+``held`` (1 when the controller held the arm). ``--engine simple`` keeps the
+kinematic arm and the spring-damper formula (:mod:`ftkin.sim.placement`).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
+from dataclasses import replace
 
 import numpy as np
 
 from ..exceptions import InvalidInput
 from ..io.csv_table import write_csv
-from ..sim.placement import MODES, PlacementRun, PlacementScenario, simulate_placement, sweep
+from ..sim.placement import MODES, PlacementRun, PlacementScenario, simulate_placement
 from ..sim.surfaces import SURFACES, surface_by_name
 from .common import positive_float
 
@@ -32,7 +44,15 @@ def register(subparsers) -> None:
         "compensation, or admittance control on raw readings (METHOD.md §6).",
     )
     placement.add_argument("--surface", choices=sorted(SURFACES), default="sponge")
-    placement.add_argument("--mode", choices=MODES, default="admittance")
+    placement.add_argument("--mode", choices=(*MODES, "all"), default="admittance",
+                           help="controller; 'all' runs the three and plots them together (default: %(default)s)")
+    placement.add_argument("--engine", choices=ENGINES, default=default_engine(),
+                           help="mujoco (physics engine, extra 'sim') or simple (kinematic arm, spring-damper formula); "
+                           "default: mujoco when installed (here: %(default)s)")
+    placement.add_argument("--sample-rate", type=positive_float, metavar="HZ",
+                           help="MuJoCo engine: sensor sample rate [Hz] (default: one sample per control tick)")
+    placement.add_argument("--delay-ticks", type=int, default=1, metavar="N",
+                           help="MuJoCo engine: sensor delay in control ticks (default: %(default)s)")
     placement.add_argument("--k1", type=_non_negative, default=_DEFAULT.k1 * 1e3, metavar="MM_PER_N",
                            help="position gain k13 [mm/N] (default: %(default)g)")
     placement.add_argument("--k2", type=_non_negative, default=_DEFAULT.k2 * 1e3, metavar="MM_PER_S_N",
@@ -49,6 +69,15 @@ def register(subparsers) -> None:
     placement.add_argument("-o", "--output", metavar="RUN.csv", help="write the time series")
     placement.add_argument("--plot", metavar="RUN.png", help="write displacement, velocity and force plots (needs matplotlib)")
     placement.set_defaults(func=run)
+
+
+ENGINES = ("mujoco", "simple")
+"""Simulation engines of ``ftkin simulate placement``."""
+
+
+def default_engine() -> str:
+    """``"mujoco"`` when the ``mujoco`` package is importable, else ``"simple"``."""
+    return "mujoco" if importlib.util.find_spec("mujoco") is not None else "simple"
 
 
 def _non_negative(text: str) -> float:
@@ -72,37 +101,59 @@ def _summary(run: PlacementRun) -> str:
             f"final penetration {run.penetration[-1] * 1e3:.3f} mm; {placed}")
 
 
+def _simulate(scenario: PlacementScenario, args):
+    """``(PlacementRun, header, rows)`` of one run on the chosen engine."""
+    if args.engine == "simple":
+        run_ = simulate_placement(scenario)
+        return run_, list(PlacementRun.COLUMNS), run_.rows()
+    from ..sim.mujoco.placement import simulate_placement_mujoco
+
+    if args.delay_ticks < 0:
+        raise InvalidInput(f"--delay-ticks must be an integer >= 0, got {args.delay_ticks}")
+    run_, full = simulate_placement_mujoco(scenario, sample_rate=args.sample_rate, delay_ticks=args.delay_ticks)
+    for time, event in full.events:
+        if event:
+            print(f"  t = {time:.3f} s: {event}")
+    return run_, list(full.columns), full.table
+
+
 def run(args) -> int:
     scenario = PlacementScenario(
-        surface=surface_by_name(args.surface), mode=args.mode, k1=args.k1 * 1e-3, k2=args.k2 * 1e-3,
-        object_weight=args.weight, start_gap=args.gap * 1e-3, duration=args.duration, dt=args.dt, seed=args.seed,
+        surface=surface_by_name(args.surface), mode=MODES[0] if args.mode == "all" else args.mode, k1=args.k1 * 1e-3,
+        k2=args.k2 * 1e-3, object_weight=args.weight, start_gap=args.gap * 1e-3, duration=args.duration, dt=args.dt,
+        seed=args.seed,
     )
     if args.sweep:
         if not args.values:
             raise InvalidInput("--sweep needs --values, e.g. --values 0.05,0.1,0.2 (mm units)")
-        if args.mode == "position":
+        if args.mode in ("position", "all"):
             raise InvalidInput("--sweep varies admittance gains; use --mode admittance or admittance-uncompensated")
-        runs = sweep(scenario, args.sweep, [value * 1e-3 for value in args.values])
+        scenarios = [replace(scenario, **{args.sweep: value * 1e-3}) for value in args.values]
+        labels = list(args.values)
     else:
         if args.values:
             raise InvalidInput("--values needs --sweep k1 or --sweep k2")
-        runs = [simulate_placement(scenario)]
+        modes = MODES if args.mode == "all" else (args.mode,)
+        scenarios = [replace(scenario, mode=mode) for mode in modes]
+        labels = list(range(len(modes)))
+    results = [_simulate(one, args) for one in scenarios]
+    runs = [result[0] for result in results]
     for one in runs:
         prefix = f"{'k13' if args.sweep == 'k1' else 'k23'} = {getattr(one.scenario, args.sweep) * 1e3:g}: " if args.sweep else ""
-        print(f"{args.surface}, {args.mode}: {prefix}{_summary(one)}")
+        print(f"{args.surface}, {one.scenario.mode} ({args.engine}): {prefix}{_summary(one)}")
     if args.output:
-        header = list(PlacementRun.COLUMNS)
-        if args.sweep:
-            header = ["gain"] + header
-            rows = [[value, *row] for value, one in zip(args.values, runs) for row in one.rows().tolist()]
+        header = results[0][1]
+        if len(results) > 1:
+            header = ["gain" if args.sweep else "mode"] + header
+            rows = [[label, *row] for label, result in zip(labels, results) for row in result[2].tolist()]
         else:
-            rows = runs[0].rows().tolist()
+            rows = results[0][2].tolist()
         write_csv(args.output, header, rows)
         print(f"wrote {args.output}")
     if args.plot:
         from ..sim.placement_plots import plot_runs, plot_sweep
 
-        title = f"Placement on the {args.surface}, {args.mode}"
+        title = f"Placement on the {args.surface}, {args.mode} ({args.engine})"
         if args.sweep:
             plot_sweep(runs, args.sweep, args.plot, title)
         else:

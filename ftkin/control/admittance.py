@@ -10,8 +10,14 @@ gains make the tool yield::
 * position form ``ΔX = S·K1·ΔF``  (:meth:`Admittance.displacement`) [m, rad];
 * velocity form ``ΔV = S·K2·ΔF``  (:meth:`Admittance.velocity`) [m/s, rad/s];
 * combined ``ΔV = S·(K1·dΔF/dt + K2·ΔF)`` (:meth:`Admittance.update`), with
-  the derivative low-pass filtered (first order, cutoff [Hz]) and ``ΔV``
-  saturated (linear norm [m/s], angular norm [rad/s]).
+  the derivative low-pass filtered (first order, cutoff ``f_c`` [Hz],
+  discretised exactly: ``α = 1 − exp(−2π f_c dt)``) and ``ΔV`` saturated
+  (linear norm [m/s], angular norm [rad/s]; each part on its own, or the whole
+  twist by one factor, which keeps its screw axis and pitch).
+
+K1 has a stability limit on a stiff contact (the derivative of the contact's
+damping force feeds back through a delay):
+:func:`~ftkin.control.stability.max_stable_k1` computes it.
 
 With ``F_desired = 0`` a held weight ``W`` gives ``ΔF = W`` along gravity and
 the tool moves down at ``K2·W`` until a surface carries the weight.
@@ -86,6 +92,10 @@ class Admittance:
         derivative_cutoff: Cutoff of the derivative's low-pass filter [Hz].
         max_linear_velocity: Saturation of ``|ΔV[:3]|`` [m/s].
         max_angular_velocity: Saturation of ``|ΔV[3:]|`` [rad/s].
+        saturation: ``"separate"`` scales the linear and the angular part each to
+            its limit (the direction of each is kept, their ratio is not);
+            ``"common"`` scales the whole twist by the one factor that brings both
+            within their limits (the screw axis and pitch ``ω·v/|ω|²`` are kept).
         bumpless: If True the first update after a reset takes its error as the
             previous one (no derivative kick). If False the filter starts from
             ΔF = 0, so a force present at switch-on moves the tool by the
@@ -94,7 +104,8 @@ class Admittance:
 
     def __init__(self, k1=0.0, k2=0.0, *, selection=1.0, desired_wrench=0.0, frame: str = "sensor",
                  force_deadband: float = 0.0, torque_deadband: float = 0.0, derivative_cutoff: float = 10.0,
-                 max_linear_velocity: float = 0.05, max_angular_velocity: float = 0.5, bumpless: bool = True):
+                 max_linear_velocity: float = 0.05, max_angular_velocity: float = 0.5, bumpless: bool = True,
+                 saturation: str = "separate"):
         self.k1 = _diagonal(k1, "k1")
         self.k2 = _diagonal(k2, "k2")
         self.selection = _diagonal(selection, "selection")
@@ -115,6 +126,10 @@ class Admittance:
         self.max_linear_velocity = float(limits[3])
         self.max_angular_velocity = float(limits[4])
         self.bumpless = bool(bumpless)
+        if saturation not in ("separate", "common"):
+            raise InvalidInput(f"saturation must be 'separate' or 'common', got {saturation!r}")
+        self.common_saturation = saturation == "common"
+        self._alpha_dt, self._alpha = math.nan, 0.0
         self._time_constant = 1.0 / (2.0 * math.pi * self.derivative_cutoff)
         self._k1s = self.selection * self.k1
         self._k2s = self.selection * self.k2
@@ -152,19 +167,24 @@ class Admittance:
             state.started = True
             if self.bumpless:
                 state.previous_error = error
-        alpha = dt / (dt + self._time_constant)
+        if dt != self._alpha_dt:  # exact discretisation of the first-order low-pass, cached per dt
+            self._alpha_dt, self._alpha = dt, -math.expm1(-dt / self._time_constant)
+        alpha = self._alpha
         raw_derivative = (error - state.previous_error) / dt
         state.filtered_derivative = state.filtered_derivative + alpha * (raw_derivative - state.filtered_derivative)
         state.previous_error = error
         return self.saturate(self._k1s * state.filtered_derivative + self._k2s * error)
 
     def saturate(self, twist: np.ndarray) -> np.ndarray:
-        """Scale the linear and angular parts of a twist to their norm limits (direction kept)."""
+        """Scale a twist to the norm limits: each part on its own, or all by one factor (``saturation``)."""
         v0, v1, v2, w0, w1, w2 = twist.tolist()
         linear = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
         angular = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
         if linear <= self.max_linear_velocity and angular <= self.max_angular_velocity:
             return twist
+        if self.common_saturation:
+            return twist * min(self.max_linear_velocity / max(linear, self.max_linear_velocity),
+                               self.max_angular_velocity / max(angular, self.max_angular_velocity))
         out = twist.copy()
         if linear > self.max_linear_velocity:
             out[:3] *= self.max_linear_velocity / linear

@@ -15,7 +15,10 @@
    position limit (``gain · distance`` [rad/s]) and is capped by the velocity
    limit; ``dq`` is scaled uniformly (direction kept) to fit;
 6. safety: a contact force [N] or torque [N·m] beyond the user limit commands
-   ``dq = 0`` and latches until :meth:`JointAdmittance.reset`.
+   ``dq = 0`` and latches until :meth:`JointAdmittance.reset`; so does an
+   oscillating loop (:class:`~ftkin.control.oscillation.OscillationDetector`:
+   repeated large reversals of the contact force), with
+   ``fault = SensorFault.OSCILLATION`` and a message naming the gain to lower.
 
 Before all that, a :class:`~ftkin.control.sensor_faults.FaultMonitor` checks the tick
 (NaN/inf in ``q`` or the reading, a ``dt`` jump, a saturated channel, a stuck
@@ -41,11 +44,12 @@ import pinocchio as pin
 from scipy.linalg import lapack
 
 from ..exceptions import InvalidInput
-from ..kinematics.arm import Arm
+from ..kinematics.arm import Arm, bundled_urdf_path
 from ..kinematics.mounting import mounted_arm
 from .admittance import Admittance
 from .compensation import Compensator
 from .control_frame import control_frame_for
+from .oscillation import DEFAULT_OSCILLATION_LIMITS, OscillationDetector, OscillationLimits
 from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
 
 _potrf, _potrs, _posv = lapack.dpotrf, lapack.dpotrs, lapack.dposv
@@ -104,13 +108,17 @@ class JointAdmittance:
         sensor_limits: Fault thresholds (:class:`~ftkin.control.sensor_faults.SensorLimits`;
             default: the paper's sensor range ±250 N / ±6 N·m, stuck after 10
             identical ticks or 50 ms, dropped tick at 5x the nominal dt,
-            5 good ticks to recover).
+            5 good ticks to recover). Required for any arm but the bundled
+            one: its sensor's measuring range is not the paper sensor's.
+        oscillation: Thresholds of the oscillation detector
+            (:class:`~ftkin.control.oscillation.OscillationLimits`); None disables it.
     """
 
     def __init__(self, arm: Arm, admittance: Admittance, compensator: Compensator | None = None, *,
                  control_point: str | None = None, force_limit: float = 50.0, torque_limit: float = 5.0,
                  manipulability_threshold: float = 0.005, max_damping: float = 0.05, velocity_scale: float = 1.0,
-                 limit_gain: float = 5.0, sensor_limits: SensorLimits | None = None):
+                 limit_gain: float = 5.0, sensor_limits: SensorLimits | None = None,
+                 oscillation: OscillationLimits | None = DEFAULT_OSCILLATION_LIMITS):
         if not isinstance(arm, Arm) or not isinstance(admittance, Admittance):
             raise InvalidInput("JointAdmittance needs an ftkin Arm and an ftkin Admittance")
         if compensator is not None and not isinstance(compensator, Compensator):
@@ -130,14 +138,21 @@ class JointAdmittance:
         self._joint_limits = list(zip(arm.lower_limits.tolist(), arm.upper_limits.tolist(),
                                       (arm.velocity_limits * float(velocity_scale)).tolist()))
         self._nq = arm.nq
+        if sensor_limits is None and (arm.urdf_path is None or arm.urdf_path != bundled_urdf_path().resolve()):
+            raise InvalidInput("give sensor_limits=SensorLimits(force_range=..., torque_range=...) with your sensor's "
+                               "measuring range [N, N·m]: the default ±250 N / ±6 N·m is the bundled arm's (the paper's) sensor")
         self.monitor = FaultMonitor(sensor_limits)
+        self.detector = OscillationDetector(oscillation) if oscillation is not None else None
         self.reset()
 
     def reset(self) -> None:
         """Clear the admittance filter, the safety latch and the fault monitor's state."""
         self.admittance.reset()
         self.monitor.reset()
+        if self.detector is not None:
+            self.detector.reset()
         self.safety_latched = False
+        self.oscillation_event = ""
         self._holding = False
         self.last_status: StepStatus | None = None
 
@@ -177,6 +192,8 @@ class JointAdmittance:
             self.compensator.observe_bias(contact, dt, q=q, free=free)
         fx, fy, fz, mx, my, mz = contact.tolist()
         force, torque = math.sqrt(fx * fx + fy * fy + fz * fz), math.sqrt(mx * mx + my * my + mz * mz)
+        if (self.detector is not None and self.detector.update(force, torque, dt)) or self.oscillation_event:
+            return self._hold_oscillation(contact)
         if self.safety_latched or force > self.force_limit or torque > self.torque_limit:
             return self._stop(contact, force, torque)
         wrench = self.frame.wrench_from_sensor(contact, rotation)
@@ -201,6 +218,22 @@ class JointAdmittance:
         dq = np.zeros(self._nq)
         self.last_status = StepStatus(dq, np.full(6, math.nan), np.zeros(6), math.nan, math.nan, 0.0,
                                       self.safety_latched, event, fault)
+        return dq
+
+    def _hold_oscillation(self, contact: np.ndarray) -> np.ndarray:
+        """``dq = 0`` for an oscillating loop, latched until :meth:`reset`; the event names the gain to lower."""
+        if not self.oscillation_event:
+            law, state = self.admittance, self.admittance.state
+            derivative_part = float(np.linalg.norm(law._k1s * state.filtered_derivative))
+            proportional_part = float(np.linalg.norm(law._k2s * state.previous_error))
+            gain = ("k1 (K1, the dΔF/dt term: see ftkin.control.stability.max_stable_k1) or derivative_cutoff"
+                    if derivative_part >= proportional_part else "k2 (K2, the ΔF term)")
+            limits = self.detector.limits
+            self.oscillation_event = (f"oscillation: {self.detector.count:.0f} reversals of the contact force by more than "
+                                      f"{limits.force_step:g} N within ~{limits.window:g} s: holding (reset() to resume); lower {gain}")
+        dq = np.zeros(self._nq)
+        self.last_status = StepStatus(dq, contact, np.zeros(6), math.nan, math.nan, 0.0, self.safety_latched,
+                                      self.oscillation_event, SensorFault.OSCILLATION)
         return dq
 
     def _restart_derivative(self, wrench: np.ndarray) -> None:

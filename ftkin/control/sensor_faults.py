@@ -42,6 +42,8 @@ class SensorFault(StrEnum):
     DT_JUMP = "dt_jump"
     SATURATED = "saturated"
     STUCK = "stuck"
+    OSCILLATION = "oscillation"
+    """Not a sensor fault: the loop itself oscillates (:mod:`ftkin.control.oscillation`); latched until reset."""
 
 
 @dataclass(frozen=True)

@@ -54,7 +54,7 @@ def test_deadband_is_continuous_and_zero_inside():
 def test_filtered_derivative_of_a_ramp_follows_the_first_order_response():
     dt, cutoff, slope = 1e-3, 5.0, 3.0  # s, Hz, N/s
     law = Admittance(k1=1e-3, frame="sensor", derivative_cutoff=cutoff, selection=[0, 0, 1, 0, 0, 0])
-    alpha = dt / (dt + 1.0 / (2 * np.pi * cutoff))
+    alpha = 1.0 - np.exp(-dt * 2 * np.pi * cutoff)  # the exact discretisation of the first-order low-pass
     law.update(np.zeros(6), dt)  # bumpless start at ΔF = 0
     outputs = [law.update(np.array([0, 0, slope * dt * n, 0, 0, 0]), dt)[2] for n in range(1, 301)]
     expected = 1e-3 * slope * (1 - (1 - alpha) ** np.arange(1, 301))

@@ -137,7 +137,7 @@ def test_surface_pushes_but_never_pulls():
 # --------------------------------------------------------------------- CLI
 def test_cli_writes_the_time_series_and_a_plot(tmp_path, capsys):
     csv_path, png_path = tmp_path / "run.csv", tmp_path / "run.png"
-    code = main(["simulate", "placement", "--surface", "book", "--mode", "admittance", "--k1", "0.1", "--k2", "2",
+    code = main(["simulate", "placement", "--engine", "simple", "--surface", "book", "--mode", "admittance", "--k1", "0.1", "--k2", "2",
                  "--duration", "0.5", "--dt", "0.002", "-o", str(csv_path), "--plot", str(png_path)])
     assert code == 0
     assert "peak contact force" in capsys.readouterr().out
@@ -151,7 +151,7 @@ def test_cli_writes_the_time_series_and_a_plot(tmp_path, capsys):
 
 def test_cli_sweep_adds_a_gain_column(tmp_path):
     csv_path = tmp_path / "sweep.csv"
-    assert main(["simulate", "placement", "--sweep", "k2", "--values", "1,2", "--duration", "0.2", "--dt", "0.002",
+    assert main(["simulate", "placement", "--engine", "simple", "--sweep", "k2", "--values", "1,2", "--duration", "0.2", "--dt", "0.002",
                  "-o", str(csv_path)]) == 0
     table = read_table(csv_path)
     gains = table.floats(["gain"])[:, 0]
