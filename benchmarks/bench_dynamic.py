@@ -1,6 +1,6 @@
 """Dynamic calibration and compensation during motion, against MuJoCo as the truth.
 
-Setup: the bundled arm in MuJoCo (``ftkin.sim.mujoco_recording``) carrying a
+Setup: the bundled arm in MuJoCo (``ftkin.sim.mujoco.recording``) carrying a
 1.5 kg tool of known, non-diagonal inertia; base tilted by (0.3°, −0.2°);
 sensor bias [2, −1.5, 3] N, [0.1, −0.05, 0.02] N·m; white sensor noise
 0.05 N / 0.003 N·m per reading and encoder noise 1e-5 rad, at 1 kHz. The
@@ -40,7 +40,7 @@ from ftkin.control.dynamic_compensation import DynamicCompensator
 from ftkin.kinematics.rotations import euler_zyx_to_matrix
 from ftkin.planning.constraints import PoseConstraints
 from ftkin.planning.excitation import plan_excitation
-from ftkin.sim.mujoco_recording import MujocoRecorder, ToolInertia
+from ftkin.sim.mujoco.recording import MujocoRecorder, ToolInertia
 
 RATE = 1000.0
 FORCE_STD, TORQUE_STD, ENCODER_STD = 0.05, 0.003, 1e-5

@@ -57,12 +57,13 @@ from .sim.mujoco import (
     ArmSimulation,
     ClosedLoopRun,
     GraspedObject,
+    MujocoRecorder,
     MujocoSensor,
+    ToolInertia,
     build_arm_model,
     run_closed_loop,
     simulate_placement_mujoco,
 )
-from .sim.mujoco_recording import MujocoRecorder, ToolInertia
 from .sim.placement import PlacementRun, PlacementScenario, simulate_placement
 from .sim.sensor import SimulatedSensor, recording_times
 from .sim.surfaces import Surface

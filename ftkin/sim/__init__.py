@@ -14,8 +14,7 @@ Depends on :mod:`ftkin.control`, :mod:`ftkin.io`, :mod:`ftkin.calibration` and b
 """
 
 from .drift import SensorDrift
-from .mujoco import build_arm_model, run_closed_loop, simulate_placement_mujoco
-from .mujoco_recording import MujocoRecorder, ToolInertia
+from .mujoco import MujocoRecorder, ToolInertia, build_arm_model, run_closed_loop, simulate_placement_mujoco
 from .placement import PlacementRun, PlacementScenario, simulate_placement
 from .sensor import SimulatedSensor, recording_times
 from .surfaces import Surface

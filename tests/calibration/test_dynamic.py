@@ -19,7 +19,7 @@ from ftkin.calibration.log_cholesky import (
 from ftkin.calibration.regressor import MotionSamples, body_regressor, gravity_regressor
 from ftkin.kinematics.rotations import gravity_in_base_from_tilt
 
-mujoco_recording = pytest.importorskip("ftkin.sim.mujoco_recording")
+mujoco_recording = pytest.importorskip("ftkin.sim.mujoco.recording")
 pytest.importorskip("mujoco")
 
 TOOL = mujoco_recording.ToolInertia(

@@ -11,7 +11,7 @@ from ftkin import CalibrationResult, DynamicCalibrationResult, load_calibration,
 from ftkin.cli import main
 from ftkin.io.csv_table import read_table, write_csv
 
-mujoco_recording = pytest.importorskip("ftkin.sim.mujoco_recording")
+mujoco_recording = pytest.importorskip("ftkin.sim.mujoco.recording")
 pytest.importorskip("mujoco")
 
 TOOL = mujoco_recording.ToolInertia(1.5, [0.006, -0.012, 0.072], np.diag([0.006, 0.005, 0.002]))

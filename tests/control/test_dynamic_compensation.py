@@ -8,7 +8,7 @@ import pytest
 from ftkin import Compensator, DynamicCompensator, InvalidInput, SensorModel
 from ftkin.calibration.log_cholesky import body_from_parameters
 
-mujoco_recording = pytest.importorskip("ftkin.sim.mujoco_recording")
+mujoco_recording = pytest.importorskip("ftkin.sim.mujoco.recording")
 pytest.importorskip("mujoco")
 
 TOOL = mujoco_recording.ToolInertia(1.5, [0.006, -0.012, 0.072], np.diag([0.006, 0.005, 0.002]))

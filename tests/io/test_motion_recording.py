@@ -8,7 +8,7 @@ import pytest
 from ftkin import InvalidSamples, calibrate_dynamic, load_motion_bag, load_motion_csv, plan_excitation
 from ftkin.io.csv_table import write_csv
 
-mujoco_recording = pytest.importorskip("ftkin.sim.mujoco_recording")
+mujoco_recording = pytest.importorskip("ftkin.sim.mujoco.recording")
 pytest.importorskip("mujoco")
 pytest.importorskip("rosbags")
 from rosbags.rosbag2 import StoragePlugin, Writer  # noqa: E402

@@ -11,8 +11,19 @@ the loop. ``mujoco`` is imported only when a model is built.
 from .loop import ClosedLoopRun, run_closed_loop
 from .model import GraspedObject, build_arm_model
 from .placement import simulate_placement_mujoco
+from .recording import MujocoRecorder
 from .sensor import MujocoSensor
-from .simulation import ArmSimulation, ToolInertia
+from .simulation import ArmSimulation
+from .tool_inertia import ToolInertia
 
-__all__ = ["ArmSimulation", "ClosedLoopRun", "GraspedObject", "MujocoSensor", "ToolInertia", "build_arm_model", "run_closed_loop",
-           "simulate_placement_mujoco"]
+__all__ = [
+    "ArmSimulation",
+    "ClosedLoopRun",
+    "GraspedObject",
+    "MujocoRecorder",
+    "MujocoSensor",
+    "ToolInertia",
+    "build_arm_model",
+    "run_closed_loop",
+    "simulate_placement_mujoco",
+]

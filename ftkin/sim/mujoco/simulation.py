@@ -8,34 +8,11 @@ origin); ftkin's raw reading is the load on the sensor, its negative.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from ...calibration.model import SensorModel
 from ...kinematics.arm import Arm
-
-
-@dataclass(frozen=True)
-class ToolInertia:
-    """Inertial parameters of the measured subtree without the grasped object (sensor frame).
-
-    Attributes:
-        mass: [kg].
-        center_of_mass: [m], sensor frame.
-        inertia: ``(3, 3)`` about the centre of mass, sensor axes [kg·m²].
-    """
-
-    mass: float
-    center_of_mass: np.ndarray
-    inertia: np.ndarray
-
-    def dynamic_parameters(self) -> np.ndarray:
-        """``[m, m·c, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]`` about the sensor origin (Pinocchio's order)."""
-        c = self.center_of_mass
-        about_origin = self.inertia + self.mass * (float(c @ c) * np.eye(3) - np.outer(c, c))
-        i = about_origin
-        return np.concatenate(([self.mass], self.mass * c, [i[0, 0], i[0, 1], i[1, 1], i[0, 2], i[1, 2], i[2, 2]]))
+from .tool_inertia import ToolInertia
 
 
 class ArmSimulation:

@@ -10,58 +10,29 @@ force and torque sensors on a site at the sensor frame, and for prescribed
 sensor body exerts on the load's subtree. ftkin's raw reading is the load on
 the sensor, i.e. minus that.
 
-This is deliberately small: the full MuJoCo model of the arm with the closed
-loop lives (or will live) in ``ftkin.sim.mujoco``; this module only records.
+This is deliberately small: the full MuJoCo model of the arm with its scene and
+the closed loop is :func:`~ftkin.sim.mujoco.model.build_arm_model`; this module only records.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import pinocchio as pin
 
-from ..calibration.log_cholesky import parameters_from_body
-from ..calibration.model import STANDARD_GRAVITY
-from ..exceptions import InvalidInput, MissingDependency
-from ..kinematics.arm import bundled_urdf_path
-from ..kinematics.rotations import gravity_in_base_from_tilt
-from ..validation import as_batch, as_positive, as_vector
+from ...calibration.model import STANDARD_GRAVITY
+from ...exceptions import InvalidInput, MissingDependency
+from ...kinematics.arm import bundled_urdf_path
+from ...kinematics.rotations import gravity_in_base_from_tilt
+from ...validation import as_batch, as_positive, as_vector
+from .tool_inertia import ToolInertia
 
 
 def _mujoco():
     try:
         import mujoco
     except ImportError:
-        raise MissingDependency("mujoco", "sim", "recording wrenches with MuJoCo (ftkin.sim.mujoco_recording)") from None
+        raise MissingDependency("mujoco", "sim", "recording wrenches with MuJoCo (ftkin.sim.mujoco.recording)") from None
     return mujoco
-
-
-@dataclass(frozen=True)
-class ToolInertia:
-    """A rigid load on the sensor: mass, centre of mass and inertia, in the sensor frame.
-
-    Attributes:
-        mass: [kg].
-        center_of_mass: ``(3,)`` in the sensor frame [m].
-        inertia_about_com: ``(3, 3)`` about the COM, sensor axes [kg·m²].
-    """
-
-    mass: float
-    center_of_mass: np.ndarray
-    inertia_about_com: np.ndarray
-
-    def __post_init__(self):
-        object.__setattr__(self, "mass", as_positive(self.mass, "mass"))
-        object.__setattr__(self, "center_of_mass", as_vector(self.center_of_mass, 3, "center_of_mass"))
-        inertia = np.asarray(self.inertia_about_com, dtype=float)
-        if inertia.shape != (3, 3) or not np.allclose(inertia, inertia.T) or np.linalg.eigvalsh(inertia)[0] <= 0:
-            raise InvalidInput(f"inertia_about_com must be a symmetric positive definite (3, 3) matrix, got {inertia!r}")
-        object.__setattr__(self, "inertia_about_com", inertia)
-
-    def parameters(self) -> np.ndarray:
-        """The ten inertial parameters θ about the sensor origin (:mod:`ftkin.calibration.log_cholesky`)."""
-        return parameters_from_body(self.mass, self.center_of_mass, self.inertia_about_com)
 
 
 class MujocoRecorder:
