@@ -30,6 +30,7 @@ from ..calibration.diagnostics import FitDiagnostics
 from ..calibration.estimate import CalibrationResult
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from .atomic import atomic_write_text
+from .calibration_checks import check_covariance, check_derived, has_bool, parse_calibration_json, short_repr
 
 FORMAT_NAME = "ftkin-calibration"
 FORMAT_VERSION = 1
@@ -141,17 +142,26 @@ class _Reader:
         if value is None:
             return default
         if isinstance(value, bool) or not isinstance(value, kind):
-            self.fail(f"expected {kind.__name__} or null, got {value!r}", key)
+            self.fail(f"expected {kind.__name__} or null, got {short_repr(value)}", key)
+        return value
+
+    def count(self, key: str, default: int) -> int:
+        """An optional non-negative integer count (``sample_count``, ``pose_count``)."""
+        value = self.optional(key, int, default)
+        if not 0 <= value <= 2**53:
+            self.fail(f"expected a count between 0 and 2**53, got {short_repr(value)}", key)
         return value
 
     def array(self, key: str, shape: tuple, required: bool = True, source=None):
         value = self.get(key, required) if source is None else source
         if value is None:
             return None
+        if has_bool(value):
+            self.fail(f"expected numbers of shape {shape}, got a boolean (true/false are not numbers)", key)
         try:
             array = np.array(value, dtype=np.float64)
-        except (TypeError, ValueError):
-            self.fail(f"expected numbers of shape {shape}, got {value!r}", key)
+        except (TypeError, ValueError, OverflowError):
+            self.fail(f"expected numbers of shape {shape}, got {short_repr(value)}", key)
         if array.shape != shape and not (array.size == 0 and 0 in shape):
             self.fail(f"expected shape {shape}, got {array.shape}", key)
         if not np.all(np.isfinite(array)):
@@ -160,8 +170,12 @@ class _Reader:
 
     def number(self, key: str) -> float:
         value = self.get(key)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            self.fail(f"expected a finite number, got {value!r}", key)
+        try:
+            finite = not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
+        except OverflowError:
+            finite = False
+        if not finite:
+            self.fail(f"expected a finite number, got {short_repr(value)}", key)
         return float(value)
 
 
@@ -175,8 +189,8 @@ def _diagnostics(reader: _Reader) -> FitDiagnostics | None:
         return FitDiagnostics.from_dict(data)
     except KeyError as error:
         reader.fail(f"missing {error.args[0]!r}", "diagnostics")
-    except (TypeError, ValueError, FtkinError) as error:
-        reader.fail(f"malformed: {error}", "diagnostics")
+    except (TypeError, ValueError, OverflowError, FtkinError) as error:
+        reader.fail(f"malformed: {str(error)[:200]}", "diagnostics")
 
 
 def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationResult:
@@ -203,15 +217,19 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     raw_ids = poses.get("ids")
     if raw_ids is None:
         raw_ids = []
-    if not isinstance(raw_ids, list) or not all(isinstance(i, int) and not isinstance(i, bool) for i in raw_ids):
-        reader.fail(f"expected a list of integer pose ids, got {raw_ids!r}", "poses.ids")
+    if not isinstance(raw_ids, list) or not all(
+        isinstance(i, int) and not isinstance(i, bool) and abs(i) <= 2**53 for i in raw_ids
+    ):
+        reader.fail(f"expected a list of integer pose ids of magnitude at most 2**53, got {short_repr(raw_ids)}", "poses.ids")
     pose_ids = np.array(raw_ids, dtype=np.int64)
     count = len(pose_ids)
     measured = reader.array("poses.measured", (count, 6), source=poses.get("measured", np.zeros((0, 6))))
     residuals = reader.array("poses.residuals", (count, 6), source=poses.get("residuals", np.zeros((0, 6))))
     method = reader.optional("method", str, "unknown")
     urdf, sensor_frame = reader.optional("urdf", str), reader.optional("sensor_frame", str)
-    sample_count = reader.optional("sample_count", int, count)
+    sample_count = reader.count("sample_count", count)
+    if "pose_count" in document and reader.count("pose_count", count) != count:
+        reader.fail(f"{document['pose_count']} disagrees with the {count} pose ids in poses.ids", "pose_count")
     try:
         result = CalibrationResult(
             force_offset=reader.array("force_offset", (3,)),
@@ -233,13 +251,8 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
         raise CalibrationFileError(path, str(error)) from None
     if not (np.isfinite(result.tool_weight) and result.tool_weight > 0.0):
         reader.fail(f"|gravity_in_base| must be finite and positive, got {result.tool_weight}", "gravity_in_base")
-    if "tool_weight" in document:
-        stated = reader.number("tool_weight")
-        if not math.isclose(stated, result.tool_weight, rel_tol=1e-9, abs_tol=1e-12):
-            reader.fail(
-                f"{stated} N disagrees with |gravity_in_base| = {result.tool_weight} N (file edited by hand?)",
-                "tool_weight",
-            )
+    check_derived(reader, document, result)
+    check_covariance(reader, result.covariance)
     return result
 
 
@@ -252,17 +265,13 @@ def load_calibration(path) -> CalibrationResult:
     """
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise CalibrationFileError(str(path), "file not found") from None
+    except IsADirectoryError:
+        raise CalibrationFileError(str(path), "is a folder; expected a calibration JSON file") from None
     except (OSError, UnicodeDecodeError) as error:
         raise CalibrationFileError(str(path), f"cannot read: {error}") from None
     if not text.strip():
         raise CalibrationFileError(str(path), "file is empty; expected an ftkin calibration JSON document")
-    try:
-        document = json.loads(text)
-    except json.JSONDecodeError as error:
-        raise CalibrationFileError(
-            str(path), f"not valid JSON (truncated or corrupt?) at line {error.lineno}, column {error.colno}: {error.msg}"
-        ) from None
-    return calibration_from_dict(document, str(path))
+    return calibration_from_dict(parse_calibration_json(text, str(path)), str(path))
