@@ -122,8 +122,13 @@ class _QuietPipe:
 
 def _run(argv) -> int:
     try:
+        from .common import join_number_lists
+
         parser = build_parser()
-        args = parser.parse_args(argv)
+        try:
+            args = parser.parse_args(join_number_lists(list(sys.argv[1:] if argv is None else argv)))
+        except SystemExit as exit_:  # usage errors and --help: an exit code, as every other outcome
+            return exit_.code if isinstance(exit_.code, int) else 2
         logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="ftkin: %(message)s")
         if not getattr(args, "func", None):
             parser.print_help()

@@ -8,7 +8,7 @@ from ..calibration.ml import LOSSES
 from ..calibration.model import STANDARD_GRAVITY
 from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
-from .common import add_samples_arguments, load_samples_from_args, positive_float
+from .common import add_samples_arguments, gravity, load_samples_from_args, positive_float
 
 
 def register(subparsers) -> None:
@@ -27,7 +27,7 @@ def register(subparsers) -> None:
         help="ml: joint maximum-likelihood fit with standard errors; linear: the paper's two-step "
         "least squares (default: %(default)s)",
     )
-    parser.add_argument("--g", type=positive_float, default=STANDARD_GRAVITY, help="gravity for the mass [m/s²] (default: %(default)s)")
+    parser.add_argument("--g", type=gravity, default=STANDARD_GRAVITY, help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)")
     ml = parser.add_argument_group("ml estimator")
     ml.add_argument(
         "--noise-force", type=positive_float, metavar="N",

@@ -23,9 +23,8 @@ def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--tool-frame", default=None, metavar="NAME", help="tool / control-point frame name")
     group.add_argument(
         "--sensor-offset",
-        type=float,
-        nargs="+",
-        metavar="X",
+        type=number_list,
+        metavar="X Y Z [R P Y]",
         help="with --robot: sensor origin in the flange frame, X Y Z [m] and optionally ROLL PITCH YAW [rad] "
         "(with --urdf and --sensor-parent: the same, relative to that frame)",
     )
@@ -83,8 +82,66 @@ def _number(text: str, accept, expected: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (accept(value) and value != float("inf")):
+    if not (accept(value) and abs(value) != float("inf")):
         raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+    return value
+
+
+NUMBER_LIST_OPTIONS = ("--sensor-offset",)
+"""Options that take several numbers; their values end at the first token that is not a number."""
+
+
+def _is_number(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
+def join_number_lists(argv: list[str]) -> list[str]:
+    """``--sensor-offset 0 0 0.05 LOG.csv`` → ``--sensor-offset=0,0,0.05 LOG.csv``.
+
+    A list option takes the numbers that follow it (at most 6) and no more, so
+    it never swallows the positional file after it; negative numbers work.
+    """
+    out, k = [], 0
+    while k < len(argv):
+        token = argv[k]
+        if token in NUMBER_LIST_OPTIONS:
+            values = []
+            while k + 1 < len(argv) and len(values) < 6 and _is_number(argv[k + 1]):
+                values.append(argv[k + 1])
+                k += 1
+            out.append(f"{token}={','.join(values)}" if values else token)
+        else:
+            out.append(token)
+        k += 1
+    return out
+
+
+def number_list(text: str) -> list[float]:
+    """argparse type: finite numbers separated by commas (or spaces)."""
+    parts = [part for part in text.replace(",", " ").split()]
+    if not parts:
+        raise argparse.ArgumentTypeError("expected numbers, got nothing")
+    values = []
+    for part in parts:
+        try:
+            value = float(part)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number, got {part!r}") from None
+        if value != value or abs(value) == float("inf"):
+            raise argparse.ArgumentTypeError(f"expected a finite number, got {part!r}")
+        values.append(value)
+    return values
+
+
+def gravity(text: str) -> float:
+    """argparse type: gravity [m/s²] between 1 and 30 (Earth: 9.81; the Moon 1.6, Jupiter 24.8)."""
+    value = _number(text, lambda v: v > 0, "a finite positive number")
+    if not 1.0 <= value <= 30.0:
+        raise argparse.ArgumentTypeError(f"gravity must be between 1 and 30 m/s² (Earth: 9.80665), got {text!r}")
     return value
 
 

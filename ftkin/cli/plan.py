@@ -34,8 +34,18 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
                        help="force noise per reading [N] (default: %(default)s)")
     group.add_argument("--noise-torque", type=positive_float, default=float(noise.torque_std[0]), metavar="NM",
                        help="torque noise per reading [N·m] (default: %(default)s)")
-    group.add_argument("--readings-per-pose", type=int, default=1, metavar="K",
+    group.add_argument("--readings-per-pose", type=_readings, default=1, metavar="K",
                        help="independent readings averaged at each pose (default: %(default)s)")
+
+
+def _readings(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not 1 <= value <= 10**9:
+        raise argparse.ArgumentTypeError(f"expected 1 to 10**9 readings per pose, got {text}")
+    return value
 
 
 def expectation_from_args(args) -> dict:
@@ -50,15 +60,44 @@ def expectation_from_args(args) -> dict:
     }
 
 
+MAX_PLAN_POSES = 500
+"""Largest ``plan --n``: beyond a few dozen poses the standard errors only fall as 1/√n."""
+
+
+def pose_count(text: str) -> int:
+    """argparse type: number of poses to plan, 3 to :data:`MAX_PLAN_POSES`."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of poses, got {text!r}") from None
+    if value < 3:
+        raise argparse.ArgumentTypeError(f"at least 3 poses are needed to determine the calibration, got {text}")
+    if value > MAX_PLAN_POSES:
+        raise argparse.ArgumentTypeError(
+            f"plan between 3 and {MAX_PLAN_POSES} poses, got {text}: beyond a few dozen poses the standard errors "
+            "only fall as 1/√n (average readings with --readings-per-pose instead)"
+        )
+    return value
+
+
 def joint_range(text: str) -> tuple[str, float, float]:
     """argparse type: ``NAME:LO:HI`` [rad]."""
     parts = text.rsplit(":", 2)
     try:
         if len(parts) != 3 or not parts[0]:
             raise ValueError
-        return parts[0], float(parts[1]), float(parts[2])
+        low, high = float(parts[1]), float(parts[2])
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected NAME:LO:HI with LO, HI in radians, got {text!r}") from None
+    if not (np.isfinite(low) and np.isfinite(high)):
+        raise argparse.ArgumentTypeError(f"expected finite LO and HI [rad], got {text!r}")
+    if max(abs(low), abs(high)) > 2.0 * np.pi:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: LO and HI are beyond 2π: ranges are in radians (these look like degrees)"
+        )
+    if low > high:
+        raise argparse.ArgumentTypeError(f"{text!r}: LO must not exceed HI")
+    return parts[0], low, high
 
 
 def register(subparsers) -> None:
@@ -69,7 +108,7 @@ def register(subparsers) -> None:
         "within joint limits, free of self-collision and above the floor, ordered for short joint travel; "
         "print the predicted standard error of every calibration parameter.",
     )
-    parser.add_argument("--n", type=int, required=True, help="number of poses (at least 3)")
+    parser.add_argument("-n", "--n", type=pose_count, required=True, help=f"number of poses (3 to {MAX_PLAN_POSES})")
     parser.add_argument("-o", "--output", metavar="POSES.csv", help="write the poses here")
     parser.add_argument("--format", choices=FORMATS, default=None, help="output format (default: from the file name, else csv)")
     group = parser.add_argument_group("constraints")

@@ -221,6 +221,23 @@ def pose_ids_from_table(table: Table) -> np.ndarray | None:
     return pose_ids.astype(np.int64)
 
 
+MAX_WRENCH = 1e6
+"""Largest accepted reading magnitude [N, N·m]: beyond it a value is a raw count or a unit mistake, not a load."""
+
+
+def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
+    """Refuse readings beyond ±:data:`MAX_WRENCH` (they would overflow the fit, not inform it)."""
+    bad = np.argwhere(np.abs(wrenches) > MAX_WRENCH)
+    if bad.size:
+        row, column = bad[0]
+        raise InvalidSamples(
+            f"column {WRENCH_CHANNELS[column]!r} holds {wrenches[row, column]:g}, beyond ±{MAX_WRENCH:g}: expected N "
+            "(fx, fy, fz) and N·m (mx, my, mz), not raw counts",
+            table.source,
+            table.lines[row],
+        )
+
+
 @dataclass(frozen=True)
 class LoadedSamples:
     """Samples read from a CSV, with the table they came from."""
@@ -241,6 +258,7 @@ def samples_from_table(table: Table, arm=None) -> LoadedSamples:
     missing_columns(table, WRENCH_CHANNELS, "wrench")
     orientations = orientations_from_table(table, arm)
     wrenches = table.floats(WRENCH_CHANNELS)
+    check_wrench_magnitude(table, wrenches)
     pose_ids = pose_ids_from_table(table)
     if orientations.arm is None:
         samples = Samples(wrenches, orientations.rotations, pose_ids)

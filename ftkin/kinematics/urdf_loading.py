@@ -92,9 +92,15 @@ def read_urdf_text(path: Path) -> str:
     if not path.is_file():
         raise UrdfError(str(path), ["file not found"])
     try:
-        return path.read_text()
+        text = path.read_text()
     except (OSError, UnicodeDecodeError) as error:
         raise UrdfError(str(path), [f"cannot read file: {error}"]) from None
+    if path.name.endswith(".xacro") or "<xacro:" in text or "${" in text:
+        raise UrdfError(
+            str(path),
+            [f"this is a xacro file, not a URDF: run xacro first (xacro {path.name} > robot.urdf) and give the result"],
+        )
+    return text
 
 
 _SOURCE_LOCATION = re.compile(r"^at line \d+ in \S+\.(cpp|hpp|h|cc)$")
