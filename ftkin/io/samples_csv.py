@@ -76,8 +76,8 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
         found["quaternion"] = quaternion
     generic = sorted((name for name in header if _GENERIC_JOINT.match(name)), key=lambda n: int(n[1:]))
     named = [name for name in (joint_names or []) if name in header]
-    if joint_names is None and (euler or quaternion):
-        named = [name for name in header if "joint" in name.lower()]  # joint columns of any arm
+    if euler or quaternion:  # joint columns of any arm would be mixed in
+        named = named or [name for name in header if "joint" in name.lower()]
     if named and generic:
         raise InvalidSamples(
             f"both URDF joint-name columns {named} and generic columns {generic}; use one", table.source

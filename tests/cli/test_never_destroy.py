@@ -59,7 +59,7 @@ def test_output_naming_an_input_is_refused_for_every_command(files, tmp_path, ca
         (["view", calibration, "--replay", samples, "--png", samples], samples),
     ]
     for argv, victim in cases:
-        _refused(argv, capsys, [samples, calibration], "refusing to overwrite an input")
+        _refused(argv, capsys, [victim, samples, calibration], "refusing to overwrite an input")
 
 
 def test_outputs_that_are_not_regular_files_are_refused(files, tmp_path, capsys):
