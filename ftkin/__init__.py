@@ -10,6 +10,7 @@ and scipy.
 """
 
 from ._version import __version__  # noqa: F401  (re-exported: ftkin.__version__)
+from .calibration.conventions import ConventionReport
 from .calibration.diagnostics import FitDiagnostics
 from .calibration.estimate import METHODS, CalibrationResult, calibrate
 from .calibration.information import SensorNoise, fisher_information
@@ -21,6 +22,7 @@ from .control.joint_admittance import JointAdmittance, StepStatus
 from .control.sensor_faults import FaultMonitor, SensorFault, SensorLimits
 from .exceptions import (
     CalibrationFileError,
+    ConventionMistake,
     FrameNotFound,
     FtkinError,
     InvalidInput,
@@ -30,6 +32,7 @@ from .exceptions import (
     UrdfError,
 )
 from .io.calibration_file import load_calibration, save_calibration
+from .io.conventions import diagnose_samples
 from .io.samples_csv import load_samples
 from .kinematics.arm import Arm, SensorMount, bundled_urdf_path
 from .kinematics.robots import ROBOTS, load_robot
@@ -48,6 +51,8 @@ __all__ = [
     "CalibrationResult",
     "Compensator",
     "ControlFrame",
+    "ConventionMistake",
+    "ConventionReport",
     "FaultMonitor",
     "FitDiagnostics",
     "FrameNotFound",
@@ -77,6 +82,7 @@ __all__ = [
     "UrdfError",
     "bundled_urdf_path",
     "calibrate",
+    "diagnose_samples",
     "euler_zyx_deg_to_matrix",
     "evaluate_poses",
     "fisher_information",

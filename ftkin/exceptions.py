@@ -42,6 +42,20 @@ class InvalidSamples(InvalidInput):
         self.line = line
 
 
+class ConventionMistake(InvalidSamples):
+    """The data fit only when read in another convention (radians for degrees, x,y,z,w for w,x,y,z, ...).
+
+    Attributes:
+        reading: What the data fit under, e.g. ``"Euler angles in radians"``.
+        fix: What to change in the input.
+    """
+
+    def __init__(self, message: str, source: str | None = None, reading: str = "", fix: str = ""):
+        super().__init__(message, source)
+        self.reading = reading
+        self.fix = fix
+
+
 class FrameNotFound(FtkinError, KeyError):
     """A frame name is not in the robot model.
 

@@ -11,6 +11,7 @@ Fisher information here also serves pose planning.
 Depends on the bottom layer and :mod:`ftkin.kinematics` (rotations).
 """
 
+from .conventions import ConventionReport, diagnose_readings
 from .diagnostics import FitDiagnostics
 from .estimate import METHODS, CalibrationResult, calibrate
 from .information import SensorNoise, fisher_information
@@ -21,10 +22,12 @@ __all__ = [
     "METHODS",
     "STANDARD_GRAVITY",
     "CalibrationResult",
+    "ConventionReport",
     "FitDiagnostics",
     "Samples",
     "SensorModel",
     "SensorNoise",
     "calibrate",
+    "diagnose_readings",
     "fisher_information",
 ]

@@ -27,6 +27,7 @@ COMMAND_MODULES = (
     "evaluate-poses",
     "view",
     "simulate",
+    "doctor",
 )
 """Subcommand modules of ``ftkin.cli``, in the order ``--help`` lists them."""
 

@@ -8,7 +8,8 @@ from ..calibration.ml import LOSSES
 from ..calibration.model import STANDARD_GRAVITY
 from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
-from .common import add_samples_arguments, gravity, load_samples_from_args, positive_float
+from .common import add_samples_arguments, arm_from_args, gravity, load_samples_from_args, positive_float
+from .doctor import check_conventions
 
 
 def register(subparsers) -> None:
@@ -40,6 +41,10 @@ def register(subparsers) -> None:
         help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
     )
     ml.add_argument("--drop-outliers", action="store_true", help="refit without the poses flagged as outliers")
+    parser.add_argument(
+        "--no-convention-check", action="store_true",
+        help="do not refit under the common convention mistakes (see 'ftkin doctor')",
+    )
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -56,7 +61,10 @@ def run(args) -> int:
     noise = _noise(args)
     if args.method == "linear" and (noise is not None or args.loss != "linear" or args.drop_outliers):
         raise InvalidInput("--noise-force/--noise-torque, --loss and --drop-outliers apply to --method ml only")
-    loaded = load_samples_from_args(args.samples, args)
+    arm = arm_from_args(args)
+    loaded = load_samples_from_args(args.samples, args, arm=arm)
+    if not args.no_convention_check:
+        check_conventions(loaded, arm)
     result = calibrate(
         loaded.samples, method=args.method, g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers
     )

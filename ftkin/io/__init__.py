@@ -12,9 +12,11 @@ Depends on :mod:`ftkin.calibration` and :mod:`ftkin.kinematics`.
 """
 
 from .calibration_file import load_calibration, save_calibration
+from .conventions import diagnose_samples
 from .samples_csv import load_samples
 
 __all__ = [
+    "diagnose_samples",
     "load_calibration",
     "load_samples",
     "save_calibration",

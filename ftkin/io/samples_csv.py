@@ -15,6 +15,7 @@ Other columns are carried along untouched (``ftkin compensate`` copies them).
 
 from __future__ import annotations
 
+import functools
 import logging
 import re
 from dataclasses import dataclass
@@ -135,6 +136,13 @@ def check_radians(table: Table, columns, values: np.ndarray) -> None:
         )
 
 
+@functools.lru_cache(maxsize=1)
+def _bundled_joint_names() -> tuple[str, ...]:
+    from ..kinematics.arm import Arm
+
+    return tuple(Arm.default().joint_names)
+
+
 def warn_outside_limits(table: Table, columns, values: np.ndarray, arm) -> None:
     """Log one warning per joint column with values outside the arm's position limits, naming the limit."""
     lower, upper = np.asarray(arm.lower_limits, float), np.asarray(arm.upper_limits, float)
@@ -185,7 +193,7 @@ def orientations_from_table(table: Table, arm=None) -> TableOrientations:
     if arm is None and not any(name in table.header for name in EULER_COLUMNS + QUATERNION_COLUMNS):
         arm = Arm.default()
     if arm is None:  # Euler or quaternion columns: joint columns of the bundled arm would be mixed in
-        detect_orientation(table, Arm.default().joint_names)
+        detect_orientation(table, _bundled_joint_names())
     kind, columns = detect_orientation(table, arm.joint_names if arm is not None else None)
     values = table.floats(columns)
     try:
