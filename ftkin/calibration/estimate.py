@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..exceptions import InvalidInput
+from ..kinematics.record import KinematicsRecord
 from ..validation import as_positive
 from .diagnostics import FitDiagnostics
 from .fit_quality import diagnose
@@ -47,6 +48,8 @@ class CalibrationResult(SensorModel):
             the estimator provides one (``ml``), else None.
         diagnostics: Fit quality, outlier poses, observability and warnings
             (:class:`~ftkin.calibration.diagnostics.FitDiagnostics`) for ``ml``, else None.
+        kinematics: How the sensor frame was obtained (robot or URDF, mount, URDF hash:
+            :class:`~ftkin.kinematics.record.KinematicsRecord`), or None when unknown.
     """
 
     method: str = "linear"
@@ -58,6 +61,7 @@ class CalibrationResult(SensorModel):
     sensor_frame: str | None = None
     covariance: np.ndarray | None = None
     diagnostics: FitDiagnostics | None = None
+    kinematics: KinematicsRecord | None = None
 
     @property
     def pose_count(self) -> int:

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+from pathlib import Path
+
 from ..calibration.estimate import METHODS, calibrate
 from ..calibration.information import SensorNoise
 from ..calibration.ml import LOSSES
 from ..calibration.model import STANDARD_GRAVITY
 from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
+from ..kinematics.record import KinematicsRecord
 from .common import add_samples_arguments, arm_from_args, gravity, load_samples_from_args, positive_float
 from .doctor import check_conventions
 
@@ -57,6 +61,15 @@ def _noise(args) -> SensorNoise | None:
     return SensorNoise(args.noise_force, args.noise_torque)
 
 
+def _bundled_if_used(loaded):
+    """The bundled arm when the samples' joint columns were read with it (no arm option given)."""
+    from ..kinematics.arm import Arm, bundled_urdf_path
+
+    if loaded.samples.urdf and Path(loaded.samples.urdf).resolve() == bundled_urdf_path().resolve():
+        return Arm.default()
+    return None
+
+
 def run(args) -> int:
     noise = _noise(args)
     if args.method == "linear" and (noise is not None or args.loss != "linear" or args.drop_outliers):
@@ -68,6 +81,9 @@ def run(args) -> int:
     result = calibrate(
         loaded.samples, method=args.method, g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers
     )
+    samples_arm = getattr(loaded.samples, "urdf", None) and (arm or _bundled_if_used(loaded))
+    if samples_arm is not None:
+        result = replace(result, kinematics=KinematicsRecord.from_arm(samples_arm))
     print(result.summary())
     if args.output:
         save_calibration(result, args.output)

@@ -187,13 +187,19 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
 def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:
     """The arm to read joint angles with when applying ``calibration``.
 
-    The options given win; without any, the URDF and sensor frame recorded in
-    the calibration file are used (when that file still exists), so a log is
-    compensated with the kinematics it was calibrated with. Returns None when
-    nothing is named or recorded (the bundled arm is then used on demand).
+    The options given win; without any, the arm recorded in the calibration
+    file (robot or URDF, sensor parent and offset) is rebuilt, so a log is
+    compensated with the kinematics it was calibrated with; older files give
+    their URDF and sensor frame. Returns None when nothing is named or
+    recorded (the bundled arm is then used on demand).
     """
     arm = arm_from_args(args)
-    if arm is not None or not calibration.urdf:
+    if arm is not None:
+        return arm
+    record = getattr(calibration, "kinematics", None)
+    if record is not None:  # the calibration says how its sensor frame was obtained: no options to repeat
+        return record.build_arm(list(getattr(args, "package_dir", None) or []))
+    if not calibration.urdf:
         return arm
     recorded = Path(calibration.urdf)
     if not recorded.is_file() or recorded.resolve() == bundled_urdf_path().resolve():

@@ -21,15 +21,21 @@ def register(subparsers) -> None:
     parser.add_argument("calibration", metavar="CALIB.json")
     parser.add_argument("log", metavar="LOG.csv")
     parser.add_argument("-o", "--output", metavar="OUT.csv", required=True)
+    parser.add_argument(
+        "--allow-other-arm", action="store_true",
+        help="accept robot options that differ from the arm recorded in the calibration (deliberate reuse)",
+    )
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
-    loaded = load_samples_from_args(args.log, args, static_only=False, arm=arm_for_calibration(args, calibration))
+    arm = arm_for_calibration(args, calibration)
+    compensator = Compensator(calibration, arm, allow_other_arm=args.allow_other_arm)  # checks arm against the record
+    loaded = load_samples_from_args(args.log, args, static_only=False, arm=arm)
     warn_if_kinematics_differ(loaded, calibration)
-    contact = Compensator(calibration).compensate_samples(loaded.samples)
+    contact = compensator.compensate_samples(loaded.samples)
     table = loaded.table
     wrench_columns = [table.column_index(name) for name in WRENCH_CHANNELS]
     rows = []

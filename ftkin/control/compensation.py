@@ -26,12 +26,26 @@ class Compensator:
         calibration: Parameters (a :class:`~ftkin.calibration.CalibrationResult`
             or any :class:`~ftkin.calibration.model.SensorModel`).
         arm: Kinematics for the joint-angle entry points; not needed when the
-            caller supplies ``R_BS`` itself.
+            caller supplies ``R_BS`` itself. When the calibration records the
+            arm it was made with (``calibration.kinematics``), ``arm`` must be
+            that arm: same URDF (SHA-256), sensor frame and mount.
+        allow_other_arm: Accept an arm that differs from the recorded one (deliberate reuse).
+
+    Raises:
+        InvalidInput: ``arm`` differs from the calibration's record (the message says how).
     """
 
-    def __init__(self, calibration: SensorModel, arm: Arm | None = None):
+    def __init__(self, calibration: SensorModel, arm: Arm | None = None, *, allow_other_arm: bool = False):
         if not isinstance(calibration, SensorModel):
             raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
+        record = getattr(calibration, "kinematics", None)
+        if arm is not None and record is not None and not allow_other_arm:
+            problems = record.mismatches(arm)
+            if problems:
+                raise InvalidInput(
+                    "this arm is not the one the calibration was made with (" + record.describe() + "): "
+                    + "; ".join(problems) + ". Pass allow_other_arm=True (ftkin compensate: --allow-other-arm) if that is deliberate."
+                )
         self.calibration = calibration
         self.arm = arm
         self._gravity_in_base = np.array(calibration.gravity_in_base)
@@ -42,6 +56,14 @@ class Compensator:
         self._com_floats = tuple(self._com.tolist())
         self._bias_floats = tuple(self._bias.tolist())
         self._q_shape = (arm.nq,) if arm is not None else None
+
+    def __repr__(self) -> str:
+        calibration = self.calibration
+        arm = "none" if self.arm is None else f"{self.arm.sensor_frame} of {getattr(self.arm.urdf_path, 'name', '?')}"
+        return (
+            f"Compensator(tool {calibration.tool_weight:.4g} N, COM {np.round(calibration.center_of_mass, 4).tolist()} m, "
+            f"bias {np.round(calibration.bias, 4).tolist()} [N, N·m], arm {arm})"
+        )
 
     def _require_arm(self) -> Arm:
         if self.arm is None:

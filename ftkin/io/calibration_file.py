@@ -10,7 +10,9 @@ Keys (units): ``force_offset`` [N], ``torque_offset`` [N·m],
 values), ``diagnostics`` (``ml`` only, else absent: noise used, chi-square,
 per-pose normalized residuals, outliers, condition number, warnings; see
 :class:`~ftkin.calibration.diagnostics.FitDiagnostics`), ``created`` (UTC, ISO 8601),
-``ftkin_version``. Files without ``covariance``/``diagnostics`` (written by
+``ftkin_version``; ``kinematics`` (how the sensor frame was obtained: robot or URDF
+path, its SHA-256, sensor parent and offset, see :class:`~ftkin.kinematics.record.KinematicsRecord`;
+absent when unknown). Files without ``covariance``/``diagnostics`` (written by
 ``linear`` or an older ftkin) load with those set to None.
 
 Floats are written with Python's shortest round-trip repr, so
@@ -29,6 +31,7 @@ import numpy as np
 from ..calibration.diagnostics import FitDiagnostics
 from ..calibration.estimate import CalibrationResult
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
+from ..kinematics.record import KinematicsRecord
 from .atomic import atomic_write_text
 from .calibration_checks import check_covariance, check_derived, has_bool, parse_calibration_json, short_repr
 
@@ -96,6 +99,7 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         "covariance": result.covariance,
         "std_errors": _std_errors_document(result),
         **({"diagnostics": result.diagnostics.to_dict()} if result.diagnostics is not None else {}),
+        **({"kinematics": result.kinematics.to_dict()} if result.kinematics is not None else {}),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "ftkin_version": __version__,
     }
@@ -193,6 +197,16 @@ def _diagnostics(reader: _Reader) -> FitDiagnostics | None:
         reader.fail(f"malformed: {str(error)[:200]}", "diagnostics")
 
 
+def _kinematics(reader: _Reader) -> KinematicsRecord | None:
+    data = reader.get("kinematics", required=False)
+    if data is None:
+        return None
+    try:
+        return KinematicsRecord.from_dict(data)
+    except FtkinError as error:
+        reader.fail(f"malformed: {error}", "kinematics")
+
+
 def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationResult:
     """Rebuild a :class:`CalibrationResult` from a parsed calibration document."""
     if not isinstance(document, dict):
@@ -246,6 +260,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             sensor_frame=sensor_frame,
             covariance=reader.array("covariance", (12, 12), required=False),
             diagnostics=_diagnostics(reader),
+            kinematics=_kinematics(reader),
         )
     except (ValueError, TypeError) as error:
         raise CalibrationFileError(path, str(error)) from None

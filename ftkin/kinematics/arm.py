@@ -102,6 +102,8 @@ class Arm:
         self._locked_joint_ids = list(locked_joint_ids)
         self._reference_configuration = reference_configuration
         self.joint_names = [model.names[i] for i in range(1, model.njoints)]
+        self.sensor_mount: SensorMount | None = None  # set by from_urdf when the sensor frame was added
+        self.robot_name: str | None = None  # set by load_robot
         self._geometry: dict[str, pin.GeometryModel] = {}
 
     # ----------------------------------------------------------------- loading
@@ -139,7 +141,9 @@ class Arm:
         full_model, locked_ids, reference = None, [], None
         if locked_joints:
             full_model, model, locked_ids, reference = _lock_joints(model, locked_joints)
-        return cls(model, sensor_frame, tool_frame, path.resolve(), package_dirs, full_model, locked_ids, reference)
+        arm = cls(model, sensor_frame, tool_frame, path.resolve(), package_dirs, full_model, locked_ids, reference)
+        arm.sensor_mount = sensor_mount
+        return arm
 
     @classmethod
     def default(cls, tool_frame: str | None = "tool") -> Arm:

@@ -160,4 +160,6 @@ def load_robot(name: str, sensor_offset: Sequence[float] | SensorMount | None = 
     """
     if name not in ROBOTS:
         raise InvalidInput(f"unknown robot {name!r}; known robots: {', '.join(sorted(ROBOTS))}")
-    return ROBOTS[name](sensor_offset, tool_frame)
+    arm = ROBOTS[name](sensor_offset, tool_frame)
+    arm.robot_name = name
+    return arm

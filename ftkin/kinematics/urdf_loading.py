@@ -87,6 +87,10 @@ def yourdfpy_reasons(text: str, check_meshes: bool = False) -> list[str]:
     return reasons
 
 
+_XML_COMMENT = re.compile(r"<!--.*?-->", re.DOTALL)
+_XACRO_MARK = re.compile(r"<xacro:|\$\{|\$\(")  # macros, properties, substitution args
+
+
 def read_urdf_text(path: Path) -> str:
     """Read a URDF file or raise :class:`UrdfError` (missing, unreadable, not text)."""
     if not path.is_file():
@@ -95,7 +99,7 @@ def read_urdf_text(path: Path) -> str:
         text = path.read_text()
     except (OSError, UnicodeDecodeError) as error:
         raise UrdfError(str(path), [f"cannot read file: {error}"]) from None
-    if path.name.endswith(".xacro") or "<xacro:" in text or "${" in text:
+    if path.name.endswith(".xacro") or _XACRO_MARK.search(_XML_COMMENT.sub("", text)):
         raise UrdfError(
             str(path),
             [f"this is a xacro file, not a URDF: run xacro first (xacro {path.name} > robot.urdf) and give the result"],
