@@ -62,17 +62,27 @@ class FrameNotFound(FtkinError, KeyError):
     Attributes:
         name: The name that was asked for.
         available: Names of the frames the model has.
+        hint: What to do about it (e.g. how to add a missing sensor frame), or "".
     """
 
-    def __init__(self, name: str, available: Sequence[str]):
+    def __init__(self, name: str, available: Sequence[str], hint: str = ""):
         self.name = name
         self.available = list(available)
+        self.hint = hint
         super().__init__(name)
 
     def __str__(self) -> str:
-        return f"frame {self.name!r} not found in the model; available frames: " + ", ".join(
-            self.available
-        )
+        import difflib
+
+        close = difflib.get_close_matches(self.name, self.available, n=1, cutoff=0.6)
+        lowered = [frame for frame in self.available if frame.lower() == self.name.lower()]
+        suggestion = (lowered or close or [None])[0]
+        text = f"frame {self.name!r} not found in the model"
+        if suggestion is not None:
+            text += f"; did you mean {suggestion!r}?"
+        elif self.hint:
+            text += f"; {self.hint}"
+        return text + "; available frames: " + ", ".join(self.available)
 
 
 class UrdfError(FtkinError):

@@ -85,10 +85,32 @@ def main(argv=None) -> int:
     """
     stdout = sys.stdout
     sys.stdout = _QuietPipe(stdout)
+    once = _OnceFilter()
+    fit_log = logging.getLogger("ftkin.calibration.fit_quality")
+    fit_log_disabled = fit_log.disabled
+    fit_log.disabled = True  # every command that fits prints the summary, which lists these warnings
     try:
-        return _run(argv)
+        return _run(argv, once)
     finally:
         sys.stdout = stdout
+        fit_log.disabled = fit_log_disabled
+        for handler in logging.getLogger().handlers:
+            handler.removeFilter(once)
+
+
+class _OnceFilter(logging.Filter):
+    """Let each warning text through once per command."""
+
+    def __init__(self):
+        super().__init__()
+        self.seen: set[str] = set()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        text = record.getMessage()
+        if text in self.seen:
+            return False
+        self.seen.add(text)
+        return True
 
 
 class _QuietPipe:
@@ -121,7 +143,7 @@ class _QuietPipe:
         return getattr(self._stream, name)
 
 
-def _run(argv) -> int:
+def _run(argv, once: logging.Filter) -> int:
     try:
         from .common import join_number_lists
 
@@ -131,6 +153,8 @@ def _run(argv) -> int:
         except SystemExit as exit_:  # usage errors and --help: an exit code, as every other outcome
             return exit_.code if isinstance(exit_.code, int) else 2
         logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="ftkin: %(message)s")
+        for handler in logging.getLogger().handlers:
+            handler.addFilter(once)
         if not getattr(args, "func", None):
             parser.print_help()
             return 2

@@ -60,6 +60,9 @@ def expectation_from_args(args) -> dict:
     }
 
 
+DEFAULT_FLOOR_HEIGHT = 0.05
+"""Default floor for plans [m, base z]: the base plane plus a 5 cm margin."""
+
 MAX_PLAN_POSES = 500
 """Largest ``plan --n``: beyond a few dozen poses the standard errors only fall as 1/√n."""
 
@@ -77,6 +80,16 @@ def pose_count(text: str) -> int:
             f"plan between 3 and {MAX_PLAN_POSES} poses, got {text}: beyond a few dozen poses the standard errors "
             "only fall as 1/√n (average readings with --readings-per-pose instead)"
         )
+    return value
+
+
+def _floor(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a height in metres, got {text!r}") from None
+    if not np.isfinite(value) or abs(value) > 100.0:
+        raise argparse.ArgumentTypeError(f"expected a finite height within ±100 m, got {text!r}")
     return value
 
 
@@ -114,8 +127,10 @@ def register(subparsers) -> None:
     group = parser.add_argument_group("constraints")
     group.add_argument("--margin", type=non_negative_float, default=DEFAULT_MARGIN, metavar="RAD",
                        help="distance kept from the joint limits [rad] (default: %(default)s)")
-    group.add_argument("--floor-height", type=float, default=None, metavar="M",
-                       help="sensor and tool origins stay above this height in the base frame [m]")
+    group.add_argument("--floor-height", type=_floor, default=DEFAULT_FLOOR_HEIGHT, metavar="M",
+                       help="sensor and tool origins stay above this height in the base frame [m] (default: %(default)s, "
+                       "a floor at base z = 0 with a 5 cm margin)")
+    group.add_argument("--no-floor", action="store_true", help="no floor constraint (an arm mounted on a wall or ceiling)")
     group.add_argument("--max-tilt-deg", type=non_negative_float, default=None, metavar="DEG",
                        help="largest angle of the tool axis from pointing straight down [deg]")
     group.add_argument("--joint-range", type=joint_range, action="append", default=[], metavar="NAME:LO:HI",
@@ -141,7 +156,7 @@ def run(args) -> int:
     max_tilt = None if args.max_tilt_deg is None else float(np.deg2rad(args.max_tilt_deg))
     try:
         plan = plan_poses(
-            arm, args.n, margin=args.margin, floor_height=args.floor_height, max_tilt=max_tilt,
+            arm, args.n, margin=args.margin, floor_height=None if args.no_floor else args.floor_height, max_tilt=max_tilt,
             joint_ranges=args.joint_range, self_collision=not args.no_self_collision, seed=args.seed,
             **expectation_from_args(args),
         )

@@ -62,6 +62,13 @@ class SensorMount:
         return pin.SE3(pin.rpy.rpyToMatrix(*rpy), translation)
 
 
+def last_link(model: pin.Model) -> str:
+    """The link at the end of the chain: the last body frame on the last joint (e.g. ``tool0``, ``wrist_3_link``)."""
+    last_joint = model.njoints - 1
+    bodies = [frame.name for frame in model.frames if frame.parentJoint == last_joint]
+    return bodies[-1] if bodies else model.frames[len(model.frames) - 1].name
+
+
 class Arm:
     """A serial arm with a wrist F/T sensor frame (and optionally a tool frame).
 
@@ -72,6 +79,11 @@ class Arm:
         urdf_path: The URDF the model came from.
         joint_names: Names of the configuration's joints, in ``q`` order.
     """
+
+    def __repr__(self) -> str:
+        name = self.robot_name or (self.urdf_path.name if self.urdf_path is not None else "model")
+        tool = f", tool frame {self.tool_frame!r}" if self.tool_frame else ""
+        return f"Arm({name}: {self.nq} joints, sensor frame {self.sensor_frame!r}{tool})"
 
     def __init__(
         self,
@@ -93,7 +105,15 @@ class Arm:
         self.model = model
         self.data = model.createData()
         self.sensor_frame = sensor_frame
-        self.sensor_frame_id = self.frame_id(sensor_frame)
+        try:
+            self.sensor_frame_id = self.frame_id(sensor_frame)
+        except FrameNotFound as error:
+            last = last_link(model)
+            raise FrameNotFound(
+                error.name, error.available,
+                f"if the URDF has no sensor frame, add it at the link the sensor is bolted to, e.g. --sensor-parent {last} "
+                f"(and --sensor-offset X Y Z [m]; in Python sensor_mount=SensorMount({last!r}, ...))",
+            ) from None
         self.tool_frame = tool_frame
         self.tool_frame_id = self.frame_id(tool_frame) if tool_frame is not None else None
         self.urdf_path = urdf_path
