@@ -46,6 +46,10 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     ``--sensor-frame`` or ``--tool-frame`` that the model lacks is a
     :class:`~ftkin.exceptions.FrameNotFound` listing its frames.
     """
+    for option in ("urdf", "robot", "sensor_frame", "tool_frame", "sensor_parent"):
+        value = getattr(args, option, None)
+        if value is not None and not str(value).strip():
+            raise InvalidInput(f"--{option.replace('_', '-')} is empty; give a name or leave the option out")
     if getattr(args, "urdf", None) and getattr(args, "robot", None):
         raise InvalidInput("give either --urdf or --robot, not both")
     offset = getattr(args, "sensor_offset", None)
@@ -135,6 +139,25 @@ def number_list(text: str) -> list[float]:
             raise argparse.ArgumentTypeError(f"expected a finite number, got {part!r}")
         values.append(value)
     return values
+
+
+def bounded_int(low: int, high: int, what: str):
+    """argparse type factory: a whole number in ``[low, high]``, the message naming ``what``."""
+
+    def convert(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number of {what}, got {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected {low} to {high:,} {what}, got {text}")
+        return value
+
+    return convert
+
+
+seed = bounded_int(0, 2**63 - 1, "(random seed, ≥ 0)")
+"""argparse type: a random seed, 0 to 2**63 - 1."""
 
 
 def gravity(text: str) -> float:

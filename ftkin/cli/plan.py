@@ -17,7 +17,7 @@ from ..kinematics.arm import Arm
 from ..planning.constraints import DEFAULT_MARGIN
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT
 from ..planning.plan import plan_poses
-from .common import add_arm_arguments, arm_from_args, non_negative_float, positive_float
+from .common import add_arm_arguments, arm_from_args, non_negative_float, positive_float, seed
 
 FORMATS = ("csv", "yaml", "json")
 
@@ -136,7 +136,7 @@ def register(subparsers) -> None:
     group.add_argument("--joint-range", type=joint_range, action="append", default=[], metavar="NAME:LO:HI",
                        help="extra range for one joint [rad]; repeat for several joints")
     group.add_argument("--no-self-collision", action="store_true", help="do not check self-collision")
-    parser.add_argument("--seed", type=int, default=0, help="random seed; the same seed gives the same plan (default: 0)")
+    parser.add_argument("--seed", type=seed, default=0, help="random seed; the same seed gives the same plan (default: 0)")
     add_expectation_arguments(parser)
     add_arm_arguments(parser)
     parser.set_defaults(func=run)
