@@ -124,7 +124,7 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
 
 
 def check_radians(table: Table, columns, values: np.ndarray) -> None:
-    """Refuse joint angles that can only be degrees (|q| > 2π)."""
+    """Refuse joint angles that can only be degrees (``|q| > 2π``)."""
     bad = np.argwhere(np.abs(values) > _DEGREES_THRESHOLD)
     if bad.size:
         row, column = bad[0]
