@@ -17,7 +17,7 @@ from ..exceptions import InvalidInput, UnobservableParameters
 from ..validation import as_float_array, as_rotation_batch, check_finite
 from .model import COMPONENT_NAMES, SensorModel
 
-NOISE_RANGE = (1e-9, 1e6)
+NOISE_RANGE = (1e-15, 1e6)
 """Accepted noise standard deviations per reading [N, N·m]: beyond them 1/σ² leaves the float range's useful part."""
 
 
