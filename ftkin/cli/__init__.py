@@ -89,7 +89,7 @@ def main(argv=None) -> int:
     """
     stdout = sys.stdout
     sys.stdout = _QuietPipe(stdout)
-    once = _OnceFilter()
+    once: dict[logging.Handler, _OnceFilter] = {}  # one filter per handler: each handler sees each record once
     fit_log = logging.getLogger("ftkin.calibration.fit_quality")
     fit_log_disabled = fit_log.disabled
     fit_log.disabled = True  # every command that fits prints the summary, which lists these warnings
@@ -98,8 +98,8 @@ def main(argv=None) -> int:
     finally:
         sys.stdout = stdout
         fit_log.disabled = fit_log_disabled
-        for handler in logging.getLogger().handlers:
-            handler.removeFilter(once)
+        for handler, once_filter in once.items():
+            handler.removeFilter(once_filter)
 
 
 class _OnceFilter(logging.Filter):
@@ -147,7 +147,7 @@ class _QuietPipe:
         return getattr(self._stream, name)
 
 
-def _run(argv, once: logging.Filter) -> int:
+def _run(argv, once: dict) -> int:
     try:
         from .common import join_number_lists
 
@@ -158,7 +158,8 @@ def _run(argv, once: logging.Filter) -> int:
             return exit_.code if isinstance(exit_.code, int) else 2
         logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="ftkin: %(message)s")
         for handler in logging.getLogger().handlers:
-            handler.addFilter(once)
+            once[handler] = _OnceFilter()
+            handler.addFilter(once[handler])
         if not getattr(args, "func", None):
             parser.print_help()
             return 2

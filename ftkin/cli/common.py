@@ -156,8 +156,17 @@ def bounded_int(low: int, high: int, what: str):
     return convert
 
 
-seed = bounded_int(0, 2**63 - 1, "(random seed, ≥ 0)")
-"""argparse type: a random seed, 0 to 2**63 - 1."""
+def seed(text: str) -> int:
+    """argparse type: a random seed, 0 to 2**63 - 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"the seed must be at least 0, got {text}")
+    if value >= 2**63:
+        raise argparse.ArgumentTypeError(f"the seed must be below 2**63, got {text}")
+    return value
 
 
 def gravity(text: str) -> float:

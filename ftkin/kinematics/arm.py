@@ -16,7 +16,7 @@ import pinocchio as pin
 
 from ..exceptions import FrameNotFound, InvalidInput, UrdfError
 from ..validation import as_batch, as_vector
-from .urdf_loading import build_geometry, build_model
+from .urdf_loading import build_geometry, build_model, sensor_frame_hint
 
 BUNDLED_URDF_NAME = "ftkin_c4.urdf"
 
@@ -62,13 +62,6 @@ class SensorMount:
         return pin.SE3(pin.rpy.rpyToMatrix(*rpy), translation)
 
 
-def last_link(model: pin.Model) -> str:
-    """The link at the end of the chain: the last body frame on the last joint (e.g. ``tool0``, ``wrist_3_link``)."""
-    last_joint = model.njoints - 1
-    bodies = [frame.name for frame in model.frames if frame.parentJoint == last_joint]
-    return bodies[-1] if bodies else model.frames[len(model.frames) - 1].name
-
-
 class Arm:
     """A serial arm with a wrist F/T sensor frame (and optionally a tool frame).
 
@@ -108,12 +101,7 @@ class Arm:
         try:
             self.sensor_frame_id = self.frame_id(sensor_frame)
         except FrameNotFound as error:
-            last = last_link(model)
-            raise FrameNotFound(
-                error.name, error.available,
-                f"if the URDF has no sensor frame, add it at the link the sensor is bolted to, e.g. --sensor-parent {last} "
-                f"(and --sensor-offset X Y Z [m]; in Python sensor_mount=SensorMount({last!r}, ...))",
-            ) from None
+            raise FrameNotFound(error.name, error.available, sensor_frame_hint(model)) from None
         self.tool_frame = tool_frame
         self.tool_frame_id = self.frame_id(tool_frame) if tool_frame is not None else None
         self.urdf_path = urdf_path
