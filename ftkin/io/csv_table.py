@@ -101,7 +101,7 @@ def read_table(path) -> Table:
     except FileNotFoundError:
         raise InvalidSamples("file not found", source) from None
     except IsADirectoryError:
-        raise InvalidSamples("is a folder; expected a CSV file", source) from None
+        raise InvalidSamples("is a folder; expected a CSV file (or a ROS 2 bag folder with metadata.yaml)", source) from None
     except UnicodeDecodeError as error:
         raise InvalidSamples(f"not UTF-8 text (a binary file?): {error.reason} at byte {error.start}", source) from None
     except OSError as error:

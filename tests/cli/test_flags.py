@@ -63,3 +63,34 @@ def test_xacro_is_named(tmp_path, capsys):
     hidden = tmp_path / "arm.urdf"
     hidden.write_text(xacro.read_text())
     _usage_error(["plan", "-n", "3", "--urdf", hidden], capsys, "run xacro first")
+
+
+@pytest.mark.parametrize(
+    "argv, pattern",
+    [
+        (["demo", "--poses", "-1"], "expected 3 to 1,000 poses"),
+        (["demo", "--poses", "100000000000000"], "expected 3 to 1,000 poses"),
+        (["demo", "--readings", "0"], "readings per pose"),
+        (["demo", "--seed", "-5"], "the seed must be at least 0"),
+        (["plan", "-n", "3", "--seed", str(2**64)], "the seed must be below 2**63"),
+        (["simulate", "placement", "--dt", "1e-12"], "at most 1,000,000"),
+        (["simulate", "placement", "--duration", "1e9"], "at most 1,000,000"),
+        (["plan", "-n", "3", "--floor-height", "nan"], "finite height"),
+    ],
+)
+def test_sizes_and_seeds_are_bounded(argv, pattern, capsys):
+    _usage_error(argv, capsys, pattern)
+
+
+@pytest.mark.parametrize(
+    "argv, pattern",
+    [
+        (["calibrate", ""], "the samples file name is empty"),
+        (["calibrate", "s.csv", "--urdf", ""], "the urdf file name is empty"),
+        (["calibrate", "s.csv", "--robot", " "], "--robot is empty"),
+        (["plan", "-n", "3", "--sensor-frame", ""], "--sensor-frame is empty"),
+        (["compensate", "", "s.csv", "-o", "x.csv"], "the calibration file name is empty"),
+    ],
+)
+def test_empty_names_are_refused(argv, pattern, capsys):
+    _usage_error(argv, capsys, pattern)
