@@ -80,7 +80,8 @@ class ConventionReport:
 
     Attributes:
         fits: One per reading; the first is the data as given.
-        verdict: ``"ok"``, ``"suspect"`` (warn) or ``"mistake"`` (refuse).
+        verdict: ``"ok"``, ``"suspect"`` (warn), ``"mistake"`` (refuse), or ``"undetermined"`` (the data
+            cannot be fitted under any reading, e.g. too few poses: the fit itself says why).
         culprit: The alternative that explains the data, when the verdict is not ok.
         reason: One sentence of evidence for the verdict.
     """
@@ -213,7 +214,7 @@ def diagnose_readings(readings: list[Reading]) -> ConventionReport:
     fits = _fit_all(readings)
     valid = [fit for fit in fits if fit.rss is not None]
     if not valid:
-        return ConventionReport(tuple(fits), "ok", None, "no reading could be fitted")
+        return ConventionReport(tuple(fits), "undetermined", None, "no reading could be fitted: " + (fits[0].failure or "?"))
     channel_dof = max(len(valid[0].reading.poses) - 2, 1)
     scale = max(float(np.max(np.abs(valid[0].reading.poses.wrenches * valid[0].reading.unit_scale))), 1e-12)
     floor = (1e-9 * scale) ** 2
@@ -241,7 +242,7 @@ def _verdict(fits: tuple[ReadingFit, ...]) -> ConventionReport:
             )
             return ConventionReport(fits, verdict, best, reason)
     if given.model is None:
-        return ConventionReport(fits, "ok", None, f"the data as given cannot be fitted: {given.failure}")
+        return ConventionReport(fits, "undetermined", None, f"the data as given cannot be fitted: {given.failure}")
     return _plausibility(fits, given, alternatives)
 
 

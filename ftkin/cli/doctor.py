@@ -31,8 +31,8 @@ def run(args) -> int:
     report = diagnose_table(table, arm_from_args(args))
     print(f"{args.samples}: {len(table.rows)} readings; linear fit under each reading (chi² with the noise of the best):")
     print(report.table())
-    if report.verdict == "ok":
-        print(f"verdict: ok, {report.reason}")
+    if report.verdict in ("ok", "undetermined"):
+        print(f"verdict: {report.verdict}: {report.reason}")
         return 0
     print(f"verdict: {report.verdict}: {report.message}")
     return 1 if report.verdict == "mistake" else 0
