@@ -189,6 +189,9 @@ def _diagnostics(reader: _Reader) -> FitDiagnostics | None:
         return None
     if not isinstance(data, dict):
         reader.fail(f"expected an object, got {type(data).__name__}", "diagnostics")
+    flags = [key for key, value in data.items() if has_bool(value)]
+    if flags:
+        reader.fail(f"{flags[0]!r} holds a boolean; true/false are not numbers", "diagnostics")
     try:
         return FitDiagnostics.from_dict(data)
     except KeyError as error:

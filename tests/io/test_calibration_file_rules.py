@@ -90,3 +90,8 @@ def test_negative_counts_are_refused(document, tmp_path, key):
 def test_non_finite_literals_name_the_key(document, tmp_path):
     _refused(tmp_path, document, lambda d: d.__setitem__("g", float("nan")), "g", "finite number")  # written as NaN
     _refused(tmp_path, document, None, "g", "finite number", raw=json.dumps(document)[:-1].replace('"g": 9', '"g": 1e999, "_": 9') + "}")
+
+
+def test_booleans_in_diagnostics_are_not_numbers(document, tmp_path):
+    _refused(tmp_path, document, lambda d: d["diagnostics"].__setitem__("chi_square", True), "diagnostics",
+             "'chi_square' holds a boolean")
