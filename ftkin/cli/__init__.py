@@ -168,13 +168,21 @@ def _run(argv, once: dict) -> int:
         sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
         return code
     except FtkinError as error:
-        print(f"ftkin: error: {error}", file=sys.stderr)
+        _say(f"ftkin: error: {error}")
         return 2
     except KeyboardInterrupt:
-        print("ftkin: interrupted", file=sys.stderr)
+        _say("ftkin: interrupted")
         return 130
     except Exception as error:  # the guard: no traceback ever reaches a user
         return _unexpected(error)
+
+
+def _say(text: str) -> None:
+    """One line on stderr; a closed stderr is not an error of its own."""
+    try:
+        print(text, file=sys.stderr)
+    except (OSError, ValueError):
+        pass
 
 
 def _unexpected(error: Exception) -> int:
@@ -189,7 +197,7 @@ def _unexpected(error: Exception) -> int:
     }
     reason = next((text for kind, text in kinds.items() if isinstance(error, kind)), "unexpected internal error")
     logging.getLogger("ftkin.cli").info("details", exc_info=error)
-    print(f"ftkin: error: {reason} ({type(error).__name__}: {str(error)[:200]})", file=sys.stderr)
+    _say(f"ftkin: error: {reason} ({type(error).__name__}: {str(error)[:200]})")
     return 2 if reason != "unexpected internal error" else 3
 
 
