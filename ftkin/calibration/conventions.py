@@ -14,6 +14,9 @@ the data:
   suspicion (warned, not refused). Residuals of a reading in other units are
   converted back to the given units first, so a change of unit alone never
   looks like a better fit.
+* **explained variation**: a reading is only named when its fit explains at
+  least :data:`EXPLAINED` of the variation across poses (pure noise is never
+  "explained" by some convention).
 * **plausibility** (readings that fit exactly as well, by construction): a
   centre of mass metres away that becomes millimetres when the torques are
   read as N·mm; a tool that weighs nothing as given but the expected weight
@@ -40,6 +43,8 @@ MISTAKE_RATIO = 20.0
 """Chi-square ratio (given / alternative) from which the alternative is named as the mistake."""
 SUSPECT_RATIO = 4.0
 """Chi-square ratio from which the alternative is a suspicion (a warning)."""
+EXPLAINED = (0.5, 0.8)
+"""Share of the variation a reading must explain to be a suspicion, and to be named as the mistake."""
 FAR_COM = (0.5, 2.0)
 """Centre-of-mass distance [m]: beyond the first a suspicion, beyond the second implausible."""
 
@@ -65,13 +70,18 @@ class Reading:
 
 @dataclass(frozen=True)
 class ReadingFit:
-    """The linear fit of one reading: model, residual sum of squares per channel (given units), or why it failed."""
+    """The linear fit of one reading: model, residual sum of squares per channel (given units), or why it failed.
+
+    ``explained`` is the share of the variation across poses that the fit explains, the smaller of the
+    force and the torque channels' (1: all of it; a reading that explains little is never named).
+    """
 
     reading: Reading
     model: SensorModel | None
     rss: np.ndarray | None
     chi_square: float = np.inf
     failure: str | None = None
+    explained: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -187,7 +197,10 @@ def _fit_group(readings: list[Reading], g: float = STANDARD_GRAVITY) -> list[Rea
             fits.append(ReadingFit(reading, None, None, failure="non-finite residuals"))
             continue
         model = SensorModel(force_offset, torque_offset, gravity_in_base, center_of_mass, g)
-        fits.append(ReadingFit(reading, model, np.sum(residuals**2, axis=0)))
+        rss = np.sum(residuals**2, axis=0)
+        spread = np.sum(((measured - measured.mean(axis=0)) * reading.unit_scale) ** 2, axis=0)
+        explained = min(1.0 - rss[:3].sum() / max(spread[:3].sum(), 1e-300), 1.0 - rss[3:].sum() / max(spread[3:].sum(), 1e-300))
+        fits.append(ReadingFit(reading, model, rss, explained=float(explained)))
     return fits
 
 
@@ -222,7 +235,8 @@ def diagnose_readings(readings: list[Reading]) -> ConventionReport:
     best = min(valid, key=lambda fit: float(np.sum(np.log(fit.rss / channel_dof + floor))))
     variance = best.rss / channel_dof + floor
     fits = [
-        fit if fit.rss is None else ReadingFit(fit.reading, fit.model, fit.rss, float(np.sum(fit.rss / variance)))
+        fit if fit.rss is None
+        else ReadingFit(fit.reading, fit.model, fit.rss, float(np.sum(fit.rss / variance)), explained=fit.explained)
         for fit in fits
     ]
     return _verdict(tuple(fits))
@@ -230,12 +244,15 @@ def diagnose_readings(readings: list[Reading]) -> ConventionReport:
 
 def _verdict(fits: tuple[ReadingFit, ...]) -> ConventionReport:
     given, alternatives = fits[0], [fit for fit in fits[1:] if fit.model is not None]
-    plausible = [fit for fit in alternatives if np.linalg.norm(fit.model.center_of_mass) < FAR_COM[0]]
+    plausible = [
+        fit for fit in alternatives
+        if np.linalg.norm(fit.model.center_of_mass) < FAR_COM[0] and fit.explained >= EXPLAINED[0]
+    ]
     if plausible:
         best = min(plausible, key=lambda fit: fit.chi_square)
         ratio = given.chi_square / max(best.chi_square, 1e-300)
         if ratio >= SUSPECT_RATIO:
-            verdict = "mistake" if ratio >= MISTAKE_RATIO else "suspect"
+            verdict = "mistake" if ratio >= MISTAKE_RATIO and best.explained >= EXPLAINED[1] else "suspect"
             reason = (
                 "the data as given cannot be fitted" if given.model is None
                 else f"{ratio:.3g} times smaller chi-square than as given"
@@ -250,12 +267,12 @@ def _plausibility(fits, given: ReadingFit, alternatives) -> ConventionReport:
     by_name = {fit.reading.name: fit for fit in alternatives}
     distance = float(np.linalg.norm(given.model.center_of_mass))
     millimetres = by_name.get("torques in N·mm")
-    if millimetres is not None and distance >= FAR_COM[0]:
-        verdict = "mistake" if distance >= FAR_COM[1] else "suspect"
+    if millimetres is not None and distance >= FAR_COM[0] and given.explained >= EXPLAINED[0]:
+        verdict = "mistake" if distance >= FAR_COM[1] and given.explained >= EXPLAINED[1] else "suspect"
         reason = f"the centre of mass would be {distance:.3g} m from the sensor, {distance:.3g} mm in N·mm"
         return ConventionReport(fits, verdict, millimetres, reason)
     base = by_name.get("the wrench in the base frame")
-    if base is not None and given.model.tool_weight < 0.05 * base.model.tool_weight:
+    if base is not None and given.model.tool_weight < 0.05 * base.model.tool_weight and base.explained >= EXPLAINED[1]:
         ratio = given.chi_square / max(base.chi_square, 1e-300)
         if ratio >= 0.5:
             reason = (
@@ -263,7 +280,8 @@ def _plausibility(fits, given: ReadingFit, alternatives) -> ConventionReport:
             )
             return ConventionReport(fits, "mistake", base, reason)
     reaction = by_name.get("the readings negated (the reaction)")
-    if reaction is not None and given.model.gravity_in_base[2] > 0 > reaction.model.gravity_in_base[2]:
+    if (reaction is not None and given.explained >= EXPLAINED[1]
+            and given.model.gravity_in_base[2] > 0 > reaction.model.gravity_in_base[2]):
         reason = "gravity points up in the base frame as given (or the arm hangs from a ceiling)"
         return ConventionReport(fits, "suspect", reaction, reason)
     return ConventionReport(fits, "ok", None, "no alternative reading fits better")

@@ -162,3 +162,17 @@ def test_too_few_poses_is_undetermined_not_ok(tmp_path, capsys):
     path.write_text("alpha,beta,gamma,fx,fy,fz,mx,my,mz\n0,0,0,1,2,3,0.1,0.2,0.3\n10,0,0,1,2,3,0.1,0.2,0.3\n")
     assert main(["doctor", str(path)]) == 0
     assert "verdict: undetermined: no reading could be fitted: fewer than 3 poses" in capsys.readouterr().out
+
+
+def test_pure_noise_is_never_explained_by_a_convention(arm):
+    """Readings without any structure: no convention may be named (nothing explains noise)."""
+    rng = np.random.default_rng(77)
+    named = []
+    for _ in range(100):
+        count = int(rng.integers(3, 15))
+        wrenches = rng.normal(size=(count, 6)) * 10 ** rng.uniform(-3, 3)
+        angles = rng.uniform(-180, 180, (count, 3))
+        report = diagnose_table(_table(["alpha", "beta", "gamma", *WRENCH], np.hstack([angles, wrenches])))
+        if report.verdict in ("mistake", "suspect"):
+            named.append(report.message)
+    assert named == []
