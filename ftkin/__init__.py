@@ -13,6 +13,7 @@ from ._version import __version__  # noqa: F401  (re-exported: ftkin.__version__
 from .calibration.conventions import ConventionCheck, detect_sign_and_handedness
 from .calibration.derivatives import CausalDifferentiator, joint_derivatives
 from .calibration.diagnostics import FitDiagnostics
+from .calibration.doctor import ConventionReport
 from .calibration.drift import DRIFT_CHOICES, BiasDrift
 from .calibration.dynamic import DynamicCalibrationResult, calibrate_dynamic
 from .calibration.estimate import METHODS, CalibrationResult, calibrate
@@ -31,6 +32,7 @@ from .control.sensor_faults import FaultMonitor, SensorFault, SensorLimits
 from .control.stability import max_stable_k1
 from .exceptions import (
     CalibrationFileError,
+    ConventionMistake,
     FrameNotFound,
     FtkinError,
     InvalidInput,
@@ -41,6 +43,7 @@ from .exceptions import (
     UrdfError,
 )
 from .io.calibration_file import load_calibration, save_calibration
+from .io.conventions import diagnose_samples
 from .io.motion_recording import MotionRecording, load_motion_bag, load_motion_csv
 from .io.payload_export import Payload, export_payload, payload_in_flange
 from .io.samples_csv import load_samples
@@ -81,6 +84,8 @@ __all__ = [
     "Compensator",
     "ControlFrame",
     "ConventionCheck",
+    "ConventionMistake",
+    "ConventionReport",
     "DRIFT_CHOICES",
     "DynamicCalibrationResult",
     "DynamicCompensator",
@@ -130,6 +135,7 @@ __all__ = [
     "calibrate",
     "calibrate_dynamic",
     "detect_sign_and_handedness",
+    "diagnose_samples",
     "euler_zyx_deg_to_matrix",
     "evaluate_poses",
     "export_payload",

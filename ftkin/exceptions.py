@@ -42,23 +42,47 @@ class InvalidSamples(InvalidInput):
         self.line = line
 
 
+class ConventionMistake(InvalidSamples):
+    """The data fit only when read in another convention (radians for degrees, x,y,z,w for w,x,y,z, ...).
+
+    Attributes:
+        reading: What the data fit under, e.g. ``"Euler angles in radians"``.
+        fix: What to change in the input.
+    """
+
+    def __init__(self, message: str, source: str | None = None, reading: str = "", fix: str = ""):
+        super().__init__(message, source)
+        self.reading = reading
+        self.fix = fix
+
+
 class FrameNotFound(FtkinError, KeyError):
     """A frame name is not in the robot model.
 
     Attributes:
         name: The name that was asked for.
         available: Names of the frames the model has.
+        hint: What to do about it (e.g. how to add a missing sensor frame), or "".
     """
 
-    def __init__(self, name: str, available: Sequence[str]):
+    def __init__(self, name: str, available: Sequence[str], hint: str = ""):
         self.name = name
         self.available = list(available)
+        self.hint = hint
         super().__init__(name)
 
     def __str__(self) -> str:
-        return f"frame {self.name!r} not found in the model; available frames: " + ", ".join(
-            self.available
-        )
+        import difflib
+
+        close = difflib.get_close_matches(self.name, self.available, n=1, cutoff=0.6)
+        lowered = [frame for frame in self.available if frame.lower() == self.name.lower()]
+        suggestion = (lowered or close or [None])[0]
+        text = f"frame {self.name!r} not found in the model"
+        if suggestion is not None:
+            text += f"; did you mean {suggestion!r}?"
+        elif self.hint:
+            text += f"; {self.hint}"
+        return text + "; available frames: " + ", ".join(self.available)
 
 
 class UrdfError(FtkinError):

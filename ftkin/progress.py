@@ -1,22 +1,21 @@
-"""A minimal progress bar: drawn on a terminal, silent otherwise.
+"""Progress bars with tqdm: drawn on a terminal, silent otherwise.
 
 Used for anything that can take more than a second (planning, bag reading).
-Writes to stderr only when it is a TTY, so logs and pipes stay clean.
+Draws on stderr only when it is a TTY, so logs and pipes stay clean.
 """
 
 from __future__ import annotations
 
 import sys
-import time
 
 
 class Progress:
-    """Context manager drawing ``label [#####.....] k/n`` on stderr.
+    """Context manager around a :class:`tqdm.tqdm` bar on stderr.
 
     Args:
         total: Number of steps.
         label: Text before the bar.
-        enabled: Force on/off; default: on when stderr is a terminal.
+        enabled: Force on/off; default: on when the stream is a terminal.
         stream: Where to draw (default ``sys.stderr``).
     """
 
@@ -26,31 +25,24 @@ class Progress:
         self.stream = stream if stream is not None else sys.stderr
         self.enabled = enabled if enabled is not None else bool(getattr(self.stream, "isatty", lambda: False)())
         self.count = 0
-        self._last_draw = 0.0
+        self._bar = None
 
     def __enter__(self) -> Progress:
-        self._draw(force=True)
+        if self.enabled:
+            from tqdm import tqdm
+
+            self._bar = tqdm(total=self.total, desc=self.label, file=self.stream, leave=True, dynamic_ncols=True,
+                             mininterval=0.1)
         return self
 
     def advance(self, steps: int = 1) -> None:
-        """Count ``steps`` more done; redraws at most 10 times a second."""
-        self.count = min(self.count + steps, self.total)
-        self._draw()
-
-    def _draw(self, force: bool = False) -> None:
-        if not self.enabled:
-            return
-        now = time.monotonic()
-        if not force and now - self._last_draw < 0.1 and self.count < self.total:
-            return
-        self._last_draw = now
-        width = 30
-        filled = int(width * self.count / self.total)
-        self.stream.write(f"\r{self.label} [{'#' * filled}{'.' * (width - filled)}] {self.count}/{self.total}")
-        self.stream.flush()
+        """Count ``steps`` more done."""
+        steps = min(steps, self.total - self.count)
+        self.count += steps
+        if self._bar is not None and steps > 0:
+            self._bar.update(steps)
 
     def __exit__(self, *exc) -> None:
-        if self.enabled:
-            self._draw(force=True)
-            self.stream.write("\n")
-            self.stream.flush()
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None

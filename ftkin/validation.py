@@ -85,8 +85,31 @@ def as_positive(value, name: str) -> float:
     """A finite, strictly positive float."""
     try:
         number = float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise InvalidInput(f"{name} must be a number, got {value!r}") from None
     if not np.isfinite(number) or number <= 0.0:
         raise InvalidInput(f"{name} must be a finite positive number, got {value!r}")
+    return number
+
+
+def as_in_range(value, name: str, low: float, high: float, unit: str = "") -> float:
+    """A finite float in ``[low, high]``; the message names the range and its unit.
+
+    Bounds keep physically absurd inputs (a 1e308 N tool, a 1e-300 N noise)
+    out of the numerics, where they would overflow instead of meaning anything.
+    """
+    number = as_positive(value, name) if low > 0 else _finite(value, name)
+    if not low <= number <= high:
+        suffix = f" {unit}" if unit else ""
+        raise InvalidInput(f"{name} must be between {low:g} and {high:g}{suffix}, got {number:g}")
+    return number
+
+
+def _finite(value, name: str) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidInput(f"{name} must be a number, got {value!r}") from None
+    if not np.isfinite(number):
+        raise InvalidInput(f"{name} must be finite, got {value!r}")
     return number

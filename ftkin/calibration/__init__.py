@@ -14,6 +14,7 @@ Depends on the bottom layer and :mod:`ftkin.kinematics` (rotations).
 from .conventions import ConventionCheck, detect_sign_and_handedness
 from .derivatives import CausalDifferentiator, joint_derivatives
 from .diagnostics import FitDiagnostics
+from .doctor import ConventionReport, diagnose_readings
 from .drift import DRIFT_CHOICES, BiasDrift
 from .dynamic import DynamicCalibrationResult, calibrate_dynamic
 from .estimate import METHODS, CalibrationResult, calibrate
@@ -28,6 +29,7 @@ __all__ = [
     "CalibrationResult",
     "CausalDifferentiator",
     "ConventionCheck",
+    "ConventionReport",
     "DRIFT_CHOICES",
     "DynamicCalibrationResult",
     "FitDiagnostics",
@@ -41,6 +43,7 @@ __all__ = [
     "calibrate",
     "calibrate_dynamic",
     "detect_sign_and_handedness",
+    "diagnose_readings",
     "fisher_information",
     "joint_derivatives",
 ]

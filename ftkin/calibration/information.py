@@ -18,6 +18,9 @@ from ..validation import as_float_array, as_rotation_batch, check_finite
 from .model import COMPONENT_NAMES, SensorModel
 from .mount import mount_jacobian
 
+NOISE_RANGE = (1e-15, 1e6)
+"""Accepted noise standard deviations per reading [N, N·m]: beyond them 1/σ² leaves the float range's useful part."""
+
 
 @dataclass(frozen=True)
 class SensorNoise:
@@ -36,6 +39,10 @@ class SensorNoise:
             value = np.broadcast_to(as_float_array(getattr(self, name), name), (3,)).copy()
             if not np.all(np.isfinite(value)) or np.any(value <= 0):
                 raise InvalidInput(f"{name} must be finite and positive, got {value}")
+            if np.any(value < NOISE_RANGE[0]) or np.any(value > NOISE_RANGE[1]):
+                raise InvalidInput(
+                    f"{name} must be between {NOISE_RANGE[0]:g} and {NOISE_RANGE[1]:g} (N or N·m per reading), got {value}"
+                )
             value.setflags(write=False)
             object.__setattr__(self, name, value)
 

@@ -106,6 +106,14 @@ class SensorModel:
         scale = float(np.abs(self.gravity_in_base).max())
         return scale * float(np.linalg.norm(self.gravity_in_base / scale)) if scale > 0.0 else 0.0
 
+    def __repr__(self) -> str:
+        round_ = lambda values: [round(float(v), 6) for v in values]  # noqa: E731
+        return (
+            f"{type(self).__name__}(tool_weight={self.tool_weight:.6g} N, center_of_mass={round_(self.center_of_mass)} m, "
+            f"force_offset={round_(self.force_offset)} N, torque_offset={round_(self.torque_offset)} N·m, "
+            f"base_tilt_deg={[round(v, 4) for v in self.base_tilt_deg]}, g={self.g:g} m/s²)"
+        )
+
     @property
     def tool_mass(self) -> float:
         """Tool mass ``G / g`` [kg]."""

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..exceptions import InvalidInput
+from ..kinematics.record import KinematicsRecord
 from ..validation import as_vector
 from .conventions import check_flip_axis, check_sensor_sign, reading_signs
 from .diagnostics import FitDiagnostics
@@ -54,6 +55,8 @@ class CalibrationResult(SensorModel):
             reaction): applied to every raw reading.
         flip_axis: None, or the sensor axis (``"x"``, ``"y"``, ``"z"``) whose
             force and torque channels are negated in every raw reading.
+        kinematics: How the sensor frame was obtained (robot or URDF, mount, URDF hash:
+            :class:`~ftkin.kinematics.record.KinematicsRecord`), or None when unknown.
         drift: The bias over time (:class:`~ftkin.calibration.drift.BiasDrift`)
             when the samples had times, else None. With a drift model the
             ``force_offset``/``torque_offset`` are the bias at the end of the
@@ -114,6 +117,7 @@ class CalibrationResult(SensorModel):
         """``(6,)`` factors ``±1`` applied to every raw reading (``sensor_sign`` and ``flip_axis``)."""
         return reading_signs(self.sensor_sign, self.flip_axis)
     drift: BiasDrift | None = None
+    kinematics: KinematicsRecord | None = None
 
     @property
     def pose_count(self) -> int:

@@ -10,9 +10,10 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
 import sys
 
-from ..exceptions import FtkinError
+from ..exceptions import FtkinError, InvalidInput
 
 COMMAND_MODULES = (
     "calibrate",
@@ -27,8 +28,41 @@ COMMAND_MODULES = (
     "evaluate-poses",
     "view",
     "simulate",
+    "doctor",
 )
 """Subcommand modules of ``ftkin.cli``, in the order ``--help`` lists them."""
+
+
+OUTPUT_OPTIONS = {"output": "-o/--output", "html": "--html", "png": "--png", "plot": "--plot"}
+"""Namespace attributes that name files a subcommand writes, and their flags."""
+
+INPUT_OPTIONS = ("calibration", "samples", "log", "recording", "poses", "replay", "urdf")
+"""Namespace attributes that name files a subcommand reads."""
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """Refuse, before anything is read or written, outputs that would destroy a file.
+
+    Every output option goes through :func:`ftkin.io.atomic.check_output_path`
+    against every input of the command; two outputs naming one file are refused too.
+    """
+    from ..io.atomic import check_output_path
+
+    inputs = [getattr(args, name) for name in INPUT_OPTIONS if isinstance(getattr(args, name, None), str)]
+    for name in INPUT_OPTIONS:
+        value = getattr(args, name, None)
+        if isinstance(value, str) and not value.strip():
+            raise InvalidInput(f"the {name} file name is empty; expected a path to read")
+    seen: dict[str, str] = {}
+    for name, flag in OUTPUT_OPTIONS.items():
+        value = getattr(args, name, None)
+        if value is None or not isinstance(value, str):
+            continue
+        check_output_path(value, inputs, flag)
+        key = os.path.realpath(value)
+        if key in seen:
+            raise InvalidInput(f"{seen[key]} and {flag} both name {value}; give each output its own file")
+        seen[key] = flag
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -48,23 +82,130 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    """Run the CLI; returns the exit code (0 success, 2 bad input or usage)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="ftkin: %(message)s")
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 2
+    """Run the CLI; returns the exit code (0 success, 2 bad input or usage, 3 internal error).
+
+    When the reader of stdout goes away (``ftkin ... | head -1``), the rest of
+    the printout is dropped and the command still finishes its work (its
+    ``-o`` file is written).
+    """
+    stdout = sys.stdout
+    sys.stdout = _QuietPipe(stdout)
+    once: dict[logging.Handler, _OnceFilter] = {}  # one filter per handler: each handler sees each record once
+    fit_log = logging.getLogger("ftkin.calibration.fit_quality")
+    fit_log_disabled = fit_log.disabled
+    fit_log.disabled = True  # every command that fits prints the summary, which lists these warnings
     try:
-        return int(args.func(args) or 0)
+        return _run(argv, once)
+    finally:
+        sys.stdout = stdout
+        fit_log.disabled = fit_log_disabled
+        for handler, once_filter in once.items():
+            handler.removeFilter(once_filter)
+
+
+class _OnceFilter(logging.Filter):
+    """Let each warning text through once per command."""
+
+    def __init__(self):
+        super().__init__()
+        self.seen: set[str] = set()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        text = record.getMessage()
+        if text in self.seen:
+            return False
+        self.seen.add(text)
+        return True
+
+
+class _QuietPipe:
+    """stdout that stops writing, without an error, once its reader has closed the pipe."""
+
+    def __init__(self, stream):
+        self._stream = stream
+        self.closed_pipe = False
+
+    def _call(self, method, *args):
+        if self.closed_pipe:
+            return len(args[0]) if args else None
+        try:
+            return getattr(self._stream, method)(*args)
+        except BrokenPipeError:
+            self.closed_pipe = True
+            try:  # the interpreter's final flush must not fail again
+                os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())
+            except (OSError, ValueError, AttributeError):
+                pass
+            return len(args[0]) if args else None
+
+    def write(self, text):
+        return self._call("write", text)
+
+    def flush(self):
+        return self._call("flush")
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+def _run(argv, once: dict) -> int:
+    try:
+        from .common import join_number_lists
+
+        parser = build_parser()
+        try:
+            args = parser.parse_args(join_number_lists(list(sys.argv[1:] if argv is None else argv)))
+        except SystemExit as exit_:  # usage errors and --help: an exit code, as every other outcome
+            return exit_.code if isinstance(exit_.code, int) else 2
+        logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="ftkin: %(message)s")
+        for handler in logging.getLogger().handlers:
+            once[handler] = _OnceFilter()
+            handler.addFilter(once[handler])
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return 2
+        check_outputs(args)
+        code = int(args.func(args) or 0)
+        sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
+        return code
     except FtkinError as error:
-        print(f"ftkin: error: {error}", file=sys.stderr)
+        _say(f"ftkin: error: {error}")
         return 2
     except KeyboardInterrupt:
-        print("ftkin: interrupted", file=sys.stderr)
+        _say("ftkin: interrupted")
         return 130
+    except Exception as error:  # the guard: no traceback ever reaches a user
+        return _unexpected(error)
+
+
+def _say(text: str) -> None:
+    """One line on stderr; a closed stderr is not an error of its own."""
+    try:
+        print(text, file=sys.stderr)
+    except (OSError, ValueError):
+        pass
+
+
+def _unexpected(error: Exception) -> int:
+    """One line for an error ftkin did not foresee, naming its kind; the traceback only with -v."""
+    import numpy as np
+
+    kinds = {
+        RecursionError: "the input is nested too deeply",
+        OverflowError: "a number in the input is too large",
+        MemoryError: "the input is too large for the memory available",
+        np.linalg.LinAlgError: "the numbers are too extreme for the linear algebra (a matrix became singular)",
+    }
+    reason = next((text for kind, text in kinds.items() if isinstance(error, kind)), "unexpected internal error")
+    logging.getLogger("ftkin.cli").info("details", exc_info=error)
+    _say(f"ftkin: error: {reason} ({type(error).__name__}: {str(error)[:200]})")
+    return 2 if reason != "unexpected internal error" else 3
 
 
 def entry_point() -> None:
     """Console-script entry (``[project.scripts] ftkin``)."""
     sys.exit(main())
+
+
+if __name__ == "__main__":  # pragma: no cover
+    entry_point()

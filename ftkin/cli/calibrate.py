@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+from pathlib import Path
+
 from ..calibration.conventions import BASE_MOUNTS
 from ..calibration.drift import DRIFT_CHOICES
 from ..calibration.estimate import METHODS, calibrate
@@ -11,7 +14,9 @@ from ..calibration.model import STANDARD_GRAVITY
 from ..calibration.mount import MOUNT_MODES
 from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
-from .common import add_samples_arguments, arm_from_args, load_samples_from_args, positive_float
+from ..kinematics.record import KinematicsRecord
+from .common import add_samples_arguments, arm_from_args, gravity, load_samples_from_args, positive_float
+from .doctor import check_conventions
 from .motion import add_derivative_arguments, calibrate_motion
 
 
@@ -32,7 +37,7 @@ def register(subparsers) -> None:
         help="ml: joint maximum-likelihood fit with standard errors; linear: the paper's two-step "
         "least squares (default: %(default)s)",
     )
-    parser.add_argument("--g", type=positive_float, default=STANDARD_GRAVITY, help="gravity for the mass [m/s²] (default: %(default)s)")
+    parser.add_argument("--g", type=gravity, default=STANDARD_GRAVITY, help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)")
     ml = parser.add_argument_group("ml estimator")
     ml.add_argument(
         "--noise-force", type=positive_float, metavar="N",
@@ -78,6 +83,10 @@ def register(subparsers) -> None:
                          help="identify mass, centre of mass, inertia, bias and tilt from a moving recording")
     dynamic.add_argument("--no-inertia", action="store_true", help="with --dynamic: fit the static parameters only")
     add_derivative_arguments(dynamic)
+    parser.add_argument(
+        "--no-convention-check", action="store_true",
+        help="do not refit under the common convention mistakes (see 'ftkin doctor')",
+    )
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -88,6 +97,15 @@ def _noise(args) -> SensorNoise | None:
     if args.noise_force is None:
         return None
     return SensorNoise(args.noise_force, args.noise_torque)
+
+
+def _bundled_if_used(loaded):
+    """The bundled arm when the samples' joint columns were read with it (no arm option given)."""
+    from ..kinematics.arm import Arm, bundled_urdf_path
+
+    if loaded.samples.urdf and Path(loaded.samples.urdf).resolve() == bundled_urdf_path().resolve():
+        return Arm.default()
+    return None
 
 
 def run(args) -> int:
@@ -106,15 +124,24 @@ def run(args) -> int:
         raise InvalidInput("--no-inertia and --sg-window apply to --dynamic only")
     if args.method == "linear" and (noise is not None or args.loss != "linear" or args.drop_outliers):
         raise InvalidInput("--noise-force/--noise-torque, --loss and --drop-outliers apply to --method ml only")
-    loaded = load_samples_from_args(args.samples, args)
     if args.method == "linear" and args.estimate_mount:
         raise InvalidInput("--estimate-mount applies to --method ml only")
+    arm = arm_from_args(args)
+    loaded = load_samples_from_args(args.samples, args, arm=arm)
+    stated = args.sensor_sign != 1 or args.flip_axis or args.base_mount != "floor" or args.expected_gravity or args.estimate_mount
+    if not (args.no_convention_check or stated):
+        # The doctor refits the readings as given, on a floor-mounted base with the URDF's sensor frame; with a
+        # stated sign, axis, base mount or an estimated mount calibrate() checks the conventions itself.
+        check_conventions(loaded, arm)
     result = calibrate(
         loaded.samples, method=args.method, g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers,
         estimate_mount=args.estimate_mount or "none", sensor_sign=args.sensor_sign, flip_axis=args.flip_axis,
         base_mount=args.base_mount, expected_gravity=args.expected_gravity,
         drift=args.drift,
     )
+    samples_arm = getattr(loaded.samples, "urdf", None) and (arm or _bundled_if_used(loaded))
+    if samples_arm is not None:
+        result = replace(result, kinematics=KinematicsRecord.from_arm(samples_arm))
     return _report(result, args)
 
 

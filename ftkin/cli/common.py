@@ -23,9 +23,8 @@ def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--tool-frame", default=None, metavar="NAME", help="tool / control-point frame name")
     group.add_argument(
         "--sensor-offset",
-        type=float,
-        nargs="+",
-        metavar="X",
+        type=number_list,
+        metavar="X Y Z [R P Y]",
         help="with --robot: sensor origin in the flange frame, X Y Z [m] and optionally ROLL PITCH YAW [rad] "
         "(with --urdf and --sensor-parent: the same, relative to that frame)",
     )
@@ -47,6 +46,10 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     ``--sensor-frame`` or ``--tool-frame`` that the model lacks is a
     :class:`~ftkin.exceptions.FrameNotFound` listing its frames.
     """
+    for option in ("urdf", "robot", "sensor_frame", "tool_frame", "sensor_parent"):
+        value = getattr(args, option, None)
+        if value is not None and not str(value).strip():
+            raise InvalidInput(f"--{option.replace('_', '-')} is empty; give a name or leave the option out")
     if getattr(args, "urdf", None) and getattr(args, "robot", None):
         raise InvalidInput("give either --urdf or --robot, not both")
     offset = getattr(args, "sensor_offset", None)
@@ -83,8 +86,94 @@ def _number(text: str, accept, expected: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (accept(value) and value != float("inf")):
+    if not (accept(value) and abs(value) != float("inf")):
         raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+    return value
+
+
+NUMBER_LIST_OPTIONS = ("--sensor-offset",)
+"""Options that take several numbers; their values end at the first token that is not a number."""
+
+
+def _is_number(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
+def join_number_lists(argv: list[str]) -> list[str]:
+    """``--sensor-offset 0 0 0.05 LOG.csv`` → ``--sensor-offset=0,0,0.05 LOG.csv``.
+
+    A list option takes the numbers that follow it (at most 6) and no more, so
+    it never swallows the positional file after it; negative numbers work.
+    """
+    out, k = [], 0
+    while k < len(argv):
+        token = argv[k]
+        if token in NUMBER_LIST_OPTIONS:
+            values = []
+            while k + 1 < len(argv) and len(values) < 6 and _is_number(argv[k + 1]):
+                values.append(argv[k + 1])
+                k += 1
+            out.append(f"{token}={','.join(values)}" if values else token)
+        else:
+            out.append(token)
+        k += 1
+    return out
+
+
+def number_list(text: str) -> list[float]:
+    """argparse type: finite numbers separated by commas (or spaces)."""
+    parts = [part for part in text.replace(",", " ").split()]
+    if not parts:
+        raise argparse.ArgumentTypeError("expected numbers, got nothing")
+    values = []
+    for part in parts:
+        try:
+            value = float(part)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number, got {part!r}") from None
+        if value != value or abs(value) == float("inf"):
+            raise argparse.ArgumentTypeError(f"expected a finite number, got {part!r}")
+        values.append(value)
+    return values
+
+
+def bounded_int(low: int, high: int, what: str):
+    """argparse type factory: a whole number in ``[low, high]``, the message naming ``what``."""
+
+    def convert(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number of {what}, got {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected {low} to {high:,} {what}, got {text}")
+        return value
+
+    return convert
+
+
+def seed(text: str) -> int:
+    """argparse type: a random seed, 0 to 2**63 - 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"the seed must be at least 0, got {text}")
+    if value >= 2**63:
+        raise argparse.ArgumentTypeError(f"the seed must be below 2**63, got {text}")
+    return value
+
+
+def gravity(text: str) -> float:
+    """argparse type: gravity [m/s²] between 1 and 30 (Earth: 9.81; the Moon 1.6, Jupiter 24.8)."""
+    value = _number(text, lambda v: v > 0, "a finite positive number")
+    if not 1.0 <= value <= 30.0:
+        raise argparse.ArgumentTypeError(f"gravity must be between 1 and 30 m/s² (Earth: 9.80665), got {text!r}")
     return value
 
 
@@ -135,13 +224,19 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
 def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:
     """The arm to read joint angles with when applying ``calibration``.
 
-    The options given win; without any, the URDF and sensor frame recorded in
-    the calibration file are used (when that file still exists), so a log is
-    compensated with the kinematics it was calibrated with. Returns None when
-    nothing is named or recorded (the bundled arm is then used on demand).
+    The options given win; without any, the arm recorded in the calibration
+    file (robot or URDF, sensor parent and offset) is rebuilt, so a log is
+    compensated with the kinematics it was calibrated with; older files give
+    their URDF and sensor frame. Returns None when nothing is named or
+    recorded (the bundled arm is then used on demand).
     """
     arm = arm_from_args(args)
-    if arm is not None or not calibration.urdf:
+    if arm is not None:
+        return arm
+    record = getattr(calibration, "kinematics", None)
+    if record is not None:  # the calibration says how its sensor frame was obtained: no options to repeat
+        return record.build_arm(list(getattr(args, "package_dir", None) or []))
+    if not calibration.urdf:
         return arm
     recorded = Path(calibration.urdf)
     if not recorded.is_file() or recorded.resolve() == bundled_urdf_path().resolve():

@@ -28,6 +28,10 @@ def register(subparsers) -> None:
     parser.add_argument("log", metavar="LOG.csv")
     parser.add_argument("-o", "--output", metavar="OUT.csv", required=True)
     add_derivative_arguments(parser)
+    parser.add_argument(
+        "--allow-other-arm", action="store_true",
+        help="accept robot options that differ from the arm recorded in the calibration (deliberate reuse)",
+    )
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -35,6 +39,7 @@ def register(subparsers) -> None:
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
     arm = arm_for_calibration(args, calibration)
+    compensator = Compensator(calibration, arm, allow_other_arm=args.allow_other_arm)  # checks arm against the record
     if getattr(calibration, "has_inertia", False):
         done = compensate_motion(args, calibration, arm)
         if done is not None:
@@ -43,7 +48,7 @@ def run(args) -> int:
         raise InvalidInput("--sg-window applies to a calibration with an inertia (ftkin calibrate --dynamic)")
     loaded = load_samples_from_args(args.log, args, static_only=False, arm=arm)
     warn_if_kinematics_differ(loaded, calibration)
-    contact = Compensator(calibration).compensate_samples(loaded.samples)
+    contact = compensator.compensate_samples(loaded.samples)
     table = loaded.table
     wrench_columns = [table.column_index(name) for name in WRENCH_CHANNELS]
     rows = []

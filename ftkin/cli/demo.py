@@ -18,15 +18,18 @@ from ..control.compensation import Compensator
 from ..io.calibration_file import save_calibration
 from ..kinematics.arm import Arm
 from ..sim.sensor import SimulatedSensor, paper_like_truth
+from .common import bounded_int, seed
 
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "demo", help="simulated sensor on the bundled arm: calibrate, compare with the truth, compensate"
     )
-    parser.add_argument("--poses", type=int, default=12, help="number of static poses (default: %(default)s)")
-    parser.add_argument("--readings", type=int, default=500, help="readings averaged per pose (default: %(default)s, as the paper)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
+    parser.add_argument("--poses", type=bounded_int(3, 1000, "poses"), default=12,
+                        help="number of static poses, 3 to 1000 (default: %(default)s)")
+    parser.add_argument("--readings", type=bounded_int(1, 100_000, "readings per pose"), default=500,
+                        help="readings averaged per pose, 1 to 100,000 (default: %(default)s, as the paper)")
+    parser.add_argument("--seed", type=seed, default=0, help="random seed (default: %(default)s)")
     parser.add_argument("--method", choices=METHODS, default=METHODS[0])
     parser.add_argument("-o", "--output", metavar="CALIB.json", help="also write the calibration file")
     parser.add_argument("--sim-seconds", type=float, default=2.0, metavar="S",

@@ -17,7 +17,7 @@ from ..kinematics.arm import Arm
 from ..planning.constraints import DEFAULT_MARGIN
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT
 from ..planning.plan import plan_poses
-from .common import add_arm_arguments, arm_from_args, non_negative_float, positive_float
+from .common import add_arm_arguments, arm_from_args, non_negative_float, positive_float, seed
 from .motion import add_excitation_arguments, run_excitation
 
 FORMATS = ("csv", "yaml", "json")
@@ -35,10 +35,20 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
                        help="force noise per reading [N] (default: %(default)s)")
     group.add_argument("--noise-torque", type=positive_float, default=float(noise.torque_std[0]), metavar="NM",
                        help="torque noise per reading [N·m] (default: %(default)s)")
-    group.add_argument("--readings-per-pose", type=int, default=1, metavar="K",
+    group.add_argument("--readings-per-pose", type=_readings, default=1, metavar="K",
                        help="independent readings averaged at each pose (default: %(default)s)")
     group.add_argument("--estimate-mount", choices=("yaw", "full"), default=None, metavar="yaw|full",
                        help="the calibration will also estimate the sensor's mount on the flange: plan and predict for it")
+
+
+def _readings(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not 1 <= value <= 10**9:
+        raise argparse.ArgumentTypeError(f"expected 1 to 10**9 readings per pose, got {text}")
+    return value
 
 
 def expectation_from_args(args) -> dict:
@@ -54,15 +64,57 @@ def expectation_from_args(args) -> dict:
     }
 
 
+DEFAULT_FLOOR_HEIGHT = 0.05
+"""Default floor for plans [m, base z]: the base plane plus a 5 cm margin."""
+
+MAX_PLAN_POSES = 500
+"""Largest ``plan --n``: beyond a few dozen poses the standard errors only fall as 1/√n."""
+
+
+def pose_count(text: str) -> int:
+    """argparse type: number of poses to plan, 3 to :data:`MAX_PLAN_POSES`."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of poses, got {text!r}") from None
+    if value < 3:
+        raise argparse.ArgumentTypeError(f"at least 3 poses are needed to determine the calibration, got {text}")
+    if value > MAX_PLAN_POSES:
+        raise argparse.ArgumentTypeError(
+            f"plan between 3 and {MAX_PLAN_POSES} poses, got {text}: beyond a few dozen poses the standard errors "
+            "only fall as 1/√n (average readings with --readings-per-pose instead)"
+        )
+    return value
+
+
+def _floor(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a height in metres, got {text!r}") from None
+    if not np.isfinite(value) or abs(value) > 100.0:
+        raise argparse.ArgumentTypeError(f"expected a finite height within ±100 m, got {text!r}")
+    return value
+
+
 def joint_range(text: str) -> tuple[str, float, float]:
     """argparse type: ``NAME:LO:HI`` [rad]."""
     parts = text.rsplit(":", 2)
     try:
         if len(parts) != 3 or not parts[0]:
             raise ValueError
-        return parts[0], float(parts[1]), float(parts[2])
+        low, high = float(parts[1]), float(parts[2])
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected NAME:LO:HI with LO, HI in radians, got {text!r}") from None
+    if not (np.isfinite(low) and np.isfinite(high)):
+        raise argparse.ArgumentTypeError(f"expected finite LO and HI [rad], got {text!r}")
+    if max(abs(low), abs(high)) > 2.0 * np.pi:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: LO and HI are beyond 2π: ranges are in radians (these look like degrees)"
+        )
+    if low > high:
+        raise argparse.ArgumentTypeError(f"{text!r}: LO must not exceed HI")
+    return parts[0], low, high
 
 
 def register(subparsers) -> None:
@@ -73,20 +125,23 @@ def register(subparsers) -> None:
         "within joint limits, free of self-collision and above the floor, ordered for short joint travel; "
         "print the predicted standard error of every calibration parameter.",
     )
-    parser.add_argument("--n", type=int, default=None, help="number of poses (at least 3; required without --excitation)")
+    parser.add_argument("-n", "--n", type=pose_count, default=None,
+                        help=f"number of poses (3 to {MAX_PLAN_POSES}; required without --excitation)")
     parser.add_argument("-o", "--output", metavar="POSES.csv", help="write the poses here")
     parser.add_argument("--format", choices=FORMATS, default=None, help="output format (default: from the file name, else csv)")
     group = parser.add_argument_group("constraints")
     group.add_argument("--margin", type=non_negative_float, default=DEFAULT_MARGIN, metavar="RAD",
                        help="distance kept from the joint limits [rad] (default: %(default)s)")
-    group.add_argument("--floor-height", type=float, default=None, metavar="M",
-                       help="sensor and tool origins stay above this height in the base frame [m]")
+    group.add_argument("--floor-height", type=_floor, default=DEFAULT_FLOOR_HEIGHT, metavar="M",
+                       help="sensor and tool origins stay above this height in the base frame [m] (default: %(default)s, "
+                       "a floor at base z = 0 with a 5 cm margin)")
+    group.add_argument("--no-floor", action="store_true", help="no floor constraint (an arm mounted on a wall or ceiling)")
     group.add_argument("--max-tilt-deg", type=non_negative_float, default=None, metavar="DEG",
                        help="largest angle of the tool axis from pointing straight down [deg]")
     group.add_argument("--joint-range", type=joint_range, action="append", default=[], metavar="NAME:LO:HI",
                        help="extra range for one joint [rad]; repeat for several joints")
     group.add_argument("--no-self-collision", action="store_true", help="do not check self-collision")
-    parser.add_argument("--seed", type=int, default=0, help="random seed; the same seed gives the same plan (default: 0)")
+    parser.add_argument("--seed", type=seed, default=0, help="random seed; the same seed gives the same plan (default: 0)")
     add_expectation_arguments(parser)
     add_excitation_arguments(parser)
     add_arm_arguments(parser)
@@ -113,7 +168,7 @@ def run(args) -> int:
     max_tilt = None if args.max_tilt_deg is None else float(np.deg2rad(args.max_tilt_deg))
     try:
         plan = plan_poses(
-            arm, args.n, margin=args.margin, floor_height=args.floor_height, max_tilt=max_tilt,
+            arm, args.n, margin=args.margin, floor_height=None if args.no_floor else args.floor_height, max_tilt=max_tilt,
             joint_ranges=args.joint_range, self_collision=not args.no_self_collision, seed=args.seed,
             **expectation_from_args(args),
         )

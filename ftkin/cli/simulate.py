@@ -30,7 +30,7 @@ from ..exceptions import InvalidInput
 from ..io.csv_table import write_csv
 from ..sim.placement import MODES, PlacementRun, PlacementScenario, simulate_placement
 from ..sim.surfaces import SURFACES, surface_by_name
-from .common import positive_float
+from .common import positive_float, seed
 
 _DEFAULT = PlacementScenario()
 
@@ -62,7 +62,7 @@ def register(subparsers) -> None:
                            help="object bottom above the surface at the start [mm] (default: %(default)g)")
     placement.add_argument("--duration", type=positive_float, default=_DEFAULT.duration, help="simulated time [s] (default: %(default)g)")
     placement.add_argument("--dt", type=positive_float, default=_DEFAULT.dt, help="control period [s] (default: %(default)g)")
-    placement.add_argument("--seed", type=int, default=0, help="random seed of the sensor noise (default: %(default)s)")
+    placement.add_argument("--seed", type=seed, default=0, help="random seed of the sensor noise (default: %(default)s)")
     placement.add_argument("--sweep", choices=("k1", "k2"), help="repeat the run over --values of this gain")
     placement.add_argument("--values", type=_value_list, metavar="V1,V2,...",
                            help="gain values for --sweep, in the paper's mm units (e.g. 0.05,0.1,0.2)")
@@ -117,7 +117,16 @@ def _simulate(scenario: PlacementScenario, args):
     return run_, list(full.columns), full.table
 
 
+MAX_TICKS = 1_000_000
+"""Longest simulation, in control ticks (duration / dt)."""
+
+
 def run(args) -> int:
+    if args.duration / args.dt > MAX_TICKS:
+        raise InvalidInput(
+            f"--duration {args.duration:g} s at --dt {args.dt:g} s is {args.duration / args.dt:.3g} ticks; "
+            f"at most {MAX_TICKS:,}: shorten the run or lengthen the step"
+        )
     scenario = PlacementScenario(
         surface=surface_by_name(args.surface), mode=MODES[0] if args.mode == "all" else args.mode, k1=args.k1 * 1e-3,
         k2=args.k2 * 1e-3, object_weight=args.weight, start_gap=args.gap * 1e-3, duration=args.duration, dt=args.dt,

@@ -43,16 +43,32 @@ class Compensator:
             or any :class:`~ftkin.calibration.model.SensorModel`).
         arm: Kinematics for the joint-angle entry points; not needed when the
             caller supplies ``R_BS`` itself. With a calibration that carries a
-            mount, :attr:`arm` is a copy with the real sensor frame.
+            mount, :attr:`arm` is a copy with the real sensor frame. When the
+            calibration records the arm it was made with
+            (``calibration.kinematics``), ``arm`` must be that arm: same URDF
+            (SHA-256), sensor frame and mount.
         tracker: Optional :class:`~ftkin.control.bias_tracker.BiasTracker`
             (off by default); it is restarted from the calibration's bias.
+        allow_other_arm: Accept an arm that differs from the recorded one (deliberate reuse).
+
+    Raises:
+        InvalidInput: ``arm`` differs from the calibration's record (the message says how).
     """
 
-    def __init__(self, calibration: SensorModel, arm: Arm | None = None, tracker: BiasTracker | None = None):
+    def __init__(self, calibration: SensorModel, arm: Arm | None = None, tracker: BiasTracker | None = None, *,
+                 allow_other_arm: bool = False):
         if not isinstance(calibration, SensorModel):
             raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
         if tracker is not None and not isinstance(tracker, BiasTracker):
             raise InvalidInput(f"tracker must be an ftkin BiasTracker or None, got {type(tracker).__name__}")
+        record = getattr(calibration, "kinematics", None)
+        if arm is not None and record is not None and not allow_other_arm:
+            problems = record.mismatches(arm)
+            if problems:
+                raise InvalidInput(
+                    "this arm is not the one the calibration was made with (" + record.describe() + "): "
+                    + "; ".join(problems) + ". Pass allow_other_arm=True (ftkin compensate: --allow-other-arm) if that is deliberate."
+                )
         self.calibration = calibration
         mount = getattr(calibration, "mount_rotation", None)
         self.arm = mounted_arm(arm, mount) if arm is not None and mount is not None else arm
@@ -79,6 +95,14 @@ class Compensator:
 
     def _signed_batch_unchecked(self, rotations: np.ndarray, raw: np.ndarray, bias: np.ndarray | None = None) -> np.ndarray:
         return Compensator.compensate_batch_unchecked(self, rotations, raw * self._reading_signs, bias)
+
+    def __repr__(self) -> str:
+        calibration = self.calibration
+        arm = "none" if self.arm is None else f"{self.arm.sensor_frame} of {getattr(self.arm.urdf_path, 'name', '?')}"
+        return (
+            f"Compensator(tool {calibration.tool_weight:.4g} N, COM {np.round(calibration.center_of_mass, 4).tolist()} m, "
+            f"bias {np.round(calibration.bias, 4).tolist()} [N, N·m], arm {arm})"
+        )
 
     def _require_arm(self) -> Arm:
         if self.arm is None:

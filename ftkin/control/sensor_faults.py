@@ -37,7 +37,7 @@ from ..validation import as_float_array
 class SensorFault(StrEnum):
     """Why a tick was held (``NONE``: it was not)."""
 
-    NONE = ""
+    NONE = "none"
     NOT_FINITE = "not_finite"
     DT_JUMP = "dt_jump"
     SATURATED = "saturated"

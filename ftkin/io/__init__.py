@@ -13,6 +13,7 @@ Depends on :mod:`ftkin.calibration` and :mod:`ftkin.kinematics`.
 """
 
 from .calibration_file import load_calibration, save_calibration
+from .conventions import diagnose_samples
 from .motion_recording import MotionRecording, load_motion_bag, load_motion_csv
 from .payload_export import Payload, export_payload, payload_in_flange
 from .samples_csv import load_samples
@@ -20,6 +21,7 @@ from .samples_csv import load_samples
 __all__ = [
     "MotionRecording",
     "Payload",
+    "diagnose_samples",
     "export_payload",
     "load_calibration",
     "load_motion_bag",

@@ -1,32 +1,106 @@
-"""Atomic file writes: a reader sees the old file or the new one, never half.
+"""Atomic file writes that never destroy a file: a reader sees the old file or the new one, never half.
 
 The text goes to a temporary file in the target's folder, is flushed and
 fsynced, then renamed over the target (``os.replace`` is atomic on POSIX and
 Windows). A writer killed midway leaves the old file intact and at most a
 stray ``.<name>.*.tmp`` file behind.
+
+:func:`check_output_path` is the one check every output goes through (the
+CLI calls it for every ``-o``, ``--html``, ``--png``, ``--plot`` before
+anything is read or written): an empty name, an existing output that is not a
+regular file (a folder, a device such as ``/dev/null``, a FIFO, a socket) and
+an output that is one of the command's inputs (``os.path.samefile``: also
+through symlinks and hard links) are refused. An output that is a symlink is
+written through to its target, atomically in the target's folder, so the link
+survives.
 """
 
 from __future__ import annotations
 
 import os
+import stat
 import tempfile
 from pathlib import Path
 
-from ..exceptions import FtkinError
+from ..exceptions import FtkinError, InvalidInput
+
+
+def _kind(mode: int) -> str:
+    for test, name in (
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISFIFO, "a FIFO (named pipe)"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
+def check_output_path(path, inputs=(), what: str = "output") -> Path:
+    """Refuse an output path that would destroy something; returns it as a :class:`~pathlib.Path`.
+
+    Args:
+        path: The file about to be written.
+        inputs: Paths the same command reads (files or folders); names that do
+            not exist are skipped.
+        what: How the output is named in messages (e.g. ``"-o/--output"``).
+
+    Raises:
+        InvalidInput: an empty name, an existing output that is not a regular
+            file, or an output that is the same file as one of ``inputs``.
+    """
+    if path is None or not str(path).strip():
+        raise InvalidInput(f"{what}: the file name is empty; expected a path to write")
+    path = Path(path)
+    try:
+        status = os.stat(path)  # follows symlinks: the file that would be written
+    except FileNotFoundError:
+        return path
+    except OSError as error:
+        raise InvalidInput(f"{what} {path}: cannot check the output: {error}") from None
+    if not stat.S_ISREG(status.st_mode):
+        raise InvalidInput(
+            f"{what} {path} exists and is {_kind(status.st_mode)}; refusing to replace it: expected a regular file or a new name"
+        )
+    for source in inputs:
+        if source is None or not str(source):
+            continue
+        try:
+            same = os.path.samefile(path, source)
+        except OSError:
+            continue
+        if same:
+            raise InvalidInput(
+                f"{what} {path} is the input {source} of this command (same file); refusing to overwrite an input: "
+                "write to another file"
+            )
+    return path
+
+
+def _target(path: Path) -> Path:
+    """The file a write to ``path`` should replace: the final target when ``path`` is a symlink."""
+    return Path(os.path.realpath(path)) if path.is_symlink() else path
 
 
 def atomic_write_bytes(path, data: bytes) -> Path:
     """Write ``data`` to ``path`` atomically; returns the path.
 
+    A symlink is written through: its target is replaced (atomically, in the
+    target's folder) and the link kept.
+
     Raises:
+        InvalidInput: empty name, or an existing path that is not a regular file.
         FtkinError: the folder does not exist or is not writable.
     """
-    path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
+    path = Path(check_output_path(path))
+    target = _target(path)
+    folder = target.parent if str(target.parent) else Path(".")
     if not folder.is_dir():
         raise FtkinError(f"cannot write {path}: folder {folder} does not exist")
     try:
-        handle, temporary = tempfile.mkstemp(dir=folder, prefix=f".{path.name}.", suffix=".tmp")
+        handle, temporary = tempfile.mkstemp(dir=folder, prefix=f".{target.name}.", suffix=".tmp")
     except OSError as error:
         raise FtkinError(f"cannot write {path}: {error}") from None
     try:
@@ -34,11 +108,11 @@ def atomic_write_bytes(path, data: bytes) -> Path:
             stream.write(data)
             stream.flush()
             os.fsync(stream.fileno())
-        if path.exists():
-            os.chmod(temporary, path.stat().st_mode & 0o777)
+        if target.exists():
+            os.chmod(temporary, target.stat().st_mode & 0o777)
         else:
             os.chmod(temporary, 0o644)
-        os.replace(temporary, path)
+        os.replace(temporary, target)
     except BaseException as error:
         try:
             os.unlink(temporary)

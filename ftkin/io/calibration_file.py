@@ -12,7 +12,10 @@ per-pose normalized residuals, outliers, condition number, warnings; see
 :class:`~ftkin.calibration.diagnostics.FitDiagnostics`), ``created`` (UTC, ISO 8601),
 ``ftkin_version``; a dynamic calibration adds ``inertia`` (3×3 about the
 centre of mass, sensor axes [kg·m²]) and ``std_errors.inertia`` and loads as a
-:class:`~ftkin.calibration.dynamic.DynamicCalibrationResult`. Files without ``covariance``/``diagnostics`` (written by
+:class:`~ftkin.calibration.dynamic.DynamicCalibrationResult`; ``kinematics``
+(how the sensor frame was obtained: robot or URDF path, its SHA-256, sensor
+parent and offset, see :class:`~ftkin.kinematics.record.KinematicsRecord`;
+absent when unknown). Files without ``covariance``/``diagnostics`` (written by
 ``linear`` or an older ftkin) load with those set to None.
 
 The sensor as it is really mounted (:mod:`ftkin.calibration.mount`,
@@ -40,7 +43,6 @@ from __future__ import annotations
 
 import datetime
 import json
-import math
 from pathlib import Path
 
 import numpy as np
@@ -48,7 +50,9 @@ import numpy as np
 from ..calibration.diagnostics import FitDiagnostics
 from ..calibration.estimate import CalibrationResult
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
+from ..kinematics.record import KinematicsRecord
 from .atomic import atomic_write_text
+from .calibration_checks import check_covariance, check_derived, has_bool, parse_calibration_json, short_repr
 from .calibration_inertia import inertia_document, with_inertia
 from .drift_file import drift_from_document, drift_to_document
 from .json_reader import JsonReader
@@ -135,6 +139,7 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         "flip_axis": result.flip_axis,
         **({"diagnostics": result.diagnostics.to_dict()} if result.diagnostics is not None else {}),
         "drift": drift_to_document(result.drift),
+        **({"kinematics": result.kinematics.to_dict()} if result.kinematics is not None else {}),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "ftkin_version": __version__,
     }
@@ -171,12 +176,25 @@ def _diagnostics(reader: JsonReader) -> FitDiagnostics | None:
         return None
     if not isinstance(data, dict):
         reader.fail(f"expected an object, got {type(data).__name__}", "diagnostics")
+    flags = [key for key, value in data.items() if has_bool(value)]
+    if flags:
+        reader.fail(f"{flags[0]!r} holds a boolean; true/false are not numbers", "diagnostics")
     try:
         return FitDiagnostics.from_dict(data)
     except KeyError as error:
         reader.fail(f"missing {error.args[0]!r}", "diagnostics")
-    except (TypeError, ValueError, FtkinError) as error:
-        reader.fail(f"malformed: {error}", "diagnostics")
+    except (TypeError, ValueError, OverflowError, FtkinError) as error:
+        reader.fail(f"malformed: {str(error)[:200]}", "diagnostics")
+
+
+def _kinematics(reader: JsonReader) -> KinematicsRecord | None:
+    data = reader.get("kinematics", required=False)
+    if data is None:
+        return None
+    try:
+        return KinematicsRecord.from_dict(data)
+    except FtkinError as error:
+        reader.fail(f"malformed: {error}", "kinematics")
 
 
 def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationResult:
@@ -203,15 +221,19 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     raw_ids = poses.get("ids")
     if raw_ids is None:
         raw_ids = []
-    if not isinstance(raw_ids, list) or not all(isinstance(i, int) and not isinstance(i, bool) for i in raw_ids):
-        reader.fail(f"expected a list of integer pose ids, got {raw_ids!r}", "poses.ids")
+    if not isinstance(raw_ids, list) or not all(
+        isinstance(i, int) and not isinstance(i, bool) and abs(i) <= 2**53 for i in raw_ids
+    ):
+        reader.fail(f"expected a list of integer pose ids of magnitude at most 2**53, got {short_repr(raw_ids)}", "poses.ids")
     pose_ids = np.array(raw_ids, dtype=np.int64)
     count = len(pose_ids)
     measured = reader.array("poses.measured", (count, 6), source=poses.get("measured", np.zeros((0, 6))))
     residuals = reader.array("poses.residuals", (count, 6), source=poses.get("residuals", np.zeros((0, 6))))
     method = reader.optional("method", str, "unknown")
     urdf, sensor_frame = reader.optional("urdf", str), reader.optional("sensor_frame", str)
-    sample_count = reader.optional("sample_count", int, count)
+    sample_count = reader.count("sample_count", count)
+    if "pose_count" in document and reader.count("pose_count", count) != count:
+        reader.fail(f"{document['pose_count']} disagrees with the {count} pose ids in poses.ids", "pose_count")
     mount = reader.array("mount_rotation", (3, 3), required=False)
     mount_mode = reader.optional("mount_mode", str, "none")
     mount_size = {"yaw": 1, "full": 3}.get(mount_mode, 0)
@@ -240,20 +262,16 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             sensor_sign=sensor_sign,
             flip_axis=reader.optional("flip_axis", str),
             drift=drift_from_document(reader),
+            kinematics=_kinematics(reader),
         )
     except (ValueError, TypeError) as error:
         raise CalibrationFileError(path, str(error)) from None
     if not (np.isfinite(result.tool_weight) and result.tool_weight > 0.0):
         reader.fail(f"|gravity_in_base| must be finite and positive, got {result.tool_weight}", "gravity_in_base")
+    check_derived(reader, document, result)
+    check_covariance(reader, result.covariance)
     if inertia is not None:
         result = with_inertia(reader, result, inertia)
-    if "tool_weight" in document:
-        stated = reader.number("tool_weight")
-        if not math.isclose(stated, result.tool_weight, rel_tol=1e-9, abs_tol=1e-12):
-            reader.fail(
-                f"{stated} N disagrees with |gravity_in_base| = {result.tool_weight} N (file edited by hand?)",
-                "tool_weight",
-            )
     return result
 
 
@@ -266,17 +284,13 @@ def load_calibration(path) -> CalibrationResult:
     """
     path = Path(path)
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise CalibrationFileError(str(path), "file not found") from None
+    except IsADirectoryError:
+        raise CalibrationFileError(str(path), "is a folder; expected a calibration JSON file") from None
     except (OSError, UnicodeDecodeError) as error:
         raise CalibrationFileError(str(path), f"cannot read: {error}") from None
     if not text.strip():
         raise CalibrationFileError(str(path), "file is empty; expected an ftkin calibration JSON document")
-    try:
-        document = json.loads(text)
-    except json.JSONDecodeError as error:
-        raise CalibrationFileError(
-            str(path), f"not valid JSON (truncated or corrupt?) at line {error.lineno}, column {error.colno}: {error.msg}"
-        ) from None
-    return calibration_from_dict(document, str(path))
+    return calibration_from_dict(parse_calibration_json(text, str(path)), str(path))

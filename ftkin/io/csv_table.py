@@ -11,13 +11,28 @@ from __future__ import annotations
 import csv
 import difflib
 import io
-from dataclasses import dataclass
+import logging
+import re
+from collections import Counter
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from ..exceptions import InvalidSamples
 from .atomic import atomic_write_text
+
+logger = logging.getLogger(__name__)
+
+DELIMITER_NAMES = {",": "comma", ";": "semicolon", "\t": "tab"}
+_DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+(?:[eE][+-]?\d+)?$")
+
+
+def _not_a_number(name: str, cell: str) -> str:
+    if _DECIMAL_COMMA.match(cell):
+        return f"column {name!r}: {cell!r} has a decimal comma; write numbers with a decimal point ({cell.replace(',', '.')!r})"
+    shown = cell if len(cell) <= 40 else cell[:40] + "..."
+    return f"column {name!r}: {shown!r} is not a number"
 
 
 @dataclass(frozen=True)
@@ -43,19 +58,41 @@ class Table:
                 try:
                     value = float(cell)
                 except ValueError:
-                    raise InvalidSamples(f"column {name!r}: {cell!r} is not a number", self.source, line) from None
+                    raise InvalidSamples(_not_a_number(name, cell), self.source, line) from None
                 if not np.isfinite(value):
                     raise InvalidSamples(f"column {name!r}: {cell!r} is not finite; expected a finite number", self.source, line)
                 out[r, c] = value
         return out
 
 
+def sniff_delimiter(text: str) -> str:
+    """The separator of a CSV text: comma, semicolon or tab, judged by its header line.
+
+    The first line that is neither blank nor a ``#`` comment is the header; a
+    header with semicolons or tabs and no commas is read with that separator.
+    """
+    for line in io.StringIO(text):
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        counts = {delimiter: line.count(delimiter) for delimiter in DELIMITER_NAMES}
+        if counts[","] == 0 and max(counts[";"], counts["\t"]) > 0:
+            return ";" if counts[";"] >= counts["\t"] else "\t"
+        return ","
+    return ","
+
+
 def read_table(path) -> Table:
     """Read a CSV with a header row; ``#`` lines are comments.
 
+    The separator is sniffed from the header (comma, semicolon or tab; a
+    semicolon- or tab-separated file is read and a warning names the
+    separator). Duplicated header names are found in linear time.
+
     Raises:
         InvalidSamples: missing or empty file, no data rows, duplicated
-            columns, or a row with the wrong number of cells.
+            columns, a row with the wrong number of cells (decimal commas are
+            named), or a cell the csv module cannot parse (too long, NUL byte).
     """
     path = Path(path)
     source = str(path)
@@ -63,22 +100,40 @@ def read_table(path) -> Table:
         text = path.read_text(encoding="utf-8-sig")  # a byte-order mark (Excel) is not part of the header
     except FileNotFoundError:
         raise InvalidSamples("file not found", source) from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise InvalidSamples(f"cannot read: {error}", source) from None
+    except IsADirectoryError:
+        raise InvalidSamples("is a folder; expected a CSV file (or a ROS 2 bag folder with metadata.yaml)", source) from None
+    except UnicodeDecodeError as error:
+        raise InvalidSamples(f"not UTF-8 text (a binary file?): {error.reason} at byte {error.start}", source) from None
+    except OSError as error:
+        raise InvalidSamples(f"cannot read: {error.strerror or error}", source) from None
+    delimiter = sniff_delimiter(text)
+    if delimiter != ",":
+        logger.warning("%s: read as a %s-separated file (ftkin writes commas)", source, DELIMITER_NAMES[delimiter])
     header, header_line, rows, lines = None, None, [], []
-    for number, record in enumerate(csv.reader(io.StringIO(text)), start=1):
-        if not record or not "".join(record).strip() or record[0].lstrip().startswith("#"):
-            continue
-        if header is None:
-            header, header_line = [cell.strip() for cell in record], number
-            duplicates = sorted({name for name in header if header.count(name) > 1})
-            if duplicates:
-                raise InvalidSamples(f"duplicated column(s) {duplicates} in the header", source, number)
-            continue
-        if len(record) != len(header):
-            raise InvalidSamples(f"{len(record)} cells but the header has {len(header)} columns", source, number)
-        rows.append(record)
-        lines.append(number)
+    reader = csv.reader(io.StringIO(text), delimiter=delimiter)
+    try:
+        for record in reader:
+            number = reader.line_num
+            if not record or not "".join(record).strip() or record[0].lstrip().startswith("#"):
+                continue
+            if header is None:
+                header, header_line = [cell.strip() for cell in record], number
+                duplicates = sorted(name for name, count in Counter(header).items() if count > 1)
+                if duplicates:
+                    shown = duplicates[:10] + (["..."] if len(duplicates) > 10 else [])
+                    raise InvalidSamples(f"duplicated column(s) {shown} in the header", source, number)
+                continue
+            if len(record) != len(header):
+                raise InvalidSamples(_cell_count_message(record, header, delimiter), source, number)
+            rows.append(record)
+            lines.append(number)
+    except csv.Error as error:
+        raise InvalidSamples(
+            f"cannot parse the CSV: {error} (a cell longer than {csv.field_size_limit()} characters, a NUL byte "
+            "or an unclosed quote?)",
+            source,
+            reader.line_num,
+        ) from None
     if header is None:
         raise InvalidSamples("file is empty; expected a header row and data rows", source)
     if not rows:
@@ -86,18 +141,43 @@ def read_table(path) -> Table:
     return Table(source, header, rows, lines, header_line)
 
 
+def _cell_count_message(record, header, delimiter) -> str:
+    message = f"{len(record)} cells but the header has {len(header)} columns"
+    if delimiter == "," and len(record) > len(header):
+        joined = ",".join(record)
+        if re.search(r"\d,\d", joined) and any(re.fullmatch(r"\d+", cell.strip()) for cell in record[1:]):
+            message += (
+                "; the numbers look like they have decimal commas (e.g. 1,5): write them with a decimal point, "
+                "or separate the cells with semicolons"
+            )
+    return message
+
+
+def rename_columns(table: Table, aliases: dict[str, str]) -> Table:
+    """A copy of ``table`` with header names replaced by ``aliases`` (``{old: new}``)."""
+    if not aliases:
+        return table
+    return replace(table, header=[aliases.get(name, name) for name in table.header])
+
+
 def missing_columns(table: Table, wanted, what: str) -> None:
     missing = [name for name in wanted if name not in table.header]
     if missing:
         hints = []
+        lowered = {}
+        for column in table.header:
+            lowered.setdefault(column.lower(), column)
         for name in missing:
-            close = [column for column in table.header if column.lower() == name.lower()]
-            close = close or difflib.get_close_matches(name, table.header, n=1)
-            if close:
-                hints.append(f"{close[0]!r} for {name!r}?")
-        hint = (" (did you mean " + ", ".join(hints) + ")") if hints else ""
+            close = lowered.get(name.lower())
+            if close is None:
+                matches = difflib.get_close_matches(name, table.header, n=1) if len(table.header) <= 1000 else []
+                close = matches[0] if matches else None
+            if close is not None:
+                hints.append(f"rename column {close!r} to {name!r}")
+        hint = (" (did you mean: " + "; ".join(hints) + "?)") if hints else ""
+        shown = table.header if len(table.header) <= 30 else [*table.header[:30], "..."]
         raise InvalidSamples(
-            f"missing {what} column(s) {missing}{hint}; the header has {table.header}",
+            f"missing {what} column(s) {missing}{hint}; the header has {shown}",
             table.source,
             table.header_line if table.header_line is not None else table.lines[0] - 1,
         )

@@ -39,7 +39,7 @@ import numpy as np
 from ..calibration.model import SensorModel
 from ..exceptions import InvalidInput
 from .atomic import atomic_write_text
-from .yaml_text import yaml_lines
+from .yaml_text import yaml_text
 
 EXPORT_FORMATS = ("admittance", "gravity-compensation", "ft-calib")
 """Targets :func:`export_text` knows."""
@@ -191,7 +191,7 @@ def export_text(
     else:
         header.append("# bias = [fx, fy, fz, tx, ty, tz] subtracted from the raw reading; the model is")
         header.append("# raw = bias + [m·g_S; com × m·g_S] with g_S the gravity acceleration (pointing down) in the sensor frame")
-    return "\n".join(header + yaml_lines(tree)) + "\n"
+    return yaml_text(tree, comments=[line.removeprefix("# ") for line in header])
 
 
 def export_calibration(calibration: SensorModel, path, fmt: str, **options) -> Path:

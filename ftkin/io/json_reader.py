@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from ..exceptions import CalibrationFileError
+from .calibration_checks import has_bool, short_repr
 
 
 class JsonReader:
@@ -31,17 +32,26 @@ class JsonReader:
         if value is None:
             return default
         if isinstance(value, bool) or not isinstance(value, kind):
-            self.fail(f"expected {kind.__name__} or null, got {value!r}", key)
+            self.fail(f"expected {kind.__name__} or null, got {short_repr(value)}", key)
+        return value
+
+    def count(self, key: str, default: int) -> int:
+        """An optional non-negative integer count (``sample_count``, ``pose_count``)."""
+        value = self.optional(key, int, default)
+        if not 0 <= value <= 2**53:
+            self.fail(f"expected a count between 0 and 2**53, got {short_repr(value)}", key)
         return value
 
     def array(self, key: str, shape: tuple, required: bool = True, source=None):
         value = self.get(key, required) if source is None else source
         if value is None:
             return None
+        if has_bool(value):
+            self.fail(f"expected numbers of shape {shape}, got a boolean (true/false are not numbers)", key)
         try:
             array = np.array(value, dtype=np.float64)
-        except (TypeError, ValueError):
-            self.fail(f"expected numbers of shape {shape}, got {value!r}", key)
+        except (TypeError, ValueError, OverflowError):
+            self.fail(f"expected numbers of shape {shape}, got {short_repr(value)}", key)
         if array.shape != shape and not (array.size == 0 and 0 in shape):
             self.fail(f"expected shape {shape}, got {array.shape}", key)
         if not np.all(np.isfinite(array)):
@@ -50,8 +60,12 @@ class JsonReader:
 
     def number(self, key: str) -> float:
         value = self.get(key)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            self.fail(f"expected a finite number, got {value!r}", key)
+        try:
+            finite = not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
+        except OverflowError:
+            finite = False
+        if not finite:
+            self.fail(f"expected a finite number, got {short_repr(value)}", key)
         return float(value)
 
 

@@ -46,7 +46,7 @@ import pinocchio as pin
 from ..calibration.model import SensorModel
 from ..exceptions import InvalidInput
 from .atomic import atomic_write_text
-from .yaml_text import yaml_lines
+from .yaml_text import yaml_text
 
 PAYLOAD_FORMATS = ("franka-load", "ur-payload")
 """Robot-controller payload formats of :func:`payload_text`."""
@@ -103,7 +103,9 @@ def payload_in_flange(calibration: SensorModel, arm, flange_frame: str | None = 
         arm: The arm **as its URDF describes it** (the sensor frame not mounted).
         flange_frame: Flange frame name (default: :func:`flange_frame_name`).
         inertia: ``(3, 3)`` inertia about the centre of mass in flange axes
-            [kg·m²], or ``(6,)`` ``[ixx, iyy, izz, ixy, ixz, iyz]``; None: unknown.
+            [kg·m²], or ``(6,)`` ``[ixx, iyy, izz, ixy, ixz, iyz]``; None: the
+            calibration's own (a dynamic calibration's
+            ``inertia_about_com_in_sensor``, turned into flange axes), else unknown.
 
     Raises:
         InvalidInput: no tool weight, a bad inertia, or a flange frame not fixed to the sensor.
@@ -117,7 +119,11 @@ def payload_in_flange(calibration: SensorModel, arm, flange_frame: str | None = 
     flange_frame = flange_frame or flange_frame_name(arm)
     placement = sensor_in_flange(arm, flange_frame)
     mount = np.asarray(getattr(calibration, "mount_rotation", np.eye(3)), dtype=float)
-    com = placement.rotation @ mount.T @ np.asarray(calibration.center_of_mass, dtype=float) + placement.translation
+    rotation_sensor_to_flange = placement.rotation @ mount.T
+    com = rotation_sensor_to_flange @ np.asarray(calibration.center_of_mass, dtype=float) + placement.translation
+    in_sensor = getattr(calibration, "inertia_about_com_in_sensor", None)
+    if inertia is None and in_sensor is not None:
+        inertia = rotation_sensor_to_flange @ np.asarray(in_sensor, dtype=float) @ rotation_sensor_to_flange.T
     return Payload(mass, com, flange_frame, _inertia(inertia))
 
 
@@ -178,7 +184,7 @@ def payload_text(payload: Payload, fmt: str, urscript_only: bool = False) -> str
             "\"{mass: ..., center_of_gravity: {x: ..., y: ..., z: ...}}\"",
             f"# URScript: {urscript_line(payload)}",
         ]
-    return "\n".join(header + yaml_lines(tree)) + "\n"
+    return yaml_text(tree, [line.removeprefix("# ") for line in header])
 
 
 def export_payload(calibration: SensorModel, arm, path, fmt: str, flange_frame: str | None = None, inertia=None) -> Path:

@@ -17,6 +17,7 @@ Other columns are carried along untouched (``ftkin compensate`` copies them).
 
 from __future__ import annotations
 
+import functools
 import logging
 import re
 from dataclasses import dataclass
@@ -27,7 +28,7 @@ from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.samples import Samples
 from ..exceptions import InvalidSamples
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
-from .csv_table import Table, missing_columns, read_table
+from .csv_table import Table, missing_columns, read_table, rename_columns
 
 logger = logging.getLogger(__name__)
 
@@ -37,6 +38,30 @@ POSE_COLUMN = "pose"
 TIME_COLUMN = "t"
 _GENERIC_JOINT = re.compile(r"^q(\d+)$")
 _DEGREES_THRESHOLD = 2.0 * np.pi + 0.01
+_ROS_WRENCH = re.compile(r"^(?:.*[./_])?(force|torque)[._]([xyz])$", re.IGNORECASE)
+_TORQUE_T = {"tx": "mx", "ty": "my", "tz": "mz"}
+MAX_POSE_ID = 2**53
+"""Largest pose id magnitude: every integer up to it is exact in a float64 cell."""
+
+
+def wrench_aliases(header) -> dict[str, str]:
+    """``{column: ftkin name}`` for ROS-style wrench columns when ftkin's names are absent.
+
+    Accepted: ``force.x``/``torque.x`` (also ``force_x``, ``wrench.force.x``,
+    ``field.wrench.torque.z``, any prefix ending in ``.``, ``_`` or ``/``) and
+    ``tx,ty,tz`` for the torques.
+    """
+    aliases = {}
+    for name in header:
+        match = _ROS_WRENCH.match(name)
+        if match:
+            aliases[name] = ("f" if match.group(1).lower() == "force" else "m") + match.group(2).lower()
+        elif name.lower() in _TORQUE_T:
+            aliases[name] = _TORQUE_T[name.lower()]
+    targets = list(aliases.values())
+    return {
+        old: new for old, new in aliases.items() if new not in header and targets.count(new) == 1
+    }
 
 
 def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
@@ -55,6 +80,8 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
         found["quaternion"] = quaternion
     generic = sorted((name for name in header if _GENERIC_JOINT.match(name)), key=lambda n: int(n[1:]))
     named = [name for name in (joint_names or []) if name in header]
+    if euler or quaternion:  # joint columns of any arm would be mixed in
+        named = named or [name for name in header if "joint" in name.lower()]
     if named and generic:
         raise InvalidSamples(
             f"both URDF joint-name columns {named} and generic columns {generic}; use one", table.source
@@ -112,6 +139,29 @@ def check_radians(table: Table, columns, values: np.ndarray) -> None:
         )
 
 
+@functools.lru_cache(maxsize=1)
+def _bundled_joint_names() -> tuple[str, ...]:
+    from ..kinematics.arm import Arm
+
+    return tuple(Arm.default().joint_names)
+
+
+def warn_outside_limits(table: Table, columns, values: np.ndarray, arm) -> None:
+    """Log one warning per joint column with values outside the arm's position limits, naming the limit."""
+    lower, upper = np.asarray(arm.lower_limits, float), np.asarray(arm.upper_limits, float)
+    if lower.shape != (values.shape[1],):
+        return
+    for c, name in enumerate(columns):
+        below, above = values[:, c] < lower[c] - 1e-9, values[:, c] > upper[c] + 1e-9
+        count = int(np.sum(below | above))
+        if count:
+            row = int(np.flatnonzero(below | above)[0])
+            logger.warning(
+                "%s: joint column %r has %d value(s) outside the URDF limits [%g, %g] rad (first %g at line %d)",
+                table.source, name, count, lower[c], upper[c], values[row, c], table.lines[row],
+            )
+
+
 @dataclass(frozen=True)
 class TableOrientations:
     """Sensor orientations read from a table's orientation columns.
@@ -141,10 +191,12 @@ def orientations_from_table(table: Table, arm=None) -> TableOrientations:
         InvalidSamples: no, mixed or incomplete orientation columns, non-numbers,
             joint angles in degrees, non-unit quaternions (with file and line).
     """
-    if arm is None and not any(name in table.header for name in EULER_COLUMNS + QUATERNION_COLUMNS):
-        from ..kinematics.arm import Arm
+    from ..kinematics.arm import Arm
 
+    if arm is None and not any(name in table.header for name in EULER_COLUMNS + QUATERNION_COLUMNS):
         arm = Arm.default()
+    if arm is None:  # Euler or quaternion columns: joint columns of the bundled arm would be mixed in
+        detect_orientation(table, _bundled_joint_names())
     kind, columns = detect_orientation(table, arm.joint_names if arm is not None else None)
     values = table.floats(columns)
     try:
@@ -153,6 +205,7 @@ def orientations_from_table(table: Table, arm=None) -> TableOrientations:
         if kind == "quaternion":
             return TableOrientations(quaternion_to_matrix(values).reshape(-1, 3, 3), kind, columns)
         check_radians(table, columns, values)
+        warn_outside_limits(table, columns, values, arm)
         return TableOrientations(arm.rotation_sensor_to_base(values), kind, columns, values, arm)
     except InvalidSamples:
         raise
@@ -165,6 +218,13 @@ def pose_ids_from_table(table: Table) -> np.ndarray | None:
     if POSE_COLUMN not in table.header:
         return None
     pose_ids = table.floats([POSE_COLUMN])[:, 0]
+    huge = np.flatnonzero(np.abs(pose_ids) > MAX_POSE_ID)
+    if huge.size:
+        row = int(huge[0])
+        raise InvalidSamples(
+            f"pose id {table.rows[row][table.column_index(POSE_COLUMN)].strip()!r} is too large; expected an integer "
+            f"of magnitude at most 2**53", table.source, table.lines[row],
+        )
     fractional = np.flatnonzero(pose_ids != np.round(pose_ids))
     if fractional.size:
         row = int(fractional[0])
@@ -177,6 +237,23 @@ def times_from_table(table: Table) -> np.ndarray | None:
     if TIME_COLUMN not in table.header:
         return None
     return table.floats([TIME_COLUMN])[:, 0]
+
+
+MAX_WRENCH = 1e6
+"""Largest accepted reading magnitude [N, N·m]: beyond it a value is a raw count or a unit mistake, not a load."""
+
+
+def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
+    """Refuse readings beyond ±:data:`MAX_WRENCH` (they would overflow the fit, not inform it)."""
+    bad = np.argwhere(np.abs(wrenches) > MAX_WRENCH)
+    if bad.size:
+        row, column = bad[0]
+        raise InvalidSamples(
+            f"column {WRENCH_CHANNELS[column]!r} holds {wrenches[row, column]:g}, beyond ±{MAX_WRENCH:g}: expected N "
+            "(fx, fy, fz) and N·m (mx, my, mz), not raw counts",
+            table.source,
+            table.lines[row],
+        )
 
 
 @dataclass(frozen=True)
@@ -193,10 +270,13 @@ def samples_from_table(table: Table, arm=None) -> LoadedSamples:
     """Build :class:`Samples` from a table; ``arm`` is needed for joint columns.
 
     When the table has joint columns and ``arm`` is None, the bundled arm is used.
+    ROS-style wrench names (``force.x``, ``torque.x``, ``tx``) are read as ftkin's.
     """
+    table = rename_columns(table, wrench_aliases(table.header))
     missing_columns(table, WRENCH_CHANNELS, "wrench")
     orientations = orientations_from_table(table, arm)
     wrenches = table.floats(WRENCH_CHANNELS)
+    check_wrench_magnitude(table, wrenches)
     pose_ids = pose_ids_from_table(table)
     times = times_from_table(table)
     if orientations.arm is None:

@@ -1,45 +1,51 @@
-"""Block-style YAML for ftkin's own output files, without a YAML dependency.
+"""YAML for ftkin's own output files, written by PyYAML's ``safe_dump``.
 
-Nested dicts become indented blocks; a list of rows (lists) becomes a block
-sequence of flow rows; every other leaf (string, number, number list, None,
-bool) is written as JSON, which is valid YAML flow syntax with correct string
-escaping. Non-finite numbers are refused: YAML readers disagree about them.
+A well-kept emitter quotes and escapes every key and value, so no name given
+on the command line (a ``--node-name`` or ``--frame-id`` holding a newline,
+a colon, a ``#``) can inject structure. Leaf lists are written in flow style
+(``[0.0, 0.0, 0.047]``), dicts as blocks, keys in the given order. Numbers
+keep their shortest round-trip form. Comments go above the document as ``#``
+header lines (each line of a comment is prefixed, so a comment cannot inject
+YAML either). Non-finite numbers are refused: YAML readers disagree about them.
 """
 
 from __future__ import annotations
 
-import json
+import math
 
 import numpy as np
+import yaml
 
 from ..exceptions import InvalidInput
 
 
-def _flow(value) -> str:
-    if isinstance(value, np.ndarray | np.generic):
+def _plain(value):
+    """``value`` as plain Python (dict, list, str, int, float, bool, None), or :class:`InvalidInput`."""
+    if isinstance(value, np.ndarray):
         value = value.tolist()
-    try:
-        return json.dumps(value, allow_nan=False)
-    except (TypeError, ValueError):
-        raise InvalidInput(f"cannot write {value!r} to YAML: expected finite numbers, strings or lists of them") from None
+    elif isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, dict):
+        return {str(key): _plain(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(item) for item in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        raise InvalidInput(f"cannot write {value!r} to YAML: expected finite numbers")
+    if value is None or isinstance(value, (str, int, float, bool)):
+        return value
+    raise InvalidInput(f"cannot write {value!r} to YAML: expected finite numbers, strings or lists of them")
 
 
-def yaml_lines(tree: dict, indent: int = 0) -> list[str]:
-    """The lines of ``tree`` as block YAML, indented by ``indent`` spaces."""
-    lines = []
-    pad = " " * indent
-    for key, value in tree.items():
-        if isinstance(value, dict):
-            lines.append(f"{pad}{key}:")
-            lines.extend(yaml_lines(value, indent + 2))
-        elif isinstance(value, list) and value and all(isinstance(row, list) for row in value):
-            lines.append(f"{pad}{key}:")
-            lines.extend(f"{pad}  - {_flow(row)}" for row in value)
-        else:
-            lines.append(f"{pad}{key}: {_flow(value)}")
-    return lines
+def comment_lines(comments) -> list[str]:
+    """``#`` lines for ``comments`` (one per line of each comment)."""
+    return [f"# {line}".rstrip() for comment in comments for line in str(comment).splitlines() or [""]]
 
 
-def yaml_text(tree: dict) -> str:
-    """``tree`` as a block YAML document (ends with a newline)."""
-    return "\n".join(yaml_lines(tree)) + "\n"
+def yaml_text(tree: dict, comments=()) -> str:
+    """``tree`` as a YAML document (ends with a newline), with ``comments`` as ``#`` lines above it.
+
+    Raises:
+        InvalidInput: a non-finite number or a value that is not plain data.
+    """
+    body = yaml.safe_dump(_plain(tree), sort_keys=False, default_flow_style=None, allow_unicode=True, width=4096)
+    return "".join(f"{line}\n" for line in comment_lines(comments)) + body

@@ -16,7 +16,7 @@ import pinocchio as pin
 
 from ..exceptions import FrameNotFound, InvalidInput, UrdfError
 from ..validation import as_batch, as_vector
-from .urdf_loading import build_geometry, build_model
+from .urdf_loading import build_geometry, build_model, sensor_frame_hint
 
 BUNDLED_URDF_NAME = "ftkin_c4.urdf"
 
@@ -73,6 +73,11 @@ class Arm:
         joint_names: Names of the configuration's joints, in ``q`` order.
     """
 
+    def __repr__(self) -> str:
+        name = self.robot_name or (self.urdf_path.name if self.urdf_path is not None else "model")
+        tool = f", tool frame {self.tool_frame!r}" if self.tool_frame else ""
+        return f"Arm({name}: {self.nq} joints, sensor frame {self.sensor_frame!r}{tool})"
+
     def __init__(
         self,
         model: pin.Model,
@@ -93,7 +98,10 @@ class Arm:
         self.model = model
         self.data = model.createData()
         self.sensor_frame = sensor_frame
-        self.sensor_frame_id = self.frame_id(sensor_frame)
+        try:
+            self.sensor_frame_id = self.frame_id(sensor_frame)
+        except FrameNotFound as error:
+            raise FrameNotFound(error.name, error.available, sensor_frame_hint(model)) from None
         self.tool_frame = tool_frame
         self.tool_frame_id = self.frame_id(tool_frame) if tool_frame is not None else None
         self.urdf_path = urdf_path
@@ -102,6 +110,8 @@ class Arm:
         self._locked_joint_ids = list(locked_joint_ids)
         self._reference_configuration = reference_configuration
         self.joint_names = [model.names[i] for i in range(1, model.njoints)]
+        self.sensor_mount: SensorMount | None = None  # set by from_urdf when the sensor frame was added
+        self.robot_name: str | None = None  # set by load_robot
         self._geometry: dict[str, pin.GeometryModel] = {}
 
     # ----------------------------------------------------------------- loading
@@ -139,7 +149,9 @@ class Arm:
         full_model, locked_ids, reference = None, [], None
         if locked_joints:
             full_model, model, locked_ids, reference = _lock_joints(model, locked_joints)
-        return cls(model, sensor_frame, tool_frame, path.resolve(), package_dirs, full_model, locked_ids, reference)
+        arm = cls(model, sensor_frame, tool_frame, path.resolve(), package_dirs, full_model, locked_ids, reference)
+        arm.sensor_mount = sensor_mount
+        return arm
 
     @classmethod
     def default(cls, tool_frame: str | None = "tool") -> Arm:

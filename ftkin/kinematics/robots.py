@@ -103,7 +103,13 @@ def sensor_mount_from_offset(parent_frame: str, sensor_offset=None) -> SensorMou
         raise InvalidInput(
             f"sensor offset must be 3 numbers (x y z [m]) or 6 (x y z [m] roll pitch yaw [rad]), got {sensor_offset!r}"
         )
+    if np.any(np.abs(values[:3]) > 10.0):
+        raise InvalidInput(f"sensor offset x y z must be within 10 m of the parent frame, got {values[:3].tolist()} [m]")
     rpy = values[3:] if len(values) == 6 else np.zeros(3)
+    if np.any(np.abs(rpy) > 2.0 * np.pi):
+        raise InvalidInput(
+            f"sensor offset roll pitch yaw {rpy.tolist()} are beyond 2π: angles are in radians (these look like degrees)"
+        )
     return SensorMount(parent_frame, tuple(values[:3]), tuple(rpy))
 
 
@@ -154,4 +160,6 @@ def load_robot(name: str, sensor_offset: Sequence[float] | SensorMount | None = 
     """
     if name not in ROBOTS:
         raise InvalidInput(f"unknown robot {name!r}; known robots: {', '.join(sorted(ROBOTS))}")
-    return ROBOTS[name](sensor_offset, tool_frame)
+    arm = ROBOTS[name](sensor_offset, tool_frame)
+    arm.robot_name = name
+    return arm

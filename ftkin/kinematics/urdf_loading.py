@@ -87,14 +87,24 @@ def yourdfpy_reasons(text: str, check_meshes: bool = False) -> list[str]:
     return reasons
 
 
+_XML_COMMENT = re.compile(r"<!--.*?-->", re.DOTALL)
+_XACRO_MARK = re.compile(r"<xacro:|\$\{|\$\(")  # macros, properties, substitution args
+
+
 def read_urdf_text(path: Path) -> str:
     """Read a URDF file or raise :class:`UrdfError` (missing, unreadable, not text)."""
     if not path.is_file():
         raise UrdfError(str(path), ["file not found"])
     try:
-        return path.read_text()
+        text = path.read_text()
     except (OSError, UnicodeDecodeError) as error:
         raise UrdfError(str(path), [f"cannot read file: {error}"]) from None
+    if path.name.endswith(".xacro") or _XACRO_MARK.search(_XML_COMMENT.sub("", text)):
+        raise UrdfError(
+            str(path),
+            [f"this is a xacro file, not a URDF: run xacro first (xacro {path.name} > robot.urdf) and give the result"],
+        )
+    return text
 
 
 _SOURCE_LOCATION = re.compile(r"^at line \d+ in \S+\.(cpp|hpp|h|cc)$")
@@ -148,3 +158,19 @@ def build_geometry(model: pin.Model, path: Path, kind: str, package_dirs: list[s
     reasons += _parser_lines(stderr)
     reasons += yourdfpy_reasons(read_urdf_text(path), check_meshes=True)
     raise UrdfError(str(path), reasons) from None
+
+
+def last_link(model: pin.Model) -> str:
+    """The link at the end of the chain: the last body frame on the last joint (e.g. ``tool0``, ``wrist_3_link``)."""
+    last_joint = model.njoints - 1
+    bodies = [frame.name for frame in model.frames if frame.parentJoint == last_joint]
+    return bodies[-1] if bodies else model.frames[len(model.frames) - 1].name
+
+
+def sensor_frame_hint(model: pin.Model) -> str:
+    """How to add a sensor frame the URDF lacks, naming its last link."""
+    last = last_link(model)
+    return (
+        f"if the URDF has no sensor frame, add it at the link the sensor is bolted to, e.g. --sensor-parent {last} "
+        f"(and --sensor-offset X Y Z [m]; in Python sensor_mount=SensorMount({last!r}, ...))"
+    )

@@ -19,7 +19,7 @@ from ..calibration.model import STANDARD_GRAVITY, SensorModel
 from ..calibration.mount import MOUNT_NAMES, check_mount_mode, split_information
 from ..calibration.observability import check_pose_count
 from ..exceptions import InvalidInput
-from ..validation import as_positive, as_rotation_batch, as_vector
+from ..validation import as_in_range, as_positive, as_rotation_batch, as_vector
 
 PAPER_TOOL_WEIGHT = 3.15
 """The paper's tool weight [N] (gripper plus the sensor's sensitive end)."""
@@ -38,8 +38,10 @@ _ROWS = (
 
 def expected_tool(tool_weight: float | None = None, center_of_mass=None, g: float = STANDARD_GRAVITY) -> SensorModel:
     """The tool a plan is made for: weight [N] hanging straight down the base z axis, COM [m, sensor frame]."""
-    weight = PAPER_TOOL_WEIGHT if tool_weight is None else as_positive(tool_weight, "tool_weight")
+    weight = PAPER_TOOL_WEIGHT if tool_weight is None else as_in_range(tool_weight, "tool_weight", 1e-6, 1e6, "N")
     com = as_vector(PAPER_CENTER_OF_MASS if center_of_mass is None else center_of_mass, 3, "center_of_mass")
+    if np.linalg.norm(com) > 10.0:
+        raise InvalidInput(f"center_of_mass must lie within 10 m of the sensor, got {com.tolist()} m")
     return SensorModel.from_tool(weight / g, com, g=g)
 
 

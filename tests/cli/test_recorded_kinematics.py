@@ -45,9 +45,13 @@ def test_compensate_uses_the_recorded_urdf(tmp_path, rng, caplog):
     out = read_table(tmp_path / "out.csv").floats(WRENCH_CHANNELS)
     np.testing.assert_allclose(out, np.tile(contact, (5, 1)), atol=1e-4)
 
-    # with the bundled arm named explicitly the kinematics differ: the result is wrong, and a warning says why
+    # with the bundled arm named explicitly the kinematics differ: refused (the record says which arm) ...
     assert main(["compensate", str(tmp_path / "calib.json"), str(tmp_path / "log.csv"), "-o", str(tmp_path / "wrong.csv"),
-                 "--robot", "ftkin_c4"]) == 0
+                 "--robot", "ftkin_c4"]) == 2
+    assert not (tmp_path / "wrong.csv").exists()
+    # ... unless deliberate: then the result is wrong, and a warning says why
+    assert main(["compensate", str(tmp_path / "calib.json"), str(tmp_path / "log.csv"), "-o", str(tmp_path / "wrong.csv"),
+                 "--robot", "ftkin_c4", "--allow-other-arm"]) == 0
     wrong = read_table(tmp_path / "wrong.csv").floats(WRENCH_CHANNELS)
     assert np.abs(wrong - contact).max() > 0.1
     assert "the calibration was made with" in caplog.text and "turned.urdf" in caplog.text

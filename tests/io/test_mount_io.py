@@ -157,3 +157,22 @@ def test_ros_exports_note_the_mount_and_the_sign(mounted):
     result, _ = mounted
     notes = " ".join(export_notes(result, "admittance"))
     assert "estimated mount" in notes and "sensor_sign -1 and the x axis reversed" in notes
+
+
+def test_franka_load_takes_a_dynamic_calibrations_inertia_into_flange_axes(mounted, arm, tmp_path):
+    """The inertia of a dynamic calibration (sensor axes) is exported in flange axes: I_F = R I_S Rᵀ by FK."""
+    import dataclasses
+
+    from ftkin import DynamicCalibrationResult
+
+    result, _ = mounted
+    inertia_in_sensor = np.array([[0.012, 0.001, -0.002], [0.001, 0.02, 0.0005], [-0.002, 0.0005, 0.03]])
+    fields = {f.name: getattr(result, f.name) for f in dataclasses.fields(result)}
+    dynamic = DynamicCalibrationResult(**fields, inertia_about_com_in_sensor=inertia_in_sensor)
+    request = yaml.safe_load(export_payload(dynamic, arm, tmp_path / "load.yaml", "franka-load").read_text())
+    q = arm.random_configurations(1, np.random.default_rng(3))[0]
+    rotation_flange, _ = arm.frame_placement(q, "flange")
+    rotation_sensor, _ = arm.frame_placement(q, "sensor")
+    sensor_to_flange = rotation_flange.T @ rotation_sensor @ result.mount_rotation.T
+    expected = sensor_to_flange @ inertia_in_sensor @ sensor_to_flange.T
+    np.testing.assert_allclose(np.reshape(request["load_inertia"], (3, 3), order="F"), expected, atol=1e-12)

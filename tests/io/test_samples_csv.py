@@ -114,12 +114,12 @@ def test_missing_file(tmp_path):
 def test_misspelled_wrench_column_suggests(tmp_path):
     # regression: a case-only difference was not suggested (difflib ratio too low for 2 letters)
     text = HEADER.replace("fz", "Fz") + "\n" + ROW + "\n"
-    _assert_error(tmp_path, text, r"missing wrench column\(s\) \['fz'\] \(did you mean 'Fz' for 'fz'\?\)", line=1)
+    _assert_error(tmp_path, text, r"missing wrench column\(s\) \['fz'\] \(did you mean: rename column 'Fz' to 'fz'\?\)", line=1)
 
 
 def test_missing_orientation_columns(tmp_path):
     text = "fx,fy,fz,mx,my,mz,alpah,beta,gamma\n1,2,3,4,5,6,0,0,0\n"
-    _assert_error(tmp_path, text, r"missing Euler angle column\(s\) \['alpha'\].*did you mean 'alpah'", arm=None)
+    _assert_error(tmp_path, text, r"missing Euler angle column\(s\) \['alpha'\].*did you mean: rename column 'alpah' to 'alpha'", arm=None)
 
 
 def test_no_orientation_at_all(tmp_path, arm):
@@ -210,7 +210,7 @@ def test_non_unit_quaternion(tmp_path):
 def test_missing_column_points_at_the_header_line(tmp_path):
     # regression: the line was the one before the first data row, a comment here
     text = "# c1\n" + HEADER.replace("my", "My") + "\n# c2\n# c3\n" + ROW + "\n"
-    _assert_error(tmp_path, text, r"missing wrench column\(s\) \['my'\] \(did you mean 'My'", line=2)
+    _assert_error(tmp_path, text, r"missing wrench column\(s\) \['my'\] \(did you mean: rename column 'My' to 'my'", line=2)
 
 
 def test_excel_byte_order_mark_and_crlf(tmp_path):

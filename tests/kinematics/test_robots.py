@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.metadata
+import json
 
 import numpy as np
 import pinocchio as pin
@@ -152,7 +153,14 @@ def test_cli_report_and_view_read_samples_with_the_calibration_robot(tmp_path, t
     calib = tmp_path / "calib.json"
     assert main(["calibrate", str(csv_path), "--robot", "ur5", "-o", str(calib)]) == 0
     capsys.readouterr()
-    # q1..q6 fit the bundled arm too: without --robot the calibration's UR5 is not silently swapped for it.
+    # the calibration file records --robot ur5: report and view need no robot options repeated
+    assert main(["report", str(calib), str(csv_path), "-o", str(tmp_path / "r0.png")]) == 0
+    assert main(["view", str(calib), str(csv_path), "--html", str(tmp_path / "v.html")]) == 0
+    capsys.readouterr()
+    # a file without that record (older ftkin): q1..q6 fit the bundled arm too, the UR5 is not silently swapped for it
+    document = json.loads(calib.read_text())
+    del document["kinematics"]
+    calib.write_text(json.dumps(document))
     for command in (["report", str(calib), str(csv_path), "-o", str(tmp_path / "r.png")], ["view", str(calib), str(csv_path), "--no-wait"]):
         assert main(command) == 2
         error = capsys.readouterr().err

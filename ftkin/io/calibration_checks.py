@@ -1,0 +1,97 @@
+"""Consistency checks of a calibration document, beyond types and shapes.
+
+JSON parsing refuses duplicate keys (which value is meant would be
+ambiguous) and absurd nesting; the parameters must agree with the derived
+fields written beside them (``tool_weight``, ``tool_mass``, ``base_tilt_deg``);
+a covariance must be symmetric positive semi-definite. Booleans are not
+numbers. Each failure is a :class:`~ftkin.exceptions.CalibrationFileError`
+naming the key.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+from ..exceptions import CalibrationFileError
+
+
+def short_repr(value) -> str:
+    """``repr`` cut to 80 characters for messages."""
+    text = repr(value)
+    return text if len(text) <= 80 else text[:80] + "..."
+
+
+def has_bool(value) -> bool:
+    """Whether a JSON value (or any item of a nested list) is a boolean."""
+    if isinstance(value, bool):
+        return True
+    return isinstance(value, list) and any(has_bool(item) for item in value)
+
+
+def _refuse_duplicate_keys(pairs):
+    document = {}
+    for key, value in pairs:
+        if key in document:
+            raise _DuplicateKey(key)
+        document[key] = value
+    return document
+
+
+class _DuplicateKey(ValueError):
+    pass
+
+
+def parse_calibration_json(text: str, path: str) -> dict:
+    """Parse the JSON of a calibration file: duplicate keys, NaN/Infinity and absurd nesting refused."""
+    try:
+        return json.loads(text, object_pairs_hook=_refuse_duplicate_keys)
+    except _DuplicateKey as error:
+        raise CalibrationFileError(path, "duplicate key in a JSON object: which value is meant is ambiguous", str(error)) from None
+    except json.JSONDecodeError as error:
+        raise CalibrationFileError(
+            path, f"not valid JSON (truncated or corrupt?) at line {error.lineno}, column {error.colno}: {error.msg}"
+        ) from None
+    except RecursionError:
+        raise CalibrationFileError(path, "JSON nested too deeply; expected an ftkin calibration document") from None
+    except ValueError as error:  # a number with too many digits
+        raise CalibrationFileError(path, f"not a valid calibration document: {error}") from None
+
+
+def check_derived(reader, document: dict, result) -> None:
+    """Refuse a derived field (``tool_weight``, ``tool_mass``, ``base_tilt_deg``) that disagrees with the parameters."""
+    derived = (
+        ("tool_weight", result.tool_weight, "N", "|gravity_in_base|"),
+        ("tool_mass", result.tool_mass, "kg", "|gravity_in_base| / g"),
+    )
+    for key, value, unit, source in derived:
+        if key in document:
+            stated = reader.number(key)
+            if not math.isclose(stated, value, rel_tol=1e-9, abs_tol=1e-12):
+                reader.fail(f"{stated} {unit} disagrees with {source} = {value} {unit} (file edited by hand?)", key)
+    if "base_tilt_deg" in document:
+        stated = reader.array("base_tilt_deg", (2,))
+        expected = np.array(result.base_tilt_deg)
+        if not np.allclose(stated, expected, rtol=1e-9, atol=1e-9):
+            reader.fail(
+                f"{stated.tolist()} deg disagrees with the tilt of gravity_in_base = {expected.tolist()} deg "
+                "(file edited by hand?)",
+                "base_tilt_deg",
+            )
+
+
+def check_covariance(reader, covariance) -> None:
+    """Refuse a covariance that is not symmetric positive semi-definite."""
+    if covariance is None:
+        return
+    scale = max(float(np.max(np.abs(covariance))), 1e-300)
+    asymmetry = float(np.max(np.abs(covariance - covariance.T)))
+    if asymmetry > 1e-9 * scale:
+        reader.fail(f"not symmetric (largest |C - C^T| = {asymmetry:.3g}); expected a covariance matrix", "covariance")
+    smallest = float(np.linalg.eigvalsh(0.5 * (covariance + covariance.T))[0])
+    if smallest < -1e-9 * scale:
+        reader.fail(
+            f"not positive semi-definite (eigenvalue {smallest:.3g}); expected a covariance matrix", "covariance"
+        )
