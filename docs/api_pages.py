@@ -51,7 +51,7 @@ def automodule(name: str, members: bool = True, no_index: bool = False) -> str:
 
 
 def stage_modules(package: str, preferred: list[str]) -> list[str]:
-    found = sorted(m.name for m in pkgutil.iter_modules(importlib.import_module(package).__path__))
+    found = sorted(m.name for m in pkgutil.iter_modules(importlib.import_module(package).__path__) if not m.name.startswith("__"))
     return [m for m in preferred if m in found] + [m for m in found if m not in preferred]
 
 
