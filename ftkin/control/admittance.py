@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from operator import add
 
 import numpy as np
 
@@ -118,6 +119,7 @@ class Admittance:
         self._time_constant = 1.0 / (2.0 * math.pi * self.derivative_cutoff)
         self._k1s = self.selection * self.k1
         self._k2s = self.selection * self.k2
+        self._k1s_floats, self._k2s_floats = self._k1s.tolist(), self._k2s.tolist()
         self.state = AdmittanceState()
 
     def reset(self) -> None:
@@ -146,28 +148,49 @@ class Admittance:
                 (environment on the tool), already validated.
             dt: Time since the previous update [s], > 0.
         """
+        return np.array(self.update_floats(contact_wrench.tolist(), dt))
+
+    def update_floats(self, contact_wrench, dt: float) -> list[float] | tuple[float, ...]:
+        """:meth:`update` on six Python floats, returning six floats (the control tick's path).
+
+        Every update, from :meth:`update` or from ``JointAdmittance.step``, runs
+        here, so a per-tick feature of the law belongs in this method. The
+        operations are those of the array form, component by component (same
+        IEEE results), on floats because numpy's per-call overhead dominates
+        on 6-vectors.
+        """
         state = self.state
-        error = self.force_error(contact_wrench)
+        error = [e - min(max(e, -band), band)
+                 for e, band in zip(map(add, self.desired_wrench.tolist(), contact_wrench), self.deadband.tolist())]
         if not state.started:
             state.started = True
             if self.bumpless:
-                state.previous_error = error
+                state.previous_error = np.array(error)
+        # First-order low pass of the error's derivative, then S·(K1·dΔF/dt + K2·ΔF).
         alpha = dt / (dt + self._time_constant)
-        raw_derivative = (error - state.previous_error) / dt
-        state.filtered_derivative = state.filtered_derivative + alpha * (raw_derivative - state.filtered_derivative)
-        state.previous_error = error
-        return self.saturate(self._k1s * state.filtered_derivative + self._k2s * error)
+        derivative = [f + alpha * ((e - p) / dt - f)
+                      for e, p, f in zip(error, state.previous_error.tolist(), state.filtered_derivative.tolist())]
+        state.filtered_derivative = np.array(derivative)
+        state.previous_error = np.array(error)
+        return self.saturate_floats([a * d + b * e for a, d, b, e in zip(self._k1s_floats, derivative, self._k2s_floats, error)])
 
-    def saturate(self, twist: np.ndarray) -> np.ndarray:
-        """Scale the linear and angular parts of a twist to their norm limits (direction kept)."""
-        v0, v1, v2, w0, w1, w2 = twist.tolist()
+    def saturate_floats(self, twist):
+        """:meth:`saturate` on six floats: returns ``twist`` itself when within the limits, else six new floats."""
+        v0, v1, v2, w0, w1, w2 = twist
         linear = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
         angular = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
         if linear <= self.max_linear_velocity and angular <= self.max_angular_velocity:
             return twist
-        out = twist.copy()
         if linear > self.max_linear_velocity:
-            out[:3] *= self.max_linear_velocity / linear
+            scale = self.max_linear_velocity / linear
+            v0, v1, v2 = v0 * scale, v1 * scale, v2 * scale
         if angular > self.max_angular_velocity:
-            out[3:] *= self.max_angular_velocity / angular
-        return out
+            scale = self.max_angular_velocity / angular
+            w0, w1, w2 = w0 * scale, w1 * scale, w2 * scale
+        return v0, v1, v2, w0, w1, w2
+
+    def saturate(self, twist: np.ndarray) -> np.ndarray:
+        """Scale the linear and angular parts of a twist to their norm limits (direction kept)."""
+        values = twist.tolist()
+        limited = self.saturate_floats(values)
+        return twist if limited is values else np.array(limited)

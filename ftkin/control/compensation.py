@@ -10,13 +10,15 @@ Positive contact force is what the environment exerts on the tool.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..calibration.model import SensorModel, cross_rows
 from ..calibration.samples import Samples
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
-from ..validation import as_batch, as_rotation_batch
+from ..validation import as_batch, as_rotation_batch, rotation_rows
 
 
 class Compensator:
@@ -37,11 +39,18 @@ class Compensator:
         self._gravity_in_base = np.array(calibration.gravity_in_base)
         self._bias = np.array(calibration.bias)
         self._com = np.array(calibration.center_of_mass)
-        # The same parameters as Python floats, for the one-sample path.
+        self._q_shape = (arm.nq,) if arm is not None else None
+        self.refresh_floats()
+
+    def refresh_floats(self) -> None:
+        """Copy the parameter arrays (``_bias``, ``_gravity_in_base``, ``_com``) into the float path.
+
+        The one-sample path reads Python floats: call this after replacing a
+        parameter array at run time (e.g. a re-zeroed bias).
+        """
         self._gravity_floats = tuple(self._gravity_in_base.tolist())
         self._com_floats = tuple(self._com.tolist())
         self._bias_floats = tuple(self._bias.tolist())
-        self._q_shape = (arm.nq,) if arm is not None else None
 
     def _require_arm(self) -> Arm:
         if self.arm is None:
@@ -53,50 +62,72 @@ class Compensator:
         """Contact wrench ``(6,)`` from joint angles ``q`` [rad] and one raw reading.
 
         This is the control-loop path: one forward-kinematics call and a few
-        vector operations, no allocation of large arrays.
+        float operations, no allocation of large arrays.
         """
         arm = self._require_arm()
         try:
             q = np.asarray(q, dtype=np.float64)
-            raw = np.asarray(raw_wrench, dtype=np.float64)
+            raw = raw_wrench.tolist() if type(raw_wrench) is np.ndarray and raw_wrench.dtype == np.float64 \
+                else np.asarray(raw_wrench, dtype=np.float64).tolist()
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q and raw_wrench must be numeric: {error}") from None
-        if q.shape != self._q_shape or raw.shape != (6,):
-            raise InvalidInput(f"expected q of shape {self._q_shape} and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
-        if not (np.isfinite(q).all() and np.isfinite(raw).all()):
+        if q.shape != self._q_shape or len(raw) != 6 or type(raw[0]) is not float:
+            raise InvalidInput(f"expected q of shape {self._q_shape} and raw_wrench of shape (6,), "
+                               f"got {q.shape} and {np.shape(raw_wrench)}")
+        if not (math.isfinite(sum(raw)) and math.isfinite(sum(q.tolist()))) and not (np.isfinite(q).all() and all(map(math.isfinite, raw))):
             raise InvalidInput(f"q and raw_wrench must be finite, got q={q} raw_wrench={raw}")
-        return self.compensate_rotation_unchecked(arm.sensor_rotation_unchecked(q), raw)
+        return np.array(self.contact_floats(arm.sensor_rotation_unchecked(q).tolist(), raw))
 
     def compensate_rotation(self, rotation_sensor_to_base, raw_wrench) -> np.ndarray:
-        """Contact wrench ``(6,)`` from ``R_BS`` ``(3, 3)`` and one raw reading."""
-        rotations, _ = as_rotation_batch(rotation_sensor_to_base)
-        raw, _ = as_batch(raw_wrench, 6, "raw_wrench")
-        if len(rotations) != 1 or len(raw) != 1:
-            raise InvalidInput("compensate_rotation takes one (3, 3) rotation and one (6,) wrench; use compensate_batch")
-        return self.compensate_rotation_unchecked(rotations[0], raw[0])
+        """Contact wrench ``(6,)`` from ``R_BS`` ``(3, 3)`` and one raw reading.
+
+        Raises:
+            InvalidInput: ``R_BS`` not a ``(3, 3)`` rotation (orthonormal within 1e-6, det +1),
+                or ``raw_wrench`` not six finite numbers.
+        """
+        rows, raw = rotation_rows(rotation_sensor_to_base), None
+        try:
+            raw = np.asarray(raw_wrench, dtype=np.float64).tolist()
+        except (TypeError, ValueError):
+            pass
+        if rows is None or type(raw) is not list or len(raw) != 6 or type(raw[0]) is not float or not math.isfinite(sum(raw)):
+            rotations, _ = as_rotation_batch(rotation_sensor_to_base)  # raises the detailed error
+            batch, _ = as_batch(raw_wrench, 6, "raw_wrench")
+            if len(rotations) != 1 or len(batch) != 1:
+                raise InvalidInput("compensate_rotation takes one (3, 3) rotation and one (6,) wrench; use compensate_batch")
+            rows, raw = rotations[0].tolist(), batch[0].tolist()
+        return np.array(self.contact_floats(rows, raw))
 
     def compensate_rotation_unchecked(self, rotation: np.ndarray, raw: np.ndarray) -> np.ndarray:
         """:meth:`compensate_rotation` without validation: ``R_BS`` ``(3, 3)`` and ``raw`` ``(6,)`` float arrays.
 
         For control loops that validated their inputs already; returns a new array.
         """
-        # Scalar arithmetic on Python floats: ~3x faster than numpy on 3-vectors, same IEEE results.
-        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation.tolist()
+        return np.array(self.contact_floats(rotation.tolist(), raw.tolist()))
+
+    def contact_floats(self, rotation_rows, raw) -> tuple[float, ...]:
+        """The compensation on Python floats: ``R_BS.tolist()`` and six raw floats → six contact floats.
+
+        Every one-sample path (and ``JointAdmittance.step``) runs here: numpy's
+        per-call overhead dominates on 3-vectors; the IEEE operations are those
+        of the batch form.
+        """
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation_rows
         ax, ay, az = self._gravity_floats
         px, py, pz = self._com_floats
         b0, b1, b2, b3, b4, b5 = self._bias_floats
-        w0, w1, w2, w3, w4, w5 = raw.tolist()
-        gx = r00 * ax + r10 * ay + r20 * az
+        w0, w1, w2, w3, w4, w5 = raw
+        gx = r00 * ax + r10 * ay + r20 * az  # Gs = R_BSᵀ a
         gy = r01 * ax + r11 * ay + r21 * az
         gz = r02 * ax + r12 * ay + r22 * az
-        return np.array([
+        return (
             (w0 - b0) - gx,
             (w1 - b1) - gy,
             (w2 - b2) - gz,
-            (w3 - b3) - (py * gz - pz * gy),
+            (w3 - b3) - (py * gz - pz * gy),  # M' = M − M0 − P × Gs
             (w4 - b4) - (pz * gx - px * gz),
             (w5 - b5) - (px * gy - py * gx),
-        ])
+        )
 
     # ----------------------------------------------------------------- batch
     def compensate_batch(self, rotation_sensor_to_base, raw_wrenches) -> np.ndarray:
@@ -117,8 +148,13 @@ class Compensator:
 
     def compensate_joint_positions(self, joint_positions, raw_wrenches) -> np.ndarray:
         """Contact wrenches ``(N, 6)`` from ``(N, nq)`` joint angles [rad] and ``(N, 6)`` raw readings."""
-        rotations = self._require_arm().rotation_sensor_to_base(np.atleast_2d(joint_positions))
-        return self.compensate_batch(rotations, raw_wrenches)
+        arm = self._require_arm()
+        configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
+        raw, _ = as_batch(raw_wrenches, 6, "raw_wrenches")
+        if len(configurations) != len(raw):
+            raise InvalidInput(f"{len(configurations)} rotations but {len(raw)} wrenches (one rotation per joint configuration); "
+                               "expected one each")
+        return self.compensate_batch_unchecked(arm.rotations_unchecked(configurations), raw)
 
     def compensate_samples(self, samples: Samples) -> np.ndarray:
         """Contact wrenches ``(N, 6)`` of a :class:`~ftkin.calibration.samples.Samples`."""

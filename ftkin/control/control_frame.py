@@ -56,27 +56,35 @@ class ControlFrame:
 
     def wrench_from_sensor(self, wrench_in_sensor: np.ndarray, rotation_sensor_to_base: np.ndarray) -> np.ndarray:
         """``(6,)`` wrench at the control point in this frame's axes, from the sensor's ``(6,)``."""
-        fx, fy, fz, mx, my, mz = wrench_in_sensor.tolist()
-        rx, ry, rz = self._r
-        mx, my, mz = mx - (ry * fz - rz * fy), my - (rz * fx - rx * fz), mz - (rx * fy - ry * fx)
-        if self.frame != "sensor":
-            rows = rotation_sensor_to_base.tolist() if self.frame == "base" else self._inverse_rows
-            fx, fy, fz = _rotate(rows, fx, fy, fz)
-            mx, my, mz = _rotate(rows, mx, my, mz)
-        return np.array([fx, fy, fz, mx, my, mz])
+        return np.array(self.wrench_floats(wrench_in_sensor.tolist(), rotation_sensor_to_base.tolist()))
 
     def twist_to_sensor_origin(self, twist: np.ndarray, rotation_sensor_to_base: np.ndarray) -> np.ndarray:
         """Twist ``[v; ω]`` of the sensor origin in base axes, from a control-point twist in this frame's axes."""
-        vx, vy, vz, wx, wy, wz = twist.tolist()
-        rows = rotation_sensor_to_base.tolist()
+        return np.array(self.twist_floats(twist.tolist(), rotation_sensor_to_base.tolist()))
+
+    # The two transports on Python floats (the control tick's path; the methods above wrap them).
+    def wrench_floats(self, wrench_in_sensor, rotation_rows) -> tuple[float, ...]:
+        """:meth:`wrench_from_sensor` on six floats and ``R_BS.tolist()``; returns six floats."""
+        fx, fy, fz, mx, my, mz = wrench_in_sensor
+        rx, ry, rz = self._r
+        mx, my, mz = mx - (ry * fz - rz * fy), my - (rz * fx - rx * fz), mz - (rx * fy - ry * fx)
+        if self.frame != "sensor":
+            rows = rotation_rows if self.frame == "base" else self._inverse_rows
+            fx, fy, fz = _rotate(rows, fx, fy, fz)
+            mx, my, mz = _rotate(rows, mx, my, mz)
+        return fx, fy, fz, mx, my, mz
+
+    def twist_floats(self, twist, rotation_rows) -> tuple[float, ...]:
+        """:meth:`twist_to_sensor_origin` on six floats and ``R_BS.tolist()``; returns six floats."""
+        vx, vy, vz, wx, wy, wz = twist
         if self.frame != "base":
             if self.frame == "tool":
                 vx, vy, vz = _rotate(self._rotation_rows, vx, vy, vz)
                 wx, wy, wz = _rotate(self._rotation_rows, wx, wy, wz)
-            vx, vy, vz = _rotate(rows, vx, vy, vz)
-            wx, wy, wz = _rotate(rows, wx, wy, wz)
-        px, py, pz = _rotate(rows, *self._r)
-        return np.array([vx - (wy * pz - wz * py), vy - (wz * px - wx * pz), vz - (wx * py - wy * px), wx, wy, wz])
+            vx, vy, vz = _rotate(rotation_rows, vx, vy, vz)
+            wx, wy, wz = _rotate(rotation_rows, wx, wy, wz)
+        px, py, pz = _rotate(rotation_rows, *self._r)
+        return vx - (wy * pz - wz * py), vy - (wz * px - wx * pz), vz - (wx * py - wy * px), wx, wy, wz
 
 
 def _rotate(rows, x: float, y: float, z: float) -> tuple[float, float, float]:

@@ -35,10 +35,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from operator import ge, le
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg import lapack
 
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
@@ -47,7 +47,8 @@ from .compensation import Compensator
 from .control_frame import control_frame_for
 from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
 
-_potrf, _potrs, _posv = lapack.dpotrf, lapack.dpotrs, lapack.dposv
+_posv = None
+"""LAPACK's ``dposv`` (Cholesky factor and solve in one call), loaded with scipy on first use."""
 
 
 @dataclass(frozen=True)
@@ -123,8 +124,14 @@ class JointAdmittance:
         self.manipulability_threshold, self.max_damping = float(manipulability_threshold), float(max_damping)
         self.limit_gain = float(limit_gain)
         self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
-        self._joint_limits = list(zip(arm.lower_limits.tolist(), arm.upper_limits.tolist(),
-                                      (arm.velocity_limits * float(velocity_scale)).tolist()))
+        lower, upper = arm.lower_limits.tolist(), arm.upper_limits.tolist()
+        speeds = (arm.velocity_limits * float(velocity_scale)).tolist()
+        self._joint_limits = list(zip(lower, upper, speeds))
+        # Joints this far inside their limits are bounded by their speed alone (limit scaling's shortcut);
+        # the 1e-9 rad margin covers the rounding of gain · distance.
+        self._speeds = speeds
+        self._safe_lower = [low + speed / self.limit_gain + 1e-9 for low, speed in zip(lower, speeds)]
+        self._safe_upper = [high - speed / self.limit_gain - 1e-9 for high, speed in zip(upper, speeds)]
         self._nq = arm.nq
         self.monitor = FaultMonitor(sensor_limits)
         self.reset()
@@ -135,7 +142,21 @@ class JointAdmittance:
         self.monitor.reset()
         self.safety_latched = False
         self._holding = False
-        self.last_status: StepStatus | None = None
+        self._status: StepStatus | None = None
+        self._status_parts: tuple | None = None
+
+    @property
+    def last_status(self) -> StepStatus | None:
+        """The :class:`StepStatus` of the last tick (None before the first tick after a reset).
+
+        Built on first access: the tick itself only keeps its parts (a moving
+        tick's status costs more than a microsecond to build).
+        """
+        if self._status_parts is not None:
+            dq, contact, twist, manipulability, damping, scale = self._status_parts
+            self._status = StepStatus(dq, np.array(contact), np.array(twist), manipulability, damping, scale, False, "")
+            self._status_parts = None
+        return self._status
 
     def step(self, q, raw_wrench, dt: float) -> np.ndarray:
         """Joint velocities ``(nq,)`` [rad/s] for this tick.
@@ -149,6 +170,8 @@ class JointAdmittance:
             InvalidInput: ``q``, ``raw_wrench`` or ``dt`` of the wrong shape or not numbers
                 (NaN, inf, a bad ``dt`` are sensor faults: held and reported, not raised).
         """
+        # The tick runs on Python floats (numpy's per-call overhead dominates on 3- and 6-vectors);
+        # numpy only for the Jacobian products. The status is built when asked (last_status).
         try:
             q = np.asarray(q, dtype=np.float64)
             raw = np.asarray(raw_wrench, dtype=np.float64)
@@ -157,26 +180,32 @@ class JointAdmittance:
             raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
         if q.shape != (self._nq,) or raw.shape != (6,):
             raise InvalidInput(f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
-        fault, event = self.monitor.check(q, raw.tolist(), dt)
+        raw = raw.tolist()
+        fault, event = self.monitor.check(q, raw, dt)
         if fault is not SensorFault.NONE:
             return self._hold(fault, event)
+        # 1. kinematics: forward kinematics and the sensor Jacobian (base axes), one Pinocchio call
         jacobian = pin.computeFrameJacobian(self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED)
-        rotation = self._data.oMf[self._sensor_id].rotation
-        contact = raw.copy() if self.compensator is None else self.compensator.compensate_rotation_unchecked(rotation, raw)
-        fx, fy, fz, mx, my, mz = contact.tolist()
+        rotation = self._data.oMf[self._sensor_id].rotation.tolist()
+        # 2. compensation (six floats, sensor frame) and the safety stop
+        contact = raw if self.compensator is None else self.compensator.contact_floats(rotation, raw)
+        fx, fy, fz, mx, my, mz = contact
         force, torque = math.sqrt(fx * fx + fy * fy + fz * fz), math.sqrt(mx * mx + my * my + mz * mz)
         if self.safety_latched or force > self.force_limit or torque > self.torque_limit:
-            return self._stop(contact, force, torque)
-        wrench = self.frame.wrench_from_sensor(contact, rotation)
+            return self._stop(np.array(contact), force, torque)
+        # 3. the admittance law in the control frame, its twist moved to the sensor origin
+        wrench = self.frame.wrench_floats(contact, rotation)
         if self._holding:
-            self._restart_derivative(wrench)
-        twist = self.admittance.update(wrench, dt)
-        sensor_twist = self.frame.twist_to_sensor_origin(twist, rotation)
-        dq, manipulability, damping = damped_least_squares(jacobian, sensor_twist, self.manipulability_threshold, self.max_damping)
-        scale = self._limit_scale(q, dq)
+            self._restart_derivative(np.array(wrench))
+        twist = self.admittance.update_floats(wrench, dt)
+        sensor_twist = self.frame.twist_floats(twist, rotation)
+        # 4. joint velocities: damped least squares, then the joint limits
+        dq, manipulability, damping = damped_least_squares(jacobian, np.array(sensor_twist), self.manipulability_threshold,
+                                                           self.max_damping)
+        scale = self._limit_scale(q.tolist(), dq.tolist())
         if scale < 1.0:
             dq *= scale
-        self.last_status = StepStatus(dq, contact, twist, manipulability, damping, scale, False, "")
+        self._status_parts = (dq, contact, twist, manipulability, damping, scale)
         return dq
 
     def _hold(self, fault: SensorFault, event: str) -> np.ndarray:
@@ -187,7 +216,8 @@ class JointAdmittance:
         """
         self._holding = True
         dq = np.zeros(self._nq)
-        self.last_status = StepStatus(dq, np.full(6, math.nan), np.zeros(6), math.nan, math.nan, 0.0,
+        self._status_parts = None
+        self._status = StepStatus(dq, np.full(6, math.nan), np.zeros(6), math.nan, math.nan, 0.0,
                                       self.safety_latched, event, fault)
         return dq
 
@@ -200,24 +230,29 @@ class JointAdmittance:
             state.filtered_derivative = np.zeros(6)
 
     def _stop(self, contact: np.ndarray, force: float, torque: float) -> np.ndarray:
-        if self.safety_latched and self.last_status is not None and self.last_status.safety_stop:
-            event = self.last_status.event
+        previous = self.last_status
+        if self.safety_latched and previous is not None and previous.safety_stop:
+            event = previous.event
         else:
             event = (f"contact {force:.3g} N / {torque:.3g} N·m exceeded the limit "
                      f"{self.force_limit:.3g} N / {self.torque_limit:.3g} N·m: stopped (reset() to resume)")
         self.safety_latched = True
         dq = np.zeros(self._nq)
-        self.last_status = StepStatus(dq, contact, np.zeros(6), math.nan, math.nan, 0.0, True, event)
+        self._status_parts = None
+        self._status = StepStatus(dq, contact, np.zeros(6), math.nan, math.nan, 0.0, True, event)
         return dq
 
-    def _limit_scale(self, q: np.ndarray, dq: np.ndarray) -> float:
+    def _limit_scale(self, q: list, dq: list) -> float:
         """Largest ``s ≤ 1`` keeping every joint's ``s·dq`` within its bound (0 if one is at or past its limit).
 
         A joint moving towards its position limit may go at most ``limit_gain · distance``
         [rad/s], and never beyond its (scaled) velocity limit.
         """
+        if (all(map(le, map(abs, dq), self._speeds)) and all(map(ge, q, self._safe_lower))
+                and all(map(le, q, self._safe_upper))):
+            return 1.0  # every joint far from its limits and within its speed: the loop below gives 1.0 too
         gain, scale = self.limit_gain, 1.0
-        for position, velocity, (lower, upper, speed) in zip(q.tolist(), dq.tolist(), self._joint_limits):
+        for position, velocity, (lower, upper, speed) in zip(q, dq, self._joint_limits):
             if velocity > 0.0:
                 scale = min(scale, max(0.0, min(speed, gain * (upper - position))) / velocity)
             elif velocity < 0.0:
@@ -242,11 +277,14 @@ def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, manipulability
     Returns:
         ``dq`` ``(nq,)`` [rad/s], the manipulability ``w`` and ``λ``.
     """
+    global _posv
+    if _posv is None:
+        from scipy.linalg.lapack import dposv as _posv
     gram = jacobian @ jacobian.T
-    factor, info = _potrf(gram)
+    factor, solution, info = _posv(gram, twist)  # one factorisation; w from its diagonal
     manipulability = math.prod(factor.diagonal().tolist()) if info == 0 else 0.0
     if manipulability >= manipulability_threshold:
-        return jacobian.T @ _potrs(factor, twist)[0], manipulability, 0.0
+        return jacobian.T @ solution, manipulability, 0.0
     damping = max_damping * (1.0 - manipulability / manipulability_threshold)
     gram.flat[::7] += damping * damping
     return jacobian.T @ _posv(gram, twist)[1], manipulability, damping

@@ -27,6 +27,7 @@ import math
 from dataclasses import dataclass
 from enum import StrEnum
 from numbers import Real
+from operator import lt
 
 import numpy as np
 
@@ -184,7 +185,7 @@ class FaultMonitor:
         if dt > self._ratio * reference:
             return SensorFault.DT_JUMP, (f"dt = {dt:.4g} s is more than {self._ratio:g} x the nominal "
                                          f"{reference:.4g} s (dropped ticks): holding")
-        if self._check_range:
+        if self._check_range and not all(map(lt, map(abs, raw), self._ranges)):
             for channel, (value, limit) in enumerate(zip(raw, self._ranges)):
                 if not -limit < value < limit:
                     return SensorFault.SATURATED, f"channel {channel} reads {value:.4g}, at or beyond the range ±{limit:g}: holding"

@@ -16,10 +16,11 @@ import pinocchio as pin
 
 from ..exceptions import FrameNotFound, InvalidInput, UrdfError
 from ..validation import as_batch, as_vector
+from .chain import RotationChain
 from .urdf_loading import build_geometry, build_model
 
 BUNDLED_URDF_NAME = "ftkin_c4.urdf"
-
+_BATCH_MINIMUM = 16  # batches from this size use numpy kinematics (below it Pinocchio per row is as fast)
 _REFERENCE_FRAMES = {
     "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
     "local": pin.ReferenceFrame.LOCAL,
@@ -103,6 +104,7 @@ class Arm:
         self._reference_configuration = reference_configuration
         self.joint_names = [model.names[i] for i in range(1, model.njoints)]
         self._geometry: dict[str, pin.GeometryModel] = {}
+        self._chain: RotationChain | None | bool = False  # False: not built yet
 
     # ----------------------------------------------------------------- loading
     @classmethod
@@ -198,12 +200,25 @@ class Arm:
         return pin.updateFramePlacement(self.model, self.data, self.sensor_frame_id).rotation
 
     def rotation_sensor_to_base(self, q) -> np.ndarray:
-        """Sensor orientation ``R_BS`` for ``q`` ``(nq,)`` → ``(3, 3)`` or ``(N, nq)`` → ``(N, 3, 3)``."""
+        """Sensor orientation ``R_BS`` for ``q`` ``(nq,)`` → ``(3, 3)`` or ``(N, nq)`` → ``(N, 3, 3)``.
+
+        Batches of revolute/prismatic chains: :class:`~ftkin.kinematics.chain.RotationChain` (numpy).
+        """
         configurations, single = as_batch(q, self.nq, "joint positions q")
+        out = self.rotations_unchecked(configurations)
+        return out[0] if single else out
+
+    def rotations_unchecked(self, configurations: np.ndarray) -> np.ndarray:
+        """``R_BS`` ``(N, 3, 3)`` for validated ``(N, nq)`` float joint positions."""
+        if len(configurations) >= _BATCH_MINIMUM:
+            if self._chain is False:  # built on first use; None: not a revolute/prismatic chain
+                self._chain = RotationChain.from_model(self.model, self.sensor_frame_id)
+            if self._chain is not None:
+                return self._chain.rotations(configurations)
         out = np.empty((len(configurations), 3, 3))
         for i, configuration in enumerate(configurations):
             out[i] = self.sensor_rotation_unchecked(configuration)
-        return out[0] if single else out
+        return out
 
     def frame_placement(self, q, frame: str = "sensor") -> tuple[np.ndarray, np.ndarray]:
         """Rotation ``(3, 3)`` (frame to base) and position ``(3,)`` [m] of a frame in the base frame.

@@ -1,0 +1,119 @@
+"""Batched forward kinematics in numpy for chains of revolute and prismatic joints.
+
+Pinocchio computes one configuration per call (about a microsecond of work
+behind a few microseconds of Python overhead). For a log of many
+configurations, :class:`RotationChain` computes the rotation ``R_BS`` of one
+frame for the whole batch at once.
+
+A revolute joint about the unit axis ``u`` rotates by ``R_u(θ) = Q Rz(θ) Qᵀ``,
+with ``Q`` any rotation whose third column is ``u``. The constant rotations
+(joint placements, ``Q`` and ``Qᵀ`` of neighbouring joints) fold into one
+``(3, 3)`` matrix per joint, applied to the batch as a single matrix product,
+and ``Rz(θ)`` mixes two columns. A prismatic joint does not rotate. The result
+is checked against Pinocchio on a few configurations when the chain is built.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+_AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
+
+BLOCK = 16384
+"""Configurations per block (the temporaries stay in the cache)."""
+
+
+class RotationChain:
+    """``R_BS(q)`` of one frame for a batch of configurations, vectorised in numpy.
+
+    Build it with :meth:`from_model`, which returns None for chains with other
+    joint kinds (spherical, free, planar, helical, mimic, ...).
+    """
+
+    def __init__(self, steps: list[tuple[int, np.ndarray]], head: np.ndarray, tail: np.ndarray):
+        self._steps = steps
+        self._head = head
+        self._tail = tail
+
+    @classmethod
+    def from_model(cls, model: pin.Model, frame_id: int, tolerance: float = 1e-12) -> RotationChain | None:
+        """The chain from the root to frame ``frame_id``, or None if a joint on it is neither revolute nor prismatic.
+
+        Also None (callers fall back to Pinocchio) if the batched rotations
+        differ from Pinocchio's by more than ``tolerance`` on a few seeded
+        random configurations.
+        """
+        path, joint_id = [], model.frames[frame_id].parentJoint
+        while joint_id > 0:
+            path.append(joint_id)
+            joint_id = model.parents[joint_id]
+        steps, carry = [], np.eye(3)
+        for joint_id in reversed(path):
+            joint = model.joints[joint_id]
+            kind = _joint_kind(joint)
+            if kind is None:
+                return None
+            carry = carry @ model.jointPlacements[joint_id].rotation
+            revolute, axis = kind
+            if revolute:
+                basis = _basis_with_z(axis)
+                steps.append((joint.idx_q, carry @ basis))
+                carry = basis.T
+        tail = carry @ model.frames[frame_id].placement.rotation
+        chain = cls(steps, np.eye(3), tail)
+        if not chain._agrees_with_pinocchio(model, frame_id, tolerance):
+            return None
+        return chain
+
+    def rotations(self, configurations: np.ndarray) -> np.ndarray:
+        """``R_BS`` ``(N, 3, 3)`` for validated ``(N, nq)`` float joint positions [rad, m]."""
+        out = np.empty((len(configurations), 3, 3))
+        for start in range(0, len(configurations), BLOCK):
+            out[start:start + BLOCK] = self._block(configurations[start:start + BLOCK])
+        return out
+
+    def _block(self, configurations: np.ndarray) -> np.ndarray:
+        count = len(configurations)
+        cosines, sines = np.cos(configurations), np.sin(configurations)
+        current = np.broadcast_to(self._head, (count, 3, 3))
+        for index, constant in self._steps:
+            current = (current.reshape(-1, 3) @ constant).reshape(count, 3, 3)
+            c, s = cosines[:, index, np.newaxis], sines[:, index, np.newaxis]
+            x, y = current[:, :, 0].copy(), current[:, :, 1]
+            current[:, :, 0] = c * x + s * y  # (A Rz(θ)) column 0
+            current[:, :, 1] = c * y - s * x  # (A Rz(θ)) column 1
+        return (current.reshape(-1, 3) @ self._tail).reshape(count, 3, 3)
+
+    def _agrees_with_pinocchio(self, model: pin.Model, frame_id: int, tolerance: float) -> bool:
+        rng = np.random.default_rng(0)
+        lower = np.where(np.isfinite(model.lowerPositionLimit), model.lowerPositionLimit, -np.pi)
+        upper = np.where(np.isfinite(model.upperPositionLimit), model.upperPositionLimit, np.pi)
+        configurations = rng.uniform(lower, upper, size=(4, model.nq))
+        data = model.createData()
+        expected = []
+        for configuration in configurations:
+            pin.forwardKinematics(model, data, configuration)
+            expected.append(pin.updateFramePlacement(model, data, frame_id).rotation.copy())
+        return bool(np.abs(self.rotations(configurations) - np.array(expected)).max() <= tolerance)
+
+
+def _joint_kind(joint) -> tuple[bool, np.ndarray] | None:
+    """``(revolute, unit axis)`` of a one-coordinate revolute or prismatic joint, else None."""
+    name = joint.shortname().removeprefix("JointModel")
+    if joint.nq != 1:
+        return None
+    if name in ("RevoluteUnaligned", "PrismaticUnaligned"):
+        axis = np.array(joint.extract().axis, dtype=float)
+        return name.startswith("Revolute"), axis / np.linalg.norm(axis)
+    if len(name) == 2 and name[0] in "RP" and name[1] in _AXES:
+        return name[0] == "R", np.array(_AXES[name[1]])
+    return None
+
+
+def _basis_with_z(axis: np.ndarray) -> np.ndarray:
+    """A rotation whose third column is the unit vector ``axis``."""
+    helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, axis)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(axis, x), axis])
