@@ -5,41 +5,64 @@ from static poses; compensate raw readings at control rate with the sensor
 orientation from Pinocchio forward kinematics; control the arm compliantly
 (admittance to joint velocities); plan calibration poses; see the result.
 
-Optional extras are imported lazily: importing ftkin needs only pin, numpy
-and scipy.
+Importing ftkin is cheap: each public name loads its module on first use
+(PEP 562), so ``ftkin --version`` and a script using only the compensation
+do not import the planner or the I/O layer. Optional extras (and scipy) are
+imported where they are used.
 """
 
+import importlib
+
 from ._version import __version__  # noqa: F401  (re-exported: ftkin.__version__)
-from .calibration.diagnostics import FitDiagnostics
-from .calibration.estimate import METHODS, CalibrationResult, calibrate
-from .calibration.information import SensorNoise, fisher_information
-from .calibration.model import STANDARD_GRAVITY, SensorModel
-from .calibration.samples import Samples
-from .control.admittance import Admittance, ControlFrame
-from .control.compensation import Compensator
-from .control.joint_admittance import JointAdmittance, StepStatus
-from .control.sensor_faults import FaultMonitor, SensorFault, SensorLimits
-from .exceptions import (
-    CalibrationFileError,
-    FrameNotFound,
-    FtkinError,
-    InvalidInput,
-    InvalidSamples,
-    MissingDependency,
-    UnobservableParameters,
-    UrdfError,
-)
-from .io.calibration_file import load_calibration, save_calibration
-from .io.samples_csv import load_samples
-from .kinematics.arm import Arm, SensorMount, bundled_urdf_path
-from .kinematics.robots import ROBOTS, load_robot
-from .kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
-from .planning.constraints import PoseConstraints
-from .planning.evaluation import PoseEvaluation, evaluate_poses
-from .planning.plan import PosePlan, plan_poses
-from .sim.placement import PlacementRun, PlacementScenario, simulate_placement
-from .sim.sensor import SimulatedSensor
-from .sim.surfaces import Surface
+
+_EXPORTS = {
+    "Admittance": ".control.admittance",
+    "Arm": ".kinematics.arm",
+    "CalibrationFileError": ".exceptions",
+    "CalibrationResult": ".calibration.estimate",
+    "Compensator": ".control.compensation",
+    "ControlFrame": ".control.admittance",
+    "FaultMonitor": ".control.sensor_faults",
+    "FitDiagnostics": ".calibration.diagnostics",
+    "FrameNotFound": ".exceptions",
+    "FtkinError": ".exceptions",
+    "InvalidInput": ".exceptions",
+    "InvalidSamples": ".exceptions",
+    "JointAdmittance": ".control.joint_admittance",
+    "METHODS": ".calibration.estimate",
+    "MissingDependency": ".exceptions",
+    "PlacementRun": ".sim.placement",
+    "PlacementScenario": ".sim.placement",
+    "PoseConstraints": ".planning.constraints",
+    "PoseEvaluation": ".planning.evaluation",
+    "PosePlan": ".planning.plan",
+    "ROBOTS": ".kinematics.robots",
+    "STANDARD_GRAVITY": ".calibration.model",
+    "Samples": ".calibration.samples",
+    "SensorFault": ".control.sensor_faults",
+    "SensorLimits": ".control.sensor_faults",
+    "SensorModel": ".calibration.model",
+    "SensorMount": ".kinematics.arm",
+    "SensorNoise": ".calibration.information",
+    "SimulatedSensor": ".sim.sensor",
+    "StepStatus": ".control.joint_admittance",
+    "Surface": ".sim.surfaces",
+    "UnobservableParameters": ".exceptions",
+    "UrdfError": ".exceptions",
+    "bundled_urdf_path": ".kinematics.arm",
+    "calibrate": ".calibration.estimate",
+    "euler_zyx_deg_to_matrix": ".kinematics.rotations",
+    "evaluate_poses": ".planning.evaluation",
+    "fisher_information": ".calibration.information",
+    "load_calibration": ".io.calibration_file",
+    "load_robot": ".kinematics.robots",
+    "load_samples": ".io.samples_csv",
+    "plan_poses": ".planning.plan",
+    "quaternion_to_matrix": ".kinematics.rotations",
+    "save_calibration": ".io.calibration_file",
+    "simulate_placement": ".sim.placement",
+}
+"""Public name → the module defining it (imported on first access)."""
 
 __all__ = [
     "Admittance",
@@ -88,3 +111,16 @@ __all__ = [
     "save_calibration",
     "simulate_placement",
 ]
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'ftkin' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -48,6 +48,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     """Run the CLI; returns the exit code (0 success, 2 bad input or usage)."""
+    arguments = sys.argv[1:] if argv is None else list(argv)
+    if "--version" in arguments and all(argument in ("--version", "-v", "--verbose") for argument in arguments):
+        # Answered before the subcommands (and the library behind them) are imported.
+        from .._version import __version__
+
+        print(f"ftkin {__version__}")
+        return 0
     parser = build_parser()
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="ftkin: %(message)s")

@@ -9,7 +9,6 @@ stray ``.<name>.*.tmp`` file behind.
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 
 from ..exceptions import FtkinError
@@ -26,6 +25,8 @@ def atomic_write_bytes(path, data: bytes) -> Path:
     if not folder.is_dir():
         raise FtkinError(f"cannot write {path}: folder {folder} does not exist")
     try:
+        import tempfile  # here, not at import: it pulls in shutil, random, bz2, lzma
+
         handle, temporary = tempfile.mkstemp(dir=folder, prefix=f".{path.name}.", suffix=".tmp")
     except OSError as error:
         raise FtkinError(f"cannot write {path}: {error}") from None

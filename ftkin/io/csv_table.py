@@ -9,7 +9,6 @@ atomic write.
 from __future__ import annotations
 
 import csv
-import difflib
 import io
 from dataclasses import dataclass
 from pathlib import Path
@@ -92,6 +91,8 @@ def missing_columns(table: Table, wanted, what: str) -> None:
         hints = []
         for name in missing:
             close = [column for column in table.header if column.lower() == name.lower()]
+            import difflib  # only for an error message
+
             close = close or difflib.get_close_matches(name, table.header, n=1)
             if close:
                 hints.append(f"{close[0]!r} for {name!r}?")

@@ -13,8 +13,6 @@ import io
 import logging
 import os
 import re
-import tempfile
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pinocchio as pin
@@ -36,6 +34,8 @@ def captured_c_stderr():
     except OSError:  # no usable stderr (embedded interpreter): capture nothing
         yield captured
         return
+    import tempfile  # imported when an arm is loaded, not with ftkin
+
     with tempfile.TemporaryFile(mode="w+b") as sink:
         os.dup2(sink.fileno(), 2)
         try:
@@ -49,6 +49,8 @@ def captured_c_stderr():
 
 def xml_reasons(text: str) -> list[str]:
     """Problems an XML parser finds (empty list when the XML is well formed)."""
+    import xml.etree.ElementTree as ET  # imported when an arm is loaded, not with ftkin
+
     try:
         root = ET.fromstring(text)
     except ET.ParseError as error:
