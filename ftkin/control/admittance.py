@@ -160,7 +160,8 @@ class Admittance:
         on 6-vectors.
         """
         state = self.state
-        error = [e - min(max(e, -band), band)
+        # ΔF with the deadband: e − clip(e, −band, band), written as branches (the same IEEE results)
+        error = [e - band if e > band else (e + band if e < -band else 0.0)
                  for e, band in zip(map(add, self.desired_wrench.tolist(), contact_wrench), self.deadband.tolist())]
         if not state.started:
             state.started = True

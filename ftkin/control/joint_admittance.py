@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from operator import ge, le
+from operator import ge, le, mul, sub
 
 import numpy as np
 import pinocchio as pin
@@ -127,11 +127,8 @@ class JointAdmittance:
         lower, upper = arm.lower_limits.tolist(), arm.upper_limits.tolist()
         speeds = (arm.velocity_limits * float(velocity_scale)).tolist()
         self._joint_limits = list(zip(lower, upper, speeds))
-        # Joints this far inside their limits are bounded by their speed alone (limit scaling's shortcut);
-        # the 1e-9 rad margin covers the rounding of gain · distance.
-        self._speeds = speeds
-        self._safe_lower = [low + speed / self.limit_gain + 1e-9 for low, speed in zip(lower, speeds)]
-        self._safe_upper = [high - speed / self.limit_gain - 1e-9 for high, speed in zip(upper, speeds)]
+        self._lower, self._upper, self._speeds = lower, upper, speeds  # as floats, for limit scaling's shortcut
+        self._gains = [self.limit_gain] * arm.nq
         self._nq = arm.nq
         self.monitor = FaultMonitor(sensor_limits)
         self.reset()
@@ -248,10 +245,10 @@ class JointAdmittance:
         A joint moving towards its position limit may go at most ``limit_gain · distance``
         [rad/s], and never beyond its (scaled) velocity limit.
         """
-        if (all(map(le, map(abs, dq), self._speeds)) and all(map(ge, q, self._safe_lower))
-                and all(map(le, q, self._safe_upper))):
-            return 1.0  # every joint far from its limits and within its speed: the loop below gives 1.0 too
         gain, scale = self.limit_gain, 1.0
+        if (all(map(le, map(abs, dq), self._speeds)) and all(map(le, dq, map(mul, self._gains, map(sub, self._upper, q))))
+                and all(map(ge, dq, map(mul, self._gains, map(sub, self._lower, q))))):
+            return 1.0  # every joint within both of its bounds: the loop below gives 1.0 too
         for position, velocity, (lower, upper, speed) in zip(q, dq, self._joint_limits):
             if velocity > 0.0:
                 scale = min(scale, max(0.0, min(speed, gain * (upper - position))) / velocity)
@@ -280,11 +277,11 @@ def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, manipulability
     global _posv
     if _posv is None:
         from scipy.linalg.lapack import dposv as _posv
-    gram = jacobian @ jacobian.T
-    factor, solution, info = _posv(gram, twist)  # one factorisation; w from its diagonal
+    factor, solution, info = _posv(jacobian @ jacobian.T, twist)  # one factorisation; w from its diagonal
     manipulability = math.prod(factor.diagonal().tolist()) if info == 0 else 0.0
     if manipulability >= manipulability_threshold:
         return jacobian.T @ solution, manipulability, 0.0
     damping = max_damping * (1.0 - manipulability / manipulability_threshold)
+    gram = jacobian @ jacobian.T
     gram.flat[::7] += damping * damping
-    return jacobian.T @ _posv(gram, twist)[1], manipulability, damping
+    return jacobian.T @ _posv(gram, twist, overwrite_a=True)[1], manipulability, damping

@@ -87,8 +87,8 @@ class RotationChain:
 
     def _agrees_with_pinocchio(self, model: pin.Model, frame_id: int, tolerance: float) -> bool:
         rng = np.random.default_rng(0)
-        lower = np.where(np.isfinite(model.lowerPositionLimit), model.lowerPositionLimit, -np.pi)
-        upper = np.where(np.isfinite(model.upperPositionLimit), model.upperPositionLimit, np.pi)
+        lower = np.clip(model.lowerPositionLimit, -np.pi, np.pi)  # unbounded joints: one turn
+        upper = np.maximum(np.clip(model.upperPositionLimit, -np.pi, np.pi), lower)
         configurations = rng.uniform(lower, upper, size=(4, model.nq))
         data = model.createData()
         expected = []
