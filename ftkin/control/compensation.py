@@ -154,7 +154,11 @@ class Compensator:
         if len(configurations) != len(raw):
             raise InvalidInput(f"{len(configurations)} rotations but {len(raw)} wrenches (one rotation per joint configuration); "
                                "expected one each")
-        return self.compensate_batch_unchecked(arm.rotations_unchecked(configurations), raw)
+        gravity_in_sensor = arm.vectors_in_sensor_unchecked(configurations, self._gravity_in_base)  # Gs = R_BSᵀ a
+        out = raw - self._bias
+        out[:, :3] -= gravity_in_sensor
+        out[:, 3:] -= cross_rows(self._com, gravity_in_sensor)
+        return out
 
     def compensate_samples(self, samples: Samples) -> np.ndarray:
         """Contact wrenches ``(N, 6)`` of a :class:`~ftkin.calibration.samples.Samples`."""

@@ -17,7 +17,7 @@ import pinocchio as pin
 from ..exceptions import FrameNotFound, InvalidInput, UrdfError
 from ..validation import as_batch, as_vector
 from .chain import RotationChain
-from .urdf_loading import build_geometry, build_model
+from .urdf_loading import build_geometry, build_model, lock_joints
 
 BUNDLED_URDF_NAME = "ftkin_c4.urdf"
 _BATCH_MINIMUM = 16  # batches from this size use numpy kinematics (below it Pinocchio per row is as fast)
@@ -140,7 +140,7 @@ class Arm:
             _add_frame(model, sensor_frame, sensor_mount)
         full_model, locked_ids, reference = None, [], None
         if locked_joints:
-            full_model, model, locked_ids, reference = _lock_joints(model, locked_joints)
+            full_model, model, locked_ids, reference = lock_joints(model, locked_joints)
         return cls(model, sensor_frame, tool_frame, path.resolve(), package_dirs, full_model, locked_ids, reference)
 
     @classmethod
@@ -210,15 +210,22 @@ class Arm:
 
     def rotations_unchecked(self, configurations: np.ndarray) -> np.ndarray:
         """``R_BS`` ``(N, 3, 3)`` for validated ``(N, nq)`` float joint positions."""
-        if len(configurations) >= _BATCH_MINIMUM:
-            if self._chain is False:  # built on first use; None: not a revolute/prismatic chain
-                self._chain = RotationChain.from_model(self.model, self.sensor_frame_id)
-            if self._chain is not None:
-                return self._chain.rotations(configurations)
-        out = np.empty((len(configurations), 3, 3))
-        for i, configuration in enumerate(configurations):
-            out[i] = self.sensor_rotation_unchecked(configuration)
-        return out
+        chain = self._sensor_chain(len(configurations))
+        if chain is not None:
+            return chain.rotations(configurations)
+        return np.array([self.sensor_rotation_unchecked(q).copy() for q in configurations]).reshape(-1, 3, 3)
+
+    def vectors_in_sensor_unchecked(self, configurations: np.ndarray, vector_in_base: np.ndarray) -> np.ndarray:
+        """``R_BS(q)ᵀ v`` ``(N, 3)``: a base-frame vector in the sensor frame, for validated ``(N, nq)`` angles."""
+        chain = self._sensor_chain(len(configurations))
+        if chain is not None:
+            return chain.transposed_times(configurations, vector_in_base)
+        return np.einsum("nji,j->ni", self.rotations_unchecked(configurations), vector_in_base)
+
+    def _sensor_chain(self, count: int) -> RotationChain | None:
+        if count >= _BATCH_MINIMUM and self._chain is False:  # built on first use; None: not a revolute/prismatic chain
+            self._chain = RotationChain.from_model(self.model, self.sensor_frame_id)
+        return self._chain if count >= _BATCH_MINIMUM else None
 
     def frame_placement(self, q, frame: str = "sensor") -> tuple[np.ndarray, np.ndarray]:
         """Rotation ``(3, 3)`` (frame to base) and position ``(3,)`` [m] of a frame in the base frame.
@@ -282,19 +289,3 @@ def _add_frame(model: pin.Model, name: str, mount: SensorMount) -> None:
     parent = model.frames[parent_id]
     placement = parent.placement * mount.placement()
     model.addFrame(pin.Frame(name, parent.parentJoint, parent_id, placement, pin.FrameType.OP_FRAME), False)
-
-
-def _lock_joints(model: pin.Model, locked_joints: Mapping[str, float]):
-    reference = pin.neutral(model)
-    ids = []
-    for name, value in locked_joints.items():
-        if not model.existJointName(name):
-            raise InvalidInput(
-                f"cannot lock joint {name!r}: not in the model; joints: "
-                + ", ".join(model.names[i] for i in range(1, model.njoints))
-            )
-        joint_id = model.getJointId(name)
-        reference[model.joints[joint_id].idx_q] = float(value)
-        ids.append(joint_id)
-    reduced = pin.buildReducedModel(model, ids, reference)
-    return model, reduced, ids, reference

@@ -13,11 +13,12 @@ import io
 import logging
 import os
 import re
+from collections.abc import Mapping
 from pathlib import Path
 
 import pinocchio as pin
 
-from ..exceptions import UrdfError
+from ..exceptions import InvalidInput, UrdfError
 
 logger = logging.getLogger(__name__)
 
@@ -150,3 +151,24 @@ def build_geometry(model: pin.Model, path: Path, kind: str, package_dirs: list[s
     reasons += _parser_lines(stderr)
     reasons += yourdfpy_reasons(read_urdf_text(path), check_meshes=True)
     raise UrdfError(str(path), reasons) from None
+
+
+def lock_joints(model: pin.Model, locked_joints: Mapping[str, float]):
+    """The model with ``{joint name: value [rad or m]}`` fixed: ``(full, reduced, locked ids, reference q)``.
+
+    Raises:
+        InvalidInput: a joint name is not in the model (lists the joints).
+    """
+    reference = pin.neutral(model)
+    ids = []
+    for name, value in locked_joints.items():
+        if not model.existJointName(name):
+            raise InvalidInput(
+                f"cannot lock joint {name!r}: not in the model; joints: "
+                + ", ".join(model.names[i] for i in range(1, model.njoints))
+            )
+        joint_id = model.getJointId(name)
+        reference[model.joints[joint_id].idx_q] = float(value)
+        ids.append(joint_id)
+    reduced = pin.buildReducedModel(model, ids, reference)
+    return model, reduced, ids, reference
