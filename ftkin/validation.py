@@ -149,9 +149,10 @@ def rotation_rows(value, atol: float = 1e-6) -> list | None:
         return None
     rows = array.tolist()
     (a, b, c), (d, e, f), (g, h, i) = rows
-    if (abs(a * a + d * d + g * g - 1.0) <= atol and abs(b * b + e * e + h * h - 1.0) <= atol
-            and abs(c * c + f * f + i * i - 1.0) <= atol and abs(a * b + d * e + g * h) <= atol
-            and abs(a * c + d * f + g * i) <= atol and abs(b * c + e * f + h * i) <= atol
+    low, high = 1.0 - atol, 1.0 + atol  # column norms² within 1 ± atol, dot products within ± atol
+    if (low <= a * a + d * d + g * g <= high and low <= b * b + e * e + h * h <= high
+            and low <= c * c + f * f + i * i <= high and -atol <= a * b + d * e + g * h <= atol
+            and -atol <= a * c + d * f + g * i <= atol and -atol <= b * c + e * f + h * i <= atol
             and a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0.0):
         return rows
     return None

@@ -85,18 +85,21 @@ class Compensator:
             InvalidInput: ``R_BS`` not a ``(3, 3)`` rotation (orthonormal within 1e-6, det +1),
                 or ``raw_wrench`` not six finite numbers.
         """
-        rows, raw = rotation_rows(rotation_sensor_to_base), None
+        rows = rotation_rows(rotation_sensor_to_base)  # closed-form check on floats, None if not a rotation
         try:
-            raw = np.asarray(raw_wrench, dtype=np.float64).tolist()
+            raw = np.asarray(raw_wrench, dtype=np.float64)
         except (TypeError, ValueError):
-            pass
-        if rows is None or type(raw) is not list or len(raw) != 6 or type(raw[0]) is not float or not math.isfinite(sum(raw)):
-            rotations, _ = as_rotation_batch(rotation_sensor_to_base)  # raises the detailed error
-            batch, _ = as_batch(raw_wrench, 6, "raw_wrench")
-            if len(rotations) != 1 or len(batch) != 1:
-                raise InvalidInput("compensate_rotation takes one (3, 3) rotation and one (6,) wrench; use compensate_batch")
-            rows, raw = rotations[0].tolist(), batch[0].tolist()
-        return np.array(self.contact_floats(rows, raw))
+            raw = None
+        if rows is not None and raw is not None and raw.shape == (6,):
+            values = raw.tolist()
+            if math.isfinite(sum(values)):
+                return np.array(self.contact_floats(rows, values))
+        # Something is wrong (or a huge reading overflowed the sum): the array checks name it.
+        rotations, _ = as_rotation_batch(rotation_sensor_to_base)
+        batch, _ = as_batch(raw_wrench, 6, "raw_wrench")
+        if len(rotations) != 1 or len(batch) != 1:
+            raise InvalidInput("compensate_rotation takes one (3, 3) rotation and one (6,) wrench; use compensate_batch")
+        return np.array(self.contact_floats(rotations[0].tolist(), batch[0].tolist()))
 
     def compensate_rotation_unchecked(self, rotation: np.ndarray, raw: np.ndarray) -> np.ndarray:
         """:meth:`compensate_rotation` without validation: ``R_BS`` ``(3, 3)`` and ``raw`` ``(6,)`` float arrays.

@@ -124,6 +124,7 @@ class JointAdmittance:
         self.manipulability_threshold, self.max_damping = float(manipulability_threshold), float(max_damping)
         self.limit_gain = float(limit_gain)
         self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
+        self._rotation = arm.data.oMf[arm.sensor_frame_id].rotation  # a view: follows every kinematics update
         lower, upper = arm.lower_limits.tolist(), arm.upper_limits.tolist()
         speeds = (arm.velocity_limits * float(velocity_scale)).tolist()
         self._joint_limits = list(zip(lower, upper, speeds))
@@ -183,7 +184,7 @@ class JointAdmittance:
             return self._hold(fault, event)
         # 1. kinematics: forward kinematics and the sensor Jacobian (base axes), one Pinocchio call
         jacobian = pin.computeFrameJacobian(self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED)
-        rotation = self._data.oMf[self._sensor_id].rotation.tolist()
+        rotation = self._rotation.tolist()  # R_BS, updated by the call above
         # 2. compensation (six floats, sensor frame) and the safety stop
         contact = raw if self.compensator is None else self.compensator.contact_floats(rotation, raw)
         fx, fy, fz, mx, my, mz = contact
