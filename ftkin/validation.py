@@ -84,16 +84,22 @@ def _all_rotations(array: np.ndarray, atol: float) -> bool:
     are column dot products and ``det R = c2 · (c0 × c1)``. NaN and inf fail
     the comparisons, so this also checks finiteness.
     """
-    dot = _column_dot
     for start in range(0, len(array), _BLOCK):
         block = array[start:start + _BLOCK]
         c0, c1, c2 = block[:, :, 0], block[:, :, 1], block[:, :, 2]
-        error = np.abs(dot(c0, c0) - 1.0)
-        for entry in (dot(c1, c1) - 1.0, dot(c2, c2) - 1.0, dot(c0, c1), dot(c0, c2), dot(c1, c2)):
-            np.maximum(error, np.abs(entry), out=error)
+        low, high = 1.0 - atol, 1.0 + atol
+        ok = True
+        for a, b in ((c0, c0), (c1, c1), (c2, c2)):
+            norm = _column_dot(a, b)
+            ok = ok and bool(((low <= norm) & (norm <= high)).all())
+        for a, b in ((c0, c1), (c0, c2), (c1, c2)):
+            product = _column_dot(a, b)
+            ok = ok and bool((np.abs(product, out=product) <= atol).all())
+        if not ok:
+            return False
         det = ((c0[:, 1] * c1[:, 2] - c0[:, 2] * c1[:, 1]) * c2[:, 0] + (c0[:, 2] * c1[:, 0] - c0[:, 0] * c1[:, 2]) * c2[:, 1]
                + (c0[:, 0] * c1[:, 1] - c0[:, 1] * c1[:, 0]) * c2[:, 2])
-        if not ((error <= atol) & (det > 0.0)).all():
+        if not (det > 0.0).all():
             return False
     return True
 
