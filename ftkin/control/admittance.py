@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from operator import add
 
 import numpy as np
 
@@ -160,20 +159,26 @@ class Admittance:
         on 6-vectors.
         """
         state = self.state
-        # ΔF with the deadband: e − clip(e, −band, band), written as branches (the same IEEE results)
-        error = [e - band if e > band else (e + band if e < -band else 0.0)
-                 for e, band in zip(map(add, self.desired_wrench.tolist(), contact_wrench), self.deadband.tolist())]
-        if not state.started:
-            state.started = True
-            if self.bumpless:
-                state.previous_error = np.array(error)
-        # First-order low pass of the error's derivative, then S·(K1·dΔF/dt + K2·ΔF).
-        alpha = dt / (dt + self._time_constant)
-        derivative = [f + alpha * ((e - p) / dt - f)
-                      for e, p, f in zip(error, state.previous_error.tolist(), state.filtered_derivative.tolist())]
-        state.filtered_derivative = np.array(derivative)
-        state.previous_error = np.array(error)
-        return self.saturate_floats([a * d + b * e for a, d, b, e in zip(self._k1s_floats, derivative, self._k2s_floats, error)])
+        bumpless_start = not state.started and self.bumpless  # the first error is its own previous one: no kick
+        state.started = True
+        alpha = dt / (dt + self._time_constant)  # first-order low pass of the error's derivative
+        errors, derivatives, twist = [], [], []
+        for wanted, measured, band, previous, derivative, k1, k2 in zip(
+                self.desired_wrench.tolist(), contact_wrench, self.deadband.tolist(), state.previous_error.tolist(),
+                state.filtered_derivative.tolist(), self._k1s_floats, self._k2s_floats):
+            # One axis of the law, in this order: ΔF = F_desired + F' with the deadband (e − clip(e, ±band),
+            # as branches), the filtered dΔF/dt, then S·(K1·dΔF/dt + K2·ΔF).
+            error = wanted + measured
+            error = error - band if error > band else (error + band if error < -band else 0.0)
+            if bumpless_start:
+                previous = error
+            derivative = derivative + alpha * ((error - previous) / dt - derivative)
+            errors.append(error)
+            derivatives.append(derivative)
+            twist.append(k1 * derivative + k2 * error)
+        state.filtered_derivative = np.array(derivatives)
+        state.previous_error = np.array(errors)
+        return self.saturate_floats(twist)
 
     def saturate_floats(self, twist):
         """:meth:`saturate` on six floats: returns ``twist`` itself when within the limits, else six new floats."""
