@@ -77,14 +77,16 @@ class ControlFrame:
     def twist_floats(self, twist, rotation_rows) -> tuple[float, ...]:
         """:meth:`twist_to_sensor_origin` on six floats and ``R_BS.tolist()``; returns six floats."""
         vx, vy, vz, wx, wy, wz = twist
-        if self.frame != "base":
-            if self.frame == "tool":
-                vx, vy, vz = _rotate(self._rotation_rows, vx, vy, vz)
-                wx, wy, wz = _rotate(self._rotation_rows, wx, wy, wz)
-            vx, vy, vz = _rotate(rotation_rows, vx, vy, vz)
-            wx, wy, wz = _rotate(rotation_rows, wx, wy, wz)
-        px, py, pz = _rotate(rotation_rows, *self._r)
-        return vx - (wy * pz - wz * py), vy - (wz * px - wx * pz), vz - (wx * py - wy * px), wx, wy, wz
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation_rows  # R_BS, written out below
+        if self.frame == "tool":  # tool axes to sensor axes
+            vx, vy, vz = _rotate(self._rotation_rows, vx, vy, vz)
+            wx, wy, wz = _rotate(self._rotation_rows, wx, wy, wz)
+        if self.frame != "base":  # sensor axes to base axes
+            vx, vy, vz = r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz
+            wx, wy, wz = r00 * wx + r01 * wy + r02 * wz, r10 * wx + r11 * wy + r12 * wz, r20 * wx + r21 * wy + r22 * wz
+        rx, ry, rz = self._r
+        px, py, pz = r00 * rx + r01 * ry + r02 * rz, r10 * rx + r11 * ry + r12 * rz, r20 * rx + r21 * ry + r22 * rz
+        return vx - (wy * pz - wz * py), vy - (wz * px - wx * pz), vz - (wx * py - wy * px), wx, wy, wz  # v − ω × p
 
 
 def _rotate(rows, x: float, y: float, z: float) -> tuple[float, float, float]:

@@ -180,7 +180,7 @@ class JointAdmittance:
             raise InvalidInput(f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
         raw = raw.tolist()
         fault, event = self.monitor.check(q, raw, dt)
-        if fault is not SensorFault.NONE:
+        if fault:  # SensorFault.NONE is the empty string
             return self._hold(fault, event)
         # 1. kinematics: forward kinematics and the sensor Jacobian (base axes), one Pinocchio call
         jacobian = pin.computeFrameJacobian(self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED)
@@ -278,11 +278,11 @@ def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, manipulability
     global _posv
     if _posv is None:
         from scipy.linalg.lapack import dposv as _posv
-    factor, solution, info = _posv(jacobian @ jacobian.T, twist)  # one factorisation; w from its diagonal
+    factor, solution, info = _posv(np.dot(jacobian, jacobian.T), twist)  # one factorisation; w from its diagonal
     manipulability = math.prod(factor.diagonal().tolist()) if info == 0 else 0.0
     if manipulability >= manipulability_threshold:
-        return jacobian.T @ solution, manipulability, 0.0
+        return np.dot(solution, jacobian), manipulability, 0.0  # Jᵀ x (np.dot: less overhead than @ on 6×6)
     damping = max_damping * (1.0 - manipulability / manipulability_threshold)
-    gram = jacobian @ jacobian.T
+    gram = np.dot(jacobian, jacobian.T)
     gram.flat[::7] += damping * damping
-    return jacobian.T @ _posv(gram, twist, overwrite_a=True)[1], manipulability, damping
+    return np.dot(_posv(gram, twist, overwrite_a=True)[1], jacobian), manipulability, damping

@@ -45,6 +45,10 @@ class SensorFault(StrEnum):
     STUCK = "stuck"
 
 
+_OK = (SensorFault.NONE, "")
+"""``check``'s answer for a good tick (one shared tuple: the common case allocates nothing)."""
+
+
 @dataclass(frozen=True)
 class SensorLimits:
     """Fault thresholds; None disables a check (NaN/inf and ``dt <= 0`` are always faults).
@@ -156,16 +160,16 @@ class FaultMonitor:
             if len(raw) != 6 or not all(isinstance(value, float) for value in raw):
                 raise InvalidInput(f"raw reading must have shape (6,), got {np.shape(raw)}")
         fault, event = self._detect(q, raw, dt)
-        if fault is not SensorFault.NONE:
+        if fault:  # SensorFault.NONE is the empty string
             self.fault, self.good_ticks = fault, 0
             self.counts[fault] += 1
             return fault, event
-        if self.fault is SensorFault.NONE:
-            return fault, event
+        if not self.fault:
+            return _OK
         self.good_ticks += 1
         if self.good_ticks >= self.limits.recovery_ticks:
             self.fault = SensorFault.NONE
-            return SensorFault.NONE, ""
+            return _OK
         self.counts[self.fault] += 1
         return self.fault, f"recovering from {self.fault.value}: {self.good_ticks}/{self.limits.recovery_ticks} good ticks"
 
@@ -196,4 +200,4 @@ class FaultMonitor:
                 return SensorFault.STUCK, f"reading unchanged for {self._repeats + 1} ticks ({self._stale_time:.4g} s): holding"
         else:
             self._previous, self._repeats, self._stale_time = raw, 0, 0.0
-        return SensorFault.NONE, ""
+        return _OK
