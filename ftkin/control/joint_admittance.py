@@ -198,7 +198,7 @@ class JointAdmittance:
         twist = self.admittance.update_floats(wrench, dt)
         sensor_twist = self.frame.twist_floats(twist, rotation)
         # 4. joint velocities: damped least squares, then the joint limits
-        dq, manipulability, damping = damped_least_squares(jacobian, np.array(sensor_twist), self.manipulability_threshold,
+        dq, manipulability, damping = damped_least_squares(jacobian, sensor_twist, self.manipulability_threshold,
                                                            self.max_damping)
         scale = self._limit_scale(q.tolist(), dq.tolist())
         if scale < 1.0:
@@ -268,7 +268,7 @@ def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, manipulability
 
     Args:
         jacobian: ``(6, nq)`` [m/rad, 1] (``[v; ω] = J dq``).
-        twist: ``(6,)`` ``[v; ω]`` wanted [m/s, rad/s].
+        twist: ``(6,)`` ``[v; ω]`` wanted [m/s, rad/s] (an array or six floats).
         manipulability_threshold: ``w₀``.
         max_damping: ``λ_max``.
 
