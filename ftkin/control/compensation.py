@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from ..calibration.model import SensorModel, cross_rows
+from ..calibration.model import SensorModel
 from ..calibration.samples import Samples
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
@@ -143,10 +143,19 @@ class Compensator:
 
     def compensate_batch_unchecked(self, rotations: np.ndarray, raw: np.ndarray) -> np.ndarray:
         """:meth:`compensate_batch` without validation, for callers that validated already."""
-        gravity_in_sensor = np.einsum("nji,j->ni", rotations, self._gravity_in_base)
+        return self._contact_batch(raw, np.einsum("nji,j->ni", rotations, self._gravity_in_base))
+
+    def _contact_batch(self, raw: np.ndarray, gravity_in_sensor: np.ndarray) -> np.ndarray:
+        """``raw − bias − [Gs, P × Gs]`` ``(N, 6)`` from the tool weight in the sensor frame ``Gs`` ``(N, 3)``.
+
+        The torque columns are updated one by one (no ``(N, 3)`` temporary for ``P × Gs``).
+        """
         out = raw - self._bias
         out[:, :3] -= gravity_in_sensor
-        out[:, 3:] -= cross_rows(self._com, gravity_in_sensor)
+        (px, py, pz), (gx, gy, gz) = self._com_floats, gravity_in_sensor.T
+        out[:, 3] -= py * gz - pz * gy
+        out[:, 4] -= pz * gx - px * gz
+        out[:, 5] -= px * gy - py * gx
         return out
 
     def compensate_joint_positions(self, joint_positions, raw_wrenches) -> np.ndarray:
@@ -157,11 +166,7 @@ class Compensator:
         if len(configurations) != len(raw):
             raise InvalidInput(f"{len(configurations)} rotations but {len(raw)} wrenches (one rotation per joint configuration); "
                                "expected one each")
-        gravity_in_sensor = arm.vectors_in_sensor_unchecked(configurations, self._gravity_in_base)  # Gs = R_BSᵀ a
-        out = raw - self._bias
-        out[:, :3] -= gravity_in_sensor
-        out[:, 3:] -= cross_rows(self._com, gravity_in_sensor)
-        return out
+        return self._contact_batch(raw, arm.vectors_in_sensor_unchecked(configurations, self._gravity_in_base))
 
     def compensate_samples(self, samples: Samples) -> np.ndarray:
         """Contact wrenches ``(N, 6)`` of a :class:`~ftkin.calibration.samples.Samples`."""
