@@ -5,71 +5,104 @@ from static poses; compensate raw readings at control rate with the sensor
 orientation from Pinocchio forward kinematics; control the arm compliantly
 (admittance to joint velocities); plan calibration poses; see the result.
 
-Optional extras are imported lazily: importing ftkin needs only pin, numpy
-and scipy.
+Importing ftkin is cheap: each public name loads its module on first use
+(PEP 562), so ``ftkin --version`` and a script using only the compensation
+do not import the planner or the I/O layer. Optional extras (and scipy) are
+imported where they are used.
 """
 
+import importlib
+
 from ._version import __version__  # noqa: F401  (re-exported: ftkin.__version__)
-from .calibration.conventions import ConventionCheck, detect_sign_and_handedness
-from .calibration.derivatives import CausalDifferentiator, joint_derivatives
-from .calibration.diagnostics import FitDiagnostics
-from .calibration.doctor import ConventionReport
-from .calibration.drift import DRIFT_CHOICES, BiasDrift
-from .calibration.dynamic import DynamicCalibrationResult, calibrate_dynamic
-from .calibration.estimate import METHODS, CalibrationResult, calibrate
-from .calibration.information import SensorNoise, fisher_information
-from .calibration.model import STANDARD_GRAVITY, SensorModel
-from .calibration.mount import MOUNT_MODES
-from .calibration.regressor import MotionSamples
-from .calibration.samples import Samples
-from .control.admittance import Admittance, ControlFrame
-from .control.bias_tracker import BiasTracker
-from .control.compensation import Compensator
-from .control.dynamic_compensation import DynamicCompensator
-from .control.joint_admittance import JointAdmittance, StepStatus
-from .control.oscillation import OscillationDetector, OscillationLimits
-from .control.sensor_faults import FaultMonitor, SensorFault, SensorLimits
-from .control.stability import max_stable_k1
-from .exceptions import (
-    CalibrationFileError,
-    ConventionMistake,
-    FrameNotFound,
-    FtkinError,
-    InvalidInput,
-    InvalidSamples,
-    MissingDependency,
-    SuspectConvention,
-    UnobservableParameters,
-    UrdfError,
-)
-from .io.calibration_file import load_calibration, save_calibration
-from .io.conventions import diagnose_samples
-from .io.motion_recording import MotionRecording, load_motion_bag, load_motion_csv
-from .io.payload_export import Payload, export_payload, payload_in_flange
-from .io.samples_csv import load_samples
-from .kinematics.arm import Arm, SensorMount, bundled_urdf_path
-from .kinematics.mounting import mounted_arm
-from .kinematics.robots import ROBOTS, load_robot
-from .kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
-from .planning.constraints import PoseConstraints
-from .planning.evaluation import PoseEvaluation, evaluate_poses
-from .planning.excitation import ExcitationPlan, FourierTrajectory, plan_excitation
-from .planning.plan import PosePlan, plan_poses
-from .sim.drift import SensorDrift
-from .sim.mujoco import (
-    ArmSimulation,
-    ClosedLoopRun,
-    GraspedObject,
-    MujocoRecorder,
-    MujocoSensor,
-    ToolInertia,
-    build_arm_model,
-    run_closed_loop,
-    simulate_placement_mujoco,
-)
-from .sim.placement import PlacementRun, PlacementScenario, simulate_placement
-from .sim.sensor import SimulatedSensor, recording_times
-from .sim.surfaces import Surface
+
+_EXPORTS = {
+    "Admittance": ".control.admittance",
+    "Arm": ".kinematics.arm",
+    "ArmSimulation": ".sim.mujoco",
+    "BiasDrift": ".calibration.drift",
+    "BiasTracker": ".control.bias_tracker",
+    "CalibrationFileError": ".exceptions",
+    "CalibrationResult": ".calibration.estimate",
+    "CausalDifferentiator": ".calibration.derivatives",
+    "ClosedLoopRun": ".sim.mujoco",
+    "Compensator": ".control.compensation",
+    "ControlFrame": ".control.admittance",
+    "ConventionCheck": ".calibration.conventions",
+    "ConventionMistake": ".exceptions",
+    "ConventionReport": ".calibration.doctor",
+    "DRIFT_CHOICES": ".calibration.drift",
+    "DynamicCalibrationResult": ".calibration.dynamic",
+    "DynamicCompensator": ".control.dynamic_compensation",
+    "ExcitationPlan": ".planning.excitation",
+    "FaultMonitor": ".control.sensor_faults",
+    "FitDiagnostics": ".calibration.diagnostics",
+    "FourierTrajectory": ".planning.excitation",
+    "FrameNotFound": ".exceptions",
+    "FtkinError": ".exceptions",
+    "GraspedObject": ".sim.mujoco",
+    "InvalidInput": ".exceptions",
+    "InvalidSamples": ".exceptions",
+    "JointAdmittance": ".control.joint_admittance",
+    "METHODS": ".calibration.estimate",
+    "MOUNT_MODES": ".calibration.mount",
+    "MissingDependency": ".exceptions",
+    "MotionRecording": ".io.motion_recording",
+    "MotionSamples": ".calibration.regressor",
+    "MujocoRecorder": ".sim.mujoco",
+    "MujocoSensor": ".sim.mujoco",
+    "OscillationDetector": ".control.oscillation",
+    "OscillationLimits": ".control.oscillation",
+    "Payload": ".io.payload_export",
+    "PlacementRun": ".sim.placement",
+    "PlacementScenario": ".sim.placement",
+    "PoseConstraints": ".planning.constraints",
+    "PoseEvaluation": ".planning.evaluation",
+    "PosePlan": ".planning.plan",
+    "ROBOTS": ".kinematics.robots",
+    "STANDARD_GRAVITY": ".calibration.model",
+    "Samples": ".calibration.samples",
+    "SensorDrift": ".sim.drift",
+    "SensorFault": ".control.sensor_faults",
+    "SensorLimits": ".control.sensor_faults",
+    "SensorModel": ".calibration.model",
+    "SensorMount": ".kinematics.arm",
+    "SensorNoise": ".calibration.information",
+    "SimulatedSensor": ".sim.sensor",
+    "StepStatus": ".control.joint_admittance",
+    "Surface": ".sim.surfaces",
+    "SuspectConvention": ".exceptions",
+    "ToolInertia": ".sim.mujoco",
+    "UnobservableParameters": ".exceptions",
+    "UrdfError": ".exceptions",
+    "build_arm_model": ".sim.mujoco",
+    "bundled_urdf_path": ".kinematics.arm",
+    "calibrate": ".calibration.estimate",
+    "calibrate_dynamic": ".calibration.dynamic",
+    "detect_sign_and_handedness": ".calibration.conventions",
+    "diagnose_samples": ".io.conventions",
+    "euler_zyx_deg_to_matrix": ".kinematics.rotations",
+    "evaluate_poses": ".planning.evaluation",
+    "export_payload": ".io.payload_export",
+    "fisher_information": ".calibration.information",
+    "joint_derivatives": ".calibration.derivatives",
+    "load_calibration": ".io.calibration_file",
+    "load_motion_bag": ".io.motion_recording",
+    "load_motion_csv": ".io.motion_recording",
+    "load_robot": ".kinematics.robots",
+    "load_samples": ".io.samples_csv",
+    "max_stable_k1": ".control.stability",
+    "mounted_arm": ".kinematics.mounting",
+    "payload_in_flange": ".io.payload_export",
+    "plan_excitation": ".planning.excitation",
+    "plan_poses": ".planning.plan",
+    "quaternion_to_matrix": ".kinematics.rotations",
+    "recording_times": ".sim.sensor",
+    "run_closed_loop": ".sim.mujoco",
+    "save_calibration": ".io.calibration_file",
+    "simulate_placement": ".sim.placement",
+    "simulate_placement_mujoco": ".sim.mujoco",
+}
+"""Public name → the module defining it (imported on first access)."""
 
 __all__ = [
     "Admittance",
@@ -158,3 +191,16 @@ __all__ = [
     "simulate_placement",
     "simulate_placement_mujoco",
 ]
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'ftkin' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

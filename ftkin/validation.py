@@ -68,17 +68,64 @@ def as_rotation_batch(value, name: str = "rotation_sensor_to_base", atol: float 
         array = array[np.newaxis]
     if array.ndim != 3 or array.shape[1:] != (3, 3):
         raise InvalidInput(f"{name} must have shape (3, 3) or (N, 3, 3), got {np.shape(value)}")
+    if not _all_rotations(array, atol):
+        _raise_not_rotation(array, name, atol)
+    return array, single
+
+
+_BLOCK = 16384
+"""Rotations checked per block by :func:`_all_rotations` (temporaries stay in cache)."""
+
+
+def _all_rotations(array: np.ndarray, atol: float) -> bool:
+    """True if every ``(3, 3)`` of ``array`` has ``|RᵀR − I| <= atol`` entry by entry and ``det > 0``.
+
+    Closed form, vectorised over the batch: the six distinct entries of ``RᵀR``
+    are column dot products and ``det R = c2 · (c0 × c1)``. NaN and inf fail
+    the comparisons, so this also checks finiteness.
+    """
+    for start in range(0, len(array), _BLOCK):
+        block = array[start:start + _BLOCK]
+        c0, c1, c2 = block[:, :, 0], block[:, :, 1], block[:, :, 2]
+        low, high = 1.0 - atol, 1.0 + atol
+        ok = True
+        for a, b in ((c0, c0), (c1, c1), (c2, c2)):
+            norm = _column_dot(a, b)
+            ok = ok and bool(((low <= norm) & (norm <= high)).all())
+        for a, b in ((c0, c1), (c0, c2), (c1, c2)):
+            product = _column_dot(a, b)
+            ok = ok and bool((np.abs(product, out=product) <= atol).all())
+        if not ok:
+            return False
+        det = ((c0[:, 1] * c1[:, 2] - c0[:, 2] * c1[:, 1]) * c2[:, 0] + (c0[:, 2] * c1[:, 0] - c0[:, 0] * c1[:, 2]) * c2[:, 1]
+               + (c0[:, 0] * c1[:, 1] - c0[:, 1] * c1[:, 0]) * c2[:, 2])
+        if not (det > 0.0).all():
+            return False
+    return True
+
+
+def _column_dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise dot products of two ``(N, 3)`` arrays."""
+    return np.einsum("nj,nj->n", a, b)
+
+
+def _raise_not_rotation(array: np.ndarray, name: str, atol: float) -> None:
+    """The detailed error for a batch :func:`_all_rotations` rejected (names the first bad matrix).
+
+    Returns without raising only for a matrix exactly on the tolerance's edge
+    that the two computations round differently.
+    """
     check_finite(array, name)
     gram_error = np.abs(np.einsum("nji,njk->nik", array, array) - np.eye(3)).max(axis=(1, 2))
     det = np.linalg.det(array)
     bad = np.flatnonzero((gram_error > atol) | (det < 0.0))
-    if bad.size:
-        i = int(bad[0])
-        raise InvalidInput(
-            f"{name}[{i}] is not a rotation matrix (|R^T R - I| = {gram_error[i]:.2e}, det = {det[i]:.4f}); "
-            "expected an orthonormal matrix with determinant +1"
-        )
-    return array, single
+    if not bad.size:  # a matrix on the tolerance's edge, rounded the other way: accept it
+        return
+    i = int(bad[0])
+    raise InvalidInput(
+        f"{name}[{i}] is not a rotation matrix (|R^T R - I| = {gram_error[i]:.2e}, det = {det[i]:.4f}); "
+        "expected an orthonormal matrix with determinant +1"
+    )
 
 
 def as_positive(value, name: str) -> float:
@@ -113,3 +160,28 @@ def _finite(value, name: str) -> float:
     if not np.isfinite(number):
         raise InvalidInput(f"{name} must be finite, got {value!r}")
     return number
+
+
+def rotation_rows(value, atol: float = 1e-6) -> list | None:
+    """``R.tolist()`` if ``value`` is one proper rotation ``(3, 3)``, else None.
+
+    The one-sample form of :func:`as_rotation_batch`'s test, in closed form on
+    Python floats: ``|RᵀR − I| <= atol`` entry by entry and ``det R > 0``
+    (NaN and inf fail the comparisons). A None tells the caller to run
+    :func:`as_rotation_batch` for the detailed error.
+    """
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        return None
+    if array.shape != (3, 3):
+        return None
+    rows = array.tolist()
+    (a, b, c), (d, e, f), (g, h, i) = rows
+    low, high = 1.0 - atol, 1.0 + atol  # column norms² within 1 ± atol, dot products within ± atol
+    if (low <= a * a + d * d + g * g <= high and low <= b * b + e * e + h * h <= high
+            and low <= c * c + f * f + i * i <= high and -atol <= a * b + d * e + g * h <= atol
+            and -atol <= a * c + d * f + g * i <= atol and -atol <= b * c + e * f + h * i <= atol
+            and a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0.0):
+        return rows
+    return None

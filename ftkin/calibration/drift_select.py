@@ -9,7 +9,6 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy.optimize import minimize
 
 from ..exceptions import UnobservableParameters
 from .drift import BiasDrift
@@ -99,6 +98,8 @@ def fit_random_walk(poses: PoseAverages, theta0: np.ndarray, channel_std: np.nda
     noise_part = log_noise if estimate_noise else np.zeros(0)
     grid = [objective(np.concatenate([reference + np.log(factor), noise_part])) for factor in RATE_GRID]
     start = np.concatenate([reference + np.log(RATE_GRID[int(np.argmin(grid))]), noise_part])
+    from scipy.optimize import minimize  # scipy loads where it is used (import ftkin stays light)
+
     solution = minimize(objective, start, method="Nelder-Mead", options={"xatol": 0.05, "fatol": 0.01, "maxfev": 40 * len(start)})
     rate, std = unpack(solution.x)
     log_l, phi, residuals, whitened_jacobian, gains = _profile(data, best["theta"], rate, std, FINAL_ITERATIONS, trend)

@@ -21,7 +21,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from ..exceptions import UnobservableParameters
 from .log_cholesky import INERTIAL_PARAMETER_NAMES, log_cholesky_jacobian, parameters_from_log_cholesky
@@ -167,6 +166,8 @@ def fit_linear(problem: DynamicProblem) -> np.ndarray:
 
 def fit_unconstrained(problem: DynamicProblem, x0: np.ndarray) -> np.ndarray:
     """Stage 2: nonlinear weighted least squares over ``[bias, U, V, θ_free]``."""
+    from scipy.optimize import least_squares  # scipy loads where it is used
+
     solution = least_squares(
         problem.whitened_residuals, x0, jac=problem.whitened_jacobian, method="lm", xtol=1e-14, ftol=1e-14, gtol=1e-14
     )
@@ -191,6 +192,8 @@ def fit_consistent(problem: DynamicProblem, x0_phi: np.ndarray) -> np.ndarray:
         jac = problem.whitened_jacobian(to_theta_space(x))
         jac[:, 8:] = jac[:, 8:] @ log_cholesky_jacobian(x[8:])
         return jac
+
+    from scipy.optimize import least_squares
 
     solution = least_squares(residuals, x0_phi, jac=jacobian, method="lm", xtol=1e-14, ftol=1e-14, gtol=1e-14, max_nfev=2000)
     return solution.x

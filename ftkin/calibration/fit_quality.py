@@ -22,7 +22,6 @@
 import logging
 
 import numpy as np
-from scipy import special
 
 from .diagnostics import (
     FIT_ALPHA,
@@ -46,6 +45,8 @@ _UNITS = {"gravity_in_base": "N", "force_offset": "N", "torque_offset": "N·m", 
 
 def _f_sf(ratio, dfn, dfd):
     """Survival function of F(dfn, dfd) (vectorized), the chi-square limit for infinite ``dfd``."""
+    from scipy import special  # here, not at import: scipy.special takes ~0.2 s to import
+
     ratio, dfn, dfd = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (ratio, dfn, dfd)))
     large = ~np.isfinite(dfd) | (dfd > 1e7)
     with np.errstate(invalid="ignore"):

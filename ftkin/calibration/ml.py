@@ -22,7 +22,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from ..exceptions import InvalidInput
 from .information import SensorNoise, covariance_from_information
@@ -204,6 +203,8 @@ def noise_from_residuals(problem: WeightedProblem, theta: np.ndarray, robust: bo
 
 def _solve(problem: WeightedProblem, start: np.ndarray, loss: str) -> tuple[np.ndarray, int]:
     """Minimize the (robust) whitened residuals from ``start``; ``θ`` and the function evaluations used."""
+    from scipy.optimize import least_squares  # here, not at import: scipy.optimize takes ~0.3 s to import
+
     robust = {"method": "lm"} if loss == "linear" else {"method": "trf", "loss": loss, "f_scale": ROBUST_LOSS_SCALE}
     solution = least_squares(
         problem.whitened_residuals, start, jac=lambda theta: -problem.whitened_jacobian(theta),

@@ -88,6 +88,13 @@ def main(argv=None) -> int:
     the printout is dropped and the command still finishes its work (its
     ``-o`` file is written).
     """
+    arguments = sys.argv[1:] if argv is None else list(argv)
+    if "--version" in arguments and all(argument in ("--version", "-v", "--verbose") for argument in arguments):
+        # Answered before the subcommands (and the library behind them) are imported.
+        from .._version import __version__
+
+        print(f"ftkin {__version__}")
+        return 0
     stdout = sys.stdout
     sys.stdout = _QuietPipe(stdout)
     once: dict[logging.Handler, _OnceFilter] = {}  # one filter per handler: each handler sees each record once

@@ -133,6 +133,7 @@ class Admittance:
         self._time_constant = 1.0 / (2.0 * math.pi * self.derivative_cutoff)
         self._k1s = self.selection * self.k1
         self._k2s = self.selection * self.k2
+        self._k1s_floats, self._k2s_floats = self._k1s.tolist(), self._k2s.tolist()
         self.state = AdmittanceState()
 
     def reset(self) -> None:
@@ -161,33 +162,62 @@ class Admittance:
                 (environment on the tool), already validated.
             dt: Time since the previous update [s], > 0.
         """
+        return np.array(self.update_floats(contact_wrench.tolist(), dt))
+
+    def update_floats(self, contact_wrench, dt: float) -> list[float] | tuple[float, ...]:
+        """:meth:`update` on six Python floats, returning six floats (the control tick's path).
+
+        Every update, from :meth:`update` or from ``JointAdmittance.step``, runs
+        here, so a per-tick feature of the law belongs in this method. The
+        operations are those of the array form, component by component (same
+        IEEE results), on floats because numpy's per-call overhead dominates
+        on 6-vectors.
+        """
         state = self.state
-        error = self.force_error(contact_wrench)
-        if not state.started:
-            state.started = True
-            if self.bumpless:
-                state.previous_error = error
-        if dt != self._alpha_dt:  # exact discretisation of the first-order low-pass, cached per dt
+        bumpless_start = not state.started and self.bumpless  # the first error is its own previous one: no kick
+        state.started = True
+        if dt != self._alpha_dt:  # exact discretisation of the first-order low-pass (α = 1 − e^(−dt/τ)), cached per dt
             self._alpha_dt, self._alpha = dt, -math.expm1(-dt / self._time_constant)
         alpha = self._alpha
-        raw_derivative = (error - state.previous_error) / dt
-        state.filtered_derivative = state.filtered_derivative + alpha * (raw_derivative - state.filtered_derivative)
-        state.previous_error = error
-        return self.saturate(self._k1s * state.filtered_derivative + self._k2s * error)
+        errors, derivatives, twist = [], [], []
+        for wanted, measured, band, previous, derivative, k1, k2 in zip(
+                self.desired_wrench.tolist(), contact_wrench, self.deadband.tolist(), state.previous_error.tolist(),
+                state.filtered_derivative.tolist(), self._k1s_floats, self._k2s_floats):
+            # One axis of the law, in this order: ΔF = F_desired + F' with the deadband (e − clip(e, ±band),
+            # as branches), the filtered dΔF/dt, then S·(K1·dΔF/dt + K2·ΔF).
+            error = wanted + measured
+            error = error - band if error > band else (error + band if error < -band else 0.0)
+            if bumpless_start:
+                previous = error
+            derivative = derivative + alpha * ((error - previous) / dt - derivative)
+            errors.append(error)
+            derivatives.append(derivative)
+            twist.append(k1 * derivative + k2 * error)
+        state.filtered_derivative = np.array(derivatives)
+        state.previous_error = np.array(errors)
+        return self.saturate_floats(twist)
 
-    def saturate(self, twist: np.ndarray) -> np.ndarray:
-        """Scale a twist to the norm limits: each part on its own, or all by one factor (``saturation``)."""
-        v0, v1, v2, w0, w1, w2 = twist.tolist()
+    def saturate_floats(self, twist):
+        """:meth:`saturate` on six floats: returns ``twist`` itself when within the limits, else six new floats."""
+        v0, v1, v2, w0, w1, w2 = twist
         linear = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
         angular = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
         if linear <= self.max_linear_velocity and angular <= self.max_angular_velocity:
             return twist
-        if self.common_saturation:
-            return twist * min(self.max_linear_velocity / max(linear, self.max_linear_velocity),
-                               self.max_angular_velocity / max(angular, self.max_angular_velocity))
-        out = twist.copy()
+        if self.common_saturation:  # one factor for both parts: the screw (pitch, axis) is kept
+            scale = min(self.max_linear_velocity / max(linear, self.max_linear_velocity),
+                        self.max_angular_velocity / max(angular, self.max_angular_velocity))
+            return v0 * scale, v1 * scale, v2 * scale, w0 * scale, w1 * scale, w2 * scale
         if linear > self.max_linear_velocity:
-            out[:3] *= self.max_linear_velocity / linear
+            scale = self.max_linear_velocity / linear
+            v0, v1, v2 = v0 * scale, v1 * scale, v2 * scale
         if angular > self.max_angular_velocity:
-            out[3:] *= self.max_angular_velocity / angular
-        return out
+            scale = self.max_angular_velocity / angular
+            w0, w1, w2 = w0 * scale, w1 * scale, w2 * scale
+        return v0, v1, v2, w0, w1, w2
+
+    def saturate(self, twist: np.ndarray) -> np.ndarray:
+        """Scale a twist to the norm limits: each part on its own, or all by one factor (``saturation="common"``)."""
+        values = twist.tolist()
+        limited = self.saturate_floats(values)
+        return twist if limited is values else np.array(limited)

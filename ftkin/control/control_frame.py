@@ -56,27 +56,37 @@ class ControlFrame:
 
     def wrench_from_sensor(self, wrench_in_sensor: np.ndarray, rotation_sensor_to_base: np.ndarray) -> np.ndarray:
         """``(6,)`` wrench at the control point in this frame's axes, from the sensor's ``(6,)``."""
-        fx, fy, fz, mx, my, mz = wrench_in_sensor.tolist()
-        rx, ry, rz = self._r
-        mx, my, mz = mx - (ry * fz - rz * fy), my - (rz * fx - rx * fz), mz - (rx * fy - ry * fx)
-        if self.frame != "sensor":
-            rows = rotation_sensor_to_base.tolist() if self.frame == "base" else self._inverse_rows
-            fx, fy, fz = _rotate(rows, fx, fy, fz)
-            mx, my, mz = _rotate(rows, mx, my, mz)
-        return np.array([fx, fy, fz, mx, my, mz])
+        return np.array(self.wrench_floats(wrench_in_sensor.tolist(), rotation_sensor_to_base.tolist()))
 
     def twist_to_sensor_origin(self, twist: np.ndarray, rotation_sensor_to_base: np.ndarray) -> np.ndarray:
         """Twist ``[v; ω]`` of the sensor origin in base axes, from a control-point twist in this frame's axes."""
-        vx, vy, vz, wx, wy, wz = twist.tolist()
-        rows = rotation_sensor_to_base.tolist()
-        if self.frame != "base":
-            if self.frame == "tool":
-                vx, vy, vz = _rotate(self._rotation_rows, vx, vy, vz)
-                wx, wy, wz = _rotate(self._rotation_rows, wx, wy, wz)
-            vx, vy, vz = _rotate(rows, vx, vy, vz)
-            wx, wy, wz = _rotate(rows, wx, wy, wz)
-        px, py, pz = _rotate(rows, *self._r)
-        return np.array([vx - (wy * pz - wz * py), vy - (wz * px - wx * pz), vz - (wx * py - wy * px), wx, wy, wz])
+        return np.array(self.twist_floats(twist.tolist(), rotation_sensor_to_base.tolist()))
+
+    # The two transports on Python floats (the control tick's path; the methods above wrap them).
+    def wrench_floats(self, wrench_in_sensor, rotation_rows) -> tuple[float, ...]:
+        """:meth:`wrench_from_sensor` on six floats and ``R_BS.tolist()``; returns six floats."""
+        fx, fy, fz, mx, my, mz = wrench_in_sensor
+        rx, ry, rz = self._r
+        mx, my, mz = mx - (ry * fz - rz * fy), my - (rz * fx - rx * fz), mz - (rx * fy - ry * fx)
+        if self.frame != "sensor":
+            rows = rotation_rows if self.frame == "base" else self._inverse_rows
+            fx, fy, fz = _rotate(rows, fx, fy, fz)
+            mx, my, mz = _rotate(rows, mx, my, mz)
+        return fx, fy, fz, mx, my, mz
+
+    def twist_floats(self, twist, rotation_rows) -> tuple[float, ...]:
+        """:meth:`twist_to_sensor_origin` on six floats and ``R_BS.tolist()``; returns six floats."""
+        vx, vy, vz, wx, wy, wz = twist
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation_rows  # R_BS, written out below
+        if self.frame == "tool":  # tool axes to sensor axes
+            vx, vy, vz = _rotate(self._rotation_rows, vx, vy, vz)
+            wx, wy, wz = _rotate(self._rotation_rows, wx, wy, wz)
+        if self.frame != "base":  # sensor axes to base axes
+            vx, vy, vz = r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz
+            wx, wy, wz = r00 * wx + r01 * wy + r02 * wz, r10 * wx + r11 * wy + r12 * wz, r20 * wx + r21 * wy + r22 * wz
+        rx, ry, rz = self._r
+        px, py, pz = r00 * rx + r01 * ry + r02 * rz, r10 * rx + r11 * ry + r12 * rz, r20 * rx + r21 * ry + r22 * rz
+        return vx - (wy * pz - wz * py), vy - (wz * px - wx * pz), vz - (wx * py - wy * px), wx, wy, wz  # v − ω × p
 
 
 def _rotate(rows, x: float, y: float, z: float) -> tuple[float, float, float]:

@@ -27,21 +27,19 @@ sensor). A faulty tick commands ``dq = 0``, names the fault in
 sample enters the state; faults are not latched: after
 ``SensorLimits.recovery_ticks`` good ticks the arm moves again, its derivative
 filter restarted from the current force error (no kick from the jump in ΔF).
-``step`` neither raises nor returns NaN for inputs of the right shape; wrong
-shapes or non-numeric inputs are programming errors and raise
-:class:`~ftkin.exceptions.InvalidInput`.
-
-Each tick leaves a :class:`StepStatus` in ``last_status``.
+``step`` neither raises nor returns NaN for inputs of the right shape; wrong shapes or
+non-numeric inputs raise :class:`~ftkin.exceptions.InvalidInput`. Each tick leaves a
+:class:`StepStatus` in ``last_status``.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from operator import ge, le, mul, sub
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg import lapack
 
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm, bundled_urdf_path
@@ -49,10 +47,9 @@ from ..kinematics.mounting import mounted_arm
 from .admittance import Admittance
 from .compensation import Compensator
 from .control_frame import control_frame_for
+from .damped_least_squares import damped_least_squares
 from .oscillation import DEFAULT_OSCILLATION_LIMITS, OscillationDetector, OscillationLimits
 from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
-
-_potrf, _potrs, _posv = lapack.dpotrf, lapack.dpotrs, lapack.dposv
 
 
 @dataclass(frozen=True)
@@ -135,8 +132,12 @@ class JointAdmittance:
         self.manipulability_threshold, self.max_damping = float(manipulability_threshold), float(max_damping)
         self.limit_gain = float(limit_gain)
         self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
-        self._joint_limits = list(zip(arm.lower_limits.tolist(), arm.upper_limits.tolist(),
-                                      (arm.velocity_limits * float(velocity_scale)).tolist()))
+        self._rotation = arm.data.oMf[arm.sensor_frame_id].rotation  # a view: follows every kinematics update
+        lower, upper = arm.lower_limits.tolist(), arm.upper_limits.tolist()
+        speeds = (arm.velocity_limits * float(velocity_scale)).tolist()
+        self._joint_limits = list(zip(lower, upper, speeds))
+        self._lower, self._upper, self._speeds = lower, upper, speeds  # as floats, for limit scaling's shortcut
+        self._gains = [self.limit_gain] * arm.nq
         self._nq = arm.nq
         if sensor_limits is None and (arm.urdf_path is None or arm.urdf_path != bundled_urdf_path().resolve()):
             raise InvalidInput("give sensor_limits=SensorLimits(force_range=..., torque_range=...) with your sensor's "
@@ -154,7 +155,21 @@ class JointAdmittance:
         self.safety_latched = False
         self.oscillation_event = ""
         self._holding = False
-        self.last_status: StepStatus | None = None
+        self._status: StepStatus | None = None
+        self._status_parts: tuple | None = None
+
+    @property
+    def last_status(self) -> StepStatus | None:
+        """The :class:`StepStatus` of the last tick (None before the first tick after a reset).
+
+        Built on first access: the tick itself only keeps its parts (a moving
+        tick's status costs more than a microsecond to build).
+        """
+        if self._status_parts is not None:
+            dq, contact, twist, manipulability, damping, scale = self._status_parts
+            self._status = StepStatus(dq, np.array(contact), np.array(twist), manipulability, damping, scale, False, "")
+            self._status_parts = None
+        return self._status
 
     def step(self, q, raw_wrench, dt: float, free: bool | None = None) -> np.ndarray:
         """Joint velocities ``(nq,)`` [rad/s] for this tick.
@@ -172,6 +187,8 @@ class JointAdmittance:
             InvalidInput: ``q``, ``raw_wrench`` or ``dt`` of the wrong shape or not numbers
                 (NaN, inf, a bad ``dt`` are sensor faults: held and reported, not raised).
         """
+        # The tick runs on Python floats (numpy's per-call overhead dominates on 3- and 6-vectors);
+        # numpy only for the Jacobian products. The status is built when asked (last_status).
         try:
             q = np.asarray(q, dtype=np.float64)
             raw = np.asarray(raw_wrench, dtype=np.float64)
@@ -180,32 +197,38 @@ class JointAdmittance:
             raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
         if q.shape != (self._nq,) or raw.shape != (6,):
             raise InvalidInput(f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
-        fault, event = self.monitor.check(q, raw.tolist(), dt)
+        raw = raw.tolist()
+        fault, event = self.monitor.check(q, raw, dt)
         if fault is not SensorFault.NONE:
             if self.compensator is not None and self.compensator.tracker is not None:
                 self.compensator.tracker.interrupt()
             return self._hold(fault, event)
+        # 1. kinematics: forward kinematics and the sensor Jacobian (base axes), one Pinocchio call
         jacobian = pin.computeFrameJacobian(self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED)
-        rotation = self._data.oMf[self._sensor_id].rotation
-        contact = raw.copy() if self.compensator is None else self.compensator.compensate_rotation_unchecked(rotation, raw)
+        rotation = self._rotation.tolist()  # R_BS, updated by the call above
+        # 2. compensation (six floats, sensor frame), the bias tracker, the oscillation detector and the safety stop
+        contact = raw if self.compensator is None else self.compensator.contact_floats(rotation, raw)
         if self.compensator is not None and self.compensator.tracker is not None:
             self.compensator.observe_bias(contact, dt, q=q, free=free)
-        fx, fy, fz, mx, my, mz = contact.tolist()
+        fx, fy, fz, mx, my, mz = contact
         force, torque = math.sqrt(fx * fx + fy * fy + fz * fz), math.sqrt(mx * mx + my * my + mz * mz)
         if (self.detector is not None and self.detector.update(force, torque, dt)) or self.oscillation_event:
-            return self._hold_oscillation(contact)
+            return self._hold_oscillation(np.array(contact))
         if self.safety_latched or force > self.force_limit or torque > self.torque_limit:
-            return self._stop(contact, force, torque)
-        wrench = self.frame.wrench_from_sensor(contact, rotation)
+            return self._stop(np.array(contact), force, torque)
+        # 3. the admittance law in the control frame, its twist moved to the sensor origin
+        wrench = self.frame.wrench_floats(contact, rotation)
         if self._holding:
-            self._restart_derivative(wrench)
-        twist = self.admittance.update(wrench, dt)
-        sensor_twist = self.frame.twist_to_sensor_origin(twist, rotation)
-        dq, manipulability, damping = damped_least_squares(jacobian, sensor_twist, self.manipulability_threshold, self.max_damping)
-        scale = self._limit_scale(q, dq)
+            self._restart_derivative(np.array(wrench))
+        twist = self.admittance.update_floats(wrench, dt)
+        sensor_twist = self.frame.twist_floats(twist, rotation)
+        # 4. joint velocities: damped least squares, then the joint limits
+        dq, manipulability, damping = damped_least_squares(jacobian, sensor_twist, self.manipulability_threshold,
+                                                           self.max_damping)
+        scale = self._limit_scale(q.tolist(), dq.tolist())
         if scale < 1.0:
             dq *= scale
-        self.last_status = StepStatus(dq, contact, twist, manipulability, damping, scale, False, "")
+        self._status_parts = (dq, contact, twist, manipulability, damping, scale)
         return dq
 
     def _hold(self, fault: SensorFault, event: str) -> np.ndarray:
@@ -216,7 +239,8 @@ class JointAdmittance:
         """
         self._holding = True
         dq = np.zeros(self._nq)
-        self.last_status = StepStatus(dq, np.full(6, math.nan), np.zeros(6), math.nan, math.nan, 0.0,
+        self._status_parts = None
+        self._status = StepStatus(dq, np.full(6, math.nan), np.zeros(6), math.nan, math.nan, 0.0,
                                       self.safety_latched, event, fault)
         return dq
 
@@ -232,8 +256,9 @@ class JointAdmittance:
             self.oscillation_event = (f"oscillation: {self.detector.count:.0f} reversals of the contact force by more than "
                                       f"{limits.force_step:g} N within ~{limits.window:g} s: holding (reset() to resume); lower {gain}")
         dq = np.zeros(self._nq)
-        self.last_status = StepStatus(dq, contact, np.zeros(6), math.nan, math.nan, 0.0, self.safety_latched,
-                                      self.oscillation_event, SensorFault.OSCILLATION)
+        self._status_parts = None
+        self._status = StepStatus(dq, contact, np.zeros(6), math.nan, math.nan, 0.0, self.safety_latched,
+                                  self.oscillation_event, SensorFault.OSCILLATION)
         return dq
 
     def _restart_derivative(self, wrench: np.ndarray) -> None:
@@ -245,53 +270,31 @@ class JointAdmittance:
             state.filtered_derivative = np.zeros(6)
 
     def _stop(self, contact: np.ndarray, force: float, torque: float) -> np.ndarray:
-        if self.safety_latched and self.last_status is not None and self.last_status.safety_stop:
-            event = self.last_status.event
+        previous = self.last_status
+        if self.safety_latched and previous is not None and previous.safety_stop:
+            event = previous.event
         else:
             event = (f"contact {force:.3g} N / {torque:.3g} N·m exceeded the limit "
                      f"{self.force_limit:.3g} N / {self.torque_limit:.3g} N·m: stopped (reset() to resume)")
         self.safety_latched = True
         dq = np.zeros(self._nq)
-        self.last_status = StepStatus(dq, contact, np.zeros(6), math.nan, math.nan, 0.0, True, event)
+        self._status_parts = None
+        self._status = StepStatus(dq, contact, np.zeros(6), math.nan, math.nan, 0.0, True, event)
         return dq
 
-    def _limit_scale(self, q: np.ndarray, dq: np.ndarray) -> float:
+    def _limit_scale(self, q: list, dq: list) -> float:
         """Largest ``s ≤ 1`` keeping every joint's ``s·dq`` within its bound (0 if one is at or past its limit).
 
         A joint moving towards its position limit may go at most ``limit_gain · distance``
         [rad/s], and never beyond its (scaled) velocity limit.
         """
         gain, scale = self.limit_gain, 1.0
-        for position, velocity, (lower, upper, speed) in zip(q.tolist(), dq.tolist(), self._joint_limits):
+        if (all(map(le, map(abs, dq), self._speeds)) and all(map(le, dq, map(mul, self._gains, map(sub, self._upper, q))))
+                and all(map(ge, dq, map(mul, self._gains, map(sub, self._lower, q))))):
+            return 1.0  # every joint within both of its bounds: the loop below gives 1.0 too
+        for position, velocity, (lower, upper, speed) in zip(q, dq, self._joint_limits):
             if velocity > 0.0:
                 scale = min(scale, max(0.0, min(speed, gain * (upper - position))) / velocity)
             elif velocity < 0.0:
                 scale = min(scale, min(0.0, max(-speed, gain * (lower - position))) / velocity)
         return scale
-
-
-def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, manipulability_threshold: float = 0.005,
-                         max_damping: float = 0.05) -> tuple[np.ndarray, float, float]:
-    """``dq = Jᵀ(J Jᵀ + λ² I)⁻¹ V`` with λ growing near singularities.
-
-    The damping follows Nakamura and Hanafusa: with the manipulability
-    ``w = sqrt(det(J Jᵀ))``, ``λ² = λ_max² (1 − w/w₀)²`` for ``w < w₀``, else 0.
-    ``w`` comes free from the Cholesky factor of ``J Jᵀ`` (no SVD on the hot path).
-
-    Args:
-        jacobian: ``(6, nq)`` [m/rad, 1] (``[v; ω] = J dq``).
-        twist: ``(6,)`` ``[v; ω]`` wanted [m/s, rad/s].
-        manipulability_threshold: ``w₀``.
-        max_damping: ``λ_max``.
-
-    Returns:
-        ``dq`` ``(nq,)`` [rad/s], the manipulability ``w`` and ``λ``.
-    """
-    gram = jacobian @ jacobian.T
-    factor, info = _potrf(gram)
-    manipulability = math.prod(factor.diagonal().tolist()) if info == 0 else 0.0
-    if manipulability >= manipulability_threshold:
-        return jacobian.T @ _potrs(factor, twist)[0], manipulability, 0.0
-    damping = max_damping * (1.0 - manipulability / manipulability_threshold)
-    gram.flat[::7] += damping * damping
-    return jacobian.T @ _posv(gram, twist)[1], manipulability, damping

@@ -27,6 +27,7 @@ import math
 from dataclasses import dataclass
 from enum import StrEnum
 from numbers import Real
+from operator import lt
 
 import numpy as np
 
@@ -44,6 +45,10 @@ class SensorFault(StrEnum):
     STUCK = "stuck"
     OSCILLATION = "oscillation"
     """Not a sensor fault: the loop itself oscillates (:mod:`ftkin.control.oscillation`); latched until reset."""
+
+
+_OK = (SensorFault.NONE, "")
+"""``check``'s answer for a good tick (one shared tuple: the common case allocates nothing)."""
 
 
 @dataclass(frozen=True)
@@ -162,11 +167,11 @@ class FaultMonitor:
             self.counts[fault] += 1
             return fault, event
         if self.fault is SensorFault.NONE:
-            return fault, event
+            return _OK
         self.good_ticks += 1
         if self.good_ticks >= self.limits.recovery_ticks:
             self.fault = SensorFault.NONE
-            return SensorFault.NONE, ""
+            return _OK
         self.counts[self.fault] += 1
         return self.fault, f"recovering from {self.fault.value}: {self.good_ticks}/{self.limits.recovery_ticks} good ticks"
 
@@ -186,7 +191,7 @@ class FaultMonitor:
         if dt > self._ratio * reference:
             return SensorFault.DT_JUMP, (f"dt = {dt:.4g} s is more than {self._ratio:g} x the nominal "
                                          f"{reference:.4g} s (dropped ticks): holding")
-        if self._check_range:
+        if self._check_range and not all(map(lt, map(abs, raw), self._ranges)):
             for channel, (value, limit) in enumerate(zip(raw, self._ranges)):
                 if not -limit < value < limit:
                     return SensorFault.SATURATED, f"channel {channel} reads {value:.4g}, at or beyond the range ±{limit:g}: holding"
@@ -197,4 +202,4 @@ class FaultMonitor:
                 return SensorFault.STUCK, f"reading unchanged for {self._repeats + 1} ticks ({self._stale_time:.4g} s): holding"
         else:
             self._previous, self._repeats, self._stale_time = raw, 0, 0.0
-        return SensorFault.NONE, ""
+        return _OK

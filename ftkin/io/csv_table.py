@@ -9,7 +9,6 @@ atomic write.
 from __future__ import annotations
 
 import csv
-import difflib
 import io
 import logging
 import re
@@ -170,6 +169,8 @@ def missing_columns(table: Table, wanted, what: str) -> None:
         for name in missing:
             close = lowered.get(name.lower())
             if close is None:
+                import difflib  # only for an error message
+
                 matches = difflib.get_close_matches(name, table.header, n=1) if len(table.header) <= 1000 else []
                 close = matches[0] if matches else None
             if close is not None:

@@ -8,7 +8,6 @@ the URDF's root (Pinocchio's world frame).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -16,10 +15,12 @@ import pinocchio as pin
 
 from ..exceptions import FrameNotFound, InvalidInput, UrdfError
 from ..validation import as_batch, as_vector
-from .urdf_loading import build_geometry, build_model, sensor_frame_hint
+from .chain import RotationChain
+from .sensor_frame import SensorMount, add_sensor_frame
+from .urdf_loading import build_geometry, build_model, lock_joints, sensor_frame_hint
 
 BUNDLED_URDF_NAME = "ftkin_c4.urdf"
-
+_BATCH_MINIMUM = 16  # batches from this size use numpy kinematics (below it Pinocchio per row is as fast)
 _REFERENCE_FRAMES = {
     "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
     "local": pin.ReferenceFrame.LOCAL,
@@ -38,28 +39,6 @@ def bundled_urdf_path() -> Path:
         if candidate.is_file():
             return candidate
     raise UrdfError(BUNDLED_URDF_NAME, ["the bundled URDF is missing from this installation"])
-
-
-@dataclass(frozen=True)
-class SensorMount:
-    """Where to add a sensor frame when the URDF has none.
-
-    Attributes:
-        parent_frame: Existing frame (link) the sensor is bolted to, e.g. ``tool0``.
-        translation: Sensor origin in the parent frame [m].
-        rpy: Sensor orientation in the parent frame, roll-pitch-yaw [rad]
-            (``R = Rz(yaw) Ry(pitch) Rx(roll)``, the URDF convention).
-    """
-
-    parent_frame: str
-    translation: Sequence[float] = (0.0, 0.0, 0.0)
-    rpy: Sequence[float] = (0.0, 0.0, 0.0)
-
-    def placement(self) -> pin.SE3:
-        """Sensor placement relative to the parent frame."""
-        translation = as_vector(self.translation, 3, "sensor mount translation")
-        rpy = as_vector(self.rpy, 3, "sensor mount rpy")
-        return pin.SE3(pin.rpy.rpyToMatrix(*rpy), translation)
 
 
 class Arm:
@@ -113,6 +92,7 @@ class Arm:
         self.sensor_mount: SensorMount | None = None  # set by from_urdf when the sensor frame was added
         self.robot_name: str | None = None  # set by load_robot
         self._geometry: dict[str, pin.GeometryModel] = {}
+        self._chain: RotationChain | None | bool = False  # False: not built yet
 
     # ----------------------------------------------------------------- loading
     @classmethod
@@ -145,10 +125,10 @@ class Arm:
         path = Path(path)
         model = build_model(path)
         if sensor_mount is not None:
-            _add_frame(model, sensor_frame, sensor_mount)
+            add_sensor_frame(model, sensor_frame, sensor_mount)
         full_model, locked_ids, reference = None, [], None
         if locked_joints:
-            full_model, model, locked_ids, reference = _lock_joints(model, locked_joints)
+            full_model, model, locked_ids, reference = lock_joints(model, locked_joints)
         arm = cls(model, sensor_frame, tool_frame, path.resolve(), package_dirs, full_model, locked_ids, reference)
         arm.sensor_mount = sensor_mount
         return arm
@@ -210,12 +190,32 @@ class Arm:
         return pin.updateFramePlacement(self.model, self.data, self.sensor_frame_id).rotation
 
     def rotation_sensor_to_base(self, q) -> np.ndarray:
-        """Sensor orientation ``R_BS`` for ``q`` ``(nq,)`` → ``(3, 3)`` or ``(N, nq)`` → ``(N, 3, 3)``."""
+        """Sensor orientation ``R_BS`` for ``q`` ``(nq,)`` → ``(3, 3)`` or ``(N, nq)`` → ``(N, 3, 3)``.
+
+        Batches of revolute/prismatic chains: :class:`~ftkin.kinematics.chain.RotationChain` (numpy).
+        """
         configurations, single = as_batch(q, self.nq, "joint positions q")
-        out = np.empty((len(configurations), 3, 3))
-        for i, configuration in enumerate(configurations):
-            out[i] = self.sensor_rotation_unchecked(configuration)
+        out = self.rotations_unchecked(configurations)
         return out[0] if single else out
+
+    def rotations_unchecked(self, configurations: np.ndarray) -> np.ndarray:
+        """``R_BS`` ``(N, 3, 3)`` for validated ``(N, nq)`` float joint positions."""
+        chain = self._sensor_chain(len(configurations))
+        if chain is not None:
+            return chain.rotations(configurations)
+        return np.array([self.sensor_rotation_unchecked(q).copy() for q in configurations]).reshape(-1, 3, 3)
+
+    def vectors_in_sensor_unchecked(self, configurations: np.ndarray, vector_in_base: np.ndarray) -> np.ndarray:
+        """``R_BS(q)ᵀ v`` ``(N, 3)``: a base-frame vector in the sensor frame, for validated ``(N, nq)`` angles."""
+        chain = self._sensor_chain(len(configurations))
+        if chain is not None:
+            return chain.transposed_times(configurations, vector_in_base)
+        return np.einsum("nji,j->ni", self.rotations_unchecked(configurations), vector_in_base)
+
+    def _sensor_chain(self, count: int) -> RotationChain | None:
+        if count >= _BATCH_MINIMUM and self._chain is False:  # built on first use; None: not a revolute/prismatic chain
+            self._chain = RotationChain.from_model(self.model, self.sensor_frame_id)
+        return self._chain if count >= _BATCH_MINIMUM else None
 
     def frame_placement(self, q, frame: str = "sensor") -> tuple[np.ndarray, np.ndarray]:
         """Rotation ``(3, 3)`` (frame to base) and position ``(3,)`` [m] of a frame in the base frame.
@@ -268,30 +268,3 @@ class Arm:
                 )
             self._geometry[kind] = geometry
         return self._geometry[kind]
-
-
-def _add_frame(model: pin.Model, name: str, mount: SensorMount) -> None:
-    if model.existFrame(name):
-        raise InvalidInput(f"frame {name!r} already exists in the model; choose another sensor frame name")
-    if not model.existFrame(mount.parent_frame):
-        raise FrameNotFound(mount.parent_frame, [frame.name for frame in model.frames])
-    parent_id = model.getFrameId(mount.parent_frame)
-    parent = model.frames[parent_id]
-    placement = parent.placement * mount.placement()
-    model.addFrame(pin.Frame(name, parent.parentJoint, parent_id, placement, pin.FrameType.OP_FRAME), False)
-
-
-def _lock_joints(model: pin.Model, locked_joints: Mapping[str, float]):
-    reference = pin.neutral(model)
-    ids = []
-    for name, value in locked_joints.items():
-        if not model.existJointName(name):
-            raise InvalidInput(
-                f"cannot lock joint {name!r}: not in the model; joints: "
-                + ", ".join(model.names[i] for i in range(1, model.njoints))
-            )
-        joint_id = model.getJointId(name)
-        reference[model.joints[joint_id].idx_q] = float(value)
-        ids.append(joint_id)
-    reduced = pin.buildReducedModel(model, ids, reference)
-    return model, reduced, ids, reference

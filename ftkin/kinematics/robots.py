@@ -17,7 +17,6 @@ against.
 from __future__ import annotations
 
 import functools
-import importlib.metadata
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -80,6 +79,8 @@ def example_robot_data_share() -> Path:
     Raises:
         MissingDependency: example-robot-data is not installed.
     """
+    import importlib.metadata  # here, not at import: it pulls in the email package (~0.05 s)
+
     try:
         distribution = importlib.metadata.distribution(_DISTRIBUTION)
     except importlib.metadata.PackageNotFoundError:

@@ -13,13 +13,12 @@ import io
 import logging
 import os
 import re
-import tempfile
-import xml.etree.ElementTree as ET
+from collections.abc import Mapping
 from pathlib import Path
 
 import pinocchio as pin
 
-from ..exceptions import UrdfError
+from ..exceptions import InvalidInput, UrdfError
 
 logger = logging.getLogger(__name__)
 
@@ -36,6 +35,8 @@ def captured_c_stderr():
     except OSError:  # no usable stderr (embedded interpreter): capture nothing
         yield captured
         return
+    import tempfile  # imported when an arm is loaded, not with ftkin
+
     with tempfile.TemporaryFile(mode="w+b") as sink:
         os.dup2(sink.fileno(), 2)
         try:
@@ -49,6 +50,8 @@ def captured_c_stderr():
 
 def xml_reasons(text: str) -> list[str]:
     """Problems an XML parser finds (empty list when the XML is well formed)."""
+    import xml.etree.ElementTree as ET  # imported when an arm is loaded, not with ftkin
+
     try:
         root = ET.fromstring(text)
     except ET.ParseError as error:
@@ -174,3 +177,24 @@ def sensor_frame_hint(model: pin.Model) -> str:
         f"if the URDF has no sensor frame, add it at the link the sensor is bolted to, e.g. --sensor-parent {last} "
         f"(and --sensor-offset X Y Z [m]; in Python sensor_mount=SensorMount({last!r}, ...))"
     )
+
+
+def lock_joints(model: pin.Model, locked_joints: Mapping[str, float]):
+    """The model with ``{joint name: value [rad or m]}`` fixed: ``(full, reduced, locked ids, reference q)``.
+
+    Raises:
+        InvalidInput: a joint name is not in the model (lists the joints).
+    """
+    reference = pin.neutral(model)
+    ids = []
+    for name, value in locked_joints.items():
+        if not model.existJointName(name):
+            raise InvalidInput(
+                f"cannot lock joint {name!r}: not in the model; joints: "
+                + ", ".join(model.names[i] for i in range(1, model.njoints))
+            )
+        joint_id = model.getJointId(name)
+        reference[model.joints[joint_id].idx_q] = float(value)
+        ids.append(joint_id)
+    reduced = pin.buildReducedModel(model, ids, reference)
+    return model, reduced, ids, reference

@@ -139,8 +139,12 @@ class FeasibilityChecker:
         """True when ``q`` lies within the effective joint bounds."""
         return bool(np.all(q >= self.lower) and np.all(q <= self.upper))
 
-    def check(self, q: np.ndarray) -> np.ndarray | None:
-        """``R_BS`` ``(3, 3)`` of a bounded configuration ``q`` if it meets the other constraints, else None."""
+    def check(self, q: np.ndarray, collision: bool = True) -> np.ndarray | None:
+        """``R_BS`` ``(3, 3)`` of a bounded configuration ``q`` if it meets the other constraints, else None.
+
+        ``collision=False`` leaves out the self-collision test (the costly one:
+        callers that may discard the pose anyway run :meth:`in_collision` last).
+        """
         model, data, limits = self.arm.model, self.data, self.constraints
         pin.forwardKinematics(model, data, q)
         if limits.floor_height is not None:
@@ -154,10 +158,16 @@ class FeasibilityChecker:
                 self.rejected["tilt"] += 1
                 return None
         rotation = pin.updateFramePlacement(model, data, self.arm.sensor_frame_id).rotation.copy()
-        if self.collision is not None and self.collision.in_collision(q):
-            self.rejected["self-collision"] += 1
+        if collision and self.in_collision(q):
             return None
         return rotation
+
+    def in_collision(self, q: np.ndarray) -> bool:
+        """True (and counted as a rejection) when ``q`` is self-colliding; False without a collision check."""
+        if self.collision is not None and self.collision.in_collision(q):
+            self.rejected["self-collision"] += 1
+            return True
+        return False
 
     def tool_to_sensor_rotation(self) -> np.ndarray:
         """Fixed rotation from the tilt-axis frame to the sensor frame, ``R_TS`` ``(3, 3)``."""

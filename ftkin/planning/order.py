@@ -1,7 +1,8 @@
 """Order poses so the arm travels little between consecutive ones.
 
 An open path through all configurations (no return to the start) with short
-total joint travel: nearest-neighbour tours from every start, each improved
+total joint travel: nearest-neighbour tours from every start (at most
+:data:`MAX_STARTS` of them, evenly spread, for large sets), each improved
 by 2-opt (reverse a segment while that shortens the path); the shortest wins.
 Distance is the Euclidean norm of the joint difference [rad], a proxy for
 motion time and cable wind-up. Exact for a handful of poses, within a few per
@@ -15,6 +16,9 @@ arms with ±2π joints otherwise plan poses a full turn apart.
 from __future__ import annotations
 
 import numpy as np
+
+MAX_STARTS = 32
+"""Nearest-neighbour starts tried (every pose for up to this many poses, else evenly spread ones)."""
 
 REVOLUTE_KINDS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
 
@@ -67,22 +71,45 @@ def _nearest_neighbour(distances: np.ndarray, start: int) -> list[int]:
 
 
 def _two_opt(distances: np.ndarray, order: list[int]) -> list[int]:
-    order = list(order)
+    """Reverse segments ``order[i..j]`` while that shortens the path (first improvement, in scan order).
+
+    For each ``i`` the gains of every ``j`` are computed at once; after a
+    reversal the scan goes on from ``j + 1`` on the new order, so the result
+    is that of the plain double loop.
+    """
+    order = np.array(order)
     count = len(order)
     improved = True
     while improved:
         improved = False
         for i in range(count - 1):
-            for j in range(i + 1, count):
-                # Reverse order[i..j]; edges (i-1, i) and (j, j+1) change.
-                before = distances[order[i - 1], order[i]] if i > 0 else 0.0
-                after = distances[order[j], order[j + 1]] if j < count - 1 else 0.0
-                new_before = distances[order[i - 1], order[j]] if i > 0 else 0.0
-                new_after = distances[order[i], order[j + 1]] if j < count - 1 else 0.0
-                if new_before + new_after < before + after - 1e-12:
-                    order[i : j + 1] = order[i : j + 1][::-1]
-                    improved = True
-    return order
+            j = i + 1
+            while j < count:
+                j = _first_improvement(distances, order, i, j)
+                if j < 0:
+                    break
+                order[i : j + 1] = order[i : j + 1][::-1].copy()
+                improved = True
+                j += 1
+    return order.tolist()
+
+
+def _first_improvement(distances: np.ndarray, order: np.ndarray, i: int, start: int) -> int:
+    """The first ``j >= start`` whose reversal of ``order[i..j]`` shortens the path, or -1.
+
+    Reversing changes the edges ``(i-1, i)`` and ``(j, j+1)`` into ``(i-1, j)``
+    and ``(i, j+1)``; a missing edge at either end of the path counts 0.
+    """
+    ends, following = order[start:], order[start + 1 :]
+    after, new_after = np.zeros(len(ends)), np.zeros(len(ends))
+    after[:-1] = distances[ends[:-1], following]
+    new_after[:-1] = distances[order[i], following]
+    if i > 0:
+        before, new_before = distances[order[i - 1], order[i]], distances[order[i - 1], ends]
+    else:
+        before, new_before = 0.0, np.zeros(len(ends))
+    hits = np.flatnonzero(new_before + new_after < before + after - 1e-12)
+    return start + int(hits[0]) if hits.size else -1
 
 
 def short_travel_order(joint_positions) -> np.ndarray:
@@ -97,7 +124,7 @@ def short_travel_order(joint_positions) -> np.ndarray:
         return np.arange(count)
     distances = joint_distances(joint_positions)
     best, best_length = None, np.inf
-    for start in range(count):
+    for start in sorted(set(np.linspace(0, count - 1, min(count, MAX_STARTS)).round().astype(int).tolist())):
         order = _two_opt(distances, _nearest_neighbour(distances, start))
         length = path_length(distances, order)
         if length < best_length - 1e-12:

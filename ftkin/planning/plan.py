@@ -42,6 +42,8 @@ from .order import revolute_mask, short_travel_order, unwind_revolute
 CRITERION = "D-optimality: log det of the Fisher information of θ = [a, F0, M0, P] (and the mount angles, if estimated; SI units)"
 REFINE_STEPS = (0.2, 0.08, 0.03, 0.01)
 """Standard deviations [rad] of the joint perturbations in the refinement rounds."""
+REFINE_TRIES = 25
+"""Perturbations drawn per pose and refinement round."""
 SAMPLE_BATCH = 2000
 
 
@@ -159,9 +161,11 @@ def plan_poses(
     checker = FeasibilityChecker(arm, constraints)
     rng = np.random.default_rng(seed)
 
+    channel_std = noise.channel_std
+
     def factors(rotations):
-        return information_factors(rotations, model.gravity_in_base, model.center_of_mass, noise.channel_std,
-                                   readings_per_pose, estimate_mount)
+        return information_factors(rotations, model.gravity_in_base, model.center_of_mass, channel_std, readings_per_pose,
+                                   estimate_mount)
 
     check_tilt_observability(checker, factors)
     pool_q, pool_rotations, sampled = _candidate_pool(checker, rng, candidates, max_samples, n, progress)
@@ -223,27 +227,35 @@ def _candidate_pool(checker, rng, wanted, max_samples, n, progress):
 
 
 def _refine(checker, q, rotations, factors, rng, progress):
-    """Perturb each pose at random; keep feasible changes that raise ``log det``."""
-    contributions = [f.T @ f for f in factors(rotations)]
-    information = np.sum(contributions, axis=0)
-    tries = 25
+    """Perturb each pose at random; keep the best feasible change that raises ``log det``.
+
+    Per pose and step size, :data:`REFINE_TRIES` perturbations are drawn and
+    evaluated together (their information and ``log det`` as batches); the
+    costly self-collision test runs last, on the best improving ones only.
+    """
+    contributions = np.array([f.T @ f for f in factors(rotations)])
+    information = contributions.sum(axis=0)
     with Progress(len(REFINE_STEPS) * len(q), "refining poses", enabled=progress) as bar:
         for step in REFINE_STEPS:
             for slot in range(len(q)):
                 current = log_det(information)
                 without = information - contributions[slot]
-                for _ in range(tries):
-                    candidate = q[slot] + rng.normal(0.0, step, size=q.shape[1])
-                    if not checker.within_bounds(candidate):
-                        continue
-                    rotation = checker.check(candidate)
-                    if rotation is None:
-                        continue
-                    factor = factors(rotation[None])[0]
-                    contribution = factor.T @ factor
-                    value = log_det(without + contribution)
-                    if value > current:
-                        q[slot], rotations[slot], contributions[slot] = candidate, rotation, contribution
-                        current, information = value, without + contribution
+                tried = q[slot] + rng.normal(0.0, step, size=(REFINE_TRIES, q.shape[1]))
+                tried = tried[np.all((tried >= checker.lower) & (tried <= checker.upper), axis=1)]
+                feasible = [(x, rotation) for x in tried if (rotation := checker.check(x, collision=False)) is not None]
                 bar.advance()
+                if not feasible:
+                    continue
+                factor = factors(np.array([rotation for _, rotation in feasible]))
+                candidates = np.transpose(factor, (0, 2, 1)) @ factor
+                sign, values = np.linalg.slogdet(without + candidates)
+                values = np.where(sign > 0, values, -np.inf)
+                for best in np.argsort(-values, kind="stable"):
+                    if not values[best] > current:
+                        break
+                    if not checker.in_collision(feasible[best][0]):
+                        q[slot], rotations[slot] = feasible[best]
+                        contributions[slot] = candidates[best]
+                        information = without + candidates[best]
+                        break
     return q, rotations

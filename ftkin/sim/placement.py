@@ -46,7 +46,8 @@ from ..calibration.information import SensorNoise
 from ..calibration.model import SensorModel
 from ..control.admittance import Admittance
 from ..control.compensation import Compensator
-from ..control.joint_admittance import JointAdmittance, damped_least_squares
+from ..control.damped_least_squares import damped_least_squares
+from ..control.joint_admittance import JointAdmittance
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
 from .sensor import SimulatedSensor, paper_like_truth

@@ -8,7 +8,8 @@ import pytest
 
 from ftkin import Arm, Compensator
 from ftkin.control.admittance import Admittance
-from ftkin.control.joint_admittance import JointAdmittance, damped_least_squares
+from ftkin.control.damped_least_squares import damped_least_squares
+from ftkin.control.joint_admittance import JointAdmittance
 from ftkin.exceptions import InvalidInput
 from ftkin.sim.sensor import paper_like_truth
 

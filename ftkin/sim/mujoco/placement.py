@@ -24,7 +24,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...calibration.model import STANDARD_GRAVITY
-from ...control.joint_admittance import damped_least_squares
+from ...control.damped_least_squares import damped_least_squares
 from ...kinematics.arm import Arm
 from ..placement import PlacementRun, PlacementScenario, admittance_controller
 from ..sensor import SimulatedSensor, paper_like_truth
