@@ -48,6 +48,8 @@ def register(subparsers) -> None:
                            help="gain values for --sweep, in the paper's mm units (e.g. 0.05,0.1,0.2)")
     placement.add_argument("-o", "--output", metavar="RUN.csv", help="write the time series")
     placement.add_argument("--plot", metavar="RUN.png", help="write displacement, velocity and force plots (needs matplotlib)")
+    placement.add_argument("--view", action="store_true",
+                           help="watch the run live in meshcat (arm, contact wrench, commanded twist), paced to real time")
     placement.set_defaults(func=run)
 
 
@@ -72,11 +74,40 @@ def _summary(run: PlacementRun) -> str:
             f"final penetration {run.penetration[-1] * 1e3:.3f} mm; {placed}")
 
 
+def _run_viewed(scenario: PlacementScenario) -> PlacementRun:
+    """One run drawn by a LiveView, each tick published and paced to the wall clock."""
+    import time
+
+    from ..kinematics.arm import Arm
+    from ..sim.placement import admittance_controller
+    from ..viz.live import LiveView
+
+    arm = Arm.default()
+    frame = admittance_controller(scenario, arm, None).frame
+    with LiveView(arm, control_frame=frame) as view:
+        print(f"live view: {view.url}")
+        start, ticks = time.perf_counter(), [0]
+
+        def on_tick(q, wrench, twist):
+            view.publish(q, wrench, twist)
+            ticks[0] += 1
+            ahead = ticks[0] * scenario.dt - (time.perf_counter() - start)
+            if ahead > 0.002:
+                time.sleep(ahead)
+
+        result = simulate_placement(scenario, arm, on_tick=on_tick)
+        time.sleep(0.2)  # let the last state be drawn
+        print(f"drew {view.frames_drawn} frames in {time.perf_counter() - start:.1f} s")
+    return result
+
+
 def run(args) -> int:
     scenario = PlacementScenario(
         surface=surface_by_name(args.surface), mode=args.mode, k1=args.k1 * 1e-3, k2=args.k2 * 1e-3,
         object_weight=args.weight, start_gap=args.gap * 1e-3, duration=args.duration, dt=args.dt, seed=args.seed,
     )
+    if args.view and (args.sweep or args.mode == "position"):
+        raise InvalidInput("--view draws one run of an admittance controller: drop --sweep, use --mode admittance")
     if args.sweep:
         if not args.values:
             raise InvalidInput("--sweep needs --values, e.g. --values 0.05,0.1,0.2 (mm units)")
@@ -86,7 +117,7 @@ def run(args) -> int:
     else:
         if args.values:
             raise InvalidInput("--values needs --sweep k1 or --sweep k2")
-        runs = [simulate_placement(scenario)]
+        runs = [_run_viewed(scenario) if args.view else simulate_placement(scenario)]
     for one in runs:
         prefix = f"{'k13' if args.sweep == 'k1' else 'k23'} = {getattr(one.scenario, args.sweep) * 1e3:g}: " if args.sweep else ""
         print(f"{args.surface}, {args.mode}: {prefix}{_summary(one)}")
