@@ -41,6 +41,9 @@ from ..validation import as_positive
 from .live_process import StateLayout, ViewSettings
 from .server import import_meshcat
 
+CHILD_COMMAND = "from ftkin.viz.live_process import main; main()"
+"""What the view process runs (a fresh interpreter)."""
+
 STARTUP_TIMEOUT = 120.0
 """Seconds to wait for the view process to start meshcat and load the arm [s]."""
 
@@ -78,16 +81,20 @@ class LiveView:
             frame.frame, frame.rotation_tool_to_sensor.copy(), frame.point_in_sensor.copy(), zmq_url,
         )
         environment = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
-        self._process = subprocess.Popen([sys.executable, "-m", "ftkin.viz.live_process"], stdin=subprocess.PIPE,
+        self._process = subprocess.Popen([sys.executable, "-c", CHILD_COMMAND], stdin=subprocess.PIPE,
                                          stdout=subprocess.PIPE, env=environment)
         atexit.register(self.close)
-        self._process.stdin.write(pickle.dumps(settings))
-        self._process.stdin.close()
+        try:
+            self._process.stdin.write(pickle.dumps(settings))
+            self._process.stdin.close()
+        except BrokenPipeError:
+            pass  # the process died at once: reported below as no answer
         line = _read_line(self._process.stdout, STARTUP_TIMEOUT)
         kind, _, message = line.partition(" ")
         if kind != "ready":
             self.close()
-            raise FtkinError(f"the live view process failed: {message.strip() or 'no answer within %g s' % STARTUP_TIMEOUT}")
+            reason = message.strip() or f"no answer within {STARTUP_TIMEOUT:g} s"
+            raise FtkinError(f"the live view process failed: {reason}")
         self.url: str = message.strip()
         self._stop = threading.Event()
         self._sampler = threading.Thread(target=self._sample, name="ftkin-liveview-sampler", daemon=True)

@@ -225,7 +225,7 @@ def _draw(visualizer, robot, arm, settings: ViewSettings, body: np.ndarray, styl
 
 
 def main() -> None:
-    """``python -m ftkin.viz.live_process``: pickled :class:`ViewSettings` on stdin, one status line on stdout."""
+    """The view process: pickled :class:`ViewSettings` on stdin, one status line on stdout, then draw."""
     import pickle
     import sys
 
@@ -237,6 +237,3 @@ def main() -> None:
 
     run_view(settings, report)
 
-
-if __name__ == "__main__":
-    main()
