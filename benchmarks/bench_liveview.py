@@ -99,7 +99,8 @@ def main() -> None:
             for _ in range(BLOCK):
                 pass
 
-        rows = {"step, view idle": step_alone, "step, view drawing": step_drawing, "step + publish": step_publish, "wrapped step": step_wrapped,
+        rows = {"step, view idle": step_alone, "step, view drawing": step_drawing, "step + publish": step_publish,
+                "wrapped step": step_wrapped,
                 "publish alone": publish_alone, "empty call": empty_call, "loop floor": loop_floor}
         times = {name: [] for name in rows}
         for function in rows.values():
