@@ -34,7 +34,7 @@ QUIET_FLAGS = (
     "--no-first-run",
     "--disable-sync",
     "--hide-scrollbars",
-    "--virtual-time-budget=10000",
+    "--virtual-time-budget=2500",
 )
 """Flags for a headless run on a machine without display or internet.
 

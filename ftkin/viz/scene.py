@@ -92,12 +92,11 @@ def apply_view(sink, view: PoseView, animated: bool) -> None:
     """
     shift = rigid_transform(np.eye(3), -view.target)
     x, y, z = (float(v) for v in view.offset)
+    sink["/meshcat"].set_transform(shift)
+    sink["/Axes"].set_transform(shift)
     if animated:
-        sink["/meshcat"].set_transform(shift)
         sink[CAMERA_PATH].set_property("position", "vector3", [x, z, -y])
         sink[f"/meshcat/{ROOT}/floor"].set_property("visible", "boolean", bool(view.floor_visible))
     else:
-        sink["/meshcat"].set_transform(shift)
-        sink["/Axes"].set_transform(shift)
         sink[CAMERA_PATH].set_property("position", [x, z, -y])
         sink[f"/meshcat/{ROOT}/floor"].set_property("visible", bool(view.floor_visible))

@@ -93,9 +93,13 @@ def test_every_arrow_is_on_screen_and_gravity_lies_on_the_measured_force(viewer,
 
     wrong = SensorModel(truth.force_offset, truth.torque_offset, -truth.gravity_in_base, truth.center_of_mass)  # sign flip
     _use(viewer, wrong)
-    viewer.show_pose(Q_SIDE, raw)
-    measured_wrong = _mask(_render(viewer, tmp_path, "measured_wrong", {"measured"}), MEASURED.rgb)
-    gravity_wrong = _mask(_render(viewer, tmp_path, "gravity_wrong", {"gravity"}), GRAVITY.rgb)
+    viewer.auto_camera = False  # keep the camera of the right calibration (framing depends on the predicted gravity)
+    try:
+        viewer.show_pose(Q_SIDE, raw)
+        measured_wrong = _mask(_render(viewer, tmp_path, "measured_wrong", {"measured"}), MEASURED.rgb)
+        gravity_wrong = _mask(_render(viewer, tmp_path, "gravity_wrong", {"gravity"}), GRAVITY.rgb)
+    finally:
+        viewer.auto_camera = True
     bad = (measured_wrong & gravity_wrong).sum() / measured_wrong.sum()
     print(
         f"measured/gravity pixels: right calibration {measured.sum()}/{gravity.sum()} needle on the sleeve {good:.3f}; "

@@ -25,6 +25,9 @@ class DriftingModel(SensorModel):
     bias_trajectory: object = None
     motion_residual: object = None
 
+    def summary(self) -> str:
+        return "a drifting sensor (synthetic)"
+
 
 def _model(truth, **series) -> DriftingModel:
     return DriftingModel(truth.force_offset, truth.torque_offset, truth.gravity_in_base, truth.center_of_mass, truth.g, **series)
