@@ -89,12 +89,12 @@ def sheet_cells(viewer, labels: Sequence[str], raw_wrenches, *, configurations=N
     return cells
 
 
-def render_cells(cells: Sequence[SheetCell], size=CELL_SIZE, workers: int = WORKERS) -> list[np.ndarray]:
-    """Screenshot every cell's page; returns ``(H, W, 3)`` uint8 images in order."""
+def render_cells(cells: Sequence[SheetCell], size=CELL_SIZE, workers: int = WORKERS, timeout: float = 180.0) -> list[np.ndarray]:
+    """Screenshot every cell's page (``timeout`` [s] each); returns ``(H, W, 3)`` uint8 images in order."""
     image = _import_matplotlib_image()
     with tempfile.TemporaryDirectory(prefix="ftkin-sheet-") as scratch:
         def shoot(k: int) -> np.ndarray:
-            png = screenshot_html(cells[k].page, Path(scratch) / f"cell{k}.png", window_size=size)
+            png = screenshot_html(cells[k].page, Path(scratch) / f"cell{k}.png", window_size=size, timeout=timeout)
             pixels = image.imread(str(png))
             if pixels.dtype != np.uint8:
                 pixels = np.round(pixels * 255).astype(np.uint8)
