@@ -17,8 +17,10 @@ from ftkin.sim.sensor import SimulatedSensor
 pytest.importorskip("meshcat")
 pytest.importorskip("matplotlib")
 
-from ftkin.viz import CalibrationViewer  # noqa: E402
-from ftkin.viz import contact_sheet  # noqa: E402
+from ftkin.viz import (
+    CalibrationViewer,  # noqa: E402
+    contact_sheet,  # noqa: E402
+)
 from ftkin.viz.contact_sheet import SheetCell, force_angle_deg, sheet_cells, sheet_figure  # noqa: E402
 
 PUSHED = 3  # pose id that gets a contact during its readings
