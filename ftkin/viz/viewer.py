@@ -84,6 +84,7 @@ class CalibrationViewer:
         self.gravity_anchor = None if gravity_anchor is None else as_vector(gravity_anchor, 3, "gravity_anchor [m]")
         self.auto_camera = bool(auto_camera)
         self.view: PoseView | None = None
+        self._anchor = (np.array([-0.25, -0.3, 0.4]), 0.3)  # gravity arrow beside the base until a pose is framed
         self._meshcat = import_meshcat()
         self._owns_server = visualizer is None and zmq_url is None
         self.visualizer = visualizer if visualizer is not None else start_visualizer(zmq_url)
@@ -226,16 +227,17 @@ class CalibrationViewer:
             place(sink, f"{ROOT}/{layer.name}/head", arrow.head)
         place(sink, f"{ROOT}/{CENTER_OF_MASS.name}", NodePose(rigid_transform(np.eye(3), vectors.center_of_mass), np.ones(3)))
         anchor, length = self.gravity_anchor, 0.3
+        if anchor is None:
+            anchor, length = self._anchor
         if self.auto_camera:
             forces = (vectors.measured_force, vectors.gravity_force, vectors.contact_force)
             tool_size = 2.0 * float(np.linalg.norm(self.calibration.center_of_mass))
             self.view = frame_pose(vectors.sensor_origin, [self.scale * f for f in forces], points, tool_size=tool_size)
             apply_view(sink, self.view, animated)
-            if anchor is None:  # beside the sensor, right of it and a little up on screen
+            if self.gravity_anchor is None:  # beside the sensor, right of it and a little up on screen
                 anchor = self.view.target + self.view.radius * (0.8 * self.view.right + np.array([0.0, 0.0, 0.3]))
                 length = min(0.3, 0.6 * self.view.radius)
-        if anchor is None:
-            anchor = np.array([-0.25, -0.3, 0.4])
+                self._anchor = (anchor, length)
         drawn_direction = exaggerate_tilt(vectors.gravity_direction, self.tilt_exaggeration)
         for layer, direction in ((BASE_GRAVITY, drawn_direction), (VERTICAL, np.array([0.0, 0.0, -1.0]))):
             arrow = arrow_placement(anchor, direction, length, self.style)

@@ -71,7 +71,7 @@ def test_arrows_are_visible_outside_the_legend_at_every_pose(robot, tmp_path):
     pages = _pages(arm)
 
     def shoot(k: int):
-        return _counts(screenshot_html(pages[k][0], tmp_path / f"pose{k}.png", window_size=SIZE))
+        return _counts(screenshot_html(pages[k][0], tmp_path / f"pose{k}.png", window_size=SIZE, timeout=240))
 
     with ThreadPoolExecutor(max_workers=2) as pool:
         counts = list(pool.map(shoot, range(len(pages))))
