@@ -34,14 +34,8 @@ QUIET_FLAGS = (
     "--no-first-run",
     "--disable-sync",
     "--hide-scrollbars",
-    "--virtual-time-budget=2500",
 )
-"""Flags for a headless run on a machine without display or internet.
-
-``--virtual-time-budget`` [ms of page time] makes Chromium wait until the page
-has run its pending work (meshcat decodes a large page's meshes after the
-load event); without it a loaded machine sometimes screenshots an empty scene.
-"""
+"""Flags for a headless run on a machine without display or internet."""
 
 
 class BrowserError(FtkinError):

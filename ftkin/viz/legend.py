@@ -9,6 +9,7 @@ them; the browser test finds each arrow by its colour.
 from __future__ import annotations
 
 import html
+import re
 from dataclasses import dataclass
 
 
@@ -86,3 +87,32 @@ def add_legend(page: str, legend: str) -> str:
     if index < 0:
         return page + legend
     return page[:index] + legend + page[index:]
+
+
+_FETCH = re.compile(
+    r'fetch\("data:application/octet-binary;base64,([A-Za-z0-9+/=]*)"\)\s*'
+    r"\.then\(res => res\.arrayBuffer\(\)\)\s*"
+    r"\.then\(buffer => viewer\.handle_command_bytearray\(new Uint8Array\(buffer\)\)\);"
+)
+_DECODE = (
+    "function ftkinCommand(b){const s=atob(b);const a=new Uint8Array(s.length);"
+    "for(let i=0;i<s.length;i++)a[i]=s.charCodeAt(i);viewer.handle_command_bytearray(a);}\n"
+)
+
+
+def inline_commands(page: str) -> str:
+    """meshcat's static page with its scene commands run synchronously, in order, before the page's load event.
+
+    meshcat 0.3.2 replays each command through ``fetch("data:...")``, a
+    promise that may settle after headless Chromium has taken its screenshot
+    (an empty scene on a busy machine). Each becomes a direct call that decodes
+    the same base64 bytes. A page without such commands is returned unchanged.
+    """
+    replaced, count = _FETCH.subn(lambda match: f'ftkinCommand("{match.group(1)}");', page)
+    if count == 0:
+        return page
+    anchor = "var viewer = new MeshCat.Viewer("
+    index = replaced.find(anchor)
+    if index < 0:
+        return page
+    return replaced[:index] + _DECODE + replaced[index:]

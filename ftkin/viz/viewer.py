@@ -30,7 +30,7 @@ from ..kinematics.arm import Arm
 from ..validation import as_batch, as_positive, as_vector
 from .arrows import ArrowStyle, NodePose, arrow_placement, exaggerate_tilt, rigid_transform
 from .framing import PoseView, arm_points, frame_pose
-from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, LAYERS, VERTICAL, add_legend, legend_html
+from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, LAYERS, VERTICAL, add_legend, inline_commands, legend_html
 from .scene import ROOT, add_markers, apply_view, frame_view, set_camera
 from .server import import_meshcat, import_pinocchio_visualizer, start_visualizer, stop_server
 from .vectors import PoseVectors, pose_vectors
@@ -252,7 +252,7 @@ class CalibrationViewer:
 
     def static_html(self, legend: bool = True, caption: str = "") -> str:
         """A self-contained page of the current scene (and animation), optionally with the legend."""
-        page = self.visualizer.static_html()
+        page = inline_commands(self.visualizer.static_html())
         return add_legend(page, self.legend(caption)) if legend else page
 
     def save_html(self, path, legend: bool = True, caption: str = "") -> Path:
