@@ -72,3 +72,27 @@ def test_a_paced_control_loop_is_drawn_at_20_fps_and_the_view_gets_the_latest_st
     assert process.poll() is not None  # the view process has stopped
     with pytest.raises(FileNotFoundError):
         shared_memory.SharedMemory(name=name)
+
+
+def test_on_tick_sees_every_admittance_tick_and_changes_nothing(arm):
+    from ftkin.sim.placement import simulate_placement
+
+    scenario = PlacementScenario(duration=0.05)
+    seen = []
+    hooked = simulate_placement(scenario, arm, on_tick=lambda q, w, t: seen.append((q.copy(), w.copy(), t.copy())))
+    plain = simulate_placement(scenario, arm)
+    assert len(seen) == round(scenario.duration / scenario.dt)
+    np.testing.assert_array_equal(hooked.rows(), plain.rows())
+    np.testing.assert_array_equal([w[2] for _, w, _ in seen], plain.measured_force)  # the controller's F'z per tick
+
+
+def test_simulate_placement_view(capsys):
+    from ftkin.cli import main
+
+    assert main(["simulate", "placement", "--view", "--duration", "0.3"]) == 0
+    out = capsys.readouterr().out
+    assert "live view: http://" in out
+    frames = int(out.split("drew ")[1].split(" frames")[0])
+    assert frames >= 1
+    assert main(["simulate", "placement", "--view", "--mode", "position"]) == 2
+    assert "--view draws one run" in capsys.readouterr().err
