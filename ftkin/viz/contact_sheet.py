@@ -130,10 +130,10 @@ def sheet_figure(cells: Sequence[SheetCell], images: Sequence[np.ndarray], title
             spine.set_edgecolor("red" if cell.outlier else "0.6")
             spine.set_linewidth(4.0 if cell.outlier else 0.8)
     key = ", ".join(f"{name} = {layer.label}" for name, layer in zip(("magenta", "cyan", "yellow"), ARROWS))
-    key += f", green dot = {CENTER_OF_MASS.label}, purple = estimated gravity direction"
+    key += f"\ngreen dot = {CENTER_OF_MASS.label}, purple = estimated gravity direction of the base"
     figure.suptitle((title + "\n" if title else "") + "angle: between the measured force − bias and the predicted gravity",
                     fontsize=10)
-    figure.supxlabel(key, fontsize=7, wrap=True)
+    figure.supxlabel(key, fontsize=7)
     return figure
 
 
