@@ -68,6 +68,8 @@ def register(subparsers) -> None:
                            help="gain values for --sweep, in the paper's mm units (e.g. 0.05,0.1,0.2)")
     placement.add_argument("-o", "--output", metavar="RUN.csv", help="write the time series")
     placement.add_argument("--plot", metavar="RUN.png", help="write displacement, velocity and force plots (needs matplotlib)")
+    placement.add_argument("--view", action="store_true",
+                           help="watch the run live in meshcat (arm, contact wrench, commanded twist), paced to real time")
     placement.set_defaults(func=run)
 
 
@@ -121,6 +123,33 @@ MAX_TICKS = 1_000_000
 """Longest simulation, in control ticks (duration / dt)."""
 
 
+def _run_viewed(scenario: PlacementScenario) -> PlacementRun:
+    """One run drawn by a LiveView, each tick published and paced to the wall clock."""
+    import time
+
+    from ..kinematics.arm import Arm
+    from ..sim.placement import admittance_controller
+    from ..viz.live import LiveView
+
+    arm = Arm.default()
+    frame = admittance_controller(scenario, arm, None).frame
+    with LiveView(arm, control_frame=frame) as view:
+        print(f"live view: {view.url}")
+        start, ticks = time.perf_counter(), [0]
+
+        def on_tick(q, wrench, twist):
+            view.publish(q, wrench, twist)
+            ticks[0] += 1
+            ahead = ticks[0] * scenario.dt - (time.perf_counter() - start)
+            if ahead > 0.002:
+                time.sleep(ahead)
+
+        result = simulate_placement(scenario, arm, on_tick=on_tick)
+        time.sleep(0.2)  # let the last state be drawn
+        print(f"drew {view.frames_drawn} frames in {time.perf_counter() - start:.1f} s")
+    return result
+
+
 def run(args) -> int:
     if args.duration / args.dt > MAX_TICKS:
         raise InvalidInput(
@@ -132,6 +161,8 @@ def run(args) -> int:
         k2=args.k2 * 1e-3, object_weight=args.weight, start_gap=args.gap * 1e-3, duration=args.duration, dt=args.dt,
         seed=args.seed,
     )
+    if args.view and (args.sweep or args.mode in ("position", "all")):
+        raise InvalidInput("--view draws one run of an admittance controller: drop --sweep, use --mode admittance")
     if args.sweep:
         if not args.values:
             raise InvalidInput("--sweep needs --values, e.g. --values 0.05,0.1,0.2 (mm units)")
@@ -145,7 +176,13 @@ def run(args) -> int:
         modes = MODES if args.mode == "all" else (args.mode,)
         scenarios = [replace(scenario, mode=mode) for mode in modes]
         labels = list(range(len(modes)))
-    results = [_simulate(one, args) for one in scenarios]
+    if args.view:  # the live view draws the simple engine's run, paced to the wall clock
+        if args.engine != "simple":
+            print("--view: running the simple engine (the live view follows its ticks)")
+        viewed = _run_viewed(scenarios[0])
+        results = [(viewed, list(PlacementRun.COLUMNS), viewed.rows())]
+    else:
+        results = [_simulate(one, args) for one in scenarios]
     runs = [result[0] for result in results]
     for one in runs:
         prefix = f"{'k13' if args.sweep == 'k1' else 'k23'} = {getattr(one.scenario, args.sweep) * 1e3:g}: " if args.sweep else ""

@@ -24,6 +24,9 @@ from .common import (
     warn_if_kinematics_differ,
 )
 
+SHEET_CELLS = 25
+"""Most cells of a contact sheet (more poses or log rows are subsampled evenly)."""
+
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
@@ -38,7 +41,12 @@ def register(subparsers) -> None:
     parser.add_argument("samples", metavar="SAMPLES.csv", nargs="?", help="the calibration samples (poses to step through)")
     parser.add_argument("--replay", metavar="LOG.csv", help="play a recorded run instead: joint columns, fx..mz, optional t [s]")
     parser.add_argument("--html", metavar="OUT.html", help="write a self-contained page (animated unless --pose is given)")
-    parser.add_argument("--png", metavar="OUT.png", help="write a screenshot with headless Chromium (1024×768)")
+    parser.add_argument(
+        "--png",
+        metavar="OUT.png",
+        help="write a screenshot with headless Chromium: the --pose (1024×768), else a contact sheet of every pose "
+        f"(at most {SHEET_CELLS} evenly spaced rows of a replay; outlier poses outlined in red)",
+    )
     parser.add_argument("--pose", type=int, metavar="K", help="only this pose: pose id of SAMPLES.csv, or row index of the replay log")
     parser.add_argument(
         "--scale", type=positive_float, metavar="M_PER_N", help="arrow length per newton [m/N] (default: tool weight drawn 25 cm long)"
@@ -127,6 +135,22 @@ def _print_table(labels: list[str], vectors) -> None:
         print(f"  ... {len(labels) - 40} more")
 
 
+def _contact_sheet(viewer, frames: Frames, calibration, path: str, title: str) -> None:
+    from ..viz.contact_sheet import save_contact_sheet, sheet_cells
+
+    rows = np.arange(len(frames.labels))
+    if len(rows) > SHEET_CELLS:
+        rows = np.unique(np.linspace(0, len(rows) - 1, SHEET_CELLS).round().astype(int))
+    diagnostics = getattr(calibration, "diagnostics", None)
+    flagged = {f"pose {int(pid)}" for pid in (diagnostics.outlier_pose_ids if diagnostics is not None else ())}
+    labels = [frames.labels[k] for k in rows]
+    outliers = [i for i, label in enumerate(labels) if label in flagged]
+    kind = {"configurations": frames.configurations[rows]} if frames.configurations is not None else {"rotations": frames.rotations[rows]}
+    cells = sheet_cells(viewer, labels, frames.raw_wrenches[rows], outliers=outliers, **kind)
+    save_contact_sheet(cells, path, title=title)
+    print(f"wrote {path} (contact sheet of {len(cells)} poses, {len(outliers)} outliers outlined in red)")
+
+
 def run(args: argparse.Namespace) -> int:
     from ..viz import CalibrationViewer  # meshcat is optional: imported only here
 
@@ -152,12 +176,14 @@ def run(args: argparse.Namespace) -> int:
         vectors = _show(viewer, frames, chosen if chosen is not None else 0)
         print(f"scale: 1 N = {100 * viewer.scale:.3g} cm; magenta = measured force − bias, cyan = predicted tool gravity, "
               "yellow = contact force, green = tool COM, purple = base gravity direction")
-        if args.png:
+        if args.png and chosen is not None:
             from ..viz.browser import screenshot_html
 
-            shown = frames.labels[chosen if chosen is not None else 0]
+            shown = frames.labels[chosen]
             screenshot_html(viewer.static_html(caption=f"{source}: {shown}"), args.png)
             print(f"wrote {args.png} ({shown})")
+        elif args.png:
+            _contact_sheet(viewer, frames, calibration, args.png, title=str(source))
         if chosen is None:
             all_vectors = _animate(viewer, frames, args.hold)
             _print_table(frames.labels, all_vectors)

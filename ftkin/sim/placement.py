@@ -191,8 +191,12 @@ class PlacementRun:
                                 self.measured_force, self.penetration, self.normal_force])
 
 
-def simulate_placement(scenario: PlacementScenario, arm: Arm | None = None) -> PlacementRun:
-    """Run one scenario; the arm defaults to the bundled one (with its tool frame)."""
+def simulate_placement(scenario: PlacementScenario, arm: Arm | None = None, on_tick=None) -> PlacementRun:
+    """Run one scenario; the arm defaults to the bundled one (with its tool frame).
+
+    ``on_tick(q, contact_wrench, twist)``, if given, is called after every
+    admittance tick with the controller's status (e.g. ``LiveView.publish``).
+    """
     arm = Arm.default() if arm is None else arm
     if arm.tool_frame_id is None:
         raise InvalidInput("the placement simulation needs an arm with a tool frame")
@@ -232,6 +236,8 @@ def simulate_placement(scenario: PlacementScenario, arm: Arm | None = None) -> P
         else:
             dq = controller.step(q, raw, scenario.dt)
             measured = controller.last_status.contact_wrench[2]
+            if on_tick is not None:
+                on_tick(q, controller.last_status.contact_wrench, controller.last_status.twist)
         out[i] = (i * scenario.dt, tool_point[2] - tool_start[2], jacobian_tool[2] @ dq, contact[2], measured, penetration, normal)
         q = q + dq * scenario.dt
     safety = bool(controller is not None and controller.safety_latched)

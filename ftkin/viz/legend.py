@@ -9,6 +9,7 @@ them; the browser test finds each arrow by its colour.
 from __future__ import annotations
 
 import html
+import re
 from dataclasses import dataclass
 
 
@@ -45,8 +46,17 @@ LAYERS = (MEASURED, GRAVITY, CONTACT, CENTER_OF_MASS, BASE_GRAVITY, VERTICAL)
 """Everything ftkin draws besides the arm and the sensor triad."""
 
 
+LEGEND_BOX = (0, 0, 268, 190)
+"""Screen box the legend never leaves, ``(left, top, right, bottom)`` [px]: top-left corner.
+
+The camera puts the sensor in the middle of the image and keeps the arrows
+within half of the half-height around it (:mod:`ftkin.viz.framing`), so at
+1024 × 768 the arrows stay out of this corner.
+"""
+
+
 def legend_html(scale_m_per_n: float, tilt_deg: tuple[float, float], exaggeration: float, caption: str = "") -> str:
-    """An HTML block (absolute-positioned, top left) listing the colours and the scale."""
+    """A small HTML block (top-left corner, inside :data:`LEGEND_BOX`) listing the colours and the scale."""
     rows = []
     for layer in LAYERS:
         label = layer.label
@@ -55,17 +65,19 @@ def legend_html(scale_m_per_n: float, tilt_deg: tuple[float, float], exaggeratio
             if exaggeration != 1.0:
                 label += f" (drawn ×{exaggeration:g})"
         rows.append(
-            f'<div><span style="display:inline-block;width:14px;height:14px;margin-right:6px;'
+            f'<div><span style="display:inline-block;width:10px;height:10px;margin-right:5px;'
             f'vertical-align:middle;background:{layer.css}"></span>{html.escape(label)}</div>'
         )
     scale_cm = 100.0 * scale_m_per_n
-    rows.append(f"<div>scale: 1 N = {scale_cm:.3g} cm (arrows from the sensor origin; triad = sensor frame x,y,z = r,g,b)</div>")
+    rows.append(f"<div>1 N = {scale_cm:.3g} cm from the sensor origin; triad x,y,z = r,g,b</div>")
     if caption:
-        rows.append(f"<div>{html.escape(caption)}</div>")
+        rows.append(f'<div style="white-space:nowrap;overflow:hidden;text-overflow:ellipsis">{html.escape(caption)}</div>')
+    left, top, right, bottom = LEGEND_BOX
     return (
-        '<div id="ftkin-legend" style="position:absolute;left:8px;top:8px;padding:6px 8px;'
-        "background:rgba(255,255,255,0.85);font:13px sans-serif;color:#111;border-radius:4px;"
-        'line-height:18px;z-index:10">' + "".join(rows) + "</div>"
+        f'<div id="ftkin-legend" style="position:absolute;left:{left + 6}px;top:{top + 6}px;'
+        f"width:{right - left - 22}px;max-height:{bottom - top - 20}px;overflow:hidden;padding:4px 5px;"
+        "background:rgba(255,255,255,0.85);font:10px sans-serif;color:#111;border-radius:3px;"
+        'line-height:12px;z-index:10">' + "".join(rows) + "</div>"
     )
 
 
@@ -75,3 +87,32 @@ def add_legend(page: str, legend: str) -> str:
     if index < 0:
         return page + legend
     return page[:index] + legend + page[index:]
+
+
+_FETCH = re.compile(
+    r'fetch\("data:application/octet-binary;base64,([A-Za-z0-9+/=]*)"\)\s*'
+    r"\.then\(res => res\.arrayBuffer\(\)\)\s*"
+    r"\.then\(buffer => viewer\.handle_command_bytearray\(new Uint8Array\(buffer\)\)\);"
+)
+_DECODE = (
+    "function ftkinCommand(b){const s=atob(b);const a=new Uint8Array(s.length);"
+    "for(let i=0;i<s.length;i++)a[i]=s.charCodeAt(i);viewer.handle_command_bytearray(a);}\n"
+)
+
+
+def inline_commands(page: str) -> str:
+    """meshcat's static page with its scene commands run synchronously, in order, before the page's load event.
+
+    meshcat 0.3.2 replays each command through ``fetch("data:...")``, a
+    promise that may settle after headless Chromium has taken its screenshot
+    (an empty scene on a busy machine). Each becomes a direct call that decodes
+    the same base64 bytes. A page without such commands is returned unchanged.
+    """
+    replaced, count = _FETCH.subn(lambda match: f'ftkinCommand("{match.group(1)}");', page)
+    if count == 0:
+        return page
+    anchor = "var viewer = new MeshCat.Viewer("
+    index = replaced.find(anchor)
+    if index < 0:
+        return page
+    return replaced[:index] + _DECODE + replaced[index:]

@@ -5,7 +5,10 @@ measured raw readings (with the standard error of that mean as error bars,
 when a pose has several readings) against the calibrated model's prediction,
 and below it the residual (measured − predicted) per pose. A text panel gives
 the parameters with their standard errors when the calibration has a
-covariance. Drawn with the non-interactive Agg backend (no display needed).
+covariance. When the calibration carries time series (a drifting sensor's
+bias trajectory, the residual during motion: :mod:`ftkin.viz.report_series`),
+a row of panels per series follows. Drawn with the non-interactive Agg backend
+(no display needed).
 """
 
 from __future__ import annotations
@@ -20,17 +23,18 @@ from ..calibration.model import WRENCH_CHANNELS, SensorModel
 from ..calibration.samples import Samples
 from ..exceptions import InvalidInput, MissingDependency
 from ..io.atomic import atomic_write_bytes
+from .report_series import draw_series, report_series
 
 _UNITS = ("N", "N", "N", "N·m", "N·m", "N·m")
 
 
-def _pyplot_free_figure():
+def _pyplot_free_figure(height: float = 10.0):
     try:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
     except ImportError:
         raise MissingDependency("matplotlib", "plots", "plotting a calibration report") from None
-    figure = Figure(figsize=(14, 10), layout="constrained")
+    figure = Figure(figsize=(14, height), layout="constrained")
     FigureCanvasAgg(figure)
     return figure
 
@@ -65,8 +69,9 @@ def report_figure(calibration, samples: Samples, title: str | None = None):
         MissingDependency: matplotlib is not installed (extra ``plots``).
     """
     data = report_data(calibration, samples)
-    figure = _pyplot_free_figure()
-    grid = figure.add_gridspec(5, 3, height_ratios=[3, 1.4, 3, 1.4, 2.6])
+    series = report_series(calibration)
+    figure = _pyplot_free_figure(10.0 + 2.6 * len(series))
+    grid = figure.add_gridspec(5 + len(series), 3, height_ratios=[3, 1.4, 3, 1.4, 2.6] + [2.6] * len(series))
     x = np.arange(len(data["pose_ids"]))
     error = np.nan_to_num(data["standard_error"], nan=0.0)
     for channel, (name, unit) in enumerate(zip(WRENCH_CHANNELS, _UNITS)):
@@ -90,6 +95,8 @@ def report_figure(calibration, samples: Samples, title: str | None = None):
     if getattr(calibration, "std_errors", None) is None:
         summary += "\n  (no standard errors: the calibration has no covariance)"
     text.text(0.0, 1.0, summary, family="monospace", fontsize=8, va="top", ha="left", transform=text.transAxes)
+    for k, one in enumerate(series):
+        draw_series(figure, grid[5 + k, :].subgridspec(1, 4), one)
     figure.suptitle(title or f"ftkin calibration report: {len(x)} poses, {len(samples)} readings")
     return figure
 

@@ -14,10 +14,20 @@ import numpy as np
 from ..kinematics.arm import Arm
 from ..validation import as_vector
 from .arrows import ArrowStyle, rigid_transform
-from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, VERTICAL
+from .framing import PoseView
+from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, GRAVITY, MEASURED, VERTICAL
 
 ROOT = "ftkin"
 """Scene folder of everything ftkin draws besides the arm."""
+
+CAMERA_PATH = "/Cameras/default/rotated/<object>"
+"""meshcat's camera object (three.js axes ``[x, z, -y]``, y up)."""
+
+BACK_SIDE = 1
+"""three.js ``THREE.BackSide``: only the inner faces are drawn."""
+
+RADIUS_FACTORS = {MEASURED.name: 0.5, GRAVITY.name: 1.6, VERTICAL.name: 0.5}
+"""Arrow radii relative to the style: a thin measured-force needle inside a wide predicted-gravity sleeve."""
 
 CAMERA_DIRECTION = np.array([0.55, -0.75, 0.35]) / np.linalg.norm([0.55, -0.75, 0.35])
 """From the orbit target towards the camera (base axes): front right, above."""
@@ -27,8 +37,11 @@ def add_markers(visualizer, geometry, style: ArrowStyle) -> None:
     """Sensor triad, arrows (unit shaft + cone head, unlit) and the COM sphere."""
     visualizer[f"{ROOT}/sensor"].set_object(geometry.triad(0.12))
     for layer in (*ARROWS, BASE_GRAVITY, VERTICAL):
-        radius_factor = 0.5 if layer is VERTICAL else 1.0
-        material = geometry.MeshBasicMaterial(color=layer.color)
+        radius_factor = RADIUS_FACTORS.get(layer.name, 1.0)
+        # The predicted-gravity arrow shows only its inner faces: unlit it looks the same, but the
+        # measured-force needle inside it stays visible when the two coincide (a good calibration).
+        side = BACK_SIDE if layer is GRAVITY else 2
+        material = geometry.MeshBasicMaterial(color=layer.color, side=side)
         visualizer[f"{ROOT}/{layer.name}/shaft"].set_object(geometry.Cylinder(1.0, style.shaft_radius * radius_factor), material)
         visualizer[f"{ROOT}/{layer.name}/head"].set_object(
             geometry.Cylinder(style.head_length, radiusTop=0.0, radiusBottom=style.head_radius * radius_factor), material
@@ -67,4 +80,23 @@ def frame_view(visualizer, geometry, arm: Arm | None) -> None:
 def set_camera(visualizer, position) -> None:
     """Camera position relative to the orbit target, base axes [m]."""
     x, y, z = as_vector(position, 3, "camera position [m]")
-    visualizer["/Cameras/default/rotated/<object>"].set_property("position", [float(x), float(z), float(-y)])
+    visualizer[CAMERA_PATH].set_property("position", [float(x), float(z), float(-y)])
+
+
+def apply_view(sink, view: PoseView, animated: bool) -> None:
+    """Aim the camera of ``sink`` (a visualizer or an animation frame) at ``view.target``.
+
+    The scene is shifted by ``-target`` (meshcat cannot move the orbit target),
+    the camera goes to ``view.offset`` and the floor is shown only when it
+    cannot hide an arrow.
+    """
+    shift = rigid_transform(np.eye(3), -view.target)
+    x, y, z = (float(v) for v in view.offset)
+    sink["/meshcat"].set_transform(shift)
+    sink["/Axes"].set_transform(shift)
+    if animated:
+        sink[CAMERA_PATH].set_property("position", "vector3", [x, z, -y])
+        sink[f"/meshcat/{ROOT}/floor"].set_property("visible", "boolean", bool(view.floor_visible))
+    else:
+        sink[CAMERA_PATH].set_property("position", [x, z, -y])
+        sink[f"/meshcat/{ROOT}/floor"].set_property("visible", bool(view.floor_visible))

@@ -29,8 +29,9 @@ from ..io.atomic import atomic_write_text
 from ..kinematics.arm import Arm
 from ..validation import as_batch, as_positive, as_vector
 from .arrows import ArrowStyle, NodePose, arrow_placement, exaggerate_tilt, rigid_transform
-from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, LAYERS, VERTICAL, add_legend, legend_html
-from .scene import ROOT, add_markers, frame_view, set_camera
+from .framing import PoseView, arm_points, frame_pose
+from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, LAYERS, VERTICAL, add_legend, inline_commands, legend_html
+from .scene import ROOT, add_markers, apply_view, frame_view, set_camera
 from .server import import_meshcat, import_pinocchio_visualizer, start_visualizer, stop_server
 from .vectors import PoseVectors, pose_vectors
 
@@ -52,7 +53,10 @@ class CalibrationViewer:
         tilt_exaggeration: Factor applied to the base tilt angle when drawing
             the gravity direction (1 = true angle).
         style: Arrow sizes [m].
-        gravity_anchor: Where the gravity-direction arrow starts (base frame) [m].
+        gravity_anchor: Where the gravity-direction arrow starts (base frame) [m];
+            default: beside the sensor, right of it on screen.
+        auto_camera: At each pose aim the camera at the sensor origin and see the
+            arrows side-on (:func:`ftkin.viz.framing.frame_pose`); :meth:`set_camera` turns it off.
     """
 
     def __init__(
@@ -65,7 +69,8 @@ class CalibrationViewer:
         scale: float | None = None,
         tilt_exaggeration: float = 1.0,
         style: ArrowStyle | None = None,
-        gravity_anchor=(-0.25, -0.3, 0.4),
+        gravity_anchor=None,
+        auto_camera: bool = True,
     ):
         _check_calibration(calibration)
         if arm is not None and not isinstance(arm, Arm):
@@ -76,7 +81,10 @@ class CalibrationViewer:
         self.scale = as_positive(scale, "scale [m/N]") if scale is not None else DEFAULT_ARROW_LENGTH / max(weight, 1e-9)
         self.tilt_exaggeration = as_positive(tilt_exaggeration, "tilt_exaggeration")
         self.style = style or ArrowStyle()
-        self.gravity_anchor = as_vector(gravity_anchor, 3, "gravity_anchor [m]")
+        self.gravity_anchor = None if gravity_anchor is None else as_vector(gravity_anchor, 3, "gravity_anchor [m]")
+        self.auto_camera = bool(auto_camera)
+        self.view: PoseView | None = None
+        self._anchor = (np.array([-0.25, -0.3, 0.4]), 0.3)  # gravity arrow beside the base until a pose is framed
         self._meshcat = import_meshcat()
         self._owns_server = visualizer is None and zmq_url is None
         self.visualizer = visualizer if visualizer is not None else start_visualizer(zmq_url)
@@ -132,7 +140,8 @@ class CalibrationViewer:
         self.calibration = calibration
 
     def set_camera(self, position) -> None:
-        """Camera position relative to the orbit target, base axes [m]."""
+        """Camera position relative to the orbit target, base axes [m]; stops the per-pose framing."""
+        self.auto_camera = False
         set_camera(self.visualizer, position)
 
     def set_visible(self, name: str, visible: bool) -> None:
@@ -194,11 +203,13 @@ class CalibrationViewer:
         return out
 
     def _draw(self, sink, q, rotation_and_origin, raw_wrench, animated: bool) -> PoseVectors:
+        points = None
         if q is not None:
             if self.arm is None:
                 raise InvalidInput("this viewer has no arm: use show_rotation(R_BS, raw_wrench) or pass arm=")
             q = self.arm.check_configuration(q)
             rotation, origin = self.arm.frame_placement(q, "sensor")
+            points = arm_points(self.arm, q) if self.auto_camera else None
             if self._robot is not None:
                 self._robot.viewer = sink
                 try:
@@ -215,9 +226,21 @@ class CalibrationViewer:
             place(sink, f"{ROOT}/{layer.name}/shaft", arrow.shaft)
             place(sink, f"{ROOT}/{layer.name}/head", arrow.head)
         place(sink, f"{ROOT}/{CENTER_OF_MASS.name}", NodePose(rigid_transform(np.eye(3), vectors.center_of_mass), np.ones(3)))
+        anchor, length = self.gravity_anchor, 0.3
+        if anchor is None:
+            anchor, length = self._anchor
+        if self.auto_camera:
+            forces = (vectors.measured_force, vectors.gravity_force, vectors.contact_force)
+            tool_size = 2.0 * float(np.linalg.norm(self.calibration.center_of_mass))
+            self.view = frame_pose(vectors.sensor_origin, [self.scale * f for f in forces], points, tool_size=tool_size)
+            apply_view(sink, self.view, animated)
+            if self.gravity_anchor is None:  # beside the sensor, right of it and a little up on screen
+                anchor = self.view.target + self.view.radius * (0.8 * self.view.right + np.array([0.0, 0.0, 0.3]))
+                length = min(0.3, 0.6 * self.view.radius)
+                self._anchor = (anchor, length)
         drawn_direction = exaggerate_tilt(vectors.gravity_direction, self.tilt_exaggeration)
         for layer, direction in ((BASE_GRAVITY, drawn_direction), (VERTICAL, np.array([0.0, 0.0, -1.0]))):
-            arrow = arrow_placement(self.gravity_anchor, direction, 0.3, self.style)
+            arrow = arrow_placement(anchor, direction, length, self.style)
             place(sink, f"{ROOT}/{layer.name}/shaft", arrow.shaft)
             place(sink, f"{ROOT}/{layer.name}/head", arrow.head)
         return vectors
@@ -229,7 +252,7 @@ class CalibrationViewer:
 
     def static_html(self, legend: bool = True, caption: str = "") -> str:
         """A self-contained page of the current scene (and animation), optionally with the legend."""
-        page = self.visualizer.static_html()
+        page = inline_commands(self.visualizer.static_html())
         return add_legend(page, self.legend(caption)) if legend else page
 
     def save_html(self, path, legend: bool = True, caption: str = "") -> Path:

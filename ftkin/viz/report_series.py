@@ -1,0 +1,110 @@
+"""Optional time-series panels of the calibration report.
+
+A calibration may carry quantities that vary over time, added by other
+features: the bias trajectory of a drifting sensor, the residual during
+motion. :func:`report_series` finds the ones a calibration has and
+:func:`draw_series` plots each as a row of two panels (forces [N], torques
+[N·m]) against time [s]. A series is read from an attribute of the
+calibration (see :data:`SERIES`; a drift-aware calibration's ``drift``,
+:class:`~ftkin.calibration.drift.BiasDrift`, is one) holding any of:
+
+* a pair ``(times, values)``;
+* a mapping with ``"times"`` and ``"values"`` (or the attribute's own kind:
+  ``"bias"``, ``"residual"``, ``"residuals"``);
+* an object with such attributes.
+
+``times`` is ``(N,)`` [s], ``values`` ``(N, 6)`` ``[fx, fy, fz, mx, my, mz]``
+[N, N·m], sensor frame. An attribute that is absent or None draws nothing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..calibration.model import WRENCH_CHANNELS
+from ..exceptions import InvalidInput
+
+SERIES = (
+    ("drift", "bias of a drifting sensor"),
+    ("bias_trajectory", "bias of a drifting sensor"),
+    ("motion_residual", "residual during motion"),
+)
+"""``(attribute, title)`` of the optional series, in drawing order."""
+
+_VALUE_KEYS = ("values", "bias", "residual", "residuals")
+
+
+@dataclass(frozen=True)
+class Series:
+    """One time series to plot.
+
+    Attributes:
+        name: The calibration attribute it came from.
+        title: Panel title.
+        times: ``(N,)`` times [s].
+        values: ``(N, 6)`` wrench channels [N, N·m].
+    """
+
+    name: str
+    title: str
+    times: np.ndarray
+    values: np.ndarray
+
+
+def _field(source, key):
+    if isinstance(source, dict):
+        return source.get(key)
+    return getattr(source, key, None)
+
+
+def as_series(name: str, title: str, source) -> Series:
+    """Read one series (see the module docstring for the accepted forms).
+
+    Raises:
+        InvalidInput: the shapes do not match ``(N,)`` and ``(N, 6)`` or are not finite.
+    """
+    if isinstance(source, (tuple, list)) and len(source) == 2:
+        times, values = source
+    else:
+        times = _field(source, "times")
+        values = next((v for v in (_field(source, key) for key in _VALUE_KEYS) if v is not None), None)
+    try:
+        times = np.asarray(times, dtype=float).reshape(-1)
+        values = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInput(f"{name}: expected times (N,) [s] and values (N, 6) [N, N·m]") from None
+    if values.ndim != 2 or values.shape != (len(times), 6) or len(times) == 0:
+        raise InvalidInput(f"{name}: expected times (N,) [s] and values (N, 6) [N, N·m], got {times.shape} and {values.shape}")
+    if not (np.all(np.isfinite(times)) and np.all(np.isfinite(values))):
+        raise InvalidInput(f"{name}: times and values must be finite")
+    return Series(name, title, times, values)
+
+
+def report_series(calibration) -> list[Series]:
+    """The optional series the calibration carries, in :data:`SERIES` order."""
+    out = []
+    for name, title in SERIES:
+        source = getattr(calibration, name, None)
+        if name == "drift" and getattr(source, "model", None) == "none":
+            continue  # a constant bias: nothing moves over time
+        if source is not None:
+            out.append(as_series(name, title, source))
+    return out
+
+
+def draw_series(figure, grid_row, series: Series) -> list:
+    """Plot ``series`` into the two halves of ``grid_row`` (a gridspec row); returns the two axes."""
+    force = figure.add_subplot(grid_row[0, :2])
+    torque = figure.add_subplot(grid_row[0, 2:])
+    for k, ax in ((0, force), (3, torque)):
+        for channel in range(k, k + 3):
+            ax.plot(series.times, series.values[:, channel], lw=1, label=WRENCH_CHANNELS[channel])
+        ax.set_xlabel("time [s]")
+        ax.legend(loc="best", fontsize="small")
+    force.set_ylabel("force [N]")
+    torque.set_ylabel("torque [N·m]")
+    force.set_title(f"{series.title}: forces")
+    torque.set_title(f"{series.title}: torques")
+    return [force, torque]
