@@ -26,7 +26,7 @@ _EXPORTS = {
     "CausalDifferentiator": ".calibration.derivatives",
     "ClosedLoopRun": ".sim.mujoco",
     "Compensator": ".control.compensation",
-    "ControlFrame": ".control.admittance",
+    "ControlFrame": ".control.control_frame",
     "ConventionCheck": ".calibration.conventions",
     "ConventionMistake": ".exceptions",
     "ConventionReport": ".calibration.doctor",

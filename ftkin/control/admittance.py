@@ -27,7 +27,7 @@ S is a 0/1 diagonal: 0 keeps that axis still. A deadband shrinks each force
 (torque) error component towards zero by ``force_deadband`` [N]
 (``torque_deadband`` [N·m]), continuously. ``frame`` names the axes (and the
 point) in which ``ΔF`` and ``ΔV`` are expressed;
-:class:`~ftkin.control.control_frame.ControlFrame` (re-exported here) does the
+:class:`~ftkin.control.control_frame.ControlFrame` (importable from here too) does the
 rotations and the lever arm.
 """
 
@@ -40,9 +40,9 @@ import numpy as np
 
 from ..exceptions import InvalidInput
 from ..validation import as_float_array, as_vector, check_finite
-from .control_frame import FRAMES, ControlFrame
+from .control_frame import FRAMES, ControlFrame  # noqa: F401  (ControlFrame importable from here, as before)
 
-__all__ = ["FRAMES", "Admittance", "AdmittanceState", "ControlFrame"]
+__all__ = ["FRAMES", "Admittance", "AdmittanceState"]
 
 
 def _diagonal(value, name: str, nonnegative: bool = True) -> np.ndarray:
