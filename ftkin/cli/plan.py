@@ -17,7 +17,7 @@ from ..kinematics.arm import Arm
 from ..planning.constraints import DEFAULT_MARGIN
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT
 from ..planning.plan import plan_poses
-from .common import add_arm_arguments, arm_from_args, non_negative_float, positive_float, seed
+from .common import add_arm_arguments, arm_from_args, bounded_int, non_negative_float, positive_float, seed
 from .motion import add_excitation_arguments, run_excitation
 
 FORMATS = ("csv", "yaml", "json")
@@ -35,20 +35,10 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
                        help="force noise per reading [N] (default: %(default)s)")
     group.add_argument("--noise-torque", type=positive_float, default=float(noise.torque_std[0]), metavar="NM",
                        help="torque noise per reading [N·m] (default: %(default)s)")
-    group.add_argument("--readings-per-pose", type=_readings, default=1, metavar="K",
+    group.add_argument("--readings-per-pose", type=bounded_int(1, 10**9, "readings per pose"), default=1, metavar="K",
                        help="independent readings averaged at each pose (default: %(default)s)")
     group.add_argument("--estimate-mount", choices=("yaw", "full"), default=None, metavar="yaw|full",
                        help="the calibration will also estimate the sensor's mount on the flange: plan and predict for it")
-
-
-def _readings(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if not 1 <= value <= 10**9:
-        raise argparse.ArgumentTypeError(f"expected 1 to 10**9 readings per pose, got {text}")
-    return value
 
 
 def expectation_from_args(args) -> dict:

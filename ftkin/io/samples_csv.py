@@ -128,15 +128,17 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
 
 def check_radians(table: Table, columns, values: np.ndarray) -> None:
     """Refuse joint angles that can only be degrees (``|q| > 2π``)."""
-    bad = np.argwhere(np.abs(values) > _DEGREES_THRESHOLD)
+    _refuse_beyond(table, values, _DEGREES_THRESHOLD, lambda column, value: (
+        f"joint column {columns[column]!r} holds {value:g}, outside ±2π: joint angles must be in radians "
+        "(these look like degrees)"))
+
+
+def _refuse_beyond(table: Table, values: np.ndarray, limit: float, describe) -> None:
+    """:class:`InvalidSamples` at the first cell of ``values`` beyond ``±limit``: ``describe(column, value)``, its line."""
+    bad = np.argwhere(np.abs(values) > limit)
     if bad.size:
         row, column = bad[0]
-        raise InvalidSamples(
-            f"joint column {columns[column]!r} holds {values[row, column]:g}, outside ±2π: joint angles "
-            "must be in radians (these look like degrees)",
-            table.source,
-            table.lines[row],
-        )
+        raise InvalidSamples(describe(column, values[row, column]), table.source, table.lines[row])
 
 
 @functools.lru_cache(maxsize=1)
@@ -245,15 +247,9 @@ MAX_WRENCH = 1e6
 
 def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
     """Refuse readings beyond ±:data:`MAX_WRENCH` (they would overflow the fit, not inform it)."""
-    bad = np.argwhere(np.abs(wrenches) > MAX_WRENCH)
-    if bad.size:
-        row, column = bad[0]
-        raise InvalidSamples(
-            f"column {WRENCH_CHANNELS[column]!r} holds {wrenches[row, column]:g}, beyond ±{MAX_WRENCH:g}: expected N "
-            "(fx, fy, fz) and N·m (mx, my, mz), not raw counts",
-            table.source,
-            table.lines[row],
-        )
+    _refuse_beyond(table, wrenches, MAX_WRENCH, lambda column, value: (
+        f"column {WRENCH_CHANNELS[column]!r} holds {value:g}, beyond ±{MAX_WRENCH:g}: expected N (fx, fy, fz) and N·m "
+        "(mx, my, mz), not raw counts"))
 
 
 @dataclass(frozen=True)
