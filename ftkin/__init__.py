@@ -68,7 +68,7 @@ _EXPORTS = {
     "SensorMount": ".kinematics.arm",
     "SensorNoise": ".calibration.information",
     "SimulatedSensor": ".sim.sensor",
-    "StepStatus": ".control.joint_admittance",
+    "StepStatus": ".control.step_status",
     "Surface": ".sim.surfaces",
     "SuspectConvention": ".exceptions",
     "ToolInertia": ".sim.mujoco",

@@ -59,7 +59,7 @@ class DynamicCompensator:
             raise InvalidInput(f"arm must be an ftkin Arm, got {type(arm).__name__}")
         self.static = Compensator(calibration, arm)
         self.calibration = calibration
-        self.arm = arm
+        self.arm = self.static.arm  # with the calibration's mount folded into the sensor frame, if any
         self.inertial_parameters = _dynamic_parameters(calibration, inertial_parameters)
         self._data = arm.model.createData()
         theta = self.inertial_parameters.tolist()
@@ -71,9 +71,6 @@ class DynamicCompensator:
         self._q_shape = (arm.nq,)
         self._zeros = np.zeros(arm.nq)
         self._zeros6 = np.zeros(6)
-        self._gravity_floats = tuple(np.asarray(calibration.gravity_in_base, dtype=float).tolist())
-        self._com_floats = tuple(np.asarray(calibration.center_of_mass, dtype=float).tolist())
-        self._bias_floats = tuple(np.asarray(calibration.bias, dtype=float).tolist())
         self._stream: CausalDifferentiator | None = None
         self._raw_buffer: deque = deque()
 
@@ -135,23 +132,9 @@ class DynamicCompensator:
             pin.getFrameVelocity(model, data, frame, self._local).vector,
             pin.getFrameAcceleration(model, data, frame, self._local).vector,
         )
-        # The static part, as in Compensator.compensate_rotation_unchecked (scalar floats, same IEEE results).
-        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation.tolist()
-        ax, ay, az = self._gravity_floats
-        px, py, pz = self._com_floats
-        b0, b1, b2, b3, b4, b5 = self._bias_floats
-        w0, w1, w2, w3, w4, w5 = raw.tolist()
-        gx = r00 * ax + r10 * ay + r20 * az
-        gy = r01 * ax + r11 * ay + r21 * az
-        gz = r02 * ax + r12 * ay + r22 * az
-        return np.array([
-            (w0 - b0) - gx + i0,
-            (w1 - b1) - gy + i1,
-            (w2 - b2) - gz + i2,
-            (w3 - b3) - (py * gz - pz * gy) + i3,
-            (w4 - b4) - (pz * gx - px * gz) + i4,
-            (w5 - b5) - (px * gy - py * gx) + i5,
-        ])
+        # The static part is the Compensator's own kernel: its current bias (re-zeroed or tracked), reading signs.
+        c0, c1, c2, c3, c4, c5 = self.static.contact_floats(rotation.tolist(), raw.tolist())
+        return np.array([c0 + i0, c1 + i1, c2 + i2, c3 + i3, c4 + i4, c5 + i5])
 
     # ---------------------------------------------------------------- stream
     def start_stream(self, sample_period: float, window: int | None = None, polyorder: int = 4) -> float:

@@ -35,7 +35,6 @@ non-numeric inputs raise :class:`~ftkin.exceptions.InvalidInput`. Each tick leav
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from operator import ge, le, mul, sub
 
 import numpy as np
@@ -48,41 +47,10 @@ from .admittance import Admittance
 from .compensation import Compensator
 from .control_frame import control_frame_for
 from .damped_least_squares import damped_least_squares
+from .dynamic_compensation import DynamicCompensator
 from .oscillation import DEFAULT_OSCILLATION_LIMITS, OscillationDetector, OscillationLimits
 from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
-
-
-@dataclass(frozen=True)
-class StepStatus:
-    """What one :meth:`JointAdmittance.step` did.
-
-    Attributes:
-        dq: Commanded joint velocities ``(nq,)`` [rad/s].
-        contact_wrench: Compensated wrench in the sensor frame [N, N·m] (NaN on a sensor-fault tick).
-        twist: Admittance output at the control point, control-frame axes [m/s, rad/s].
-        manipulability: ``w = sqrt(det(J Jᵀ))`` of the sensor Jacobian.
-        damping: ``λ`` used in the least-squares inverse.
-        limit_scale: Uniform factor applied for joint velocity/position limits (1 = none).
-        safety_stop: True when the contact exceeded the limit (this tick or latched).
-        event: ``""`` or a short description of why the arm was stopped.
-        fault: The sensor fault holding the arm this tick (or being recovered
-            from), :attr:`SensorFault.NONE` when there is none.
-    """
-
-    dq: np.ndarray
-    contact_wrench: np.ndarray
-    twist: np.ndarray
-    manipulability: float
-    damping: float
-    limit_scale: float
-    safety_stop: bool
-    event: str
-    fault: SensorFault = SensorFault.NONE
-
-    @property
-    def held(self) -> bool:
-        """True when ``dq`` is zero because of a safety stop or a sensor fault."""
-        return self.safety_stop or self.fault is not SensorFault.NONE
+from .step_status import StepStatus
 
 
 class JointAdmittance:
@@ -92,7 +60,10 @@ class JointAdmittance:
         arm: Kinematics (sensor frame, and tool frame for a tool control point).
         admittance: The Cartesian law; its ``frame`` picks the control frame.
         compensator: Removes bias and tool weight; None passes raw readings
-            through (the "uncompensated" experiment).
+            through (the "uncompensated" experiment). A
+            :class:`~ftkin.control.dynamic_compensation.DynamicCompensator` also
+            removes the tool's inertial wrench on ticks given joint velocities
+            and accelerations (:meth:`step`); its static part serves the others.
         control_point: ``"tool"`` (the arm's tool frame, rigidly attached to the
             sensor) or ``"sensor"``. Default: tool if the arm has one.
         force_limit: Contact force norm [N] that stops the arm.
@@ -118,6 +89,9 @@ class JointAdmittance:
                  oscillation: OscillationLimits | None = DEFAULT_OSCILLATION_LIMITS):
         if not isinstance(arm, Arm) or not isinstance(admittance, Admittance):
             raise InvalidInput("JointAdmittance needs an ftkin Arm and an ftkin Admittance")
+        self.dynamic = compensator if isinstance(compensator, DynamicCompensator) else None
+        if self.dynamic is not None:
+            compensator = self.dynamic.static
         if compensator is not None and not isinstance(compensator, Compensator):
             raise InvalidInput(f"compensator must be an ftkin Compensator or None, got {type(compensator).__name__}")
         numbers = np.array([force_limit, torque_limit, manipulability_threshold, max_damping, velocity_scale, limit_gain], dtype=float)
@@ -171,7 +145,8 @@ class JointAdmittance:
             self._status_parts = None
         return self._status
 
-    def step(self, q, raw_wrench, dt: float, free: bool | None = None) -> np.ndarray:
+    def step(self, q, raw_wrench, dt: float, free: bool | None = None, joint_velocities=None,
+             joint_accelerations=None) -> np.ndarray:
         """Joint velocities ``(nq,)`` [rad/s] for this tick.
 
         Args:
@@ -182,10 +157,14 @@ class JointAdmittance:
                 (:class:`~ftkin.control.bias_tracker.BiasTracker`): True when the
                 tool is known free of contact, False in contact, None to let
                 it detect. A faulty tick never reaches the tracker.
+            joint_velocities: ``dq`` ``(nq,)`` [rad/s] measured (or estimated) at ``q``, with
+            joint_accelerations: ``ddq`` ``(nq,)`` [rad/s²]: with a dynamic compensator, the
+                contact is raw − bias − (gravity + inertial wrench) this tick.
 
         Raises:
             InvalidInput: ``q``, ``raw_wrench`` or ``dt`` of the wrong shape or not numbers
-                (NaN, inf, a bad ``dt`` are sensor faults: held and reported, not raised).
+                (NaN, inf, a bad ``dt`` are sensor faults: held and reported, not raised);
+                joint velocities or accelerations of the wrong shape or not finite.
         """
         # The tick runs on Python floats (numpy's per-call overhead dominates on 3- and 6-vectors);
         # numpy only for the Jacobian products. The status is built when asked (last_status).
@@ -207,7 +186,10 @@ class JointAdmittance:
         jacobian = pin.computeFrameJacobian(self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED)
         rotation = self._rotation.tolist()  # R_BS, updated by the call above
         # 2. compensation (six floats, sensor frame), the bias tracker, the oscillation detector and the safety stop
-        contact = raw if self.compensator is None else self.compensator.contact_floats(rotation, raw)
+        if self.dynamic is not None and joint_velocities is not None:
+            contact = self.dynamic.compensate_moving(q, joint_velocities, joint_accelerations, raw).tolist()
+        else:
+            contact = raw if self.compensator is None else self.compensator.contact_floats(rotation, raw)
         if self.compensator is not None and self.compensator.tracker is not None:
             self.compensator.observe_bias(contact, dt, q=q, free=free)
         fx, fy, fz, mx, my, mz = contact
