@@ -118,6 +118,10 @@ class JointAdmittance:
                                "measuring range [N, N·m]: the default ±250 N / ±6 N·m is the bundled arm's (the paper's) sensor")
         self.monitor = FaultMonitor(sensor_limits)
         self.detector = OscillationDetector(oscillation) if oscillation is not None else None
+        # Bound once: the tick calls these without attribute lookups (the compensator's kernel is fixed at its creation).
+        self._detect = self.detector.update if self.detector is not None else None
+        self._contact_floats = compensator.contact_floats if compensator is not None else None
+        self._tracked = compensator is not None and compensator.tracker is not None
         self.reset()
 
     def reset(self) -> None:
@@ -179,22 +183,22 @@ class JointAdmittance:
         raw = raw.tolist()
         fault, event = self.monitor.check(q, raw, dt)
         if fault is not SensorFault.NONE:
-            if self.compensator is not None and self.compensator.tracker is not None:
+            if self._tracked:
                 self.compensator.tracker.interrupt()
             return self._hold(fault, event)
         # 1. kinematics: forward kinematics and the sensor Jacobian (base axes), one Pinocchio call
         jacobian = pin.computeFrameJacobian(self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED)
         rotation = self._rotation.tolist()  # R_BS, updated by the call above
         # 2. compensation (six floats, sensor frame), the bias tracker, the oscillation detector and the safety stop
-        if self.dynamic is not None and joint_velocities is not None:
+        if joint_velocities is not None and self.dynamic is not None:
             contact = self.dynamic.compensate_moving(q, joint_velocities, joint_accelerations, raw).tolist()
         else:
-            contact = raw if self.compensator is None else self.compensator.contact_floats(rotation, raw)
-        if self.compensator is not None and self.compensator.tracker is not None:
+            contact = raw if self._contact_floats is None else self._contact_floats(rotation, raw)
+        if self._tracked:
             self.compensator.observe_bias(contact, dt, q=q, free=free)
         fx, fy, fz, mx, my, mz = contact
         force, torque = math.sqrt(fx * fx + fy * fy + fz * fz), math.sqrt(mx * mx + my * my + mz * mz)
-        if (self.detector is not None and self.detector.update(force, torque, dt)) or self.oscillation_event:
+        if (self._detect is not None and self._detect(force, torque, dt)) or self.oscillation_event:
             return self._hold_oscillation(np.array(contact))
         if self.safety_latched or force > self.force_limit or torque > self.torque_limit:
             return self._stop(np.array(contact), force, torque)

@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import yaml
 
 from ..exceptions import InvalidInput
 
@@ -47,5 +46,7 @@ def yaml_text(tree: dict, comments=()) -> str:
     Raises:
         InvalidInput: a non-finite number or a value that is not plain data.
     """
+    import yaml  # PyYAML loads when a file is written, not with ftkin
+
     body = yaml.safe_dump(_plain(tree), sort_keys=False, default_flow_style=None, allow_unicode=True, width=4096)
     return "".join(f"{line}\n" for line in comment_lines(comments)) + body
