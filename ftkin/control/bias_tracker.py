@@ -15,20 +15,24 @@ where that innovation is the bias error and nothing else:
   or while the arm moves faster than ``max_speed`` (inertial forces are not
   in the model), even if declared free.
 
-Ticks are gathered in blocks of ``window`` seconds; a block is used only when
-all its ticks passed, and (when detected, not declared) when its mean stays
-within ``k`` standard deviations of the prediction and the ``guard`` seconds
-after it passed too; after any failed tick the first ``guard`` seconds are
-skipped. So the small first and last ticks of a contact (its ramps, below
-``k σ``) are never absorbed into the bias. A block is one Kalman measurement
-update with the block mean (noise ``σ² / n``). Between updates the bias
-variance grows by ``q² dt``. Any failed tick throws the partial and the
-pending block away.
+Every tick that passed is one Kalman measurement of the bias (noise ``σ²``),
+applied in time order by a filter that runs ``guard`` seconds behind the
+clock (declared free: no delay): a tick is used only once the ``guard``
+seconds after it passed too, in batches every ``window`` seconds (so a
+detected update rarely falls on the first, small tick of a contact); after any failed tick the first
+``guard`` seconds are skipped, and the mean of the ticks not yet used must
+stay within ``k`` standard deviations (``σ² / n +`` bias variance) of the
+prediction. So the small first and last ticks of a contact (its ramps, below
+``k σ``) are never absorbed into the bias, while every other free reading
+is. Any failed tick throws the unused ticks away. The delayed filter is
+exact for a random walk: the bias now is predicted by the filtered bias at
+the last used tick, its variance grown by ``q²`` times the time since.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 
 import numpy as np
 
@@ -55,8 +59,8 @@ class BiasTracker:
     Args:
         rate: Drift rate ``q`` [N/√s, N·m/√s]: ``[force, torque]`` or ``(6,)``.
         noise: Noise of one reading ``σ`` [N, N·m]: ``[force, torque]`` or ``(6,)`` (positive).
-        window: Length of a block of consistent ticks before an update [s].
-        guard: Consistent time needed after a detected block before it is used [s].
+        window: Consistent time (detected) before the first update of a run [s].
+        guard: Consistent time (detected) needed after a tick before it is used [s].
         k: Consistency threshold in standard deviations (per channel).
         still_speed: Fastest joint speed [rad/s] at which the arm counts as still (detection).
         max_speed: Fastest joint speed [rad/s] at which even a declared-free tick is used.
@@ -64,7 +68,7 @@ class BiasTracker:
 
     Attributes:
         update_count: Measurement updates made so far.
-        last_update_span: Ticks from the last update's tick back to the first
+        last_update_span: Ticks from the last update's tick back to the oldest
             reading it used (to audit which readings moved the bias).
     """
 
@@ -116,26 +120,27 @@ class BiasTracker:
     def reset(self, bias, std=None) -> None:
         """Restart from ``bias`` ``(6,)`` [N, N·m] with standard deviation ``std`` (default: ``initial_std``)."""
         self._bias = as_vector(bias, 6, "bias [F0, M0]").copy()
-        self._variance = (self._initial_std if std is None else _positive_six(std, "std")) ** 2
+        self._filter_variance = (self._initial_std if std is None else _positive_six(std, "std")) ** 2
+        self._clock = 0.0
+        self._filter_time = 0.0  # time of the filter's last measurement (the delayed filter's clock) [s]
+        self._tick = 0
         self._previous_q = None
         self.interrupt()
 
     def interrupt(self) -> None:
-        """Throw the current and the pending block away (a fault, a contact, a jump)."""
-        self._start_block()
-        self._pending = None
+        """Throw the readings not yet used away (a fault, a contact, a jump)."""
+        self._waiting = deque()  # (time [s], tick, measured bias (6,)) of consistent ticks not yet used
+        self._waiting_sum = np.zeros(6)
         self._settle = 0.0
-        self._settle_ticks = 0
-
-    def _start_block(self) -> None:
-        self._sum = np.zeros(6)
-        self._count = 0
-        self._elapsed = 0.0
 
     @property
     def bias(self) -> np.ndarray:
         """Current bias estimate ``(6,)`` [N, N·m]."""
         return self._bias.copy()
+
+    @property
+    def _variance(self) -> np.ndarray:
+        return self._filter_variance + self.rate**2 * (self._clock - self._filter_time)
 
     @property
     def std(self) -> np.ndarray:
@@ -158,51 +163,59 @@ class BiasTracker:
         if not (math.isfinite(dt) and dt > 0.0):
             self.interrupt()
             return False
-        self._variance = self._variance + self.rate**2 * dt
+        self._clock += dt
+        self._tick += 1
         speed = 0.0
         if q is not None:
             q = np.array(q, dtype=float)
             if self._previous_q is not None and self._previous_q.shape == q.shape:
                 speed = float(np.max(np.abs(q - self._previous_q))) / dt
+            else:
+                speed = math.inf  # the first tick with positions: the speed is not known yet
             self._previous_q = q
         contact = np.asarray(contact_wrench, dtype=float)
         limit = self.max_speed if free else self.still_speed
         if fault or free is False or speed > limit or not np.all(np.isfinite(contact)):
             self.interrupt()
             return False
-        if free is None and np.any(np.abs(contact) > self.k * np.sqrt(self.noise**2 + self._variance)):
+        variance = self._variance
+        if free is None and np.any(np.abs(contact) > self.k * np.sqrt(self.noise**2 + variance)):
             self.interrupt()
             return False
         if not free and self._settle < self.guard:
             self._settle += dt
             return False
-        self._sum += contact
-        self._count += 1
-        self._elapsed += dt
-        updated = False
-        if self._pending is not None:
-            self._pending[2] += dt
-            self._pending[3] += 1
-            if self._pending[2] >= self.guard:
-                updated = self._update(self._pending[0], self._pending[1], self._pending[1] + self._pending[3] - 1)
-                self._pending = None
-        if self._elapsed >= self.window:
-            mean, count = self._sum / self._count, self._count
-            self._start_block()
-            if free:
-                updated = self._update(mean, count, count - 1) or updated
-            elif np.all(np.abs(mean) <= self.k * np.sqrt(self.noise**2 / count + self._variance)):
-                self._pending = [mean, count, 0.0, 0]
-        return updated
+        measured = contact + self._bias  # raw − tool gravity: this tick's measurement of the bias
+        self._waiting.append((self._clock, self._tick, measured))
+        self._waiting_sum += measured
+        if free:
+            return self._use(self._clock)
+        count = len(self._waiting)
+        if np.any(np.abs(self._waiting_sum / count - self._bias) > self.k * np.sqrt(self.noise**2 / count + variance)):
+            self.interrupt()
+            return False
+        tolerance = 1e-9 * max(dt, 1.0)
+        if self._clock - self._waiting[0][0] < self.window + self.guard - tolerance:
+            return False
+        return self._use(self._clock - self.guard + tolerance)
 
-    def _update(self, mean: np.ndarray, count: int, span: int) -> bool:
-        """Kalman measurement update with a block mean of ``count`` ticks (the first ``span`` ticks ago)."""
-        measurement_variance = self.noise**2 / count
-        gain = self._variance / (self._variance + measurement_variance)
-        step = gain * mean
-        self._bias = self._bias + step
-        self._sum -= step * self._count  # the ticks gathered since were compensated with the old bias
-        self._variance = (1.0 - gain) * self._variance
+    def _use(self, until: float) -> bool:
+        """Kalman updates, in time order, with every waiting tick taken at or before ``until`` [s]."""
+        waiting = self._waiting
+        if not waiting or waiting[0][0] > until:
+            return False
+        bias, variance, filter_time = self._bias, self._filter_variance, self._filter_time
+        rate_squared, noise_squared = self.rate**2, self.noise**2
+        first_tick = waiting[0][1]
+        while waiting and waiting[0][0] <= until:
+            time, _, measured = waiting.popleft()
+            self._waiting_sum -= measured
+            variance = variance + rate_squared * (time - filter_time)
+            gain = variance / (variance + noise_squared)
+            bias = bias + gain * (measured - bias)
+            variance = (1.0 - gain) * variance
+            filter_time = time
+        self._bias, self._filter_variance, self._filter_time = bias, variance, filter_time
         self.update_count += 1
-        self.last_update_span = span
+        self.last_update_span = self._tick - first_tick
         return True

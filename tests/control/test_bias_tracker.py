@@ -22,20 +22,24 @@ def _feed(tracker, contacts, q=None, free=None, fault=None):
     return ticks, spans
 
 
-def test_first_update_is_the_hand_computed_kalman_step(rng):
-    tracker = BiasTracker([0.002, 4e-5], SIGMA, window=0.5, guard=0.25, initial_std=[0.05, 0.001])
+def test_first_update_is_the_random_walk_posterior_of_the_used_ticks(rng):
+    rate, initial = np.array([0.002] * 3 + [4e-5] * 3), np.array([0.05] * 3 + [0.001] * 3)
+    tracker = BiasTracker(rate[[0, 3]], SIGMA, window=0.5, guard=0.25, initial_std=initial[[0, 3]])
     offset = np.array([0.1, -0.08, 0.05, 0.002, -0.001, 0.0015])
     contacts = offset + rng.standard_normal((120, 6)) * SIGMA
     ticks, spans = _feed(tracker, contacts)
-    # 25 ticks skipped (guard after the start), a block of 50, then 25 guard ticks: committed at tick 99
-    assert ticks[0] == 99 and spans[0] == 74
-    block = contacts[25:75].mean(axis=0)
-    variance = np.array([0.05**2] * 3 + [0.001**2] * 3) + np.array([0.002**2] * 3 + [4e-5**2] * 3) * DT * 100
-    gain = variance / (variance + SIGMA**2 / 50)
-    tracker2 = BiasTracker([0.002, 4e-5], SIGMA, initial_std=[0.05, 0.001])
-    _feed(tracker2, contacts[:100])
-    np.testing.assert_allclose(tracker2.bias, gain * block, rtol=1e-12, atol=1e-15)
-    np.testing.assert_allclose(tracker2.std**2, (1 - gain) * variance, rtol=1e-12)
+    # 25 ticks skipped (guard after the start); at tick 100 the ticks 25..75 have 0.25 s of consistent ticks after them
+    assert ticks[0] == 100 and spans[0] == 75
+    tracker2 = BiasTracker(rate[[0, 3]], SIGMA, initial_std=initial[[0, 3]])
+    _feed(tracker2, contacts[:101])
+    # independent: Gaussian conditioning of a random walk b(t) = b(0) + q W(t) on y_j = b(t_j) + e_j, t_j = (j + 1) dt
+    times = (np.arange(25, 76) + 1) * DT
+    for c in range(6):
+        prior = initial[c] ** 2 + rate[c] ** 2 * np.minimum.outer(times, times)
+        solve = np.linalg.solve(prior + SIGMA[c] ** 2 * np.eye(len(times)), prior[-1])
+        np.testing.assert_allclose(tracker2.bias[c], solve @ contacts[25:76, c], rtol=1e-9)
+        variance = prior[-1, -1] - prior[-1] @ solve + rate[c] ** 2 * (101 * DT - times[-1])
+        np.testing.assert_allclose(tracker2.std[c] ** 2, variance, rtol=1e-9)
 
 
 def test_converges_to_the_bias_on_free_still_readings(rng):
