@@ -28,9 +28,12 @@ channel with a 5-minute time constant plus a random walk of 0.002 N/√s
    without the sensor's white noise (compensated minus true contact force:
    bias error plus the calibration's tool-gravity error at each pose), and the
    number of tracker updates whose data overlapped a contact (target 0). The
+   oracle row is the same Kalman filter told exactly which ticks are still and
+   free (the best a tracker can do with the reading noise). The
    last row is the floor with these free moments: the true bias at the last
    still, free tick, held through contacts and moves (the bias still wanders
-   between free moments).
+   between free moments; it also counts the single repeated first sample of
+   each move as a still, free moment known without noise).
 
 Run: ``python benchmarks/bench_drift.py [--trials 30] [--seed 0]`` (about a minute).
 """
@@ -151,10 +154,13 @@ def control_session(arm, configurations, rng):
     # compensated minus true contact without the white noise = (true − used bias) + (true − calibrated tool gravity)
     model_error = (TRUTH.tool_gravity_wrench(rotations) - calibration.tool_gravity_wrench(rotations))[:, :3]
     rate = calibration.drift.rate if calibration.drift.rate is not None else DRIFT.random_walk[[0, 3]]
+    still_free = declared_free & np.concatenate([[False], np.all(q[1:] == q[:-1], axis=1)])
     rows = {}
-    for name, mode in (("fixed bias", None), ("tracker (contact detected)", "detect"), ("tracker (free declared)", "declare")):
+    for name, mode in (("fixed bias", None), ("tracker (contact detected)", "detect"), ("tracker (free declared)", "declare"),
+                       ("oracle: tracker told still+free", "oracle")):
         tracker = None if mode is None else BiasTracker.from_calibration(calibration, rate=rate)
         compensator = Compensator(calibration, arm, tracker)
+        flags = {"declare": declared_free, "oracle": still_free}.get(mode)
         used = np.empty((len(q), 6))
         update_ticks, spans = [], []
         dt = 1.0 / RATE
@@ -165,7 +171,7 @@ def control_session(arm, configurations, rng):
                 compensator.compensate(q[i], raw[i])
                 continue
             before = tracker.update_count
-            compensator.compensate_tracked(q[i], raw[i], dt, free=bool(declared_free[i]) if mode == "declare" else None)
+            compensator.compensate_tracked(q[i], raw[i], dt, free=None if flags is None else bool(flags[i]))
             if tracker.update_count != before:
                 update_ticks.append(i)
                 spans.append(tracker.last_update_span)
@@ -175,7 +181,6 @@ def control_session(arm, configurations, rng):
         error = np.linalg.norm(true_bias[:, :3] - used[:, :3] + model_error, axis=1)
         rows[name] = (float(np.sqrt(np.mean(error**2))), float(np.max(error)), len(update_ticks), during_contact, per_tick)
     # floor: the true bias at the last still, free tick (what a perfect tracker with these free moments could know)
-    still_free = declared_free & np.concatenate([[False], np.all(q[1:] == q[:-1], axis=1)])
     last = np.maximum.accumulate(np.where(still_free, np.arange(len(q)), 0))
     used = np.where((np.cumsum(still_free) > 0)[:, None], true_bias[last], calibration.bias)
     error = np.linalg.norm(true_bias[:, :3] - used[:, :3] + model_error, axis=1)
