@@ -34,6 +34,9 @@ from ..validation import as_batch, as_rotation_batch, rotation_rows
 from .bias_control import BiasControl
 from .bias_tracker import BiasTracker
 
+_BLOCK = 8192
+"""Samples per block of the batch compensation's column updates."""
+
 
 class Compensator(BiasControl):
     """Remove the sensor bias and the tool's weight from raw readings.
@@ -222,12 +225,18 @@ class Compensator(BiasControl):
 
         The torque columns are updated one by one (no ``(N, 3)`` temporary for ``P × Gs``).
         """
-        out = raw - (self._bias if bias is None else bias)
-        out[:, :3] -= gravity_in_sensor
-        (px, py, pz), (gx, gy, gz) = self._com_floats, gravity_in_sensor.T
-        out[:, 3] -= py * gz - pz * gy
-        out[:, 4] -= pz * gx - px * gz
-        out[:, 5] -= px * gy - py * gx
+        bias = self._bias if bias is None else bias
+        out = np.empty_like(raw)
+        px, py, pz = self._com_floats
+        for start in range(0, len(out), _BLOCK):  # the temporaries of a block stay below the mmap threshold
+            stop = start + _BLOCK
+            gravity, block = gravity_in_sensor[start:stop], out[start:stop]
+            np.subtract(raw[start:stop], bias if np.ndim(bias) == 1 else bias[start:stop], out=block)
+            block[:, :3] -= gravity
+            gx, gy, gz = gravity.T
+            block[:, 3] -= py * gz - pz * gy
+            block[:, 4] -= pz * gx - px * gz
+            block[:, 5] -= px * gy - py * gx
         return out
 
     def compensate_joint_positions(self, joint_positions, raw_wrenches) -> np.ndarray:
