@@ -161,6 +161,18 @@ def test_d_optimal_selection_is_a_local_optimum_near_the_best(rng):
     assert value >= best - 0.5
 
 
+def test_entrywise_cholesky_log_det_equals_lapack(rng):
+    from ftkin.planning.design import _cholesky_log_det
+
+    x = rng.normal(size=(500, 6, 12)) * rng.uniform(1e-3, 1e3, size=(500, 1, 1))
+    matrices = x @ np.transpose(x, (0, 2, 1)) + np.eye(6)
+    np.testing.assert_allclose(_cholesky_log_det(matrices), np.linalg.slogdet(matrices)[1], rtol=1e-12, atol=1e-12)
+    huge = matrices[:3] * 1e120  # pivot product beyond the float range: sum of logs
+    np.testing.assert_allclose(_cholesky_log_det(huge), np.linalg.slogdet(huge)[1], rtol=1e-12)
+    matrices[7, 2, 2] = -1.0  # not positive definite
+    assert _cholesky_log_det(matrices) is None
+
+
 def test_travel_order_close_to_brute_force(rng):
     q = rng.uniform(-2, 2, size=(7, 6))
     distances = joint_distances(q)
