@@ -223,17 +223,24 @@ class Compensator(BiasControl):
     def _contact_batch(self, raw: np.ndarray, gravity_in_sensor: np.ndarray, bias: np.ndarray | None = None) -> np.ndarray:
         """``raw − bias − [Gs, P × Gs]`` ``(N, 6)`` from the tool weight in the sensor frame ``Gs`` ``(N, 3)``.
 
-        The torque columns are updated one by one (no ``(N, 3)`` temporary for ``P × Gs``).
+        Computed column by column on blocks (no ``(N, 3)`` temporary for ``P × Gs``).
         """
         bias = self._bias if bias is None else bias
         out = np.empty_like(raw)
         px, py, pz = self._com_floats
-        for start in range(0, len(out), _BLOCK):  # the temporaries of a block stay below the mmap threshold
+        per_sample, gravity = np.ndim(bias) == 2, gravity_in_sensor.T
+        # Column by column on blocks: (N,) operations run as one vectorised loop each, where (N, 6) with a (6,)
+        # operand loops over rows of six; the block's temporaries stay below the mmap threshold.
+        for start in range(0, len(out), _BLOCK):
             stop = start + _BLOCK
-            gravity, block = gravity_in_sensor[start:stop], out[start:stop]
-            np.subtract(raw[start:stop], bias if np.ndim(bias) == 1 else bias[start:stop], out=block)
-            block[:, :3] -= gravity
-            gx, gy, gz = gravity.T
+            block, readings = out[start:stop], raw[start:stop]
+            offsets = bias[start:stop].T if per_sample else bias
+            for column in range(6):
+                np.subtract(readings[:, column], offsets[column], out=block[:, column])
+            gx, gy, gz = gravity[:, start:stop]
+            block[:, 0] -= gx
+            block[:, 1] -= gy
+            block[:, 2] -= gz
             block[:, 3] -= py * gz - pz * gy
             block[:, 4] -= pz * gx - px * gz
             block[:, 5] -= px * gy - py * gx
