@@ -167,7 +167,7 @@ def _cos_sin(angles: np.ndarray, buffers: list[np.ndarray] | None = None) -> tup
     (128 kB) cost a page fault per 4 kB page, more than the arithmetic.
     The returned arrays are two of them.
     """
-    if angles.size and not np.abs(angles).max() <= _TABLE_RANGE:  # also NaN: numpy's functions
+    if angles.size and not (angles.max() <= _TABLE_RANGE and angles.min() >= -_TABLE_RANGE):  # also NaN
         with np.errstate(invalid="ignore"):
             return np.cos(angles), np.sin(angles)
     turns, residual, squared, table_cos, table_sin, cos, sin, index = buffers or _buffers(angles.shape)
