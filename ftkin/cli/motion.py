@@ -7,13 +7,10 @@ import logging
 
 import numpy as np
 
-from ..calibration.dynamic import calibrate_dynamic
 from ..calibration.information import SensorNoise
 from ..calibration.model import WRENCH_CHANNELS
-from ..control.dynamic_compensation import DynamicCompensator
 from ..io.bags import is_bag_path
 from ..io.csv_table import read_table, write_csv
-from ..io.motion_recording import is_motion_table, load_motion_bag, load_motion_csv, motion_from_table
 from ..kinematics.arm import Arm
 from ..planning.constraints import PoseConstraints
 from ..planning.excitation import DEFAULT_ACCELERATION_LIMIT, DEFAULT_AMPLITUDE, DEFAULT_VELOCITY_FRACTION, plan_excitation
@@ -32,6 +29,8 @@ def add_derivative_arguments(parser: argparse.ArgumentParser) -> None:
 
 def load_motion(path: str, args, arm: Arm):
     """A :class:`~ftkin.io.motion_recording.MotionRecording` from a motion CSV or a bag."""
+    from ..io.motion_recording import load_motion_bag, load_motion_csv  # with the dynamic model, when used
+
     if is_bag_path(path):
         return load_motion_bag(path, arm, getattr(args, "joint_topic", None), getattr(args, "wrench_topic", None))
     return load_motion_csv(path, arm)
@@ -39,6 +38,8 @@ def load_motion(path: str, args, arm: Arm):
 
 def calibrate_motion(args, arm: Arm | None, noise: SensorNoise | None):
     """``ftkin calibrate --dynamic``: the dynamic calibration of a moving recording."""
+    from ..calibration.dynamic import calibrate_dynamic
+
     arm = arm or Arm.default()
     recording = load_motion(args.samples, args, arm)
     motion = recording.motion_samples(arm, args.sg_window)
@@ -47,6 +48,9 @@ def calibrate_motion(args, arm: Arm | None, noise: SensorNoise | None):
 
 def compensate_motion(args, calibration, arm: Arm | None) -> int | None:
     """``ftkin compensate`` with the inertial term, or None when the log is not a moving recording."""
+    from ..control.dynamic_compensation import DynamicCompensator
+    from ..io.motion_recording import is_motion_table, load_motion_bag, motion_from_table
+
     arm = arm or Arm.default()
     if is_bag_path(args.log):
         recording = load_motion_bag(args.log, arm, args.joint_topic, args.wrench_topic)

@@ -34,6 +34,9 @@ from ..validation import as_batch, as_rotation_batch, rotation_rows
 from .bias_control import BiasControl
 from .bias_tracker import BiasTracker
 
+_BLOCK = 8192
+"""Samples per block of the batch compensation's column updates."""
+
 
 class Compensator(BiasControl):
     """Remove the sensor bias and the tool's weight from raw readings.
@@ -220,14 +223,27 @@ class Compensator(BiasControl):
     def _contact_batch(self, raw: np.ndarray, gravity_in_sensor: np.ndarray, bias: np.ndarray | None = None) -> np.ndarray:
         """``raw − bias − [Gs, P × Gs]`` ``(N, 6)`` from the tool weight in the sensor frame ``Gs`` ``(N, 3)``.
 
-        The torque columns are updated one by one (no ``(N, 3)`` temporary for ``P × Gs``).
+        Computed column by column on blocks (no ``(N, 3)`` temporary for ``P × Gs``).
         """
-        out = raw - (self._bias if bias is None else bias)
-        out[:, :3] -= gravity_in_sensor
-        (px, py, pz), (gx, gy, gz) = self._com_floats, gravity_in_sensor.T
-        out[:, 3] -= py * gz - pz * gy
-        out[:, 4] -= pz * gx - px * gz
-        out[:, 5] -= px * gy - py * gx
+        bias = self._bias if bias is None else bias
+        out = np.empty_like(raw)
+        px, py, pz = self._com_floats
+        per_sample, gravity = np.ndim(bias) == 2, gravity_in_sensor.T
+        # Column by column on blocks: (N,) operations run as one vectorised loop each, where (N, 6) with a (6,)
+        # operand loops over rows of six; the block's temporaries stay below the mmap threshold.
+        for start in range(0, len(out), _BLOCK):
+            stop = start + _BLOCK
+            block, readings = out[start:stop], raw[start:stop]
+            offsets = bias[start:stop].T if per_sample else bias
+            for column in range(6):
+                np.subtract(readings[:, column], offsets[column], out=block[:, column])
+            gx, gy, gz = gravity[:, start:stop]
+            block[:, 0] -= gx
+            block[:, 1] -= gy
+            block[:, 2] -= gz
+            block[:, 3] -= py * gz - pz * gy
+            block[:, 4] -= pz * gx - px * gz
+            block[:, 5] -= px * gy - py * gx
         return out
 
     def compensate_joint_positions(self, joint_positions, raw_wrenches) -> np.ndarray:

@@ -12,11 +12,36 @@
 Depends on :mod:`ftkin.calibration` and :mod:`ftkin.kinematics`.
 """
 
-from .calibration_file import load_calibration, save_calibration
-from .conventions import diagnose_samples
-from .motion_recording import MotionRecording, load_motion_bag, load_motion_csv
-from .payload_export import Payload, export_payload, payload_in_flange
-from .samples_csv import load_samples
+import importlib
+
+_EXPORTS = {
+    "MotionRecording": ".motion_recording",
+    "Payload": ".payload_export",
+    "diagnose_samples": ".conventions",
+    "export_payload": ".payload_export",
+    "load_calibration": ".calibration_file",
+    "load_motion_bag": ".motion_recording",
+    "load_motion_csv": ".motion_recording",
+    "load_samples": ".samples_csv",
+    "payload_in_flange": ".payload_export",
+    "save_calibration": ".calibration_file",
+}
+"""Public name → module: each loads on first access (PEP 562), so ``import ftkin.io.samples_csv`` does
+not import the calibration file, motion recordings and payload exports (start-up of the CLI)."""
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'ftkin.io' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
 
 __all__ = [
     "MotionRecording",

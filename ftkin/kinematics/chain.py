@@ -23,6 +23,10 @@ _AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
 BLOCK = 16384
 """Configurations per block (the temporaries stay in the cache)."""
 
+VECTOR_BLOCK = 8192
+"""Configurations per block of :meth:`RotationChain.transposed_times` (its ``(N,)`` temporaries,
+64 kB, stay below the allocator's mmap threshold and in the cache)."""
+
 
 class RotationChain:
     """``R_BS(q)`` of one frame for a batch of configurations, vectorised in numpy.
@@ -33,6 +37,7 @@ class RotationChain:
 
     def __init__(self, steps: list[tuple[int, np.ndarray]], head: np.ndarray, tail: np.ndarray):
         self._steps = steps
+        self._indices = [index for index, _ in steps]
         self._head = head
         self._tail = tail
 
@@ -79,20 +84,29 @@ class RotationChain:
         ``Rᵀ v = Tᵀ Rz(θₙ)ᵀ Cₙᵀ ⋯ Rz(θ₁)ᵀ C₁ᵀ v``: a 3-vector carried through the
         chain, six times cheaper than the rotation matrices.
         """
-        out = np.empty((len(configurations), 3))
-        for start in range(0, len(configurations), BLOCK):
-            out[start:start + BLOCK] = self._vector_block(configurations[start:start + BLOCK], vector).T
-        return out
-
-    def _vector_block(self, configurations: np.ndarray, vector) -> np.ndarray:
         count = len(configurations)
-        cosines, sines = _cos_sin(np.ascontiguousarray(configurations.T))
+        out = np.empty((3, count))  # returned transposed: each component contiguous, as the compensation reads it
+        size = min(count, VECTOR_BLOCK)
+        angles, buffers = np.empty((len(self._steps), size)), _buffers((len(self._steps), size))
+        for start in range(0, count, VECTOR_BLOCK):
+            block = configurations[start:start + VECTOR_BLOCK]
+            if len(block) != size:  # the last, shorter block
+                size = len(block)
+                angles, buffers = np.empty((len(self._steps), size)), _buffers((len(self._steps), size))
+            for row, index in enumerate(self._indices):
+                angles[row] = block[:, index]
+            self._vector_block(_cos_sin(angles, buffers), vector, out[:, start:start + size])
+        return out.T
+
+    def _vector_block(self, cos_sin: tuple[np.ndarray, np.ndarray], vector, out: np.ndarray) -> None:
+        cosines, sines = cos_sin
         v = (self._head.T @ np.asarray(vector, dtype=float)).tolist()
-        for index, constant in self._steps:
-            v = [_combine(row, v) for row in constant.T.tolist()]  # Cᵀ v
-            cos, sin = cosines[index], sines[index]
+        for row, (_, constant) in enumerate(self._steps):
+            v = [_combine(line, v) for line in constant.T.tolist()]  # Cᵀ v
+            cos, sin = cosines[row], sines[row]
             v = [cos * v[0] + sin * v[1], cos * v[1] - sin * v[0], v[2]]  # Rz(θ)ᵀ v
-        return np.array([np.broadcast_to(_combine(row, v), (count,)) for row in self._tail.T.tolist()])
+        for component, line in zip(out, self._tail.T.tolist()):
+            component[:] = _combine(line, v)
 
     def _block(self, configurations: np.ndarray) -> np.ndarray:
         count = len(configurations)
@@ -119,17 +133,71 @@ class RotationChain:
         return bool(np.abs(self.rotations(configurations) - np.array(expected)).max() <= tolerance)
 
 
-def _cos_sin(angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``cos`` and ``sin`` from one ``tan`` of the half angle (``t = tan(θ/2)``).
+_TABLE_SIZE = 4096
+_STEP = 2.0 * np.pi / _TABLE_SIZE
+_STEP_HIGH = float(np.float32(_STEP))  # 24 significant bits: k · _STEP_HIGH is exact for |k| < 2²⁹
+_STEP_LOW = ((2.0 * np.pi - _TABLE_SIZE * _STEP_HIGH) + 2.4492935982947064e-16) / _TABLE_SIZE
+"""``2π/4096 − _STEP_HIGH``, with the part of 2π below the double ``2.0 * np.pi`` (Cody–Waite reduction)."""
 
-    ``cos θ = (1 − t²)/(1 + t²)``, ``sin θ = 2t/(1 + t²)``: one transcendental
-    call instead of two (numpy's float64 ``sin``/``cos`` cost ~20 ns each),
-    within a few ulp of them.
+
+def _table() -> tuple[np.ndarray, np.ndarray]:
+    """``cos``/``sin`` of ``j 2π/4096`` to within an ulp: numpy's on the rounded angle, corrected to first order."""
+    j = np.arange(_TABLE_SIZE, dtype=float)
+    rounded = j * _STEP_HIGH + j * _STEP_LOW
+    error = (j * _STEP_HIGH - rounded) + j * _STEP_LOW
+    return np.cos(rounded) - error * np.sin(rounded), np.sin(rounded) + error * np.cos(rounded)
+
+
+_COS_TABLE, _SIN_TABLE = _table()
+_TABLE_RANGE = 1e4
+"""Angles beyond ±this [rad] take numpy's ``cos``/``sin`` (the table's residual loses digits)."""
+
+
+def _cos_sin(angles: np.ndarray, buffers: list[np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``cos`` and ``sin`` of an array of angles [rad] from a table and a short Taylor series.
+
+    ``θ = k h + r`` with ``h = 2π/4096`` and ``|r| ≤ h/2``; ``cos``/``sin`` of
+    ``k h`` come from a table and those of ``r`` from ``1 − r²/2 + r⁴/24`` and
+    ``r − r³/6`` (the next terms are below 3e-18), combined by the angle-sum
+    formulas: within a few ulp of numpy's ``cos``/``sin``, which cost ~20 ns an
+    angle here against a few ns for this. Non-finite angles give NaN.
+
+    ``buffers`` (from :func:`_buffers`, of the angles' shape) are reused
+    across calls: fresh arrays larger than the allocator's mmap threshold
+    (128 kB) cost a page fault per 4 kB page, more than the arithmetic.
+    The returned arrays are two of them.
     """
-    half = np.tan(0.5 * angles)
-    squared = half * half
-    scale = 1.0 / (1.0 + squared)
-    return (1.0 - squared) * scale, 2.0 * half * scale
+    if angles.size and not (angles.max() <= _TABLE_RANGE and angles.min() >= -_TABLE_RANGE):  # also NaN
+        with np.errstate(invalid="ignore"):
+            return np.cos(angles), np.sin(angles)
+    turns, residual, squared, table_cos, table_sin, cos, sin, index = buffers or _buffers(angles.shape)
+    np.multiply(angles, 1.0 / _STEP, out=turns)
+    np.rint(turns, out=turns)
+    np.multiply(turns, _STEP_HIGH, out=residual)
+    np.subtract(angles, residual, out=residual)
+    residual -= np.multiply(turns, _STEP_LOW, out=squared)  # r = θ − k h, h in two parts
+    np.copyto(index, turns, casting="unsafe")
+    index &= _TABLE_SIZE - 1  # k mod 4096 (two's complement); "clip" then never clips and is the fastest take
+    _COS_TABLE.take(index, out=table_cos, mode="clip")
+    _SIN_TABLE.take(index, out=table_sin, mode="clip")
+    np.multiply(residual, residual, out=squared)
+    cos_residual = np.multiply(squared, 1.0 / 24.0, out=turns)
+    np.subtract(0.5, cos_residual, out=cos_residual)
+    cos_residual *= squared
+    np.subtract(1.0, cos_residual, out=cos_residual)  # 1 − r²(1/2 − r²/24)
+    squared *= 1.0 / 6.0
+    squared *= residual
+    sin_residual = np.subtract(residual, squared, out=residual)  # r − r³/6
+    np.multiply(table_cos, cos_residual, out=cos)
+    cos -= np.multiply(table_sin, sin_residual, out=squared)
+    np.multiply(table_sin, cos_residual, out=sin)
+    sin += np.multiply(table_cos, sin_residual, out=squared)
+    return cos, sin
+
+
+def _buffers(shape: tuple[int, ...]) -> list[np.ndarray]:
+    """Work arrays of :func:`_cos_sin` for angles of ``shape``."""
+    return [np.empty(shape) for _ in range(7)] + [np.empty(shape, dtype=np.intp)]
 
 
 def _combine(row: list[float], v: list):

@@ -102,14 +102,16 @@ def _first_improvement(distances: np.ndarray, order: np.ndarray, i: int, start: 
     """
     ends, following = order[start:], order[start + 1 :]
     after, new_after = np.zeros(len(ends)), np.zeros(len(ends))
-    after[:-1] = distances[ends[:-1], following]
-    new_after[:-1] = distances[order[i], following]
+    after[:-1] = distances.ravel().take(ends[:-1] * len(distances) + following)  # distances[ends[:-1], following]
+    new_after[:-1] = distances[order[i]].take(following)
     if i > 0:
-        before, new_before = distances[order[i - 1], order[i]], distances[order[i - 1], ends]
+        row = distances[order[i - 1]]
+        before, new_before = row[order[i]], row.take(ends)
     else:
-        before, new_before = 0.0, np.zeros(len(ends))
-    hits = np.flatnonzero(new_before + new_after < before + after - 1e-12)
-    return start + int(hits[0]) if hits.size else -1
+        before, new_before = 0.0, 0.0
+    hits = new_before + new_after < before + after - 1e-12
+    first = int(hits.argmax())
+    return start + first if hits[first] else -1
 
 
 def short_travel_order(joint_positions) -> np.ndarray:

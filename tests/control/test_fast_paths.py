@@ -181,3 +181,21 @@ def test_replaced_bias_reaches_the_float_path(arm):
     compensator._bias = compensator._bias + [1.0, 0, 0, 0, 0, 0]
     compensator.refresh_floats()
     np.testing.assert_allclose(compensator.compensate(q, raw), [-1.0, 0, 0, 0, 0, 0], atol=1e-12)
+
+
+def test_blocked_batch_compensation_equals_the_formula_over_several_blocks(arm, rng):
+    from ftkin.control.compensation import _BLOCK
+
+    truth = paper_like_truth()
+    compensator = Compensator(truth, arm)
+    count = 2 * _BLOCK + 11
+    rotations = arm.rotation_sensor_to_base(arm.random_configurations(count, rng))
+    raw = rng.normal(size=(count, 6)) * 5.0
+    gravity = np.einsum("nji,j->ni", rotations, truth.gravity_in_base)
+    bias = rng.normal(size=(count, 6))  # one bias per sample (as a drift model gives)
+    for given, offsets in ((None, truth.bias), (bias, bias)):
+        expected = raw - offsets
+        expected[:, :3] -= gravity
+        expected[:, 3:] -= np.cross(truth.center_of_mass, gravity)
+        got = compensator._contact_batch(raw, gravity, given)
+        np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)

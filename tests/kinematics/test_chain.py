@@ -72,3 +72,34 @@ def test_log_compensation_from_joint_angles_equals_row_by_row(arm, rng):
     raw = truth.predict(_pinocchio_rotations(arm.model, arm.sensor_frame_id, q)) + rng.normal(size=(500, 6))
     rows = np.array([compensator.compensate(x, w) for x, w in zip(q, raw)])
     np.testing.assert_allclose(compensator.compensate_joint_positions(q, raw), rows, rtol=0, atol=1e-12)
+
+
+def test_cos_sin_table_equals_numpy_to_a_few_ulp(rng):
+    from ftkin.kinematics.chain import _cos_sin
+
+    angles = np.concatenate([rng.uniform(-60.0, 60.0, 5000), np.arange(-8, 9) * np.pi / 4,
+                             np.arange(-3, 4) * np.pi / 4096 + 0.5 * np.pi / 2048, [0.0, -0.0, 9999.5]])
+    cos, sin = _cos_sin(angles.reshape(2, -1) if angles.size % 2 == 0 else angles)
+    np.testing.assert_allclose(cos.ravel(), np.cos(angles), rtol=0, atol=2e-15)
+    np.testing.assert_allclose(sin.ravel(), np.sin(angles), rtol=0, atol=2e-15)
+    wide = np.array([1e5, -3e7, np.nan, 1.0])  # beyond the table's range, and NaN: numpy's functions
+    cos, sin = _cos_sin(wide)
+    np.testing.assert_array_equal(cos, np.cos(wide))
+    np.testing.assert_array_equal(sin, np.sin(wide))
+
+
+@pytest.mark.parametrize("name", ["bundled", "ur5", "mixed"])
+def test_vector_in_sensor_frame_equals_pinocchio_over_several_blocks(name, rng):
+    from ftkin.kinematics.chain import VECTOR_BLOCK
+
+    if name == "mixed":
+        model, frame = _mixed_chain()
+    else:
+        arm = Arm.default() if name == "bundled" else ftkin.load_robot("ur5")
+        model, frame = arm.model, arm.sensor_frame_id
+    configurations = rng.uniform(-20.0, 20.0, size=(VECTOR_BLOCK + 37, model.nq))  # a full block and a short one
+    vector = np.array([0.4, -1.2, -9.3])
+    expected = np.einsum("nji,j->ni", _pinocchio_rotations(model, frame, configurations), vector)
+    got = RotationChain.from_model(model, frame).transposed_times(configurations, vector)
+    assert got.shape == (len(configurations), 3)
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)

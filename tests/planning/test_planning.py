@@ -161,6 +161,37 @@ def test_d_optimal_selection_is_a_local_optimum_near_the_best(rng):
     assert value >= best - 0.5
 
 
+def test_entrywise_cholesky_log_det_equals_lapack(rng):
+    from ftkin.planning.design import _cholesky_log_det
+
+    x = rng.normal(size=(500, 6, 12)) * rng.uniform(1e-3, 1e3, size=(500, 1, 1))
+    matrices = x @ np.transpose(x, (0, 2, 1)) + np.eye(6)
+
+    def entries(m):
+        return np.ascontiguousarray(np.transpose(m, (1, 2, 0)))
+
+    np.testing.assert_allclose(_cholesky_log_det(entries(matrices)), np.linalg.slogdet(matrices)[1],
+                               rtol=1e-12, atol=1e-12)
+    huge = matrices[:3] * 1e120  # pivot product beyond the float range: sum of logs
+    np.testing.assert_allclose(_cholesky_log_det(entries(huge)), np.linalg.slogdet(huge)[1], rtol=1e-12)
+    matrices[7, 2, 2] = -1.0  # not positive definite
+    assert _cholesky_log_det(entries(matrices)) is None
+
+
+def test_exchange_gains_equal_the_log_det_increase(rng, monkeypatch):
+    from ftkin.planning.design import _gains
+
+    factors = rng.normal(size=(300, 6, 12))
+    base = rng.normal(size=(30, 12))
+    information = base.T @ base
+    expected = [log_det(information + f.T @ f) - log_det(information) for f in factors]
+    gains = _gains(np.ascontiguousarray(np.transpose(factors, (1, 2, 0))), information)
+    np.testing.assert_allclose(gains, expected, rtol=1e-9, atol=1e-9)
+    monkeypatch.setattr("ftkin.planning.design._cholesky_log_det", lambda entries: None)  # the LU fallback
+    np.testing.assert_allclose(_gains(np.ascontiguousarray(np.transpose(factors, (1, 2, 0))), information),
+                               expected, rtol=1e-9, atol=1e-9)
+
+
 def test_travel_order_close_to_brute_force(rng):
     q = rng.uniform(-2, 2, size=(7, 6))
     distances = joint_distances(q)
