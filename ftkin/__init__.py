@@ -11,8 +11,7 @@ do not import the planner or the I/O layer. Optional extras (and scipy) are
 imported where they are used.
 """
 
-import importlib
-
+from ._lazy import lazy_exports
 from ._version import __version__  # noqa: F401  (re-exported: ftkin.__version__)
 
 _EXPORTS = {
@@ -192,15 +191,4 @@ __all__ = [
     "simulate_placement_mujoco",
 ]
 
-
-def __getattr__(name: str):
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'ftkin' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

@@ -12,7 +12,7 @@
 Depends on :mod:`ftkin.calibration` and :mod:`ftkin.kinematics`.
 """
 
-import importlib
+from .._lazy import lazy_exports
 
 _EXPORTS = {
     "MotionRecording": ".motion_recording",
@@ -29,20 +29,6 @@ _EXPORTS = {
 """Public name → module: each loads on first access (PEP 562), so ``import ftkin.io.samples_csv`` does
 not import the calibration file, motion recordings and payload exports (start-up of the CLI)."""
 
-
-def __getattr__(name: str):
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'ftkin.io' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
-
-
 __all__ = [
     "MotionRecording",
     "Payload",
@@ -55,3 +41,5 @@ __all__ = [
     "payload_in_flange",
     "save_calibration",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
