@@ -119,7 +119,11 @@ def run(args) -> int:
                 "--dynamic; "
                 "calibrate the mount and sign from static poses first"
             )
-        return _report(calibrate_motion(args, arm_from_args(args), noise), args)
+        from ..kinematics.arm import Arm
+
+        arm = arm_from_args(args) or Arm.default()
+        result = calibrate_motion(args, arm, noise)  # the file records its arm, as a static calibration does
+        return _report(replace(result, kinematics=KinematicsRecord.from_arm(arm)), args)
     if args.no_inertia or args.sg_window is not None:
         raise InvalidInput("--no-inertia and --sg-window apply to --dynamic only")
     if args.method == "linear" and (noise is not None or args.loss != "linear" or args.drop_outliers):

@@ -52,12 +52,14 @@ class DynamicCompensator:
         arm: Kinematics (Pinocchio) of the arm carrying the sensor.
         inertial_parameters: Override θ (10,) in the sensor frame (see
             :mod:`ftkin.calibration.log_cholesky`).
+        allow_other_arm: Accept an arm other than the one the calibration
+            records (as :class:`~ftkin.control.compensation.Compensator`).
     """
 
-    def __init__(self, calibration: SensorModel, arm: Arm, inertial_parameters=None):
+    def __init__(self, calibration: SensorModel, arm: Arm, inertial_parameters=None, *, allow_other_arm: bool = False):
         if not isinstance(arm, Arm):
             raise InvalidInput(f"arm must be an ftkin Arm, got {type(arm).__name__}")
-        self.static = Compensator(calibration, arm)
+        self.static = Compensator(calibration, arm, allow_other_arm=allow_other_arm)
         self.calibration = calibration
         self.arm = self.static.arm  # with the calibration's mount folded into the sensor frame, if any
         self.inertial_parameters = _dynamic_parameters(calibration, inertial_parameters)

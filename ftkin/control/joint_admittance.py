@@ -64,6 +64,8 @@ class JointAdmittance:
             :class:`~ftkin.control.dynamic_compensation.DynamicCompensator` also
             removes the tool's inertial wrench on ticks given joint velocities
             and accelerations (:meth:`step`); its static part serves the others.
+            Its bias tracker, if any, is read here once: attach a tracker when
+            creating the ``Compensator``, not afterwards.
         control_point: ``"tool"`` (the arm's tool frame, rigidly attached to the
             sensor) or ``"sensor"``. Default: tool if the arm has one.
         force_limit: Contact force norm [N] that stops the arm.

@@ -171,11 +171,9 @@ def save_calibration(result: CalibrationResult, path, *, rezero: dict | None = N
 
 
 def _diagnostics(reader: JsonReader) -> FitDiagnostics | None:
-    data = reader.get("diagnostics", required=False)
+    data = reader.optional_object("diagnostics")
     if data is None:
         return None
-    if not isinstance(data, dict):
-        reader.fail(f"expected an object, got {type(data).__name__}", "diagnostics")
     flags = [key for key, value in data.items() if has_bool(value)]
     if flags:
         reader.fail(f"{flags[0]!r} holds a boolean; true/false are not numbers", "diagnostics")
@@ -188,7 +186,7 @@ def _diagnostics(reader: JsonReader) -> FitDiagnostics | None:
 
 
 def _kinematics(reader: JsonReader) -> KinematicsRecord | None:
-    data = reader.get("kinematics", required=False)
+    data = reader.optional_object("kinematics")
     if data is None:
         return None
     try:

@@ -27,11 +27,9 @@ def drift_to_document(drift: BiasDrift | None) -> dict | None:
 
 def drift_from_document(reader: JsonReader) -> BiasDrift | None:
     """The :class:`BiasDrift` of a parsed calibration document (None when absent or null)."""
-    data = reader.get("drift", required=False)
+    data = reader.optional_object("drift")
     if data is None:
         return None
-    if not isinstance(data, dict):
-        reader.fail(f"expected an object or null, got {type(data).__name__}", "drift")
     sub = NestedReader(reader.path, data, "drift")
     model = sub.get("model")
     if not isinstance(model, str) or not (model in ("none", "random-walk") or model.startswith(("poly:", "random-walk+poly:"))):

@@ -35,6 +35,13 @@ class JsonReader:
             self.fail(f"expected {kind.__name__} or null, got {short_repr(value)}", key)
         return value
 
+    def optional_object(self, key: str) -> dict | None:
+        """An optional JSON object: None when absent or null; anything but an object fails, naming the key."""
+        value = self.get(key, required=False)
+        if value is not None and not isinstance(value, dict):
+            self.fail(f"expected an object or null, got {type(value).__name__}", key)
+        return value
+
     def count(self, key: str, default: int) -> int:
         """An optional non-negative integer count (``sample_count``, ``pose_count``)."""
         value = self.optional(key, int, default)

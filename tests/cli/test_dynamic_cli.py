@@ -90,3 +90,20 @@ def test_dynamic_calibration_of_a_still_recording_names_the_inertia(tmp_path, ar
               np.column_stack([times, q, recorder.wrenches(q) + BIAS]).tolist())
     assert main(["calibrate", "--dynamic", str(log)]) == 2
     assert "inertia" in capsys.readouterr().err
+
+
+def test_a_dynamic_calibration_records_its_arm_and_refuses_another(recorded, tmp_path):
+    """Like a static one, the dynamic calibration file says which arm it was made with; another arm is refused."""
+    from ftkin import InvalidInput, load_robot
+    from ftkin.control.dynamic_compensation import DynamicCompensator
+    from ftkin.kinematics.arm import bundled_urdf_path
+    from ftkin.kinematics.record import file_sha256
+
+    _, log = recorded
+    calibration = tmp_path / "calib.json"
+    assert main(["calibrate", "--dynamic", str(log), "-o", str(calibration)]) == 0
+    result = load_calibration(calibration)
+    assert result.kinematics is not None and result.kinematics.urdf_sha256 == file_sha256(bundled_urdf_path())
+    with pytest.raises(InvalidInput, match="not the one the calibration was made with"):
+        DynamicCompensator(result, load_robot("ur5"))
+    DynamicCompensator(result, load_robot("ur5"), allow_other_arm=True)
