@@ -34,7 +34,7 @@ import numpy as np
 
 from ..exceptions import UnobservableParameters
 from .drift import BiasDrift
-from .information import SensorNoise
+from .information import SensorNoise, noise_floor
 from .model import COMPONENT_NAMES, SensorModel, cross_rows, parameter_jacobian
 from .samples import PoseAverages
 
@@ -138,17 +138,18 @@ def _gaussian_log_likelihood(residuals: np.ndarray, variance: np.ndarray) -> flo
     return float(-0.5 * np.sum(residuals**2 / variance + np.log(2.0 * np.pi * variance)))
 
 
-def _profiled_std(residuals: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """ML per-reading noise ``(6,)`` (forces and torques pooled) from raw residuals of pose means."""
+def _profiled_std(residuals: np.ndarray, counts: np.ndarray, wrenches: np.ndarray) -> np.ndarray:
+    """ML per-reading noise ``(6,)`` (forces and torques pooled) from raw residuals of pose means, at least the floor."""
     scaled = residuals**2 * counts[:, None]
-    return np.concatenate([np.full(3, np.sqrt(np.mean(scaled[:, group]))) for group in _GROUPS])
+    std = np.concatenate([np.full(3, np.sqrt(np.mean(scaled[:, group]))) for group in _GROUPS])
+    return np.maximum(std, noise_floor(wrenches))
 
 
 def constant_log_likelihood(poses: PoseAverages, theta: np.ndarray, channel_std: np.ndarray, estimated: bool) -> float:
     """Log-likelihood of the constant-bias fit ``θ`` (at the ML noise when the noise is ``estimated``)."""
     residuals = poses.wrenches - predict_with_jacobian(theta, poses.rotations)[0]
     counts = np.asarray(poses.counts, dtype=float)
-    std = _profiled_std(residuals, counts) if estimated else channel_std
+    std = _profiled_std(residuals, counts, poses.wrenches) if estimated else channel_std
     return _gaussian_log_likelihood(residuals, std[None, :] ** 2 / counts[:, None])
 
 
@@ -228,12 +229,13 @@ def fit_polynomial(poses: PoseAverages, theta0: np.ndarray, channel_std: np.ndar
         leverage = np.diagonal(hat, axis1=1, axis2=2)
         scaled = residuals**2 * data.counts[:, None]
         new = np.concatenate([np.full(3, np.sqrt(np.sum(scaled[:, g]) / max(np.sum(1.0 - leverage[:, g]), 1e-12))) for g in _GROUPS])
+        new = np.maximum(new, noise_floor(data.wrenches))
         converged = np.allclose(new, std, rtol=1e-3)
         std = new
         if converged:
             break
     estimated = source == "residuals"
-    log_l_std = _profiled_std(residuals, data.counts) if estimated else std
+    log_l_std = _profiled_std(residuals, data.counts, data.wrenches) if estimated else std
     log_l = _gaussian_log_likelihood(residuals, log_l_std[None, :] ** 2 / data.counts[:, None])
     bias = phi[3:9] + powers @ phi[12:].reshape(degree, 6)
     drift = BiasDrift(f"poly:{degree}", selected_by, data.times, bias, trend_std(powers, covariance),

@@ -24,6 +24,7 @@ from .drift_fit import (
     predict_with_jacobian,
     trend_std,
 )
+from .information import noise_floor
 from .random_walk import log_likelihood, smooth, walk_gains, whiten
 from .samples import PoseAverages
 
@@ -77,6 +78,7 @@ def fit_random_walk(poses: PoseAverages, theta0: np.ndarray, channel_std: np.nda
     data = SortedPoses(poses)
     powers, trend, scale, names = polynomial_columns(data, degree)
     estimate_noise = source == "residuals"
+    floor = noise_floor(data.wrenches)
     per_pose = np.asarray(channel_std) / np.sqrt(np.median(data.counts))
     spacing = max(float(np.median(np.diff(data.times))) if len(data.times) > 1 else 1.0, 1e-9)
     reference = np.log(np.array([per_pose[:3].mean(), per_pose[3:].mean()]) / np.sqrt(spacing))
@@ -85,7 +87,7 @@ def fit_random_walk(poses: PoseAverages, theta0: np.ndarray, channel_std: np.nda
 
     def unpack(parameters):
         rate = np.repeat(np.exp(parameters[:2]), 3)
-        std = np.repeat(np.exp(parameters[2:4]), 3) if estimate_noise else np.asarray(channel_std, dtype=float)
+        std = np.maximum(np.repeat(np.exp(parameters[2:4]), 3), floor) if estimate_noise else np.asarray(channel_std, dtype=float)
         return rate, std
 
     def objective(parameters):

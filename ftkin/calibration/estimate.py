@@ -154,12 +154,12 @@ def calibrate(
         model = fit_linear(poses, g)
     else:
         fit = fit_ml(poses, g, noise, loss, estimate_mount)
-        diagnostics, covariance = diagnose(fit, poses.pose_ids, log=drift_kind == "none")
+        diagnostics, covariance = diagnose(fit, poses.pose_ids, log=drift_kind == "none", wrenches=poses.wrenches)
         if drop_outliers and diagnostics.outlier_pose_ids:
             dropped = diagnostics.outlier_pose_ids
             poses = _subset(poses, ~np.isin(poses.pose_ids, dropped))
             fit = fit_ml(poses, g, noise, loss, estimate_mount)
-            diagnostics, covariance = diagnose(fit, poses.pose_ids, dropped)
+            diagnostics, covariance = diagnose(fit, poses.pose_ids, dropped, wrenches=poses.wrenches)
         model, mount, mount_covariance = fit.model, fit.mount_rotation, fit.mount_covariance
         if mount_covariance is not None:
             mount_covariance = mount_covariance * diagnostics.covariance_scale  # the same goodness-of-fit scaling as θ
@@ -168,7 +168,8 @@ def calibrate(
     if samples.times is not None and method == "ml" and drift_kind != "none":
         drift_fit, criteria = fit_drift(poses, fit, drift_kind, degree)
         if drift_fit is not None:
-            diagnostics, covariance = diagnose(drift_fit, poses.pose_ids, parameter_count=drift_fit.parameter_count)
+            diagnostics, covariance = diagnose(drift_fit, poses.pose_ids, parameter_count=drift_fit.parameter_count,
+                                               wrenches=poses.wrenches)
             model, trajectory = SensorModel.from_vector(drift_fit.model.to_vector(), g), drift_fit.drift
         else:
             log_warnings(diagnostics)

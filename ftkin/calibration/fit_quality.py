@@ -31,6 +31,7 @@ from .diagnostics import (
     FitDiagnostics,
     main_components,
 )
+from .information import NOISE_FLOOR_RELATIVE, at_noise_floor
 from .model import PARAMETER_NAMES
 
 __all__ = ["FIT_ALPHA", "OUTLIER_ALPHA", "RELATIVE_STD_ERROR_WARNING", "FitDiagnostics", "diagnose", "log_warnings"]
@@ -94,7 +95,8 @@ def _pose_statistics(whitened, hat, fit_ok, source, noise_dof, parameter_count=1
     return normalized, p_values, leverage
 
 
-def diagnose(fit, pose_ids, dropped_pose_ids=(), parameter_count: int | None = None, log: bool = True) -> tuple[FitDiagnostics, np.ndarray]:
+def diagnose(fit, pose_ids, dropped_pose_ids=(), parameter_count: int | None = None, log: bool = True,
+             wrenches=None) -> tuple[FitDiagnostics, np.ndarray]:
     """Assess an :class:`~ftkin.calibration.ml.MlFit`; returns its diagnostics and the (scaled) covariance.
 
     ``parameter_count``: parameters fitted (default: the problem's, 12 for ``θ``
@@ -102,6 +104,10 @@ def diagnose(fit, pose_ids, dropped_pose_ids=(), parameter_count: int | None = N
     model, :class:`~ftkin.calibration.drift_fit.DriftFit`), for the degrees of freedom.
     ``log``: False keeps the warnings out of the log (for a fit that may be
     replaced; :func:`log_warnings` sends them later).
+    ``wrenches``: the pose-mean readings ``(P, 6)``; with them, a noise
+    estimated at its floor (:func:`~ftkin.calibration.information.noise_floor`:
+    readings that fit the model to rounding, e.g. noise-free simulated data)
+    is said in a warning, and no pose is called an outlier for a rounding error.
 
     Warnings are also sent to the ``ftkin.calibration.fit_quality`` logger.
     """
@@ -131,9 +137,17 @@ def diagnose(fit, pose_ids, dropped_pose_ids=(), parameter_count: int | None = N
     sigma, scales = np.sqrt(np.clip(np.diag(covariance), 0.0, None)), _block_scales(theta)
     relative = sigma / scales
     pose_ids = np.asarray(pose_ids)
-    outliers = tuple(int(i) for i in pose_ids[pose_p < OUTLIER_ALPHA / max(count, 1)])
+    exact = wrenches is not None and fit.noise_source == "residuals" and at_noise_floor(fit.noise.channel_std, wrenches)
+    outliers = () if exact else tuple(int(i) for i in pose_ids[pose_p < OUTLIER_ALPHA / max(count, 1)])
 
     messages = []
+    if exact:
+        messages.append(
+            f"the readings fit the model to rounding (noise estimated at its floor, {NOISE_FLOOR_RELATIVE:g} of the "
+            "largest reading): noise-free data, e.g. a simulation without sensor noise? The estimates are exact, but "
+            "the standard errors, the fit test and the outlier test mean nothing; add sensor noise to simulated "
+            "readings or give the noise level (noise=, --noise-force/--noise-torque)"
+        )
     if not fit_ok:
         messages.append(
             f"the readings do not fit the model within their noise (chi-square {chi_square:.1f} for {dof} "

@@ -21,6 +21,27 @@ from .mount import mount_jacobian
 NOISE_RANGE = (1e-15, 1e6)
 """Accepted noise standard deviations per reading [N, N·m]: beyond them 1/σ² leaves the float range's useful part."""
 
+NOISE_FLOOR_RELATIVE = 1e-7
+"""Smallest noise an estimate from the data may give, relative to the largest reading of its group (at least 1 N or 1 N·m).
+
+Readings that fit the model to rounding (noise-free simulated data, e.g. a
+MuJoCo recording without sensor noise) would otherwise give a noise of
+~1e-16, a likelihood without bound and rounding errors flagged as outliers.
+A real sensor's noise is orders of magnitude above it (the best resolve ~1e-5 of their range);
+the solver's own convergence leaves residuals of ~1e-9 on exact data."""
+
+
+def noise_floor(wrenches) -> np.ndarray:
+    """``(6,)`` floor [N, N·m] of an estimated per-reading noise for readings ``(P, 6)``, forces and torques pooled."""
+    magnitude = np.abs(np.asarray(wrenches, dtype=float))
+    groups = [max(1.0, float(np.max(magnitude[:, part], initial=0.0))) for part in (slice(0, 3), slice(3, 6))]
+    return NOISE_FLOOR_RELATIVE * np.repeat(groups, 3)
+
+
+def at_noise_floor(channel_std, wrenches) -> bool:
+    """True when an estimated noise ``(6,)`` sits at :func:`noise_floor` (the readings fit the model to rounding)."""
+    return bool(np.any(np.asarray(channel_std, dtype=float) <= noise_floor(wrenches) * (1.0 + 1e-6)))
+
 
 @dataclass(frozen=True)
 class SensorNoise:

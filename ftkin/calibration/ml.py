@@ -24,7 +24,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..exceptions import InvalidInput
-from .information import SensorNoise, covariance_from_information
+from .information import SensorNoise, covariance_from_information, noise_floor
 from .linear import fit_linear
 from .model import STANDARD_GRAVITY, SensorModel, cross_rows, parameter_jacobian
 from .mount import MountedProblem, check_mount_mode, check_mount_observable, mount_start, split_information
@@ -188,6 +188,7 @@ def noise_from_residuals(problem: WeightedProblem, theta: np.ndarray, robust: bo
     scaled = residuals * np.sqrt(problem.counts)[:, None]
     std = np.empty(6)
     dofs = []
+    floor = noise_floor(problem.wrenches)
     for group in RESIDUAL_NOISE_GROUPS:
         dof = float(np.sum(1.0 - leverage[:, group]))
         if robust:
@@ -195,8 +196,7 @@ def noise_from_residuals(problem: WeightedProblem, theta: np.ndarray, robust: bo
             value = 1.4826 * float(np.median(studentized))
         else:
             value = float(np.sqrt(np.sum(scaled[:, group] ** 2) / max(dof, 1e-12)))
-        floor = 1e-12 * max(1.0, float(np.abs(problem.wrenches[:, group]).max()))
-        std[group] = max(value, floor)
+        std[group] = max(value, float(floor[group][0]))
         dofs.append(dof)
     return std, min(dofs)
 

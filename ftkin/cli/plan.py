@@ -15,6 +15,7 @@ from ..io.samples_csv import POSE_COLUMN
 from ..io.yaml_text import yaml_text
 from ..kinematics.arm import Arm
 from ..planning.constraints import DEFAULT_MARGIN
+from ..planning.drift_order import DEFAULT_POSE_INTERVAL
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT
 from ..planning.plan import plan_poses
 from .common import add_arm_arguments, arm_from_args, bounded_int, non_negative_float, positive_float, seed
@@ -39,6 +40,12 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
                        help="independent readings averaged at each pose (default: %(default)s)")
     group.add_argument("--estimate-mount", choices=("yaw", "full"), default=None, metavar="yaw|full",
                        help="the calibration will also estimate the sensor's mount on the flange: plan and predict for it")
+    group.add_argument("--drift-rate", type=float, nargs=2, default=None, metavar=("N/√s", "NM/√s"),
+                       help="the bias drifts as a random walk of these rates (force, torque; e.g. a past calibration's "
+                       "drift rate): visit the poses in the order the drift spoils least (longer joint travel) "
+                       "and predict errors with the drift")
+    group.add_argument("--pose-interval", type=positive_float, default=DEFAULT_POSE_INTERVAL, metavar="S",
+                       help="time from one pose to the next [s], with --drift-rate (default: %(default)s)")
 
 
 def expectation_from_args(args) -> dict:
@@ -51,6 +58,8 @@ def expectation_from_args(args) -> dict:
         "noise": SensorNoise(args.noise_force, args.noise_torque),
         "readings_per_pose": args.readings_per_pose,
         "estimate_mount": args.estimate_mount or "none",
+        "drift_rate": args.drift_rate,
+        "pose_interval": args.pose_interval,
     }
 
 
@@ -198,6 +207,8 @@ def plan_document(plan) -> dict:
         "criterion": plan.criterion,
         "criterion_value": plan.criterion_value,
         "predicted_standard_errors": errors,
+        **({} if plan.evaluation.drift_rate is None else {
+            "drift_rate": plan.evaluation.drift_rate.tolist(), "pose_interval_s": plan.evaluation.pose_interval}),
     }
 
 

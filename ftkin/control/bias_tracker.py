@@ -24,7 +24,10 @@ detected update rarely falls on the first, small tick of a contact); after any f
 stay within ``k`` standard deviations (``σ² / n +`` bias variance) of the
 prediction. So the small first and last ticks of a contact (its ramps, below
 ``k σ``) are never absorbed into the bias, while every other free reading
-is. Any failed tick throws the unused ticks away. The delayed filter is
+is. A failed tick ends the run: the waiting ticks that had ``guard`` seconds of
+consistent ticks after them (in a run that lasted ``window + guard``) are still
+used (they are the most recent free readings, the most telling for the
+contact that follows), the others thrown away. The delayed filter is
 exact for a random walk: the bias now is predicted by the filtered bias at
 the last used tick, its variance grown by ``q²`` times the time since.
 """
@@ -70,6 +73,9 @@ class BiasTracker:
         update_count: Measurement updates made so far.
         last_update_span: Ticks from the last update's tick back to the oldest
             reading it used (to audit which readings moved the bias).
+        last_update_ticks: ``(first, last)`` tick numbers of the readings the
+            last update used (ticks counted from 1 since :meth:`reset`; the
+            current tick is :attr:`tick_count`).
     """
 
     def __init__(self, rate, noise, *, window: float = 0.5, guard: float = 0.25, k: float = 4.0, still_speed: float = 0.01,
@@ -85,6 +91,7 @@ class BiasTracker:
         self._initial_std = _positive_six(initial_std, "initial_std")
         self.update_count = 0
         self.last_update_span = 0
+        self.last_update_ticks = (0, 0)
         self.reset(np.zeros(6))
 
     @classmethod
@@ -132,6 +139,25 @@ class BiasTracker:
         self._waiting = deque()  # (time [s], tick, measured bias (6,)) of consistent ticks not yet used
         self._waiting_sum = np.zeros(6)
         self._settle = 0.0
+        self._run_start = None  # time of the first waiting tick of this run [s]
+
+    def _end_run(self, dt: float) -> bool:
+        """A failed tick at the clock: use the waiting ticks that had ``guard`` s of consistent ticks after them, drop the rest.
+
+        True when that moved the bias.
+        """
+        tolerance = 1e-9 * max(dt, 1.0)
+        last_consistent = self._clock - dt
+        used = False
+        if self._run_start is not None and last_consistent - self._run_start >= self.window + self.guard - tolerance:
+            used = self._use(last_consistent - self.guard + tolerance)
+        self.interrupt()
+        return used
+
+    @property
+    def tick_count(self) -> int:
+        """Ticks observed since :meth:`reset`."""
+        return self._tick
 
     @property
     def bias(self) -> np.ndarray:
@@ -176,23 +202,23 @@ class BiasTracker:
         contact = np.asarray(contact_wrench, dtype=float)
         limit = self.max_speed if free else self.still_speed
         if fault or free is False or speed > limit or not np.all(np.isfinite(contact)):
-            self.interrupt()
-            return False
+            return self._end_run(dt)
         variance = self._variance
         if free is None and np.any(np.abs(contact) > self.k * np.sqrt(self.noise**2 + variance)):
-            self.interrupt()
-            return False
+            return self._end_run(dt)
         if not free and self._settle < self.guard:
             self._settle += dt
             return False
         measured = contact + self._bias  # raw − tool gravity: this tick's measurement of the bias
+        if self._run_start is None:
+            self._run_start = self._clock
         self._waiting.append((self._clock, self._tick, measured))
         self._waiting_sum += measured
         if free:
             return self._use(self._clock)
         count = len(self._waiting)
         if np.any(np.abs(self._waiting_sum / count - self._bias) > self.k * np.sqrt(self.noise**2 / count + variance)):
-            self.interrupt()
+            self.interrupt()  # the waiting ticks together are inconsistent: none of them is used
             return False
         tolerance = 1e-9 * max(dt, 1.0)
         if self._clock - self._waiting[0][0] < self.window + self.guard - tolerance:
@@ -206,9 +232,9 @@ class BiasTracker:
             return False
         bias, variance, filter_time = self._bias, self._filter_variance, self._filter_time
         rate_squared, noise_squared = self.rate**2, self.noise**2
-        first_tick = waiting[0][1]
+        first_tick = last_tick = waiting[0][1]
         while waiting and waiting[0][0] <= until:
-            time, _, measured = waiting.popleft()
+            time, last_tick, measured = waiting.popleft()
             self._waiting_sum -= measured
             variance = variance + rate_squared * (time - filter_time)
             gain = variance / (variance + noise_squared)
@@ -218,4 +244,5 @@ class BiasTracker:
         self._bias, self._filter_variance, self._filter_time = bias, variance, filter_time
         self.update_count += 1
         self.last_update_span = self._tick - first_tick
+        self.last_update_ticks = (first_tick, last_tick)
         return True

@@ -22,9 +22,12 @@ import numpy as np
 from ..calibration.mount import mount_jacobian
 
 REGULARIZATION = 1e-9
-"""Ridge added to the (scale-normalized) information so that designs with
-fewer poses than needed for full rank can still be compared while the
-greedy start builds up."""
+"""Ridge added to the scale-normalized information (each parameter scaled so
+that a pool pose's mean information on it is 1) so that designs with fewer
+poses than needed for full rank can still be compared while the greedy start
+builds up. The normalization keeps the ridge relative: without it, a quiet
+sensor or many readings per pose (information ~1e8) next to an absolute
+ridge would make the first greedy steps numerically singular."""
 
 
 def information_factors(rotations: np.ndarray, gravity_in_base, center_of_mass, channel_std, readings_per_pose=1,
@@ -118,6 +121,8 @@ def d_optimal_selection(factors: np.ndarray, count: int, max_passes: int = 20) -
         ``log det`` of their (unregularized) information.
     """
     size = factors.shape[2]
+    scale = 1.0 / np.sqrt(np.maximum(np.mean(np.sum(factors**2, axis=1), axis=0), np.finfo(float).tiny))
+    factors = factors * scale  # log det changes by the constant 2 Σ log scale: same choices
     contributions = np.transpose(factors, (0, 2, 1)) @ factors
     entries = np.ascontiguousarray(np.transpose(factors, (1, 2, 0)))
     ridge = REGULARIZATION * np.eye(size)
@@ -147,4 +152,4 @@ def d_optimal_selection(factors: np.ndarray, count: int, max_passes: int = 20) -
                 swapped = True
         if not swapped:
             break
-    return np.array(chosen), log_det(information - ridge)
+    return np.array(chosen), log_det(information - ridge) - 2.0 * float(np.sum(np.log(scale)))

@@ -18,8 +18,10 @@ from ..calibration.information import SensorNoise, covariance_from_information, 
 from ..calibration.model import STANDARD_GRAVITY, SensorModel
 from ..calibration.mount import MOUNT_NAMES, check_mount_mode, split_information
 from ..calibration.observability import check_pose_count
+from ..calibration.random_walk import walk_gains
 from ..exceptions import InvalidInput
 from ..validation import as_in_range, as_positive, as_rotation_batch, as_vector
+from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_rate, check_pose_interval, walk_information
 
 PAPER_TOOL_WEIGHT = 3.15
 """The paper's tool weight [N] (gripper plus the sensor's sensitive end)."""
@@ -60,6 +62,10 @@ class PoseEvaluation:
         mount_mode: ``"none"``, or the mount estimated with the parameters
             (``information`` is then θ's marginal information, mount estimated).
         mount_covariance: ``(k, k)`` covariance of the mount angles [rad²], else None.
+        drift_rate: ``(2,)`` random-walk rate of the bias [N/√s, N·m/√s] the
+            prediction integrates out (poses visited in the given order, one
+            every ``pose_interval`` s), else None (a constant bias).
+        pose_interval: Time from one pose to the next [s] (with ``drift_rate``).
     """
 
     rotations: np.ndarray
@@ -71,6 +77,8 @@ class PoseEvaluation:
     standard_errors: dict
     mount_mode: str = "none"
     mount_covariance: np.ndarray | None = None
+    drift_rate: np.ndarray | None = None
+    pose_interval: float | None = None
 
     @property
     def mount_std_deg(self) -> dict[str, float]:
@@ -103,6 +111,9 @@ class PoseEvaluation:
             f"predicted standard errors for {self.pose_count} poses × {self.readings_per_pose} reading(s), "
             f"tool {self.model.tool_weight:.3g} N with COM {np.round(self.model.center_of_mass, 4).tolist()} m, "
             f"noise {self.noise.force_std[0]:g} N / {self.noise.torque_std[0]:g} N·m",
+            *([] if self.drift_rate is None else [
+                f"bias drifting as a random walk of {self.drift_rate[0]:g} N/√s, {self.drift_rate[1]:g} N·m/√s, "
+                f"poses visited in this order one every {self.pose_interval:g} s"]),
             f"{'parameter':<10}{'std error':>14}  {'unit':<5}{'bound σ/√N':>14}{'ratio':>8}",
         ]
         for block, (names, unit) in enumerate(_ROWS):
@@ -128,6 +139,8 @@ def evaluate_poses(
     noise: SensorNoise | None = None,
     readings_per_pose: int = 1,
     estimate_mount: str = "none",
+    drift_rate=None,
+    pose_interval: float = DEFAULT_POSE_INTERVAL,
 ) -> PoseEvaluation:
     """Predict the calibration's standard errors for sensor orientations ``(N, 3, 3)``.
 
@@ -140,6 +153,12 @@ def evaluate_poses(
         estimate_mount: ``"yaw"`` or ``"full"``: the calibration will also
             estimate the sensor's mount (:mod:`ftkin.calibration.mount`; the
             rotations are the URDF's, the mount assumed near identity).
+        drift_rate: ``[force N/√s, torque N·m/√s]``: the bias drifts as a
+            random walk of this rate, and the prediction is for a
+            ``random-walk`` calibration (the walk integrated out,
+            :mod:`ftkin.planning.drift_order`); the order of the rotations is
+            the visiting order. Not with ``estimate_mount``.
+        pose_interval: Time from one pose to the next [s] (with ``drift_rate``).
 
     Raises:
         UnobservableParameters: fewer than three poses, or orientations that
@@ -156,7 +175,17 @@ def evaluate_poses(
     if readings != int(readings):
         raise InvalidInput(f"readings_per_pose must be a whole number, got {readings_per_pose!r}")
     readings = int(readings)
-    information = fisher_information(model, rotations, noise, readings, check_mount_mode(estimate_mount))
+    check_mount_mode(estimate_mount)
+    if drift_rate is not None:
+        if estimate_mount != "none":
+            raise InvalidInput("a drifting bias and an estimated mount cannot be planned together "
+                               "(a drift-aware calibration keeps the mount fixed): drop drift_rate or estimate_mount")
+        drift_rate, pose_interval = check_drift_rate(drift_rate), check_pose_interval(pose_interval)
+        gains = walk_gains(np.arange(len(rotations)) * pose_interval,
+                           np.tile(noise.channel_std**2 / readings, (len(rotations), 1)), drift_rate)
+        information = walk_information(model.parameter_jacobian(rotations), gains)
+    else:
+        information = fisher_information(model, rotations, noise, readings, estimate_mount)
     mount_covariance = None
     if estimate_mount != "none":
         information, mount_covariance = split_information(information)
@@ -171,4 +200,6 @@ def evaluate_poses(
         standard_errors=standard_errors(model, covariance),
         mount_mode=estimate_mount,
         mount_covariance=mount_covariance,
+        drift_rate=None if drift_rate is None else drift_rate[[0, 3]],
+        pose_interval=None if drift_rate is None else pose_interval,
     )

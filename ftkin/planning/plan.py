@@ -9,7 +9,10 @@ Fisher information of ``θ = [a, F0, M0, P]`` (D-optimality, see
 2. greedy D-optimal selection from the pool, then Fedorov exchange;
 3. refine each pose by small random joint perturbations that stay feasible
    and raise the criterion (shrinking steps);
-4. order the poses for short joint travel (:mod:`ftkin.planning.order`).
+4. order the poses for short joint travel (:mod:`ftkin.planning.order`), or,
+   for a sensor whose bias drifts (``drift_rate``), in the order that keeps the
+   most information with the drift integrated out
+   (:mod:`ftkin.planning.drift_order`).
 
 Only the sensor orientation carries information. With noise ``σ`` per channel
 and ``N`` poses no design beats ``σ/√N`` for each bias channel; a good design
@@ -36,6 +39,7 @@ from .constraints import (
     check_tilt_observability,
 )
 from .design import d_optimal_selection, information_factors, log_det
+from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_rate, check_pose_interval, drift_robust_order
 from .evaluation import PoseEvaluation, evaluate_poses, expected_tool
 from .order import revolute_mask, short_travel_order, unwind_revolute
 
@@ -44,6 +48,8 @@ REFINE_STEPS = (0.2, 0.08, 0.03, 0.01)
 """Standard deviations [rad] of the joint perturbations in the refinement rounds."""
 REFINE_TRIES = 25
 """Perturbations drawn per pose and refinement round."""
+DRIFT_CRITERION = ("D-optimality: log det of the Fisher information of θ = [a, F0, M0, P] with the bias's random walk "
+                   "integrated out, poses visited in order (SI units)")
 SAMPLE_BATCH = 2000
 
 
@@ -117,6 +123,8 @@ def plan_poses(
     max_samples: int = 200_000,
     progress: bool | None = None,
     estimate_mount: str = "none",
+    drift_rate=None,
+    pose_interval: float = DEFAULT_POSE_INTERVAL,
 ) -> PosePlan:
     """Plan ``n`` calibration poses for ``arm``.
 
@@ -139,6 +147,14 @@ def plan_poses(
         estimate_mount: ``"yaw"`` or ``"full"``: plan for a calibration that
             also estimates the sensor's mount (D-optimality over ``[θ, mount
             angles]``, the mount assumed near identity).
+        drift_rate: ``[force N/√s, torque N·m/√s]``, the expected random-walk
+            rate of the bias (e.g. a past calibration's ``drift.rate``): the
+            poses are then visited in the order that keeps the most
+            information with the drift integrated out
+            (:func:`~ftkin.planning.drift_order.drift_robust_order`; longer
+            joint travel), and the predicted standard errors include the
+            drift. Not with ``estimate_mount``.
+        pose_interval: Time from one pose to the next [s] (with ``drift_rate``).
 
     Raises:
         UnobservableParameters: ``n < 3``, or the constraints leave a
@@ -155,6 +171,11 @@ def plan_poses(
     if noise is not None and not isinstance(noise, SensorNoise):
         raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
     check_mount_mode(estimate_mount)
+    if drift_rate is not None:
+        if estimate_mount != "none":
+            raise InvalidInput("a drifting bias and an estimated mount cannot be planned together "
+                               "(a drift-aware calibration keeps the mount fixed): drop drift_rate or estimate_mount")
+        drift_rate, pose_interval = check_drift_rate(drift_rate), check_pose_interval(pose_interval)
     constraints = PoseConstraints(margin, floor_height, max_tilt, joint_ranges or (), self_collision)
     model = expected_tool(tool_weight, center_of_mass)
     noise = noise if noise is not None else SensorNoise.paper()
@@ -176,15 +197,23 @@ def plan_poses(
     q, rotations = _refine(checker, q, rotations, factors, rng, progress)
     q = unwind_revolute(q, checker.lower, checker.upper, revolute_mask(arm.model))
     order = short_travel_order(q)
+    criterion = CRITERION
+    if drift_rate is not None:
+        order, _ = drift_robust_order(model, rotations, rate=drift_rate, noise_std=channel_std,
+                                      readings_per_pose=readings_per_pose, pose_interval=pose_interval, rng=rng,
+                                      initial_order=order)
+        criterion = DRIFT_CRITERION
     q, rotations = q[order], rotations[order]
     evaluation = evaluate_poses(rotations, tool_weight=tool_weight, center_of_mass=center_of_mass,
-                                noise=noise, readings_per_pose=readings_per_pose, estimate_mount=estimate_mount)
-    full_information = np.einsum("nki,nkj->ij", *(2 * (factors(rotations),)))
+                                noise=noise, readings_per_pose=readings_per_pose, estimate_mount=estimate_mount,
+                                drift_rate=None if drift_rate is None else drift_rate[[0, 3]], pose_interval=pose_interval)
+    full_information = (evaluation.information if drift_rate is not None
+                        else np.einsum("nki,nkj->ij", *(2 * (factors(rotations),))))
     return PosePlan(
         joint_positions=q,
         joint_names=tuple(arm.joint_names),
         evaluation=evaluation,
-        criterion=CRITERION,
+        criterion=criterion,
         criterion_value=log_det(full_information),
         seed=seed,
         constraints=constraints,
