@@ -36,6 +36,10 @@ def window_samples(sample_period: float, window_seconds: float = DEFAULT_WINDOW_
     return count if count % 2 == 1 else count + 1
 
 
+MAX_MOTION_PERIOD = 0.1
+"""Longest sample period [s] of a moving recording: below 10 Hz the accelerations of any useful motion are lost."""
+
+
 def uniform_period(times) -> float:
     """The sample period [s] of uniformly sampled stamps ``(N,)``.
 
@@ -73,6 +77,11 @@ def joint_derivatives(times, joint_positions, window: int | None = None, polyord
     from scipy.signal import savgol_filter
 
     period = uniform_period(times)
+    if period > MAX_MOTION_PERIOD:
+        raise InvalidInput(
+            f"the stamps are {period:g} s apart: a moving recording for accelerations needs at least "
+            f"{1.0 / MAX_MOTION_PERIOD:g} Hz; t must be in seconds (stamps in milliseconds? divide by 1000)"
+        )
     q, _ = as_batch(joint_positions, np.shape(joint_positions)[-1], "joint positions q")
     window = window_samples(period, polyorder=polyorder) if window is None else int(window)
     _check_window(window, polyorder, len(q))

@@ -11,6 +11,7 @@ paper's commanded Euler angles.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,6 +19,28 @@ import numpy as np
 from ..exceptions import InvalidSamples
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from ..validation import as_batch, as_float_array, as_rotation_batch
+
+logger = logging.getLogger(__name__)
+
+LONGEST_TIME_SPAN = 365.25 * 86400.0
+"""Longest span of reading times accepted [s] (a year): beyond, ``t`` is not in seconds."""
+LONG_TIME_SPAN = 7 * 86400.0
+"""Span of reading times [s] (a week) beyond which a warning asks whether ``t`` is in seconds."""
+
+
+def check_time_span(times: np.ndarray) -> None:
+    """Refuse reading times spanning more than a year, warn beyond a week: ``t`` is in seconds, not ms, µs or ns."""
+    span = float(np.max(times) - np.min(times)) if len(times) else 0.0
+    if span <= LONG_TIME_SPAN:
+        return
+    guesses = [(name, factor) for name, factor in (("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9))
+               if span / factor <= LONG_TIME_SPAN]
+    hint = (f"; they look like {guesses[0][0]} (divide by {guesses[0][1]:g}: {span / guesses[0][1]:.4g} s)"
+            if guesses else "")
+    message = f"the reading times span {span:.4g} s ({span / 86400.0:.4g} days): t must be in seconds{hint}"
+    if span > LONGEST_TIME_SPAN:
+        raise InvalidSamples(message)
+    logger.warning(message)
 
 MAX_POSE_SPREAD = np.deg2rad(2.0)
 """Largest accepted angle [rad] between a reading's orientation and its pose's mean."""
@@ -99,6 +122,7 @@ class Samples:
                 raise InvalidSamples(f"times must have shape ({len(wrenches)},) (one per reading) [s], got {times.shape}")
             if not np.all(np.isfinite(times)):
                 raise InvalidSamples(f"times must be finite [s]; reading {int(np.argmin(np.isfinite(times)))} is not")
+            check_time_span(times)
             times.setflags(write=False)
             object.__setattr__(self, "times", times)
         for array in (wrenches, rotations, pose_ids):
