@@ -12,7 +12,6 @@ import numpy as np
 
 from ..calibration.conventions import as_real_sensor
 from ..exceptions import InvalidInput
-from ..io.bags import TIME_COLUMN
 from ..io.calibration_file import load_calibration
 from ..kinematics.arm import Arm
 from ..kinematics.mounting import mounted_arm
@@ -82,9 +81,9 @@ def _calibration_poses(loaded) -> Frames:
 
 def _replay_rows(loaded, max_frames: int) -> Frames:
     samples, table = loaded.samples, loaded.table
-    times = table.floats([TIME_COLUMN])[:, 0] if TIME_COLUMN in table.header else None
+    times = samples.times
     if times is not None and np.any(np.diff(times) < 0):
-        raise InvalidInput(f"{table.source}: column {TIME_COLUMN!r} must not decrease (seconds since the start)")
+        raise InvalidInput(f"{table.source}: the time column must not decrease (seconds since the start)")
     rows = np.arange(len(samples))
     if len(rows) > max_frames:
         rows = np.unique(np.linspace(0, len(samples) - 1, max_frames).round().astype(int))

@@ -33,7 +33,7 @@ from ..calibration.samples import Samples
 from ..exceptions import InvalidSamples, MissingDependency
 from ..progress import Progress
 from .csv_table import Table, format_float
-from .samples_csv import POSE_COLUMN, LoadedSamples
+from .samples_csv import POSE_COLUMN, TIME_COLUMN, LoadedSamples
 from .static_segments import SegmentParameters, SegmentSearch, find_static_segments, segment_index
 from .wrench_frames import wrenches_in_sensor_frame
 
@@ -42,7 +42,6 @@ logger = logging.getLogger(__name__)
 JOINT_STATE_TYPE = "sensor_msgs/msg/JointState"
 WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
 BAG_SUFFIXES = (".mcap", ".db3")
-TIME_COLUMN = "t"
 
 
 def is_bag_path(path) -> bool:

@@ -27,9 +27,8 @@ from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.regressor import MotionSamples
 from ..exceptions import InvalidInput, InvalidSamples
 from .csv_table import Table, missing_columns, read_table
-from .samples_csv import check_radians, detect_orientation
+from .samples_csv import TIME_COLUMN, check_radians, detect_orientation, time_column, times_from_table
 
-TIME_COLUMN = "t"
 JITTER_TOLERANCE = 1e-3
 """Largest deviation of a bag's time step from the median step [fraction] accepted without resampling."""
 
@@ -67,9 +66,9 @@ class MotionRecording:
 
 def is_motion_table(table: Table, arm) -> bool:
     """True when the table has a ``t`` column and joint columns (a moving recording)."""
-    if TIME_COLUMN not in table.header:
-        return False
     try:
+        if time_column(table) is None:
+            return False
         kind, _ = detect_orientation(table, arm.joint_names)
     except InvalidSamples:
         return False
@@ -83,7 +82,8 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
         InvalidSamples: missing ``t``, joint or wrench columns, joint angles in
             degrees, or times not increasing (with file and line).
     """
-    missing_columns(table, (TIME_COLUMN,), "time")
+    if time_column(table) is None:
+        missing_columns(table, (TIME_COLUMN,), "time")
     missing_columns(table, WRENCH_CHANNELS, "wrench")
     kind, columns = detect_orientation(table, arm.joint_names)
     if kind != "joints":
@@ -93,7 +93,7 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
         )
     joints = table.floats(columns)
     check_radians(table, columns, joints)
-    times = table.floats([TIME_COLUMN])[:, 0]
+    times = times_from_table(table)
     steps = np.diff(times)
     if np.any(steps <= 0):
         row = int(np.flatnonzero(steps <= 0)[0]) + 1

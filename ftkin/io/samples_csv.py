@@ -11,7 +11,10 @@ in exactly one convention:
 
 An optional integer ``pose`` column groups repeated readings of one pose; an
 optional ``t`` column gives each reading's time [s] (a drifting bias is then
-modelled, see :mod:`ftkin.calibration.drift`).
+modelled, see :mod:`ftkin.calibration.drift`); without ``t``, one column named
+``time``, ``time_s``, ``t_s``, ``timestamp``, ``stamp`` or ``%time`` is read as
+it [s], and ``t_ms``/``time_ms``, ``t_us``/``time_us``, ``t_ns``/``time_ns``
+are converted from the unit their name gives.
 Other columns are carried along untouched (``ftkin compensate`` copies them).
 """
 
@@ -234,11 +237,32 @@ def pose_ids_from_table(table: Table) -> np.ndarray | None:
     return pose_ids.astype(np.int64)
 
 
-def times_from_table(table: Table) -> np.ndarray | None:
-    """The ``t`` column ``(N,)`` [s], or None when the table has none."""
-    if TIME_COLUMN not in table.header:
+TIME_ALIASES = {"time": 1.0, "time_s": 1.0, "t_s": 1.0, "timestamp": 1.0, "stamp": 1.0, "%time": 1.0,
+                "t_ms": 1e-3, "time_ms": 1e-3, "t_us": 1e-6, "time_us": 1e-6, "t_ns": 1e-9, "time_ns": 1e-9}
+"""Time columns read when ``t`` is absent, with the factor to seconds their name gives."""
+
+
+def time_column(table: Table) -> tuple[str, float] | None:
+    """The time column's name and its factor to seconds (``t``, or its one alias), or None."""
+    if TIME_COLUMN in table.header:
+        return TIME_COLUMN, 1.0
+    found = [name for name in table.header if name.lower() in TIME_ALIASES]
+    if not found:
         return None
-    return table.floats([TIME_COLUMN])[:, 0]
+    if len(found) > 1:
+        raise InvalidSamples(f"several time columns {found}: name the one to use 't' (seconds)", table.source)
+    return found[0], TIME_ALIASES[found[0].lower()]
+
+
+def times_from_table(table: Table) -> np.ndarray | None:
+    """The ``t`` column ``(N,)`` [s] (or its one alias, converted), or None when the table has none."""
+    column = time_column(table)
+    if column is None:
+        return None
+    name, factor = column
+    if name != TIME_COLUMN:
+        logger.info("reading column %r as the time t%s", name, "" if factor == 1.0 else f" (× {factor:g} to seconds)")
+    return table.floats([name])[:, 0] * factor
 
 
 MAX_WRENCH = 1e6
