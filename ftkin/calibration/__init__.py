@@ -11,18 +11,33 @@ Fisher information here also serves pose planning.
 Depends on the bottom layer and :mod:`ftkin.kinematics` (rotations).
 """
 
-from .conventions import ConventionCheck, detect_sign_and_handedness
-from .derivatives import CausalDifferentiator, joint_derivatives
-from .diagnostics import FitDiagnostics
-from .doctor import ConventionReport, diagnose_readings
-from .drift import DRIFT_CHOICES, BiasDrift
-from .dynamic import DynamicCalibrationResult, calibrate_dynamic
-from .estimate import METHODS, CalibrationResult, calibrate
-from .information import SensorNoise, fisher_information
-from .model import STANDARD_GRAVITY, SensorModel
-from .mount import MOUNT_MODES
-from .regressor import MotionSamples
-from .samples import Samples
+from .._lazy import lazy_exports
+
+_EXPORTS = {
+    "BiasDrift": ".drift",
+    "CalibrationResult": ".estimate",
+    "CausalDifferentiator": ".derivatives",
+    "ConventionCheck": ".conventions",
+    "ConventionReport": ".doctor",
+    "DRIFT_CHOICES": ".drift",
+    "DynamicCalibrationResult": ".dynamic",
+    "FitDiagnostics": ".diagnostics",
+    "METHODS": ".estimate",
+    "MOUNT_MODES": ".mount",
+    "MotionSamples": ".regressor",
+    "STANDARD_GRAVITY": ".model",
+    "Samples": ".samples",
+    "SensorModel": ".model",
+    "SensorNoise": ".information",
+    "calibrate": ".estimate",
+    "calibrate_dynamic": ".dynamic",
+    "detect_sign_and_handedness": ".conventions",
+    "diagnose_readings": ".doctor",
+    "fisher_information": ".information",
+    "joint_derivatives": ".derivatives",
+}
+"""Public name → module: each loads on first access (PEP 562), so importing one calibration module (the CLI's
+start) does not import them all."""
 
 __all__ = [
     "BiasDrift",
@@ -47,3 +62,5 @@ __all__ = [
     "fisher_information",
     "joint_derivatives",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

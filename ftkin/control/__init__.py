@@ -13,15 +13,24 @@ K1 on a stiff contact.
 Depends on :mod:`ftkin.calibration` (the sensor model) and :mod:`ftkin.kinematics`.
 """
 
-from .admittance import Admittance
-from .bias_tracker import BiasTracker
-from .compensation import Compensator
-from .control_frame import ControlFrame
-from .dynamic_compensation import DynamicCompensator
-from .joint_admittance import JointAdmittance, StepStatus
-from .oscillation import OscillationDetector, OscillationLimits
-from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
-from .stability import max_stable_k1
+from .._lazy import lazy_exports
+
+_EXPORTS = {
+    "Admittance": ".admittance",
+    "BiasTracker": ".bias_tracker",
+    "Compensator": ".compensation",
+    "ControlFrame": ".control_frame",
+    "DynamicCompensator": ".dynamic_compensation",
+    "FaultMonitor": ".sensor_faults",
+    "JointAdmittance": ".joint_admittance",
+    "OscillationDetector": ".oscillation",
+    "OscillationLimits": ".oscillation",
+    "SensorFault": ".sensor_faults",
+    "SensorLimits": ".sensor_faults",
+    "StepStatus": ".joint_admittance",
+    "max_stable_k1": ".stability",
+}
+"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does not import them all."""
 
 __all__ = [
     "Admittance",
@@ -38,3 +47,5 @@ __all__ = [
     "StepStatus",
     "max_stable_k1",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

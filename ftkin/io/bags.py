@@ -33,8 +33,9 @@ from ..calibration.samples import Samples
 from ..exceptions import InvalidSamples, MissingDependency
 from ..progress import Progress
 from .csv_table import Table, format_float
-from .samples_csv import POSE_COLUMN, TIME_COLUMN, LoadedSamples
+from .samples_csv import POSE_COLUMN, LoadedSamples
 from .static_segments import SegmentParameters, SegmentSearch, find_static_segments, segment_index
+from .time_columns import TIME_COLUMN
 from .wrench_frames import wrenches_in_sensor_frame
 
 logger = logging.getLogger(__name__)

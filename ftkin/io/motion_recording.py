@@ -27,7 +27,8 @@ from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.regressor import MotionSamples
 from ..exceptions import InvalidInput, InvalidSamples
 from .csv_table import Table, missing_columns, read_table
-from .samples_csv import TIME_COLUMN, check_radians, detect_orientation, time_column, times_from_table
+from .samples_csv import check_radians, detect_orientation
+from .time_columns import TIME_COLUMN, time_column, times_from_table
 
 JITTER_TOLERANCE = 1e-3
 """Largest deviation of a bag's time step from the median step [fraction] accepted without resampling."""

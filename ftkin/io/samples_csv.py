@@ -32,13 +32,13 @@ from ..calibration.samples import Samples
 from ..exceptions import InvalidSamples
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from .csv_table import Table, missing_columns, read_table, rename_columns
+from .time_columns import times_from_table
 
 logger = logging.getLogger(__name__)
 
 EULER_COLUMNS = ("alpha", "beta", "gamma")
 QUATERNION_COLUMNS = ("qw", "qx", "qy", "qz")
 POSE_COLUMN = "pose"
-TIME_COLUMN = "t"
 _GENERIC_JOINT = re.compile(r"^q(\d+)$")
 _DEGREES_THRESHOLD = 2.0 * np.pi + 0.01
 _ROS_WRENCH = re.compile(r"^(?:.*[./_])?(force|torque)[._]([xyz])$", re.IGNORECASE)
@@ -235,34 +235,6 @@ def pose_ids_from_table(table: Table) -> np.ndarray | None:
         row = int(fractional[0])
         raise InvalidSamples(f"pose id {float(pose_ids[row])!r} is not an integer", table.source, table.lines[row])
     return pose_ids.astype(np.int64)
-
-
-TIME_ALIASES = {"time": 1.0, "time_s": 1.0, "t_s": 1.0, "timestamp": 1.0, "stamp": 1.0, "%time": 1.0,
-                "t_ms": 1e-3, "time_ms": 1e-3, "t_us": 1e-6, "time_us": 1e-6, "t_ns": 1e-9, "time_ns": 1e-9}
-"""Time columns read when ``t`` is absent, with the factor to seconds their name gives."""
-
-
-def time_column(table: Table) -> tuple[str, float] | None:
-    """The time column's name and its factor to seconds (``t``, or its one alias), or None."""
-    if TIME_COLUMN in table.header:
-        return TIME_COLUMN, 1.0
-    found = [name for name in table.header if name.lower() in TIME_ALIASES]
-    if not found:
-        return None
-    if len(found) > 1:
-        raise InvalidSamples(f"several time columns {found}: name the one to use 't' (seconds)", table.source)
-    return found[0], TIME_ALIASES[found[0].lower()]
-
-
-def times_from_table(table: Table) -> np.ndarray | None:
-    """The ``t`` column ``(N,)`` [s] (or its one alias, converted), or None when the table has none."""
-    column = time_column(table)
-    if column is None:
-        return None
-    name, factor = column
-    if name != TIME_COLUMN:
-        logger.info("reading column %r as the time t%s", name, "" if factor == 1.0 else f" (× {factor:g} to seconds)")
-    return table.floats([name])[:, 0] * factor
 
 
 MAX_WRENCH = 1e6

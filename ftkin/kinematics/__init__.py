@@ -9,10 +9,19 @@ self-collision check used by pose planning.
 Depends only on the bottom layer (:mod:`ftkin.exceptions`, :mod:`ftkin.validation`).
 """
 
-from .arm import Arm, SensorMount, bundled_urdf_path
-from .mounting import mounted_arm
-from .robots import ROBOTS, load_robot
-from .rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
+from .._lazy import lazy_exports
+
+_EXPORTS = {
+    "Arm": ".arm",
+    "ROBOTS": ".robots",
+    "SensorMount": ".arm",
+    "bundled_urdf_path": ".arm",
+    "euler_zyx_deg_to_matrix": ".rotations",
+    "load_robot": ".robots",
+    "mounted_arm": ".mounting",
+    "quaternion_to_matrix": ".rotations",
+}
+"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does not import them all."""
 
 __all__ = [
     "Arm",
@@ -24,3 +33,5 @@ __all__ = [
     "mounted_arm",
     "quaternion_to_matrix",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

@@ -10,10 +10,19 @@ parameter for any pose set before a reading is taken.
 Depends on :mod:`ftkin.calibration` (information) and :mod:`ftkin.kinematics`.
 """
 
-from .constraints import PoseConstraints
-from .evaluation import PoseEvaluation, evaluate_poses
-from .excitation import ExcitationPlan, FourierTrajectory, plan_excitation
-from .plan import PosePlan, plan_poses
+from .._lazy import lazy_exports
+
+_EXPORTS = {
+    "ExcitationPlan": ".excitation",
+    "FourierTrajectory": ".excitation",
+    "PoseConstraints": ".constraints",
+    "PoseEvaluation": ".evaluation",
+    "PosePlan": ".plan",
+    "evaluate_poses": ".evaluation",
+    "plan_excitation": ".excitation",
+    "plan_poses": ".plan",
+}
+"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does not import them all."""
 
 __all__ = [
     "ExcitationPlan",
@@ -25,3 +34,5 @@ __all__ = [
     "plan_excitation",
     "plan_poses",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

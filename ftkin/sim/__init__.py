@@ -13,11 +13,23 @@ engine: :func:`build_arm_model`, :func:`run_closed_loop`,
 Depends on :mod:`ftkin.control`, :mod:`ftkin.io`, :mod:`ftkin.calibration` and below.
 """
 
-from .drift import SensorDrift
-from .mujoco import MujocoRecorder, ToolInertia, build_arm_model, run_closed_loop, simulate_placement_mujoco
-from .placement import PlacementRun, PlacementScenario, simulate_placement
-from .sensor import SimulatedSensor, recording_times
-from .surfaces import Surface
+from .._lazy import lazy_exports
+
+_EXPORTS = {
+    "MujocoRecorder": ".mujoco",
+    "PlacementRun": ".placement",
+    "PlacementScenario": ".placement",
+    "SensorDrift": ".drift",
+    "SimulatedSensor": ".sensor",
+    "Surface": ".surfaces",
+    "ToolInertia": ".mujoco",
+    "build_arm_model": ".mujoco",
+    "recording_times": ".sensor",
+    "run_closed_loop": ".mujoco",
+    "simulate_placement": ".placement",
+    "simulate_placement_mujoco": ".mujoco",
+}
+"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does not import them all."""
 
 __all__ = [
     "MujocoRecorder",
@@ -33,3 +45,5 @@ __all__ = [
     "simulate_placement",
     "simulate_placement_mujoco",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

@@ -13,12 +13,27 @@ Takes a calibration and samples (or a log); gives pictures. Depends on
 :mod:`ftkin.control`, :mod:`ftkin.io` and below.
 """
 
-from .arrows import ArrowPlacement, ArrowStyle, NodePose, arrow_placement, exaggerate_tilt, rotation_y_to
-from .framing import PoseView, frame_pose
-from .legend import ARROWS, LAYERS, Layer
-from .live import LiveView, PublishingController
-from .vectors import PoseVectors, pose_vectors
-from .viewer import CalibrationViewer
+from .._lazy import lazy_exports
+
+_EXPORTS = {
+    "ARROWS": ".legend",
+    "ArrowPlacement": ".arrows",
+    "ArrowStyle": ".arrows",
+    "CalibrationViewer": ".viewer",
+    "LAYERS": ".legend",
+    "Layer": ".legend",
+    "LiveView": ".live",
+    "NodePose": ".arrows",
+    "PoseVectors": ".vectors",
+    "PoseView": ".framing",
+    "PublishingController": ".live",
+    "arrow_placement": ".arrows",
+    "exaggerate_tilt": ".arrows",
+    "frame_pose": ".framing",
+    "pose_vectors": ".vectors",
+    "rotation_y_to": ".arrows",
+}
+"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does not import them all."""
 
 __all__ = [
     "ARROWS",
@@ -38,3 +53,5 @@ __all__ = [
     "pose_vectors",
     "rotation_y_to",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

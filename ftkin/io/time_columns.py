@@ -1,0 +1,49 @@
+"""Time columns of the CSVs: ``t`` [s], or one alias, converted by the unit its name gives.
+
+Without ``t``, one column named ``time``, ``time_s``, ``t_s``, ``timestamp``,
+``stamp`` or ``%time`` is read as seconds, and ``t_ms``/``time_ms``,
+``t_us``/``time_us``, ``t_ns``/``time_ns`` are converted (a unit is applied
+only where the column's name says it). Two candidates are an error. Used by
+the samples CSV, the motion recordings, bag extraction and the viewer.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from ..exceptions import InvalidSamples
+from .csv_table import Table
+
+logger = logging.getLogger(__name__)
+
+TIME_COLUMN = "t"
+"""ftkin's time column [s] (written by ``ftkin extract``)."""
+
+TIME_ALIASES = {"time": 1.0, "time_s": 1.0, "t_s": 1.0, "timestamp": 1.0, "stamp": 1.0, "%time": 1.0,
+                "t_ms": 1e-3, "time_ms": 1e-3, "t_us": 1e-6, "time_us": 1e-6, "t_ns": 1e-9, "time_ns": 1e-9}
+"""Time columns read when ``t`` is absent, with the factor to seconds their name gives."""
+
+
+def time_column(table: Table) -> tuple[str, float] | None:
+    """The time column's name and its factor to seconds (``t``, or its one alias), or None."""
+    if TIME_COLUMN in table.header:
+        return TIME_COLUMN, 1.0
+    found = [name for name in table.header if name.lower() in TIME_ALIASES]
+    if not found:
+        return None
+    if len(found) > 1:
+        raise InvalidSamples(f"several time columns {found}: name the one to use 't' (seconds)", table.source)
+    return found[0], TIME_ALIASES[found[0].lower()]
+
+
+def times_from_table(table: Table) -> np.ndarray | None:
+    """The ``t`` column ``(N,)`` [s] (or its one alias, converted), or None when the table has none."""
+    column = time_column(table)
+    if column is None:
+        return None
+    name, factor = column
+    if name != TIME_COLUMN:
+        logger.info("reading column %r as the time t%s", name, "" if factor == 1.0 else f" (× {factor:g} to seconds)")
+    return table.floats([name])[:, 0] * factor
