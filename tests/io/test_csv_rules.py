@@ -54,6 +54,9 @@ def test_decimal_commas_are_named(data, tmp_path):
     path = _write(tmp_path / "comma_comma.csv", "fx,fy\n1,5,2,25\n")
     with pytest.raises(ftkin.InvalidSamples, match="4 cells but the header has 2 columns; the numbers look like they have decimal commas"):
         read_table(path)
+    path = _write(tmp_path / "extra_cells.csv", "fx,fy\n1.5,2.25,3,4\n")  # numbers with decimal points: just extra cells
+    with pytest.raises(ftkin.InvalidSamples, match=r"4 cells but the header has 2 columns$"):
+        read_table(path)
 
 
 @pytest.mark.parametrize(
