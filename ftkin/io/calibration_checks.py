@@ -3,8 +3,10 @@
 JSON parsing refuses duplicate keys (which value is meant would be
 ambiguous) and absurd nesting; the parameters must agree with the derived
 fields written beside them (``tool_weight``, ``tool_mass``, ``base_tilt_deg``);
-a covariance must be symmetric positive semi-definite. Booleans are not
-numbers. Each failure is a :class:`~ftkin.exceptions.CalibrationFileError`
+a covariance must be symmetric positive semi-definite; the units a file
+states must be ftkin's; the parameters must be physically plausible (centre of
+mass within 10 m of the sensor, |bias| and weight at most 1e6 N or N·m,
+g between 1 and 30 m/s²). Booleans are not numbers. Each failure is a :class:`~ftkin.exceptions.CalibrationFileError`
 naming the key.
 """
 
@@ -60,6 +62,14 @@ def parse_calibration_json(text: str, path: str) -> dict:
         raise CalibrationFileError(path, f"not a valid calibration document: {error}") from None
 
 
+def check_document(reader, document: dict, result, units: dict) -> None:
+    """Every check of a parsed calibration: derived fields, units, plausibility, covariance."""
+    check_derived(reader, document, result)
+    check_units(reader, document, units)
+    check_plausible(reader, result)
+    check_covariance(reader, result.covariance)
+
+
 def check_derived(reader, document: dict, result) -> None:
     """Refuse a derived field (``tool_weight``, ``tool_mass``, ``base_tilt_deg``) that disagrees with the parameters."""
     derived = (
@@ -95,3 +105,39 @@ def check_covariance(reader, covariance) -> None:
         reader.fail(
             f"not positive semi-definite (eigenvalue {smallest:.3g}); expected a covariance matrix", "covariance"
         )
+
+
+MAX_COM_DISTANCE = 10.0
+"""Farthest plausible centre of mass from the sensor [m] (the planner's bound too)."""
+MAX_LOAD = 1e6
+"""Largest plausible bias or tool weight [N, N·m] (the readers' bound on a reading)."""
+G_RANGE = (1.0, 30.0)
+"""Plausible acceleration of gravity [m/s²] (the CLI's ``--g`` range)."""
+
+
+def check_units(reader, document: dict, units: dict) -> None:
+    """Refuse a file whose ``units`` name another unit than ftkin's for a key (e.g. ``"force_offset": "kN"``)."""
+    stated = reader.optional_object("units")
+    if stated is None:
+        return
+    for key, expected in units.items():
+        if key in stated and key in document:
+            value = stated[key]
+            unit, ours = (str(value).split(",")[0].strip(), expected.split(",")[0].strip())
+            if not isinstance(value, str) or unit.replace("·", "*") != ours:
+                reader.fail(f"{key} is stated in {short_repr(value)}, but ftkin files are in {ours!r} "
+                            "(convert the values, or the file is not ftkin's)", "units")
+
+
+def check_plausible(reader, result) -> None:
+    """Refuse parameters no tool on a wrist sensor has: a wrong unit or a corrupt file that still parses."""
+    distance = float(np.linalg.norm(result.center_of_mass))
+    if distance > MAX_COM_DISTANCE:
+        reader.fail(f"the centre of mass is {distance:.4g} m from the sensor; expected at most {MAX_COM_DISTANCE:g} m "
+                    "(millimetres written as metres?)", "center_of_mass")
+    for key, value in (("force_offset", result.force_offset), ("torque_offset", result.torque_offset),
+                       ("gravity_in_base", result.gravity_in_base)):
+        if float(np.max(np.abs(value))) > MAX_LOAD:
+            reader.fail(f"{np.asarray(value).tolist()} is beyond ±{MAX_LOAD:g} (N or N·m): not a load", key)
+    if not G_RANGE[0] <= result.g <= G_RANGE[1]:
+        reader.fail(f"g = {result.g:g} m/s² is outside {G_RANGE[0]:g}..{G_RANGE[1]:g} (Earth: 9.80665)", "g")

@@ -52,7 +52,7 @@ from ..calibration.estimate import CalibrationResult
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from ..kinematics.record import KinematicsRecord
 from .atomic import atomic_write_text
-from .calibration_checks import check_covariance, check_derived, has_bool, parse_calibration_json, short_repr
+from .calibration_checks import check_document, has_bool, parse_calibration_json, short_repr
 from .calibration_inertia import inertia_document, with_inertia
 from .drift_file import drift_from_document, drift_to_document
 from .json_reader import JsonReader
@@ -266,8 +266,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
         raise CalibrationFileError(path, str(error)) from None
     if not (np.isfinite(result.tool_weight) and result.tool_weight > 0.0):
         reader.fail(f"|gravity_in_base| must be finite and positive, got {result.tool_weight}", "gravity_in_base")
-    check_derived(reader, document, result)
-    check_covariance(reader, result.covariance)
+    check_document(reader, document, result, UNITS)
     if inertia is not None:
         result = with_inertia(reader, result, inertia)
     return result
