@@ -26,7 +26,7 @@ def check_finite(array: np.ndarray, name: str) -> None:
         bad = np.argwhere(~np.isfinite(array))[0]
         index = tuple(int(i) for i in bad)
         raise InvalidInput(
-            f"{name} must be finite, found {array[index]!r} at index {index if len(index) > 1 else index[0]}"
+            f"{name} must be finite, found {float(array[index])} at index {index if len(index) > 1 else index[0]}"
         )
 
 

@@ -41,11 +41,25 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
+def _check_pose(arm, q) -> None:
+    """Refuse angles beyond 2π (degrees) and a pose outside the arm's joint limits: the bias would be set at a pose
+    the arm was not in."""
+    if not np.all(np.isfinite(q)):
+        raise InvalidInput(f"--q must be finite numbers [rad], got {q.tolist()}")
+    lower, upper = np.asarray(arm.lower_limits, float), np.asarray(arm.upper_limits, float)
+    for name, value, low, high in zip(arm.joint_names, q, lower, upper):
+        if abs(value) > 2.0 * np.pi + 0.01:
+            raise InvalidInput(f"--q: {name} = {value:g} is beyond ±2π: joint angles are in radians (this looks like degrees)")
+        if not low - 1e-6 <= value <= high + 1e-6:
+            raise InvalidInput(f"--q: {name} = {value:g} rad is outside its limits [{low:g}, {high:g}] rad")
+
+
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
     arm = arm_for_calibration(args, calibration) or Arm.default()
     if len(args.q) != arm.nq:
         raise InvalidInput(f"--q takes the arm's {arm.nq} joint angles [rad] ({', '.join(arm.joint_names)}), got {len(args.q)}")
+    _check_pose(arm, np.array(args.q))
     compensator = Compensator(calibration, arm)
     previous = calibration.bias
     bias = compensator.rezero(np.array(args.q), np.array(args.wrench))

@@ -105,6 +105,9 @@ def read_table(path) -> Table:
         raise InvalidSamples(f"not UTF-8 text (a binary file?): {error.reason} at byte {error.start}", source) from None
     except OSError as error:
         raise InvalidSamples(f"cannot read: {error.strerror or error}", source) from None
+    if text.lstrip()[:1] in ("{", "["):
+        raise InvalidSamples("this is a JSON file (an ftkin calibration?), not a CSV table; expected a header row "
+                             "and data rows", source)
     delimiter = sniff_delimiter(text)
     if delimiter != ",":
         logger.warning("%s: read as a %s-separated file (ftkin writes commas)", source, DELIMITER_NAMES[delimiter])

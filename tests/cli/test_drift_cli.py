@@ -61,3 +61,13 @@ def test_rezero_updates_the_file_in_place_or_writes_elsewhere(samples_csv, tmp_p
     np.testing.assert_allclose(load_calibration(calibration_path).bias, other.bias)
     assert main(["rezero", str(calibration_path), "--q", "0", "1", "--wrench", *["0"] * 6]) == 2
     assert "6 joint angles" in capsys.readouterr().err
+    # a pose the arm cannot be in: degrees, or past a joint limit (joint2's upper limit is 1.134 rad)
+    unchanged = calibration_path.read_text()
+    assert main(["rezero", str(calibration_path), "--q", "0", "0", "0", "0", "0", "90", "--wrench", *["0"] * 6]) == 2
+    assert "joint6 = 90 is beyond ±2π" in capsys.readouterr().err
+    assert main(["rezero", str(calibration_path), "--q", "0", "1.5", "0", "0", "0", "0", "--wrench", *["0"] * 6]) == 2
+    assert "joint2 = 1.5 rad is outside its limits" in capsys.readouterr().err
+    assert calibration_path.read_text() == unchanged
+    # a JSON file where a CSV is expected
+    assert main(["compensate", str(calibration_path), str(calibration_path), "-o", str(tmp_path / "x.csv")]) == 2
+    assert "is a JSON file" in capsys.readouterr().err
