@@ -64,6 +64,16 @@ def check_pose_interval(value) -> float:
     return as_in_range(value, "pose_interval", 1e-3, 86400.0, "s")
 
 
+def check_drift_options(drift_rate, pose_interval, estimate_mount: str) -> tuple[np.ndarray | None, float]:
+    """``(rate (6,) or None, pose_interval [s])`` checked; a drift with a mount estimate is refused."""
+    if drift_rate is None:
+        return None, pose_interval
+    if estimate_mount != "none":
+        raise InvalidInput("a drifting bias and an estimated mount cannot be planned together "
+                           "(a drift-aware calibration keeps the mount fixed): drop drift_rate or estimate_mount")
+    return check_drift_rate(drift_rate), check_pose_interval(pose_interval)
+
+
 def walk_information(jacobians: np.ndarray, gains) -> np.ndarray:
     """Fisher information ``(..., 12, 12)`` of ``θ`` from per-pose ``jacobians`` ``(..., P, 6, 12)`` in visiting order.
 

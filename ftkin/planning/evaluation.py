@@ -21,7 +21,7 @@ from ..calibration.observability import check_pose_count
 from ..calibration.random_walk import walk_gains
 from ..exceptions import InvalidInput
 from ..validation import as_in_range, as_positive, as_rotation_batch, as_vector
-from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_rate, check_pose_interval, walk_information
+from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_options, walk_information
 
 PAPER_TOOL_WEIGHT = 3.15
 """The paper's tool weight [N] (gripper plus the sensor's sensitive end)."""
@@ -176,11 +176,8 @@ def evaluate_poses(
         raise InvalidInput(f"readings_per_pose must be a whole number, got {readings_per_pose!r}")
     readings = int(readings)
     check_mount_mode(estimate_mount)
+    drift_rate, pose_interval = check_drift_options(drift_rate, pose_interval, estimate_mount)
     if drift_rate is not None:
-        if estimate_mount != "none":
-            raise InvalidInput("a drifting bias and an estimated mount cannot be planned together "
-                               "(a drift-aware calibration keeps the mount fixed): drop drift_rate or estimate_mount")
-        drift_rate, pose_interval = check_drift_rate(drift_rate), check_pose_interval(pose_interval)
         gains = walk_gains(np.arange(len(rotations)) * pose_interval,
                            np.tile(noise.channel_std**2 / readings, (len(rotations), 1)), drift_rate)
         information = walk_information(model.parameter_jacobian(rotations), gains)

@@ -39,7 +39,7 @@ from .constraints import (
     check_tilt_observability,
 )
 from .design import d_optimal_selection, information_factors, log_det
-from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_rate, check_pose_interval, drift_robust_order
+from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_options, drift_robust_order
 from .evaluation import PoseEvaluation, evaluate_poses, expected_tool
 from .order import revolute_mask, short_travel_order, unwind_revolute
 
@@ -171,11 +171,7 @@ def plan_poses(
     if noise is not None and not isinstance(noise, SensorNoise):
         raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
     check_mount_mode(estimate_mount)
-    if drift_rate is not None:
-        if estimate_mount != "none":
-            raise InvalidInput("a drifting bias and an estimated mount cannot be planned together "
-                               "(a drift-aware calibration keeps the mount fixed): drop drift_rate or estimate_mount")
-        drift_rate, pose_interval = check_drift_rate(drift_rate), check_pose_interval(pose_interval)
+    drift_rate, pose_interval = check_drift_options(drift_rate, pose_interval, estimate_mount)
     constraints = PoseConstraints(margin, floor_height, max_tilt, joint_ranges or (), self_collision)
     model = expected_tool(tool_weight, center_of_mass)
     noise = noise if noise is not None else SensorNoise.paper()
