@@ -19,7 +19,8 @@ channel with a 5-minute time constant plus a random walk of 0.002 N/√s
    ratio; which model auto took; auto's mean reported standard error over its
    RMS error (honest standard errors are ≈ 1). RMS errors over 40 trials are
    themselves uncertain by about ±7 % (100 trials).
-2. **5-fold cross-validation** (for each order). Poses split in 5 folds; each fold's pose means
+2. **5-fold cross-validation** (for each order; :func:`ftkin.cross_validate`, ``ftkin calibrate
+   --cross-validate 5``). Poses split in 5 folds; each fold's pose means
    compensated with a calibration on the other four (auto: its bias at the
    pose's time); RMS of the compensated force [N] (truth: no contact).
 3. **Control sessions** (5 by default, each with its own drift, script and
@@ -53,7 +54,18 @@ import time
 
 import numpy as np
 
-from ftkin import Arm, BiasTracker, Compensator, SensorDrift, SensorModel, SensorNoise, SimulatedSensor, calibrate, fisher_information
+from ftkin import (
+    Arm,
+    BiasTracker,
+    Compensator,
+    SensorDrift,
+    SensorModel,
+    SensorNoise,
+    SimulatedSensor,
+    calibrate,
+    cross_validate,
+    fisher_information,
+)
 from ftkin.calibration.information import covariance_from_information, extended_standard_errors
 from ftkin.calibration.random_walk import walk_gains, whiten
 from ftkin.planning.drift_order import drift_robust_order
@@ -96,25 +108,9 @@ def calibration_trials(arm, rotations, configurations, trials, rng):
                 reported.append(quantity_errors(result, result.covariance))
                 models.append(result.drift.model)
         if trial < max(3, trials // 5):
-            for drift, rms in cross_validate(samples, rng).items():
+            for drift, rms in cross_validate(samples, seed=int(rng.integers(2**31))).force_rms.items():
                 cv[drift].append(rms)
     return errors, np.array(reported), models, {k: float(np.sqrt(np.mean(np.square(v)))) for k, v in cv.items()}
-
-
-def cross_validate(samples, rng, folds=5) -> dict:
-    """RMS compensated force [N] of held-out pose means, per drift setting."""
-    poses = samples.pose_averages()
-    fold = rng.permutation(len(poses)) % folds
-    squares = {"none": [], "auto": []}
-    for k in range(folds):
-        train = np.isin(samples.pose_ids, poses.pose_ids[fold != k])
-        subset = type(samples)(samples.wrenches[train], samples.rotations[train], samples.pose_ids[train], times=samples.times[train])
-        test = fold == k
-        for drift in squares:
-            result = calibrate(subset, drift=drift)
-            predicted = result.tool_gravity_wrench(poses.rotations[test]) + result.bias_at(poses.times[test])
-            squares[drift].extend(np.sum((poses.wrenches[test] - predicted)[:, :3] ** 2, axis=1))
-    return {drift: float(np.sqrt(np.mean(values))) for drift, values in squares.items()}
 
 
 def session_script(arm, rng):

@@ -15,7 +15,7 @@ from ..calibration.mount import MOUNT_MODES
 from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
 from ..kinematics.record import KinematicsRecord
-from .common import add_samples_arguments, arm_from_args, gravity, load_samples_from_args, positive_float
+from .common import add_samples_arguments, arm_from_args, bounded_int, gravity, load_samples_from_args, positive_float
 from .doctor import check_conventions
 from .motion import add_derivative_arguments, calibrate_motion
 
@@ -54,6 +54,11 @@ def register(subparsers) -> None:
         "--drift", default="auto", metavar="MODEL",
         help=f"bias drift over time, with a 't' column: {'|'.join(DRIFT_CHOICES)} (poly:N a polynomial of degree N; "
         "random-walk estimates the rate; auto picks by BIC and says which; default: %(default)s)",
+    )
+    ml.add_argument(
+        "--cross-validate", type=bounded_int(2, 50, "folds"), metavar="K", default=None,
+        help="also print the K-fold cross-validated compensation error at held-out poses, with drift none beside "
+        "the --drift model (does modelling a drift pay on this sensor?)",
     )
     ml.add_argument(
         "--estimate-mount", choices=MOUNT_MODES[1:], metavar="yaw|full",
@@ -113,9 +118,10 @@ def run(args) -> int:
     if args.dynamic:
         if args.method != METHODS[0] or args.loss != "linear" or args.drop_outliers:
             raise InvalidInput("--method, --loss and --drop-outliers apply to static calibration, not to --dynamic")
-        if args.estimate_mount or args.sensor_sign != 1 or args.flip_axis or args.drift != "auto":
+        if args.estimate_mount or args.sensor_sign != 1 or args.flip_axis or args.drift != "auto" or args.cross_validate:
             raise InvalidInput(
-                "--estimate-mount, --sensor-sign, --flip-axis and --drift apply to static calibration, not yet to "
+                "--estimate-mount, --sensor-sign, --flip-axis, --drift and --cross-validate apply to static calibration, "
+                "not yet to "
                 "--dynamic; "
                 "calibrate the mount and sign from static poses first"
             )
@@ -137,16 +143,24 @@ def run(args) -> int:
         # The doctor refits the readings as given, on a floor-mounted base with the URDF's sensor frame; with a
         # stated sign, axis, base mount or an estimated mount calibrate() checks the conventions itself.
         check_conventions(loaded, arm)
-    result = calibrate(
-        loaded.samples, method=args.method, g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers,
-        estimate_mount=args.estimate_mount or "none", sensor_sign=args.sensor_sign, flip_axis=args.flip_axis,
-        base_mount=args.base_mount, expected_gravity=args.expected_gravity,
-        drift=args.drift,
-    )
+    options = dict(method=args.method, g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers,
+                   estimate_mount=args.estimate_mount or "none", sensor_sign=args.sensor_sign, flip_axis=args.flip_axis,
+                   base_mount=args.base_mount, expected_gravity=args.expected_gravity)
+    result = calibrate(loaded.samples, drift=args.drift, **options)
     samples_arm = getattr(loaded.samples, "urdf", None) and (arm or _bundled_if_used(loaded))
     if samples_arm is not None:
         result = replace(result, kinematics=KinematicsRecord.from_arm(samples_arm))
-    return _report(result, args)
+    validation = None
+    if args.cross_validate:  # before anything is written: a failure leaves no file behind
+        from ..calibration.cross_validation import cross_validate
+
+        timed = loaded.samples.times is not None and args.drift != "none"
+        drifts = ("none", args.drift) if timed else ("none",)
+        validation = cross_validate(loaded.samples, drifts, folds=args.cross_validate, **options)
+    status = _report(result, args)
+    if validation is not None:
+        print(validation.report())
+    return status
 
 
 def _report(result, args) -> int:
