@@ -148,11 +148,12 @@ class FaultMonitor:
         self._reference_dt = self.limits.nominal_dt
         self.fault, self.good_ticks = SensorFault.NONE, 0
 
-    def check(self, q: np.ndarray, raw: list, dt: float) -> tuple[SensorFault, str]:
+    def check(self, q: np.ndarray | list, raw: list, dt: float) -> tuple[SensorFault, str]:
         """The fault holding this tick and a description (``(NONE, "")`` when the arm may move).
 
         Args:
-            q: Joint positions ``(nq,)`` float array [rad] (shape already checked).
+            q: Joint positions ``(nq,)`` float array [rad] (shape already checked), or its
+                ``tolist()`` (the control-loop path).
             raw: The six raw channels [N, N·m], best as a list of Python floats
                 (the control-loop path); an array is converted.
             dt: Time step [s].
@@ -175,12 +176,13 @@ class FaultMonitor:
         self.counts[self.fault] += 1
         return self.fault, f"recovering from {self.fault.value}: {self.good_ticks}/{self.limits.recovery_ticks} good ticks"
 
-    def _detect(self, q: np.ndarray, raw: list, dt: float) -> tuple[SensorFault, str]:
+    def _detect(self, q: np.ndarray | list, raw: list, dt: float) -> tuple[SensorFault, str]:
         dt_ok = math.isfinite(dt) and dt > 0.0
         if not math.isfinite(sum(raw)) and not all(map(math.isfinite, raw)):
             return SensorFault.NOT_FINITE, f"raw_wrench not finite: {raw}: holding"
-        if not math.isfinite(sum(q.tolist())) and not np.isfinite(q).all():
-            return SensorFault.NOT_FINITE, f"q not finite: {q.tolist()}: holding"
+        positions = q if type(q) is list else q.tolist()
+        if not math.isfinite(sum(positions)) and not all(map(math.isfinite, positions)):
+            return SensorFault.NOT_FINITE, f"q not finite: {positions}: holding"
         if not dt_ok:
             return SensorFault.DT_JUMP, f"dt = {dt!r} s is not a positive time step: holding"
         reference = self._reference_dt
