@@ -150,11 +150,15 @@ class Compensator(BiasControl):
                 or ``raw_wrench`` not six finite numbers.
         """
         rotation, raw = rotation_sensor_to_base, raw_wrench
-        if (type(rotation) is np.ndarray and type(raw) is np.ndarray and rotation.dtype is FLOAT64
-                and raw.dtype is FLOAT64 and rotation.shape == (3, 3) and raw.shape == (6,)):
-            # The common case, two float64 arrays: no conversion, the closed-form check on floats.
-            rows, values = rotation.tolist(), raw.tolist()
-            if is_rotation_rows(rows) and math.isfinite(sum(values)):
+        if type(rotation) is np.ndarray and type(raw) is np.ndarray and rotation.dtype is FLOAT64 and raw.dtype is FLOAT64:
+            # The common case, two float64 arrays: no conversion, the closed-form check on their floats. A wrong
+            # shape fails there (unpacking R's rows, or a nested reading in the sum): the general path names it.
+            try:
+                rows, values = rotation.tolist(), raw.tolist()
+                valid = is_rotation_rows(rows) and len(values) == 6 and math.isfinite(sum(values))
+            except (TypeError, ValueError):
+                valid = False
+            if valid:
                 return np.array(self.contact_floats(rows, values))
         rows = rotation_rows(rotation_sensor_to_base)  # closed-form check on floats, None if not a rotation
         try:

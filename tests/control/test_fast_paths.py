@@ -228,3 +228,19 @@ def test_blocked_batch_compensation_equals_the_formula_over_several_blocks(arm, 
         expected[:, 3:] -= np.cross(truth.center_of_mass, gravity)
         got = compensator._contact_batch(raw, gravity, given)
         np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize(("rotation_shape", "raw_shape"), [((9,), (6,)), ((3, 3, 1), (6,)), ((3, 3), (5,)), ((3, 3), (6, 1)),
+                                                           ((3,), (6,)), ((), (6,)), ((2, 3, 3), (6,))])
+def test_compensate_rotation_refuses_wrong_shapes_of_float_arrays(rotation_shape, raw_shape):
+    rotation = np.float64(1.0) if rotation_shape == () else np.resize(np.eye(3), rotation_shape)
+    with pytest.raises(InvalidInput, match="shape|compensate_batch|rotation"):
+        Compensator(paper_like_truth()).compensate_rotation(rotation, np.ones(raw_shape))
+
+
+def test_compensate_rotation_takes_a_batch_of_one_like_one_sample():
+    compensator, rotation, raw = Compensator(paper_like_truth()), np.eye(3)[[1, 2, 0]], np.arange(6.0)
+    expected = compensator.compensate_rotation_unchecked(rotation, raw)
+    np.testing.assert_array_equal(compensator.compensate_rotation(rotation[np.newaxis], raw), expected)
+    np.testing.assert_array_equal(compensator.compensate_rotation(rotation, raw[np.newaxis]), expected)
+    np.testing.assert_array_equal(compensator.compensate_rotation(rotation.astype(np.float32), raw.astype(int)), expected)
