@@ -141,7 +141,7 @@ class DynamicCompensator:
         # Y(v, a) θ with Pinocchio's body regressor (as the batch path), v and a LOCAL (Pinocchio's default frame:
         # naming it costs a conversion per call); inertial_wrench_unchecked is the same sum written out on floats.
         regressor = pin.bodyRegressor(pin.getFrameVelocity(model, data, frame), pin.getFrameAcceleration(model, data, frame))
-        i0, i1, i2, i3, i4, i5 = np.dot(regressor, self.inertial_parameters).tolist()
+        i0, i1, i2, i3, i4, i5 = regressor.dot(self.inertial_parameters).tolist()
         c0, c1, c2, c3, c4, c5 = self._contact_floats(rotation.tolist(), raw)
         return c0 + i0, c1 + i1, c2 + i2, c3 + i3, c4 + i4, c5 + i5
 
