@@ -64,12 +64,11 @@ def _diagonal(value, name: str, nonnegative: bool = True) -> np.ndarray:
 class AdmittanceState:
     """The filter memory of an :class:`Admittance` (explicit, resettable).
 
-    Kept as Python floats (the control tick's path); the attributes below
-    read and write ``(6,)`` arrays (a read returns a new array).
+    Kept as Python floats (the control tick's path: ``errors``, ``derivatives``);
+    :attr:`previous_error` and :attr:`filtered_derivative` read and write them as
+    ``(6,)`` arrays (a read returns a new array).
 
     Attributes:
-        previous_error: ΔF at the previous update [N, N·m].
-        filtered_derivative: Low-passed dΔF/dt [N/s, N·m/s].
         started: False until the first update after a reset.
     """
 
@@ -82,6 +81,7 @@ class AdmittanceState:
 
     @property
     def previous_error(self) -> np.ndarray:
+        """ΔF at the previous update ``(6,)`` [N, N·m]."""
         return np.array(self.errors)
 
     @previous_error.setter
@@ -90,6 +90,7 @@ class AdmittanceState:
 
     @property
     def filtered_derivative(self) -> np.ndarray:
+        """Low-passed dΔF/dt ``(6,)`` [N/s, N·m/s]."""
         return np.array(self.derivatives)
 
     @filtered_derivative.setter
