@@ -104,7 +104,7 @@ class DynamicCompensator:
         """Contact wrench ``(6,)`` [N, N·m] from ``q`` [rad], ``dq`` [rad/s], ``ddq`` [rad/s²] ``(nq,)`` and one raw reading.
 
         The control-loop path: one forward-kinematics call with velocities and
-        accelerations, three frame queries and scalar arithmetic.
+        accelerations, three frame queries, Pinocchio's body regressor times θ and the static kernel on floats.
         """
         return np.array(self.contact_moving_floats(q, dq, ddq, raw_wrench))
 
