@@ -20,13 +20,17 @@ Rows:
    limits: standard errors of the six inertia elements (delta method, and a
    Monte-Carlo spread over noise seeds);
 4. cost per tick of ``DynamicCompensator.compensate_moving`` against
-   ``Compensator.compensate``, interleaved, median (target ≤ 2×).
+   ``Compensator.compensate`` with the identified tool, timed as
+   ``bench_control.py`` does (alternating blocks, CPU time, the median of
+   the per-repeat ratios; target ≤ 2×; ``bench_control.py`` has the same row).
 
 Run: ``.venv/bin/python benchmarks/bench_dynamic.py``
 """
 
 from __future__ import annotations
 
+import os
+import sys
 import time
 
 import numpy as np
@@ -77,22 +81,15 @@ def inertia_entries(result) -> np.ndarray:
     return np.array([matrix[0, 0], matrix[1, 1], matrix[2, 2], matrix[0, 1], matrix[0, 2], matrix[1, 2]])
 
 
-def tick_costs(arm, result, repeats: int = 15, calls: int = 3000):
+def tick_costs(arm, result, repeats: int = 21):
+    """Median seconds per tick, static and dynamic, and the median ratio (``bench_control.paired``)."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from bench_control import paired
+
     rng = np.random.default_rng(1)
     static, dynamic = Compensator(result, arm), DynamicCompensator(result, arm)
     q, dq, ddq, raw = (rng.normal(size=arm.nq) * 0.5, rng.normal(size=arm.nq), rng.normal(size=arm.nq) * 5, rng.normal(size=6))
-    static_times, dynamic_times = [], []
-    clock = time.perf_counter
-    for _ in range(repeats):  # interleaved: both see the same machine load
-        start = clock()
-        for _ in range(calls):
-            static.compensate(q, raw)
-        static_times.append((clock() - start) / calls)
-        start = clock()
-        for _ in range(calls):
-            dynamic.compensate_moving(q, dq, ddq, raw)
-        dynamic_times.append((clock() - start) / calls)
-    return float(np.median(static_times)), float(np.median(dynamic_times))
+    return paired(lambda: static.compensate(q, raw), lambda: dynamic.compensate_moving(q, dq, ddq, raw), repeats)
 
 
 def main() -> None:
@@ -136,7 +133,7 @@ def main() -> None:
             sigma = fit.inertia_std_errors
             predicted.append([sigma[0, 0], sigma[1, 1], sigma[2, 2], sigma[0, 1], sigma[0, 2], sigma[1, 2]])
         spreads[name] = (np.std(estimates, axis=0, ddof=1), np.mean(predicted, axis=0), plan.log_det)
-    static_tick, dynamic_tick = tick_costs(arm, result)
+    static_tick, dynamic_tick, tick_ratio = tick_costs(arm, result)
 
     peak_speed = np.abs(validation.joint_velocities).max()
     peak_acceleration = np.abs(validation.joint_accelerations).max()
@@ -163,7 +160,8 @@ def main() -> None:
         print(f"| {name} trajectory (log det {log_det:.1f}): inertia std, Monte Carlo ({MONTE_CARLO} runs) / predicted, "
               f"mean of 6 elements | {1e6 * spread.mean():.2f} / {1e6 * predicted.mean():.2f} ×1e-6 kg·m² | planned lower |")
     print(f"| cost per tick: Compensator.compensate / DynamicCompensator.compensate_moving | "
-          f"{1e6 * static_tick:.2f} / {1e6 * dynamic_tick:.2f} µs ({dynamic_tick / static_tick:.2f}×) | ≤ 2× |")
+          f"{1e6 * static_tick:.2f} / {1e6 * dynamic_tick:.2f} µs ({tick_ratio:.2f}×; load average "
+          f"{os.getloadavg()[0]:.1f}) | ≤ 2× |")
 
 
 if __name__ == "__main__":

@@ -162,26 +162,37 @@ def _finite(value, name: str) -> float:
     return number
 
 
+FLOAT64 = np.dtype(np.float64)
+"""The dtype of the one-sample fast paths (``array.dtype is FLOAT64``: native float64, no conversion)."""
+
+
 def rotation_rows(value, atol: float = 1e-6) -> list | None:
     """``R.tolist()`` if ``value`` is one proper rotation ``(3, 3)``, else None.
 
-    The one-sample form of :func:`as_rotation_batch`'s test, in closed form on
-    Python floats: ``|RᵀR − I| <= atol`` entry by entry and ``det R > 0``
-    (NaN and inf fail the comparisons). A None tells the caller to run
-    :func:`as_rotation_batch` for the detailed error.
+    The one-sample form of :func:`as_rotation_batch`'s test (:func:`is_rotation_rows`).
+    A None tells the caller to run :func:`as_rotation_batch` for the detailed error.
     """
-    try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
+    if type(value) is not np.ndarray or value.dtype is not FLOAT64:
+        try:
+            value = np.asarray(value, dtype=np.float64)
+        except (TypeError, ValueError):
+            return None
+    if value.shape != (3, 3):
         return None
-    if array.shape != (3, 3):
-        return None
-    rows = array.tolist()
+    rows = value.tolist()
+    return rows if is_rotation_rows(rows, atol) else None
+
+
+def is_rotation_rows(rows: list, atol: float = 1e-6) -> bool:
+    """True if ``rows`` (``R.tolist()`` of a float ``(3, 3)``) is a proper rotation.
+
+    :func:`as_rotation_batch`'s test in closed form on Python floats:
+    ``|RᵀR − I| <= atol`` entry by entry and ``det R > 0`` (NaN and inf fail
+    the comparisons).
+    """
     (a, b, c), (d, e, f), (g, h, i) = rows
     low, high = 1.0 - atol, 1.0 + atol  # column norms² within 1 ± atol, dot products within ± atol
-    if (low <= a * a + d * d + g * g <= high and low <= b * b + e * e + h * h <= high
+    return (low <= a * a + d * d + g * g <= high and low <= b * b + e * e + h * h <= high
             and low <= c * c + f * f + i * i <= high and -atol <= a * b + d * e + g * h <= atol
             and -atol <= a * c + d * f + g * i <= atol and -atol <= b * c + e * f + h * i <= atol
-            and a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0.0):
-        return rows
-    return None
+            and a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0.0)

@@ -34,7 +34,6 @@ rotations and the lever arm.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -62,19 +61,48 @@ def _diagonal(value, name: str, nonnegative: bool = True) -> np.ndarray:
     return array.astype(np.float64, copy=True)
 
 
-@dataclass
 class AdmittanceState:
     """The filter memory of an :class:`Admittance` (explicit, resettable).
 
+    Kept as Python floats (the control tick's path: ``errors``, ``derivatives``);
+    :attr:`previous_error` and :attr:`filtered_derivative` read and write them as
+    ``(6,)`` arrays (a read returns a new array).
+
     Attributes:
-        previous_error: ΔF at the previous update [N, N·m].
-        filtered_derivative: Low-passed dΔF/dt [N/s, N·m/s].
         started: False until the first update after a reset.
     """
 
-    previous_error: np.ndarray = field(default_factory=lambda: np.zeros(6))
-    filtered_derivative: np.ndarray = field(default_factory=lambda: np.zeros(6))
-    started: bool = False
+    __slots__ = ("errors", "derivatives", "started")
+
+    def __init__(self, previous_error=None, filtered_derivative=None, started: bool = False):
+        self.errors = [0.0] * 6 if previous_error is None else _six_floats(previous_error)
+        self.derivatives = [0.0] * 6 if filtered_derivative is None else _six_floats(filtered_derivative)
+        self.started = bool(started)
+
+    @property
+    def previous_error(self) -> np.ndarray:
+        """ΔF at the previous update ``(6,)`` [N, N·m]."""
+        return np.array(self.errors)
+
+    @previous_error.setter
+    def previous_error(self, value) -> None:
+        self.errors = _six_floats(value)
+
+    @property
+    def filtered_derivative(self) -> np.ndarray:
+        """Low-passed dΔF/dt ``(6,)`` [N/s, N·m/s]."""
+        return np.array(self.derivatives)
+
+    @filtered_derivative.setter
+    def filtered_derivative(self, value) -> None:
+        self.derivatives = _six_floats(value)
+
+    def __repr__(self) -> str:
+        return f"AdmittanceState(previous_error={self.errors}, filtered_derivative={self.derivatives}, started={self.started})"
+
+
+def _six_floats(value) -> list[float]:
+    return as_vector(value, 6, "admittance state").tolist()
 
 
 class Admittance:
@@ -164,7 +192,7 @@ class Admittance:
         """
         return np.array(self.update_floats(contact_wrench.tolist(), dt))
 
-    def update_floats(self, contact_wrench, dt: float) -> list[float] | tuple[float, ...]:
+    def update_floats(self, contact_wrench, dt: float) -> tuple[float, ...]:
         """:meth:`update` on six Python floats, returning six floats (the control tick's path).
 
         Every update, from :meth:`update` or from ``JointAdmittance.step``, runs
@@ -179,23 +207,31 @@ class Admittance:
         if dt != self._alpha_dt:  # exact discretisation of the first-order low-pass (α = 1 − e^(−dt/τ)), cached per dt
             self._alpha_dt, self._alpha = dt, -math.expm1(-dt / self._time_constant)
         alpha = self._alpha
-        errors, derivatives, twist = [], [], []
-        for wanted, measured, band, previous, derivative, k1, k2 in zip(
-                self.desired_wrench.tolist(), contact_wrench, self.deadband.tolist(), state.previous_error.tolist(),
-                state.filtered_derivative.tolist(), self._k1s_floats, self._k2s_floats):
-            # One axis of the law, in this order: ΔF = F_desired + F' with the deadband (e − clip(e, ±band),
-            # as branches), the filtered dΔF/dt, then S·(K1·dΔF/dt + K2·ΔF).
-            error = wanted + measured
-            error = error - band if error > band else (error + band if error < -band else 0.0)
-            if bumpless_start:
-                previous = error
-            derivative = derivative + alpha * ((error - previous) / dt - derivative)
-            errors.append(error)
-            derivatives.append(derivative)
-            twist.append(k1 * derivative + k2 * error)
-        state.filtered_derivative = np.array(derivatives)
-        state.previous_error = np.array(errors)
-        return self.saturate_floats(twist)
+        # Axis by axis, written out (a loop over zipped lists costs more than the arithmetic): ΔF = F_desired + F'
+        # with the deadband (e − clip(e, ±band), as branches), the filtered dΔF/dt, then S·(K1·dΔF/dt + K2·ΔF).
+        d0, d1, d2, d3, d4, d5 = self.desired_wrench.tolist()
+        c0, c1, c2, c3, c4, c5 = contact_wrench
+        b0, b1, b2, b3, b4, b5 = self.deadband.tolist()
+        e0, e1, e2, e3, e4, e5 = d0 + c0, d1 + c1, d2 + c2, d3 + c3, d4 + c4, d5 + c5
+        e0 = e0 - b0 if e0 > b0 else (e0 + b0 if e0 < -b0 else 0.0)
+        e1 = e1 - b1 if e1 > b1 else (e1 + b1 if e1 < -b1 else 0.0)
+        e2 = e2 - b2 if e2 > b2 else (e2 + b2 if e2 < -b2 else 0.0)
+        e3 = e3 - b3 if e3 > b3 else (e3 + b3 if e3 < -b3 else 0.0)
+        e4 = e4 - b4 if e4 > b4 else (e4 + b4 if e4 < -b4 else 0.0)
+        e5 = e5 - b5 if e5 > b5 else (e5 + b5 if e5 < -b5 else 0.0)
+        p0, p1, p2, p3, p4, p5 = (e0, e1, e2, e3, e4, e5) if bumpless_start else state.errors
+        g0, g1, g2, g3, g4, g5 = state.derivatives
+        g0 = g0 + alpha * ((e0 - p0) / dt - g0)
+        g1 = g1 + alpha * ((e1 - p1) / dt - g1)
+        g2 = g2 + alpha * ((e2 - p2) / dt - g2)
+        g3 = g3 + alpha * ((e3 - p3) / dt - g3)
+        g4 = g4 + alpha * ((e4 - p4) / dt - g4)
+        g5 = g5 + alpha * ((e5 - p5) / dt - g5)
+        state.errors, state.derivatives = [e0, e1, e2, e3, e4, e5], [g0, g1, g2, g3, g4, g5]
+        k0, k1, k2, k3, k4, k5 = self._k1s_floats
+        h0, h1, h2, h3, h4, h5 = self._k2s_floats
+        return self.saturate_floats((k0 * g0 + h0 * e0, k1 * g1 + h1 * e1, k2 * g2 + h2 * e2,
+                                     k3 * g3 + h3 * e3, k4 * g4 + h4 * e4, k5 * g5 + h5 * e5))
 
     def saturate_floats(self, twist):
         """:meth:`saturate` on six floats: returns ``twist`` itself when within the limits, else six new floats."""

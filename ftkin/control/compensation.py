@@ -30,7 +30,7 @@ from ..calibration.samples import Samples
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
 from ..kinematics.mounting import mounted_arm
-from ..validation import as_batch, as_rotation_batch, rotation_rows
+from ..validation import FLOAT64, as_batch, as_rotation_batch, is_rotation_rows, rotation_rows
 from .bias_control import BiasControl
 from .bias_tracker import BiasTracker
 
@@ -149,6 +149,17 @@ class Compensator(BiasControl):
             InvalidInput: ``R_BS`` not a ``(3, 3)`` rotation (orthonormal within 1e-6, det +1),
                 or ``raw_wrench`` not six finite numbers.
         """
+        rotation, raw = rotation_sensor_to_base, raw_wrench
+        if type(rotation) is np.ndarray and type(raw) is np.ndarray and rotation.dtype is FLOAT64 and raw.dtype is FLOAT64:
+            # The common case, two float64 arrays: no conversion, the closed-form check on their floats. A wrong
+            # shape fails there (unpacking R's rows, or a nested reading in the sum): the general path names it.
+            try:
+                rows, values = rotation.tolist(), raw.tolist()
+                valid = is_rotation_rows(rows) and len(values) == 6 and math.isfinite(sum(values))
+            except (TypeError, ValueError):
+                valid = False
+            if valid:
+                return np.array(self.contact_floats(rows, values))
         rows = rotation_rows(rotation_sensor_to_base)  # closed-form check on floats, None if not a rotation
         try:
             raw = np.asarray(raw_wrench, dtype=np.float64)

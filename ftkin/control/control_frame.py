@@ -68,31 +68,26 @@ class ControlFrame:
         fx, fy, fz, mx, my, mz = wrench_in_sensor
         rx, ry, rz = self._r
         mx, my, mz = mx - (ry * fz - rz * fy), my - (rz * fx - rx * fz), mz - (rx * fy - ry * fx)
-        if self.frame != "sensor":
-            rows = rotation_rows if self.frame == "base" else self._inverse_rows
-            fx, fy, fz = _rotate(rows, fx, fy, fz)
-            mx, my, mz = _rotate(rows, mx, my, mz)
-        return fx, fy, fz, mx, my, mz
+        if self.frame == "sensor":
+            return fx, fy, fz, mx, my, mz
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation_rows if self.frame == "base" else self._inverse_rows
+        return (r00 * fx + r01 * fy + r02 * fz, r10 * fx + r11 * fy + r12 * fz, r20 * fx + r21 * fy + r22 * fz,
+                r00 * mx + r01 * my + r02 * mz, r10 * mx + r11 * my + r12 * mz, r20 * mx + r21 * my + r22 * mz)
 
     def twist_floats(self, twist, rotation_rows) -> tuple[float, ...]:
         """:meth:`twist_to_sensor_origin` on six floats and ``R_BS.tolist()``; returns six floats."""
         vx, vy, vz, wx, wy, wz = twist
         (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation_rows  # R_BS, written out below
-        if self.frame == "tool":  # tool axes to sensor axes
-            vx, vy, vz = _rotate(self._rotation_rows, vx, vy, vz)
-            wx, wy, wz = _rotate(self._rotation_rows, wx, wy, wz)
+        if self.frame == "tool":  # tool axes to sensor axes (R_ST, written out)
+            (t00, t01, t02), (t10, t11, t12), (t20, t21, t22) = self._rotation_rows
+            vx, vy, vz = t00 * vx + t01 * vy + t02 * vz, t10 * vx + t11 * vy + t12 * vz, t20 * vx + t21 * vy + t22 * vz
+            wx, wy, wz = t00 * wx + t01 * wy + t02 * wz, t10 * wx + t11 * wy + t12 * wz, t20 * wx + t21 * wy + t22 * wz
         if self.frame != "base":  # sensor axes to base axes
             vx, vy, vz = r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz
             wx, wy, wz = r00 * wx + r01 * wy + r02 * wz, r10 * wx + r11 * wy + r12 * wz, r20 * wx + r21 * wy + r22 * wz
         rx, ry, rz = self._r
         px, py, pz = r00 * rx + r01 * ry + r02 * rz, r10 * rx + r11 * ry + r12 * rz, r20 * rx + r21 * ry + r22 * rz
         return vx - (wy * pz - wz * py), vy - (wz * px - wx * pz), vz - (wx * py - wy * px), wx, wy, wz  # v − ω × p
-
-
-def _rotate(rows, x: float, y: float, z: float) -> tuple[float, float, float]:
-    """``R @ (x, y, z)`` on Python floats, ``rows`` = ``R.tolist()``."""
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rows
-    return r00 * x + r01 * y + r02 * z, r10 * x + r11 * y + r12 * z, r20 * x + r21 * y + r22 * z
 
 
 def control_frame_for(arm: Arm, frame: str, control_point: str | None = None) -> ControlFrame:

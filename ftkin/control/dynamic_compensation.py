@@ -30,7 +30,7 @@ from ..calibration.model import SensorModel
 from ..calibration.regressor import MotionSamples
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
-from ..validation import as_vector
+from ..validation import FLOAT64, as_vector
 from .compensation import Compensator
 
 
@@ -68,11 +68,10 @@ class DynamicCompensator:
         self._mass = theta[0]
         self._moment = tuple(theta[1:4])
         self._inertia = tuple(theta[4:10])
-        self._local = pin.ReferenceFrame.LOCAL
+        self._model, self._frame = self.arm.model, self.arm.sensor_frame_id
         self._nq = arm.nq
         self._q_shape = (arm.nq,)
-        self._zeros = np.zeros(arm.nq)
-        self._zeros6 = np.zeros(6)
+        self._contact_floats = self.static.contact_floats  # its kernel: current bias (re-zeroed or tracked), reading signs
         self._stream: CausalDifferentiator | None = None
         self._raw_buffer: deque = deque()
 
@@ -105,13 +104,18 @@ class DynamicCompensator:
         """Contact wrench ``(6,)`` [N, N·m] from ``q`` [rad], ``dq`` [rad/s], ``ddq`` [rad/s²] ``(nq,)`` and one raw reading.
 
         The control-loop path: one forward-kinematics call with velocities and
-        accelerations, three frame queries and scalar arithmetic.
+        accelerations, three frame queries, Pinocchio's body regressor times θ and the static kernel on floats.
         """
-        try:
-            q = np.asarray(q, dtype=np.float64)
-            dq = np.asarray(dq, dtype=np.float64)
-            ddq = np.asarray(ddq, dtype=np.float64)
-            raw = np.asarray(raw_wrench, dtype=np.float64)
+        return np.array(self.contact_moving_floats(q, dq, ddq, raw_wrench))
+
+    def contact_moving_floats(self, q, dq, ddq, raw_wrench) -> tuple[float, ...]:
+        """:meth:`compensate_moving` returning six Python floats (``JointAdmittance.step``'s path); validated the same way."""
+        try:  # float64 arrays (the control loop's) pass as they are
+            q = q if type(q) is np.ndarray and q.dtype is FLOAT64 else np.asarray(q, dtype=np.float64)
+            dq = dq if type(dq) is np.ndarray and dq.dtype is FLOAT64 else np.asarray(dq, dtype=np.float64)
+            ddq = ddq if type(ddq) is np.ndarray and ddq.dtype is FLOAT64 else np.asarray(ddq, dtype=np.float64)
+            raw = raw_wrench if type(raw_wrench) is np.ndarray and raw_wrench.dtype is FLOAT64 \
+                else np.asarray(raw_wrench, dtype=np.float64)
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q, dq, ddq and raw_wrench must be numeric: {error}") from None
         shape = self._q_shape
@@ -119,24 +123,27 @@ class DynamicCompensator:
             raise InvalidInput(
                 f"expected q, dq, ddq of shape {shape} and raw_wrench of shape (6,), got {q.shape}, {dq.shape}, {ddq.shape}, {raw.shape}"
             )
-        # x · 0 is NaN exactly when x holds a NaN or an infinity: one cheap test for all four arrays.
-        zeros = self._zeros
-        if math.isnan(q.dot(zeros) + dq.dot(zeros) + ddq.dot(zeros) + raw.dot(self._zeros6)):
+        values = raw.tolist()
+        # One test for the common case: the sum is finite only if every input is (or they overflow: the test below passes).
+        if not math.isfinite(sum(q.tolist()) + sum(dq.tolist()) + sum(ddq.tolist()) + sum(values)) and not (
+                np.isfinite(q).all() and np.isfinite(dq).all() and np.isfinite(ddq).all() and np.isfinite(raw).all()):
             raise InvalidInput(f"q, dq, ddq and raw_wrench must be finite, got q={q} dq={dq} ddq={ddq} raw_wrench={raw}")
-        return self.compensate_moving_unchecked(q, dq, ddq, raw)
+        return self._moving_floats(q, dq, ddq, values)
 
     def compensate_moving_unchecked(self, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, raw: np.ndarray) -> np.ndarray:
         """:meth:`compensate_moving` without validation (float arrays of the right shapes); returns a new array."""
-        model, data, frame = self.arm.model, self._data, self.arm.sensor_frame_id
+        return np.array(self._moving_floats(q, dq, ddq, raw.tolist()))
+
+    def _moving_floats(self, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, raw: list) -> tuple[float, ...]:
+        model, data, frame = self._model, self._data, self._frame
         pin.forwardKinematics(model, data, q, dq, ddq)
         rotation = pin.updateFramePlacement(model, data, frame).rotation
-        i0, i1, i2, i3, i4, i5 = self.inertial_wrench_unchecked(
-            pin.getFrameVelocity(model, data, frame, self._local).vector,
-            pin.getFrameAcceleration(model, data, frame, self._local).vector,
-        )
-        # The static part is the Compensator's own kernel: its current bias (re-zeroed or tracked), reading signs.
-        c0, c1, c2, c3, c4, c5 = self.static.contact_floats(rotation.tolist(), raw.tolist())
-        return np.array([c0 + i0, c1 + i1, c2 + i2, c3 + i3, c4 + i4, c5 + i5])
+        # Y(v, a) θ with Pinocchio's body regressor (as the batch path), v and a LOCAL (Pinocchio's default frame:
+        # naming it costs a conversion per call); inertial_wrench_unchecked is the same sum written out on floats.
+        regressor = pin.bodyRegressor(pin.getFrameVelocity(model, data, frame), pin.getFrameAcceleration(model, data, frame))
+        i0, i1, i2, i3, i4, i5 = regressor.dot(self.inertial_parameters).tolist()
+        c0, c1, c2, c3, c4, c5 = self._contact_floats(rotation.tolist(), raw)
+        return c0 + i0, c1 + i1, c2 + i2, c3 + i3, c4 + i4, c5 + i5
 
     # ---------------------------------------------------------------- stream
     def start_stream(self, sample_period: float, window: int | None = None, polyorder: int = 4) -> float:

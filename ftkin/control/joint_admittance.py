@@ -122,6 +122,8 @@ class JointAdmittance:
         self.detector = OscillationDetector(oscillation) if oscillation is not None else None
         # Bound once: the tick calls these without attribute lookups (the compensator's kernel is fixed at its creation).
         self._detect = self.detector.update if self.detector is not None else None
+        self._check, self._update = self.monitor.check, admittance.update_floats
+        self._wrench_floats, self._twist_floats = self.frame.wrench_floats, self.frame.twist_floats
         self._contact_floats = compensator.contact_floats if compensator is not None else None
         self._tracked = compensator is not None and compensator.tracker is not None
         self.reset()
@@ -182,8 +184,8 @@ class JointAdmittance:
             raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
         if q.shape != (self._nq,) or raw.shape != (6,):
             raise InvalidInput(f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
-        raw = raw.tolist()
-        fault, event = self.monitor.check(q, raw, dt)
+        raw, positions = raw.tolist(), q.tolist()
+        fault, event = self._check(positions, raw, dt)
         if fault is not SensorFault.NONE:
             if self._tracked:
                 self.compensator.tracker.interrupt()
@@ -193,7 +195,7 @@ class JointAdmittance:
         rotation = self._rotation.tolist()  # R_BS, updated by the call above
         # 2. compensation (six floats, sensor frame), the bias tracker, the oscillation detector and the safety stop
         if joint_velocities is not None and self.dynamic is not None:
-            contact = self.dynamic.compensate_moving(q, joint_velocities, joint_accelerations, raw).tolist()
+            contact = self.dynamic.contact_moving_floats(q, joint_velocities, joint_accelerations, raw)
         else:
             contact = raw if self._contact_floats is None else self._contact_floats(rotation, raw)
         if self._tracked:
@@ -205,15 +207,15 @@ class JointAdmittance:
         if self.safety_latched or force > self.force_limit or torque > self.torque_limit:
             return self._stop(np.array(contact), force, torque)
         # 3. the admittance law in the control frame, its twist moved to the sensor origin
-        wrench = self.frame.wrench_floats(contact, rotation)
+        wrench = self._wrench_floats(contact, rotation)
         if self._holding:
             self._restart_derivative(np.array(wrench))
-        twist = self.admittance.update_floats(wrench, dt)
-        sensor_twist = self.frame.twist_floats(twist, rotation)
+        twist = self._update(wrench, dt)
+        sensor_twist = self._twist_floats(twist, rotation)
         # 4. joint velocities: damped least squares, then the joint limits
         dq, manipulability, damping = damped_least_squares(jacobian, sensor_twist, self.manipulability_threshold,
                                                            self.max_damping)
-        scale = self._limit_scale(q.tolist(), dq.tolist())
+        scale = self._limit_scale(positions, dq.tolist())
         if scale < 1.0:
             dq *= scale
         self._status_parts = (dq, contact, twist, manipulability, damping, scale)

@@ -59,7 +59,7 @@ class OscillationDetector:
     """Per-tick detection with constant memory (see the module docstring)."""
 
     __slots__ = ("limits", "count", "energy", "_previous", "_step", "_swing", "_dt", "_decay", "_threshold",
-                 "_energy_floor", "_inverse_lever")
+                 "_energy_floor", "_inverse_lever", "_window", "_reversals")
 
     def __init__(self, limits: OscillationLimits | None = None):
         self.limits = OscillationLimits() if limits is None else limits
@@ -68,6 +68,7 @@ class OscillationDetector:
         self._threshold = float(self.limits.force_step)
         self._energy_floor = 0.25 * self._threshold * self._threshold
         self._inverse_lever = 1.0 / float(self.limits.lever)
+        self._window, self._reversals = self.limits.window, self.limits.reversals
         self.reset()
 
     def reset(self) -> None:
@@ -84,7 +85,7 @@ class OscillationDetector:
         if step != step:  # first tick after a reset
             return False
         if dt != self._dt:
-            self._dt, self._decay = dt, math.exp(-dt / self.limits.window)
+            self._dt, self._decay = dt, math.exp(-dt / self._window)
         decay = self._decay
         count = self.count * decay
         if step * self._step < 0.0:  # a reversal: count the swing it ends if that was large
@@ -95,7 +96,7 @@ class OscillationDetector:
             self._swing += step
         self.count, self._step = count, step
         self.energy = energy = self.energy * decay + (1.0 - decay) * step * step
-        return count >= self.limits.reversals and energy >= self._energy_floor
+        return count >= self._reversals and energy >= self._energy_floor
 
 
 DEFAULT_OSCILLATION_LIMITS = OscillationLimits()

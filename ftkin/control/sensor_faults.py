@@ -138,6 +138,7 @@ class FaultMonitor:
         self._stuck_ticks = math.inf if self.limits.stuck_ticks is None else int(self.limits.stuck_ticks)
         self._stuck_time = math.inf if self.limits.stuck_time is None else float(self.limits.stuck_time)
         self._ratio = math.inf if self.limits.dt_ratio is None else float(self.limits.dt_ratio)
+        self._running_dt = self.limits.nominal_dt is None
         self.counts = {fault: 0 for fault in SensorFault if fault is not SensorFault.NONE}
         self.reset()
 
@@ -148,11 +149,12 @@ class FaultMonitor:
         self._reference_dt = self.limits.nominal_dt
         self.fault, self.good_ticks = SensorFault.NONE, 0
 
-    def check(self, q: np.ndarray, raw: list, dt: float) -> tuple[SensorFault, str]:
+    def check(self, q: np.ndarray | list, raw: list, dt: float) -> tuple[SensorFault, str]:
         """The fault holding this tick and a description (``(NONE, "")`` when the arm may move).
 
         Args:
-            q: Joint positions ``(nq,)`` float array [rad] (shape already checked).
+            q: Joint positions ``(nq,)`` float array [rad] (shape already checked), or its
+                ``tolist()`` (the control-loop path).
             raw: The six raw channels [N, N·m], best as a list of Python floats
                 (the control-loop path); an array is converted.
             dt: Time step [s].
@@ -175,18 +177,20 @@ class FaultMonitor:
         self.counts[self.fault] += 1
         return self.fault, f"recovering from {self.fault.value}: {self.good_ticks}/{self.limits.recovery_ticks} good ticks"
 
-    def _detect(self, q: np.ndarray, raw: list, dt: float) -> tuple[SensorFault, str]:
-        dt_ok = math.isfinite(dt) and dt > 0.0
-        if not math.isfinite(sum(raw)) and not all(map(math.isfinite, raw)):
-            return SensorFault.NOT_FINITE, f"raw_wrench not finite: {raw}: holding"
-        if not math.isfinite(sum(q.tolist())) and not np.isfinite(q).all():
-            return SensorFault.NOT_FINITE, f"q not finite: {q.tolist()}: holding"
-        if not dt_ok:
-            return SensorFault.DT_JUMP, f"dt = {dt!r} s is not a positive time step: holding"
+    def _detect(self, q: np.ndarray | list, raw: list, dt: float) -> tuple[SensorFault, str]:
+        positions = q if type(q) is list else q.tolist()
+        # One test for the common case: the sum is finite only if every input is (or they overflow: the tests below pass).
+        if not (math.isfinite(sum(raw) + sum(positions)) and 0.0 < dt < math.inf):
+            if not all(map(math.isfinite, raw)):
+                return SensorFault.NOT_FINITE, f"raw_wrench not finite: {raw}: holding"
+            if not all(map(math.isfinite, positions)):
+                return SensorFault.NOT_FINITE, f"q not finite: {positions}: holding"
+            if not (math.isfinite(dt) and dt > 0.0):
+                return SensorFault.DT_JUMP, f"dt = {dt!r} s is not a positive time step: holding"
         reference = self._reference_dt
         if reference is None:
             reference = self._reference_dt = dt
-        elif self.limits.nominal_dt is None:
+        elif self._running_dt:
             self._reference_dt = reference + _ALPHA * (min(dt, self._ratio * reference) - reference)
         if dt > self._ratio * reference:
             return SensorFault.DT_JUMP, (f"dt = {dt:.4g} s is more than {self._ratio:g} x the nominal "

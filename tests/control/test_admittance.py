@@ -162,3 +162,22 @@ def test_moment_about_the_tool_point_by_hand():
 def test_control_frame_refuses_a_non_rotation():
     with pytest.raises(InvalidInput, match="rotation matrix"):
         ControlFrame("tool", [0, 0, 0.1], np.diag([1.0, 1.0, -1.0]))
+
+
+def test_filter_state_reads_and_writes_arrays_and_the_update_uses_them(rng):
+    law = Admittance(K1, K2, max_linear_velocity=10.0, max_angular_velocity=10.0)
+    wrench, dt = rng.normal(size=6), 1e-3
+    law.update(wrench, dt)
+    state = law.state
+    previous = state.previous_error
+    np.testing.assert_array_equal(previous, wrench)  # no deadband: ΔF = F'
+    previous[0] += 1.0  # a read is a copy
+    np.testing.assert_array_equal(state.previous_error, wrench)
+    state.previous_error = np.zeros(6)  # a write is taken by the next update: dΔF/dt = (ΔF − 0)/dt, filtered
+    state.filtered_derivative = [0.0] * 6
+    alpha = -np.expm1(-dt * 2.0 * np.pi * law.derivative_cutoff)
+    np.testing.assert_allclose(law.update(wrench, dt), K1 * alpha * wrench / dt + K2 * wrench, rtol=1e-14)
+    with pytest.raises(InvalidInput, match="shape"):
+        state.previous_error = np.zeros(5)
+    with pytest.raises(InvalidInput, match="finite"):
+        state.filtered_derivative = np.full(6, np.nan)

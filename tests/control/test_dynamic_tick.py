@@ -30,3 +30,28 @@ def test_moving_ticks_remove_the_inertial_wrench_and_static_ticks_do_not(arm):
 
     with pytest.raises(InvalidInput):
         controller.step(q, raw, 1e-3, joint_velocities=dq, joint_accelerations=np.full(6, np.nan))
+
+
+def test_one_sample_path_equals_the_written_out_newton_euler_sum(arm):
+    """compensate_moving (Pinocchio's body regressor) = static contact + Y(v, a) θ written out on floats."""
+    import pinocchio as pin
+
+    truth = paper_like_truth()
+    theta = np.array([0.55, 0.004, -0.002, 0.033, 2e-3, 1e-4, 2.2e-3, -1e-4, 2e-4, 1e-3])
+    dynamic, static = DynamicCompensator(truth, arm, theta), Compensator(truth, arm)
+    data = arm.model.createData()
+    rng = np.random.default_rng(5)
+    for q in arm.random_configurations(50, rng):
+        dq, ddq, raw = rng.normal(size=6) * 2.0, rng.normal(size=6) * 10.0, rng.normal(size=6) * 5.0
+        pin.forwardKinematics(arm.model, data, q, dq, ddq)
+        velocity = pin.getFrameVelocity(arm.model, data, arm.sensor_frame_id, pin.LOCAL).vector
+        acceleration = pin.getFrameAcceleration(arm.model, data, arm.sensor_frame_id, pin.LOCAL).vector
+        expected = static.compensate(q, raw) + np.array(dynamic.inertial_wrench_unchecked(velocity, acceleration))
+        np.testing.assert_allclose(dynamic.compensate_moving(q, dq, ddq, raw), expected, rtol=0, atol=1e-12)
+        np.testing.assert_array_equal(dynamic.compensate_moving(q.tolist(), dq.tolist(), ddq.tolist(), raw.tolist()),
+                                      dynamic.compensate_moving(q, dq, ddq, raw))
+    for position in range(4):  # a non-finite value in any input is refused
+        inputs = [q.copy(), dq.copy(), ddq.copy(), raw.copy()]
+        inputs[position][position] = np.inf
+        with pytest.raises(InvalidInput, match="finite"):
+            dynamic.compensate_moving(*inputs)

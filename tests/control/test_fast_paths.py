@@ -174,6 +174,35 @@ def test_closed_form_rotation_checks_accept_and_refuse_like_the_gram_matrix(rng)
         Compensator(paper_like_truth()).compensate_rotation(off[1], np.zeros(6))
 
 
+def test_compensate_rotation_fast_path_agrees_with_the_array_checks_at_the_tolerance(rng):
+    """The float64 fast path of compensate_rotation accepts exactly what as_rotation_batch accepts."""
+    compensator = Compensator(paper_like_truth())
+    base = Arm.default().rotation_sensor_to_base(np.array([0.1, 0.2, -0.6, 0.3, -1.0, 0.2]))
+    raw = np.array([1.0, -2.0, 3.0, 0.1, -0.2, 0.3])
+    accepted = refused = 0
+    for scale in (3e-7, 5e-7, 1e-6):  # perturbations straddling |RᵀR − I| = 1e-6
+        for _ in range(100):
+            candidate = base + scale * rng.normal(size=(3, 3))
+            try:
+                as_rotation_batch(candidate)
+            except InvalidInput as error:
+                refused += 1
+                with pytest.raises(InvalidInput) as fast:
+                    compensator.compensate_rotation(candidate, raw)
+                assert str(fast.value) == str(error)
+            else:
+                accepted += 1
+                expected = compensator.compensate_rotation_unchecked(candidate, raw)
+                np.testing.assert_array_equal(compensator.compensate_rotation(candidate, raw), expected)
+                np.testing.assert_array_equal(compensator.compensate_rotation(candidate.tolist(), raw.tolist()), expected)
+    assert accepted > 20 and refused > 20
+    for bad_raw in ([np.nan, 0, 0, 0, 0, 0], [np.inf, 0, 0, 0, 0, 0]):
+        with pytest.raises(InvalidInput, match="finite"):
+            compensator.compensate_rotation(base, np.array(bad_raw))
+    with pytest.raises(InvalidInput, match="shape"):
+        compensator.compensate_rotation(base, np.zeros(5))
+
+
 def test_replaced_bias_reaches_the_float_path(arm):
     truth = paper_like_truth()
     compensator = Compensator(truth, arm)
@@ -199,3 +228,19 @@ def test_blocked_batch_compensation_equals_the_formula_over_several_blocks(arm, 
         expected[:, 3:] -= np.cross(truth.center_of_mass, gravity)
         got = compensator._contact_batch(raw, gravity, given)
         np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize(("rotation_shape", "raw_shape"), [((9,), (6,)), ((3, 3, 1), (6,)), ((3, 3), (5,)), ((3, 3), (6, 1)),
+                                                           ((3,), (6,)), ((), (6,)), ((2, 3, 3), (6,))])
+def test_compensate_rotation_refuses_wrong_shapes_of_float_arrays(rotation_shape, raw_shape):
+    rotation = np.float64(1.0) if rotation_shape == () else np.resize(np.eye(3), rotation_shape)
+    with pytest.raises(InvalidInput, match="shape|compensate_batch|rotation"):
+        Compensator(paper_like_truth()).compensate_rotation(rotation, np.ones(raw_shape))
+
+
+def test_compensate_rotation_takes_a_batch_of_one_like_one_sample():
+    compensator, rotation, raw = Compensator(paper_like_truth()), np.eye(3)[[1, 2, 0]], np.arange(6.0)
+    expected = compensator.compensate_rotation_unchecked(rotation, raw)
+    np.testing.assert_array_equal(compensator.compensate_rotation(rotation[np.newaxis], raw), expected)
+    np.testing.assert_array_equal(compensator.compensate_rotation(rotation, raw[np.newaxis]), expected)
+    np.testing.assert_array_equal(compensator.compensate_rotation(rotation.astype(np.float32), raw.astype(int)), expected)

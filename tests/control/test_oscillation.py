@@ -87,3 +87,35 @@ def test_sensor_range_is_required_for_other_arms(tmp_path):
     with pytest.raises(InvalidInput, match="measuring range"):
         JointAdmittance(other, Admittance(frame="tool"))
     JointAdmittance(other, Admittance(frame="tool"), sensor_limits=SensorLimits(force_range=100.0, torque_range=4.0))
+
+
+def test_incremental_counts_and_energy_equal_a_direct_recomputation():
+    """The detector's O(1) per-tick update against the sums of its docstring, recomputed in numpy."""
+    rng = np.random.default_rng(3)
+    n, limits = 400, OscillationLimits()
+    t = np.arange(n) * DT
+    force = 5.0 + 1.5 * np.sin(2 * np.pi * 60 * t) + rng.normal(0.0, 0.3, n)
+    torque = np.abs(0.2 + rng.normal(0.0, 0.05, n))
+    dts = np.where(np.arange(n) % 7 == 3, 1.2 * DT, DT)  # a second dt exercises the cached decay
+    detector, counts, energies = OscillationDetector(limits), [], []
+    for f, m, dt in zip(force, torque, dts):
+        detector.update(float(f), float(m), float(dt))
+        counts.append(detector.count)
+        energies.append(detector.energy)
+    steps = np.diff(force + torque / limits.lever)  # δ for ticks 1..n-1
+    decays = np.exp(-dts[1:] / limits.window)
+    log_decay = np.cumsum(np.log(decays))  # Π d over ticks (k, m] = exp(L[m] − L[k])
+    previous = np.concatenate([[0.0], steps[:-1]])
+    reversal = steps * previous < 0.0
+    starts = np.flatnonzero(reversal)
+    swing_start = np.concatenate([[0], starts])  # a swing runs from one reversal (inclusive) to the next (exclusive)
+    large = np.zeros(len(steps), dtype=bool)
+    for begin, end in zip(swing_start[:-1], starts):
+        large[end] = abs(steps[begin:end].sum()) > limits.force_step
+    for m in range(len(steps)):
+        weights = np.exp(log_decay[m] - log_decay[:m + 1])
+        expected_count = weights[:m + 1][large[:m + 1]].sum()
+        expected_energy = np.sum(weights * (1.0 - decays[:m + 1]) * steps[:m + 1] ** 2)
+        assert counts[m + 1] == pytest.approx(expected_count, rel=1e-12, abs=1e-12)
+        assert energies[m + 1] == pytest.approx(expected_energy, rel=1e-12, abs=1e-12)
+    assert counts[0] == 0.0 and energies[0] == 0.0 and max(counts) > limits.reversals / 2
