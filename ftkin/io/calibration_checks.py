@@ -5,7 +5,7 @@ ambiguous) and absurd nesting; the parameters must agree with the derived
 fields written beside them (``tool_weight``, ``tool_mass``, ``base_tilt_deg``);
 a covariance must be symmetric positive semi-definite; the units a file
 states must be ftkin's; the parameters must be physically plausible (centre of
-mass within 10 m of the sensor, |bias| and weight at most 1e6 N or N·m,
+mass within 10 m of the sensor, bias and weight at most 1e6 N or N·m,
 g between 1 and 30 m/s²). Booleans are not numbers. Each failure is a :class:`~ftkin.exceptions.CalibrationFileError`
 naming the key.
 """
