@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..io.samples_csv import orientations_from_table, pose_ids_from_table, read_table
+from ..io.time_columns import times_from_table
 from ..planning.evaluation import evaluate_poses
 from .common import add_arm_arguments, arm_from_args
 from .plan import add_expectation_arguments, expectation_from_args
@@ -34,9 +35,27 @@ def pose_rotations(table, args) -> np.ndarray:
     return rotations[np.sort(first_rows)]
 
 
+def pose_times(table) -> np.ndarray | None:
+    """Time [s] of each pose (its first row), from the table's time column, or None."""
+    times = times_from_table(table)
+    if times is None:
+        return None
+    pose_ids = pose_ids_from_table(table)
+    if pose_ids is None:
+        return times
+    _, first_rows = np.unique(pose_ids, return_index=True)
+    return times[np.sort(first_rows)]
+
+
 def run(args) -> int:
     table = read_table(args.poses)
     rotations = pose_rotations(table, args)
     print(f"{args.poses}: {len(rotations)} poses")
-    print(evaluate_poses(rotations, **expectation_from_args(args)).report())
+    options = expectation_from_args(args)
+    if args.drift_rate is not None and args.pose_interval is None and (times := pose_times(table)) is not None:
+        options["pose_times"] = times  # the recording's own times (the poses as visited)
+        order = np.argsort(times, kind="stable")
+        rotations, options["pose_times"] = rotations[order], times[order]
+        print(f"poses in the order of their time column, {times.min():g} to {times.max():g} s")
+    print(evaluate_poses(rotations, **options).report())
     return 0

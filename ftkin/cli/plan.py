@@ -44,14 +44,16 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
                        help="the bias drifts as a random walk of these rates (force, torque; e.g. a past calibration's "
                        "drift rate): visit the poses in the order the drift spoils least (longer joint travel) "
                        "and predict errors with the drift")
-    group.add_argument("--pose-interval", type=positive_float, default=DEFAULT_POSE_INTERVAL, metavar="S",
-                       help="time from one pose to the next [s], with --drift-rate (default: %(default)s)")
+    group.add_argument("--pose-interval", type=positive_float, default=None, metavar="S",
+                       help=f"time from one pose to the next [s], with --drift-rate (default: {DEFAULT_POSE_INTERVAL:g})")
 
 
 def expectation_from_args(args) -> dict:
     """Keyword arguments for :func:`ftkin.planning.plan_poses` / :func:`ftkin.planning.evaluation.evaluate_poses`."""
     if args.readings_per_pose < 1:
         raise InvalidInput(f"--readings-per-pose must be at least 1, got {args.readings_per_pose}")
+    if args.pose_interval is not None and args.drift_rate is None:
+        raise InvalidInput("--pose-interval applies with --drift-rate (the time between poses matters only to a drift)")
     return {
         "tool_weight": args.tool_weight,
         "center_of_mass": args.com,
@@ -59,7 +61,7 @@ def expectation_from_args(args) -> dict:
         "readings_per_pose": args.readings_per_pose,
         "estimate_mount": args.estimate_mount or "none",
         "drift_rate": args.drift_rate,
-        "pose_interval": args.pose_interval,
+        "pose_interval": DEFAULT_POSE_INTERVAL if args.pose_interval is None else args.pose_interval,
     }
 
 
@@ -158,8 +160,10 @@ def run(args) -> int:
     if args.max_tilt_deg is not None and args.max_tilt_deg > 180.0:
         raise InvalidInput(f"--max-tilt-deg must be between 0 and 180 [deg], got {args.max_tilt_deg:g}")
     if args.excitation:
-        if args.n is not None or args.max_tilt_deg is not None or (args.format not in (None, "csv")):
-            raise InvalidInput("--excitation plans a trajectory: --n, --max-tilt-deg and --format yaml/json do not apply")
+        if (args.n is not None or args.max_tilt_deg is not None or args.format not in (None, "csv")
+                or args.drift_rate is not None or args.pose_interval is not None):
+            raise InvalidInput("--excitation plans a trajectory: --n, --max-tilt-deg, --format yaml/json, --drift-rate "
+                               "and --pose-interval do not apply")
         return run_excitation(args, load_arm(args))
     if args.n is None:
         raise InvalidInput("give --n N (the number of poses), or --excitation for a trajectory")

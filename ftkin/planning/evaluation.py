@@ -20,7 +20,7 @@ from ..calibration.mount import MOUNT_NAMES, check_mount_mode, split_information
 from ..calibration.observability import check_pose_count
 from ..calibration.random_walk import walk_gains
 from ..exceptions import InvalidInput
-from ..validation import as_in_range, as_positive, as_rotation_batch, as_vector
+from ..validation import as_float_array, as_in_range, as_positive, as_rotation_batch, as_vector
 from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_options, walk_information
 
 PAPER_TOOL_WEIGHT = 3.15
@@ -65,7 +65,9 @@ class PoseEvaluation:
         drift_rate: ``(2,)`` random-walk rate of the bias [N/√s, N·m/√s] the
             prediction integrates out (poses visited in the given order, one
             every ``pose_interval`` s), else None (a constant bias).
-        pose_interval: Time from one pose to the next [s] (with ``drift_rate``).
+        pose_interval: Time from one pose to the next [s] (with ``drift_rate``;
+            the median one when ``pose_times`` are given).
+        pose_times: ``(N,)`` the poses' times [s] when given, else None.
     """
 
     rotations: np.ndarray
@@ -79,6 +81,7 @@ class PoseEvaluation:
     mount_covariance: np.ndarray | None = None
     drift_rate: np.ndarray | None = None
     pose_interval: float | None = None
+    pose_times: np.ndarray | None = None
 
     @property
     def mount_std_deg(self) -> dict[str, float]:
@@ -113,7 +116,8 @@ class PoseEvaluation:
             f"noise {self.noise.force_std[0]:g} N / {self.noise.torque_std[0]:g} N·m",
             *([] if self.drift_rate is None else [
                 f"bias drifting as a random walk of {self.drift_rate[0]:g} N/√s, {self.drift_rate[1]:g} N·m/√s, "
-                f"poses visited in this order one every {self.pose_interval:g} s"]),
+                + (f"poses visited in this order one every {self.pose_interval:g} s" if self.pose_times is None else
+                   f"poses at their times ({self.pose_times[0]:g} to {self.pose_times[-1]:g} s)")]),
             f"{'parameter':<10}{'std error':>14}  {'unit':<5}{'bound σ/√N':>14}{'ratio':>8}",
         ]
         for block, (names, unit) in enumerate(_ROWS):
@@ -131,6 +135,14 @@ class PoseEvaluation:
         return "\n".join(lines)
 
 
+def _pose_times(value, count: int) -> np.ndarray:
+    times = as_float_array(value, "pose_times")
+    if times.shape != (count,) or not np.all(np.isfinite(times)) or np.any(np.diff(times) <= 0):
+        raise InvalidInput(f"pose_times must be {count} finite, strictly increasing times [s] (one per pose, in "
+                           f"visiting order), got shape {times.shape}")
+    return times
+
+
 def evaluate_poses(
     rotation_sensor_to_base,
     *,
@@ -141,6 +153,7 @@ def evaluate_poses(
     estimate_mount: str = "none",
     drift_rate=None,
     pose_interval: float = DEFAULT_POSE_INTERVAL,
+    pose_times=None,
 ) -> PoseEvaluation:
     """Predict the calibration's standard errors for sensor orientations ``(N, 3, 3)``.
 
@@ -159,6 +172,8 @@ def evaluate_poses(
             :mod:`ftkin.planning.drift_order`); the order of the rotations is
             the visiting order. Not with ``estimate_mount``.
         pose_interval: Time from one pose to the next [s] (with ``drift_rate``).
+        pose_times: ``(N,)`` time of each pose [s] (with ``drift_rate``;
+            instead of one every ``pose_interval``), strictly increasing.
 
     Raises:
         UnobservableParameters: fewer than three poses, or orientations that
@@ -178,7 +193,8 @@ def evaluate_poses(
     check_mount_mode(estimate_mount)
     drift_rate, pose_interval = check_drift_options(drift_rate, pose_interval, estimate_mount)
     if drift_rate is not None:
-        gains = walk_gains(np.arange(len(rotations)) * pose_interval,
+        times = np.arange(len(rotations)) * pose_interval if pose_times is None else _pose_times(pose_times, len(rotations))
+        gains = walk_gains(times,
                            np.tile(noise.channel_std**2 / readings, (len(rotations), 1)), drift_rate)
         information = walk_information(model.parameter_jacobian(rotations), gains)
     else:
@@ -198,5 +214,6 @@ def evaluate_poses(
         mount_mode=estimate_mount,
         mount_covariance=mount_covariance,
         drift_rate=None if drift_rate is None else drift_rate[[0, 3]],
-        pose_interval=None if drift_rate is None else pose_interval,
+        pose_interval=None if drift_rate is None else (pose_interval if pose_times is None else float(np.median(np.diff(times)))),
+        pose_times=None if drift_rate is None or pose_times is None else times,
     )

@@ -137,3 +137,29 @@ def test_cli_plan_with_drift(tmp_path, capsys):
     assert '"drift_rate": [\n    0.002,\n    4e-05\n  ]' in out.read_text()
     assert main(["plan", "--n", "6", "--drift-rate", "0", "0"]) == 2
     assert "drift_rate must be two finite rates" in capsys.readouterr().err
+
+
+def test_pose_times_replace_the_interval(pose_set, tmp_path, capsys):
+    common = dict(tool_weight=15.0, noise=NOISE, readings_per_pose=READINGS, drift_rate=[0.002, 4e-5])
+    uniform = evaluate_poses(pose_set, pose_interval=INTERVAL, **common)
+    timed = evaluate_poses(pose_set, pose_times=100.0 + INTERVAL * np.arange(len(pose_set)), **common)
+    np.testing.assert_allclose(timed.vector_std, uniform.vector_std, rtol=1e-12)  # only differences of times matter
+    assert "poses at their times (100 to" in timed.report()
+    uneven = 30.0 * np.arange(len(pose_set)) ** 1.5
+    to_end = uneven[-1] - uneven
+    jacobian = expected_tool(15.0).parameter_jacobian(pose_set)
+    dense = sum(jacobian[:, c].T @ np.linalg.solve(RATE[c] ** 2 * np.minimum.outer(to_end, to_end)
+                                                   + np.eye(len(uneven)) * NOISE.channel_std[c] ** 2 / READINGS,
+                                                   jacobian[:, c]) for c in range(6))
+    np.testing.assert_allclose(evaluate_poses(pose_set, pose_times=uneven, **common).information, dense, rtol=1e-7,
+                               atol=1e-9 * np.max(np.abs(dense)))
+    with pytest.raises(InvalidInput, match="strictly increasing"):
+        evaluate_poses(pose_set, pose_times=np.zeros(len(pose_set)), **common)
+    # the CLI takes the times of a recording's time column
+    path = tmp_path / "poses.csv"
+    path.write_text("t,alpha,beta,gamma\n" + "".join(f"{30 * i},{a},{b},0\n" for i, (a, b) in
+                                                   enumerate([(0, 0), (90, 0), (0, 90), (180, 0), (0, -90), (45, 45)])))
+    assert main(["evaluate-poses", str(path), "--drift-rate", "0.002", "4e-5"]) == 0
+    assert "poses at their times (0 to 150 s)" in capsys.readouterr().out
+    assert main(["evaluate-poses", str(path), "--pose-interval", "5"]) == 2
+    assert "--pose-interval applies with --drift-rate" in capsys.readouterr().err
