@@ -65,7 +65,10 @@ class JointAdmittance:
             removes the tool's inertial wrench on ticks given joint velocities
             and accelerations (:meth:`step`); its static part serves the others.
             Its bias tracker, if any, is read here once: attach a tracker when
-            creating the ``Compensator``, not afterwards.
+            creating the ``Compensator``, not afterwards. Likewise the fault
+            monitor, the law and the control frame's methods are bound at
+            construction (the tick's speed): build a new controller rather
+            than replacing ``monitor``, ``admittance`` or ``frame`` later.
         control_point: ``"tool"`` (the arm's tool frame, rigidly attached to the
             sensor) or ``"sensor"``. Default: tool if the arm has one.
         force_limit: Contact force norm [N] that stops the arm.
