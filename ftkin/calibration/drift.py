@@ -94,11 +94,11 @@ class BiasDrift:
     recorded_span: np.ndarray | None = None
 
     def __post_init__(self):
-        times = as_float_array(self.times, "times").reshape(-1)
+        times = as_float_array(self.times, "times").reshape(-1).copy()  # frozen below: a copy
         if len(times) == 0 or np.any(np.diff(times) < 0) or not np.all(np.isfinite(times)):
             raise InvalidInput("drift times must be finite, ascending and not empty [s]")
         for name in ("bias", "bias_std"):
-            value = as_float_array(getattr(self, name), name)
+            value = as_float_array(getattr(self, name), name).copy()  # frozen: a copy, never the caller's array
             if value.shape != (len(times), 6):
                 raise InvalidInput(f"drift {name} must have shape ({len(times)}, 6), got {value.shape}")
             value.setflags(write=False)

@@ -25,7 +25,7 @@ from .ml import LOSSES, fit_ml
 from .model import STANDARD_GRAVITY, SensorModel
 from .mount import MOUNT_NAMES, POSES_NEEDED, check_mount_mode
 from .result import CalibrationResult
-from .samples import PoseAverages, Samples
+from .samples import PoseAverages, Samples, check_one_visit_per_pose
 
 logger = logging.getLogger(__name__)
 
@@ -140,6 +140,8 @@ def calibrate(
             raise InvalidInput(f"drift={drift!r} and estimate_mount={estimate_mount!r} cannot be fitted together yet: "
                                "estimate the mount from a short recording (drift='none'), then the drift")
         drift_kind = "none"  # documented: with a mount estimate, auto keeps the constant bias
+    if drift_kind != "none":
+        check_one_visit_per_pose(samples)
     signs = reading_signs(sensor_sign, flip_axis)
     raw_poses = samples.pose_averages()
     poses = replace(raw_poses, wrenches=raw_poses.wrenches * signs)

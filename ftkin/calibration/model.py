@@ -80,7 +80,7 @@ class SensorModel:
 
     def __post_init__(self):
         for name in ("force_offset", "torque_offset", "gravity_in_base", "center_of_mass"):
-            vector = as_vector(getattr(self, name), 3, name)
+            vector = as_vector(getattr(self, name), 3, name).copy()  # frozen: a copy, never the caller's array
             vector.setflags(write=False)
             object.__setattr__(self, name, vector)
         object.__setattr__(self, "g", as_positive(self.g, "g"))

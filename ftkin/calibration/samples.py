@@ -125,6 +125,10 @@ class Samples:
             check_time_span(times)
             times.setflags(write=False)
             object.__setattr__(self, "times", times)
+        # Frozen copies: freezing the caller's own arrays (or sharing them) would change them behind their back.
+        wrenches, rotations, pose_ids = (array if array.base is None and array is not given else array.copy()
+                                         for array, given in ((wrenches, self.wrenches), (rotations, self.rotations),
+                                                              (pose_ids, self.pose_ids)))
         for array in (wrenches, rotations, pose_ids):
             array.setflags(write=False)
         object.__setattr__(self, "wrenches", wrenches)
@@ -208,3 +212,29 @@ class Samples:
             np.add.at(time_sums, group, self.times)
             pose_times = time_sums / counts
         return PoseAverages(unique[order], mean_rotations, means, counts, spread, pose_times)
+
+
+def check_one_visit_per_pose(samples: Samples) -> None:
+    """Refuse a pose id whose readings come in separate visits (another pose recorded in between), for a drift model.
+
+    A drift model gives each pose one time (the mean of its readings); a pose
+    revisited minutes later under the same id would average two biases at a
+    time in between. Visits are runs of the same id in time order.
+    """
+    if samples.times is None or len(samples.times) < 2:
+        return
+    order = np.argsort(samples.times, kind="stable")
+    ids, times = samples.pose_ids[order], samples.times[order]
+    starts = np.flatnonzero(np.concatenate([[True], ids[1:] != ids[:-1]]))
+    run_ids = ids[starts]
+    unique, counts = np.unique(run_ids, return_counts=True)
+    if np.all(counts == 1):
+        return
+    pose = unique[np.argmax(counts > 1)]
+    ends = np.concatenate([starts[1:], [len(ids)]]) - 1
+    spans = [f"{times[a]:g}–{times[b]:g} s" for a, b, i in zip(starts, ends, run_ids) if i == pose]
+    raise InvalidSamples(
+        f"pose {int(pose)} was recorded in {len(spans)} separate visits ({', '.join(spans[:4])}"
+        f"{', ...' if len(spans) > 4 else ''}; {int(np.sum(counts > 1))} pose id(s) revisited): a drift model needs one "
+        "time per pose; give each visit its own pose id, or calibrate with drift='none' (--drift none)"
+    )

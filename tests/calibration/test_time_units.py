@@ -33,3 +33,42 @@ def test_a_motion_sampled_in_milliseconds_is_refused():
         joint_derivatives(times, q)
     smooth, velocity, _ = joint_derivatives(times / 1000.0, q)
     np.testing.assert_allclose(velocity[50:150], np.cos(np.outer(times[50:150] / 1000.0, np.ones(6))), atol=1e-6)
+
+
+def test_a_pose_revisited_under_the_same_id_is_refused_for_a_drift_model(arm):
+    from ftkin import calibrate
+    from ftkin.sim.sensor import paper_like_truth
+
+    rng = np.random.default_rng(2)
+    q = arm.random_configurations(8, rng, margin=0.3).copy()
+    q[7] = q[2]  # the last visit returns to pose 2
+    truth = paper_like_truth()
+    rotations = arm.rotation_sensor_to_base(np.repeat(q, 3, axis=0))
+    wrenches = truth.predict(rotations) + rng.normal(0, 0.01, (24, 6))
+    ids = np.repeat(np.arange(8), 3)
+    times = np.arange(24) * 10.0
+    ids[-3:] = 2  # the last visit reuses pose 2's id, 150 s later
+    samples = Samples(wrenches, rotations, ids, times=times)
+    with pytest.raises(InvalidSamples, match=r"pose 2 was recorded in 2 separate visits \(60–80 s, 210–230 s; 1 pose"):
+        calibrate(samples, drift="auto")
+    assert calibrate(samples, drift="none").pose_count == 7  # a constant bias: the visits may be averaged
+    ids[-3:] = 8
+    assert calibrate(Samples(wrenches, rotations, ids, times=times), drift="auto").pose_count == 8
+
+
+def test_constructors_never_freeze_the_callers_arrays():
+    from ftkin import SensorModel
+    from ftkin.calibration.drift import BiasDrift
+
+    wrenches, rotations, ids, times = np.zeros((3, 6)), np.tile(np.eye(3), (3, 1, 1)), np.arange(3), np.arange(3.0)
+    samples = Samples(wrenches, rotations, ids, times=times)
+    force = np.array([1.0, 2.0, 3.0])
+    model = SensorModel(force_offset=force, torque_offset=np.zeros(3), gravity_in_base=np.array([0.0, 0.0, -5.0]),
+                        center_of_mass=np.zeros(3))
+    bias = np.zeros((3, 6))
+    BiasDrift("none", "given", times, bias, bias.copy())
+    for array in (wrenches, rotations, ids, times, force, bias):
+        assert array.flags.writeable
+    wrenches[0, 0], force[0] = 9.0, 9.0  # and the objects keep their own values
+    assert samples.wrenches[0, 0] == 0.0 and model.force_offset[0] == 1.0
+    assert not samples.wrenches.flags.writeable and not model.force_offset.flags.writeable
