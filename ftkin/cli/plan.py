@@ -143,6 +143,9 @@ def register(subparsers) -> None:
                        help="extra range for one joint [rad]; repeat for several joints")
     group.add_argument("--no-self-collision", action="store_true", help="do not check self-collision")
     parser.add_argument("--seed", type=seed, default=0, help="random seed; the same seed gives the same plan (default: 0)")
+    parser.add_argument("--max-travel-ratio", type=positive_float, default=None, metavar="R",
+                        help="with --drift-rate: keep the joint travel within R (≥ 1) times the short-travel order's "
+                        "(default: unbounded, about 2x)")
     add_expectation_arguments(parser)
     add_excitation_arguments(parser)
     add_arm_arguments(parser)
@@ -161,9 +164,9 @@ def run(args) -> int:
         raise InvalidInput(f"--max-tilt-deg must be between 0 and 180 [deg], got {args.max_tilt_deg:g}")
     if args.excitation:
         if (args.n is not None or args.max_tilt_deg is not None or args.format not in (None, "csv")
-                or args.drift_rate is not None or args.pose_interval is not None):
-            raise InvalidInput("--excitation plans a trajectory: --n, --max-tilt-deg, --format yaml/json, --drift-rate "
-                               "and --pose-interval do not apply")
+                or args.drift_rate is not None or args.pose_interval is not None or args.max_travel_ratio is not None):
+            raise InvalidInput("--excitation plans a trajectory: --n, --max-tilt-deg, --format yaml/json, --drift-rate, "
+                               "--pose-interval and --max-travel-ratio do not apply")
         return run_excitation(args, load_arm(args))
     if args.n is None:
         raise InvalidInput("give --n N (the number of poses), or --excitation for a trajectory")
@@ -173,7 +176,7 @@ def run(args) -> int:
         plan = plan_poses(
             arm, args.n, margin=args.margin, floor_height=None if args.no_floor else args.floor_height, max_tilt=max_tilt,
             joint_ranges=args.joint_range, self_collision=not args.no_self_collision, seed=args.seed,
-            **expectation_from_args(args),
+            max_travel_ratio=args.max_travel_ratio, **expectation_from_args(args),
         )
     except UrdfError as error:  # only the collision geometry is loaded here: meshes not found
         hint = "give --package-dir DIR (the folder holding the package:// packages) or --no-self-collision"
@@ -211,6 +214,7 @@ def plan_document(plan) -> dict:
         "criterion": plan.criterion,
         "criterion_value": plan.criterion_value,
         "predicted_standard_errors": errors,
+        "joint_travel_rad": plan.joint_travel,
         **({} if plan.evaluation.drift_rate is None else {
             "drift_rate": plan.evaluation.drift_rate.tolist(), "pose_interval_s": plan.evaluation.pose_interval}),
     }

@@ -24,10 +24,12 @@ the information a ``random-walk`` calibration uses), the poses visited one every
    criterion; stop after :data:`PATIENCE` rounds without a gain or
    :data:`MAX_ROUNDS` rounds.
 
-The order ignores joint travel: poses that turn gravity around are far apart
-in joint space, so the arm moves more between them. That is the price of the
-drift-robust order; without a drift rate, :func:`ftkin.plan_poses` orders for
-short travel instead.
+Poses that turn gravity around are far apart in joint space, so the arm moves
+more between them: on the bundled arm about twice the joint travel of the
+short-travel order. ``max_length`` bounds the path (the sum of joint-space
+distances between consecutive poses [rad]); swaps beyond it are not taken,
+and a greedy start beyond it is not used. Without a drift rate,
+:func:`ftkin.plan_poses` orders for short travel instead.
 """
 
 from __future__ import annotations
@@ -62,6 +64,15 @@ def check_drift_rate(value) -> np.ndarray:
 def check_pose_interval(value) -> float:
     """Time between poses [s], between 1 ms and a day."""
     return as_in_range(value, "pose_interval", 1e-3, 86400.0, "s")
+
+
+def check_travel_ratio(value, drift_rate) -> float | None:
+    """A bound on the drift order's joint travel, as a ratio to the short-travel order's (1 to 100), or None."""
+    if value is None:
+        return None
+    if drift_rate is None:
+        raise InvalidInput("max_travel_ratio bounds the drift-robust order: it applies with drift_rate")
+    return as_in_range(value, "max_travel_ratio", 1.0, 100.0, "(× the short-travel order's joint travel)")
 
 
 def check_drift_options(drift_rate, pose_interval, estimate_mount: str) -> tuple[np.ndarray | None, float]:
@@ -112,7 +123,8 @@ def _turning_order(gravity_in_sensor: np.ndarray, start: int) -> np.ndarray:
 
 
 def drift_robust_order(model, rotations, *, rate, noise_std, readings_per_pose: int, pose_interval: float,
-                       rng: np.random.Generator, initial_order=None) -> tuple[np.ndarray, float]:
+                       rng: np.random.Generator, initial_order=None, distances=None,
+                       max_length: float | None = None) -> tuple[np.ndarray, float]:
     """Visiting order of poses that keeps the most information under a random-walk bias.
 
     Args:
@@ -124,7 +136,11 @@ def drift_robust_order(model, rotations, *, rate, noise_std, readings_per_pose: 
         readings_per_pose: Readings averaged at each pose.
         pose_interval: Time from one pose to the next [s].
         rng: Random generator of the swap search (the order is deterministic for a seed).
-        initial_order: Order to start from (default: as given).
+        initial_order: Order to start from (default: as given); it must keep
+            within ``max_length``.
+        distances: ``(P, P)`` joint-space distances between the poses [rad]
+            (with ``max_length``).
+        max_length: Longest path through the poses [rad], or None (unbounded).
 
     Returns:
         The order (indices into ``rotations``) and its criterion, ``log det`` of
@@ -132,6 +148,8 @@ def drift_robust_order(model, rotations, *, rate, noise_std, readings_per_pose: 
     """
     rotations = np.asarray(rotations, dtype=float)
     count = len(rotations)
+    if max_length is not None and distances is None:
+        raise InvalidInput("max_length needs the distances between the poses")
     jacobians = model.parameter_jacobian(rotations)
     variance = np.tile(np.asarray(noise_std, dtype=float) ** 2 / readings_per_pose, (count, 1))
     gains = walk_gains(np.arange(count) * float(pose_interval), variance, np.asarray(rate, dtype=float))
@@ -139,7 +157,15 @@ def drift_robust_order(model, rotations, *, rate, noise_std, readings_per_pose: 
     gravity /= np.linalg.norm(gravity, axis=1, keepdims=True)
     starts = [np.arange(count) if initial_order is None else np.asarray(initial_order)]
     starts += [_turning_order(gravity, start) for start in (starts[0][0], int(np.argmax(gravity[:, 2])))]
-    values = _log_det(walk_information(jacobians[np.array(starts)], gains))
+
+    def admissible(orders: np.ndarray) -> np.ndarray:
+        if max_length is None:
+            return np.ones(len(orders), dtype=bool)
+        return distances[orders[:, :-1], orders[:, 1:]].sum(axis=1) <= max_length * (1.0 + 1e-12)
+
+    starts = np.array(starts)
+    values = np.where(admissible(starts), _log_det(walk_information(jacobians[starts], gains)), -np.inf)
+    values[0] = _log_det(walk_information(jacobians[starts[:1]], gains))[0]  # the given order always counts
     order, best = starts[int(np.argmax(values))].copy(), float(np.max(values))
     if count < 2:
         return order, best
@@ -150,7 +176,7 @@ def drift_robust_order(model, rotations, *, rate, noise_std, readings_per_pose: 
         candidates = np.tile(order, (len(pairs), 1))
         rows = np.arange(len(pairs))
         candidates[rows, pairs[:, 0]], candidates[rows, pairs[:, 1]] = order[pairs[:, 1]], order[pairs[:, 0]]
-        values = _log_det(walk_information(jacobians[candidates], gains))
+        values = np.where(admissible(candidates), _log_det(walk_information(jacobians[candidates], gains)), -np.inf)
         winner = int(np.argmax(values)) if len(values) else 0
         if len(values) and values[winner] > best + 1e-9:
             order, best, idle = candidates[winner], float(values[winner]), 0

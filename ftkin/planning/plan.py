@@ -39,9 +39,9 @@ from .constraints import (
     check_tilt_observability,
 )
 from .design import d_optimal_selection, information_factors, log_det
-from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_options, drift_robust_order
+from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_options, check_travel_ratio, drift_robust_order
 from .evaluation import PoseEvaluation, evaluate_poses, expected_tool
-from .order import revolute_mask, short_travel_order, unwind_revolute
+from .order import joint_distances, path_length, revolute_mask, short_travel_order, unwind_revolute
 
 CRITERION = "D-optimality: log det of the Fisher information of θ = [a, F0, M0, P] (and the mount angles, if estimated; SI units)"
 REFINE_STEPS = (0.2, 0.08, 0.03, 0.01)
@@ -94,6 +94,11 @@ class PosePlan:
         """Number of poses."""
         return len(self.joint_positions)
 
+    @property
+    def joint_travel(self) -> float:
+        """Joint-space path length through the poses in visiting order [rad] (Euclidean norm of each move)."""
+        return float(np.sum(np.linalg.norm(np.diff(self.joint_positions, axis=0), axis=1)))
+
     def report(self) -> str:
         """Human-readable summary: constraints and predicted standard errors."""
         lines = [
@@ -101,6 +106,7 @@ class PosePlan:
             f"from {self.sampled_count} sampled",
             f"constraints: {self.constraints.describe()}",
             f"criterion: {self.criterion} = {self.criterion_value:.3f}",
+            f"joint travel along the visiting order: {self.joint_travel:.1f} rad",
         ]
         return "\n".join(lines) + "\n" + self.evaluation.report()
 
@@ -125,6 +131,7 @@ def plan_poses(
     estimate_mount: str = "none",
     drift_rate=None,
     pose_interval: float = DEFAULT_POSE_INTERVAL,
+    max_travel_ratio: float | None = None,
 ) -> PosePlan:
     """Plan ``n`` calibration poses for ``arm``.
 
@@ -155,6 +162,9 @@ def plan_poses(
             joint travel), and the predicted standard errors include the
             drift. Not with ``estimate_mount``.
         pose_interval: Time from one pose to the next [s] (with ``drift_rate``).
+        max_travel_ratio: With ``drift_rate``: the joint travel along the
+            drift-robust order stays within this multiple (≥ 1) of the
+            short-travel order's (None: unbounded, about 2× on the bundled arm).
 
     Raises:
         UnobservableParameters: ``n < 3``, or the constraints leave a
@@ -172,6 +182,7 @@ def plan_poses(
         raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
     check_mount_mode(estimate_mount)
     drift_rate, pose_interval = check_drift_options(drift_rate, pose_interval, estimate_mount)
+    max_travel_ratio = check_travel_ratio(max_travel_ratio, drift_rate)
     constraints = PoseConstraints(margin, floor_height, max_tilt, joint_ranges or (), self_collision)
     model = expected_tool(tool_weight, center_of_mass)
     noise = noise if noise is not None else SensorNoise.paper()
@@ -195,9 +206,11 @@ def plan_poses(
     order = short_travel_order(q)
     criterion = CRITERION
     if drift_rate is not None:
+        distances = joint_distances(q)
+        max_length = None if max_travel_ratio is None else max_travel_ratio * path_length(distances, order)
         order, _ = drift_robust_order(model, rotations, rate=drift_rate, noise_std=channel_std,
                                       readings_per_pose=readings_per_pose, pose_interval=pose_interval, rng=rng,
-                                      initial_order=order)
+                                      initial_order=order, distances=distances, max_length=max_length)
         criterion = DRIFT_CRITERION
     q, rotations = q[order], rotations[order]
     evaluation = evaluate_poses(rotations, tool_weight=tool_weight, center_of_mass=center_of_mass,

@@ -163,3 +163,25 @@ def test_pose_times_replace_the_interval(pose_set, tmp_path, capsys):
     assert "poses at their times (0 to 150 s)" in capsys.readouterr().out
     assert main(["evaluate-poses", str(path), "--pose-interval", "5"]) == 2
     assert "--pose-interval applies with --drift-rate" in capsys.readouterr().err
+
+
+def test_the_travel_bound_is_kept(arm, pose_set):
+    common = dict(seed=2, candidates=400, tool_weight=15.0, noise=NOISE, readings_per_pose=READINGS,
+                  drift_rate=[0.002, 4e-5], pose_interval=INTERVAL)
+    travel = plan_poses(arm, 10, **{k: v for k, v in common.items() if k not in ("drift_rate", "pose_interval")})
+    free = plan_poses(arm, 10, **common)
+    bounded = plan_poses(arm, 10, max_travel_ratio=1.2, **common)
+    # independent: the path length from the joint positions themselves
+    length = float(np.sum(np.linalg.norm(np.diff(bounded.joint_positions, axis=0), axis=1)))
+    assert bounded.joint_travel == pytest.approx(length)
+    assert length <= 1.2 * travel.joint_travel * (1 + 1e-9) < free.joint_travel
+    assert free.criterion_value >= bounded.criterion_value
+    assert f"joint travel along the visiting order: {length:.1f} rad" in bounded.report()
+    with pytest.raises(InvalidInput, match="applies with drift_rate"):
+        plan_poses(arm, 8, max_travel_ratio=1.5, candidates=200)
+    with pytest.raises(InvalidInput, match="max_travel_ratio must be between 1 and 100"):
+        plan_poses(arm, 8, drift_rate=[0.002, 4e-5], max_travel_ratio=0.9, candidates=200)
+    model = expected_tool(15.0)
+    with pytest.raises(InvalidInput, match="needs the distances"):
+        drift_robust_order(model, pose_set, rate=RATE, noise_std=NOISE.channel_std, readings_per_pose=READINGS,
+                           pose_interval=INTERVAL, rng=np.random.default_rng(0), max_length=10.0)
