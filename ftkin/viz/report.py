@@ -28,6 +28,24 @@ from .report_series import draw_series, report_series
 _UNITS = ("N", "N", "N", "N·m", "N·m", "N·m")
 
 
+SUMMARY_FONT_SIZE = 8
+"""Font size of the summary text [pt]."""
+SUMMARY_WIDTH = 180
+"""Characters per summary line on the 14-inch page (monospace at :data:`SUMMARY_FONT_SIZE`); longer lines wrap."""
+
+
+def _wrapped(text: str) -> str:
+    """``text`` with lines longer than :data:`SUMMARY_WIDTH` wrapped, continuation lines indented."""
+    import textwrap
+
+    lines = []
+    for line in text.splitlines():
+        indent = " " * (len(line) - len(line.lstrip()) + 4)
+        lines.extend(textwrap.wrap(line, SUMMARY_WIDTH, subsequent_indent=indent, drop_whitespace=False,
+                                   break_on_hyphens=False) or [""])
+    return "\n".join(lines)
+
+
 def _pyplot_free_figure(height: float = 10.0):
     try:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -44,7 +62,8 @@ def report_data(calibration, samples: Samples) -> dict[str, np.ndarray]:
 
     Returns a dict with ``pose_ids`` ``(P,)``, ``measured`` ``(P, 6)`` (mean raw
     wrench [N, N·m]), ``predicted`` ``(P, 6)`` (model prediction at the pose's
-    mean orientation), ``residuals`` = measured − predicted, and
+    mean orientation; for a drift-aware calibration and samples with times,
+    with the bias at the pose's time), ``residuals`` = measured − predicted, and
     ``standard_error`` ``(P, 6)`` (spread / √count; NaN for single readings).
     """
     if not isinstance(calibration, SensorModel):
@@ -53,6 +72,8 @@ def report_data(calibration, samples: Samples) -> dict[str, np.ndarray]:
         raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
     poses = as_real_sensor(samples, calibration).pose_averages()  # the stored sign, axis flip and mount applied
     predicted = calibration.predict(poses.rotations)
+    if poses.times is not None and getattr(calibration, "drift", None) is not None:
+        predicted = calibration.tool_gravity_wrench(poses.rotations) + calibration.bias_at(poses.times)
     return {
         "pose_ids": poses.pose_ids,
         "measured": poses.wrenches,
@@ -70,8 +91,14 @@ def report_figure(calibration, samples: Samples, title: str | None = None):
     """
     data = report_data(calibration, samples)
     series = report_series(calibration)
-    figure = _pyplot_free_figure(10.0 + 2.6 * len(series))
-    grid = figure.add_gridspec(5 + len(series), 3, height_ratios=[3, 1.4, 3, 1.4, 2.6] + [2.6] * len(series))
+    summary = calibration.summary() if hasattr(calibration, "summary") else repr(calibration)
+    if getattr(calibration, "std_errors", None) is None:
+        summary += "\n  (no standard errors: the calibration has no covariance)"
+    summary = _wrapped(summary)
+    text_height = 0.2 + len(summary.splitlines()) * SUMMARY_FONT_SIZE * 1.25 / 72.0  # [in]: the text's own height
+    heights = [2.6, 1.2, 2.6, 1.2, text_height] + [2.3] * len(series)  # [in]
+    figure = _pyplot_free_figure(sum(heights) + 0.6)
+    grid = figure.add_gridspec(5 + len(series), 3, height_ratios=heights)
     x = np.arange(len(data["pose_ids"]))
     error = np.nan_to_num(data["standard_error"], nan=0.0)
     for channel, (name, unit) in enumerate(zip(WRENCH_CHANNELS, _UNITS)):
@@ -91,10 +118,8 @@ def report_figure(calibration, samples: Samples, title: str | None = None):
         bottom.set_xlabel("pose")
     text = figure.add_subplot(grid[4, :])
     text.axis("off")
-    summary = calibration.summary() if hasattr(calibration, "summary") else repr(calibration)
-    if getattr(calibration, "std_errors", None) is None:
-        summary += "\n  (no standard errors: the calibration has no covariance)"
-    text.text(0.0, 1.0, summary, family="monospace", fontsize=8, va="top", ha="left", transform=text.transAxes)
+    text.text(0.0, 1.0, summary, family="monospace", fontsize=SUMMARY_FONT_SIZE, va="top", ha="left",
+              transform=text.transAxes)
     for k, one in enumerate(series):
         draw_series(figure, grid[5 + k, :].subgridspec(1, 4), one)
     figure.suptitle(title or f"ftkin calibration report: {len(x)} poses, {len(samples)} readings")

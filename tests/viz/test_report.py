@@ -83,3 +83,23 @@ def test_cli_report(calibrated, arm, tmp_path, capsys):
     assert main(["report", str(calib), str(csv_path), "-o", str(out)]) == 0
     assert out.read_bytes()[:8] == PNG_SIGNATURE
     assert "8 poses" in capsys.readouterr().out
+
+
+def test_a_drift_aware_report_predicts_with_the_bias_at_each_pose_time(arm):
+    from ftkin import SensorDrift, SensorNoise, SimulatedSensor
+    from ftkin.sim.sensor import paper_like_truth, recording_times
+    from ftkin.viz.report import SUMMARY_WIDTH, _wrapped
+
+    rng = np.random.default_rng(8)
+    q = arm.random_configurations(16, rng, margin=0.3)
+    sensor = SimulatedSensor(paper_like_truth(), SensorNoise(0.02, 0.001), SensorDrift.typical())
+    samples = sensor.samples_at_configurations(arm, q, rng, 5, times=recording_times(16, 5, 900.0, 0.01))
+    result = calibrate(samples, drift="poly:2")
+    data = report_data(result, samples)
+    poses = samples.pose_averages()
+    expected = result.tool_gravity_wrench(poses.rotations) + result.bias_at(poses.times)  # by hand
+    np.testing.assert_allclose(data["predicted"], expected, atol=1e-12)
+    assert np.sqrt(np.mean(data["residuals"][:, :3] ** 2)) < 0.05  # the drift is not left in the residuals
+    long = "  WARNING: " + "word " * 80
+    assert all(len(line) <= SUMMARY_WIDTH for line in _wrapped(long).splitlines())
+    assert _wrapped(long).splitlines()[1].startswith(" " * 6)
