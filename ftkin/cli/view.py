@@ -79,6 +79,19 @@ def _calibration_poses(loaded) -> Frames:
     return Frames(labels, averages.wrenches, configurations, averages.rotations, None)
 
 
+def _with_bias_at_times(frames: Frames, calibration, times: np.ndarray) -> Frames:
+    """For a drift-aware calibration, shift each frame's reading by ``bias(t) − bias(end)`` (``times`` [s], one per frame).
+
+    The viewer subtracts the calibration's bias (the one at the end of its
+    recording); with this shift it effectively subtracts the bias at the
+    reading's time, as ``ftkin compensate`` does (held outside the recording).
+    """
+    if getattr(calibration, "drift", None) is None:
+        return frames
+    shift = calibration.bias_at(times) - calibration.bias
+    return dataclasses.replace(frames, raw_wrenches=frames.raw_wrenches - shift)
+
+
 def _replay_rows(loaded, max_frames: int) -> Frames:
     samples, table = loaded.samples, loaded.table
     times = samples.times
@@ -166,6 +179,9 @@ def run(args: argparse.Namespace) -> int:
     loaded = dataclasses.replace(loaded, samples=as_real_sensor(loaded.samples, calibration))
     arm = mounted_arm(arm, calibration.mount_rotation)
     frames = _replay_rows(loaded, args.max_frames) if args.replay else _calibration_poses(loaded)
+    if loaded.samples.times is not None:  # per-frame times: the rows' own, or each calibration pose's mean time
+        frames = _with_bias_at_times(frames, calibration,
+                                     frames.times if args.replay else loaded.samples.pose_averages().times)
     if frames.configurations is None:
         arm = None  # orientations without joint angles: no arm to draw
     chosen = _pick(frames, args.pose, bool(args.replay)) if args.pose is not None else None

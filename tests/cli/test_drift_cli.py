@@ -71,3 +71,18 @@ def test_rezero_updates_the_file_in_place_or_writes_elsewhere(samples_csv, tmp_p
     # a JSON file where a CSV is expected
     assert main(["compensate", str(calibration_path), str(calibration_path), "-o", str(tmp_path / "x.csv")]) == 2
     assert "is a JSON file" in capsys.readouterr().err
+
+
+def test_view_subtracts_the_bias_at_each_pose_time(samples_csv, tmp_path, capsys):
+    calibration = tmp_path / "c.json"
+    for drift, largest in (("poly:3", 0.05), ("none", 0.1)):
+        assert main(["calibrate", str(samples_csv), "--drift", drift, "-o", str(calibration)]) == 0
+        capsys.readouterr()
+        assert main(["view", str(calibration), str(samples_csv), "--html", str(tmp_path / "v.html")]) == 0
+        rows = [line.split() for line in capsys.readouterr().out.splitlines() if line.strip().startswith("pose ")]
+        contact = np.array([float(row[5]) for row in rows])  # |F'| [N] at the 24 calibration poses
+        assert len(contact) == 24
+        if drift == "none":
+            assert contact.max() > largest  # a constant bias leaves the warm-up in the contact force
+        else:
+            assert contact.max() < largest  # the bias at each pose's time: only the noise is left
