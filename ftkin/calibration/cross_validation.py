@@ -17,6 +17,8 @@ with the same options.
 
 from __future__ import annotations
 
+import logging
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -63,6 +65,18 @@ class CrossValidation:
         return "\n".join(lines)
 
 
+@contextmanager
+def _quiet_fits():
+    """The folds' fits keep their warnings to themselves: they are about sub-fits, not the user's calibration."""
+    logger = logging.getLogger("ftkin.calibration")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
 def _subset(samples: Samples, mask: np.ndarray) -> Samples:
     def part(array):
         return None if array is None else array[mask]
@@ -103,7 +117,8 @@ def cross_validate(samples: Samples, drifts=("none", "auto"), folds: int = 5, se
         train, test = _subset(samples, reading_fold != k), _subset(samples, reading_fold == k)
         for drift in drifts:
             try:
-                result = calibrate(train, drift=drift, **options)
+                with _quiet_fits():
+                    result = calibrate(train, drift=drift, **options)
             except UnobservableParameters as error:
                 raise InvalidInput(f"fold {k + 1} of {folds}: the other folds' {len(np.unique(train.pose_ids))} poses "
                                    f"cannot determine the parameters ({error}); use fewer folds") from None
