@@ -2,8 +2,13 @@
 
 A motion CSV has a time column ``t`` [s] (uniformly sampled), the joint
 columns of the samples CSV (the URDF's joint names or ``q1..qn`` [rad]) and
-the wrench columns ``fx..mz`` [N, N·m] (see :mod:`ftkin.io.samples_csv`).
-Other columns are carried along. A bag is read with
+the wrench columns ``fx..mz`` [N, N·m] (see :mod:`ftkin.io.samples_csv`),
+and optionally the joint velocities and accelerations the recording already
+has (a simulator's): ``dq1..dqn`` and ``ddq1..ddqn`` [rad/s, rad/s²], or
+``<joint>_velocity`` and ``<joint>_acceleration``; given, they are used as they
+are instead of differentiating the positions, once checked against the
+positions' time derivatives (:func:`given_derivatives`). Other columns are
+carried along. A bag is read with
 :func:`ftkin.io.bags.read_bag` (joint positions interpolated to the wrench
 stamps) and resampled to a uniform grid at the wrench rate when its stamps
 jitter.
@@ -18,6 +23,7 @@ and runs the kinematics: :class:`~ftkin.calibration.regressor.MotionSamples` out
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +35,8 @@ from ..exceptions import InvalidInput, InvalidSamples
 from .csv_table import Table, missing_columns, read_table
 from .samples_csv import check_radians, detect_orientation
 from .time_columns import TIME_COLUMN, time_column, times_from_table
+
+logger = logging.getLogger(__name__)
 
 JITTER_TOLERANCE = 1e-3
 """Largest deviation of a bag's time step from the median step [fraction] accepted without resampling."""
@@ -44,6 +52,8 @@ class MotionRecording:
         joint_positions: ``(N, nq)`` [rad], in the arm's joint order.
         wrenches: ``(N, 6)`` raw readings, sensor frame [N, N·m].
         table: The CSV table (for copying other columns), or None for a bag.
+        joint_velocities: ``(N, nq)`` [rad/s] given by the recording, or None.
+        joint_accelerations: ``(N, nq)`` [rad/s²] given by the recording, or None.
     """
 
     source: str
@@ -51,13 +61,22 @@ class MotionRecording:
     joint_positions: np.ndarray
     wrenches: np.ndarray
     table: Table | None = None
+    joint_velocities: np.ndarray | None = None
+    joint_accelerations: np.ndarray | None = None
 
     def motion_samples(self, arm, window: int | None = None, polyorder: int = DEFAULT_POLYORDER) -> MotionSamples:
         """Zero-phase ``q, dq, ddq`` and the sensor frame's motion (:class:`MotionSamples`).
 
+        With velocities and accelerations given by the recording, those are
+        used with the positions as they are (``window`` and ``polyorder`` do
+        not apply).
+
         Raises:
             InvalidSamples: the times are not uniform or too few for the window.
         """
+        if self.joint_velocities is not None and self.joint_accelerations is not None:
+            return MotionSamples.from_joint_trajectory(arm, self.joint_positions, self.joint_velocities,
+                                                       self.joint_accelerations, self.wrenches, self.times)
         try:
             q, dq, ddq = joint_derivatives(self.times, self.joint_positions, window, polyorder)
         except InvalidInput as error:
@@ -100,7 +119,55 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
         row = int(np.flatnonzero(steps <= 0)[0]) + 1
         message = f"time {times[row]!r} s does not increase; expected strictly increasing stamps"
         raise InvalidSamples(message, table.source, table.lines[row])
-    return MotionRecording(table.source, times, joints, table.floats(WRENCH_CHANNELS), table)
+    velocities, accelerations = given_derivatives(table, columns, times, joints)
+    return MotionRecording(table.source, times, joints, table.floats(WRENCH_CHANNELS), table, velocities, accelerations)
+
+
+DERIVATIVE_TOLERANCE = 0.2
+"""Largest RMS disagreement, as a fraction of their RMS, between given velocities (accelerations) and the
+finite-difference derivative of the positions (velocities)."""
+
+
+def _derivative_columns(table: Table, columns: list[str], kind: str) -> list[str] | None:
+    prefix, suffix = ("dq", "_velocity") if kind == "velocity" else ("ddq", "_acceleration")
+    for names in ([f"{prefix}{i + 1}" for i in range(len(columns))], [f"{c}{suffix}" for c in columns]):
+        present = [name in table.header for name in names]
+        if all(present):
+            return names
+        if any(present):
+            missing = [name for name, here in zip(names, present) if not here]
+            raise InvalidSamples(f"joint {kind} columns {missing} are missing (the others are given); give all "
+                                 f"{len(columns)} or none", table.source)
+    return None
+
+
+def given_derivatives(table: Table, columns: list[str], times: np.ndarray, joints: np.ndarray):
+    """The recording's own joint velocities and accelerations ``(N, nq)`` [rad/s, rad/s²], or ``(None, None)``.
+
+    Both are needed (one alone is ignored with a warning), and each must agree
+    with the time derivative (central differences) of the one below it within
+    :data:`DERIVATIVE_TOLERANCE` of its RMS: degrees per second, another joint
+    order or a sign would not.
+    """
+    velocity_names = _derivative_columns(table, columns, "velocity")
+    acceleration_names = _derivative_columns(table, columns, "acceleration")
+    if velocity_names is None or acceleration_names is None:
+        if velocity_names is not None or acceleration_names is not None:
+            logger.warning("%s: joint velocities or accelerations given without the other; both are taken from "
+                           "the positions instead", table.source)
+        return None, None
+    velocities, accelerations = table.floats(velocity_names), table.floats(acceleration_names)
+    for given, below, names, unit in ((velocities, joints, velocity_names, "rad/s"),
+                                      (accelerations, velocities, acceleration_names, "rad/s²")):
+        derivative = np.gradient(below, times, axis=0)
+        scale = float(np.sqrt(np.mean(derivative**2)))
+        mismatch = float(np.sqrt(np.mean((given - derivative) ** 2)))
+        if mismatch > DERIVATIVE_TOLERANCE * scale + 1e-9:
+            raise InvalidSamples(
+                f"columns {names[0]}..{names[-1]} disagree with the time derivative of the columns before them "
+                f"(RMS difference {mismatch:.3g} against RMS {scale:.3g} {unit}): expected {unit} in the joint order "
+                "(degrees? another order?); drop them to differentiate the positions", table.source)
+    return velocities, accelerations
 
 
 def load_motion_csv(path, arm) -> MotionRecording:
