@@ -3,7 +3,8 @@
 Without ``t``, one column named ``time``, ``time_s``, ``t_s``, ``timestamp``,
 ``stamp`` or ``%time`` is read as seconds, and ``t_ms``/``time_ms``,
 ``t_us``/``time_us``, ``t_ns``/``time_ns`` are converted (a unit is applied
-only where the column's name says it). Two candidates are an error. Used by
+only where the column's name says it). An alias whose cells are not numbers (ISO dates, say) is not a time here: it
+is left alone with a warning. Two numeric candidates are an error. Used by
 the samples CSV, the motion recordings, bag extraction and the viewer.
 """
 
@@ -26,11 +27,22 @@ TIME_ALIASES = {"time": 1.0, "time_s": 1.0, "t_s": 1.0, "timestamp": 1.0, "stamp
 """Time columns read when ``t`` is absent, with the factor to seconds their name gives."""
 
 
+def _numeric(table: Table, name: str) -> bool:
+    """Whether the column's first cell is a number (an alias holding dates or text is not a time in seconds)."""
+    try:
+        float(table.rows[0][table.column_index(name)])
+    except (ValueError, IndexError):
+        logger.warning("%s: column %r is not numbers of seconds (%r); not read as the time: name a time column "
+                       "'t' [s] to model a drift", table.source, name, table.rows[0][table.column_index(name)][:40])
+        return False
+    return True
+
+
 def time_column(table: Table) -> tuple[str, float] | None:
-    """The time column's name and its factor to seconds (``t``, or its one alias), or None."""
+    """The time column's name and its factor to seconds (``t``, or its one numeric alias), or None."""
     if TIME_COLUMN in table.header:
         return TIME_COLUMN, 1.0
-    found = [name for name in table.header if name.lower() in TIME_ALIASES]
+    found = [name for name in table.header if name.lower() in TIME_ALIASES and _numeric(table, name)]
     if not found:
         return None
     if len(found) > 1:

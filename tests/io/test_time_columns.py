@@ -32,3 +32,16 @@ def test_two_time_columns_are_ambiguous(tmp_path):
     path.write_text("time,stamp,alpha,beta,gamma,fx,fy,fz,mx,my,mz\n0,0,0,0,0,1,2,3,0,0,0\n")
     with pytest.raises(InvalidSamples, match=r"several time columns \['time', 'stamp'\]"):
         load_samples(path)
+
+
+def test_a_textual_timestamp_column_is_left_alone(tmp_path, caplog):
+    import logging
+
+    path = tmp_path / "s.csv"
+    path.write_text("timestamp,alpha,beta,gamma,fx,fy,fz,mx,my,mz\n"
+                    "2026-11-29T10:00:00,0,0,0,1,2,-9,0.1,0.2,0\n2026-11-29T10:00:30,90,0,0,1.5,2,-3,0,0.3,0\n"
+                    "2026-11-29T10:01:00,0,90,0,-8,2,1,0.2,0,0.1\n")
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        loaded = load_samples(path)
+    assert loaded.samples.times is None
+    assert "column 'timestamp' is not numbers of seconds" in caplog.text
