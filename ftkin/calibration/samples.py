@@ -28,15 +28,27 @@ LONG_TIME_SPAN = 7 * 86400.0
 """Span of reading times [s] (a week) beyond which a warning asks whether ``t`` is in seconds."""
 
 
+_UNITS = (("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9))
+
+
+def _likely_unit(span: float, smallest: float, largest: float) -> tuple[str | None, float]:
+    """The unit that makes reading times plausible: the one in which every |time| is an epoch stamp (seconds since
+    1970 in 2001–2286), else the unit bringing the span nearest ten minutes (in decades) within a week."""
+    for name, factor in _UNITS:
+        if 1e9 <= smallest / factor and largest / factor < 1e10:
+            return name, factor
+    candidates = [(abs(np.log10(span / factor / 600.0)), name, factor) for name, factor in _UNITS
+                  if span / factor <= LONG_TIME_SPAN]
+    return (min(candidates)[1:]) if candidates else (None, 1.0)
+
+
 def check_time_span(times: np.ndarray) -> None:
     """Refuse reading times spanning more than a year, warn beyond a week: ``t`` is in seconds, not ms, µs or ns."""
     span = float(np.max(times) - np.min(times)) if len(times) else 0.0
     if span <= LONG_TIME_SPAN:
         return
-    guesses = [(name, factor) for name, factor in (("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9))
-               if span / factor <= LONG_TIME_SPAN]
-    hint = (f"; they look like {guesses[0][0]} (divide by {guesses[0][1]:g}: {span / guesses[0][1]:.4g} s)"
-            if guesses else "")
+    name, factor = _likely_unit(span, float(np.min(np.abs(times))), float(np.max(np.abs(times))))
+    hint = f"; they look like {name} (divide by {factor:g}: {span / factor:.4g} s)" if name else ""
     message = f"the reading times span {span:.4g} s ({span / 86400.0:.4g} days): t must be in seconds{hint}"
     if span > LONGEST_TIME_SPAN:
         raise InvalidSamples(message)

@@ -4,7 +4,9 @@ Without ``t``, one column named ``time``, ``time_s``, ``t_s``, ``timestamp``,
 ``stamp`` or ``%time`` is read as seconds, and ``t_ms``/``time_ms``,
 ``t_us``/``time_us``, ``t_ns``/``time_ns`` are converted (a unit is applied
 only where the column's name says it). An alias whose cells are not numbers (ISO dates, say) is not a time here: it
-is left alone with a warning. Two numeric candidates are an error. Used by
+is left alone with a warning, and so is one spanning more than a year (ROS
+stamps in nanoseconds): only a column named ``t`` is refused for that. Two
+numeric candidates are an error. Used by
 the samples CSV, the motion recordings, bag extraction and the viewer.
 """
 
@@ -14,6 +16,7 @@ import logging
 
 import numpy as np
 
+from ..calibration.samples import LONGEST_TIME_SPAN
 from ..exceptions import InvalidSamples
 from .csv_table import Table
 
@@ -56,6 +59,13 @@ def times_from_table(table: Table) -> np.ndarray | None:
     if column is None:
         return None
     name, factor = column
-    if name != TIME_COLUMN:
-        logger.info("reading column %r as the time t%s", name, "" if factor == 1.0 else f" (× {factor:g} to seconds)")
-    return table.floats([name])[:, 0] * factor
+    times = table.floats([name])[:, 0] * factor
+    if name == TIME_COLUMN:
+        return times  # ftkin's own column: a span beyond a year is refused by Samples, naming the likely unit
+    span = float(np.ptp(times))
+    if span > LONGEST_TIME_SPAN:
+        logger.warning("%s: column %r spans %.4g s, more than a year: not read as the time (nanoseconds? write a "
+                       "column t = %s / 1e9 in seconds to model a drift)", table.source, name, span, name)
+        return None
+    logger.info("reading column %r as the time t%s", name, "" if factor == 1.0 else f" (× {factor:g} to seconds)")
+    return times

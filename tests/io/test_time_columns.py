@@ -45,3 +45,18 @@ def test_a_textual_timestamp_column_is_left_alone(tmp_path, caplog):
         loaded = load_samples(path)
     assert loaded.samples.times is None
     assert "column 'timestamp' is not numbers of seconds" in caplog.text
+
+
+def test_an_alias_in_nanoseconds_is_left_alone_but_t_is_refused(tmp_path, caplog):
+    import logging
+
+    rows = "0,0,0,1,2,-9,0.1,0.2,0\n90,0,0,1.5,2,-3,0,0.3,0\n0,90,0,-8,2,1,0.2,0,0.1\n"
+    stamps = ["1764410400000000000", "1764410430000000000", "1764410460000000000"]
+    text = "".join(f"{s},{r}\n" for s, r in zip(stamps, rows.splitlines()))
+    (tmp_path / "stamp.csv").write_text("stamp,alpha,beta,gamma,fx,fy,fz,mx,my,mz\n" + text)
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        assert load_samples(tmp_path / "stamp.csv").samples.times is None
+    assert "not read as the time (nanoseconds?" in caplog.text
+    (tmp_path / "t.csv").write_text("t,alpha,beta,gamma,fx,fy,fz,mx,my,mz\n" + text)
+    with pytest.raises(InvalidSamples, match="nanoseconds"):
+        load_samples(tmp_path / "t.csv")
