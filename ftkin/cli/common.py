@@ -141,14 +141,19 @@ def number_list(text: str) -> list[float]:
     return values
 
 
+def whole_number(text: str, what: str = "") -> int:
+    """``text`` as an int, or :class:`argparse.ArgumentTypeError` naming ``what`` (e.g. "poses")."""
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number{' of ' + what if what else ''}, got {text!r}") from None
+
+
 def bounded_int(low: int, high: int, what: str):
     """argparse type factory: a whole number in ``[low, high]``, the message naming ``what``."""
 
     def convert(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a whole number of {what}, got {text!r}") from None
+        value = whole_number(text, what)
         if not low <= value <= high:
             raise argparse.ArgumentTypeError(f"expected {low} to {high:,} {what}, got {text}")
         return value
@@ -158,10 +163,7 @@ def bounded_int(low: int, high: int, what: str):
 
 def seed(text: str) -> int:
     """argparse type: a random seed, 0 to 2**63 - 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    value = whole_number(text)
     if value < 0:
         raise argparse.ArgumentTypeError(f"the seed must be at least 0, got {text}")
     if value >= 2**63:

@@ -18,7 +18,7 @@ from ..planning.constraints import DEFAULT_MARGIN
 from ..planning.drift_order import DEFAULT_POSE_INTERVAL
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT
 from ..planning.plan import plan_poses
-from .common import add_arm_arguments, arm_from_args, bounded_int, non_negative_float, positive_float, seed
+from .common import add_arm_arguments, arm_from_args, bounded_int, non_negative_float, positive_float, seed, whole_number
 from .motion import add_excitation_arguments, run_excitation
 
 FORMATS = ("csv", "yaml", "json")
@@ -74,10 +74,7 @@ MAX_PLAN_POSES = 500
 
 def pose_count(text: str) -> int:
     """argparse type: number of poses to plan, 3 to :data:`MAX_PLAN_POSES`."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number of poses, got {text!r}") from None
+    value = whole_number(text, "poses")
     if value < 3:
         raise argparse.ArgumentTypeError(f"at least 3 poses are needed to determine the calibration, got {text}")
     if value > MAX_PLAN_POSES:
