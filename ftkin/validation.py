@@ -30,6 +30,24 @@ def check_finite(array: np.ndarray, name: str) -> None:
         )
 
 
+def as_six_channels(value, name: str, non_negative: bool = False) -> np.ndarray:
+    """Six per-channel values ``(6,)`` [N then N·m] from a scalar, ``[force, torque]`` or six numbers; finite, frozen.
+
+    ``non_negative``: also refuse values below zero (rates, noise levels).
+    """
+    array = as_float_array(value, name)
+    if array.shape == (2,):
+        array = np.repeat(array, 3)
+    if array.shape not in ((), (1,), (6,)):
+        raise InvalidInput(f"{name} must be a scalar, [force, torque] or six channels, got shape {array.shape}")
+    array = np.broadcast_to(array, (6,)).copy()
+    if not np.all(np.isfinite(array)) or (non_negative and np.any(array < 0)):
+        requirement = "finite and ≥ 0" if non_negative else "finite"
+        raise InvalidInput(f"{name} must be {requirement} (a scalar, [force, torque] or six channels), got {array}")
+    array.setflags(write=False)
+    return array
+
+
 def as_vector(value, size: int, name: str) -> np.ndarray:
     """A finite float vector of the given size."""
     array = as_float_array(value, name)

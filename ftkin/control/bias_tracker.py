@@ -40,20 +40,7 @@ from collections import deque
 import numpy as np
 
 from ..exceptions import InvalidInput
-from ..validation import as_float_array, as_vector
-
-
-def _positive_six(value, name: str) -> np.ndarray:
-    """Six per-channel values from a scalar, ``[force, torque]`` or ``(6,)``, all finite and ≥ 0."""
-    array = as_float_array(value, name)
-    if array.shape == (2,):
-        array = np.repeat(array, 3)
-    if array.shape not in ((), (1,), (6,)):
-        raise InvalidInput(f"{name} must be a scalar, [force, torque] or six channels, got shape {array.shape}")
-    array = np.broadcast_to(array, (6,)).astype(float)
-    if not np.all(np.isfinite(array)) or np.any(array < 0):
-        raise InvalidInput(f"{name} must be finite and ≥ 0 (a scalar, [force, torque] or six channels), got {array}")
-    return array
+from ..validation import as_six_channels, as_vector
 
 
 class BiasTracker:
@@ -80,15 +67,15 @@ class BiasTracker:
 
     def __init__(self, rate, noise, *, window: float = 0.5, guard: float = 0.25, k: float = 4.0, still_speed: float = 0.01,
                  max_speed: float = 0.2, initial_std=0.0):
-        self.rate = _positive_six(rate, "rate")
-        self.noise = _positive_six(noise, "noise")
+        self.rate = as_six_channels(rate, "rate", non_negative=True)
+        self.noise = as_six_channels(noise, "noise", non_negative=True)
         if np.any(self.noise <= 0):
             raise InvalidInput(f"noise must be positive, got {self.noise}")
         numbers = np.array([window, guard, k, still_speed, max_speed], dtype=float)
         if not np.all(np.isfinite(numbers)) or np.any(numbers[[0, 2, 3, 4]] <= 0) or numbers[1] < 0:
             raise InvalidInput(f"window, k, still_speed and max_speed must be finite and > 0, guard ≥ 0, got {numbers}")
         self.window, self.guard, self.k, self.still_speed, self.max_speed = (float(v) for v in numbers)
-        self._initial_std = _positive_six(initial_std, "initial_std")
+        self._initial_std = as_six_channels(initial_std, "initial_std", non_negative=True)
         self.update_count = 0
         self.last_update_span = 0
         self.last_update_ticks = (0, 0)
@@ -127,7 +114,7 @@ class BiasTracker:
     def reset(self, bias, std=None) -> None:
         """Restart from ``bias`` ``(6,)`` [N, N·m] with standard deviation ``std`` (default: ``initial_std``)."""
         self._bias = as_vector(bias, 6, "bias [F0, M0]").copy()
-        self._filter_variance = (self._initial_std if std is None else _positive_six(std, "std")) ** 2
+        self._filter_variance = (self._initial_std if std is None else as_six_channels(std, "std", non_negative=True)) ** 2
         self._clock = 0.0
         self._filter_time = 0.0  # time of the filter's last measurement (the delayed filter's clock) [s]
         self._tick = 0

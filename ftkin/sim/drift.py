@@ -18,20 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import InvalidInput
-from ..validation import as_float_array
-
-
-def _channels(value, name: str) -> np.ndarray:
-    array = as_float_array(value, name)
-    if array.shape == (2,):
-        array = np.repeat(array, 3)
-    if array.shape not in ((), (6,)):
-        raise InvalidInput(f"{name} must be a scalar, [force, torque] or six channels, got shape {array.shape}")
-    array = np.broadcast_to(array, (6,)).copy()
-    if not np.all(np.isfinite(array)):
-        raise InvalidInput(f"{name} must be finite, got {array}")
-    array.setflags(write=False)
-    return array
+from ..validation import as_float_array, as_six_channels
 
 
 @dataclass(frozen=True)
@@ -56,7 +43,7 @@ class SensorDrift:
 
     def __post_init__(self):
         for name in ("warmup", "random_walk", "temperature_coefficient"):
-            object.__setattr__(self, name, _channels(getattr(self, name), name))
+            object.__setattr__(self, name, as_six_channels(getattr(self, name), name))
         if np.any(self.random_walk < 0):
             raise InvalidInput(f"random_walk rates must be ≥ 0, got {self.random_walk}")
         if not (np.isfinite(self.warmup_time_constant) and self.warmup_time_constant > 0):
