@@ -44,7 +44,7 @@ from .log_cholesky import (
     nearest_consistent,
 )
 from .model import STANDARD_GRAVITY
-from .regressor import MotionSamples
+from .regressor import MotionSamples, point_mass_parameters
 from .samples import Samples
 
 NOISE_FLOOR = 1e-12
@@ -101,7 +101,7 @@ class DynamicCalibrationResult(CalibrationResult):
         """θ (10,) for compensation: the identified one, or ``[m, m·c, 0…]`` without inertia."""
         if self.inertial_parameters is not None:
             return np.array(self.inertial_parameters)
-        return np.concatenate([[self.tool_mass], self.tool_mass * self.center_of_mass, np.zeros(6)])
+        return point_mass_parameters(self)
 
     def summary(self) -> str:
         """Static summary plus the inertia (± standard errors) and the fit over the motion."""

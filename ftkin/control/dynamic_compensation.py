@@ -27,7 +27,7 @@ import pinocchio as pin
 
 from ..calibration.derivatives import CausalDifferentiator
 from ..calibration.model import SensorModel
-from ..calibration.regressor import MotionSamples
+from ..calibration.regressor import MotionSamples, point_mass_parameters
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
 from ..validation import FLOAT64, as_vector
@@ -39,8 +39,7 @@ def _dynamic_parameters(calibration: SensorModel, inertial_parameters) -> np.nda
         return as_vector(inertial_parameters, 10, "inertial_parameters")
     if hasattr(calibration, "dynamic_parameters"):
         return np.asarray(calibration.dynamic_parameters, dtype=float)
-    mass = calibration.tool_mass
-    return np.concatenate([[mass], mass * calibration.center_of_mass, np.zeros(6)])
+    return point_mass_parameters(calibration)
 
 
 class DynamicCompensator:
@@ -63,11 +62,7 @@ class DynamicCompensator:
         self.calibration = calibration
         self.arm = self.static.arm  # with the calibration's mount folded into the sensor frame, if any
         self.inertial_parameters = _dynamic_parameters(calibration, inertial_parameters)
-        self._data = arm.model.createData()
-        theta = self.inertial_parameters.tolist()
-        self._mass = theta[0]
-        self._moment = tuple(theta[1:4])
-        self._inertia = tuple(theta[4:10])
+        self._data = self.arm.model.createData()
         self._model, self._frame = self.arm.model, self.arm.sensor_frame_id
         self._nq = arm.nq
         self._q_shape = (arm.nq,)
@@ -76,30 +71,6 @@ class DynamicCompensator:
         self._raw_buffer: deque = deque()
 
     # ------------------------------------------------------------ one sample
-    def inertial_wrench_unchecked(self, velocity: np.ndarray, acceleration: np.ndarray) -> tuple:
-        """``Y(v, a) θ`` as six floats (minus the inertial wrench) for LOCAL ``v``, ``a`` ``(6,)`` arrays."""
-        vx, vy, vz, wx, wy, wz = velocity.tolist()
-        ax, ay, az, bx, by, bz = acceleration.tolist()
-        m = self._mass
-        hx, hy, hz = self._moment
-        ixx, ixy, iyy, ixz, iyz, izz = self._inertia
-        # α = a_lin + ω × v_lin
-        px = ax + wy * vz - wz * vy
-        py = ay + wz * vx - wx * vz
-        pz = az + wx * vy - wy * vx
-        # ω × h, then ω × (ω × h)
-        cx, cy, cz = wy * hz - wz * hy, wz * hx - wx * hz, wx * hy - wy * hx
-        # Ī ω and Ī ω̇
-        lx, ly, lz = ixx * wx + ixy * wy + ixz * wz, ixy * wx + iyy * wy + iyz * wz, ixz * wx + iyz * wy + izz * wz
-        return (
-            m * px + (by * hz - bz * hy) + (wy * cz - wz * cy),
-            m * py + (bz * hx - bx * hz) + (wz * cx - wx * cz),
-            m * pz + (bx * hy - by * hx) + (wx * cy - wy * cx),
-            ixx * bx + ixy * by + ixz * bz + (wy * lz - wz * ly) - (py * hz - pz * hy),
-            ixy * bx + iyy * by + iyz * bz + (wz * lx - wx * lz) - (pz * hx - px * hz),
-            ixz * bx + iyz * by + izz * bz + (wx * ly - wy * lx) - (px * hy - py * hx),
-        )
-
     def compensate_moving(self, q, dq, ddq, raw_wrench) -> np.ndarray:
         """Contact wrench ``(6,)`` [N, N·m] from ``q`` [rad], ``dq`` [rad/s], ``ddq`` [rad/s²] ``(nq,)`` and one raw reading.
 
@@ -139,7 +110,7 @@ class DynamicCompensator:
         pin.forwardKinematics(model, data, q, dq, ddq)
         rotation = pin.updateFramePlacement(model, data, frame).rotation
         # Y(v, a) θ with Pinocchio's body regressor (as the batch path), v and a LOCAL (Pinocchio's default frame:
-        # naming it costs a conversion per call); inertial_wrench_unchecked is the same sum written out on floats.
+        # naming it costs a conversion per call); a test checks it against the Newton–Euler sum written out.
         regressor = pin.bodyRegressor(pin.getFrameVelocity(model, data, frame), pin.getFrameAcceleration(model, data, frame))
         i0, i1, i2, i3, i4, i5 = regressor.dot(self.inertial_parameters).tolist()
         c0, c1, c2, c3, c4, c5 = self._contact_floats(rotation.tolist(), raw)
@@ -161,8 +132,8 @@ class DynamicCompensator:
         if self._stream is None:
             raise InvalidInput("call start_stream(sample_period) before compensate_stream")
         raw = as_vector(raw_wrench, 6, "raw_wrench")
+        estimate = self._stream.update(q)  # validates q first: a refused sample enters neither buffer
         self._raw_buffer.append(raw)
-        estimate = self._stream.update(q)
         if estimate is None:
             return None
         centre = self._raw_buffer[(self._stream.window - 1) // 2]

@@ -57,6 +57,14 @@ def test_stream_has_the_documented_delay(arm):
     ddq = -0.3 * np.arange(1, 7) ** 2 * np.sin(centre * np.arange(1, 7))
     expected = compensator.compensate_moving(q[k - 5], dq, ddq, raw[k - 5])
     np.testing.assert_allclose(outputs[k], expected, atol=2e-3)
+    # a refused sample (q not finite) enters neither buffer: the raw readings stay paired with their joint angles
+    compensator.start_stream(1e-3, window=11, polyorder=3)
+    for i, (q_k, raw_k) in enumerate(zip(q, raw)):
+        if i == 30:
+            with pytest.raises(InvalidInput):
+                compensator.compensate_stream(np.full(6, np.nan), raw_k + 100.0)
+        last = compensator.compensate_stream(q_k, raw_k)
+    np.testing.assert_allclose(last, outputs[-1], atol=1e-12)
 
 
 def test_point_mass_without_inertia_and_errors(arm):
