@@ -152,6 +152,7 @@ def _covariance(problem: DynamicProblem, x: np.ndarray, phi_space: bool) -> np.n
         jac[:, 8:] = jac[:, 8:] @ log_cholesky_jacobian(x[8:])
     information = jac.T @ jac
     scale = np.sqrt(np.diag(information))
+    scale = np.where(scale > 0.0, scale, 1.0)  # a parameter without information: named below, not a NaN
     values, vectors = np.linalg.eigh(information / np.outer(scale, scale))
     if values[0] <= 1e-14 * values[-1]:
         raise UnobservableParameters(

@@ -18,7 +18,7 @@ from ..control.compensation import Compensator
 from ..io.calibration_file import save_calibration
 from ..kinematics.arm import Arm
 from ..sim.sensor import SimulatedSensor, paper_like_truth
-from .common import bounded_int, seed
+from .common import bounded_int, non_negative_float, seed
 
 
 def register(subparsers) -> None:
@@ -32,7 +32,7 @@ def register(subparsers) -> None:
     parser.add_argument("--seed", type=seed, default=0, help="random seed (default: %(default)s)")
     parser.add_argument("--method", choices=METHODS, default=METHODS[0])
     parser.add_argument("-o", "--output", metavar="CALIB.json", help="also write the calibration file")
-    parser.add_argument("--sim-seconds", type=float, default=2.0, metavar="S",
+    parser.add_argument("--sim-seconds", type=non_negative_float, default=2.0, metavar="S",
                         help="simulated seconds of the closed-loop MuJoCo segment (needs the 'sim' extra; 0 skips it; "
                         "default: %(default)s)")
     parser.set_defaults(func=run)

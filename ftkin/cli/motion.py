@@ -66,7 +66,7 @@ def compensate_motion(args, calibration, arm: Arm | None) -> int | None:
         header, source_rows = table.header, table.rows
         wrench_columns = [table.column_index(name) for name in WRENCH_CHANNELS]
     motion = recording.motion_samples(arm, args.sg_window)
-    contact = DynamicCompensator(calibration, arm).compensate_motion(motion)
+    contact = DynamicCompensator(calibration, arm, allow_other_arm=args.allow_other_arm).compensate_motion(motion)
     rows = []
     for row, wrench in zip(source_rows, contact):
         out = list(row)
@@ -101,7 +101,8 @@ def add_excitation_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run_excitation(args, arm: Arm) -> int:
     """``ftkin plan --excitation``: plan, print a summary, write the CSV."""
-    constraints = PoseConstraints(args.margin, args.floor_height, None, tuple(args.joint_range), not args.no_self_collision)
+    floor = None if args.no_floor else args.floor_height
+    constraints = PoseConstraints(args.margin, floor, None, tuple(args.joint_range), not args.no_self_collision)
     plan = plan_excitation(
         arm, args.duration, rate=args.rate, period=args.period, harmonics=args.harmonics,
         velocity_fraction=args.velocity_fraction, acceleration_limit=args.acceleration_limit, amplitude=args.amplitude,

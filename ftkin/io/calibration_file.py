@@ -52,7 +52,7 @@ from ..calibration.estimate import CalibrationResult
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from ..kinematics.record import KinematicsRecord
 from .atomic import atomic_write_text
-from .calibration_checks import check_document, has_bool, parse_calibration_json, short_repr
+from .calibration_checks import check_document, check_plausible, has_bool, parse_calibration_json, short_repr
 from .calibration_inertia import inertia_document, with_inertia
 from .drift_file import drift_from_document, drift_to_document
 from .json_reader import JsonReader
@@ -154,12 +154,14 @@ def save_calibration(result: CalibrationResult, path, *, rezero: dict | None = N
 
     Raises:
         InvalidInput: ``result`` is not a :class:`CalibrationResult`.
-        CalibrationFileError: it holds NaN or infinite numbers.
+        CalibrationFileError: it holds NaN or infinite numbers, or parameters no
+            tool has (:func:`~ftkin.io.calibration_checks.check_plausible`).
     """
     if not isinstance(result, CalibrationResult):
         raise InvalidInput(
             f"result must be an ftkin.CalibrationResult (from calibrate or load_calibration), got {type(result).__name__}"
         )
+    check_plausible(JsonReader(str(path), {}), result)  # never write what load_calibration would refuse
     try:
         document = calibration_to_dict(result)
         if rezero is not None:

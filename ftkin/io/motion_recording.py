@@ -32,9 +32,9 @@ from ..calibration.derivatives import DEFAULT_POLYORDER, joint_derivatives
 from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.regressor import MotionSamples
 from ..exceptions import InvalidInput, InvalidSamples
-from .csv_table import Table, missing_columns, read_table
-from .samples_csv import check_radians, detect_orientation
-from .time_columns import TIME_COLUMN, time_column, times_from_table
+from .csv_table import Table, missing_columns, read_table, rename_columns
+from .samples_csv import check_radians, check_wrench_magnitude, detect_orientation, wrench_aliases
+from .time_columns import TIME_COLUMN, times_from_table
 
 logger = logging.getLogger(__name__)
 
@@ -87,7 +87,7 @@ class MotionRecording:
 def is_motion_table(table: Table, arm) -> bool:
     """True when the table has a ``t`` column and joint columns (a moving recording)."""
     try:
-        if time_column(table) is None:
+        if times_from_table(table) is None:
             return False
         kind, _ = detect_orientation(table, arm.joint_names)
     except InvalidSamples:
@@ -102,7 +102,9 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
         InvalidSamples: missing ``t``, joint or wrench columns, joint angles in
             degrees, or times not increasing (with file and line).
     """
-    if time_column(table) is None:
+    table = rename_columns(table, wrench_aliases(table.header))  # ROS names (force.x, ...) as for static samples
+    times = times_from_table(table)
+    if times is None:
         missing_columns(table, (TIME_COLUMN,), "time")
     missing_columns(table, WRENCH_CHANNELS, "wrench")
     kind, columns = detect_orientation(table, arm.joint_names)
@@ -113,14 +115,15 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
         )
     joints = table.floats(columns)
     check_radians(table, columns, joints)
-    times = times_from_table(table)
     steps = np.diff(times)
     if np.any(steps <= 0):
         row = int(np.flatnonzero(steps <= 0)[0]) + 1
         message = f"time {times[row]!r} s does not increase; expected strictly increasing stamps"
         raise InvalidSamples(message, table.source, table.lines[row])
     velocities, accelerations = given_derivatives(table, columns, times, joints)
-    return MotionRecording(table.source, times, joints, table.floats(WRENCH_CHANNELS), table, velocities, accelerations)
+    wrenches = table.floats(WRENCH_CHANNELS)
+    check_wrench_magnitude(table, wrenches)
+    return MotionRecording(table.source, times, joints, wrenches, table, velocities, accelerations)
 
 
 DERIVATIVE_TOLERANCE = 0.2

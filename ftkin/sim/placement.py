@@ -115,6 +115,15 @@ class PlacementScenario:
                 raise InvalidInput(f"{name} must be a finite number > 0, got {getattr(self, name)!r}")
         if not (_finite(self.start_gap) and self.start_gap >= 0):
             raise InvalidInput(f"start_gap must be a finite number >= 0 [m], got {self.start_gap!r}")
+        if self.duration / self.dt > MAX_TICKS:
+            raise InvalidInput(
+                f"duration {self.duration:g} s at dt {self.dt:g} s is {self.duration / self.dt:.3g} ticks; "
+                f"at most {MAX_TICKS:,}: shorten the run or lengthen the step"
+            )
+
+
+MAX_TICKS = 1_000_000
+"""Longest simulation, in control ticks (duration / dt): beyond it the run's arrays exhaust memory."""
 
 
 def _finite(value) -> bool:

@@ -66,3 +66,21 @@ def test_partial_or_lone_derivatives(arm, tmp_path, caplog):
     with caplog.at_level(logging.WARNING, logger="ftkin"):
         recording = load_motion_csv(_write(tmp_path / "b.csv", arm, {f"dq{i + 1}": dq[:, i] for i in range(arm.nq)}), arm)
     assert recording.joint_velocities is None and "given without the other" in caplog.text
+
+
+def test_nanosecond_stamps_and_ros_wrench_names_in_a_moving_recording(arm, tmp_path, caplog):
+    from ftkin.io.csv_table import read_table
+    from ftkin.io.motion_recording import is_motion_table
+
+    t, q, _, _ = _trajectory(arm.nq)
+    wrench = np.tile([1.0, -2.0, 3.0, 0.1, 0.2, -0.1], (len(t), 1))
+    ros = ["force.x", "force.y", "force.z", "torque.x", "torque.y", "torque.z"]
+    path = tmp_path / "ns.csv"
+    write_csv(path, ["stamp", *arm.joint_names, *ros], np.column_stack([1.7644e18 + t * 1e9, q, wrench]).tolist())
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        assert not is_motion_table(read_table(path), arm)  # a static log then, not a crash
+        with pytest.raises(InvalidSamples, match="missing time column"):
+            load_motion_csv(path, arm)
+    path = tmp_path / "ros.csv"
+    write_csv(path, ["t", *arm.joint_names, *ros], np.column_stack([t, q, wrench]).tolist())
+    np.testing.assert_allclose(load_motion_csv(path, arm).wrenches, wrench)
