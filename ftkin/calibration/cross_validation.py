@@ -65,16 +65,24 @@ class CrossValidation:
         return "\n".join(lines)
 
 
+def _below_error(record: logging.LogRecord) -> bool:
+    return record.levelno >= logging.ERROR
+
+
 @contextmanager
 def _quiet_fits():
-    """The folds' fits keep their warnings to themselves: they are about sub-fits, not the user's calibration."""
-    logger = logging.getLogger("ftkin.calibration")
-    level = logger.level
-    logger.setLevel(logging.ERROR)
+    """The folds' fits keep their warnings to themselves: they are about sub-fits, not the user's calibration.
+
+    A filter on the calibration loggers (not their level, which another thread may rely on) drops the warnings.
+    """
+    loggers = [logging.getLogger(name) for name in logging.root.manager.loggerDict if name.startswith("ftkin.calibration")]
+    for logger in loggers:
+        logger.addFilter(_below_error)
     try:
         yield
     finally:
-        logger.setLevel(level)
+        for logger in loggers:
+            logger.removeFilter(_below_error)
 
 
 def _subset(samples: Samples, mask: np.ndarray) -> Samples:
@@ -103,6 +111,8 @@ def cross_validate(samples: Samples, drifts=("none", "auto"), folds: int = 5, se
 
     if isinstance(folds, bool) or not isinstance(folds, (int, np.integer)) or not MIN_FOLDS <= folds <= MAX_FOLDS:
         raise InvalidInput(f"folds must be an integer from {MIN_FOLDS} to {MAX_FOLDS}, got {folds!r}")
+    if "drift" in options:
+        raise InvalidInput("give the drift settings to compare as drifts=(...), not drift=")
     drifts = tuple(drifts)
     if not drifts or len(set(drifts)) != len(drifts) or not all(isinstance(d, str) for d in drifts):
         raise InvalidInput(f"drifts must be distinct drift settings (e.g. ('none', 'auto')), got {drifts!r}")

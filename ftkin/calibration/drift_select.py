@@ -28,6 +28,9 @@ from .information import noise_floor
 from .random_walk import log_likelihood, smooth, walk_gains, whiten
 from .samples import PoseAverages
 
+MAX_AUTO_WALK_POSES = 500
+"""Above this many poses, ``auto`` compares the polynomial models only (``drift="random-walk"`` still fits the walk):
+a stream without a pose column makes every reading a pose, and the walk's search would take minutes."""
 SEARCH_ITERATIONS = 2
 """Gauss–Newton steps of ``θ`` per likelihood evaluation while the rates are searched (warm-started)."""
 
@@ -144,6 +147,8 @@ def _fit_drift(poses: PoseAverages, ml_fit, kind: str, degree: int) -> tuple[Dri
     for name in AUTO_CANDIDATES[1:]:
         walk, _, degree = name.partition("poly:")
         degree = int(degree or 0)
+        if walk and len(poses) > MAX_AUTO_WALK_POSES:
+            continue  # the walk's profile likelihood costs a Python pass per pose and evaluation: seconds per 100 poses
         parameters = 12 + 6 * degree + 2 * bool(walk) + 2 * estimated
         if parameters > observations - 6:
             continue

@@ -12,7 +12,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..exceptions import InvalidInput
+from ..exceptions import InvalidInput, InvalidSamples
 from ..validation import as_positive
 from .conventions import check_conventions, detect_sign_and_handedness, reading_signs
 from .diagnostics import FitDiagnostics
@@ -141,7 +141,13 @@ def calibrate(
                                "estimate the mount from a short recording (drift='none'), then the drift")
         drift_kind = "none"  # documented: with a mount estimate, auto keeps the constant bias
     if drift_kind != "none":
-        check_one_visit_per_pose(samples)
+        try:
+            check_one_visit_per_pose(samples)
+        except InvalidSamples as error:
+            if drift != "auto":
+                raise
+            logger.warning("%s; drift='auto' keeps a constant bias", error)  # the user did not ask for a drift model
+            drift_kind = "none"
     signs = reading_signs(sensor_sign, flip_axis)
     raw_poses = samples.pose_averages()
     poses = replace(raw_poses, wrenches=raw_poses.wrenches * signs)

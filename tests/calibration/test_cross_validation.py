@@ -51,7 +51,8 @@ def test_auto_drift_pays_on_a_drifting_sensor(drifting, caplog):
 
 @pytest.mark.parametrize(("kwargs", "match"), [({"folds": 1}, "folds must be an integer"), ({"folds": 30}, "cannot be split"),
                                                ({"drifts": ()}, "distinct drift settings"),
-                                               ({"drifts": ("none", "none")}, "distinct")])
+                                               ({"drifts": ("none", "none")}, "distinct"),
+                                               ({"drift": "none"}, "drifts=")])
 def test_bad_arguments(drifting, kwargs, match):
     with pytest.raises(InvalidInput, match=match):
         cross_validate(drifting, **kwargs)

@@ -35,7 +35,7 @@ def test_a_motion_sampled_in_milliseconds_is_refused():
     np.testing.assert_allclose(velocity[50:150], np.cos(np.outer(times[50:150] / 1000.0, np.ones(6))), atol=1e-6)
 
 
-def test_a_pose_revisited_under_the_same_id_is_refused_for_a_drift_model(arm):
+def test_a_pose_revisited_under_the_same_id_is_refused_for_a_drift_model(arm, caplog):
     from ftkin import calibrate
     from ftkin.sim.sensor import paper_like_truth
 
@@ -50,7 +50,11 @@ def test_a_pose_revisited_under_the_same_id_is_refused_for_a_drift_model(arm):
     ids[-3:] = 2  # the last visit reuses pose 2's id, 150 s later
     samples = Samples(wrenches, rotations, ids, times=times)
     with pytest.raises(InvalidSamples, match=r"pose 2 was recorded in 2 separate visits \(60–80 s, 210–230 s; 1 pose"):
-        calibrate(samples, drift="auto")
+        calibrate(samples, drift="poly:2")
+    # not asked for a drift model: auto keeps a constant bias and says why
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        assert calibrate(samples, drift="auto").drift.model == "none"
+    assert "keeps a constant bias" in caplog.text
     assert calibrate(samples, drift="none").pose_count == 7  # a constant bias: the visits may be averaged
     ids[-3:] = 8
     assert calibrate(Samples(wrenches, rotations, ids, times=times), drift="auto").pose_count == 8
@@ -72,3 +76,18 @@ def test_constructors_never_freeze_the_callers_arrays():
     wrenches[0, 0], force[0] = 9.0, 9.0  # and the objects keep their own values
     assert samples.wrenches[0, 0] == 0.0 and model.force_offset[0] == 1.0
     assert not samples.wrenches.flags.writeable and not model.force_offset.flags.writeable
+
+
+def test_auto_on_a_long_stream_of_single_readings_compares_polynomials_only(arm):
+    from ftkin import SensorDrift, SensorNoise, SimulatedSensor, calibrate
+    from ftkin.calibration.drift_select import MAX_AUTO_WALK_POSES
+    from ftkin.sim.sensor import paper_like_truth
+
+    rng = np.random.default_rng(3)
+    count = MAX_AUTO_WALK_POSES + 100
+    q = arm.random_configurations(count, rng, margin=0.3)
+    sensor = SimulatedSensor(paper_like_truth(), SensorNoise(0.02, 0.001), SensorDrift.typical())
+    samples = sensor.samples_at_configurations(arm, q, rng, 1, times=np.arange(count) * 2.0)  # no pose column
+    result = calibrate(samples)  # auto (the walk's search over 600 poses took about a minute)
+    assert not any(name.startswith("random-walk") for name in result.drift.criteria)
+    assert result.drift.model.startswith("poly")  # the warm-up is found
