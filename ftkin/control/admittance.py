@@ -40,6 +40,7 @@ import numpy as np
 from ..exceptions import InvalidInput
 from ..validation import as_float_array, as_vector, check_finite
 from .control_frame import FRAMES, ControlFrame  # noqa: F401  (ControlFrame importable from here, as before)
+from .stability import derivative_alpha
 
 __all__ = ["FRAMES", "Admittance", "AdmittanceState"]
 
@@ -158,7 +159,6 @@ class Admittance:
             raise InvalidInput(f"saturation must be 'separate' or 'common', got {saturation!r}")
         self.common_saturation = saturation == "common"
         self._alpha_dt, self._alpha = math.nan, 0.0
-        self._time_constant = 1.0 / (2.0 * math.pi * self.derivative_cutoff)
         self._k1s = self.selection * self.k1
         self._k2s = self.selection * self.k2
         self._k1s_floats, self._k2s_floats = self._k1s.tolist(), self._k2s.tolist()
@@ -186,11 +186,13 @@ class Admittance:
         """Combined law ``ΔV = S·(K1·dΔF/dt + K2·ΔF)``, saturated; advances the filter.
 
         Args:
-            contact_wrench: ``F'`` ``(6,)`` float array in ``frame`` [N, N·m]
-                (environment on the tool), already validated.
-            dt: Time since the previous update [s], > 0.
+            contact_wrench: ``F'`` ``(6,)`` in ``frame`` [N, N·m] (environment on the tool).
+            dt: Time since the previous update [s], finite and > 0.
         """
-        return np.array(self.update_floats(contact_wrench.tolist(), dt))
+        wrench = as_vector(contact_wrench, 6, "contact_wrench")
+        if not (isinstance(dt, (int, float, np.floating, np.integer)) and math.isfinite(dt) and dt > 0):
+            raise InvalidInput(f"dt must be a finite time > 0 [s], got {dt!r}")
+        return np.array(self.update_floats(wrench.tolist(), float(dt)))
 
     def update_floats(self, contact_wrench, dt: float) -> tuple[float, ...]:
         """:meth:`update` on six Python floats, returning six floats (the control tick's path).
@@ -204,8 +206,8 @@ class Admittance:
         state = self.state
         bumpless_start = not state.started and self.bumpless  # the first error is its own previous one: no kick
         state.started = True
-        if dt != self._alpha_dt:  # exact discretisation of the first-order low-pass (α = 1 − e^(−dt/τ)), cached per dt
-            self._alpha_dt, self._alpha = dt, -math.expm1(-dt / self._time_constant)
+        if dt != self._alpha_dt:  # exact discretisation of the first-order low-pass, cached per dt
+            self._alpha_dt, self._alpha = dt, derivative_alpha(dt, self.derivative_cutoff)
         alpha = self._alpha
         # Axis by axis, written out (a loop over zipped lists costs more than the arithmetic): ΔF = F_desired + F'
         # with the deadband (e − clip(e, ±band), as branches), the filtered dΔF/dt, then S·(K1·dΔF/dt + K2·ΔF).

@@ -135,7 +135,7 @@ class Compensator(BiasControl):
                 else np.asarray(raw_wrench, dtype=np.float64).tolist()
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q and raw_wrench must be numeric: {error}") from None
-        if q.shape != self._q_shape or len(raw) != 6 or type(raw[0]) is not float:
+        if q.shape != self._q_shape or type(raw) is not list or len(raw) != 6 or type(raw[0]) is not float:
             raise InvalidInput(f"expected q of shape {self._q_shape} and raw_wrench of shape (6,), "
                                f"got {q.shape} and {np.shape(raw_wrench)}")
         if not (math.isfinite(sum(raw)) and math.isfinite(sum(q.tolist()))) and not (np.isfinite(q).all() and all(map(math.isfinite, raw))):

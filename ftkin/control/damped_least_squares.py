@@ -34,11 +34,11 @@ def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, manipulability
     global _posv
     if _posv is None:
         from scipy.linalg.lapack import dposv as _posv
-    factor, solution, info = _posv(np.dot(jacobian, jacobian.T), twist)  # one factorisation; w from its diagonal
+    gram = np.dot(jacobian, jacobian.T)
+    factor, solution, info = _posv(gram, twist)  # one factorisation (gram kept); w from its diagonal
     manipulability = math.prod(factor.diagonal().tolist()) if info == 0 else 0.0
     if manipulability >= manipulability_threshold:
         return np.dot(solution, jacobian), manipulability, 0.0  # Jᵀ x (np.dot: less overhead than @ on 6×6)
     damping = max_damping * (1.0 - manipulability / manipulability_threshold)
-    gram = np.dot(jacobian, jacobian.T)
     gram.flat[::7] += damping * damping
     return np.dot(_posv(gram, twist, overwrite_a=True)[1], jacobian), manipulability, damping

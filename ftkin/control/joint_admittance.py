@@ -114,7 +114,6 @@ class JointAdmittance:
         self._rotation = arm.data.oMf[arm.sensor_frame_id].rotation  # a view: follows every kinematics update
         lower, upper = arm.lower_limits.tolist(), arm.upper_limits.tolist()
         speeds = (arm.velocity_limits * float(velocity_scale)).tolist()
-        self._joint_limits = list(zip(lower, upper, speeds))
         self._lower, self._upper, self._speeds = lower, upper, speeds  # as floats, for limit scaling's shortcut
         self._gains = [self.limit_gain] * arm.nq
         self._nq = arm.nq
@@ -175,7 +174,8 @@ class JointAdmittance:
         Raises:
             InvalidInput: ``q``, ``raw_wrench`` or ``dt`` of the wrong shape or not numbers
                 (NaN, inf, a bad ``dt`` are sensor faults: held and reported, not raised);
-                joint velocities or accelerations of the wrong shape or not finite.
+                joint velocities or accelerations of the wrong shape or not finite, one
+                without the other, or given without a dynamic compensator.
         """
         # The tick runs on Python floats (numpy's per-call overhead dominates on 3- and 6-vectors);
         # numpy only for the Jacobian products. The status is built when asked (last_status).
@@ -187,6 +187,10 @@ class JointAdmittance:
             raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
         if q.shape != (self._nq,) or raw.shape != (6,):
             raise InvalidInput(f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
+        if (joint_velocities is None) != (joint_accelerations is None) or (
+                joint_velocities is not None and self.dynamic is None):
+            raise InvalidInput("joint_velocities and joint_accelerations go together, and with a DynamicCompensator "
+                               "only (a static compensator has no inertial term to use them)")
         raw, positions = raw.tolist(), q.tolist()
         fault, event = self._check(positions, raw, dt)
         if fault is not SensorFault.NONE:
@@ -285,7 +289,7 @@ class JointAdmittance:
         if (all(map(le, map(abs, dq), self._speeds)) and all(map(le, dq, map(mul, self._gains, map(sub, self._upper, q))))
                 and all(map(ge, dq, map(mul, self._gains, map(sub, self._lower, q))))):
             return 1.0  # every joint within both of its bounds: the loop below gives 1.0 too
-        for position, velocity, (lower, upper, speed) in zip(q, dq, self._joint_limits):
+        for position, velocity, lower, upper, speed in zip(q, dq, self._lower, self._upper, self._speeds):
             if velocity > 0.0:
                 scale = min(scale, max(0.0, min(speed, gain * (upper - position))) / velocity)
             elif velocity < 0.0:
