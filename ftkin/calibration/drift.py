@@ -61,6 +61,14 @@ def parse_drift(drift: str) -> tuple[str, int]:
     return ("random-walk" if match.group(1) else "poly"), degree
 
 
+def check_model_name(model) -> None:
+    """Refuse anything but a fitted model's name (``"none"``, ``"poly:N"``, ``"random-walk"``, ``"random-walk+poly:N"``)."""
+    if model == "auto" or not isinstance(model, str):
+        raise InvalidInput(f"unknown drift model {model!r}; a fitted trajectory is 'none', 'poly:N', 'random-walk' "
+                           "or 'random-walk+poly:N'")
+    parse_drift(model)
+
+
 @dataclass(frozen=True)
 class BiasDrift:
     """The bias trajectory a drift-aware calibration found.
@@ -94,6 +102,11 @@ class BiasDrift:
     recorded_span: np.ndarray | None = None
 
     def __post_init__(self):
+        check_model_name(self.model)
+        if self.selected_by not in ("auto", "given"):
+            raise InvalidInput(f"selected_by must be 'auto' or 'given', got {self.selected_by!r}")
+        if not (np.isfinite(self.time_scale) and self.time_scale > 0):
+            raise InvalidInput(f"time_scale must be a finite time > 0 [s], got {self.time_scale!r}")
         times = as_float_array(self.times, "times").reshape(-1).copy()  # frozen below: a copy
         if len(times) == 0 or np.any(np.diff(times) < 0) or not np.all(np.isfinite(times)):
             raise InvalidInput("drift times must be finite, ascending and not empty [s]")
@@ -106,14 +119,20 @@ class BiasDrift:
         times.setflags(write=False)
         object.__setattr__(self, "times", times)
         if self.rate is not None:
-            object.__setattr__(self, "rate", as_float_array(self.rate, "rate").reshape(2))
+            rate = as_float_array(self.rate, "rate").reshape(-1)
+            if rate.shape != (2,) or not np.all(np.isfinite(rate)) or np.any(rate < 0):
+                raise InvalidInput(f"rate must be [force N/√s, torque N·m/√s], finite and ≥ 0, got {rate.tolist()}")
+            object.__setattr__(self, "rate", rate)
         if self.recorded_span is not None:
             span = as_float_array(self.recorded_span, "recorded_span").reshape(-1)
             if span.shape != (2,) or not np.all(np.isfinite(span)) or span[0] > span[1]:
                 raise InvalidInput(f"recorded_span must be [first, last] reading time [s], got {span}")
             object.__setattr__(self, "recorded_span", span)
         if self.coefficients is not None:
-            object.__setattr__(self, "coefficients", as_float_array(self.coefficients, "coefficients").reshape(-1, 6))
+            coefficients = as_float_array(self.coefficients, "coefficients")
+            if coefficients.ndim != 2 or coefficients.shape[1] != 6 or not np.all(np.isfinite(coefficients)):
+                raise InvalidInput(f"coefficients must be finite, one row of six per degree, got shape {coefficients.shape}")
+            object.__setattr__(self, "coefficients", coefficients)
 
     @property
     def start_time(self) -> float:

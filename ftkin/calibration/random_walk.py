@@ -80,10 +80,9 @@ def log_likelihood(gains: WalkGains, whitened_residuals: np.ndarray) -> float:
 def smooth(gains: WalkGains, times: np.ndarray, residuals: np.ndarray, rate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """RTS-smoothed walk ``w(t_i)`` ``(P, 6)`` and its variance, from ``residuals = y − f(θ)`` ``(P, 6)``."""
     count = len(times)
-    filtered, predicted_mean = np.empty((count, 6)), np.empty((count, 6))
+    filtered = np.empty((count, 6))
     state = np.zeros(6)
     for i in range(count - 1, -1, -1):
-        predicted_mean[i] = state
         state = state + gains.gain[i] * (residuals[i] - state)
         filtered[i] = state
     mean, variance = filtered.copy(), gains.filtered_variance.copy()

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from ..calibration.drift import BiasDrift
-from ..exceptions import FtkinError
+from ..calibration.drift import BiasDrift, check_model_name
+from ..exceptions import FtkinError, InvalidInput
 from .json_reader import JsonReader, NestedReader
 
 
@@ -32,8 +32,10 @@ def drift_from_document(reader: JsonReader) -> BiasDrift | None:
         return None
     sub = NestedReader(reader.path, data, "drift")
     model = sub.get("model")
-    if not isinstance(model, str) or not (model in ("none", "random-walk") or model.startswith(("poly:", "random-walk+poly:"))):
-        reader.fail(f"unknown drift model {model!r}", "drift.model")
+    try:
+        check_model_name(model)
+    except InvalidInput as error:
+        reader.fail(str(error), "drift.model")
     times = sub.array("times", (len(data.get("times") or []),))
     count = len(times)
     coefficients = data.get("coefficients")

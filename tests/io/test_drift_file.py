@@ -71,3 +71,17 @@ def test_the_csv_time_column_becomes_samples_times(drifting, tmp_path):
     np.testing.assert_array_equal(loaded.times, drifting.times)
     write_csv(tmp_path / "n.csv", header[1:], [row[1:] for row in rows])
     assert load_samples(tmp_path / "n.csv").samples.times is None
+
+
+@pytest.mark.parametrize(("change", "match"), [
+    ({"model": "banana"}, "unknown drift model"), ({"model": "auto"}, "unknown drift model"),
+    ({"rate": [-1.0, float("nan")]}, "rate must be"), ({"time_scale": 0.0}, "time_scale must be"),
+    ({"coefficients": np.zeros((1, 5))}, "coefficients must be"), ({"selected_by": "me"}, "selected_by"),
+])
+def test_a_bias_drift_refuses_what_no_fit_gives(change, match):
+    from ftkin.calibration.drift import BiasDrift
+    from ftkin.exceptions import InvalidInput
+
+    arguments = dict(model="poly:1", selected_by="given", times=[0.0, 1.0], bias=np.zeros((2, 6)), bias_std=np.zeros((2, 6)))
+    with pytest.raises(InvalidInput, match=match):
+        BiasDrift(**{**arguments, **change})
