@@ -34,7 +34,7 @@ from .dynamic_fit import (
     theta_from_phi,
 )
 from .estimate import CalibrationResult
-from .information import SensorNoise
+from .information import SensorNoise, noise_floor
 from .log_cholesky import (
     body_from_parameters,
     inertia_entries,
@@ -46,9 +46,6 @@ from .log_cholesky import (
 from .model import STANDARD_GRAVITY
 from .regressor import MotionSamples, point_mass_parameters
 from .samples import Samples
-
-NOISE_FLOOR = 1e-12
-"""Smallest noise level [relative to the channel's RMS] used as a weight (noise-free data)."""
 
 
 @dataclass(frozen=True)
@@ -125,8 +122,7 @@ def _estimate_noise(problem: DynamicProblem, x: np.ndarray, dof: int) -> np.ndar
     residuals = problem.wrenches - problem.predict(x)
     count = len(residuals)
     std = np.sqrt(np.sum(residuals**2, axis=0) / max(count - dof / 6.0, 1.0))
-    floor = NOISE_FLOOR * np.maximum(np.sqrt(np.mean(problem.wrenches**2, axis=0)), 1e-300)
-    return np.maximum(std, floor)
+    return np.maximum(std, noise_floor(problem.wrenches))  # the static fits' floor: exact data stays finite
 
 
 def _with_std(problem: DynamicProblem, std: np.ndarray) -> DynamicProblem:
