@@ -14,7 +14,7 @@ from ..io.csv_table import read_table, write_csv
 from ..kinematics.arm import Arm
 from ..planning.constraints import PoseConstraints
 from ..planning.excitation import DEFAULT_ACCELERATION_LIMIT, DEFAULT_AMPLITUDE, DEFAULT_VELOCITY_FRACTION, plan_excitation
-from .common import positive_float
+from .common import bounded_int, positive_float
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -22,7 +22,7 @@ logger = logging.getLogger("ftkin.cli")
 def add_derivative_arguments(parser: argparse.ArgumentParser) -> None:
     """``--sg-window``: the Savitzky–Golay window of the zero-phase derivatives."""
     parser.add_argument(
-        "--sg-window", type=int, default=None, metavar="SAMPLES",
+        "--sg-window", type=bounded_int(3, 100_001, "samples"), default=None, metavar="SAMPLES",
         help="odd Savitzky–Golay window for joint velocities and accelerations (default: about 51 ms)",
     )
 
@@ -89,14 +89,16 @@ def add_excitation_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--rate", type=positive_float, default=1000.0, metavar="HZ",
                        help="sample rate of the CSV [Hz] (default: %(default)s)")
     group.add_argument("--period", type=positive_float, default=None, metavar="S", help="period of the series [s] (default: the duration)")
-    group.add_argument("--harmonics", type=int, default=5, metavar="K", help="harmonics per joint (default: %(default)s)")
+    group.add_argument("--harmonics", type=bounded_int(1, 50, "harmonics"), default=5, metavar="K",
+                       help="harmonics per joint (default: %(default)s)")
     group.add_argument("--velocity-fraction", type=positive_float, default=DEFAULT_VELOCITY_FRACTION, metavar="F",
                        help="fraction of the URDF velocity limits (default: %(default)s)")
     group.add_argument("--acceleration-limit", type=positive_float, default=DEFAULT_ACCELERATION_LIMIT, metavar="RAD_S2",
                        help="joint acceleration limit [rad/s²] (default: %(default)s)")
     group.add_argument("--amplitude", type=positive_float, default=DEFAULT_AMPLITUDE, metavar="RAD",
                        help="largest excursion of a joint from the zero configuration [rad] (default: %(default)s)")
-    group.add_argument("--iterations", type=int, default=150, metavar="N", help="local search evaluations (default: %(default)s)")
+    group.add_argument("--iterations", type=bounded_int(0, 100_000, "evaluations"), default=150, metavar="N",
+                       help="local search evaluations (default: %(default)s)")
 
 
 def run_excitation(args, arm: Arm) -> int:

@@ -30,7 +30,7 @@ from ..exceptions import InvalidInput
 from ..io.csv_table import write_csv
 from ..sim.placement import MODES, PlacementRun, PlacementScenario, simulate_placement
 from ..sim.surfaces import SURFACES, surface_by_name
-from .common import positive_float, seed
+from .common import bounded_int, positive_float, seed
 
 _DEFAULT = PlacementScenario()
 
@@ -51,7 +51,7 @@ def register(subparsers) -> None:
                            "default: mujoco when installed (here: %(default)s)")
     placement.add_argument("--sample-rate", type=positive_float, metavar="HZ",
                            help="MuJoCo engine: sensor sample rate [Hz] (default: one sample per control tick)")
-    placement.add_argument("--delay-ticks", type=int, default=1, metavar="N",
+    placement.add_argument("--delay-ticks", type=bounded_int(0, 10_000, "ticks"), default=1, metavar="N",
                            help="MuJoCo engine: sensor delay in control ticks (default: %(default)s)")
     placement.add_argument("--k1", type=_non_negative, default=_DEFAULT.k1 * 1e3, metavar="MM_PER_N",
                            help="position gain k13 [mm/N] (default: %(default)g)")
@@ -110,8 +110,6 @@ def _simulate(scenario: PlacementScenario, args):
         return run_, list(PlacementRun.COLUMNS), run_.rows()
     from ..sim.mujoco.placement import simulate_placement_mujoco
 
-    if args.delay_ticks < 0:
-        raise InvalidInput(f"--delay-ticks must be an integer >= 0, got {args.delay_ticks}")
     run_, full = simulate_placement_mujoco(scenario, sample_rate=args.sample_rate, delay_ticks=args.delay_ticks)
     for time, event in full.events:
         if event:

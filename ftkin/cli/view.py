@@ -18,6 +18,7 @@ from ..kinematics.mounting import mounted_arm
 from .common import (
     add_samples_arguments,
     arm_for_calibration,
+    bounded_int,
     load_samples_from_args,
     positive_float,
     warn_if_kinematics_differ,
@@ -52,7 +53,8 @@ def register(subparsers) -> None:
     )
     parser.add_argument("--tilt-exaggeration", type=positive_float, default=1.0, metavar="K", help="draw the base tilt K times larger")
     parser.add_argument("--hold", type=positive_float, default=1.0, metavar="S", help="seconds per calibration pose in the animation")
-    parser.add_argument("--max-frames", type=int, default=1500, metavar="N", help="replay: keep at most N rows (evenly spaced)")
+    parser.add_argument("--max-frames", type=bounded_int(1, 1_000_000, "frames"), default=1500, metavar="N",
+                        help="replay: keep at most N rows (evenly spaced)")
     parser.add_argument("--no-wait", action="store_true", help="do not keep the live viewer running (scripts, tests)")
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
@@ -168,8 +170,6 @@ def run(args: argparse.Namespace) -> int:
 
     if (args.samples is None) == (args.replay is None):
         raise InvalidInput("give SAMPLES.csv (calibration poses) or --replay LOG.csv, exactly one")
-    if args.max_frames < 1:
-        raise InvalidInput(f"--max-frames must be at least 1, got {args.max_frames}")
     calibration = load_calibration(args.calibration)
     source = args.replay or args.samples
     arm = arm_for_calibration(args, calibration) or Arm.default()
