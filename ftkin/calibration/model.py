@@ -22,6 +22,9 @@ from ..validation import as_positive, as_rotation_batch, as_vector
 STANDARD_GRAVITY = 9.80665
 """Standard acceleration of gravity [m/s²] used to turn weight into mass."""
 
+GRAVITY_RANGE = (1.0, 30.0)
+"""Plausible acceleration of gravity [m/s²] (the Moon 1.6, Jupiter 24.8): beyond, a unit mistake."""
+
 PARAMETER_NAMES = (
     "gravity_in_base",
     "force_offset",

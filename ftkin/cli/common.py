@@ -6,6 +6,7 @@ import argparse
 import logging
 from pathlib import Path
 
+from ..calibration.model import GRAVITY_RANGE
 from ..exceptions import FrameNotFound, InvalidInput
 from ..io.samples_csv import load_samples
 from ..kinematics.arm import Arm, bundled_urdf_path
@@ -173,10 +174,8 @@ def seed(text: str) -> int:
 
 def gravity(text: str) -> float:
     """argparse type: gravity [m/s²] between 1 and 30 (Earth: 9.81; the Moon 1.6, Jupiter 24.8)."""
-    value = _number(text, lambda v: v > 0, "a finite positive number")
-    if not 1.0 <= value <= 30.0:
-        raise argparse.ArgumentTypeError(f"gravity must be between 1 and 30 m/s² (Earth: 9.80665), got {text!r}")
-    return value
+    return _number(text, lambda v: GRAVITY_RANGE[0] <= v <= GRAVITY_RANGE[1],
+                   "gravity between {:g} and {:g} m/s² (Earth: 9.80665)".format(*GRAVITY_RANGE))
 
 
 def positive_float(text: str) -> float:

@@ -17,7 +17,9 @@ import math
 
 import numpy as np
 
+from ..calibration.model import GRAVITY_RANGE
 from ..exceptions import CalibrationFileError
+from .samples_csv import MAX_WRENCH
 
 
 def short_repr(value) -> str:
@@ -109,10 +111,8 @@ def check_covariance(reader, covariance) -> None:
 
 MAX_COM_DISTANCE = 10.0
 """Farthest plausible centre of mass from the sensor [m] (the planner's bound too)."""
-MAX_LOAD = 1e6
-"""Largest plausible bias or tool weight [N, N·m] (the readers' bound on a reading)."""
-G_RANGE = (1.0, 30.0)
-"""Plausible acceleration of gravity [m/s²] (the CLI's ``--g`` range)."""
+MAX_LOAD = MAX_WRENCH
+"""Largest plausible bias or tool weight [N, N·m]: the samples reader's bound on a reading."""
 
 
 def check_units(reader, document: dict, units: dict) -> None:
@@ -139,5 +139,5 @@ def check_plausible(reader, result) -> None:
                        ("gravity_in_base", result.gravity_in_base)):
         if float(np.max(np.abs(value))) > MAX_LOAD:
             reader.fail(f"{np.asarray(value).tolist()} is beyond ±{MAX_LOAD:g} (N or N·m): not a load", key)
-    if not G_RANGE[0] <= result.g <= G_RANGE[1]:
-        reader.fail(f"g = {result.g:g} m/s² is outside {G_RANGE[0]:g}..{G_RANGE[1]:g} (Earth: 9.80665)", "g")
+    if not GRAVITY_RANGE[0] <= result.g <= GRAVITY_RANGE[1]:
+        reader.fail(f"g = {result.g:g} m/s² is outside {GRAVITY_RANGE[0]:g}..{GRAVITY_RANGE[1]:g} (Earth: 9.80665)", "g")
