@@ -163,7 +163,7 @@ class _QuietPipe:
 
 def _run(argv, once: dict) -> int:
     try:
-        from .common import join_number_lists
+        from .arg_types import join_number_lists
 
         arguments = join_number_lists(list(sys.argv[1:] if argv is None else argv))
         parser = build_parser(arguments)

@@ -15,7 +15,8 @@ from ..calibration.mount import MOUNT_MODES
 from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
 from ..kinematics.record import KinematicsRecord
-from .common import add_samples_arguments, arm_from_args, bounded_int, gravity, load_samples_from_args, positive_float
+from .arg_types import bounded_int, gravity, positive_float
+from .common import add_samples_arguments, arm_from_args, load_samples_from_args
 from .doctor import check_conventions
 from .motion import add_derivative_arguments, calibrate_motion
 

@@ -6,11 +6,11 @@ import argparse
 import logging
 from pathlib import Path
 
-from ..calibration.model import GRAVITY_RANGE
 from ..exceptions import FrameNotFound, InvalidInput
 from ..io.samples_csv import load_samples
 from ..kinematics.arm import Arm, bundled_urdf_path
 from ..kinematics.robots import DEFAULT_ROBOT, ROBOT_SPECS, ROBOTS, load_robot, sensor_mount_from_offset
+from .arg_types import non_negative_float, number_list, positive_float
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -80,112 +80,6 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     if sensor_frame != "ft_sensor" or tool_frame is not None:
         return Arm.from_urdf(bundled_urdf_path(), sensor_frame, tool_frame or "tool")
     return None
-
-
-def _number(text: str, accept, expected: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (accept(value) and abs(value) != float("inf")):
-        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
-    return value
-
-
-NUMBER_LIST_OPTIONS = ("--sensor-offset",)
-"""Options that take several numbers; their values end at the first token that is not a number."""
-
-
-def _is_number(token: str) -> bool:
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return True
-
-
-def join_number_lists(argv: list[str]) -> list[str]:
-    """``--sensor-offset 0 0 0.05 LOG.csv`` → ``--sensor-offset=0,0,0.05 LOG.csv``.
-
-    A list option takes the numbers that follow it (at most 6) and no more, so
-    it never swallows the positional file after it; negative numbers work.
-    """
-    out, k = [], 0
-    while k < len(argv):
-        token = argv[k]
-        if token in NUMBER_LIST_OPTIONS:
-            values = []
-            while k + 1 < len(argv) and len(values) < 6 and _is_number(argv[k + 1]):
-                values.append(argv[k + 1])
-                k += 1
-            out.append(f"{token}={','.join(values)}" if values else token)
-        else:
-            out.append(token)
-        k += 1
-    return out
-
-
-def number_list(text: str) -> list[float]:
-    """argparse type: finite numbers separated by commas (or spaces)."""
-    parts = [part for part in text.replace(",", " ").split()]
-    if not parts:
-        raise argparse.ArgumentTypeError("expected numbers, got nothing")
-    values = []
-    for part in parts:
-        try:
-            value = float(part)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a number, got {part!r}") from None
-        if value != value or abs(value) == float("inf"):
-            raise argparse.ArgumentTypeError(f"expected a finite number, got {part!r}")
-        values.append(value)
-    return values
-
-
-def whole_number(text: str, what: str = "") -> int:
-    """``text`` as an int, or :class:`argparse.ArgumentTypeError` naming ``what`` (e.g. "poses")."""
-    try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number{' of ' + what if what else ''}, got {text!r}") from None
-
-
-def bounded_int(low: int, high: int, what: str):
-    """argparse type factory: a whole number in ``[low, high]``, the message naming ``what``."""
-
-    def convert(text: str) -> int:
-        value = whole_number(text, what)
-        if not low <= value <= high:
-            raise argparse.ArgumentTypeError(f"expected {low} to {high:,} {what}, got {text}")
-        return value
-
-    return convert
-
-
-def seed(text: str) -> int:
-    """argparse type: a random seed, 0 to 2**63 - 1."""
-    value = whole_number(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"the seed must be at least 0, got {text}")
-    if value >= 2**63:
-        raise argparse.ArgumentTypeError(f"the seed must be below 2**63, got {text}")
-    return value
-
-
-def gravity(text: str) -> float:
-    """argparse type: gravity [m/s²] between 1 and 30 (Earth: 9.81; the Moon 1.6, Jupiter 24.8)."""
-    return _number(text, lambda v: GRAVITY_RANGE[0] <= v <= GRAVITY_RANGE[1],
-                   "gravity between {:g} and {:g} m/s² (Earth: 9.80665)".format(*GRAVITY_RANGE))
-
-
-def positive_float(text: str) -> float:
-    """argparse type: a finite positive number."""
-    return _number(text, lambda value: value > 0, "a finite positive number")
-
-
-def non_negative_float(text: str) -> float:
-    """argparse type: a finite number ≥ 0."""
-    return _number(text, lambda value: value >= 0, "a finite number ≥ 0")
 
 
 def add_samples_arguments(parser: argparse.ArgumentParser) -> None:

@@ -18,7 +18,7 @@ from ..control.compensation import Compensator
 from ..io.calibration_file import save_calibration
 from ..kinematics.arm import Arm
 from ..sim.sensor import SimulatedSensor, paper_like_truth
-from .common import bounded_int, non_negative_float, seed
+from .arg_types import bounded_int, non_negative_float, seed
 
 
 def register(subparsers) -> None:

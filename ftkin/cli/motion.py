@@ -14,7 +14,7 @@ from ..io.csv_table import read_table, write_csv
 from ..kinematics.arm import Arm
 from ..planning.constraints import PoseConstraints
 from ..planning.excitation import DEFAULT_ACCELERATION_LIMIT, DEFAULT_AMPLITUDE, DEFAULT_VELOCITY_FRACTION, plan_excitation
-from .common import bounded_int, positive_float
+from .arg_types import bounded_int, positive_float
 
 logger = logging.getLogger("ftkin.cli")
 

@@ -18,7 +18,8 @@ from ..planning.constraints import DEFAULT_MARGIN
 from ..planning.drift_order import DEFAULT_POSE_INTERVAL
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT
 from ..planning.plan import plan_poses
-from .common import add_arm_arguments, arm_from_args, bounded_int, non_negative_float, positive_float, seed, whole_number
+from .arg_types import bounded_int, non_negative_float, positive_float, seed, whole_number
+from .common import add_arm_arguments, arm_from_args
 from .motion import add_excitation_arguments, run_excitation
 
 FORMATS = ("csv", "yaml", "json")

@@ -30,7 +30,7 @@ from ..exceptions import InvalidInput
 from ..io.csv_table import write_csv
 from ..sim.placement import MODES, PlacementRun, PlacementScenario, simulate_placement
 from ..sim.surfaces import SURFACES, surface_by_name
-from .common import bounded_int, positive_float, seed
+from .arg_types import bounded_int, positive_float, seed
 
 _DEFAULT = PlacementScenario()
 

@@ -15,14 +15,8 @@ from ..exceptions import InvalidInput
 from ..io.calibration_file import load_calibration
 from ..kinematics.arm import Arm
 from ..kinematics.mounting import mounted_arm
-from .common import (
-    add_samples_arguments,
-    arm_for_calibration,
-    bounded_int,
-    load_samples_from_args,
-    positive_float,
-    warn_if_kinematics_differ,
-)
+from .arg_types import bounded_int, positive_float
+from .common import add_samples_arguments, arm_for_calibration, load_samples_from_args, warn_if_kinematics_differ
 
 SHEET_CELLS = 25
 """Most cells of a contact sheet (more poses or log rows are subsampled evenly)."""

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ftkin.cli import main
-from ftkin.cli.common import join_number_lists
+from ftkin.cli.arg_types import join_number_lists
 from ftkin.io.csv_table import write_csv
 
 WRENCH = ["fx", "fy", "fz", "mx", "my", "mz"]
