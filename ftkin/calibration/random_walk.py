@@ -59,15 +59,18 @@ def walk_gains(times: np.ndarray, noise_variance: np.ndarray, rate: np.ndarray) 
 
 
 def whiten(gains: WalkGains, columns: np.ndarray) -> np.ndarray:
-    """Innovations ``ν_i / √S_i`` of ``columns`` ``(P, 6, m)`` (the filter is linear: one pass for all columns)."""
-    count = len(columns)
+    """Innovations ``ν_i / √S_i`` of ``columns`` ``(..., P, 6, m)`` (the filter is linear: one pass for all columns).
+
+    Leading axes are independent sets of columns (e.g. candidate pose orders), whitened together.
+    """
+    count = columns.shape[-3]
     out = np.empty_like(columns)
-    state = np.zeros(columns.shape[1:])
+    state = np.zeros(columns.shape[:-3] + columns.shape[-2:])
     gain = gains.gain[:, :, None]
     scale = 1.0 / np.sqrt(gains.innovation_variance)[:, :, None]
     for i in range(count - 1, -1, -1):
-        innovation = columns[i] - state
-        out[i] = innovation * scale[i]
+        innovation = columns[..., i, :, :] - state
+        out[..., i, :, :] = innovation * scale[i]
         state = state + gain[i] * innovation
     return out
 

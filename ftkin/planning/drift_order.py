@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..calibration.random_walk import walk_gains
+from ..calibration.random_walk import walk_gains, whiten
 from ..exceptions import InvalidInput
 from ..validation import as_float_array, as_in_range
 
@@ -92,17 +92,8 @@ def walk_information(jacobians: np.ndarray, gains) -> np.ndarray:
     walk's Kalman gains for the ``P`` visiting slots
     (:func:`~ftkin.calibration.random_walk.walk_gains`).
     """
-    count = jacobians.shape[-3]
-    state = np.zeros(jacobians.shape[:-3] + jacobians.shape[-2:])
-    information = np.zeros(jacobians.shape[:-3] + (jacobians.shape[-1],) * 2)
-    gain = gains.gain[:, :, None]
-    scale = 1.0 / np.sqrt(gains.innovation_variance)[:, :, None]
-    for i in range(count - 1, -1, -1):
-        innovation = jacobians[..., i, :, :] - state
-        whitened = innovation * scale[i]
-        information += np.swapaxes(whitened, -1, -2) @ whitened
-        state = state + gain[i] * innovation
-    return information
+    whitened = whiten(gains, jacobians)
+    return np.einsum("...pki,...pkj->...ij", whitened, whitened)
 
 
 def _log_det(information: np.ndarray) -> np.ndarray:
