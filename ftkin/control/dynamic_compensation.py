@@ -101,6 +101,19 @@ class DynamicCompensator:
             raise InvalidInput(f"q, dq, ddq and raw_wrench must be finite, got q={q} dq={dq} ddq={ddq} raw_wrench={raw}")
         return self._moving_floats(q, dq, ddq, values)
 
+    def contact_rates_floats(self, q: np.ndarray, raw: list, dq, ddq) -> tuple[float, ...]:
+        """:meth:`contact_moving_floats` for a ``q`` (float64 ``(nq,)``) and ``raw`` (six finite floats) the caller
+        validated already (``JointAdmittance.step``): only ``dq`` [rad/s] and ``ddq`` [rad/s²] are checked."""
+        try:
+            dq, ddq = np.asarray(dq, dtype=np.float64), np.asarray(ddq, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise InvalidInput(f"dq and ddq must be numeric: {error}") from None
+        if dq.shape != self._q_shape or ddq.shape != self._q_shape:
+            raise InvalidInput(f"expected dq, ddq of shape {self._q_shape}, got {dq.shape}, {ddq.shape}")
+        if not math.isfinite(sum(dq.tolist()) + sum(ddq.tolist())) and not (np.isfinite(dq).all() and np.isfinite(ddq).all()):
+            raise InvalidInput(f"dq and ddq must be finite, got dq={dq} ddq={ddq}")
+        return self._moving_floats(q, dq, ddq, raw)
+
     def compensate_moving_unchecked(self, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, raw: np.ndarray) -> np.ndarray:
         """:meth:`compensate_moving` without validation (float arrays of the right shapes); returns a new array."""
         return np.array(self._moving_floats(q, dq, ddq, raw.tolist()))

@@ -202,7 +202,7 @@ class JointAdmittance:
         rotation = self._rotation.tolist()  # R_BS, updated by the call above
         # 2. compensation (six floats, sensor frame), the bias tracker, the oscillation detector and the safety stop
         if joint_velocities is not None and self.dynamic is not None:
-            contact = self.dynamic.contact_moving_floats(q, joint_velocities, joint_accelerations, raw)
+            contact = self.dynamic.contact_rates_floats(q, raw, joint_velocities, joint_accelerations)
         else:
             contact = raw if self._contact_floats is None else self._contact_floats(rotation, raw)
         if self._tracked:
