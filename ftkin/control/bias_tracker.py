@@ -76,6 +76,7 @@ class BiasTracker:
             raise InvalidInput(f"window, k, still_speed and max_speed must be finite and > 0, guard ≥ 0, got {numbers}")
         self.window, self.guard, self.k, self.still_speed, self.max_speed = (float(v) for v in numbers)
         self._initial_std = as_six_channels(initial_std, "initial_std", non_negative=True)
+        self._rate2, self._noise2 = (self.rate**2).tolist(), (self.noise**2).tolist()  # the per-tick gate runs on floats
         self.update_count = 0
         self.last_update_span = 0
         self.last_update_ticks = (0, 0)
@@ -123,8 +124,8 @@ class BiasTracker:
 
     def interrupt(self) -> None:
         """Throw the readings not yet used away (a fault, a contact, a jump)."""
-        self._waiting = deque()  # (time [s], tick, measured bias (6,)) of consistent ticks not yet used
-        self._waiting_sum = np.zeros(6)
+        self._waiting = deque()  # (time [s], tick, measured bias: six floats) of consistent ticks not yet used
+        self._waiting_sum = [0.0] * 6
         self._settle = 0.0
         self._run_start = None  # time of the first waiting tick of this run [s]
 
@@ -179,32 +180,42 @@ class BiasTracker:
         self._clock += dt
         self._tick += 1
         speed = 0.0
-        if q is not None:
-            q = np.array(q, dtype=float)
-            if self._previous_q is not None and self._previous_q.shape == q.shape:
-                speed = float(np.max(np.abs(q - self._previous_q))) / dt
+        try:  # on Python floats, as the rest of the tick: numpy's per-call cost dominates on 6-vectors
+            positions = None if q is None else q.tolist() if type(q) is np.ndarray else [float(value) for value in q]
+            contact = (contact_wrench.tolist() if type(contact_wrench) is np.ndarray
+                       else [float(value) for value in contact_wrench])
+        except (TypeError, ValueError) as error:
+            raise InvalidInput(f"q and contact_wrench must be numbers: {error}") from None
+        if positions is not None:
+            previous = self._previous_q
+            if previous is not None and len(previous) == len(positions):
+                speed = max(map(abs, map(float.__sub__, positions, previous)), default=0.0) / dt
             else:
                 speed = math.inf  # the first tick with positions: the speed is not known yet
-            self._previous_q = q
-        contact = np.asarray(contact_wrench, dtype=float)
+            self._previous_q = positions
+        if len(contact) != 6:
+            raise InvalidInput(f"contact_wrench must have six values [N, N·m], got {len(contact)}")
         limit = self.max_speed if free else self.still_speed
-        if fault or free is False or speed > limit or not np.all(np.isfinite(contact)):
+        if fault or free is False or speed > limit or not all(map(math.isfinite, contact)):
             return self._end_run(dt)
-        variance = self._variance
-        if free is None and np.any(np.abs(contact) > self.k * np.sqrt(self.noise**2 + variance)):
+        elapsed, k = self._clock - self._filter_time, self.k
+        variance = [v + r2 * elapsed for v, r2 in zip(self._filter_variance.tolist(), self._rate2)]
+        if free is None and any(abs(c) > k * math.sqrt(n2 + v) for c, n2, v in zip(contact, self._noise2, variance)):
             return self._end_run(dt)
         if not free and self._settle < self.guard:
             self._settle += dt
             return False
-        measured = contact + self._bias  # raw − tool gravity: this tick's measurement of the bias
+        bias = self._bias.tolist()
+        measured = [c + b for c, b in zip(contact, bias)]  # raw − tool gravity: this tick's measurement of the bias
         if self._run_start is None:
             self._run_start = self._clock
         self._waiting.append((self._clock, self._tick, measured))
-        self._waiting_sum += measured
+        self._waiting_sum = [s + m for s, m in zip(self._waiting_sum, measured)]
         if free:
             return self._use(self._clock)
         count = len(self._waiting)
-        if np.any(np.abs(self._waiting_sum / count - self._bias) > self.k * np.sqrt(self.noise**2 / count + variance)):
+        if any(abs(s / count - b) > k * math.sqrt(n2 / count + v)
+               for s, b, n2, v in zip(self._waiting_sum, bias, self._noise2, variance)):
             self.interrupt()  # the waiting ticks together are inconsistent: none of them is used
             return False
         tolerance = 1e-9 * max(dt, 1.0)
@@ -217,18 +228,20 @@ class BiasTracker:
         waiting = self._waiting
         if not waiting or waiting[0][0] > until:
             return False
-        bias, variance, filter_time = self._bias, self._filter_variance, self._filter_time
-        rate_squared, noise_squared = self.rate**2, self.noise**2
+        bias, variance, filter_time = self._bias.tolist(), self._filter_variance.tolist(), self._filter_time
+        rate_squared, noise_squared = self._rate2, self._noise2
         first_tick = last_tick = waiting[0][1]
-        while waiting and waiting[0][0] <= until:
+        while waiting and waiting[0][0] <= until:  # per channel, on floats (six-element numpy calls cost more)
             time, last_tick, measured = waiting.popleft()
-            self._waiting_sum -= measured
-            variance = variance + rate_squared * (time - filter_time)
-            gain = variance / (variance + noise_squared)
-            bias = bias + gain * (measured - bias)
-            variance = (1.0 - gain) * variance
+            self._waiting_sum = [s - m for s, m in zip(self._waiting_sum, measured)]
+            elapsed = time - filter_time
+            for c in range(6):
+                predicted = variance[c] + rate_squared[c] * elapsed
+                gain = predicted / (predicted + noise_squared[c])
+                bias[c] += gain * (measured[c] - bias[c])
+                variance[c] = (1.0 - gain) * predicted
             filter_time = time
-        self._bias, self._filter_variance, self._filter_time = bias, variance, filter_time
+        self._bias, self._filter_variance, self._filter_time = np.array(bias), np.array(variance), filter_time
         self.update_count += 1
         self.last_update_span = self._tick - first_tick
         self.last_update_ticks = (first_tick, last_tick)
