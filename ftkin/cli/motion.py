@@ -32,7 +32,8 @@ def load_motion(path: str, args, arm: Arm):
     from ..io.motion_recording import load_motion_bag, load_motion_csv  # with the dynamic model, when used
 
     if is_bag_path(path):
-        return load_motion_bag(path, arm, getattr(args, "joint_topic", None), getattr(args, "wrench_topic", None))
+        return load_motion_bag(path, arm, getattr(args, "joint_topic", None), getattr(args, "wrench_topic", None),
+                               getattr(args, "wrench_frame", "sensor"))
     return load_motion_csv(path, arm)
 
 
@@ -53,7 +54,7 @@ def compensate_motion(args, calibration, arm: Arm | None) -> int | None:
 
     arm = arm or Arm.default()
     if is_bag_path(args.log):
-        recording = load_motion_bag(args.log, arm, args.joint_topic, args.wrench_topic)
+        recording = load_motion_bag(args.log, arm, args.joint_topic, args.wrench_topic, args.wrench_frame)
         header = ["t", *arm.joint_names, *WRENCH_CHANNELS]
         source_rows = [[*map(float, row)] for row in np.column_stack([recording.times, recording.joint_positions, recording.wrenches])]
         wrench_columns = [header.index(name) for name in WRENCH_CHANNELS]

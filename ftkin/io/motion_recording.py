@@ -188,10 +188,18 @@ def uniform(times: np.ndarray, *arrays: np.ndarray) -> tuple[np.ndarray, ...]:
     return (grid, *(np.column_stack([np.interp(grid, times, column) for column in array.T]) for array in arrays))
 
 
-def load_motion_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None = None) -> MotionRecording:
-    """Read a moving recording from a ROS 2 bag (extra ``bags``), resampled to a uniform grid if needed."""
+def load_motion_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None = None,
+                    wrench_frame: str = "sensor") -> MotionRecording:
+    """Read a moving recording from a ROS 2 bag (extra ``bags``), resampled to a uniform grid if needed.
+
+    ``wrench_frame``: ``"sensor"`` or ``"base"``, as for static bags
+    (:func:`~ftkin.io.wrench_frames.wrenches_in_sensor_frame`; the frame_id is checked the same way).
+    """
     from .bags import read_bag
+    from .wrench_frames import wrenches_in_sensor_frame
 
     recording = read_bag(path, arm, joint_topic, wrench_topic)
-    times, joints, wrenches = uniform(recording.times, recording.joint_positions, recording.wrenches)
+    wrenches = wrenches_in_sensor_frame(recording.wrenches, arm.rotation_sensor_to_base(recording.joint_positions),
+                                        recording.wrench_frame_id, arm, wrench_frame, recording.source)
+    times, joints, wrenches = uniform(recording.times, recording.joint_positions, wrenches)
     return MotionRecording(recording.source, times, joints, wrenches)

@@ -65,6 +65,12 @@ def test_bag_recording_identifies_the_tool(tmp_path, arm, excitation):
     recording = load_motion_bag(path, arm)
     assert recording.times[1] - recording.times[0] == pytest.approx(1 / RATE, rel=0.05)
     _check(calibrate_dynamic(recording.motion_samples(arm)))
+    # the same bag read as base-frame wrenches (a UR TCP force): rotated into the sensor frame, R_BSᵀ w
+    as_base = load_motion_bag(path, arm, wrench_frame="base")
+    rotations = arm.rotation_sensor_to_base(as_base.joint_positions)
+    expected = np.concatenate([np.einsum("nji,nj->ni", rotations, recording.wrenches[:, :3]),
+                               np.einsum("nji,nj->ni", rotations, recording.wrenches[:, 3:])], axis=1)
+    np.testing.assert_allclose(as_base.wrenches, expected, atol=2e-3)
 
 
 def test_csv_recording_and_its_errors(tmp_path, arm, excitation):
