@@ -20,9 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import InvalidInput, UnobservableParameters
+from ..exceptions import InvalidInput, SuspectConvention, UnobservableParameters
 from ..kinematics.rotations import gravity_in_base_from_tilt
 from ..validation import as_positive
+from .conventions import check_conventions, detect_sign_and_handedness
 from .dynamic_fit import (
     ALL_INDICES,
     STATIC_INDICES,
@@ -211,6 +212,15 @@ def calibrate_dynamic(
     x = fit_unconstrained(problem, x)
     theta_unconstrained = problem.theta(x[8:])
     if theta_unconstrained[0] <= 0.0:
+        # a negative mass is most often a convention: readings negated (the reaction) or a base mounted upside down
+        static = Samples(motion.wrenches, motion.rotations).pose_averages()
+        try:
+            check_conventions(detect_sign_and_handedness(static, g=g))
+        except SuspectConvention as error:
+            raise SuspectConvention(
+                f"{error} The dynamic calibration takes none of these options yet: negate the readings (sign) or "
+                "calibrate from static poses, where they apply.", error.explanations, error.fixes, error.sensor_sign,
+                error.flip_axis) from None
         raise InvalidInput(f"the estimated tool mass is {theta_unconstrained[0]:.4g} kg (not positive): is there a tool on the sensor?")
     consistent = is_physically_consistent(theta_unconstrained) if estimate_inertia else None
     phi_space = estimate_inertia
