@@ -26,7 +26,8 @@ test: $(STAMP)
 	$(PY) -m pytest -q
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check ftkin tests benchmarks
+	$(VENV)/bin/ruff format --check ftkin tests benchmarks docs scripts
+	$(VENV)/bin/ruff check ftkin tests benchmarks docs scripts
 	$(VENV)/bin/lint-imports
 
 docs: $(STAMP)

@@ -41,7 +41,9 @@ CALLS = 2000
 
 
 def paired(floor, function, repeats: int, calls: int = CALLS) -> tuple[float, float, float]:
-    """Median seconds per call of ``floor`` and ``function``, and the median ratio, over alternating blocks."""
+    """Median seconds per call of ``floor`` and ``function``, and the median ratio, over alternating
+    blocks.
+    """
     for _ in range(calls // 4):
         floor()
         function()
@@ -49,7 +51,7 @@ def paired(floor, function, repeats: int, calls: int = CALLS) -> tuple[float, fl
     clock = time.process_time  # CPU time: waiting for a core on a shared machine does not count
     for repeat in range(repeats):
         pair = []
-        for timed in ((floor, function) if repeat % 2 == 0 else (function, floor)):
+        for timed in (floor, function) if repeat % 2 == 0 else (function, floor):
             start = clock()
             for _ in range(calls):
                 timed()
@@ -61,9 +63,14 @@ def paired(floor, function, repeats: int, calls: int = CALLS) -> tuple[float, fl
     return float(np.median(floors)), float(np.median(values)), float(np.median(ratios))
 
 
-def print_row(name: str, floor_name: str, floor: float, value: float, ratio: float, target: float | None) -> None:
+def print_row(
+    name: str, floor_name: str, floor: float, value: float, ratio: float, target: float | None
+) -> None:
     verdict = "" if target is None else f"<= {target:g}x {'PASS' if ratio <= target else 'FAIL'}"
-    print(f"{name:<38}{floor_name:<42}{floor * 1e6:>10.2f}{value * 1e6:>10.2f}{ratio:>8.2f}  {verdict}")
+    print(
+        f"{name:<38}{floor_name:<42}{floor * 1e6:>10.2f}{value * 1e6:>10.2f}{ratio:>8.2f}  "
+        f"{verdict}"
+    )
 
 
 def main(repeats: int = 41) -> None:
@@ -76,21 +83,29 @@ def main(repeats: int = 41) -> None:
     rotation = arm.rotation_sensor_to_base(q)
     model, data, frame = arm.model, arm.data, arm.sensor_frame_id
     k2 = np.array([1e-3] * 3 + [1e-2] * 3)
-    admittance = Admittance(k1=1e-4, k2=k2, selection=[0, 0, 1, 0, 0, 0], frame="tool", force_deadband=0.02)
+    admittance = Admittance(
+        k1=1e-4, k2=k2, selection=[0, 0, 1, 0, 0, 0], frame="tool", force_deadband=0.02
+    )
     controller = JointAdmittance(arm, admittance, compensator)
-    noisy = list(raw + rng.standard_normal((4096, 6)) * np.array([0.02, 0.02, 0.02, 0.002, 0.002, 0.002]))
+    noisy = list(
+        raw + rng.standard_normal((4096, 6)) * np.array([0.02, 0.02, 0.02, 0.002, 0.002, 0.002])
+    )
     rows_step, rows_floor = cycle(noisy), cycle(noisy)
     nan_raw = raw.copy()
     nan_raw[2] = np.nan
     held = JointAdmittance(arm, Admittance(k1=1e-4, k2=1e-3, frame="tool"), compensator)
-    # A tool of the calibration's mass and COM with a full inertia: θ = [m, m·c, I about the sensor origin] (10,).
+    # A tool of the calibration's mass and COM with a full inertia: θ = [m, m·c, I about the sensor
+    # origin] (10,).
     mass, com = truth.tool_mass, truth.center_of_mass
-    inertia = np.array([[2.0e-3, 1e-4, -2e-4], [1e-4, 2.2e-3, 1e-4], [-2e-4, 1e-4, 1.1e-3]]) + mass * skew(com).T @ skew(com)
+    inertia = np.array(
+        [[2.0e-3, 1e-4, -2e-4], [1e-4, 2.2e-3, 1e-4], [-2e-4, 1e-4, 1.1e-3]]
+    ) + mass * skew(com).T @ skew(com)
     theta = np.concatenate([[mass], mass * com, inertia[[0, 0, 1, 0, 1, 2], [0, 1, 1, 2, 2, 2]]])
     dynamic = DynamicCompensator(truth, arm, theta)
     dq, ddq = rng.normal(size=arm.nq), 5.0 * rng.normal(size=arm.nq)
 
-    # The floors: the same physics, hand-written tight (np.dot: less overhead than @ on small arrays),
+    # The floors: the same physics, hand-written tight (np.dot: less overhead than @ on small
+    # arrays),
     # no checks, no features.
     gravity, bias = truth.gravity_in_base.copy(), truth.bias
     lever = np.vstack([np.eye(3), skew(truth.center_of_mass)])  # [Gs; P × Gs] = lever @ Gs
@@ -116,22 +131,51 @@ def main(repeats: int = 41) -> None:
         return controller.step(q, next(rows_step), 1e-3)
 
     load = os.getloadavg()
-    print(f"control paths: {repeats} repeats x {CALLS} calls per block; load average {load[0]:.1f} / {load[1]:.1f} "
-          f"on {os.cpu_count()} cores")
+    print(
+        f"control paths: {repeats} repeats x {CALLS} calls per block; load average {load[0]:.1f} / "
+        f"{load[1]:.1f} "
+        f"on {os.cpu_count()} cores"
+    )
     print(f"{'path':<38}{'floor':<42}{'floor µs':>10}{'ftkin µs':>10}{'ratio':>8}  target")
-    print_row("JointAdmittance.step (all features)", "minimal tick (FK+J, comp, K2, solve)",
-              *paired(floor_tick, step, repeats), 1.3)
-    print_row("Compensator.compensate(q, raw)", "Pinocchio FK + numpy",
-              *paired(floor_compensate, lambda: compensator.compensate(q, raw), repeats), 1.3)
-    print_row("compensate_rotation (validated)", "compensate_rotation_unchecked",
-              *paired(unchecked, lambda: compensator.compensate_rotation(rotation, raw), repeats), 2.0)
-    print_row("step on a NaN sample (held)", "minimal tick", *paired(floor_tick, lambda: held.step(q, nan_raw, 1e-3),
-                                                                     max(5, repeats // 4)), None)
-    print_row("DynamicCompensator.compensate_moving", "Compensator.compensate(q, raw)",
-              *paired(lambda: compensator.compensate(q, raw), lambda: dynamic.compensate_moving(q, dq, ddq, raw), repeats), 2.0)
+    print_row(
+        "JointAdmittance.step (all features)",
+        "minimal tick (FK+J, comp, K2, solve)",
+        *paired(floor_tick, step, repeats),
+        1.3,
+    )
+    print_row(
+        "Compensator.compensate(q, raw)",
+        "Pinocchio FK + numpy",
+        *paired(floor_compensate, lambda: compensator.compensate(q, raw), repeats),
+        1.3,
+    )
+    print_row(
+        "compensate_rotation (validated)",
+        "compensate_rotation_unchecked",
+        *paired(unchecked, lambda: compensator.compensate_rotation(rotation, raw), repeats),
+        2.0,
+    )
+    print_row(
+        "step on a NaN sample (held)",
+        "minimal tick",
+        *paired(floor_tick, lambda: held.step(q, nan_raw, 1e-3), max(5, repeats // 4)),
+        None,
+    )
+    print_row(
+        "DynamicCompensator.compensate_moving",
+        "Compensator.compensate(q, raw)",
+        *paired(
+            lambda: compensator.compensate(q, raw),
+            lambda: dynamic.compensate_moving(q, dq, ddq, raw),
+            repeats,
+        ),
+        2.0,
+    )
     status = controller.last_status
-    print(f"last status: limit_scale {status.limit_scale:.3f}, damping {status.damping:.3g}, "
-          f"|dq| {np.linalg.norm(status.dq):.3g} rad/s")
+    print(
+        f"last status: limit_scale {status.limit_scale:.3f}, damping {status.damping:.3g}, "
+        f"|dq| {np.linalg.norm(status.dq):.3g} rad/s"
+    )
 
 
 if __name__ == "__main__":

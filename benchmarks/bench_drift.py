@@ -24,7 +24,8 @@ channel with a 5-minute time constant plus a random walk of 0.002 N/√s
    compensated with a calibration on the other four (auto: its bias at the
    pose's time); RMS of the compensated force [N] (truth: no contact).
 3. **Control sessions** (5 by default, each with its own drift, script and
-   noise; medians over the sessions, and the range of the ratio). 30 minutes after the calibration (t = 20..50 min),
+   noise; medians over the sessions, and the range of the ratio). 30 minutes after the calibration
+   (t = 20..50 min),
    100 Hz: moves between poses (up to 0.5 rad/s), contact episodes (2–15 N,
    ramped in 0.3 s, 5–20 s long) and free still moments (2–8 s). The bias used by a
    :class:`ftkin.Compensator` with a fixed bias (the calibration's last) and
@@ -43,7 +44,8 @@ channel with a 5-minute time constant plus a random walk of 0.002 N/√s
    ratio depends much on its walk (a fixed bias is as good as the walk is
    quiet): hence several sessions.
 
-Run: ``python benchmarks/bench_drift.py [--trials 100] [--sessions 5] [--seed 0]`` (about 5 minutes).
+Run: ``python benchmarks/bench_drift.py [--trials 100] [--sessions 5] [--seed 0]`` (about 5
+minutes).
 """
 
 from __future__ import annotations
@@ -76,8 +78,11 @@ POSES, READINGS, DURATION = 40, 10, 1200.0  # calibration: poses, readings per p
 READING_INTERVAL = 0.01  # [s]
 NOISE = SensorNoise(0.03, 0.0015)  # per reading [N], [N·m]
 TRUTH = SensorModel.from_tool(
-    tool_mass=15.0 / 9.80665, center_of_mass=[0.03, -0.02, 0.08], force_offset=[2.0, -1.5, 3.0],
-    torque_offset=[0.10, -0.05, 0.02], base_tilt=np.deg2rad([0.3, -0.2]),
+    tool_mass=15.0 / 9.80665,
+    center_of_mass=[0.03, -0.02, 0.08],
+    force_offset=[2.0, -1.5, 3.0],
+    torque_offset=[0.10, -0.05, 0.02],
+    base_tilt=np.deg2rad([0.3, -0.2]),
 )
 DRIFT = SensorDrift.typical()
 SESSION, RATE = 1800.0, 100.0  # control session length [s] and rate [Hz]
@@ -108,13 +113,22 @@ def calibration_trials(arm, rotations, configurations, trials, rng):
                 reported.append(quantity_errors(result, result.covariance))
                 models.append(result.drift.model)
         if trial < max(3, trials // 5):
-            for drift, rms in cross_validate(samples, seed=int(rng.integers(2**31))).force_rms.items():
+            for drift, rms in cross_validate(
+                samples, seed=int(rng.integers(2**31))
+            ).force_rms.items():
                 cv[drift].append(rms)
-    return errors, np.array(reported), models, {k: float(np.sqrt(np.mean(np.square(v)))) for k, v in cv.items()}
+    return (
+        errors,
+        np.array(reported),
+        models,
+        {k: float(np.sqrt(np.mean(np.square(v)))) for k, v in cv.items()},
+    )
 
 
 def session_script(arm, rng):
-    """Joint positions ``(T, nq)``, contact wrench ``(T, 6)`` and a 'declared free' flag per tick."""
+    """Joint positions ``(T, nq)``, contact wrench ``(T, 6)`` and a 'declared free' flag per
+    tick.
+    """
     dt = 1.0 / RATE
     q_list, contact_list, free_list = [], [], []
     q = arm.random_configurations(1, rng, margin=0.4)[0]
@@ -129,14 +143,18 @@ def session_script(arm, rng):
             q = target
             contact, free = np.zeros((steps, 6)), np.ones(steps, bool)
         else:
-            steps = int(rng.uniform(2, 8) * RATE) if kind == "still" else int(rng.uniform(5, 20) * RATE)
+            steps = (
+                int(rng.uniform(2, 8) * RATE) if kind == "still" else int(rng.uniform(5, 20) * RATE)
+            )
             path = np.tile(q, (steps, 1))
             contact, free = np.zeros((steps, 6)), np.full(steps, kind == "still")
             if kind == "contact":
                 direction = rng.standard_normal(3)
                 force = rng.uniform(2, 15) * direction / np.linalg.norm(direction)
                 ramp = int(0.3 * RATE)
-                envelope = np.minimum(1.0, np.minimum(np.arange(steps) + 1, steps - np.arange(steps)) / ramp)
+                envelope = np.minimum(
+                    1.0, np.minimum(np.arange(steps) + 1, steps - np.arange(steps)) / ramp
+                )
                 contact[:, :3] = envelope[:, None] * force
                 contact[:, 3:] = envelope[:, None] * np.cross(TIP, force)
         q_list.append(path), contact_list.append(contact), free_list.append(free)
@@ -150,19 +168,36 @@ def control_session(arm, configurations, rng):
     q, contact, declared_free = session_script(arm, rng)
     session_times = DURATION + np.arange(len(q)) / RATE
     drift = sensor.bias_drift(np.concatenate([calibration_times, session_times]), rng)
-    samples = sensor.samples_at_configurations(arm, configurations, rng, READINGS, times=calibration_times,
-                                               bias_drift=drift[: len(calibration_times)])
+    samples = sensor.samples_at_configurations(
+        arm,
+        configurations,
+        rng,
+        READINGS,
+        times=calibration_times,
+        bias_drift=drift[: len(calibration_times)],
+    )
     calibration = calibrate(samples)
-    true_bias = TRUTH.bias + drift[len(calibration_times):]
+    true_bias = TRUTH.bias + drift[len(calibration_times) :]
     rotations = arm.rotation_sensor_to_base(q)
-    raw = sensor.read(rotations, rng, contact_wrench=contact, bias_drift=drift[len(calibration_times):])
-    # compensated minus true contact without the white noise = (true − used bias) + (true − calibrated tool gravity)
-    model_error = (TRUTH.tool_gravity_wrench(rotations) - calibration.tool_gravity_wrench(rotations))[:, :3]
-    rate = calibration.drift.rate if calibration.drift.rate is not None else DRIFT.random_walk[[0, 3]]
+    raw = sensor.read(
+        rotations, rng, contact_wrench=contact, bias_drift=drift[len(calibration_times) :]
+    )
+    # compensated minus true contact without the white noise = (true − used bias) + (true −
+    # calibrated tool gravity)
+    model_error = (
+        TRUTH.tool_gravity_wrench(rotations) - calibration.tool_gravity_wrench(rotations)
+    )[:, :3]
+    rate = (
+        calibration.drift.rate if calibration.drift.rate is not None else DRIFT.random_walk[[0, 3]]
+    )
     still_free = declared_free & np.concatenate([[False], np.all(q[1:] == q[:-1], axis=1)])
     rows = {}
-    for name, mode in (("fixed bias", None), ("tracker (contact detected)", "detect"), ("tracker (free declared)", "declare"),
-                       ("oracle: tracker told still+free", "oracle")):
+    for name, mode in (
+        ("fixed bias", None),
+        ("tracker (contact detected)", "detect"),
+        ("tracker (free declared)", "declare"),
+        ("oracle: tracker told still+free", "oracle"),
+    ):
         tracker = None if mode is None else BiasTracker.from_calibration(calibration, rate=rate)
         compensator = Compensator(calibration, arm, tracker)
         flags = {"declare": declared_free, "oracle": still_free}.get(mode)
@@ -176,48 +211,87 @@ def control_session(arm, configurations, rng):
                 compensator.compensate(q[i], raw[i])
                 continue
             before = tracker.update_count
-            compensator.compensate_tracked(q[i], raw[i], dt, free=None if flags is None else bool(flags[i]))
+            compensator.compensate_tracked(
+                q[i], raw[i], dt, free=None if flags is None else bool(flags[i])
+            )
             if tracker.update_count != before:
-                first, last = tracker.last_update_ticks  # tracker ticks count from 1: tick i is session index i - 1
+                first, last = (
+                    tracker.last_update_ticks
+                )  # tracker ticks count from 1: tick i is session index i - 1
                 used_readings.append((first - 1, last - 1))
         per_tick = (time.process_time() - start) / len(q)
         in_contact = np.any(contact != 0.0, axis=1)
-        during_contact = sum(bool(np.any(in_contact[first: last + 1])) for first, last in used_readings)
+        during_contact = sum(
+            bool(np.any(in_contact[first : last + 1])) for first, last in used_readings
+        )
         error = np.linalg.norm(true_bias[:, :3] - used[:, :3] + model_error, axis=1)
-        rows[name] = (float(np.sqrt(np.mean(error**2))), float(np.max(error)), len(used_readings), during_contact, per_tick)
-    # floor: the true bias at the last still, free tick (what a perfect tracker with these free moments could know)
+        rows[name] = (
+            float(np.sqrt(np.mean(error**2))),
+            float(np.max(error)),
+            len(used_readings),
+            during_contact,
+            per_tick,
+        )
+    # floor: the true bias at the last still, free tick (what a perfect tracker with these free
+    # moments could know)
     last = np.maximum.accumulate(np.where(still_free, np.arange(len(q)), 0))
     used = np.where((np.cumsum(still_free) > 0)[:, None], true_bias[last], calibration.bias)
     error = np.linalg.norm(true_bias[:, :3] - used[:, :3] + model_error, axis=1)
-    rows["floor: true bias at free moments"] = (float(np.sqrt(np.mean(error**2))), float(np.max(error)), 0, 0, float("nan"))
+    rows["floor: true bias at free moments"] = (
+        float(np.sqrt(np.mean(error**2))),
+        float(np.max(error)),
+        0,
+        0,
+        float("nan"),
+    )
     return rows, calibration.drift.model, float(np.mean(np.any(contact != 0, axis=1))), len(q)
 
 
 def walk_bound_ratio(rotations, crlb) -> np.ndarray:
-    """The bound with the random walk alone (rate known), over the drift-free CRLB, for poses in this order."""
-    pose_times = recording_times(POSES, READINGS, DURATION, READING_INTERVAL).reshape(POSES, READINGS).mean(axis=1)
-    gains = walk_gains(pose_times, np.tile(NOISE.channel_std**2 / READINGS, (POSES, 1)), DRIFT.random_walk)
+    """The bound with the random walk alone (rate known), over the drift-free CRLB, for poses in
+    this order.
+    """
+    pose_times = (
+        recording_times(POSES, READINGS, DURATION, READING_INTERVAL)
+        .reshape(POSES, READINGS)
+        .mean(axis=1)
+    )
+    gains = walk_gains(
+        pose_times, np.tile(NOISE.channel_std**2 / READINGS, (POSES, 1)), DRIFT.random_walk
+    )
     whitened = whiten(gains, TRUTH.parameter_jacobian(rotations)).reshape(-1, 12)
     return quantity_errors(TRUTH, covariance_from_information(whitened.T @ whitened)) / crlb
 
 
 def calibration_table(arm, configurations, trials, rng, title) -> float:
     rotations = arm.rotation_sensor_to_base(configurations)
-    crlb = quantity_errors(TRUTH, covariance_from_information(fisher_information(TRUTH, rotations, NOISE, READINGS)))
+    crlb = quantity_errors(
+        TRUTH, covariance_from_information(fisher_information(TRUTH, rotations, NOISE, READINGS))
+    )
     walk_bound = walk_bound_ratio(rotations, crlb)
     errors, reported, models, cv = calibration_trials(arm, rotations, configurations, trials, rng)
     labels = ["mass [kg]", "COM x [m]", "COM y [m]", "COM z [m]", "tilt U [rad]", "tilt V [rad]"]
-    print(f"{title}: {POSES} poses over {DURATION / 60:.0f} min, {trials} trials "
-          f"(auto chose: {', '.join(f'{m} ×{models.count(m)}' for m in sorted(set(models)))})")
-    print(f"{'quantity':<14}{'CRLB (no drift)':>16}{'none RMSE':>12}{'÷CRLB':>8}{'auto RMSE':>12}{'÷CRLB':>8}"
-          f"{'walk bound÷CRLB':>17}{'auto SE÷RMSE':>14}")
+    print(
+        f"{title}: {POSES} poses over {DURATION / 60:.0f} min, {trials} trials "
+        f"(auto chose: {', '.join(f'{m} ×{models.count(m)}' for m in sorted(set(models)))})"
+    )
+    print(
+        f"{'quantity':<14}{'CRLB (no drift)':>16}{'none RMSE':>12}{'÷CRLB':>8}{'auto RMSE':>12}"
+        f"{'÷CRLB':>8}"
+        f"{'walk bound÷CRLB':>17}{'auto SE÷RMSE':>14}"
+    )
     rmse = {k: np.sqrt(np.mean(np.square(v), axis=0)) for k, v in errors.items()}
     for i, label in enumerate(labels):
-        print(f"{label:<14}{crlb[i]:>16.3g}{rmse['none'][i]:>12.3g}{rmse['none'][i] / crlb[i]:>8.2f}"
-              f"{rmse['auto'][i]:>12.3g}{rmse['auto'][i] / crlb[i]:>8.2f}{walk_bound[i]:>17.2f}"
-              f"{np.mean(reported[:, i]) / rmse['auto'][i]:>14.2f}")
-    print(f"5-fold cross-validated compensated force RMS [N]: none {cv['none']:.4f}, auto {cv['auto']:.4f} "
-          f"(none/auto = {cv['none'] / cv['auto']:.1f}x)\n")
+        print(
+            f"{label:<14}{crlb[i]:>16.3g}{rmse['none'][i]:>12.3g}{rmse['none'][i] / crlb[i]:>8.2f}"
+            f"{rmse['auto'][i]:>12.3g}{rmse['auto'][i] / crlb[i]:>8.2f}{walk_bound[i]:>17.2f}"
+            f"{np.mean(reported[:, i]) / rmse['auto'][i]:>14.2f}"
+        )
+    print(
+        f"5-fold cross-validated compensated force RMS [N]: none {cv['none']:.4f}, auto "
+        f"{cv['auto']:.4f} "
+        f"(none/auto = {cv['none'] / cv['auto']:.1f}x)\n"
+    )
     return cv["none"] / cv["auto"]
 
 
@@ -232,26 +306,55 @@ def main(argv=None) -> None:
     arm = Arm.default()
     configurations = arm.random_configurations(POSES, rng, margin=0.3)
     start = time.perf_counter()
-    calibration_table(arm, configurations, args.trials, rng, "1a. Calibration, random poses in a random order")
-    order, _ = drift_robust_order(expected_tool(TRUTH.tool_weight, TRUTH.center_of_mass),
-                                  arm.rotation_sensor_to_base(configurations), rate=DRIFT.random_walk,
-                                  noise_std=NOISE.channel_std, readings_per_pose=READINGS,
-                                  pose_interval=DURATION / POSES, rng=np.random.default_rng(args.seed))
-    calibration_table(arm, configurations[order], args.trials, rng,
-                      "1b. Calibration, the same poses in ftkin's drift-robust order (plan --drift-rate)")
-    sessions = [control_session(arm, configurations, np.random.default_rng([args.seed, k])) for k in range(args.sessions)]
-    print(f"3. Control sessions: {args.sessions} × {SESSION / 60:.0f} min at {RATE:.0f} Hz "
-          f"({sessions[0][3]} ticks each, {100 * np.mean([s[2] for s in sessions]):.0f} % in contact), "
-          f"calibration drift models {sorted(set(s[1] for s in sessions))}; medians over the sessions")
-    print(f"{'bias used':<34}{'error RMS [N]':>14}{'max [N]':>10}{'updates':>9}{'in contact':>12}{'µs/tick':>9}"
-          f"{'fixed÷this':>12}{'(min–max)':>14}")
+    calibration_table(
+        arm, configurations, args.trials, rng, "1a. Calibration, random poses in a random order"
+    )
+    order, _ = drift_robust_order(
+        expected_tool(TRUTH.tool_weight, TRUTH.center_of_mass),
+        arm.rotation_sensor_to_base(configurations),
+        rate=DRIFT.random_walk,
+        noise_std=NOISE.channel_std,
+        readings_per_pose=READINGS,
+        pose_interval=DURATION / POSES,
+        rng=np.random.default_rng(args.seed),
+    )
+    calibration_table(
+        arm,
+        configurations[order],
+        args.trials,
+        rng,
+        "1b. Calibration, the same poses in ftkin's drift-robust order (plan --drift-rate)",
+    )
+    sessions = [
+        control_session(arm, configurations, np.random.default_rng([args.seed, k]))
+        for k in range(args.sessions)
+    ]
+    print(
+        f"3. Control sessions: {args.sessions} × {SESSION / 60:.0f} min at {RATE:.0f} Hz "
+        f"({sessions[0][3]} ticks each, {100 * np.mean([s[2] for s in sessions]):.0f} % in "
+        "contact), "
+        f"calibration drift models {sorted(set(s[1] for s in sessions))}; medians over the sessions"
+    )
+    print(
+        f"{'bias used':<34}{'error RMS [N]':>14}{'max [N]':>10}{'updates':>9}{'in contact':>12}"
+        f"{'µs/tick':>9}"
+        f"{'fixed÷this':>12}{'(min–max)':>14}"
+    )
     for name in sessions[0][0]:
         values = np.array([s[0][name] for s in sessions])
         ratios = np.array([s[0]["fixed bias"][0] / s[0][name][0] for s in sessions])
         rms, worst, updates, _, per_tick = np.median(values, axis=0)
         during = int(np.max(values[:, 3]))  # the worst session: target 0
-        updates_text = f"{updates:>9.0f}{during:>12d}{per_tick * 1e6:>9.1f}" if np.isfinite(per_tick) else f"{'-':>9}{'-':>12}{'-':>9}"
-        ratio_text = "" if name == "fixed bias" else f"{np.median(ratios):>11.1f}x{f'({ratios.min():.1f}–{ratios.max():.1f})':>14}"
+        updates_text = (
+            f"{updates:>9.0f}{during:>12d}{per_tick * 1e6:>9.1f}"
+            if np.isfinite(per_tick)
+            else f"{'-':>9}{'-':>12}{'-':>9}"
+        )
+        ratio_text = (
+            ""
+            if name == "fixed bias"
+            else f"{np.median(ratios):>11.1f}x{f'({ratios.min():.1f}–{ratios.max():.1f})':>14}"
+        )
         print(f"{name:<34}{rms:>14.4f}{worst:>10.4f}{updates_text}{ratio_text}")
     print(f"\n(total {time.perf_counter() - start:.0f} s)")
 

@@ -60,12 +60,16 @@ def make_tool() -> ToolInertia:
 
 
 def record(recorder, arm, plan, rng):
-    """Noisy readings and noisy joint positions along a plan; derivatives from the noisy positions."""
+    """Noisy readings and noisy joint positions along a plan; derivatives from the noisy
+    positions.
+    """
     q, dq, ddq = plan.joint_positions, plan.joint_velocities, plan.joint_accelerations
     wrenches = recorder.wrenches(q, dq, ddq) + BIAS
     wrenches += rng.normal(0.0, [FORCE_STD] * 3 + [TORQUE_STD] * 3, wrenches.shape)
     measured_q = q + rng.normal(0.0, ENCODER_STD, q.shape)
-    return MotionSamples.from_joint_trajectory(arm, *joint_derivatives(plan.times, measured_q), wrenches, plan.times)
+    return MotionSamples.from_joint_trajectory(
+        arm, *joint_derivatives(plan.times, measured_q), wrenches, plan.times
+    )
 
 
 def errors(result, tool: ToolInertia):
@@ -78,18 +82,31 @@ def errors(result, tool: ToolInertia):
 
 def inertia_entries(result) -> np.ndarray:
     matrix = result.inertia_about_com_in_sensor
-    return np.array([matrix[0, 0], matrix[1, 1], matrix[2, 2], matrix[0, 1], matrix[0, 2], matrix[1, 2]])
+    return np.array(
+        [matrix[0, 0], matrix[1, 1], matrix[2, 2], matrix[0, 1], matrix[0, 2], matrix[1, 2]]
+    )
 
 
 def tick_costs(arm, result, repeats: int = 21):
-    """Median seconds per tick, static and dynamic, and the median ratio (``bench_control.paired``)."""
+    """Median seconds per tick, static and dynamic, and the median ratio
+    (``bench_control.paired``).
+    """
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
     from bench_control import paired
 
     rng = np.random.default_rng(1)
     static, dynamic = Compensator(result, arm), DynamicCompensator(result, arm)
-    q, dq, ddq, raw = (rng.normal(size=arm.nq) * 0.5, rng.normal(size=arm.nq), rng.normal(size=arm.nq) * 5, rng.normal(size=6))
-    return paired(lambda: static.compensate(q, raw), lambda: dynamic.compensate_moving(q, dq, ddq, raw), repeats)
+    q, dq, ddq, raw = (
+        rng.normal(size=arm.nq) * 0.5,
+        rng.normal(size=arm.nq),
+        rng.normal(size=arm.nq) * 5,
+        rng.normal(size=6),
+    )
+    return paired(
+        lambda: static.compensate(q, raw),
+        lambda: dynamic.compensate_moving(q, dq, ddq, raw),
+        repeats,
+    )
 
 
 def main() -> None:
@@ -99,10 +116,28 @@ def main() -> None:
     constraints = PoseConstraints(floor_height=0.15)
     started = time.perf_counter()
     planned = plan_excitation(arm, 30.0, rate=RATE, period=10.0, constraints=constraints, seed=0)
-    random_plan = plan_excitation(arm, 30.0, rate=RATE, period=10.0, constraints=constraints, seed=1, candidates=20, optimize=False)
+    random_plan = plan_excitation(
+        arm,
+        30.0,
+        rate=RATE,
+        period=10.0,
+        constraints=constraints,
+        seed=1,
+        candidates=20,
+        optimize=False,
+    )
     validation = plan_excitation(
-        arm, 4.0, rate=RATE, period=2.0, harmonics=4, velocity_fraction=0.6, acceleration_limit=14.0,
-        constraints=constraints, seed=7, candidates=20, optimize=False,
+        arm,
+        4.0,
+        rate=RATE,
+        period=2.0,
+        harmonics=4,
+        velocity_fraction=0.6,
+        acceleration_limit=14.0,
+        constraints=constraints,
+        seed=7,
+        candidates=20,
+        optimize=False,
     )
     planning_time = time.perf_counter() - started
 
@@ -131,37 +166,69 @@ def main() -> None:
             fit = calibrate_dynamic(record(recorder, arm, plan, np.random.default_rng(100 + seed)))
             estimates.append(inertia_entries(fit))
             sigma = fit.inertia_std_errors
-            predicted.append([sigma[0, 0], sigma[1, 1], sigma[2, 2], sigma[0, 1], sigma[0, 2], sigma[1, 2]])
-        spreads[name] = (np.std(estimates, axis=0, ddof=1), np.mean(predicted, axis=0), plan.log_det)
+            predicted.append(
+                [sigma[0, 0], sigma[1, 1], sigma[2, 2], sigma[0, 1], sigma[0, 2], sigma[1, 2]]
+            )
+        spreads[name] = (
+            np.std(estimates, axis=0, ddof=1),
+            np.mean(predicted, axis=0),
+            plan.log_det,
+        )
     static_tick, dynamic_tick, tick_ratio = tick_costs(arm, result)
 
     peak_speed = np.abs(validation.joint_velocities).max()
     peak_acceleration = np.abs(validation.joint_accelerations).max()
-    print(f"bench_dynamic: bundled arm, MuJoCo truth, {RATE:g} Hz, tool {tool.mass} kg, "
-          f"noise {FORCE_STD} N / {TORQUE_STD} N·m, encoder {ENCODER_STD} rad "
-          f"(planning {planning_time:.1f} s, calibration {calibration_time:.1f} s)")
+    print(
+        f"bench_dynamic: bundled arm, MuJoCo truth, {RATE:g} Hz, tool {tool.mass} kg, "
+        f"noise {FORCE_STD} N / {TORQUE_STD} N·m, encoder {ENCODER_STD} rad "
+        f"(planning {planning_time:.1f} s, calibration {calibration_time:.1f} s)"
+    )
     print()
     print("| quantity | ftkin | target |")
     print("|---|---|---|")
     print(f"| mass error, 30 s planned excitation | {100 * mass_error:.3f} % | ≤ 0.5 % |")
     print(f"| COM error | {1000 * com_error:.3f} mm | ≤ 1 mm |")
-    print(f"| worst inertia element error / largest principal moment | {100 * inertia_error:.2f} % | ≤ 5 % |")
+    print(
+        f"| worst inertia element error / largest principal moment | {100 * inertia_error:.2f} % | "
+        "≤ 5 % |"
+    )
     consistent = "yes" if is_physically_consistent(result.inertial_parameters) else "NO"
-    print(f"| physically consistent (unconstrained LS consistent) | {consistent} ({result.unconstrained_consistent}) | yes |")
-    print(f"| validation motion: peak joint speed, acceleration | {peak_speed:.2f} rad/s, {peak_acceleration:.1f} rad/s² | ≥ 1.5, ≥ 8 |")
-    print(f"| compensated force RMS, static / dynamic (noise floor) | {rms(static_contact, force):.4f} / "
-          f"{rms(dynamic_contact, force):.4f} N ({noise_force:.4f}) | dynamic ≥ 10× lower |")
-    print(f"| compensated torque RMS, static / dynamic (noise floor) | {rms(static_contact, torque):.5f} / "
-          f"{rms(dynamic_contact, torque):.5f} N·m ({noise_torque:.5f}) | |")
-    print(f"| ratio static / dynamic, force, torque | {rms(static_contact, force) / rms(dynamic_contact, force):.1f}×, "
-          f"{rms(static_contact, torque) / rms(dynamic_contact, torque):.1f}× | ≥ 10× |")
+    print(
+        f"| physically consistent (unconstrained LS consistent) | {consistent} "
+        f"({result.unconstrained_consistent}) | yes |"
+    )
+    print(
+        f"| validation motion: peak joint speed, acceleration | {peak_speed:.2f} rad/s, "
+        f"{peak_acceleration:.1f} rad/s² | ≥ 1.5, ≥ 8 |"
+    )
+    print(
+        "| compensated force RMS, static / dynamic (noise floor) | "
+        f"{rms(static_contact, force):.4f} / "
+        f"{rms(dynamic_contact, force):.4f} N ({noise_force:.4f}) | dynamic ≥ 10× lower |"
+    )
+    print(
+        "| compensated torque RMS, static / dynamic (noise floor) | "
+        f"{rms(static_contact, torque):.5f} / "
+        f"{rms(dynamic_contact, torque):.5f} N·m ({noise_torque:.5f}) | |"
+    )
+    print(
+        "| ratio static / dynamic, force, torque | "
+        f"{rms(static_contact, force) / rms(dynamic_contact, force):.1f}×, "
+        f"{rms(static_contact, torque) / rms(dynamic_contact, torque):.1f}× | ≥ 10× |"
+    )
     for name in ("planned", "random"):
         spread, predicted, log_det = spreads[name]
-        print(f"| {name} trajectory (log det {log_det:.1f}): inertia std, Monte Carlo ({MONTE_CARLO} runs) / predicted, "
-              f"mean of 6 elements | {1e6 * spread.mean():.2f} / {1e6 * predicted.mean():.2f} ×1e-6 kg·m² | planned lower |")
-    print(f"| cost per tick: Compensator.compensate / DynamicCompensator.compensate_moving | "
-          f"{1e6 * static_tick:.2f} / {1e6 * dynamic_tick:.2f} µs ({tick_ratio:.2f}×; load average "
-          f"{os.getloadavg()[0]:.1f}) | ≤ 2× |")
+        print(
+            f"| {name} trajectory (log det {log_det:.1f}): inertia std, Monte Carlo ({MONTE_CARLO} "
+            "runs) / predicted, "
+            f"mean of 6 elements | {1e6 * spread.mean():.2f} / {1e6 * predicted.mean():.2f} ×1e-6 "
+            "kg·m² | planned lower |"
+        )
+    print(
+        f"| cost per tick: Compensator.compensate / DynamicCompensator.compensate_moving | "
+        f"{1e6 * static_tick:.2f} / {1e6 * dynamic_tick:.2f} µs ({tick_ratio:.2f}×; load average "
+        f"{os.getloadavg()[0]:.1f}) | ≤ 2× |"
+    )
 
 
 if __name__ == "__main__":

@@ -32,8 +32,20 @@ import time
 
 import numpy as np
 
-from ftkin import Arm, Samples, SensorModel, SensorNoise, SimulatedSensor, calibrate, fisher_information
-from ftkin.calibration.information import covariance_from_information, extended_parameters, extended_standard_errors
+from ftkin import (
+    Arm,
+    Samples,
+    SensorModel,
+    SensorNoise,
+    SimulatedSensor,
+    calibrate,
+    fisher_information,
+)
+from ftkin.calibration.information import (
+    covariance_from_information,
+    extended_parameters,
+    extended_standard_errors,
+)
 
 POSES = 12
 READINGS_PER_POSE = 10
@@ -46,15 +58,21 @@ TRUTH = SensorModel.from_tool(
     torque_offset=[0.10, -0.05, 0.02],  # [N·m]
     base_tilt=np.deg2rad([0.3, -0.2]),  # U, V [rad]
 )
-LABELS = [f"{block}[{axis}]" for block in ("a", "F0", "M0", "P") for axis in "xyz"] + ["G", "U", "V"]
+LABELS = [f"{block}[{axis}]" for block in ("a", "F0", "M0", "P") for axis in "xyz"] + [
+    "G",
+    "U",
+    "V",
+]
 UNITS = ["N"] * 6 + ["N·m"] * 3 + ["m"] * 3 + ["N", "rad", "rad"]
 
 
 def monte_carlo(trials: int, rng: np.random.Generator, arm: Arm):
     configurations = arm.random_configurations(POSES, rng, margin=MARGIN)
     rotations = arm.rotation_sensor_to_base(configurations)
-    crlb = extended_standard_errors(TRUTH, covariance_from_information(
-        fisher_information(TRUTH, rotations, NOISE, READINGS_PER_POSE)))
+    crlb = extended_standard_errors(
+        TRUTH,
+        covariance_from_information(fisher_information(TRUTH, rotations, NOISE, READINGS_PER_POSE)),
+    )
     sensor = SimulatedSensor(TRUTH, NOISE)
     names = ("linear", "ml known", "ml spread", "ml resid")
     errors = {name: np.empty((trials, 15)) for name in names}
@@ -92,45 +110,83 @@ def timing(rng: np.random.Generator, arm: Arm) -> list[tuple[str, float]]:
     rotations = arm.rotation_sensor_to_base(arm.random_configurations(POSES, rng, margin=MARGIN))
     small = sensor.samples(rotations, rng, 1)
     small_repeated = sensor.samples(rotations, rng, READINGS_PER_POSE)
-    rows.append(("linear, 12 poses x 1 reading", median_time(lambda: calibrate(small, method="linear"), 200)))
-    rows.append(("ml known noise, 12 poses x 1", median_time(lambda: calibrate(small, noise=NOISE), 200)))
+    rows.append(
+        (
+            "linear, 12 poses x 1 reading",
+            median_time(lambda: calibrate(small, method="linear"), 200),
+        )
+    )
+    rows.append(
+        ("ml known noise, 12 poses x 1", median_time(lambda: calibrate(small, noise=NOISE), 200))
+    )
     rows.append(("ml noise from residuals, 12 x 1", median_time(lambda: calibrate(small), 200)))
-    rows.append((f"ml noise from spread, 12 x {READINGS_PER_POSE}", median_time(lambda: calibrate(small_repeated), 200)))
+    rows.append(
+        (
+            f"ml noise from spread, 12 x {READINGS_PER_POSE}",
+            median_time(lambda: calibrate(small_repeated), 200),
+        )
+    )
     many = arm.rotation_sensor_to_base(arm.random_configurations(400, rng, margin=MARGIN))
     big = sensor.samples(many, rng, 25)
     rows.append(("ml, 10,000 readings (400 poses x 25)", median_time(lambda: calibrate(big), 20)))
-    rows.append(("  Samples(...) validation of those", median_time(lambda: Samples(big.wrenches, big.rotations, big.pose_ids), 20)))
-    rows.append(("ml + drop outliers, 10,000 readings", median_time(lambda: calibrate(big, drop_outliers=True), 20)))
+    rows.append(
+        (
+            "  Samples(...) validation of those",
+            median_time(lambda: Samples(big.wrenches, big.rotations, big.pose_ids), 20),
+        )
+    )
+    rows.append(
+        (
+            "ml + drop outliers, 10,000 readings",
+            median_time(lambda: calibrate(big, drop_outliers=True), 20),
+        )
+    )
     return rows
 
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--trials", type=int, default=1000, help="Monte-Carlo trials (default: %(default)s)")
+    parser.add_argument(
+        "--trials", type=int, default=1000, help="Monte-Carlo trials (default: %(default)s)"
+    )
     parser.add_argument("--seed", type=int, default=0, help="random seed (default: %(default)s)")
     args = parser.parse_args(argv)
-    logging.getLogger("ftkin").setLevel(logging.ERROR)  # the rare flagged pose of a clean trial is expected
+    logging.getLogger("ftkin").setLevel(
+        logging.ERROR
+    )  # the rare flagged pose of a clean trial is expected
     rng = np.random.default_rng(args.seed)
     arm = Arm.default()
     start = time.perf_counter()
     crlb, errors, reported = monte_carlo(args.trials, rng, arm)
     elapsed = time.perf_counter() - start
-    print(f"Monte-Carlo: {args.trials} trials, one fixed set of {POSES} poses, {READINGS_PER_POSE} readings per pose, "
-          f"noise {NOISE.force_std[0]} N / {NOISE.torque_std[0]} N·m per reading, tool {TRUTH.tool_weight:.1f} N "
-          f"({elapsed:.1f} s)")
+    print(
+        f"Monte-Carlo: {args.trials} trials, one fixed set of {POSES} poses, {READINGS_PER_POSE} "
+        "readings per pose, "
+        f"noise {NOISE.force_std[0]} N / {NOISE.torque_std[0]} N·m per reading, tool "
+        f"{TRUTH.tool_weight:.1f} N "
+        f"({elapsed:.1f} s)"
+    )
     names = list(errors)
-    header = f"{'param':<7}{'unit':<5}{'CRLB std':>10}" + "".join(f"{'RMSE ' + n:>16}" for n in names)
+    header = f"{'param':<7}{'unit':<5}{'CRLB std':>10}" + "".join(
+        f"{'RMSE ' + n:>16}" for n in names
+    )
     header += "".join(f"{'eff ' + n:>15}" for n in names) + f"{'SE/RMSE spread':>16}"
     print(header)
     rmse = {name: np.sqrt(np.mean(errors[name] ** 2, axis=0)) for name in names}
     efficiency = {name: crlb**2 / rmse[name] ** 2 for name in names}
     se_ratio = np.mean(reported["ml spread"], axis=0) / rmse["ml spread"]
     for k, label in enumerate(LABELS):
-        row = f"{label:<7}{UNITS[k]:<5}{crlb[k]:>10.3g}" + "".join(f"{rmse[n][k]:>16.3g}" for n in names)
+        row = f"{label:<7}{UNITS[k]:<5}{crlb[k]:>10.3g}" + "".join(
+            f"{rmse[n][k]:>16.3g}" for n in names
+        )
         row += "".join(f"{efficiency[n][k]:>15.2f}" for n in names) + f"{se_ratio[k]:>16.2f}"
         print(row)
-    print("min efficiency: " + ", ".join(f"{n} {efficiency[n].min():.2f}" for n in names)
-          + f"  (sampling error of an efficiency at {args.trials} trials ≈ {np.sqrt(2 / args.trials):.0%})")
+    print(
+        "min efficiency: "
+        + ", ".join(f"{n} {efficiency[n].min():.2f}" for n in names)
+        + f"  (sampling error of an efficiency at {args.trials} trials ≈ "
+        f"{np.sqrt(2 / args.trials):.0%})"
+    )
     print()
     print(f"{'timing (median)':<42}{'ms per fit':>12}")
     for label, seconds in timing(rng, arm):

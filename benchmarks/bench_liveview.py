@@ -103,9 +103,15 @@ def main() -> None:
             for _ in range(BLOCK):
                 pass
 
-        rows = {"step, view idle": step_alone, "step, view drawing": step_drawing, "step + publish": step_publish,
-                "wrapped step": step_wrapped,
-                "publish alone": publish_alone, "empty call": empty_call, "loop floor": loop_floor}
+        rows = {
+            "step, view idle": step_alone,
+            "step, view drawing": step_drawing,
+            "step + publish": step_publish,
+            "wrapped step": step_wrapped,
+            "publish alone": publish_alone,
+            "empty call": empty_call,
+            "loop floor": loop_floor,
+        }
         times = {name: [] for name in rows}
         for function in rows.values():
             function()  # warm-up
@@ -145,22 +151,37 @@ def main() -> None:
         elapsed = clock() - start
         fps = (view.frames_drawn - frames_before) / elapsed
 
-    print(f"LiveView cost per control tick, bundled arm (median of {REPEATS} blocks of {BLOCK} ticks)")
+    print(
+        f"LiveView cost per control tick, bundled arm (median of {REPEATS} blocks of {BLOCK} ticks)"
+    )
     print(f"{'row':<22}{'µs/tick':>10}")
     for name in ("step, view idle", "step, view drawing", "step + publish", "wrapped step"):
         print(f"{name:<22}{median[name]:>10.2f}")
     for name in ("publish alone", "empty call"):
-        print(f"{name:<22}{median[name] - floor:>10.3f}   (loop overhead {floor:.3f} µs subtracted)")
+        print(
+            f"{name:<22}{median[name] - floor:>10.3f}   (loop overhead {floor:.3f} µs subtracted)"
+        )
     added = median["step + publish"] - median["step, view drawing"]
     contention = median["step, view drawing"] - median["step, view idle"]
-    print(f"{'publish adds':<22}{added:>10.2f}   target <= 1 µs: {'ok' if added <= 1.0 else 'MISSED'}"
-          f" (publish alone: {'ok' if median['publish alone'] - floor <= 1.0 else 'MISSED'})")
-    print(f"alternating ticks, median of {len(alternating) // 2} each: step {tick_alone:.2f} µs, step + publish "
-          f"{tick_publish:.2f} µs, publish adds {tick_publish - tick_alone:.2f} µs: "
-          f"{'ok' if tick_publish - tick_alone <= 1.0 else 'MISSED'}")
-    print(f"{'drawing process':<22}{contention:>10.2f}   (CPU shared with the view process on this machine, not on the tick)")
-    print(f"paced 1 kHz loop for {elapsed:.1f} s ({ticks} ticks): the view drew {fps:.1f} frames/s, target >= 20: "
-          f"{'ok' if fps >= 20 else 'MISSED'}")
+    print(
+        f"{'publish adds':<22}{added:>10.2f}   target <= 1 µs: {'ok' if added <= 1.0 else 'MISSED'}"
+        f" (publish alone: {'ok' if median['publish alone'] - floor <= 1.0 else 'MISSED'})"
+    )
+    print(
+        f"alternating ticks, median of {len(alternating) // 2} each: step {tick_alone:.2f} µs, "
+        "step + publish "
+        f"{tick_publish:.2f} µs, publish adds {tick_publish - tick_alone:.2f} µs: "
+        f"{'ok' if tick_publish - tick_alone <= 1.0 else 'MISSED'}"
+    )
+    print(
+        f"{'drawing process':<22}{contention:>10.2f}   (CPU shared with the view process on this "
+        "machine, not on the tick)"
+    )
+    print(
+        f"paced 1 kHz loop for {elapsed:.1f} s ({ticks} ticks): the view drew {fps:.1f} frames/s, "
+        "target >= 20: "
+        f"{'ok' if fps >= 20 else 'MISSED'}"
+    )
 
 
 if __name__ == "__main__":

@@ -53,8 +53,12 @@ TRUTH = SensorModel.from_tool(
     torque_offset=[0.10, -0.05, 0.02],  # [N·m]
     base_tilt=np.deg2rad([0.3, -0.2]),  # U, V [rad]
 )
-MOUNT = Rotation.from_euler("xyz", [3.0, -2.0, 35.0], degrees=True).as_matrix()  # URDF rpy: Rz(35°) Ry(-2°) Rx(3°)
-LABELS = [f"{block}[{axis}]" for block in ("a", "F0", "M0", "P") for axis in "xyz"] + [f"mount[{axis}]" for axis in "xyz"]
+MOUNT = Rotation.from_euler(
+    "xyz", [3.0, -2.0, 35.0], degrees=True
+).as_matrix()  # URDF rpy: Rz(35°) Ry(-2°) Rx(3°)
+LABELS = [f"{block}[{axis}]" for block in ("a", "F0", "M0", "P") for axis in "xyz"] + [
+    f"mount[{axis}]" for axis in "xyz"
+]
 UNITS = ["N"] * 6 + ["N·m"] * 3 + ["m"] * 3 + ["deg"] * 3
 
 
@@ -65,19 +69,37 @@ def crlb(rotations_urdf: np.ndarray) -> np.ndarray:
 
 
 def pose_means(rotations: np.ndarray, real: np.ndarray, rng: np.random.Generator) -> PoseAverages:
-    """Per-pose means of ``READINGS_PER_POSE`` noisy readings of the real sensor, stored with ``rotations``."""
+    """Per-pose means of ``READINGS_PER_POSE`` noisy readings of the real sensor, stored with
+    ``rotations``.
+    """
     count = len(rotations)
-    means = TRUTH.predict(real) + rng.normal(size=(count, 6)) * NOISE.channel_std / np.sqrt(READINGS_PER_POSE)
-    return PoseAverages(np.arange(count), rotations, means, np.full(count, READINGS_PER_POSE), np.full((count, 6), np.nan))
+    means = TRUTH.predict(real) + rng.normal(size=(count, 6)) * NOISE.channel_std / np.sqrt(
+        READINGS_PER_POSE
+    )
+    return PoseAverages(
+        np.arange(count),
+        rotations,
+        means,
+        np.full(count, READINGS_PER_POSE),
+        np.full((count, 6), np.nan),
+    )
 
 
 def errors_of(fit) -> np.ndarray:
-    """``(15,)`` error of ``[θ, mount angles]``; the mount error as a rotation vector about the real sensor's axes."""
+    """``(15,)`` error of ``[θ, mount angles]``; the mount error as a rotation vector about the real
+    sensor's axes.
+    """
     mount_error = Rotation.from_matrix(MOUNT.T @ fit.mount_rotation).as_rotvec()
     return np.concatenate([fit.model.to_vector() - TRUTH.to_vector(), mount_error])
 
 
-def monte_carlo(rotations_urdf: np.ndarray, trials: int, rng: np.random.Generator, label: str, known: bool = True):
+def monte_carlo(
+    rotations_urdf: np.ndarray,
+    trials: int,
+    rng: np.random.Generator,
+    label: str,
+    known: bool = True,
+):
     """RMS errors with the mount estimated (and known), and the seconds per estimated fit."""
     real = rotations_urdf @ MOUNT.T
     estimated, fixed = np.empty((trials, 15)), np.empty((trials, 12))
@@ -105,52 +127,95 @@ def _scaled(values: np.ndarray) -> np.ndarray:
 
 
 def table(name: str, bound: np.ndarray, rmse: np.ndarray, rmse_known: np.ndarray) -> list[str]:
-    lines = [f"{name}: mount rpy (3, -2, 35) deg, {POSES} random poses x {READINGS_PER_POSE} readings",
-             f"  {'parameter':<10}{'unit':<5}{'CRLB':>11}{'RMSE':>11}{'eff':>7}{'std/known':>11}"]
+    lines = [
+        f"{name}: mount rpy (3, -2, 35) deg, {POSES} random poses x {READINGS_PER_POSE} readings",
+        f"  {'parameter':<10}{'unit':<5}{'CRLB':>11}{'RMSE':>11}{'eff':>7}{'std/known':>11}",
+    ]
     bound_s, rmse_s = _scaled(bound), _scaled(rmse)
     for k, (label, unit) in enumerate(zip(LABELS, UNITS)):
         ratio = f"{rmse[k] / rmse_known[k]:>11.3f}" if k < 12 else f"{'-':>11}"
-        lines.append(f"  {label:<10}{unit:<5}{bound_s[k]:>11.3e}{rmse_s[k]:>11.3e}{bound[k] ** 2 / rmse[k] ** 2:>7.3f}{ratio}")
+        lines.append(
+            "  "
+            f"{label:<10}{unit:<5}{bound_s[k]:>11.3e}{rmse_s[k]:>11.3e}"
+            f"{bound[k] ** 2 / rmse[k] ** 2:>7.3f}{ratio}"
+        )
     efficiency = bound**2 / rmse**2
-    lines.append(f"  efficiency min {efficiency.min():.3f} (target >= 0.9), median {np.median(efficiency):.3f}; "
-                 f"std/known median {np.median(rmse[:12] / rmse_known):.3f}, max {np.max(rmse[:12] / rmse_known):.3f}")
+    lines.append(
+        f"  efficiency min {efficiency.min():.3f} (target >= 0.9), median "
+        f"{np.median(efficiency):.3f}; "
+        f"std/known median {np.median(rmse[:12] / rmse_known):.3f}, max "
+        f"{np.max(rmse[:12] / rmse_known):.3f}"
+    )
     return lines
 
 
-def planned_vs_random(arm: Arm, name: str, random_rotations: np.ndarray, trials: int, rng) -> list[str]:
-    plan = plan_poses(arm, POSES, estimate_mount="full", tool_weight=TRUTH.tool_weight,
-                      center_of_mass=TRUTH.center_of_mass, noise=NOISE, readings_per_pose=READINGS_PER_POSE,
-                      candidates=1500, progress=False, seed=1)
+def planned_vs_random(
+    arm: Arm, name: str, random_rotations: np.ndarray, trials: int, rng
+) -> list[str]:
+    plan = plan_poses(
+        arm,
+        POSES,
+        estimate_mount="full",
+        tool_weight=TRUTH.tool_weight,
+        center_of_mass=TRUTH.center_of_mass,
+        noise=NOISE,
+        readings_per_pose=READINGS_PER_POSE,
+        candidates=1500,
+        progress=False,
+        seed=1,
+    )
     planned_rotations = arm.rotation_sensor_to_base(plan.joint_positions)
-    lines = [f"{name}: planned (estimate_mount='full') vs random poses, {POSES} each",
-             f"  {'poses':<8}{'sigma mount x, y, z [deg] (CRLB)':>36}{'geo-mean theta CRLB ratio':>28}{'mount RMSE [deg]':>24}"]
+    lines = [
+        f"{name}: planned (estimate_mount='full') vs random poses, {POSES} each",
+        "  "
+        f"{'poses':<8}{'sigma mount x, y, z [deg] (CRLB)':>36}{'geo-mean theta CRLB ratio':>28}"
+        f"{'mount RMSE [deg]':>24}",
+    ]
     random_bound, planned_bound = crlb(random_rotations), crlb(planned_rotations)
     rmse, _, _ = monte_carlo(planned_rotations, trials, rng, f"{name} planned", known=False)
     for label, bound in (("random", random_bound), ("planned", planned_bound)):
         mount = ", ".join(f"{value:.4f}" for value in np.rad2deg(bound[12:]))
         ratio = float(np.exp(np.mean(np.log(bound[:12] / random_bound[:12]))))
-        achieved = ", ".join(f"{value:.4f}" for value in np.rad2deg(rmse[12:])) if label == "planned" else "(above)"
+        achieved = (
+            ", ".join(f"{value:.4f}" for value in np.rad2deg(rmse[12:]))
+            if label == "planned"
+            else "(above)"
+        )
         lines.append(f"  {label:<8}{mount:>36}{ratio:>28.3f}{achieved:>24}")
     return lines
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--trials", type=int, default=1000, help="Monte-Carlo trials per arm (default: %(default)s)")
-    parser.add_argument("--plan-trials", type=int, default=200, help="trials on the planned poses (default: %(default)s)")
+    parser.add_argument(
+        "--trials", type=int, default=1000, help="Monte-Carlo trials per arm (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--plan-trials",
+        type=int,
+        default=200,
+        help="trials on the planned poses (default: %(default)s)",
+    )
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
     rng = np.random.default_rng(args.seed)
     arms = (("bundled arm", Arm.default()), ("UR5", load_robot("ur5", [0.0, 0.0, 0.03])))
     output, started = [], time.perf_counter()
     for name, arm in arms:
-        rotations = arm.rotation_sensor_to_base(arm.random_configurations(POSES, rng, margin=MARGIN))
+        rotations = arm.rotation_sensor_to_base(
+            arm.random_configurations(POSES, rng, margin=MARGIN)
+        )
         rmse, rmse_known, seconds = monte_carlo(rotations, args.trials, rng, name)
         output += table(name, crlb(rotations), rmse, rmse_known)
-        output.append(f"  {args.trials} trials; mean time per full-mount fit {1000 * seconds:.1f} ms")
+        output.append(
+            f"  {args.trials} trials; mean time per full-mount fit {1000 * seconds:.1f} ms"
+        )
         output += planned_vs_random(arm, name, rotations, args.plan_trials, rng)
         output.append("")
-    output.append(f"total {time.perf_counter() - started:.0f} s, {2 * args.trials} trials (+ {2 * args.plan_trials} on planned poses)")
+    output.append(
+        f"total {time.perf_counter() - started:.0f} s, {2 * args.trials} trials (+ "
+        f"{2 * args.plan_trials} on planned poses)"
+    )
     print("\n".join(output))
     return 0
 

@@ -37,7 +37,8 @@ from ftkin.sim.surfaces import BOOK, SPONGE
 
 
 def speed(arm: Arm, dt: float, seconds: float, repeats: int) -> tuple[float, ...]:
-    """Median real-time factors: closed loop (wall clock), (process CPU time), (median tick), bare physics, controller alone.
+    """Median real-time factors: closed loop (wall clock), (process CPU time), (median tick), bare
+    physics, controller alone.
 
     The median-tick factor is ``dt`` over the median time between successive
     physics steps of the closed loop (one whole tick: sensor, controller,
@@ -75,7 +76,9 @@ def speed(arm: Arm, dt: float, seconds: float, repeats: int) -> tuple[float, ...
         physics.append(seconds / (time.perf_counter() - start))
         controller.reset()
         q, raw = sim.q0, sim.ideal_wrench_in_sensor() + truth.bias
-        rows = raw + np.random.default_rng(0).standard_normal((steps, 6)) * scenario.noise.channel_std
+        rows = (
+            raw + np.random.default_rng(0).standard_normal((steps, 6)) * scenario.noise.channel_std
+        )
         start = time.perf_counter()
         for row in rows:
             controller.step(q, row, dt)
@@ -109,34 +112,61 @@ def stability_rows(arm: Arm, factors, duration: float) -> list[tuple]:
 
 def print_speed(arm: Arm, repeats: int) -> None:
     print("\n1. speed: simulated seconds per wall second (median of", repeats, "runs of 3 s)")
-    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores (a shared machine slows every column)")
-    print(f"{'rate':<8}{'closed loop':>13}{'(CPU time)':>12}{'(median tick)':>15}{'physics only':>14}{'controller only':>17}  target")
+    print(
+        f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores (a shared machine slows "
+        "every column)"
+    )
+    print(
+        f"{'rate':<8}{'closed loop':>13}{'(CPU time)':>12}{'(median tick)':>15}{'physics only':>14}"
+        f"{'controller only':>17}  target"
+    )
     for dt in (1e-3, 2e-3, 8e-3):
         loop, cpu, tick, physics, control = speed(arm, dt, 3.0, repeats)
         target = ">= 5x" if dt == 1e-3 else ""
-        print(f"{1 / dt:>5.0f} Hz{loop:>12.1f}x{cpu:>11.1f}x{tick:>14.1f}x{physics:>13.1f}x{control:>16.1f}x  {target}")
+        print(
+            f"{1 / dt:>5.0f} "
+            f"Hz{loop:>12.1f}x{cpu:>11.1f}x{tick:>14.1f}x{physics:>13.1f}x{control:>16.1f}x  "
+            f"{target}"
+        )
 
 
 def print_placement(arm: Arm) -> None:
     print("\n2. placement, 1 kHz, 5 s (MuJoCo | simple engine)")
-    print(f"{'surface':<8}{'mode':<26}{'peak N [N]':>18}{'settle [s]':>18}{'depth [mm]':>18}{'final Fz [N]':>20}{'held':>7}")
+    print(
+        f"{'surface':<8}{'mode':<26}{'peak N [N]':>18}{'settle [s]':>18}{'depth [mm]':>18}"
+        f"{'final Fz [N]':>20}{'held':>7}"
+    )
     for surface, mode, run, simple, hold in placement_rows(arm, 5.0):
         pair = lambda a, b, f: f"{a:{f}} | {b:{f}}"  # noqa: E731
-        print(f"{surface:<8}{mode:<26}{pair(run.peak_contact_force, simple.peak_contact_force, '7.2f'):>18}"
-              f"{pair(run.settle_time, simple.settle_time, '6.3f'):>18}"
-              f"{pair(run.penetration[-1] * 1e3, simple.penetration[-1] * 1e3, '6.3f'):>18}"
-              f"{pair(run.final_force, simple.final_force, '+7.3f'):>20}{'yes' if np.isfinite(hold) else 'no':>7}")
+        print(
+            f"{surface:<8}{mode:<26}"
+            f"{pair(run.peak_contact_force, simple.peak_contact_force, '7.2f'):>18}"
+            f"{pair(run.settle_time, simple.settle_time, '6.3f'):>18}"
+            f"{pair(run.penetration[-1] * 1e3, simple.penetration[-1] * 1e3, '6.3f'):>18}"
+            f"{pair(run.final_force, simple.final_force, '+7.3f'):>20}"
+            f"{'yes' if np.isfinite(hold) else 'no':>7}"
+        )
 
 
 def print_stability(arm: Arm, factors) -> None:
-    print("\n3. stability on the book (k23 1 mm/(s·N), 5 Hz filter, one-tick sensor delay), 2 s runs")
-    print("bounds [mm/N]: ideal arm | 60 Hz servos with the payload in contact (0.75 kg) | in free air (0.55 kg)")
+    print(
+        "\n3. stability on the book (k23 1 mm/(s·N), 5 Hz filter, one-tick sensor delay), 2 s runs"
+    )
+    print(
+        "bounds [mm/N]: ideal arm | 60 Hz servos with the payload in contact (0.75 kg) | in free "
+        "air (0.55 kg)"
+    )
     for dt in (1e-3, 2e-3, 8e-3):
         ideal = max_stable_k1(BOOK.stiffness, BOOK.damping, dt, 5.0, k2=1e-3)
-        contact = max_stable_k1(BOOK.stiffness, BOOK.damping, dt, 5.0, k2=1e-3, servo_bandwidth=60.0, mass=0.75)
+        contact = max_stable_k1(
+            BOOK.stiffness, BOOK.damping, dt, 5.0, k2=1e-3, servo_bandwidth=60.0, mass=0.75
+        )
         air = max_stable_k1(0.0, 0.0, dt, 5.0, k2=1e-3, servo_bandwidth=60.0, mass=0.55)
         print(f"{1 / dt:>5.0f} Hz  {ideal * 1e3:.3f} | {contact * 1e3:.3f} | {air * 1e3:.3f}")
-    print(f"{'rate':<8}{'bound [mm/N]':>13}{'k13 / bound':>12}{'touch [s]':>11}{'held [s]':>10}  verdict")
+    print(
+        f"{'rate':<8}{'bound [mm/N]':>13}{'k13 / bound':>12}{'touch [s]':>11}{'held [s]':>10}  "
+        "verdict"
+    )
     for dt, bound, factor, touch, hold, _ in stability_rows(arm, factors, 2.0):
         if np.isinf(hold):
             verdict = "no trip"
@@ -144,14 +174,23 @@ def print_stability(arm: Arm, factors) -> None:
             verdict = "held in the air (payload-inertia loop)"
         else:
             verdict = f"held {hold - touch:.3f} s after contact"
-        print(f"{1 / dt:>5.0f} Hz{bound * 1e3:>13.3f}{factor:>12.1f}{touch:>11.3f}{hold:>10.3f}  {verdict}")
+        print(
+            f"{1 / dt:>5.0f} Hz{bound * 1e3:>13.3f}{factor:>12.1f}{touch:>11.3f}{hold:>10.3f}  "
+            f"{verdict}"
+        )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="shorter runs (speed 2 s x 3, placement 5 s, fewer stability runs)")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="shorter runs (speed 2 s x 3, placement 5 s, fewer stability runs)",
+    )
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--only", choices=("speed", "placement", "stability"), help="run one section")
+    parser.add_argument(
+        "--only", choices=("speed", "placement", "stability"), help="run one section"
+    )
     args = parser.parse_args()
     arm = Arm.default()
     repeats = 3 if args.quick else args.repeats

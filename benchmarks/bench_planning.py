@@ -69,9 +69,16 @@ def compare(label, arm, paper, **constraints):
     plan12, time12 = timed_plans(arm, 12, **constraints)
     random_stds, acceptance = random_sets(arm, np.random.default_rng(0), **constraints)
     random_std = np.median(random_stds, axis=0)
-    sets = {"planned 9": plan9.evaluation.vector_std, "planned 12": plan12.evaluation.vector_std, "random 9": random_std}
+    sets = {
+        "planned 9": plan9.evaluation.vector_std,
+        "planned 12": plan12.evaluation.vector_std,
+        "random 9": random_std,
+    }
     print(f"\n## {label}: {plan9.constraints.describe()}")
-    print(f"random feasible configurations: {100 * acceptance:.1f} % of uniform joint samples accepted")
+    print(
+        f"random feasible configurations: {100 * acceptance:.1f} % of uniform joint samples "
+        "accepted"
+    )
     head = f"{'param':<6}{'paper 9':>11}" + "".join(f"{name:>12}{'ratio':>7}" for name in sets)
     print(head)
     for i, name in enumerate(NAMES):
@@ -85,15 +92,24 @@ def compare(label, arm, paper, **constraints):
         "planned 9": (plan9.evaluation, paper.vector_std / plan9.evaluation.vector_std, time9),
         "planned 12": (plan12.evaluation, paper.vector_std / plan12.evaluation.vector_std, time12),
     }
-    print(f"{'set':<12}{'median ratio':>13}{'worst ratio':>12}{'F0/bound':>10}{'M0/bound':>10}{'time [s]':>10}")
+    print(
+        f"{'set':<12}{'median ratio':>13}{'worst ratio':>12}{'F0/bound':>10}{'M0/bound':>10}"
+        f"{'time [s]':>10}"
+    )
     for name, (evaluation, ratio, seconds) in summary.items():
         force, torque = bias_to_bound(evaluation)
-        print(f"{name:<12}{np.median(ratio):>13.2f}{ratio.min():>12.2f}{force:>10.3f}{torque:>10.3f}{seconds:>10.2f}")
+        print(
+            f"{name:<12}{np.median(ratio):>13.2f}{ratio.min():>12.2f}{force:>10.3f}{torque:>10.3f}"
+            f"{seconds:>10.2f}"
+        )
     bound = paper.bias_bound  # σ/√9, the same for any nine poses
     force_r = np.median((random_stds[:, 3:6] / bound[:3]).max(axis=1))
     torque_r = np.median((random_stds[:, 6:9] / bound[3:]).max(axis=1))
-    print(f"{'random 9':<12}{np.median(np.median(random_ratios, axis=1)):>13.2f}"
-          f"{np.median(random_ratios.min(axis=1)):>12.2f}{force_r:>10.3f}{torque_r:>10.3f}{'':>10}  (median of {RANDOM_DRAWS} draws)")
+    print(
+        f"{'random 9':<12}{np.median(np.median(random_ratios, axis=1)):>13.2f}"
+        f"{np.median(random_ratios.min(axis=1)):>12.2f}{force_r:>10.3f}{torque_r:>10.3f}{'':>10}  "
+        f"(median of {RANDOM_DRAWS} draws)"
+    )
     return plan9, paper.vector_std / plan9.evaluation.vector_std, time12
 
 

@@ -48,7 +48,9 @@ def _cpu(function) -> float:
 
 
 def paired_rate(floor, function, samples: int, repeats: int) -> tuple[float, float, float]:
-    """Median samples/s of ``floor`` and ``function`` and the median ratio ftkin / floor (alternating)."""
+    """Median samples/s of ``floor`` and ``function`` and the median ratio ftkin / floor
+    (alternating).
+    """
     floor()
     function()
     floors, values = [], []
@@ -58,7 +60,11 @@ def paired_rate(floor, function, samples: int, repeats: int) -> tuple[float, flo
         floor_time, time_ = times if repeat % 2 == 0 else times[::-1]
         floors.append(samples / floor_time)
         values.append(samples / time_)
-    return float(np.median(floors)), float(np.median(values)), float(np.median(np.array(values) / np.array(floors)))
+    return (
+        float(np.median(floors)),
+        float(np.median(values)),
+        float(np.median(np.array(values) / np.array(floors))),
+    )
 
 
 BYTECODE_CACHE = Path(tempfile.gettempdir()) / "ftkin-bench-pycache"
@@ -73,16 +79,30 @@ def run(code: str) -> tuple[float, float]:
     :data:`BYTECODE_CACHE`; a first, untimed run warms it. Otherwise every run
     would time Python compiling ~100 modules, which no user waits for twice.
     """
-    environment = {key: value for key, value in os.environ.items() if key != "PYTHONDONTWRITEBYTECODE"}
+    environment = {
+        key: value for key, value in os.environ.items() if key != "PYTHONDONTWRITEBYTECODE"
+    }
     environment.update(PYTHONPATH=str(ROOT), PYTHONPYCACHEPREFIX=str(BYTECODE_CACHE))
     if code not in _WARMED:
-        subprocess.run([sys.executable, "-c", code], check=True, env=environment, cwd=ROOT,
-                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        subprocess.run(
+            [sys.executable, "-c", code],
+            check=True,
+            env=environment,
+            cwd=ROOT,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         _WARMED.add(code)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    subprocess.run([sys.executable, "-c", code], check=True, env=environment, cwd=ROOT,
-                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    subprocess.run(
+        [sys.executable, "-c", code],
+        check=True,
+        env=environment,
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -95,7 +115,11 @@ def paired_run(floor_code: str, code: str, repeats: int):
     """Median wall and CPU times of both snippets and their median ratios (alternating order)."""
     rows = {"floor": [], "ftkin": []}
     for repeat in range(repeats):
-        pairs = (("floor", floor_code), ("ftkin", code)) if repeat % 2 == 0 else (("ftkin", code), ("floor", floor_code))
+        pairs = (
+            (("floor", floor_code), ("ftkin", code))
+            if repeat % 2 == 0
+            else (("ftkin", code), ("floor", floor_code))
+        )
         for name, snippet in pairs:
             rows[name].append(run(snippet))
     floor, value = np.array(rows["floor"]), np.array(rows["ftkin"])
@@ -103,7 +127,9 @@ def paired_run(floor_code: str, code: str, repeats: int):
 
 
 def joint_log_row(name: str, robot: Arm, truth, raws: np.ndarray, rng, repeats: int) -> None:
-    """``compensate_joint_positions`` samples/s beside the old path (Pinocchio FK per row + einsum)."""
+    """``compensate_joint_positions`` samples/s beside the old path (Pinocchio FK per row +
+    einsum).
+    """
     count, per_row = len(raws), 5000
     joint_q = robot.random_configurations(count, rng)
     model, data, frame = robot.model, robot.model.createData(), robot.sensor_frame_id
@@ -117,17 +143,28 @@ def joint_log_row(name: str, robot: Arm, truth, raws: np.ndarray, rng, repeats: 
         return compensator.compensate_batch_unchecked(out, raws[:per_row])
 
     pinocchio_rate = per_row / min(_cpu(pinocchio_rows) for _ in range(3))
-    rate = float(np.median([count / _cpu(lambda: compensator.compensate_joint_positions(joint_q, raws))
-                            for _ in range(repeats)]))
-    print(f"{'log from joint angles, ' + name:<46}{'Pinocchio FK per row + einsum':<34}"
-          f"{pinocchio_rate / 1e6:>10.2f}{rate / 1e6:>10.2f}{rate / pinocchio_rate:>7.1f}  "
-          f">= 5 M/s {'PASS' if rate >= 5e6 else 'FAIL'}")
+    rate = float(
+        np.median(
+            [
+                count / _cpu(lambda: compensator.compensate_joint_positions(joint_q, raws))
+                for _ in range(repeats)
+            ]
+        )
+    )
+    print(
+        f"{'log from joint angles, ' + name:<46}{'Pinocchio FK per row + einsum':<34}"
+        f"{pinocchio_rate / 1e6:>10.2f}{rate / 1e6:>10.2f}{rate / pinocchio_rate:>7.1f}  "
+        f">= 5 M/s {'PASS' if rate >= 5e6 else 'FAIL'}"
+    )
 
 
 def main(quick: bool = False) -> None:
     repeats = 5 if quick else 15
     load = os.getloadavg()
-    print(f"throughput and start-up; load average {load[0]:.1f} / {load[1]:.1f} on {os.cpu_count()} cores\n")
+    print(
+        f"throughput and start-up; load average {load[0]:.1f} / {load[1]:.1f} on {os.cpu_count()} "
+        "cores\n"
+    )
     rng = np.random.default_rng(0)
     truth = paper_like_truth()
     arm = Arm.default()
@@ -149,36 +186,72 @@ def main(quick: bool = False) -> None:
         return out
 
     print(f"{'batch path':<46}{'floor':<34}{'floor M/s':>10}{'ftkin M/s':>10}{'ratio':>7}  target")
-    floor, value, ratio = paired_rate(einsum_floor, lambda: compensator.compensate_batch(rotations, raws), count, repeats)
-    print(f"{'compensate_batch(R, raw), validated':<46}{'numpy einsum, no checks':<34}{floor / 1e6:>10.2f}"
-          f"{value / 1e6:>10.2f}{ratio:>7.2f}  >= 0.5x {'PASS' if ratio >= 0.5 else 'FAIL'}")
-    floor, value, ratio = paired_rate(einsum_floor, lambda: compensator.compensate_batch_unchecked(rotations, raws),
-                                      count, repeats)
-    print(f"{'compensate_batch_unchecked(R, raw)':<46}{'numpy einsum, no checks':<34}{floor / 1e6:>10.2f}"
-          f"{value / 1e6:>10.2f}{ratio:>7.2f}")
+    floor, value, ratio = paired_rate(
+        einsum_floor, lambda: compensator.compensate_batch(rotations, raws), count, repeats
+    )
+    print(
+        f"{'compensate_batch(R, raw), validated':<46}{'numpy einsum, no checks':<34}"
+        f"{floor / 1e6:>10.2f}"
+        f"{value / 1e6:>10.2f}{ratio:>7.2f}  >= 0.5x {'PASS' if ratio >= 0.5 else 'FAIL'}"
+    )
+    floor, value, ratio = paired_rate(
+        einsum_floor,
+        lambda: compensator.compensate_batch_unchecked(rotations, raws),
+        count,
+        repeats,
+    )
+    print(
+        f"{'compensate_batch_unchecked(R, raw)':<46}{'numpy einsum, no checks':<34}"
+        f"{floor / 1e6:>10.2f}"
+        f"{value / 1e6:>10.2f}{ratio:>7.2f}"
+    )
     for name, robot in (("bundled arm", arm), ("UR5", ftkin.load_robot("ur5"))):
         joint_log_row(name, robot, truth, raws, rng, repeats)
 
-    print(f"\n{'start-up (fresh interpreter)':<46}{'floor':<34}{'floor s':>10}{'ftkin s':>10}{'ratio':>7}  target"
-          "   [CPU: floor, ftkin, ratio]")
+    print(
+        f"\n{'start-up (fresh interpreter)':<46}{'floor':<34}{'floor s':>10}{'ftkin s':>10}"
+        f"{'ratio':>7}  target"
+        "   [CPU: floor, ftkin, ratio]"
+    )
     rows = (
         ("import ftkin", "import numpy, pinocchio", "import numpy, pinocchio", "import ftkin", 1.5),
-        ("import ftkin + every public name", "import numpy, pinocchio", "import numpy, pinocchio",
-         "import ftkin; from ftkin import *", 1.5),
-        ("ftkin --version", "python -c pass", "pass", "from ftkin.cli import main; main(['--version'])", None),
+        (
+            "import ftkin + every public name",
+            "import numpy, pinocchio",
+            "import numpy, pinocchio",
+            "import ftkin; from ftkin import *",
+            1.5,
+        ),
+        (
+            "ftkin --version",
+            "python -c pass",
+            "pass",
+            "from ftkin.cli import main; main(['--version'])",
+            None,
+        ),
     )
     for name, floor_name, floor_code, code, target in rows:
-        (floor_wall, floor_cpu), (wall, cpu), (ratio, cpu_ratio) = paired_run(floor_code, code, repeats)
-        verdict = (f"<= {target}x {'PASS' if ratio <= target else 'FAIL'}" if target
-                   else f"< 0.4 s {'PASS' if wall < 0.4 else 'FAIL'}")
-        print(f"{name:<46}{floor_name:<34}{floor_wall:>10.3f}{wall:>10.3f}{ratio:>7.2f}  {verdict:<14}"
-              f"[{floor_cpu:.3f}, {cpu:.3f}, {cpu_ratio:.2f}]")
+        (floor_wall, floor_cpu), (wall, cpu), (ratio, cpu_ratio) = paired_run(
+            floor_code, code, repeats
+        )
+        verdict = (
+            f"<= {target}x {'PASS' if ratio <= target else 'FAIL'}"
+            if target
+            else f"< 0.4 s {'PASS' if wall < 0.4 else 'FAIL'}"
+        )
+        print(
+            f"{name:<46}{floor_name:<34}{floor_wall:>10.3f}{wall:>10.3f}{ratio:>7.2f}  "
+            f"{verdict:<14}"
+            f"[{floor_cpu:.3f}, {cpu:.3f}, {cpu_ratio:.2f}]"
+        )
     for n, target, plan_repeats in ((12, 1.0, repeats), (200, 5.0, 1 if quick else 3)):
         code = f"from ftkin.cli import main; main(['plan', '--n', '{n}'])"
         times = np.array([run(code) for _ in range(plan_repeats)])
         wall, cpu = np.median(times, axis=0)
-        print(f"{f'ftkin plan --n {n}':<46}{'-':<34}{'':>10}{wall:>10.2f}{'':>7}  "
-              f"{f'<= {target:g} s'} {'PASS' if wall <= target else 'FAIL':<6}[CPU {cpu:.2f} s]")
+        print(
+            f"{f'ftkin plan --n {n}':<46}{'-':<34}{'':>10}{wall:>10.2f}{'':>7}  "
+            f"{f'<= {target:g} s'} {'PASS' if wall <= target else 'FAIL':<6}[CPU {cpu:.2f} s]"
+        )
 
 
 if __name__ == "__main__":

@@ -27,7 +27,18 @@ from ftkin.io.calibration_file import calibration_to_dict, load_calibration
 from ftkin.io.samples_csv import load_samples
 from ftkin.sim.paper import paper_calibration, paper_csv_path
 
-ALPHABET = list(",\n\r#.-+eE0123456789 \t\"'") + ["nan", "inf", "-inf", "1e999", "\x00", "é", "pose", "fx", "q1", "alpha"]
+ALPHABET = list(",\n\r#.-+eE0123456789 \t\"'") + [
+    "nan",
+    "inf",
+    "-inf",
+    "1e999",
+    "\x00",
+    "é",
+    "pose",
+    "fx",
+    "q1",
+    "alpha",
+]
 
 
 def mutate_text(text: str, rng: random.Random) -> str:
@@ -99,21 +110,40 @@ def write_small_bag(path: Path, arm, seed: int) -> Path:
 
     folder = path.parent / "bag"
     with Writer(folder, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
-        joints = writer.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=store)
-        wrench = writer.add_connection("/ft_sensor/wrench", "geometry_msgs/msg/WrenchStamped", typestore=store)
+        joints = writer.add_connection(
+            "/joint_states", "sensor_msgs/msg/JointState", typestore=store
+        )
+        wrench = writer.add_connection(
+            "/ft_sensor/wrench", "geometry_msgs/msg/WrenchStamped", typestore=store
+        )
         for t in np.arange(0.0, 6.0, 0.02):
             q = poses[min(int(t // 2.0), 2)]
             message = types["sensor_msgs/msg/JointState"](
-                header=header(100.0 + t), name=list(arm.joint_names), position=q, velocity=np.zeros(0), effort=np.zeros(0)
+                header=header(100.0 + t),
+                name=list(arm.joint_names),
+                position=q,
+                velocity=np.zeros(0),
+                effort=np.zeros(0),
             )
-            writer.write(joints, int((100.0 + t) * 1e9), store.serialize_cdr(message, "sensor_msgs/msg/JointState"))
+            writer.write(
+                joints,
+                int((100.0 + t) * 1e9),
+                store.serialize_cdr(message, "sensor_msgs/msg/JointState"),
+            )
         for t in np.arange(0.005, 6.0, 0.01):
             w = sensor.read(arm.rotation_sensor_to_base(poses[min(int(t // 2.0), 2)]), rng)[0]
-            vector = lambda v: types["geometry_msgs/msg/Vector3"](x=float(v[0]), y=float(v[1]), z=float(v[2]))  # noqa: E731
+            vector = lambda v: types["geometry_msgs/msg/Vector3"](
+                x=float(v[0]), y=float(v[1]), z=float(v[2])
+            )  # noqa: E731
             message = types["geometry_msgs/msg/WrenchStamped"](
-                header=header(100.0 + t), wrench=types["geometry_msgs/msg/Wrench"](force=vector(w[:3]), torque=vector(w[3:]))
+                header=header(100.0 + t),
+                wrench=types["geometry_msgs/msg/Wrench"](force=vector(w[:3]), torque=vector(w[3:])),
             )
-            writer.write(wrench, int((100.0 + t) * 1e9), store.serialize_cdr(message, "geometry_msgs/msg/WrenchStamped"))
+            writer.write(
+                wrench,
+                int((100.0 + t) * 1e9),
+                store.serialize_cdr(message, "geometry_msgs/msg/WrenchStamped"),
+            )
     return next(folder.glob("*.mcap"))
 
 
@@ -140,7 +170,9 @@ def mutate_bytes(data: bytes, rng: random.Random) -> bytes:
 
 def check_samples(loaded) -> None:
     samples = loaded.samples
-    assert np.all(np.isfinite(samples.wrenches)) and np.all(np.isfinite(samples.rotations)), "non-finite samples"
+    assert np.all(np.isfinite(samples.wrenches)) and np.all(np.isfinite(samples.rotations)), (
+        "non-finite samples"
+    )
 
 
 def check_calibration(result) -> None:
@@ -154,7 +186,9 @@ def _read_bag_quietly(path: Path, arm):
 
 
 def run(seconds: float, seed: int) -> int:
-    logging.disable(logging.WARNING)  # readers log warnings about odd but accepted input; not the point here
+    logging.disable(
+        logging.WARNING
+    )  # readers log warnings about odd but accepted input; not the point here
     rng = random.Random(seed)
     workdir = Path(tempfile.mkdtemp(prefix="ftkin-fuzz-"))
     csv_seeds = [paper_csv_path().read_text()]
@@ -164,7 +198,10 @@ def run(seconds: float, seed: int) -> int:
     for i, row in enumerate(q):
         joint_lines.append(",".join(f"{v:.6f}" for v in row) + f",{i},0.1,0.2,3.1,0.01,0.02,0.03")
     csv_seeds.append("\n".join(joint_lines) + "\n")
-    quat_seed = "qw,qx,qy,qz,fx,fy,fz,mx,my,mz\n1,0,0,0,0,0,3,0,0,0\n0,1,0,0,0,0,-3,0,0,0\n0.7071,0.7071,0,0,0,3,0,0,0,0\n"
+    quat_seed = (
+        "qw,qx,qy,qz,fx,fy,fz,mx,my,mz\n1,0,0,0,0,0,3,0,0,0\n"
+        "0,1,0,0,0,0,-3,0,0,0\n0.7071,0.7071,0,0,0,3,0,0,0,0\n"
+    )
     csv_seeds.append(quat_seed)
     calibration_document = calibration_to_dict(paper_calibration())
     json_seed = json.dumps(calibration_document, indent=2)
@@ -211,13 +248,18 @@ def run(seconds: float, seed: int) -> int:
     for name, count in counts.items():
         print(f"{name:<20}{count:>10}")
     print(f"{'total':<20}{total:>10}   ({total / seconds:.0f}/s, seed {seed})")
-    print(f"outcomes: {outcomes['ok']} accepted with finite values, {outcomes['ftkin error']} refused with an ftkin error, 0 other")
+    print(
+        f"outcomes: {outcomes['ok']} accepted with finite values, {outcomes['ftkin error']} "
+        "refused with an ftkin error, 0 other"
+    )
     return 0
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=60.0, help="time budget (default: %(default)s)")
+    parser.add_argument(
+        "--seconds", type=float, default=60.0, help="time budget (default: %(default)s)"
+    )
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     return run(args.seconds, args.seed)

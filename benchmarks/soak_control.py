@@ -47,15 +47,22 @@ from ftkin.sim.sensor import paper_like_truth
 from ftkin.sim.surfaces import BOOK, SPONGE, held_object_wrench
 
 SCENARIO = PlacementScenario()  # the paper's object, gains, deadband and noise
-DT = SCENARIO.dt          # control period [s]
-WEIGHT, HEIGHT = SCENARIO.object_weight, SCENARIO.object_height  # [N], object bottom below the tool point [m]
-PLACE_TICKS = 4000        # ticks of the place phase
-LIFT_FORCE = -8.0         # desired tool-z force while lifting [N]
-WARMUP = 20_000           # ticks before the memory baseline
-CHUNK = 100_000           # ticks per block of pre-drawn noise, and per RSS checkpoint
-INJECTIONS = (("nan raw", SensorFault.NOT_FINITE, 1), ("nan q", SensorFault.NOT_FINITE, 1),
-              ("saturated fz", SensorFault.SATURATED, 3), ("dt jump", SensorFault.DT_JUMP, 1),
-              ("stuck", SensorFault.STUCK, 25))
+DT = SCENARIO.dt  # control period [s]
+WEIGHT, HEIGHT = (
+    SCENARIO.object_weight,
+    SCENARIO.object_height,
+)  # [N], object bottom below the tool point [m]
+PLACE_TICKS = 4000  # ticks of the place phase
+LIFT_FORCE = -8.0  # desired tool-z force while lifting [N]
+WARMUP = 20_000  # ticks before the memory baseline
+CHUNK = 100_000  # ticks per block of pre-drawn noise, and per RSS checkpoint
+INJECTIONS = (
+    ("nan raw", SensorFault.NOT_FINITE, 1),
+    ("nan q", SensorFault.NOT_FINITE, 1),
+    ("saturated fz", SensorFault.SATURATED, 3),
+    ("dt jump", SensorFault.DT_JUMP, 1),
+    ("stuck", SensorFault.STUCK, 25),
+)
 
 
 def rss_kib() -> int:
@@ -100,7 +107,9 @@ class PlacementCycles:
         rotation, origin = self.rotation, self.origin
         tool = origin + rotation @ self.tool_in_sensor
         penetration = max(0.0, self.surface.height - (tool[2] + rotation[2, 2] * HEIGHT))
-        normal = self.surface.normal_force(penetration, (penetration - self.penetration_before) / DT)
+        normal = self.surface.normal_force(
+            penetration, (penetration - self.penetration_before) / DT
+        )
         self.penetration_before, self.normal = penetration, normal
         contact = held_object_wrench(rotation, origin, tool, HEIGHT, WEIGHT, normal)
         return contact - self.unloaded.compensate_rotation_unchecked(rotation, self._zero) + noise
@@ -113,9 +122,14 @@ class PlacementCycles:
         self.phase_ticks += 1
         if not self.lifting and self.phase_ticks >= PLACE_TICKS:
             self.lifting, self.phase_ticks = True, 0
-            self.placed += abs(self.normal - WEIGHT) < 0.1  # the surface carries the object's weight
+            self.placed += (
+                abs(self.normal - WEIGHT) < 0.1
+            )  # the surface carries the object's weight
             self.controller.admittance.desired_wrench[2] = LIFT_FORCE
-        elif self.lifting and (self.origin + self.rotation @ self.tool_in_sensor)[2] >= self.start_height:
+        elif (
+            self.lifting
+            and (self.origin + self.rotation @ self.tool_in_sensor)[2] >= self.start_height
+        ):
             self.cycles += 1
             self._new_surface()
 
@@ -123,9 +137,15 @@ class PlacementCycles:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ticks", type=float, default=1e6, help="control ticks (default 1e6)")
-    parser.add_argument("--fault-every", type=int, default=10_007, help="ticks between injected faults")
-    parser.add_argument("--trace-ticks", type=int, default=50_000, help="extra ticks under tracemalloc")
-    parser.add_argument("--max-rss-growth", type=float, default=4.0, help="allowed RSS growth after warm-up [MB]")
+    parser.add_argument(
+        "--fault-every", type=int, default=10_007, help="ticks between injected faults"
+    )
+    parser.add_argument(
+        "--trace-ticks", type=int, default=50_000, help="extra ticks under tracemalloc"
+    )
+    parser.add_argument(
+        "--max-rss-growth", type=float, default=4.0, help="allowed RSS growth after warm-up [MB]"
+    )
     args = parser.parse_args(argv)
     ticks = int(args.ticks)
     world = PlacementCycles()
@@ -155,7 +175,9 @@ def main(argv=None) -> int:
             gc.collect()
             rss["end"], objects["end"] = rss_kib(), len(gc.get_objects())
             tracemalloc.start()
-        if tick == ticks + min(1000, args.trace_ticks // 10):  # after the traced objects' first allocations
+        if tick == ticks + min(
+            1000, args.trace_ticks // 10
+        ):  # after the traced objects' first allocations
             traced["start"] = tracemalloc.get_traced_memory()[0]
         q, raw, dt = world.q, world.reading(noise[tick % CHUNK]), DT
         if remaining == 0 and tick > WARMUP and tick % args.fault_every == 0:
@@ -191,38 +213,87 @@ def main(argv=None) -> int:
     traced["end"], traced["peak"] = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     wall = time.perf_counter() - wall
-    return report(args, ticks, world, latency, held, injected, onsets, rss, objects, traced, nan_returned, wall)
+    return report(
+        args,
+        ticks,
+        world,
+        latency,
+        held,
+        injected,
+        onsets,
+        rss,
+        objects,
+        traced,
+        nan_returned,
+        wall,
+    )
 
 
-def report(args, ticks, world, latency, held, injected, onsets, rss, objects, traced, nan_returned, wall) -> int:
+def report(
+    args, ticks, world, latency, held, injected, onsets, rss, objects, traced, nan_returned, wall
+) -> int:
     """Print the tables; the exit code (1 when a check failed)."""
     micro = latency[:ticks] / 1e3
-    print(f"soak: {ticks:,} ticks + {args.trace_ticks:,} traced, {world.cycles} placement cycles "
-          f"({ticks * DT:.0f} s simulated) in {wall:.1f} s wall; object placed (surface carries it "
-          f"within 0.1 N at the end of the place phase) in {world.placed} of {world.cycles + world.lifting} cycles")
-    print(f"\n{'step latency [µs]':<26}{'ticks':>9}{'p50':>8}{'p90':>8}{'p99':>8}{'p99.9':>8}{'max':>9}{'mean':>8}")
-    for name, values in (("all ticks", micro), ("moving ticks", micro[~held[:ticks]]), ("held (fault) ticks", micro[held[:ticks]])):
+    print(
+        f"soak: {ticks:,} ticks + {args.trace_ticks:,} traced, {world.cycles} placement cycles "
+        f"({ticks * DT:.0f} s simulated) in {wall:.1f} s wall; object placed (surface carries it "
+        f"within 0.1 N at the end of the place phase) in {world.placed} of "
+        f"{world.cycles + world.lifting} cycles"
+    )
+    print(
+        f"\n{'step latency [µs]':<26}{'ticks':>9}{'p50':>8}{'p90':>8}{'p99':>8}{'p99.9':>8}"
+        f"{'max':>9}{'mean':>8}"
+    )
+    for name, values in (
+        ("all ticks", micro),
+        ("moving ticks", micro[~held[:ticks]]),
+        ("held (fault) ticks", micro[held[:ticks]]),
+    ):
         if values.size:
             p50, p90, p99, p999 = np.percentile(values, [50, 90, 99, 99.9])
-            print(f"{name:<26}{values.size:>9}{p50:>8.1f}{p90:>8.1f}{p99:>8.1f}{p999:>8.1f}{values.max():>9.1f}{values.mean():>8.1f}")
-    expected = {SensorFault.NOT_FINITE: injected["nan raw"] + injected["nan q"], SensorFault.SATURATED: injected["saturated fz"],
-                SensorFault.DT_JUMP: injected["dt jump"], SensorFault.STUCK: injected["stuck"]}
+            print(
+                f"{name:<26}{values.size:>9}{p50:>8.1f}{p90:>8.1f}{p99:>8.1f}{p999:>8.1f}"
+                f"{values.max():>9.1f}{values.mean():>8.1f}"
+            )
+    expected = {
+        SensorFault.NOT_FINITE: injected["nan raw"] + injected["nan q"],
+        SensorFault.SATURATED: injected["saturated fz"],
+        SensorFault.DT_JUMP: injected["dt jump"],
+        SensorFault.STUCK: injected["stuck"],
+    }
     print(f"\n{'fault':<14}{'injected':>9}{'reported':>9}{'held ticks':>11}")
     for fault, count in expected.items():
-        print(f"{fault.value:<14}{count:>9}{onsets[fault]:>9}{world.controller.monitor.counts[fault]:>11}")
+        print(
+            f"{fault.value:<14}{count:>9}{onsets[fault]:>9}"
+            f"{world.controller.monitor.counts[fault]:>11}"
+        )
     growth = (rss["end"] - rss["start"]) / 1024
     peak_rss = max(value for value in rss.values())
     traced_growth = traced["end"] - traced["start"]
     print(f"\n{'memory':<44}{'start':>12}{'end':>12}{'growth':>12}")
-    print(f"{'RSS [MB] (after warm-up .. end of ticks)':<44}{rss['start'] / 1024:>12.2f}{rss['end'] / 1024:>12.2f}{growth:>12.2f}")
-    print(f"{'gc-tracked objects':<44}{objects['start']:>12}{objects['end']:>12}{objects['end'] - objects['start']:>12}")
-    print(f"{'tracemalloc [kB] (traced window)':<44}{traced['start'] / 1e3:>12.1f}{traced['end'] / 1e3:>12.1f}"
-          f"{traced_growth / 1e3:>12.1f}   peak {traced['peak'] / 1e3:.1f} kB")
+    print(
+        f"{'RSS [MB] (after warm-up .. end of ticks)':<44}{rss['start'] / 1024:>12.2f}"
+        f"{rss['end'] / 1024:>12.2f}{growth:>12.2f}"
+    )
+    print(
+        f"{'gc-tracked objects':<44}{objects['start']:>12}{objects['end']:>12}"
+        f"{objects['end'] - objects['start']:>12}"
+    )
+    print(
+        f"{'tracemalloc [kB] (traced window)':<44}{traced['start'] / 1e3:>12.1f}"
+        f"{traced['end'] / 1e3:>12.1f}"
+        f"{traced_growth / 1e3:>12.1f}   peak {traced['peak'] / 1e3:.1f} kB"
+    )
     checkpoints = [value for key, value in rss.items() if isinstance(key, int)]
     if checkpoints:
-        print("RSS every 100,000 ticks [MB]: " + " ".join(f"{value / 1024:.1f}" for value in checkpoints))
-    print(f"RSS max over checkpoints: {peak_rss / 1024:.2f} MB; NaN dq returned: {nan_returned}; "
-          f"safety stop: {world.controller.safety_latched}")
+        print(
+            "RSS every 100,000 ticks [MB]: "
+            + " ".join(f"{value / 1024:.1f}" for value in checkpoints)
+        )
+    print(
+        f"RSS max over checkpoints: {peak_rss / 1024:.2f} MB; NaN dq returned: {nan_returned}; "
+        f"safety stop: {world.controller.safety_latched}"
+    )
     failures = []
     if nan_returned:
         failures.append(f"{nan_returned} NaN dq")

@@ -20,14 +20,48 @@ from pathlib import Path
 # data path inside the stage), then any module added since, alphabetically.
 STAGES = [
     ("kinematics", "Kinematics", ["arm", "urdf_loading", "robots", "rotations", "collision"]),
-    ("calibration", "Calibration", ["samples", "model", "linear", "ml", "information", "fit_quality",
-                                    "diagnostics", "observability", "summary", "estimate"]),
-    ("control", "Control", ["compensation", "admittance", "control_frame", "joint_admittance", "sensor_faults"]),
+    (
+        "calibration",
+        "Calibration",
+        [
+            "samples",
+            "model",
+            "linear",
+            "ml",
+            "information",
+            "fit_quality",
+            "diagnostics",
+            "observability",
+            "summary",
+            "estimate",
+        ],
+    ),
+    (
+        "control",
+        "Control",
+        ["compensation", "admittance", "control_frame", "joint_admittance", "sensor_faults"],
+    ),
     ("planning", "Planning", ["plan", "design", "constraints", "order", "evaluation"]),
-    ("io", "Input and output", ["samples_csv", "csv_table", "bags", "static_segments", "calibration_file",
-                                "export", "yaml_text", "atomic"]),
+    (
+        "io",
+        "Input and output",
+        [
+            "samples_csv",
+            "csv_table",
+            "bags",
+            "static_segments",
+            "calibration_file",
+            "export",
+            "yaml_text",
+            "atomic",
+        ],
+    ),
     ("sim", "Simulation", ["sensor", "placement", "surfaces", "placement_plots", "paper"]),
-    ("viz", "Visualisation", ["arrows", "legend", "scene", "server", "vectors", "viewer", "browser", "report"]),
+    (
+        "viz",
+        "Visualisation",
+        ["arrows", "legend", "scene", "server", "vectors", "viewer", "browser", "report"],
+    ),
     ("cli", "Command line", []),
 ]
 BOTTOM = ["exceptions", "validation", "progress"]
@@ -51,7 +85,11 @@ def automodule(name: str, members: bool = True, no_index: bool = False) -> str:
 
 
 def stage_modules(package: str, preferred: list[str]) -> list[str]:
-    found = sorted(m.name for m in pkgutil.iter_modules(importlib.import_module(package).__path__) if not m.name.startswith("__"))
+    found = sorted(
+        m.name
+        for m in pkgutil.iter_modules(importlib.import_module(package).__path__)
+        if not m.name.startswith("__")
+    )
     return [m for m in preferred if m in found] + [m for m in found if m not in preferred]
 
 
@@ -75,8 +113,14 @@ def stage_page(package: str, title: str, preferred: list[str], root: Path) -> st
     exported = getattr(importlib.import_module(full), "__all__", [])
     if exported:
         source_dir = root / "ftkin" / package
-        links = (f"{{py:obj}}`~{defining_module(full, modules, name, source_dir)}.{name}`" for name in exported)
-        parts += ["Exported from the subpackage (documented in full in its modules below):\n", ", ".join(links) + "\n"]
+        links = (
+            f"{{py:obj}}`~{defining_module(full, modules, name, source_dir)}.{name}`"
+            for name in exported
+        )
+        parts += [
+            "Exported from the subpackage (documented in full in its modules below):\n",
+            ", ".join(links) + "\n",
+        ]
     for module in modules:
         parts += [f"## `{full}.{module}`\n", automodule(f"{full}.{module}")]
     return "\n".join(parts)
@@ -84,17 +128,22 @@ def stage_page(package: str, title: str, preferred: list[str], root: Path) -> st
 
 def index_page() -> str:
     toctree = "\n".join(package for package, _, _ in STAGES)
-    return "\n".join([
-        "# API reference\n",
-        "Generated from the docstrings (Google style). The flat public API, `ftkin`, comes first; then one "
-        "page per stage of the data path ([Architecture](../architecture.md)), each with the subpackage's "
-        "summary and every module in full.\n",
-        f"```{{toctree}}\n:maxdepth: 2\n\n{toctree}\nbottom\n```\n",
-        "## `ftkin`: the public API\n",
-        "Every name in `ftkin.__all__`. Each is documented where it is defined (the stage pages); this "
-        "section repeats them for reading in one place.\n",
-        automodule("ftkin", no_index=True),
-    ])
+    return "\n".join(
+        [
+            "# API reference\n",
+            "Generated from the docstrings (Google style). The flat public API, `ftkin`, comes "
+            "first; then one "
+            "page per stage of the data path ([Architecture](../architecture.md)), each with the "
+            "subpackage's "
+            "summary and every module in full.\n",
+            f"```{{toctree}}\n:maxdepth: 2\n\n{toctree}\nbottom\n```\n",
+            "## `ftkin`: the public API\n",
+            "Every name in `ftkin.__all__`. Each is documented where it is defined (the stage "
+            "pages); this "
+            "section repeats them for reading in one place.\n",
+            automodule("ftkin", no_index=True),
+        ]
+    )
 
 
 def bottom_page() -> str:

@@ -43,7 +43,8 @@ class InvalidSamples(InvalidInput):
 
 
 class ConventionMistake(InvalidSamples):
-    """The data fit only when read in another convention (radians for degrees, x,y,z,w for w,x,y,z, ...).
+    """The data fit only when read in another convention (radians for degrees, x,y,z,w for w,x,y,z,
+    ...).
 
     Attributes:
         reading: What the data fit under, e.g. ``"Euler angles in radians"``.
@@ -113,9 +114,7 @@ class UnobservableParameters(FtkinError):
         self.names = list(names)
         self.reason = reason
         self.singular_values = singular_values
-        super().__init__(
-            "the poses cannot determine " + ", ".join(self.names) + f": {reason}"
-        )
+        super().__init__("the poses cannot determine " + ", ".join(self.names) + f": {reason}")
 
 
 class CalibrationFileError(FtkinError):
@@ -160,8 +159,14 @@ class SuspectConvention(FtkinError):
         flip_axis: The axis whose reversal fits (``"x"``, ``"y"`` or ``"z"``), else None.
     """
 
-    def __init__(self, message: str, explanations: Sequence[str] = (), fixes: Sequence[str] = (),
-                 sensor_sign: int | None = None, flip_axis: str | None = None):
+    def __init__(
+        self,
+        message: str,
+        explanations: Sequence[str] = (),
+        fixes: Sequence[str] = (),
+        sensor_sign: int | None = None,
+        flip_axis: str | None = None,
+    ):
         self.explanations = list(explanations)
         self.fixes = list(fixes)
         self.sensor_sign = sensor_sign

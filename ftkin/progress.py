@@ -23,7 +23,11 @@ class Progress:
         self.total = max(int(total), 1)
         self.label = label
         self.stream = stream if stream is not None else sys.stderr
-        self.enabled = enabled if enabled is not None else bool(getattr(self.stream, "isatty", lambda: False)())
+        self.enabled = (
+            enabled
+            if enabled is not None
+            else bool(getattr(self.stream, "isatty", lambda: False)())
+        )
         self.count = 0
         self._bar = None
 
@@ -31,8 +35,14 @@ class Progress:
         if self.enabled:
             from tqdm import tqdm
 
-            self._bar = tqdm(total=self.total, desc=self.label, file=self.stream, leave=True, dynamic_ncols=True,
-                             mininterval=0.1)
+            self._bar = tqdm(
+                total=self.total,
+                desc=self.label,
+                file=self.stream,
+                leave=True,
+                dynamic_ncols=True,
+                mininterval=0.1,
+            )
         return self
 
     def advance(self, steps: int = 1) -> None:

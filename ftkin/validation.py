@@ -26,12 +26,14 @@ def check_finite(array: np.ndarray, name: str) -> None:
         bad = np.argwhere(~np.isfinite(array))[0]
         index = tuple(int(i) for i in bad)
         raise InvalidInput(
-            f"{name} must be finite, found {float(array[index])} at index {index if len(index) > 1 else index[0]}"
+            f"{name} must be finite, found {float(array[index])} at index "
+            f"{index if len(index) > 1 else index[0]}"
         )
 
 
 def as_six_channels(value, name: str, non_negative: bool = False) -> np.ndarray:
-    """Six per-channel values ``(6,)`` [N then N·m] from a scalar, ``[force, torque]`` or six numbers; finite, frozen.
+    """Six per-channel values ``(6,)`` [N then N·m] from a scalar, ``[force, torque]`` or six
+    numbers; finite, frozen.
 
     ``non_negative``: also refuse values below zero (rates, noise levels).
     """
@@ -39,11 +41,15 @@ def as_six_channels(value, name: str, non_negative: bool = False) -> np.ndarray:
     if array.shape == (2,):
         array = np.repeat(array, 3)
     if array.shape not in ((), (1,), (6,)):
-        raise InvalidInput(f"{name} must be a scalar, [force, torque] or six channels, got shape {array.shape}")
+        raise InvalidInput(
+            f"{name} must be a scalar, [force, torque] or six channels, got shape {array.shape}"
+        )
     array = np.broadcast_to(array, (6,)).copy()
     if not np.all(np.isfinite(array)) or (non_negative and np.any(array < 0)):
         requirement = "finite and ≥ 0" if non_negative else "finite"
-        raise InvalidInput(f"{name} must be {requirement} (a scalar, [force, torque] or six channels), got {array}")
+        raise InvalidInput(
+            f"{name} must be {requirement} (a scalar, [force, torque] or six channels), got {array}"
+        )
     array.setflags(write=False)
     return array
 
@@ -68,12 +74,16 @@ def as_batch(value, width: int, name: str) -> tuple[np.ndarray, bool]:
     if single:
         array = array[np.newaxis, :]
     if array.ndim != 2 or array.shape[1] != width:
-        raise InvalidInput(f"{name} must have shape ({width},) or (N, {width}), got {np.shape(value)}")
+        raise InvalidInput(
+            f"{name} must have shape ({width},) or (N, {width}), got {np.shape(value)}"
+        )
     check_finite(array, name)
     return array, single
 
 
-def as_rotation_batch(value, name: str = "rotation_sensor_to_base", atol: float = 1e-6) -> tuple[np.ndarray, bool]:
+def as_rotation_batch(
+    value, name: str = "rotation_sensor_to_base", atol: float = 1e-6
+) -> tuple[np.ndarray, bool]:
     """A batch of proper rotation matrices ``(N, 3, 3)``; ``(3, 3)`` accepted.
 
     Raises:
@@ -96,14 +106,15 @@ _BLOCK = 16384
 
 
 def _all_rotations(array: np.ndarray, atol: float) -> bool:
-    """True if every ``(3, 3)`` of ``array`` has ``|RᵀR − I| <= atol`` entry by entry and ``det > 0``.
+    """True if every ``(3, 3)`` of ``array`` has ``|RᵀR − I| <= atol`` entry by entry and ``det >
+    0``.
 
     Closed form, vectorised over the batch: the six distinct entries of ``RᵀR``
     are column dot products and ``det R = c2 · (c0 × c1)``. NaN and inf fail
     the comparisons, so this also checks finiteness.
     """
     for start in range(0, len(array), _BLOCK):
-        block = array[start:start + _BLOCK]
+        block = array[start : start + _BLOCK]
         c0, c1, c2 = block[:, :, 0], block[:, :, 1], block[:, :, 2]
         low, high = 1.0 - atol, 1.0 + atol
         ok = True
@@ -115,8 +126,11 @@ def _all_rotations(array: np.ndarray, atol: float) -> bool:
             ok = ok and bool((np.abs(product, out=product) <= atol).all())
         if not ok:
             return False
-        det = ((c0[:, 1] * c1[:, 2] - c0[:, 2] * c1[:, 1]) * c2[:, 0] + (c0[:, 2] * c1[:, 0] - c0[:, 0] * c1[:, 2]) * c2[:, 1]
-               + (c0[:, 0] * c1[:, 1] - c0[:, 1] * c1[:, 0]) * c2[:, 2])
+        det = (
+            (c0[:, 1] * c1[:, 2] - c0[:, 2] * c1[:, 1]) * c2[:, 0]
+            + (c0[:, 2] * c1[:, 0] - c0[:, 0] * c1[:, 2]) * c2[:, 1]
+            + (c0[:, 0] * c1[:, 1] - c0[:, 1] * c1[:, 0]) * c2[:, 2]
+        )
         if not (det > 0.0).all():
             return False
     return True
@@ -141,7 +155,8 @@ def _raise_not_rotation(array: np.ndarray, name: str, atol: float) -> None:
         return
     i = int(bad[0])
     raise InvalidInput(
-        f"{name}[{i}] is not a rotation matrix (|R^T R - I| = {gram_error[i]:.2e}, det = {det[i]:.4f}); "
+        f"{name}[{i}] is not a rotation matrix (|R^T R - I| = {gram_error[i]:.2e}, det = "
+        f"{det[i]:.4f}); "
         "expected an orthonormal matrix with determinant +1"
     )
 
@@ -181,7 +196,9 @@ def _finite(value, name: str) -> float:
 
 
 FLOAT64 = np.dtype(np.float64)
-"""The dtype of the one-sample fast paths (``array.dtype is FLOAT64``: native float64, no conversion)."""
+"""The dtype of the one-sample fast paths (``array.dtype is FLOAT64``: native float64, no
+conversion).
+"""
 
 
 def rotation_rows(value, atol: float = 1e-6) -> list | None:
@@ -210,7 +227,12 @@ def is_rotation_rows(rows: list, atol: float = 1e-6) -> bool:
     """
     (a, b, c), (d, e, f), (g, h, i) = rows
     low, high = 1.0 - atol, 1.0 + atol  # column norms² within 1 ± atol, dot products within ± atol
-    return (low <= a * a + d * d + g * g <= high and low <= b * b + e * e + h * h <= high
-            and low <= c * c + f * f + i * i <= high and -atol <= a * b + d * e + g * h <= atol
-            and -atol <= a * c + d * f + g * i <= atol and -atol <= b * c + e * f + h * i <= atol
-            and a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0.0)
+    return (
+        low <= a * a + d * d + g * g <= high
+        and low <= b * b + e * e + h * h <= high
+        and low <= c * c + f * f + i * i <= high
+        and -atol <= a * b + d * e + g * h <= atol
+        and -atol <= a * c + d * f + g * i <= atol
+        and -atol <= b * c + e * f + h * i <= atol
+        and a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0.0
+    )

@@ -25,13 +25,18 @@ def write_example(folder: Path, push_pose: int = 4) -> tuple[Path, Path]:
     arm = ftkin.Arm.default()
     plan = ftkin.plan_poses(arm, 9)
     rng = np.random.default_rng(0)
-    samples = SimulatedSensor(paper_like_truth(), ftkin.SensorNoise.paper()).samples_at_configurations(
-        arm, plan.joint_positions, rng, readings_per_pose=5
-    )
+    samples = SimulatedSensor(
+        paper_like_truth(), ftkin.SensorNoise.paper()
+    ).samples_at_configurations(arm, plan.joint_positions, rng, readings_per_pose=5)
     wrenches = samples.wrenches.copy()
-    wrenches[samples.pose_ids == push_pose, 1] += 1.5  # N along the sensor's y: a contact during the pose
+    wrenches[samples.pose_ids == push_pose, 1] += (
+        1.5  # N along the sensor's y: a contact during the pose
+    )
     header = [f"q{i + 1}" for i in range(arm.nq)] + ["fx", "fy", "fz", "mx", "my", "mz", "pose"]
-    rows = [[*map(float, q), *map(float, w), int(p)] for q, w, p in zip(samples.joint_positions, wrenches, samples.pose_ids)]
+    rows = [
+        [*map(float, q), *map(float, w), int(p)]
+        for q, w, p in zip(samples.joint_positions, wrenches, samples.pose_ids)
+    ]
     write_csv(folder / "samples.csv", header, rows)
     calibration = ftkin.calibrate(ftkin.load_samples(folder / "samples.csv", arm=arm).samples)
     ftkin.save_calibration(calibration, folder / "calib.json")

@@ -29,14 +29,22 @@ def truth():
 
 @pytest.fixture(scope="module")
 def tool() -> SensorModel:
-    """A 15 N tool, COM a few cm off the sensor axis, biases, a small base tilt (the estimator benchmark's)."""
+    """A 15 N tool, COM a few cm off the sensor axis, biases, a small base tilt (the estimator
+    benchmark's).
+    """
     return SensorModel.from_tool(
-        15.0 / 9.80665, [0.03, -0.02, 0.08], [2.0, -1.5, 3.0], [0.10, -0.05, 0.02], base_tilt=np.deg2rad([0.3, -0.2])
+        15.0 / 9.80665,
+        [0.03, -0.02, 0.08],
+        [2.0, -1.5, 3.0],
+        [0.10, -0.05, 0.02],
+        base_tilt=np.deg2rad([0.3, -0.2]),
     )
 
 
 @pytest.fixture(scope="module")
 def rotations(arm) -> np.ndarray:
-    """Twelve sensor orientations ``(12, 3, 3)`` of random joint configurations of the bundled arm."""
+    """Twelve sensor orientations ``(12, 3, 3)`` of random joint configurations of the bundled
+    arm.
+    """
     rng = np.random.default_rng(7)
     return arm.rotation_sensor_to_base(arm.random_configurations(12, rng, margin=0.3))

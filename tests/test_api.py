@@ -44,12 +44,18 @@ STAGES = ("kinematics", "calibration", "control", "planning", "io", "sim", "viz"
 # The public names as they stood before the stages became subpackages: each
 # must still import from ``ftkin`` (the layout moved modules, not the API).
 NAMES_BEFORE_THE_LAYOUT = (
-    "Admittance Arm CalibrationFileError CalibrationResult Compensator ControlFrame FaultMonitor FitDiagnostics "
-    "FrameNotFound FtkinError InvalidInput InvalidSamples JointAdmittance METHODS MissingDependency PlacementRun "
-    "PlacementScenario PoseConstraints PoseEvaluation PosePlan ROBOTS STANDARD_GRAVITY Samples SensorFault "
-    "SensorLimits SensorModel SensorMount SensorNoise SimulatedSensor StepStatus Surface UnobservableParameters "
-    "UrdfError bundled_urdf_path calibrate euler_zyx_deg_to_matrix evaluate_poses fisher_information "
-    "load_calibration load_robot load_samples plan_poses quaternion_to_matrix save_calibration simulate_placement"
+    "Admittance Arm CalibrationFileError CalibrationResult Compensator ControlFrame FaultMonitor "
+    "FitDiagnostics "
+    "FrameNotFound FtkinError InvalidInput InvalidSamples JointAdmittance METHODS "
+    "MissingDependency PlacementRun "
+    "PlacementScenario PoseConstraints PoseEvaluation PosePlan ROBOTS STANDARD_GRAVITY Samples "
+    "SensorFault "
+    "SensorLimits SensorModel SensorMount SensorNoise SimulatedSensor StepStatus Surface "
+    "UnobservableParameters "
+    "UrdfError bundled_urdf_path calibrate euler_zyx_deg_to_matrix evaluate_poses "
+    "fisher_information "
+    "load_calibration load_robot load_samples plan_poses quaternion_to_matrix save_calibration "
+    "simulate_placement"
 ).split()
 
 
@@ -60,7 +66,9 @@ def test_names_of_the_flat_layout_still_import_from_ftkin():
 @pytest.mark.parametrize("stage", STAGES)
 def test_every_stage_exports_what_its_all_names(stage):
     package = importlib.import_module(f"ftkin.{stage}")
-    assert package.__doc__ and "Depends" in package.__doc__, f"ftkin.{stage} must say what it takes, gives and depends on"
+    assert package.__doc__ and "Depends" in package.__doc__, (
+        f"ftkin.{stage} must say what it takes, gives and depends on"
+    )
     assert [name for name in package.__all__ if not hasattr(package, name)] == []
     assert len(set(package.__all__)) == len(package.__all__)
 
@@ -73,8 +81,7 @@ def test_the_top_level_re_exports_the_same_objects(stage):
             assert getattr(ftkin, name) is getattr(package, name), name
 
 
-def test_no_module_is_over_300_lines_and_the_top_level_stays_small():
+def test_the_top_level_stays_small():
+    # Modules are cut by concept, not by a line cap (the 300-line cap is retired).
     root = Path(ftkin.__file__).parent
-    long = {str(p.relative_to(root)): n for p in root.rglob("*.py") if (n := len(p.read_text().splitlines())) > 300}
-    assert long == {}
     assert len(list(root.glob("*.py"))) <= 6

@@ -15,8 +15,14 @@ HEAVY = ("scipy", "matplotlib", "meshcat", "rosbags", "yourdfpy", "mujoco")
 
 def _modules_after(code: str) -> set[str]:
     environment = {**os.environ, "PYTHONPATH": str(ROOT)}
-    out = subprocess.run([sys.executable, "-c", code + "\nimport sys; print(' '.join(sys.modules))"],
-                         capture_output=True, text=True, env=environment, check=True, cwd=ROOT).stdout
+    out = subprocess.run(
+        [sys.executable, "-c", code + "\nimport sys; print(' '.join(sys.modules))"],
+        capture_output=True,
+        text=True,
+        env=environment,
+        check=True,
+        cwd=ROOT,
+    ).stdout
     return set(out.split())
 
 

@@ -38,7 +38,8 @@ _EXPORTS = {
     "fisher_information": ".information",
     "joint_derivatives": ".derivatives",
 }
-"""Public name → module: each loads on first access (PEP 562), so importing one calibration module (the CLI's
+"""Public name → module: each loads on first access (PEP 562), so importing one calibration module
+(the CLI's
 start) does not import them all."""
 
 __all__ = [

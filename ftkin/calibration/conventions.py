@@ -41,21 +41,33 @@ BASE_MOUNTS = ("floor", "ceiling", "wall")
 """How the robot base is mounted; sets the expected gravity direction (wall: none)."""
 
 MAX_GRAVITY_ANGLE_DEG = 90.0
-"""Largest accepted angle [deg] between the fitted tool weight and the expected gravity direction."""
+"""Largest accepted angle [deg] between the fitted tool weight and the expected gravity
+direction.
+"""
 
 FLIP_COST_RATIO = 0.1
-"""A reversed axis is named when its force residual sum of squares is below this fraction of the assumed one's."""
+"""A reversed axis is named when its force residual sum of squares is below this fraction of the
+assumed one's.
+"""
 
 MIN_POSES_FOR_FLIP = 6
-"""Fewest poses for the reversed-axis test (fewer leave too few degrees of freedom to compare fits)."""
+"""Fewest poses for the reversed-axis test (fewer leave too few degrees of freedom to compare
+fits).
+"""
 
-_EXPECTED = {"floor": np.array([0.0, 0.0, -1.0]), "ceiling": np.array([0.0, 0.0, 1.0]), "wall": None}
+_EXPECTED = {
+    "floor": np.array([0.0, 0.0, -1.0]),
+    "ceiling": np.array([0.0, 0.0, 1.0]),
+    "wall": None,
+}
 
 
 def check_sensor_sign(sensor_sign) -> int:
     """``sensor_sign`` as ``+1`` or ``-1``, else :class:`InvalidInput`."""
     if isinstance(sensor_sign, bool) or sensor_sign not in (1, -1):
-        raise InvalidInput(f"sensor_sign must be +1 (load on the sensor) or -1 (the reaction), got {sensor_sign!r}")
+        raise InvalidInput(
+            f"sensor_sign must be +1 (load on the sensor) or -1 (the reaction), got {sensor_sign!r}"
+        )
     return int(sensor_sign)
 
 
@@ -75,13 +87,18 @@ def reading_signs(sensor_sign: int = 1, flip_axis: str | None = None) -> np.ndar
     return signs
 
 
-def expected_gravity_direction(base_mount: str = "floor", expected_gravity=None) -> np.ndarray | None:
-    """Unit vector [base frame] the tool weight should point along, or None (a wall mount without a direction).
+def expected_gravity_direction(
+    base_mount: str = "floor", expected_gravity=None
+) -> np.ndarray | None:
+    """Unit vector [base frame] the tool weight should point along, or None (a wall mount without a
+    direction).
 
     ``expected_gravity`` (any non-zero 3-vector in the base frame) overrides ``base_mount``.
     """
     if base_mount not in BASE_MOUNTS:
-        raise InvalidInput(f"base_mount must be one of {', '.join(BASE_MOUNTS)}, got {base_mount!r}")
+        raise InvalidInput(
+            f"base_mount must be one of {', '.join(BASE_MOUNTS)}, got {base_mount!r}"
+        )
     if expected_gravity is not None:
         direction = as_vector(expected_gravity, 3, "expected_gravity")
         norm = float(np.linalg.norm(direction))
@@ -102,7 +119,8 @@ class ConventionCheck:
         best_flip: The alternative with the smallest cost.
         gravity_angle_deg: Angle [deg] between the fitted tool weight and the
             expected gravity direction (NaN when none is expected).
-        gravity_in_base: The tool weight [N, base frame] of the linear fit with the assumed convention.
+        gravity_in_base: The tool weight [N, base frame] of the linear fit with the assumed
+        convention.
         equivalent_flips: Other axes whose reversal the data cannot tell from
             ``best_flip`` (with a yaw mount estimated, x and y).
         estimate_mount: The mount mode the alternatives were fitted with.
@@ -121,12 +139,15 @@ class ConventionCheck:
         """True when another axis reversal fits far better (:data:`FLIP_COST_RATIO`)."""
         return (
             self.best_flip != self.assumed_flip
-            and self.flip_costs[self.best_flip] < FLIP_COST_RATIO * self.flip_costs[self.assumed_flip]
+            and self.flip_costs[self.best_flip]
+            < FLIP_COST_RATIO * self.flip_costs[self.assumed_flip]
         )
 
     @property
     def sign_suspected(self) -> bool:
-        """True when the tool weight points more than :data:`MAX_GRAVITY_ANGLE_DEG` away from the expected gravity."""
+        """True when the tool weight points more than :data:`MAX_GRAVITY_ANGLE_DEG` away from the
+        expected gravity.
+        """
         return bool(self.gravity_angle_deg > MAX_GRAVITY_ANGLE_DEG)
 
 
@@ -155,7 +176,8 @@ def detect_sign_and_handedness(
         estimate_mount: ``"none"``, or a mount mode: the alternatives are then
             scored with the best yaw mount of a grid, and a reversed x axis
             cannot be told from a reversed y axis (a 180° yaw turns one into the other).
-        base_mount: ``"floor"`` (gravity along base −z), ``"ceiling"`` (+z) or ``"wall"`` (no check).
+        base_mount: ``"floor"`` (gravity along base −z), ``"ceiling"`` (+z) or ``"wall"`` (no
+        check).
         expected_gravity: Expected gravity direction in the base frame; overrides ``base_mount``.
         g: Gravity [m/s²] (for the linear fit's reported mass only).
 
@@ -188,21 +210,37 @@ def detect_sign_and_handedness(
     return ConventionCheck(costs, flip_axis, best, angle, gravity, equivalent, estimate_mount)
 
 
-def check_conventions(check: ConventionCheck, sensor_sign: int = 1, base_mount: str = "floor") -> None:
+def check_conventions(
+    check: ConventionCheck, sensor_sign: int = 1, base_mount: str = "floor"
+) -> None:
     """Raise :class:`~ftkin.exceptions.SuspectConvention` for a suspected reversed axis or sign."""
     if check.flip_suspected:
         rms = {key: float(np.sqrt(value)) for key, value in check.flip_costs.items()}
-        found = f"the sensor's {check.best_flip} axis reversed" if check.best_flip else "no axis reversed"
+        found = (
+            f"the sensor's {check.best_flip} axis reversed"
+            if check.best_flip
+            else "no axis reversed"
+        )
         flag = f"--flip-axis {check.best_flip}" if check.best_flip else "no --flip-axis"
         if check.equivalent_flips:
-            found += " (or, the same readings with the mount turned 180° about z, the " + \
-                " or ".join(check.equivalent_flips) + " axis)"
+            found += (
+                " (or, the same readings with the mount turned 180° about z, the "
+                + " or ".join(check.equivalent_flips)
+                + " axis)"
+            )
         keyword = f"flip_axis={check.best_flip!r}"
         raise SuspectConvention(
-            f"the data fit with {found}: {flag} ({keyword}); force residual {rms[check.best_flip]:.3g} N against "
-            f"{rms[check.assumed_flip]:.3g} N as assumed (root sum of squares over the poses). A mirrored axis "
-            "(left-handed sensor frame) fits no rotation of the model; recalibrate with that setting",
-            explanations=[f"the sensor's {check.best_flip} axis is reversed" if check.best_flip else "no axis is reversed"],
+            f"the data fit with {found}: {flag} ({keyword}); force residual "
+            f"{rms[check.best_flip]:.3g} N against "
+            f"{rms[check.assumed_flip]:.3g} N as assumed (root sum of squares over the poses). A "
+            "mirrored axis "
+            "(left-handed sensor frame) fits no rotation of the model; recalibrate with that "
+            "setting",
+            explanations=[
+                f"the sensor's {check.best_flip} axis is reversed"
+                if check.best_flip
+                else "no axis is reversed"
+            ],
             fixes=[flag],
             flip_axis=check.best_flip,
         )
@@ -214,13 +252,20 @@ def check_conventions(check: ConventionCheck, sensor_sign: int = 1, base_mount: 
             # −I = diag(1, 1, −1) · Rz(π): with the yaw estimated, a reversed z axis reads the same
             sign_fix += " (or, the same readings with the mount turned 180° about z, --flip-axis z)"
         raise SuspectConvention(
-            f"the fitted tool weight gravity_in_base = [{weight}] N points {check.gravity_angle_deg:.0f}° away from "
-            f"the expected gravity direction (base -z for a floor mount, +z for a ceiling mount). Either the sensor "
+            f"the fitted tool weight gravity_in_base = [{weight}] N points "
+            f"{check.gravity_angle_deg:.0f}° away from "
+            "the expected gravity direction (base -z for a floor mount, +z for a ceiling mount). "
+            "Either the sensor "
             f"reports the reaction instead of the load on the sensor: recalibrate with {sign_fix} "
-            f"(sensor_sign={-sensor_sign}), which negates every reading; or the robot is mounted on the {other}: "
-            f"--base-mount {other} (base_mount={other!r}), or give the expected gravity direction. Admittance "
+            f"(sensor_sign={-sensor_sign}), which negates every reading; or the robot is mounted "
+            f"on the {other}: "
+            f"--base-mount {other} (base_mount={other!r}), or give the expected gravity direction. "
+            "Admittance "
             "control with a reversed sign moves toward a contact instead of away from it",
-            explanations=["the sensor reports the reaction (opposite sign)", f"the robot is mounted on the {other}"],
+            explanations=[
+                "the sensor reports the reaction (opposite sign)",
+                f"the robot is mounted on the {other}",
+            ],
             fixes=[sign_fix, f"--base-mount {other}"],
             sensor_sign=-sensor_sign,
         )

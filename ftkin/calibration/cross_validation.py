@@ -54,14 +54,22 @@ class CrossValidation:
         """A table: one row per drift setting, and the ratio to the first."""
         settings = list(self.force_rms)
         first = settings[0]
-        lines = [f"{self.folds}-fold cross-validation over {self.pose_count} poses (seed {self.seed}): "
-                 "compensated wrench at held-out poses (the truth is zero)",
-                 f"  {'drift':<22}{'force RMS [N]':>15}{'torque RMS [N·m]':>18}{f'÷ {first}':>10}  models of the folds"]
+        lines = [
+            f"{self.folds}-fold cross-validation over {self.pose_count} poses (seed {self.seed}): "
+            "compensated wrench at held-out poses (the truth is zero)",
+            f"  {'drift':<22}{'force RMS [N]':>15}{'torque RMS [N·m]':>18}{f'÷ {first}':>10}  "
+            "models of the folds",
+        ]
         for setting in settings:
             ratio = self.force_rms[setting] / max(self.force_rms[first], 1e-300)
-            models = ", ".join(f"{m} ×{self.models[setting].count(m)}" for m in sorted(set(self.models.get(setting, ()))))
-            lines.append(f"  {setting:<22}{self.force_rms[setting]:>15.4g}{self.torque_rms[setting]:>18.4g}"
-                         f"{ratio:>10.2f}  {models}")
+            models = ", ".join(
+                f"{m} ×{self.models[setting].count(m)}"
+                for m in sorted(set(self.models.get(setting, ())))
+            )
+            lines.append(
+                f"  {setting:<22}{self.force_rms[setting]:>15.4g}{self.torque_rms[setting]:>18.4g}"
+                f"{ratio:>10.2f}  {models}"
+            )
         return "\n".join(lines)
 
 
@@ -71,11 +79,17 @@ def _below_error(record: logging.LogRecord) -> bool:
 
 @contextmanager
 def _quiet_fits():
-    """The folds' fits keep their warnings to themselves: they are about sub-fits, not the user's calibration.
+    """The folds' fits keep their warnings to themselves: they are about sub-fits, not the user's
+    calibration.
 
-    A filter on the calibration loggers (not their level, which another thread may rely on) drops the warnings.
+    A filter on the calibration loggers (not their level, which another thread may rely on) drops
+    the warnings.
     """
-    loggers = [logging.getLogger(name) for name in logging.root.manager.loggerDict if name.startswith("ftkin.calibration")]
+    loggers = [
+        logging.getLogger(name)
+        for name in logging.root.manager.loggerDict
+        if name.startswith("ftkin.calibration")
+    ]
     for logger in loggers:
         logger.addFilter(_below_error)
     try:
@@ -89,19 +103,29 @@ def _subset(samples: Samples, mask: np.ndarray) -> Samples:
     def part(array):
         return None if array is None else array[mask]
 
-    return replace(samples, wrenches=samples.wrenches[mask], rotations=samples.rotations[mask],
-                   pose_ids=samples.pose_ids[mask], joint_positions=part(samples.joint_positions), times=part(samples.times))
+    return replace(
+        samples,
+        wrenches=samples.wrenches[mask],
+        rotations=samples.rotations[mask],
+        pose_ids=samples.pose_ids[mask],
+        joint_positions=part(samples.joint_positions),
+        times=part(samples.times),
+    )
 
 
-def cross_validate(samples: Samples, drifts=("none", "auto"), folds: int = 5, seed: int = 0, **options) -> CrossValidation:
+def cross_validate(
+    samples: Samples, drifts=("none", "auto"), folds: int = 5, seed: int = 0, **options
+) -> CrossValidation:
     """Compensate each fold's poses with a calibration on the others, for each drift setting.
 
     Args:
         samples: The calibration samples (several readings per pose are averaged per pose).
-        drifts: Drift settings to compare (:func:`~ftkin.calibration.estimate.calibrate`'s ``drift``).
+        drifts: Drift settings to compare (:func:`~ftkin.calibration.estimate.calibrate`'s
+        ``drift``).
         folds: Number of folds ``k`` (2..50, at most the number of poses).
         seed: Seed of the random split into folds.
-        **options: Passed to every :func:`~ftkin.calibration.estimate.calibrate` (method, noise, mount, signs, ...).
+        **options: Passed to every :func:`~ftkin.calibration.estimate.calibrate` (method, noise,
+        mount, signs, ...).
 
     Raises:
         InvalidInput: bad ``folds`` or drift settings, or too few poses for
@@ -109,17 +133,32 @@ def cross_validate(samples: Samples, drifts=("none", "auto"), folds: int = 5, se
     """
     from .estimate import calibrate  # estimate imports the whole estimator; keep this module light
 
-    if isinstance(folds, bool) or not isinstance(folds, (int, np.integer)) or not MIN_FOLDS <= folds <= MAX_FOLDS:
-        raise InvalidInput(f"folds must be an integer from {MIN_FOLDS} to {MAX_FOLDS}, got {folds!r}")
+    if (
+        isinstance(folds, bool)
+        or not isinstance(folds, (int, np.integer))
+        or not MIN_FOLDS <= folds <= MAX_FOLDS
+    ):
+        raise InvalidInput(
+            f"folds must be an integer from {MIN_FOLDS} to {MAX_FOLDS}, got {folds!r}"
+        )
     if "drift" in options:
         raise InvalidInput("give the drift settings to compare as drifts=(...), not drift=")
     drifts = tuple(drifts)
     if not drifts or len(set(drifts)) != len(drifts) or not all(isinstance(d, str) for d in drifts):
-        raise InvalidInput(f"drifts must be distinct drift settings (e.g. ('none', 'auto')), got {drifts!r}")
+        raise InvalidInput(
+            f"drifts must be distinct drift settings (e.g. ('none', 'auto')), got {drifts!r}"
+        )
     pose_ids = np.unique(samples.pose_ids)
     if len(pose_ids) < folds:
-        raise InvalidInput(f"{len(pose_ids)} poses cannot be split into {folds} folds; use fewer folds")
-    fold_of = dict(zip(pose_ids.tolist(), (np.random.default_rng(seed).permutation(len(pose_ids)) % folds).tolist()))
+        raise InvalidInput(
+            f"{len(pose_ids)} poses cannot be split into {folds} folds; use fewer folds"
+        )
+    fold_of = dict(
+        zip(
+            pose_ids.tolist(),
+            (np.random.default_rng(seed).permutation(len(pose_ids)) % folds).tolist(),
+        )
+    )
     reading_fold = np.array([fold_of[int(i)] for i in samples.pose_ids])
     squares = {drift: [] for drift in drifts}
     models = {drift: [] for drift in drifts}
@@ -130,13 +169,28 @@ def cross_validate(samples: Samples, drifts=("none", "auto"), folds: int = 5, se
                 with _quiet_fits():
                     result = calibrate(train, drift=drift, **options)
             except UnobservableParameters as error:
-                raise InvalidInput(f"fold {k + 1} of {folds}: the other folds' {len(np.unique(train.pose_ids))} poses "
-                                   f"cannot determine the parameters ({error}); use fewer folds") from None
+                raise InvalidInput(
+                    f"fold {k + 1} of {folds}: the other folds' {len(np.unique(train.pose_ids))} "
+                    "poses "
+                    f"cannot determine the parameters ({error}); use fewer folds"
+                ) from None
             poses = as_real_sensor(test, result).pose_averages()
             bias = result.bias if poses.times is None else result.bias_at(poses.times)
             residual = poses.wrenches - result.tool_gravity_wrench(poses.rotations) - bias
-            squares[drift].append(np.column_stack([np.sum(residual[:, :3] ** 2, axis=1), np.sum(residual[:, 3:] ** 2, axis=1)]))
+            squares[drift].append(
+                np.column_stack(
+                    [np.sum(residual[:, :3] ** 2, axis=1), np.sum(residual[:, 3:] ** 2, axis=1)]
+                )
+            )
             models[drift].append(result.drift.model if result.drift is not None else "none")
-    rms = {drift: np.sqrt(np.mean(np.concatenate(values), axis=0)) for drift, values in squares.items()}
-    return CrossValidation(folds, len(pose_ids), {d: float(v[0]) for d, v in rms.items()},
-                           {d: float(v[1]) for d, v in rms.items()}, {d: tuple(m) for d, m in models.items()}, seed)
+    rms = {
+        drift: np.sqrt(np.mean(np.concatenate(values), axis=0)) for drift, values in squares.items()
+    }
+    return CrossValidation(
+        folds,
+        len(pose_ids),
+        {d: float(v[0]) for d, v in rms.items()},
+        {d: float(v[1]) for d, v in rms.items()},
+        {d: tuple(m) for d, m in models.items()},
+        seed,
+    )

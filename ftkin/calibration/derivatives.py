@@ -29,15 +29,28 @@ DEFAULT_POLYORDER = 4
 """Default Savitzky–Golay polynomial degree."""
 
 
-def window_samples(sample_period: float, window_seconds: float = DEFAULT_WINDOW_SECONDS, polyorder: int = DEFAULT_POLYORDER) -> int:
-    """Odd window length [samples] covering about ``window_seconds`` [s], larger than ``polyorder``."""
-    count = int(round(as_positive(window_seconds, "window_seconds") / as_positive(sample_period, "sample_period")))
+def window_samples(
+    sample_period: float,
+    window_seconds: float = DEFAULT_WINDOW_SECONDS,
+    polyorder: int = DEFAULT_POLYORDER,
+) -> int:
+    """Odd window length [samples] covering about ``window_seconds`` [s], larger than
+    ``polyorder``.
+    """
+    count = int(
+        round(
+            as_positive(window_seconds, "window_seconds")
+            / as_positive(sample_period, "sample_period")
+        )
+    )
     count = max(count, polyorder + 2)
     return count if count % 2 == 1 else count + 1
 
 
 MAX_MOTION_PERIOD = 0.1
-"""Longest sample period [s] of a moving recording: below 10 Hz the accelerations of any useful motion are lost."""
+"""Longest sample period [s] of a moving recording: below 10 Hz the accelerations of any useful
+motion are lost.
+"""
 
 
 def uniform_period(times) -> float:
@@ -49,21 +62,27 @@ def uniform_period(times) -> float:
     """
     times = np.asarray(times, dtype=float)
     if times.ndim != 1 or len(times) < 2 or not np.all(np.isfinite(times)):
-        raise InvalidInput(f"times must be a finite 1-D array of at least two stamps, got shape {times.shape}")
+        raise InvalidInput(
+            f"times must be a finite 1-D array of at least two stamps, got shape {times.shape}"
+        )
     steps = np.diff(times)
     period = float(np.median(steps))
     if period <= 0.0 or np.any(steps <= 0.0):
         raise InvalidInput("times must increase strictly")
     if np.max(np.abs(steps - period)) > 0.05 * period:
         raise InvalidInput(
-            f"times are not uniformly sampled (period {period:g} s, steps from {steps.min():g} to {steps.max():g} s); "
+            f"times are not uniformly sampled (period {period:g} s, steps from {steps.min():g} to "
+            f"{steps.max():g} s); "
             "resample the recording to a uniform rate first"
         )
     return period
 
 
-def joint_derivatives(times, joint_positions, window: int | None = None, polyorder: int = DEFAULT_POLYORDER):
-    """Zero-phase smoothed ``q``, ``dq`` [rad/s] and ``ddq`` [rad/s²] of a uniformly sampled ``(N, nq)`` trajectory.
+def joint_derivatives(
+    times, joint_positions, window: int | None = None, polyorder: int = DEFAULT_POLYORDER
+):
+    """Zero-phase smoothed ``q``, ``dq`` [rad/s] and ``ddq`` [rad/s²] of a uniformly sampled ``(N,
+    nq)`` trajectory.
 
     Args:
         times: ``(N,)`` stamps [s] (uniform).
@@ -79,8 +98,10 @@ def joint_derivatives(times, joint_positions, window: int | None = None, polyord
     period = uniform_period(times)
     if period > MAX_MOTION_PERIOD:
         raise InvalidInput(
-            f"the stamps are {period:g} s apart: a moving recording for accelerations needs at least "
-            f"{1.0 / MAX_MOTION_PERIOD:g} Hz; t must be in seconds (stamps in milliseconds? divide by 1000)"
+            f"the stamps are {period:g} s apart: a moving recording for accelerations needs at "
+            "least "
+            f"{1.0 / MAX_MOTION_PERIOD:g} Hz; t must be in seconds (stamps in milliseconds? divide "
+            "by 1000)"
         )
     q, _ = as_batch(joint_positions, np.shape(joint_positions)[-1], "joint positions q")
     window = window_samples(period, polyorder=polyorder) if window is None else int(window)
@@ -95,7 +116,9 @@ def _check_window(window: int, polyorder: int, count: int | None = None) -> None
     if polyorder < 2:
         raise InvalidInput(f"polyorder must be at least 2 to give accelerations, got {polyorder}")
     if window % 2 == 0 or window <= polyorder:
-        raise InvalidInput(f"window must be odd and larger than polyorder {polyorder}, got {window}")
+        raise InvalidInput(
+            f"window must be odd and larger than polyorder {polyorder}, got {window}"
+        )
     if count is not None and count < window:
         raise InvalidInput(f"{count} samples are fewer than the differentiation window of {window}")
 
@@ -114,7 +137,13 @@ class CausalDifferentiator:
     the window is full.
     """
 
-    def __init__(self, nq: int, sample_period: float, window: int | None = None, polyorder: int = DEFAULT_POLYORDER):
+    def __init__(
+        self,
+        nq: int,
+        sample_period: float,
+        window: int | None = None,
+        polyorder: int = DEFAULT_POLYORDER,
+    ):
         from scipy.signal import savgol_coeffs
 
         period = as_positive(sample_period, "sample_period")
@@ -124,9 +153,9 @@ class CausalDifferentiator:
         self.window = window
         self.sample_period = period
         # savgol_coeffs(use="dot") weights the window oldest → newest, evaluated at its centre.
-        self._weights = np.stack([
-            savgol_coeffs(window, polyorder, deriv=k, delta=period, use="dot") for k in range(3)
-        ])
+        self._weights = np.stack(
+            [savgol_coeffs(window, polyorder, deriv=k, delta=period, use="dot") for k in range(3)]
+        )
         self._buffer: deque = deque(maxlen=window)
 
     @property
@@ -139,7 +168,9 @@ class CausalDifferentiator:
         self._buffer.clear()
 
     def update(self, q) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """Push one ``(nq,)`` joint position [rad]; ``(q, dq, ddq)`` of ``delay`` s ago, or None while filling."""
+        """Push one ``(nq,)`` joint position [rad]; ``(q, dq, ddq)`` of ``delay`` s ago, or None
+        while filling.
+        """
         q = np.asarray(q, dtype=float)
         if q.shape != (self.nq,) or not np.all(np.isfinite(q)):
             raise InvalidInput(f"q must be a finite ({self.nq},) array, got {q!r}")

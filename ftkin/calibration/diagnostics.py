@@ -73,7 +73,9 @@ class FitDiagnostics:
 
     @property
     def fit_ok(self) -> bool:
-        """False when the chi-square test rejects the model (always True with residual-based noise)."""
+        """False when the chi-square test rejects the model (always True with residual-based
+        noise).
+        """
         return not (self.p_value < FIT_ALPHA)
 
     @property
@@ -89,7 +91,10 @@ class FitDiagnostics:
     @property
     def poorly_determined(self) -> tuple[str, ...]:
         """Parameter components whose relative standard error exceeds the warning level."""
-        return tuple(COMPONENT_NAMES[i] for i in np.flatnonzero(self.relative_std_errors > RELATIVE_STD_ERROR_WARNING))
+        return tuple(
+            COMPONENT_NAMES[i]
+            for i in np.flatnonzero(self.relative_std_errors > RELATIVE_STD_ERROR_WARNING)
+        )
 
     def to_dict(self) -> dict:
         """Plain-Python form for the calibration file (non-finite numbers written as null)."""
@@ -148,7 +153,9 @@ class FitDiagnostics:
 
 
 def main_components(direction: np.ndarray) -> list[tuple[str, float]]:
-    """Entries of a unit direction in θ above 0.3 in magnitude, ``(name, weight)``, largest first."""
+    """Entries of a unit direction in θ above 0.3 in magnitude, ``(name, weight)``, largest
+    first.
+    """
     order = np.argsort(-np.abs(direction))
     return [(COMPONENT_NAMES[i], float(direction[i])) for i in order if abs(direction[i]) > 0.3]
 

@@ -44,7 +44,9 @@ MISTAKE_RATIO = 20.0
 SUSPECT_RATIO = 4.0
 """Chi-square ratio from which the alternative is a suspicion (a warning)."""
 EXPLAINED = (0.5, 0.8)
-"""Share of the variation a reading must explain to be a suspicion, and to be named as the mistake."""
+"""Share of the variation a reading must explain to be a suspicion, and to be named as the
+mistake.
+"""
 FAR_COM = (0.5, 2.0)
 """Centre-of-mass distance [m]: beyond the first a suspicion, beyond the second implausible."""
 
@@ -54,7 +56,8 @@ class Reading:
     """One way to read a data set.
 
     Attributes:
-        name: What this reading assumes, e.g. ``"Euler angles in radians"`` (``"as given"`` for the data as read).
+        name: What this reading assumes, e.g. ``"Euler angles in radians"`` (``"as given"`` for the
+        data as read).
         fix: What the user should change when this reading is the right one.
         poses: The pose-averaged readings under this assumption, or None when they cannot be formed.
         unit_scale: ``(6,)`` factors that turn this reading's wrench units into the given ones.
@@ -70,9 +73,11 @@ class Reading:
 
 @dataclass(frozen=True)
 class ReadingFit:
-    """The linear fit of one reading: model, residual sum of squares per channel (given units), or why it failed.
+    """The linear fit of one reading: model, residual sum of squares per channel (given units), or
+    why it failed.
 
-    ``explained`` is the share of the variation across poses that the fit explains, the smaller of the
+    ``explained`` is the share of the variation across poses that the fit explains, the smaller of
+    the
     force and the torque channels' (1: all of it; a reading that explains little is never named).
     """
 
@@ -90,7 +95,8 @@ class ConventionReport:
 
     Attributes:
         fits: One per reading; the first is the data as given.
-        verdict: ``"ok"``, ``"suspect"`` (warn), ``"mistake"`` (refuse), or ``"undetermined"`` (the data
+        verdict: ``"ok"``, ``"suspect"`` (warn), ``"mistake"`` (refuse), or ``"undetermined"`` (the
+        data
             cannot be fitted under any reading, e.g. too few poses: the fit itself says why).
         culprit: The alternative that explains the data, when the verdict is not ok.
         reason: One sentence of evidence for the verdict.
@@ -106,20 +112,31 @@ class ConventionReport:
         """The sentence an error or warning prints: the reading that fits and the fix."""
         if self.culprit is None:
             return "the data fit as given"
-        return f"the data fit when read with {self.culprit.reading.name} ({self.reason}): {self.culprit.reading.fix}"
+        return (
+            f"the data fit when read with {self.culprit.reading.name} ({self.reason}): "
+            f"{self.culprit.reading.fix}"
+        )
 
     def table(self) -> str:
-        """Every reading with its chi-square relative to the best, tool weight and centre of mass distance."""
+        """Every reading with its chi-square relative to the best, tool weight and centre of mass
+        distance.
+        """
         finite = [fit.chi_square for fit in self.fits if np.isfinite(fit.chi_square)]
         best = max(min(finite), 1e-300) if finite else 1.0
-        lines = [f"  {'reading':<46}{'chi² / best':>12}{'G [N]':>10}{'|P| [m]':>10}{'gravity z':>11}"]
+        lines = [
+            f"  {'reading':<46}{'chi² / best':>12}{'G [N]':>10}{'|P| [m]':>10}{'gravity z':>11}"
+        ]
         for fit in self.fits:
             if fit.model is None:
-                lines.append(f"  {fit.reading.name:<46}{'-':>12}  {fit.failure or fit.reading.failure}")
+                lines.append(
+                    f"  {fit.reading.name:<46}{'-':>12}  {fit.failure or fit.reading.failure}"
+                )
                 continue
             up = "up" if fit.model.gravity_in_base[2] > 0 else "down"
             lines.append(
-                f"  {fit.reading.name:<46}{fit.chi_square / best:>12.3g}{fit.model.tool_weight:>10.4g}"
+                "  "
+                f"{fit.reading.name:<46}{fit.chi_square / best:>12.3g}"
+                f"{fit.model.tool_weight:>10.4g}"
                 f"{np.linalg.norm(fit.model.center_of_mass):>10.4g}{up:>11}"
             )
         return "\n".join(lines)
@@ -131,27 +148,54 @@ def wrench_readings(given: Samples | PoseAverages) -> list[Reading]:
     rotations, wrenches = poses.rotations, poses.wrenches
 
     def make(name, fix, new_wrenches, scale=None):
-        return Reading(name, fix, replace(poses, wrenches=new_wrenches), np.ones(6) if scale is None else np.asarray(scale, float))
+        return Reading(
+            name,
+            fix,
+            replace(poses, wrenches=new_wrenches),
+            np.ones(6) if scale is None else np.asarray(scale, float),
+        )
 
     to_sensor = np.transpose(rotations, (0, 2, 1))
-    in_sensor = np.hstack([np.einsum("nij,nj->ni", to_sensor, wrenches[:, :3]), np.einsum("nij,nj->ni", to_sensor, wrenches[:, 3:])])
+    in_sensor = np.hstack(
+        [
+            np.einsum("nij,nj->ni", to_sensor, wrenches[:, :3]),
+            np.einsum("nij,nj->ni", to_sensor, wrenches[:, 3:]),
+        ]
+    )
     out = [
-        make("the wrench in the base frame", "give the wrench in the sensor frame (rotate it by R_BS^T)", in_sensor),
-        make("the readings negated (the reaction)", "calibrate with --sensor-sign -1 (the sensor reports the reaction, not the "
-             "load), or with --base-mount ceiling if the robot hangs from a ceiling", -wrenches),
-        make("torques in N·mm", "give the torques in N·m (divide mx, my, mz by 1000)", wrenches * [1, 1, 1, 1e-3, 1e-3, 1e-3],
-             [1, 1, 1, 1e3, 1e3, 1e3]),
+        make(
+            "the wrench in the base frame",
+            "give the wrench in the sensor frame (rotate it by R_BS^T)",
+            in_sensor,
+        ),
+        make(
+            "the readings negated (the reaction)",
+            "calibrate with --sensor-sign -1 (the sensor reports the reaction, not the "
+            "load), or with --base-mount ceiling if the robot hangs from a ceiling",
+            -wrenches,
+        ),
+        make(
+            "torques in N·mm",
+            "give the torques in N·m (divide mx, my, mz by 1000)",
+            wrenches * [1, 1, 1, 1e-3, 1e-3, 1e-3],
+            [1, 1, 1, 1e3, 1e3, 1e3],
+        ),
     ]
     for k, axis in enumerate("xyz"):
         others = [a for a in "xyz" if a != axis]
         handed = np.ones(6)
         handed[k] = -1.0
         handed[[3 + i for i in range(3) if i != k]] = -1.0
-        out.append(make(
-            f"the sensor's {axis} axis reversed", f"calibrate with --flip-axis {axis} (flip_axis={axis!r}: negates f{axis} and "
-            f"m{axis}; a true mirror image negates f{axis}, m{others[0]} and m{others[1]} instead: static data cannot tell "
-            "the two apart, they differ in the sign of the centre of mass)", wrenches * handed,
-        ))
+        out.append(
+            make(
+                f"the sensor's {axis} axis reversed",
+                f"calibrate with --flip-axis {axis} (flip_axis={axis!r}: negates f{axis} and "
+                f"m{axis}; a true mirror image negates f{axis}, m{others[0]} and m{others[1]} "
+                "instead: static data cannot tell "
+                "the two apart, they differ in the sign of the centre of mass)",
+                wrenches * handed,
+            )
+        )
     return out
 
 
@@ -173,10 +217,15 @@ def _fit_group(readings: list[Reading], g: float = STANDARD_GRAVITY) -> list[Rea
     poses = readings[0].poses
     rotations = poses.rotations
     if len(poses) < MIN_POSES:
-        return [ReadingFit(r, None, None, failure=f"fewer than {MIN_POSES} poses") for r in readings]
+        return [
+            ReadingFit(r, None, None, failure=f"fewer than {MIN_POSES} poses") for r in readings
+        ]
     step1 = force_regressor(rotations)
     if _relative_condition(step1) < MIN_RELATIVE_SINGULAR_VALUE:
-        return [ReadingFit(r, None, None, failure="the poses cannot determine the tool's weight") for r in readings]
+        return [
+            ReadingFit(r, None, None, failure="the poses cannot determine the tool's weight")
+            for r in readings
+        ]
     forces = np.stack([r.poses.wrenches[:, :3].reshape(-1) for r in readings], axis=1)
     solutions = np.linalg.pinv(step1) @ forces  # (6, K): [a; F0] per reading
     fits = []
@@ -185,14 +234,28 @@ def _fit_group(readings: list[Reading], g: float = STANDARD_GRAVITY) -> list[Rea
         measured = reading.poses.wrenches
         weight = float(np.linalg.norm(gravity_in_base))
         directions = np.einsum("nji,j->ni", rotations, gravity_in_base / max(weight, 1e-300))
-        if weight == 0.0 or _relative_condition(torque_regressor(directions)) < MIN_RELATIVE_SINGULAR_VALUE:
-            fits.append(ReadingFit(reading, None, None, failure="the poses cannot determine the centre of mass"))
+        if (
+            weight == 0.0
+            or _relative_condition(torque_regressor(directions)) < MIN_RELATIVE_SINGULAR_VALUE
+        ):
+            fits.append(
+                ReadingFit(
+                    reading, None, None, failure="the poses cannot determine the centre of mass"
+                )
+            )
             continue
-        step2, *_ = np.linalg.lstsq(torque_regressor(measured[:, :3]), measured[:, 3:].reshape(-1), rcond=None)
+        step2, *_ = np.linalg.lstsq(
+            torque_regressor(measured[:, :3]), measured[:, 3:].reshape(-1), rcond=None
+        )
         center_of_mass, auxiliary = step2[:3], step2[3:]
         torque_offset = auxiliary - np.cross(force_offset, center_of_mass)
         gravity_in_sensor = np.einsum("nji,j->ni", rotations, gravity_in_base)
-        predicted = np.hstack([force_offset + gravity_in_sensor, torque_offset + np.cross(center_of_mass, gravity_in_sensor)])
+        predicted = np.hstack(
+            [
+                force_offset + gravity_in_sensor,
+                torque_offset + np.cross(center_of_mass, gravity_in_sensor),
+            ]
+        )
         residuals = (measured - predicted) * reading.unit_scale
         if not np.all(np.isfinite(residuals)):
             fits.append(ReadingFit(reading, None, None, failure="non-finite residuals"))
@@ -200,7 +263,10 @@ def _fit_group(readings: list[Reading], g: float = STANDARD_GRAVITY) -> list[Rea
         model = SensorModel(force_offset, torque_offset, gravity_in_base, center_of_mass, g)
         rss = np.sum(residuals**2, axis=0)
         spread = np.sum(((measured - measured.mean(axis=0)) * reading.unit_scale) ** 2, axis=0)
-        explained = min(1.0 - rss[:3].sum() / max(spread[:3].sum(), 1e-300), 1.0 - rss[3:].sum() / max(spread[3:].sum(), 1e-300))
+        explained = min(
+            1.0 - rss[:3].sum() / max(spread[:3].sum(), 1e-300),
+            1.0 - rss[3:].sum() / max(spread[3:].sum(), 1e-300),
+        )
         fits.append(ReadingFit(reading, model, rss, explained=float(explained)))
     return fits
 
@@ -228,16 +294,30 @@ def diagnose_readings(readings: list[Reading]) -> ConventionReport:
     fits = _fit_all(readings)
     valid = [fit for fit in fits if fit.rss is not None]
     if not valid:
-        return ConventionReport(tuple(fits), "undetermined", None, "no reading could be fitted: " + (fits[0].failure or "?"))
+        return ConventionReport(
+            tuple(fits),
+            "undetermined",
+            None,
+            "no reading could be fitted: " + (fits[0].failure or "?"),
+        )
     channel_dof = max(len(valid[0].reading.poses) - 2, 1)
-    scale = max(float(np.max(np.abs(valid[0].reading.poses.wrenches * valid[0].reading.unit_scale))), 1e-12)
+    scale = max(
+        float(np.max(np.abs(valid[0].reading.poses.wrenches * valid[0].reading.unit_scale))), 1e-12
+    )
     floor = (1e-9 * scale) ** 2
     # the best reading by a scale-free measure sets the per-channel noise of all
     best = min(valid, key=lambda fit: float(np.sum(np.log(fit.rss / channel_dof + floor))))
     variance = best.rss / channel_dof + floor
     fits = [
-        fit if fit.rss is None
-        else ReadingFit(fit.reading, fit.model, fit.rss, float(np.sum(fit.rss / variance)), explained=fit.explained)
+        fit
+        if fit.rss is None
+        else ReadingFit(
+            fit.reading,
+            fit.model,
+            fit.rss,
+            float(np.sum(fit.rss / variance)),
+            explained=fit.explained,
+        )
         for fit in fits
     ]
     return _verdict(tuple(fits))
@@ -246,21 +326,29 @@ def diagnose_readings(readings: list[Reading]) -> ConventionReport:
 def _verdict(fits: tuple[ReadingFit, ...]) -> ConventionReport:
     given, alternatives = fits[0], [fit for fit in fits[1:] if fit.model is not None]
     plausible = [
-        fit for fit in alternatives
+        fit
+        for fit in alternatives
         if np.linalg.norm(fit.model.center_of_mass) < FAR_COM[0] and fit.explained >= EXPLAINED[0]
     ]
     if plausible:
         best = min(plausible, key=lambda fit: fit.chi_square)
         ratio = given.chi_square / max(best.chi_square, 1e-300)
         if ratio >= SUSPECT_RATIO:
-            verdict = "mistake" if ratio >= MISTAKE_RATIO and best.explained >= EXPLAINED[1] else "suspect"
+            verdict = (
+                "mistake"
+                if ratio >= MISTAKE_RATIO and best.explained >= EXPLAINED[1]
+                else "suspect"
+            )
             reason = (
-                "the data as given cannot be fitted" if given.model is None
+                "the data as given cannot be fitted"
+                if given.model is None
                 else f"{ratio:.3g} times smaller chi-square than as given"
             )
             return ConventionReport(fits, verdict, best, reason)
     if given.model is None:
-        return ConventionReport(fits, "undetermined", None, f"the data as given cannot be fitted: {given.failure}")
+        return ConventionReport(
+            fits, "undetermined", None, f"the data as given cannot be fitted: {given.failure}"
+        )
     return _plausibility(fits, given, alternatives)
 
 
@@ -269,20 +357,33 @@ def _plausibility(fits, given: ReadingFit, alternatives) -> ConventionReport:
     distance = float(np.linalg.norm(given.model.center_of_mass))
     millimetres = by_name.get("torques in N·mm")
     if millimetres is not None and distance >= FAR_COM[0] and given.explained >= EXPLAINED[0]:
-        verdict = "mistake" if distance >= FAR_COM[1] and given.explained >= EXPLAINED[1] else "suspect"
-        reason = f"the centre of mass would be {distance:.3g} m from the sensor, {distance:.3g} mm in N·mm"
+        verdict = (
+            "mistake" if distance >= FAR_COM[1] and given.explained >= EXPLAINED[1] else "suspect"
+        )
+        reason = (
+            f"the centre of mass would be {distance:.3g} m from the sensor, {distance:.3g} mm in "
+            "N·mm"
+        )
         return ConventionReport(fits, verdict, millimetres, reason)
     base = by_name.get("the wrench in the base frame")
-    if base is not None and given.model.tool_weight < 0.05 * base.model.tool_weight and base.explained >= EXPLAINED[1]:
+    if (
+        base is not None
+        and given.model.tool_weight < 0.05 * base.model.tool_weight
+        and base.explained >= EXPLAINED[1]
+    ):
         ratio = given.chi_square / max(base.chi_square, 1e-300)
         if ratio >= 0.5:
             reason = (
-                f"as given the tool weighs {given.model.tool_weight:.3g} N, in the sensor frame {base.model.tool_weight:.3g} N"
+                f"as given the tool weighs {given.model.tool_weight:.3g} N, in the sensor frame "
+                f"{base.model.tool_weight:.3g} N"
             )
             return ConventionReport(fits, "mistake", base, reason)
     reaction = by_name.get("the readings negated (the reaction)")
-    if (reaction is not None and given.explained >= EXPLAINED[1]
-            and given.model.gravity_in_base[2] > 0 > reaction.model.gravity_in_base[2]):
+    if (
+        reaction is not None
+        and given.explained >= EXPLAINED[1]
+        and given.model.gravity_in_base[2] > 0 > reaction.model.gravity_in_base[2]
+    ):
         reason = "gravity points up in the base frame as given (or the arm hangs from a ceiling)"
         return ConventionReport(fits, "suspect", reaction, reason)
     return ConventionReport(fits, "ok", None, "no alternative reading fits better")

@@ -43,29 +43,42 @@ _POLY = re.compile(r"^(random-walk\+)?poly:(\d+)$")
 
 
 def parse_drift(drift: str) -> tuple[str, int]:
-    """``("auto"|"none"|"poly"|"random-walk", degree)`` from a ``drift=`` value (degree > 0 with a walk: its trend).
+    """``("auto"|"none"|"poly"|"random-walk", degree)`` from a ``drift=`` value (degree > 0 with a
+    walk: its trend).
 
     Raises:
         InvalidInput: anything else, or a degree outside ``1..MAX_POLY_DEGREE``.
     """
     if not isinstance(drift, str):
-        raise InvalidInput(f"drift must be a string ({', '.join(DRIFT_CHOICES)}), got {type(drift).__name__}")
+        raise InvalidInput(
+            f"drift must be a string ({', '.join(DRIFT_CHOICES)}), got {type(drift).__name__}"
+        )
     if drift in ("auto", "none", "random-walk"):
         return drift, 0
     match = _POLY.match(drift)
     if match is None:
-        raise InvalidInput(f"unknown drift model {drift!r}; expected one of {', '.join(DRIFT_CHOICES)}")
+        raise InvalidInput(
+            f"unknown drift model {drift!r}; expected one of {', '.join(DRIFT_CHOICES)}"
+        )
     degree = int(match.group(2))
     if not 1 <= degree <= MAX_POLY_DEGREE:
-        raise InvalidInput(f"drift polynomial degree must be 1..{MAX_POLY_DEGREE}, got {degree} (poly:0 is drift='none')")
+        raise InvalidInput(
+            f"drift polynomial degree must be 1..{MAX_POLY_DEGREE}, got {degree} (poly:0 is "
+            "drift='none')"
+        )
     return ("random-walk" if match.group(1) else "poly"), degree
 
 
 def check_model_name(model) -> None:
-    """Refuse anything but a fitted model's name (``"none"``, ``"poly:N"``, ``"random-walk"``, ``"random-walk+poly:N"``)."""
+    """Refuse anything but a fitted model's name (``"none"``, ``"poly:N"``, ``"random-walk"``,
+    ``"random-walk+poly:N"``).
+    """
     if model == "auto" or not isinstance(model, str):
-        raise InvalidInput(f"unknown drift model {model!r}; a fitted trajectory is 'none', 'poly:N', 'random-walk' "
-                           "or 'random-walk+poly:N'")
+        raise InvalidInput(
+            f"unknown drift model {model!r}; a fitted trajectory is 'none', 'poly:N', "
+            "'random-walk' "
+            "or 'random-walk+poly:N'"
+        )
     parse_drift(model)
 
 
@@ -111,9 +124,13 @@ class BiasDrift:
         if len(times) == 0 or np.any(np.diff(times) < 0) or not np.all(np.isfinite(times)):
             raise InvalidInput("drift times must be finite, ascending and not empty [s]")
         for name in ("bias", "bias_std"):
-            value = as_float_array(getattr(self, name), name).copy()  # frozen: a copy, never the caller's array
+            value = as_float_array(
+                getattr(self, name), name
+            ).copy()  # frozen: a copy, never the caller's array
             if value.shape != (len(times), 6):
-                raise InvalidInput(f"drift {name} must have shape ({len(times)}, 6), got {value.shape}")
+                raise InvalidInput(
+                    f"drift {name} must have shape ({len(times)}, 6), got {value.shape}"
+                )
             value.setflags(write=False)
             object.__setattr__(self, name, value)
         times.setflags(write=False)
@@ -121,17 +138,28 @@ class BiasDrift:
         if self.rate is not None:
             rate = as_float_array(self.rate, "rate").reshape(-1)
             if rate.shape != (2,) or not np.all(np.isfinite(rate)) or np.any(rate < 0):
-                raise InvalidInput(f"rate must be [force N/√s, torque N·m/√s], finite and ≥ 0, got {rate.tolist()}")
+                raise InvalidInput(
+                    f"rate must be [force N/√s, torque N·m/√s], finite and ≥ 0, got {rate.tolist()}"
+                )
             object.__setattr__(self, "rate", rate)
         if self.recorded_span is not None:
             span = as_float_array(self.recorded_span, "recorded_span").reshape(-1)
             if span.shape != (2,) or not np.all(np.isfinite(span)) or span[0] > span[1]:
-                raise InvalidInput(f"recorded_span must be [first, last] reading time [s], got {span}")
+                raise InvalidInput(
+                    f"recorded_span must be [first, last] reading time [s], got {span}"
+                )
             object.__setattr__(self, "recorded_span", span)
         if self.coefficients is not None:
             coefficients = as_float_array(self.coefficients, "coefficients")
-            if coefficients.ndim != 2 or coefficients.shape[1] != 6 or not np.all(np.isfinite(coefficients)):
-                raise InvalidInput(f"coefficients must be finite, one row of six per degree, got shape {coefficients.shape}")
+            if (
+                coefficients.ndim != 2
+                or coefficients.shape[1] != 6
+                or not np.all(np.isfinite(coefficients))
+            ):
+                raise InvalidInput(
+                    "coefficients must be finite, one row of six per degree, got shape "
+                    f"{coefficients.shape}"
+                )
             object.__setattr__(self, "coefficients", coefficients)
 
     @property
@@ -141,12 +169,20 @@ class BiasDrift:
 
     @property
     def end_time(self) -> float:
-        """Last pose time ``T`` [s]: the bias there is the calibration's ``force_offset``/``torque_offset``."""
+        """Last pose time ``T`` [s]: the bias there is the calibration's
+        ``force_offset``/``torque_offset``.
+        """
         return float(self.times[-1])
 
     def covers(self, times) -> np.ndarray:
-        """``(N,)`` True where ``times`` [s] fall inside the recording (:attr:`recorded_span`, else the pose times)."""
-        first, last = self.recorded_span if self.recorded_span is not None else (self.times[0], self.times[-1])
+        """``(N,)`` True where ``times`` [s] fall inside the recording (:attr:`recorded_span`, else
+        the pose times).
+        """
+        first, last = (
+            self.recorded_span
+            if self.recorded_span is not None
+            else (self.times[0], self.times[-1])
+        )
         times = as_float_array(times, "times").reshape(-1)
         return (times >= first) & (times <= last)
 
@@ -181,8 +217,11 @@ class BiasDrift:
     def describe(self) -> str:
         """One line: model, how it was chosen, range of the bias over the recording."""
         force_range, torque_range = self.drift_range[:3].max(), self.drift_range[3:].max()
-        text = (f"{self.model} ({'chosen by BIC' if self.selected_by == 'auto' else 'given'}) over "
-                f"{self.end_time - self.start_time:.4g} s; bias range up to {force_range:.4f} N, {torque_range:.5f} N·m")
+        text = (
+            f"{self.model} ({'chosen by BIC' if self.selected_by == 'auto' else 'given'}) over "
+            f"{self.end_time - self.start_time:.4g} s; bias range up to {force_range:.4f} N, "
+            f"{torque_range:.5f} N·m"
+        )
         if self.rate is not None:
             text += f"; rate {self.rate[0]:.3g} N/√s, {self.rate[1]:.3g} N·m/√s"
         return text

@@ -38,7 +38,15 @@ from .information import SensorNoise, noise_floor
 from .model import COMPONENT_NAMES, SensorModel, cross_rows, parameter_jacobian
 from .samples import PoseAverages
 
-AUTO_CANDIDATES = ("none", "poly:1", "poly:2", "poly:3", "random-walk", "random-walk+poly:1", "random-walk+poly:2")
+AUTO_CANDIDATES = (
+    "none",
+    "poly:1",
+    "poly:2",
+    "poly:3",
+    "random-walk",
+    "random-walk+poly:1",
+    "random-walk+poly:2",
+)
 """Models ``drift="auto"`` compares."""
 
 _GROUPS = (slice(0, 3), slice(3, 6))
@@ -46,7 +54,9 @@ _GROUPS = (slice(0, 3), slice(3, 6))
 
 @dataclass(frozen=True)
 class WhitenedFit:
-    """Whitened residuals and hat blocks of a drift fit, in pose order (what the diagnostics read)."""
+    """Whitened residuals and hat blocks of a drift fit, in pose order (what the diagnostics
+    read).
+    """
 
     residuals: np.ndarray
     hat: np.ndarray
@@ -62,7 +72,8 @@ class WhitenedFit:
 
 @dataclass(frozen=True)
 class DriftFit:
-    """A drift model's fit, shaped like :class:`~ftkin.calibration.ml.MlFit` for :func:`~ftkin.calibration.fit_quality.diagnose`.
+    """A drift model's fit, shaped like :class:`~ftkin.calibration.ml.MlFit` for
+    :func:`~ftkin.calibration.fit_quality.diagnose`.
 
     Attributes:
         model: ``θ`` with the bias at the end of the recording.
@@ -71,7 +82,8 @@ class DriftFit:
         noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
         noise_dof: Degrees of freedom of the noise estimate.
         information: ``(12, 12)`` information of ``θ`` with the drift parameters marginalized.
-        parameter_count: Fitted parameters (``θ``, drift coefficients or rates, estimated noise levels).
+        parameter_count: Fitted parameters (``θ``, drift coefficients or rates, estimated noise
+        levels).
         log_likelihood: Gaussian log-likelihood of the pose means at the fit.
         drift: The bias trajectory.
     """
@@ -100,13 +112,20 @@ class DriftFit:
     @property
     def bic(self) -> float:
         """Bayesian information criterion ``−2 log L + k log(6P)``."""
-        return -2.0 * self.log_likelihood + self.parameter_count * np.log(self.problem.residuals.size)
+        return -2.0 * self.log_likelihood + self.parameter_count * np.log(
+            self.problem.residuals.size
+        )
 
 
-def predict_with_jacobian(theta: np.ndarray, rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def predict_with_jacobian(
+    theta: np.ndarray, rotations: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Prediction ``(P, 6)`` and its Jacobian ``(P, 6, 12)`` for ``θ``."""
     gravity_in_sensor = np.einsum("nji,j->ni", rotations, theta[0:3])
-    prediction = np.concatenate([gravity_in_sensor, cross_rows(theta[9:12], gravity_in_sensor)], axis=1) + theta[3:9]
+    prediction = (
+        np.concatenate([gravity_in_sensor, cross_rows(theta[9:12], gravity_in_sensor)], axis=1)
+        + theta[3:9]
+    )
     return prediction, parameter_jacobian(rotations, theta[0:3], theta[9:12])
 
 
@@ -114,20 +133,26 @@ def invert_information(information: np.ndarray, names: list[str]) -> np.ndarray:
     """Inverse of an information matrix, or :class:`UnobservableParameters` when it is singular."""
     scale = np.sqrt(np.diag(information))
     if np.any(scale == 0):
-        raise UnobservableParameters([names[i] for i in np.flatnonzero(scale == 0)], "the poses carry no information about them")
+        raise UnobservableParameters(
+            [names[i] for i in np.flatnonzero(scale == 0)],
+            "the poses carry no information about them",
+        )
     eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
     if eigenvalues[0] <= 1e-12 * eigenvalues[-1]:
         weakest = eigenvectors[:, 0]
         raise UnobservableParameters(
             [names[i] for i in np.flatnonzero(np.abs(weakest) > 0.3)],
-            "the drift model cannot be told apart from them with these poses and times (record the poses in a "
+            "the drift model cannot be told apart from them with these poses and times (record the "
+            "poses in a "
             "mixed order, or choose a simpler drift model)",
             singular_values=eigenvalues[::-1],
         )
     return (eigenvectors / eigenvalues) @ eigenvectors.T / np.outer(scale, scale)
 
 
-def _leverage_dof(whitened_jacobian: np.ndarray, covariance: np.ndarray) -> tuple[np.ndarray, float]:
+def _leverage_dof(
+    whitened_jacobian: np.ndarray, covariance: np.ndarray
+) -> tuple[np.ndarray, float]:
     """Per-pose hat blocks ``(P, 6, 6)`` and the smaller channel group's ``Σ (1 − h)``."""
     hat = whitened_jacobian @ covariance @ np.transpose(whitened_jacobian, (0, 2, 1))
     leverage = np.diagonal(hat, axis1=1, axis2=2)
@@ -139,14 +164,20 @@ def _gaussian_log_likelihood(residuals: np.ndarray, variance: np.ndarray) -> flo
 
 
 def _profiled_std(residuals: np.ndarray, counts: np.ndarray, wrenches: np.ndarray) -> np.ndarray:
-    """ML per-reading noise ``(6,)`` (forces and torques pooled) from raw residuals of pose means, at least the floor."""
+    """ML per-reading noise ``(6,)`` (forces and torques pooled) from raw residuals of pose means,
+    at least the floor.
+    """
     scaled = residuals**2 * counts[:, None]
     std = np.concatenate([np.full(3, np.sqrt(np.mean(scaled[:, group]))) for group in _GROUPS])
     return np.maximum(std, noise_floor(wrenches))
 
 
-def constant_log_likelihood(poses: PoseAverages, theta: np.ndarray, channel_std: np.ndarray, estimated: bool) -> float:
-    """Log-likelihood of the constant-bias fit ``θ`` (at the ML noise when the noise is ``estimated``)."""
+def constant_log_likelihood(
+    poses: PoseAverages, theta: np.ndarray, channel_std: np.ndarray, estimated: bool
+) -> float:
+    """Log-likelihood of the constant-bias fit ``θ`` (at the ML noise when the noise is
+    ``estimated``).
+    """
     residuals = poses.wrenches - predict_with_jacobian(theta, poses.rotations)[0]
     counts = np.asarray(poses.counts, dtype=float)
     std = _profiled_std(residuals, counts, poses.wrenches) if estimated else channel_std
@@ -170,21 +201,47 @@ class SortedPoses:
         return out
 
 
-def finish_fit(data: SortedPoses, theta, channel_std, source, whitened, jacobian, covariance, count, log_l, drift) -> DriftFit:
+def finish_fit(
+    data: SortedPoses,
+    theta,
+    channel_std,
+    source,
+    whitened,
+    jacobian,
+    covariance,
+    count,
+    log_l,
+    drift,
+) -> DriftFit:
     hat, dof = _leverage_dof(jacobian, covariance)
     information = np.linalg.inv(covariance[:12, :12])
-    return DriftFit(SensorModel.from_vector(theta), WhitenedFit(data.unsort(whitened), data.unsort(hat)), channel_std,
-                    source, dof if source == "residuals" else np.inf, information, count, log_l, drift)
+    return DriftFit(
+        SensorModel.from_vector(theta),
+        WhitenedFit(data.unsort(whitened), data.unsort(hat)),
+        channel_std,
+        source,
+        dof if source == "residuals" else np.inf,
+        information,
+        count,
+        log_l,
+        drift,
+    )
 
 
-def polynomial_columns(data: SortedPoses, degree: int) -> tuple[np.ndarray, np.ndarray, float, list[str]]:
-    """Powers ``((t − T)/span)^k`` ``(P, K)``, their Jacobian columns ``(P, 6, 6K)``, the span [s] and the parameter names."""
+def polynomial_columns(
+    data: SortedPoses, degree: int
+) -> tuple[np.ndarray, np.ndarray, float, list[str]]:
+    """Powers ``((t − T)/span)^k`` ``(P, K)``, their Jacobian columns ``(P, 6, 6K)``, the span [s]
+    and the parameter names.
+    """
     scale = data.span if data.span > 0 else 1.0
     powers = ((data.times - data.times[-1]) / scale)[:, None] ** np.arange(1, degree + 1)[None, :]
     columns = np.zeros((len(data.times), 6, 6 * degree))
     for k in range(degree):
-        columns[:, :, 6 * k: 6 * k + 6] = powers[:, k, None, None] * np.eye(6)
-    names = list(COMPONENT_NAMES) + [f"drift c{k + 1}[{c}]" for k in range(degree) for c in range(6)]
+        columns[:, :, 6 * k : 6 * k + 6] = powers[:, k, None, None] * np.eye(6)
+    names = list(COMPONENT_NAMES) + [
+        f"drift c{k + 1}[{c}]" for k in range(degree) for c in range(6)
+    ]
     return powers, columns, scale, names
 
 
@@ -200,9 +257,17 @@ def trend_std(powers: np.ndarray, covariance: np.ndarray) -> np.ndarray:
     return out
 
 
-def fit_polynomial(poses: PoseAverages, theta0: np.ndarray, channel_std: np.ndarray, source: str, degree: int,
-                   selected_by: str = "given") -> DriftFit:
-    """Fit ``θ`` and a degree-``degree`` polynomial bias drift (noise re-estimated from the residuals if ``source`` says so)."""
+def fit_polynomial(
+    poses: PoseAverages,
+    theta0: np.ndarray,
+    channel_std: np.ndarray,
+    source: str,
+    degree: int,
+    selected_by: str = "given",
+) -> DriftFit:
+    """Fit ``θ`` and a degree-``degree`` polynomial bias drift (noise re-estimated from the
+    residuals if ``source`` says so).
+    """
     data = SortedPoses(poses)
     powers, drift_jacobian, scale, names = polynomial_columns(data, degree)
     count = 12 + 6 * degree
@@ -228,7 +293,12 @@ def fit_polynomial(poses: PoseAverages, theta0: np.ndarray, channel_std: np.ndar
         hat, _ = _leverage_dof(full, covariance)
         leverage = np.diagonal(hat, axis1=1, axis2=2)
         scaled = residuals**2 * data.counts[:, None]
-        new = np.concatenate([np.full(3, np.sqrt(np.sum(scaled[:, g]) / max(np.sum(1.0 - leverage[:, g]), 1e-12))) for g in _GROUPS])
+        new = np.concatenate(
+            [
+                np.full(3, np.sqrt(np.sum(scaled[:, g]) / max(np.sum(1.0 - leverage[:, g]), 1e-12)))
+                for g in _GROUPS
+            ]
+        )
         new = np.maximum(new, noise_floor(data.wrenches))
         converged = np.allclose(new, std, rtol=1e-3)
         std = new
@@ -238,7 +308,24 @@ def fit_polynomial(poses: PoseAverages, theta0: np.ndarray, channel_std: np.ndar
     log_l_std = _profiled_std(residuals, data.counts, data.wrenches) if estimated else std
     log_l = _gaussian_log_likelihood(residuals, log_l_std[None, :] ** 2 / data.counts[:, None])
     bias = phi[3:9] + powers @ phi[12:].reshape(degree, 6)
-    drift = BiasDrift(f"poly:{degree}", selected_by, data.times, bias, trend_std(powers, covariance),
-                      coefficients=phi[12:].reshape(degree, 6), time_scale=scale)
-    return finish_fit(data, phi[:12], std, source, residuals * weights, full, covariance,
-                   count + 2 * estimated, log_l, drift)
+    drift = BiasDrift(
+        f"poly:{degree}",
+        selected_by,
+        data.times,
+        bias,
+        trend_std(powers, covariance),
+        coefficients=phi[12:].reshape(degree, 6),
+        time_scale=scale,
+    )
+    return finish_fit(
+        data,
+        phi[:12],
+        std,
+        source,
+        residuals * weights,
+        full,
+        covariance,
+        count + 2 * estimated,
+        log_l,
+        drift,
+    )

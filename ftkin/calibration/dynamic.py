@@ -61,7 +61,8 @@ class DynamicCalibrationResult(CalibrationResult):
         inertia_about_com_in_sensor: ``(3, 3)`` inertia about the COM, sensor axes [kg·m²],
             or None when the inertia was not estimated.
         inertia_std_errors: ``(3, 3)`` its standard errors [kg·m²], or None.
-        inertial_parameters: ``(10,)`` θ in the sensor frame (see :mod:`ftkin.calibration.log_cholesky`).
+        inertial_parameters: ``(10,)`` θ in the sensor frame (see
+        :mod:`ftkin.calibration.log_cholesky`).
         inertial_covariance: ``(10, 10)`` covariance of θ, or None.
         motion_residual_rms: ``(6,)`` RMS of measured minus predicted per channel [N, N·m].
         channel_std: ``(6,)`` noise per reading used as weights [N, N·m].
@@ -81,8 +82,15 @@ class DynamicCalibrationResult(CalibrationResult):
 
     def __post_init__(self):
         super().__post_init__()
-        for name in ("inertia_about_com_in_sensor", "inertia_std_errors", "inertial_parameters", "inertial_covariance",
-                     "motion_residual_rms", "channel_std", "unconstrained_parameters"):
+        for name in (
+            "inertia_about_com_in_sensor",
+            "inertia_std_errors",
+            "inertial_parameters",
+            "inertial_covariance",
+            "motion_residual_rms",
+            "channel_std",
+            "unconstrained_parameters",
+        ):
             value = getattr(self, name)
             if value is not None:
                 value = np.array(value, dtype=float)
@@ -104,18 +112,36 @@ class DynamicCalibrationResult(CalibrationResult):
     def summary(self) -> str:
         """Static summary plus the inertia (± standard errors) and the fit over the motion."""
         lines = super().summary().split("\n")
-        lines[0] = f"ftkin calibration: method {self.method}, moving recording of {self.sample_count} readings"
+        lines[0] = (
+            f"ftkin calibration: method {self.method}, moving recording of {self.sample_count} "
+            "readings"
+        )
         if self.has_inertia:
-            errors = self.inertia_std_errors if self.inertia_std_errors is not None else np.full((3, 3), np.nan)
+            errors = (
+                self.inertia_std_errors
+                if self.inertia_std_errors is not None
+                else np.full((3, 3), np.nan)
+            )
             lines.append("  inertia_about_com_in_sensor [kg·m²] (± standard error):")
             for row, error in zip(self.inertia_about_com_in_sensor, errors):
-                lines.append("    [" + ", ".join(f"{v:+.6f} ± {e:.6f}" for v, e in zip(row, error)) + "]")
+                lines.append(
+                    "    [" + ", ".join(f"{v:+.6f} ± {e:.6f}" for v, e in zip(row, error)) + "]"
+                )
             moments = np.linalg.eigvalsh(self.inertia_about_com_in_sensor)
-            lines.append("  principal moments: " + ", ".join(f"{m:.6f}" for m in moments) + " kg·m²")
+            lines.append(
+                "  principal moments: " + ", ".join(f"{m:.6f}" for m in moments) + " kg·m²"
+            )
         if self.unconstrained_consistent is False:
-            lines.append("  NOTE: the unconstrained least squares was not physically consistent; the ML fit is")
+            lines.append(
+                "  NOTE: the unconstrained least squares was not physically consistent; the ML fit "
+                "is"
+            )
         if self.motion_residual_rms is not None:
-            lines.append("  residual RMS over the motion: " + ", ".join(f"{v:.4g}" for v in self.motion_residual_rms) + " (N, N·m)")
+            lines.append(
+                "  residual RMS over the motion: "
+                + ", ".join(f"{v:.4g}" for v in self.motion_residual_rms)
+                + " (N, N·m)"
+            )
         return "\n".join(lines)
 
 
@@ -123,11 +149,20 @@ def _estimate_noise(problem: DynamicProblem, x: np.ndarray, dof: int) -> np.ndar
     residuals = problem.wrenches - problem.predict(x)
     count = len(residuals)
     std = np.sqrt(np.sum(residuals**2, axis=0) / max(count - dof / 6.0, 1.0))
-    return np.maximum(std, noise_floor(problem.wrenches))  # the static fits' floor: exact data stays finite
+    return np.maximum(
+        std, noise_floor(problem.wrenches)
+    )  # the static fits' floor: exact data stays finite
 
 
 def _with_std(problem: DynamicProblem, std: np.ndarray) -> DynamicProblem:
-    return DynamicProblem(problem.wrenches, problem.rotations, problem.inertial_regressor, std, problem.g, problem.free)
+    return DynamicProblem(
+        problem.wrenches,
+        problem.rotations,
+        problem.inertial_regressor,
+        std,
+        problem.g,
+        problem.free,
+    )
 
 
 def _outputs(problem: DynamicProblem, x: np.ndarray, phi_space: bool) -> np.ndarray:
@@ -136,25 +171,34 @@ def _outputs(problem: DynamicProblem, x: np.ndarray, phi_space: bool) -> np.ndar
     mass = theta[0]
     com = theta[1:4] / mass
     gravity = gravity_in_base_from_tilt(mass * problem.g, x[6], x[7])
-    about_com = inertia_matrix(theta[4:10]) - mass * (float(com @ com) * np.eye(3) - np.outer(com, com))
+    about_com = inertia_matrix(theta[4:10]) - mass * (
+        float(com @ com) * np.eye(3) - np.outer(com, com)
+    )
     return np.concatenate([gravity, x[:6], com, theta, inertia_entries(about_com)])
 
 
 def _covariance(problem: DynamicProblem, x: np.ndarray, phi_space: bool) -> np.ndarray:
-    """Covariance of :func:`_outputs` by the delta method from the Gauss–Newton covariance of ``x``."""
-    jac = problem.whitened_jacobian(np.concatenate([x[:8], theta_from_phi(x[8:])]) if phi_space else x)
+    """Covariance of :func:`_outputs` by the delta method from the Gauss–Newton covariance of
+    ``x``.
+    """
+    jac = problem.whitened_jacobian(
+        np.concatenate([x[:8], theta_from_phi(x[8:])]) if phi_space else x
+    )
     if phi_space:
         from .log_cholesky import log_cholesky_jacobian
 
         jac[:, 8:] = jac[:, 8:] @ log_cholesky_jacobian(x[8:])
     information = jac.T @ jac
     scale = np.sqrt(np.diag(information))
-    scale = np.where(scale > 0.0, scale, 1.0)  # a parameter without information: named below, not a NaN
+    scale = np.where(
+        scale > 0.0, scale, 1.0
+    )  # a parameter without information: named below, not a NaN
     values, vectors = np.linalg.eigh(information / np.outer(scale, scale))
     if values[0] <= 1e-14 * values[-1]:
         raise UnobservableParameters(
             [problem.names[i] for i in np.flatnonzero(np.abs(vectors[:, 0]) > 0.3)],
-            "the information at the solution is singular (the estimate sits on the boundary of physical consistency "
+            "the information at the solution is singular (the estimate sits on the boundary of "
+            "physical consistency "
             "or the motion does not excite these parameters)",
         )
     cov_x = ((vectors / values) @ vectors.T) / np.outer(scale, scale)
@@ -164,7 +208,9 @@ def _covariance(problem: DynamicProblem, x: np.ndarray, phi_space: bool) -> np.n
         up, down = x.copy(), x.copy()
         up[i] += step
         down[i] -= step
-        gradient[:, i] = (_outputs(problem, up, phi_space) - _outputs(problem, down, phi_space)) / (2 * step)
+        gradient[:, i] = (_outputs(problem, up, phi_space) - _outputs(problem, down, phi_space)) / (
+            2 * step
+        )
     return gradient @ cov_x @ gradient.T
 
 
@@ -175,7 +221,8 @@ def calibrate_dynamic(
     g: float = STANDARD_GRAVITY,
     noise: SensorNoise | None = None,
 ) -> DynamicCalibrationResult:
-    """Identify bias, base tilt, mass, centre of mass and (optionally) inertia from readings along a motion.
+    """Identify bias, base tilt, mass, centre of mass and (optionally) inertia from readings along a
+    motion.
 
     Args:
         motion: Readings with the sensor frame's orientation, velocity and
@@ -197,13 +244,19 @@ def calibrate_dynamic(
     if isinstance(motion, Samples):
         motion = MotionSamples.from_static(motion)
     if not isinstance(motion, MotionSamples):
-        raise InvalidInput(f"motion must be an ftkin MotionSamples or Samples, got {type(motion).__name__}")
+        raise InvalidInput(
+            f"motion must be an ftkin MotionSamples or Samples, got {type(motion).__name__}"
+        )
     if noise is not None and not isinstance(noise, SensorNoise):
         raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
     g = as_positive(g, "g")
     free = ALL_INDICES if estimate_inertia else STATIC_INDICES
-    initial_std = noise.channel_std if noise is not None else np.array([1.0, 1.0, 1.0, 0.1, 0.1, 0.1])
-    problem = DynamicProblem(motion.wrenches, motion.rotations, motion.regressor(), initial_std, g, free)
+    initial_std = (
+        noise.channel_std if noise is not None else np.array([1.0, 1.0, 1.0, 0.1, 0.1, 0.1])
+    )
+    problem = DynamicProblem(
+        motion.wrenches, motion.rotations, motion.regressor(), initial_std, g, free
+    )
     check_observability(problem)
     x = fit_linear(problem)
     if noise is None:
@@ -212,16 +265,25 @@ def calibrate_dynamic(
     x = fit_unconstrained(problem, x)
     theta_unconstrained = problem.theta(x[8:])
     if theta_unconstrained[0] <= 0.0:
-        # a negative mass is most often a convention: readings negated (the reaction) or a base mounted upside down
+        # a negative mass is most often a convention: readings negated (the reaction) or a base
+        # mounted upside down
         static = Samples(motion.wrenches, motion.rotations).pose_averages()
         try:
             check_conventions(detect_sign_and_handedness(static, g=g))
         except SuspectConvention as error:
             raise SuspectConvention(
-                f"{error} The dynamic calibration takes none of these options yet: negate the readings (sign) or "
-                "calibrate from static poses, where they apply.", error.explanations, error.fixes, error.sensor_sign,
-                error.flip_axis) from None
-        raise InvalidInput(f"the estimated tool mass is {theta_unconstrained[0]:.4g} kg (not positive): is there a tool on the sensor?")
+                f"{error} The dynamic calibration takes none of these options yet: negate the "
+                "readings (sign) or "
+                "calibrate from static poses, where they apply.",
+                error.explanations,
+                error.fixes,
+                error.sensor_sign,
+                error.flip_axis,
+            ) from None
+        raise InvalidInput(
+            f"the estimated tool mass is {theta_unconstrained[0]:.4g} kg (not positive): is there "
+            "a tool on the sensor?"
+        )
     consistent = is_physically_consistent(theta_unconstrained) if estimate_inertia else None
     phi_space = estimate_inertia
     if estimate_inertia:

@@ -1,4 +1,5 @@
-"""The dynamic identification problem and its solvers (used by :func:`~ftkin.calibration.dynamic.calibrate_dynamic`).
+"""The dynamic identification problem and its solvers (used by
+:func:`~ftkin.calibration.dynamic.calibrate_dynamic`).
 
 Parameters ``x = [F0 (3), M0 (3), U, V, θ_free]``: the sensor bias [N, N·m], the
 base tilt [rad] (gravity ``|g|`` is known, its direction is not) and the free
@@ -23,11 +24,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import UnobservableParameters
-from .log_cholesky import INERTIAL_PARAMETER_NAMES, log_cholesky_jacobian, parameters_from_log_cholesky
+from .log_cholesky import (
+    INERTIAL_PARAMETER_NAMES,
+    log_cholesky_jacobian,
+    parameters_from_log_cholesky,
+)
 from .model import cross_rows
 from .regressor import gravity_regressor
 
-BIAS_NAMES = tuple(f"{block}[{axis}]" for block in ("force_offset", "torque_offset") for axis in "xyz")
+BIAS_NAMES = tuple(
+    f"{block}[{axis}]" for block in ("force_offset", "torque_offset") for axis in "xyz"
+)
 TILT_NAMES = ("base_tilt[u]", "base_tilt[v]")
 THETA_NAMES = ("mass", "first_moment[x]", "first_moment[y]", "first_moment[z]") + tuple(
     f"inertia_about_sensor[{name[1:].lower()}]" for name in INERTIAL_PARAMETER_NAMES[4:]
@@ -40,8 +47,12 @@ MIN_INERTIAL_EXCITATION = 1e-6
 """RMS of an inertia column of the regressor [rad/s²] below which the recording counts as static."""
 
 
-def upward_gravity(g: float, tilt_u: float, tilt_v: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``γ`` (base frame, [m/s²], pointing up) and its derivatives with respect to ``U`` and ``V``."""
+def upward_gravity(
+    g: float, tilt_u: float, tilt_v: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``γ`` (base frame, [m/s²], pointing up) and its derivatives with respect to ``U`` and
+    ``V``.
+    """
     cu, su, cv, sv = np.cos(tilt_u), np.sin(tilt_u), np.cos(tilt_v), np.sin(tilt_v)
     gamma = -g * np.array([cu * sv, -su, -cu * cv])
     d_u = -g * np.array([-su * sv, -cu, su * cv])
@@ -132,8 +143,10 @@ def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
         if np.all(rms < MIN_INERTIAL_EXCITATION):
             raise UnobservableParameters(
                 ["inertia_about_com_in_sensor"] + [THETA_NAMES[i] for i in inertia],
-                "the recording has no angular velocity or acceleration (static data): the inertia cannot be "
-                "identified; record a moving excitation (ftkin plan --excitation) or calibrate without the inertia",
+                "the recording has no angular velocity or acceleration (static data): the inertia "
+                "cannot be "
+                "identified; record a moving excitation (ftkin plan --excitation) or calibrate "
+                "without the inertia",
             )
     x = np.zeros(8 + len(problem.free))
     x[8] = 1.0  # a unit mass: the tilt and moment columns need weight to act on
@@ -141,14 +154,20 @@ def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
     scale = np.linalg.norm(jac, axis=0)
     names = problem.names
     if np.any(scale == 0.0):
-        raise UnobservableParameters([names[i] for i in np.flatnonzero(scale == 0.0)], "the recording carries no information about them")
+        raise UnobservableParameters(
+            [names[i] for i in np.flatnonzero(scale == 0.0)],
+            "the recording carries no information about them",
+        )
     normalized = jac / scale
-    eigenvalues, eigenvectors = np.linalg.eigh(normalized.T @ normalized)  # the normal matrix: cheap for tall regressors
+    eigenvalues, eigenvectors = np.linalg.eigh(
+        normalized.T @ normalized
+    )  # the normal matrix: cheap for tall regressors
     if eigenvalues[0] <= rcond * eigenvalues[-1]:
         weakest = eigenvectors[:, 0]
         raise UnobservableParameters(
             [names[i] for i in np.flatnonzero(np.abs(weakest) > 0.3)],
-            "the regressor is singular along a combination of them (too few distinct orientations or motions)",
+            "the regressor is singular along a combination of them (too few distinct orientations "
+            "or motions)",
             singular_values=np.sqrt(np.clip(eigenvalues[::-1], 0.0, None)),
         )
 
@@ -169,7 +188,13 @@ def fit_unconstrained(problem: DynamicProblem, x0: np.ndarray) -> np.ndarray:
     from scipy.optimize import least_squares  # scipy loads where it is used
 
     solution = least_squares(
-        problem.whitened_residuals, x0, jac=problem.whitened_jacobian, method="lm", xtol=1e-14, ftol=1e-14, gtol=1e-14
+        problem.whitened_residuals,
+        x0,
+        jac=problem.whitened_jacobian,
+        method="lm",
+        xtol=1e-14,
+        ftol=1e-14,
+        gtol=1e-14,
     )
     return solution.x
 
@@ -180,7 +205,9 @@ def theta_from_phi(phi: np.ndarray) -> np.ndarray:
 
 
 def fit_consistent(problem: DynamicProblem, x0_phi: np.ndarray) -> np.ndarray:
-    """Stage 3: maximum likelihood over ``[bias, U, V, φ]`` (all ten θ free); returns the φ-space ``x``."""
+    """Stage 3: maximum likelihood over ``[bias, U, V, φ]`` (all ten θ free); returns the φ-space
+    ``x``.
+    """
 
     def to_theta_space(x):
         return np.concatenate([x[:8], theta_from_phi(x[8:])])
@@ -195,5 +222,14 @@ def fit_consistent(problem: DynamicProblem, x0_phi: np.ndarray) -> np.ndarray:
 
     from scipy.optimize import least_squares
 
-    solution = least_squares(residuals, x0_phi, jac=jacobian, method="lm", xtol=1e-14, ftol=1e-14, gtol=1e-14, max_nfev=2000)
+    solution = least_squares(
+        residuals,
+        x0_phi,
+        jac=jacobian,
+        method="lm",
+        xtol=1e-14,
+        ftol=1e-14,
+        gtol=1e-14,
+        max_nfev=2000,
+    )
     return solution.x

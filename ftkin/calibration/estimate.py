@@ -36,10 +36,16 @@ METHODS = ("ml", "linear")
 """Estimators :func:`calibrate` accepts; the first is the default."""
 
 
-def _with_mount_warning(diagnostics: FitDiagnostics, mode: str, covariance: np.ndarray) -> FitDiagnostics:
+def _with_mount_warning(
+    diagnostics: FitDiagnostics, mode: str, covariance: np.ndarray
+) -> FitDiagnostics:
     """Add a warning for mount angles with a standard error above :data:`MOUNT_STD_WARNING_DEG`."""
     sigma = np.rad2deg(np.sqrt(np.clip(np.diag(covariance), 0.0, None)))
-    weak = [f"{name} ± {value:.2g}°" for name, value in zip(MOUNT_NAMES[mode], sigma) if value > MOUNT_STD_WARNING_DEG]
+    weak = [
+        f"{name} ± {value:.2g}°"
+        for name, value in zip(MOUNT_NAMES[mode], sigma)
+        if value > MOUNT_STD_WARNING_DEG
+    ]
     if not weak:
         return diagnostics
     message = f"the mount is poorly determined ({', '.join(weak)}): {POSES_NEEDED[mode]}"
@@ -49,8 +55,14 @@ def _with_mount_warning(diagnostics: FitDiagnostics, mode: str, covariance: np.n
 
 def _subset(poses: PoseAverages, keep: np.ndarray) -> PoseAverages:
     times = poses.times[keep] if poses.times is not None else None
-    return PoseAverages(poses.pose_ids[keep], poses.rotations[keep], poses.wrenches[keep], poses.counts[keep], poses.spread[keep],
-                        times)
+    return PoseAverages(
+        poses.pose_ids[keep],
+        poses.rotations[keep],
+        poses.wrenches[keep],
+        poses.counts[keep],
+        poses.spread[keep],
+        times,
+    )
 
 
 def calibrate(
@@ -119,7 +131,9 @@ def calibrate(
     if not isinstance(samples, Samples):
         raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
     if method not in METHODS:
-        raise InvalidInput(f"unknown calibration method {method!r}; expected one of {', '.join(METHODS)}")
+        raise InvalidInput(
+            f"unknown calibration method {method!r}; expected one of {', '.join(METHODS)}"
+        )
     if loss not in LOSSES:
         raise InvalidInput(f"unknown loss {loss!r}; expected one of {', '.join(LOSSES)}")
     if noise is not None and not isinstance(noise, SensorNoise):
@@ -130,15 +144,20 @@ def calibrate(
         raise InvalidInput("estimate_mount applies to method='ml' only")
     if estimate_mount != "none" and samples.joint_positions is None:
         raise InvalidInput(
-            "estimate_mount needs samples from joint angles (Samples.from_joint_positions): rotations given "
-            "directly are taken as the real sensor orientation, so any mount is already in them (absorbed)"
+            "estimate_mount needs samples from joint angles (Samples.from_joint_positions): "
+            "rotations given "
+            "directly are taken as the real sensor orientation, so any mount is already in them "
+            "(absorbed)"
         )
     g = as_positive(g, "g")
     drift_kind, degree = _drift_kind(drift, samples, method, loss, drop_outliers)
     if drift_kind != "none" and estimate_mount != "none":
         if drift != "auto":
-            raise InvalidInput(f"drift={drift!r} and estimate_mount={estimate_mount!r} cannot be fitted together yet: "
-                               "estimate the mount from a short recording (drift='none'), then the drift")
+            raise InvalidInput(
+                f"drift={drift!r} and estimate_mount={estimate_mount!r} cannot be fitted together "
+                "yet: "
+                "estimate the mount from a short recording (drift='none'), then the drift"
+            )
         drift_kind = "none"  # documented: with a mount estimate, auto keeps the constant bias
     if drift_kind != "none":
         try:
@@ -146,14 +165,21 @@ def calibrate(
         except InvalidSamples as error:
             if drift != "auto":
                 raise
-            logger.warning("%s; drift='auto' keeps a constant bias", error)  # the user did not ask for a drift model
+            logger.warning(
+                "%s; drift='auto' keeps a constant bias", error
+            )  # the user did not ask for a drift model
             drift_kind = "none"
     signs = reading_signs(sensor_sign, flip_axis)
     raw_poses = samples.pose_averages()
     poses = replace(raw_poses, wrenches=raw_poses.wrenches * signs)
     check = detect_sign_and_handedness(
-        raw_poses, sensor_sign=sensor_sign, flip_axis=flip_axis, estimate_mount=estimate_mount,
-        base_mount=base_mount, expected_gravity=expected_gravity, g=g,
+        raw_poses,
+        sensor_sign=sensor_sign,
+        flip_axis=flip_axis,
+        estimate_mount=estimate_mount,
+        base_mount=base_mount,
+        expected_gravity=expected_gravity,
+        g=g,
     )
     check_conventions(check, sensor_sign, base_mount)
     covariance = diagnostics = mount_covariance = None
@@ -162,34 +188,53 @@ def calibrate(
         model = fit_linear(poses, g)
     else:
         fit = fit_ml(poses, g, noise, loss, estimate_mount)
-        diagnostics, covariance = diagnose(fit, poses.pose_ids, log=drift_kind == "none", wrenches=poses.wrenches)
+        diagnostics, covariance = diagnose(
+            fit, poses.pose_ids, log=drift_kind == "none", wrenches=poses.wrenches
+        )
         if drop_outliers and diagnostics.outlier_pose_ids:
             dropped = diagnostics.outlier_pose_ids
             poses = _subset(poses, ~np.isin(poses.pose_ids, dropped))
             fit = fit_ml(poses, g, noise, loss, estimate_mount)
-            diagnostics, covariance = diagnose(fit, poses.pose_ids, dropped, wrenches=poses.wrenches)
+            diagnostics, covariance = diagnose(
+                fit, poses.pose_ids, dropped, wrenches=poses.wrenches
+            )
         model, mount, mount_covariance = fit.model, fit.mount_rotation, fit.mount_covariance
         if mount_covariance is not None:
-            mount_covariance = mount_covariance * diagnostics.covariance_scale  # the same goodness-of-fit scaling as θ
+            mount_covariance = (
+                mount_covariance * diagnostics.covariance_scale
+            )  # the same goodness-of-fit scaling as θ
             diagnostics = _with_mount_warning(diagnostics, estimate_mount, mount_covariance)
     trajectory = None
     if samples.times is not None and method == "ml" and drift_kind != "none":
         drift_fit, criteria = fit_drift(poses, fit, drift_kind, degree)
         if drift_fit is not None:
-            diagnostics, covariance = diagnose(drift_fit, poses.pose_ids, parameter_count=drift_fit.parameter_count,
-                                               wrenches=poses.wrenches)
-            model, trajectory = SensorModel.from_vector(drift_fit.model.to_vector(), g), drift_fit.drift
+            diagnostics, covariance = diagnose(
+                drift_fit,
+                poses.pose_ids,
+                parameter_count=drift_fit.parameter_count,
+                wrenches=poses.wrenches,
+            )
+            model, trajectory = (
+                SensorModel.from_vector(drift_fit.model.to_vector(), g),
+                drift_fit.drift,
+            )
         else:
             log_warnings(diagnostics)
             trajectory = _constant_trajectory(model, poses, covariance, criteria)
     elif samples.times is not None:
         trajectory = _constant_trajectory(model, poses, covariance, {})
     if trajectory is not None:
-        trajectory = replace(trajectory, recorded_span=np.array([np.min(samples.times), np.max(samples.times)]))
+        trajectory = replace(
+            trajectory, recorded_span=np.array([np.min(samples.times), np.max(samples.times)])
+        )
     if trajectory is None or trajectory.model == "none":
         residuals = poses.wrenches - model.predict(poses.rotations @ mount.T)
     else:
-        residuals = poses.wrenches - model.tool_gravity_wrench(poses.rotations @ mount.T) - trajectory.bias_at(poses.times)
+        residuals = (
+            poses.wrenches
+            - model.tool_gravity_wrench(poses.rotations @ mount.T)
+            - trajectory.bias_at(poses.times)
+        )
     return CalibrationResult(
         force_offset=model.force_offset,
         torque_offset=model.torque_offset,
@@ -214,26 +259,48 @@ def calibrate(
     )
 
 
-def _drift_kind(drift, samples: Samples, method: str, loss: str, drop_outliers: bool) -> tuple[str, int]:
-    """The drift model to fit: ``("none"|"auto"|"poly"|"random-walk", degree)`` after checking the options."""
+def _drift_kind(
+    drift, samples: Samples, method: str, loss: str, drop_outliers: bool
+) -> tuple[str, int]:
+    """The drift model to fit: ``("none"|"auto"|"poly"|"random-walk", degree)`` after checking the
+    options.
+    """
     kind, degree = parse_drift(drift)
     if kind in ("none", "auto"):
         unsupported = method != "ml" or loss != "linear" or drop_outliers
-        if kind == "auto" and (samples.times is None or unsupported or np.ptp(samples.times) <= 0.0):
+        if kind == "auto" and (
+            samples.times is None or unsupported or np.ptp(samples.times) <= 0.0
+        ):
             return "none", 0
         return kind, degree
     if samples.times is None:
-        raise InvalidInput(f"drift={drift!r} needs the time of each reading (Samples.times, a 't' column in the CSV)")
+        raise InvalidInput(
+            f"drift={drift!r} needs the time of each reading (Samples.times, a 't' column in the "
+            "CSV)"
+        )
     if method != "ml" or loss != "linear" or drop_outliers:
-        raise InvalidInput(f"drift={drift!r} needs method='ml' with loss='linear' and no drop_outliers")
+        raise InvalidInput(
+            f"drift={drift!r} needs method='ml' with loss='linear' and no drop_outliers"
+        )
     if np.ptp(samples.times) <= 0.0:
-        raise InvalidInput(f"drift={drift!r}: all readings have the same time; a drift needs readings spread over time")
+        raise InvalidInput(
+            f"drift={drift!r}: all readings have the same time; a drift needs readings spread over "
+            "time"
+        )
     return kind, degree
 
 
-def _constant_trajectory(model: SensorModel, poses: PoseAverages, covariance, criteria: dict) -> BiasDrift:
+def _constant_trajectory(
+    model: SensorModel, poses: PoseAverages, covariance, criteria: dict
+) -> BiasDrift:
     """The constant bias as a :class:`BiasDrift` (``"none"``), for samples that had times."""
     times = np.sort(poses.times)
     std = np.sqrt(np.diag(covariance)[3:9]) if covariance is not None else np.zeros(6)
-    return BiasDrift("none", "auto" if criteria else "given", times, np.tile(model.bias, (len(times), 1)),
-                     np.tile(std, (len(times), 1)), criteria=criteria)
+    return BiasDrift(
+        "none",
+        "auto" if criteria else "given",
+        times,
+        np.tile(model.bias, (len(times), 1)),
+        np.tile(std, (len(times), 1)),
+        criteria=criteria,
+    )

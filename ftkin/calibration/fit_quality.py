@@ -18,7 +18,6 @@
   scale.
 """
 
-
 import logging
 
 import numpy as np
@@ -34,14 +33,28 @@ from .diagnostics import (
 from .information import NOISE_FLOOR_RELATIVE, at_noise_floor
 from .model import PARAMETER_NAMES
 
-__all__ = ["FIT_ALPHA", "OUTLIER_ALPHA", "RELATIVE_STD_ERROR_WARNING", "FitDiagnostics", "diagnose", "log_warnings"]
+__all__ = [
+    "FIT_ALPHA",
+    "OUTLIER_ALPHA",
+    "RELATIVE_STD_ERROR_WARNING",
+    "FitDiagnostics",
+    "diagnose",
+    "log_warnings",
+]
 
 logger = logging.getLogger(__name__)
 
 MIN_NOISE_DOF = 8
-"""Fewest degrees of freedom of a residual-based noise estimate before the standard errors are called rough."""
+"""Fewest degrees of freedom of a residual-based noise estimate before the standard errors are
+called rough.
+"""
 
-_UNITS = {"gravity_in_base": "N", "force_offset": "N", "torque_offset": "N·m", "center_of_mass": "m"}
+_UNITS = {
+    "gravity_in_base": "N",
+    "force_offset": "N",
+    "torque_offset": "N·m",
+    "center_of_mass": "m",
+}
 
 
 def _f_sf(ratio, dfn, dfd):
@@ -52,7 +65,9 @@ def _f_sf(ratio, dfn, dfd):
     large = ~np.isfinite(dfd) | (dfd > 1e7)
     with np.errstate(invalid="ignore"):
         finite_dfd = np.where(large, 1.0, dfd)
-        out = np.where(large, special.chdtrc(dfn, ratio * dfn), special.fdtrc(dfn, finite_dfd, ratio))
+        out = np.where(
+            large, special.chdtrc(dfn, ratio * dfn), special.fdtrc(dfn, finite_dfd, ratio)
+        )
     return out
 
 
@@ -60,8 +75,12 @@ def _block_scales(theta: np.ndarray) -> np.ndarray:
     """``(12,)`` scale each parameter's standard error is judged against."""
     weight = float(np.linalg.norm(theta[0:3]))
     com = max(float(np.linalg.norm(theta[9:12])), MIN_COM_SCALE)
-    scales = [weight, max(float(np.linalg.norm(theta[3:6])), weight),
-              max(float(np.linalg.norm(theta[6:9])), weight * com), com]
+    scales = [
+        weight,
+        max(float(np.linalg.norm(theta[3:6])), weight),
+        max(float(np.linalg.norm(theta[6:9])), weight * com),
+        com,
+    ]
     return np.repeat(np.maximum(scales, 1e-300), 3)
 
 
@@ -90,14 +109,25 @@ def _pose_statistics(whitened, hat, fit_ok, source, noise_dof, parameter_count=1
         denominator_dof = np.full(count, noise_dof)
     normalized = np.sqrt(z / rank / scale)
     valid = np.isfinite(normalized) & (denominator_dof > 0)
-    p_values = np.where(valid, _f_sf(np.where(valid, normalized, 0.0) ** 2, rank, np.where(valid, denominator_dof, 1.0)), np.nan)
+    p_values = np.where(
+        valid,
+        _f_sf(np.where(valid, normalized, 0.0) ** 2, rank, np.where(valid, denominator_dof, 1.0)),
+        np.nan,
+    )
     leverage = np.diagonal(hat, axis1=1, axis2=2)
     return normalized, p_values, leverage
 
 
-def diagnose(fit, pose_ids, dropped_pose_ids=(), parameter_count: int | None = None, log: bool = True,
-             wrenches=None) -> tuple[FitDiagnostics, np.ndarray]:
-    """Assess an :class:`~ftkin.calibration.ml.MlFit`; returns its diagnostics and the (scaled) covariance.
+def diagnose(
+    fit,
+    pose_ids,
+    dropped_pose_ids=(),
+    parameter_count: int | None = None,
+    log: bool = True,
+    wrenches=None,
+) -> tuple[FitDiagnostics, np.ndarray]:
+    """Assess an :class:`~ftkin.calibration.ml.MlFit`; returns its diagnostics and the (scaled)
+    covariance.
 
     ``parameter_count``: parameters fitted (default: the problem's, 12 for ``θ``
     plus any mount angles; more with a drift
@@ -125,7 +155,13 @@ def diagnose(fit, pose_ids, dropped_pose_ids=(), parameter_count: int | None = N
         p_value = float(_f_sf(chi_square / dof, dof, fit.noise_dof))
     fit_ok = not (p_value < FIT_ALPHA)
     normalized, pose_p, leverage = _pose_statistics(
-        whitened, problem.hat_blocks(theta), fit_ok, fit.noise_source, fit.noise_dof, parameter_count)
+        whitened,
+        problem.hat_blocks(theta),
+        fit_ok,
+        fit.noise_source,
+        fit.noise_dof,
+        parameter_count,
+    )
     with np.errstate(invalid="ignore", divide="ignore"):
         channel_chi_square = np.sum(whitened**2, axis=0) / np.sum(1.0 - leverage, axis=0)
     scale = chi_square / dof if (not fit_ok and chi_square > dof) else 1.0
@@ -137,29 +173,42 @@ def diagnose(fit, pose_ids, dropped_pose_ids=(), parameter_count: int | None = N
     sigma, scales = np.sqrt(np.clip(np.diag(covariance), 0.0, None)), _block_scales(theta)
     relative = sigma / scales
     pose_ids = np.asarray(pose_ids)
-    exact = wrenches is not None and fit.noise_source == "residuals" and at_noise_floor(fit.noise.channel_std, wrenches)
-    outliers = () if exact else tuple(int(i) for i in pose_ids[pose_p < OUTLIER_ALPHA / max(count, 1)])
+    exact = (
+        wrenches is not None
+        and fit.noise_source == "residuals"
+        and at_noise_floor(fit.noise.channel_std, wrenches)
+    )
+    outliers = (
+        () if exact else tuple(int(i) for i in pose_ids[pose_p < OUTLIER_ALPHA / max(count, 1)])
+    )
 
     messages = []
     if exact:
         messages.append(
-            f"the readings fit the model to rounding (noise estimated at its floor, {NOISE_FLOOR_RELATIVE:g} of the "
-            "largest reading): noise-free data, e.g. a simulation without sensor noise? The estimates are exact, but "
-            "the standard errors, the fit test and the outlier test mean nothing; add sensor noise to simulated "
+            "the readings fit the model to rounding (noise estimated at its floor, "
+            f"{NOISE_FLOOR_RELATIVE:g} of the "
+            "largest reading): noise-free data, e.g. a simulation without sensor noise? The "
+            "estimates are exact, but "
+            "the standard errors, the fit test and the outlier test mean nothing; add sensor noise "
+            "to simulated "
             "readings or give the noise level (noise=, --noise-force/--noise-torque)"
         )
     if not fit_ok:
         messages.append(
-            f"the readings do not fit the model within their noise (chi-square {chi_square:.1f} for {dof} "
-            f"degrees of freedom, p = {p_value:.1e}): sensor crosstalk, a contact or cable at some poses, or "
+            f"the readings do not fit the model within their noise (chi-square {chi_square:.1f} "
+            f"for {dof} "
+            f"degrees of freedom, p = {p_value:.1e}): sensor crosstalk, a contact or cable at some "
+            "poses, or "
             f"noise underestimated; standard errors scaled by {np.sqrt(scale):.2f}"
         )
     if outliers:
         worst = ", ".join(
-            f"{i} ({normalized[pose_ids == i][0]:.1f}σ, p = {pose_p[pose_ids == i][0]:.1e})" for i in outliers
+            f"{i} ({normalized[pose_ids == i][0]:.1f}σ, p = {pose_p[pose_ids == i][0]:.1e})"
+            for i in outliers
         )
         messages.append(
-            f"outlier pose(s), far outside the noise: {worst} (RMS normalized residual over the six channels; "
+            f"outlier pose(s), far outside the noise: {worst} (RMS normalized residual over the "
+            "six channels; "
             f"threshold p < {OUTLIER_ALPHA / count:.1e}); check them or refit without them "
             "(drop_outliers=True, --drop-outliers)"
         )
@@ -167,16 +216,21 @@ def diagnose(fit, pose_ids, dropped_pose_ids=(), parameter_count: int | None = N
         part = slice(3 * block, 3 * block + 3)
         if np.any(relative[part] > RELATIVE_STD_ERROR_WARNING):
             messages.append(
-                f"{name} is poorly determined: standard errors [{', '.join(f'{s:.3g}' for s in sigma[part])}] "
+                f"{name} is poorly determined: standard errors "
+                f"[{', '.join(f'{s:.3g}' for s in sigma[part])}] "
                 f"{_UNITS[name]} are up to {100 * relative[part].max():.0f} % of its scale "
                 f"{scales[3 * block]:.3g} {_UNITS[name]}; add poses that turn gravity into other "
-                f"sensor directions (condition number {eigenvalues[-1] / eigenvalues[0]:.3g}, weakest direction "
-                + ", ".join(f"{weight:+.2f} {label}" for label, weight in main_components(weakest)) + ")"
+                f"sensor directions (condition number {eigenvalues[-1] / eigenvalues[0]:.3g}, "
+                "weakest direction "
+                + ", ".join(f"{weight:+.2f} {label}" for label, weight in main_components(weakest))
+                + ")"
             )
     if fit.noise_source == "residuals" and fit.noise_dof < MIN_NOISE_DOF:
         messages.append(
-            f"the noise levels come from the residuals with only {fit.noise_dof:.1f} degrees of freedom, so the "
-            "standard errors are rough; record several readings per pose (pose column), add poses, or give the noise"
+            f"the noise levels come from the residuals with only {fit.noise_dof:.1f} degrees of "
+            "freedom, so the "
+            "standard errors are rough; record several readings per pose (pose column), add poses, "
+            "or give the noise"
         )
     diagnostics = FitDiagnostics(
         loss=fit.loss,

@@ -19,10 +19,13 @@ from .model import COMPONENT_NAMES, SensorModel
 from .mount import mount_jacobian
 
 NOISE_RANGE = (1e-15, 1e6)
-"""Accepted noise standard deviations per reading [N, N·m]: beyond them 1/σ² leaves the float range's useful part."""
+"""Accepted noise standard deviations per reading [N, N·m]: beyond them 1/σ² leaves the float
+range's useful part.
+"""
 
 NOISE_FLOOR_RELATIVE = 1e-7
-"""Smallest noise an estimate from the data may give, relative to the largest reading of its group (at least 1 N or 1 N·m).
+"""Smallest noise an estimate from the data may give, relative to the largest reading of its group
+(at least 1 N or 1 N·m).
 
 Readings that fit the model to rounding (noise-free simulated data, e.g. a
 MuJoCo recording without sensor noise) would otherwise give a noise of
@@ -32,15 +35,24 @@ the solver's own convergence leaves residuals of ~1e-9 on exact data."""
 
 
 def noise_floor(wrenches) -> np.ndarray:
-    """``(6,)`` floor [N, N·m] of an estimated per-reading noise for readings ``(P, 6)``, forces and torques pooled."""
+    """``(6,)`` floor [N, N·m] of an estimated per-reading noise for readings ``(P, 6)``, forces and
+    torques pooled.
+    """
     magnitude = np.abs(np.asarray(wrenches, dtype=float))
-    groups = [max(1.0, float(np.max(magnitude[:, part], initial=0.0))) for part in (slice(0, 3), slice(3, 6))]
+    groups = [
+        max(1.0, float(np.max(magnitude[:, part], initial=0.0)))
+        for part in (slice(0, 3), slice(3, 6))
+    ]
     return NOISE_FLOOR_RELATIVE * np.repeat(groups, 3)
 
 
 def at_noise_floor(channel_std, wrenches) -> bool:
-    """True when an estimated noise ``(6,)`` sits at :func:`noise_floor` (the readings fit the model to rounding)."""
-    return bool(np.any(np.asarray(channel_std, dtype=float) <= noise_floor(wrenches) * (1.0 + 1e-6)))
+    """True when an estimated noise ``(6,)`` sits at :func:`noise_floor` (the readings fit the model
+    to rounding).
+    """
+    return bool(
+        np.any(np.asarray(channel_std, dtype=float) <= noise_floor(wrenches) * (1.0 + 1e-6))
+    )
 
 
 @dataclass(frozen=True)
@@ -62,7 +74,8 @@ class SensorNoise:
                 raise InvalidInput(f"{name} must be finite and positive, got {value}")
             if np.any(value < NOISE_RANGE[0]) or np.any(value > NOISE_RANGE[1]):
                 raise InvalidInput(
-                    f"{name} must be between {NOISE_RANGE[0]:g} and {NOISE_RANGE[1]:g} (N or N·m per reading), got {value}"
+                    f"{name} must be between {NOISE_RANGE[0]:g} and {NOISE_RANGE[1]:g} (N or N·m "
+                    f"per reading), got {value}"
                 )
             value.setflags(write=False)
             object.__setattr__(self, name, value)
@@ -78,8 +91,14 @@ class SensorNoise:
         return cls(0.02, 0.002)
 
 
-def fisher_information(model: SensorModel, rotation_sensor_to_base, noise: SensorNoise, readings_per_pose=1,
-                       estimate_mount: str = "none", mount_rotation=None) -> np.ndarray:
+def fisher_information(
+    model: SensorModel,
+    rotation_sensor_to_base,
+    noise: SensorNoise,
+    readings_per_pose=1,
+    estimate_mount: str = "none",
+    mount_rotation=None,
+) -> np.ndarray:
     """Fisher information ``Σ_i n_i J_iᵀ W J_i`` of ``θ`` for a pose set, ``(12, 12)``.
 
     With ``estimate_mount="yaw"`` or ``"full"`` it is the ``(12 + k)``
@@ -103,11 +122,20 @@ def fisher_information(model: SensorModel, rotation_sensor_to_base, noise: Senso
         raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
     counts = as_float_array(readings_per_pose, "readings_per_pose")
     if counts.ndim > 1 or counts.size not in (1, len(rotations)):
-        raise InvalidInput(f"readings_per_pose must be a scalar or have shape ({len(rotations)},), got {counts.shape}")
+        raise InvalidInput(
+            f"readings_per_pose must be a scalar or have shape ({len(rotations)},), got "
+            f"{counts.shape}"
+        )
     if not np.all(np.isfinite(counts) & (counts > 0)):
         raise InvalidInput(f"readings_per_pose must be finite and positive, got {counts}")
-    jac = mount_jacobian(rotations, model.gravity_in_base, model.center_of_mass, estimate_mount, mount_rotation)
-    weighted = jac / noise.channel_std[None, :, None] * np.sqrt(np.broadcast_to(counts, (len(rotations),)))[:, None, None]
+    jac = mount_jacobian(
+        rotations, model.gravity_in_base, model.center_of_mass, estimate_mount, mount_rotation
+    )
+    weighted = (
+        jac
+        / noise.channel_std[None, :, None]
+        * np.sqrt(np.broadcast_to(counts, (len(rotations),)))[:, None, None]
+    )
     stacked = weighted.reshape(-1, jac.shape[2])
     return stacked.T @ stacked
 
@@ -116,13 +144,17 @@ def _as_parameter_matrix(value, name: str) -> np.ndarray:
     """A finite ``(12, 12)`` matrix over ``θ`` or :class:`InvalidInput`."""
     matrix = as_float_array(value, name)
     if matrix.shape != (12, 12):
-        raise InvalidInput(f"{name} must have shape (12, 12) over θ = [a, F0, M0, P], got {matrix.shape}")
+        raise InvalidInput(
+            f"{name} must have shape (12, 12) over θ = [a, F0, M0, P], got {matrix.shape}"
+        )
     check_finite(matrix, name)
     return matrix
 
 
 def covariance_from_information(information: np.ndarray, rcond: float = 1e-12) -> np.ndarray:
-    """Invert a ``(12, 12)`` information matrix; raise :class:`UnobservableParameters` if singular."""
+    """Invert a ``(12, 12)`` information matrix; raise :class:`UnobservableParameters` if
+    singular.
+    """
     information = _as_parameter_matrix(information, "information")
     scale = np.sqrt(np.diag(information))
     if np.any(scale == 0):
@@ -170,12 +202,15 @@ EXTENDED_NAMES = COMPONENT_NAMES + ("tool_weight", "base_tilt[u]", "base_tilt[v]
 
 
 def extended_parameters(model: SensorModel) -> np.ndarray:
-    """``(15,)`` ``θ = [a, F0, M0, P]`` followed by the tool weight ``G`` [N] and base tilt ``U``, ``V`` [rad]."""
+    """``(15,)`` ``θ = [a, F0, M0, P]`` followed by the tool weight ``G`` [N] and base tilt ``U``,
+    ``V`` [rad].
+    """
     return np.concatenate([model.to_vector(), [model.tool_weight], model.base_tilt])
 
 
 def extended_standard_errors(model: SensorModel, covariance) -> np.ndarray:
-    """``(15,)`` standard errors of :func:`extended_parameters` from the ``(12, 12)`` covariance of ``θ``.
+    """``(15,)`` standard errors of :func:`extended_parameters` from the ``(12, 12)`` covariance of
+    ``θ``.
 
     ``G``, ``U`` and ``V`` get theirs by the delta method (:func:`derived_gradients`).
 
@@ -184,7 +219,9 @@ def extended_standard_errors(model: SensorModel, covariance) -> np.ndarray:
     """
     covariance = _as_parameter_matrix(covariance, "covariance")
     grads = derived_gradients(model.gravity_in_base)
-    jacobian = np.vstack([np.eye(12), grads["tool_weight"], grads["base_tilt_u"], grads["base_tilt_v"]])
+    jacobian = np.vstack(
+        [np.eye(12), grads["tool_weight"], grads["base_tilt_u"], grads["base_tilt_v"]]
+    )
     return np.sqrt(np.clip(np.einsum("ij,jk,ik->i", jacobian, covariance, jacobian), 0.0, None))
 
 

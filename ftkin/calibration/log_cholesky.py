@@ -47,7 +47,11 @@ def inertia_entries(matrix) -> np.ndarray:
 
 def parameters_from_body(mass: float, center_of_mass, inertia_about_com) -> np.ndarray:
     """θ from mass [kg], COM [m] and the inertia about the COM (3×3) [kg·m²], all in frame S."""
-    inertia = pin.Inertia(float(mass), as_vector(center_of_mass, 3, "center_of_mass"), np.asarray(inertia_about_com, dtype=float))
+    inertia = pin.Inertia(
+        float(mass),
+        as_vector(center_of_mass, 3, "center_of_mass"),
+        np.asarray(inertia_about_com, dtype=float),
+    )
     return np.asarray(inertia.toDynamicParameters(), dtype=float)
 
 
@@ -106,28 +110,32 @@ def log_cholesky_from_parameters(theta) -> np.ndarray:
         lower = np.linalg.cholesky(exchange @ pseudo @ exchange)
     except np.linalg.LinAlgError:
         raise InvalidInput(
-            "the inertial parameters are not physically consistent (pseudo-inertia not positive definite); "
+            "the inertial parameters are not physically consistent (pseudo-inertia not positive "
+            "definite); "
             f"its eigenvalues are {np.linalg.eigvalsh(pseudo).tolist()}"
         ) from None
     upper = exchange @ lower @ exchange
     scale = upper[3, 3]
     u = upper / scale
-    return np.array([
-        np.log(scale),
-        np.log(u[0, 0]),
-        np.log(u[1, 1]),
-        np.log(u[2, 2]),
-        u[0, 1],
-        u[1, 2],
-        u[0, 2],
-        u[0, 3],
-        u[1, 3],
-        u[2, 3],
-    ])
+    return np.array(
+        [
+            np.log(scale),
+            np.log(u[0, 0]),
+            np.log(u[1, 1]),
+            np.log(u[2, 2]),
+            u[0, 1],
+            u[1, 2],
+            u[0, 2],
+            u[0, 3],
+            u[1, 3],
+            u[2, 3],
+        ]
+    )
 
 
 def nearest_consistent(theta, floor: float = 1e-9) -> np.ndarray:
-    """A physically consistent θ close to θ: the pseudo-inertia's eigenvalues clipped at ``floor`` × its scale.
+    """A physically consistent θ close to θ: the pseudo-inertia's eigenvalues clipped at ``floor`` ×
+    its scale.
 
     Used to start the constrained fit when the unconstrained one is inconsistent.
     """

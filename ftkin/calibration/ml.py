@@ -27,7 +27,13 @@ from ..exceptions import InvalidInput
 from .information import SensorNoise, covariance_from_information, noise_floor
 from .linear import fit_linear
 from .model import STANDARD_GRAVITY, SensorModel, cross_rows, parameter_jacobian
-from .mount import MountedProblem, check_mount_mode, check_mount_observable, mount_start, split_information
+from .mount import (
+    MountedProblem,
+    check_mount_mode,
+    check_mount_observable,
+    mount_start,
+    split_information,
+)
 from .samples import PoseAverages
 
 LOSSES = ("linear", "soft_l1", "huber")
@@ -40,7 +46,9 @@ MIN_SPREAD_DOF = 5
 """Fewest degrees of freedom (``Σ (n_i − 1)``) for a noise estimate from repeated readings."""
 
 RESIDUAL_NOISE_PASSES = 3
-"""Most re-estimations of residual-based noise (each followed by a refit) until it settles to 1 %."""
+"""Most re-estimations of residual-based noise (each followed by a refit) until it settles to 1
+%.
+"""
 
 _FORCE, _TORQUE = slice(0, 3), slice(3, 6)
 
@@ -92,13 +100,16 @@ class WeightedProblem:
         return (jac * self.weights[:, :, None]).reshape(-1, 12)
 
     def hat_blocks(self, theta: np.ndarray) -> np.ndarray:
-        """``(P, 6, 6)`` per-pose diagonal blocks of the hat matrix ``J (JᵀJ)⁺ Jᵀ`` of the whitened fit.
+        """``(P, 6, 6)`` per-pose diagonal blocks of the hat matrix ``J (JᵀJ)⁺ Jᵀ`` of the whitened
+        fit.
 
         Their diagonals are the leverages of the readings' channels.
         """
         jac = self.whitened_jacobian(theta)
         blocks = jac.reshape(-1, 6, jac.shape[1])
-        return blocks @ np.linalg.pinv(jac.T @ jac, hermitian=True) @ np.transpose(blocks, (0, 2, 1))
+        return (
+            blocks @ np.linalg.pinv(jac.T @ jac, hermitian=True) @ np.transpose(blocks, (0, 2, 1))
+        )
 
 
 @dataclass(frozen=True)
@@ -143,7 +154,9 @@ class MlFit:
 
     @property
     def covariance(self) -> np.ndarray:
-        """``(12, 12)`` covariance of ``θ`` from the noise used (before any goodness-of-fit scaling)."""
+        """``(12, 12)`` covariance of ``θ`` from the noise used (before any goodness-of-fit
+        scaling).
+        """
         return covariance_from_information(self.information)
 
 
@@ -167,14 +180,18 @@ def noise_from_spread(poses: PoseAverages) -> tuple[np.ndarray, float] | None:
     dof = float(np.sum(poses.counts[repeated] - 1))
     if dof < MIN_SPREAD_DOF:
         return None
-    variance = np.sum((poses.counts[repeated] - 1)[:, None] * poses.spread[repeated] ** 2, axis=0) / dof
+    variance = (
+        np.sum((poses.counts[repeated] - 1)[:, None] * poses.spread[repeated] ** 2, axis=0) / dof
+    )
     scale = np.maximum(np.abs(poses.wrenches).max(axis=0), 1e-300)
     if not np.all(np.isfinite(variance)) or np.any(np.sqrt(variance) <= 1e-12 * scale):
         return None
     return np.sqrt(variance), dof
 
 
-def noise_from_residuals(problem: WeightedProblem, theta: np.ndarray, robust: bool = False) -> tuple[np.ndarray, float]:
+def noise_from_residuals(
+    problem: WeightedProblem, theta: np.ndarray, robust: bool = False
+) -> tuple[np.ndarray, float]:
     """Per-reading noise ``(6,)`` from the fit residuals, force and torque channels pooled.
 
     ``σ_g² = Σ n_i e_ic² / Σ (1 − h_ic)`` over the channels of group ``g``
@@ -202,13 +219,27 @@ def noise_from_residuals(problem: WeightedProblem, theta: np.ndarray, robust: bo
 
 
 def _solve(problem: WeightedProblem, start: np.ndarray, loss: str) -> tuple[np.ndarray, int]:
-    """Minimize the (robust) whitened residuals from ``start``; ``θ`` and the function evaluations used."""
-    from scipy.optimize import least_squares  # here, not at import: scipy.optimize takes ~0.3 s to import
+    """Minimize the (robust) whitened residuals from ``start``; ``θ`` and the function evaluations
+    used.
+    """
+    from scipy.optimize import (
+        least_squares,
+    )  # here, not at import: scipy.optimize takes ~0.3 s to import
 
-    robust = {"method": "lm"} if loss == "linear" else {"method": "trf", "loss": loss, "f_scale": ROBUST_LOSS_SCALE}
+    robust = (
+        {"method": "lm"}
+        if loss == "linear"
+        else {"method": "trf", "loss": loss, "f_scale": ROBUST_LOSS_SCALE}
+    )
     solution = least_squares(
-        problem.whitened_residuals, start, jac=lambda theta: -problem.whitened_jacobian(theta),
-        x_scale="jac", xtol=1e-13, ftol=1e-13, gtol=1e-13, **robust,
+        problem.whitened_residuals,
+        start,
+        jac=lambda theta: -problem.whitened_jacobian(theta),
+        x_scale="jac",
+        xtol=1e-13,
+        ftol=1e-13,
+        gtol=1e-13,
+        **robust,
     )
     return solution.x, int(solution.nfev)
 
@@ -243,7 +274,9 @@ def fit_ml(
         theta0 = start.to_vector()
     else:
         mount0, start = mount_start(poses, g)
-        problem = MountedProblem(poses.rotations, poses.wrenches, counts, np.ones(6), mount0, estimate_mount)
+        problem = MountedProblem(
+            poses.rotations, poses.wrenches, counts, np.ones(6), mount0, estimate_mount
+        )
         theta0 = np.concatenate([start.to_vector(), np.zeros(problem.parameter_count - 12)])
     if noise is not None:
         channel_std, dof, source = noise.channel_std, np.inf, "given"
@@ -255,9 +288,13 @@ def fit_ml(
             source = "residuals"
             # rough levels (no leverage correction) to weight the channels for the leverages
             rms = np.sqrt(np.mean(problem.residuals(theta0) ** 2 * counts[:, None], axis=0))
-            rough = np.concatenate([np.full(3, rms[_FORCE].mean()), np.full(3, rms[_TORQUE].mean())])
+            rough = np.concatenate(
+                [np.full(3, rms[_FORCE].mean()), np.full(3, rms[_TORQUE].mean())]
+            )
             rough = np.maximum(rough, 1e-12 * np.maximum(1.0, np.abs(poses.wrenches).max(axis=0)))
-            channel_std, dof = noise_from_residuals(replace(problem, channel_std=rough), theta0, robust=loss != "linear")
+            channel_std, dof = noise_from_residuals(
+                replace(problem, channel_std=rough), theta0, robust=loss != "linear"
+            )
     problem = replace(problem, channel_std=channel_std)
     if estimate_mount != "none":
         check_mount_observable(problem, theta0)

@@ -83,7 +83,9 @@ class SensorModel:
 
     def __post_init__(self):
         for name in ("force_offset", "torque_offset", "gravity_in_base", "center_of_mass"):
-            vector = as_vector(getattr(self, name), 3, name).copy()  # frozen: a copy, never the caller's array
+            vector = as_vector(
+                getattr(self, name), 3, name
+            ).copy()  # frozen: a copy, never the caller's array
             vector.setflags(write=False)
             object.__setattr__(self, name, vector)
         object.__setattr__(self, "g", as_positive(self.g, "g"))
@@ -112,8 +114,10 @@ class SensorModel:
     def __repr__(self) -> str:
         round_ = lambda values: [round(float(v), 6) for v in values]  # noqa: E731
         return (
-            f"{type(self).__name__}(tool_weight={self.tool_weight:.6g} N, center_of_mass={round_(self.center_of_mass)} m, "
-            f"force_offset={round_(self.force_offset)} N, torque_offset={round_(self.torque_offset)} N·m, "
+            f"{type(self).__name__}(tool_weight={self.tool_weight:.6g} N, "
+            f"center_of_mass={round_(self.center_of_mass)} m, "
+            f"force_offset={round_(self.force_offset)} N, "
+            f"torque_offset={round_(self.torque_offset)} N·m, "
             f"base_tilt_deg={[round(v, 4) for v in self.base_tilt_deg]}, g={self.g:g} m/s²)"
         )
 
@@ -180,8 +184,12 @@ class SensorModel:
         return parameter_jacobian(rotations, self.gravity_in_base, self.center_of_mass)
 
 
-def parameter_jacobian(rotations: np.ndarray, gravity_in_base: np.ndarray, center_of_mass: np.ndarray) -> np.ndarray:
-    """Unchecked core of :meth:`SensorModel.parameter_jacobian` for validated ``(N, 3, 3)`` input."""
+def parameter_jacobian(
+    rotations: np.ndarray, gravity_in_base: np.ndarray, center_of_mass: np.ndarray
+) -> np.ndarray:
+    """Unchecked core of :meth:`SensorModel.parameter_jacobian` for validated ``(N, 3, 3)``
+    input.
+    """
     count = len(rotations)
     rotations_t = np.transpose(rotations, (0, 2, 1))
     gravity_in_sensor = rotations_t @ gravity_in_base

@@ -47,12 +47,16 @@ _AXES = {"yaw": np.array([[0.0], [0.0], [1.0]]), "full": np.eye(3)}
 
 POSES_NEEDED = {
     "yaw": (
-        "turning the sensor about its z axis changes no reading while gravity lies along that axis: use poses "
-        "with the tool tilted 30° or more from vertical, about at least two different horizontal axes"
+        "turning the sensor about its z axis changes no reading while gravity lies along that "
+        "axis: use poses "
+        "with the tool tilted 30° or more from vertical, about at least two different horizontal "
+        "axes"
     ),
     "full": (
-        "use poses that turn gravity into every sensor direction: the tool tilted 30° or more about at least "
-        "two different horizontal axes, and the wrist turned so gravity is seen along the sensor's x, y and z axes"
+        "use poses that turn gravity into every sensor direction: the tool tilted 30° or more "
+        "about at least "
+        "two different horizontal axes, and the wrist turned so gravity is seen along the sensor's "
+        "x, y and z axes"
     ),
 }
 """What pose sets each mode needs (said when a mount is refused as unobservable)."""
@@ -61,7 +65,9 @@ POSES_NEEDED = {
 def check_mount_mode(estimate_mount: str) -> str:
     """``estimate_mount`` if it is one of :data:`MOUNT_MODES`, else :class:`InvalidInput`."""
     if estimate_mount not in MOUNT_MODES:
-        raise InvalidInput(f"unknown estimate_mount {estimate_mount!r}; expected one of {', '.join(MOUNT_MODES)}")
+        raise InvalidInput(
+            f"unknown estimate_mount {estimate_mount!r}; expected one of {', '.join(MOUNT_MODES)}"
+        )
     return estimate_mount
 
 
@@ -82,7 +88,11 @@ def right_jacobian_so3(rotation_vector) -> np.ndarray:
     k = skew(w)
     if angle < 1e-6:
         return np.eye(3) - 0.5 * k + k @ k / 6.0
-    return np.eye(3) - (1.0 - np.cos(angle)) / angle**2 * k + (angle - np.sin(angle)) / angle**3 * k @ k
+    return (
+        np.eye(3)
+        - (1.0 - np.cos(angle)) / angle**2 * k
+        + (angle - np.sin(angle)) / angle**3 * k @ k
+    )
 
 
 def mount_rotation(base: np.ndarray, mode: str, increment) -> np.ndarray:
@@ -92,7 +102,8 @@ def mount_rotation(base: np.ndarray, mode: str, increment) -> np.ndarray:
 
 @dataclass(frozen=True)
 class MountedProblem:
-    """The whitened problem of :class:`~ftkin.calibration.ml.WeightedProblem` with the mount increment appended to ``θ``.
+    """The whitened problem of :class:`~ftkin.calibration.ml.WeightedProblem` with the mount
+    increment appended to ``θ``.
 
     The parameter vector is ``x = [θ (12), δ (k)]``; a bare 12-vector ``θ``
     means ``δ = 0`` (the mount at :attr:`mount_base`).
@@ -128,7 +139,11 @@ class MountedProblem:
         return 12 + _AXES[self.mode].shape[1]
 
     def _full(self, x: np.ndarray) -> np.ndarray:
-        return x if len(x) == self.parameter_count else np.concatenate([x, np.zeros(self.parameter_count - len(x))])
+        return (
+            x
+            if len(x) == self.parameter_count
+            else np.concatenate([x, np.zeros(self.parameter_count - len(x))])
+        )
 
     def mount(self, x: np.ndarray) -> np.ndarray:
         """``R_M`` at parameters ``x``."""
@@ -165,14 +180,18 @@ class MountedProblem:
         """``(P, 6, 6)`` diagonal blocks of the hat matrix, mount columns included."""
         jac = self.whitened_jacobian(x)
         blocks = jac.reshape(-1, 6, self.parameter_count)
-        return blocks @ np.linalg.pinv(jac.T @ jac, hermitian=True) @ np.transpose(blocks, (0, 2, 1))
+        return (
+            blocks @ np.linalg.pinv(jac.T @ jac, hermitian=True) @ np.transpose(blocks, (0, 2, 1))
+        )
 
     def recentred(self, x: np.ndarray) -> tuple[MountedProblem, np.ndarray]:
         """The same problem with ``R_M0`` moved to ``x``'s mount, and ``θ`` (12,)."""
         return replace(self, mount_base=self.mount(x)), np.asarray(x[:12], dtype=float)
 
 
-def force_step_cost(rotations: np.ndarray, forces: np.ndarray, mode: str = "none") -> tuple[float, np.ndarray]:
+def force_step_cost(
+    rotations: np.ndarray, forces: np.ndarray, mode: str = "none"
+) -> tuple[float, np.ndarray]:
     """Smallest force residual sum of squares [N²] of the paper's force step, and the mount it took.
 
     ``mode="none"``: the mount is the identity; otherwise the best yaw of
@@ -193,7 +212,8 @@ def force_step_cost(rotations: np.ndarray, forces: np.ndarray, mode: str = "none
 
 
 def mount_start(poses: PoseAverages, g: float):
-    """Starting mount ``R_M0`` (a yaw from :data:`YAW_START_GRID`) and the two-step linear fit there.
+    """Starting mount ``R_M0`` (a yaw from :data:`YAW_START_GRID`) and the two-step linear fit
+    there.
 
     The yaw is the one of :func:`force_step_cost`; the full two-step fit (with
     its observability checks) then runs at that yaw.
@@ -220,17 +240,24 @@ def check_mount_observable(problem: MountedProblem, x: np.ndarray) -> None:
     names = COMPONENT_NAMES + MOUNT_NAMES[problem.mode]
     weakest = np.abs(vt[-1]) / np.abs(vt[-1]).max()
     involved = [names[i] for i in np.flatnonzero(weakest > 0.3)]
-    mount_involved = [name for name in involved if name.startswith("mount")] or list(MOUNT_NAMES[problem.mode])
+    mount_involved = [name for name in involved if name.startswith("mount")] or list(
+        MOUNT_NAMES[problem.mode]
+    )
     others = [name for name in involved if not name.startswith("mount")]
     raise UnobservableParameters(
         mount_involved,
-        f"{POSES_NEEDED[problem.mode]} (smallest relative singular value {relative[-1]:.1e}, need at least "
-        f"{MIN_RELATIVE_SINGULAR_VALUE:.0e}" + (f"; traded against {', '.join(others)}" if others else "") + ")",
+        f"{POSES_NEEDED[problem.mode]} (smallest relative singular value {relative[-1]:.1e}, need "
+        "at least "
+        f"{MIN_RELATIVE_SINGULAR_VALUE:.0e}"
+        + (f"; traded against {', '.join(others)}" if others else "")
+        + ")",
         singular_values=relative,
     )
 
 
-def mount_jacobian(rotations: np.ndarray, gravity_in_base, center_of_mass, mode: str, mount=None) -> np.ndarray:
+def mount_jacobian(
+    rotations: np.ndarray, gravity_in_base, center_of_mass, mode: str, mount=None
+) -> np.ndarray:
     """``(N, 6, 12 + k)`` derivative of the prediction with respect to ``[θ, δ]`` at ``δ = 0``.
 
     ``rotations`` are the URDF's ``R_BS``; ``mount`` is ``R_M`` (default the
@@ -247,7 +274,9 @@ def mount_jacobian(rotations: np.ndarray, gravity_in_base, center_of_mass, mode:
 
 
 def check_information_observable(information: np.ndarray, mode: str, rcond: float = 1e-10) -> None:
-    """Refuse a singular ``(12 + k)`` information matrix, naming the weak parameters (and the poses a mount needs)."""
+    """Refuse a singular ``(12 + k)`` information matrix, naming the weak parameters (and the poses
+    a mount needs).
+    """
     names = COMPONENT_NAMES + MOUNT_NAMES[mode]
     scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
     eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
@@ -255,12 +284,17 @@ def check_information_observable(information: np.ndarray, mode: str, rcond: floa
         return
     involved = [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)]
     mount_names = [name for name in involved if name.startswith("mount")]
-    reason = POSES_NEEDED[mode] if mount_names else "the information matrix is singular along a combination of them"
+    reason = (
+        POSES_NEEDED[mode]
+        if mount_names
+        else "the information matrix is singular along a combination of them"
+    )
     raise UnobservableParameters(involved, reason, singular_values=eigenvalues[::-1])
 
 
 def split_information(information: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Split a ``(12 + k)`` information matrix into θ's marginal information and the mount covariance.
+    """Split a ``(12 + k)`` information matrix into θ's marginal information and the mount
+    covariance.
 
     Returns the Schur complement ``I_θθ − I_θm I_mm⁻¹ I_mθ`` (12, 12), whose
     inverse is θ's covariance with the mount estimated, and the ``(k, k)``

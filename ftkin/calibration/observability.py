@@ -24,7 +24,14 @@ MIN_RELATIVE_SINGULAR_VALUE = 1e-3
 """Smallest accepted singular value of a normalized regressor, relative to the
 largest (about the smallest angle, in radians, by which the poses must differ)."""
 
-FORCE_STEP_NAMES = ("gravity_in_base", "gravity_in_base", "gravity_in_base", "force_offset", "force_offset", "force_offset")
+FORCE_STEP_NAMES = (
+    "gravity_in_base",
+    "gravity_in_base",
+    "gravity_in_base",
+    "force_offset",
+    "force_offset",
+    "force_offset",
+)
 TORQUE_STEP_NAMES = ("center_of_mass",) * 3 + ("torque_offset",) * 3
 
 
@@ -91,12 +98,14 @@ def check_gravity_directions(rotations: np.ndarray, gravity_in_base: np.ndarray)
     weight = np.linalg.norm(gravity_in_base)
     if weight == 0.0:
         raise UnobservableParameters(
-            ["center_of_mass"], "the estimated tool weight is zero, so its centre of mass has no effect"
+            ["center_of_mass"],
+            "the estimated tool weight is zero, so its centre of mass has no effect",
         )
     directions = np.transpose(rotations, (0, 2, 1)) @ (gravity_in_base / weight)
     _check_rank(
         torque_regressor(directions),
         TORQUE_STEP_NAMES,
         "gravity is seen along one sensor direction only (poses differ only by rotation about "
-        "the gravity axis); use at least three poses with gravity along different sensor directions",
+        "the gravity axis); use at least three poses with "
+        "gravity along different sensor directions",
     )

@@ -42,7 +42,9 @@ class WalkGains:
 
 
 def walk_gains(times: np.ndarray, noise_variance: np.ndarray, rate: np.ndarray) -> WalkGains:
-    """Gains for poses at ascending ``times`` ``(P,)`` [s], ``noise_variance`` ``(P, 6)``, ``rate`` ``(6,)``."""
+    """Gains for poses at ascending ``times`` ``(P,)`` [s], ``noise_variance`` ``(P, 6)``, ``rate``
+    ``(6,)``.
+    """
     count = len(times)
     steps = np.diff(times)
     predicted, filtered = np.empty((count, 6)), np.empty((count, 6))
@@ -59,7 +61,8 @@ def walk_gains(times: np.ndarray, noise_variance: np.ndarray, rate: np.ndarray) 
 
 
 def whiten(gains: WalkGains, columns: np.ndarray) -> np.ndarray:
-    """Innovations ``ν_i / √S_i`` of ``columns`` ``(..., P, 6, m)`` (the filter is linear: one pass for all columns).
+    """Innovations ``ν_i / √S_i`` of ``columns`` ``(..., P, 6, m)`` (the filter is linear: one pass
+    for all columns).
 
     Leading axes are independent sets of columns (e.g. candidate pose orders), whitened together.
     """
@@ -77,11 +80,18 @@ def whiten(gains: WalkGains, columns: np.ndarray) -> np.ndarray:
 
 def log_likelihood(gains: WalkGains, whitened_residuals: np.ndarray) -> float:
     """Gaussian log-likelihood of the readings from their whitened innovations ``(P, 6)``."""
-    return float(-0.5 * (np.sum(whitened_residuals**2) + np.sum(np.log(2.0 * np.pi * gains.innovation_variance))))
+    return float(
+        -0.5
+        * (np.sum(whitened_residuals**2) + np.sum(np.log(2.0 * np.pi * gains.innovation_variance)))
+    )
 
 
-def smooth(gains: WalkGains, times: np.ndarray, residuals: np.ndarray, rate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """RTS-smoothed walk ``w(t_i)`` ``(P, 6)`` and its variance, from ``residuals = y − f(θ)`` ``(P, 6)``."""
+def smooth(
+    gains: WalkGains, times: np.ndarray, residuals: np.ndarray, rate: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """RTS-smoothed walk ``w(t_i)`` ``(P, 6)`` and its variance, from ``residuals = y − f(θ)`` ``(P,
+    6)``.
+    """
     count = len(times)
     filtered = np.empty((count, 6))
     state = np.zeros(6)
@@ -94,8 +104,9 @@ def smooth(gains: WalkGains, times: np.ndarray, residuals: np.ndarray, rate: np.
         # the filter moved from pose i to pose i-1; smooth pose i from pose i-1
         predicted_variance = gains.filtered_variance[i] + rate**2 * steps[i - 1]
         with np.errstate(invalid="ignore", divide="ignore"):
-            gain = np.where(predicted_variance > 0.0, gains.filtered_variance[i] / predicted_variance, 0.0)
+            gain = np.where(
+                predicted_variance > 0.0, gains.filtered_variance[i] / predicted_variance, 0.0
+            )
         mean[i] = filtered[i] + gain * (mean[i - 1] - filtered[i])
         variance[i] = gains.filtered_variance[i] + gain**2 * (variance[i - 1] - predicted_variance)
     return mean, np.clip(variance, 0.0, None)
-

@@ -61,12 +61,18 @@ def body_regressor(velocity, acceleration) -> np.ndarray:
 
 
 def point_mass_parameters(model) -> np.ndarray:
-    """θ (10,) of a point-mass tool ``[m, m·c, 0…]`` [kg, kg·m, kg·m²] from a model's mass and centre of mass (sensor frame)."""
-    return np.concatenate([[model.tool_mass], model.tool_mass * np.asarray(model.center_of_mass), np.zeros(6)])
+    """θ (10,) of a point-mass tool ``[m, m·c, 0…]`` [kg, kg·m, kg·m²] from a model's mass and
+    centre of mass (sensor frame).
+    """
+    return np.concatenate(
+        [[model.tool_mass], model.tool_mass * np.asarray(model.center_of_mass), np.zeros(6)]
+    )
 
 
 def gravity_regressor(upward_gravity_in_sensor) -> np.ndarray:
-    """``(N, 6, 10)`` regressor of the weight alone: :func:`body_regressor` at rest with ``a_lin = g_S``."""
+    """``(N, 6, 10)`` regressor of the weight alone: :func:`body_regressor` at rest with ``a_lin =
+    g_S``.
+    """
     gravity, _ = as_batch(upward_gravity_in_sensor, 3, "upward gravity in sensor")
     out = np.zeros((len(gravity), 6, 10))
     out[:, :3, 0] = gravity
@@ -82,7 +88,8 @@ class MotionSamples:
         wrenches: ``(N, 6)`` raw readings, sensor frame [N, N·m].
         rotations: ``(N, 3, 3)`` ``R_BS`` (sensor → base).
         velocities: ``(N, 6)`` sensor-frame spatial velocity ``[v, ω]`` in sensor axes [m/s, rad/s].
-        accelerations: ``(N, 6)`` spatial acceleration ``[a, ω̇]`` in sensor axes, gravity excluded [m/s², rad/s²].
+        accelerations: ``(N, 6)`` spatial acceleration ``[a, ω̇]`` in sensor axes, gravity excluded
+        [m/s², rad/s²].
         times: ``(N,)`` stamps [s], or None.
         urdf, sensor_frame: Provenance when built from joint angles.
     """
@@ -103,10 +110,17 @@ class MotionSamples:
         count = len(wrenches)
         if not (len(rotations) == len(velocities) == len(accelerations) == count):
             raise InvalidInput(
-                f"motion samples need one rotation, velocity and acceleration per wrench: got {count} wrenches, "
-                f"{len(rotations)} rotations, {len(velocities)} velocities, {len(accelerations)} accelerations"
+                "motion samples need one rotation, velocity and acceleration per wrench: got "
+                f"{count} wrenches, "
+                f"{len(rotations)} rotations, {len(velocities)} velocities, {len(accelerations)} "
+                "accelerations"
             )
-        for name, value in (("wrenches", wrenches), ("rotations", rotations), ("velocities", velocities), ("accelerations", accelerations)):
+        for name, value in (
+            ("wrenches", wrenches),
+            ("rotations", rotations),
+            ("velocities", velocities),
+            ("accelerations", accelerations),
+        ):
             value = np.array(value)
             value.setflags(write=False)
             object.__setattr__(self, name, value)
@@ -123,16 +137,31 @@ class MotionSamples:
     def from_static(cls, samples: Samples) -> MotionSamples:
         """Static readings as a motion at rest (velocity and acceleration zero)."""
         zeros = np.zeros((len(samples), 6))
-        return cls(samples.wrenches, samples.rotations, zeros, zeros, None, samples.urdf, samples.sensor_frame)
+        return cls(
+            samples.wrenches,
+            samples.rotations,
+            zeros,
+            zeros,
+            None,
+            samples.urdf,
+            samples.sensor_frame,
+        )
 
     @classmethod
-    def from_joint_trajectory(cls, arm, joint_positions, joint_velocities, joint_accelerations, wrenches, times=None) -> MotionSamples:
-        """Forward kinematics (Pinocchio) of ``q, dq, ddq`` ``(N, nq)`` [rad, rad/s, rad/s²] at the arm's sensor frame."""
+    def from_joint_trajectory(
+        cls, arm, joint_positions, joint_velocities, joint_accelerations, wrenches, times=None
+    ) -> MotionSamples:
+        """Forward kinematics (Pinocchio) of ``q, dq, ddq`` ``(N, nq)`` [rad, rad/s, rad/s²] at the
+        arm's sensor frame.
+        """
         q, _ = as_batch(joint_positions, arm.nq, "joint positions q")
         dq, _ = as_batch(joint_velocities, arm.nq, "joint velocities dq")
         ddq, _ = as_batch(joint_accelerations, arm.nq, "joint accelerations ddq")
         if not (len(q) == len(dq) == len(ddq)):
-            raise InvalidInput(f"q, dq and ddq must have the same number of rows, got {len(q)}, {len(dq)}, {len(ddq)}")
+            raise InvalidInput(
+                f"q, dq and ddq must have the same number of rows, got {len(q)}, {len(dq)}, "
+                f"{len(ddq)}"
+            )
         rotations, velocities, accelerations = sensor_motion(arm, q, dq, ddq)
         urdf = str(arm.urdf_path) if arm.urdf_path is not None else None
         return cls(wrenches, rotations, velocities, accelerations, times, urdf, arm.sensor_frame)
@@ -143,7 +172,9 @@ class MotionSamples:
 
 
 def sensor_motion(arm, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray):
-    """``R_BS`` ``(N, 3, 3)``, LOCAL velocity and acceleration ``(N, 6)`` of the sensor frame for validated arrays."""
+    """``R_BS`` ``(N, 3, 3)``, LOCAL velocity and acceleration ``(N, 6)`` of the sensor frame for
+    validated arrays.
+    """
     model, data, frame = arm.model, arm.model.createData(), arm.sensor_frame_id
     count = len(q)
     rotations = np.empty((count, 3, 3))

@@ -86,8 +86,15 @@ class CalibrationResult(SensorModel):
     def __post_init__(self):
         super().__post_init__()
         rotation = np.array(self.mount_rotation, dtype=float)
-        if rotation.shape != (3, 3) or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) or np.linalg.det(rotation) <= 0:
-            raise InvalidInput(f"mount_rotation must be a (3, 3) rotation matrix (orthonormal, det = +1), got {rotation.tolist()}")
+        if (
+            rotation.shape != (3, 3)
+            or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6)
+            or np.linalg.det(rotation) <= 0
+        ):
+            raise InvalidInput(
+                "mount_rotation must be a (3, 3) rotation matrix (orthonormal, det = +1), got "
+                f"{rotation.tolist()}"
+            )
         rotation.setflags(write=False)
         object.__setattr__(self, "mount_rotation", rotation)
         object.__setattr__(self, "mount_mode", check_mount_mode(self.mount_mode))
@@ -106,7 +113,9 @@ class CalibrationResult(SensorModel):
 
     @property
     def mount_std_deg(self) -> dict[str, float]:
-        """Standard errors [deg] of the estimated mount angles by name (empty without a mount estimate)."""
+        """Standard errors [deg] of the estimated mount angles by name (empty without a mount
+        estimate).
+        """
         if self.mount_covariance is None:
             return {}
         sigma = np.rad2deg(np.sqrt(np.clip(np.diag(self.mount_covariance), 0.0, None)))
@@ -114,8 +123,11 @@ class CalibrationResult(SensorModel):
 
     @property
     def reading_signs(self) -> np.ndarray:
-        """``(6,)`` factors ``±1`` applied to every raw reading (``sensor_sign`` and ``flip_axis``)."""
+        """``(6,)`` factors ``±1`` applied to every raw reading (``sensor_sign`` and
+        ``flip_axis``).
+        """
         return reading_signs(self.sensor_sign, self.flip_axis)
+
     drift: BiasDrift | None = None
     kinematics: KinematicsRecord | None = None
 
@@ -127,7 +139,9 @@ class CalibrationResult(SensorModel):
     @property
     def model(self) -> SensorModel:
         """The bare parameters, without provenance."""
-        return SensorModel(self.force_offset, self.torque_offset, self.gravity_in_base, self.center_of_mass, self.g)
+        return SensorModel(
+            self.force_offset, self.torque_offset, self.gravity_in_base, self.center_of_mass, self.g
+        )
 
     @property
     def residual_rms(self) -> np.ndarray:
@@ -138,13 +152,17 @@ class CalibrationResult(SensorModel):
 
     @property
     def mean_relative_error(self) -> np.ndarray:
-        """``(6,)`` mean over poses of ``|residual| / |measured|`` per channel (the paper's Table 3) [-]."""
+        """``(6,)`` mean over poses of ``|residual| / |measured|`` per channel (the paper's Table 3)
+        [-].
+        """
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.mean(np.abs(self.residuals) / np.abs(self.pose_wrenches), axis=0)
 
     @property
     def std_errors(self) -> dict | None:
-        """Standard errors per parameter (see :func:`ftkin.calibration.information.standard_errors`), or None."""
+        """Standard errors per parameter (see
+        :func:`ftkin.calibration.information.standard_errors`), or None.
+        """
         if self.covariance is None:
             return None
         return standard_errors(self, self.covariance)
@@ -166,7 +184,9 @@ class CalibrationResult(SensorModel):
         return self.bias.copy() if times.ndim == 0 else np.tile(self.bias, (times.size, 1))
 
     def with_bias(self, bias) -> CalibrationResult:
-        """A copy with the sensor bias ``[F0, M0]`` [N, N·m] replaced (after a re-zero); the rest is kept."""
+        """A copy with the sensor bias ``[F0, M0]`` [N, N·m] replaced (after a re-zero); the rest is
+        kept.
+        """
         bias = as_vector(bias, 6, "bias [F0, M0]")
         return replace(self, force_offset=bias[:3], torque_offset=bias[3:])
 

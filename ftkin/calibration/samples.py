@@ -4,7 +4,8 @@ A :class:`Samples` holds ``N`` raw readings ``[fx, fy, fz, mx, my, mz]`` [N, N·
 in the sensor frame, the sensor orientation ``R_BS`` of each (canonical
 ``(N, 3, 3)`` form), and an optional pose id grouping repeated readings of one
 static pose, and optional reading times ``t`` [s] (needed to model a
-bias that drifts, :mod:`ftkin.calibration.drift`). Build it from whichever orientation input you have: joint angles
+bias that drifts, :mod:`ftkin.calibration.drift`). Build it from whichever orientation input you
+have: joint angles
 through an :class:`~ftkin.kinematics.arm.Arm`, rotation matrices, quaternions, or the
 paper's commanded Euler angles.
 """
@@ -32,27 +33,39 @@ _UNITS = (("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9))
 
 
 def _likely_unit(span: float, smallest: float, largest: float) -> tuple[str | None, float]:
-    """The unit that makes reading times plausible: the one in which every |time| is an epoch stamp (seconds since
-    1970 in 2001–2286), else the unit bringing the span nearest ten minutes (in decades) within a week."""
+    """The unit that makes reading times plausible: the one in which every |time| is an epoch stamp
+    (seconds since
+    1970 in 2001–2286), else the unit bringing the span nearest ten minutes (in decades) within a
+    week.
+    """
     for name, factor in _UNITS:
         if 1e9 <= smallest / factor and largest / factor < 1e10:
             return name, factor
-    candidates = [(abs(np.log10(span / factor / 600.0)), name, factor) for name, factor in _UNITS
-                  if span / factor <= LONG_TIME_SPAN]
+    candidates = [
+        (abs(np.log10(span / factor / 600.0)), name, factor)
+        for name, factor in _UNITS
+        if span / factor <= LONG_TIME_SPAN
+    ]
     return (min(candidates)[1:]) if candidates else (None, 1.0)
 
 
 def check_time_span(times: np.ndarray) -> None:
-    """Refuse reading times spanning more than a year, warn beyond a week: ``t`` is in seconds, not ms, µs or ns."""
+    """Refuse reading times spanning more than a year, warn beyond a week: ``t`` is in seconds, not
+    ms, µs or ns.
+    """
     span = float(np.max(times) - np.min(times)) if len(times) else 0.0
     if span <= LONG_TIME_SPAN:
         return
     name, factor = _likely_unit(span, float(np.min(np.abs(times))), float(np.max(np.abs(times))))
     hint = f"; they look like {name} (divide by {factor:g}: {span / factor:.4g} s)" if name else ""
-    message = f"the reading times span {span:.4g} s ({span / 86400.0:.4g} days): t must be in seconds{hint}"
+    message = (
+        f"the reading times span {span:.4g} s ({span / 86400.0:.4g} days): t must be in "
+        f"seconds{hint}"
+    )
     if span > LONGEST_TIME_SPAN:
         raise InvalidSamples(message)
     logger.warning(message)
+
 
 MAX_POSE_SPREAD = np.deg2rad(2.0)
 """Largest accepted angle [rad] between a reading's orientation and its pose's mean."""
@@ -113,7 +126,9 @@ class Samples:
         wrenches, _ = as_batch(self.wrenches, 6, "wrenches [fx, fy, fz, mx, my, mz]")
         rotations, _ = as_rotation_batch(self.rotations)
         if len(rotations) != len(wrenches):
-            raise InvalidSamples(f"{len(wrenches)} wrenches but {len(rotations)} orientations; expected one each")
+            raise InvalidSamples(
+                f"{len(wrenches)} wrenches but {len(rotations)} orientations; expected one each"
+            )
         if len(wrenches) == 0:
             raise InvalidSamples("no samples")
         pose_ids = self.pose_ids
@@ -121,7 +136,9 @@ class Samples:
             pose_ids = np.arange(len(wrenches))
         pose_ids = np.asarray(pose_ids)
         if pose_ids.shape != (len(wrenches),):
-            raise InvalidSamples(f"pose_ids must have shape ({len(wrenches)},), got {pose_ids.shape}")
+            raise InvalidSamples(
+                f"pose_ids must have shape ({len(wrenches)},), got {pose_ids.shape}"
+            )
         if not np.issubdtype(pose_ids.dtype, np.integer):
             as_float = as_float_array(pose_ids, "pose_ids")
             if not np.all(np.isfinite(as_float)) or np.any(as_float != np.round(as_float)):
@@ -131,16 +148,27 @@ class Samples:
         if times is not None:
             times = as_float_array(times, "times [s]").copy()
             if times.shape != (len(wrenches),):
-                raise InvalidSamples(f"times must have shape ({len(wrenches)},) (one per reading) [s], got {times.shape}")
+                raise InvalidSamples(
+                    f"times must have shape ({len(wrenches)},) (one per reading) [s], got "
+                    f"{times.shape}"
+                )
             if not np.all(np.isfinite(times)):
-                raise InvalidSamples(f"times must be finite [s]; reading {int(np.argmin(np.isfinite(times)))} is not")
+                raise InvalidSamples(
+                    f"times must be finite [s]; reading {int(np.argmin(np.isfinite(times)))} is not"
+                )
             check_time_span(times)
             times.setflags(write=False)
             object.__setattr__(self, "times", times)
-        # Frozen copies: freezing the caller's own arrays (or sharing them) would change them behind their back.
-        wrenches, rotations, pose_ids = (array if array.base is None and array is not given else array.copy()
-                                         for array, given in ((wrenches, self.wrenches), (rotations, self.rotations),
-                                                              (pose_ids, self.pose_ids)))
+        # Frozen copies: freezing the caller's own arrays (or sharing them) would change them behind
+        # their back.
+        wrenches, rotations, pose_ids = (
+            array if array.base is None and array is not given else array.copy()
+            for array, given in (
+                (wrenches, self.wrenches),
+                (rotations, self.rotations),
+                (pose_ids, self.pose_ids),
+            )
+        )
         for array in (wrenches, rotations, pose_ids):
             array.setflags(write=False)
         object.__setattr__(self, "wrenches", wrenches)
@@ -152,12 +180,16 @@ class Samples:
 
     # ---------------------------------------------------------- constructors
     @classmethod
-    def from_rotations(cls, rotation_sensor_to_base, wrenches, pose_ids=None, times=None) -> Samples:
+    def from_rotations(
+        cls, rotation_sensor_to_base, wrenches, pose_ids=None, times=None
+    ) -> Samples:
         """From ``(N, 3, 3)`` sensor orientations ``R_BS`` (and optional times ``(N,)`` [s])."""
         return cls(wrenches, rotation_sensor_to_base, pose_ids, times=times)
 
     @classmethod
-    def from_joint_positions(cls, arm, joint_positions, wrenches, pose_ids=None, rotations=None, times=None) -> Samples:
+    def from_joint_positions(
+        cls, arm, joint_positions, wrenches, pose_ids=None, rotations=None, times=None
+    ) -> Samples:
         """From ``(N, nq)`` joint angles [rad] through the arm's forward kinematics.
 
         ``rotations``: their ``R_BS`` ``(N, 3, 3)`` when the caller computed them
@@ -177,7 +209,9 @@ class Samples:
 
     @classmethod
     def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None, times=None) -> Samples:
-        """From the paper's commanded ``(N, 3)`` Euler angles ``[α, β, γ]`` [deg], ``R = Rz Ry Rx``."""
+        """From the paper's commanded ``(N, 3)`` Euler angles ``[α, β, γ]`` [deg], ``R = Rz Ry
+        Rx``.
+        """
         rotations = euler_zyx_deg_to_matrix(angles_deg)
         return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids, times=times)
 
@@ -215,7 +249,8 @@ class Samples:
         if deviation[worst] > MAX_POSE_SPREAD:
             raise InvalidSamples(
                 f"the readings of pose {self.pose_ids[worst]} differ in orientation by up to "
-                f"{np.rad2deg(deviation[worst]):.2f}° (more than {np.rad2deg(MAX_POSE_SPREAD):.0f}°): a pose id must "
+                f"{np.rad2deg(deviation[worst]):.2f}° (more than "
+                f"{np.rad2deg(MAX_POSE_SPREAD):.0f}°): a pose id must "
                 "group readings of one static pose; check the pose column"
             )
         pose_times = None
@@ -227,7 +262,8 @@ class Samples:
 
 
 def check_one_visit_per_pose(samples: Samples) -> None:
-    """Refuse a pose id whose readings come in separate visits (another pose recorded in between), for a drift model.
+    """Refuse a pose id whose readings come in separate visits (another pose recorded in between),
+    for a drift model.
 
     A drift model gives each pose one time (the mean of its readings); a pose
     revisited minutes later under the same id would average two biases at a
@@ -247,6 +283,8 @@ def check_one_visit_per_pose(samples: Samples) -> None:
     spans = [f"{times[a]:g}–{times[b]:g} s" for a, b, i in zip(starts, ends, run_ids) if i == pose]
     raise InvalidSamples(
         f"pose {int(pose)} was recorded in {len(spans)} separate visits ({', '.join(spans[:4])}"
-        f"{', ...' if len(spans) > 4 else ''}; {int(np.sum(counts > 1))} pose id(s) revisited): a drift model needs one "
-        "time per pose; give each visit its own pose id, or calibrate with drift='none' (--drift none)"
+        f"{', ...' if len(spans) > 4 else ''}; {int(np.sum(counts > 1))} pose id(s) revisited): a "
+        "drift model needs one "
+        "time per pose; give each visit its own pose id, or calibrate with drift='none' (--drift "
+        "none)"
     )

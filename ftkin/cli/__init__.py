@@ -48,7 +48,9 @@ def check_outputs(args: argparse.Namespace) -> None:
     """
     from ..io.atomic import check_output_path
 
-    inputs = [getattr(args, name) for name in INPUT_OPTIONS if isinstance(getattr(args, name, None), str)]
+    inputs = [
+        getattr(args, name) for name in INPUT_OPTIONS if isinstance(getattr(args, name, None), str)
+    ]
     for name in INPUT_OPTIONS:
         value = getattr(args, name, None)
         if isinstance(value, str) and not value.strip():
@@ -61,7 +63,9 @@ def check_outputs(args: argparse.Namespace) -> None:
         check_output_path(value, inputs, flag)
         key = os.path.realpath(value)
         if key in seen:
-            raise InvalidInput(f"{seen[key]} and {flag} both name {value}; give each output its own file")
+            raise InvalidInput(
+                f"{seen[key]} and {flag} both name {value}; give each output its own file"
+            )
         seen[key] = flag
 
 
@@ -95,7 +99,9 @@ def main(argv=None) -> int:
     ``-o`` file is written).
     """
     arguments = sys.argv[1:] if argv is None else list(argv)
-    if "--version" in arguments and all(argument in ("--version", "-v", "--verbose") for argument in arguments):
+    if "--version" in arguments and all(
+        argument in ("--version", "-v", "--verbose") for argument in arguments
+    ):
         # Answered before the subcommands (and the library behind them) are imported.
         from .._version import __version__
 
@@ -103,10 +109,14 @@ def main(argv=None) -> int:
         return 0
     stdout = sys.stdout
     sys.stdout = _QuietPipe(stdout)
-    once: dict[logging.Handler, _OnceFilter] = {}  # one filter per handler: each handler sees each record once
+    once: dict[
+        logging.Handler, _OnceFilter
+    ] = {}  # one filter per handler: each handler sees each record once
     fit_log = logging.getLogger("ftkin.calibration.fit_quality")
     fit_log_disabled = fit_log.disabled
-    fit_log.disabled = True  # every command that fits prints the summary, which lists these warnings
+    fit_log.disabled = (
+        True  # every command that fits prints the summary, which lists these warnings
+    )
     try:
         return _run(argv, once)
     finally:
@@ -171,7 +181,9 @@ def _run(argv, once: dict) -> int:
             args = parser.parse_args(arguments)
         except SystemExit as exit_:  # usage errors and --help: an exit code, as every other outcome
             return exit_.code if isinstance(exit_.code, int) else 2
-        logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="ftkin: %(message)s")
+        logging.basicConfig(
+            level=logging.INFO if args.verbose else logging.WARNING, format="ftkin: %(message)s"
+        )
         for handler in logging.getLogger().handlers:
             once[handler] = _OnceFilter()
             handler.addFilter(once[handler])
@@ -208,9 +220,13 @@ def _unexpected(error: Exception) -> int:
         RecursionError: "the input is nested too deeply",
         OverflowError: "a number in the input is too large",
         MemoryError: "the input is too large for the memory available",
-        np.linalg.LinAlgError: "the numbers are too extreme for the linear algebra (a matrix became singular)",
+        np.linalg.LinAlgError: "the numbers are too extreme for the linear algebra (a matrix "
+        "became singular)",
     }
-    reason = next((text for kind, text in kinds.items() if isinstance(error, kind)), "unexpected internal error")
+    reason = next(
+        (text for kind, text in kinds.items() if isinstance(error, kind)),
+        "unexpected internal error",
+    )
     logging.getLogger("ftkin.cli").info("details", exc_info=error)
     _say(f"ftkin: error: {reason} ({type(error).__name__}: {str(error)[:200]})")
     return 2 if reason != "unexpected internal error" else 3

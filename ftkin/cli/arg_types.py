@@ -1,4 +1,5 @@
-"""argparse value types: numbers with their range and unit in the message, and the number-list options.
+"""argparse value types: numbers with their range and unit in the message, and the number-list
+options.
 
 Each converter raises :class:`argparse.ArgumentTypeError`, which the CLI reports as
 ``ftkin <command>: error: argument --x: ...`` (exit 2), never a traceback.
@@ -76,7 +77,9 @@ def whole_number(text: str, what: str = "") -> int:
     try:
         return int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number{' of ' + what if what else ''}, got {text!r}") from None
+        raise argparse.ArgumentTypeError(
+            f"expected a whole number{' of ' + what if what else ''}, got {text!r}"
+        ) from None
 
 
 def bounded_int(low: int, high: int, what: str):
@@ -105,8 +108,11 @@ def gravity(text: str) -> float:
     """argparse type: gravity [m/s²] between 1 and 30 (Earth: 9.81; the Moon 1.6, Jupiter 24.8)."""
     value = _number(text, lambda v: v > 0, "a finite positive number")
     if not GRAVITY_RANGE[0] <= value <= GRAVITY_RANGE[1]:
-        raise argparse.ArgumentTypeError("gravity must be between {:g} and {:g} m/s² (Earth: 9.80665), got {!r}".format(
-            *GRAVITY_RANGE, text))
+        raise argparse.ArgumentTypeError(
+            "gravity must be between {:g} and {:g} m/s² (Earth: 9.80665), got {!r}".format(
+                *GRAVITY_RANGE, text
+            )
+        )
     return value
 
 

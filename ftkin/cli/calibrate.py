@@ -25,72 +25,128 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "calibrate",
         help="estimate sensor bias, tool weight, centre of mass and base tilt",
-        description="Calibrate from a samples CSV: wrench columns fx,fy,fz,mx,my,mz [N, N·m] and the "
+        description="Calibrate from a samples CSV: wrench columns fx,fy,fz,mx,my,mz [N, N·m] and "
+        "the "
         "orientation as joint columns (URDF names or q1..qn, rad), alpha,beta,gamma (deg, "
         "R = Rz Ry Rx) or qw,qx,qy,qz; optional integer 'pose' column groups repeated readings "
-        "(their spread then gives the noise levels of the ml fit); optional 't' column [s] (bags: the stamps) "
+        "(their spread then gives the noise levels of the ml fit); optional 't' column [s] (bags: "
+        "the stamps) "
         "lets the bias drift with time (--drift).",
     )
     parser.add_argument("samples", metavar="SAMPLES.csv")
-    parser.add_argument("-o", "--output", metavar="CALIB.json", help="write the calibration file here")
     parser.add_argument(
-        "--method", choices=METHODS, default=METHODS[0],
+        "-o", "--output", metavar="CALIB.json", help="write the calibration file here"
+    )
+    parser.add_argument(
+        "--method",
+        choices=METHODS,
+        default=METHODS[0],
         help="ml: joint maximum-likelihood fit with standard errors; linear: the paper's two-step "
         "least squares (default: %(default)s)",
     )
-    parser.add_argument("--g", type=gravity, default=STANDARD_GRAVITY, help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)")
+    parser.add_argument(
+        "--g",
+        type=gravity,
+        default=STANDARD_GRAVITY,
+        help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)",
+    )
     ml = parser.add_argument_group("ml estimator")
     ml.add_argument(
-        "--noise-force", type=positive_float, metavar="N",
-        help="noise std of one force reading [N] (with --noise-torque; default: estimated from the spread "
+        "--noise-force",
+        type=positive_float,
+        metavar="N",
+        help="noise std of one force reading [N] (with --noise-torque; default: estimated from the "
+        "spread "
         "of repeated readings per pose, else from the residuals)",
     )
-    ml.add_argument("--noise-torque", type=positive_float, metavar="N·m", help="noise std of one torque reading [N·m]")
     ml.add_argument(
-        "--loss", choices=LOSSES, default="linear",
+        "--noise-torque",
+        type=positive_float,
+        metavar="N·m",
+        help="noise std of one torque reading [N·m]",
+    )
+    ml.add_argument(
+        "--loss",
+        choices=LOSSES,
+        default="linear",
         help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
     )
-    ml.add_argument("--drop-outliers", action="store_true", help="refit without the poses flagged as outliers")
     ml.add_argument(
-        "--drift", default="auto", metavar="MODEL",
-        help=f"bias drift over time, with a 't' column: {'|'.join(DRIFT_CHOICES)} (poly:N a polynomial of degree N; "
+        "--drop-outliers", action="store_true", help="refit without the poses flagged as outliers"
+    )
+    ml.add_argument(
+        "--drift",
+        default="auto",
+        metavar="MODEL",
+        help=f"bias drift over time, with a 't' column: {'|'.join(DRIFT_CHOICES)} (poly:N a "
+        "polynomial of degree N; "
         "random-walk estimates the rate; auto picks by BIC and says which; default: %(default)s)",
     )
     ml.add_argument(
-        "--cross-validate", type=bounded_int(2, 50, "folds"), metavar="K", default=None,
-        help="also print the K-fold cross-validated compensation error at held-out poses, with drift none beside "
+        "--cross-validate",
+        type=bounded_int(2, 50, "folds"),
+        metavar="K",
+        default=None,
+        help="also print the K-fold cross-validated compensation error at held-out poses, with "
+        "drift none beside "
         "the --drift model (does modelling a drift pay on this sensor?)",
     )
     ml.add_argument(
-        "--estimate-mount", choices=MOUNT_MODES[1:], metavar="yaw|full",
-        help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or full (any rotation); "
+        "--estimate-mount",
+        choices=MOUNT_MODES[1:],
+        metavar="yaw|full",
+        help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or full "
+        "(any rotation); "
         "needs joint-angle samples (default: the URDF's sensor frame is right)",
     )
-    conventions = parser.add_argument_group("sensor and robot conventions (stored in the calibration file)")
-    conventions.add_argument(
-        "--sensor-sign", type=int, choices=(1, -1), default=1,
-        help="-1: the sensor reports the reaction, negate every reading (default: %(default)s, the load on the sensor)",
+    conventions = parser.add_argument_group(
+        "sensor and robot conventions (stored in the calibration file)"
     )
     conventions.add_argument(
-        "--flip-axis", choices=("x", "y", "z"),
-        help="negate this axis's force and torque channels in every reading (a mirrored, left-handed sensor axis)",
+        "--sensor-sign",
+        type=int,
+        choices=(1, -1),
+        default=1,
+        help="-1: the sensor reports the reaction, negate every reading (default: %(default)s, the "
+        "load on the sensor)",
     )
     conventions.add_argument(
-        "--base-mount", choices=BASE_MOUNTS, default="floor",
-        help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall (no check); a fitted "
-        "weight more than 90° off the expected direction is refused as a suspect sign (default: %(default)s)",
+        "--flip-axis",
+        choices=("x", "y", "z"),
+        help="negate this axis's force and torque channels in every reading (a mirrored, "
+        "left-handed sensor axis)",
     )
     conventions.add_argument(
-        "--expected-gravity", type=float, nargs=3, metavar=("GX", "GY", "GZ"),
+        "--base-mount",
+        choices=BASE_MOUNTS,
+        default="floor",
+        help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall (no "
+        "check); a fitted "
+        "weight more than 90° off the expected direction is refused as a suspect sign (default: "
+        "%(default)s)",
+    )
+    conventions.add_argument(
+        "--expected-gravity",
+        type=float,
+        nargs=3,
+        metavar=("GX", "GY", "GZ"),
         help="expected gravity direction in the base frame (overrides --base-mount)",
     )
-    dynamic = parser.add_argument_group("dynamic calibration (a moving recording: columns t, joints, fx..mz, or a bag)")
-    dynamic.add_argument("--dynamic", action="store_true",
-                         help="identify mass, centre of mass, inertia, bias and tilt from a moving recording")
-    dynamic.add_argument("--no-inertia", action="store_true", help="with --dynamic: fit the static parameters only")
+    dynamic = parser.add_argument_group(
+        "dynamic calibration (a moving recording: columns t, joints, fx..mz, or a bag)"
+    )
+    dynamic.add_argument(
+        "--dynamic",
+        action="store_true",
+        help="identify mass, centre of mass, inertia, bias and tilt from a moving recording",
+    )
+    dynamic.add_argument(
+        "--no-inertia", action="store_true", help="with --dynamic: fit the static parameters only"
+    )
     add_derivative_arguments(dynamic)
     parser.add_argument(
-        "--no-convention-check", action="store_true",
+        "--no-convention-check",
+        action="store_true",
         help="do not refit under the common convention mistakes (see 'ftkin doctor')",
     )
     add_samples_arguments(parser)
@@ -99,7 +155,9 @@ def register(subparsers) -> None:
 
 def _noise(args) -> SensorNoise | None:
     if (args.noise_force is None) != (args.noise_torque is None):
-        raise InvalidInput("give both --noise-force [N] and --noise-torque [N·m], or neither (then estimated)")
+        raise InvalidInput(
+            "give both --noise-force [N] and --noise-torque [N·m], or neither (then estimated)"
+        )
     if args.noise_force is None:
         return None
     return SensorNoise(args.noise_force, args.noise_torque)
@@ -118,10 +176,19 @@ def run(args) -> int:
     noise = _noise(args)
     if args.dynamic:
         if args.method != METHODS[0] or args.loss != "linear" or args.drop_outliers:
-            raise InvalidInput("--method, --loss and --drop-outliers apply to static calibration, not to --dynamic")
-        if args.estimate_mount or args.sensor_sign != 1 or args.flip_axis or args.drift != "auto" or args.cross_validate:
             raise InvalidInput(
-                "--estimate-mount, --sensor-sign, --flip-axis, --drift and --cross-validate apply to static calibration, "
+                "--method, --loss and --drop-outliers apply to static calibration, not to --dynamic"
+            )
+        if (
+            args.estimate_mount
+            or args.sensor_sign != 1
+            or args.flip_axis
+            or args.drift != "auto"
+            or args.cross_validate
+        ):
+            raise InvalidInput(
+                "--estimate-mount, --sensor-sign, --flip-axis, --drift and --cross-validate apply "
+                "to static calibration, "
                 "not yet to "
                 "--dynamic; "
                 "calibrate the mount and sign from static poses first"
@@ -129,24 +196,47 @@ def run(args) -> int:
         from ..kinematics.arm import Arm
 
         arm = arm_from_args(args) or Arm.default()
-        result = calibrate_motion(args, arm, noise)  # the file records its arm, as a static calibration does
+        result = calibrate_motion(
+            args, arm, noise
+        )  # the file records its arm, as a static calibration does
         return _report(replace(result, kinematics=KinematicsRecord.from_arm(arm)), args)
     if args.no_inertia or args.sg_window is not None:
         raise InvalidInput("--no-inertia and --sg-window apply to --dynamic only")
-    if args.method == "linear" and (noise is not None or args.loss != "linear" or args.drop_outliers):
-        raise InvalidInput("--noise-force/--noise-torque, --loss and --drop-outliers apply to --method ml only")
+    if args.method == "linear" and (
+        noise is not None or args.loss != "linear" or args.drop_outliers
+    ):
+        raise InvalidInput(
+            "--noise-force/--noise-torque, --loss and --drop-outliers apply to --method ml only"
+        )
     if args.method == "linear" and args.estimate_mount:
         raise InvalidInput("--estimate-mount applies to --method ml only")
     arm = arm_from_args(args)
     loaded = load_samples_from_args(args.samples, args, arm=arm)
-    stated = args.sensor_sign != 1 or args.flip_axis or args.base_mount != "floor" or args.expected_gravity or args.estimate_mount
+    stated = (
+        args.sensor_sign != 1
+        or args.flip_axis
+        or args.base_mount != "floor"
+        or args.expected_gravity
+        or args.estimate_mount
+    )
     if not (args.no_convention_check or stated):
-        # The doctor refits the readings as given, on a floor-mounted base with the URDF's sensor frame; with a
-        # stated sign, axis, base mount or an estimated mount calibrate() checks the conventions itself.
+        # The doctor refits the readings as given, on a floor-mounted base with the URDF's sensor
+        # frame; with a
+        # stated sign, axis, base mount or an estimated mount calibrate() checks the conventions
+        # itself.
         check_conventions(loaded, arm)
-    options = dict(method=args.method, g=args.g, noise=noise, loss=args.loss, drop_outliers=args.drop_outliers,
-                   estimate_mount=args.estimate_mount or "none", sensor_sign=args.sensor_sign, flip_axis=args.flip_axis,
-                   base_mount=args.base_mount, expected_gravity=args.expected_gravity)
+    options = dict(
+        method=args.method,
+        g=args.g,
+        noise=noise,
+        loss=args.loss,
+        drop_outliers=args.drop_outliers,
+        estimate_mount=args.estimate_mount or "none",
+        sensor_sign=args.sensor_sign,
+        flip_axis=args.flip_axis,
+        base_mount=args.base_mount,
+        expected_gravity=args.expected_gravity,
+    )
     result = calibrate(loaded.samples, drift=args.drift, **options)
     samples_arm = getattr(loaded.samples, "urdf", None) and (arm or _bundled_if_used(loaded))
     if samples_arm is not None:

@@ -9,7 +9,13 @@ from pathlib import Path
 from ..exceptions import FrameNotFound, InvalidInput
 from ..io.samples_csv import load_samples
 from ..kinematics.arm import Arm, bundled_urdf_path
-from ..kinematics.robots import DEFAULT_ROBOT, ROBOT_SPECS, ROBOTS, load_robot, sensor_mount_from_offset
+from ..kinematics.robots import (
+    DEFAULT_ROBOT,
+    ROBOT_SPECS,
+    ROBOTS,
+    load_robot,
+    sensor_mount_from_offset,
+)
 from .arg_types import non_negative_float, number_list, positive_float
 
 logger = logging.getLogger("ftkin.cli")
@@ -18,15 +24,29 @@ logger = logging.getLogger("ftkin.cli")
 def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
     """``--urdf``, ``--sensor-frame``, ``--tool-frame`` (default: the bundled arm)."""
     group = parser.add_argument_group("robot model (for joint-angle columns)")
-    group.add_argument("--robot", metavar="NAME", help=f"robot by name: {', '.join(ROBOTS)} (default: {DEFAULT_ROBOT}, the bundled arm)")
-    group.add_argument("--urdf", metavar="PATH", help="URDF of the arm (default: the bundled six-axis arm)")
-    group.add_argument("--sensor-frame", default="ft_sensor", metavar="NAME", help="sensor frame name (default: ft_sensor)")
-    group.add_argument("--tool-frame", default=None, metavar="NAME", help="tool / control-point frame name")
+    group.add_argument(
+        "--robot",
+        metavar="NAME",
+        help=f"robot by name: {', '.join(ROBOTS)} (default: {DEFAULT_ROBOT}, the bundled arm)",
+    )
+    group.add_argument(
+        "--urdf", metavar="PATH", help="URDF of the arm (default: the bundled six-axis arm)"
+    )
+    group.add_argument(
+        "--sensor-frame",
+        default="ft_sensor",
+        metavar="NAME",
+        help="sensor frame name (default: ft_sensor)",
+    )
+    group.add_argument(
+        "--tool-frame", default=None, metavar="NAME", help="tool / control-point frame name"
+    )
     group.add_argument(
         "--sensor-offset",
         type=number_list,
         metavar="X Y Z [R P Y]",
-        help="with --robot: sensor origin in the flange frame, X Y Z [m] and optionally ROLL PITCH YAW [rad] "
+        help="with --robot: sensor origin in the flange frame, X Y Z [m] and optionally ROLL PITCH "
+        "YAW [rad] "
         "(with --urdf and --sensor-parent: the same, relative to that frame)",
     )
     group.add_argument(
@@ -35,8 +55,12 @@ def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
         help="with --urdf: add the sensor frame at this existing frame (for URDFs without one)",
     )
     group.add_argument(
-        "--package-dir", action="append", default=[], metavar="DIR",
-        help="folder that package:// mesh URIs resolve against (collision checks, 3D view; repeatable)",
+        "--package-dir",
+        action="append",
+        default=[],
+        metavar="DIR",
+        help="folder that package:// mesh URIs resolve against (collision checks, 3D view; "
+        "repeatable)",
     )
 
 
@@ -50,7 +74,9 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     for option in ("urdf", "robot", "sensor_frame", "tool_frame", "sensor_parent"):
         value = getattr(args, option, None)
         if value is not None and not str(value).strip():
-            raise InvalidInput(f"--{option.replace('_', '-')} is empty; give a name or leave the option out")
+            raise InvalidInput(
+                f"--{option.replace('_', '-')} is empty; give a name or leave the option out"
+            )
     if getattr(args, "urdf", None) and getattr(args, "robot", None):
         raise InvalidInput("give either --urdf or --robot, not both")
     offset = getattr(args, "sensor_offset", None)
@@ -59,19 +85,33 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     tool_frame = getattr(args, "tool_frame", None)
     package_dirs = list(getattr(args, "package_dir", None) or [])
     if offset is not None and len(offset) not in (3, 6):
-        raise InvalidInput(f"--sensor-offset takes 3 numbers (X Y Z [m]) or 6 (and ROLL PITCH YAW [rad]), got {len(offset)}")
+        raise InvalidInput(
+            "--sensor-offset takes 3 numbers (X Y Z [m]) or 6 (and ROLL PITCH YAW [rad]), got "
+            f"{len(offset)}"
+        )
     if getattr(args, "urdf", None):
         mount = None
         if parent is not None:
             mount = sensor_mount_from_offset(parent, offset)
         elif offset is not None:
-            raise InvalidInput("--sensor-offset with --urdf needs --sensor-parent FRAME (the frame the sensor is bolted to)")
-        return Arm.from_urdf(args.urdf, sensor_frame, tool_frame, sensor_mount=mount, package_dirs=package_dirs)
+            raise InvalidInput(
+                "--sensor-offset with --urdf needs --sensor-parent FRAME (the frame the sensor is "
+                "bolted to)"
+            )
+        return Arm.from_urdf(
+            args.urdf, sensor_frame, tool_frame, sensor_mount=mount, package_dirs=package_dirs
+        )
     if parent is not None:
-        raise InvalidInput("--sensor-parent is for --urdf; with --robot the sensor is mounted at the robot's flange")
+        raise InvalidInput(
+            "--sensor-parent is for --urdf; with --robot the sensor is mounted at the robot's "
+            "flange"
+        )
     if getattr(args, "robot", None):
         if sensor_frame != "ft_sensor":
-            raise InvalidInput("--sensor-frame is for --urdf; --robot names its sensor frame ft_sensor (move it with --sensor-offset)")
+            raise InvalidInput(
+                "--sensor-frame is for --urdf; --robot names its sensor frame ft_sensor (move it "
+                "with --sensor-offset)"
+            )
         arm = load_robot(args.robot, offset, tool_frame)
         arm.package_dirs += package_dirs
         return arm
@@ -91,27 +131,50 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group(
         "ROS 2 bags (a rosbag2 folder, .mcap or .db3 instead of a CSV; needs ftkin[bags])"
     )
-    group.add_argument("--joint-topic", metavar="TOPIC", help="sensor_msgs/JointState topic (default: the only one)")
-    group.add_argument("--wrench-topic", metavar="TOPIC", help="geometry_msgs/WrenchStamped topic (default: the only one)")
     group.add_argument(
-        "--wrench-frame", choices=("sensor", "base"), default="sensor",
-        help="frame the bag's wrenches are expressed in; base: rotate them into the sensor frame (a UR TCP force) "
+        "--joint-topic",
+        metavar="TOPIC",
+        help="sensor_msgs/JointState topic (default: the only one)",
+    )
+    group.add_argument(
+        "--wrench-topic",
+        metavar="TOPIC",
+        help="geometry_msgs/WrenchStamped topic (default: the only one)",
+    )
+    group.add_argument(
+        "--wrench-frame",
+        choices=("sensor", "base"),
+        default="sensor",
+        help="frame the bag's wrenches are expressed in; base: rotate them into the sensor frame "
+        "(a UR TCP force) "
         "(default: %(default)s)",
     )
     group.add_argument(
-        "--speed-threshold", type=positive_float, default=defaults.speed_threshold, metavar="RAD_S",
+        "--speed-threshold",
+        type=positive_float,
+        default=defaults.speed_threshold,
+        metavar="RAD_S",
         help="static when every joint is slower than this [rad/s] (default: %(default)s)",
     )
     group.add_argument(
-        "--min-static-duration", type=positive_float, default=defaults.min_duration, metavar="S",
+        "--min-static-duration",
+        type=positive_float,
+        default=defaults.min_duration,
+        metavar="S",
         help="shortest usable static segment after settling [s] (default: %(default)s)",
     )
     group.add_argument(
-        "--settle-time", type=non_negative_float, default=defaults.settle_time, metavar="S",
+        "--settle-time",
+        type=non_negative_float,
+        default=defaults.settle_time,
+        metavar="S",
         help="time skipped at the start of each static segment [s] (default: %(default)s)",
     )
     group.add_argument(
-        "--speed-window", type=positive_float, default=defaults.speed_window, metavar="S",
+        "--speed-window",
+        type=positive_float,
+        default=defaults.speed_window,
+        metavar="S",
         help="time span of the joint-speed finite difference [s] (default: %(default)s)",
     )
 
@@ -129,7 +192,9 @@ def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:
     if arm is not None:
         return arm
     record = getattr(calibration, "kinematics", None)
-    if record is not None:  # the calibration says how its sensor frame was obtained: no options to repeat
+    if (
+        record is not None
+    ):  # the calibration says how its sensor frame was obtained: no options to repeat
         return record.build_arm(list(getattr(args, "package_dir", None) or []))
     if not calibration.urdf:
         return arm
@@ -139,27 +204,46 @@ def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:
     try:
         return Arm.from_urdf(recorded, calibration.sensor_frame or "ft_sensor")
     except FrameNotFound:
-        names = [name for name, spec in ROBOT_SPECS.items() if recorded.as_posix().endswith(spec.urdf)]
-        hint = f"--robot {names[0]} (and the --sensor-offset used, if any)" if names else "--urdf with --sensor-parent"
+        names = [
+            name for name, spec in ROBOT_SPECS.items() if recorded.as_posix().endswith(spec.urdf)
+        ]
+        hint = (
+            f"--robot {names[0]} (and the --sensor-offset used, if any)"
+            if names
+            else "--urdf with --sensor-parent"
+        )
         raise InvalidInput(
-            f"the calibration was made with {recorded} and a sensor frame {calibration.sensor_frame!r} that the URDF "
-            f"does not contain (it was added when calibrating): give the same robot options as for the calibration: {hint}"
+            f"the calibration was made with {recorded} and a sensor frame "
+            f"{calibration.sensor_frame!r} that the URDF "
+            "does not contain (it was added when calibrating): give the same robot options as for "
+            f"the calibration: {hint}"
         ) from None
 
 
 def warn_if_kinematics_differ(loaded, calibration) -> None:
-    """Log a warning when samples were read with another URDF or sensor frame than the calibration's."""
+    """Log a warning when samples were read with another URDF or sensor frame than the
+    calibration's.
+    """
     samples = loaded.samples
     if samples.urdf is None or calibration.urdf is None:
         return
-    if Path(samples.urdf).name != Path(calibration.urdf).name or samples.sensor_frame != calibration.sensor_frame:
+    if (
+        Path(samples.urdf).name != Path(calibration.urdf).name
+        or samples.sensor_frame != calibration.sensor_frame
+    ):
         logger.warning(
-            "the calibration was made with %s (sensor frame %s) but these samples were read with %s (sensor frame %s)",
-            calibration.urdf, calibration.sensor_frame, samples.urdf, samples.sensor_frame,
+            "the calibration was made with %s (sensor frame %s) but these samples were read with "
+            "%s (sensor frame %s)",
+            calibration.urdf,
+            calibration.sensor_frame,
+            samples.urdf,
+            samples.sensor_frame,
         )
 
 
-def load_samples_from_args(path: str, args: argparse.Namespace, *, static_only: bool = True, arm: Arm | None = None):
+def load_samples_from_args(
+    path: str, args: argparse.Namespace, *, static_only: bool = True, arm: Arm | None = None
+):
     """Read a samples CSV or a ROS 2 bag named on the command line.
 
     Returns a :class:`~ftkin.io.samples_csv.LoadedSamples` (a :class:`~ftkin.io.bags.BagSamples`

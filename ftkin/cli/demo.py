@@ -23,18 +23,35 @@ from .arg_types import bounded_int, non_negative_float, seed
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
-        "demo", help="simulated sensor on the bundled arm: calibrate, compare with the truth, compensate"
+        "demo",
+        help="simulated sensor on the bundled arm: calibrate, compare with the truth, compensate",
     )
-    parser.add_argument("--poses", type=bounded_int(3, 1000, "poses"), default=12,
-                        help="number of static poses, 3 to 1000 (default: %(default)s)")
-    parser.add_argument("--readings", type=bounded_int(1, 100_000, "readings per pose"), default=500,
-                        help="readings averaged per pose, 1 to 100,000 (default: %(default)s, as the paper)")
+    parser.add_argument(
+        "--poses",
+        type=bounded_int(3, 1000, "poses"),
+        default=12,
+        help="number of static poses, 3 to 1000 (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--readings",
+        type=bounded_int(1, 100_000, "readings per pose"),
+        default=500,
+        help="readings averaged per pose, 1 to 100,000 (default: %(default)s, as the paper)",
+    )
     parser.add_argument("--seed", type=seed, default=0, help="random seed (default: %(default)s)")
     parser.add_argument("--method", choices=METHODS, default=METHODS[0])
-    parser.add_argument("-o", "--output", metavar="CALIB.json", help="also write the calibration file")
-    parser.add_argument("--sim-seconds", type=non_negative_float, default=2.0, metavar="S",
-                        help="simulated seconds of the closed-loop MuJoCo segment (needs the 'sim' extra; 0 skips it; "
-                        "default: %(default)s)")
+    parser.add_argument(
+        "-o", "--output", metavar="CALIB.json", help="also write the calibration file"
+    )
+    parser.add_argument(
+        "--sim-seconds",
+        type=non_negative_float,
+        default=2.0,
+        metavar="S",
+        help="simulated seconds of the closed-loop MuJoCo segment (needs the 'sim' extra; 0 skips "
+        "it; "
+        "default: %(default)s)",
+    )
     parser.set_defaults(func=run)
 
 
@@ -54,27 +71,39 @@ def run(args) -> int:
     truth = paper_like_truth()
     sensor = SimulatedSensor(truth, SensorNoise.paper())
     configurations = arm.random_configurations(args.poses, rng, margin=0.3)
-    samples = sensor.samples_at_configurations(arm, configurations, rng, readings_per_pose=args.readings)
+    samples = sensor.samples_at_configurations(
+        arm, configurations, rng, readings_per_pose=args.readings
+    )
     print(
-        f"Bundled arm {arm.urdf_path.name}, sensor frame {arm.sensor_frame}; {args.poses} random poses, "
+        f"Bundled arm {arm.urdf_path.name}, sensor frame {arm.sensor_frame}; {args.poses} random "
+        "poses, "
         f"{args.readings} readings each, noise 0.02 N / 0.002 N·m per reading (seed {args.seed})."
     )
     result = calibrate(samples, method=args.method)
     print(result.summary())
     errors = result.std_errors or {}
-    print(f"\n  {'parameter':<16}{'truth':<36}{'estimate':<36}{'max |error|':<14}max |error| / std error")
+    print(
+        f"\n  {'parameter':<16}{'truth':<36}{'estimate':<36}{'max |error|':<14}max |error| / std "
+        "error"
+    )
     for name, unit, decimals in (
         ("force_offset", "N", 4),
         ("torque_offset", "N·m", 5),
         ("center_of_mass", "m", 5),
         ("gravity_in_base", "N", 4),
     ):
-        print(_row(name, unit, getattr(truth, name), getattr(result, name), decimals, errors.get(name)))
+        print(
+            _row(
+                name, unit, getattr(truth, name), getattr(result, name), decimals, errors.get(name)
+            )
+        )
     tilt_error = np.rad2deg(errors["base_tilt"]) if "base_tilt" in errors else None
     print(_row("base_tilt_deg", "deg", truth.base_tilt_deg, result.base_tilt_deg, 3, tilt_error))
 
     compensator = Compensator(result, arm)
-    contact = np.array([1.5, -0.8, -4.0, 0.05, 0.02, -0.01])  # N, N·m: the environment pushing on the tool
+    contact = np.array(
+        [1.5, -0.8, -4.0, 0.05, 0.02, -0.01]
+    )  # N, N·m: the environment pushing on the tool
     q_check = arm.random_configurations(1, rng, margin=0.3)[0]
     raw = sensor.read(arm.rotation_sensor_to_base(q_check), rng, contact)[0]
     recovered = compensator.compensate(q_check, raw)
@@ -82,7 +111,10 @@ def run(args) -> int:
     print("  injected  " + " ".join(f"{v:+.4f}" for v in contact))
     print("  recovered " + " ".join(f"{v:+.4f}" for v in recovered))
     print("  raw       " + " ".join(f"{v:+.4f}" for v in raw))
-    print(f"  max error {np.max(np.abs(recovered - contact)):.4f} (noise of one reading: 0.02 N, 0.002 N·m)")
+    print(
+        f"  max error {np.max(np.abs(recovered - contact)):.4f} (noise of one reading: 0.02 N, "
+        "0.002 N·m)"
+    )
     if args.output:
         save_calibration(result, args.output)
         print(f"wrote {args.output}")
@@ -98,10 +130,24 @@ def _closed_loop(arm: Arm, calibration, seconds: float, seed: int) -> None:
     from ..sim.surfaces import BOOK
 
     scenario = PlacementScenario(surface=BOOK, duration=seconds, seed=seed)
-    run, _ = simulate_placement_mujoco(scenario, arm, controller=admittance_controller(scenario, arm, calibration))
+    run, _ = simulate_placement_mujoco(
+        scenario, arm, controller=admittance_controller(scenario, arm, calibration)
+    )
     settle = run.settle_time
-    placed = f"placed at t = {settle:.2f} s" if np.isfinite(settle) else "not placed yet (run longer: --sim-seconds)"
-    print(f"\nClosed loop in MuJoCo ({seconds:g} s at 1 kHz): admittance with this calibration lowers a "
-          f"{scenario.object_weight:.2f} N object onto the book:")
-    print(f"  peak contact force {run.peak_contact_force:.2f} N, final F'z {run.final_force:+.3f} N, {placed}")
-    print("  (ftkin simulate placement --mode all --plot run.png compares it with position control)")
+    placed = (
+        f"placed at t = {settle:.2f} s"
+        if np.isfinite(settle)
+        else "not placed yet (run longer: --sim-seconds)"
+    )
+    print(
+        f"\nClosed loop in MuJoCo ({seconds:g} s at 1 kHz): admittance with this calibration "
+        "lowers a "
+        f"{scenario.object_weight:.2f} N object onto the book:"
+    )
+    print(
+        f"  peak contact force {run.peak_contact_force:.2f} N, final F'z {run.final_force:+.3f} N, "
+        f"{placed}"
+    )
+    print(
+        "  (ftkin simulate placement --mode all --plot run.png compares it with position control)"
+    )

@@ -15,10 +15,14 @@ logger = logging.getLogger("ftkin.cli")
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "doctor",
-        help="check a samples CSV for convention mistakes (radians for degrees, quaternion order, frame, units, signs)",
-        description="Fit the samples as given and under each common mistake: Euler angles in radians, a quaternion "
-        "stored x,y,z,w, the wrench in the base frame, the reaction instead of the load, one sensor axis reversed, "
-        "joint angles in degrees, torques in N·mm; print the fit of each and name the reading that explains the data. "
+        help="check a samples CSV for convention mistakes (radians for degrees, quaternion order, "
+        "frame, units, signs)",
+        description="Fit the samples as given and under each common mistake: Euler angles in "
+        "radians, a quaternion "
+        "stored x,y,z,w, the wrench in the base frame, the reaction instead of the load, one "
+        "sensor axis reversed, "
+        "joint angles in degrees, torques in N·mm; print the fit of each and name the reading that "
+        "explains the data. "
         "Exit code 0 when the data fit as given (or only a suspicion), 1 when a mistake is named.",
     )
     parser.add_argument("samples", metavar="SAMPLES.csv")
@@ -29,7 +33,10 @@ def register(subparsers) -> None:
 def run(args) -> int:
     table = read_table(args.samples)
     report = diagnose_table(table, arm_from_args(args))
-    print(f"{args.samples}: {len(table.rows)} readings; linear fit under each reading (chi² with the noise of the best):")
+    print(
+        f"{args.samples}: {len(table.rows)} readings; linear fit under each reading (chi² with the "
+        "noise of the best):"
+    )
     print(report.table())
     if report.verdict in ("ok", "undetermined"):
         print(f"verdict: {report.verdict}: {report.reason}")
@@ -39,15 +46,22 @@ def run(args) -> int:
 
 
 def check_conventions(loaded, arm) -> None:
-    """Refuse samples whose data fit only under a common mistake; warn on a suspicion (``calibrate``)."""
+    """Refuse samples whose data fit only under a common mistake; warn on a suspicion
+    (``calibrate``).
+    """
     table = getattr(loaded, "table", None)
-    if table is None or getattr(loaded, "recording", None) is not None:  # bags carry their own conventions
+    if (
+        table is None or getattr(loaded, "recording", None) is not None
+    ):  # bags carry their own conventions
         return
     report = diagnose_table(table, arm)
     if report.verdict == "mistake":
         reading = report.culprit.reading
         raise ConventionMistake(
-            report.message + " (run 'ftkin doctor' for the fit of every reading)", table.source, reading.name, reading.fix
+            report.message + " (run 'ftkin doctor' for the fit of every reading)",
+            table.source,
+            reading.name,
+            reading.fix,
         )
     if report.verdict == "suspect":
         logger.warning("%s: %s", table.source, report.message)

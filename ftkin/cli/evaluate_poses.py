@@ -15,9 +15,11 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "evaluate-poses",
         help="predict the calibration's standard errors for a pose set",
-        description="Read poses (joint columns by URDF name or q1..qn [rad], alpha,beta,gamma [deg, "
+        description="Read poses (joint columns by URDF name or q1..qn [rad], alpha,beta,gamma "
+        "[deg, "
         "R = Rz Ry Rx] or qw,qx,qy,qz; wrench columns not needed) and print the predicted standard "
-        "error of every calibration parameter. Rows sharing a 'pose' id count as one pose (the first row).",
+        "error of every calibration parameter. Rows sharing a 'pose' id count as one pose (the "
+        "first row).",
     )
     parser.add_argument("poses", metavar="POSES.csv")
     add_expectation_arguments(parser)
@@ -27,7 +29,9 @@ def register(subparsers) -> None:
 
 def pose_rotations(table, args) -> np.ndarray:
     """``R_BS`` ``(N, 3, 3)`` of the table's poses, one per distinct ``pose`` id (its first row)."""
-    rotations = orientations_from_table(table, arm_from_args(args)).rotations  # joint columns: bundled arm by default
+    rotations = orientations_from_table(
+        table, arm_from_args(args)
+    ).rotations  # joint columns: bundled arm by default
     pose_ids = pose_ids_from_table(table)
     if pose_ids is None:
         return rotations
@@ -52,7 +56,11 @@ def run(args) -> int:
     rotations = pose_rotations(table, args)
     print(f"{args.poses}: {len(rotations)} poses")
     options = expectation_from_args(args)
-    if args.drift_rate is not None and args.pose_interval is None and (times := pose_times(table)) is not None:
+    if (
+        args.drift_rate is not None
+        and args.pose_interval is None
+        and (times := pose_times(table)) is not None
+    ):
         options["pose_times"] = times  # the recording's own times (the poses as visited)
         order = np.argsort(times, kind="stable")
         rotations, options["pose_times"] = rotations[order], times[order]

@@ -12,14 +12,18 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "extract",
         help="write the samples extracted from a ROS 2 bag (or a samples CSV) as a CSV",
-        description="Read a ROS 2 bag (rosbag2 folder, .mcap or .db3), align joint states to the wrench "
-        "stamps, find the static segments and write one row per reading: t [s], pose (static segment "
+        description="Read a ROS 2 bag (rosbag2 folder, .mcap or .db3), align joint states to the "
+        "wrench "
+        "stamps, find the static segments and write one row per reading: t [s], pose (static "
+        "segment "
         "number), the arm's joint angles [rad] and fx..mz [N, N·m]. The CSV is a valid input of "
         "'ftkin calibrate'. With --all, every reading (no pose column) is written.",
     )
     parser.add_argument("recording", metavar="RECORDING")
     parser.add_argument("-o", "--output", metavar="SAMPLES.csv", required=True)
-    parser.add_argument("--all", action="store_true", help="every reading, not only the static segments")
+    parser.add_argument(
+        "--all", action="store_true", help="every reading, not only the static segments"
+    )
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -29,12 +33,22 @@ def run(args) -> int:
     write_csv(args.output, loaded.table.header, loaded.table.rows)
     search = getattr(loaded, "search", None)
     poses = len(np.unique(loaded.samples.pose_ids))
-    print(f"wrote {len(loaded.table.rows)} readings" + (f" in {poses} static poses" if search is not None else "") + f" to {args.output}")
+    print(
+        f"wrote {len(loaded.table.rows)} readings"
+        + (f" in {poses} static poses" if search is not None else "")
+        + f" to {args.output}"
+    )
     recording = getattr(loaded, "recording", None)
     if recording is not None:
-        print(f"  topics: {recording.joint_topic} (joints), {recording.wrench_topic} (wrench, frame {recording.wrench_frame_id or '?'})")
+        print(
+            f"  topics: {recording.joint_topic} (joints), {recording.wrench_topic} (wrench, frame "
+            f"{recording.wrench_frame_id or '?'})"
+        )
         if recording.dropped:
-            print(f"  {recording.dropped} wrench readings outside the joint-state time range were dropped")
+            print(
+                f"  {recording.dropped} wrench readings outside the joint-state time range were "
+                "dropped"
+            )
     if search is not None:
         print(f"  {search.describe()}")
     return 0

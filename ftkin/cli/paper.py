@@ -9,11 +9,15 @@ from ..sim.paper import comparison_table, paper_calibration
 def register(subparsers) -> None:
     parser = subparsers.add_parser("paper", help="reproduce the paper's calibration (Tables 1-3)")
     parser.add_argument(
-        "--method", choices=METHODS, default="linear",
+        "--method",
+        choices=METHODS,
+        default="linear",
         help="estimator compared with the printed values (default: linear, the paper's)",
     )
     parser.add_argument(
-        "--no-ml", dest="show_ml", action="store_false",
+        "--no-ml",
+        dest="show_ml",
+        action="store_false",
         help="do not also print the ml fit with standard errors after the linear one",
     )
     parser.set_defaults(func=run)
@@ -26,6 +30,9 @@ def run(args) -> int:
     print(comparison_table(result))
     if args.method == "linear" and args.show_ml:
         print()
-        print("The same data through the maximum-likelihood fit (ftkin's default), value ± standard error:")
+        print(
+            "The same data through the maximum-likelihood fit (ftkin's default), value ± standard "
+            "error:"
+        )
         print(paper_calibration("ml").summary())
     return 0

@@ -28,33 +28,83 @@ FORMATS = ("csv", "yaml", "json")
 def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
     """Expected tool and sensor noise the predicted standard errors are for."""
     group = parser.add_argument_group("expected tool and sensor noise (defaults: the paper's)")
-    group.add_argument("--tool-weight", type=positive_float, default=PAPER_TOOL_WEIGHT, metavar="N",
-                       help="tool weight [N] (default: %(default)s)")
-    group.add_argument("--com", type=float, nargs=3, default=list(PAPER_CENTER_OF_MASS), metavar=("X", "Y", "Z"),
-                       help="tool centre of mass in the sensor frame [m] (default: 0 0 0.047)")
+    group.add_argument(
+        "--tool-weight",
+        type=positive_float,
+        default=PAPER_TOOL_WEIGHT,
+        metavar="N",
+        help="tool weight [N] (default: %(default)s)",
+    )
+    group.add_argument(
+        "--com",
+        type=float,
+        nargs=3,
+        default=list(PAPER_CENTER_OF_MASS),
+        metavar=("X", "Y", "Z"),
+        help="tool centre of mass in the sensor frame [m] (default: 0 0 0.047)",
+    )
     noise = SensorNoise.paper()
-    group.add_argument("--noise-force", type=positive_float, default=float(noise.force_std[0]), metavar="N",
-                       help="force noise per reading [N] (default: %(default)s)")
-    group.add_argument("--noise-torque", type=positive_float, default=float(noise.torque_std[0]), metavar="NM",
-                       help="torque noise per reading [N·m] (default: %(default)s)")
-    group.add_argument("--readings-per-pose", type=bounded_int(1, 10**9, "readings per pose"), default=1, metavar="K",
-                       help="independent readings averaged at each pose (default: %(default)s)")
-    group.add_argument("--estimate-mount", choices=("yaw", "full"), default=None, metavar="yaw|full",
-                       help="the calibration will also estimate the sensor's mount on the flange: plan and predict for it")
-    group.add_argument("--drift-rate", type=float, nargs=2, default=None, metavar=("N/√s", "NM/√s"),
-                       help="the bias drifts as a random walk of these rates (force, torque; e.g. a past calibration's "
-                       "drift rate): visit the poses in the order the drift spoils least (longer joint travel) "
-                       "and predict errors with the drift")
-    group.add_argument("--pose-interval", type=positive_float, default=None, metavar="S",
-                       help=f"time from one pose to the next [s], with --drift-rate (default: {DEFAULT_POSE_INTERVAL:g})")
+    group.add_argument(
+        "--noise-force",
+        type=positive_float,
+        default=float(noise.force_std[0]),
+        metavar="N",
+        help="force noise per reading [N] (default: %(default)s)",
+    )
+    group.add_argument(
+        "--noise-torque",
+        type=positive_float,
+        default=float(noise.torque_std[0]),
+        metavar="NM",
+        help="torque noise per reading [N·m] (default: %(default)s)",
+    )
+    group.add_argument(
+        "--readings-per-pose",
+        type=bounded_int(1, 10**9, "readings per pose"),
+        default=1,
+        metavar="K",
+        help="independent readings averaged at each pose (default: %(default)s)",
+    )
+    group.add_argument(
+        "--estimate-mount",
+        choices=("yaw", "full"),
+        default=None,
+        metavar="yaw|full",
+        help="the calibration will also estimate the sensor's mount on the flange: plan and "
+        "predict for it",
+    )
+    group.add_argument(
+        "--drift-rate",
+        type=float,
+        nargs=2,
+        default=None,
+        metavar=("N/√s", "NM/√s"),
+        help="the bias drifts as a random walk of these rates (force, torque; e.g. a past "
+        "calibration's "
+        "drift rate): visit the poses in the order the drift spoils least (longer joint travel) "
+        "and predict errors with the drift",
+    )
+    group.add_argument(
+        "--pose-interval",
+        type=positive_float,
+        default=None,
+        metavar="S",
+        help="time from one pose to the next [s], with --drift-rate (default: "
+        f"{DEFAULT_POSE_INTERVAL:g})",
+    )
 
 
 def expectation_from_args(args) -> dict:
-    """Keyword arguments for :func:`ftkin.planning.plan_poses` / :func:`ftkin.planning.evaluation.evaluate_poses`."""
+    """Keyword arguments for :func:`ftkin.planning.plan_poses` /
+    :func:`ftkin.planning.evaluation.evaluate_poses`.
+    """
     if args.readings_per_pose < 1:
         raise InvalidInput(f"--readings-per-pose must be at least 1, got {args.readings_per_pose}")
     if args.pose_interval is not None and args.drift_rate is None:
-        raise InvalidInput("--pose-interval applies with --drift-rate (the time between poses matters only to a drift)")
+        raise InvalidInput(
+            "--pose-interval applies with --drift-rate (the time between poses matters only to a "
+            "drift)"
+        )
     return {
         "tool_weight": args.tool_weight,
         "center_of_mass": args.com,
@@ -62,7 +112,9 @@ def expectation_from_args(args) -> dict:
         "readings_per_pose": args.readings_per_pose,
         "estimate_mount": args.estimate_mount or "none",
         "drift_rate": args.drift_rate,
-        "pose_interval": DEFAULT_POSE_INTERVAL if args.pose_interval is None else args.pose_interval,
+        "pose_interval": DEFAULT_POSE_INTERVAL
+        if args.pose_interval is None
+        else args.pose_interval,
     }
 
 
@@ -77,10 +129,13 @@ def pose_count(text: str) -> int:
     """argparse type: number of poses to plan, 3 to :data:`MAX_PLAN_POSES`."""
     value = whole_number(text, "poses")
     if value < 3:
-        raise argparse.ArgumentTypeError(f"at least 3 poses are needed to determine the calibration, got {text}")
+        raise argparse.ArgumentTypeError(
+            f"at least 3 poses are needed to determine the calibration, got {text}"
+        )
     if value > MAX_PLAN_POSES:
         raise argparse.ArgumentTypeError(
-            f"plan between 3 and {MAX_PLAN_POSES} poses, got {text}: beyond a few dozen poses the standard errors "
+            f"plan between 3 and {MAX_PLAN_POSES} poses, got {text}: beyond a few dozen poses the "
+            "standard errors "
             "only fall as 1/√n (average readings with --readings-per-pose instead)"
         )
     return value
@@ -104,7 +159,9 @@ def joint_range(text: str) -> tuple[str, float, float]:
             raise ValueError
         low, high = float(parts[1]), float(parts[2])
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected NAME:LO:HI with LO, HI in radians, got {text!r}") from None
+        raise argparse.ArgumentTypeError(
+            f"expected NAME:LO:HI with LO, HI in radians, got {text!r}"
+        ) from None
     if not (np.isfinite(low) and np.isfinite(high)):
         raise argparse.ArgumentTypeError(f"expected finite LO and HI [rad], got {text!r}")
     if max(abs(low), abs(high)) > 2.0 * np.pi:
@@ -120,30 +177,81 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "plan",
         help="plan calibration poses (joint configurations) for the most accurate calibration",
-        description="Choose N joint configurations (D-optimal: largest log det of the Fisher information) "
-        "within joint limits, free of self-collision and above the floor, ordered for short joint travel; "
+        description="Choose N joint configurations (D-optimal: largest log det of the Fisher "
+        "information) "
+        "within joint limits, free of self-collision and above the floor, ordered for short joint "
+        "travel; "
         "print the predicted standard error of every calibration parameter.",
     )
-    parser.add_argument("-n", "--n", type=pose_count, default=None,
-                        help=f"number of poses (3 to {MAX_PLAN_POSES}; required without --excitation)")
+    parser.add_argument(
+        "-n",
+        "--n",
+        type=pose_count,
+        default=None,
+        help=f"number of poses (3 to {MAX_PLAN_POSES}; required without --excitation)",
+    )
     parser.add_argument("-o", "--output", metavar="POSES.csv", help="write the poses here")
-    parser.add_argument("--format", choices=FORMATS, default=None, help="output format (default: from the file name, else csv)")
+    parser.add_argument(
+        "--format",
+        choices=FORMATS,
+        default=None,
+        help="output format (default: from the file name, else csv)",
+    )
     group = parser.add_argument_group("constraints")
-    group.add_argument("--margin", type=non_negative_float, default=DEFAULT_MARGIN, metavar="RAD",
-                       help="distance kept from the joint limits [rad] (default: %(default)s)")
-    group.add_argument("--floor-height", type=_floor, default=DEFAULT_FLOOR_HEIGHT, metavar="M",
-                       help="sensor and tool origins stay above this height in the base frame [m] (default: %(default)s, "
-                       "a floor at base z = 0 with a 5 cm margin)")
-    group.add_argument("--no-floor", action="store_true", help="no floor constraint (an arm mounted on a wall or ceiling)")
-    group.add_argument("--max-tilt-deg", type=non_negative_float, default=None, metavar="DEG",
-                       help="largest angle of the tool axis from pointing straight down [deg]")
-    group.add_argument("--joint-range", type=joint_range, action="append", default=[], metavar="NAME:LO:HI",
-                       help="extra range for one joint [rad]; repeat for several joints")
-    group.add_argument("--no-self-collision", action="store_true", help="do not check self-collision")
-    parser.add_argument("--seed", type=seed, default=0, help="random seed; the same seed gives the same plan (default: 0)")
-    parser.add_argument("--max-travel-ratio", type=positive_float, default=None, metavar="R",
-                        help="with --drift-rate: keep the joint travel within R (≥ 1) times the short-travel order's "
-                        "(default: unbounded, about 2x)")
+    group.add_argument(
+        "--margin",
+        type=non_negative_float,
+        default=DEFAULT_MARGIN,
+        metavar="RAD",
+        help="distance kept from the joint limits [rad] (default: %(default)s)",
+    )
+    group.add_argument(
+        "--floor-height",
+        type=_floor,
+        default=DEFAULT_FLOOR_HEIGHT,
+        metavar="M",
+        help="sensor and tool origins stay above this height in the base frame [m] (default: "
+        "%(default)s, "
+        "a floor at base z = 0 with a 5 cm margin)",
+    )
+    group.add_argument(
+        "--no-floor",
+        action="store_true",
+        help="no floor constraint (an arm mounted on a wall or ceiling)",
+    )
+    group.add_argument(
+        "--max-tilt-deg",
+        type=non_negative_float,
+        default=None,
+        metavar="DEG",
+        help="largest angle of the tool axis from pointing straight down [deg]",
+    )
+    group.add_argument(
+        "--joint-range",
+        type=joint_range,
+        action="append",
+        default=[],
+        metavar="NAME:LO:HI",
+        help="extra range for one joint [rad]; repeat for several joints",
+    )
+    group.add_argument(
+        "--no-self-collision", action="store_true", help="do not check self-collision"
+    )
+    parser.add_argument(
+        "--seed",
+        type=seed,
+        default=0,
+        help="random seed; the same seed gives the same plan (default: 0)",
+    )
+    parser.add_argument(
+        "--max-travel-ratio",
+        type=positive_float,
+        default=None,
+        metavar="R",
+        help="with --drift-rate: keep the joint travel within R (≥ 1) times the short-travel "
+        "order's "
+        "(default: unbounded, about 2x)",
+    )
     add_expectation_arguments(parser)
     add_excitation_arguments(parser)
     add_arm_arguments(parser)
@@ -157,14 +265,28 @@ def load_arm(args) -> Arm:
 
 def run(args) -> int:
     if args.format is not None and not args.output:
-        raise InvalidInput(f"--format {args.format} needs -o/--output FILE (the plan is printed as a table otherwise)")
+        raise InvalidInput(
+            f"--format {args.format} needs -o/--output FILE (the plan is printed as a table "
+            "otherwise)"
+        )
     if args.max_tilt_deg is not None and args.max_tilt_deg > 180.0:
-        raise InvalidInput(f"--max-tilt-deg must be between 0 and 180 [deg], got {args.max_tilt_deg:g}")
+        raise InvalidInput(
+            f"--max-tilt-deg must be between 0 and 180 [deg], got {args.max_tilt_deg:g}"
+        )
     if args.excitation:
-        if (args.n is not None or args.max_tilt_deg is not None or args.format not in (None, "csv")
-                or args.drift_rate is not None or args.pose_interval is not None or args.max_travel_ratio is not None):
-            raise InvalidInput("--excitation plans a trajectory: --n, --max-tilt-deg, --format yaml/json, --drift-rate, "
-                               "--pose-interval and --max-travel-ratio do not apply")
+        if (
+            args.n is not None
+            or args.max_tilt_deg is not None
+            or args.format not in (None, "csv")
+            or args.drift_rate is not None
+            or args.pose_interval is not None
+            or args.max_travel_ratio is not None
+        ):
+            raise InvalidInput(
+                "--excitation plans a trajectory: --n, --max-tilt-deg, --format yaml/json, "
+                "--drift-rate, "
+                "--pose-interval and --max-travel-ratio do not apply"
+            )
         return run_excitation(args, load_arm(args))
     if args.n is None:
         raise InvalidInput("give --n N (the number of poses), or --excitation for a trajectory")
@@ -172,12 +294,22 @@ def run(args) -> int:
     max_tilt = None if args.max_tilt_deg is None else float(np.deg2rad(args.max_tilt_deg))
     try:
         plan = plan_poses(
-            arm, args.n, margin=args.margin, floor_height=None if args.no_floor else args.floor_height, max_tilt=max_tilt,
-            joint_ranges=args.joint_range, self_collision=not args.no_self_collision, seed=args.seed,
-            max_travel_ratio=args.max_travel_ratio, **expectation_from_args(args),
+            arm,
+            args.n,
+            margin=args.margin,
+            floor_height=None if args.no_floor else args.floor_height,
+            max_tilt=max_tilt,
+            joint_ranges=args.joint_range,
+            self_collision=not args.no_self_collision,
+            seed=args.seed,
+            max_travel_ratio=args.max_travel_ratio,
+            **expectation_from_args(args),
         )
     except UrdfError as error:  # only the collision geometry is loaded here: meshes not found
-        hint = "give --package-dir DIR (the folder holding the package:// packages) or --no-self-collision"
+        hint = (
+            "give --package-dir DIR (the folder holding the package:// packages) or "
+            "--no-self-collision"
+        )
         raise UrdfError(error.path, [*error.reasons, hint]) from None
     print(plan.report())
     print(_pose_lines(plan))
@@ -197,7 +329,10 @@ def _format_from_name(path: str) -> str:
 
 def _pose_lines(plan) -> str:
     header = f"{POSE_COLUMN:>4} " + " ".join(f"{name[:12]:>12}" for name in plan.joint_names)
-    rows = [f"{i:>4} " + " ".join(f"{value:>12.4f}" for value in q) for i, q in enumerate(plan.joint_positions)]
+    rows = [
+        f"{i:>4} " + " ".join(f"{value:>12.4f}" for value in q)
+        for i, q in enumerate(plan.joint_positions)
+    ]
     return "joint positions [rad], in visiting order:\n" + "\n".join([header, *rows])
 
 
@@ -213,8 +348,14 @@ def plan_document(plan) -> dict:
         "criterion_value": plan.criterion_value,
         "predicted_standard_errors": errors,
         "joint_travel_rad": plan.joint_travel,
-        **({} if plan.evaluation.drift_rate is None else {
-            "drift_rate": plan.evaluation.drift_rate.tolist(), "pose_interval_s": plan.evaluation.pose_interval}),
+        **(
+            {}
+            if plan.evaluation.drift_rate is None
+            else {
+                "drift_rate": plan.evaluation.drift_rate.tolist(),
+                "pose_interval_s": plan.evaluation.pose_interval,
+            }
+        ),
     }
 
 

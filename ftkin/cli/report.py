@@ -4,17 +4,26 @@ from __future__ import annotations
 
 from ..io.calibration_file import load_calibration
 from ..viz.report import save_report
-from .common import add_samples_arguments, arm_for_calibration, load_samples_from_args, warn_if_kinematics_differ
+from .common import (
+    add_samples_arguments,
+    arm_for_calibration,
+    load_samples_from_args,
+    warn_if_kinematics_differ,
+)
 
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "report",
         help="plot measured vs predicted wrench per pose and the residuals (needs ftkin[plots])",
-        description="Draw a one-page report (PNG, PDF or SVG): per channel fx..mz the per-pose mean "
-        "measured reading (± standard error) against the calibration's prediction, the residuals, and "
-        "the parameters with standard errors when the calibration has them. SAMPLES is a samples CSV or "
-        "a ROS 2 bag (same options as 'ftkin calibrate'; without --robot/--urdf the URDF recorded in the "
+        description="Draw a one-page report (PNG, PDF or SVG): per channel fx..mz the per-pose "
+        "mean "
+        "measured reading (± standard error) against the calibration's prediction, the residuals, "
+        "and "
+        "the parameters with standard errors when the calibration has them. SAMPLES is a samples "
+        "CSV or "
+        "a ROS 2 bag (same options as 'ftkin calibrate'; without --robot/--urdf the URDF recorded "
+        "in the "
         "calibration file is used).",
     )
     parser.add_argument("calibration", metavar="CALIB.json")

@@ -24,41 +24,70 @@ from .common import add_arm_arguments, arm_for_calibration
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "rezero",
-        help="re-zero the sensor bias from one contact-free reading at a known pose (tool weight kept)",
-        description="Set the bias so that the contact wrench of the given raw reading is zero at the given joint "
-        "angles: bias = reading − predicted tool gravity (not the whole reading, which would subtract the tool's "
-        "weight at this pose). The tool must be free of contact and the arm still. Updates CALIB.json in place "
+        help="re-zero the sensor bias from one contact-free reading at a known pose (tool weight "
+        "kept)",
+        description="Set the bias so that the contact wrench of the given raw reading is zero at "
+        "the given joint "
+        "angles: bias = reading − predicted tool gravity (not the whole reading, which would "
+        "subtract the tool's "
+        "weight at this pose). The tool must be free of contact and the arm still. Updates "
+        "CALIB.json in place "
         "(atomically) unless -o is given.",
     )
     parser.add_argument("calibration", metavar="CALIB.json")
-    parser.add_argument("--q", type=float, nargs="+", required=True, metavar="Q", help="joint angles of the pose [rad]")
     parser.add_argument(
-        "--wrench", type=float, nargs=6, required=True, metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
+        "--q",
+        type=float,
+        nargs="+",
+        required=True,
+        metavar="Q",
+        help="joint angles of the pose [rad]",
+    )
+    parser.add_argument(
+        "--wrench",
+        type=float,
+        nargs=6,
+        required=True,
+        metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
         help="raw reading at that pose [N, N·m], sensor frame (average a few hundred readings)",
     )
-    parser.add_argument("-o", "--output", metavar="OUT.json", help="write the re-zeroed calibration here instead of in place")
+    parser.add_argument(
+        "-o",
+        "--output",
+        metavar="OUT.json",
+        help="write the re-zeroed calibration here instead of in place",
+    )
     add_arm_arguments(parser)
     parser.set_defaults(func=run)
 
 
 def _check_pose(arm, q) -> None:
-    """Refuse angles beyond 2π (degrees) and a pose outside the arm's joint limits: the bias would be set at a pose
+    """Refuse angles beyond 2π (degrees) and a pose outside the arm's joint limits: the bias would
+    be set at a pose
     the arm was not in."""
     if not np.all(np.isfinite(q)):
         raise InvalidInput(f"--q must be finite numbers [rad], got {q.tolist()}")
     lower, upper = np.asarray(arm.lower_limits, float), np.asarray(arm.upper_limits, float)
     for name, value, low, high in zip(arm.joint_names, q, lower, upper):
         if abs(value) > 2.0 * np.pi + 0.01:
-            raise InvalidInput(f"--q: {name} = {value:g} is beyond ±2π: joint angles are in radians (this looks like degrees)")
+            raise InvalidInput(
+                f"--q: {name} = {value:g} is beyond ±2π: joint angles are in radians (this looks "
+                "like degrees)"
+            )
         if not low - 1e-6 <= value <= high + 1e-6:
-            raise InvalidInput(f"--q: {name} = {value:g} rad is outside its limits [{low:g}, {high:g}] rad")
+            raise InvalidInput(
+                f"--q: {name} = {value:g} rad is outside its limits [{low:g}, {high:g}] rad"
+            )
 
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
     arm = arm_for_calibration(args, calibration) or Arm.default()
     if len(args.q) != arm.nq:
-        raise InvalidInput(f"--q takes the arm's {arm.nq} joint angles [rad] ({', '.join(arm.joint_names)}), got {len(args.q)}")
+        raise InvalidInput(
+            f"--q takes the arm's {arm.nq} joint angles [rad] ({', '.join(arm.joint_names)}), got "
+            f"{len(args.q)}"
+        )
     _check_pose(arm, np.array(args.q))
     compensator = Compensator(calibration, arm)
     previous = calibration.bias
@@ -72,7 +101,10 @@ def run(args) -> int:
     output = args.output or args.calibration
     save_calibration(calibration.with_bias(bias), output, rezero=record)
     change = bias - previous
-    print(f"bias F0 = [{', '.join(f'{v:+.4f}' for v in bias[:3])}] N, M0 = [{', '.join(f'{v:+.5f}' for v in bias[3:])}] N·m "
-          f"(changed by {np.linalg.norm(change[:3]):.4f} N, {np.linalg.norm(change[3:]):.5f} N·m)")
+    print(
+        f"bias F0 = [{', '.join(f'{v:+.4f}' for v in bias[:3])}] N, M0 = "
+        f"[{', '.join(f'{v:+.5f}' for v in bias[3:])}] N·m "
+        f"(changed by {np.linalg.norm(change[:3]):.4f} N, {np.linalg.norm(change[3:]):.5f} N·m)"
+    )
     print(f"wrote {output}" + (" (updated in place)" if args.output is None else ""))
     return 0

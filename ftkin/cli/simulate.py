@@ -36,40 +36,110 @@ _DEFAULT = PlacementScenario()
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser("simulate", help="simulated experiments (the paper's placement test)")
+    parser = subparsers.add_parser(
+        "simulate", help="simulated experiments (the paper's placement test)"
+    )
     experiments = parser.add_subparsers(dest="experiment", metavar="EXPERIMENT", required=True)
     placement = experiments.add_parser(
-        "placement", help="lower a grasped object onto a sponge or a book: position vs admittance control",
-        description="Lower a grasped object onto a surface with position control, admittance control with "
+        "placement",
+        help="lower a grasped object onto a sponge or a book: position vs admittance control",
+        description="Lower a grasped object onto a surface with position control, admittance "
+        "control with "
         "compensation, or admittance control on raw readings (METHOD.md §6).",
     )
     placement.add_argument("--surface", choices=sorted(SURFACES), default="sponge")
-    placement.add_argument("--mode", choices=(*MODES, "all"), default="admittance",
-                           help="controller; 'all' runs the three and plots them together (default: %(default)s)")
-    placement.add_argument("--engine", choices=ENGINES, default=default_engine(),
-                           help="mujoco (physics engine, extra 'sim') or simple (kinematic arm, spring-damper formula); "
-                           "default: mujoco when installed (here: %(default)s)")
-    placement.add_argument("--sample-rate", type=positive_float, metavar="HZ",
-                           help="MuJoCo engine: sensor sample rate [Hz] (default: one sample per control tick)")
-    placement.add_argument("--delay-ticks", type=bounded_int(0, 10_000, "ticks"), default=1, metavar="N",
-                           help="MuJoCo engine: sensor delay in control ticks (default: %(default)s)")
-    placement.add_argument("--k1", type=_non_negative, default=_DEFAULT.k1 * 1e3, metavar="MM_PER_N",
-                           help="position gain k13 [mm/N] (default: %(default)g)")
-    placement.add_argument("--k2", type=_non_negative, default=_DEFAULT.k2 * 1e3, metavar="MM_PER_S_N",
-                           help="velocity gain k23 [mm/(s·N)] (default: %(default)g; the paper swept around 0.1)")
-    placement.add_argument("--weight", type=positive_float, default=_DEFAULT.object_weight, help="object weight [N] (default: %(default)g)")
-    placement.add_argument("--gap", type=_non_negative, default=_DEFAULT.start_gap * 1e3,
-                           help="object bottom above the surface at the start [mm] (default: %(default)g)")
-    placement.add_argument("--duration", type=positive_float, default=_DEFAULT.duration, help="simulated time [s] (default: %(default)g)")
-    placement.add_argument("--dt", type=positive_float, default=_DEFAULT.dt, help="control period [s] (default: %(default)g)")
-    placement.add_argument("--seed", type=seed, default=0, help="random seed of the sensor noise (default: %(default)s)")
-    placement.add_argument("--sweep", choices=("k1", "k2"), help="repeat the run over --values of this gain")
-    placement.add_argument("--values", type=_value_list, metavar="V1,V2,...",
-                           help="gain values for --sweep, in the paper's mm units (e.g. 0.05,0.1,0.2)")
+    placement.add_argument(
+        "--mode",
+        choices=(*MODES, "all"),
+        default="admittance",
+        help="controller; 'all' runs the three and plots them together (default: %(default)s)",
+    )
+    placement.add_argument(
+        "--engine",
+        choices=ENGINES,
+        default=default_engine(),
+        help="mujoco (physics engine, extra 'sim') or simple (kinematic arm, spring-damper "
+        "formula); "
+        "default: mujoco when installed (here: %(default)s)",
+    )
+    placement.add_argument(
+        "--sample-rate",
+        type=positive_float,
+        metavar="HZ",
+        help="MuJoCo engine: sensor sample rate [Hz] (default: one sample per control tick)",
+    )
+    placement.add_argument(
+        "--delay-ticks",
+        type=bounded_int(0, 10_000, "ticks"),
+        default=1,
+        metavar="N",
+        help="MuJoCo engine: sensor delay in control ticks (default: %(default)s)",
+    )
+    placement.add_argument(
+        "--k1",
+        type=_non_negative,
+        default=_DEFAULT.k1 * 1e3,
+        metavar="MM_PER_N",
+        help="position gain k13 [mm/N] (default: %(default)g)",
+    )
+    placement.add_argument(
+        "--k2",
+        type=_non_negative,
+        default=_DEFAULT.k2 * 1e3,
+        metavar="MM_PER_S_N",
+        help="velocity gain k23 [mm/(s·N)] (default: %(default)g; the paper swept around 0.1)",
+    )
+    placement.add_argument(
+        "--weight",
+        type=positive_float,
+        default=_DEFAULT.object_weight,
+        help="object weight [N] (default: %(default)g)",
+    )
+    placement.add_argument(
+        "--gap",
+        type=_non_negative,
+        default=_DEFAULT.start_gap * 1e3,
+        help="object bottom above the surface at the start [mm] (default: %(default)g)",
+    )
+    placement.add_argument(
+        "--duration",
+        type=positive_float,
+        default=_DEFAULT.duration,
+        help="simulated time [s] (default: %(default)g)",
+    )
+    placement.add_argument(
+        "--dt",
+        type=positive_float,
+        default=_DEFAULT.dt,
+        help="control period [s] (default: %(default)g)",
+    )
+    placement.add_argument(
+        "--seed",
+        type=seed,
+        default=0,
+        help="random seed of the sensor noise (default: %(default)s)",
+    )
+    placement.add_argument(
+        "--sweep", choices=("k1", "k2"), help="repeat the run over --values of this gain"
+    )
+    placement.add_argument(
+        "--values",
+        type=_value_list,
+        metavar="V1,V2,...",
+        help="gain values for --sweep, in the paper's mm units (e.g. 0.05,0.1,0.2)",
+    )
     placement.add_argument("-o", "--output", metavar="RUN.csv", help="write the time series")
-    placement.add_argument("--plot", metavar="RUN.png", help="write displacement, velocity and force plots (needs matplotlib)")
-    placement.add_argument("--view", action="store_true",
-                           help="watch the run live in meshcat (arm, contact wrench, commanded twist), paced to real time")
+    placement.add_argument(
+        "--plot",
+        metavar="RUN.png",
+        help="write displacement, velocity and force plots (needs matplotlib)",
+    )
+    placement.add_argument(
+        "--view",
+        action="store_true",
+        help="watch the run live in meshcat (arm, contact wrench, commanded twist), paced to real "
+        "time",
+    )
     placement.set_defaults(func=run)
 
 
@@ -98,9 +168,15 @@ def _value_list(text: str) -> list[float]:
 
 def _summary(run: PlacementRun) -> str:
     settle = run.settle_time
-    placed = f"placed at t = {settle:.3f} s" if np.isfinite(settle) else "not placed (|F'z| >= 0.05 N or still moving at the end)"
-    return (f"peak contact force {run.peak_contact_force:.3f} N, final F'z {run.final_force:+.3f} N, "
-            f"final penetration {run.penetration[-1] * 1e3:.3f} mm; {placed}")
+    placed = (
+        f"placed at t = {settle:.3f} s"
+        if np.isfinite(settle)
+        else "not placed (|F'z| >= 0.05 N or still moving at the end)"
+    )
+    return (
+        f"peak contact force {run.peak_contact_force:.3f} N, final F'z {run.final_force:+.3f} N, "
+        f"final penetration {run.penetration[-1] * 1e3:.3f} mm; {placed}"
+    )
 
 
 def _simulate(scenario: PlacementScenario, args):
@@ -110,14 +186,13 @@ def _simulate(scenario: PlacementScenario, args):
         return run_, list(PlacementRun.COLUMNS), run_.rows()
     from ..sim.mujoco.placement import simulate_placement_mujoco
 
-    run_, full = simulate_placement_mujoco(scenario, sample_rate=args.sample_rate, delay_ticks=args.delay_ticks)
+    run_, full = simulate_placement_mujoco(
+        scenario, sample_rate=args.sample_rate, delay_ticks=args.delay_ticks
+    )
     for time, event in full.events:
         if event:
             print(f"  t = {time:.3f} s: {event}")
     return run_, list(full.columns), full.table
-
-
-
 
 
 def _run_viewed(scenario: PlacementScenario) -> PlacementRun:
@@ -149,17 +224,27 @@ def _run_viewed(scenario: PlacementScenario) -> PlacementRun:
 
 def run(args) -> int:
     scenario = PlacementScenario(
-        surface=surface_by_name(args.surface), mode=MODES[0] if args.mode == "all" else args.mode, k1=args.k1 * 1e-3,
-        k2=args.k2 * 1e-3, object_weight=args.weight, start_gap=args.gap * 1e-3, duration=args.duration, dt=args.dt,
+        surface=surface_by_name(args.surface),
+        mode=MODES[0] if args.mode == "all" else args.mode,
+        k1=args.k1 * 1e-3,
+        k2=args.k2 * 1e-3,
+        object_weight=args.weight,
+        start_gap=args.gap * 1e-3,
+        duration=args.duration,
+        dt=args.dt,
         seed=args.seed,
     )
     if args.view and (args.sweep or args.mode in ("position", "all")):
-        raise InvalidInput("--view draws one run of an admittance controller: drop --sweep, use --mode admittance")
+        raise InvalidInput(
+            "--view draws one run of an admittance controller: drop --sweep, use --mode admittance"
+        )
     if args.sweep:
         if not args.values:
             raise InvalidInput("--sweep needs --values, e.g. --values 0.05,0.1,0.2 (mm units)")
         if args.mode in ("position", "all"):
-            raise InvalidInput("--sweep varies admittance gains; use --mode admittance or admittance-uncompensated")
+            raise InvalidInput(
+                "--sweep varies admittance gains; use --mode admittance or admittance-uncompensated"
+            )
         scenarios = [replace(scenario, **{args.sweep: value * 1e-3}) for value in args.values]
         labels = list(args.values)
     else:
@@ -177,13 +262,22 @@ def run(args) -> int:
         results = [_simulate(one, args) for one in scenarios]
     runs = [result[0] for result in results]
     for one in runs:
-        prefix = f"{'k13' if args.sweep == 'k1' else 'k23'} = {getattr(one.scenario, args.sweep) * 1e3:g}: " if args.sweep else ""
+        prefix = (
+            f"{'k13' if args.sweep == 'k1' else 'k23'} = "
+            f"{getattr(one.scenario, args.sweep) * 1e3:g}: "
+            if args.sweep
+            else ""
+        )
         print(f"{args.surface}, {one.scenario.mode} ({args.engine}): {prefix}{_summary(one)}")
     if args.output:
         header = results[0][1]
         if len(results) > 1:
             header = ["gain" if args.sweep else "mode"] + header
-            rows = [[label, *row] for label, result in zip(labels, results) for row in result[2].tolist()]
+            rows = [
+                [label, *row]
+                for label, result in zip(labels, results)
+                for row in result[2].tolist()
+            ]
         else:
             rows = results[0][2].tolist()
         write_csv(args.output, header, rows)

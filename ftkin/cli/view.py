@@ -1,4 +1,6 @@
-"""``ftkin view CALIB.json SAMPLES.csv`` / ``ftkin view CALIB.json --replay LOG.csv``: see the calibration in 3D."""
+"""``ftkin view CALIB.json SAMPLES.csv`` / ``ftkin view CALIB.json --replay LOG.csv``: see the
+calibration in 3D.
+"""
 
 from __future__ import annotations
 
@@ -16,7 +18,12 @@ from ..io.calibration_file import load_calibration
 from ..kinematics.arm import Arm
 from ..kinematics.mounting import mounted_arm
 from .arg_types import bounded_int, positive_float
-from .common import add_samples_arguments, arm_for_calibration, load_samples_from_args, warn_if_kinematics_differ
+from .common import (
+    add_samples_arguments,
+    arm_for_calibration,
+    load_samples_from_args,
+    warn_if_kinematics_differ,
+)
 
 SHEET_CELLS = 25
 """Most cells of a contact sheet (more poses or log rows are subsampled evenly)."""
@@ -25,31 +32,78 @@ SHEET_CELLS = 25
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "view",
-        help="3D view (meshcat) of the arm, sensor frame and force vectors at the calibration poses",
-        description="Show the arm at each calibration pose with arrows from the sensor origin: measured force minus "
-        "bias (magenta), predicted tool gravity (cyan), compensated contact force (yellow); the tool's centre of mass "
-        "(green) and the estimated gravity direction of the base (purple). At a good calibration magenta lies on cyan. "
+        help="3D view (meshcat) of the arm, sensor frame and "
+        "force vectors at the calibration poses",
+        description="Show the arm at each calibration pose with arrows from the sensor origin: "
+        "measured force minus "
+        "bias (magenta), predicted tool gravity (cyan), compensated contact force (yellow); the "
+        "tool's centre of mass "
+        "(green) and the estimated gravity direction of the base (purple). At a good calibration "
+        "magenta lies on cyan. "
         "Starts a meshcat server and prints its URL (Ctrl-C stops it), or writes --html / --png.",
     )
     parser.add_argument("calibration", metavar="CALIB.json")
-    parser.add_argument("samples", metavar="SAMPLES.csv", nargs="?", help="the calibration samples (poses to step through)")
-    parser.add_argument("--replay", metavar="LOG.csv", help="play a recorded run instead: joint columns, fx..mz, optional t [s]")
-    parser.add_argument("--html", metavar="OUT.html", help="write a self-contained page (animated unless --pose is given)")
+    parser.add_argument(
+        "samples",
+        metavar="SAMPLES.csv",
+        nargs="?",
+        help="the calibration samples (poses to step through)",
+    )
+    parser.add_argument(
+        "--replay",
+        metavar="LOG.csv",
+        help="play a recorded run instead: joint columns, fx..mz, optional t [s]",
+    )
+    parser.add_argument(
+        "--html",
+        metavar="OUT.html",
+        help="write a self-contained page (animated unless --pose is given)",
+    )
     parser.add_argument(
         "--png",
         metavar="OUT.png",
-        help="write a screenshot with headless Chromium: the --pose (1024×768), else a contact sheet of every pose "
+        help="write a screenshot with headless Chromium: the --pose (1024×768), else a contact "
+        "sheet of every pose "
         f"(at most {SHEET_CELLS} evenly spaced rows of a replay; outlier poses outlined in red)",
     )
-    parser.add_argument("--pose", type=int, metavar="K", help="only this pose: pose id of SAMPLES.csv, or row index of the replay log")
     parser.add_argument(
-        "--scale", type=positive_float, metavar="M_PER_N", help="arrow length per newton [m/N] (default: tool weight drawn 25 cm long)"
+        "--pose",
+        type=int,
+        metavar="K",
+        help="only this pose: pose id of SAMPLES.csv, or row index of the replay log",
     )
-    parser.add_argument("--tilt-exaggeration", type=positive_float, default=1.0, metavar="K", help="draw the base tilt K times larger")
-    parser.add_argument("--hold", type=positive_float, default=1.0, metavar="S", help="seconds per calibration pose in the animation")
-    parser.add_argument("--max-frames", type=bounded_int(1, 1_000_000, "frames"), default=1500, metavar="N",
-                        help="replay: keep at most N rows (evenly spaced)")
-    parser.add_argument("--no-wait", action="store_true", help="do not keep the live viewer running (scripts, tests)")
+    parser.add_argument(
+        "--scale",
+        type=positive_float,
+        metavar="M_PER_N",
+        help="arrow length per newton [m/N] (default: tool weight drawn 25 cm long)",
+    )
+    parser.add_argument(
+        "--tilt-exaggeration",
+        type=positive_float,
+        default=1.0,
+        metavar="K",
+        help="draw the base tilt K times larger",
+    )
+    parser.add_argument(
+        "--hold",
+        type=positive_float,
+        default=1.0,
+        metavar="S",
+        help="seconds per calibration pose in the animation",
+    )
+    parser.add_argument(
+        "--max-frames",
+        type=bounded_int(1, 1_000_000, "frames"),
+        default=1500,
+        metavar="N",
+        help="replay: keep at most N rows (evenly spaced)",
+    )
+    parser.add_argument(
+        "--no-wait",
+        action="store_true",
+        help="do not keep the live viewer running (scripts, tests)",
+    )
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -70,13 +124,19 @@ def _calibration_poses(loaded) -> Frames:
     averages = samples.pose_averages()
     configurations = None
     if samples.joint_positions is not None:
-        configurations = np.array([samples.joint_positions[samples.pose_ids == pid].mean(axis=0) for pid in averages.pose_ids])
+        configurations = np.array(
+            [
+                samples.joint_positions[samples.pose_ids == pid].mean(axis=0)
+                for pid in averages.pose_ids
+            ]
+        )
     labels = [f"pose {int(pid)}" for pid in averages.pose_ids]
     return Frames(labels, averages.wrenches, configurations, averages.rotations, None)
 
 
 def _with_bias_at_times(frames: Frames, calibration, times: np.ndarray) -> Frames:
-    """For a drift-aware calibration, shift each frame's reading by ``bias(t) − bias(end)`` (``times`` [s], one per frame).
+    """For a drift-aware calibration, shift each frame's reading by ``bias(t) − bias(end)``
+    (``times`` [s], one per frame).
 
     The viewer subtracts the calibration's bias (the one at the end of its
     recording); with this shift it effectively subtracts the bias at the
@@ -92,7 +152,9 @@ def _replay_rows(loaded, max_frames: int) -> Frames:
     samples, table = loaded.samples, loaded.table
     times = samples.times
     if times is not None and np.any(np.diff(times) < 0):
-        raise InvalidInput(f"{table.source}: the time column must not decrease (seconds since the start)")
+        raise InvalidInput(
+            f"{table.source}: the time column must not decrease (seconds since the start)"
+        )
     rows = np.arange(len(samples))
     if len(rows) > max_frames:
         rows = np.unique(np.linspace(0, len(samples) - 1, max_frames).round().astype(int))
@@ -120,7 +182,11 @@ def _show(viewer, frames: Frames, k: int):
 
 
 def _animate(viewer, frames: Frames, hold: float):
-    kind = {"configurations": frames.configurations} if frames.configurations is not None else {"rotations": frames.rotations}
+    kind = (
+        {"configurations": frames.configurations}
+        if frames.configurations is not None
+        else {"rotations": frames.rotations}
+    )
     return viewer.animate(frames.raw_wrenches, times=frames.times, hold=hold, **kind)
 
 
@@ -132,11 +198,16 @@ def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def _print_table(labels: list[str], vectors) -> None:
-    print(f"  {'':<10}{'|F-F0| N':>10}{'|Gs| N':>10}{'angle deg':>11}{'|F′| N':>10}{'|M′| N·m':>10}")
+    print(
+        f"  {'':<10}{'|F-F0| N':>10}{'|Gs| N':>10}{'angle deg':>11}{'|F′| N':>10}{'|M′| N·m':>10}"
+    )
     for label, v in list(zip(labels, vectors))[:40]:
         print(
-            f"  {label:<10}{np.linalg.norm(v.measured_force):>10.4f}{np.linalg.norm(v.gravity_force):>10.4f}"
-            f"{_angle_deg(v.measured_force, v.gravity_force):>11.3f}{np.linalg.norm(v.contact_wrench[:3]):>10.4f}"
+            "  "
+            f"{label:<10}{np.linalg.norm(v.measured_force):>10.4f}"
+            f"{np.linalg.norm(v.gravity_force):>10.4f}"
+            f"{_angle_deg(v.measured_force, v.gravity_force):>11.3f}"
+            f"{np.linalg.norm(v.contact_wrench[:3]):>10.4f}"
             f"{np.linalg.norm(v.contact_wrench[3:]):>10.4f}"
         )
     if len(labels) > 40:
@@ -150,13 +221,23 @@ def _contact_sheet(viewer, frames: Frames, calibration, path: str, title: str) -
     if len(rows) > SHEET_CELLS:
         rows = np.unique(np.linspace(0, len(rows) - 1, SHEET_CELLS).round().astype(int))
     diagnostics = getattr(calibration, "diagnostics", None)
-    flagged = {f"pose {int(pid)}" for pid in (diagnostics.outlier_pose_ids if diagnostics is not None else ())}
+    flagged = {
+        f"pose {int(pid)}"
+        for pid in (diagnostics.outlier_pose_ids if diagnostics is not None else ())
+    }
     labels = [frames.labels[k] for k in rows]
     outliers = [i for i, label in enumerate(labels) if label in flagged]
-    kind = {"configurations": frames.configurations[rows]} if frames.configurations is not None else {"rotations": frames.rotations[rows]}
+    kind = (
+        {"configurations": frames.configurations[rows]}
+        if frames.configurations is not None
+        else {"rotations": frames.rotations[rows]}
+    )
     cells = sheet_cells(viewer, labels, frames.raw_wrenches[rows], outliers=outliers, **kind)
     save_contact_sheet(cells, path, title=title)
-    print(f"wrote {path} (contact sheet of {len(cells)} poses, {len(outliers)} outliers outlined in red)")
+    print(
+        f"wrote {path} (contact sheet of {len(cells)} poses, {len(outliers)} outliers outlined in "
+        "red)"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -169,22 +250,35 @@ def run(args: argparse.Namespace) -> int:
     arm = arm_for_calibration(args, calibration) or Arm.default()
     loaded = load_samples_from_args(source, args, static_only=not args.replay, arm=arm)
     warn_if_kinematics_differ(loaded, calibration)
-    # the real sensor: stored sign and axis flip applied to the readings, the mount to the sensor frame
+    # the real sensor: stored sign and axis flip applied to the readings, the mount to the sensor
+    # frame
     loaded = dataclasses.replace(loaded, samples=as_real_sensor(loaded.samples, calibration))
     arm = mounted_arm(arm, calibration.mount_rotation)
     frames = _replay_rows(loaded, args.max_frames) if args.replay else _calibration_poses(loaded)
-    if loaded.samples.times is not None:  # per-frame times: the rows' own, or each calibration pose's mean time
-        frames = _with_bias_at_times(frames, calibration,
-                                     frames.times if args.replay else loaded.samples.pose_averages().times)
+    if (
+        loaded.samples.times is not None
+    ):  # per-frame times: the rows' own, or each calibration pose's mean time
+        frames = _with_bias_at_times(
+            frames,
+            calibration,
+            frames.times if args.replay else loaded.samples.pose_averages().times,
+        )
     if frames.configurations is None:
         arm = None  # orientations without joint angles: no arm to draw
     chosen = _pick(frames, args.pose, bool(args.replay)) if args.pose is not None else None
-    caption = f"{source}: " + (frames.labels[chosen] if chosen is not None else f"{len(frames.labels)} poses, animated")
+    caption = f"{source}: " + (
+        frames.labels[chosen] if chosen is not None else f"{len(frames.labels)} poses, animated"
+    )
 
-    with CalibrationViewer(calibration, arm, scale=args.scale, tilt_exaggeration=args.tilt_exaggeration) as viewer:
+    with CalibrationViewer(
+        calibration, arm, scale=args.scale, tilt_exaggeration=args.tilt_exaggeration
+    ) as viewer:
         vectors = _show(viewer, frames, chosen if chosen is not None else 0)
-        print(f"scale: 1 N = {100 * viewer.scale:.3g} cm; magenta = measured force − bias, cyan = predicted tool gravity, "
-              "yellow = contact force, green = tool COM, purple = base gravity direction")
+        print(
+            f"scale: 1 N = {100 * viewer.scale:.3g} cm; magenta = measured force − bias, cyan = "
+            "predicted tool gravity, "
+            "yellow = contact force, green = tool COM, purple = base gravity direction"
+        )
         if args.png and chosen is not None:
             from ..viz.browser import screenshot_html
 
@@ -203,7 +297,10 @@ def run(args: argparse.Namespace) -> int:
             print(f"wrote {args.html}")
         if args.no_wait or args.html or args.png:
             return 0
-        print(f"meshcat viewer: {viewer.url}  (animation controls: Open Controls > Animations; Ctrl-C to stop)")
+        print(
+            f"meshcat viewer: {viewer.url}  (animation controls: Open Controls > Animations; "
+            "Ctrl-C to stop)"
+        )
         try:
             while True:
                 time.sleep(1.0)

@@ -30,7 +30,9 @@ _EXPORTS = {
     "StepStatus": ".step_status",
     "max_stable_k1": ".stability",
 }
-"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does not import them all."""
+"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does
+not import them all.
+"""
 
 __all__ = [
     "Admittance",

@@ -52,13 +52,20 @@ def _diagonal(value, name: str, nonnegative: bool = True) -> np.ndarray:
         array = np.full(6, float(array))
     elif array.shape == (6, 6):
         if np.any(array - np.diag(np.diag(array))):
-            raise InvalidInput(f"{name} must be diagonal; got off-diagonal entries in a (6, 6) matrix")
+            raise InvalidInput(
+                f"{name} must be diagonal; got off-diagonal entries in a (6, 6) matrix"
+            )
         array = np.diag(array).copy()
     elif array.shape != (6,):
-        raise InvalidInput(f"{name} must be a scalar, a 6-vector or a (6, 6) diagonal matrix, got shape {array.shape}")
+        raise InvalidInput(
+            f"{name} must be a scalar, a 6-vector or a (6, 6) diagonal matrix, got shape "
+            f"{array.shape}"
+        )
     check_finite(array, name)
     if nonnegative and np.any(array < 0):
-        raise InvalidInput(f"{name} must be non-negative (a negative gain pushes into the contact), got {array}")
+        raise InvalidInput(
+            f"{name} must be non-negative (a negative gain pushes into the contact), got {array}"
+        )
     return array.astype(np.float64, copy=True)
 
 
@@ -77,7 +84,9 @@ class AdmittanceState:
 
     def __init__(self, previous_error=None, filtered_derivative=None, started: bool = False):
         self.errors = [0.0] * 6 if previous_error is None else _six_floats(previous_error)
-        self.derivatives = [0.0] * 6 if filtered_derivative is None else _six_floats(filtered_derivative)
+        self.derivatives = (
+            [0.0] * 6 if filtered_derivative is None else _six_floats(filtered_derivative)
+        )
         self.started = bool(started)
 
     @property
@@ -99,7 +108,10 @@ class AdmittanceState:
         self.derivatives = _six_floats(value)
 
     def __repr__(self) -> str:
-        return f"AdmittanceState(previous_error={self.errors}, filtered_derivative={self.derivatives}, started={self.started})"
+        return (
+            f"AdmittanceState(previous_error={self.errors}, "
+            f"filtered_derivative={self.derivatives}, started={self.started})"
+        )
 
 
 def _six_floats(value) -> list[float]:
@@ -131,10 +143,22 @@ class Admittance:
             position form's ``K1·ΔF`` (a weight taken up while the loop runs).
     """
 
-    def __init__(self, k1=0.0, k2=0.0, *, selection=1.0, desired_wrench=0.0, frame: str = "sensor",
-                 force_deadband: float = 0.0, torque_deadband: float = 0.0, derivative_cutoff: float = 10.0,
-                 max_linear_velocity: float = 0.05, max_angular_velocity: float = 0.5, bumpless: bool = True,
-                 saturation: str = "separate"):
+    def __init__(
+        self,
+        k1=0.0,
+        k2=0.0,
+        *,
+        selection=1.0,
+        desired_wrench=0.0,
+        frame: str = "sensor",
+        force_deadband: float = 0.0,
+        torque_deadband: float = 0.0,
+        derivative_cutoff: float = 10.0,
+        max_linear_velocity: float = 0.05,
+        max_angular_velocity: float = 0.5,
+        bumpless: bool = True,
+        saturation: str = "separate",
+    ):
         self.k1 = _diagonal(k1, "k1")
         self.k2 = _diagonal(k2, "k2")
         self.selection = _diagonal(selection, "selection")
@@ -144,12 +168,29 @@ class Admittance:
         if frame not in FRAMES:
             raise InvalidInput(f"frame must be one of {FRAMES}, got {frame!r}")
         self.frame = frame
-        names = ("force_deadband", "torque_deadband", "derivative_cutoff", "max_linear_velocity", "max_angular_velocity")
-        limits = as_vector([force_deadband, torque_deadband, derivative_cutoff, max_linear_velocity, max_angular_velocity],
-                           5, "deadbands, cutoff and velocity limits")
+        names = (
+            "force_deadband",
+            "torque_deadband",
+            "derivative_cutoff",
+            "max_linear_velocity",
+            "max_angular_velocity",
+        )
+        limits = as_vector(
+            [
+                force_deadband,
+                torque_deadband,
+                derivative_cutoff,
+                max_linear_velocity,
+                max_angular_velocity,
+            ],
+            5,
+            "deadbands, cutoff and velocity limits",
+        )
         if np.any(limits[:2] < 0) or np.any(limits[2:] <= 0):
-            raise InvalidInput("deadbands must be >= 0; derivative_cutoff and velocity limits must be > 0, "
-                               f"got {dict(zip(names, limits.tolist()))}")
+            raise InvalidInput(
+                "deadbands must be >= 0; derivative_cutoff and velocity limits must be > 0, "
+                f"got {dict(zip(names, limits.tolist()))}"
+            )
         self.deadband = np.repeat(limits[:2], 3)
         self.derivative_cutoff = float(limits[2])
         self.max_linear_velocity = float(limits[3])
@@ -190,7 +231,9 @@ class Admittance:
             dt: Time since the previous update [s], finite and > 0.
         """
         wrench = as_vector(contact_wrench, 6, "contact_wrench")
-        if not (isinstance(dt, (int, float, np.floating, np.integer)) and math.isfinite(dt) and dt > 0):
+        if not (
+            isinstance(dt, (int, float, np.floating, np.integer)) and math.isfinite(dt) and dt > 0
+        ):
             raise InvalidInput(f"dt must be a finite time > 0 [s], got {dt!r}")
         return np.array(self.update_floats(wrench.tolist(), float(dt)))
 
@@ -204,13 +247,17 @@ class Admittance:
         on 6-vectors.
         """
         state = self.state
-        bumpless_start = not state.started and self.bumpless  # the first error is its own previous one: no kick
+        bumpless_start = (
+            not state.started and self.bumpless
+        )  # the first error is its own previous one: no kick
         state.started = True
         if dt != self._alpha_dt:  # exact discretisation of the first-order low-pass, cached per dt
             self._alpha_dt, self._alpha = dt, derivative_alpha(dt, self.derivative_cutoff)
         alpha = self._alpha
-        # Axis by axis, written out (a loop over zipped lists costs more than the arithmetic): ΔF = F_desired + F'
-        # with the deadband (e − clip(e, ±band), as branches), the filtered dΔF/dt, then S·(K1·dΔF/dt + K2·ΔF).
+        # Axis by axis, written out (a loop over zipped lists costs more than the arithmetic): ΔF =
+        # F_desired + F'
+        # with the deadband (e − clip(e, ±band), as branches), the filtered dΔF/dt, then
+        # S·(K1·dΔF/dt + K2·ΔF).
         d0, d1, d2, d3, d4, d5 = self.desired_wrench.tolist()
         c0, c1, c2, c3, c4, c5 = contact_wrench
         b0, b1, b2, b3, b4, b5 = self.deadband.tolist()
@@ -232,19 +279,31 @@ class Admittance:
         state.errors, state.derivatives = [e0, e1, e2, e3, e4, e5], [g0, g1, g2, g3, g4, g5]
         k0, k1, k2, k3, k4, k5 = self._k1s_floats
         h0, h1, h2, h3, h4, h5 = self._k2s_floats
-        return self.saturate_floats((k0 * g0 + h0 * e0, k1 * g1 + h1 * e1, k2 * g2 + h2 * e2,
-                                     k3 * g3 + h3 * e3, k4 * g4 + h4 * e4, k5 * g5 + h5 * e5))
+        return self.saturate_floats(
+            (
+                k0 * g0 + h0 * e0,
+                k1 * g1 + h1 * e1,
+                k2 * g2 + h2 * e2,
+                k3 * g3 + h3 * e3,
+                k4 * g4 + h4 * e4,
+                k5 * g5 + h5 * e5,
+            )
+        )
 
     def saturate_floats(self, twist):
-        """:meth:`saturate` on six floats: returns ``twist`` itself when within the limits, else six new floats."""
+        """:meth:`saturate` on six floats: returns ``twist`` itself when within the limits, else six
+        new floats.
+        """
         v0, v1, v2, w0, w1, w2 = twist
         linear = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
         angular = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
         if linear <= self.max_linear_velocity and angular <= self.max_angular_velocity:
             return twist
         if self.common_saturation:  # one factor for both parts: the screw (pitch, axis) is kept
-            scale = min(self.max_linear_velocity / max(linear, self.max_linear_velocity),
-                        self.max_angular_velocity / max(angular, self.max_angular_velocity))
+            scale = min(
+                self.max_linear_velocity / max(linear, self.max_linear_velocity),
+                self.max_angular_velocity / max(angular, self.max_angular_velocity),
+            )
             return v0 * scale, v1 * scale, v2 * scale, w0 * scale, w1 * scale, w2 * scale
         if linear > self.max_linear_velocity:
             scale = self.max_linear_velocity / linear
@@ -255,7 +314,9 @@ class Admittance:
         return v0, v1, v2, w0, w1, w2
 
     def saturate(self, twist: np.ndarray) -> np.ndarray:
-        """Scale a twist to the norm limits: each part on its own, or all by one factor (``saturation="common"``)."""
+        """Scale a twist to the norm limits: each part on its own, or all by one factor
+        (``saturation="common"``).
+        """
         values = twist.tolist()
         limited = self.saturate_floats(values)
         return twist if limited is values else np.array(limited)

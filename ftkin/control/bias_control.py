@@ -16,7 +16,9 @@ from ..validation import as_float_array, as_rotation_batch, as_vector
 
 
 class BiasControl:
-    """Bias methods of :class:`~ftkin.control.compensation.Compensator` (a mixin: it holds no state of its own)."""
+    """Bias methods of :class:`~ftkin.control.compensation.Compensator` (a mixin: it holds no state
+    of its own).
+    """
 
     @property
     def bias(self) -> np.ndarray:
@@ -40,7 +42,9 @@ class BiasControl:
         raw = as_vector(raw_wrench, 6, "raw_wrench")
         if len(rotations) != 1:
             raise InvalidInput("rezero takes one (3, 3) rotation")
-        if self._reading_signs is not None:  # a stored sensor sign or reversed axis applies to this reading too
+        if (
+            self._reading_signs is not None
+        ):  # a stored sensor sign or reversed axis applies to this reading too
             raw = raw * self._reading_signs
         bias = raw - self.calibration.tool_gravity_wrench(rotations[0])
         self.set_bias(bias)
@@ -96,14 +100,22 @@ class BiasControl:
             out[inside] = drift.bias_at(times[inside])
         return out
 
-    def compensate_tracked(self, q, raw_wrench, dt: float, *, free: bool | None = None) -> np.ndarray:
-        """:meth:`compensate`, then feed the tracker (if any) with the result; see :meth:`observe_bias`."""
+    def compensate_tracked(
+        self, q, raw_wrench, dt: float, *, free: bool | None = None
+    ) -> np.ndarray:
+        """:meth:`compensate`, then feed the tracker (if any) with the result; see
+        :meth:`observe_bias`.
+        """
         contact = self.compensate(q, raw_wrench)
         self.observe_bias(contact, dt, q=q, free=free)
         return contact
 
-    def observe_bias(self, contact_wrench, dt: float, *, q=None, free: bool | None = None, fault: bool = False) -> bool:
-        """Give the tracker this tick's contact wrench; True when it moved the bias (used from the next call)."""
+    def observe_bias(
+        self, contact_wrench, dt: float, *, q=None, free: bool | None = None, fault: bool = False
+    ) -> bool:
+        """Give the tracker this tick's contact wrench; True when it moved the bias (used from the
+        next call).
+        """
         tracker = self.tracker
         if tracker is None or not tracker.observe(contact_wrench, dt, q=q, free=free, fault=fault):
             return False

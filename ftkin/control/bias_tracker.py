@@ -54,7 +54,8 @@ class BiasTracker:
         k: Consistency threshold in standard deviations (per channel).
         still_speed: Fastest joint speed [rad/s] at which the arm counts as still (detection).
         max_speed: Fastest joint speed [rad/s] at which even a declared-free tick is used.
-        initial_std: Standard deviation of the initial bias [N, N·m] (``[force, torque]`` or ``(6,)``).
+        initial_std: Standard deviation of the initial bias [N, N·m] (``[force, torque]`` or
+        ``(6,)``).
 
     Attributes:
         update_count: Measurement updates made so far.
@@ -65,18 +66,36 @@ class BiasTracker:
             current tick is :attr:`tick_count`).
     """
 
-    def __init__(self, rate, noise, *, window: float = 0.5, guard: float = 0.25, k: float = 4.0, still_speed: float = 0.01,
-                 max_speed: float = 0.2, initial_std=0.0):
+    def __init__(
+        self,
+        rate,
+        noise,
+        *,
+        window: float = 0.5,
+        guard: float = 0.25,
+        k: float = 4.0,
+        still_speed: float = 0.01,
+        max_speed: float = 0.2,
+        initial_std=0.0,
+    ):
         self.rate = as_six_channels(rate, "rate", non_negative=True)
         self.noise = as_six_channels(noise, "noise", non_negative=True)
         if np.any(self.noise <= 0):
             raise InvalidInput(f"noise must be positive, got {self.noise}")
         numbers = np.array([window, guard, k, still_speed, max_speed], dtype=float)
         if not np.all(np.isfinite(numbers)) or np.any(numbers[[0, 2, 3, 4]] <= 0) or numbers[1] < 0:
-            raise InvalidInput(f"window, k, still_speed and max_speed must be finite and > 0, guard ≥ 0, got {numbers}")
-        self.window, self.guard, self.k, self.still_speed, self.max_speed = (float(v) for v in numbers)
+            raise InvalidInput(
+                "window, k, still_speed and max_speed must be finite and > 0, guard ≥ 0, got "
+                f"{numbers}"
+            )
+        self.window, self.guard, self.k, self.still_speed, self.max_speed = (
+            float(v) for v in numbers
+        )
         self._initial_std = as_six_channels(initial_std, "initial_std", non_negative=True)
-        self._rate2, self._noise2 = (self.rate**2).tolist(), (self.noise**2).tolist()  # the per-tick gate runs on floats
+        self._rate2, self._noise2 = (
+            (self.rate**2).tolist(),
+            (self.noise**2).tolist(),
+        )  # the per-tick gate runs on floats
         self.update_count = 0
         self.last_update_span = 0
         self.last_update_ticks = (0, 0)
@@ -97,47 +116,65 @@ class BiasTracker:
         drift = getattr(calibration, "drift", None)
         if rate is None:
             if drift is None or drift.rate is None:
-                raise InvalidInput("the calibration has no random-walk drift rate: give rate=[N/√s, N·m/√s]")
+                raise InvalidInput(
+                    "the calibration has no random-walk drift rate: give rate=[N/√s, N·m/√s]"
+                )
             rate = drift.rate
         if noise is None:
             diagnostics = getattr(calibration, "diagnostics", None)
             if diagnostics is None:
-                raise InvalidInput("the calibration has no noise estimate (method 'linear'?): give noise=[N, N·m]")
+                raise InvalidInput(
+                    "the calibration has no noise estimate (method 'linear'?): give noise=[N, N·m]"
+                )
             noise = diagnostics.noise.channel_std
         errors = getattr(calibration, "std_errors", None)
         if errors is not None and "initial_std" not in options:
-            options["initial_std"] = np.concatenate([errors["force_offset"], errors["torque_offset"]])
+            options["initial_std"] = np.concatenate(
+                [errors["force_offset"], errors["torque_offset"]]
+            )
         tracker = cls(rate, noise, **options)
         tracker.reset(calibration.bias)
         return tracker
 
     # ------------------------------------------------------------- state
     def reset(self, bias, std=None) -> None:
-        """Restart from ``bias`` ``(6,)`` [N, N·m] with standard deviation ``std`` (default: ``initial_std``)."""
+        """Restart from ``bias`` ``(6,)`` [N, N·m] with standard deviation ``std`` (default:
+        ``initial_std``).
+        """
         self._bias = as_vector(bias, 6, "bias [F0, M0]").copy()
-        self._filter_variance = (self._initial_std if std is None else as_six_channels(std, "std", non_negative=True)) ** 2
+        self._filter_variance = (
+            self._initial_std if std is None else as_six_channels(std, "std", non_negative=True)
+        ) ** 2
         self._clock = 0.0
-        self._filter_time = 0.0  # time of the filter's last measurement (the delayed filter's clock) [s]
+        self._filter_time = (
+            0.0  # time of the filter's last measurement (the delayed filter's clock) [s]
+        )
         self._tick = 0
         self._previous_q = None
         self.interrupt()
 
     def interrupt(self) -> None:
         """Throw the readings not yet used away (a fault, a contact, a jump)."""
-        self._waiting = deque()  # (time [s], tick, measured bias: six floats) of consistent ticks not yet used
+        self._waiting = (
+            deque()
+        )  # (time [s], tick, measured bias: six floats) of consistent ticks not yet used
         self._waiting_sum = [0.0] * 6
         self._settle = 0.0
         self._run_start = None  # time of the first waiting tick of this run [s]
 
     def _end_run(self, dt: float) -> bool:
-        """A failed tick at the clock: use the waiting ticks that had ``guard`` s of consistent ticks after them, drop the rest.
+        """A failed tick at the clock: use the waiting ticks that had ``guard`` s of consistent
+        ticks after them, drop the rest.
 
         True when that moved the bias.
         """
         tolerance = 1e-9 * max(dt, 1.0)
         last_consistent = self._clock - dt
         used = False
-        if self._run_start is not None and last_consistent - self._run_start >= self.window + self.guard - tolerance:
+        if (
+            self._run_start is not None
+            and last_consistent - self._run_start >= self.window + self.guard - tolerance
+        ):
             used = self._use(last_consistent - self.guard + tolerance)
         self.interrupt()
         return used
@@ -162,7 +199,9 @@ class BiasTracker:
         return np.sqrt(self._variance)
 
     # -------------------------------------------------------------- tick
-    def observe(self, contact_wrench, dt: float, *, q=None, free: bool | None = None, fault: bool = False) -> bool:
+    def observe(
+        self, contact_wrench, dt: float, *, q=None, free: bool | None = None, fault: bool = False
+    ) -> bool:
         """Feed one tick; True when the bias estimate changed (read :attr:`bias`).
 
         Args:
@@ -180,10 +219,20 @@ class BiasTracker:
         self._clock += dt
         self._tick += 1
         speed = 0.0
-        try:  # on Python floats, as the rest of the tick: numpy's per-call cost dominates on 6-vectors
-            positions = None if q is None else q.tolist() if type(q) is np.ndarray else [float(value) for value in q]
-            contact = (contact_wrench.tolist() if type(contact_wrench) is np.ndarray
-                       else [float(value) for value in contact_wrench])
+        # on Python floats, as the rest of the tick: numpy's per-call cost dominates on 6-vectors
+        try:
+            positions = (
+                None
+                if q is None
+                else q.tolist()
+                if type(q) is np.ndarray
+                else [float(value) for value in q]
+            )
+            contact = (
+                contact_wrench.tolist()
+                if type(contact_wrench) is np.ndarray
+                else [float(value) for value in contact_wrench]
+            )
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q and contact_wrench must be numbers: {error}") from None
         if positions is not None:
@@ -200,13 +249,17 @@ class BiasTracker:
             return self._end_run(dt)
         elapsed, k = self._clock - self._filter_time, self.k
         variance = [v + r2 * elapsed for v, r2 in zip(self._filter_variance.tolist(), self._rate2)]
-        if free is None and any(abs(c) > k * math.sqrt(n2 + v) for c, n2, v in zip(contact, self._noise2, variance)):
+        if free is None and any(
+            abs(c) > k * math.sqrt(n2 + v) for c, n2, v in zip(contact, self._noise2, variance)
+        ):
             return self._end_run(dt)
         if not free and self._settle < self.guard:
             self._settle += dt
             return False
         bias = self._bias.tolist()
-        measured = [c + b for c, b in zip(contact, bias)]  # raw − tool gravity: this tick's measurement of the bias
+        measured = [
+            c + b for c, b in zip(contact, bias)
+        ]  # raw − tool gravity: this tick's measurement of the bias
         if self._run_start is None:
             self._run_start = self._clock
         self._waiting.append((self._clock, self._tick, measured))
@@ -214,8 +267,10 @@ class BiasTracker:
         if free:
             return self._use(self._clock)
         count = len(self._waiting)
-        if any(abs(s / count - b) > k * math.sqrt(n2 / count + v)
-               for s, b, n2, v in zip(self._waiting_sum, bias, self._noise2, variance)):
+        if any(
+            abs(s / count - b) > k * math.sqrt(n2 / count + v)
+            for s, b, n2, v in zip(self._waiting_sum, bias, self._noise2, variance)
+        ):
             self.interrupt()  # the waiting ticks together are inconsistent: none of them is used
             return False
         tolerance = 1e-9 * max(dt, 1.0)
@@ -224,14 +279,22 @@ class BiasTracker:
         return self._use(self._clock - self.guard + tolerance)
 
     def _use(self, until: float) -> bool:
-        """Kalman updates, in time order, with every waiting tick taken at or before ``until`` [s]."""
+        """Kalman updates, in time order, with every waiting tick taken at or before ``until``
+        [s].
+        """
         waiting = self._waiting
         if not waiting or waiting[0][0] > until:
             return False
-        bias, variance, filter_time = self._bias.tolist(), self._filter_variance.tolist(), self._filter_time
+        bias, variance, filter_time = (
+            self._bias.tolist(),
+            self._filter_variance.tolist(),
+            self._filter_time,
+        )
         rate_squared, noise_squared = self._rate2, self._noise2
         first_tick = last_tick = waiting[0][1]
-        while waiting and waiting[0][0] <= until:  # per channel, on floats (six-element numpy calls cost more)
+        while (
+            waiting and waiting[0][0] <= until
+        ):  # per channel, on floats (six-element numpy calls cost more)
             time, last_tick, measured = waiting.popleft()
             self._waiting_sum = [s - m for s, m in zip(self._waiting_sum, measured)]
             elapsed = time - filter_time
@@ -241,7 +304,11 @@ class BiasTracker:
                 bias[c] += gain * (measured[c] - bias[c])
                 variance[c] = (1.0 - gain) * predicted
             filter_time = time
-        self._bias, self._filter_variance, self._filter_time = np.array(bias), np.array(variance), filter_time
+        self._bias, self._filter_variance, self._filter_time = (
+            np.array(bias),
+            np.array(variance),
+            filter_time,
+        )
         self.update_count += 1
         self.last_update_span = self._tick - first_tick
         self.last_update_ticks = (first_tick, last_tick)

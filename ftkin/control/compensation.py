@@ -58,19 +58,34 @@ class Compensator(BiasControl):
         InvalidInput: ``arm`` differs from the calibration's record (the message says how).
     """
 
-    def __init__(self, calibration: SensorModel, arm: Arm | None = None, tracker: BiasTracker | None = None, *,
-                 allow_other_arm: bool = False):
+    def __init__(
+        self,
+        calibration: SensorModel,
+        arm: Arm | None = None,
+        tracker: BiasTracker | None = None,
+        *,
+        allow_other_arm: bool = False,
+    ):
         if not isinstance(calibration, SensorModel):
-            raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
+            raise InvalidInput(
+                "calibration must be an ftkin SensorModel or CalibrationResult, got "
+                f"{type(calibration).__name__}"
+            )
         if tracker is not None and not isinstance(tracker, BiasTracker):
-            raise InvalidInput(f"tracker must be an ftkin BiasTracker or None, got {type(tracker).__name__}")
+            raise InvalidInput(
+                f"tracker must be an ftkin BiasTracker or None, got {type(tracker).__name__}"
+            )
         record = getattr(calibration, "kinematics", None)
         if arm is not None and record is not None and not allow_other_arm:
             problems = record.mismatches(arm)
             if problems:
                 raise InvalidInput(
-                    "this arm is not the one the calibration was made with (" + record.describe() + "): "
-                    + "; ".join(problems) + ". Pass allow_other_arm=True (ftkin compensate: --allow-other-arm) if that is deliberate."
+                    "this arm is not the one the calibration was made with ("
+                    + record.describe()
+                    + "): "
+                    + "; ".join(problems)
+                    + ". Pass allow_other_arm=True (ftkin compensate: --allow-other-arm) if that "
+                    "is deliberate."
                 )
         self.calibration = calibration
         mount = getattr(calibration, "mount_rotation", None)
@@ -78,7 +93,8 @@ class Compensator(BiasControl):
         signs = getattr(calibration, "reading_signs", None)
         self._reading_signs = None if signs is None or np.all(signs == 1.0) else np.array(signs)
         if self._reading_signs is not None:
-            # Shadow the two kernels (every other path calls one of them) with ones that apply the signs.
+            # Shadow the two kernels (every other path calls one of them) with ones that apply the
+            # signs.
             self.contact_floats = self._signed_contact_floats
             self._contact_batch = self._signed_contact_batch
         self._gravity_in_base = np.array(calibration.gravity_in_base)
@@ -93,21 +109,31 @@ class Compensator(BiasControl):
     def _signed_contact_floats(self, rotation_rows, raw) -> tuple[float, ...]:
         s0, s1, s2, s3, s4, s5 = self._reading_signs.tolist()
         w0, w1, w2, w3, w4, w5 = raw
-        return Compensator.contact_floats(self, rotation_rows, (w0 * s0, w1 * s1, w2 * s2, w3 * s3, w4 * s4, w5 * s5))
+        return Compensator.contact_floats(
+            self, rotation_rows, (w0 * s0, w1 * s1, w2 * s2, w3 * s3, w4 * s4, w5 * s5)
+        )
 
-    def _signed_contact_batch(self, raw: np.ndarray, gravity_in_sensor: np.ndarray, bias=None) -> np.ndarray:
+    def _signed_contact_batch(
+        self, raw: np.ndarray, gravity_in_sensor: np.ndarray, bias=None
+    ) -> np.ndarray:
         return Compensator._contact_batch(self, raw * self._reading_signs, gravity_in_sensor, bias)
 
     def __repr__(self) -> str:
         calibration = self.calibration
-        arm = "none" if self.arm is None else f"{self.arm.sensor_frame} of {getattr(self.arm.urdf_path, 'name', '?')}"
+        arm = (
+            "none"
+            if self.arm is None
+            else f"{self.arm.sensor_frame} of {getattr(self.arm.urdf_path, 'name', '?')}"
+        )
         return (
-            f"Compensator(tool {calibration.tool_weight:.4g} N, COM {np.round(calibration.center_of_mass, 4).tolist()} m, "
+            f"Compensator(tool {calibration.tool_weight:.4g} N, COM "
+            f"{np.round(calibration.center_of_mass, 4).tolist()} m, "
             f"bias {np.round(calibration.bias, 4).tolist()} [N, N·m], arm {arm})"
         )
 
     def refresh_floats(self) -> None:
-        """Copy the parameter arrays (``_bias``, ``_gravity_in_base``, ``_com``) into the float path.
+        """Copy the parameter arrays (``_bias``, ``_gravity_in_base``, ``_com``) into the float
+        path.
 
         The one-sample path reads Python floats: call this after replacing a
         parameter array at run time (e.g. a re-zeroed bias).
@@ -118,7 +144,9 @@ class Compensator(BiasControl):
 
     def _require_arm(self) -> Arm:
         if self.arm is None:
-            raise InvalidInput("this Compensator has no Arm: pass arm= to use joint angles, or give R_BS")
+            raise InvalidInput(
+                "this Compensator has no Arm: pass arm= to use joint angles, or give R_BS"
+            )
         return self.arm
 
     # ------------------------------------------------------------ one sample
@@ -131,14 +159,26 @@ class Compensator(BiasControl):
         arm = self._require_arm()
         try:
             q = np.asarray(q, dtype=np.float64)
-            raw = raw_wrench.tolist() if type(raw_wrench) is np.ndarray and raw_wrench.dtype == np.float64 \
+            raw = (
+                raw_wrench.tolist()
+                if type(raw_wrench) is np.ndarray and raw_wrench.dtype == np.float64
                 else np.asarray(raw_wrench, dtype=np.float64).tolist()
+            )
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q and raw_wrench must be numeric: {error}") from None
-        if q.shape != self._q_shape or type(raw) is not list or len(raw) != 6 or type(raw[0]) is not float:
-            raise InvalidInput(f"expected q of shape {self._q_shape} and raw_wrench of shape (6,), "
-                               f"got {q.shape} and {np.shape(raw_wrench)}")
-        if not (math.isfinite(sum(raw)) and math.isfinite(sum(q.tolist()))) and not (np.isfinite(q).all() and all(map(math.isfinite, raw))):
+        if (
+            q.shape != self._q_shape
+            or type(raw) is not list
+            or len(raw) != 6
+            or type(raw[0]) is not float
+        ):
+            raise InvalidInput(
+                f"expected q of shape {self._q_shape} and raw_wrench of shape (6,), "
+                f"got {q.shape} and {np.shape(raw_wrench)}"
+            )
+        if not (math.isfinite(sum(raw)) and math.isfinite(sum(q.tolist()))) and not (
+            np.isfinite(q).all() and all(map(math.isfinite, raw))
+        ):
             raise InvalidInput(f"q and raw_wrench must be finite, got q={q} raw_wrench={raw}")
         return np.array(self.contact_floats(arm.sensor_rotation_unchecked(q).tolist(), raw))
 
@@ -150,9 +190,16 @@ class Compensator(BiasControl):
                 or ``raw_wrench`` not six finite numbers.
         """
         rotation, raw = rotation_sensor_to_base, raw_wrench
-        if type(rotation) is np.ndarray and type(raw) is np.ndarray and rotation.dtype is FLOAT64 and raw.dtype is FLOAT64:
-            # The common case, two float64 arrays: no conversion, the closed-form check on their floats. A wrong
-            # shape fails there (unpacking R's rows, or a nested reading in the sum): the general path names it.
+        if (
+            type(rotation) is np.ndarray
+            and type(raw) is np.ndarray
+            and rotation.dtype is FLOAT64
+            and raw.dtype is FLOAT64
+        ):
+            # The common case, two float64 arrays: no conversion, the closed-form check on their
+            # floats. A wrong
+            # shape fails there (unpacking R's rows, or a nested reading in the sum): the general
+            # path names it.
             try:
                 rows, values = rotation.tolist(), raw.tolist()
                 valid = is_rotation_rows(rows) and len(values) == 6 and math.isfinite(sum(values))
@@ -160,7 +207,9 @@ class Compensator(BiasControl):
                 valid = False
             if valid:
                 return np.array(self.contact_floats(rows, values))
-        rows = rotation_rows(rotation_sensor_to_base)  # closed-form check on floats, None if not a rotation
+        rows = rotation_rows(
+            rotation_sensor_to_base
+        )  # closed-form check on floats, None if not a rotation
         try:
             raw = np.asarray(raw_wrench, dtype=np.float64)
         except (TypeError, ValueError):
@@ -173,18 +222,23 @@ class Compensator(BiasControl):
         rotations, _ = as_rotation_batch(rotation_sensor_to_base)
         batch, _ = as_batch(raw_wrench, 6, "raw_wrench")
         if len(rotations) != 1 or len(batch) != 1:
-            raise InvalidInput("compensate_rotation takes one (3, 3) rotation and one (6,) wrench; use compensate_batch")
+            raise InvalidInput(
+                "compensate_rotation takes one (3, 3) rotation and one (6,) wrench; use "
+                "compensate_batch"
+            )
         return np.array(self.contact_floats(rotations[0].tolist(), batch[0].tolist()))
 
     def compensate_rotation_unchecked(self, rotation: np.ndarray, raw: np.ndarray) -> np.ndarray:
-        """:meth:`compensate_rotation` without validation: ``R_BS`` ``(3, 3)`` and ``raw`` ``(6,)`` float arrays.
+        """:meth:`compensate_rotation` without validation: ``R_BS`` ``(3, 3)`` and ``raw`` ``(6,)``
+        float arrays.
 
         For control loops that validated their inputs already; returns a new array.
         """
         return np.array(self.contact_floats(rotation.tolist(), raw.tolist()))
 
     def contact_floats(self, rotation_rows, raw) -> tuple[float, ...]:
-        """The compensation on Python floats: ``R_BS.tolist()`` and six raw floats → six contact floats.
+        """The compensation on Python floats: ``R_BS.tolist()`` and six raw floats → six contact
+        floats.
 
         Every one-sample path (and ``JointAdmittance.step``) runs here: numpy's
         per-call overhead dominates on 3-vectors; the IEEE operations are those
@@ -209,14 +263,17 @@ class Compensator(BiasControl):
 
     # ----------------------------------------------------------------- batch
     def compensate_batch(self, rotation_sensor_to_base, raw_wrenches, times=None) -> np.ndarray:
-        """Contact wrenches ``(N, 6)`` from ``(N, 3, 3)`` ``R_BS`` and ``(N, 6)`` raw readings (vectorized).
+        """Contact wrenches ``(N, 6)`` from ``(N, 3, 3)`` ``R_BS`` and ``(N, 6)`` raw readings
+        (vectorized).
 
         ``times``: ``(N,)`` reading times [s]; the bias is then :meth:`bias_at` those times.
         """
         rotations, _ = as_rotation_batch(rotation_sensor_to_base)
         raw, _ = as_batch(raw_wrenches, 6, "raw_wrenches")
         if len(rotations) != len(raw):
-            raise InvalidInput(f"{len(rotations)} rotations but {len(raw)} wrenches; expected one each")
+            raise InvalidInput(
+                f"{len(rotations)} rotations but {len(raw)} wrenches; expected one each"
+            )
         bias = None
         if times is not None:
             bias = self.bias_at(times)
@@ -224,15 +281,22 @@ class Compensator(BiasControl):
                 raise InvalidInput(f"{len(bias)} times but {len(raw)} wrenches; expected one each")
         return self.compensate_batch_unchecked(rotations, raw, bias)
 
-    def compensate_batch_unchecked(self, rotations: np.ndarray, raw: np.ndarray, bias: np.ndarray | None = None) -> np.ndarray:
+    def compensate_batch_unchecked(
+        self, rotations: np.ndarray, raw: np.ndarray, bias: np.ndarray | None = None
+    ) -> np.ndarray:
         """:meth:`compensate_batch` without validation, for callers that validated already.
 
         ``bias``: ``(N, 6)`` per-reading bias [N, N·m] (default: the current one).
         """
-        return self._contact_batch(raw, np.einsum("nji,j->ni", rotations, self._gravity_in_base), bias)
+        return self._contact_batch(
+            raw, np.einsum("nji,j->ni", rotations, self._gravity_in_base), bias
+        )
 
-    def _contact_batch(self, raw: np.ndarray, gravity_in_sensor: np.ndarray, bias: np.ndarray | None = None) -> np.ndarray:
-        """``raw − bias − [Gs, P × Gs]`` ``(N, 6)`` from the tool weight in the sensor frame ``Gs`` ``(N, 3)``.
+    def _contact_batch(
+        self, raw: np.ndarray, gravity_in_sensor: np.ndarray, bias: np.ndarray | None = None
+    ) -> np.ndarray:
+        """``raw − bias − [Gs, P × Gs]`` ``(N, 6)`` from the tool weight in the sensor frame ``Gs``
+        ``(N, 3)``.
 
         Computed column by column on blocks (no ``(N, 3)`` temporary for ``P × Gs``).
         """
@@ -240,7 +304,8 @@ class Compensator(BiasControl):
         out = np.empty_like(raw)
         px, py, pz = self._com_floats
         per_sample, gravity = np.ndim(bias) == 2, gravity_in_sensor.T
-        # Column by column on blocks: (N,) operations run as one vectorised loop each, where (N, 6) with a (6,)
+        # Column by column on blocks: (N,) operations run as one vectorised loop each, where (N, 6)
+        # with a (6,)
         # operand loops over rows of six; the block's temporaries stay below the mmap threshold.
         for start in range(0, len(out), _BLOCK):
             stop = start + _BLOCK
@@ -258,19 +323,28 @@ class Compensator(BiasControl):
         return out
 
     def compensate_joint_positions(self, joint_positions, raw_wrenches) -> np.ndarray:
-        """Contact wrenches ``(N, 6)`` from ``(N, nq)`` joint angles [rad] and ``(N, 6)`` raw readings."""
+        """Contact wrenches ``(N, 6)`` from ``(N, nq)`` joint angles [rad] and ``(N, 6)`` raw
+        readings.
+        """
         arm = self._require_arm()
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
         raw, _ = as_batch(raw_wrenches, 6, "raw_wrenches")
         if len(configurations) != len(raw):
-            raise InvalidInput(f"{len(configurations)} rotations but {len(raw)} wrenches (one rotation per joint configuration); "
-                               "expected one each")
-        return self._contact_batch(raw, arm.vectors_in_sensor_unchecked(configurations, self._gravity_in_base))
+            raise InvalidInput(
+                f"{len(configurations)} rotations but {len(raw)} wrenches (one rotation per joint "
+                "configuration); "
+                "expected one each"
+            )
+        return self._contact_batch(
+            raw, arm.vectors_in_sensor_unchecked(configurations, self._gravity_in_base)
+        )
 
     def compensate_samples(self, samples: Samples) -> np.ndarray:
-        """Contact wrenches ``(N, 6)`` of a :class:`~ftkin.calibration.samples.Samples` (at their times, if any).
+        """Contact wrenches ``(N, 6)`` of a :class:`~ftkin.calibration.samples.Samples` (at their
+        times, if any).
 
-        Samples read from joint angles hold the URDF's ``R_BS``: the calibration's mount is applied to them.
+        Samples read from joint angles hold the URDF's ``R_BS``: the calibration's mount is applied
+        to them.
         """
         rotations = samples.rotations
         mount = getattr(self.calibration, "mount_rotation", None)
@@ -281,7 +355,9 @@ class Compensator(BiasControl):
 
     @staticmethod
     def payload_weight(contact_wrench) -> np.ndarray | float:
-        """Weight of a held load ``|F'|`` [N] from contact wrench ``(6,)`` → float or ``(N, 6)`` → ``(N,)`` (arm still)."""
+        """Weight of a held load ``|F'|`` [N] from contact wrench ``(6,)`` → float or ``(N, 6)`` →
+        ``(N,)`` (arm still).
+        """
         wrench, single = as_batch(contact_wrench, 6, "contact_wrench")
         norms = np.linalg.norm(wrench[:, :3], axis=1)
         return float(norms[0]) if single else norms

@@ -36,7 +36,9 @@ class ControlFrame:
         rotation_tool_to_sensor: ``R_ST`` ``(3, 3)``, only used for ``"tool"``.
     """
 
-    def __init__(self, frame: str = "sensor", point_in_sensor=(0.0, 0.0, 0.0), rotation_tool_to_sensor=None):
+    def __init__(
+        self, frame: str = "sensor", point_in_sensor=(0.0, 0.0, 0.0), rotation_tool_to_sensor=None
+    ):
         if frame not in FRAMES:
             raise InvalidInput(f"frame must be one of {FRAMES}, got {frame!r}")
         self.frame = frame
@@ -44,22 +46,36 @@ class ControlFrame:
         self.point_in_sensor = np.zeros(3) if frame == "sensor" else point.copy()
         self.rotation_tool_to_sensor = np.eye(3)
         if rotation_tool_to_sensor is not None:
-            rotations, single = as_rotation_batch(rotation_tool_to_sensor, "rotation_tool_to_sensor")
+            rotations, single = as_rotation_batch(
+                rotation_tool_to_sensor, "rotation_tool_to_sensor"
+            )
             if not single:
-                raise InvalidInput(f"rotation_tool_to_sensor must be one (3, 3) rotation matrix, got shape {rotations.shape}")
+                raise InvalidInput(
+                    "rotation_tool_to_sensor must be one (3, 3) rotation matrix, got shape "
+                    f"{rotations.shape}"
+                )
             if frame == "tool":
                 self.rotation_tool_to_sensor = rotations[0].copy()
-        # The transports' constants as Python floats (the arrays above are copies: the caller's stay theirs).
+        # The transports' constants as Python floats (the arrays above are copies: the caller's stay
+        # theirs).
         self._r = self.point_in_sensor.tolist()
         self._rotation_rows = self.rotation_tool_to_sensor.tolist()
         self._inverse_rows = self.rotation_tool_to_sensor.T.tolist()
 
-    def wrench_from_sensor(self, wrench_in_sensor: np.ndarray, rotation_sensor_to_base: np.ndarray) -> np.ndarray:
+    def wrench_from_sensor(
+        self, wrench_in_sensor: np.ndarray, rotation_sensor_to_base: np.ndarray
+    ) -> np.ndarray:
         """``(6,)`` wrench at the control point in this frame's axes, from the sensor's ``(6,)``."""
-        return np.array(self.wrench_floats(wrench_in_sensor.tolist(), rotation_sensor_to_base.tolist()))
+        return np.array(
+            self.wrench_floats(wrench_in_sensor.tolist(), rotation_sensor_to_base.tolist())
+        )
 
-    def twist_to_sensor_origin(self, twist: np.ndarray, rotation_sensor_to_base: np.ndarray) -> np.ndarray:
-        """Twist ``[v; ω]`` of the sensor origin in base axes, from a control-point twist in this frame's axes."""
+    def twist_to_sensor_origin(
+        self, twist: np.ndarray, rotation_sensor_to_base: np.ndarray
+    ) -> np.ndarray:
+        """Twist ``[v; ω]`` of the sensor origin in base axes, from a control-point twist in this
+        frame's axes.
+        """
         return np.array(self.twist_floats(twist.tolist(), rotation_sensor_to_base.tolist()))
 
     # The two transports on Python floats (the control tick's path; the methods above wrap them).
@@ -70,24 +86,61 @@ class ControlFrame:
         mx, my, mz = mx - (ry * fz - rz * fy), my - (rz * fx - rx * fz), mz - (rx * fy - ry * fx)
         if self.frame == "sensor":
             return fx, fy, fz, mx, my, mz
-        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation_rows if self.frame == "base" else self._inverse_rows
-        return (r00 * fx + r01 * fy + r02 * fz, r10 * fx + r11 * fy + r12 * fz, r20 * fx + r21 * fy + r22 * fz,
-                r00 * mx + r01 * my + r02 * mz, r10 * mx + r11 * my + r12 * mz, r20 * mx + r21 * my + r22 * mz)
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = (
+            rotation_rows if self.frame == "base" else self._inverse_rows
+        )
+        return (
+            r00 * fx + r01 * fy + r02 * fz,
+            r10 * fx + r11 * fy + r12 * fz,
+            r20 * fx + r21 * fy + r22 * fz,
+            r00 * mx + r01 * my + r02 * mz,
+            r10 * mx + r11 * my + r12 * mz,
+            r20 * mx + r21 * my + r22 * mz,
+        )
 
     def twist_floats(self, twist, rotation_rows) -> tuple[float, ...]:
-        """:meth:`twist_to_sensor_origin` on six floats and ``R_BS.tolist()``; returns six floats."""
+        """:meth:`twist_to_sensor_origin` on six floats and ``R_BS.tolist()``; returns six
+        floats.
+        """
         vx, vy, vz, wx, wy, wz = twist
         (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation_rows  # R_BS, written out below
         if self.frame == "tool":  # tool axes to sensor axes (R_ST, written out)
             (t00, t01, t02), (t10, t11, t12), (t20, t21, t22) = self._rotation_rows
-            vx, vy, vz = t00 * vx + t01 * vy + t02 * vz, t10 * vx + t11 * vy + t12 * vz, t20 * vx + t21 * vy + t22 * vz
-            wx, wy, wz = t00 * wx + t01 * wy + t02 * wz, t10 * wx + t11 * wy + t12 * wz, t20 * wx + t21 * wy + t22 * wz
+            vx, vy, vz = (
+                t00 * vx + t01 * vy + t02 * vz,
+                t10 * vx + t11 * vy + t12 * vz,
+                t20 * vx + t21 * vy + t22 * vz,
+            )
+            wx, wy, wz = (
+                t00 * wx + t01 * wy + t02 * wz,
+                t10 * wx + t11 * wy + t12 * wz,
+                t20 * wx + t21 * wy + t22 * wz,
+            )
         if self.frame != "base":  # sensor axes to base axes
-            vx, vy, vz = r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz
-            wx, wy, wz = r00 * wx + r01 * wy + r02 * wz, r10 * wx + r11 * wy + r12 * wz, r20 * wx + r21 * wy + r22 * wz
+            vx, vy, vz = (
+                r00 * vx + r01 * vy + r02 * vz,
+                r10 * vx + r11 * vy + r12 * vz,
+                r20 * vx + r21 * vy + r22 * vz,
+            )
+            wx, wy, wz = (
+                r00 * wx + r01 * wy + r02 * wz,
+                r10 * wx + r11 * wy + r12 * wz,
+                r20 * wx + r21 * wy + r22 * wz,
+            )
         rx, ry, rz = self._r
-        px, py, pz = r00 * rx + r01 * ry + r02 * rz, r10 * rx + r11 * ry + r12 * rz, r20 * rx + r21 * ry + r22 * rz
-        return vx - (wy * pz - wz * py), vy - (wz * px - wx * pz), vz - (wx * py - wy * px), wx, wy, wz  # v − ω × p
+        px, py, pz = (
+            r00 * rx + r01 * ry + r02 * rz,
+            r10 * rx + r11 * ry + r12 * rz,
+            r20 * rx + r21 * ry + r22 * rz,
+        )
+        return (
+            vx - (wy * pz - wz * py),
+            vy - (wz * px - wx * pz),
+            vz - (wx * py - wy * px),
+            wx,
+            wy,
+            wz,
+        )  # v − ω × p
 
 
 def control_frame_for(arm: Arm, frame: str, control_point: str | None = None) -> ControlFrame:
@@ -106,10 +159,15 @@ def control_frame_for(arm: Arm, frame: str, control_point: str | None = None) ->
     if control_point == "sensor" or frame == "sensor":
         return ControlFrame(frame)
     if arm.tool_frame_id is None:
-        raise InvalidInput("this Arm has no tool frame: load it with tool_frame= or use control_point='sensor'")
+        raise InvalidInput(
+            "this Arm has no tool frame: load it with tool_frame= or use control_point='sensor'"
+        )
     sensor, tool = arm.model.frames[arm.sensor_frame_id], arm.model.frames[arm.tool_frame_id]
     if sensor.parentJoint != tool.parentJoint:
-        raise InvalidInput(f"tool frame {arm.tool_frame!r} is not on the same joint as sensor frame {arm.sensor_frame!r}; "
-                           "the control point must be rigidly attached to the sensor")
+        raise InvalidInput(
+            f"tool frame {arm.tool_frame!r} is not on the same joint as sensor frame "
+            f"{arm.sensor_frame!r}; "
+            "the control point must be rigidly attached to the sensor"
+        )
     relative = sensor.placement.inverse() * tool.placement
     return ControlFrame(frame, relative.translation, relative.rotation)

@@ -14,8 +14,12 @@ _posv = None
 """LAPACK's ``dposv`` (Cholesky factor and solve in one call), loaded with scipy on first use."""
 
 
-def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, manipulability_threshold: float = 0.005,
-                         max_damping: float = 0.05) -> tuple[np.ndarray, float, float]:
+def damped_least_squares(
+    jacobian: np.ndarray,
+    twist: np.ndarray,
+    manipulability_threshold: float = 0.005,
+    max_damping: float = 0.05,
+) -> tuple[np.ndarray, float, float]:
     """``dq = Jᵀ(J Jᵀ + λ² I)⁻¹ V`` with λ growing near singularities.
 
     The damping follows Nakamura and Hanafusa: with the manipulability
@@ -35,10 +39,16 @@ def damped_least_squares(jacobian: np.ndarray, twist: np.ndarray, manipulability
     if _posv is None:
         from scipy.linalg.lapack import dposv as _posv
     gram = np.dot(jacobian, jacobian.T)
-    factor, solution, info = _posv(gram, twist)  # one factorisation (gram kept); w from its diagonal
+    factor, solution, info = _posv(
+        gram, twist
+    )  # one factorisation (gram kept); w from its diagonal
     manipulability = math.prod(factor.diagonal().tolist()) if info == 0 else 0.0
     if manipulability >= manipulability_threshold:
-        return np.dot(solution, jacobian), manipulability, 0.0  # Jᵀ x (np.dot: less overhead than @ on 6×6)
+        return (
+            np.dot(solution, jacobian),
+            manipulability,
+            0.0,
+        )  # Jᵀ x (np.dot: less overhead than @ on 6×6)
     damping = max_damping * (1.0 - manipulability / manipulability_threshold)
     gram.flat[::7] += damping * damping
     return np.dot(_posv(gram, twist, overwrite_a=True)[1], jacobian), manipulability, damping

@@ -55,89 +55,152 @@ class DynamicCompensator:
             records (as :class:`~ftkin.control.compensation.Compensator`).
     """
 
-    def __init__(self, calibration: SensorModel, arm: Arm, inertial_parameters=None, *, allow_other_arm: bool = False):
+    def __init__(
+        self,
+        calibration: SensorModel,
+        arm: Arm,
+        inertial_parameters=None,
+        *,
+        allow_other_arm: bool = False,
+    ):
         if not isinstance(arm, Arm):
             raise InvalidInput(f"arm must be an ftkin Arm, got {type(arm).__name__}")
         self.static = Compensator(calibration, arm, allow_other_arm=allow_other_arm)
         self.calibration = calibration
-        self.arm = self.static.arm  # with the calibration's mount folded into the sensor frame, if any
+        self.arm = (
+            self.static.arm
+        )  # with the calibration's mount folded into the sensor frame, if any
         self.inertial_parameters = _dynamic_parameters(calibration, inertial_parameters)
         self._data = self.arm.model.createData()
         self._model, self._frame = self.arm.model, self.arm.sensor_frame_id
         self._nq = arm.nq
         self._q_shape = (arm.nq,)
-        self._contact_floats = self.static.contact_floats  # its kernel: current bias (re-zeroed or tracked), reading signs
+        self._contact_floats = (
+            self.static.contact_floats
+        )  # its kernel: current bias (re-zeroed or tracked), reading signs
         self._stream: CausalDifferentiator | None = None
         self._raw_buffer: deque = deque()
 
     # ------------------------------------------------------------ one sample
     def compensate_moving(self, q, dq, ddq, raw_wrench) -> np.ndarray:
-        """Contact wrench ``(6,)`` [N, N·m] from ``q`` [rad], ``dq`` [rad/s], ``ddq`` [rad/s²] ``(nq,)`` and one raw reading.
+        """Contact wrench ``(6,)`` [N, N·m] from ``q`` [rad], ``dq`` [rad/s], ``ddq`` [rad/s²]
+        ``(nq,)`` and one raw reading.
 
         The control-loop path: one forward-kinematics call with velocities and
-        accelerations, three frame queries, Pinocchio's body regressor times θ and the static kernel on floats.
+        accelerations, three frame queries, Pinocchio's body regressor times θ and the static kernel
+        on floats.
         """
         return np.array(self.contact_moving_floats(q, dq, ddq, raw_wrench))
 
     def contact_moving_floats(self, q, dq, ddq, raw_wrench) -> tuple[float, ...]:
-        """:meth:`compensate_moving` returning six Python floats (``JointAdmittance.step``'s path); validated the same way."""
+        """:meth:`compensate_moving` returning six Python floats (``JointAdmittance.step``'s path);
+        validated the same way.
+        """
         try:  # float64 arrays (the control loop's) pass as they are
-            q = q if type(q) is np.ndarray and q.dtype is FLOAT64 else np.asarray(q, dtype=np.float64)
-            dq = dq if type(dq) is np.ndarray and dq.dtype is FLOAT64 else np.asarray(dq, dtype=np.float64)
-            ddq = ddq if type(ddq) is np.ndarray and ddq.dtype is FLOAT64 else np.asarray(ddq, dtype=np.float64)
-            raw = raw_wrench if type(raw_wrench) is np.ndarray and raw_wrench.dtype is FLOAT64 \
+            q = (
+                q
+                if type(q) is np.ndarray and q.dtype is FLOAT64
+                else np.asarray(q, dtype=np.float64)
+            )
+            dq = (
+                dq
+                if type(dq) is np.ndarray and dq.dtype is FLOAT64
+                else np.asarray(dq, dtype=np.float64)
+            )
+            ddq = (
+                ddq
+                if type(ddq) is np.ndarray and ddq.dtype is FLOAT64
+                else np.asarray(ddq, dtype=np.float64)
+            )
+            raw = (
+                raw_wrench
+                if type(raw_wrench) is np.ndarray and raw_wrench.dtype is FLOAT64
                 else np.asarray(raw_wrench, dtype=np.float64)
+            )
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q, dq, ddq and raw_wrench must be numeric: {error}") from None
         shape = self._q_shape
         if q.shape != shape or dq.shape != shape or ddq.shape != shape or raw.shape != (6,):
             raise InvalidInput(
-                f"expected q, dq, ddq of shape {shape} and raw_wrench of shape (6,), got {q.shape}, {dq.shape}, {ddq.shape}, {raw.shape}"
+                f"expected q, dq, ddq of shape {shape} and raw_wrench of shape (6,), got "
+                f"{q.shape}, {dq.shape}, {ddq.shape}, {raw.shape}"
             )
         values = raw.tolist()
-        # One test for the common case: the sum is finite only if every input is (or they overflow: the test below passes).
-        if not math.isfinite(sum(q.tolist()) + sum(dq.tolist()) + sum(ddq.tolist()) + sum(values)) and not (
-                np.isfinite(q).all() and np.isfinite(dq).all() and np.isfinite(ddq).all() and np.isfinite(raw).all()):
-            raise InvalidInput(f"q, dq, ddq and raw_wrench must be finite, got q={q} dq={dq} ddq={ddq} raw_wrench={raw}")
+        # One test for the common case: the sum is finite only if every input is (or they overflow:
+        # the test below passes).
+        if not math.isfinite(
+            sum(q.tolist()) + sum(dq.tolist()) + sum(ddq.tolist()) + sum(values)
+        ) and not (
+            np.isfinite(q).all()
+            and np.isfinite(dq).all()
+            and np.isfinite(ddq).all()
+            and np.isfinite(raw).all()
+        ):
+            raise InvalidInput(
+                f"q, dq, ddq and raw_wrench must be finite, got q={q} dq={dq} ddq={ddq} "
+                f"raw_wrench={raw}"
+            )
         return self._moving_floats(q, dq, ddq, values)
 
     def contact_rates_floats(self, q: np.ndarray, raw: list, dq, ddq) -> tuple[float, ...]:
-        """:meth:`contact_moving_floats` for a ``q`` (float64 ``(nq,)``) and ``raw`` (six finite floats) the caller
-        validated already (``JointAdmittance.step``): only ``dq`` [rad/s] and ``ddq`` [rad/s²] are checked."""
+        """:meth:`contact_moving_floats` for a ``q`` (float64 ``(nq,)``) and ``raw`` (six finite
+        floats) the caller
+        validated already (``JointAdmittance.step``): only ``dq`` [rad/s] and ``ddq`` [rad/s²] are
+        checked.
+        """
         try:
             dq, ddq = np.asarray(dq, dtype=np.float64), np.asarray(ddq, dtype=np.float64)
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"dq and ddq must be numeric: {error}") from None
         if dq.shape != self._q_shape or ddq.shape != self._q_shape:
-            raise InvalidInput(f"expected dq, ddq of shape {self._q_shape}, got {dq.shape}, {ddq.shape}")
-        if not math.isfinite(sum(dq.tolist()) + sum(ddq.tolist())) and not (np.isfinite(dq).all() and np.isfinite(ddq).all()):
+            raise InvalidInput(
+                f"expected dq, ddq of shape {self._q_shape}, got {dq.shape}, {ddq.shape}"
+            )
+        if not math.isfinite(sum(dq.tolist()) + sum(ddq.tolist())) and not (
+            np.isfinite(dq).all() and np.isfinite(ddq).all()
+        ):
             raise InvalidInput(f"dq and ddq must be finite, got dq={dq} ddq={ddq}")
         return self._moving_floats(q, dq, ddq, raw)
 
-    def compensate_moving_unchecked(self, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, raw: np.ndarray) -> np.ndarray:
-        """:meth:`compensate_moving` without validation (float arrays of the right shapes); returns a new array."""
+    def compensate_moving_unchecked(
+        self, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, raw: np.ndarray
+    ) -> np.ndarray:
+        """:meth:`compensate_moving` without validation (float arrays of the right shapes); returns
+        a new array.
+        """
         return np.array(self._moving_floats(q, dq, ddq, raw.tolist()))
 
-    def _moving_floats(self, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, raw: list) -> tuple[float, ...]:
+    def _moving_floats(
+        self, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray, raw: list
+    ) -> tuple[float, ...]:
         model, data, frame = self._model, self._data, self._frame
         pin.forwardKinematics(model, data, q, dq, ddq)
         rotation = pin.updateFramePlacement(model, data, frame).rotation
-        # Y(v, a) θ with Pinocchio's body regressor (as the batch path), v and a LOCAL (Pinocchio's default frame:
-        # naming it costs a conversion per call); a test checks it against the Newton–Euler sum written out.
-        regressor = pin.bodyRegressor(pin.getFrameVelocity(model, data, frame), pin.getFrameAcceleration(model, data, frame))
+        # Y(v, a) θ with Pinocchio's body regressor (as the batch path), v and a LOCAL (Pinocchio's
+        # default frame:
+        # naming it costs a conversion per call); a test checks it against the Newton–Euler sum
+        # written out.
+        regressor = pin.bodyRegressor(
+            pin.getFrameVelocity(model, data, frame), pin.getFrameAcceleration(model, data, frame)
+        )
         i0, i1, i2, i3, i4, i5 = regressor.dot(self.inertial_parameters).tolist()
         c0, c1, c2, c3, c4, c5 = self._contact_floats(rotation.tolist(), raw)
         return c0 + i0, c1 + i1, c2 + i2, c3 + i3, c4 + i4, c5 + i5
 
     # ---------------------------------------------------------------- stream
-    def start_stream(self, sample_period: float, window: int | None = None, polyorder: int = 4) -> float:
-        """Estimate ``dq, ddq`` online from the stream of ``q`` (:class:`CausalDifferentiator`); returns its delay [s]."""
+    def start_stream(
+        self, sample_period: float, window: int | None = None, polyorder: int = 4
+    ) -> float:
+        """Estimate ``dq, ddq`` online from the stream of ``q`` (:class:`CausalDifferentiator`);
+        returns its delay [s].
+        """
         self._stream = CausalDifferentiator(self._nq, sample_period, window, polyorder)
         self._raw_buffer = deque(maxlen=self._stream.window)
         return self._stream.delay
 
     def compensate_stream(self, q, raw_wrench) -> np.ndarray | None:
-        """Push one ``(q, raw)``; the contact wrench of the sample ``delay`` seconds ago, or None while filling.
+        """Push one ``(q, raw)``; the contact wrench of the sample ``delay`` seconds ago, or None
+        while filling.
 
         The raw readings are delayed with the joint estimates, so each output
         is consistent (same instant); call :meth:`start_stream` first.
@@ -145,7 +208,9 @@ class DynamicCompensator:
         if self._stream is None:
             raise InvalidInput("call start_stream(sample_period) before compensate_stream")
         raw = as_vector(raw_wrench, 6, "raw_wrench")
-        estimate = self._stream.update(q)  # validates q first: a refused sample enters neither buffer
+        estimate = self._stream.update(
+            q
+        )  # validates q first: a refused sample enters neither buffer
         self._raw_buffer.append(raw)
         if estimate is None:
             return None
@@ -154,11 +219,19 @@ class DynamicCompensator:
 
     # ----------------------------------------------------------------- batch
     def compensate_motion(self, motion: MotionSamples) -> np.ndarray:
-        """Contact wrenches ``(N, 6)`` of :class:`~ftkin.calibration.regressor.MotionSamples` (vectorized)."""
+        """Contact wrenches ``(N, 6)`` of :class:`~ftkin.calibration.regressor.MotionSamples`
+        (vectorized).
+        """
         static = self.static.compensate_batch_unchecked(motion.rotations, motion.wrenches)
         return static + motion.regressor() @ self.inertial_parameters
 
-    def compensate_trajectory(self, joint_positions, joint_velocities, joint_accelerations, raw_wrenches) -> np.ndarray:
-        """Contact wrenches ``(N, 6)`` from ``(N, nq)`` ``q, dq, ddq`` and ``(N, 6)`` raw readings."""
-        motion = MotionSamples.from_joint_trajectory(self.arm, joint_positions, joint_velocities, joint_accelerations, raw_wrenches)
+    def compensate_trajectory(
+        self, joint_positions, joint_velocities, joint_accelerations, raw_wrenches
+    ) -> np.ndarray:
+        """Contact wrenches ``(N, 6)`` from ``(N, nq)`` ``q, dq, ddq`` and ``(N, 6)`` raw
+        readings.
+        """
+        motion = MotionSamples.from_joint_trajectory(
+            self.arm, joint_positions, joint_velocities, joint_accelerations, raw_wrenches
+        )
         return self.compensate_motion(motion)

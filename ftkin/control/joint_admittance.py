@@ -87,42 +87,90 @@ class JointAdmittance:
             (:class:`~ftkin.control.oscillation.OscillationLimits`); None disables it.
     """
 
-    def __init__(self, arm: Arm, admittance: Admittance, compensator: Compensator | None = None, *,
-                 control_point: str | None = None, force_limit: float = 50.0, torque_limit: float = 5.0,
-                 manipulability_threshold: float = 0.005, max_damping: float = 0.05, velocity_scale: float = 1.0,
-                 limit_gain: float = 5.0, sensor_limits: SensorLimits | None = None,
-                 oscillation: OscillationLimits | None = DEFAULT_OSCILLATION_LIMITS):
+    def __init__(
+        self,
+        arm: Arm,
+        admittance: Admittance,
+        compensator: Compensator | None = None,
+        *,
+        control_point: str | None = None,
+        force_limit: float = 50.0,
+        torque_limit: float = 5.0,
+        manipulability_threshold: float = 0.005,
+        max_damping: float = 0.05,
+        velocity_scale: float = 1.0,
+        limit_gain: float = 5.0,
+        sensor_limits: SensorLimits | None = None,
+        oscillation: OscillationLimits | None = DEFAULT_OSCILLATION_LIMITS,
+    ):
         if not isinstance(arm, Arm) or not isinstance(admittance, Admittance):
             raise InvalidInput("JointAdmittance needs an ftkin Arm and an ftkin Admittance")
         self.dynamic = compensator if isinstance(compensator, DynamicCompensator) else None
         if self.dynamic is not None:
             compensator = self.dynamic.static
         if compensator is not None and not isinstance(compensator, Compensator):
-            raise InvalidInput(f"compensator must be an ftkin Compensator or None, got {type(compensator).__name__}")
-        numbers = np.array([force_limit, torque_limit, manipulability_threshold, max_damping, velocity_scale, limit_gain], dtype=float)
+            raise InvalidInput(
+                "compensator must be an ftkin Compensator or None, got "
+                f"{type(compensator).__name__}"
+            )
+        numbers = np.array(
+            [
+                force_limit,
+                torque_limit,
+                manipulability_threshold,
+                max_damping,
+                velocity_scale,
+                limit_gain,
+            ],
+            dtype=float,
+        )
         if not np.all(np.isfinite(numbers)) or np.any(numbers <= 0):
-            raise InvalidInput(f"limits, thresholds and gains must be finite and > 0, got {numbers}")
-        mount = getattr(compensator.calibration, "mount_rotation", None) if compensator is not None else None
+            raise InvalidInput(
+                f"limits, thresholds and gains must be finite and > 0, got {numbers}"
+            )
+        mount = (
+            getattr(compensator.calibration, "mount_rotation", None)
+            if compensator is not None
+            else None
+        )
         if mount is not None:
-            arm = mounted_arm(arm, mount)  # the real sensor frame, folded into the model: no work per tick
+            arm = mounted_arm(
+                arm, mount
+            )  # the real sensor frame, folded into the model: no work per tick
         self.arm, self.admittance, self.compensator = arm, admittance, compensator
         self.frame = control_frame_for(arm, admittance.frame, control_point)
         self.force_limit, self.torque_limit = float(force_limit), float(torque_limit)
-        self.manipulability_threshold, self.max_damping = float(manipulability_threshold), float(max_damping)
+        self.manipulability_threshold, self.max_damping = (
+            float(manipulability_threshold),
+            float(max_damping),
+        )
         self.limit_gain = float(limit_gain)
         self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
-        self._rotation = arm.data.oMf[arm.sensor_frame_id].rotation  # a view: follows every kinematics update
+        self._rotation = arm.data.oMf[
+            arm.sensor_frame_id
+        ].rotation  # a view: follows every kinematics update
         lower, upper = arm.lower_limits.tolist(), arm.upper_limits.tolist()
         speeds = (arm.velocity_limits * float(velocity_scale)).tolist()
-        self._lower, self._upper, self._speeds = lower, upper, speeds  # as floats, for limit scaling's shortcut
+        self._lower, self._upper, self._speeds = (
+            lower,
+            upper,
+            speeds,
+        )  # as floats, for limit scaling's shortcut
         self._gains = [self.limit_gain] * arm.nq
         self._nq = arm.nq
-        if sensor_limits is None and (arm.urdf_path is None or arm.urdf_path != bundled_urdf_path().resolve()):
-            raise InvalidInput("give sensor_limits=SensorLimits(force_range=..., torque_range=...) with your sensor's "
-                               "measuring range [N, N·m]: the default ±250 N / ±6 N·m is the bundled arm's (the paper's) sensor")
+        if sensor_limits is None and (
+            arm.urdf_path is None or arm.urdf_path != bundled_urdf_path().resolve()
+        ):
+            raise InvalidInput(
+                "give sensor_limits=SensorLimits(force_range=..., torque_range=...) with your "
+                "sensor's "
+                "measuring range [N, N·m]: the default ±250 N / ±6 N·m is the bundled arm's (the "
+                "paper's) sensor"
+            )
         self.monitor = FaultMonitor(sensor_limits)
         self.detector = OscillationDetector(oscillation) if oscillation is not None else None
-        # Bound once: the tick calls these without attribute lookups (the compensator's kernel is fixed at its creation).
+        # Bound once: the tick calls these without attribute lookups (the compensator's kernel is
+        # fixed at its creation).
         self._detect = self.detector.update if self.detector is not None else None
         self._check, self._update = self.monitor.check, admittance.update_floats
         self._wrench_floats, self._twist_floats = self.frame.wrench_floats, self.frame.twist_floats
@@ -151,12 +199,21 @@ class JointAdmittance:
         """
         if self._status_parts is not None:
             dq, contact, twist, manipulability, damping, scale = self._status_parts
-            self._status = StepStatus(dq, np.array(contact), np.array(twist), manipulability, damping, scale, False, "")
+            self._status = StepStatus(
+                dq, np.array(contact), np.array(twist), manipulability, damping, scale, False, ""
+            )
             self._status_parts = None
         return self._status
 
-    def step(self, q, raw_wrench, dt: float, free: bool | None = None, joint_velocities=None,
-             joint_accelerations=None) -> np.ndarray:
+    def step(
+        self,
+        q,
+        raw_wrench,
+        dt: float,
+        free: bool | None = None,
+        joint_velocities=None,
+        joint_accelerations=None,
+    ) -> np.ndarray:
         """Joint velocities ``(nq,)`` [rad/s] for this tick.
 
         Args:
@@ -186,11 +243,18 @@ class JointAdmittance:
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
         if q.shape != (self._nq,) or raw.shape != (6,):
-            raise InvalidInput(f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} and {raw.shape}")
+            raise InvalidInput(
+                f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} "
+                f"and {raw.shape}"
+            )
         if (joint_velocities is None) != (joint_accelerations is None) or (
-                joint_velocities is not None and self.dynamic is None):
-            raise InvalidInput("joint_velocities and joint_accelerations go together, and with a DynamicCompensator "
-                               "only (a static compensator has no inertial term to use them)")
+            joint_velocities is not None and self.dynamic is None
+        ):
+            raise InvalidInput(
+                "joint_velocities and joint_accelerations go together, and with a "
+                "DynamicCompensator "
+                "only (a static compensator has no inertial term to use them)"
+            )
         raw, positions = raw.tolist(), q.tolist()
         fault, event = self._check(positions, raw, dt)
         if fault is not SensorFault.NONE:
@@ -198,17 +262,25 @@ class JointAdmittance:
                 self.compensator.tracker.interrupt()
             return self._hold(fault, event)
         # 1. kinematics: forward kinematics and the sensor Jacobian (base axes), one Pinocchio call
-        jacobian = pin.computeFrameJacobian(self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED)
+        jacobian = pin.computeFrameJacobian(
+            self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED
+        )
         rotation = self._rotation.tolist()  # R_BS, updated by the call above
-        # 2. compensation (six floats, sensor frame), the bias tracker, the oscillation detector and the safety stop
+        # 2. compensation (six floats, sensor frame), the bias tracker, the oscillation detector and
+        # the safety stop
         if joint_velocities is not None and self.dynamic is not None:
-            contact = self.dynamic.contact_rates_floats(q, raw, joint_velocities, joint_accelerations)
+            contact = self.dynamic.contact_rates_floats(
+                q, raw, joint_velocities, joint_accelerations
+            )
         else:
             contact = raw if self._contact_floats is None else self._contact_floats(rotation, raw)
         if self._tracked:
             self.compensator.observe_bias(contact, dt, q=q, free=free)
         fx, fy, fz, mx, my, mz = contact
-        force, torque = math.sqrt(fx * fx + fy * fy + fz * fz), math.sqrt(mx * mx + my * my + mz * mz)
+        force, torque = (
+            math.sqrt(fx * fx + fy * fy + fz * fz),
+            math.sqrt(mx * mx + my * my + mz * mz),
+        )
         if (self._detect is not None and self._detect(force, torque, dt)) or self.oscillation_event:
             return self._hold_oscillation(np.array(contact))
         if self.safety_latched or force > self.force_limit or torque > self.torque_limit:
@@ -220,8 +292,9 @@ class JointAdmittance:
         twist = self._update(wrench, dt)
         sensor_twist = self._twist_floats(twist, rotation)
         # 4. joint velocities: damped least squares, then the joint limits
-        dq, manipulability, damping = damped_least_squares(jacobian, sensor_twist, self.manipulability_threshold,
-                                                           self.max_damping)
+        dq, manipulability, damping = damped_least_squares(
+            jacobian, sensor_twist, self.manipulability_threshold, self.max_damping
+        )
         scale = self._limit_scale(positions, dq.tolist())
         if scale < 1.0:
             dq *= scale
@@ -237,29 +310,59 @@ class JointAdmittance:
         self._holding = True
         dq = np.zeros(self._nq)
         self._status_parts = None
-        self._status = StepStatus(dq, np.full(6, math.nan), np.zeros(6), math.nan, math.nan, 0.0,
-                                      self.safety_latched, event, fault)
+        self._status = StepStatus(
+            dq,
+            np.full(6, math.nan),
+            np.zeros(6),
+            math.nan,
+            math.nan,
+            0.0,
+            self.safety_latched,
+            event,
+            fault,
+        )
         return dq
 
     def _hold_oscillation(self, contact: np.ndarray) -> np.ndarray:
-        """``dq = 0`` for an oscillating loop, latched until :meth:`reset`; the event names the gain to lower."""
+        """``dq = 0`` for an oscillating loop, latched until :meth:`reset`; the event names the gain
+        to lower.
+        """
         if not self.oscillation_event:
             law, state = self.admittance, self.admittance.state
             derivative_part = float(np.linalg.norm(law._k1s * state.filtered_derivative))
             proportional_part = float(np.linalg.norm(law._k2s * state.previous_error))
-            gain = ("k1 (K1, the dΔF/dt term: see ftkin.control.stability.max_stable_k1) or derivative_cutoff"
-                    if derivative_part >= proportional_part else "k2 (K2, the ΔF term)")
+            gain = (
+                "k1 (K1, the dΔF/dt term: see ftkin.control.stability.max_stable_k1) or "
+                "derivative_cutoff"
+                if derivative_part >= proportional_part
+                else "k2 (K2, the ΔF term)"
+            )
             limits = self.detector.limits
-            self.oscillation_event = (f"oscillation: {self.detector.count:.0f} reversals of the contact force by more than "
-                                      f"{limits.force_step:g} N within ~{limits.window:g} s: holding (reset() to resume); lower {gain}")
+            self.oscillation_event = (
+                f"oscillation: {self.detector.count:.0f} reversals of the contact force by more "
+                "than "
+                f"{limits.force_step:g} N within ~{limits.window:g} s: holding (reset() to "
+                f"resume); lower {gain}"
+            )
         dq = np.zeros(self._nq)
         self._status_parts = None
-        self._status = StepStatus(dq, contact, np.zeros(6), math.nan, math.nan, 0.0, self.safety_latched,
-                                  self.oscillation_event, SensorFault.OSCILLATION)
+        self._status = StepStatus(
+            dq,
+            contact,
+            np.zeros(6),
+            math.nan,
+            math.nan,
+            0.0,
+            self.safety_latched,
+            self.oscillation_event,
+            SensorFault.OSCILLATION,
+        )
         return dq
 
     def _restart_derivative(self, wrench: np.ndarray) -> None:
-        """After a hold: take this tick's force error as the previous one and zero the filtered derivative."""
+        """After a hold: take this tick's force error as the previous one and zero the filtered
+        derivative.
+        """
         self._holding = False
         state = self.admittance.state
         if state.started:
@@ -271,8 +374,11 @@ class JointAdmittance:
         if self.safety_latched and previous is not None and previous.safety_stop:
             event = previous.event
         else:
-            event = (f"contact {force:.3g} N / {torque:.3g} N·m exceeded the limit "
-                     f"{self.force_limit:.3g} N / {self.torque_limit:.3g} N·m: stopped (reset() to resume)")
+            event = (
+                f"contact {force:.3g} N / {torque:.3g} N·m exceeded the limit "
+                f"{self.force_limit:.3g} N / {self.torque_limit:.3g} N·m: stopped (reset() to "
+                "resume)"
+            )
         self.safety_latched = True
         dq = np.zeros(self._nq)
         self._status_parts = None
@@ -280,16 +386,22 @@ class JointAdmittance:
         return dq
 
     def _limit_scale(self, q: list, dq: list) -> float:
-        """Largest ``s ≤ 1`` keeping every joint's ``s·dq`` within its bound (0 if one is at or past its limit).
+        """Largest ``s ≤ 1`` keeping every joint's ``s·dq`` within its bound (0 if one is at or past
+        its limit).
 
         A joint moving towards its position limit may go at most ``limit_gain · distance``
         [rad/s], and never beyond its (scaled) velocity limit.
         """
         gain, scale = self.limit_gain, 1.0
-        if (all(map(le, map(abs, dq), self._speeds)) and all(map(le, dq, map(mul, self._gains, map(sub, self._upper, q))))
-                and all(map(ge, dq, map(mul, self._gains, map(sub, self._lower, q))))):
+        if (
+            all(map(le, map(abs, dq), self._speeds))
+            and all(map(le, dq, map(mul, self._gains, map(sub, self._upper, q))))
+            and all(map(ge, dq, map(mul, self._gains, map(sub, self._lower, q))))
+        ):
             return 1.0  # every joint within both of its bounds: the loop below gives 1.0 too
-        for position, velocity, lower, upper, speed in zip(q, dq, self._lower, self._upper, self._speeds):
+        for position, velocity, lower, upper, speed in zip(
+            q, dq, self._lower, self._upper, self._speeds
+        ):
             if velocity > 0.0:
                 scale = min(scale, max(0.0, min(speed, gain * (upper - position))) / velocity)
             elif velocity < 0.0:

@@ -51,20 +51,42 @@ class OscillationLimits:
 
     def __post_init__(self):
         values = (self.force_step, self.reversals, self.window, self.lever)
-        if not all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in values) or self.reversals < 2:
-            raise InvalidInput(f"OscillationLimits needs force_step [N], window [s], lever [m] > 0 and reversals >= 2, got {self}")
+        if (
+            not all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in values)
+            or self.reversals < 2
+        ):
+            raise InvalidInput(
+                "OscillationLimits needs force_step [N], window [s], lever [m] > 0 and reversals "
+                f">= 2, got {self}"
+            )
 
 
 class OscillationDetector:
     """Per-tick detection with constant memory (see the module docstring)."""
 
-    __slots__ = ("limits", "count", "energy", "_previous", "_step", "_swing", "_dt", "_decay", "_threshold",
-                 "_energy_floor", "_inverse_lever", "_window", "_reversals")
+    __slots__ = (
+        "limits",
+        "count",
+        "energy",
+        "_previous",
+        "_step",
+        "_swing",
+        "_dt",
+        "_decay",
+        "_threshold",
+        "_energy_floor",
+        "_inverse_lever",
+        "_window",
+        "_reversals",
+    )
 
     def __init__(self, limits: OscillationLimits | None = None):
         self.limits = OscillationLimits() if limits is None else limits
         if not isinstance(self.limits, OscillationLimits):
-            raise InvalidInput(f"oscillation limits must be an ftkin OscillationLimits or None, got {type(limits).__name__}")
+            raise InvalidInput(
+                "oscillation limits must be an ftkin OscillationLimits or None, got "
+                f"{type(limits).__name__}"
+            )
         self._threshold = float(self.limits.force_step)
         self._energy_floor = 0.25 * self._threshold * self._threshold
         self._inverse_lever = 1.0 / float(self.limits.lever)
@@ -78,7 +100,9 @@ class OscillationDetector:
         self._dt, self._decay = math.nan, 0.0
 
     def update(self, force: float, torque: float, dt: float) -> bool:
-        """Feed one tick's contact force and torque norms [N, N·m] and ``dt`` [s]; True while oscillating."""
+        """Feed one tick's contact force and torque norms [N, N·m] and ``dt`` [s]; True while
+        oscillating.
+        """
         signal = force + torque * self._inverse_lever
         step = signal - self._previous
         self._previous = signal

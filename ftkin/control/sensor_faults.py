@@ -44,7 +44,9 @@ class SensorFault(StrEnum):
     SATURATED = "saturated"
     STUCK = "stuck"
     OSCILLATION = "oscillation"
-    """Not a sensor fault: the loop itself oscillates (:mod:`ftkin.control.oscillation`); latched until reset."""
+    """Not a sensor fault: the loop itself oscillates (:mod:`ftkin.control.oscillation`); latched
+    until reset.
+    """
 
 
 _OK = (SensorFault.NONE, "")
@@ -56,7 +58,8 @@ class SensorLimits:
     """Fault thresholds; None disables a check (NaN/inf and ``dt <= 0`` are always faults).
 
     Attributes:
-        force_range: Saturation per force channel [N] (scalar or 3-vector): ``|F_i| >= range`` is a fault.
+        force_range: Saturation per force channel [N] (scalar or 3-vector): ``|F_i| >= range`` is a
+        fault.
         torque_range: Saturation per torque channel [N·m] (scalar or 3-vector).
         stuck_ticks: A reading repeated bit for bit on more than this many
             consecutive ticks is a stuck sensor. Must exceed the number of
@@ -66,7 +69,8 @@ class SensorLimits:
         nominal_dt: Fixed nominal step [s]; None: a running average of the
             accepted steps (starting from the first one, so a bogus first
             ``dt`` after a reset is believed for a while: pass this if that matters).
-        recovery_ticks: Consecutive good ticks after a fault before the arm may move (the last one moves it).
+        recovery_ticks: Consecutive good ticks after a fault before the arm may move (the last one
+        moves it).
     """
 
     force_range: object = 250.0
@@ -83,16 +87,27 @@ class SensorLimits:
             if value is not None and not _is_number(value, lambda x: math.isfinite(x) and x > 0):
                 raise InvalidInput(f"{name} must be a finite number > 0 or None, got {value!r}")
         if self.dt_ratio is not None and self.dt_ratio <= 1.0:
-            raise InvalidInput(f"dt_ratio must be > 1 (a multiple of the nominal step), got {self.dt_ratio!r}")
+            raise InvalidInput(
+                f"dt_ratio must be > 1 (a multiple of the nominal step), got {self.dt_ratio!r}"
+            )
         if self.stuck_ticks is not None and not _is_number(self.stuck_ticks, _is_count):
-            raise InvalidInput(f"stuck_ticks must be an integer >= 1 or None, got {self.stuck_ticks!r}")
+            raise InvalidInput(
+                f"stuck_ticks must be an integer >= 1 or None, got {self.stuck_ticks!r}"
+            )
         if not _is_number(self.recovery_ticks, _is_count):
-            raise InvalidInput(f"recovery_ticks must be an integer >= 1, got {self.recovery_ticks!r}")
+            raise InvalidInput(
+                f"recovery_ticks must be an integer >= 1, got {self.recovery_ticks!r}"
+            )
         self.ranges()
 
     def ranges(self) -> np.ndarray:
         """Saturation limits ``(6,)`` [N, N·m] per channel (``inf`` where disabled)."""
-        return np.concatenate([_range(self.force_range, "force_range", "N"), _range(self.torque_range, "torque_range", "N·m")])
+        return np.concatenate(
+            [
+                _range(self.force_range, "force_range", "N"),
+                _range(self.torque_range, "torque_range", "N·m"),
+            ]
+        )
 
 
 def _is_number(value, test) -> bool:
@@ -113,7 +128,9 @@ def _range(value, name: str, unit: str) -> np.ndarray:
     except (TypeError, ValueError):
         array = None
     if array is None or np.isnan(array).any() or np.any(array <= 0):
-        raise InvalidInput(f"{name} must be None, or a number or 3-vector > 0 [{unit}], got {value!r}")
+        raise InvalidInput(
+            f"{name} must be None, or a number or 3-vector > 0 [{unit}], got {value!r}"
+        )
     return array
 
 
@@ -132,11 +149,17 @@ class FaultMonitor:
     def __init__(self, limits: SensorLimits | None = None):
         self.limits = SensorLimits() if limits is None else limits
         if not isinstance(self.limits, SensorLimits):
-            raise InvalidInput(f"limits must be an ftkin SensorLimits or None, got {type(limits).__name__}")
+            raise InvalidInput(
+                f"limits must be an ftkin SensorLimits or None, got {type(limits).__name__}"
+            )
         self._ranges = self.limits.ranges().tolist()
         self._check_range = any(math.isfinite(r) for r in self._ranges)
-        self._stuck_ticks = math.inf if self.limits.stuck_ticks is None else int(self.limits.stuck_ticks)
-        self._stuck_time = math.inf if self.limits.stuck_time is None else float(self.limits.stuck_time)
+        self._stuck_ticks = (
+            math.inf if self.limits.stuck_ticks is None else int(self.limits.stuck_ticks)
+        )
+        self._stuck_time = (
+            math.inf if self.limits.stuck_time is None else float(self.limits.stuck_time)
+        )
         self._ratio = math.inf if self.limits.dt_ratio is None else float(self.limits.dt_ratio)
         self._running_dt = self.limits.nominal_dt is None
         self.counts = {fault: 0 for fault in SensorFault if fault is not SensorFault.NONE}
@@ -175,11 +198,16 @@ class FaultMonitor:
             self.fault = SensorFault.NONE
             return _OK
         self.counts[self.fault] += 1
-        return self.fault, f"recovering from {self.fault.value}: {self.good_ticks}/{self.limits.recovery_ticks} good ticks"
+        return (
+            self.fault,
+            f"recovering from {self.fault.value}: {self.good_ticks}/{self.limits.recovery_ticks} "
+            "good ticks",
+        )
 
     def _detect(self, q: np.ndarray | list, raw: list, dt: float) -> tuple[SensorFault, str]:
         positions = q if type(q) is list else q.tolist()
-        # One test for the common case: the sum is finite only if every input is (or they overflow: the tests below pass).
+        # One test for the common case: the sum is finite only if every input is (or they overflow:
+        # the tests below pass).
         if not (math.isfinite(sum(raw) + sum(positions)) and 0.0 < dt < math.inf):
             if not all(map(math.isfinite, raw)):
                 return SensorFault.NOT_FINITE, f"raw_wrench not finite: {raw}: holding"
@@ -193,17 +221,27 @@ class FaultMonitor:
         elif self._running_dt:
             self._reference_dt = reference + _ALPHA * (min(dt, self._ratio * reference) - reference)
         if dt > self._ratio * reference:
-            return SensorFault.DT_JUMP, (f"dt = {dt:.4g} s is more than {self._ratio:g} x the nominal "
-                                         f"{reference:.4g} s (dropped ticks): holding")
+            return SensorFault.DT_JUMP, (
+                f"dt = {dt:.4g} s is more than {self._ratio:g} x the nominal "
+                f"{reference:.4g} s (dropped ticks): holding"
+            )
         if self._check_range and not all(map(lt, map(abs, raw), self._ranges)):
             for channel, (value, limit) in enumerate(zip(raw, self._ranges)):
                 if not -limit < value < limit:
-                    return SensorFault.SATURATED, f"channel {channel} reads {value:.4g}, at or beyond the range ±{limit:g}: holding"
+                    return (
+                        SensorFault.SATURATED,
+                        f"channel {channel} reads {value:.4g}, at or beyond the range ±{limit:g}: "
+                        "holding",
+                    )
         if raw == self._previous:
             self._repeats += 1
             self._stale_time += dt
             if self._repeats >= self._stuck_ticks or self._stale_time > self._stuck_time:
-                return SensorFault.STUCK, f"reading unchanged for {self._repeats + 1} ticks ({self._stale_time:.4g} s): holding"
+                return (
+                    SensorFault.STUCK,
+                    f"reading unchanged for {self._repeats + 1} ticks ({self._stale_time:.4g} s): "
+                    "holding",
+                )
         else:
             self._previous, self._repeats, self._stale_time = raw, 0, 0.0
         return _OK

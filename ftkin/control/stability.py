@@ -38,12 +38,21 @@ from ..exceptions import InvalidInput
 
 
 def derivative_alpha(dt: float, cutoff: float) -> float:
-    """The exact discretisation ``α = 1 − exp(−dt/τ)``, ``τ = 1/(2π f_c)``, of a first-order low-pass [dt in s, cutoff in Hz]."""
+    """The exact discretisation ``α = 1 − exp(−dt/τ)``, ``τ = 1/(2π f_c)``, of a first-order
+    low-pass [dt in s, cutoff in Hz].
+    """
     return -math.expm1(-2.0 * math.pi * cutoff * dt)
 
 
-def loop_matrix(k1: float, stiffness: float, damping: float, dt: float, cutoff: float, k2: float = 0.0,
-                delay_ticks: int = 0) -> np.ndarray:
+def loop_matrix(
+    k1: float,
+    stiffness: float,
+    damping: float,
+    dt: float,
+    cutoff: float,
+    k2: float = 0.0,
+    delay_ticks: int = 0,
+) -> np.ndarray:
     """The state-transition matrix ``A`` of the linear loop (see the module docstring).
 
     State ``s[n] = (x[n], x[n−1], …, x[n−d−2], D[n−1])`` (``d + 4`` entries);
@@ -61,13 +70,22 @@ def loop_matrix(k1: float, stiffness: float, damping: float, dt: float, cutoff: 
         error_before = -(stiffness * x[d + 1] + damping * (x[d + 1] - x[d + 2]) / dt)  # -N[n-d-1]
         derivative = filtered + alpha * ((error - error_before) / dt - filtered)
         matrix[0, column] = x[0] + dt * (k1 * derivative + k2 * error)
-        matrix[1:history, column] = x[:history - 1]
+        matrix[1:history, column] = x[: history - 1]
         matrix[history, column] = derivative
     return matrix
 
 
-def servo_loop_matrix(k1: float, stiffness: float, damping: float, dt: float, cutoff: float, k2: float = 0.0,
-                      delay_ticks: int = 0, servo_bandwidth: float = 60.0, mass: float = 0.0) -> np.ndarray:
+def servo_loop_matrix(
+    k1: float,
+    stiffness: float,
+    damping: float,
+    dt: float,
+    cutoff: float,
+    k2: float = 0.0,
+    delay_ticks: int = 0,
+    servo_bandwidth: float = 60.0,
+    mass: float = 0.0,
+) -> np.ndarray:
     """The loop with a servoed arm and a payload (see :func:`max_stable_k1`'s ``servo_bandwidth``).
 
     The commanded velocity ``V`` (held over a tick) integrates into a position
@@ -86,26 +104,37 @@ def servo_loop_matrix(k1: float, stiffness: float, damping: float, dt: float, cu
     continuous[0, 3] = 1.0  # dr/dt = V
     discrete = expm(continuous * dt)
     phi, gamma = discrete[:3, :3], discrete[:3, 3]
-    felt = np.array([mass * omega * omega, stiffness - mass * omega * omega, damping - 2.0 * omega * mass])
+    felt = np.array(
+        [mass * omega * omega, stiffness - mass * omega * omega, damping - 2.0 * omega * mass]
+    )
     alpha = derivative_alpha(dt, cutoff)
     size = 3 + (d + 1) + 1
     matrix = np.zeros((size, size))
     for column in range(size):
         state = np.zeros(size)
         state[column] = 1.0
-        z, history, filtered = state[:3], state[3:4 + d], state[-1]
+        z, history, filtered = state[:3], state[3 : 4 + d], state[-1]
         forces = np.concatenate(([felt @ z], history))  # N[n], N[n-1], ..., N[n-d-1]
         error, error_before = -forces[d], -forces[d + 1]
         derivative = filtered + alpha * ((error - error_before) / dt - filtered)
         velocity = k1 * derivative + k2 * error
         matrix[:3, column] = phi @ z + gamma * velocity
-        matrix[3:4 + d, column] = forces[:d + 1]
+        matrix[3 : 4 + d, column] = forces[: d + 1]
         matrix[-1, column] = derivative
     return matrix
 
 
-def spectral_radius(k1: float, stiffness: float, damping: float, dt: float, cutoff: float, k2: float = 0.0,
-                    delay_ticks: int = 0, servo_bandwidth: float | None = None, mass: float = 0.0) -> float:
+def spectral_radius(
+    k1: float,
+    stiffness: float,
+    damping: float,
+    dt: float,
+    cutoff: float,
+    k2: float = 0.0,
+    delay_ticks: int = 0,
+    servo_bandwidth: float | None = None,
+    mass: float = 0.0,
+) -> float:
     """Largest ``|eigenvalue|`` of :func:`loop_matrix` (or :func:`servo_loop_matrix`) (< 1: stable).
 
     With ``k2 = 0`` (or no spring) the tool may rest anywhere: a constant
@@ -115,16 +144,27 @@ def spectral_radius(k1: float, stiffness: float, damping: float, dt: float, cuto
     if servo_bandwidth is None:
         matrix = loop_matrix(k1, stiffness, damping, dt, cutoff, k2, delay_ticks)
     else:
-        matrix = servo_loop_matrix(k1, stiffness, damping, dt, cutoff, k2, delay_ticks, servo_bandwidth, mass)
+        matrix = servo_loop_matrix(
+            k1, stiffness, damping, dt, cutoff, k2, delay_ticks, servo_bandwidth, mass
+        )
     eigenvalues = np.linalg.eigvals(matrix)
     if k2 == 0.0 or stiffness == 0.0:
         eigenvalues = np.delete(eigenvalues, int(np.argmin(np.abs(eigenvalues - 1.0))))
     return float(np.abs(eigenvalues).max())
 
 
-def max_stable_k1(stiffness: float, damping: float, dt: float, cutoff: float, *, k2: float = 0.0,
-                  delay_ticks: int = 1, servo_bandwidth: float | None = None, mass: float = 0.0,
-                  upper: float = 1.0) -> float:
+def max_stable_k1(
+    stiffness: float,
+    damping: float,
+    dt: float,
+    cutoff: float,
+    *,
+    k2: float = 0.0,
+    delay_ticks: int = 1,
+    servo_bandwidth: float | None = None,
+    mass: float = 0.0,
+    upper: float = 1.0,
+) -> float:
     """The K1 [m/N] at which the loop of the module docstring becomes unstable.
 
     Args:
@@ -153,18 +193,40 @@ def max_stable_k1(stiffness: float, damping: float, dt: float, cutoff: float, *,
         InvalidInput: a non-positive stiffness, period or cutoff, a negative damping, gain or delay.
     """
     real = lambda v: isinstance(v, (int, float)) and math.isfinite(v)
-    servo_ok = servo_bandwidth is None and mass == 0 or servo_bandwidth is not None and real(servo_bandwidth) and servo_bandwidth > 0
-    felt = stiffness + damping + (mass if servo_bandwidth is not None else 0.0) if real(mass) else 0.0
-    if not (all(real(v) and v > 0 for v in (dt, cutoff, upper)) and all(real(v) and v >= 0 for v in (stiffness, damping, k2, mass))
-            and servo_ok and felt > 0 and isinstance(delay_ticks, int) and delay_ticks >= 0):
-        raise InvalidInput("max_stable_k1 needs dt, cutoff > 0; stiffness, damping, k2, mass >= 0, something felt (k, c, or m "
-                           "with a servo_bandwidth > 0; mass needs a servo_bandwidth) and an integer delay_ticks >= 0; got "
-                           f"k={stiffness!r}, c={damping!r}, dt={dt!r}, cutoff={cutoff!r}, k2={k2!r}, delay_ticks={delay_ticks!r}, "
-                           f"servo_bandwidth={servo_bandwidth!r}, mass={mass!r}")
-    radius = lambda k1: spectral_radius(k1, stiffness, damping, dt, cutoff, k2, delay_ticks, servo_bandwidth, mass)
+    servo_ok = (
+        servo_bandwidth is None
+        and mass == 0
+        or servo_bandwidth is not None
+        and real(servo_bandwidth)
+        and servo_bandwidth > 0
+    )
+    felt = (
+        stiffness + damping + (mass if servo_bandwidth is not None else 0.0) if real(mass) else 0.0
+    )
+    if not (
+        all(real(v) and v > 0 for v in (dt, cutoff, upper))
+        and all(real(v) and v >= 0 for v in (stiffness, damping, k2, mass))
+        and servo_ok
+        and felt > 0
+        and isinstance(delay_ticks, int)
+        and delay_ticks >= 0
+    ):
+        raise InvalidInput(
+            "max_stable_k1 needs dt, cutoff > 0; stiffness, damping, k2, mass >= 0, something felt "
+            "(k, c, or m "
+            "with a servo_bandwidth > 0; mass needs a servo_bandwidth) and an integer delay_ticks "
+            ">= 0; got "
+            f"k={stiffness!r}, c={damping!r}, dt={dt!r}, cutoff={cutoff!r}, k2={k2!r}, "
+            f"delay_ticks={delay_ticks!r}, "
+            f"servo_bandwidth={servo_bandwidth!r}, mass={mass!r}"
+        )
+    radius = lambda k1: spectral_radius(
+        k1, stiffness, damping, dt, cutoff, k2, delay_ticks, servo_bandwidth, mass
+    )
     if radius(0.0) >= 1.0:
         return 0.0
-    # scan up in factors of 1.25 from a tiny gain (the radius need not be monotonic far past the bound)
+    # scan up in factors of 1.25 from a tiny gain (the radius need not be monotonic far past the
+    # bound)
     low, high = 0.0, upper * 1e-9
     while radius(high) < 1.0:
         low, high = high, high * 1.25

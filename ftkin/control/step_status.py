@@ -1,4 +1,6 @@
-"""What one control tick did: :class:`StepStatus` (see :class:`~ftkin.control.joint_admittance.JointAdmittance`)."""
+"""What one control tick did: :class:`StepStatus` (see
+:class:`~ftkin.control.joint_admittance.JointAdmittance`).
+"""
 
 from __future__ import annotations
 
@@ -15,7 +17,8 @@ class StepStatus:
 
     Attributes:
         dq: Commanded joint velocities ``(nq,)`` [rad/s].
-        contact_wrench: Compensated wrench in the sensor frame [N, N·m] (NaN on a sensor-fault tick).
+        contact_wrench: Compensated wrench in the sensor frame [N, N·m] (NaN on a sensor-fault
+        tick).
         twist: Admittance output at the control point, control-frame axes [m/s, rad/s].
         manipulability: ``w = sqrt(det(J Jᵀ))`` of the sensor Jacobian.
         damping: ``λ`` used in the least-squares inverse.

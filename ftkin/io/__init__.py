@@ -26,7 +26,8 @@ _EXPORTS = {
     "payload_in_flange": ".payload_export",
     "save_calibration": ".calibration_file",
 }
-"""Public name → module: each loads on first access (PEP 562), so ``import ftkin.io.samples_csv`` does
+"""Public name → module: each loads on first access (PEP 562), so ``import ftkin.io.samples_csv``
+does
 not import the calibration file, motion recordings and payload exports (start-up of the CLI)."""
 
 __all__ = [

@@ -1,4 +1,5 @@
-"""Atomic file writes that never destroy a file: a reader sees the old file or the new one, never half.
+"""Atomic file writes that never destroy a file: a reader sees the old file or the new one, never
+half.
 
 The text goes to a temporary file in the target's folder, is flushed and
 fsynced, then renamed over the target (``os.replace`` is atomic on POSIX and
@@ -62,7 +63,8 @@ def check_output_path(path, inputs=(), what: str = "output") -> Path:
         raise InvalidInput(f"{what} {path}: cannot check the output: {error}") from None
     if not stat.S_ISREG(status.st_mode):
         raise InvalidInput(
-            f"{what} {path} exists and is {_kind(status.st_mode)}; refusing to replace it: expected a regular file or a new name"
+            f"{what} {path} exists and is {_kind(status.st_mode)}; refusing to replace it: "
+            "expected a regular file or a new name"
         )
     for source in inputs:
         if source is None or not str(source):
@@ -73,7 +75,8 @@ def check_output_path(path, inputs=(), what: str = "output") -> Path:
             continue
         if same:
             raise InvalidInput(
-                f"{what} {path} is the input {source} of this command (same file); refusing to overwrite an input: "
+                f"{what} {path} is the input {source} of this command (same file); refusing to "
+                "overwrite an input: "
                 "write to another file"
             )
     return path

@@ -48,7 +48,9 @@ BAG_SUFFIXES = (".mcap", ".db3")
 def is_bag_path(path) -> bool:
     """True for a rosbag2 folder (with ``metadata.yaml``), a ``.mcap`` or a ``.db3`` file."""
     path = Path(path)
-    return path.suffix.lower() in BAG_SUFFIXES or (path.is_dir() and (path / "metadata.yaml").is_file())
+    return path.suffix.lower() in BAG_SUFFIXES or (
+        path.is_dir() and (path / "metadata.yaml").is_file()
+    )
 
 
 @dataclass(frozen=True)
@@ -106,13 +108,20 @@ def _pick_topic(connections, topic, msgtype, flag, source):
     if topic is not None:
         chosen = [c for c in connections if c.topic == topic]
         if not chosen:
-            raise InvalidSamples(f"no topic {topic!r} in the bag; topics found: {_topic_listing(connections)}", source)
+            raise InvalidSamples(
+                f"no topic {topic!r} in the bag; topics found: {_topic_listing(connections)}",
+                source,
+            )
         if chosen[0].msgtype != msgtype:
-            raise InvalidSamples(f"topic {topic!r} carries {chosen[0].msgtype}, expected {msgtype}", source)
+            raise InvalidSamples(
+                f"topic {topic!r} carries {chosen[0].msgtype}, expected {msgtype}", source
+            )
         return chosen
     topics = sorted({c.topic for c in connections if c.msgtype == msgtype})
     if not topics:
-        raise InvalidSamples(f"no {msgtype} topic in the bag; topics found: {_topic_listing(connections)}", source)
+        raise InvalidSamples(
+            f"no {msgtype} topic in the bag; topics found: {_topic_listing(connections)}", source
+        )
     if len(topics) > 1:
         raise InvalidSamples(f"several {msgtype} topics: {topics}; choose one with {flag}", source)
     return [c for c in connections if c.topic == topics[0]]
@@ -130,7 +139,13 @@ def _stamps(header_times: list[float], log_times: list[float], topic: str) -> np
     return stamps
 
 
-def read_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None = None, progress: bool | None = None) -> BagRecording:
+def read_bag(
+    path,
+    arm,
+    joint_topic: str | None = None,
+    wrench_topic: str | None = None,
+    progress: bool | None = None,
+) -> BagRecording:
     """Read the joint and wrench topics of a bag and align them in time.
 
     Args:
@@ -156,27 +171,44 @@ def read_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None
     if path.suffix.lower() == ".db3":
         path = path.parent
     expected = list(arm.joint_names)
-    series: dict[str, tuple[list[int], list[float]]] = {}  # joint name -> (message indices, positions)
-    joint_header, joint_log, wrench_header, wrench_log, wrench_rows, frame_id = [], [], [], [], [], ""
+    series: dict[
+        str, tuple[list[int], list[float]]
+    ] = {}  # joint name -> (message indices, positions)
+    joint_header, joint_log, wrench_header, wrench_log, wrench_rows, frame_id = (
+        [],
+        [],
+        [],
+        [],
+        [],
+        "",
+    )
     try:
         with any_reader([path], default_typestore=typestore) as reader:
-            joints = _pick_topic(reader.connections, joint_topic, JOINT_STATE_TYPE, "--joint-topic", source)
-            wrench = _pick_topic(reader.connections, wrench_topic, WRENCH_TYPE, "--wrench-topic", source)
+            joints = _pick_topic(
+                reader.connections, joint_topic, JOINT_STATE_TYPE, "--joint-topic", source
+            )
+            wrench = _pick_topic(
+                reader.connections, wrench_topic, WRENCH_TYPE, "--wrench-topic", source
+            )
             total = sum(c.msgcount for c in joints + wrench)
             with Progress(total, "reading bag", enabled=progress) as bar:
                 for connection, log_time, raw in reader.messages(connections=joints + wrench):
                     message = reader.deserialize(raw, connection.msgtype)
                     if connection.msgtype == WRENCH_TYPE:
                         force, torque = message.wrench.force, message.wrench.torque
-                        wrench_rows.append((force.x, force.y, force.z, torque.x, torque.y, torque.z))
+                        wrench_rows.append(
+                            (force.x, force.y, force.z, torque.x, torque.y, torque.z)
+                        )
                         wrench_header.append(_seconds(message.header.stamp))
                         wrench_log.append(log_time)
                         frame_id = frame_id or message.header.frame_id
                     else:
                         if len(message.position) != len(message.name):
                             raise InvalidSamples(
-                                f"{connection.topic}: a JointState has {len(message.name)} names but "
-                                f"{len(message.position)} positions", source
+                                f"{connection.topic}: a JointState has {len(message.name)} names "
+                                "but "
+                                f"{len(message.position)} positions",
+                                source,
                             )
                         index = len(joint_header)
                         joint_header.append(_seconds(message.header.stamp))
@@ -190,14 +222,19 @@ def read_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None
         raise InvalidSamples(f"cannot read the bag: {error}", source) from None
     except InvalidSamples:
         raise
-    except Exception as error:  # a corrupt bag makes rosbags raise struct, decode, index or memory errors
-        raise InvalidSamples(f"cannot read the bag (corrupt or truncated?): {type(error).__name__}: {error}", source) from None
+    except (
+        Exception
+    ) as error:  # a corrupt bag makes rosbags raise struct, decode, index or memory errors
+        raise InvalidSamples(
+            f"cannot read the bag (corrupt or truncated?): {type(error).__name__}: {error}", source
+        ) from None
     joint_topic_name, wrench_topic_name = joints[0].topic, wrench[0].topic
     missing = [name for name in expected if name not in series]
     if missing:
         raise InvalidSamples(
             f"joint names on {joint_topic_name} do not match the arm: missing {missing}; "
-            f"the bag has {sorted(series)}; the arm ({arm.urdf_path}) expects {expected}", source
+            f"the bag has {sorted(series)}; the arm ({arm.urdf_path}) expects {expected}",
+            source,
         )
     if not wrench_rows:
         raise InvalidSamples(f"no messages on {wrench_topic_name}", source)
@@ -207,7 +244,9 @@ def read_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None
     for column, name in enumerate(expected):
         times = message_times[series[name][0]]
         order = np.argsort(times, kind="stable")
-        trajectory[:, column] = np.interp(joint_times, times[order], np.asarray(series[name][1])[order])
+        trajectory[:, column] = np.interp(
+            joint_times, times[order], np.asarray(series[name][1])[order]
+        )
     times = _stamps(wrench_header, wrench_log, wrench_topic_name)
     order = np.argsort(times, kind="stable")
     times, wrenches = times[order], np.asarray(wrench_rows, dtype=float)[order]
@@ -215,19 +254,35 @@ def read_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None
     if not np.any(inside):
         raise InvalidSamples(
             f"no {wrench_topic_name} stamp falls inside the {joint_topic_name} time range "
-            f"[{joint_times[0]:.3f}, {joint_times[-1]:.3f}] s (wrench stamps [{times[0]:.3f}, {times[-1]:.3f}] s)", source)
+            f"[{joint_times[0]:.3f}, {joint_times[-1]:.3f}] s (wrench stamps [{times[0]:.3f}, "
+            f"{times[-1]:.3f}] s)",
+            source,
+        )
     times, wrenches = times[inside], wrenches[inside]
-    positions = np.column_stack([np.interp(times, joint_times, trajectory[:, j]) for j in range(len(expected))])
+    positions = np.column_stack(
+        [np.interp(times, joint_times, trajectory[:, j]) for j in range(len(expected))]
+    )
     return BagRecording(
-        source, joint_topic_name, wrench_topic_name, frame_id, expected, joint_times, trajectory,
-        times, wrenches, positions, int(np.count_nonzero(~inside)),
+        source,
+        joint_topic_name,
+        wrench_topic_name,
+        frame_id,
+        expected,
+        joint_times,
+        trajectory,
+        times,
+        wrenches,
+        positions,
+        int(np.count_nonzero(~inside)),
     )
 
 
 def _table(source: str, header: list[str], columns: list[np.ndarray]) -> Table:
     """A :class:`Table` of text cells (integers as integers, floats round-tripping exactly)."""
     cells = [
-        [str(int(v)) for v in column] if np.issubdtype(column.dtype, np.integer) else [format_float(v) for v in column]
+        [str(int(v)) for v in column]
+        if np.issubdtype(column.dtype, np.integer)
+        else [format_float(v) for v in column]
         for column in columns
     ]
     rows = [list(row) for row in zip(*cells)]
@@ -254,7 +309,8 @@ def bag_samples(
         static_only: True: only readings inside static segments, pose id =
             segment number (for calibration). False: every reading, one pose
             each, no segment search (for compensation).
-        wrench_frame: ``"sensor"`` or ``"base"`` (see :func:`~ftkin.io.wrench_frames.wrenches_in_sensor_frame`).
+        wrench_frame: ``"sensor"`` or ``"base"`` (see
+        :func:`~ftkin.io.wrench_frames.wrenches_in_sensor_frame`).
 
     Returns:
         :class:`BagSamples` whose ``table`` has columns ``t`` [s], ``pose``
@@ -266,11 +322,18 @@ def bag_samples(
     """
     if arm is None:
         from ..kinematics.arm import Arm
+
         arm = Arm.default()
     recording = read_bag(path, arm, joint_topic, wrench_topic, progress)
     times, positions = recording.times, recording.joint_positions
-    wrenches = wrenches_in_sensor_frame(recording.wrenches, arm.rotation_sensor_to_base(positions),
-                                        recording.wrench_frame_id, arm, wrench_frame, recording.source)
+    wrenches = wrenches_in_sensor_frame(
+        recording.wrenches,
+        arm.rotation_sensor_to_base(positions),
+        recording.wrench_frame_id,
+        arm,
+        wrench_frame,
+        recording.source,
+    )
     search, pose_ids = None, None
     header = [TIME_COLUMN, *recording.joint_names, *WRENCH_CHANNELS]
     if static_only:
@@ -280,20 +343,32 @@ def bag_samples(
         if not np.any(keep):
             duration = recording.joint_times[-1] - recording.joint_times[0]
             raise InvalidSamples(
-                f"no static segments with wrench readings in {duration:.3g} s of {recording.joint_topic}: "
-                f"{search.describe()}; lower --min-static-duration/--settle-time or raise --speed-threshold",
+                f"no static segments with wrench readings in {duration:.3g} s of "
+                f"{recording.joint_topic}: "
+                f"{search.describe()}; lower --min-static-duration/--settle-time or raise "
+                "--speed-threshold",
                 recording.source,
             )
         used = np.unique(index[keep])
         if len(used) < len(search.segments):
-            logger.warning("%d static segment(s) hold no wrench reading", len(search.segments) - len(used))
+            logger.warning(
+                "%d static segment(s) hold no wrench reading", len(search.segments) - len(used)
+            )
         times, wrenches, positions = times[keep], wrenches[keep], positions[keep]
         pose_ids = np.searchsorted(used, index[keep])
         header.insert(1, POSE_COLUMN)
     logger.info(
-        "%s: %d readings%s", recording.source, len(times), f", {search.describe()}" if search is not None else ""
+        "%s: %d readings%s",
+        recording.source,
+        len(times),
+        f", {search.describe()}" if search is not None else "",
     )
-    columns = [times] + ([pose_ids] if pose_ids is not None else []) + list(positions.T) + list(wrenches.T)
+    columns = (
+        [times]
+        + ([pose_ids] if pose_ids is not None else [])
+        + list(positions.T)
+        + list(wrenches.T)
+    )
     table = _table(recording.source, header, columns)
     samples = Samples.from_joint_positions(arm, positions, wrenches, pose_ids, times=times)
     return BagSamples(samples, table, "joints", list(recording.joint_names), recording, search)

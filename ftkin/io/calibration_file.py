@@ -52,7 +52,13 @@ from ..calibration.estimate import CalibrationResult
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from ..kinematics.record import KinematicsRecord
 from .atomic import atomic_write_text
-from .calibration_checks import check_document, check_plausible, has_bool, parse_calibration_json, short_repr
+from .calibration_checks import (
+    check_document,
+    check_plausible,
+    has_bool,
+    parse_calibration_json,
+    short_repr,
+)
 from .calibration_inertia import inertia_document, with_inertia
 from .drift_file import drift_from_document, drift_to_document
 from .json_reader import JsonReader
@@ -70,10 +76,13 @@ UNITS = {
     "base_tilt_deg": "deg, [U about base x, V about new y]",
     "g": "m/s^2",
     "residual_rms": "N (fx, fy, fz), N*m (mx, my, mz)",
-    "mount_rotation": "URDF sensor frame -> real sensor frame; real R_BS = R_BS_urdf * mount_rotation^T",
+    "mount_rotation": "URDF sensor frame -> real sensor frame; real R_BS = R_BS_urdf * "
+    "mount_rotation^T",
     "mount_rpy_deg": "deg, roll-pitch-yaw of mount_rotation (R = Rz(yaw) Ry(pitch) Rx(roll))",
-    "sensor_sign": "+1: readings are the load on the sensor, -1: the reaction (all readings negated)",
-    "flip_axis": "sensor axis whose force and torque channels are negated in every reading, or null",
+    "sensor_sign": "+1: readings are the load on the sensor, -1: the reaction (all readings "
+    "negated)",
+    "flip_axis": "sensor axis whose force and torque channels are "
+    "negated in every reading, or null",
     "inertia": "kg*m^2, about the centre of mass, sensor axes",
 }
 
@@ -89,7 +98,9 @@ def _jsonable(value):
 
 
 def _std_errors_document(result: CalibrationResult) -> dict | None:
-    """Standard errors under the keys of the values (``base_tilt_deg`` in degrees; ``base_tilt`` kept, rad)."""
+    """Standard errors under the keys of the values (``base_tilt_deg`` in degrees; ``base_tilt``
+    kept, rad).
+    """
     errors = result.std_errors
     if errors is None:
         return None
@@ -159,9 +170,12 @@ def save_calibration(result: CalibrationResult, path, *, rezero: dict | None = N
     """
     if not isinstance(result, CalibrationResult):
         raise InvalidInput(
-            f"result must be an ftkin.CalibrationResult (from calibrate or load_calibration), got {type(result).__name__}"
+            "result must be an ftkin.CalibrationResult (from calibrate or load_calibration), got "
+            f"{type(result).__name__}"
         )
-    check_plausible(JsonReader(str(path), {}), result)  # never write what load_calibration would refuse
+    check_plausible(
+        JsonReader(str(path), {}), result
+    )  # never write what load_calibration would refuse
     try:
         document = calibration_to_dict(result)
         if rezero is not None:
@@ -203,13 +217,18 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
         raise CalibrationFileError(path, f"expected a JSON object, got {type(document).__name__}")
     reader = JsonReader(path, document)
     if document.get("format") != FORMAT_NAME:
-        reader.fail(f"not an ftkin calibration file (format {document.get('format')!r}, expected {FORMAT_NAME!r})", "format")
+        reader.fail(
+            f"not an ftkin calibration file (format {document.get('format')!r}, expected "
+            f"{FORMAT_NAME!r})",
+            "format",
+        )
     version = document.get("version")
     if isinstance(version, bool) or not isinstance(version, int):
         reader.fail(f"expected an integer version, got {version!r}", "version")
     if version > FORMAT_VERSION:
         reader.fail(
-            f"written by a newer ftkin (file format version {version}); this ftkin reads versions up to "
+            f"written by a newer ftkin (file format version {version}); this ftkin reads versions "
+            "up to "
             f"{FORMAT_VERSION}: upgrade ftkin",
             "version",
         )
@@ -224,20 +243,35 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     if not isinstance(raw_ids, list) or not all(
         isinstance(i, int) and not isinstance(i, bool) and abs(i) <= 2**53 for i in raw_ids
     ):
-        reader.fail(f"expected a list of integer pose ids of magnitude at most 2**53, got {short_repr(raw_ids)}", "poses.ids")
+        reader.fail(
+            "expected a list of integer pose ids of magnitude at most 2**53, got "
+            f"{short_repr(raw_ids)}",
+            "poses.ids",
+        )
     pose_ids = np.array(raw_ids, dtype=np.int64)
     count = len(pose_ids)
-    measured = reader.array("poses.measured", (count, 6), source=poses.get("measured", np.zeros((0, 6))))
-    residuals = reader.array("poses.residuals", (count, 6), source=poses.get("residuals", np.zeros((0, 6))))
+    measured = reader.array(
+        "poses.measured", (count, 6), source=poses.get("measured", np.zeros((0, 6)))
+    )
+    residuals = reader.array(
+        "poses.residuals", (count, 6), source=poses.get("residuals", np.zeros((0, 6)))
+    )
     method = reader.optional("method", str, "unknown")
     urdf, sensor_frame = reader.optional("urdf", str), reader.optional("sensor_frame", str)
     sample_count = reader.count("sample_count", count)
     if "pose_count" in document and reader.count("pose_count", count) != count:
-        reader.fail(f"{document['pose_count']} disagrees with the {count} pose ids in poses.ids", "pose_count")
+        reader.fail(
+            f"{document['pose_count']} disagrees with the {count} pose ids in poses.ids",
+            "pose_count",
+        )
     mount = reader.array("mount_rotation", (3, 3), required=False)
     mount_mode = reader.optional("mount_mode", str, "none")
     mount_size = {"yaw": 1, "full": 3}.get(mount_mode, 0)
-    mount_covariance = reader.array("mount_covariance", (mount_size, mount_size), required=False) if mount_size else None
+    mount_covariance = (
+        reader.array("mount_covariance", (mount_size, mount_size), required=False)
+        if mount_size
+        else None
+    )
     sensor_sign = reader.optional("sensor_sign", int, 1)
     inertia = reader.array("inertia", (3, 3), required=False)
     try:
@@ -267,7 +301,10 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     except (ValueError, TypeError) as error:
         raise CalibrationFileError(path, str(error)) from None
     if not (np.isfinite(result.tool_weight) and result.tool_weight > 0.0):
-        reader.fail(f"|gravity_in_base| must be finite and positive, got {result.tool_weight}", "gravity_in_base")
+        reader.fail(
+            f"|gravity_in_base| must be finite and positive, got {result.tool_weight}",
+            "gravity_in_base",
+        )
     check_document(reader, document, result, UNITS)
     if inertia is not None:
         result = with_inertia(reader, result, inertia)
@@ -287,9 +324,13 @@ def load_calibration(path) -> CalibrationResult:
     except FileNotFoundError:
         raise CalibrationFileError(str(path), "file not found") from None
     except IsADirectoryError:
-        raise CalibrationFileError(str(path), "is a folder; expected a calibration JSON file") from None
+        raise CalibrationFileError(
+            str(path), "is a folder; expected a calibration JSON file"
+        ) from None
     except (OSError, UnicodeDecodeError) as error:
         raise CalibrationFileError(str(path), f"cannot read: {error}") from None
     if not text.strip():
-        raise CalibrationFileError(str(path), "file is empty; expected an ftkin calibration JSON document")
+        raise CalibrationFileError(
+            str(path), "file is empty; expected an ftkin calibration JSON document"
+        )
     return calibration_from_dict(parse_calibration_json(text, str(path)), str(path))

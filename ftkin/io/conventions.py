@@ -1,4 +1,5 @@
-"""The alternative readings of a samples table, for :func:`ftkin.calibration.conventions.diagnose_readings`.
+"""The alternative readings of a samples table, for
+:func:`ftkin.calibration.conventions.diagnose_readings`.
 
 Besides the wrench alternatives (base frame, reaction, N·mm, one axis
 reversed), the orientation columns are read the way people get them wrong:
@@ -36,7 +37,8 @@ def _reading(name: str, fix: str, build) -> Reading:
 
 
 def table_readings(table: Table, arm=None) -> list[Reading]:
-    """The table as given (first) and under each common mistake; ``arm`` reads joint columns (bundled arm by default).
+    """The table as given (first) and under each common mistake; ``arm`` reads joint columns
+    (bundled arm by default).
 
     Raises:
         InvalidSamples: the table has no usable wrench or orientation columns at all.
@@ -56,23 +58,36 @@ def table_readings(table: Table, arm=None) -> list[Reading]:
     def from_rotations(rotations):
         return Samples(wrenches, np.asarray(rotations).reshape(-1, 3, 3), pose_ids)
 
-    given = _reading("the data as given", "", lambda: from_rotations(orientations_from_table(table, arm).rotations))
+    given = _reading(
+        "the data as given",
+        "",
+        lambda: from_rotations(orientations_from_table(table, arm).rotations),
+    )
     readings = [given]
     if kind == "euler":
-        readings.append(_reading(
-            "Euler angles in radians", "give alpha, beta, gamma in degrees (multiply by 180/π)",
-            lambda: from_rotations(euler_zyx_deg_to_matrix(np.rad2deg(values))),
-        ))
+        readings.append(
+            _reading(
+                "Euler angles in radians",
+                "give alpha, beta, gamma in degrees (multiply by 180/π)",
+                lambda: from_rotations(euler_zyx_deg_to_matrix(np.rad2deg(values))),
+            )
+        )
     elif kind == "quaternion":
-        readings.append(_reading(
-            "the quaternion as x,y,z,w", "name the columns qx,qy,qz,qw (the order they hold)",
-            lambda: from_rotations(quaternion_to_matrix(values[:, [3, 0, 1, 2]])),
-        ))
+        readings.append(
+            _reading(
+                "the quaternion as x,y,z,w",
+                "name the columns qx,qy,qz,qw (the order they hold)",
+                lambda: from_rotations(quaternion_to_matrix(values[:, [3, 0, 1, 2]])),
+            )
+        )
     else:
-        readings.append(_reading(
-            "joint angles in degrees", "give the joint angles in radians (multiply by π/180)",
-            lambda: from_rotations(arm.rotation_sensor_to_base(np.deg2rad(values))),
-        ))
+        readings.append(
+            _reading(
+                "joint angles in degrees",
+                "give the joint angles in radians (multiply by π/180)",
+                lambda: from_rotations(arm.rotation_sensor_to_base(np.deg2rad(values))),
+            )
+        )
     if given.poses is not None:
         readings.extend(wrench_readings(given.poses))
     return readings

@@ -29,7 +29,10 @@ _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+(?:[eE][+-]?\d+)?$")
 
 def _not_a_number(name: str, cell: str) -> str:
     if _DECIMAL_COMMA.match(cell):
-        return f"column {name!r}: {cell!r} has a decimal comma; write numbers with a decimal point ({cell.replace(',', '.')!r})"
+        return (
+            f"column {name!r}: {cell!r} has a decimal comma; write numbers with a decimal point "
+            f"({cell.replace(',', '.')!r})"
+        )
     shown = cell if len(cell) <= 40 else cell[:40] + "..."
     return f"column {name!r}: {shown!r} is not a number"
 
@@ -59,7 +62,11 @@ class Table:
                 except ValueError:
                     raise InvalidSamples(_not_a_number(name, cell), self.source, line) from None
                 if not np.isfinite(value):
-                    raise InvalidSamples(f"column {name!r}: {cell!r} is not finite; expected a finite number", self.source, line)
+                    raise InvalidSamples(
+                        f"column {name!r}: {cell!r} is not finite; expected a finite number",
+                        self.source,
+                        line,
+                    )
                 out[r, c] = value
         return out
 
@@ -96,21 +103,34 @@ def read_table(path) -> Table:
     path = Path(path)
     source = str(path)
     try:
-        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark (Excel) is not part of the header
+        text = path.read_text(
+            encoding="utf-8-sig"
+        )  # a byte-order mark (Excel) is not part of the header
     except FileNotFoundError:
         raise InvalidSamples("file not found", source) from None
     except IsADirectoryError:
-        raise InvalidSamples("is a folder; expected a CSV file (or a ROS 2 bag folder with metadata.yaml)", source) from None
+        raise InvalidSamples(
+            "is a folder; expected a CSV file (or a ROS 2 bag folder with metadata.yaml)", source
+        ) from None
     except UnicodeDecodeError as error:
-        raise InvalidSamples(f"not UTF-8 text (a binary file?): {error.reason} at byte {error.start}", source) from None
+        raise InvalidSamples(
+            f"not UTF-8 text (a binary file?): {error.reason} at byte {error.start}", source
+        ) from None
     except OSError as error:
         raise InvalidSamples(f"cannot read: {error.strerror or error}", source) from None
     if text.lstrip()[:1] in ("{", "["):
-        raise InvalidSamples("this is a JSON file (an ftkin calibration?), not a CSV table; expected a header row "
-                             "and data rows", source)
+        raise InvalidSamples(
+            "this is a JSON file (an ftkin calibration?), not a CSV table; expected a header row "
+            "and data rows",
+            source,
+        )
     delimiter = sniff_delimiter(text)
     if delimiter != ",":
-        logger.warning("%s: read as a %s-separated file (ftkin writes commas)", source, DELIMITER_NAMES[delimiter])
+        logger.warning(
+            "%s: read as a %s-separated file (ftkin writes commas)",
+            source,
+            DELIMITER_NAMES[delimiter],
+        )
     header, header_line, rows, lines = None, None, [], []
     reader = csv.reader(io.StringIO(text), delimiter=delimiter)
     try:
@@ -123,7 +143,9 @@ def read_table(path) -> Table:
                 duplicates = sorted(name for name, count in Counter(header).items() if count > 1)
                 if duplicates:
                     shown = duplicates[:10] + (["..."] if len(duplicates) > 10 else [])
-                    raise InvalidSamples(f"duplicated column(s) {shown} in the header", source, number)
+                    raise InvalidSamples(
+                        f"duplicated column(s) {shown} in the header", source, number
+                    )
                 continue
             if len(record) != len(header):
                 raise InvalidSamples(_cell_count_message(record, header, delimiter), source, number)
@@ -131,7 +153,8 @@ def read_table(path) -> Table:
             lines.append(number)
     except csv.Error as error:
         raise InvalidSamples(
-            f"cannot parse the CSV: {error} (a cell longer than {csv.field_size_limit()} characters, a NUL byte "
+            f"cannot parse the CSV: {error} (a cell longer than {csv.field_size_limit()} "
+            "characters, a NUL byte "
             "or an unclosed quote?)",
             source,
             reader.line_num,
@@ -148,9 +171,14 @@ def _cell_count_message(record, header, delimiter) -> str:
     if delimiter == "," and len(record) > len(header):
         joined = ",".join(record)
         decimal_points = any("." in cell for cell in record)  # a file with decimal commas has none
-        if not decimal_points and re.search(r"\d,\d", joined) and any(re.fullmatch(r"\d+", cell.strip()) for cell in record[1:]):
+        if (
+            not decimal_points
+            and re.search(r"\d,\d", joined)
+            and any(re.fullmatch(r"\d+", cell.strip()) for cell in record[1:])
+        ):
             message += (
-                "; the numbers look like they have decimal commas (e.g. 1,5): write them with a decimal point, "
+                "; the numbers look like they have decimal commas (e.g. 1,5): write them with a "
+                "decimal point, "
                 "or separate the cells with semicolons"
             )
     return message
@@ -175,7 +203,11 @@ def missing_columns(table: Table, wanted, what: str) -> None:
             if close is None:
                 import difflib  # only for an error message
 
-                matches = difflib.get_close_matches(name, table.header, n=1) if len(table.header) <= 1000 else []
+                matches = (
+                    difflib.get_close_matches(name, table.header, n=1)
+                    if len(table.header) <= 1000
+                    else []
+                )
                 close = matches[0] if matches else None
             if close is not None:
                 hints.append(f"rename column {close!r} to {name!r}")
@@ -199,5 +231,7 @@ def write_csv(path, header, rows) -> Path:
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(header)
     for row in rows:
-        writer.writerow([format_float(cell) if isinstance(cell, (float, np.floating)) else cell for cell in row])
+        writer.writerow(
+            [format_float(cell) if isinstance(cell, (float, np.floating)) else cell for cell in row]
+        )
     return atomic_write_text(path, buffer.getvalue())

@@ -50,7 +50,9 @@ def drift_from_document(reader: JsonReader) -> BiasDrift | None:
             bias=sub.array("bias", (count, 6)),
             bias_std=sub.array("bias_std", (count, 6)),
             rate=sub.array("rate", (2,), required=False),
-            coefficients=None if coefficients is None else sub.array("coefficients", (len(coefficients), 6)),
+            coefficients=None
+            if coefficients is None
+            else sub.array("coefficients", (len(coefficients), 6)),
             time_scale=sub.number("time_scale") if "time_scale" in data else 1.0,
             criteria={str(name): float(value) for name, value in criteria.items()},
             recorded_span=sub.array("recorded_span", (2,), required=False),

@@ -54,7 +54,9 @@ def _short(values) -> str:
 
 
 def urdf_root_link(urdf) -> str | None:
-    """Name of the URDF's root link (the base frame of ftkin's kinematics), or None if unreadable."""
+    """Name of the URDF's root link (the base frame of ftkin's kinematics), or None if
+    unreadable.
+    """
     try:
         root = ET.parse(urdf).getroot()
     except (OSError, ET.ParseError, TypeError):
@@ -71,9 +73,12 @@ def export_notes(calibration: SensorModel, fmt: str) -> list[str]:
     notes = []
     f0, m0 = np.asarray(calibration.force_offset), np.asarray(calibration.torque_offset)
     if fmt in ("admittance", "gravity-compensation"):
-        target = "admittance_controller" if fmt == "admittance" else "the GravityCompensation filter"
+        target = (
+            "admittance_controller" if fmt == "admittance" else "the GravityCompensation filter"
+        )
         notes.append(
-            f"{target} has no sensor bias: remove F0 = {_short(f0)} N and M0 = {_short(m0)} N·m before it "
+            f"{target} has no sensor bias: remove F0 = {_short(f0)} N and M0 = {_short(m0)} N·m "
+            "before it "
             "(zero the sensor in the driver, or subtract these values upstream)"
         )
     tilt_deg = np.rad2deg(np.asarray(calibration.base_tilt, dtype=float))
@@ -86,14 +91,17 @@ def export_notes(calibration: SensorModel, fmt: str) -> list[str]:
             else "ft_calib takes gravity from an IMU/TF, not from this file"
         )
         notes.append(
-            f"the base tilt U = {tilt_deg[0]:.4f}°, V = {tilt_deg[1]:.4f}° is not representable ({where}); "
+            f"the base tilt U = {tilt_deg[0]:.4f}°, V = {tilt_deg[1]:.4f}° is not representable "
+            f"({where}); "
             f"ignoring it leaves up to {error:.4f} N of force error"
         )
     if getattr(calibration, "has_mount", False):
         rpy = ", ".join(f"{value:.3f}" for value in calibration.mount_rpy_deg)
         notes.append(
-            f"the real sensor frame is turned from the URDF's by the estimated mount (R_M roll, pitch, yaw = {rpy}°): the "
-            "values are in the real sensor frame; the ROS sensor frame must be the real one (fix the URDF's sensor joint "
+            "the real sensor frame is turned from the URDF's by the estimated mount (R_M roll, "
+            f"pitch, yaw = {rpy}°): the "
+            "values are in the real sensor frame; the ROS sensor frame must be the real one (fix "
+            "the URDF's sensor joint "
             "rpy by R_M^T)"
         )
     if getattr(calibration, "sensor_sign", 1) != 1 or getattr(calibration, "flip_axis", None):
@@ -107,10 +115,14 @@ def export_notes(calibration: SensorModel, fmt: str) -> list[str]:
 
 def _check_format(fmt: str) -> None:
     if fmt not in EXPORT_FORMATS:
-        raise InvalidInput(f"unknown export format {fmt!r}; expected one of {', '.join(EXPORT_FORMATS)}")
+        raise InvalidInput(
+            f"unknown export format {fmt!r}; expected one of {', '.join(EXPORT_FORMATS)}"
+        )
 
 
-def export_tree(calibration: SensorModel, fmt: str, frame_id: str | None = None, world_frame: str | None = None) -> dict:
+def export_tree(
+    calibration: SensorModel, fmt: str, frame_id: str | None = None, world_frame: str | None = None
+) -> dict:
     """The parameters of ``fmt`` as nested dicts (the YAML that :func:`export_text` writes).
 
     Args:
@@ -134,7 +146,9 @@ def export_tree(calibration: SensorModel, fmt: str, frame_id: str | None = None,
     mass = float(calibration.tool_mass)
     if fmt == "gravity-compensation":
         if mass <= 0.0:
-            raise InvalidInput("the calibration has no tool weight (a = 0): gravity_field = a / mass is undefined")
+            raise InvalidInput(
+                "the calibration has no tool weight (a = 0): gravity_field = a / mass is undefined"
+            )
         if world_frame is None:
             urdf = getattr(calibration, "urdf", None)
             world_frame = (urdf_root_link(urdf) if urdf else None) or DEFAULT_WORLD_FRAME
@@ -161,7 +175,8 @@ def export_text(
     world_frame: str | None = None,
     node_name: str | None = None,
 ) -> str:
-    """YAML text of ``calibration`` in format ``fmt`` (see the module docstring), with notes as comments.
+    """YAML text of ``calibration`` in format ``fmt`` (see the module docstring), with notes as
+    comments.
 
     ``node_name`` is the ROS 2 node the parameters belong to (``admittance``:
     default ``admittance_controller``; ``gravity-compensation``: default
@@ -174,7 +189,10 @@ def export_text(
             non-finite parameter.
     """
     if fmt == "ft-calib" and node_name is not None:
-        raise InvalidInput("ft-calib is a flat ROS 1 parameter file without a node name; drop node_name (--node-name)")
+        raise InvalidInput(
+            "ft-calib is a flat ROS 1 parameter file without a node name; drop node_name "
+            "(--node-name)"
+        )
     tree = export_tree(calibration, fmt, frame_id, world_frame)
     header = [
         f"# ftkin calibration exported for {fmt}",
@@ -185,12 +203,25 @@ def export_text(
     if fmt == "admittance":
         tree = {node_name or "admittance_controller": {"ros__parameters": tree}}
     elif fmt == "gravity-compensation":
-        chain = {"filter1": {"name": "gravity_compensation", "type": "control_filters/GravityCompensationWrench", "params": tree}}
+        chain = {
+            "filter1": {
+                "name": "gravity_compensation",
+                "type": "control_filters/GravityCompensationWrench",
+                "params": tree,
+            }
+        }
         tree = {node_name or "/**": {"ros__parameters": {"sensor_filter_chain": chain}}}
-        header.append("# gravity_field = tilted gravity in world_frame, tool weight = mass · gravity_field")
+        header.append(
+            "# gravity_field = tilted gravity in world_frame, tool weight = mass · gravity_field"
+        )
     else:
-        header.append("# bias = [fx, fy, fz, tx, ty, tz] subtracted from the raw reading; the model is")
-        header.append("# raw = bias + [m·g_S; com × m·g_S] with g_S the gravity acceleration (pointing down) in the sensor frame")
+        header.append(
+            "# bias = [fx, fy, fz, tx, ty, tz] subtracted from the raw reading; the model is"
+        )
+        header.append(
+            "# raw = bias + [m·g_S; com × m·g_S] with g_S the gravity acceleration (pointing down) "
+            "in the sensor frame"
+        )
     return yaml_text(tree, comments=[line.removeprefix("# ") for line in header])
 
 

@@ -1,4 +1,6 @@
-"""Typed access to a parsed JSON document, failing with :class:`~ftkin.exceptions.CalibrationFileError` naming the key."""
+"""Typed access to a parsed JSON document, failing with
+:class:`~ftkin.exceptions.CalibrationFileError` naming the key.
+"""
 
 from __future__ import annotations
 
@@ -27,7 +29,9 @@ class JsonReader:
         return self.document[key]
 
     def optional(self, key: str, kind: type, default=None):
-        """An optional value of JSON type ``kind`` (``str``, ``int``), ``default`` when absent or null."""
+        """An optional value of JSON type ``kind`` (``str``, ``int``), ``default`` when absent or
+        null.
+        """
         value = self.get(key, required=False)
         if value is None:
             return default
@@ -36,7 +40,9 @@ class JsonReader:
         return value
 
     def optional_object(self, key: str) -> dict | None:
-        """An optional JSON object: None when absent or null; anything but an object fails, naming the key."""
+        """An optional JSON object: None when absent or null; anything but an object fails, naming
+        the key.
+        """
         value = self.get(key, required=False)
         if value is not None and not isinstance(value, dict):
             self.fail(f"expected an object or null, got {type(value).__name__}", key)
@@ -54,7 +60,10 @@ class JsonReader:
         if value is None:
             return None
         if has_bool(value):
-            self.fail(f"expected numbers of shape {shape}, got a boolean (true/false are not numbers)", key)
+            self.fail(
+                f"expected numbers of shape {shape}, got a boolean (true/false are not numbers)",
+                key,
+            )
         try:
             array = np.array(value, dtype=np.float64)
         except (TypeError, ValueError, OverflowError):
@@ -68,7 +77,11 @@ class JsonReader:
     def number(self, key: str) -> float:
         value = self.get(key)
         try:
-            finite = not isinstance(value, bool) and isinstance(value, (int, float)) and math.isfinite(value)
+            finite = (
+                not isinstance(value, bool)
+                and isinstance(value, (int, float))
+                and math.isfinite(value)
+            )
         except OverflowError:
             finite = False
         if not finite:
@@ -77,7 +90,9 @@ class JsonReader:
 
 
 class NestedReader(JsonReader):
-    """A :class:`JsonReader` for an object inside the document; keys are reported as ``prefix.key``."""
+    """A :class:`JsonReader` for an object inside the document; keys are reported as
+    ``prefix.key``.
+    """
 
     def __init__(self, path: str, document: dict, prefix: str):
         super().__init__(path, document)

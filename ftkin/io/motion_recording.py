@@ -39,7 +39,9 @@ from .time_columns import TIME_COLUMN, times_from_table
 logger = logging.getLogger(__name__)
 
 JITTER_TOLERANCE = 1e-3
-"""Largest deviation of a bag's time step from the median step [fraction] accepted without resampling."""
+"""Largest deviation of a bag's time step from the median step [fraction] accepted without
+resampling.
+"""
 
 
 @dataclass(frozen=True)
@@ -64,7 +66,9 @@ class MotionRecording:
     joint_velocities: np.ndarray | None = None
     joint_accelerations: np.ndarray | None = None
 
-    def motion_samples(self, arm, window: int | None = None, polyorder: int = DEFAULT_POLYORDER) -> MotionSamples:
+    def motion_samples(
+        self, arm, window: int | None = None, polyorder: int = DEFAULT_POLYORDER
+    ) -> MotionSamples:
         """Zero-phase ``q, dq, ddq`` and the sensor frame's motion (:class:`MotionSamples`).
 
         With velocities and accelerations given by the recording, those are
@@ -75,8 +79,14 @@ class MotionRecording:
             InvalidSamples: the times are not uniform or too few for the window.
         """
         if self.joint_velocities is not None and self.joint_accelerations is not None:
-            return MotionSamples.from_joint_trajectory(arm, self.joint_positions, self.joint_velocities,
-                                                       self.joint_accelerations, self.wrenches, self.times)
+            return MotionSamples.from_joint_trajectory(
+                arm,
+                self.joint_positions,
+                self.joint_velocities,
+                self.joint_accelerations,
+                self.wrenches,
+                self.times,
+            )
         try:
             q, dq, ddq = joint_derivatives(self.times, self.joint_positions, window, polyorder)
         except InvalidInput as error:
@@ -102,7 +112,9 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
         InvalidSamples: missing ``t``, joint or wrench columns, joint angles in
             degrees, or times not increasing (with file and line).
     """
-    table = rename_columns(table, wrench_aliases(table.header))  # ROS names (force.x, ...) as for static samples
+    table = rename_columns(
+        table, wrench_aliases(table.header)
+    )  # ROS names (force.x, ...) as for static samples
     times = times_from_table(table)
     if times is None:
         missing_columns(table, (TIME_COLUMN,), "time")
@@ -110,7 +122,8 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
     kind, columns = detect_orientation(table, arm.joint_names)
     if kind != "joints":
         raise InvalidSamples(
-            f"a moving recording needs joint columns (the arm's {arm.joint_names} or q1..q{arm.nq}), found {kind} columns",
+            f"a moving recording needs joint columns (the arm's {arm.joint_names} or "
+            f"q1..q{arm.nq}), found {kind} columns",
             table.source,
         )
     joints = table.floats(columns)
@@ -127,25 +140,33 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
 
 
 DERIVATIVE_TOLERANCE = 0.2
-"""Largest RMS disagreement, as a fraction of their RMS, between given velocities (accelerations) and the
+"""Largest RMS disagreement, as a fraction of their RMS, between given velocities (accelerations)
+and the
 finite-difference derivative of the positions (velocities)."""
 
 
 def _derivative_columns(table: Table, columns: list[str], kind: str) -> list[str] | None:
     prefix, suffix = ("dq", "_velocity") if kind == "velocity" else ("ddq", "_acceleration")
-    for names in ([f"{prefix}{i + 1}" for i in range(len(columns))], [f"{c}{suffix}" for c in columns]):
+    for names in (
+        [f"{prefix}{i + 1}" for i in range(len(columns))],
+        [f"{c}{suffix}" for c in columns],
+    ):
         present = [name in table.header for name in names]
         if all(present):
             return names
         if any(present):
             missing = [name for name, here in zip(names, present) if not here]
-            raise InvalidSamples(f"joint {kind} columns {missing} are missing (the others are given); give all "
-                                 f"{len(columns)} or none", table.source)
+            raise InvalidSamples(
+                f"joint {kind} columns {missing} are missing (the others are given); give all "
+                f"{len(columns)} or none",
+                table.source,
+            )
     return None
 
 
 def given_derivatives(table: Table, columns: list[str], times: np.ndarray, joints: np.ndarray):
-    """The recording's own joint velocities and accelerations ``(N, nq)`` [rad/s, rad/s²], or ``(None, None)``.
+    """The recording's own joint velocities and accelerations ``(N, nq)`` [rad/s, rad/s²], or
+    ``(None, None)``.
 
     Both are needed (one alone is ignored with a warning), and each must agree
     with the time derivative (central differences) of the one below it within
@@ -156,20 +177,30 @@ def given_derivatives(table: Table, columns: list[str], times: np.ndarray, joint
     acceleration_names = _derivative_columns(table, columns, "acceleration")
     if velocity_names is None or acceleration_names is None:
         if velocity_names is not None or acceleration_names is not None:
-            logger.warning("%s: joint velocities or accelerations given without the other; both are taken from "
-                           "the positions instead", table.source)
+            logger.warning(
+                "%s: joint velocities or accelerations given without the other; both are taken "
+                "from "
+                "the positions instead",
+                table.source,
+            )
         return None, None
     velocities, accelerations = table.floats(velocity_names), table.floats(acceleration_names)
-    for given, below, names, unit in ((velocities, joints, velocity_names, "rad/s"),
-                                      (accelerations, velocities, acceleration_names, "rad/s²")):
+    for given, below, names, unit in (
+        (velocities, joints, velocity_names, "rad/s"),
+        (accelerations, velocities, acceleration_names, "rad/s²"),
+    ):
         derivative = np.gradient(below, times, axis=0)
         scale = float(np.sqrt(np.mean(derivative**2)))
         mismatch = float(np.sqrt(np.mean((given - derivative) ** 2)))
         if mismatch > DERIVATIVE_TOLERANCE * scale + 1e-9:
             raise InvalidSamples(
-                f"columns {names[0]}..{names[-1]} disagree with the time derivative of the columns before them "
-                f"(RMS difference {mismatch:.3g} against RMS {scale:.3g} {unit}): expected {unit} in the joint order "
-                "(degrees? another order?); drop them to differentiate the positions", table.source)
+                f"columns {names[0]}..{names[-1]} disagree with the time derivative of the columns "
+                "before them "
+                f"(RMS difference {mismatch:.3g} against RMS {scale:.3g} {unit}): expected {unit} "
+                "in the joint order "
+                "(degrees? another order?); drop them to differentiate the positions",
+                table.source,
+            )
     return velocities, accelerations
 
 
@@ -179,27 +210,48 @@ def load_motion_csv(path, arm) -> MotionRecording:
 
 
 def uniform(times: np.ndarray, *arrays: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Resample ``arrays`` ``(N, k)`` onto a uniform grid at the median step when the stamps jitter (linear)."""
+    """Resample ``arrays`` ``(N, k)`` onto a uniform grid at the median step when the stamps jitter
+    (linear).
+    """
     steps = np.diff(times)
     period = float(np.median(steps))
     if np.max(np.abs(steps - period)) <= JITTER_TOLERANCE * period:
         return (times, *arrays)
     grid = times[0] + period * np.arange(int(np.floor((times[-1] - times[0]) / period)) + 1)
-    return (grid, *(np.column_stack([np.interp(grid, times, column) for column in array.T]) for array in arrays))
+    return (
+        grid,
+        *(
+            np.column_stack([np.interp(grid, times, column) for column in array.T])
+            for array in arrays
+        ),
+    )
 
 
-def load_motion_bag(path, arm, joint_topic: str | None = None, wrench_topic: str | None = None,
-                    wrench_frame: str = "sensor") -> MotionRecording:
-    """Read a moving recording from a ROS 2 bag (extra ``bags``), resampled to a uniform grid if needed.
+def load_motion_bag(
+    path,
+    arm,
+    joint_topic: str | None = None,
+    wrench_topic: str | None = None,
+    wrench_frame: str = "sensor",
+) -> MotionRecording:
+    """Read a moving recording from a ROS 2 bag (extra ``bags``), resampled to a uniform grid if
+    needed.
 
     ``wrench_frame``: ``"sensor"`` or ``"base"``, as for static bags
-    (:func:`~ftkin.io.wrench_frames.wrenches_in_sensor_frame`; the frame_id is checked the same way).
+    (:func:`~ftkin.io.wrench_frames.wrenches_in_sensor_frame`; the frame_id is checked the same
+    way).
     """
     from .bags import read_bag
     from .wrench_frames import wrenches_in_sensor_frame
 
     recording = read_bag(path, arm, joint_topic, wrench_topic)
-    wrenches = wrenches_in_sensor_frame(recording.wrenches, arm.rotation_sensor_to_base(recording.joint_positions),
-                                        recording.wrench_frame_id, arm, wrench_frame, recording.source)
+    wrenches = wrenches_in_sensor_frame(
+        recording.wrenches,
+        arm.rotation_sensor_to_base(recording.joint_positions),
+        recording.wrench_frame_id,
+        arm,
+        wrench_frame,
+        recording.source,
+    )
     times, joints, wrenches = uniform(recording.times, recording.joint_positions, wrenches)
     return MotionRecording(recording.source, times, joints, wrenches)

@@ -66,7 +66,8 @@ class Payload:
         mass: Tool mass [kg].
         center_of_mass: Centre of mass in the flange frame [m].
         flange_frame: Name of that frame in the URDF.
-        inertia: ``(3, 3)`` inertia about the centre of mass, flange axes [kg·m²], or None (unknown).
+        inertia: ``(3, 3)`` inertia about the centre of mass, flange axes [kg·m²], or None
+        (unknown).
     """
 
     mass: float
@@ -76,7 +77,9 @@ class Payload:
 
 
 def flange_frame_name(arm) -> str:
-    """The arm's flange frame: the first of :data:`FLANGE_FRAMES` it has, else the sensor frame's parent frame."""
+    """The arm's flange frame: the first of :data:`FLANGE_FRAMES` it has, else the sensor frame's
+    parent frame.
+    """
     for name in FLANGE_FRAMES:
         if arm.model.existFrame(name):
             return name
@@ -84,18 +87,24 @@ def flange_frame_name(arm) -> str:
 
 
 def sensor_in_flange(arm, flange_frame: str) -> pin.SE3:
-    """URDF placement of the sensor frame in ``flange_frame`` (both must move with the same joint)."""
+    """URDF placement of the sensor frame in ``flange_frame`` (both must move with the same
+    joint).
+    """
     flange_id, sensor_id = arm.frame_id(flange_frame), arm.sensor_frame_id
     flange, sensor = arm.model.frames[flange_id], arm.model.frames[sensor_id]
     if flange.parentJoint != sensor.parentJoint:
         raise InvalidInput(
-            f"the flange frame {flange_frame!r} and the sensor frame {arm.sensor_frame!r} are not fixed to each other "
-            f"(they hang from joints {arm.model.names[flange.parentJoint]!r} and {arm.model.names[sensor.parentJoint]!r})"
+            f"the flange frame {flange_frame!r} and the sensor frame {arm.sensor_frame!r} are not "
+            "fixed to each other "
+            f"(they hang from joints {arm.model.names[flange.parentJoint]!r} and "
+            f"{arm.model.names[sensor.parentJoint]!r})"
         )
     return flange.placement.inverse() * sensor.placement
 
 
-def payload_in_flange(calibration: SensorModel, arm, flange_frame: str | None = None, inertia=None) -> Payload:
+def payload_in_flange(
+    calibration: SensorModel, arm, flange_frame: str | None = None, inertia=None
+) -> Payload:
     """The calibrated tool as a payload in the flange frame (see the module docstring).
 
     Args:
@@ -112,7 +121,9 @@ def payload_in_flange(calibration: SensorModel, arm, flange_frame: str | None = 
         FrameNotFound: ``flange_frame`` is not in the model.
     """
     if getattr(arm, "mount_rotation", None) is not None:
-        raise InvalidInput("give the arm as its URDF describes it (not the mounted copy of a Compensator)")
+        raise InvalidInput(
+            "give the arm as its URDF describes it (not the mounted copy of a Compensator)"
+        )
     mass = float(calibration.tool_mass)
     if not mass > 0.0:
         raise InvalidInput("the calibration has no tool weight: there is no payload to export")
@@ -120,10 +131,17 @@ def payload_in_flange(calibration: SensorModel, arm, flange_frame: str | None = 
     placement = sensor_in_flange(arm, flange_frame)
     mount = np.asarray(getattr(calibration, "mount_rotation", np.eye(3)), dtype=float)
     rotation_sensor_to_flange = placement.rotation @ mount.T
-    com = rotation_sensor_to_flange @ np.asarray(calibration.center_of_mass, dtype=float) + placement.translation
+    com = (
+        rotation_sensor_to_flange @ np.asarray(calibration.center_of_mass, dtype=float)
+        + placement.translation
+    )
     in_sensor = getattr(calibration, "inertia_about_com_in_sensor", None)
     if inertia is None and in_sensor is not None:
-        inertia = rotation_sensor_to_flange @ np.asarray(in_sensor, dtype=float) @ rotation_sensor_to_flange.T
+        inertia = (
+            rotation_sensor_to_flange
+            @ np.asarray(in_sensor, dtype=float)
+            @ rotation_sensor_to_flange.T
+        )
     return Payload(mass, com, flange_frame, _inertia(inertia))
 
 
@@ -135,7 +153,10 @@ def _inertia(value) -> np.ndarray | None:
         ixx, iyy, izz, ixy, ixz, iyz = array
         array = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
     if array.shape != (3, 3) or not np.all(np.isfinite(array)) or not np.allclose(array, array.T):
-        raise InvalidInput(f"inertia must be a symmetric (3, 3) matrix or [ixx, iyy, izz, ixy, ixz, iyz] [kg·m²], got {value!r}")
+        raise InvalidInput(
+            "inertia must be a symmetric (3, 3) matrix or [ixx, iyy, izz, ixy, ixz, iyz] [kg·m²], "
+            f"got {value!r}"
+        )
     if np.linalg.eigvalsh(array)[0] < -1e-12:
         raise InvalidInput("inertia must be positive semidefinite")
     return array
@@ -148,11 +169,17 @@ def _numbers(values) -> list[float]:
 def payload_tree(payload: Payload, fmt: str) -> dict:
     """The service request of ``fmt`` as a dict (what :func:`payload_text` writes as YAML)."""
     if fmt not in PAYLOAD_FORMATS:
-        raise InvalidInput(f"unknown payload format {fmt!r}; expected one of {', '.join(PAYLOAD_FORMATS)}")
+        raise InvalidInput(
+            f"unknown payload format {fmt!r}; expected one of {', '.join(PAYLOAD_FORMATS)}"
+        )
     com = _numbers(payload.center_of_mass)
     if fmt == "franka-load":
         inertia = np.zeros((3, 3)) if payload.inertia is None else payload.inertia
-        return {"mass": float(payload.mass), "center_of_mass": com, "load_inertia": _numbers(inertia.T)}
+        return {
+            "mass": float(payload.mass),
+            "center_of_mass": com,
+            "load_inertia": _numbers(inertia.T),
+        }
     return {"mass": float(payload.mass), "center_of_gravity": dict(zip("xyz", com))}
 
 
@@ -163,32 +190,50 @@ def urscript_line(payload: Payload) -> str:
 
 
 def payload_text(payload: Payload, fmt: str, urscript_only: bool = False) -> str:
-    """The payload file of ``fmt`` (see the module docstring): YAML request with explanatory comments."""
+    """The payload file of ``fmt`` (see the module docstring): YAML request with explanatory
+    comments.
+    """
     if urscript_only:
         if fmt != "ur-payload":
             raise InvalidInput("a URScript file is for --format ur-payload only")
-        return f"# ftkin payload: mass [kg], centre of gravity [m] in the tool flange frame\n{urscript_line(payload)}\n"
+        return (
+            "# ftkin payload: mass [kg], centre of gravity [m] in the tool flange "
+            f"frame\n{urscript_line(payload)}\n"
+        )
     tree = payload_tree(payload, fmt)
-    header = [f"# ftkin payload for {fmt}: centre of mass in the flange frame {payload.flange_frame!r} [m], mass [kg]"]
+    header = [
+        f"# ftkin payload for {fmt}: centre of mass in the flange frame {payload.flange_frame!r} "
+        "[m], mass [kg]"
+    ]
     if fmt == "franka-load":
         header += [
-            f"# franka_msgs/srv/SetLoad request (ros2 service call {FRANKA_SET_LOAD_SERVICE} franka_msgs/srv/SetLoad ...);",
-            "# libfranka: robot.setLoad(mass, F_x_Cload = center_of_mass, load_inertia) (column-major 3x3 [kg*m^2])",
+            f"# franka_msgs/srv/SetLoad request (ros2 service call {FRANKA_SET_LOAD_SERVICE} "
+            "franka_msgs/srv/SetLoad ...);",
+            "# libfranka: robot.setLoad(mass, F_x_Cload = center_of_mass, load_inertia) "
+            "(column-major 3x3 [kg*m^2])",
         ]
         if payload.inertia is None:
-            header.append("# NOTE: a static calibration does not determine the inertia: load_inertia is zero (point mass); "
-                          "give --inertia if known")
+            header.append(
+                "# NOTE: a static calibration does not determine the inertia: load_inertia is zero "
+                "(point mass); "
+                "give --inertia if known"
+            )
     else:
         header += [
-            f"# ur_msgs/srv/SetPayload request: ros2 service call {UR_SET_PAYLOAD_SERVICE} ur_msgs/srv/SetPayload "
-            "\"{mass: ..., center_of_gravity: {x: ..., y: ..., z: ...}}\"",
+            f"# ur_msgs/srv/SetPayload request: ros2 service call {UR_SET_PAYLOAD_SERVICE} "
+            "ur_msgs/srv/SetPayload "
+            '"{mass: ..., center_of_gravity: {x: ..., y: ..., z: ...}}"',
             f"# URScript: {urscript_line(payload)}",
         ]
     return yaml_text(tree, [line.removeprefix("# ") for line in header])
 
 
-def export_payload(calibration: SensorModel, arm, path, fmt: str, flange_frame: str | None = None, inertia=None) -> Path:
-    """Write the payload of ``calibration`` in ``fmt`` to ``path`` atomically (``.script``: URScript only)."""
+def export_payload(
+    calibration: SensorModel, arm, path, fmt: str, flange_frame: str | None = None, inertia=None
+) -> Path:
+    """Write the payload of ``calibration`` in ``fmt`` to ``path`` atomically (``.script``: URScript
+    only).
+    """
     payload = payload_in_flange(calibration, arm, flange_frame, inertia)
     urscript = Path(path).suffix.lower() in (".script", ".urscript")
     return atomic_write_text(Path(path), payload_text(payload, fmt, urscript_only=urscript))

@@ -58,7 +58,9 @@ def wrench_aliases(header) -> dict[str, str]:
     for name in header:
         match = _ROS_WRENCH.match(name)
         if match:
-            aliases[name] = ("f" if match.group(1).lower() == "force" else "m") + match.group(2).lower()
+            aliases[name] = ("f" if match.group(1).lower() == "force" else "m") + match.group(
+                2
+            ).lower()
         elif name.lower() in _TORQUE_T:
             aliases[name] = _TORQUE_T[name.lower()]
     targets = list(aliases.values())
@@ -81,13 +83,16 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
     quaternion = [name for name in QUATERNION_COLUMNS if name in header]
     if quaternion:
         found["quaternion"] = quaternion
-    generic = sorted((name for name in header if _GENERIC_JOINT.match(name)), key=lambda n: int(n[1:]))
+    generic = sorted(
+        (name for name in header if _GENERIC_JOINT.match(name)), key=lambda n: int(n[1:])
+    )
     named = [name for name in (joint_names or []) if name in header]
     if euler or quaternion:  # joint columns of any arm would be mixed in
         named = named or [name for name in header if "joint" in name.lower()]
     if named and generic:
         raise InvalidSamples(
-            f"both URDF joint-name columns {named} and generic columns {generic}; use one", table.source
+            f"both URDF joint-name columns {named} and generic columns {generic}; use one",
+            table.source,
         )
     if named or generic:
         found["joints"] = named or generic
@@ -99,11 +104,21 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
             table.source,
         )
     if not found:
-        joints = f"the arm's joint names {list(joint_names)} or q1..q{len(joint_names)}" if joint_names else "joint columns"
+        joints = (
+            f"the arm's joint names {list(joint_names)} or q1..q{len(joint_names)}"
+            if joint_names
+            else "joint columns"
+        )
         unknown = [name for name in header if "joint" in name.lower()]
-        hint = f"; columns {unknown} look like joint names but are not this arm's (wrong --urdf/--robot?)" if unknown else ""
+        hint = (
+            f"; columns {unknown} look like joint names but are not this arm's (wrong "
+            "--urdf/--robot?)"
+            if unknown
+            else ""
+        )
         raise InvalidSamples(
-            f"no orientation columns: expected {joints} [rad], or alpha,beta,gamma [deg], or qw,qx,qy,qz{hint}; "
+            f"no orientation columns: expected {joints} [rad], or alpha,beta,gamma [deg], or "
+            f"qw,qx,qy,qz{hint}; "
             f"the header has {header}",
             table.source,
             table.header_line,
@@ -131,13 +146,22 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
 
 def check_radians(table: Table, columns, values: np.ndarray) -> None:
     """Refuse joint angles that can only be degrees (``|q| > 2π``)."""
-    _refuse_beyond(table, values, _DEGREES_THRESHOLD, lambda column, value: (
-        f"joint column {columns[column]!r} holds {value:g}, outside ±2π: joint angles must be in radians "
-        "(these look like degrees)"))
+    _refuse_beyond(
+        table,
+        values,
+        _DEGREES_THRESHOLD,
+        lambda column, value: (
+            f"joint column {columns[column]!r} holds {value:g}, outside ±2π: joint angles must be "
+            "in radians "
+            "(these look like degrees)"
+        ),
+    )
 
 
 def _refuse_beyond(table: Table, values: np.ndarray, limit: float, describe) -> None:
-    """:class:`InvalidSamples` at the first cell of ``values`` beyond ``±limit``: ``describe(column, value)``, its line."""
+    """:class:`InvalidSamples` at the first cell of ``values`` beyond ``±limit``: ``describe(column,
+    value)``, its line.
+    """
     bad = np.argwhere(np.abs(values) > limit)
     if bad.size:
         row, column = bad[0]
@@ -152,7 +176,9 @@ def _bundled_joint_names() -> tuple[str, ...]:
 
 
 def warn_outside_limits(table: Table, columns, values: np.ndarray, arm) -> None:
-    """Log one warning per joint column with values outside the arm's position limits, naming the limit."""
+    """Log one warning per joint column with values outside the arm's position limits, naming the
+    limit.
+    """
     lower, upper = np.asarray(arm.lower_limits, float), np.asarray(arm.upper_limits, float)
     if lower.shape != (values.shape[1],):
         return
@@ -162,8 +188,15 @@ def warn_outside_limits(table: Table, columns, values: np.ndarray, arm) -> None:
         if count:
             row = int(np.flatnonzero(below | above)[0])
             logger.warning(
-                "%s: joint column %r has %d value(s) outside the URDF limits [%g, %g] rad (first %g at line %d)",
-                table.source, name, count, lower[c], upper[c], values[row, c], table.lines[row],
+                "%s: joint column %r has %d value(s) outside the URDF limits [%g, %g] rad (first "
+                "%g at line %d)",
+                table.source,
+                name,
+                count,
+                lower[c],
+                upper[c],
+                values[row, c],
+                table.lines[row],
             )
 
 
@@ -200,13 +233,17 @@ def orientations_from_table(table: Table, arm=None) -> TableOrientations:
 
     if arm is None and not any(name in table.header for name in EULER_COLUMNS + QUATERNION_COLUMNS):
         arm = Arm.default()
-    if arm is None:  # Euler or quaternion columns: joint columns of the bundled arm would be mixed in
+    if (
+        arm is None
+    ):  # Euler or quaternion columns: joint columns of the bundled arm would be mixed in
         detect_orientation(table, _bundled_joint_names())
     kind, columns = detect_orientation(table, arm.joint_names if arm is not None else None)
     values = table.floats(columns)
     try:
         if kind == "euler":
-            return TableOrientations(euler_zyx_deg_to_matrix(values).reshape(-1, 3, 3), kind, columns)
+            return TableOrientations(
+                euler_zyx_deg_to_matrix(values).reshape(-1, 3, 3), kind, columns
+            )
         if kind == "quaternion":
             return TableOrientations(quaternion_to_matrix(values).reshape(-1, 3, 3), kind, columns)
         check_radians(table, columns, values)
@@ -227,25 +264,39 @@ def pose_ids_from_table(table: Table) -> np.ndarray | None:
     if huge.size:
         row = int(huge[0])
         raise InvalidSamples(
-            f"pose id {table.rows[row][table.column_index(POSE_COLUMN)].strip()!r} is too large; expected an integer "
-            f"of magnitude at most 2**53", table.source, table.lines[row],
+            f"pose id {table.rows[row][table.column_index(POSE_COLUMN)].strip()!r} is too large; "
+            "expected an integer "
+            f"of magnitude at most 2**53",
+            table.source,
+            table.lines[row],
         )
     fractional = np.flatnonzero(pose_ids != np.round(pose_ids))
     if fractional.size:
         row = int(fractional[0])
-        raise InvalidSamples(f"pose id {float(pose_ids[row])!r} is not an integer", table.source, table.lines[row])
+        raise InvalidSamples(
+            f"pose id {float(pose_ids[row])!r} is not an integer", table.source, table.lines[row]
+        )
     return pose_ids.astype(np.int64)
 
 
 MAX_WRENCH = 1e6
-"""Largest accepted reading magnitude [N, N·m]: beyond it a value is a raw count or a unit mistake, not a load."""
+"""Largest accepted reading magnitude [N, N·m]: beyond it a value is a raw count or a unit mistake,
+not a load.
+"""
 
 
 def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
     """Refuse readings beyond ±:data:`MAX_WRENCH` (they would overflow the fit, not inform it)."""
-    _refuse_beyond(table, wrenches, MAX_WRENCH, lambda column, value: (
-        f"column {WRENCH_CHANNELS[column]!r} holds {value:g}, beyond ±{MAX_WRENCH:g}: expected N (fx, fy, fz) and N·m "
-        "(mx, my, mz), not raw counts"))
+    _refuse_beyond(
+        table,
+        wrenches,
+        MAX_WRENCH,
+        lambda column, value: (
+            f"column {WRENCH_CHANNELS[column]!r} holds {value:g}, beyond ±{MAX_WRENCH:g}: expected "
+            "N (fx, fy, fz) and N·m "
+            "(mx, my, mz), not raw counts"
+        ),
+    )
 
 
 @dataclass(frozen=True)
@@ -275,7 +326,12 @@ def samples_from_table(table: Table, arm=None) -> LoadedSamples:
         samples = Samples(wrenches, orientations.rotations, pose_ids, times=times)
     else:
         samples = Samples.from_joint_positions(
-            orientations.arm, orientations.joint_positions, wrenches, pose_ids, orientations.rotations, times
+            orientations.arm,
+            orientations.joint_positions,
+            wrenches,
+            pose_ids,
+            orientations.rotations,
+            times,
         )
     return LoadedSamples(samples, table, orientations.kind, orientations.columns)
 

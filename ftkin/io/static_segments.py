@@ -49,7 +49,9 @@ class SegmentParameters:
         except (TypeError, ValueError):
             settle_time = float("nan")
         if not (np.isfinite(settle_time) and settle_time >= 0):
-            raise InvalidInput(f"settle_time must be a finite number ≥ 0 [s], got {self.settle_time!r}")
+            raise InvalidInput(
+                f"settle_time must be a finite number ≥ 0 [s], got {self.settle_time!r}"
+            )
         object.__setattr__(self, "settle_time", settle_time)
 
 
@@ -90,18 +92,23 @@ class SegmentSearch:
         p = self.parameters
         longest = max(self.still_stretches, default=0.0)
         return (
-            f"{len(self.segments)} static segment(s) from {len(self.still_stretches)} still stretch(es) "
+            f"{len(self.segments)} static segment(s) from {len(self.still_stretches)} still "
+            "stretch(es) "
             f"(longest {longest:.3g} s); still = joint speed < {p.speed_threshold:g} rad/s, "
             f"usable ≥ {p.min_duration:g} s after skipping {p.settle_time:g} s of settling"
         )
 
 
 def joint_speed(times, joint_positions, window: float) -> np.ndarray:
-    """``(N,)`` largest joint speed at each sample [rad/s], central difference over ``window`` [s]."""
+    """``(N,)`` largest joint speed at each sample [rad/s], central difference over ``window``
+    [s].
+    """
     times = as_float_array(times, "times")
     q = as_float_array(joint_positions, "joint positions")
     if q.ndim != 2 or len(q) != len(times):
-        raise InvalidInput(f"joint positions must be (N, nq) with N = {len(times)} times, got shape {q.shape}")
+        raise InvalidInput(
+            f"joint positions must be (N, nq) with N = {len(times)} times, got shape {q.shape}"
+        )
     if len(times) < 2:
         return np.zeros(len(times))
     if np.any(np.diff(times) < 0):
@@ -116,7 +123,9 @@ def joint_speed(times, joint_positions, window: float) -> np.ndarray:
     return speed
 
 
-def find_static_segments(times, joint_positions, parameters: SegmentParameters | None = None) -> SegmentSearch:
+def find_static_segments(
+    times, joint_positions, parameters: SegmentParameters | None = None
+) -> SegmentSearch:
     """Static segments of a joint trajectory.
 
     Args:
@@ -153,6 +162,8 @@ def segment_index(times, segments: list[StaticSegment]) -> np.ndarray:
         return np.full(len(times), -1, dtype=np.int64)
     starts = np.array([segment.start for segment in segments])
     ends = np.array([segment.end for segment in segments])
-    index = np.searchsorted(starts, times, side="right") - 1  # last segment starting at or before each time
+    index = (
+        np.searchsorted(starts, times, side="right") - 1
+    )  # last segment starting at or before each time
     inside = (index >= 0) & (times <= ends[index])
     return np.where(inside, index, -1).astype(np.int64)

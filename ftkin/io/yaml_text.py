@@ -19,7 +19,9 @@ from ..exceptions import InvalidInput
 
 
 def _plain(value):
-    """``value`` as plain Python (dict, list, str, int, float, bool, None), or :class:`InvalidInput`."""
+    """``value`` as plain Python (dict, list, str, int, float, bool, None), or
+    :class:`InvalidInput`.
+    """
     if isinstance(value, np.ndarray):
         value = value.tolist()
     elif isinstance(value, np.generic):
@@ -32,12 +34,16 @@ def _plain(value):
         raise InvalidInput(f"cannot write {value!r} to YAML: expected finite numbers")
     if value is None or isinstance(value, (str, int, float, bool)):
         return value
-    raise InvalidInput(f"cannot write {value!r} to YAML: expected finite numbers, strings or lists of them")
+    raise InvalidInput(
+        f"cannot write {value!r} to YAML: expected finite numbers, strings or lists of them"
+    )
 
 
 def comment_lines(comments) -> list[str]:
     """``#`` lines for ``comments`` (one per line of each comment)."""
-    return [f"# {line}".rstrip() for comment in comments for line in str(comment).splitlines() or [""]]
+    return [
+        f"# {line}".rstrip() for comment in comments for line in str(comment).splitlines() or [""]
+    ]
 
 
 def yaml_text(tree: dict, comments=()) -> str:
@@ -48,5 +54,7 @@ def yaml_text(tree: dict, comments=()) -> str:
     """
     import yaml  # PyYAML loads when a file is written, not with ftkin
 
-    body = yaml.safe_dump(_plain(tree), sort_keys=False, default_flow_style=None, allow_unicode=True, width=4096)
+    body = yaml.safe_dump(
+        _plain(tree), sort_keys=False, default_flow_style=None, allow_unicode=True, width=4096
+    )
     return "".join(f"{line}\n" for line in comment_lines(comments)) + body

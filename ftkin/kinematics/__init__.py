@@ -21,7 +21,9 @@ _EXPORTS = {
     "mounted_arm": ".mounting",
     "quaternion_to_matrix": ".rotations",
 }
-"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does not import them all."""
+"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does
+not import them all.
+"""
 
 __all__ = [
     "Arm",

@@ -20,7 +20,9 @@ from .sensor_frame import SensorMount, add_sensor_frame
 from .urdf_loading import build_geometry, build_model, lock_joints, sensor_frame_hint
 
 BUNDLED_URDF_NAME = "ftkin_c4.urdf"
-_BATCH_MINIMUM = 16  # batches from this size use numpy kinematics (below it Pinocchio per row is as fast)
+_BATCH_MINIMUM = (
+    16  # batches from this size use numpy kinematics (below it Pinocchio per row is as fast)
+)
 _REFERENCE_FRAMES = {
     "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
     "local": pin.ReferenceFrame.LOCAL,
@@ -35,7 +37,10 @@ def bundled_urdf_path() -> Path:
     source checkout (``urdf/`` beside the ``ftkin`` folder, editable installs).
     """
     package_dir = Path(__file__).resolve().parent.parent
-    for candidate in (package_dir / "urdf" / BUNDLED_URDF_NAME, package_dir.parent / "urdf" / BUNDLED_URDF_NAME):
+    for candidate in (
+        package_dir / "urdf" / BUNDLED_URDF_NAME,
+        package_dir.parent / "urdf" / BUNDLED_URDF_NAME,
+    ):
         if candidate.is_file():
             return candidate
     raise UrdfError(BUNDLED_URDF_NAME, ["the bundled URDF is missing from this installation"])
@@ -69,10 +74,17 @@ class Arm:
         reference_configuration: np.ndarray | None = None,
     ):
         if model.nq != model.nv:
-            kinds = sorted({model.joints[i].shortname() for i in range(1, model.njoints) if model.joints[i].nq != model.joints[i].nv})
+            kinds = sorted(
+                {
+                    model.joints[i].shortname()
+                    for i in range(1, model.njoints)
+                    if model.joints[i].nq != model.joints[i].nv
+                }
+            )
             raise InvalidInput(
                 "ftkin needs one coordinate per joint (revolute or prismatic); "
-                f"this model has joints of kinds {kinds} (e.g. continuous): lock them or give them limits"
+                f"this model has joints of kinds {kinds} (e.g. continuous): lock them or give them "
+                "limits"
             )
         self.model = model
         self.data = model.createData()
@@ -89,7 +101,9 @@ class Arm:
         self._locked_joint_ids = list(locked_joint_ids)
         self._reference_configuration = reference_configuration
         self.joint_names = [model.names[i] for i in range(1, model.njoints)]
-        self.sensor_mount: SensorMount | None = None  # set by from_urdf when the sensor frame was added
+        self.sensor_mount: SensorMount | None = (
+            None  # set by from_urdf when the sensor frame was added
+        )
         self.robot_name: str | None = None  # set by load_robot
         self._geometry: dict[str, pin.GeometryModel] = {}
         self._chain: RotationChain | None | bool = False  # False: not built yet
@@ -129,7 +143,16 @@ class Arm:
         full_model, locked_ids, reference = None, [], None
         if locked_joints:
             full_model, model, locked_ids, reference = lock_joints(model, locked_joints)
-        arm = cls(model, sensor_frame, tool_frame, path.resolve(), package_dirs, full_model, locked_ids, reference)
+        arm = cls(
+            model,
+            sensor_frame,
+            tool_frame,
+            path.resolve(),
+            package_dirs,
+            full_model,
+            locked_ids,
+            reference,
+        )
         arm.sensor_mount = sensor_mount
         return arm
 
@@ -190,9 +213,11 @@ class Arm:
         return pin.updateFramePlacement(self.model, self.data, self.sensor_frame_id).rotation
 
     def rotation_sensor_to_base(self, q) -> np.ndarray:
-        """Sensor orientation ``R_BS`` for ``q`` ``(nq,)`` → ``(3, 3)`` or ``(N, nq)`` → ``(N, 3, 3)``.
+        """Sensor orientation ``R_BS`` for ``q`` ``(nq,)`` → ``(3, 3)`` or ``(N, nq)`` → ``(N, 3,
+        3)``.
 
-        Batches of revolute/prismatic chains: :class:`~ftkin.kinematics.chain.RotationChain` (numpy).
+        Batches of revolute/prismatic chains: :class:`~ftkin.kinematics.chain.RotationChain`
+        (numpy).
         """
         configurations, single = as_batch(q, self.nq, "joint positions q")
         out = self.rotations_unchecked(configurations)
@@ -203,22 +228,31 @@ class Arm:
         chain = self._sensor_chain(len(configurations))
         if chain is not None:
             return chain.rotations(configurations)
-        return np.array([self.sensor_rotation_unchecked(q).copy() for q in configurations]).reshape(-1, 3, 3)
+        return np.array([self.sensor_rotation_unchecked(q).copy() for q in configurations]).reshape(
+            -1, 3, 3
+        )
 
-    def vectors_in_sensor_unchecked(self, configurations: np.ndarray, vector_in_base: np.ndarray) -> np.ndarray:
-        """``R_BS(q)ᵀ v`` ``(N, 3)``: a base-frame vector in the sensor frame, for validated ``(N, nq)`` angles."""
+    def vectors_in_sensor_unchecked(
+        self, configurations: np.ndarray, vector_in_base: np.ndarray
+    ) -> np.ndarray:
+        """``R_BS(q)ᵀ v`` ``(N, 3)``: a base-frame vector in the sensor frame, for validated ``(N,
+        nq)`` angles.
+        """
         chain = self._sensor_chain(len(configurations))
         if chain is not None:
             return chain.transposed_times(configurations, vector_in_base)
         return np.einsum("nji,j->ni", self.rotations_unchecked(configurations), vector_in_base)
 
     def _sensor_chain(self, count: int) -> RotationChain | None:
-        if count >= _BATCH_MINIMUM and self._chain is False:  # built on first use; None: not a revolute/prismatic chain
+        if (
+            count >= _BATCH_MINIMUM and self._chain is False
+        ):  # built on first use; None: not a revolute/prismatic chain
             self._chain = RotationChain.from_model(self.model, self.sensor_frame_id)
         return self._chain if count >= _BATCH_MINIMUM else None
 
     def frame_placement(self, q, frame: str = "sensor") -> tuple[np.ndarray, np.ndarray]:
-        """Rotation ``(3, 3)`` (frame to base) and position ``(3,)`` [m] of a frame in the base frame.
+        """Rotation ``(3, 3)`` (frame to base) and position ``(3,)`` [m] of a frame in the base
+        frame.
 
         ``frame`` is ``"sensor"``, ``"tool"`` or any frame name of the model.
         """
@@ -227,7 +261,9 @@ class Arm:
         placement = pin.updateFramePlacement(self.model, self.data, frame_id)
         return placement.rotation.copy(), placement.translation.copy()
 
-    def jacobian(self, q, frame: str = "sensor", reference: str = "local_world_aligned") -> np.ndarray:
+    def jacobian(
+        self, q, frame: str = "sensor", reference: str = "local_world_aligned"
+    ) -> np.ndarray:
         """Frame Jacobian ``(6, nq)``: ``[v; ω] = J dq``.
 
         Args:
@@ -238,12 +274,18 @@ class Arm:
                 ``"local"`` (both in the frame's own axes) or ``"world"``.
         """
         if reference not in _REFERENCE_FRAMES:
-            raise InvalidInput(f"reference must be one of {sorted(_REFERENCE_FRAMES)}, got {reference!r}")
+            raise InvalidInput(
+                f"reference must be one of {sorted(_REFERENCE_FRAMES)}, got {reference!r}"
+            )
         frame_id = self._resolve_frame(frame)
         q = self.check_configuration(q)
-        return pin.computeFrameJacobian(self.model, self.data, q, frame_id, _REFERENCE_FRAMES[reference])
+        return pin.computeFrameJacobian(
+            self.model, self.data, q, frame_id, _REFERENCE_FRAMES[reference]
+        )
 
-    def random_configurations(self, count: int, rng: np.random.Generator, margin: float = 0.0) -> np.ndarray:
+    def random_configurations(
+        self, count: int, rng: np.random.Generator, margin: float = 0.0
+    ) -> np.ndarray:
         """Uniform random configurations within the joint limits shrunk by ``margin`` [rad]."""
         lower, upper = self.lower_limits + margin, self.upper_limits - margin
         return rng.uniform(lower, upper, size=(count, self.nq))
@@ -264,7 +306,10 @@ class Arm:
             geometry = build_geometry(base_model, self.urdf_path, kind, self.package_dirs)
             if self._full_model is not None:
                 _, geometry = pin.buildReducedModel(
-                    self._full_model, geometry, self._locked_joint_ids, self._reference_configuration
+                    self._full_model,
+                    geometry,
+                    self._locked_joint_ids,
+                    self._reference_configuration,
                 )
             self._geometry[kind] = geometry
         return self._geometry[kind]

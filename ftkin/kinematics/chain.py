@@ -42,8 +42,11 @@ class RotationChain:
         self._tail = tail
 
     @classmethod
-    def from_model(cls, model: pin.Model, frame_id: int, tolerance: float = 1e-12) -> RotationChain | None:
-        """The chain from the root to frame ``frame_id``, or None if a joint on it is neither revolute nor prismatic.
+    def from_model(
+        cls, model: pin.Model, frame_id: int, tolerance: float = 1e-12
+    ) -> RotationChain | None:
+        """The chain from the root to frame ``frame_id``, or None if a joint on it is neither
+        revolute nor prismatic.
 
         Also None (callers fall back to Pinocchio) if the batched rotations
         differ from Pinocchio's by more than ``tolerance`` on a few seeded
@@ -75,30 +78,38 @@ class RotationChain:
         """``R_BS`` ``(N, 3, 3)`` for validated ``(N, nq)`` float joint positions [rad, m]."""
         out = np.empty((len(configurations), 3, 3))
         for start in range(0, len(configurations), BLOCK):
-            out[start:start + BLOCK] = self._block(configurations[start:start + BLOCK])
+            out[start : start + BLOCK] = self._block(configurations[start : start + BLOCK])
         return out
 
     def transposed_times(self, configurations: np.ndarray, vector) -> np.ndarray:
-        """``R_BS(q)ᵀ v`` ``(N, 3)`` for a base-frame vector ``v`` ``(3,)`` (e.g. the tool weight seen by the sensor).
+        """``R_BS(q)ᵀ v`` ``(N, 3)`` for a base-frame vector ``v`` ``(3,)`` (e.g. the tool weight
+        seen by the sensor).
 
         ``Rᵀ v = Tᵀ Rz(θₙ)ᵀ Cₙᵀ ⋯ Rz(θ₁)ᵀ C₁ᵀ v``: a 3-vector carried through the
         chain, six times cheaper than the rotation matrices.
         """
         count = len(configurations)
-        out = np.empty((3, count))  # returned transposed: each component contiguous, as the compensation reads it
+        out = np.empty(
+            (3, count)
+        )  # returned transposed: each component contiguous, as the compensation reads it
         size = min(count, VECTOR_BLOCK)
         angles, buffers = np.empty((len(self._steps), size)), _buffers((len(self._steps), size))
         for start in range(0, count, VECTOR_BLOCK):
-            block = configurations[start:start + VECTOR_BLOCK]
+            block = configurations[start : start + VECTOR_BLOCK]
             if len(block) != size:  # the last, shorter block
                 size = len(block)
-                angles, buffers = np.empty((len(self._steps), size)), _buffers((len(self._steps), size))
+                angles, buffers = (
+                    np.empty((len(self._steps), size)),
+                    _buffers((len(self._steps), size)),
+                )
             for row, index in enumerate(self._indices):
                 angles[row] = block[:, index]
-            self._vector_block(_cos_sin(angles, buffers), vector, out[:, start:start + size])
+            self._vector_block(_cos_sin(angles, buffers), vector, out[:, start : start + size])
         return out.T
 
-    def _vector_block(self, cos_sin: tuple[np.ndarray, np.ndarray], vector, out: np.ndarray) -> None:
+    def _vector_block(
+        self, cos_sin: tuple[np.ndarray, np.ndarray], vector, out: np.ndarray
+    ) -> None:
         cosines, sines = cos_sin
         v = (self._head.T @ np.asarray(vector, dtype=float)).tolist()
         for row, (_, constant) in enumerate(self._steps):
@@ -137,11 +148,15 @@ _TABLE_SIZE = 4096
 _STEP = 2.0 * np.pi / _TABLE_SIZE
 _STEP_HIGH = float(np.float32(_STEP))  # 24 significant bits: k · _STEP_HIGH is exact for |k| < 2²⁹
 _STEP_LOW = ((2.0 * np.pi - _TABLE_SIZE * _STEP_HIGH) + 2.4492935982947064e-16) / _TABLE_SIZE
-"""``2π/4096 − _STEP_HIGH``, with the part of 2π below the double ``2.0 * np.pi`` (Cody–Waite reduction)."""
+"""``2π/4096 − _STEP_HIGH``, with the part of 2π below the double ``2.0 * np.pi`` (Cody–Waite
+reduction).
+"""
 
 
 def _table() -> tuple[np.ndarray, np.ndarray]:
-    """``cos``/``sin`` of ``j 2π/4096`` to within an ulp: numpy's on the rounded angle, corrected to first order."""
+    """``cos``/``sin`` of ``j 2π/4096`` to within an ulp: numpy's on the rounded angle, corrected to
+    first order.
+    """
     j = np.arange(_TABLE_SIZE, dtype=float)
     rounded = j * _STEP_HIGH + j * _STEP_LOW
     error = (j * _STEP_HIGH - rounded) + j * _STEP_LOW
@@ -153,7 +168,9 @@ _TABLE_RANGE = 1e4
 """Angles beyond ±this [rad] take numpy's ``cos``/``sin`` (the table's residual loses digits)."""
 
 
-def _cos_sin(angles: np.ndarray, buffers: list[np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
+def _cos_sin(
+    angles: np.ndarray, buffers: list[np.ndarray] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """``cos`` and ``sin`` of an array of angles [rad] from a table and a short Taylor series.
 
     ``θ = k h + r`` with ``h = 2π/4096`` and ``|r| ≤ h/2``; ``cos``/``sin`` of
@@ -167,17 +184,23 @@ def _cos_sin(angles: np.ndarray, buffers: list[np.ndarray] | None = None) -> tup
     (128 kB) cost a page fault per 4 kB page, more than the arithmetic.
     The returned arrays are two of them.
     """
-    if angles.size and not (angles.max() <= _TABLE_RANGE and angles.min() >= -_TABLE_RANGE):  # also NaN
+    if angles.size and not (
+        angles.max() <= _TABLE_RANGE and angles.min() >= -_TABLE_RANGE
+    ):  # also NaN
         with np.errstate(invalid="ignore"):
             return np.cos(angles), np.sin(angles)
-    turns, residual, squared, table_cos, table_sin, cos, sin, index = buffers or _buffers(angles.shape)
+    turns, residual, squared, table_cos, table_sin, cos, sin, index = buffers or _buffers(
+        angles.shape
+    )
     np.multiply(angles, 1.0 / _STEP, out=turns)
     np.rint(turns, out=turns)
     np.multiply(turns, _STEP_HIGH, out=residual)
     np.subtract(angles, residual, out=residual)
     residual -= np.multiply(turns, _STEP_LOW, out=squared)  # r = θ − k h, h in two parts
     np.copyto(index, turns, casting="unsafe")
-    index &= _TABLE_SIZE - 1  # k mod 4096 (two's complement); "clip" then never clips and is the fastest take
+    index &= (
+        _TABLE_SIZE - 1
+    )  # k mod 4096 (two's complement); "clip" then never clips and is the fastest take
     _COS_TABLE.take(index, out=table_cos, mode="clip")
     _SIN_TABLE.take(index, out=table_sin, mode="clip")
     np.multiply(residual, residual, out=squared)

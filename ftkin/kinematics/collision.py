@@ -60,7 +60,10 @@ class SelfCollision:
     def pair_names(self) -> list[tuple[str, str]]:
         """Names of the object pairs that are checked."""
         objects = self.geometry_model.geometryObjects
-        return [(objects[p.first].name, objects[p.second].name) for p in self.geometry_model.collisionPairs]
+        return [
+            (objects[p.first].name, objects[p.second].name)
+            for p in self.geometry_model.collisionPairs
+        ]
 
     def _remove_pairs(self, reference: np.ndarray) -> list[RemovedPair]:
         objects = self.geometry_model.geometryObjects
@@ -86,14 +89,24 @@ class SelfCollision:
             if result.isCollision()
         ]
         for first, second in touching:
-            removed.append(RemovedPair(objects[first].name, objects[second].name, "in contact at the reference configuration"))
+            removed.append(
+                RemovedPair(
+                    objects[first].name,
+                    objects[second].name,
+                    "in contact at the reference configuration",
+                )
+            )
             self.geometry_model.removeCollisionPair(pin.CollisionPair(first, second))
         return removed
 
     def in_collision(self, q: np.ndarray) -> bool:
-        """True when any checked pair collides at the validated ``(nq,)`` configuration ``q`` [rad]."""
+        """True when any checked pair collides at the validated ``(nq,)`` configuration ``q``
+        [rad].
+        """
         return bool(
-            pin.computeCollisions(self.model, self.data, self.geometry_model, self.geometry_data, q, True)
+            pin.computeCollisions(
+                self.model, self.data, self.geometry_model, self.geometry_data, q, True
+            )
         )
 
 

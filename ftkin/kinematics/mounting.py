@@ -36,13 +36,21 @@ def mounted_arm(arm: Arm, mount_rotation) -> Arm:
         InvalidInput: ``R_M`` is not a rotation, or ``arm`` already carries another mount.
     """
     rotation = np.asarray(mount_rotation, dtype=float)
-    if rotation.shape != (3, 3) or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) or np.linalg.det(rotation) <= 0:
-        raise InvalidInput(f"mount_rotation must be a (3, 3) rotation matrix, got {rotation.tolist()}")
+    if (
+        rotation.shape != (3, 3)
+        or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6)
+        or np.linalg.det(rotation) <= 0
+    ):
+        raise InvalidInput(
+            f"mount_rotation must be a (3, 3) rotation matrix, got {rotation.tolist()}"
+        )
     current = getattr(arm, "mount_rotation", None)
     if current is not None:
         if np.allclose(current, rotation, atol=1e-12):
             return arm
-        raise InvalidInput("this Arm already carries another sensor mount; start from the arm its URDF describes")
+        raise InvalidInput(
+            "this Arm already carries another sensor mount; start from the arm its URDF describes"
+        )
     if np.array_equal(rotation, np.eye(3)):
         return arm
     mounted = copy.copy(arm)

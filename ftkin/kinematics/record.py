@@ -33,11 +33,16 @@ def file_sha256(path) -> str | None:
 
 
 def sensor_placement(arm) -> tuple[str, list[float]]:
-    """The sensor frame's parent joint and placement on it: ``(joint, [x, y, z, roll, pitch, yaw])`` [m, rad]."""
+    """The sensor frame's parent joint and placement on it: ``(joint, [x, y, z, roll, pitch, yaw])``
+    [m, rad].
+    """
     frame = arm.model.frames[arm.sensor_frame_id]
     placement = frame.placement
     rpy = pin.rpy.matrixToRpy(placement.rotation)
-    return arm.model.names[frame.parentJoint], [*map(float, placement.translation), *map(float, rpy)]
+    return arm.model.names[frame.parentJoint], [
+        *map(float, placement.translation),
+        *map(float, rpy),
+    ]
 
 
 @dataclass(frozen=True)
@@ -49,9 +54,11 @@ class KinematicsRecord:
         robot: ``--robot`` name, or None for a URDF given by path.
         urdf: Path of the URDF (absolute).
         urdf_sha256: SHA-256 of the URDF's bytes.
-        sensor_parent: Frame the sensor frame was added at (``--sensor-parent`` or the robot's flange), or None
+        sensor_parent: Frame the sensor frame was added at (``--sensor-parent`` or the robot's
+        flange), or None
             when the URDF has the sensor frame.
-        sensor_offset: ``[x, y, z, roll, pitch, yaw]`` [m, rad] of the sensor on ``sensor_parent``, or None.
+        sensor_offset: ``[x, y, z, roll, pitch, yaw]`` [m, rad] of the sensor on ``sensor_parent``,
+        or None.
         parent_joint: Joint the sensor frame moves with.
         placement: ``[x, y, z, roll, pitch, yaw]`` [m, rad] of the sensor frame on ``parent_joint``.
         tool_frame: The tool (control point) frame, or None.
@@ -69,7 +76,9 @@ class KinematicsRecord:
 
     @classmethod
     def from_arm(cls, arm) -> KinematicsRecord:
-        """The record of an :class:`~ftkin.kinematics.arm.Arm` (its robot name and mount when it has them)."""
+        """The record of an :class:`~ftkin.kinematics.arm.Arm` (its robot name and mount when it has
+        them).
+        """
         mount = getattr(arm, "sensor_mount", None)
         joint, placement = sensor_placement(arm)
         offset = None
@@ -116,8 +125,15 @@ class KinematicsRecord:
         for key in ("sensor_offset", "placement"):
             value = data.get(key)
             if value is not None:
-                if not isinstance(value, list) or len(value) != 6 or any(isinstance(v, bool) for v in value):
-                    raise InvalidInput(f"{key} must be 6 numbers [x, y, z, roll, pitch, yaw] or null, got {value!r}")
+                if (
+                    not isinstance(value, list)
+                    or len(value) != 6
+                    or any(isinstance(v, bool) for v in value)
+                ):
+                    raise InvalidInput(
+                        f"{key} must be 6 numbers [x, y, z, roll, pitch, yaw] or null, got "
+                        f"{value!r}"
+                    )
                 array = np.asarray(value, dtype=float)
                 if not np.all(np.isfinite(array)):
                     raise InvalidInput(f"{key} must be finite, got {value!r}")
@@ -127,7 +143,11 @@ class KinematicsRecord:
 
     def describe(self) -> str:
         """How the sensor frame was obtained, as CLI options."""
-        offset = "" if self.sensor_offset is None else " --sensor-offset " + " ".join(f"{v:g}" for v in self.sensor_offset)
+        offset = (
+            ""
+            if self.sensor_offset is None
+            else " --sensor-offset " + " ".join(f"{v:g}" for v in self.sensor_offset)
+        )
         if self.robot is not None:
             return f"--robot {self.robot}{offset}"
         parent = f" --sensor-parent {self.sensor_parent}" if self.sensor_parent else ""
@@ -146,36 +166,57 @@ class KinematicsRecord:
         if self.robot is not None:
             mount = None
             if self.sensor_offset is not None and self.sensor_parent is not None:
-                mount = SensorMount(self.sensor_parent, self.sensor_offset[:3], self.sensor_offset[3:])
+                mount = SensorMount(
+                    self.sensor_parent, self.sensor_offset[:3], self.sensor_offset[3:]
+                )
             arm = load_robot(self.robot, mount, self.tool_frame)
             arm.package_dirs += list(package_dirs)
         else:
             if self.urdf is None or not Path(self.urdf).is_file():
-                raise InvalidInput(f"the calibration's URDF {self.urdf} is not there any more: give --urdf (and the mount options)")
+                raise InvalidInput(
+                    f"the calibration's URDF {self.urdf} is not there any more: give --urdf (and "
+                    "the mount options)"
+                )
             mount = None
             if self.sensor_parent is not None:
                 offset = self.sensor_offset or (0.0,) * 6
                 mount = SensorMount(self.sensor_parent, offset[:3], offset[3:])
-            arm = Arm.from_urdf(self.urdf, self.sensor_frame, self.tool_frame, sensor_mount=mount, package_dirs=package_dirs)
+            arm = Arm.from_urdf(
+                self.urdf,
+                self.sensor_frame,
+                self.tool_frame,
+                sensor_mount=mount,
+                package_dirs=package_dirs,
+            )
         problems = self.mismatches(arm)
         if problems:
-            raise InvalidInput(f"cannot rebuild the calibration's arm ({self.describe()}): " + "; ".join(problems))
+            raise InvalidInput(
+                f"cannot rebuild the calibration's arm ({self.describe()}): " + "; ".join(problems)
+            )
         return arm
 
     def mismatches(self, arm) -> list[str]:
         """How ``arm`` differs from this record (empty when it is the same kinematics)."""
         problems = []
         if arm.sensor_frame != self.sensor_frame:
-            problems.append(f"sensor frame {arm.sensor_frame!r}, calibrated with {self.sensor_frame!r}")
+            problems.append(
+                f"sensor frame {arm.sensor_frame!r}, calibrated with {self.sensor_frame!r}"
+            )
         if self.urdf_sha256 is not None and arm.urdf_path is not None:
             digest = file_sha256(arm.urdf_path)
             if digest != self.urdf_sha256:
-                problems.append(f"URDF {arm.urdf_path} is not the one calibrated with ({self.urdf}; SHA-256 differs)")
+                problems.append(
+                    f"URDF {arm.urdf_path} is not the one calibrated with ({self.urdf}; SHA-256 "
+                    "differs)"
+                )
         if self.placement is not None and arm.sensor_frame == self.sensor_frame:
             joint, placement = sensor_placement(arm)
-            if joint != self.parent_joint or not np.allclose(placement, self.placement, atol=_PLACEMENT_TOLERANCE):
+            if joint != self.parent_joint or not np.allclose(
+                placement, self.placement, atol=_PLACEMENT_TOLERANCE
+            ):
                 problems.append(
-                    f"sensor mounted at {joint} {np.round(placement, 6).tolist()}, calibrated at {self.parent_joint} "
+                    f"sensor mounted at {joint} {np.round(placement, 6).tolist()}, calibrated at "
+                    f"{self.parent_joint} "
                     f"{np.round(self.placement, 6).tolist()} [m, rad]"
                 )
         return problems

@@ -55,9 +55,18 @@ class RobotSpec:
 ROBOT_SPECS: dict[str, RobotSpec] = {
     spec.name: spec
     for spec in (
-        RobotSpec("ur3", "ur_description/urdf/ur3_robot.urdf", "tool0", description="Universal Robots UR3"),
-        RobotSpec("ur5", "ur_description/urdf/ur5_robot.urdf", "tool0", description="Universal Robots UR5"),
-        RobotSpec("ur10", "ur_description/urdf/ur10_robot.urdf", "tool0", description="Universal Robots UR10"),
+        RobotSpec(
+            "ur3", "ur_description/urdf/ur3_robot.urdf", "tool0", description="Universal Robots UR3"
+        ),
+        RobotSpec(
+            "ur5", "ur_description/urdf/ur5_robot.urdf", "tool0", description="Universal Robots UR5"
+        ),
+        RobotSpec(
+            "ur10",
+            "ur_description/urdf/ur10_robot.urdf",
+            "tool0",
+            description="Universal Robots UR10",
+        ),
         RobotSpec(
             "panda",
             "panda_description/urdf/panda.urdf",
@@ -65,8 +74,16 @@ ROBOT_SPECS: dict[str, RobotSpec] = {
             {"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0},
             "Franka Emika Panda (7 joints; fingers locked)",
         ),
-        RobotSpec("xarm7", "xarm_description/urdf/xarm7.urdf", "link_eef", description="UFactory xArm7"),
-        RobotSpec("z1", "z1_description/urdf/z1.urdf", "link06", {"jointGripper": 0.0}, "Unitree Z1 (gripper locked)"),
+        RobotSpec(
+            "xarm7", "xarm_description/urdf/xarm7.urdf", "link_eef", description="UFactory xArm7"
+        ),
+        RobotSpec(
+            "z1",
+            "z1_description/urdf/z1.urdf",
+            "link06",
+            {"jointGripper": 0.0},
+            "Unitree Z1 (gripper locked)",
+        ),
     )
 }
 """The example-robot-data arms ftkin knows, by ``--robot`` name."""
@@ -90,11 +107,15 @@ def example_robot_data_share() -> Path:
             package_xml = Path(distribution.locate_file(entry))
             if package_xml.is_file():
                 return package_xml.parent.parent
-    raise MissingDependency(_DISTRIBUTION, "robots", "loading a robot by name (its files were not found; reinstall it)")
+    raise MissingDependency(
+        _DISTRIBUTION, "robots", "loading a robot by name (its files were not found; reinstall it)"
+    )
 
 
 def sensor_mount_from_offset(parent_frame: str, sensor_offset=None) -> SensorMount:
-    """A :class:`SensorMount` at ``parent_frame`` from ``[x, y, z]`` [m] or ``[x, y, z, roll, pitch, yaw]`` [m, rad]."""
+    """A :class:`SensorMount` at ``parent_frame`` from ``[x, y, z]`` [m] or ``[x, y, z, roll, pitch,
+    yaw]`` [m, rad].
+    """
     if sensor_offset is None:
         return SensorMount(parent_frame)
     if isinstance(sensor_offset, SensorMount):
@@ -102,21 +123,29 @@ def sensor_mount_from_offset(parent_frame: str, sensor_offset=None) -> SensorMou
     values = as_float_array(sensor_offset, "sensor offset").ravel()
     if values.shape not in ((3,), (6,)) or not np.all(np.isfinite(values)):
         raise InvalidInput(
-            f"sensor offset must be 3 numbers (x y z [m]) or 6 (x y z [m] roll pitch yaw [rad]), got {sensor_offset!r}"
+            "sensor offset must be 3 numbers (x y z [m]) or 6 (x y z [m] roll pitch yaw [rad]), "
+            f"got {sensor_offset!r}"
         )
     if np.any(np.abs(values[:3]) > 10.0):
-        raise InvalidInput(f"sensor offset x y z must be within 10 m of the parent frame, got {values[:3].tolist()} [m]")
+        raise InvalidInput(
+            "sensor offset x y z must be within 10 m of the parent frame, got "
+            f"{values[:3].tolist()} [m]"
+        )
     rpy = values[3:] if len(values) == 6 else np.zeros(3)
     if np.any(np.abs(rpy) > 2.0 * np.pi):
         raise InvalidInput(
-            f"sensor offset roll pitch yaw {rpy.tolist()} are beyond 2π: angles are in radians (these look like degrees)"
+            f"sensor offset roll pitch yaw {rpy.tolist()} are beyond 2π: angles are in radians "
+            "(these look like degrees)"
         )
     return SensorMount(parent_frame, tuple(values[:3]), tuple(rpy))
 
 
 def _bundled(sensor_offset=None, tool_frame: str | None = None) -> Arm:
     if sensor_offset is not None:
-        raise InvalidInput("the bundled arm already has its ft_sensor frame; --sensor-offset is for robots without one")
+        raise InvalidInput(
+            "the bundled arm already has its ft_sensor frame; --sensor-offset is for robots "
+            "without one"
+        )
     return Arm.default(tool_frame or "tool")
 
 
@@ -124,7 +153,9 @@ def _load_spec(spec: RobotSpec, sensor_offset=None, tool_frame: str | None = Non
     share = example_robot_data_share()
     path = share / "example-robot-data" / "robots" / spec.urdf
     if not path.is_file():
-        raise UrdfError(str(path), [f"robot {spec.name!r}: this example-robot-data has no such file"])
+        raise UrdfError(
+            str(path), [f"robot {spec.name!r}: this example-robot-data has no such file"]
+        )
     return Arm.from_urdf(
         path,
         SENSOR_FRAME,
@@ -139,10 +170,16 @@ ROBOTS: dict[str, Callable[..., Arm]] = {
     DEFAULT_ROBOT: _bundled,
     **{name: functools.partial(_load_spec, spec) for name, spec in ROBOT_SPECS.items()},
 }
-"""Loaders by robot name; each takes an optional sensor offset and tool frame (see :func:`load_robot`)."""
+"""Loaders by robot name; each takes an optional sensor offset and tool frame (see
+:func:`load_robot`).
+"""
 
 
-def load_robot(name: str, sensor_offset: Sequence[float] | SensorMount | None = None, tool_frame: str | None = None) -> Arm:
+def load_robot(
+    name: str,
+    sensor_offset: Sequence[float] | SensorMount | None = None,
+    tool_frame: str | None = None,
+) -> Arm:
     """Load a robot by name (see :data:`ROBOTS`), sensor frame ``ft_sensor``.
 
     Args:

@@ -115,7 +115,12 @@ def matrix_to_quaternion(rotation) -> np.ndarray:
         trace = np.trace(m)
         if trace > 0:
             s = 2.0 * np.sqrt(1.0 + trace)
-            q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+            q = [
+                0.25 * s,
+                (m[2, 1] - m[1, 2]) / s,
+                (m[0, 2] - m[2, 0]) / s,
+                (m[1, 0] - m[0, 1]) / s,
+            ]
         else:
             k = int(np.argmax(np.diag(m)))
             i1, i2 = (k + 1) % 3, (k + 2) % 3

@@ -45,10 +45,14 @@ def add_sensor_frame(model: pin.Model, name: str, mount: SensorMount) -> None:
         FrameNotFound: the parent frame is not in the model.
     """
     if model.existFrame(name):
-        raise InvalidInput(f"frame {name!r} already exists in the model; choose another sensor frame name")
+        raise InvalidInput(
+            f"frame {name!r} already exists in the model; choose another sensor frame name"
+        )
     if not model.existFrame(mount.parent_frame):
         raise FrameNotFound(mount.parent_frame, [frame.name for frame in model.frames])
     parent_id = model.getFrameId(mount.parent_frame)
     parent = model.frames[parent_id]
     placement = parent.placement * mount.placement()
-    model.addFrame(pin.Frame(name, parent.parentJoint, parent_id, placement, pin.FrameType.OP_FRAME), False)
+    model.addFrame(
+        pin.Frame(name, parent.parentJoint, parent_id, placement, pin.FrameType.OP_FRAME), False
+    )

@@ -105,7 +105,10 @@ def read_urdf_text(path: Path) -> str:
     if path.name.endswith(".xacro") or _XACRO_MARK.search(_XML_COMMENT.sub("", text)):
         raise UrdfError(
             str(path),
-            [f"this is a xacro file, not a URDF: run xacro first (xacro {path.name} > robot.urdf) and give the result"],
+            [
+                f"this is a xacro file, not a URDF: run xacro first (xacro {path.name} > "
+                "robot.urdf) and give the result"
+            ],
         )
     return text
 
@@ -146,12 +149,18 @@ def build_model(path: Path) -> pin.Model:
     raise UrdfError(str(path), reasons) from None
 
 
-def build_geometry(model: pin.Model, path: Path, kind: str, package_dirs: list[str]) -> pin.GeometryModel:
+def build_geometry(
+    model: pin.Model, path: Path, kind: str, package_dirs: list[str]
+) -> pin.GeometryModel:
     """Collision or visual geometry of a URDF; missing meshes raise :class:`UrdfError`."""
-    geometry_type = {"collision": pin.GeometryType.COLLISION, "visual": pin.GeometryType.VISUAL}[kind]
+    geometry_type = {"collision": pin.GeometryType.COLLISION, "visual": pin.GeometryType.VISUAL}[
+        kind
+    ]
     with captured_c_stderr() as stderr:
         try:
-            geometry = pin.buildGeomFromUrdf(model, str(path), geometry_type, package_dirs=package_dirs)
+            geometry = pin.buildGeomFromUrdf(
+                model, str(path), geometry_type, package_dirs=package_dirs
+            )
             error = None
         except (RuntimeError, ValueError, OSError) as caught:
             geometry, error = None, caught
@@ -164,7 +173,9 @@ def build_geometry(model: pin.Model, path: Path, kind: str, package_dirs: list[s
 
 
 def last_link(model: pin.Model) -> str:
-    """The link at the end of the chain: the last body frame on the last joint (e.g. ``tool0``, ``wrist_3_link``)."""
+    """The link at the end of the chain: the last body frame on the last joint (e.g. ``tool0``,
+    ``wrist_3_link``).
+    """
     last_joint = model.njoints - 1
     bodies = [frame.name for frame in model.frames if frame.parentJoint == last_joint]
     return bodies[-1] if bodies else model.frames[len(model.frames) - 1].name
@@ -174,13 +185,15 @@ def sensor_frame_hint(model: pin.Model) -> str:
     """How to add a sensor frame the URDF lacks, naming its last link."""
     last = last_link(model)
     return (
-        f"if the URDF has no sensor frame, add it at the link the sensor is bolted to, e.g. --sensor-parent {last} "
+        "if the URDF has no sensor frame, add it at the link the sensor is bolted to, e.g. "
+        f"--sensor-parent {last} "
         f"(and --sensor-offset X Y Z [m]; in Python sensor_mount=SensorMount({last!r}, ...))"
     )
 
 
 def lock_joints(model: pin.Model, locked_joints: Mapping[str, float]):
-    """The model with ``{joint name: value [rad or m]}`` fixed: ``(full, reduced, locked ids, reference q)``.
+    """The model with ``{joint name: value [rad or m]}`` fixed: ``(full, reduced, locked ids,
+    reference q)``.
 
     Raises:
         InvalidInput: a joint name is not in the model (lists the joints).

@@ -22,7 +22,9 @@ _EXPORTS = {
     "plan_excitation": ".excitation",
     "plan_poses": ".plan",
 }
-"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does not import them all."""
+"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does
+not import them all.
+"""
 
 __all__ = [
     "ExcitationPlan",

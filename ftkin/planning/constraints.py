@@ -79,20 +79,29 @@ class PoseConstraints:
         cleaned = []
         for entry in ranges:
             if len(entry) != 3:
-                raise InvalidInput(f"a joint range must be (name, lower, upper) [rad], got {entry!r}")
+                raise InvalidInput(
+                    f"a joint range must be (name, lower, upper) [rad], got {entry!r}"
+                )
             try:
                 name, lower, upper = str(entry[0]), float(entry[1]), float(entry[2])
             except (TypeError, ValueError):
-                raise InvalidInput(f"a joint range must be (name, lower, upper) [rad], got {entry!r}") from None
+                raise InvalidInput(
+                    f"a joint range must be (name, lower, upper) [rad], got {entry!r}"
+                ) from None
             if not (np.isfinite(lower) and np.isfinite(upper) and lower < upper):
-                raise InvalidInput(f"joint range for {name!r} must be finite with lower < upper [rad], got ({lower}, {upper})")
+                raise InvalidInput(
+                    f"joint range for {name!r} must be finite with lower < upper [rad], got "
+                    f"({lower}, {upper})"
+                )
             cleaned.append((name, lower, upper))
         object.__setattr__(self, "joint_ranges", tuple(cleaned))
 
     def describe(self) -> str:
         """One line naming every active constraint (for reports and errors)."""
         parts = [f"joint limits with a {self.margin:g} rad margin"]
-        parts += [f"{name} in [{lower:g}, {upper:g}] rad" for name, lower, upper in self.joint_ranges]
+        parts += [
+            f"{name} in [{lower:g}, {upper:g}] rad" for name, lower, upper in self.joint_ranges
+        ]
         if self.floor_height is not None:
             parts.append(f"sensor and tool above {self.floor_height:g} m (base z)")
         if self.max_tilt is not None:
@@ -116,18 +125,25 @@ class FeasibilityChecker:
         lower, upper = arm.lower_limits + constraints.margin, arm.upper_limits - constraints.margin
         for name, low, high in constraints.joint_ranges:
             if name not in arm.joint_names:
-                raise InvalidInput(f"joint range for unknown joint {name!r}; joints: {', '.join(arm.joint_names)}")
+                raise InvalidInput(
+                    f"joint range for unknown joint {name!r}; joints: {', '.join(arm.joint_names)}"
+                )
             index = arm.joint_names.index(name)
             lower[index], upper[index] = max(lower[index], low), min(upper[index], high)
         empty = [arm.joint_names[i] for i in np.flatnonzero(lower >= upper)]
         if empty:
             raise InvalidInput(
-                f"no joint values left for {', '.join(empty)} between the URDF limits shrunk by the "
+                f"no joint values left for {', '.join(empty)} between the URDF limits shrunk by "
+                "the "
                 f"{constraints.margin:g} rad margin and the given joint ranges"
             )
         self.lower, self.upper = lower, upper
-        self.axis_frame_id = arm.tool_frame_id if arm.tool_frame_id is not None else arm.sensor_frame_id
-        self.height_frame_ids = [arm.sensor_frame_id] + ([arm.tool_frame_id] if arm.tool_frame_id is not None else [])
+        self.axis_frame_id = (
+            arm.tool_frame_id if arm.tool_frame_id is not None else arm.sensor_frame_id
+        )
+        self.height_frame_ids = [arm.sensor_frame_id] + (
+            [arm.tool_frame_id] if arm.tool_frame_id is not None else []
+        )
         self.collision = SelfCollision(arm) if constraints.self_collision else None
         self.rejected = {"floor": 0, "tilt": 0, "self-collision": 0}
 
@@ -140,7 +156,8 @@ class FeasibilityChecker:
         return bool(np.all(q >= self.lower) and np.all(q <= self.upper))
 
     def check(self, q: np.ndarray, collision: bool = True) -> np.ndarray | None:
-        """``R_BS`` ``(3, 3)`` of a bounded configuration ``q`` if it meets the other constraints, else None.
+        """``R_BS`` ``(3, 3)`` of a bounded configuration ``q`` if it meets the other constraints,
+        else None.
 
         ``collision=False`` leaves out the self-collision test (the costly one:
         callers that may discard the pose anyway run :meth:`in_collision` last).
@@ -149,7 +166,10 @@ class FeasibilityChecker:
         pin.forwardKinematics(model, data, q)
         if limits.floor_height is not None:
             for frame_id in self.height_frame_ids:
-                if pin.updateFramePlacement(model, data, frame_id).translation[2] < limits.floor_height:
+                if (
+                    pin.updateFramePlacement(model, data, frame_id).translation[2]
+                    < limits.floor_height
+                ):
                     self.rejected["floor"] += 1
                     return None
         if limits.max_tilt is not None:
@@ -163,7 +183,9 @@ class FeasibilityChecker:
         return rotation
 
     def in_collision(self, q: np.ndarray) -> bool:
-        """True (and counted as a rejection) when ``q`` is self-colliding; False without a collision check."""
+        """True (and counted as a rejection) when ``q`` is self-colliding; False without a collision
+        check.
+        """
         if self.collision is not None and self.collision.in_collision(q):
             self.rejected["self-collision"] += 1
             return True
@@ -173,15 +195,20 @@ class FeasibilityChecker:
         """Fixed rotation from the tilt-axis frame to the sensor frame, ``R_TS`` ``(3, 3)``."""
         q = np.clip(np.zeros(self.arm.nq), self.lower, self.upper)
         pin.forwardKinematics(self.arm.model, self.data, q)
-        tool = pin.updateFramePlacement(self.arm.model, self.data, self.axis_frame_id).rotation.copy()
-        sensor = pin.updateFramePlacement(self.arm.model, self.data, self.arm.sensor_frame_id).rotation
+        tool = pin.updateFramePlacement(
+            self.arm.model, self.data, self.axis_frame_id
+        ).rotation.copy()
+        sensor = pin.updateFramePlacement(
+            self.arm.model, self.data, self.arm.sensor_frame_id
+        ).rotation
         return tool.T @ sensor
 
 
 def check_tilt_observability(checker, factors) -> None:
     """Refuse a tilt limit that leaves every allowed orientation alike (names the parameters).
 
-    ``factors(rotations)`` gives the weighted Jacobians ``(N, 6, 12)`` of :mod:`ftkin.planning.design`.
+    ``factors(rotations)`` gives the weighted Jacobians ``(N, 6, 12)`` of
+    :mod:`ftkin.planning.design`.
     """
     constraints = checker.constraints
     if constraints.max_tilt is None:
@@ -189,7 +216,9 @@ def check_tilt_observability(checker, factors) -> None:
     tool_to_sensor = checker.tool_to_sensor_rotation()
     grid = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
     # Tool orientations R_BT = Rz(α) Ry(β) Rx(π) Rz(ψ): tool z tilted by β from straight down.
-    tilted = euler_zyx_to_matrix([[alpha, beta, np.pi] for alpha in grid for beta in (0.0, constraints.max_tilt)])
+    tilted = euler_zyx_to_matrix(
+        [[alpha, beta, np.pi] for alpha in grid for beta in (0.0, constraints.max_tilt)]
+    )
     spins = euler_zyx_to_matrix([[psi, 0.0, 0.0] for psi in grid])
     rotations = np.einsum("aij,bjk,kl->abil", tilted, spins, tool_to_sensor).reshape(-1, 3, 3)
     check_information(factors(rotations), constraints)
@@ -203,11 +232,17 @@ def check_information(factors, constraints, rcond: float = 1e-10):
     weak = eigenvalues <= rcond * eigenvalues[-1]
     if not np.any(weak):
         return
-    involved = np.any(np.abs(eigenvectors[:, weak]) > 0.3, axis=1) | (np.diag(information) <= rcond * information.max())
+    involved = np.any(np.abs(eigenvectors[:, weak]) > 0.3, axis=1) | (
+        np.diag(information) <= rcond * information.max()
+    )
     raise UnobservableParameters(
-        [(COMPONENT_NAMES + MOUNT_NAMES[_MOUNT_MODE_BY_SIZE[len(information)]])[i] for i in np.flatnonzero(involved)],
+        [
+            (COMPONENT_NAMES + MOUNT_NAMES[_MOUNT_MODE_BY_SIZE[len(information)]])[i]
+            for i in np.flatnonzero(involved)
+        ],
         f"every sensor orientation these constraints allow ({constraints.describe()}) sees gravity "
         "along (nearly) the same sensor direction, so the tool's weight cannot be told apart from "
-        "the force bias, nor its centre of mass from the torque bias; allow more tilt or wider joint ranges",
+        "the force bias, nor its centre of mass from the torque bias; allow more tilt or wider "
+        "joint ranges",
         singular_values=eigenvalues[::-1],
     )

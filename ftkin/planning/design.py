@@ -30,11 +30,19 @@ sensor or many readings per pose (information ~1e8) next to an absolute
 ridge would make the first greedy steps numerically singular."""
 
 
-def information_factors(rotations: np.ndarray, gravity_in_base, center_of_mass, channel_std, readings_per_pose=1,
-                        estimate_mount: str = "none"):
-    """Weighted Jacobians ``L_i`` ``(N, 6, 12 + k)`` so that the information of pose ``i`` is ``L_iᵀ L_i``.
+def information_factors(
+    rotations: np.ndarray,
+    gravity_in_base,
+    center_of_mass,
+    channel_std,
+    readings_per_pose=1,
+    estimate_mount: str = "none",
+):
+    """Weighted Jacobians ``L_i`` ``(N, 6, 12 + k)`` so that the information of pose ``i`` is ``L_iᵀ
+    L_i``.
 
-    ``k`` is 0, or the number of mount angles when ``estimate_mount`` is ``"yaw"`` (1) or ``"full"`` (3).
+    ``k`` is 0, or the number of mount angles when ``estimate_mount`` is ``"yaw"`` (1) or ``"full"``
+    (3).
     """
     jac = mount_jacobian(rotations, gravity_in_base, center_of_mass, estimate_mount)
     return jac / np.asarray(channel_std, float)[None, :, None] * np.sqrt(readings_per_pose)
@@ -73,7 +81,8 @@ def _gains(entries: np.ndarray, information: np.ndarray) -> np.ndarray:
 
 
 def _cholesky_log_det(entries: np.ndarray) -> np.ndarray | None:
-    """``log det`` of symmetric positive definite matrices by a Cholesky factorisation; None if one is not.
+    """``log det`` of symmetric positive definite matrices by a Cholesky factorisation; None if one
+    is not.
 
     ``entries``: ``(n, n, M)``, ``entries[i, j]`` the ``(M,)`` values of entry
     ``(i, j)``; only the lower triangle (``i ≥ j``) is read.
@@ -88,13 +97,19 @@ def _cholesky_log_det(entries: np.ndarray) -> np.ndarray | None:
     lower: list[list[np.ndarray]] = [[] for _ in range(n)]
     pivots = []
     for j in range(n):
-        pivot = entries[j, j] - sum(value * value for value in lower[j]) if j else entries[j, j].copy()
+        pivot = (
+            entries[j, j] - sum(value * value for value in lower[j]) if j else entries[j, j].copy()
+        )
         if not np.all(pivot > 0.0):  # also NaN
             return None
         pivots.append(pivot)
         root = np.sqrt(pivot)
         for i in range(j + 1, n):
-            off = entries[i, j] - sum(a * b for a, b in zip(lower[i], lower[j])) if j else entries[i, j]
+            off = (
+                entries[i, j] - sum(a * b for a, b in zip(lower[i], lower[j]))
+                if j
+                else entries[i, j]
+            )
             lower[i].append(off / root)
     with np.errstate(over="ignore"):
         product = np.prod(pivots, axis=0)
@@ -103,7 +118,9 @@ def _cholesky_log_det(entries: np.ndarray) -> np.ndarray | None:
     return np.log(pivots).sum(axis=0)
 
 
-def d_optimal_selection(factors: np.ndarray, count: int, max_passes: int = 20) -> tuple[np.ndarray, float]:
+def d_optimal_selection(
+    factors: np.ndarray, count: int, max_passes: int = 20
+) -> tuple[np.ndarray, float]:
     """Choose ``count`` distinct candidates maximizing ``log det`` of their information.
 
     Greedy forward selection, then Fedorov exchange passes (swap a chosen
@@ -121,7 +138,9 @@ def d_optimal_selection(factors: np.ndarray, count: int, max_passes: int = 20) -
         ``log det`` of their (unregularized) information.
     """
     size = factors.shape[2]
-    scale = 1.0 / np.sqrt(np.maximum(np.mean(np.sum(factors**2, axis=1), axis=0), np.finfo(float).tiny))
+    scale = 1.0 / np.sqrt(
+        np.maximum(np.mean(np.sum(factors**2, axis=1), axis=0), np.finfo(float).tiny)
+    )
     factors = factors * scale  # log det changes by the constant 2 Σ log scale: same choices
     contributions = np.transpose(factors, (0, 2, 1)) @ factors
     entries = np.ascontiguousarray(np.transpose(factors, (1, 2, 0)))

@@ -47,17 +47,30 @@ PATIENCE = 12
 MAX_ROUNDS = 400
 """Upper bound on the rounds of the search."""
 DEFAULT_POSE_INTERVAL = 10.0
-"""Time from one calibration pose to the next [s] when not given: a move, settling and a few readings."""
+"""Time from one calibration pose to the next [s] when not given: a move, settling and a few
+readings.
+"""
 
 
 def check_drift_rate(value) -> np.ndarray:
-    """``(6,)`` per-channel walk rate from ``[force N/√s, torque N·m/√s]``, each finite, ≥ 0 and one > 0."""
+    """``(6,)`` per-channel walk rate from ``[force N/√s, torque N·m/√s]``, each finite, ≥ 0 and one
+    > 0.
+    """
     rate = as_float_array(value, "drift_rate")
     if rate.shape != (2,):
-        raise InvalidInput(f"drift_rate must be [force N/√s, torque N·m/√s] (two numbers), got shape {rate.shape}")
-    if not np.all(np.isfinite(rate)) or np.any(rate < 0) or not np.any(rate > 0) or np.any(rate > 100.0):
-        raise InvalidInput(f"drift_rate must be two finite rates between 0 and 100 [N/√s, N·m/√s], not both 0, "
-                           f"got {rate.tolist()}")
+        raise InvalidInput(
+            f"drift_rate must be [force N/√s, torque N·m/√s] (two numbers), got shape {rate.shape}"
+        )
+    if (
+        not np.all(np.isfinite(rate))
+        or np.any(rate < 0)
+        or not np.any(rate > 0)
+        or np.any(rate > 100.0)
+    ):
+        raise InvalidInput(
+            f"drift_rate must be two finite rates between 0 and 100 [N/√s, N·m/√s], not both 0, "
+            f"got {rate.tolist()}"
+        )
     return np.repeat(rate, 3)
 
 
@@ -67,26 +80,39 @@ def check_pose_interval(value) -> float:
 
 
 def check_travel_ratio(value, drift_rate) -> float | None:
-    """A bound on the drift order's joint travel, as a ratio to the short-travel order's (1 to 100), or None."""
+    """A bound on the drift order's joint travel, as a ratio to the short-travel order's (1 to 100),
+    or None.
+    """
     if value is None:
         return None
     if drift_rate is None:
-        raise InvalidInput("max_travel_ratio bounds the drift-robust order: it applies with drift_rate")
-    return as_in_range(value, "max_travel_ratio", 1.0, 100.0, "(× the short-travel order's joint travel)")
+        raise InvalidInput(
+            "max_travel_ratio bounds the drift-robust order: it applies with drift_rate"
+        )
+    return as_in_range(
+        value, "max_travel_ratio", 1.0, 100.0, "(× the short-travel order's joint travel)"
+    )
 
 
-def check_drift_options(drift_rate, pose_interval, estimate_mount: str) -> tuple[np.ndarray | None, float]:
-    """``(rate (6,) or None, pose_interval [s])`` checked; a drift with a mount estimate is refused."""
+def check_drift_options(
+    drift_rate, pose_interval, estimate_mount: str
+) -> tuple[np.ndarray | None, float]:
+    """``(rate (6,) or None, pose_interval [s])`` checked; a drift with a mount estimate is
+    refused.
+    """
     if drift_rate is None:
         return None, pose_interval
     if estimate_mount != "none":
-        raise InvalidInput("a drifting bias and an estimated mount cannot be planned together "
-                           "(a drift-aware calibration keeps the mount fixed): drop drift_rate or estimate_mount")
+        raise InvalidInput(
+            "a drifting bias and an estimated mount cannot be planned together "
+            "(a drift-aware calibration keeps the mount fixed): drop drift_rate or estimate_mount"
+        )
     return check_drift_rate(drift_rate), check_pose_interval(pose_interval)
 
 
 def walk_information(jacobians: np.ndarray, gains) -> np.ndarray:
-    """Fisher information ``(..., 12, 12)`` of ``θ`` from per-pose ``jacobians`` ``(..., P, 6, 12)`` in visiting order.
+    """Fisher information ``(..., 12, 12)`` of ``θ`` from per-pose ``jacobians`` ``(..., P, 6, 12)``
+    in visiting order.
 
     The leading axes are independent candidate orders; ``gains`` are the
     walk's Kalman gains for the ``P`` visiting slots
@@ -113,9 +139,19 @@ def _turning_order(gravity_in_sensor: np.ndarray, start: int) -> np.ndarray:
     return np.array(order)
 
 
-def drift_robust_order(model, rotations, *, rate, noise_std, readings_per_pose: int, pose_interval: float,
-                       rng: np.random.Generator, initial_order=None, distances=None,
-                       max_length: float | None = None) -> tuple[np.ndarray, float]:
+def drift_robust_order(
+    model,
+    rotations,
+    *,
+    rate,
+    noise_std,
+    readings_per_pose: int,
+    pose_interval: float,
+    rng: np.random.Generator,
+    initial_order=None,
+    distances=None,
+    max_length: float | None = None,
+) -> tuple[np.ndarray, float]:
     """Visiting order of poses that keeps the most information under a random-walk bias.
 
     Args:
@@ -143,11 +179,15 @@ def drift_robust_order(model, rotations, *, rate, noise_std, readings_per_pose: 
         raise InvalidInput("max_length needs the distances between the poses")
     jacobians = model.parameter_jacobian(rotations)
     variance = np.tile(np.asarray(noise_std, dtype=float) ** 2 / readings_per_pose, (count, 1))
-    gains = walk_gains(np.arange(count) * float(pose_interval), variance, np.asarray(rate, dtype=float))
+    gains = walk_gains(
+        np.arange(count) * float(pose_interval), variance, np.asarray(rate, dtype=float)
+    )
     gravity = np.einsum("nji,j->ni", rotations, model.gravity_in_base)
     gravity /= np.linalg.norm(gravity, axis=1, keepdims=True)
     starts = [np.arange(count) if initial_order is None else np.asarray(initial_order)]
-    starts += [_turning_order(gravity, start) for start in (starts[0][0], int(np.argmax(gravity[:, 2])))]
+    starts += [
+        _turning_order(gravity, start) for start in (starts[0][0], int(np.argmax(gravity[:, 2])))
+    ]
 
     def admissible(orders: np.ndarray) -> np.ndarray:
         if max_length is None:
@@ -155,8 +195,12 @@ def drift_robust_order(model, rotations, *, rate, noise_std, readings_per_pose: 
         return distances[orders[:, :-1], orders[:, 1:]].sum(axis=1) <= max_length * (1.0 + 1e-12)
 
     starts = np.array(starts)
-    values = np.where(admissible(starts), _log_det(walk_information(jacobians[starts], gains)), -np.inf)
-    values[0] = _log_det(walk_information(jacobians[starts[:1]], gains))[0]  # the given order always counts
+    values = np.where(
+        admissible(starts), _log_det(walk_information(jacobians[starts], gains)), -np.inf
+    )
+    values[0] = _log_det(walk_information(jacobians[starts[:1]], gains))[
+        0
+    ]  # the given order always counts
     order, best = starts[int(np.argmax(values))].copy(), float(np.max(values))
     if count < 2:
         return order, best
@@ -166,8 +210,15 @@ def drift_robust_order(model, rotations, *, rate, noise_std, readings_per_pose: 
         pairs = pairs[pairs[:, 0] != pairs[:, 1]]
         candidates = np.tile(order, (len(pairs), 1))
         rows = np.arange(len(pairs))
-        candidates[rows, pairs[:, 0]], candidates[rows, pairs[:, 1]] = order[pairs[:, 1]], order[pairs[:, 0]]
-        values = np.where(admissible(candidates), _log_det(walk_information(jacobians[candidates], gains)), -np.inf)
+        candidates[rows, pairs[:, 0]], candidates[rows, pairs[:, 1]] = (
+            order[pairs[:, 1]],
+            order[pairs[:, 0]],
+        )
+        values = np.where(
+            admissible(candidates),
+            _log_det(walk_information(jacobians[candidates], gains)),
+            -np.inf,
+        )
         winner = int(np.argmax(values)) if len(values) else 0
         if len(values) and values[winner] > best + 1e-9:
             order, best, idle = candidates[winner], float(values[winner]), 0

@@ -14,7 +14,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..calibration.information import SensorNoise, covariance_from_information, fisher_information, standard_errors
+from ..calibration.information import (
+    SensorNoise,
+    covariance_from_information,
+    fisher_information,
+    standard_errors,
+)
 from ..calibration.model import STANDARD_GRAVITY, SensorModel
 from ..calibration.mount import MOUNT_NAMES, check_mount_mode, split_information
 from ..calibration.observability import check_pose_count
@@ -38,12 +43,24 @@ _ROWS = (
 """Short names and unit of each block of ``θ`` in :meth:`PoseEvaluation.report`."""
 
 
-def expected_tool(tool_weight: float | None = None, center_of_mass=None, g: float = STANDARD_GRAVITY) -> SensorModel:
-    """The tool a plan is made for: weight [N] hanging straight down the base z axis, COM [m, sensor frame]."""
-    weight = PAPER_TOOL_WEIGHT if tool_weight is None else as_in_range(tool_weight, "tool_weight", 1e-6, 1e6, "N")
-    com = as_vector(PAPER_CENTER_OF_MASS if center_of_mass is None else center_of_mass, 3, "center_of_mass")
+def expected_tool(
+    tool_weight: float | None = None, center_of_mass=None, g: float = STANDARD_GRAVITY
+) -> SensorModel:
+    """The tool a plan is made for: weight [N] hanging straight down the base z axis, COM [m, sensor
+    frame].
+    """
+    weight = (
+        PAPER_TOOL_WEIGHT
+        if tool_weight is None
+        else as_in_range(tool_weight, "tool_weight", 1e-6, 1e6, "N")
+    )
+    com = as_vector(
+        PAPER_CENTER_OF_MASS if center_of_mass is None else center_of_mass, 3, "center_of_mass"
+    )
     if np.linalg.norm(com) > 10.0:
-        raise InvalidInput(f"center_of_mass must lie within 10 m of the sensor, got {com.tolist()} m")
+        raise InvalidInput(
+            f"center_of_mass must lie within 10 m of the sensor, got {com.tolist()} m"
+        )
     return SensorModel.from_tool(weight / g, com, g=g)
 
 
@@ -111,13 +128,25 @@ class PoseEvaluation:
         std = self.vector_std.reshape(4, 3)
         bound = self.bias_bound.reshape(2, 3)
         lines = [
-            f"predicted standard errors for {self.pose_count} poses × {self.readings_per_pose} reading(s), "
-            f"tool {self.model.tool_weight:.3g} N with COM {np.round(self.model.center_of_mass, 4).tolist()} m, "
+            f"predicted standard errors for {self.pose_count} poses × {self.readings_per_pose} "
+            "reading(s), "
+            f"tool {self.model.tool_weight:.3g} N with COM "
+            f"{np.round(self.model.center_of_mass, 4).tolist()} m, "
             f"noise {self.noise.force_std[0]:g} N / {self.noise.torque_std[0]:g} N·m",
-            *([] if self.drift_rate is None else [
-                f"bias drifting as a random walk of {self.drift_rate[0]:g} N/√s, {self.drift_rate[1]:g} N·m/√s, "
-                + (f"poses visited in this order one every {self.pose_interval:g} s" if self.pose_times is None else
-                   f"poses at their times ({self.pose_times[0]:g} to {self.pose_times[-1]:g} s)")]),
+            *(
+                []
+                if self.drift_rate is None
+                else [
+                    f"bias drifting as a random walk of {self.drift_rate[0]:g} N/√s, "
+                    f"{self.drift_rate[1]:g} N·m/√s, "
+                    + (
+                        f"poses visited in this order one every {self.pose_interval:g} s"
+                        if self.pose_times is None
+                        else f"poses at their times ({self.pose_times[0]:g} to "
+                        f"{self.pose_times[-1]:g} s)"
+                    )
+                ]
+            ),
             f"{'parameter':<10}{'std error':>14}  {'unit':<5}{'bound σ/√N':>14}{'ratio':>8}",
         ]
         for block, (names, unit) in enumerate(_ROWS):
@@ -138,8 +167,10 @@ class PoseEvaluation:
 def _pose_times(value, count: int) -> np.ndarray:
     times = as_float_array(value, "pose_times")
     if times.shape != (count,) or not np.all(np.isfinite(times)) or np.any(np.diff(times) <= 0):
-        raise InvalidInput(f"pose_times must be {count} finite, strictly increasing times [s] (one per pose, in "
-                           f"visiting order), got shape {times.shape}")
+        raise InvalidInput(
+            f"pose_times must be {count} finite, strictly increasing times [s] (one per pose, in "
+            f"visiting order), got shape {times.shape}"
+        )
     return times
 
 
@@ -193,9 +224,14 @@ def evaluate_poses(
     check_mount_mode(estimate_mount)
     drift_rate, pose_interval = check_drift_options(drift_rate, pose_interval, estimate_mount)
     if drift_rate is not None:
-        times = np.arange(len(rotations)) * pose_interval if pose_times is None else _pose_times(pose_times, len(rotations))
-        gains = walk_gains(times,
-                           np.tile(noise.channel_std**2 / readings, (len(rotations), 1)), drift_rate)
+        times = (
+            np.arange(len(rotations)) * pose_interval
+            if pose_times is None
+            else _pose_times(pose_times, len(rotations))
+        )
+        gains = walk_gains(
+            times, np.tile(noise.channel_std**2 / readings, (len(rotations), 1)), drift_rate
+        )
         information = walk_information(model.parameter_jacobian(rotations), gains)
     else:
         information = fisher_information(model, rotations, noise, readings, estimate_mount)
@@ -214,6 +250,8 @@ def evaluate_poses(
         mount_mode=estimate_mount,
         mount_covariance=mount_covariance,
         drift_rate=None if drift_rate is None else drift_rate[[0, 3]],
-        pose_interval=None if drift_rate is None else (pose_interval if pose_times is None else float(np.median(np.diff(times)))),
+        pose_interval=None
+        if drift_rate is None
+        else (pose_interval if pose_times is None else float(np.median(np.diff(times)))),
         pose_times=None if drift_rate is None or pose_times is None else times,
     )

@@ -12,7 +12,8 @@ coefficients that maximise ``log det`` of the whitened information of the
 linear identification problem (bias and the ten inertial parameters,
 :mod:`ftkin.calibration.dynamic_fit`), over random starts followed by a
 local search (a (1+1) evolution strategy: the limit scaling and the
-collision penalty make the cost non-smooth, which stalls gradient methods). Joint position, velocity and acceleration limits hold by
+collision penalty make the cost non-smooth, which stalls gradient methods). Joint position, velocity
+and acceleration limits hold by
 construction (every candidate is scaled into them); the floor and
 self-collision are checked on a grid (:class:`~ftkin.planning.constraints.FeasibilityChecker`),
 violations cost a penalty during the search, and the returned plan is
@@ -63,7 +64,9 @@ class FourierTrajectory:
     sine: np.ndarray
 
     def evaluate(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``q`` [rad], ``dq`` [rad/s], ``ddq`` [rad/s²], each ``(N, nq)``, at ``(N,)`` times [s]."""
+        """``q`` [rad], ``dq`` [rad/s], ``ddq`` [rad/s²], each ``(N, nq)``, at ``(N,)`` times
+        [s].
+        """
         times = np.asarray(times, dtype=float)
         omega = 2.0 * np.pi / self.period
         k = np.arange(1, self.cosine.shape[1] + 1)
@@ -100,16 +103,27 @@ class ExcitationPlan:
     optimized: bool
 
     def table(self) -> tuple[list[str], np.ndarray]:
-        """Header and ``(N, 1 + 3 nq)`` rows: ``t``, joint positions, then ``<joint>_vel`` and ``<joint>_acc``."""
-        header = ["t", *self.joint_names, *(f"{n}_vel" for n in self.joint_names), *(f"{n}_acc" for n in self.joint_names)]
-        rows = np.column_stack([self.times, self.joint_positions, self.joint_velocities, self.joint_accelerations])
+        """Header and ``(N, 1 + 3 nq)`` rows: ``t``, joint positions, then ``<joint>_vel`` and
+        ``<joint>_acc``.
+        """
+        header = [
+            "t",
+            *self.joint_names,
+            *(f"{n}_vel" for n in self.joint_names),
+            *(f"{n}_acc" for n in self.joint_names),
+        ]
+        rows = np.column_stack(
+            [self.times, self.joint_positions, self.joint_velocities, self.joint_accelerations]
+        )
         return header, rows
 
 
 def _information(arm, q, dq, ddq, noise: SensorNoise) -> np.ndarray:
     rotations, velocities, accelerations = sensor_motion(arm, q, dq, ddq)
     regressor = body_regressor(velocities, accelerations)
-    problem = DynamicProblem(np.zeros((len(q), 6)), rotations, regressor, noise.channel_std, STANDARD_GRAVITY)
+    problem = DynamicProblem(
+        np.zeros((len(q), 6)), rotations, regressor, noise.channel_std, STANDARD_GRAVITY
+    )
     x = np.zeros(18)
     x[8] = 1.0
     jac = problem.whitened_jacobian(x)
@@ -122,16 +136,33 @@ def _log_det(information: np.ndarray) -> tuple[float, float]:
     values = np.linalg.eigvalsh(information / np.outer(scale, scale))
     if values[0] <= 0.0:
         return -np.inf, np.inf
-    return float(np.sum(np.log(values)) + 2.0 * np.sum(np.log(scale))), float(values[-1] / values[0])
+    return float(np.sum(np.log(values)) + 2.0 * np.sum(np.log(scale))), float(
+        values[-1] / values[0]
+    )
 
 
 class _Design:
     """Maps free coefficients to a trajectory inside the joint limits."""
 
-    def __init__(self, arm, checker, period, harmonics, velocity_limits, acceleration_limits, grid, center, amplitude):
+    def __init__(
+        self,
+        arm,
+        checker,
+        period,
+        harmonics,
+        velocity_limits,
+        acceleration_limits,
+        grid,
+        center,
+        amplitude,
+    ):
         self.arm, self.checker, self.period, self.harmonics = arm, checker, period, harmonics
         self.center, self.amplitude = center, amplitude
-        self.velocity_limits, self.acceleration_limits, self.grid = velocity_limits, acceleration_limits, grid
+        self.velocity_limits, self.acceleration_limits, self.grid = (
+            velocity_limits,
+            acceleration_limits,
+            grid,
+        )
         self.nq = arm.nq
 
     @property
@@ -148,22 +179,38 @@ class _Design:
         unscaled = FourierTrajectory(self.period, np.zeros(nq), cosine, sine)
         q, dq, ddq = unscaled.evaluate(self.grid)
         span = np.maximum(q.max(axis=0) - q.min(axis=0), 1e-12)
-        scale = np.minimum.reduce([
-            self.velocity_limits / np.maximum(np.abs(dq).max(axis=0), 1e-12),
-            self.acceleration_limits / np.maximum(np.abs(ddq).max(axis=0), 1e-12),
-            np.minimum(self.checker.upper - self.checker.lower, 2.0 * self.amplitude) / span,
-        ]) * 0.98
+        scale = (
+            np.minimum.reduce(
+                [
+                    self.velocity_limits / np.maximum(np.abs(dq).max(axis=0), 1e-12),
+                    self.acceleration_limits / np.maximum(np.abs(ddq).max(axis=0), 1e-12),
+                    np.minimum(self.checker.upper - self.checker.lower, 2.0 * self.amplitude)
+                    / span,
+                ]
+            )
+            * 0.98
+        )
         low, high = scale * q.min(axis=0), scale * q.max(axis=0)
-        offsets = np.clip(self.center + x[2 * nq * free :] - 0.5 * (low + high), self.checker.lower - low, self.checker.upper - high)
-        return FourierTrajectory(self.period, offsets, cosine * scale[:, None], sine * scale[:, None])
+        offsets = np.clip(
+            self.center + x[2 * nq * free :] - 0.5 * (low + high),
+            self.checker.lower - low,
+            self.checker.upper - high,
+        )
+        return FourierTrajectory(
+            self.period, offsets, cosine * scale[:, None], sine * scale[:, None]
+        )
 
     def violations(self, trajectory: FourierTrajectory, times) -> int:
         q, _, _ = trajectory.evaluate(times)
         return sum(self.checker.check(row) is None for row in q)
 
 
-def _evolve(cost, x: np.ndarray, iterations: int, rng: np.random.Generator, step: float = 0.3) -> np.ndarray:
-    """(1+1) evolution strategy with the 1/5 success rule: robust to the kinks of the limit scaling and penalties."""
+def _evolve(
+    cost, x: np.ndarray, iterations: int, rng: np.random.Generator, step: float = 0.3
+) -> np.ndarray:
+    """(1+1) evolution strategy with the 1/5 success rule: robust to the kinks of the limit scaling
+    and penalties.
+    """
     best = cost(x)
     for _ in range(iterations):
         candidate = x + rng.normal(0.0, step, x.shape)
@@ -193,7 +240,8 @@ def plan_excitation(
     max_iterations: int = 150,
     seed: int = 0,
 ) -> ExcitationPlan:
-    """Plan a periodic excitation trajectory for :func:`~ftkin.calibration.dynamic.calibrate_dynamic`.
+    """Plan a periodic excitation trajectory for
+    :func:`~ftkin.calibration.dynamic.calibrate_dynamic`.
 
     Args:
         arm: The arm (:class:`~ftkin.kinematics.Arm`).
@@ -229,16 +277,34 @@ def plan_excitation(
     noise = noise if noise is not None else SensorNoise.paper()
     checker = FeasibilityChecker(arm, constraints)
     velocity_limits = as_positive(velocity_fraction, "velocity_fraction") * arm.velocity_limits
-    acceleration_limits = np.broadcast_to(np.asarray(acceleration_limit, dtype=float), (arm.nq,)).copy()
+    acceleration_limits = np.broadcast_to(
+        np.asarray(acceleration_limit, dtype=float), (arm.nq,)
+    ).copy()
     if not np.all(np.isfinite(acceleration_limits) & (acceleration_limits > 0)):
-        raise InvalidInput(f"acceleration_limit must be positive [rad/s²], got {acceleration_limit!r}")
+        raise InvalidInput(
+            f"acceleration_limit must be positive [rad/s²], got {acceleration_limit!r}"
+        )
     grid = np.linspace(0.0, period, 120, endpoint=False)
     check_grid = np.linspace(0.0, period, 60, endpoint=False)
-    center = np.clip(np.zeros(arm.nq) if center is None else arm.check_configuration(center), checker.lower, checker.upper)
+    center = np.clip(
+        np.zeros(arm.nq) if center is None else arm.check_configuration(center),
+        checker.lower,
+        checker.upper,
+    )
     amplitude = np.broadcast_to(np.asarray(amplitude, dtype=float), (arm.nq,)).copy()
     if not np.all(np.isfinite(amplitude) & (amplitude > 0)):
         raise InvalidInput(f"amplitude must be positive [rad], got {amplitude!r}")
-    design = _Design(arm, checker, period, harmonics, velocity_limits, acceleration_limits, grid, center, amplitude)
+    design = _Design(
+        arm,
+        checker,
+        period,
+        harmonics,
+        velocity_limits,
+        acceleration_limits,
+        grid,
+        center,
+        amplitude,
+    )
 
     def cost(x):
         trajectory = design.trajectory(x)
@@ -248,9 +314,17 @@ def plan_excitation(
         return (-value if np.isfinite(value) else 1e6) + penalty
 
     rng = np.random.default_rng(seed)
-    starts = [np.concatenate([rng.normal(size=design.size - arm.nq), rng.normal(0.0, 0.05, arm.nq)]) for _ in range(candidates)]
-    # Optimising: best start first. Not optimising: seed order, i.e. a random feasible Fourier trajectory.
-    scored = sorted(((cost(x), i) for i, x in enumerate(starts))) if optimize else [(0.0, i) for i in range(len(starts))]
+    starts = [
+        np.concatenate([rng.normal(size=design.size - arm.nq), rng.normal(0.0, 0.05, arm.nq)])
+        for _ in range(candidates)
+    ]
+    # Optimising: best start first. Not optimising: seed order, i.e. a random feasible Fourier
+    # trajectory.
+    scored = (
+        sorted(((cost(x), i) for i, x in enumerate(starts)))
+        if optimize
+        else [(0.0, i) for i in range(len(starts))]
+    )
     fine_grid = np.arange(0.0, period, min(0.01, period / 200))
     for _, index in scored:
         x = starts[index]
@@ -260,8 +334,13 @@ def plan_excitation(
         if design.violations(trajectory, fine_grid) == 0:
             break
     else:
-        raise InvalidInput(f"no excitation candidate meets the constraints ({constraints.describe()}); widen them or try more candidates")
+        raise InvalidInput(
+            f"no excitation candidate meets the constraints ({constraints.describe()}); widen them "
+            "or try more candidates"
+        )
     times = np.arange(int(round(duration * rate))) / rate
     q, dq, ddq = trajectory.evaluate(times)
     log_det, condition = _log_det(_information(arm, *trajectory.evaluate(grid), noise))
-    return ExcitationPlan(trajectory, list(arm.joint_names), times, q, dq, ddq, log_det, condition, optimize)
+    return ExcitationPlan(
+        trajectory, list(arm.joint_names), times, q, dq, ddq, log_det, condition, optimize
+    )

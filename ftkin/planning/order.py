@@ -18,7 +18,9 @@ from __future__ import annotations
 import numpy as np
 
 MAX_STARTS = 32
-"""Nearest-neighbour starts tried (every pose for up to this many poses, else evenly spread ones)."""
+"""Nearest-neighbour starts tried (every pose for up to this many poses, else evenly spread
+ones).
+"""
 
 REVOLUTE_KINDS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
 
@@ -33,7 +35,9 @@ def revolute_mask(model) -> np.ndarray:
 
 
 def unwind_revolute(joint_positions, lower, upper, mask) -> np.ndarray:
-    """Shift revolute coordinates by multiples of 2π toward zero while within ``[lower, upper]`` [rad]."""
+    """Shift revolute coordinates by multiples of 2π toward zero while within ``[lower, upper]``
+    [rad].
+    """
     q = np.array(joint_positions, dtype=float)
     turns = np.round(q / (2.0 * np.pi))
     for _ in range(int(np.max(np.abs(turns), initial=0))):
@@ -71,7 +75,8 @@ def _nearest_neighbour(distances: np.ndarray, start: int) -> list[int]:
 
 
 def _two_opt(distances: np.ndarray, order: list[int]) -> list[int]:
-    """Reverse segments ``order[i..j]`` while that shortens the path (first improvement, in scan order).
+    """Reverse segments ``order[i..j]`` while that shortens the path (first improvement, in scan
+    order).
 
     For each ``i`` the gains of every ``j`` are computed at once; after a
     reversal the scan goes on from ``j + 1`` on the new order, so the result
@@ -102,7 +107,9 @@ def _first_improvement(distances: np.ndarray, order: np.ndarray, i: int, start: 
     """
     ends, following = order[start:], order[start + 1 :]
     after, new_after = np.zeros(len(ends)), np.zeros(len(ends))
-    after[:-1] = distances.ravel().take(ends[:-1] * len(distances) + following)  # distances[ends[:-1], following]
+    after[:-1] = distances.ravel().take(
+        ends[:-1] * len(distances) + following
+    )  # distances[ends[:-1], following]
     new_after[:-1] = distances[order[i]].take(following)
     if i > 0:
         row = distances[order[i - 1]]
@@ -126,7 +133,9 @@ def short_travel_order(joint_positions) -> np.ndarray:
         return np.arange(count)
     distances = joint_distances(joint_positions)
     best, best_length = None, np.inf
-    for start in sorted(set(np.linspace(0, count - 1, min(count, MAX_STARTS)).round().astype(int).tolist())):
+    for start in sorted(
+        set(np.linspace(0, count - 1, min(count, MAX_STARTS)).round().astype(int).tolist())
+    ):
         order = _two_opt(distances, _nearest_neighbour(distances, start))
         length = path_length(distances, order)
         if length < best_length - 1e-12:

@@ -39,17 +39,28 @@ from .constraints import (
     check_tilt_observability,
 )
 from .design import d_optimal_selection, information_factors, log_det
-from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_options, check_travel_ratio, drift_robust_order
+from .drift_order import (
+    DEFAULT_POSE_INTERVAL,
+    check_drift_options,
+    check_travel_ratio,
+    drift_robust_order,
+)
 from .evaluation import PoseEvaluation, evaluate_poses, expected_tool
 from .order import joint_distances, path_length, revolute_mask, short_travel_order, unwind_revolute
 
-CRITERION = "D-optimality: log det of the Fisher information of θ = [a, F0, M0, P] (and the mount angles, if estimated; SI units)"
+CRITERION = (
+    "D-optimality: log det of the Fisher information of θ = [a, F0, M0, P] (and the mount angles, "
+    "if estimated; SI units)"
+)
 REFINE_STEPS = (0.2, 0.08, 0.03, 0.01)
 """Standard deviations [rad] of the joint perturbations in the refinement rounds."""
 REFINE_TRIES = 25
 """Perturbations drawn per pose and refinement round."""
-DRIFT_CRITERION = ("D-optimality: log det of the Fisher information of θ = [a, F0, M0, P] with the bias's random walk "
-                   "integrated out, poses visited in order (SI units)")
+DRIFT_CRITERION = (
+    "D-optimality: log det of the Fisher information of θ = [a, F0, M0, P] with the bias's random "
+    "walk "
+    "integrated out, poses visited in order (SI units)"
+)
 SAMPLE_BATCH = 2000
 
 
@@ -86,7 +97,9 @@ class PosePlan:
 
     @property
     def standard_errors(self) -> dict:
-        """Predicted standard errors (keys of :func:`ftkin.calibration.information.standard_errors`)."""
+        """Predicted standard errors (keys of
+        :func:`ftkin.calibration.information.standard_errors`).
+        """
         return self.evaluation.standard_errors
 
     @property
@@ -96,13 +109,16 @@ class PosePlan:
 
     @property
     def joint_travel(self) -> float:
-        """Joint-space path length through the poses in visiting order [rad] (Euclidean norm of each move)."""
+        """Joint-space path length through the poses in visiting order [rad] (Euclidean norm of each
+        move).
+        """
         return float(np.sum(np.linalg.norm(np.diff(self.joint_positions, axis=0), axis=1)))
 
     def report(self) -> str:
         """Human-readable summary: constraints and predicted standard errors."""
         lines = [
-            f"{self.pose_count} poses (seed {self.seed}); {self.candidate_count} feasible candidates "
+            f"{self.pose_count} poses (seed {self.seed}); {self.candidate_count} feasible "
+            "candidates "
             f"from {self.sampled_count} sampled",
             f"constraints: {self.constraints.describe()}",
             f"criterion: {self.criterion} = {self.criterion_value:.3f}",
@@ -183,7 +199,9 @@ def plan_poses(
     check_mount_mode(estimate_mount)
     drift_rate, pose_interval = check_drift_options(drift_rate, pose_interval, estimate_mount)
     max_travel_ratio = check_travel_ratio(max_travel_ratio, drift_rate)
-    constraints = PoseConstraints(margin, floor_height, max_tilt, joint_ranges or (), self_collision)
+    constraints = PoseConstraints(
+        margin, floor_height, max_tilt, joint_ranges or (), self_collision
+    )
     model = expected_tool(tool_weight, center_of_mass)
     noise = noise if noise is not None else SensorNoise.paper()
     checker = FeasibilityChecker(arm, constraints)
@@ -192,11 +210,19 @@ def plan_poses(
     channel_std = noise.channel_std
 
     def factors(rotations):
-        return information_factors(rotations, model.gravity_in_base, model.center_of_mass, channel_std, readings_per_pose,
-                                   estimate_mount)
+        return information_factors(
+            rotations,
+            model.gravity_in_base,
+            model.center_of_mass,
+            channel_std,
+            readings_per_pose,
+            estimate_mount,
+        )
 
     check_tilt_observability(checker, factors)
-    pool_q, pool_rotations, sampled = _candidate_pool(checker, rng, candidates, max_samples, n, progress)
+    pool_q, pool_rotations, sampled = _candidate_pool(
+        checker, rng, candidates, max_samples, n, progress
+    )
     pool_factors = factors(pool_rotations)
     check_information(pool_factors, constraints)
     chosen, _ = d_optimal_selection(pool_factors, n)
@@ -207,17 +233,38 @@ def plan_poses(
     criterion = CRITERION
     if drift_rate is not None:
         distances = joint_distances(q)
-        max_length = None if max_travel_ratio is None else max_travel_ratio * path_length(distances, order)
-        order, _ = drift_robust_order(model, rotations, rate=drift_rate, noise_std=channel_std,
-                                      readings_per_pose=readings_per_pose, pose_interval=pose_interval, rng=rng,
-                                      initial_order=order, distances=distances, max_length=max_length)
+        max_length = (
+            None if max_travel_ratio is None else max_travel_ratio * path_length(distances, order)
+        )
+        order, _ = drift_robust_order(
+            model,
+            rotations,
+            rate=drift_rate,
+            noise_std=channel_std,
+            readings_per_pose=readings_per_pose,
+            pose_interval=pose_interval,
+            rng=rng,
+            initial_order=order,
+            distances=distances,
+            max_length=max_length,
+        )
         criterion = DRIFT_CRITERION
     q, rotations = q[order], rotations[order]
-    evaluation = evaluate_poses(rotations, tool_weight=tool_weight, center_of_mass=center_of_mass,
-                                noise=noise, readings_per_pose=readings_per_pose, estimate_mount=estimate_mount,
-                                drift_rate=None if drift_rate is None else drift_rate[[0, 3]], pose_interval=pose_interval)
-    full_information = (evaluation.information if drift_rate is not None
-                        else np.einsum("nki,nkj->ij", *(2 * (factors(rotations),))))
+    evaluation = evaluate_poses(
+        rotations,
+        tool_weight=tool_weight,
+        center_of_mass=center_of_mass,
+        noise=noise,
+        readings_per_pose=readings_per_pose,
+        estimate_mount=estimate_mount,
+        drift_rate=None if drift_rate is None else drift_rate[[0, 3]],
+        pose_interval=pose_interval,
+    )
+    full_information = (
+        evaluation.information
+        if drift_rate is not None
+        else np.einsum("nki,nkj->ij", *(2 * (factors(rotations),)))
+    )
     return PosePlan(
         joint_positions=q,
         joint_names=tuple(arm.joint_names),
@@ -280,7 +327,11 @@ def _refine(checker, q, rotations, factors, rng, progress):
                 without = information - contributions[slot]
                 tried = q[slot] + rng.normal(0.0, step, size=(REFINE_TRIES, q.shape[1]))
                 tried = tried[np.all((tried >= checker.lower) & (tried <= checker.upper), axis=1)]
-                feasible = [(x, rotation) for x in tried if (rotation := checker.check(x, collision=False)) is not None]
+                feasible = [
+                    (x, rotation)
+                    for x in tried
+                    if (rotation := checker.check(x, collision=False)) is not None
+                ]
                 bar.advance()
                 if not feasible:
                     continue

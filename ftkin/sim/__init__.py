@@ -29,7 +29,9 @@ _EXPORTS = {
     "simulate_placement": ".placement",
     "simulate_placement_mujoco": ".mujoco",
 }
-"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does not import them all."""
+"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does
+not import them all.
+"""
 
 __all__ = [
     "MujocoRecorder",

@@ -47,7 +47,9 @@ class SensorDrift:
         if np.any(self.random_walk < 0):
             raise InvalidInput(f"random_walk rates must be ≥ 0, got {self.random_walk}")
         if not (np.isfinite(self.warmup_time_constant) and self.warmup_time_constant > 0):
-            raise InvalidInput(f"warmup_time_constant must be finite and > 0 [s], got {self.warmup_time_constant}")
+            raise InvalidInput(
+                f"warmup_time_constant must be finite and > 0 [s], got {self.warmup_time_constant}"
+            )
         if (self.temperature_times is None) != (self.temperatures is None):
             raise InvalidInput("give both temperature_times [s] and temperatures, or neither")
         if self.temperature_times is not None:
@@ -60,13 +62,22 @@ class SensorDrift:
 
     @classmethod
     def typical(cls) -> SensorDrift:
-        """The benchmark's drift: warm-up ±0.5 N / ±0.01 N·m per channel with τ = 5 min, random walk 0.002 N/√s, 4e-5 N·m/√s."""
-        return cls(warmup=[0.5, -0.5, 0.5, 0.01, -0.01, 0.01], warmup_time_constant=300.0, random_walk=[0.002, 0.00004])
+        """The benchmark's drift: warm-up ±0.5 N / ±0.01 N·m per channel with τ = 5 min, random walk
+        0.002 N/√s, 4e-5 N·m/√s.
+        """
+        return cls(
+            warmup=[0.5, -0.5, 0.5, 0.01, -0.01, 0.01],
+            warmup_time_constant=300.0,
+            random_walk=[0.002, 0.00004],
+        )
 
     def deterministic(self, times) -> np.ndarray:
         """Warm-up plus temperature part ``(N, 6)`` at ``times`` [s] (no randomness)."""
         times = as_float_array(times, "times").reshape(-1)
-        out = self.warmup[None, :] * (1.0 - np.exp(-np.clip(times, 0.0, None) / self.warmup_time_constant))[:, None]
+        out = (
+            self.warmup[None, :]
+            * (1.0 - np.exp(-np.clip(times, 0.0, None) / self.warmup_time_constant))[:, None]
+        )
         if self.temperature_times is not None:
             temperature = np.interp(times, self.temperature_times, self.temperatures)
             reference = np.interp(0.0, self.temperature_times, self.temperatures)
@@ -74,13 +85,18 @@ class SensorDrift:
         return out
 
     def offsets(self, times, rng: np.random.Generator) -> np.ndarray:
-        """One draw of the bias change ``(N, 6)`` [N, N·m] at ``times`` ``(N,)`` [s ≥ 0, any order]."""
+        """One draw of the bias change ``(N, 6)`` [N, N·m] at ``times`` ``(N,)`` [s ≥ 0, any
+        order].
+        """
         times = as_float_array(times, "times").reshape(-1)
         if np.any(times < 0) or not np.all(np.isfinite(times)):
             raise InvalidInput("drift times must be finite and ≥ 0 [s] (since power-on)")
         order = np.argsort(times, kind="stable")
         steps = np.diff(np.concatenate([[0.0], times[order]]))
-        walk_sorted = np.cumsum(rng.standard_normal((len(times), 6)) * np.sqrt(steps)[:, None], axis=0) * self.random_walk
+        walk_sorted = (
+            np.cumsum(rng.standard_normal((len(times), 6)) * np.sqrt(steps)[:, None], axis=0)
+            * self.random_walk
+        )
         walk = np.empty_like(walk_sorted)
         walk[order] = walk_sorted
         return self.deterministic(times) + walk

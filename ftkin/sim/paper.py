@@ -93,12 +93,18 @@ def comparison_table(result: CalibrationResult) -> str:
             match = "yes"
         elif np.all(units <= 9):
             match = "last digit"
-            differing = [f"{p:.{decimals}f} printed, {o:.{decimals}f} re-run" for p, o, u in zip(paper_values, rounded, units) if u]
+            differing = [
+                f"{p:.{decimals}f} printed, {o:.{decimals}f} re-run"
+                for p, o, u in zip(paper_values, rounded, units)
+                if u
+            ]
             notes.append(f"  {key}: " + "; ".join(differing))
         else:
             match = "NO"
         lines.append(f"{key:<26}{paper_text:<44}{ours_text:<44}{match}")
     if notes:
-        lines.append("where the re-run of the paper's own data differs from its print in the last digit:")
+        lines.append(
+            "where the re-run of the paper's own data differs from its print in the last digit:"
+        )
         lines.extend(notes)
     return "\n".join(lines)

@@ -109,21 +109,37 @@ class PlacementScenario:
         if self.mode not in MODES:
             raise InvalidInput(f"mode must be one of {MODES}, got {self.mode!r}")
         if not (_finite(self.k1) and self.k1 >= 0 and _finite(self.k2) and self.k2 >= 0):
-            raise InvalidInput(f"gains must be finite numbers >= 0, got k1={self.k1!r} m/N, k2={self.k2!r} m/(s·N)")
-        for name in ("object_weight", "object_height", "lowering_speed", "target_depth", "duration", "dt"):
+            raise InvalidInput(
+                f"gains must be finite numbers >= 0, got k1={self.k1!r} m/N, k2={self.k2!r} m/(s·N)"
+            )
+        for name in (
+            "object_weight",
+            "object_height",
+            "lowering_speed",
+            "target_depth",
+            "duration",
+            "dt",
+        ):
             if not (_finite(getattr(self, name)) and getattr(self, name) > 0):
-                raise InvalidInput(f"{name} must be a finite number > 0, got {getattr(self, name)!r}")
+                raise InvalidInput(
+                    f"{name} must be a finite number > 0, got {getattr(self, name)!r}"
+                )
         if not (_finite(self.start_gap) and self.start_gap >= 0):
-            raise InvalidInput(f"start_gap must be a finite number >= 0 [m], got {self.start_gap!r}")
+            raise InvalidInput(
+                f"start_gap must be a finite number >= 0 [m], got {self.start_gap!r}"
+            )
         if self.duration / self.dt > MAX_TICKS:
             raise InvalidInput(
-                f"duration {self.duration:g} s at dt {self.dt:g} s is {self.duration / self.dt:.3g} ticks; "
+                f"duration {self.duration:g} s at dt {self.dt:g} s is "
+                f"{self.duration / self.dt:.3g} ticks; "
                 f"at most {MAX_TICKS:,}: shorten the run or lengthen the step"
             )
 
 
 MAX_TICKS = 1_000_000
-"""Longest simulation, in control ticks (duration / dt): beyond it the run's arrays exhaust memory."""
+"""Longest simulation, in control ticks (duration / dt): beyond it the run's arrays exhaust
+memory.
+"""
 
 
 def _finite(value) -> bool:
@@ -154,7 +170,15 @@ class PlacementRun:
     normal_force: np.ndarray
     safety_stop: bool
 
-    COLUMNS = ("t", "displacement", "velocity", "force", "measured_force", "penetration", "normal_force")
+    COLUMNS = (
+        "t",
+        "displacement",
+        "velocity",
+        "force",
+        "measured_force",
+        "penetration",
+        "normal_force",
+    )
     """CSV header; units s, m, m/s, N, N, m, N."""
 
     @property
@@ -196,11 +220,22 @@ class PlacementRun:
 
     def rows(self) -> np.ndarray:
         """The series as an ``(N, 7)`` array in :attr:`COLUMNS` order."""
-        return np.column_stack([self.time, self.displacement, self.velocity, self.force,
-                                self.measured_force, self.penetration, self.normal_force])
+        return np.column_stack(
+            [
+                self.time,
+                self.displacement,
+                self.velocity,
+                self.force,
+                self.measured_force,
+                self.penetration,
+                self.normal_force,
+            ]
+        )
 
 
-def simulate_placement(scenario: PlacementScenario, arm: Arm | None = None, on_tick=None) -> PlacementRun:
+def simulate_placement(
+    scenario: PlacementScenario, arm: Arm | None = None, on_tick=None
+) -> PlacementRun:
     """Run one scenario; the arm defaults to the bundled one (with its tool frame).
 
     ``on_tick(q, contact_wrench, twist)``, if given, is called after every
@@ -215,11 +250,16 @@ def simulate_placement(scenario: PlacementScenario, arm: Arm | None = None, on_t
     model, data, sensor_id, tool_id = arm.model, arm.data, arm.sensor_frame_id, arm.tool_frame_id
     _, tool_start = arm.frame_placement(q, "tool")
     rotation, _ = arm.frame_placement(q, "sensor")
-    surface = scenario.surface.at_height((tool_start + rotation[:, 2] * scenario.object_height)[2] - scenario.start_gap)
+    surface = scenario.surface.at_height(
+        (tool_start + rotation[:, 2] * scenario.object_height)[2] - scenario.start_gap
+    )
     controller = None
     if scenario.mode != "position":
-        controller = admittance_controller(scenario, arm, sensor.truth if scenario.mode == "admittance" else None)
-    # The sensor's no-contact reading (bias + tool gravity) is -compensate(R, 0): same model as SimulatedSensor.read.
+        controller = admittance_controller(
+            scenario, arm, sensor.truth if scenario.mode == "admittance" else None
+        )
+    # The sensor's no-contact reading (bias + tool gravity) is -compensate(R, 0): same model as
+    # SimulatedSensor.read.
     unloaded = Compensator(sensor.truth)
     zero = np.zeros(6)
     steps = int(round(scenario.duration / scenario.dt))
@@ -247,26 +287,47 @@ def simulate_placement(scenario: PlacementScenario, arm: Arm | None = None, on_t
             measured = controller.last_status.contact_wrench[2]
             if on_tick is not None:
                 on_tick(q, controller.last_status.contact_wrench, controller.last_status.twist)
-        out[i] = (i * scenario.dt, tool_point[2] - tool_start[2], jacobian_tool[2] @ dq, contact[2], measured, penetration, normal)
+        out[i] = (
+            i * scenario.dt,
+            tool_point[2] - tool_start[2],
+            jacobian_tool[2] @ dq,
+            contact[2],
+            measured,
+            penetration,
+            normal,
+        )
         q = q + dq * scenario.dt
     safety = bool(controller is not None and controller.safety_latched)
     return PlacementRun(scenario, *out.T, safety_stop=safety)
 
 
-def admittance_controller(scenario: PlacementScenario, arm: Arm, calibration: SensorModel | None) -> JointAdmittance:
-    """The experiment's controller: tool z only, desired force 0, started before the weight is taken.
+def admittance_controller(
+    scenario: PlacementScenario, arm: Arm, calibration: SensorModel | None
+) -> JointAdmittance:
+    """The experiment's controller: tool z only, desired force 0, started before the weight is
+    taken.
 
     ``calibration`` compensates the readings; None feeds the raw readings through.
     """
-    admittance = Admittance(scenario.k1, scenario.k2, selection=[0, 0, 1, 0, 0, 0], frame="tool",
-                            force_deadband=scenario.force_deadband, derivative_cutoff=scenario.derivative_cutoff,
-                            bumpless=False)
+    admittance = Admittance(
+        scenario.k1,
+        scenario.k2,
+        selection=[0, 0, 1, 0, 0, 0],
+        frame="tool",
+        force_deadband=scenario.force_deadband,
+        derivative_cutoff=scenario.derivative_cutoff,
+        bumpless=False,
+    )
     compensator = None if calibration is None else Compensator(calibration, arm)
     return JointAdmittance(arm, admittance, compensator, control_point="tool")
 
 
-def sweep(scenario: PlacementScenario, gain: str, values, arm: Arm | None = None) -> list[PlacementRun]:
-    """Runs of ``scenario`` with ``gain`` (``"k1"`` [m/N] or ``"k2"`` [m/(s·N)]) set to each value."""
+def sweep(
+    scenario: PlacementScenario, gain: str, values, arm: Arm | None = None
+) -> list[PlacementRun]:
+    """Runs of ``scenario`` with ``gain`` (``"k1"`` [m/N] or ``"k2"`` [m/(s·N)]) set to each
+    value.
+    """
     if gain not in ("k1", "k2"):
         raise InvalidInput(f"gain must be 'k1' or 'k2', got {gain!r}")
     arm = Arm.default() if arm is None else arm

@@ -23,7 +23,9 @@ def _pyplot():
     try:
         import matplotlib
     except ImportError:
-        raise MissingDependency("matplotlib", "plots", "plotting the placement experiment") from None
+        raise MissingDependency(
+            "matplotlib", "plots", "plotting the placement experiment"
+        ) from None
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -39,7 +41,12 @@ def run_label(run: PlacementRun) -> str:
     return label
 
 
-def plot_runs(runs: Sequence[PlacementRun], path, title: str | None = None, labels: Sequence[str] | None = None) -> Path:
+def plot_runs(
+    runs: Sequence[PlacementRun],
+    path,
+    title: str | None = None,
+    labels: Sequence[str] | None = None,
+) -> Path:
     """Write a PNG with displacement, velocity and force of each run against time."""
     plt = _pyplot()
     labels = list(labels) if labels is not None else [run_label(run) for run in runs]
@@ -65,7 +72,9 @@ def plot_runs(runs: Sequence[PlacementRun], path, title: str | None = None, labe
 
 
 def plot_sweep(runs: Sequence[PlacementRun], gain: str, path, title: str | None = None) -> Path:
-    """Write a PNG of a gain sweep (``gain`` is ``"k1"`` or ``"k2"``), with each run's settle time."""
+    """Write a PNG of a gain sweep (``gain`` is ``"k1"`` or ``"k2"``), with each run's settle
+    time.
+    """
     unit = "mm/N" if gain == "k1" else "mm/(s·N)"
     name = "k13" if gain == "k1" else "k23"
     labels = []

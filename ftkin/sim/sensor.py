@@ -52,12 +52,20 @@ class SimulatedSensor:
     drift: SensorDrift | None = None
 
     def bias_drift(self, times, rng: np.random.Generator) -> np.ndarray:
-        """One draw of the bias change ``(N, 6)`` [N, N·m] at ``times`` [s] (zeros without drift)."""
+        """One draw of the bias change ``(N, 6)`` [N, N·m] at ``times`` [s] (zeros without
+        drift).
+        """
         times = as_float_array(times, "times").reshape(-1)
         return np.zeros((len(times), 6)) if self.drift is None else self.drift.offsets(times, rng)
 
-    def read(self, rotation_sensor_to_base, rng: np.random.Generator, contact_wrench=None, times=None,
-             bias_drift=None) -> np.ndarray:
+    def read(
+        self,
+        rotation_sensor_to_base,
+        rng: np.random.Generator,
+        contact_wrench=None,
+        times=None,
+        bias_drift=None,
+    ) -> np.ndarray:
         """Raw readings ``(N, 6)`` [N, N·m] at orientations ``(N, 3, 3)``.
 
         Args:
@@ -81,12 +89,20 @@ class SimulatedSensor:
         if bias_drift is not None:
             offsets, _ = as_batch(bias_drift, 6, "bias_drift")
             if len(offsets) != len(raw):
-                raise InvalidInput(f"{len(offsets)} bias_drift rows but {len(raw)} readings; expected one each")
+                raise InvalidInput(
+                    f"{len(offsets)} bias_drift rows but {len(raw)} readings; expected one each"
+                )
             raw = raw + offsets
         return raw + rng.standard_normal(raw.shape) * self.noise.channel_std
 
-    def samples(self, rotation_sensor_to_base, rng: np.random.Generator, readings_per_pose: int = 1, times=None,
-                bias_drift=None) -> Samples:
+    def samples(
+        self,
+        rotation_sensor_to_base,
+        rng: np.random.Generator,
+        readings_per_pose: int = 1,
+        times=None,
+        bias_drift=None,
+    ) -> Samples:
         """Static-pose samples: ``readings_per_pose`` noisy readings at each orientation.
 
         ``times``: ``(N · readings_per_pose,)`` reading times [s] (see :func:`recording_times`),
@@ -95,27 +111,51 @@ class SimulatedSensor:
         rotations, _ = as_rotation_batch(rotation_sensor_to_base)
         repeated = np.repeat(rotations, readings_per_pose, axis=0)
         pose_ids = np.repeat(np.arange(len(rotations)), readings_per_pose)
-        return Samples(self.read(repeated, rng, times=times, bias_drift=bias_drift), repeated, pose_ids, times=times)
+        return Samples(
+            self.read(repeated, rng, times=times, bias_drift=bias_drift),
+            repeated,
+            pose_ids,
+            times=times,
+        )
 
-    def samples_at_configurations(self, arm, joint_positions, rng: np.random.Generator, readings_per_pose: int = 1,
-                                  times=None, bias_drift=None) -> Samples:
+    def samples_at_configurations(
+        self,
+        arm,
+        joint_positions,
+        rng: np.random.Generator,
+        readings_per_pose: int = 1,
+        times=None,
+        bias_drift=None,
+    ) -> Samples:
         """Like :meth:`samples` with orientations from joint angles ``(N, nq)`` [rad]."""
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
-        rotations = np.repeat(arm.rotation_sensor_to_base(configurations), readings_per_pose, axis=0)  # FK once per pose
+        rotations = np.repeat(
+            arm.rotation_sensor_to_base(configurations), readings_per_pose, axis=0
+        )  # FK once per pose
         pose_ids = np.repeat(np.arange(len(configurations)), readings_per_pose)
         repeated = np.repeat(configurations, readings_per_pose, axis=0)
         wrenches = self.read(rotations, rng, times=times, bias_drift=bias_drift)
         return Samples.from_joint_positions(arm, repeated, wrenches, pose_ids, rotations, times)
 
 
-def recording_times(pose_count: int, readings_per_pose: int, duration: float, reading_interval: float = 0.001,
-                    start: float = 0.0) -> np.ndarray:
-    """Reading times ``(pose_count · readings_per_pose,)`` [s] of poses spread evenly over ``duration`` [s].
+def recording_times(
+    pose_count: int,
+    readings_per_pose: int,
+    duration: float,
+    reading_interval: float = 0.001,
+    start: float = 0.0,
+) -> np.ndarray:
+    """Reading times ``(pose_count · readings_per_pose,)`` [s] of poses spread evenly over
+    ``duration`` [s].
 
     Pose ``i`` starts at ``start + i · duration / pose_count`` and its
     readings follow every ``reading_interval`` [s].
     """
     if pose_count < 1 or readings_per_pose < 1 or not (duration > 0 and reading_interval > 0):
-        raise InvalidInput("recording_times needs positive counts, duration [s] and reading_interval [s]")
+        raise InvalidInput(
+            "recording_times needs positive counts, duration [s] and reading_interval [s]"
+        )
     pose_starts = start + np.arange(pose_count) * (duration / pose_count)
-    return (pose_starts[:, None] + np.arange(readings_per_pose)[None, :] * reading_interval).reshape(-1)
+    return (
+        pose_starts[:, None] + np.arange(readings_per_pose)[None, :] * reading_interval
+    ).reshape(-1)

@@ -39,12 +39,18 @@ class Surface:
 
     def __post_init__(self):
         if not (isinstance(self.stiffness, Real) and 0.0 < self.stiffness < math.inf):
-            raise InvalidInput(f"surface stiffness [N/m] must be a finite number > 0, got {self.stiffness!r}")
+            raise InvalidInput(
+                f"surface stiffness [N/m] must be a finite number > 0, got {self.stiffness!r}"
+            )
         if not (isinstance(self.damping, Real) and 0.0 <= self.damping < math.inf):
-            raise InvalidInput(f"surface damping [N·s/m] must be a finite number >= 0, got {self.damping!r}")
+            raise InvalidInput(
+                f"surface damping [N·s/m] must be a finite number >= 0, got {self.damping!r}"
+            )
 
     def normal_force(self, penetration: float, penetration_rate: float) -> float:
-        """Upward force [N] on an object ``penetration`` [m] deep, moving in at ``penetration_rate`` [m/s]."""
+        """Upward force [N] on an object ``penetration`` [m] deep, moving in at ``penetration_rate``
+        [m/s].
+        """
         if penetration <= 0.0:
             return 0.0
         return max(0.0, self.stiffness * penetration + self.damping * penetration_rate)
@@ -74,9 +80,16 @@ def surface_by_name(name: str) -> Surface:
 _UP = np.array([0.0, 0.0, 1.0])
 
 
-def held_object_wrench(rotation, sensor_origin, tool_point, object_height: float, object_weight: float,
-                       normal_force: float) -> np.ndarray:
-    """Contact wrench ``(6,)`` [N, N·m] in the sensor frame of a held object pressed on a horizontal surface.
+def held_object_wrench(
+    rotation,
+    sensor_origin,
+    tool_point,
+    object_height: float,
+    object_weight: float,
+    normal_force: float,
+) -> np.ndarray:
+    """Contact wrench ``(6,)`` [N, N·m] in the sensor frame of a held object pressed on a horizontal
+    surface.
 
     The object hangs along the sensor z axis (``rotation`` = ``R_BS``): its
     weight [N] acts ``object_height / 2`` [m] below the tool point, the
@@ -86,5 +99,7 @@ def held_object_wrench(rotation, sensor_origin, tool_point, object_height: float
     axis = rotation[:, 2]
     bottom, middle = tool_point + axis * object_height, tool_point + axis * (0.5 * object_height)
     # r_b × (N ẑ) + r_m × (−W ẑ) = (N r_b − W r_m) × ẑ
-    moment_base = cross_rows(normal_force * (bottom - sensor_origin) - object_weight * (middle - sensor_origin), _UP)
+    moment_base = cross_rows(
+        normal_force * (bottom - sensor_origin) - object_weight * (middle - sensor_origin), _UP
+    )
     return np.concatenate((rotation[2] * (normal_force - object_weight), rotation.T @ moment_base))

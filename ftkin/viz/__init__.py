@@ -33,7 +33,9 @@ _EXPORTS = {
     "pose_vectors": ".vectors",
     "rotation_y_to": ".arrows",
 }
-"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does not import them all."""
+"""Public name → module, loaded on first access (PEP 562): importing one module of this stage does
+not import them all.
+"""
 
 __all__ = [
     "ARROWS",

@@ -63,7 +63,9 @@ class ArrowStyle:
 
 
 def rigid_transform(rotation: np.ndarray, translation) -> np.ndarray:
-    """``(4, 4)`` homogeneous transform from a rotation ``(3, 3)`` and a translation ``(3,)`` [m]."""
+    """``(4, 4)`` homogeneous transform from a rotation ``(3, 3)`` and a translation ``(3,)``
+    [m].
+    """
     out = np.eye(4)
     out[:3, :3] = rotation
     out[:3, 3] = translation
@@ -105,7 +107,9 @@ class ArrowPlacement:
     length: float
 
 
-def arrow_placement(origin, vector, scale: float, style: ArrowStyle | None = None) -> ArrowPlacement:
+def arrow_placement(
+    origin, vector, scale: float, style: ArrowStyle | None = None
+) -> ArrowPlacement:
     """Place an arrow from ``origin`` [m] along ``vector`` (any unit) × ``scale`` [m per unit].
 
     A zero vector gives a vanishing arrow (scale :data:`MIN_SCALE`) pointing up.

@@ -74,12 +74,15 @@ def screenshot_file(page, png_path, window_size=(1024, 768), timeout: float = 60
     except (TypeError, ValueError):
         width = height = 0
     if width <= 0 or height <= 0:
-        raise InvalidInput(f"window_size must be two positive pixel counts (width, height), got {window_size!r}")
+        raise InvalidInput(
+            f"window_size must be two positive pixel counts (width, height), got {window_size!r}"
+        )
     executable = find_chromium()
     if executable is None:
         raise BrowserError(
             "headless Chromium is needed for the screenshot but was not found; install it "
-            "(Debian/Ubuntu: apt-get install chromium) or set FTKIN_CHROMIUM to a Chrome/Chromium executable"
+            "(Debian/Ubuntu: apt-get install chromium) or set FTKIN_CHROMIUM to a Chrome/Chromium "
+            "executable"
         )
     with tempfile.TemporaryDirectory(prefix="ftkin-chromium-") as scratch:
         shot = Path(scratch) / "shot.png"
@@ -105,9 +108,13 @@ def screenshot_html(html: str, png_path, window_size=(1024, 768), timeout: float
 
 
 def _run(command: list[str], timeout: float) -> None:
-    """Run Chromium in its own process group; on timeout stop that group (Chromium forks helpers)."""
+    """Run Chromium in its own process group; on timeout stop that group (Chromium forks
+    helpers).
+    """
     try:
-        process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+        process = subprocess.Popen(
+            command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
+        )
     except OSError as error:
         raise BrowserError(f"cannot start Chromium ({command[0]}): {error}") from None
     try:

@@ -63,7 +63,9 @@ def force_angle_deg(a, b) -> float:
     return math.degrees(math.atan2(float(np.linalg.norm(np.cross(a, b))), float(a @ b)))
 
 
-def sheet_cells(viewer, labels: Sequence[str], raw_wrenches, *, configurations=None, rotations=None, outliers=()) -> list[SheetCell]:
+def sheet_cells(
+    viewer, labels: Sequence[str], raw_wrenches, *, configurations=None, rotations=None, outliers=()
+) -> list[SheetCell]:
     """Draw each pose in ``viewer`` and keep its static page (no legend: the sheet has one).
 
     Args:
@@ -76,7 +78,10 @@ def sheet_cells(viewer, labels: Sequence[str], raw_wrenches, *, configurations=N
     """
     raw = np.asarray(raw_wrenches, dtype=float)
     if len(labels) != len(raw) or len(raw) == 0:
-        raise InvalidInput(f"contact sheet: {len(labels)} labels for {len(raw)} readings; expected the same non-zero count")
+        raise InvalidInput(
+            f"contact sheet: {len(labels)} labels for {len(raw)} readings; expected the same "
+            "non-zero count"
+        )
     cells = []
     for k, label in enumerate(labels):
         if configurations is not None:
@@ -89,12 +94,19 @@ def sheet_cells(viewer, labels: Sequence[str], raw_wrenches, *, configurations=N
     return cells
 
 
-def render_cells(cells: Sequence[SheetCell], size=CELL_SIZE, workers: int = WORKERS, timeout: float = 180.0) -> list[np.ndarray]:
-    """Screenshot every cell's page (``timeout`` [s] each); returns ``(H, W, 3)`` uint8 images in order."""
+def render_cells(
+    cells: Sequence[SheetCell], size=CELL_SIZE, workers: int = WORKERS, timeout: float = 180.0
+) -> list[np.ndarray]:
+    """Screenshot every cell's page (``timeout`` [s] each); returns ``(H, W, 3)`` uint8 images in
+    order.
+    """
     image = _import_matplotlib_image()
     with tempfile.TemporaryDirectory(prefix="ftkin-sheet-") as scratch:
+
         def shoot(k: int) -> np.ndarray:
-            png = screenshot_html(cells[k].page, Path(scratch) / f"cell{k}.png", window_size=size, timeout=timeout)
+            png = screenshot_html(
+                cells[k].page, Path(scratch) / f"cell{k}.png", window_size=size, timeout=timeout
+            )
             pixels = image.imread(str(png))
             if pixels.dtype != np.uint8:
                 pixels = np.round(pixels * 255).astype(np.uint8)
@@ -104,15 +116,25 @@ def render_cells(cells: Sequence[SheetCell], size=CELL_SIZE, workers: int = WORK
             return list(pool.map(shoot, range(len(cells))))
 
 
-def sheet_figure(cells: Sequence[SheetCell], images: Sequence[np.ndarray], title: str = "", columns: int | None = None):
-    """A matplotlib ``Figure`` (not attached to pyplot) tiling ``images`` with labels and red outlier frames."""
+def sheet_figure(
+    cells: Sequence[SheetCell],
+    images: Sequence[np.ndarray],
+    title: str = "",
+    columns: int | None = None,
+):
+    """A matplotlib ``Figure`` (not attached to pyplot) tiling ``images`` with labels and red
+    outlier frames.
+    """
     Figure, FigureCanvasAgg = _import_figure()
     count = len(cells)
     columns = columns or int(math.ceil(math.sqrt(count)))
     rows = int(math.ceil(count / columns))
     height, width = images[0].shape[:2]
     cell_inches = 3.2
-    figure = Figure(figsize=(columns * cell_inches, rows * cell_inches * height / width + 0.9), layout="constrained")
+    figure = Figure(
+        figsize=(columns * cell_inches, rows * cell_inches * height / width + 0.9),
+        layout="constrained",
+    )
     FigureCanvasAgg(figure)
     axes = figure.subplots(rows, columns, squeeze=False)
     for k, ax in enumerate(axes.ravel()):
@@ -124,21 +146,36 @@ def sheet_figure(cells: Sequence[SheetCell], images: Sequence[np.ndarray], title
         ax.set_xticks([])
         ax.set_yticks([])
         angle = "n/a" if math.isnan(cell.angle_deg) else f"{cell.angle_deg:.2f}°"
-        ax.set_title(f"{cell.label}: angle {angle}" + (" (outlier)" if cell.outlier else ""), fontsize=9,
-                     color="red" if cell.outlier else "black")
+        ax.set_title(
+            f"{cell.label}: angle {angle}" + (" (outlier)" if cell.outlier else ""),
+            fontsize=9,
+            color="red" if cell.outlier else "black",
+        )
         for spine in ax.spines.values():
             spine.set_edgecolor("red" if cell.outlier else "0.6")
             spine.set_linewidth(4.0 if cell.outlier else 0.8)
-    key = ", ".join(f"{name} = {layer.label}" for name, layer in zip(("magenta", "cyan", "yellow"), ARROWS))
+    key = ", ".join(
+        f"{name} = {layer.label}" for name, layer in zip(("magenta", "cyan", "yellow"), ARROWS)
+    )
     key += f"\ngreen dot = {CENTER_OF_MASS.label}, purple = estimated gravity direction of the base"
-    figure.suptitle((title + "\n" if title else "") + "angle: between the measured force − bias and the predicted gravity",
-                    fontsize=10)
+    figure.suptitle(
+        (title + "\n" if title else "")
+        + "angle: between the measured force − bias and the predicted gravity",
+        fontsize=10,
+    )
     figure.supxlabel(key, fontsize=7)
     return figure
 
 
-def save_contact_sheet(cells: Sequence[SheetCell], path, *, title: str = "", size=CELL_SIZE, workers: int = WORKERS,
-                       dpi: int = 110) -> Path:
+def save_contact_sheet(
+    cells: Sequence[SheetCell],
+    path,
+    *,
+    title: str = "",
+    size=CELL_SIZE,
+    workers: int = WORKERS,
+    dpi: int = 110,
+) -> Path:
     """Render the cells and write the sheet to ``path`` (.png) atomically; returns the path."""
     path = Path(path)
     if path.suffix.lower() != ".png":
@@ -155,7 +192,9 @@ def _import_figure():
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
     except ImportError:
-        raise MissingDependency("matplotlib", "plots", "the contact sheet of ftkin view --png") from None
+        raise MissingDependency(
+            "matplotlib", "plots", "the contact sheet of ftkin view --png"
+        ) from None
     return Figure, FigureCanvasAgg
 
 
@@ -163,5 +202,7 @@ def _import_matplotlib_image():
     try:
         import matplotlib.image as image
     except ImportError:
-        raise MissingDependency("matplotlib", "plots", "the contact sheet of ftkin view --png") from None
+        raise MissingDependency(
+            "matplotlib", "plots", "the contact sheet of ftkin view --png"
+        ) from None
     return image

@@ -83,11 +83,23 @@ def candidate_directions() -> np.ndarray:
     """``(K, 3)`` unit directions from the target towards the camera."""
     azimuth, elevation = np.meshgrid(AZIMUTHS, ELEVATIONS, indexing="ij")
     azimuth, elevation = azimuth.ravel(), elevation.ravel()
-    return np.column_stack([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth), np.sin(elevation)])
+    return np.column_stack(
+        [
+            np.cos(elevation) * np.cos(azimuth),
+            np.cos(elevation) * np.sin(azimuth),
+            np.sin(elevation),
+        ]
+    )
 
 
-def hidden_fractions(arrow_points: np.ndarray, arm_points: np.ndarray, cameras: np.ndarray, link_radius: float = LINK_RADIUS) -> np.ndarray:
-    """Per camera position ``(K, 3)`` [m], the fraction of ``arrow_points`` ``(J, 3)`` hidden by ``arm_points`` ``(P, 3)``.
+def hidden_fractions(
+    arrow_points: np.ndarray,
+    arm_points: np.ndarray,
+    cameras: np.ndarray,
+    link_radius: float = LINK_RADIUS,
+) -> np.ndarray:
+    """Per camera position ``(K, 3)`` [m], the fraction of ``arrow_points`` ``(J, 3)`` hidden by
+    ``arm_points`` ``(P, 3)``.
 
     An arrow point is hidden when an arm point lies within ``link_radius`` of
     the segment from it to the camera (and not at the arrow point itself).
@@ -97,7 +109,14 @@ def hidden_fractions(arrow_points: np.ndarray, arm_points: np.ndarray, cameras: 
     sight = cameras[:, None, :] - arrow_points[None, :, :]  # (K, J, 3)
     length2 = np.einsum("kjd,kjd->kj", sight, sight)
     relative = arm_points[None, None, :, :] - arrow_points[None, :, None, :]  # (1, J, P, 3)
-    along = np.einsum("kjpd,kjd->kjp", np.broadcast_to(relative, (*sight.shape[:2], *relative.shape[2:])), sight) / length2[..., None]
+    along = (
+        np.einsum(
+            "kjpd,kjd->kjp",
+            np.broadcast_to(relative, (*sight.shape[:2], *relative.shape[2:])),
+            sight,
+        )
+        / length2[..., None]
+    )
     closest = arrow_points[None, :, None, :] + along[..., None] * sight[:, :, None, :]
     distance = np.linalg.norm(arm_points[None, None, :, :] - closest, axis=-1)
     in_between = (along > link_radius / np.sqrt(length2)[..., None]) & (along < 1.0)
@@ -128,7 +147,11 @@ def frame_pose(
     """
     target = as_vector(sensor_origin, 3, "sensor origin [m]")
     arrows = np.asarray(arrows, dtype=float).reshape(-1, 3)
-    arm_points = np.zeros((0, 3)) if arm_points is None else np.asarray(arm_points, dtype=float).reshape(-1, 3)
+    arm_points = (
+        np.zeros((0, 3))
+        if arm_points is None
+        else np.asarray(arm_points, dtype=float).reshape(-1, 3)
+    )
     lengths = np.linalg.norm(arrows, axis=1)
     radius = max(1.2 * float(lengths.max(initial=0.0)), float(tool_size), 0.15)
     distance = radius / (FILL * np.tan(np.radians(FIELD_OF_VIEW_DEG) / 2))
@@ -153,7 +176,11 @@ def frame_pose(
     cost += 0.6 * np.abs(elevation - PREFERRED_ELEVATION) / np.radians(45.0)
     if floor_height is not None:
         cost += 2.0 * (cameras[:, 2] < floor_height + 0.05)
-    away = np.array([target[0], target[1], 0.0]) if outward is None else as_vector(outward, 3, "outward")
+    away = (
+        np.array([target[0], target[1], 0.0])
+        if outward is None
+        else as_vector(outward, 3, "outward")
+    )
     away[2] = 0.0
     if np.linalg.norm(away) > 1e-6:
         cost -= 0.2 * (directions @ (away / np.linalg.norm(away)))
@@ -167,7 +194,9 @@ def frame_pose(
 
 
 def arm_points(arm, q, per_segment: int = 4) -> np.ndarray:
-    """Points along the arm at ``q`` [rad], base frame [m]: frame origins and points between consecutive ones."""
+    """Points along the arm at ``q`` [rad], base frame [m]: frame origins and points between
+    consecutive ones.
+    """
     origins = np.array([arm.frame_placement(q, name)[1] for name in arm.frame_names[1:]])
     if len(origins) < 2:
         return origins

@@ -55,8 +55,12 @@ within half of the half-height around it (:mod:`ftkin.viz.framing`), so at
 """
 
 
-def legend_html(scale_m_per_n: float, tilt_deg: tuple[float, float], exaggeration: float, caption: str = "") -> str:
-    """A small HTML block (top-left corner, inside :data:`LEGEND_BOX`) listing the colours and the scale."""
+def legend_html(
+    scale_m_per_n: float, tilt_deg: tuple[float, float], exaggeration: float, caption: str = ""
+) -> str:
+    """A small HTML block (top-left corner, inside :data:`LEGEND_BOX`) listing the colours and the
+    scale.
+    """
     rows = []
     for layer in LAYERS:
         label = layer.label
@@ -71,11 +75,15 @@ def legend_html(scale_m_per_n: float, tilt_deg: tuple[float, float], exaggeratio
     scale_cm = 100.0 * scale_m_per_n
     rows.append(f"<div>1 N = {scale_cm:.3g} cm from the sensor origin; triad x,y,z = r,g,b</div>")
     if caption:
-        rows.append(f'<div style="white-space:nowrap;overflow:hidden;text-overflow:ellipsis">{html.escape(caption)}</div>')
+        rows.append(
+            "<div "
+            f'style="white-space:nowrap;overflow:hidden;text-overflow:ellipsis">{html.escape(caption)}</div>'
+        )
     left, top, right, bottom = LEGEND_BOX
     return (
         f'<div id="ftkin-legend" style="position:absolute;left:{left + 6}px;top:{top + 6}px;'
-        f"width:{right - left - 22}px;max-height:{bottom - top - 20}px;overflow:hidden;padding:4px 5px;"
+        f"width:{right - left - 22}px;max-height:{bottom - top - 20}px;overflow:hidden;padding:4px "
+        "5px;"
         "background:rgba(255,255,255,0.85);font:10px sans-serif;color:#111;border-radius:3px;"
         'line-height:12px;z-index:10">' + "".join(rows) + "</div>"
     )
@@ -101,7 +109,8 @@ _DECODE = (
 
 
 def inline_commands(page: str) -> str:
-    """meshcat's static page with its scene commands run synchronously, in order, before the page's load event.
+    """meshcat's static page with its scene commands run synchronously, in order, before the page's
+    load event.
 
     meshcat 0.3.2 replays each command through ``fetch("data:...")``, a
     promise that may settle after headless Chromium has taken its screenshot

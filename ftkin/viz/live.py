@@ -61,12 +61,23 @@ class LiveView:
         zmq_url: Draw into a running meshcat server instead of starting one.
     """
 
-    def __init__(self, arm: Arm, *, control_frame: ControlFrame | None = None, fps: float = 30.0, force_scale: float = 0.02,
-                 twist_scale: float = 2.0, zmq_url: str | None = None):
+    def __init__(
+        self,
+        arm: Arm,
+        *,
+        control_frame: ControlFrame | None = None,
+        fps: float = 30.0,
+        force_scale: float = 0.02,
+        twist_scale: float = 2.0,
+        zmq_url: str | None = None,
+    ):
         if not isinstance(arm, Arm):
             raise InvalidInput(f"arm must be an ftkin Arm, got {type(arm).__name__}")
         if control_frame is not None and not isinstance(control_frame, ControlFrame):
-            raise InvalidInput(f"control_frame must be an ftkin ControlFrame or None, got {type(control_frame).__name__}")
+            raise InvalidInput(
+                "control_frame must be an ftkin ControlFrame or None, got "
+                f"{type(control_frame).__name__}"
+            )
         import_meshcat()  # fail here, with the extra's name, not in the child
         self.fps = as_positive(fps, "fps [1/s]")
         self.layout = StateLayout(arm.nq)
@@ -77,12 +88,23 @@ class LiveView:
         self._closed = False
         frame = control_frame or ControlFrame("base")
         settings = ViewSettings(
-            arm, self._block.name, self.fps, as_positive(force_scale, "force_scale [m/N]"), as_positive(twist_scale, "twist_scale [s]"),
-            frame.frame, frame.rotation_tool_to_sensor.copy(), frame.point_in_sensor.copy(), zmq_url,
+            arm,
+            self._block.name,
+            self.fps,
+            as_positive(force_scale, "force_scale [m/N]"),
+            as_positive(twist_scale, "twist_scale [s]"),
+            frame.frame,
+            frame.rotation_tool_to_sensor.copy(),
+            frame.point_in_sensor.copy(),
+            zmq_url,
         )
         environment = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
-        self._process = subprocess.Popen([sys.executable, "-c", CHILD_COMMAND], stdin=subprocess.PIPE,
-                                         stdout=subprocess.PIPE, env=environment)
+        self._process = subprocess.Popen(
+            [sys.executable, "-c", CHILD_COMMAND],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            env=environment,
+        )
         atexit.register(self.close)
         try:
             self._process.stdin.write(pickle.dumps(settings))
@@ -97,17 +119,22 @@ class LiveView:
             raise FtkinError(f"the live view process failed: {reason}")
         self.url: str = message.strip()
         self._stop = threading.Event()
-        self._sampler = threading.Thread(target=self._sample, name="ftkin-liveview-sampler", daemon=True)
+        self._sampler = threading.Thread(
+            target=self._sample, name="ftkin-liveview-sampler", daemon=True
+        )
         self._sampler.start()
 
     @classmethod
     def for_controller(cls, controller, **kwargs) -> LiveView:
-        """A view of a :class:`~ftkin.control.joint_admittance.JointAdmittance` (its arm and control frame)."""
+        """A view of a :class:`~ftkin.control.joint_admittance.JointAdmittance` (its arm and control
+        frame).
+        """
         return cls(controller.arm, control_frame=controller.frame, **kwargs)
 
     # --------------------------------------------------------------- hot path
     def publish(self, q, wrench, twist) -> None:
-        """Hand over the latest state: joint angles [rad], contact wrench (sensor frame) [N, N·m], commanded twist.
+        """Hand over the latest state: joint angles [rad], contact wrench (sensor frame) [N, N·m],
+        commanded twist.
 
         Keeps references only (no copy, no lock): pass arrays you do not change
         afterwards, or expect the view to show their newest values.
@@ -127,7 +154,9 @@ class LiveView:
             if latest is None or latest is sent:
                 continue
             try:
-                values = np.concatenate([np.asarray(v, dtype=np.float64).reshape(-1) for v in latest])
+                values = np.concatenate(
+                    [np.asarray(v, dtype=np.float64).reshape(-1) for v in latest]
+                )
             except (TypeError, ValueError):
                 continue  # not numbers: nothing to draw
             if values.shape != body.shape:
@@ -191,7 +220,8 @@ def _read_line(stream, timeout: float) -> str:
 
 
 class PublishingController:
-    """A controller whose :meth:`step` publishes ``(q, contact_wrench, twist)`` of each tick to a :class:`LiveView`.
+    """A controller whose :meth:`step` publishes ``(q, contact_wrench, twist)`` of each tick to a
+    :class:`LiveView`.
 
     Other attributes are the wrapped controller's.
     """

@@ -1,4 +1,5 @@
-"""The drawing side of :class:`~ftkin.viz.live.LiveView`: a separate process with its own meshcat server.
+"""The drawing side of :class:`~ftkin.viz.live.LiveView`: a separate process with its own meshcat
+server.
 
 The control process and this one share one small block of memory (a
 :class:`StateLayout`): a sequence counter, the joint angles, the contact
@@ -29,7 +30,9 @@ LIVE_LAYERS = (CONTACT, TORQUE, VELOCITY, ANGULAR)
 
 @dataclass(frozen=True)
 class StateLayout:
-    """Float64 slots of the shared block: ``[seq, q (nq), wrench (6), twist (6), frames drawn, stop]``."""
+    """Float64 slots of the shared block: ``[seq, q (nq), wrench (6), twist (6), frames drawn,
+    stop]``.
+    """
 
     nq: int
 
@@ -85,8 +88,12 @@ class ViewSettings:
     zmq_url: str | None
 
 
-def read_state(state: np.ndarray, layout: StateLayout, last_seq: float) -> tuple[float, np.ndarray | None]:
-    """A consistent copy of ``state[layout.body]`` newer than ``last_seq``, else None (seqlock read)."""
+def read_state(
+    state: np.ndarray, layout: StateLayout, last_seq: float
+) -> tuple[float, np.ndarray | None]:
+    """A consistent copy of ``state[layout.body]`` newer than ``last_seq``, else None (seqlock
+    read).
+    """
     for _ in range(100):
         seq = state[0]
         if seq == last_seq:
@@ -101,7 +108,8 @@ def read_state(state: np.ndarray, layout: StateLayout, last_seq: float) -> tuple
 
 
 def run_view(settings: ViewSettings, report) -> None:
-    """Body of the view process: start meshcat, ``report(kind, text)`` its URL, draw until told to stop.
+    """Body of the view process: start meshcat, ``report(kind, text)`` its URL, draw until told to
+    stop.
 
     Stops when the stop flag is set or the parent process is gone.
     """
@@ -118,15 +126,23 @@ def run_view(settings: ViewSettings, report) -> None:
     try:
         meshcat = import_meshcat()
         visualizer = start_visualizer(settings.zmq_url)
-        robot = import_pinocchio_visualizer()(arm.model, arm.geometry("collision"), arm.geometry("visual"))
+        robot = import_pinocchio_visualizer()(
+            arm.model, arm.geometry("collision"), arm.geometry("visual")
+        )
         robot.initViewer(viewer=visualizer)
         robot.loadViewerModel(rootNodeName="pinocchio")
         style = ArrowStyle()
         for layer in LIVE_LAYERS:
             material = meshcat.geometry.MeshBasicMaterial(color=layer.color)
-            visualizer[f"live/{layer.name}/shaft"].set_object(meshcat.geometry.Cylinder(1.0, style.shaft_radius), material)
+            visualizer[f"live/{layer.name}/shaft"].set_object(
+                meshcat.geometry.Cylinder(1.0, style.shaft_radius), material
+            )
             visualizer[f"live/{layer.name}/head"].set_object(
-                meshcat.geometry.Cylinder(style.head_length, radiusTop=0.0, radiusBottom=style.head_radius), material)
+                meshcat.geometry.Cylinder(
+                    style.head_length, radiusTop=0.0, radiusBottom=style.head_radius
+                ),
+                material,
+            )
         batch = PipelinedSender(visualizer.window)
         report("ready", visualizer.url())
     except BaseException as error:  # report to the parent instead of dying silently
@@ -174,7 +190,9 @@ class PipelinedSender:
 
     def send(self, command) -> None:
         data = command.lower()
-        self.socket.send_multipart([b"", data["type"].encode("utf-8"), data["path"].encode("utf-8"), self._pack(data)])
+        self.socket.send_multipart(
+            [b"", data["type"].encode("utf-8"), data["path"].encode("utf-8"), self._pack(data)]
+        )
         self.pending += 1
 
     def flush(self) -> None:
@@ -188,7 +206,9 @@ class PipelinedSender:
 
 
 def _untrack(block) -> None:
-    """Keep this process's resource tracker from unlinking the block the control process owns (Python < 3.13)."""
+    """Keep this process's resource tracker from unlinking the block the control process owns
+    (Python < 3.13).
+    """
     try:
         from multiprocessing import resource_tracker
 
@@ -197,9 +217,11 @@ def _untrack(block) -> None:
         pass
 
 
-def _draw(visualizer, robot, arm, settings: ViewSettings, body: np.ndarray, style: ArrowStyle) -> None:
+def _draw(
+    visualizer, robot, arm, settings: ViewSettings, body: np.ndarray, style: ArrowStyle
+) -> None:
     nq = arm.nq
-    q, wrench, twist = body[:nq], body[nq:nq + 6], body[nq + 6:nq + 12]
+    q, wrench, twist = body[:nq], body[nq : nq + 6], body[nq + 6 : nq + 12]
     if not np.all(np.isfinite(q)):
         return
     robot.display(q)
@@ -225,7 +247,9 @@ def _draw(visualizer, robot, arm, settings: ViewSettings, body: np.ndarray, styl
 
 
 def main() -> None:
-    """The view process: pickled :class:`ViewSettings` on stdin, one status line on stdout, then draw."""
+    """The view process: pickled :class:`ViewSettings` on stdin, one status line on stdout, then
+    draw.
+    """
     import pickle
     import sys
 
@@ -236,4 +260,3 @@ def main() -> None:
         sys.stdout.flush()
 
     run_view(settings, report)
-

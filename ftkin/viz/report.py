@@ -31,18 +31,30 @@ _UNITS = ("N", "N", "N", "N·m", "N·m", "N·m")
 SUMMARY_FONT_SIZE = 8
 """Font size of the summary text [pt]."""
 SUMMARY_WIDTH = 180
-"""Characters per summary line on the 14-inch page (monospace at :data:`SUMMARY_FONT_SIZE`); longer lines wrap."""
+"""Characters per summary line on the 14-inch page (monospace at :data:`SUMMARY_FONT_SIZE`); longer
+lines wrap.
+"""
 
 
 def _wrapped(text: str) -> str:
-    """``text`` with lines longer than :data:`SUMMARY_WIDTH` wrapped, continuation lines indented."""
+    """``text`` with lines longer than :data:`SUMMARY_WIDTH` wrapped, continuation lines
+    indented.
+    """
     import textwrap
 
     lines = []
     for line in text.splitlines():
         indent = " " * (len(line) - len(line.lstrip()) + 4)
-        lines.extend(textwrap.wrap(line, SUMMARY_WIDTH, subsequent_indent=indent, drop_whitespace=False,
-                                   break_on_hyphens=False) or [""])
+        lines.extend(
+            textwrap.wrap(
+                line,
+                SUMMARY_WIDTH,
+                subsequent_indent=indent,
+                drop_whitespace=False,
+                break_on_hyphens=False,
+            )
+            or [""]
+        )
     return "\n".join(lines)
 
 
@@ -67,13 +79,20 @@ def report_data(calibration, samples: Samples) -> dict[str, np.ndarray]:
     ``standard_error`` ``(P, 6)`` (spread / √count; NaN for single readings).
     """
     if not isinstance(calibration, SensorModel):
-        raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
+        raise InvalidInput(
+            "calibration must be an ftkin SensorModel or CalibrationResult, got "
+            f"{type(calibration).__name__}"
+        )
     if not isinstance(samples, Samples):
         raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
-    poses = as_real_sensor(samples, calibration).pose_averages()  # the stored sign, axis flip and mount applied
+    poses = as_real_sensor(
+        samples, calibration
+    ).pose_averages()  # the stored sign, axis flip and mount applied
     predicted = calibration.predict(poses.rotations)
     if poses.times is not None and getattr(calibration, "drift", None) is not None:
-        predicted = calibration.tool_gravity_wrench(poses.rotations) + calibration.bias_at(poses.times)
+        predicted = calibration.tool_gravity_wrench(poses.rotations) + calibration.bias_at(
+            poses.times
+        )
     return {
         "pose_ids": poses.pose_ids,
         "measured": poses.wrenches,
@@ -95,7 +114,9 @@ def report_figure(calibration, samples: Samples, title: str | None = None):
     if getattr(calibration, "std_errors", None) is None:
         summary += "\n  (no standard errors: the calibration has no covariance)"
     summary = _wrapped(summary)
-    text_height = 0.2 + len(summary.splitlines()) * SUMMARY_FONT_SIZE * 1.25 / 72.0  # [in]: the text's own height
+    text_height = (
+        0.2 + len(summary.splitlines()) * SUMMARY_FONT_SIZE * 1.25 / 72.0
+    )  # [in]: the text's own height
     heights = [2.6, 1.2, 2.6, 1.2, text_height] + [2.3] * len(series)  # [in]
     figure = _pyplot_free_figure(sum(heights) + 0.6)
     grid = figure.add_gridspec(5 + len(series), 3, height_ratios=heights)
@@ -104,7 +125,9 @@ def report_figure(calibration, samples: Samples, title: str | None = None):
     for channel, (name, unit) in enumerate(zip(WRENCH_CHANNELS, _UNITS)):
         row, column = 2 * (channel // 3), channel % 3
         top = figure.add_subplot(grid[row, column])
-        top.errorbar(x, data["measured"][:, channel], yerr=error[:, channel], fmt="o", ms=3, label="measured")
+        top.errorbar(
+            x, data["measured"][:, channel], yerr=error[:, channel], fmt="o", ms=3, label="measured"
+        )
         top.plot(x, data["predicted"][:, channel], "-", lw=1, label="predicted")
         top.set_ylabel(f"{name} [{unit}]")
         top.set_title(name)
@@ -113,21 +136,35 @@ def report_figure(calibration, samples: Samples, title: str | None = None):
             top.legend(loc="best", fontsize="small")
         bottom = figure.add_subplot(grid[row + 1, column], sharex=top)
         bottom.axhline(0.0, color="0.5", lw=0.8)
-        bottom.errorbar(x, data["residuals"][:, channel], yerr=error[:, channel], fmt=".", ms=3, color="C3")
+        bottom.errorbar(
+            x, data["residuals"][:, channel], yerr=error[:, channel], fmt=".", ms=3, color="C3"
+        )
         bottom.set_ylabel(f"residual [{unit}]")
         bottom.set_xlabel("pose")
     text = figure.add_subplot(grid[4, :])
     text.axis("off")
-    text.text(0.0, 1.0, summary, family="monospace", fontsize=SUMMARY_FONT_SIZE, va="top", ha="left",
-              transform=text.transAxes)
+    text.text(
+        0.0,
+        1.0,
+        summary,
+        family="monospace",
+        fontsize=SUMMARY_FONT_SIZE,
+        va="top",
+        ha="left",
+        transform=text.transAxes,
+    )
     for k, one in enumerate(series):
         draw_series(figure, grid[5 + k, :].subgridspec(1, 4), one)
     figure.suptitle(title or f"ftkin calibration report: {len(x)} poses, {len(samples)} readings")
     return figure
 
 
-def save_report(calibration, samples: Samples, path, title: str | None = None, dpi: int = 100) -> Path:
-    """Draw :func:`report_figure` and write it (format from the suffix: .png, .pdf, .svg) atomically."""
+def save_report(
+    calibration, samples: Samples, path, title: str | None = None, dpi: int = 100
+) -> Path:
+    """Draw :func:`report_figure` and write it (format from the suffix: .png, .pdf, .svg)
+    atomically.
+    """
     path = Path(path)
     fmt = path.suffix.lstrip(".").lower() or "png"
     if fmt not in ("png", "pdf", "svg"):

@@ -69,14 +69,19 @@ def as_series(name: str, title: str, source) -> Series:
         times, values = source
     else:
         times = _field(source, "times")
-        values = next((v for v in (_field(source, key) for key in _VALUE_KEYS) if v is not None), None)
+        values = next(
+            (v for v in (_field(source, key) for key in _VALUE_KEYS) if v is not None), None
+        )
     try:
         times = np.asarray(times, dtype=float).reshape(-1)
         values = np.asarray(values, dtype=float)
     except (TypeError, ValueError):
         raise InvalidInput(f"{name}: expected times (N,) [s] and values (N, 6) [N, N·m]") from None
     if values.ndim != 2 or values.shape != (len(times), 6) or len(times) == 0:
-        raise InvalidInput(f"{name}: expected times (N,) [s] and values (N, 6) [N, N·m], got {times.shape} and {values.shape}")
+        raise InvalidInput(
+            f"{name}: expected times (N,) [s] and values (N, 6) [N, N·m], got {times.shape} and "
+            f"{values.shape}"
+        )
     if not (np.all(np.isfinite(times)) and np.all(np.isfinite(values))):
         raise InvalidInput(f"{name}: times and values must be finite")
     return Series(name, title, times, values)
@@ -95,7 +100,9 @@ def report_series(calibration) -> list[Series]:
 
 
 def draw_series(figure, grid_row, series: Series) -> list:
-    """Plot ``series`` into the two halves of ``grid_row`` (a gridspec row); returns the two axes."""
+    """Plot ``series`` into the two halves of ``grid_row`` (a gridspec row); returns the two
+    axes.
+    """
     force = figure.add_subplot(grid_row[0, :2])
     torque = figure.add_subplot(grid_row[0, 2:])
     for k, ax in ((0, force), (3, torque)):

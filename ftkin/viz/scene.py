@@ -27,7 +27,9 @@ BACK_SIDE = 1
 """three.js ``THREE.BackSide``: only the inner faces are drawn."""
 
 RADIUS_FACTORS = {MEASURED.name: 0.5, GRAVITY.name: 1.6, VERTICAL.name: 0.5}
-"""Arrow radii relative to the style: a thin measured-force needle inside a wide predicted-gravity sleeve."""
+"""Arrow radii relative to the style: a thin measured-force needle inside a wide predicted-gravity
+sleeve.
+"""
 
 CAMERA_DIRECTION = np.array([0.55, -0.75, 0.35]) / np.linalg.norm([0.55, -0.75, 0.35])
 """From the orbit target towards the camera (base axes): front right, above."""
@@ -42,18 +44,27 @@ def add_markers(visualizer, geometry, style: ArrowStyle) -> None:
         # measured-force needle inside it stays visible when the two coincide (a good calibration).
         side = BACK_SIDE if layer is GRAVITY else 2
         material = geometry.MeshBasicMaterial(color=layer.color, side=side)
-        visualizer[f"{ROOT}/{layer.name}/shaft"].set_object(geometry.Cylinder(1.0, style.shaft_radius * radius_factor), material)
+        visualizer[f"{ROOT}/{layer.name}/shaft"].set_object(
+            geometry.Cylinder(1.0, style.shaft_radius * radius_factor), material
+        )
         visualizer[f"{ROOT}/{layer.name}/head"].set_object(
-            geometry.Cylinder(style.head_length, radiusTop=0.0, radiusBottom=style.head_radius * radius_factor), material
+            geometry.Cylinder(
+                style.head_length, radiusTop=0.0, radiusBottom=style.head_radius * radius_factor
+            ),
+            material,
         )
     visualizer[f"{ROOT}/{CENTER_OF_MASS.name}"].set_object(
         geometry.Sphere(0.7 * style.head_radius),
-        geometry.MeshBasicMaterial(color=CENTER_OF_MASS.color, depthTest=False),  # seen through the tool
+        geometry.MeshBasicMaterial(
+            color=CENTER_OF_MASS.color, depthTest=False
+        ),  # seen through the tool
     )
 
 
 def arm_bounds(arm: Arm | None) -> tuple[np.ndarray, float]:
-    """Centre [m] and largest extent [m] of the arm's frame origins at ``q = 0`` (clipped to the limits)."""
+    """Centre [m] and largest extent [m] of the arm's frame origins at ``q = 0`` (clipped to the
+    limits).
+    """
     if arm is None:
         return np.zeros(3), 0.6
     q = np.clip(np.zeros(arm.nq), arm.lower_limits, arm.upper_limits)
@@ -71,7 +82,9 @@ def frame_view(visualizer, geometry, arm: Arm | None) -> None:
     visualizer["/Grid"].set_property("visible", False)
     size = 2.0 * max(extent, 0.5)
     floor = visualizer[f"{ROOT}/floor"]
-    material = geometry.MeshLambertMaterial(color=0xD8D8D8, transparent=True, opacity=0.45)  # the arm may reach below
+    material = geometry.MeshLambertMaterial(
+        color=0xD8D8D8, transparent=True, opacity=0.45
+    )  # the arm may reach below
     floor.set_object(geometry.Box([size, size, 0.004]), material)
     floor.set_transform(rigid_transform(np.eye(3), [target[0], target[1], -0.003]))
     set_camera(visualizer, 1.25 * max(extent, 0.5) * CAMERA_DIRECTION)

@@ -33,7 +33,9 @@ def import_pinocchio_visualizer():
     try:
         from pinocchio.visualize import MeshcatVisualizer
     except ImportError:
-        raise MissingDependency("meshcat", "viz", "drawing the arm (pinocchio.visualize.MeshcatVisualizer)") from None
+        raise MissingDependency(
+            "meshcat", "viz", "drawing the arm (pinocchio.visualize.MeshcatVisualizer)"
+        ) from None
     return MeshcatVisualizer
 
 

@@ -48,7 +48,9 @@ class PoseVectors:
     gravity_direction: np.ndarray
 
 
-def pose_vectors(calibration: SensorModel, rotation_sensor_to_base, sensor_origin, raw_wrench) -> PoseVectors:
+def pose_vectors(
+    calibration: SensorModel, rotation_sensor_to_base, sensor_origin, raw_wrench
+) -> PoseVectors:
     """Compute the drawn vectors of one pose.
 
     Args:

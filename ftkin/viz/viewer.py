@@ -30,7 +30,16 @@ from ..kinematics.arm import Arm
 from ..validation import as_batch, as_positive, as_vector
 from .arrows import ArrowStyle, NodePose, arrow_placement, exaggerate_tilt, rigid_transform
 from .framing import PoseView, arm_points, frame_pose
-from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, LAYERS, VERTICAL, add_legend, inline_commands, legend_html
+from .legend import (
+    ARROWS,
+    BASE_GRAVITY,
+    CENTER_OF_MASS,
+    LAYERS,
+    VERTICAL,
+    add_legend,
+    inline_commands,
+    legend_html,
+)
 from .scene import ROOT, add_markers, apply_view, frame_view, set_camera
 from .server import import_meshcat, import_pinocchio_visualizer, start_visualizer, stop_server
 from .vectors import PoseVectors, pose_vectors
@@ -78,13 +87,22 @@ class CalibrationViewer:
         self.calibration = calibration
         self.arm = arm
         weight = calibration.tool_weight
-        self.scale = as_positive(scale, "scale [m/N]") if scale is not None else DEFAULT_ARROW_LENGTH / max(weight, 1e-9)
+        self.scale = (
+            as_positive(scale, "scale [m/N]")
+            if scale is not None
+            else DEFAULT_ARROW_LENGTH / max(weight, 1e-9)
+        )
         self.tilt_exaggeration = as_positive(tilt_exaggeration, "tilt_exaggeration")
         self.style = style or ArrowStyle()
-        self.gravity_anchor = None if gravity_anchor is None else as_vector(gravity_anchor, 3, "gravity_anchor [m]")
+        self.gravity_anchor = (
+            None if gravity_anchor is None else as_vector(gravity_anchor, 3, "gravity_anchor [m]")
+        )
         self.auto_camera = bool(auto_camera)
         self.view: PoseView | None = None
-        self._anchor = (np.array([-0.25, -0.3, 0.4]), 0.3)  # gravity arrow beside the base until a pose is framed
+        self._anchor = (
+            np.array([-0.25, -0.3, 0.4]),
+            0.3,
+        )  # gravity arrow beside the base until a pose is framed
         self._meshcat = import_meshcat()
         self._owns_server = visualizer is None and zmq_url is None
         self.visualizer = visualizer if visualizer is not None else start_visualizer(zmq_url)
@@ -128,7 +146,9 @@ class CalibrationViewer:
     def _build_scene(self) -> None:
         if self.arm is not None:
             visualizer_class = import_pinocchio_visualizer()
-            self._robot = visualizer_class(self.arm.model, self.arm.geometry("collision"), self.arm.geometry("visual"))
+            self._robot = visualizer_class(
+                self.arm.model, self.arm.geometry("collision"), self.arm.geometry("visual")
+            )
             self._robot.initViewer(viewer=self.visualizer)
             self._robot.loadViewerModel(rootNodeName="pinocchio")
         add_markers(self.visualizer, self._meshcat.geometry, self.style)
@@ -140,7 +160,9 @@ class CalibrationViewer:
         self.calibration = calibration
 
     def set_camera(self, position) -> None:
-        """Camera position relative to the orbit target, base axes [m]; stops the per-pose framing."""
+        """Camera position relative to the orbit target, base axes [m]; stops the per-pose
+        framing.
+        """
         self.auto_camera = False
         set_camera(self.visualizer, position)
 
@@ -158,12 +180,32 @@ class CalibrationViewer:
         """Draw the arm at joint angles ``q`` [rad] with the vectors of one raw reading [N, N·m]."""
         return self._draw(self.visualizer, q, None, raw_wrench, animated=False)
 
-    def show_rotation(self, rotation_sensor_to_base, raw_wrench, sensor_origin=(0.0, 0.0, 0.0)) -> PoseVectors:
-        """Draw the vectors for an orientation ``R_BS`` without joint angles (sensor at ``sensor_origin`` [m])."""
-        return self._draw(self.visualizer, None, (rotation_sensor_to_base, sensor_origin), raw_wrench, animated=False)
+    def show_rotation(
+        self, rotation_sensor_to_base, raw_wrench, sensor_origin=(0.0, 0.0, 0.0)
+    ) -> PoseVectors:
+        """Draw the vectors for an orientation ``R_BS`` without joint angles (sensor at
+        ``sensor_origin`` [m]).
+        """
+        return self._draw(
+            self.visualizer,
+            None,
+            (rotation_sensor_to_base, sensor_origin),
+            raw_wrench,
+            animated=False,
+        )
 
-    def animate(self, raw_wrenches, *, configurations=None, rotations=None, times=None, hold: float = 1.0, fps: int = 30,
-                repetitions: int = 1000, play: bool = True) -> list[PoseVectors]:
+    def animate(
+        self,
+        raw_wrenches,
+        *,
+        configurations=None,
+        rotations=None,
+        times=None,
+        hold: float = 1.0,
+        fps: int = 30,
+        repetitions: int = 1000,
+        play: bool = True,
+    ) -> list[PoseVectors]:
         """Store a meshcat animation through several poses (kept in :meth:`static_html`).
 
         Args:
@@ -185,7 +227,11 @@ class CalibrationViewer:
             frames = [(int(s), int(s + step - 1)) for s in starts]
         else:
             times = np.asarray(times, dtype=float).reshape(-1)
-            if times.shape != (count,) or not np.all(np.isfinite(times)) or np.any(np.diff(times) < 0):
+            if (
+                times.shape != (count,)
+                or not np.all(np.isfinite(times))
+                or np.any(np.diff(times) < 0)
+            ):
                 raise InvalidInput(f"times must be {count} finite non-decreasing values [s]")
             frames = [(int(round(f)),) for f in (times - times[0]) * fps]
         animation = self._meshcat.animation.Animation(default_framerate=fps)
@@ -196,7 +242,9 @@ class CalibrationViewer:
                 if configurations is not None:
                     vectors = self._draw(sink, configurations[k], None, raw[k], animated=True)
                 else:
-                    vectors = self._draw(sink, None, (rotations[k], (0.0, 0.0, 0.0)), raw[k], animated=True)
+                    vectors = self._draw(
+                        sink, None, (rotations[k], (0.0, 0.0, 0.0)), raw[k], animated=True
+                    )
             out.append(vectors)
         self.visualizer.set_animation(animation, play=play, repetitions=repetitions)
         self._animation = animation
@@ -206,7 +254,9 @@ class CalibrationViewer:
         points = None
         if q is not None:
             if self.arm is None:
-                raise InvalidInput("this viewer has no arm: use show_rotation(R_BS, raw_wrench) or pass arm=")
+                raise InvalidInput(
+                    "this viewer has no arm: use show_rotation(R_BS, raw_wrench) or pass arm="
+                )
             q = self.arm.check_configuration(q)
             rotation, origin = self.arm.frame_placement(q, "sensor")
             points = arm_points(self.arm, q) if self.auto_camera else None
@@ -220,26 +270,47 @@ class CalibrationViewer:
             rotation, origin = rotation_and_origin
         vectors = pose_vectors(self.calibration, rotation, origin, raw_wrench)
         place = _place_animated if animated else _place_live
-        place(sink, f"{ROOT}/sensor", NodePose(rigid_transform(vectors.rotation_sensor_to_base, vectors.sensor_origin), np.ones(3)))
-        for layer, force in zip(ARROWS, (vectors.measured_force, vectors.gravity_force, vectors.contact_force)):
+        place(
+            sink,
+            f"{ROOT}/sensor",
+            NodePose(
+                rigid_transform(vectors.rotation_sensor_to_base, vectors.sensor_origin), np.ones(3)
+            ),
+        )
+        for layer, force in zip(
+            ARROWS, (vectors.measured_force, vectors.gravity_force, vectors.contact_force)
+        ):
             arrow = arrow_placement(vectors.sensor_origin, force, self.scale, self.style)
             place(sink, f"{ROOT}/{layer.name}/shaft", arrow.shaft)
             place(sink, f"{ROOT}/{layer.name}/head", arrow.head)
-        place(sink, f"{ROOT}/{CENTER_OF_MASS.name}", NodePose(rigid_transform(np.eye(3), vectors.center_of_mass), np.ones(3)))
+        place(
+            sink,
+            f"{ROOT}/{CENTER_OF_MASS.name}",
+            NodePose(rigid_transform(np.eye(3), vectors.center_of_mass), np.ones(3)),
+        )
         anchor, length = self.gravity_anchor, 0.3
         if anchor is None:
             anchor, length = self._anchor
         if self.auto_camera:
             forces = (vectors.measured_force, vectors.gravity_force, vectors.contact_force)
             tool_size = 2.0 * float(np.linalg.norm(self.calibration.center_of_mass))
-            self.view = frame_pose(vectors.sensor_origin, [self.scale * f for f in forces], points, tool_size=tool_size)
+            self.view = frame_pose(
+                vectors.sensor_origin, [self.scale * f for f in forces], points, tool_size=tool_size
+            )
             apply_view(sink, self.view, animated)
-            if self.gravity_anchor is None:  # beside the sensor, right of it and a little up on screen
-                anchor = self.view.target + self.view.radius * (0.8 * self.view.right + np.array([0.0, 0.0, 0.3]))
+            if (
+                self.gravity_anchor is None
+            ):  # beside the sensor, right of it and a little up on screen
+                anchor = self.view.target + self.view.radius * (
+                    0.8 * self.view.right + np.array([0.0, 0.0, 0.3])
+                )
                 length = min(0.3, 0.6 * self.view.radius)
                 self._anchor = (anchor, length)
         drawn_direction = exaggerate_tilt(vectors.gravity_direction, self.tilt_exaggeration)
-        for layer, direction in ((BASE_GRAVITY, drawn_direction), (VERTICAL, np.array([0.0, 0.0, -1.0]))):
+        for layer, direction in (
+            (BASE_GRAVITY, drawn_direction),
+            (VERTICAL, np.array([0.0, 0.0, -1.0])),
+        ):
             arrow = arrow_placement(anchor, direction, length, self.style)
             place(sink, f"{ROOT}/{layer.name}/shaft", arrow.shaft)
             place(sink, f"{ROOT}/{layer.name}/head", arrow.head)
@@ -248,10 +319,14 @@ class CalibrationViewer:
     # ---------------------------------------------------------------- export
     def legend(self, caption: str = "") -> str:
         """The HTML legend: colours, scale [cm per N] and the estimated tilt."""
-        return legend_html(self.scale, self.calibration.base_tilt_deg, self.tilt_exaggeration, caption)
+        return legend_html(
+            self.scale, self.calibration.base_tilt_deg, self.tilt_exaggeration, caption
+        )
 
     def static_html(self, legend: bool = True, caption: str = "") -> str:
-        """A self-contained page of the current scene (and animation), optionally with the legend."""
+        """A self-contained page of the current scene (and animation), optionally with the
+        legend.
+        """
         page = inline_commands(self.visualizer.static_html())
         return add_legend(page, self.legend(caption)) if legend else page
 
@@ -262,7 +337,10 @@ class CalibrationViewer:
 
 def _check_calibration(calibration) -> None:
     if not isinstance(calibration, SensorModel):
-        raise InvalidInput(f"calibration must be an ftkin SensorModel or CalibrationResult, got {type(calibration).__name__}")
+        raise InvalidInput(
+            "calibration must be an ftkin SensorModel or CalibrationResult, got "
+            f"{type(calibration).__name__}"
+        )
 
 
 def _place_live(sink, path: str, pose: NodePose) -> None:

@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftkin import Samples, SensorModel, SensorNoise, SuspectConvention, calibrate, detect_sign_and_handedness
+from ftkin import (
+    Samples,
+    SensorModel,
+    SensorNoise,
+    SuspectConvention,
+    calibrate,
+    detect_sign_and_handedness,
+)
 from ftkin.calibration.conventions import reading_signs
 from ftkin.calibration.mount import exp_so3
 
@@ -22,7 +29,9 @@ def poses(arm):
 def _samples(arm, q, rotations, model, factors, seed=0, mount=None):
     rng = np.random.default_rng(seed)
     clean = model.predict(rotations if mount is None else rotations @ mount.T)
-    return Samples.from_joint_positions(arm, q, (clean + rng.normal(size=clean.shape) * NOISE.channel_std) * factors)
+    return Samples.from_joint_positions(
+        arm, q, (clean + rng.normal(size=clean.shape) * NOISE.channel_std) * factors
+    )
 
 
 def test_reading_signs_by_hand():
@@ -42,27 +51,41 @@ def test_reversed_sign_is_named_and_fixed(arm, poses, tool):
     with pytest.raises(SuspectConvention) as caught:
         calibrate(samples, noise=NOISE)
     message = str(caught.value)
-    assert "--sensor-sign -1" in message and "--base-mount ceiling" in message and "reaction" in message
+    assert (
+        "--sensor-sign -1" in message
+        and "--base-mount ceiling" in message
+        and "reaction" in message
+    )
     assert caught.value.sensor_sign == -1 and caught.value.flip_axis is None
     result = calibrate(samples, noise=NOISE, sensor_sign=-1)
     assert result.sensor_sign == -1
-    assert np.all(np.abs(result.gravity_in_base - tool.gravity_in_base) < 3 * result.std_errors["gravity_in_base"])
+    assert np.all(
+        np.abs(result.gravity_in_base - tool.gravity_in_base)
+        < 3 * result.std_errors["gravity_in_base"]
+    )
 
 
 @pytest.mark.parametrize("axis", ["x", "y", "z"])
 def test_reversed_axis_is_named_and_fixed(arm, poses, tool, axis):
     q, rotations = poses
     samples = _samples(arm, q, rotations, tool, reading_signs(1, axis))
-    with pytest.raises(SuspectConvention, match=f"the sensor's {axis} axis reversed: --flip-axis {axis}") as caught:
+    with pytest.raises(
+        SuspectConvention, match=f"the sensor's {axis} axis reversed: --flip-axis {axis}"
+    ) as caught:
         calibrate(samples, noise=NOISE)
     assert caught.value.flip_axis == axis
     result = calibrate(samples, noise=NOISE, flip_axis=axis)
-    assert np.all(np.abs(result.center_of_mass - tool.center_of_mass) < 3 * result.std_errors["center_of_mass"])
+    assert np.all(
+        np.abs(result.center_of_mass - tool.center_of_mass)
+        < 3 * result.std_errors["center_of_mass"]
+    )
 
 
 def test_reversed_axis_with_a_yaw_mount_names_x_and_y(arm, poses, tool):
     q, rotations = poses
-    samples = _samples(arm, q, rotations, tool, reading_signs(1, "y"), mount=exp_so3([0.0, 0.0, 0.5]))
+    samples = _samples(
+        arm, q, rotations, tool, reading_signs(1, "y"), mount=exp_so3([0.0, 0.0, 0.5])
+    )
     check = detect_sign_and_handedness(samples, estimate_mount="yaw")
     assert check.flip_suspected and {check.best_flip, *check.equivalent_flips} == {"x", "y"}
     with pytest.raises(SuspectConvention, match="180° about z"):
@@ -71,13 +94,17 @@ def test_reversed_axis_with_a_yaw_mount_names_x_and_y(arm, poses, tool):
 
 def test_ceiling_mount_calibrates_when_stated(arm, poses, tool):
     q, rotations = poses
-    hanging = SensorModel(tool.force_offset, tool.torque_offset, -tool.gravity_in_base, tool.center_of_mass)
+    hanging = SensorModel(
+        tool.force_offset, tool.torque_offset, -tool.gravity_in_base, tool.center_of_mass
+    )
     samples = _samples(arm, q, rotations, hanging, np.ones(6))
     with pytest.raises(SuspectConvention, match="ceiling"):
         calibrate(samples, noise=NOISE)
     result = calibrate(samples, noise=NOISE, base_mount="ceiling")
     assert result.gravity_in_base[2] > 0 and result.sensor_sign == 1
-    assert calibrate(samples, noise=NOISE, expected_gravity=[0, 0, 1]).tool_weight == pytest.approx(result.tool_weight)
+    assert calibrate(samples, noise=NOISE, expected_gravity=[0, 0, 1]).tool_weight == pytest.approx(
+        result.tool_weight
+    )
     calibrate(samples, noise=NOISE, base_mount="wall")  # no direction to check against
 
 

@@ -1,4 +1,6 @@
-"""Drift-aware calibration: the random-walk filter against dense linear algebra, drift recovered, none kept when constant."""
+"""Drift-aware calibration: the random-walk filter against dense linear algebra, drift recovered,
+none kept when constant.
+"""
 
 from __future__ import annotations
 
@@ -20,7 +22,11 @@ from ftkin import (
     fisher_information,
     recording_times,
 )
-from ftkin.calibration.information import covariance_from_information, extended_parameters, extended_standard_errors
+from ftkin.calibration.information import (
+    covariance_from_information,
+    extended_parameters,
+    extended_standard_errors,
+)
 from ftkin.calibration.random_walk import log_likelihood, smooth, walk_gains, whiten
 
 NOISE = SensorNoise(0.03, 0.0015)
@@ -28,7 +34,9 @@ DATA = Path(__file__).parents[1] / "io" / "data"
 
 
 def _walk_covariance(times, rate, noise_variance):
-    """Dense covariance of y_i = w(t_i) + e_i for a walk pinned at the last time: q² min(T − t_i, T − t_j) + D."""
+    """Dense covariance of y_i = w(t_i) + e_i for a walk pinned at the last time: q² min(T − t_i, T
+    − t_j) + D.
+    """
     to_end = times[-1] - times
     return rate**2 * np.minimum.outer(to_end, to_end) + np.diag(noise_variance)
 
@@ -44,14 +52,22 @@ def test_filter_is_the_exact_gaussian_likelihood_and_gls_whitening(rng):
         covariance = _walk_covariance(times, rate[c], noise_variance[:, c])
         inverse = np.linalg.inv(covariance)
         # whitened columns reproduce the generalized least-squares normal matrix Xᵀ Σ⁻¹ X
-        np.testing.assert_allclose(white[:, c, :].T @ white[:, c, :], data[:, c, :].T @ inverse @ data[:, c, :], rtol=1e-9)
+        np.testing.assert_allclose(
+            white[:, c, :].T @ white[:, c, :], data[:, c, :].T @ inverse @ data[:, c, :], rtol=1e-9
+        )
         # the RTS smoother is the conditional mean E[w | y] = K Σ⁻¹ y and its variance
         walk_part = covariance - np.diag(noise_variance[:, c])
         mean, variance = smooth(gains, times, data[:, :, 0], rate)
         np.testing.assert_allclose(mean[:, c], walk_part @ inverse @ data[:, c, 0], atol=1e-10)
-        np.testing.assert_allclose(variance[:, c], np.diag(walk_part - walk_part @ inverse @ walk_part), atol=1e-10)
-    expected = sum(multivariate_normal(np.zeros(15), _walk_covariance(times, rate[c], noise_variance[:, c])).logpdf(data[:, c, 0])
-                   for c in range(6))
+        np.testing.assert_allclose(
+            variance[:, c], np.diag(walk_part - walk_part @ inverse @ walk_part), atol=1e-10
+        )
+    expected = sum(
+        multivariate_normal(
+            np.zeros(15), _walk_covariance(times, rate[c], noise_variance[:, c])
+        ).logpdf(data[:, c, 0])
+        for c in range(6)
+    )
     assert log_likelihood(gains, white[:, :, 0]) == pytest.approx(expected, rel=1e-10)
 
 
@@ -64,24 +80,37 @@ def test_polynomial_drift_is_recovered(arm, tool, poses40):
     rng = np.random.default_rng(11)
     times = recording_times(40, 5, 1200.0, 0.01)
     tau = times / 1200.0
-    true_drift = np.outer(tau, [0.3, -0.2, 0.25, 0.006, -0.004, 0.005]) + np.outer(tau**2, [-0.2, 0.1, 0.1, -0.003, 0.002, 0.0])
+    true_drift = np.outer(tau, [0.3, -0.2, 0.25, 0.006, -0.004, 0.005]) + np.outer(
+        tau**2, [-0.2, 0.1, 0.1, -0.003, 0.002, 0.0]
+    )
     sensor = SimulatedSensor(tool, NOISE)
-    samples = sensor.samples_at_configurations(arm, poses40, rng, 5, times=times, bias_drift=true_drift)
+    samples = sensor.samples_at_configurations(
+        arm, poses40, rng, 5, times=times, bias_drift=true_drift
+    )
     result = calibrate(samples, drift="poly:2")
     assert result.drift.model == "poly:2" and result.drift.selected_by == "given"
     truth_bias = tool.bias + true_drift
     estimated = result.bias_at(times)
     # the bias at every reading time, within 4 of its standard errors
-    sigma = np.column_stack([np.interp(times, result.drift.times, result.drift.bias_std[:, c]) for c in range(6)])
+    sigma = np.column_stack(
+        [np.interp(times, result.drift.times, result.drift.bias_std[:, c]) for c in range(6)]
+    )
     assert np.all(np.abs(estimated - truth_bias) < 4 * sigma)
-    end_errors = np.concatenate([result.std_errors["force_offset"], result.std_errors["torque_offset"]])
+    end_errors = np.concatenate(
+        [result.std_errors["force_offset"], result.std_errors["torque_offset"]]
+    )
     assert np.all(np.abs(result.bias - truth_bias[-1]) < 4 * end_errors)
     errors = (extended_parameters(result) - extended_parameters(tool))[[0, 1, 2, 9, 10, 11]]
-    assert np.all(np.abs(errors) < 4 * extended_standard_errors(result, result.covariance)[[0, 1, 2, 9, 10, 11]])
+    assert np.all(
+        np.abs(errors)
+        < 4 * extended_standard_errors(result, result.covariance)[[0, 1, 2, 9, 10, 11]]
+    )
     # auto finds a drift too; the constant model is far off
     auto = calibrate(samples)
     assert auto.drift.model != "none" and auto.drift.selected_by == "auto"
-    assert abs(calibrate(samples, drift="none").tool_mass - tool.tool_mass) > 5 * abs(auto.tool_mass - tool.tool_mass)
+    assert abs(calibrate(samples, drift="none").tool_mass - tool.tool_mass) > 5 * abs(
+        auto.tool_mass - tool.tool_mass
+    )
 
 
 def test_random_walk_drift_and_its_rate_are_recovered(arm, tool, poses40):
@@ -90,7 +119,9 @@ def test_random_walk_drift_and_its_rate_are_recovered(arm, tool, poses40):
     drift = SensorDrift(random_walk=[0.004, 0.0001])
     sensor = SimulatedSensor(tool, NOISE, drift)
     true_drift = sensor.bias_drift(times, rng)
-    samples = sensor.samples_at_configurations(arm, poses40, rng, 5, times=times, bias_drift=true_drift)
+    samples = sensor.samples_at_configurations(
+        arm, poses40, rng, 5, times=times, bias_drift=true_drift
+    )
     result = calibrate(samples, drift="random-walk")
     assert result.drift.rate[0] == pytest.approx(0.004, rel=0.4)
     assert result.drift.rate[1] == pytest.approx(0.0001, rel=0.4)
@@ -98,7 +129,9 @@ def test_random_walk_drift_and_its_rate_are_recovered(arm, tool, poses40):
     z = (result.drift.bias - pose_truth) / result.drift.bias_std
     assert np.sqrt(np.mean(z**2)) < 1.5 and np.max(np.abs(z)) < 4.5
     # the random walk beats the constant model on the parameters
-    assert abs(result.tool_mass - tool.tool_mass) < abs(calibrate(samples, drift="none").tool_mass - tool.tool_mass)
+    assert abs(result.tool_mass - tool.tool_mass) < abs(
+        calibrate(samples, drift="none").tool_mass - tool.tool_mass
+    )
 
 
 def test_constant_bias_with_times_keeps_the_constant_model_and_its_efficiency(arm, tool, rotations):
@@ -116,17 +149,23 @@ def test_constant_bias_with_times_keeps_the_constant_model_and_its_efficiency(ar
             np.testing.assert_array_equal(result.covariance, plain.covariance)
         errors.append(extended_parameters(result) - extended_parameters(tool))
     assert picked.count("none") >= trials - 1
-    crlb = extended_standard_errors(tool, covariance_from_information(fisher_information(tool, rotations, NOISE, 4)))
+    crlb = extended_standard_errors(
+        tool, covariance_from_information(fisher_information(tool, rotations, NOISE, 4))
+    )
     efficiency = crlb**2 / np.mean(np.square(errors), axis=0)
     assert np.mean(efficiency) >= 0.9
 
 
 def test_without_times_nothing_changes(arm, truth):
-    """Bit for bit the numbers a format-1 file written by the previous ftkin holds (same seed and poses)."""
+    """Bit for bit the numbers a format-1 file written by the previous ftkin holds (same seed and
+    poses).
+    """
     stored = json.loads((DATA / "calibration_v1.json").read_text())
     rng = np.random.default_rng(5)
     configurations = arm.random_configurations(8, rng, margin=0.3)
-    samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, configurations, rng, 3)
+    samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(
+        arm, configurations, rng, 3
+    )
     result = calibrate(samples)
     assert result.drift is None
     for key in ("force_offset", "torque_offset", "gravity_in_base", "center_of_mass"):
@@ -148,12 +187,19 @@ def test_drift_options_are_checked(tool, rotations, rng):
     with pytest.raises(InvalidInput, match="method='ml'"):
         calibrate(timed, drift="poly:1", method="linear")
     with pytest.raises(InvalidInput, match="same time"):
-        calibrate(Samples(timed.wrenches, timed.rotations, timed.pose_ids, times=np.zeros(24)), drift="poly:1")
+        calibrate(
+            Samples(timed.wrenches, timed.rotations, timed.pose_ids, times=np.zeros(24)),
+            drift="poly:1",
+        )
     # auto quietly keeps the constant model where a drift does not apply
     assert calibrate(timed, loss="huber").drift.model == "none"
     assert calibrate(timed, method="linear").drift.model == "none"
-    outlying = Samples(timed.wrenches + np.where(timed.pose_ids[:, None] == 3, 5.0, 0.0), timed.rotations, timed.pose_ids,
-                       times=timed.times)
+    outlying = Samples(
+        timed.wrenches + np.where(timed.pose_ids[:, None] == 3, 5.0, 0.0),
+        timed.rotations,
+        timed.pose_ids,
+        times=timed.times,
+    )
     dropped = calibrate(outlying, drop_outliers=True)
     assert dropped.diagnostics.dropped_pose_ids == (3,) and len(dropped.drift.times) == 11
     assert calibrate(untimed).drift is None
@@ -165,20 +211,30 @@ def test_samples_times_are_validated(tool, rotations, rng):
         Samples(samples.wrenches, samples.rotations, times=np.zeros(3))
     with pytest.raises(Exception, match="finite"):
         Samples(samples.wrenches, samples.rotations, times=np.full(12, np.nan))
-    assert Samples(samples.wrenches, samples.rotations, times=np.arange(12.0)).pose_averages().times.tolist() == list(range(12))
+    assert Samples(
+        samples.wrenches, samples.rotations, times=np.arange(12.0)
+    ).pose_averages().times.tolist() == list(range(12))
 
 
 def test_sensor_drift_parts(rng):
-    drift = SensorDrift(warmup=[0.5, 0.01], warmup_time_constant=300.0, temperature_coefficient=[0.02, 0.0004],
-                        temperature_times=[0.0, 1000.0], temperatures=[20.0, 30.0])
+    drift = SensorDrift(
+        warmup=[0.5, 0.01],
+        warmup_time_constant=300.0,
+        temperature_coefficient=[0.02, 0.0004],
+        temperature_times=[0.0, 1000.0],
+        temperatures=[20.0, 30.0],
+    )
     times = np.array([0.0, 300.0, 600.0, 2000.0])
-    expected = np.outer(1 - np.exp(-times / 300.0), [0.5] * 3 + [0.01] * 3) + np.outer(np.minimum(times, 1000.0) / 100.0,
-                                                                                         [0.02] * 3 + [0.0004] * 3)
+    expected = np.outer(1 - np.exp(-times / 300.0), [0.5] * 3 + [0.01] * 3) + np.outer(
+        np.minimum(times, 1000.0) / 100.0, [0.02] * 3 + [0.0004] * 3
+    )
     np.testing.assert_allclose(drift.offsets(times, rng), expected, atol=1e-15)
     walk = SensorDrift(random_walk=0.01)
     draws = np.array([walk.offsets([100.0, 400.0], rng) for _ in range(2000)])
     np.testing.assert_allclose(np.var(draws[:, 0, :], axis=0), 0.01**2 * 100.0, rtol=0.12)
-    np.testing.assert_allclose(np.var(draws[:, 1, :] - draws[:, 0, :], axis=0), 0.01**2 * 300.0, rtol=0.12)
+    np.testing.assert_allclose(
+        np.var(draws[:, 1, :] - draws[:, 0, :], axis=0), 0.01**2 * 300.0, rtol=0.12
+    )
     with pytest.raises(InvalidInput):
         SensorDrift(random_walk=-1.0)
     # the current constructor still works, and without drift the readings are the old ones

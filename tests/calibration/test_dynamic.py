@@ -1,4 +1,6 @@
-"""Dynamic calibration (regressor, log-Cholesky map, calibrate_dynamic) against MuJoCo and Pinocchio."""
+"""Dynamic calibration (regressor, log-Cholesky map, calibrate_dynamic) against MuJoCo and
+Pinocchio.
+"""
 
 from __future__ import annotations
 
@@ -23,7 +25,9 @@ mujoco_recording = pytest.importorskip("ftkin.sim.mujoco.recording")
 pytest.importorskip("mujoco")
 
 TOOL = mujoco_recording.ToolInertia(
-    1.2, [0.01, -0.02, 0.08], [[0.004, 0.0003, 0.0001], [0.0003, 0.005, -0.0002], [0.0001, -0.0002, 0.003]]
+    1.2,
+    [0.01, -0.02, 0.08],
+    [[0.004, 0.0003, 0.0001], [0.0003, 0.005, -0.0002], [0.0001, -0.0002, 0.003]],
 )
 TILT = (0.01, -0.02)
 BIAS = np.array([0.5, -0.3, 0.2, 0.01, -0.02, 0.03])
@@ -49,8 +53,12 @@ def test_regressor_matches_mujoco_inverse_dynamics_and_pinocchio(arm, recorder):
     np.testing.assert_allclose(predicted, wrenches, atol=1e-10)
     np.testing.assert_allclose(recorder.true_parameters(), TOOL.parameters(), atol=1e-14)
     for i in range(5):
-        expected = pin.bodyRegressor(pin.Motion(motion.velocities[i]), pin.Motion(motion.accelerations[i]))
-        np.testing.assert_allclose(body_regressor(motion.velocities[i], motion.accelerations[i])[0], expected, atol=1e-12)
+        expected = pin.bodyRegressor(
+            pin.Motion(motion.velocities[i]), pin.Motion(motion.accelerations[i])
+        )
+        np.testing.assert_allclose(
+            body_regressor(motion.velocities[i], motion.accelerations[i])[0], expected, atol=1e-12
+        )
 
 
 def test_log_cholesky_round_trip_and_jacobian():
@@ -62,27 +70,45 @@ def test_log_cholesky_round_trip_and_jacobian():
         phi = log_cholesky_from_parameters(theta)
         np.testing.assert_allclose(parameters_from_log_cholesky(phi), theta, atol=1e-12)
         # Pinocchio builds the same pseudo-inertia from φ.
-        np.testing.assert_allclose(pin.LogCholeskyParameters(phi).toPseudoInertia().toMatrix(), pseudo_inertia(theta), atol=1e-12)
+        np.testing.assert_allclose(
+            pin.LogCholeskyParameters(phi).toPseudoInertia().toMatrix(),
+            pseudo_inertia(theta),
+            atol=1e-12,
+        )
         phi = rng.normal(size=10)
-        np.testing.assert_allclose(log_cholesky_from_parameters(parameters_from_log_cholesky(phi)), phi, atol=1e-9)
+        np.testing.assert_allclose(
+            log_cholesky_from_parameters(parameters_from_log_cholesky(phi)), phi, atol=1e-9
+        )
         step = 1e-6
-        numeric = np.column_stack([
-            (parameters_from_log_cholesky(phi + step * e) - parameters_from_log_cholesky(phi - step * e)) / (2 * step)
-            for e in np.eye(10)
-        ])
+        numeric = np.column_stack(
+            [
+                (
+                    parameters_from_log_cholesky(phi + step * e)
+                    - parameters_from_log_cholesky(phi - step * e)
+                )
+                / (2 * step)
+                for e in np.eye(10)
+            ]
+        )
         np.testing.assert_allclose(log_cholesky_jacobian(phi), numeric, rtol=1e-6, atol=1e-8)
     with pytest.raises(ValueError, match="not physically consistent"):
-        log_cholesky_from_parameters(np.array([1.0, 0, 0, 0, 1.0, 0, 1.0, 0, 0, 5.0]))  # violates the triangle inequality
+        log_cholesky_from_parameters(
+            np.array([1.0, 0, 0, 0, 1.0, 0, 1.0, 0, 0, 5.0])
+        )  # violates the triangle inequality
 
 
 def test_noise_free_mujoco_data_recovered(arm, recorder):
     q, dq, ddq = _random_motion(arm, 200, 2)
-    motion = MotionSamples.from_joint_trajectory(arm, q, dq, ddq, recorder.wrenches(q, dq, ddq) + BIAS)
+    motion = MotionSamples.from_joint_trajectory(
+        arm, q, dq, ddq, recorder.wrenches(q, dq, ddq) + BIAS
+    )
     result = calibrate_dynamic(motion)
     assert result.has_inertia and result.unconstrained_consistent
     assert abs(result.tool_mass - TOOL.mass) < 1e-6
     np.testing.assert_allclose(result.center_of_mass, TOOL.center_of_mass, atol=1e-6)
-    np.testing.assert_allclose(result.inertia_about_com_in_sensor, TOOL.inertia_about_com, atol=1e-6)
+    np.testing.assert_allclose(
+        result.inertia_about_com_in_sensor, TOOL.inertia_about_com, atol=1e-6
+    )
     np.testing.assert_allclose(result.bias, BIAS, atol=1e-6)
     np.testing.assert_allclose(result.base_tilt, TILT, atol=1e-6)
 
@@ -94,7 +120,9 @@ def test_static_data_reports_inertia_unobservable(arm, recorder):
         calibrate_dynamic(samples)
     assert "inertia_about_com_in_sensor" in error.value.names
     # Without the inertia, one orientation still cannot separate weight from bias.
-    single = Samples.from_joint_positions(arm, np.repeat(q[:1], 5, axis=0), recorder.wrenches(np.repeat(q[:1], 5, axis=0)))
+    single = Samples.from_joint_positions(
+        arm, np.repeat(q[:1], 5, axis=0), recorder.wrenches(np.repeat(q[:1], 5, axis=0))
+    )
     with pytest.raises(UnobservableParameters, match="force_offset|mass|base_tilt"):
         calibrate_dynamic(single, estimate_inertia=False)
 
@@ -108,14 +136,27 @@ def test_static_special_case_agrees_with_static_calibration(arm, recorder):
     static = calibrate(samples)
     assert not dynamic.has_inertia
     # Both are ML fits of the same 12-parameter model; they differ only by the noise weights.
-    np.testing.assert_allclose(dynamic.gravity_in_base, static.gravity_in_base, atol=3 * static.std_errors["gravity_in_base"].max())
-    np.testing.assert_allclose(dynamic.bias, static.bias, atol=3 * max(static.std_errors["force_offset"].max(), 1e-3))
-    np.testing.assert_allclose(dynamic.center_of_mass, static.center_of_mass, atol=3 * static.std_errors["center_of_mass"].max())
-    np.testing.assert_allclose(dynamic.std_errors["tool_mass"], static.std_errors["tool_mass"], rtol=0.3)
+    np.testing.assert_allclose(
+        dynamic.gravity_in_base,
+        static.gravity_in_base,
+        atol=3 * static.std_errors["gravity_in_base"].max(),
+    )
+    np.testing.assert_allclose(
+        dynamic.bias, static.bias, atol=3 * max(static.std_errors["force_offset"].max(), 1e-3)
+    )
+    np.testing.assert_allclose(
+        dynamic.center_of_mass,
+        static.center_of_mass,
+        atol=3 * static.std_errors["center_of_mass"].max(),
+    )
+    np.testing.assert_allclose(
+        dynamic.std_errors["tool_mass"], static.std_errors["tool_mass"], rtol=0.3
+    )
 
 
 def test_result_physically_consistent_where_least_squares_is_not(arm):
-    # A near point mass: tiny principal moments, so noise pushes the unconstrained estimate out of the consistent set.
+    # A near point mass: tiny principal moments, so noise pushes the unconstrained estimate out of
+    # the consistent set.
     point = mujoco_recording.ToolInertia(0.8, [0.0, 0.0, 0.06], np.diag([2e-7, 2e-7, 1e-7]))
     recorder = mujoco_recording.MujocoRecorder(joint_names=arm.joint_names, tool=point)
     q, dq, ddq = _random_motion(arm, 300, 6)

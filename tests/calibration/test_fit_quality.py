@@ -14,7 +14,9 @@ from ftkin.calibration.ml import fit_ml
 from ftkin.cli import main
 
 NOISE = SensorNoise(0.03, 0.0015)  # per reading [N], [N·m]
-CABLE = np.array([0.0, 0.4, -0.3, 0.02, 0.0, 0.0])  # a cable pulling on the tool at one pose [N, N·m]
+CABLE = np.array(
+    [0.0, 0.4, -0.3, 0.02, 0.0, 0.0]
+)  # a cable pulling on the tool at one pose [N, N·m]
 
 
 def _with_cable(tool, rotations, rng, readings, pose=5):
@@ -54,7 +56,11 @@ def test_cli_drop_outliers_names_the_pose(arm, tool, tmp_path, capsys):
     wrenches = SimulatedSensor(tool, NOISE).read(arm.rotation_sensor_to_base(configurations), rng)
     wrenches[pose_ids == 9] += CABLE
     header = [*arm.joint_names, "fx", "fy", "fz", "mx", "my", "mz", "pose"]
-    write_csv(tmp_path / "s.csv", header, [[*q, *w, int(p)] for q, w, p in zip(configurations, wrenches, pose_ids)])
+    write_csv(
+        tmp_path / "s.csv",
+        header,
+        [[*q, *w, int(p)] for q, w, p in zip(configurations, wrenches, pose_ids)],
+    )
     assert main(["calibrate", str(tmp_path / "s.csv")]) == 0
     assert "OUTLIER poses: 9" in capsys.readouterr().out
     assert main(["calibrate", str(tmp_path / "s.csv"), "--drop-outliers"]) == 0
@@ -68,7 +74,9 @@ def test_robust_loss_resists_the_outlier(tool, rotations, rng, loss):
     robust = calibrate(samples, loss=loss)
     sigma = np.sqrt(np.diag(robust.covariance))
     assert np.max(np.abs(robust.to_vector() - tool.to_vector()) / sigma) < 4.5
-    assert np.linalg.norm(robust.to_vector() - tool.to_vector()) < 0.5 * np.linalg.norm(plain.to_vector() - tool.to_vector())
+    assert np.linalg.norm(robust.to_vector() - tool.to_vector()) < 0.5 * np.linalg.norm(
+        plain.to_vector() - tool.to_vector()
+    )
     assert robust.diagnostics.loss == loss and robust.diagnostics.outlier_pose_ids == (5,)
 
 
@@ -103,13 +111,17 @@ def test_crosstalk_fails_the_chi_square_test_and_inflates_the_errors(tool, rotat
     diagnostics = bad.diagnostics
     assert not diagnostics.fit_ok and diagnostics.p_value < 1e-3
     assert diagnostics.covariance_scale == pytest.approx(diagnostics.chi_square / diagnostics.dof)
-    assert diagnostics.channel_chi_square[0] > 5 * diagnostics.channel_chi_square[5]  # fx is the misfit channel
+    assert (
+        diagnostics.channel_chi_square[0] > 5 * diagnostics.channel_chi_square[5]
+    )  # fx is the misfit channel
     assert "DOES NOT FIT the noise" in bad.summary()
     assert any("do not fit the model" in record.getMessage() for record in caplog.records)
 
 
 def test_clean_data_pass_the_chi_square_test(tool, rotations, rng):
-    diagnostics = calibrate(SimulatedSensor(tool, NOISE).samples(rotations, rng, 5), noise=NOISE).diagnostics
+    diagnostics = calibrate(
+        SimulatedSensor(tool, NOISE).samples(rotations, rng, 5), noise=NOISE
+    ).diagnostics
     assert diagnostics.fit_ok and diagnostics.dof == 6 * 12 - 12
     assert diagnostics.chi_square == pytest.approx(diagnostics.dof, rel=0.5)
     assert diagnostics.warnings == ()
@@ -127,7 +139,9 @@ def test_small_tilts_warn_about_the_poorly_determined_parameters(arm, tool, capl
     diagnostics = result.diagnostics
     assert diagnostics.condition_number > 1e3
     assert np.linalg.norm(diagnostics.weakest_direction) == pytest.approx(1.0)
-    assert {"center_of_mass[x]", "center_of_mass[z]", "force_offset[z]"} <= set(diagnostics.poorly_determined)
+    assert {"center_of_mass[x]", "center_of_mass[z]", "force_offset[z]"} <= set(
+        diagnostics.poorly_determined
+    )
     assert any("center_of_mass is poorly determined" in message for message in result.warnings)
     assert "WARNING: center_of_mass is poorly determined" in result.summary()
     assert any("poorly determined" in record.getMessage() for record in caplog.records)
@@ -138,16 +152,22 @@ def test_condition_number_matches_the_normalized_information(tool, rotations, rn
     fit = fit_ml(poses, noise=NOISE)
     diagnostics, covariance = diagnose(fit, poses.pose_ids)
     information = fit.information
-    correlation = np.linalg.inv(information / np.sqrt(np.outer(np.diag(information), np.diag(information))))
+    correlation = np.linalg.inv(
+        information / np.sqrt(np.outer(np.diag(information), np.diag(information)))
+    )
     assert diagnostics.condition_number == pytest.approx(np.linalg.cond(correlation), rel=1e-6)
     np.testing.assert_allclose(covariance @ information, np.eye(12), atol=1e-8)
 
 
 def test_diagnostics_survive_a_dict_round_trip_with_missing_values(tool, rotations, rng):
     poses = SimulatedSensor(tool, NOISE).samples(rotations[:3], rng).pose_averages()
-    diagnostics, _ = diagnose(fit_ml(poses), poses.pose_ids)  # noise from residuals: no chi-square test
+    diagnostics, _ = diagnose(
+        fit_ml(poses), poses.pose_ids
+    )  # noise from residuals: no chi-square test
     assert np.isnan(diagnostics.p_value)
     again = FitDiagnostics.from_dict(diagnostics.to_dict())
     assert again.to_dict() == diagnostics.to_dict()
     assert again.noise_source == "residuals" and again.fit_ok
-    assert any("standard errors are rough" in message for message in diagnostics.warnings)  # 3 poses: few dof
+    assert any(
+        "standard errors are rough" in message for message in diagnostics.warnings
+    )  # 3 poses: few dof

@@ -8,7 +8,12 @@ from scipy.spatial.transform import Rotation
 
 import ftkin
 from ftkin import Samples, calibrate
-from ftkin.calibration.information import SensorNoise, covariance_from_information, fisher_information, standard_errors
+from ftkin.calibration.information import (
+    SensorNoise,
+    covariance_from_information,
+    fisher_information,
+    standard_errors,
+)
 from ftkin.sim.sensor import SimulatedSensor
 
 TOOL_DOWN = np.array([0.0, 0.0, -0.5236, 0.0, -1.0472, 0.0])
@@ -52,7 +57,9 @@ def test_noisy_round_trip_within_standard_errors(arm, rng, truth):
     noise = SensorNoise.paper()
     readings = 200
     configurations = arm.random_configurations(12, rng, margin=0.3)
-    samples = SimulatedSensor(truth, noise).samples_at_configurations(arm, configurations, rng, readings)
+    samples = SimulatedSensor(truth, noise).samples_at_configurations(
+        arm, configurations, rng, readings
+    )
     result = calibrate(samples, method="linear")
     rotations = arm.rotation_sensor_to_base(configurations)
     covariance = covariance_from_information(fisher_information(truth, rotations, noise, readings))
@@ -71,9 +78,17 @@ def test_noisy_round_trip_within_standard_errors(arm, rng, truth):
 
 def test_paper_euler_orientations_round_trip(truth):
     angles = np.array(
-        [[90, 0, -180], [64.4, -0.7, -160.4], [86.6, -13.5, -165.7], [114.5, 6.3, 158.4], [76.7, -21.1, 171.3]]
+        [
+            [90, 0, -180],
+            [64.4, -0.7, -160.4],
+            [86.6, -13.5, -165.7],
+            [114.5, 6.3, 158.4],
+            [76.7, -21.1, 171.3],
+        ]
     )
-    samples = Samples.from_euler_zyx_deg(angles, truth.predict(ftkin.euler_zyx_deg_to_matrix(angles)))
+    samples = Samples.from_euler_zyx_deg(
+        angles, truth.predict(ftkin.euler_zyx_deg_to_matrix(angles))
+    )
     result = calibrate(samples, method="linear")
     np.testing.assert_allclose(result.to_vector(), truth.to_vector(), atol=1e-9)
 
@@ -81,9 +96,16 @@ def test_paper_euler_orientations_round_trip(truth):
 # ----------------------------------------------------------------- refusals
 def test_fewer_than_three_poses_refused(arm, truth):
     configurations = np.array([TOOL_DOWN, TOOL_DOWN + 0.4])
-    with pytest.raises(ftkin.UnobservableParameters, match="only 2 distinct pose.*at least 3") as info:
+    with pytest.raises(
+        ftkin.UnobservableParameters, match="only 2 distinct pose.*at least 3"
+    ) as info:
         calibrate(_noise_free_samples(arm, truth, configurations), method="linear")
-    assert set(info.value.names) == {"gravity_in_base", "force_offset", "torque_offset", "center_of_mass"}
+    assert set(info.value.names) == {
+        "gravity_in_base",
+        "force_offset",
+        "torque_offset",
+        "center_of_mass",
+    }
 
 
 def test_many_readings_of_two_poses_still_refused(arm, rng, truth):
@@ -104,7 +126,9 @@ def test_identical_orientations_refused(truth):
 
 def test_orientations_differing_only_about_vertical_refused(truth):
     base = ftkin.euler_zyx_deg_to_matrix([10.0, 25.0, -150.0])
-    rotations = np.array([_rotation_about([0, 0, 1], angle) @ base for angle in np.linspace(0, 5, 8)])
+    rotations = np.array(
+        [_rotation_about([0, 0, 1], angle) @ base for angle in np.linspace(0, 5, 8)]
+    )
     samples = Samples.from_rotations(rotations, truth.predict(rotations))
     with pytest.raises(ftkin.UnobservableParameters, match="about one axis") as info:
         calibrate(samples, method="linear")
@@ -116,7 +140,10 @@ def test_gravity_along_one_sensor_direction_refused(truth):
     gravity_direction = truth.gravity_in_base / truth.tool_weight
     base = ftkin.euler_zyx_deg_to_matrix([30.0, -40.0, 120.0])
     rotations = np.array(
-        [base @ _rotation_about(base.T @ gravity_direction, angle) for angle in np.linspace(0, 6, 7)]
+        [
+            base @ _rotation_about(base.T @ gravity_direction, angle)
+            for angle in np.linspace(0, 6, 7)
+        ]
     )
     seen = np.einsum("nji,j->ni", rotations, gravity_direction)
     np.testing.assert_allclose(seen, np.broadcast_to(seen[0], seen.shape), atol=1e-14)
@@ -138,14 +165,18 @@ def test_two_gravity_directions_refused_naming_center_of_mass(truth):
     seen = np.einsum("nji,j->ni", rotations, gravity_direction)
     assert len(np.unique(np.round(seen, 9), axis=0)) == 2
     samples = Samples.from_rotations(rotations, truth.predict(rotations))
-    with pytest.raises(ftkin.UnobservableParameters, match="gravity is seen along one sensor direction") as info:
+    with pytest.raises(
+        ftkin.UnobservableParameters, match="gravity is seen along one sensor direction"
+    ) as info:
         calibrate(samples, method="linear")
     assert "center_of_mass" in info.value.names
     assert "gravity_in_base" not in info.value.names
 
 
 def test_three_gravity_directions_accepted(truth):
-    rotations = ftkin.euler_zyx_deg_to_matrix([[0.0, 0.0, 180.0], [0.0, 60.0, 180.0], [0.0, 0.0, 120.0]])
+    rotations = ftkin.euler_zyx_deg_to_matrix(
+        [[0.0, 0.0, 180.0], [0.0, 60.0, 180.0], [0.0, 0.0, 120.0]]
+    )
     result = calibrate(Samples.from_rotations(rotations, truth.predict(rotations)), method="linear")
     np.testing.assert_allclose(result.to_vector(), truth.to_vector(), atol=1e-9)
 
@@ -174,7 +205,9 @@ def test_pose_grouping_equals_averaging_by_hand(arm, rng, truth):
 
 def test_g_override_changes_only_tool_mass(arm, rng, truth):
     sensor = SimulatedSensor(truth, SensorNoise.paper())
-    samples = sensor.samples_at_configurations(arm, arm.random_configurations(6, rng, margin=0.3), rng, 5)
+    samples = sensor.samples_at_configurations(
+        arm, arm.random_configurations(6, rng, margin=0.3), rng, 5
+    )
     standard = calibrate(samples, method="linear")
     paper_g = calibrate(samples, method="linear", g=9.8)
     assert standard.g == ftkin.STANDARD_GRAVITY and paper_g.g == 9.8
@@ -187,7 +220,10 @@ def test_g_override_changes_only_tool_mass(arm, rng, truth):
 
 
 def test_result_is_frozen(arm, rng, truth):
-    result = calibrate(_noise_free_samples(arm, truth, arm.random_configurations(4, rng, margin=0.3)), method="linear")
+    result = calibrate(
+        _noise_free_samples(arm, truth, arm.random_configurations(4, rng, margin=0.3)),
+        method="linear",
+    )
     with pytest.raises(AttributeError):
         result.g = 1.0
     with pytest.raises(ValueError):
@@ -197,7 +233,10 @@ def test_result_is_frozen(arm, rng, truth):
 @pytest.mark.parametrize(
     ("kwargs", "pattern"),
     [
-        ({"method": "nonlinear-magic"}, "unknown calibration method 'nonlinear-magic'; expected one of.*linear"),
+        (
+            {"method": "nonlinear-magic"},
+            "unknown calibration method 'nonlinear-magic'; expected one of.*linear",
+        ),
         ({"method": "linear", "g": 0.0}, "g must be a finite positive number"),
         ({"method": "linear", "g": float("nan")}, "g must be a finite positive number"),
     ],
@@ -219,10 +258,19 @@ def test_calibrate_needs_samples():
         (lambda r: Samples(np.zeros((3, 6)), r[:2]), "3 wrenches but 2 orientations"),
         (lambda r: Samples(np.zeros((3, 5)), r), r"wrenches .* must have shape \(6,\) or \(N, 6\)"),
         (lambda r: Samples(np.zeros((0, 6)), r[:0]), "no samples"),
-        (lambda r: Samples(np.zeros((3, 6)), r, pose_ids=[1, 2]), r"pose_ids must have shape \(3,\)"),
-        (lambda r: Samples(np.zeros((3, 6)), r, pose_ids=[1.0, 2.5, 3.0]), "pose ids must be integers"),
+        (
+            lambda r: Samples(np.zeros((3, 6)), r, pose_ids=[1, 2]),
+            r"pose_ids must have shape \(3,\)",
+        ),
+        (
+            lambda r: Samples(np.zeros((3, 6)), r, pose_ids=[1.0, 2.5, 3.0]),
+            "pose ids must be integers",
+        ),
         (lambda r: Samples(np.full((3, 6), np.nan), r), "finite"),
-        (lambda r: Samples(np.zeros((3, 6)), 2 * r), r"rotation_sensor_to_base\[0\] is not a rotation matrix"),
+        (
+            lambda r: Samples(np.zeros((3, 6)), 2 * r),
+            r"rotation_sensor_to_base\[0\] is not a rotation matrix",
+        ),
     ],
 )
 def test_bad_samples_are_refused(build, pattern):
@@ -240,4 +288,11 @@ def test_a_pose_id_grouping_different_orientations_is_refused(arm, rng):
         Samples.from_joint_positions(arm, q, wrenches, pose_ids=[0, 0, 1, 1]).pose_averages()
     # encoder jitter within a pose is fine
     jitter = np.repeat(q[:2], 2, axis=0) + rng.normal(0, 1e-4, (4, arm.nq))
-    assert len(Samples.from_joint_positions(arm, jitter, wrenches, pose_ids=[0, 0, 1, 1]).pose_averages()) == 2
+    assert (
+        len(
+            Samples.from_joint_positions(
+                arm, jitter, wrenches, pose_ids=[0, 0, 1, 1]
+            ).pose_averages()
+        )
+        == 2
+    )

@@ -53,25 +53,39 @@ def test_noise_free_data_give_the_truth(tool, rotations, noise):
 
 def test_solver_reaches_the_truth_from_a_poor_start(tool, rotations):
     """Not just the linear start handed back: 1 N, 0.1 N·m and 2 cm off, it still converges."""
-    problem = WeightedProblem(rotations, tool.predict(rotations), np.ones(len(rotations)), NOISE.channel_std)
-    start = tool.to_vector() + np.r_[1.0, -1.0, 0.5, 1.0, 1.0, -1.0, 0.1, -0.1, 0.1, 0.02, -0.02, 0.02]
+    problem = WeightedProblem(
+        rotations, tool.predict(rotations), np.ones(len(rotations)), NOISE.channel_std
+    )
+    start = (
+        tool.to_vector() + np.r_[1.0, -1.0, 0.5, 1.0, 1.0, -1.0, 0.1, -0.1, 0.1, 0.02, -0.02, 0.02]
+    )
     theta, _ = _solve(problem, start, "linear")
     np.testing.assert_allclose(theta, tool.to_vector(), rtol=0, atol=1e-9)
 
 
 def test_whitened_jacobian_matches_finite_differences(tool, rotations):
-    problem = WeightedProblem(rotations, tool.predict(rotations) + 0.1, np.arange(1, 13), NOISE.channel_std)
+    problem = WeightedProblem(
+        rotations, tool.predict(rotations) + 0.1, np.arange(1, 13), NOISE.channel_std
+    )
     theta = tool.to_vector()
     step = 1e-6
-    numeric = np.column_stack([
-        -(problem.whitened_residuals(theta + step * e) - problem.whitened_residuals(theta - step * e)) / (2 * step)
-        for e in np.eye(12)
-    ])
+    numeric = np.column_stack(
+        [
+            -(
+                problem.whitened_residuals(theta + step * e)
+                - problem.whitened_residuals(theta - step * e)
+            )
+            / (2 * step)
+            for e in np.eye(12)
+        ]
+    )
     np.testing.assert_allclose(problem.whitened_jacobian(theta), numeric, rtol=1e-6, atol=1e-4)
 
 
 def test_fit_on_pose_means_equals_fit_on_every_reading(tool, rotations, rng):
-    """Weighting pose means by counts is the fit over all raw readings (brute force, numeric Jacobian)."""
+    """Weighting pose means by counts is the fit over all raw readings (brute force, numeric
+    Jacobian).
+    """
     counts = rng.integers(1, 6, size=len(rotations))
     repeated = np.repeat(rotations, counts, axis=0)
     pose_ids = np.repeat(np.arange(len(rotations)), counts)
@@ -79,9 +93,13 @@ def test_fit_on_pose_means_equals_fit_on_every_reading(tool, rotations, rng):
     result = calibrate(Samples(raw, repeated, pose_ids), noise=NOISE)
 
     def every_reading(theta):
-        return ((raw - SensorModel.from_vector(theta).predict(repeated)) / NOISE.channel_std).ravel()
+        return (
+            (raw - SensorModel.from_vector(theta).predict(repeated)) / NOISE.channel_std
+        ).ravel()
 
-    brute = least_squares(every_reading, result.to_vector() + 1e-3, xtol=1e-14, ftol=1e-14, gtol=1e-14)
+    brute = least_squares(
+        every_reading, result.to_vector() + 1e-3, xtol=1e-14, ftol=1e-14, gtol=1e-14
+    )
     np.testing.assert_allclose(result.to_vector(), brute.x, rtol=0, atol=1e-8)
     assert result.sample_count == counts.sum()
 
@@ -119,7 +137,9 @@ def test_delta_method_gradients_match_finite_differences(tool):
         return np.array([model.tool_weight, *model.base_tilt])
 
     step = 1e-6
-    numeric = np.column_stack([(derived(theta + step * e) - derived(theta - step * e)) / (2 * step) for e in np.eye(12)])
+    numeric = np.column_stack(
+        [(derived(theta + step * e) - derived(theta - step * e)) / (2 * step) for e in np.eye(12)]
+    )
     grads = derived_gradients(tool.gravity_in_base)
     analytic = np.vstack([grads["tool_weight"], grads["base_tilt_u"], grads["base_tilt_v"]])
     np.testing.assert_allclose(analytic, numeric, rtol=1e-6, atol=1e-9)
@@ -131,27 +151,56 @@ def test_extended_standard_errors_are_the_named_ones_and_the_delta_method(tool, 
     named = standard_errors(tool, covariance)
     np.testing.assert_array_equal(sigma[:12], np.sqrt(np.diag(covariance)))
     np.testing.assert_array_equal(
-        sigma, np.concatenate([named[key] for key in ("gravity_in_base", "force_offset", "torque_offset",
-                                                      "center_of_mass")] + [[named["tool_weight"]], named["base_tilt"]])
+        sigma,
+        np.concatenate(
+            [
+                named[key]
+                for key in ("gravity_in_base", "force_offset", "torque_offset", "center_of_mass")
+            ]
+            + [[named["tool_weight"]], named["base_tilt"]]
+        ),
     )
     assert named["tool_mass"] == pytest.approx(named["tool_weight"] / tool.g)
     grads = derived_gradients(tool.gravity_in_base)
     for index, key in zip((12, 13, 14), ("tool_weight", "base_tilt_u", "base_tilt_v")):
-        assert sigma[index] == pytest.approx(np.sqrt(grads[key] @ covariance @ grads[key]), rel=1e-12)
-    assert len(EXTENDED_NAMES) == 15 and EXTENDED_NAMES[12:] == ("tool_weight", "base_tilt[u]", "base_tilt[v]")
-    np.testing.assert_array_equal(extended_parameters(tool)[12:], [tool.tool_weight, *tool.base_tilt])
+        assert sigma[index] == pytest.approx(
+            np.sqrt(grads[key] @ covariance @ grads[key]), rel=1e-12
+        )
+    assert len(EXTENDED_NAMES) == 15 and EXTENDED_NAMES[12:] == (
+        "tool_weight",
+        "base_tilt[u]",
+        "base_tilt[v]",
+    )
+    np.testing.assert_array_equal(
+        extended_parameters(tool)[12:], [tool.tool_weight, *tool.base_tilt]
+    )
 
 
 @pytest.mark.parametrize(
     "call, message",
     [
         (lambda m, r: standard_errors(m, np.eye(3)), r"covariance must have shape \(12, 12\)"),
-        (lambda m, r: extended_standard_errors(m, np.full((12, 12), np.nan)), "covariance must be finite"),
-        (lambda m, r: covariance_from_information(np.eye(3)), r"information must have shape \(12, 12\)"),
+        (
+            lambda m, r: extended_standard_errors(m, np.full((12, 12), np.nan)),
+            "covariance must be finite",
+        ),
+        (
+            lambda m, r: covariance_from_information(np.eye(3)),
+            r"information must have shape \(12, 12\)",
+        ),
         (lambda m, r: covariance_from_information("x"), "information must be numeric"),
-        (lambda m, r: fisher_information(m, r, (0.03, 0.0015)), "noise must be an ftkin.SensorNoise, got tuple"),
-        (lambda m, r: fisher_information(m, r, NOISE, [1, 2]), r"readings_per_pose must be a scalar or have shape \(12,\)"),
-        (lambda m, r: fisher_information(m, r, NOISE, 0), "readings_per_pose must be finite and positive"),
+        (
+            lambda m, r: fisher_information(m, r, (0.03, 0.0015)),
+            "noise must be an ftkin.SensorNoise, got tuple",
+        ),
+        (
+            lambda m, r: fisher_information(m, r, NOISE, [1, 2]),
+            r"readings_per_pose must be a scalar or have shape \(12,\)",
+        ),
+        (
+            lambda m, r: fisher_information(m, r, NOISE, 0),
+            "readings_per_pose must be finite and positive",
+        ),
     ],
 )
 def test_information_functions_refuse_bad_input(tool, rotations, call, message):
@@ -159,7 +208,9 @@ def test_information_functions_refuse_bad_input(tool, rotations, call, message):
         call(tool, rotations)
 
 
-@pytest.mark.parametrize("readings, given", [(1, True), (4, False)], ids=["noise given", "noise from spread"])
+@pytest.mark.parametrize(
+    "readings, given", [(1, True), (4, False)], ids=["noise given", "noise from spread"]
+)
 def test_standard_errors_match_the_monte_carlo_spread(tool, rotations, readings, given):
     rng = np.random.default_rng(2024)
     sensor = SimulatedSensor(tool, NOISE)
@@ -173,9 +224,13 @@ def test_standard_errors_match_the_monte_carlo_spread(tool, rotations, readings,
     mean_reported = np.mean(reported, axis=0)
     np.testing.assert_allclose(mean_reported, spread, rtol=0.2)
     # and the reported errors are the Cramér–Rao bound (ml is efficient)
-    crlb = extended_standard_errors(tool, covariance_from_information(fisher_information(tool, rotations, NOISE, readings)))
+    crlb = extended_standard_errors(
+        tool, covariance_from_information(fisher_information(tool, rotations, NOISE, readings))
+    )
     np.testing.assert_allclose(mean_reported, crlb, rtol=0.05)
-    assert np.all(np.abs(np.mean(estimates, axis=0) - extended_parameters(tool)) < 0.3 * crlb)  # unbiased (σ/√300 = 0.06σ)
+    assert np.all(
+        np.abs(np.mean(estimates, axis=0) - extended_parameters(tool)) < 0.3 * crlb
+    )  # unbiased (σ/√300 = 0.06σ)
 
 
 # ---------------------------------------------------------------- noise levels
@@ -225,12 +280,23 @@ def test_calibration_file_round_trip_keeps_errors_and_diagnostics(tool, rotation
     assert loaded.diagnostics.to_dict() == result.diagnostics.to_dict()
     assert loaded.summary() == result.summary()
     document = json.loads(path.read_text())
-    assert set(document["std_errors"]) >= {"gravity_in_base", "force_offset", "torque_offset", "center_of_mass",
-                                           "tool_weight", "tool_mass", "base_tilt_deg"}
-    np.testing.assert_allclose(document["std_errors"]["base_tilt_deg"], np.rad2deg(result.std_errors["base_tilt"]))
+    assert set(document["std_errors"]) >= {
+        "gravity_in_base",
+        "force_offset",
+        "torque_offset",
+        "center_of_mass",
+        "tool_weight",
+        "tool_mass",
+        "base_tilt_deg",
+    }
+    np.testing.assert_allclose(
+        document["std_errors"]["base_tilt_deg"], np.rad2deg(result.std_errors["base_tilt"])
+    )
 
 
-def test_version_1_file_without_covariance_or_diagnostics_still_loads(tool, rotations, rng, tmp_path):
+def test_version_1_file_without_covariance_or_diagnostics_still_loads(
+    tool, rotations, rng, tmp_path
+):
     document = calibration_to_dict(calibrate(SimulatedSensor(tool, NOISE).samples(rotations, rng)))
     for key in ("covariance", "std_errors", "diagnostics"):
         document.pop(key)
@@ -260,9 +326,26 @@ def test_cli_calibrate_ml_prints_errors_and_diagnostics(arm, tool, tmp_path, cap
     assert "noise per reading (from the spread of repeated readings)" in text
     assert "condition number" in text and "goodness of fit" in text
     assert load_calibration(out).diagnostics.noise_source == "spread"
-    assert main(["calibrate", str(csv), "--noise-force", "0.03", "--noise-torque", "0.0015", "--loss", "huber"]) == 0
+    assert (
+        main(
+            [
+                "calibrate",
+                str(csv),
+                "--noise-force",
+                "0.03",
+                "--noise-torque",
+                "0.0015",
+                "--loss",
+                "huber",
+            ]
+        )
+        == 0
+    )
     text = capsys.readouterr().out
-    assert "noise per reading (given): force [0.0300, 0.0300, 0.0300] N" in text and "loss huber" in text
+    assert (
+        "noise per reading (given): force [0.0300, 0.0300, 0.0300] N" in text
+        and "loss huber" in text
+    )
     assert main(["calibrate", str(csv), "--method", "linear"]) == 0
     assert "±" not in capsys.readouterr().out
 
@@ -278,7 +361,13 @@ def test_cli_calibrate_refuses_inconsistent_options(arm, tool, tmp_path, capsys,
     rng = np.random.default_rng(4)
     configurations = arm.random_configurations(6, rng, margin=0.3)
     csv = tmp_path / "samples.csv"
-    _write_samples_csv(csv, arm, configurations, tool.predict(arm.rotation_sensor_to_base(configurations)), np.arange(6))
+    _write_samples_csv(
+        csv,
+        arm,
+        configurations,
+        tool.predict(arm.rotation_sensor_to_base(configurations)),
+        np.arange(6),
+    )
     assert main(["calibrate", str(csv), *extra]) == 2
     assert message in capsys.readouterr().err
 
@@ -292,8 +381,15 @@ def test_cli_paper_keeps_the_linear_reproduction_and_adds_ml(capsys):
 
 
 def test_noise_from_residuals_is_unbiased_thanks_to_the_leverage_correction(tool, rotations):
-    """Without the correction for the 12 fitted parameters the variance would come out 6P/(6P-12) = 1.2x small."""
+    """Without the correction for the 12 fitted parameters the variance would come out 6P/(6P-12) =
+    1.2x small.
+    """
     rng = np.random.default_rng(11)
     sensor = SimulatedSensor(tool, NOISE)
-    variances = np.array([fit_ml(sensor.samples(rotations, rng).pose_averages()).noise.channel_std ** 2 for _ in range(200)])
+    variances = np.array(
+        [
+            fit_ml(sensor.samples(rotations, rng).pose_averages()).noise.channel_std ** 2
+            for _ in range(200)
+        ]
+    )
     np.testing.assert_allclose(variances.mean(axis=0) / NOISE.channel_std**2, 1.0, atol=0.06)

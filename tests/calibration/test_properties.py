@@ -23,7 +23,12 @@ from ftkin.kinematics.rotations import (
     tilt_from_gravity_in_base,
 )
 
-SETTINGS = settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.function_scoped_fixture])
+SETTINGS = settings(
+    max_examples=60,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
 
 finite = st.floats(min_value=-1e6, max_value=1e6, allow_nan=False, allow_infinity=False)
 magnitude = st.sampled_from([1e-9, 1e-3, 1.0, 1e3, 1e6])
@@ -31,7 +36,9 @@ magnitude = st.sampled_from([1e-9, 1e-3, 1.0, 1e3, 1e6])
 
 @st.composite
 def rotations(draw):
-    """A rotation: uniform random, or a signed axis permutation (gravity exactly on a sensor axis)."""
+    """A rotation: uniform random, or a signed axis permutation (gravity exactly on a sensor
+    axis).
+    """
     if draw(st.booleans()):
         quaternion = draw(arrays(np.float64, 4, elements=st.floats(-1, 1, allow_nan=False)))
         assume(np.linalg.norm(quaternion) > 1e-3)
@@ -47,10 +54,14 @@ def rotations(draw):
 @st.composite
 def sensor_models(draw):
     scale = draw(magnitude)
-    vector = lambda: np.array(draw(st.lists(st.floats(-1, 1, allow_nan=False), min_size=3, max_size=3)))  # noqa: E731
+    vector = lambda: np.array(
+        draw(st.lists(st.floats(-1, 1, allow_nan=False), min_size=3, max_size=3))
+    )  # noqa: E731
     gravity = vector() * scale
     assume(np.linalg.norm(gravity) > 0)
-    return ftkin.SensorModel(vector() * scale, vector() * scale, gravity, vector() * draw(magnitude))
+    return ftkin.SensorModel(
+        vector() * scale, vector() * scale, gravity, vector() * draw(magnitude)
+    )
 
 
 @SETTINGS
@@ -73,7 +84,9 @@ def test_euler_conversion_round_trip(angles):
 @SETTINGS
 @given(rotation=rotations())
 def test_quaternion_conversion_is_the_inverse(rotation):
-    np.testing.assert_allclose(quaternion_to_matrix(matrix_to_quaternion(rotation)), rotation, atol=1e-12)
+    np.testing.assert_allclose(
+        quaternion_to_matrix(matrix_to_quaternion(rotation)), rotation, atol=1e-12
+    )
 
 
 @SETTINGS
@@ -110,7 +123,13 @@ def test_calibration_is_finite_or_an_ftkin_error(model, poses, method):
         result = ftkin.calibrate(samples, method=method)
     except ftkin.FtkinError:
         return
-    for value in (result.force_offset, result.torque_offset, result.gravity_in_base, result.center_of_mass, result.residuals):
+    for value in (
+        result.force_offset,
+        result.torque_offset,
+        result.gravity_in_base,
+        result.center_of_mass,
+        result.residuals,
+    ):
         assert np.all(np.isfinite(value))
     assert np.isfinite(result.tool_weight) and all(np.isfinite(result.base_tilt))
 

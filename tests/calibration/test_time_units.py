@@ -1,4 +1,6 @@
-"""Reading times not in seconds (ms, ns stamps) are named, not silently fitted as a weeks-long drift."""
+"""Reading times not in seconds (ms, ns stamps) are named, not silently fitted as a weeks-long
+drift.
+"""
 
 from __future__ import annotations
 
@@ -20,9 +22,13 @@ def test_nanosecond_stamps_are_refused_with_the_factor():
 
 
 def test_epoch_seconds_are_fine_and_millisecond_stamps_warn(caplog):
-    Samples(WRENCHES, ROTATIONS, [0, 1, 2], times=1.7e9 + np.array([0.0, 600.0, 1200.0]))  # ROS time in s: fine
+    Samples(
+        WRENCHES, ROTATIONS, [0, 1, 2], times=1.7e9 + np.array([0.0, 600.0, 1200.0])
+    )  # ROS time in s: fine
     with caplog.at_level(logging.WARNING, logger="ftkin"):
-        Samples(WRENCHES, ROTATIONS, [0, 1, 2], times=np.array([0.0, 6e5, 1.2e6]))  # 20 min in ms: 13.9 days
+        Samples(
+            WRENCHES, ROTATIONS, [0, 1, 2], times=np.array([0.0, 6e5, 1.2e6])
+        )  # 20 min in ms: 13.9 days
     assert "look like milliseconds (divide by 1000: 1200 s)" in caplog.text
 
 
@@ -32,7 +38,9 @@ def test_a_motion_sampled_in_milliseconds_is_refused():
     with pytest.raises(InvalidInput, match="milliseconds"):
         joint_derivatives(times, q)
     smooth, velocity, _ = joint_derivatives(times / 1000.0, q)
-    np.testing.assert_allclose(velocity[50:150], np.cos(np.outer(times[50:150] / 1000.0, np.ones(6))), atol=1e-6)
+    np.testing.assert_allclose(
+        velocity[50:150], np.cos(np.outer(times[50:150] / 1000.0, np.ones(6))), atol=1e-6
+    )
 
 
 def test_a_pose_revisited_under_the_same_id_is_refused_for_a_drift_model(arm, caplog):
@@ -49,13 +57,18 @@ def test_a_pose_revisited_under_the_same_id_is_refused_for_a_drift_model(arm, ca
     times = np.arange(24) * 10.0
     ids[-3:] = 2  # the last visit reuses pose 2's id, 150 s later
     samples = Samples(wrenches, rotations, ids, times=times)
-    with pytest.raises(InvalidSamples, match=r"pose 2 was recorded in 2 separate visits \(60–80 s, 210–230 s; 1 pose"):
+    with pytest.raises(
+        InvalidSamples,
+        match=r"pose 2 was recorded in 2 separate visits \(60–80 s, 210–230 s; 1 pose",
+    ):
         calibrate(samples, drift="poly:2")
     # not asked for a drift model: auto keeps a constant bias and says why
     with caplog.at_level(logging.WARNING, logger="ftkin"):
         assert calibrate(samples, drift="auto").drift.model == "none"
     assert "keeps a constant bias" in caplog.text
-    assert calibrate(samples, drift="none").pose_count == 7  # a constant bias: the visits may be averaged
+    assert (
+        calibrate(samples, drift="none").pose_count == 7
+    )  # a constant bias: the visits may be averaged
     ids[-3:] = 8
     assert calibrate(Samples(wrenches, rotations, ids, times=times), drift="auto").pose_count == 8
 
@@ -64,11 +77,20 @@ def test_constructors_never_freeze_the_callers_arrays():
     from ftkin import SensorModel
     from ftkin.calibration.drift import BiasDrift
 
-    wrenches, rotations, ids, times = np.zeros((3, 6)), np.tile(np.eye(3), (3, 1, 1)), np.arange(3), np.arange(3.0)
+    wrenches, rotations, ids, times = (
+        np.zeros((3, 6)),
+        np.tile(np.eye(3), (3, 1, 1)),
+        np.arange(3),
+        np.arange(3.0),
+    )
     samples = Samples(wrenches, rotations, ids, times=times)
     force = np.array([1.0, 2.0, 3.0])
-    model = SensorModel(force_offset=force, torque_offset=np.zeros(3), gravity_in_base=np.array([0.0, 0.0, -5.0]),
-                        center_of_mass=np.zeros(3))
+    model = SensorModel(
+        force_offset=force,
+        torque_offset=np.zeros(3),
+        gravity_in_base=np.array([0.0, 0.0, -5.0]),
+        center_of_mass=np.zeros(3),
+    )
     bias = np.zeros((3, 6))
     BiasDrift("none", "given", times, bias, bias.copy())
     for array in (wrenches, rotations, ids, times, force, bias):
@@ -87,7 +109,9 @@ def test_auto_on_a_long_stream_of_single_readings_compares_polynomials_only(arm)
     count = MAX_AUTO_WALK_POSES + 100
     q = arm.random_configurations(count, rng, margin=0.3)
     sensor = SimulatedSensor(paper_like_truth(), SensorNoise(0.02, 0.001), SensorDrift.typical())
-    samples = sensor.samples_at_configurations(arm, q, rng, 1, times=np.arange(count) * 2.0)  # no pose column
+    samples = sensor.samples_at_configurations(
+        arm, q, rng, 1, times=np.arange(count) * 2.0
+    )  # no pose column
     result = calibrate(samples)  # auto (the walk's search over 600 poses took about a minute)
     assert not any(name.startswith("random-walk") for name in result.drift.criteria)
     assert result.drift.model.startswith("poly")  # the warm-up is found

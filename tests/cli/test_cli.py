@@ -24,11 +24,15 @@ def calibration_csv(arm, rng, truth, tmp_path):
     wrenches = truth.predict(arm.rotation_sensor_to_base(configurations))
     pose = np.repeat(np.arange(1, 9), 3)
     header = ["pose"] + [f"q{i + 1}" for i in range(arm.nq)] + WRENCH
-    rows = [[int(p), *map(float, q), *map(float, w)] for p, q, w in zip(pose, configurations, wrenches)]
+    rows = [
+        [int(p), *map(float, q), *map(float, w)] for p, q, w in zip(pose, configurations, wrenches)
+    ]
     return write_csv(tmp_path / "samples.csv", header, rows)
 
 
-def test_calibrate_then_compensate_returns_the_contact(arm, rng, truth, calibration_csv, tmp_path, capsys):
+def test_calibrate_then_compensate_returns_the_contact(
+    arm, rng, truth, calibration_csv, tmp_path, capsys
+):
     calib = tmp_path / "calib.json"
     assert main(["calibrate", str(calibration_csv), "-o", str(calib), "--method", "linear"]) == 0
     out = capsys.readouterr().out
@@ -43,7 +47,10 @@ def test_calibrate_then_compensate_returns_the_contact(arm, rng, truth, calibrat
     contact = rng.normal(scale=[3, 3, 3, 0.2, 0.2, 0.2], size=(10, 6))
     raw = truth.predict(arm.rotation_sensor_to_base(configurations)) + contact
     header = ["time", *arm.joint_names, *WRENCH, "label"]
-    rows = [[0.001 * i, *map(float, q), *map(float, w), f"tick {i}"] for i, (q, w) in enumerate(zip(configurations, raw))]
+    rows = [
+        [0.001 * i, *map(float, q), *map(float, w), f"tick {i}"]
+        for i, (q, w) in enumerate(zip(configurations, raw))
+    ]
     log = write_csv(tmp_path / "log.csv", header, rows)
     output = tmp_path / "out.csv"
     assert main(["compensate", str(calib), str(log), "-o", str(output)]) == 0
@@ -76,22 +83,37 @@ def test_calibrate_with_quaternion_csv_and_explicit_urdf(arm, rng, truth, tmp_pa
 def test_demo_prints_truth_beside_estimate(capsys):
     assert main(["demo", "--readings", "20", "--poses", "8", "--seed", "3"]) == 0
     out = capsys.readouterr().out
-    assert re.search(r"parameter\s+truth\s+estimate\s+max \|error\|\s+max \|error\| / std error", out)
-    for name in ("force_offset", "torque_offset", "center_of_mass", "gravity_in_base", "base_tilt_deg"):
+    assert re.search(
+        r"parameter\s+truth\s+estimate\s+max \|error\|\s+max \|error\| / std error", out
+    )
+    for name in (
+        "force_offset",
+        "torque_offset",
+        "center_of_mass",
+        "gravity_in_base",
+        "base_tilt_deg",
+    ):
         assert re.search(rf"^\s+{name}\s+\[", out, flags=re.MULTILINE), name
     injected = [float(v) for v in re.search(r"injected\s+(.*)", out).group(1).split()]
     recovered = [float(v) for v in re.search(r"recovered\s+(.*)", out).group(1).split()]
     np.testing.assert_allclose(injected, [1.5, -0.8, -4.0, 0.05, 0.02, -0.01])
     # a few readings' worth of noise (0.02 N, 0.002 N·m each) plus the calibration error
     np.testing.assert_allclose(recovered, injected, atol=0.15)
-    if importlib.util.find_spec("mujoco") is not None:  # the closed-loop segment: the object lands on the book gently
-        peak = float(re.search(r"Closed loop in MuJoCo.*\n\s+peak contact force ([\d.]+) N", out).group(1))
+    if (
+        importlib.util.find_spec("mujoco") is not None
+    ):  # the closed-loop segment: the object lands on the book gently
+        peak = float(
+            re.search(r"Closed loop in MuJoCo.*\n\s+peak contact force ([\d.]+) N", out).group(1)
+        )
         assert 2.0 < peak < 3.0
 
 
 def test_demo_writes_a_calibration_file(tmp_path, capsys):
     path = tmp_path / "demo.json"
-    assert main(["demo", "--readings", "5", "--poses", "6", "--sim-seconds", "0", "-o", str(path)]) == 0
+    assert (
+        main(["demo", "--readings", "5", "--poses", "6", "--sim-seconds", "0", "-o", str(path)])
+        == 0
+    )
     assert load_calibration(path).pose_count == 6
 
 
@@ -105,24 +127,34 @@ def _assert_cli_error(argv, capsys, pattern):
 
 
 def test_missing_samples_file(tmp_path, capsys):
-    _assert_cli_error(["calibrate", str(tmp_path / "nope.csv")], capsys, r"nope.csv: file not found")
+    _assert_cli_error(
+        ["calibrate", str(tmp_path / "nope.csv")], capsys, r"nope.csv: file not found"
+    )
 
 
 def test_bad_samples_cell(tmp_path, capsys):
     path = tmp_path / "bad.csv"
     path.write_text("alpha,beta,gamma,fx,fy,fz,mx,my,mz\n0,0,0,1,2,x,4,5,6\n")
-    _assert_cli_error(["calibrate", str(path), "--method", "linear"], capsys, r"bad.csv, line 2: column 'fz': 'x' is not a number")
+    _assert_cli_error(
+        ["calibrate", str(path), "--method", "linear"],
+        capsys,
+        r"bad.csv, line 2: column 'fz': 'x' is not a number",
+    )
 
 
 def test_unobservable_poses(tmp_path, capsys):
     path = tmp_path / "same.csv"
     path.write_text("alpha,beta,gamma,fx,fy,fz,mx,my,mz\n" + "90,0,-180,1,2,3,4,5,6\n" * 4)
-    _assert_cli_error(["calibrate", str(path), "--method", "linear"], capsys, "cannot determine .*force_offset")
+    _assert_cli_error(
+        ["calibrate", str(path), "--method", "linear"], capsys, "cannot determine .*force_offset"
+    )
 
 
 def test_missing_urdf(tmp_path, capsys, calibration_csv):
     _assert_cli_error(
-        ["calibrate", str(calibration_csv), "--urdf", str(tmp_path / "arm.urdf")], capsys, r"cannot load URDF .*arm.urdf: file not found"
+        ["calibrate", str(calibration_csv), "--urdf", str(tmp_path / "arm.urdf")],
+        capsys,
+        r"cannot load URDF .*arm.urdf: file not found",
     )
 
 
@@ -130,7 +162,14 @@ def test_unknown_sensor_frame(calibration_csv, capsys):
     from ftkin import bundled_urdf_path
 
     _assert_cli_error(
-        ["calibrate", str(calibration_csv), "--urdf", str(bundled_urdf_path()), "--sensor-frame", "fts"],
+        [
+            "calibrate",
+            str(calibration_csv),
+            "--urdf",
+            str(bundled_urdf_path()),
+            "--sensor-frame",
+            "fts",
+        ],
         capsys,
         r"frame 'fts' not found .*ft_sensor",
     )
@@ -140,14 +179,25 @@ def test_compensate_with_broken_calibration_file(tmp_path, capsys, calibration_c
     calib = tmp_path / "calib.json"
     calib.write_text('{"format": "ftkin-calibration", "version": 1,')
     _assert_cli_error(
-        ["compensate", str(calib), str(calibration_csv), "-o", str(tmp_path / "out.csv")], capsys, r"calib.json: not valid JSON .*line 1"
+        ["compensate", str(calib), str(calibration_csv), "-o", str(tmp_path / "out.csv")],
+        capsys,
+        r"calib.json: not valid JSON .*line 1",
     )
     assert not (tmp_path / "out.csv").exists()
 
 
 def test_output_into_missing_folder(calibration_csv, tmp_path, capsys):
     _assert_cli_error(
-        ["calibrate", str(calibration_csv), "--method", "linear", "-o", str(tmp_path / "no" / "c.json")], capsys, "does not exist"
+        [
+            "calibrate",
+            str(calibration_csv),
+            "--method",
+            "linear",
+            "-o",
+            str(tmp_path / "no" / "c.json"),
+        ],
+        capsys,
+        "does not exist",
     )
 
 

@@ -22,18 +22,37 @@ def samples_csv(tmp_path_factory):
     sensor = SimulatedSensor(paper_like_truth(), SensorNoise.paper(), SensorDrift.typical())
     samples = sensor.samples_at_configurations(arm, configurations, rng, 4, times=times)
     header = ["t", "pose", *[f"q{i + 1}" for i in range(6)], "fx", "fy", "fz", "mx", "my", "mz"]
-    rows = [[t, int(p), *q, *w] for t, p, q, w in zip(samples.times, samples.pose_ids, samples.joint_positions, samples.wrenches)]
+    rows = [
+        [t, int(p), *q, *w]
+        for t, p, q, w in zip(
+            samples.times, samples.pose_ids, samples.joint_positions, samples.wrenches
+        )
+    ]
     path = tmp_path_factory.mktemp("drift") / "samples.csv"
     write_csv(path, header, rows)
     return path
 
 
 def test_calibrate_with_drift_then_compensate_at_the_reading_times(samples_csv, tmp_path, capsys):
-    assert main(["calibrate", str(samples_csv), "--drift", "poly:3", "-o", str(tmp_path / "c.json")]) == 0
+    assert (
+        main(["calibrate", str(samples_csv), "--drift", "poly:3", "-o", str(tmp_path / "c.json")])
+        == 0
+    )
     out = capsys.readouterr().out
     assert "bias drift: poly:3 (given)" in out and "end of the recording" in out
     assert json.loads((tmp_path / "c.json").read_text())["drift"]["model"] == "poly:3"
-    assert main(["compensate", str(tmp_path / "c.json"), str(samples_csv), "-o", str(tmp_path / "out.csv")]) == 0
+    assert (
+        main(
+            [
+                "compensate",
+                str(tmp_path / "c.json"),
+                str(samples_csv),
+                "-o",
+                str(tmp_path / "out.csv"),
+            ]
+        )
+        == 0
+    )
     assert "used the bias at their time" in capsys.readouterr().out
     assert main(["calibrate", str(samples_csv), "--drift", "poly:7"]) == 2
     assert "degree must be 1..5" in capsys.readouterr().err
@@ -41,7 +60,9 @@ def test_calibrate_with_drift_then_compensate_at_the_reading_times(samples_csv, 
 
 def test_rezero_updates_the_file_in_place_or_writes_elsewhere(samples_csv, tmp_path, capsys):
     calibration_path = tmp_path / "c.json"
-    assert main(["calibrate", str(samples_csv), "--drift", "none", "-o", str(calibration_path)]) == 0
+    assert (
+        main(["calibrate", str(samples_csv), "--drift", "none", "-o", str(calibration_path)]) == 0
+    )
     before = calibration_path.read_text()
     original = load_calibration(calibration_path)
     q = [0.2, -1.1, 1.3, 0.4, 1.2, -0.3]
@@ -61,15 +82,61 @@ def test_rezero_updates_the_file_in_place_or_writes_elsewhere(samples_csv, tmp_p
     np.testing.assert_allclose(load_calibration(calibration_path).bias, other.bias)
     assert main(["rezero", str(calibration_path), "--q", "0", "1", "--wrench", *["0"] * 6]) == 2
     assert "6 joint angles" in capsys.readouterr().err
-    # a pose the arm cannot be in: degrees, or past a joint limit (joint2's upper limit is 1.134 rad)
+    # a pose the arm cannot be in: degrees, or past a joint limit (joint2's upper limit is 1.134
+    # rad)
     unchanged = calibration_path.read_text()
-    assert main(["rezero", str(calibration_path), "--q", "0", "0", "0", "0", "0", "90", "--wrench", *["0"] * 6]) == 2
+    assert (
+        main(
+            [
+                "rezero",
+                str(calibration_path),
+                "--q",
+                "0",
+                "0",
+                "0",
+                "0",
+                "0",
+                "90",
+                "--wrench",
+                *["0"] * 6,
+            ]
+        )
+        == 2
+    )
     assert "joint6 = 90 is beyond ±2π" in capsys.readouterr().err
-    assert main(["rezero", str(calibration_path), "--q", "0", "1.5", "0", "0", "0", "0", "--wrench", *["0"] * 6]) == 2
+    assert (
+        main(
+            [
+                "rezero",
+                str(calibration_path),
+                "--q",
+                "0",
+                "1.5",
+                "0",
+                "0",
+                "0",
+                "0",
+                "--wrench",
+                *["0"] * 6,
+            ]
+        )
+        == 2
+    )
     assert "joint2 = 1.5 rad is outside its limits" in capsys.readouterr().err
     assert calibration_path.read_text() == unchanged
     # a JSON file where a CSV is expected
-    assert main(["compensate", str(calibration_path), str(calibration_path), "-o", str(tmp_path / "x.csv")]) == 2
+    assert (
+        main(
+            [
+                "compensate",
+                str(calibration_path),
+                str(calibration_path),
+                "-o",
+                str(tmp_path / "x.csv"),
+            ]
+        )
+        == 2
+    )
     assert "is a JSON file" in capsys.readouterr().err
 
 
@@ -78,11 +145,20 @@ def test_view_subtracts_the_bias_at_each_pose_time(samples_csv, tmp_path, capsys
     for drift, largest in (("poly:3", 0.05), ("none", 0.1)):
         assert main(["calibrate", str(samples_csv), "--drift", drift, "-o", str(calibration)]) == 0
         capsys.readouterr()
-        assert main(["view", str(calibration), str(samples_csv), "--html", str(tmp_path / "v.html")]) == 0
-        rows = [line.split() for line in capsys.readouterr().out.splitlines() if line.strip().startswith("pose ")]
+        assert (
+            main(["view", str(calibration), str(samples_csv), "--html", str(tmp_path / "v.html")])
+            == 0
+        )
+        rows = [
+            line.split()
+            for line in capsys.readouterr().out.splitlines()
+            if line.strip().startswith("pose ")
+        ]
         contact = np.array([float(row[5]) for row in rows])  # |F'| [N] at the 24 calibration poses
         assert len(contact) == 24
         if drift == "none":
-            assert contact.max() > largest  # a constant bias leaves the warm-up in the contact force
+            assert (
+                contact.max() > largest
+            )  # a constant bias leaves the warm-up in the contact force
         else:
             assert contact.max() < largest  # the bias at each pose's time: only the noise is left

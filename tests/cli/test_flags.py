@@ -1,4 +1,6 @@
-"""Flags: bounds with clear messages, degrees named, --sensor-offset stops at the file, -n, xacro named."""
+"""Flags: bounds with clear messages, degrees named, --sensor-offset stops at the file, -n, xacro
+named.
+"""
 
 from __future__ import annotations
 
@@ -18,8 +20,15 @@ def _usage_error(argv, capsys, pattern):
     assert pattern in err and "Traceback" not in err, err
 
 
-@pytest.mark.parametrize("n, pattern", [("501", "plan between 3 and 500 poses"), ("10" * 20, "plan between 3 and 500"),
-                                        ("2", "at least 3 poses"), ("1e3", "whole number of poses")])
+@pytest.mark.parametrize(
+    "n, pattern",
+    [
+        ("501", "plan between 3 and 500 poses"),
+        ("10" * 20, "plan between 3 and 500"),
+        ("2", "at least 3 poses"),
+        ("1e3", "whole number of poses"),
+    ],
+)
 def test_plan_n_is_bounded(n, pattern, capsys):
     _usage_error(["plan", "-n", n], capsys, pattern)
     _usage_error(["plan", "--n", n], capsys, pattern)
@@ -36,30 +45,68 @@ def test_joint_range_in_degrees_is_named(text, capsys):
 
 
 def test_sensor_offset_in_degrees_is_named(capsys):
-    _usage_error(["plan", "-n", "3", "--robot", "ur5", "--sensor-offset", "0", "0", "0.05", "0", "0", "90"], capsys,
-                 "these look like degrees")
+    _usage_error(
+        ["plan", "-n", "3", "--robot", "ur5", "--sensor-offset", "0", "0", "0.05", "0", "0", "90"],
+        capsys,
+        "these look like degrees",
+    )
 
 
 def test_sensor_offset_stops_at_the_file(arm, truth, tmp_path, capsys):
     assert join_number_lists(["--sensor-offset", "0", "-0.1", "0.05", "s.csv", "-o", "x"]) == [
-        "--sensor-offset=0,-0.1,0.05", "s.csv", "-o", "x"]
-    assert join_number_lists(["--sensor-offset", "1", "2", "3", "4", "5", "6", "7"]) == ["--sensor-offset=1,2,3,4,5,6", "7"]
+        "--sensor-offset=0,-0.1,0.05",
+        "s.csv",
+        "-o",
+        "x",
+    ]
+    assert join_number_lists(["--sensor-offset", "1", "2", "3", "4", "5", "6", "7"]) == [
+        "--sensor-offset=1,2,3,4,5,6",
+        "7",
+    ]
     rng = np.random.default_rng(1)
     from ftkin.kinematics.robots import load_robot
 
     ur5 = load_robot("ur5", [0.0, 0.0, 0.05])
     q = ur5.random_configurations(5, rng, margin=0.3)
-    path = write_csv(tmp_path / "s.csv", [f"q{i + 1}" for i in range(ur5.nq)] + WRENCH,
-                     np.hstack([q, truth.predict(ur5.rotation_sensor_to_base(q))]).tolist())
-    assert main(["calibrate", "--robot", "ur5", "--sensor-offset", "0", "0", "0.05", str(path), "--method", "linear"]) == 0
+    path = write_csv(
+        tmp_path / "s.csv",
+        [f"q{i + 1}" for i in range(ur5.nq)] + WRENCH,
+        np.hstack([q, truth.predict(ur5.rotation_sensor_to_base(q))]).tolist(),
+    )
+    assert (
+        main(
+            [
+                "calibrate",
+                "--robot",
+                "ur5",
+                "--sensor-offset",
+                "0",
+                "0",
+                "0.05",
+                str(path),
+                "--method",
+                "linear",
+            ]
+        )
+        == 0
+    )
     assert "5 poses" in capsys.readouterr().out
-    _usage_error(["calibrate", "--robot", "ur5", "--sensor-offset", "0", "0", str(path)], capsys, "takes 3 numbers")
+    _usage_error(
+        ["calibrate", "--robot", "ur5", "--sensor-offset", "0", "0", str(path)],
+        capsys,
+        "takes 3 numbers",
+    )
 
 
 def test_xacro_is_named(tmp_path, capsys):
     xacro = tmp_path / "arm.urdf.xacro"
-    xacro.write_text('<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="a"><xacro:include filename="x"/></robot>')
-    _usage_error(["plan", "-n", "3", "--urdf", xacro], capsys, "xacro file, not a URDF: run xacro first")
+    xacro.write_text(
+        '<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="a"><xacro:include '
+        'filename="x"/></robot>'
+    )
+    _usage_error(
+        ["plan", "-n", "3", "--urdf", xacro], capsys, "xacro file, not a URDF: run xacro first"
+    )
     hidden = tmp_path / "arm.urdf"
     hidden.write_text(xacro.read_text())
     _usage_error(["plan", "-n", "3", "--urdf", hidden], capsys, "run xacro first")

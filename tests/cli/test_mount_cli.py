@@ -1,4 +1,6 @@
-"""CLI: --estimate-mount, --sensor-sign, --flip-axis, --base-mount; the file carries them to compensate."""
+"""CLI: --estimate-mount, --sensor-sign, --flip-axis, --base-mount; the file carries them to
+compensate.
+"""
 
 from __future__ import annotations
 
@@ -36,8 +38,24 @@ def test_mount_sign_round_trip_through_the_cli(arm, tool, configurations, tmp_pa
     calib = tmp_path / "calib.json"
     assert main(["calibrate", str(samples), "--estimate-mount", "yaw", "-o", str(calib)]) == 2
     error = capsys.readouterr().err
-    assert "--sensor-sign -1" in error and "--base-mount ceiling" in error and "Traceback" not in error
-    assert main(["calibrate", str(samples), "--estimate-mount", "yaw", "--sensor-sign", "-1", "-o", str(calib)]) == 0
+    assert (
+        "--sensor-sign -1" in error and "--base-mount ceiling" in error and "Traceback" not in error
+    )
+    assert (
+        main(
+            [
+                "calibrate",
+                str(samples),
+                "--estimate-mount",
+                "yaw",
+                "--sensor-sign",
+                "-1",
+                "-o",
+                str(calib),
+            ]
+        )
+        == 0
+    )
     assert "mount_rpy_deg" in capsys.readouterr().out
     result = load_calibration(calib)
     assert result.sensor_sign == -1 and result.mount_rpy_deg[2] == pytest.approx(25.0, abs=1e-6)
@@ -48,7 +66,9 @@ def test_mount_sign_round_trip_through_the_cli(arm, tool, configurations, tmp_pa
     assert main(["compensate", str(calib), str(log), "-o", str(out)]) == 0
     with open(out) as handle:
         rows = list(csv.DictReader(handle))
-    np.testing.assert_allclose([[float(row[c]) for c in WRENCH] for row in rows], contact, atol=1e-6)
+    np.testing.assert_allclose(
+        [[float(row[c]) for c in WRENCH] for row in rows], contact, atol=1e-6
+    )
 
 
 def test_flip_axis_and_base_mount_flags(arm, tool, configurations, tmp_path, capsys):
@@ -68,6 +88,10 @@ def test_evaluate_poses_plans_for_the_mount(arm, configurations, tmp_path, capsy
     assert main(["evaluate-poses", str(poses)]) == 0
     assert "mount" not in capsys.readouterr().out
     assert main(["evaluate-poses", str(poses), "--estimate-mount", "full"]) == 0
-    lines = [line.split() for line in capsys.readouterr().out.splitlines() if line.startswith("mount[")]
+    lines = [
+        line.split() for line in capsys.readouterr().out.splitlines() if line.startswith("mount[")
+    ]
     assert [line[0] for line in lines] == ["mount[x]", "mount[y]", "mount[z]"]
-    assert all(0.0 < float(line[1]) < 1.0 for line in lines)  # [deg] for 10 poses of the paper's tool
+    assert all(
+        0.0 < float(line[1]) < 1.0 for line in lines
+    )  # [deg] for 10 poses of the paper's tool

@@ -1,4 +1,6 @@
-"""No ftkin command destroys a file: outputs that name an input, a device, a FIFO or a folder are refused."""
+"""No ftkin command destroys a file: outputs that name an input, a device, a FIFO or a folder are
+refused.
+"""
 
 from __future__ import annotations
 
@@ -22,7 +24,8 @@ def files(tmp_path_factory, arm, truth):
     q = arm.random_configurations(6, rng, margin=0.3)
     wrenches = truth.predict(arm.rotation_sensor_to_base(q))
     samples = write_csv(
-        folder / "s.csv", ["pose", *[f"q{i + 1}" for i in range(arm.nq)], *WRENCH],
+        folder / "s.csv",
+        ["pose", *[f"q{i + 1}" for i in range(arm.nq)], *WRENCH],
         [[i, *map(float, a), *map(float, b)] for i, (a, b) in enumerate(zip(q, wrenches))],
     )
     calibration = folder / "c.json"
@@ -69,7 +72,12 @@ def test_outputs_that_are_not_regular_files_are_refused(files, tmp_path, capsys)
     folder = tmp_path / "folder"
     folder.mkdir()
     for target, kind in ((fifo, "FIFO"), (folder, "folder"), ("/dev/null", "character device")):
-        _refused(["export", calibration, "--format", "admittance", "-o", target], capsys, [calibration], kind)
+        _refused(
+            ["export", calibration, "--format", "admittance", "-o", target],
+            capsys,
+            [calibration],
+            kind,
+        )
         _refused(["plan", "-n", "3", "--no-self-collision", "-o", target], capsys, [], kind)
     assert os.path.exists("/dev/null") and not os.path.isfile("/dev/null")
     assert fifo.is_fifo() and folder.is_dir()
@@ -78,7 +86,12 @@ def test_outputs_that_are_not_regular_files_are_refused(files, tmp_path, capsys)
 def test_empty_output_name_is_refused(files, capsys):
     samples, calibration = files
     _refused(["calibrate", samples, "-o", ""], capsys, [samples], "file name is empty")
-    _refused(["export", calibration, "--format", "ft-calib", "-o", "  "], capsys, [calibration], "file name is empty")
+    _refused(
+        ["export", calibration, "--format", "ft-calib", "-o", "  "],
+        capsys,
+        [calibration],
+        "file name is empty",
+    )
 
 
 def test_two_outputs_naming_one_file_are_refused(files, tmp_path, capsys):
@@ -99,7 +112,9 @@ def test_symlink_output_is_written_through_atomically(files, tmp_path, capsys):
     assert main(["export", str(calibration), "--format", "ft-calib", "-o", str(link)]) == 0
     assert link.is_symlink() and os.readlink(link) == str(target)
     assert "gripper_mass" in target.read_text()
-    assert sorted(p.name for p in target_folder.iterdir()) == ["params.yaml"]  # no temp file left behind
+    assert sorted(p.name for p in target_folder.iterdir()) == [
+        "params.yaml"
+    ]  # no temp file left behind
 
 
 def test_library_writer_shares_the_check(tmp_path):
@@ -113,4 +128,7 @@ def test_library_writer_shares_the_check(tmp_path):
     data.write_text("a\n")
     with pytest.raises(InvalidInput, match="same file"):
         check_output_path(tmp_path / "." / "data.csv", [data])
-    assert check_output_path(tmp_path / "new.csv", [data, tmp_path / "missing.csv"]) == tmp_path / "new.csv"
+    assert (
+        check_output_path(tmp_path / "new.csv", [data, tmp_path / "missing.csv"])
+        == tmp_path / "new.csv"
+    )

@@ -1,4 +1,6 @@
-"""No Python traceback ever reaches a CLI user: closed pipes, huge cells, deep JSON, huge numbers, extreme values."""
+"""No Python traceback ever reaches a CLI user: closed pipes, huge cells, deep JSON, huge numbers,
+extreme values.
+"""
 
 from __future__ import annotations
 
@@ -25,7 +27,8 @@ def files(tmp_path_factory, arm, truth):
     q = np.repeat(arm.random_configurations(6, rng, margin=0.3), 2, axis=0)
     wrenches = truth.predict(arm.rotation_sensor_to_base(q)) + rng.normal(scale=0.01, size=(12, 6))
     samples = write_csv(
-        folder / "s.csv", ["pose", *[f"q{i + 1}" for i in range(arm.nq)], *WRENCH],
+        folder / "s.csv",
+        ["pose", *[f"q{i + 1}" for i in range(arm.nq)], *WRENCH],
         [[i // 2, *map(float, a), *map(float, b)] for i, (a, b) in enumerate(zip(q, wrenches))],
     )
     calibration = folder / "c.json"
@@ -33,24 +36,54 @@ def files(tmp_path_factory, arm, truth):
     return folder, samples, calibration
 
 
-def _commands(folder: Path, samples: Path, calibration: Path) -> dict[str, tuple[list[str], Path | None]]:
+def _commands(
+    folder: Path, samples: Path, calibration: Path
+) -> dict[str, tuple[list[str], Path | None]]:
     """Every subcommand, with small arguments, and the file it must still write."""
     s, c = str(samples), str(calibration)
     return {
         "calibrate": (["calibrate", s, "-o", str(folder / "c2.json")], folder / "c2.json"),
         "compensate": (["compensate", c, s, "-o", str(folder / "o.csv")], folder / "o.csv"),
         "paper": (["paper"], None),
-        "demo": (["demo", "--poses", "6", "--readings", "3", "-o", str(folder / "d.json")], folder / "d.json"),
+        "demo": (
+            ["demo", "--poses", "6", "--readings", "3", "-o", str(folder / "d.json")],
+            folder / "d.json",
+        ),
         "extract": (["extract", s, "-o", str(folder / "e.csv")], folder / "e.csv"),
-        "export": (["export", c, "--format", "ft-calib", "-o", str(folder / "x.yaml")], folder / "x.yaml"),
+        "export": (
+            ["export", c, "--format", "ft-calib", "-o", str(folder / "x.yaml")],
+            folder / "x.yaml",
+        ),
         "report": (["report", c, s, "-o", str(folder / "r.png")], folder / "r.png"),
-        "plan": (["plan", "-n", "3", "--no-self-collision", "-o", str(folder / "p.csv")], folder / "p.csv"),
+        "plan": (
+            ["plan", "-n", "3", "--no-self-collision", "-o", str(folder / "p.csv")],
+            folder / "p.csv",
+        ),
         "evaluate-poses": (["evaluate-poses", s], None),
         "view": (["view", c, s, "--html", str(folder / "v.html"), "--no-wait"], folder / "v.html"),
-        "simulate": (["simulate", "placement", "--duration", "0.3", "-o", str(folder / "run.csv")], folder / "run.csv"),
+        "simulate": (
+            ["simulate", "placement", "--duration", "0.3", "-o", str(folder / "run.csv")],
+            folder / "run.csv",
+        ),
         "doctor": (["doctor", s], None),
-        "rezero": (["rezero", c, "--q", *["0.3"] * 6, "--wrench", "0.5", "-0.2", "-3.0", "0.01", "0.02", "0.0",
-                    "-o", str(folder / "z.json")], folder / "z.json"),
+        "rezero": (
+            [
+                "rezero",
+                c,
+                "--q",
+                *["0.3"] * 6,
+                "--wrench",
+                "0.5",
+                "-0.2",
+                "-3.0",
+                "0.01",
+                "0.02",
+                "0.0",
+                "-o",
+                str(folder / "z.json"),
+            ],
+            folder / "z.json",
+        ),
         "--help": (["--help"], None),
     }
 
@@ -65,7 +98,8 @@ for name, argv in json.loads(sys.argv[1]).items():
     saved = os.dup(1)
     os.dup2(head.stdin.fileno(), 1)
     head.stdin.close()
-    sys.stdout = io.TextIOWrapper(io.FileIO(1, "w", closefd=False), write_through=True, line_buffering=True)
+    sys.stdout = io.TextIOWrapper(io.FileIO(1, "w", closefd=False), write_through=True,
+    line_buffering=True)
     try:
         code = main(argv)
         sys.stdout.flush()
@@ -83,10 +117,12 @@ print(json.dumps(results))
 
 
 def test_every_subcommand_piped_into_head(files):
-    """Each subcommand's stdout into a real ``head -1``: one line out, no traceback, exit 0, the -o file written.
+    """Each subcommand's stdout into a real ``head -1``: one line out, no traceback, exit 0, the -o
+    file written.
 
     One interpreter runs them all (importing pinocchio once keeps the test fast): for each command,
-    fd 1 becomes the write end of a pipe into a fresh ``head -1`` process, unbuffered, so writes after
+    fd 1 becomes the write end of a pipe into a fresh ``head -1`` process, unbuffered, so writes
+    after
     the first line meet a closed pipe.
     """
     folder, samples, calibration = files
@@ -95,10 +131,16 @@ def test_every_subcommand_piped_into_head(files):
     env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
     argvs = {name: argv for name, (argv, _) in commands.items()}
     process = subprocess.run(
-        [sys.executable, "-c", _DRIVER, json.dumps(argvs)], env=env, cwd=folder, capture_output=True, text=True,
+        [sys.executable, "-c", _DRIVER, json.dumps(argvs)],
+        env=env,
+        cwd=folder,
+        capture_output=True,
+        text=True,
         timeout=300,
     )
-    assert "Traceback" not in process.stderr and "Exception ignored" not in process.stderr, process.stderr
+    assert "Traceback" not in process.stderr and "Exception ignored" not in process.stderr, (
+        process.stderr
+    )
     results = json.loads(process.stdout.splitlines()[-1])
     for name, (code, out) in results.items():
         assert code == 0, f"{name}: {code} {process.stderr}"
@@ -111,14 +153,20 @@ def test_entry_point_into_head(tmp_path):
     """The real command line: ``python -m ftkin.cli paper | head -1`` exits 0 with no traceback."""
     env = {**os.environ, "PYTHONPATH": str(ROOT), "PYTHONUNBUFFERED": "1"}
     command = f"set -o pipefail; '{sys.executable}' -m ftkin.cli paper | head -1"
-    process = subprocess.run(["bash", "-c", command], env=env, cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    process = subprocess.run(
+        ["bash", "-c", command], env=env, cwd=tmp_path, capture_output=True, text=True, timeout=120
+    )
     assert process.returncode == 0, process.stderr
-    assert "Traceback" not in process.stderr and "Exception ignored" not in process.stderr, process.stderr
+    assert "Traceback" not in process.stderr and "Exception ignored" not in process.stderr, (
+        process.stderr
+    )
     assert len(process.stdout.splitlines()) == 1
 
 
 class _ClosedPipe:
-    """A stdout whose reader has gone: every write raises BrokenPipeError (deterministic, in process)."""
+    """A stdout whose reader has gone: every write raises BrokenPipeError (deterministic, in
+    process).
+    """
 
     def write(self, text):
         raise BrokenPipeError(32, "Broken pipe")
@@ -160,7 +208,9 @@ def test_deeply_nested_json(files, tmp_path, capsys):
     for depth in (100_000, 2_000):
         bad = tmp_path / f"deep{depth}.json"
         bad.write_text("[" * depth + "]" * depth)
-        _one_line_error(["export", bad, "--format", "ft-calib", "-o", tmp_path / "x.yaml"], capsys, str(bad))
+        _one_line_error(
+            ["export", bad, "--format", "ft-calib", "-o", tmp_path / "x.yaml"], capsys, str(bad)
+        )
         _one_line_error(["compensate", bad, samples, "-o", tmp_path / "x.csv"], capsys, str(bad))
 
 
@@ -182,15 +232,31 @@ def test_huge_integers(files, tmp_path, capsys):
         edit(changed)
         path = tmp_path / "huge.json"
         path.write_text(json.dumps(changed).replace("1" + "0" * 400, "1e999"))
-        _one_line_error(["export", path, "--format", "ft-calib", "-o", tmp_path / "x.yaml"], capsys, key)
+        _one_line_error(
+            ["export", path, "--format", "ft-calib", "-o", tmp_path / "x.yaml"], capsys, key
+        )
 
 
 def test_extreme_values_are_refused_before_the_numerics(files, tmp_path, capsys):
     _, samples, _ = files
-    _one_line_error(["calibrate", samples, "--noise-force", "1e-300", "--noise-torque", "1e-3"], capsys, "force_std must be between")
-    _one_line_error(["calibrate", samples, "--noise-force", "1e-3", "--noise-torque", "1e300"], capsys, "torque_std must be between")
-    _one_line_error(["plan", "-n", "4", "--tool-weight", "1e308", "--no-self-collision"], capsys, "tool_weight must be between")
-    _one_line_error(["evaluate-poses", samples, "--noise-force", "1e-300"], capsys, "force_std must be between")
+    _one_line_error(
+        ["calibrate", samples, "--noise-force", "1e-300", "--noise-torque", "1e-3"],
+        capsys,
+        "force_std must be between",
+    )
+    _one_line_error(
+        ["calibrate", samples, "--noise-force", "1e-3", "--noise-torque", "1e300"],
+        capsys,
+        "torque_std must be between",
+    )
+    _one_line_error(
+        ["plan", "-n", "4", "--tool-weight", "1e308", "--no-self-collision"],
+        capsys,
+        "tool_weight must be between",
+    )
+    _one_line_error(
+        ["evaluate-poses", samples, "--noise-force", "1e-300"], capsys, "force_std must be between"
+    )
     text = samples.read_text().splitlines()
     cells = text[2].split(",")
     cells[-3] = "1e300"
@@ -212,7 +278,8 @@ def test_unforeseen_error_is_one_line(files, monkeypatch, capsys):
     assert main(["paper"]) == 2
     err = capsys.readouterr().err
     assert err.strip() == (
-        "ftkin: error: the numbers are too extreme for the linear algebra (a matrix became singular) "
+        "ftkin: error: the numbers are too extreme for the linear algebra (a matrix became "
+        "singular) "
         "(LinAlgError: Singular matrix)"
     )
 
@@ -222,4 +289,7 @@ def test_unforeseen_error_is_one_line(files, monkeypatch, capsys):
     monkeypatch.setattr(paper, "run", bug)
     assert main(["paper"]) == 3
     err = capsys.readouterr().err
-    assert err.startswith("ftkin: error: unexpected internal error (AttributeError") and "Traceback" not in err
+    assert (
+        err.startswith("ftkin: error: unexpected internal error (AttributeError")
+        and "Traceback" not in err
+    )

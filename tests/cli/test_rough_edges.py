@@ -1,4 +1,6 @@
-"""Rough edges a new user hits: floor by default, frame names, readable reprs, warnings once, fault 'none'."""
+"""Rough edges a new user hits: floor by default, frame names, readable reprs, warnings once, fault
+'none'.
+"""
 
 from __future__ import annotations
 
@@ -12,7 +14,9 @@ from ftkin.io.csv_table import read_table
 
 
 def _heights(arm, q):
-    """Base-frame z [m] of the sensor and tool (or flange) origins at each configuration, by Pinocchio directly."""
+    """Base-frame z [m] of the sensor and tool (or flange) origins at each configuration, by
+    Pinocchio directly.
+    """
     model, data = arm.model, arm.model.createData()
     frames = [arm.sensor_frame_id] + ([arm.tool_frame_id] if arm.tool_frame_id is not None else [])
     out = []
@@ -45,16 +49,25 @@ def test_frame_names_are_suggested(tmp_path):
     from ftkin.kinematics.robots import ROBOT_SPECS, example_robot_data_share
 
     ur5 = example_robot_data_share() / "example-robot-data" / "robots" / ROBOT_SPECS["ur5"].urdf
-    with pytest.raises(ftkin.FrameNotFound, match=r"add it at the link the sensor is bolted to, e.g. --sensor-parent tool0"):
+    with pytest.raises(
+        ftkin.FrameNotFound,
+        match=r"add it at the link the sensor is bolted to, e.g. --sensor-parent tool0",
+    ):
         ftkin.Arm.from_urdf(ur5, "ft_sensor")
 
 
 def test_readable_reprs(arm, truth):
     assert repr(arm) == "Arm(ftkin_c4.urdf: 6 joints, sensor frame 'ft_sensor', tool frame 'tool')"
     text = repr(truth)
-    assert text.startswith("SensorModel(tool_weight=3.15") and "center_of_mass=[0.0001, -0.0003, 0.047] m" in text
+    assert (
+        text.startswith("SensorModel(tool_weight=3.15")
+        and "center_of_mass=[0.0001, -0.0003, 0.047] m" in text
+    )
     compensator = repr(ftkin.Compensator(truth, arm))
-    assert compensator.startswith("Compensator(tool 3.155 N") and "arm ft_sensor of ftkin_c4.urdf" in compensator
+    assert (
+        compensator.startswith("Compensator(tool 3.155 N")
+        and "arm ft_sensor of ftkin_c4.urdf" in compensator
+    )
     assert str(ftkin.StepStatus.__dataclass_fields__["fault"].default) == "none"
     assert f"{ftkin.SensorFault.NONE}" == "none"
 
@@ -65,10 +78,17 @@ def test_each_warning_is_printed_once(arm, truth, tmp_path, capsys):
     rng = np.random.default_rng(9)
     q = arm.random_configurations(4, rng, margin=0.3)
     wrenches = truth.predict(arm.rotation_sensor_to_base(q)) + rng.normal(scale=0.05, size=(4, 6))
-    path = write_csv(tmp_path / "few.csv", [f"q{i + 1}" for i in range(6)] + ["fx", "fy", "fz", "mx", "my", "mz"],
-                     np.hstack([q, wrenches]).tolist())
+    path = write_csv(
+        tmp_path / "few.csv",
+        [f"q{i + 1}" for i in range(6)] + ["fx", "fy", "fz", "mx", "my", "mz"],
+        np.hstack([q, wrenches]).tolist(),
+    )
     assert main(["calibrate", str(path)]) == 0
     captured = capsys.readouterr()
     text = captured.out + captured.err
-    warnings = [line.split("WARNING: ")[-1].removeprefix("ftkin: ") for line in text.splitlines() if "poorly determined" in line]
+    warnings = [
+        line.split("WARNING: ")[-1].removeprefix("ftkin: ")
+        for line in text.splitlines()
+        if "poorly determined" in line
+    ]
     assert warnings and len(warnings) == len(set(warnings))

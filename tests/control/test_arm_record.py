@@ -26,7 +26,9 @@ def calibration(ur5, truth):
     rng = np.random.default_rng(31)
     q = ur5.random_configurations(8, rng, margin=0.3)
     samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(ur5, q, rng, 2)
-    return dataclasses.replace(calibrate(samples, method="linear"), kinematics=KinematicsRecord.from_arm(ur5))
+    return dataclasses.replace(
+        calibrate(samples, method="linear"), kinematics=KinematicsRecord.from_arm(ur5)
+    )
 
 
 def test_record_says_how_the_sensor_frame_was_obtained(ur5, calibration, tmp_path):
@@ -38,12 +40,16 @@ def test_record_says_how_the_sensor_frame_was_obtained(ur5, calibration, tmp_pat
     assert load_calibration(path).kinematics == record
     rebuilt = record.build_arm()
     q = ur5.random_configurations(3, np.random.default_rng(0))
-    np.testing.assert_allclose(rebuilt.rotation_sensor_to_base(q), ur5.rotation_sensor_to_base(q), atol=1e-12)
+    np.testing.assert_allclose(
+        rebuilt.rotation_sensor_to_base(q), ur5.rotation_sensor_to_base(q), atol=1e-12
+    )
 
 
 def test_compensator_checks_the_arm_against_the_record(ur5, calibration, arm, tmp_path):
     Compensator(calibration, ur5)  # the same arm: fine
-    Compensator(calibration, load_robot("ur5", [0.0, 0.01, 0.05, 0.0, 0.0, 0.3]))  # rebuilt identically: fine
+    Compensator(
+        calibration, load_robot("ur5", [0.0, 0.01, 0.05, 0.0, 0.0, 0.3])
+    )  # rebuilt identically: fine
     cases = {
         "other robot": (arm, "SHA-256 differs"),
         "other mount": (load_robot("ur5", [0.0, 0.01, 0.06, 0.0, 0.0, 0.3]), "sensor mounted at"),
@@ -82,10 +88,33 @@ def test_cli_compensate_needs_no_options_repeated(ur5, truth, tmp_path, capsys):
     rows = np.hstack([q, truth.predict(ur5.rotation_sensor_to_base(q))])
     samples = write_csv(tmp_path / "s.csv", [f"q{i + 1}" for i in range(6)] + wrench, rows.tolist())
     calib = tmp_path / "c.json"
-    assert main(["calibrate", str(samples), "--robot", "ur5", "--sensor-offset", "0", "0.01", "0.05", "0", "0", "0.3",
-                 "--method", "linear", "-o", str(calib)]) == 0
+    assert (
+        main(
+            [
+                "calibrate",
+                str(samples),
+                "--robot",
+                "ur5",
+                "--sensor-offset",
+                "0",
+                "0.01",
+                "0.05",
+                "0",
+                "0",
+                "0.3",
+                "--method",
+                "linear",
+                "-o",
+                str(calib),
+            ]
+        )
+        == 0
+    )
     out = tmp_path / "o.csv"
     assert main(["compensate", str(calib), str(samples), "-o", str(out)]) == 0  # no robot options
     np.testing.assert_allclose(read_table(out).floats(wrench), 0.0, atol=1e-9)
     assert main(["compensate", str(calib), str(samples), "-o", str(out), "--robot", "ur5"]) == 2
-    assert "not the one the calibration was made with (--robot ur5 --sensor-offset" in capsys.readouterr().err
+    assert (
+        "not the one the calibration was made with (--robot ur5 --sensor-offset"
+        in capsys.readouterr().err
+    )

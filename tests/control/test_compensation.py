@@ -31,7 +31,9 @@ def test_known_contact_is_recovered_on_every_entry_point(arm, truth, poses):
     raw = truth.predict(rotations) + contact
     compensator = Compensator(truth, arm)
     from_q = np.array([compensator.compensate(q, w) for q, w in zip(configurations, raw)])
-    from_rotation = np.array([compensator.compensate_rotation(r, w) for r, w in zip(rotations, raw)])
+    from_rotation = np.array(
+        [compensator.compensate_rotation(r, w) for r, w in zip(rotations, raw)]
+    )
     batch_rotation = compensator.compensate_batch(rotations, raw)
     batch_q = compensator.compensate_joint_positions(configurations, raw)
     for recovered in (from_q, from_rotation, batch_rotation, batch_q):
@@ -53,18 +55,26 @@ def test_matches_hand_computation(arm, rng, truth, poses):
     expected = np.array([_by_hand(model, r, w) for r, w in zip(rotations, raw)])
     compensator = Compensator(model)
     np.testing.assert_allclose(compensator.compensate_batch(rotations, raw), expected, atol=1e-12)
-    np.testing.assert_allclose(compensator.compensate_rotation(rotations[3], raw[3]), expected[3], atol=1e-12)
+    np.testing.assert_allclose(
+        compensator.compensate_rotation(rotations[3], raw[3]), expected[3], atol=1e-12
+    )
 
 
 def test_compensating_a_no_contact_reading_gives_zero(arm, truth, poses):
     configurations, rotations, _ = poses
     compensator = Compensator(truth, arm)
-    np.testing.assert_allclose(compensator.compensate_joint_positions(configurations, truth.predict(rotations)), 0.0, atol=1e-12)
+    np.testing.assert_allclose(
+        compensator.compensate_joint_positions(configurations, truth.predict(rotations)),
+        0.0,
+        atol=1e-12,
+    )
 
 
 def test_compensate_samples(arm, rng, truth, poses):
     configurations, rotations, contact = poses
-    samples = ftkin.Samples.from_joint_positions(arm, configurations, truth.predict(rotations) + contact)
+    samples = ftkin.Samples.from_joint_positions(
+        arm, configurations, truth.predict(rotations) + contact
+    )
     np.testing.assert_allclose(Compensator(truth).compensate_samples(samples), contact, atol=1e-12)
 
 
@@ -82,7 +92,9 @@ def test_inputs_are_not_modified(arm, truth, poses):
 def test_calibration_result_from_calibrate_compensates(arm, rng, truth):
     configurations = arm.random_configurations(8, rng, margin=0.3)
     rotations = arm.rotation_sensor_to_base(configurations)
-    result = ftkin.calibrate(ftkin.Samples.from_rotations(rotations, truth.predict(rotations)), method="linear")
+    result = ftkin.calibrate(
+        ftkin.Samples.from_rotations(rotations, truth.predict(rotations)), method="linear"
+    )
     contact = np.array([1.5, -0.8, -4.0, 0.05, 0.02, -0.01])  # N, N·m
     q = arm.random_configurations(1, rng)[0]
     raw = truth.predict(arm.rotation_sensor_to_base(q)) + contact
@@ -152,7 +164,9 @@ def test_rotation_entry_points_refuse_bad_input(compensator):
         compensator.compensate_rotation(rotation, [np.nan] * 6)
     with pytest.raises(ftkin.InvalidInput, match="3 rotations but 2 wrenches"):
         compensator.compensate_batch(np.stack([rotation] * 3), np.zeros((2, 6)))
-    with pytest.raises(ftkin.InvalidInput, match=r"raw_wrenches must have shape \(6,\) or \(N, 6\)"):
+    with pytest.raises(
+        ftkin.InvalidInput, match=r"raw_wrenches must have shape \(6,\) or \(N, 6\)"
+    ):
         compensator.compensate_batch(np.stack([rotation] * 2), np.zeros((2, 3)))
     with pytest.raises(ftkin.InvalidInput, match="finite"):
         compensator.compensate_batch(np.full((2, 3, 3), np.nan), np.zeros((2, 6)))

@@ -1,4 +1,6 @@
-"""JointAdmittance with a DynamicCompensator: the inertial wrench leaves the contact on moving ticks."""
+"""JointAdmittance with a DynamicCompensator: the inertial wrench leaves the contact on moving
+ticks.
+"""
 
 from __future__ import annotations
 
@@ -23,17 +25,23 @@ def test_moving_ticks_remove_the_inertial_wrench_and_static_ticks_do_not(arm):
     controller.step(q, raw, 1e-3, joint_velocities=dq, joint_accelerations=ddq)
     moving = controller.last_status.contact_wrench
     np.testing.assert_allclose(moving, dynamic.compensate_moving(q, dq, ddq, raw), atol=1e-12)
-    assert np.max(np.abs(moving - static.compensate(q, raw))) > 1e-3  # the point-mass tool's inertia shows
+    assert (
+        np.max(np.abs(moving - static.compensate(q, raw))) > 1e-3
+    )  # the point-mass tool's inertia shows
 
     controller.step(q, raw, 1e-3)
-    np.testing.assert_allclose(controller.last_status.contact_wrench, static.compensate(q, raw), atol=1e-12)
+    np.testing.assert_allclose(
+        controller.last_status.contact_wrench, static.compensate(q, raw), atol=1e-12
+    )
 
     with pytest.raises(InvalidInput):
         controller.step(q, raw, 1e-3, joint_velocities=dq, joint_accelerations=np.full(6, np.nan))
 
 
 def newton_euler_sum(theta, velocity: np.ndarray, acceleration: np.ndarray) -> tuple:
-    """``Y(v, a) θ`` written out on floats (minus the inertial wrench) for LOCAL ``v``, ``a`` ``(6,)`` (hand-derived)."""
+    """``Y(v, a) θ`` written out on floats (minus the inertial wrench) for LOCAL ``v``, ``a``
+    ``(6,)`` (hand-derived).
+    """
     m = theta[0]
     hx, hy, hz = theta[1:4]
     ixx, ixy, iyy, ixz, iyz, izz = theta[4:10]
@@ -46,7 +54,11 @@ def newton_euler_sum(theta, velocity: np.ndarray, acceleration: np.ndarray) -> t
     # ω × h, then ω × (ω × h)
     cx, cy, cz = wy * hz - wz * hy, wz * hx - wx * hz, wx * hy - wy * hx
     # Ī ω and Ī ω̇
-    lx, ly, lz = ixx * wx + ixy * wy + ixz * wz, ixy * wx + iyy * wy + iyz * wz, ixz * wx + iyz * wy + izz * wz
+    lx, ly, lz = (
+        ixx * wx + ixy * wy + ixz * wz,
+        ixy * wx + iyy * wy + iyz * wz,
+        ixz * wx + iyz * wy + izz * wz,
+    )
     return (
         m * px + (by * hz - bz * hy) + (wy * cz - wz * cy),
         m * py + (bz * hx - bx * hz) + (wz * cx - wx * cz),
@@ -58,7 +70,9 @@ def newton_euler_sum(theta, velocity: np.ndarray, acceleration: np.ndarray) -> t
 
 
 def test_one_sample_path_equals_the_written_out_newton_euler_sum(arm):
-    """compensate_moving (Pinocchio's body regressor) = static contact + Y(v, a) θ written out on floats."""
+    """compensate_moving (Pinocchio's body regressor) = static contact + Y(v, a) θ written out on
+    floats.
+    """
     import pinocchio as pin
 
     truth = paper_like_truth()
@@ -70,11 +84,19 @@ def test_one_sample_path_equals_the_written_out_newton_euler_sum(arm):
         dq, ddq, raw = rng.normal(size=6) * 2.0, rng.normal(size=6) * 10.0, rng.normal(size=6) * 5.0
         pin.forwardKinematics(arm.model, data, q, dq, ddq)
         velocity = pin.getFrameVelocity(arm.model, data, arm.sensor_frame_id, pin.LOCAL).vector
-        acceleration = pin.getFrameAcceleration(arm.model, data, arm.sensor_frame_id, pin.LOCAL).vector
-        expected = static.compensate(q, raw) + np.array(newton_euler_sum(theta.tolist(), velocity, acceleration))
-        np.testing.assert_allclose(dynamic.compensate_moving(q, dq, ddq, raw), expected, rtol=0, atol=1e-12)
-        np.testing.assert_array_equal(dynamic.compensate_moving(q.tolist(), dq.tolist(), ddq.tolist(), raw.tolist()),
-                                      dynamic.compensate_moving(q, dq, ddq, raw))
+        acceleration = pin.getFrameAcceleration(
+            arm.model, data, arm.sensor_frame_id, pin.LOCAL
+        ).vector
+        expected = static.compensate(q, raw) + np.array(
+            newton_euler_sum(theta.tolist(), velocity, acceleration)
+        )
+        np.testing.assert_allclose(
+            dynamic.compensate_moving(q, dq, ddq, raw), expected, rtol=0, atol=1e-12
+        )
+        np.testing.assert_array_equal(
+            dynamic.compensate_moving(q.tolist(), dq.tolist(), ddq.tolist(), raw.tolist()),
+            dynamic.compensate_moving(q, dq, ddq, raw),
+        )
     for position in range(4):  # a non-finite value in any input is refused
         inputs = [q.copy(), dq.copy(), ddq.copy(), raw.copy()]
         inputs[position][position] = np.inf

@@ -42,29 +42,52 @@ class ReferenceTick:
         jacobian = c.arm.jacobian(q)
         calibration = c.compensator.calibration
         gravity = rotation.T @ calibration.gravity_in_base
-        contact = raw - calibration.bias - np.concatenate([gravity, np.cross(calibration.center_of_mass, gravity)])
-        if self.latched or np.linalg.norm(contact[:3]) > c.force_limit or np.linalg.norm(contact[3:]) > c.torque_limit:
+        contact = (
+            raw
+            - calibration.bias
+            - np.concatenate([gravity, np.cross(calibration.center_of_mass, gravity)])
+        )
+        if (
+            self.latched
+            or np.linalg.norm(contact[:3]) > c.force_limit
+            or np.linalg.norm(contact[3:]) > c.torque_limit
+        ):
             self.latched = True
             return np.zeros(len(q))
         r, frame = c.frame.point_in_sensor, c.frame.frame
         force, moment = contact[:3], contact[3:] - np.cross(r, contact[:3])
-        axes = {"sensor": np.eye(3), "tool": c.frame.rotation_tool_to_sensor.T, "base": rotation}[frame]
+        axes = {"sensor": np.eye(3), "tool": c.frame.rotation_tool_to_sensor.T, "base": rotation}[
+            frame
+        ]
         wrench = np.concatenate([axes @ force, axes @ moment])
         error = law.desired_wrench + wrench
         error = error - np.clip(error, -law.deadband, law.deadband)
         if self.previous is None or self.holding:
             self.previous = error.copy()
-            self.derivative = np.zeros(6) if self.holding or self.derivative is None else self.derivative
+            self.derivative = (
+                np.zeros(6) if self.holding or self.derivative is None else self.derivative
+            )
         self.holding = False
-        alpha = -math.expm1(-dt * 2.0 * math.pi * law.derivative_cutoff)  # exact discretisation: 1 − e^(−dt/τ)
+        alpha = -math.expm1(
+            -dt * 2.0 * math.pi * law.derivative_cutoff
+        )  # exact discretisation: 1 − e^(−dt/τ)
         self.derivative = self.derivative + alpha * ((error - self.previous) / dt - self.derivative)
         self.previous = error
         twist = law.selection * (law.k1 * self.derivative + law.k2 * error)
-        for part, limit in ((slice(0, 3), law.max_linear_velocity), (slice(3, 6), law.max_angular_velocity)):
+        for part, limit in (
+            (slice(0, 3), law.max_linear_velocity),
+            (slice(3, 6), law.max_angular_velocity),
+        ):
             norm = np.linalg.norm(twist[part])
             if norm > limit:
                 twist[part] *= limit / norm
-        to_base = rotation if frame == "sensor" else rotation @ c.frame.rotation_tool_to_sensor if frame == "tool" else np.eye(3)
+        to_base = (
+            rotation
+            if frame == "sensor"
+            else rotation @ c.frame.rotation_tool_to_sensor
+            if frame == "tool"
+            else np.eye(3)
+        )
         linear, angular = to_base @ twist[:3], to_base @ twist[3:]
         sensor_twist = np.concatenate([linear - np.cross(angular, rotation @ r), angular])
         gram = jacobian @ jacobian.T
@@ -76,9 +99,14 @@ class ReferenceTick:
             damping = c.max_damping * (1.0 - w / c.manipulability_threshold)
             dq = jacobian.T @ lapack.dposv(gram + damping**2 * np.eye(6), sensor_twist)[1]
         scale = 1.0
-        for position, velocity, lower, upper, speed in zip(q, dq, c.arm.lower_limits, c.arm.upper_limits,
-                                                           c.arm.velocity_limits):
-            bound = min(speed, c.limit_gain * (upper - position)) if velocity > 0 else max(-speed, c.limit_gain * (lower - position))
+        for position, velocity, lower, upper, speed in zip(
+            q, dq, c.arm.lower_limits, c.arm.upper_limits, c.arm.velocity_limits
+        ):
+            bound = (
+                min(speed, c.limit_gain * (upper - position))
+                if velocity > 0
+                else max(-speed, c.limit_gain * (lower - position))
+            )
             if velocity != 0:
                 scale = min(scale, max(0.0, bound / velocity))
         return dq * scale
@@ -87,17 +115,34 @@ class ReferenceTick:
 @pytest.mark.parametrize(("frame", "ticks"), [("tool", 1500), ("sensor", 750), ("base", 750)])
 def test_step_matches_the_reference_tick_over_thousands_of_ticks(arm, frame, ticks):
     truth = paper_like_truth()
-    law = Admittance(k1=1e-3, k2=[2e-3] * 3 + [2e-2] * 3, frame=frame, force_deadband=0.05, torque_deadband=0.01,
-                     max_linear_velocity=0.02, max_angular_velocity=0.1)
-    # The reference does not model the oscillation detector (tested in test_oscillation.py): 0.5 N white noise
+    law = Admittance(
+        k1=1e-3,
+        k2=[2e-3] * 3 + [2e-2] * 3,
+        frame=frame,
+        force_deadband=0.05,
+        torque_deadband=0.01,
+        max_linear_velocity=0.02,
+        max_angular_velocity=0.1,
+    )
+    # The reference does not model the oscillation detector (tested in test_oscillation.py): 0.5 N
+    # white noise
     # per tick would trip it here.
-    controller = JointAdmittance(arm, law, Compensator(truth, arm), limit_gain=2.0, oscillation=None)
+    controller = JointAdmittance(
+        arm, law, Compensator(truth, arm), limit_gain=2.0, oscillation=None
+    )
     reference = ReferenceTick(controller)
     rng = np.random.default_rng(7)
     q = np.array([0.1, 0.2, -0.6, 0.3, -1.0, 0.2])
     seen = {"damped": 0, "scaled": 0, "saturated": 0, "held": 0, "stopped": 0}
     for k in range(ticks):
-        raw = truth.predict(arm.rotation_sensor_to_base(q)) + rng.normal(size=6) * [0.5, 0.5, 0.5, 0.05, 0.05, 0.05]
+        raw = truth.predict(arm.rotation_sensor_to_base(q)) + rng.normal(size=6) * [
+            0.5,
+            0.5,
+            0.5,
+            0.05,
+            0.05,
+            0.05,
+        ]
         raw += [3 * np.sin(k / 100), 0.0, 5 * np.cos(k / 70), 0.2, 0.0, 0.0]
         if k % 300 == 150:
             raw[1] = np.nan
@@ -112,7 +157,9 @@ def test_step_matches_the_reference_tick_over_thousands_of_ticks(arm, frame, tic
             raw[2] += 200.0  # safety stop, latched to the end
         dt = 1e-3 * (1 + 0.1 * rng.random())
         dq = controller.step(q, raw, dt)
-        np.testing.assert_allclose(dq, reference.step(q, raw, dt), rtol=0, atol=1e-12, err_msg=f"tick {k}")
+        np.testing.assert_allclose(
+            dq, reference.step(q, raw, dt), rtol=0, atol=1e-12, err_msg=f"tick {k}"
+        )
         status = controller.last_status
         seen["damped"] += status.damping > 0
         seen["scaled"] += 0 < status.limit_scale < 1
@@ -145,13 +192,25 @@ def test_compensation_paths_agree(arm, rng):
     rotations = np.array([arm.frame_placement(x)[0] for x in q])  # Pinocchio, one call per row
     raw = truth.predict(rotations) + rng.normal(size=(200, 6))
     gravity = np.einsum("nji,j->ni", rotations, truth.gravity_in_base)
-    expected = raw - truth.bias - np.concatenate([gravity, np.cross(truth.center_of_mass, gravity)], axis=1)
+    expected = (
+        raw
+        - truth.bias
+        - np.concatenate([gravity, np.cross(truth.center_of_mass, gravity)], axis=1)
+    )
     for i in range(0, 200, 20):
-        np.testing.assert_allclose(compensator.compensate(q[i], raw[i]), expected[i], rtol=0, atol=1e-12)
-        np.testing.assert_array_equal(compensator.compensate_rotation(rotations[i], raw[i]),
-                                      compensator.compensate_rotation_unchecked(rotations[i], raw[i]))
-    np.testing.assert_allclose(compensator.compensate_batch(rotations, raw), expected, rtol=0, atol=1e-12)
-    np.testing.assert_allclose(compensator.compensate_joint_positions(q, raw), expected, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(
+            compensator.compensate(q[i], raw[i]), expected[i], rtol=0, atol=1e-12
+        )
+        np.testing.assert_array_equal(
+            compensator.compensate_rotation(rotations[i], raw[i]),
+            compensator.compensate_rotation_unchecked(rotations[i], raw[i]),
+        )
+    np.testing.assert_allclose(
+        compensator.compensate_batch(rotations, raw), expected, rtol=0, atol=1e-12
+    )
+    np.testing.assert_allclose(
+        compensator.compensate_joint_positions(q, raw), expected, rtol=0, atol=1e-12
+    )
 
 
 def test_closed_form_rotation_checks_accept_and_refuse_like_the_gram_matrix(rng):
@@ -175,7 +234,9 @@ def test_closed_form_rotation_checks_accept_and_refuse_like_the_gram_matrix(rng)
 
 
 def test_compensate_rotation_fast_path_agrees_with_the_array_checks_at_the_tolerance(rng):
-    """The float64 fast path of compensate_rotation accepts exactly what as_rotation_batch accepts."""
+    """The float64 fast path of compensate_rotation accepts exactly what as_rotation_batch
+    accepts.
+    """
     compensator = Compensator(paper_like_truth())
     base = Arm.default().rotation_sensor_to_base(np.array([0.1, 0.2, -0.6, 0.3, -1.0, 0.2]))
     raw = np.array([1.0, -2.0, 3.0, 0.1, -0.2, 0.3])
@@ -193,8 +254,12 @@ def test_compensate_rotation_fast_path_agrees_with_the_array_checks_at_the_toler
             else:
                 accepted += 1
                 expected = compensator.compensate_rotation_unchecked(candidate, raw)
-                np.testing.assert_array_equal(compensator.compensate_rotation(candidate, raw), expected)
-                np.testing.assert_array_equal(compensator.compensate_rotation(candidate.tolist(), raw.tolist()), expected)
+                np.testing.assert_array_equal(
+                    compensator.compensate_rotation(candidate, raw), expected
+                )
+                np.testing.assert_array_equal(
+                    compensator.compensate_rotation(candidate.tolist(), raw.tolist()), expected
+                )
     assert accepted > 20 and refused > 20
     for bad_raw in ([np.nan, 0, 0, 0, 0, 0], [np.inf, 0, 0, 0, 0, 0]):
         with pytest.raises(InvalidInput, match="finite"):
@@ -230,8 +295,18 @@ def test_blocked_batch_compensation_equals_the_formula_over_several_blocks(arm, 
         np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
 
 
-@pytest.mark.parametrize(("rotation_shape", "raw_shape"), [((9,), (6,)), ((3, 3, 1), (6,)), ((3, 3), (5,)), ((3, 3), (6, 1)),
-                                                           ((3,), (6,)), ((), (6,)), ((2, 3, 3), (6,))])
+@pytest.mark.parametrize(
+    ("rotation_shape", "raw_shape"),
+    [
+        ((9,), (6,)),
+        ((3, 3, 1), (6,)),
+        ((3, 3), (5,)),
+        ((3, 3), (6, 1)),
+        ((3,), (6,)),
+        ((), (6,)),
+        ((2, 3, 3), (6,)),
+    ],
+)
 def test_compensate_rotation_refuses_wrong_shapes_of_float_arrays(rotation_shape, raw_shape):
     rotation = np.float64(1.0) if rotation_shape == () else np.resize(np.eye(3), rotation_shape)
     with pytest.raises(InvalidInput, match="shape|compensate_batch|rotation"):
@@ -239,8 +314,18 @@ def test_compensate_rotation_refuses_wrong_shapes_of_float_arrays(rotation_shape
 
 
 def test_compensate_rotation_takes_a_batch_of_one_like_one_sample():
-    compensator, rotation, raw = Compensator(paper_like_truth()), np.eye(3)[[1, 2, 0]], np.arange(6.0)
+    compensator, rotation, raw = (
+        Compensator(paper_like_truth()),
+        np.eye(3)[[1, 2, 0]],
+        np.arange(6.0),
+    )
     expected = compensator.compensate_rotation_unchecked(rotation, raw)
-    np.testing.assert_array_equal(compensator.compensate_rotation(rotation[np.newaxis], raw), expected)
-    np.testing.assert_array_equal(compensator.compensate_rotation(rotation, raw[np.newaxis]), expected)
-    np.testing.assert_array_equal(compensator.compensate_rotation(rotation.astype(np.float32), raw.astype(int)), expected)
+    np.testing.assert_array_equal(
+        compensator.compensate_rotation(rotation[np.newaxis], raw), expected
+    )
+    np.testing.assert_array_equal(
+        compensator.compensate_rotation(rotation, raw[np.newaxis]), expected
+    )
+    np.testing.assert_array_equal(
+        compensator.compensate_rotation(rotation.astype(np.float32), raw.astype(int)), expected
+    )

@@ -18,7 +18,9 @@ K2 = np.array([2e-3, 2e-3, 2e-3, 2e-2, 2e-2, 2e-2])
 
 
 def _controller(arm, frame="tool", selection=1.0, compensator=True, **kwargs):
-    law = Admittance(k2=K2, selection=selection, frame=frame, max_linear_velocity=1.0, max_angular_velocity=5.0)
+    law = Admittance(
+        k2=K2, selection=selection, frame=frame, max_linear_velocity=1.0, max_angular_velocity=5.0
+    )
     comp = Compensator(paper_like_truth(), arm) if compensator else None
     return JointAdmittance(arm, law, comp, **kwargs)
 
@@ -116,14 +118,18 @@ def test_joint_velocity_limits_scale_uniformly(arm, rng):
     limits = arm.velocity_limits * 0.002
     assert np.all(np.abs(dq) <= limits * (1 + 1e-12))
     assert np.isclose(np.max(np.abs(dq) / limits), 1.0)
-    sensor_twist = controller.frame.twist_to_sensor_origin(status.twist, arm.rotation_sensor_to_base(q))
+    sensor_twist = controller.frame.twist_to_sensor_origin(
+        status.twist, arm.rotation_sensor_to_base(q)
+    )
     unscaled = damped_least_squares(arm.jacobian(q), sensor_twist)[0]
     np.testing.assert_allclose(dq, status.limit_scale * unscaled, rtol=1e-10)
 
 
 def test_slows_to_a_stop_at_a_joint_limit(arm):
     controller = _controller(arm, "base", limit_gain=5.0)
-    push = np.array([20.0, 0.0, 0.0, 0.0, 0.0, 0.0])  # along sensor x = tangential: joint 1 turns positive
+    push = np.array(
+        [20.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    )  # along sensor x = tangential: joint 1 turns positive
     upper = arm.upper_limits[0]
     speeds = []
     for distance in (0.01, 0.004, 0.001, 0.0):
@@ -173,7 +179,9 @@ def test_bad_step_inputs_are_refused(arm, q, raw, dt, match):
 def test_non_finite_input_and_bad_dt_hold_instead_of_raising(arm, q, raw, dt, fault):
     controller = _controller(arm)
     dq = controller.step(q, raw, dt)
-    assert np.all(dq == 0.0) and controller.last_status.fault == fault and controller.last_status.held
+    assert (
+        np.all(dq == 0.0) and controller.last_status.fault == fault and controller.last_status.held
+    )
 
 
 def test_tool_control_point_must_be_rigid_with_the_sensor():
@@ -183,8 +191,11 @@ def test_tool_control_point_must_be_rigid_with_the_sensor():
 
 
 def test_a_still_command_past_a_joint_limit_does_not_raise(arm):
-    # regression: dq exactly 0 with a joint past its limit raised numpy's "zero-size array" ValueError
-    controller = JointAdmittance(arm, Admittance(k2=0.0, frame="tool"), Compensator(paper_like_truth(), arm))
+    # regression: dq exactly 0 with a joint past its limit raised numpy's "zero-size array"
+    # ValueError
+    controller = JointAdmittance(
+        arm, Admittance(k2=0.0, frame="tool"), Compensator(paper_like_truth(), arm)
+    )
     q = Q_DOWN.copy()
     q[0] = arm.lower_limits[0] - 0.01
     dq = controller.step(q, _raw(arm, q, np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0])), 1e-3)

@@ -19,9 +19,17 @@ DT = 1e-3
 
 
 def _controller(arm, force_limit=50.0, torque_limit=5.0, **limits):
-    law = Admittance(k1=2e-4, k2=[2e-3] * 3 + [2e-2] * 3, frame="tool", force_deadband=0.02, bumpless=True)
-    return JointAdmittance(arm, law, Compensator(paper_like_truth(), arm), force_limit=force_limit,
-                           torque_limit=torque_limit, sensor_limits=SensorLimits(**limits))
+    law = Admittance(
+        k1=2e-4, k2=[2e-3] * 3 + [2e-2] * 3, frame="tool", force_deadband=0.02, bumpless=True
+    )
+    return JointAdmittance(
+        arm,
+        law,
+        Compensator(paper_like_truth(), arm),
+        force_limit=force_limit,
+        torque_limit=torque_limit,
+        sensor_limits=SensorLimits(**limits),
+    )
 
 
 def _readings(arm, rng, count, q=Q_DOWN, contact=CONTACT):
@@ -57,7 +65,10 @@ FAULTS = {
     "dt zero": (lambda q, raw, dt: (q, raw, 0.0), SensorFault.DT_JUMP),
     "dt negative": (lambda q, raw, dt: (q, raw, -dt), SensorFault.DT_JUMP),
     "dt nan": (lambda q, raw, dt: (q, raw, float("nan")), SensorFault.DT_JUMP),
-    "saturated fz": (lambda q, raw, dt: (q, raw + [0, 0, 300.0, 0, 0, 0], dt), SensorFault.SATURATED),
+    "saturated fz": (
+        lambda q, raw, dt: (q, raw + [0, 0, 300.0, 0, 0, 0], dt),
+        SensorFault.SATURATED,
+    ),
 }
 
 
@@ -70,18 +81,27 @@ def test_a_faulty_tick_holds_then_the_arm_recovers_like_a_fresh_controller(arm, 
         assert np.any(controller.step(Q_DOWN, raw, DT) != 0.0)
     dq = controller.step(*inject(Q_DOWN, raws[20], DT))
     status = controller.last_status
-    assert np.all(dq == 0.0) and status.fault is expected and status.held and "holding" in status.event
+    assert (
+        np.all(dq == 0.0) and status.fault is expected and status.held and "holding" in status.event
+    )
     assert not status.safety_stop and np.all(np.isnan(status.contact_wrench))
     for raw in raws[21:24]:  # recovery_ticks - 1 good ticks: still held, reported as recovering
         assert np.all(controller.step(Q_DOWN, raw, DT) == 0.0)
-        assert controller.last_status.fault is expected and "recovering" in controller.last_status.event
-    for raw in raws[24:]:  # from here on: the derivative restarted, the same as a controller started now
+        assert (
+            controller.last_status.fault is expected
+            and "recovering" in controller.last_status.event
+        )
+    for raw in raws[
+        24:
+    ]:  # from here on: the derivative restarted, the same as a controller started now
         dq, dq_fresh = controller.step(Q_DOWN, raw, DT), fresh.step(Q_DOWN, raw, DT)
         assert controller.last_status.fault is SensorFault.NONE and not controller.last_status.held
         np.testing.assert_allclose(dq, dq_fresh, rtol=1e-12, atol=1e-15)
         assert np.any(dq != 0.0)
     state = controller.admittance.state
-    assert np.all(np.isfinite(state.previous_error)) and np.all(np.isfinite(state.filtered_derivative))
+    assert np.all(np.isfinite(state.previous_error)) and np.all(
+        np.isfinite(state.filtered_derivative)
+    )
 
 
 @pytest.mark.parametrize("channel", range(6))
@@ -99,8 +119,13 @@ def test_saturation_on_each_channel(arm, rng, channel, sign):
     beyond = raws[1].copy()
     beyond[channel] = sign * limits[channel]
     assert np.all(controller.step(Q_DOWN, beyond, DT) == 0.0)
-    assert controller.last_status.fault is SensorFault.SATURATED and f"channel {channel}" in controller.last_status.event
-    assert np.any(controller.step(Q_DOWN, raws[2], DT) != 0.0)  # recovery_ticks=1: the first good tick moves
+    assert (
+        controller.last_status.fault is SensorFault.SATURATED
+        and f"channel {channel}" in controller.last_status.event
+    )
+    assert np.any(
+        controller.step(Q_DOWN, raws[2], DT) != 0.0
+    )  # recovery_ticks=1: the first good tick moves
 
 
 def test_per_channel_ranges_and_disabled_checks(arm, rng):
@@ -109,8 +134,16 @@ def test_per_channel_ranges_and_disabled_checks(arm, rng):
     narrow = _controller(arm, torque_range=[6.0, 6.0, 1.5], force_limit=1e3, torque_limit=1e3)
     narrow.step(Q_DOWN, loud, DT)
     assert narrow.last_status.fault is SensorFault.SATURATED
-    off = _controller(arm, force_range=None, torque_range=None, stuck_ticks=None, stuck_time=None, dt_ratio=None,
-                      force_limit=1e3, torque_limit=1e3)
+    off = _controller(
+        arm,
+        force_range=None,
+        torque_range=None,
+        stuck_ticks=None,
+        stuck_time=None,
+        dt_ratio=None,
+        force_limit=1e3,
+        torque_limit=1e3,
+    )
     for raw in (raws[0] + [300.0, 0, 0, 0, 0, 0], *[raws[1]] * 20):
         assert np.all(np.isfinite(off.step(Q_DOWN, raw, DT)))
         assert off.last_status.fault is SensorFault.NONE
@@ -134,27 +167,36 @@ def test_stuck_sensor_is_detected_after_k_repeats_and_recovers_on_new_readings(a
     assert faults[:10] == [SensorFault.NONE] * 10 and faults[10:] == [SensorFault.STUCK] * 5
     assert np.all(dq == 0.0) and "unchanged for 15 ticks" in controller.last_status.event
     controller.step(Q_DOWN, raws[6], DT)
-    assert controller.last_status.fault is SensorFault.STUCK and "recovering" in controller.last_status.event
+    assert (
+        controller.last_status.fault is SensorFault.STUCK
+        and "recovering" in controller.last_status.event
+    )
     assert np.any(controller.step(Q_DOWN, raws[7], DT) != 0.0)
 
 
 def test_stuck_time_triggers_in_a_slow_loop(arm, rng):
     controller = _controller(arm, stuck_ticks=None, stuck_time=0.05)
     raw = _readings(arm, rng, 1)[0]
-    faults = [(controller.step(Q_DOWN, raw, 0.01), controller.last_status.fault)[1] for _ in range(8)]
+    faults = [
+        (controller.step(Q_DOWN, raw, 0.01), controller.last_status.fault)[1] for _ in range(8)
+    ]
     # 10 ms ticks: 5 repeats = 0.05 s is not more than 0.05 s; the 6th repeat (7th reading) is
     assert faults == [SensorFault.NONE] * 6 + [SensorFault.STUCK] * 2
 
 
 @pytest.mark.parametrize("resolution", [None, (1 / 16, 1 / 1000)])
 def test_stuck_detection_does_not_false_trigger_on_a_noisy_sensor(arm, rng, resolution):
-    """20,000 ticks of paper noise, raw and quantized like a 16-bit sensor (1/16 N, 1 mN·m counts)."""
+    """20,000 ticks of paper noise, raw and quantized like a 16-bit sensor (1/16 N, 1 mN·m
+    counts).
+    """
     controller = _controller(arm)
     raws = _readings(arm, rng, 20_000)
     if resolution is not None:
         step = np.repeat(resolution, 3)
         raws = np.round(raws / step) * step
-        assert np.mean(np.all(raws[1:] == raws[:-1], axis=1)) > 0  # quantization does repeat some readings
+        assert (
+            np.mean(np.all(raws[1:] == raws[:-1], axis=1)) > 0
+        )  # quantization does repeat some readings
     for raw in raws:
         controller.step(Q_DOWN, raw, DT)
         assert controller.last_status.fault is SensorFault.NONE
@@ -163,7 +205,10 @@ def test_stuck_detection_does_not_false_trigger_on_a_noisy_sensor(arm, rng, reso
 
 def test_learned_dt_follows_a_lasting_rate_change_and_a_fixed_one_does_not(arm, rng):
     raws = _readings(arm, rng, 300)
-    learned, fixed = _controller(arm, recovery_ticks=1), _controller(arm, recovery_ticks=1, nominal_dt=DT)
+    learned, fixed = (
+        _controller(arm, recovery_ticks=1),
+        _controller(arm, recovery_ticks=1, nominal_dt=DT),
+    )
     for controller in (learned, fixed):
         for raw in raws[:100]:
             controller.step(Q_DOWN, raw, DT)
@@ -197,7 +242,9 @@ def test_no_nan_or_exception_under_random_faults(arm, rng):
         assert dq.shape == (6,) and np.all(np.isfinite(dq))
         held += controller.last_status.held
         state = controller.admittance.state
-        assert np.all(np.isfinite(state.previous_error)) and np.all(np.isfinite(state.filtered_derivative))
+        assert np.all(np.isfinite(state.previous_error)) and np.all(
+            np.isfinite(state.filtered_derivative)
+        )
     assert 0 < held < len(raws) and not controller.safety_latched
 
 
@@ -207,8 +254,13 @@ def test_faults_do_not_clear_a_latched_safety_stop(arm, rng):
     controller.step(Q_DOWN, raws[0] + [0, 0, 20.0, 0, 0, 0], DT)
     assert controller.safety_latched
     controller.step(*_nan_raw(Q_DOWN, raws[1], DT))
-    assert controller.last_status.fault is SensorFault.NOT_FINITE and controller.last_status.safety_stop
-    assert np.all(controller.step(Q_DOWN, raws[2], DT) == 0.0) and controller.last_status.safety_stop
+    assert (
+        controller.last_status.fault is SensorFault.NOT_FINITE
+        and controller.last_status.safety_stop
+    )
+    assert (
+        np.all(controller.step(Q_DOWN, raws[2], DT) == 0.0) and controller.last_status.safety_stop
+    )
     controller.reset()
     assert np.any(controller.step(Q_DOWN, raws[3], DT) != 0.0)
 
@@ -226,7 +278,10 @@ def test_faults_do_not_clear_a_latched_safety_stop(arm, rng):
         ({"nominal_dt": 0.0}, "nominal_dt"),
         ({"recovery_ticks": 0}, "recovery_ticks"),
         ({"stuck_time": "long"}, "stuck_time"),  # regression: a TypeError leaked
-        ({"recovery_ticks": "5"}, "recovery_ticks"),  # regression: a ValueError leaked / a str slipped through
+        (
+            {"recovery_ticks": "5"},
+            "recovery_ticks",
+        ),  # regression: a ValueError leaked / a str slipped through
         ({"stuck_ticks": float("inf")}, "stuck_ticks"),
     ],
 )
@@ -244,7 +299,13 @@ def test_monitor_check_takes_an_array_reading_and_refuses_a_wrong_shape():
     monitor = FaultMonitor()
     # regression: an array reading raised numpy's "truth value of an array is ambiguous"
     for _ in range(3):
-        assert monitor.check(np.zeros(6), np.array([1.0, 2.0, 3.0, 0.1, 0.2, 0.3]), DT) == (SensorFault.NONE, "")
-    assert monitor.check(np.zeros(6), np.array([np.nan, 0, 0, 0, 0, 0]), DT)[0] is SensorFault.NOT_FINITE
+        assert monitor.check(np.zeros(6), np.array([1.0, 2.0, 3.0, 0.1, 0.2, 0.3]), DT) == (
+            SensorFault.NONE,
+            "",
+        )
+    assert (
+        monitor.check(np.zeros(6), np.array([np.nan, 0, 0, 0, 0, 0]), DT)[0]
+        is SensorFault.NOT_FINITE
+    )
     with pytest.raises(InvalidInput, match=r"shape \(6,\)"):
         monitor.check(np.zeros(6), np.zeros(5), DT)

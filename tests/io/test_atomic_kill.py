@@ -49,7 +49,9 @@ def test_killed_writer_leaves_old_file_intact(tmp_path, kind):
     else:
         target.write_text("a,b\n1.0,old\n")
     before = target.read_bytes()
-    child = subprocess.Popen([sys.executable, "-c", CHILD, kind, str(target)], stdout=subprocess.PIPE, text=True)
+    child = subprocess.Popen(
+        [sys.executable, "-c", CHILD, kind, str(target)], stdout=subprocess.PIPE, text=True
+    )
     try:
         assert child.stdout.readline().strip() == "writing"
     finally:

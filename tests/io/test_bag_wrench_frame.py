@@ -1,4 +1,6 @@
-"""A bag whose wrenches are published in the base frame (UR TCP-force style): named, then converted."""
+"""A bag whose wrenches are published in the base frame (UR TCP-force style): named, then
+converted.
+"""
 
 from __future__ import annotations
 
@@ -22,12 +24,16 @@ HOLD, MOVE, RATE = 2.0, 1.0, 50.0  # [s], [s], [Hz]
 
 def _header(seconds, frame_id):
     nanoseconds = int(round(seconds * 1e9))
-    stamp = TYPESTORE.types["builtin_interfaces/msg/Time"](sec=nanoseconds // 10**9, nanosec=nanoseconds % 10**9)
+    stamp = TYPESTORE.types["builtin_interfaces/msg/Time"](
+        sec=nanoseconds // 10**9, nanosec=nanoseconds % 10**9
+    )
     return TYPESTORE.types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
 
 
 def _vector(values):
-    return TYPESTORE.types["geometry_msgs/msg/Vector3"](x=float(values[0]), y=float(values[1]), z=float(values[2]))
+    return TYPESTORE.types["geometry_msgs/msg/Vector3"](
+        x=float(values[0]), y=float(values[1]), z=float(values[2])
+    )
 
 
 @pytest.fixture(scope="module")
@@ -39,37 +45,67 @@ def base_frame_bag(tmp_path_factory, arm, truth):
     index = np.minimum((times // (HOLD + MOVE)).astype(int), len(poses) - 1)
     phase = np.clip((times - index * (HOLD + MOVE) - HOLD) / MOVE, 0.0, 1.0)
     following = np.minimum(index + 1, len(poses) - 1)
-    q = poses[index] + (0.5 - 0.5 * np.cos(np.pi * phase))[:, None] * (poses[following] - poses[index])
+    q = poses[index] + (0.5 - 0.5 * np.cos(np.pi * phase))[:, None] * (
+        poses[following] - poses[index]
+    )
     rotations = arm.rotation_sensor_to_base(q)
     in_sensor = truth.predict(rotations) + rng.normal(size=(len(times), 6)) * NOISE.channel_std
-    in_base = np.concatenate([np.einsum("nij,nj->ni", rotations, in_sensor[:, :3]),
-                              np.einsum("nij,nj->ni", rotations, in_sensor[:, 3:])], axis=1)
+    in_base = np.concatenate(
+        [
+            np.einsum("nij,nj->ni", rotations, in_sensor[:, :3]),
+            np.einsum("nij,nj->ni", rotations, in_sensor[:, 3:]),
+        ],
+        axis=1,
+    )
     path = tmp_path_factory.mktemp("bag") / "tcp_force"
     types = TYPESTORE.types
     with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
-        joints = writer.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=TYPESTORE)
-        wrench = writer.add_connection("/tcp_wrench", "geometry_msgs/msg/WrenchStamped", typestore=TYPESTORE)
+        joints = writer.add_connection(
+            "/joint_states", "sensor_msgs/msg/JointState", typestore=TYPESTORE
+        )
+        wrench = writer.add_connection(
+            "/tcp_wrench", "geometry_msgs/msg/WrenchStamped", typestore=TYPESTORE
+        )
         for t, qi, w in zip(times, q, in_base):
             stamp = int((1e9 + t) * 1e9)
-            state = types["sensor_msgs/msg/JointState"](header=_header(1e9 + t, ""), name=list(arm.joint_names),
-                                                          position=qi, velocity=np.zeros(0), effort=np.zeros(0))
-            writer.write(joints, stamp, TYPESTORE.serialize_cdr(state, "sensor_msgs/msg/JointState"))
+            state = types["sensor_msgs/msg/JointState"](
+                header=_header(1e9 + t, ""),
+                name=list(arm.joint_names),
+                position=qi,
+                velocity=np.zeros(0),
+                effort=np.zeros(0),
+            )
+            writer.write(
+                joints, stamp, TYPESTORE.serialize_cdr(state, "sensor_msgs/msg/JointState")
+            )
             message = types["geometry_msgs/msg/WrenchStamped"](
                 header=_header(1e9 + t + 0.001, "base_link"),
-                wrench=types["geometry_msgs/msg/Wrench"](force=_vector(w[:3]), torque=_vector(w[3:])))
-            writer.write(wrench, stamp + 1_000_000, TYPESTORE.serialize_cdr(message, "geometry_msgs/msg/WrenchStamped"))
+                wrench=types["geometry_msgs/msg/Wrench"](
+                    force=_vector(w[:3]), torque=_vector(w[3:])
+                ),
+            )
+            writer.write(
+                wrench,
+                stamp + 1_000_000,
+                TYPESTORE.serialize_cdr(message, "geometry_msgs/msg/WrenchStamped"),
+            )
     return path
 
 
 def test_base_frame_wrench_named_then_converted(base_frame_bag, arm, truth, caplog):
     with caplog.at_level(logging.WARNING):
         as_recorded = bag_samples(base_frame_bag, arm)
-    assert "published in the base frame 'base_link'" in caplog.text and "--wrench-frame base" in caplog.text
+    assert (
+        "published in the base frame 'base_link'" in caplog.text
+        and "--wrench-frame base" in caplog.text
+    )
     converted = bag_samples(base_frame_bag, arm, wrench_frame="base")
     assert not np.allclose(as_recorded.samples.wrenches, converted.samples.wrenches)
     result = calibrate(converted.samples, noise=NOISE)
     errors = result.std_errors
-    assert np.all(np.abs(result.center_of_mass - truth.center_of_mass) < 4 * errors["center_of_mass"])
+    assert np.all(
+        np.abs(result.center_of_mass - truth.center_of_mass) < 4 * errors["center_of_mass"]
+    )
     assert np.all(np.abs(result.force_offset - truth.force_offset) < 4 * errors["force_offset"])
 
 

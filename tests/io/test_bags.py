@@ -10,7 +10,11 @@ import numpy as np
 import pytest
 
 from ftkin import calibrate
-from ftkin.calibration.information import SensorNoise, covariance_from_information, fisher_information
+from ftkin.calibration.information import (
+    SensorNoise,
+    covariance_from_information,
+    fisher_information,
+)
 from ftkin.calibration.model import WRENCH_CHANNELS
 from ftkin.cli import main
 from ftkin.exceptions import InvalidSamples, MissingDependency
@@ -94,30 +98,47 @@ def write_bag(
                     effort=np.zeros(0),
                 )
                 # received 3 ms after the stamp
-                writer.write(joint_connection, int((T0 + t + 0.003) * 1e9), TYPESTORE.serialize_cdr(message, JOINT_STATE))
+                writer.write(
+                    joint_connection,
+                    int((T0 + t + 0.003) * 1e9),
+                    TYPESTORE.serialize_cdr(message, JOINT_STATE),
+                )
         wrench_times = np.arange(0.0, recording.duration, 1.0 / WRENCH_RATE) + 0.0037
         rotations = arm.rotation_sensor_to_base(recording.q(wrench_times))
-        raw = truth.predict(rotations) + rng.standard_normal((len(wrench_times), 6)) * NOISE.channel_std
+        raw = (
+            truth.predict(rotations)
+            + rng.standard_normal((len(wrench_times), 6)) * NOISE.channel_std
+        )
         raw[:, 2] += OVERSHOOT * np.exp(-recording.since_stop(wrench_times) / 0.1)
         for topic in wrench_topics:
             connection = writer.add_connection(topic, WRENCH_STAMPED, typestore=TYPESTORE)
             for t, w in zip(wrench_times, raw):
                 message = msg["geometry_msgs/msg/WrenchStamped"](
                     header=_header(T0 + t, "ft_sensor"),
-                    wrench=msg["geometry_msgs/msg/Wrench"](force=_vector(w[:3]), torque=_vector(w[3:])),
+                    wrench=msg["geometry_msgs/msg/Wrench"](
+                        force=_vector(w[:3]), torque=_vector(w[3:])
+                    ),
                 )
-                writer.write(connection, int((T0 + t + 0.001) * 1e9), TYPESTORE.serialize_cdr(message, WRENCH_STAMPED))
+                writer.write(
+                    connection,
+                    int((T0 + t + 0.001) * 1e9),
+                    TYPESTORE.serialize_cdr(message, WRENCH_STAMPED),
+                )
     return path
 
 
 def _header(seconds: float, frame_id: str):
     nanoseconds = int(round(seconds * 1e9))
-    stamp = TYPESTORE.types["builtin_interfaces/msg/Time"](sec=nanoseconds // 10**9, nanosec=nanoseconds % 10**9)
+    stamp = TYPESTORE.types["builtin_interfaces/msg/Time"](
+        sec=nanoseconds // 10**9, nanosec=nanoseconds % 10**9
+    )
     return TYPESTORE.types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
 
 
 def _vector(values):
-    return TYPESTORE.types["geometry_msgs/msg/Vector3"](x=float(values[0]), y=float(values[1]), z=float(values[2]))
+    return TYPESTORE.types["geometry_msgs/msg/Vector3"](
+        x=float(values[0]), y=float(values[1]), z=float(values[2])
+    )
 
 
 @pytest.fixture(scope="module")
@@ -127,10 +148,23 @@ def session(tmp_path_factory, arm, truth):
     recording = make_recording(arm, rng)
     folder = tmp_path_factory.mktemp("bags")
     mcap = write_bag(folder / "rec_mcap", arm, truth, recording, np.random.default_rng(1))
-    sqlite = write_bag(folder / "rec_sqlite", arm, truth, recording, np.random.default_rng(1), storage=StoragePlugin.SQLITE3)
+    sqlite = write_bag(
+        folder / "rec_sqlite",
+        arm,
+        truth,
+        recording,
+        np.random.default_rng(1),
+        storage=StoragePlugin.SQLITE3,
+    )
     bare = folder / "bare.mcap"
     shutil.copy(next(mcap.glob("*.mcap")), bare)
-    return {"recording": recording, "mcap": mcap, "sqlite": sqlite, "bare": bare, "db3": next(sqlite.glob("*.db3"))}
+    return {
+        "recording": recording,
+        "mcap": mcap,
+        "sqlite": sqlite,
+        "bare": bare,
+        "db3": next(sqlite.glob("*.db3")),
+    }
 
 
 def _within_noise(result, truth, samples):
@@ -138,7 +172,7 @@ def _within_noise(result, truth, samples):
     information = fisher_information(truth, poses.rotations, NOISE, poses.counts)
     sigma = np.sqrt(np.diag(covariance_from_information(information)))
     error = result.to_vector() - truth.to_vector()
-    assert np.all(np.abs(error) < 5 * sigma), (error / sigma)
+    assert np.all(np.abs(error) < 5 * sigma), error / sigma
 
 
 @pytest.mark.parametrize("kind", ["mcap", "sqlite", "bare", "db3"])
@@ -158,13 +192,17 @@ def test_storages_give_identical_samples(session, arm):
 
 
 def test_joints_matched_by_name_and_interpolated_to_wrench_stamps(session, arm):
-    """Shuffled names, an extra joint, 40 Hz joints vs 100 Hz wrench: q(t) matches the trajectory."""
+    """Shuffled names, an extra joint, 40 Hz joints vs 100 Hz wrench: q(t) matches the
+    trajectory.
+    """
     recording = read_bag(session["mcap"], arm)
     assert recording.joint_names == arm.joint_names
     assert recording.wrench_frame_id == "ft_sensor"
     exact = session["recording"].q(recording.times - T0)
     # linear interpolation of a cosine blend at 40 Hz: error ≤ (Δt²/8)·max|q̈| + encoder noise
-    max_acceleration = np.max(np.abs(np.diff(session["recording"].poses, axis=0))) * (np.pi / MOVE) ** 2 / 2
+    max_acceleration = (
+        np.max(np.abs(np.diff(session["recording"].poses, axis=0))) * (np.pi / MOVE) ** 2 / 2
+    )
     bound = (1 / JOINT_RATE) ** 2 / 8 * max_acceleration + 5e-5
     assert np.max(np.abs(recording.joint_positions - exact)) < bound
     assert len(recording.times) > 0.95 * WRENCH_RATE * session["recording"].duration
@@ -198,21 +236,41 @@ def test_progress_bar_when_asked(session, arm, capsys):
 
 # ------------------------------------------------------------------ errors
 def test_missing_topic_lists_topics(session, arm):
-    with pytest.raises(InvalidSamples, match=r"no topic '/wrench'.*/ft_sensor/wrench \(geometry_msgs/msg/WrenchStamped\)"):
+    with pytest.raises(
+        InvalidSamples,
+        match=r"no topic '/wrench'.*/ft_sensor/wrench \(geometry_msgs/msg/WrenchStamped\)",
+    ):
         read_bag(session["mcap"], arm, wrench_topic="/wrench")
-    with pytest.raises(InvalidSamples, match="carries sensor_msgs/msg/JointState, expected geometry_msgs"):
+    with pytest.raises(
+        InvalidSamples, match="carries sensor_msgs/msg/JointState, expected geometry_msgs"
+    ):
         read_bag(session["mcap"], arm, wrench_topic="/joint_states")
 
 
 def test_bag_without_joint_states(tmp_path, arm, truth, rng):
-    path = write_bag(tmp_path / "b", arm, truth, make_recording(arm, rng, 2), rng, with_joints=False)
-    with pytest.raises(InvalidSamples, match=r"no sensor_msgs/msg/JointState topic in the bag; topics found: /ft_sensor/wrench"):
+    path = write_bag(
+        tmp_path / "b", arm, truth, make_recording(arm, rng, 2), rng, with_joints=False
+    )
+    with pytest.raises(
+        InvalidSamples,
+        match=r"no sensor_msgs/msg/JointState topic in the bag; topics found: /ft_sensor/wrench",
+    ):
         read_bag(path, arm)
 
 
 def test_ambiguous_wrench_topics(tmp_path, arm, truth, rng):
-    path = write_bag(tmp_path / "b", arm, truth, make_recording(arm, rng, 2), rng, wrench_topics=("/a/wrench", "/b/wrench"))
-    expected = r"several .*WrenchStamped topics: \['/a/wrench', '/b/wrench'\]; choose one with --wrench-topic"
+    path = write_bag(
+        tmp_path / "b",
+        arm,
+        truth,
+        make_recording(arm, rng, 2),
+        rng,
+        wrench_topics=("/a/wrench", "/b/wrench"),
+    )
+    expected = (
+        r"several .*WrenchStamped topics: \['/a/wrench', '/b/wrench'\]; choose one with "
+        r"--wrench-topic"
+    )
     with pytest.raises(InvalidSamples, match=expected):
         read_bag(path, arm)
     assert len(read_bag(path, arm, wrench_topic="/b/wrench").times) > 0
@@ -220,13 +278,21 @@ def test_ambiguous_wrench_topics(tmp_path, arm, truth, rng):
 
 def test_joint_names_not_matching_urdf(tmp_path, arm, truth, rng):
     wrong = [f"ur_joint{i}" for i in range(1, 7)]
-    path = write_bag(tmp_path / "b", arm, truth, make_recording(arm, rng, 2), rng, joint_names=wrong)
-    with pytest.raises(InvalidSamples, match=r"missing \['joint1'.*the bag has \['finger_joint', 'ur_joint1'.*expects \['joint1'"):
+    path = write_bag(
+        tmp_path / "b", arm, truth, make_recording(arm, rng, 2), rng, joint_names=wrong
+    )
+    with pytest.raises(
+        InvalidSamples,
+        match=r"missing \['joint1'.*the bag has \['finger_joint', 'ur_joint1'.*expects \['joint1'",
+    ):
         read_bag(path, arm)
 
 
 def test_no_static_segment(session, arm):
-    expected = r"no static segments.*0 static segment\(s\) from 7 still stretch\(es\).*--min-static-duration"
+    expected = (
+        r"no static segments.*0 static segment\(s\) from 7 still "
+        r"stretch\(es\).*--min-static-duration"
+    )
     with pytest.raises(InvalidSamples, match=expected):
         bag_samples(session["mcap"], arm, parameters=SegmentParameters(min_duration=5.0))
 
@@ -278,12 +344,16 @@ def test_cli_error_is_one_line(session, capsys):
 
 
 def test_corrupt_bags_end_in_an_ftkin_error(session, arm, tmp_path):
-    """Byte-level corruption of a valid .mcap (a mini fuzz run): a result or an ftkin error, nothing else."""
+    """Byte-level corruption of a valid .mcap (a mini fuzz run): a result or an ftkin error, nothing
+    else.
+    """
     import random
 
     from ftkin.exceptions import FtkinError
 
-    sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[2] / "benchmarks"))
+    sys.path.insert(
+        0, str(__import__("pathlib").Path(__file__).resolve().parents[2] / "benchmarks")
+    )
     from fuzz_readers import mutate_bytes
 
     original = session["bare"].read_bytes()

@@ -12,20 +12,36 @@ import pytest
 
 import ftkin
 from ftkin import Compensator, calibrate, load_calibration, save_calibration
-from ftkin.calibration.information import SensorNoise, covariance_from_information, fisher_information
+from ftkin.calibration.information import (
+    SensorNoise,
+    covariance_from_information,
+    fisher_information,
+)
 from ftkin.io.calibration_file import FORMAT_NAME, FORMAT_VERSION
 from ftkin.sim.sensor import SimulatedSensor
 
-ARRAY_FIELDS = ("force_offset", "torque_offset", "gravity_in_base", "center_of_mass", "pose_ids", "pose_wrenches", "residuals")
+ARRAY_FIELDS = (
+    "force_offset",
+    "torque_offset",
+    "gravity_in_base",
+    "center_of_mass",
+    "pose_ids",
+    "pose_wrenches",
+    "residuals",
+)
 
 
 @pytest.fixture(scope="module")
 def result(arm, truth):
     rng = np.random.default_rng(99)
     configurations = arm.random_configurations(7, rng, margin=0.3)
-    samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, configurations, rng, 4)
+    samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(
+        arm, configurations, rng, 4
+    )
     calibrated = calibrate(samples, method="linear", g=9.8)
-    information = fisher_information(calibrated, arm.rotation_sensor_to_base(configurations), SensorNoise.paper(), 4)
+    information = fisher_information(
+        calibrated, arm.rotation_sensor_to_base(configurations), SensorNoise.paper(), 4
+    )
     return dataclasses.replace(calibrated, covariance=covariance_from_information(information))
 
 
@@ -65,18 +81,35 @@ def test_round_trip_is_bit_exact(result, saved, arm, rng):
     rotations = arm.rotation_sensor_to_base(configurations)
     raw = rng.normal(size=(20, 6))
     ours, theirs = Compensator(loaded, arm), Compensator(result, arm)
-    np.testing.assert_array_equal(ours.compensate_batch(rotations, raw), theirs.compensate_batch(rotations, raw))
-    np.testing.assert_array_equal(ours.compensate(configurations[0], raw[0]), theirs.compensate(configurations[0], raw[0]))
+    np.testing.assert_array_equal(
+        ours.compensate_batch(rotations, raw), theirs.compensate_batch(rotations, raw)
+    )
+    np.testing.assert_array_equal(
+        ours.compensate(configurations[0], raw[0]), theirs.compensate(configurations[0], raw[0])
+    )
 
 
 def test_file_documents_units_and_provenance(result, saved):
     document = json.loads(saved.read_text())
     assert document["format"] == FORMAT_NAME and document["version"] == FORMAT_VERSION
-    for key in ("force_offset", "torque_offset", "gravity_in_base", "tool_weight", "tool_mass", "center_of_mass", "base_tilt_deg", "g"):
+    for key in (
+        "force_offset",
+        "torque_offset",
+        "gravity_in_base",
+        "tool_weight",
+        "tool_mass",
+        "center_of_mass",
+        "base_tilt_deg",
+        "g",
+    ):
         assert key in document and key in document["units"], key
     assert document["base_tilt_deg"] == list(result.base_tilt_deg)
     assert document["tool_mass"] == result.tool_weight / 9.8
-    assert document["method"] == "linear" and document["pose_count"] == 7 and document["sample_count"] == 28
+    assert (
+        document["method"] == "linear"
+        and document["pose_count"] == 7
+        and document["sample_count"] == 28
+    )
     assert document["urdf"].endswith("ftkin_c4.urdf") and document["sensor_frame"] == "ft_sensor"
     assert len(document["residual_rms"]) == 6
 
@@ -107,7 +140,9 @@ def test_failed_replace_leaves_old_file_intact(result, saved, monkeypatch, truth
     with pytest.raises(ftkin.FtkinError, match=f"cannot write {saved}.*No space left"):
         save_calibration(other, saved)
     assert saved.read_bytes() == before
-    assert sorted(p.name for p in saved.parent.iterdir()) == ["calib.json"]  # no stray temporary file
+    assert sorted(p.name for p in saved.parent.iterdir()) == [
+        "calib.json"
+    ]  # no stray temporary file
 
 
 def test_failure_midway_through_writing_leaves_old_file_intact(result, saved, monkeypatch):
@@ -154,7 +189,9 @@ def test_truncated_json_gives_line_and_column(saved):
     text = saved.read_text()
     saved.write_text(text[: len(text) // 2])
     lines = text[: len(text) // 2].splitlines()
-    with pytest.raises(ftkin.CalibrationFileError, match=r"not valid JSON .*at line (\d+), column (\d+)") as info:
+    with pytest.raises(
+        ftkin.CalibrationFileError, match=r"not valid JSON .*at line (\d+), column (\d+)"
+    ) as info:
         load_calibration(saved)
     line = int(str(info.value).split("at line ")[1].split(",")[0])
     assert len(lines) - 1 <= line <= len(lines) + 1
@@ -174,7 +211,9 @@ def test_another_format(tmp_path):
 
 def test_newer_version_asks_to_upgrade(saved):
     _edit(saved, lambda d: d.update(version=FORMAT_VERSION + 1))
-    _assert_error(saved, f"newer ftkin .*version {FORMAT_VERSION + 1}.*upgrade ftkin", key="version")
+    _assert_error(
+        saved, f"newer ftkin .*version {FORMAT_VERSION + 1}.*upgrade ftkin", key="version"
+    )
 
 
 def test_non_integer_version(saved):
@@ -182,7 +221,9 @@ def test_non_integer_version(saved):
     _assert_error(saved, "expected an integer version", key="version")
 
 
-@pytest.mark.parametrize("key", ["force_offset", "torque_offset", "gravity_in_base", "center_of_mass", "g"])
+@pytest.mark.parametrize(
+    "key", ["force_offset", "torque_offset", "gravity_in_base", "center_of_mass", "g"]
+)
 def test_missing_key(saved, key):
     _edit(saved, lambda d: d.pop(key))
     _assert_error(saved, "missing", key=key)
@@ -227,7 +268,8 @@ def test_pose_arrays_must_match_ids(saved):
 
 
 @pytest.mark.parametrize(
-    "key, value, expected", [("method", 5, "str"), ("urdf", ["a.urdf"], "str"), ("sample_count", "x", "int")]
+    "key, value, expected",
+    [("method", 5, "str"), ("urdf", ["a.urdf"], "str"), ("sample_count", "x", "int")],
 )
 def test_provenance_of_the_wrong_type(saved, key, value, expected):
     _edit(saved, lambda d: d.update({key: value}))
@@ -235,7 +277,9 @@ def test_provenance_of_the_wrong_type(saved, key, value, expected):
 
 
 def test_saving_a_bare_sensor_model_is_refused(tmp_path, truth):
-    with pytest.raises(ftkin.InvalidInput, match="result must be an ftkin.CalibrationResult .*got SensorModel"):
+    with pytest.raises(
+        ftkin.InvalidInput, match="result must be an ftkin.CalibrationResult .*got SensorModel"
+    ):
         save_calibration(truth, tmp_path / "model.json")
 
 

@@ -44,7 +44,12 @@ def test_the_unedited_file_loads(document, tmp_path):
 
 @pytest.mark.parametrize(
     "key, value",
-    [("force_offset", [True, 0.0, 0.0]), ("g", True), ("center_of_mass", [0.0, False, 0.0]), ("torque_offset", [[True], 0, 0])],
+    [
+        ("force_offset", [True, 0.0, 0.0]),
+        ("g", True),
+        ("center_of_mass", [0.0, False, 0.0]),
+        ("torque_offset", [[True], 0, 0]),
+    ],
 )
 def test_booleans_are_not_numbers(document, tmp_path, key, value):
     _refused(tmp_path, document, lambda d: d.__setitem__(key, value), key, "boolean|finite number")
@@ -52,26 +57,60 @@ def test_booleans_are_not_numbers(document, tmp_path, key, value):
 
 def test_derived_fields_must_agree(document, tmp_path):
     weight = document["tool_weight"]
-    message = _refused(tmp_path, document, lambda d: d.__setitem__("tool_weight", weight * 1.01), "tool_weight", "disagrees")
+    message = _refused(
+        tmp_path,
+        document,
+        lambda d: d.__setitem__("tool_weight", weight * 1.01),
+        "tool_weight",
+        "disagrees",
+    )
     assert f"{weight * 1.01}" in message and f"{weight}" in message  # both values named
     mass = document["tool_mass"]
-    _refused(tmp_path, document, lambda d: d.__setitem__("tool_mass", mass * 2), "tool_mass", f"{mass * 2} kg disagrees")
+    _refused(
+        tmp_path,
+        document,
+        lambda d: d.__setitem__("tool_mass", mass * 2),
+        "tool_mass",
+        f"{mass * 2} kg disagrees",
+    )
     tilt = document["base_tilt_deg"]
-    _refused(tmp_path, document, lambda d: d.__setitem__("base_tilt_deg", [tilt[0] + 1.0, tilt[1]]), "base_tilt_deg",
-             "disagrees with the tilt of gravity_in_base")
-    _refused(tmp_path, document, lambda d: d.__setitem__("pose_count", 3), "pose_count", "disagrees with the 8 pose ids")
+    _refused(
+        tmp_path,
+        document,
+        lambda d: d.__setitem__("base_tilt_deg", [tilt[0] + 1.0, tilt[1]]),
+        "base_tilt_deg",
+        "disagrees with the tilt of gravity_in_base",
+    )
+    _refused(
+        tmp_path,
+        document,
+        lambda d: d.__setitem__("pose_count", 3),
+        "pose_count",
+        "disagrees with the 8 pose ids",
+    )
 
 
 def test_covariance_must_be_symmetric_positive_semidefinite(document, tmp_path):
     covariance = np.array(document["covariance"])
     asymmetric = covariance.copy()
     asymmetric[0, 5] += 1e-3 * np.abs(covariance).max()
-    _refused(tmp_path, document, lambda d: d.__setitem__("covariance", asymmetric.tolist()), "covariance", "not symmetric")
+    _refused(
+        tmp_path,
+        document,
+        lambda d: d.__setitem__("covariance", asymmetric.tolist()),
+        "covariance",
+        "not symmetric",
+    )
     values, vectors = np.linalg.eigh(covariance)
     values[0] = -0.5 * values[-1]
     indefinite = vectors @ np.diag(values) @ vectors.T
-    _refused(tmp_path, document, lambda d: d.__setitem__("covariance", indefinite.tolist()), "covariance",
-             "not positive semi-definite")
+    _refused(
+        tmp_path,
+        document,
+        lambda d: d.__setitem__("covariance", indefinite.tolist()),
+        "covariance",
+        "not positive semi-definite",
+    )
 
 
 def test_duplicate_keys_are_refused(document, tmp_path):
@@ -88,10 +127,24 @@ def test_negative_counts_are_refused(document, tmp_path, key):
 
 
 def test_non_finite_literals_name_the_key(document, tmp_path):
-    _refused(tmp_path, document, lambda d: d.__setitem__("g", float("nan")), "g", "finite number")  # written as NaN
-    _refused(tmp_path, document, None, "g", "finite number", raw=json.dumps(document)[:-1].replace('"g": 9', '"g": 1e999, "_": 9') + "}")
+    _refused(
+        tmp_path, document, lambda d: d.__setitem__("g", float("nan")), "g", "finite number"
+    )  # written as NaN
+    _refused(
+        tmp_path,
+        document,
+        None,
+        "g",
+        "finite number",
+        raw=json.dumps(document)[:-1].replace('"g": 9', '"g": 1e999, "_": 9') + "}",
+    )
 
 
 def test_booleans_in_diagnostics_are_not_numbers(document, tmp_path):
-    _refused(tmp_path, document, lambda d: d["diagnostics"].__setitem__("chi_square", True), "diagnostics",
-             "'chi_square' holds a boolean")
+    _refused(
+        tmp_path,
+        document,
+        lambda d: d["diagnostics"].__setitem__("chi_square", True),
+        "diagnostics",
+        "'chi_square' holds a boolean",
+    )

@@ -1,4 +1,6 @@
-"""A calibration file that parses but cannot be right: foreign units, an absurd centre of mass, bias or g."""
+"""A calibration file that parses but cannot be right: foreign units, an absurd centre of mass, bias
+or g.
+"""
 
 from __future__ import annotations
 
@@ -19,14 +21,23 @@ def document(tmp_path_factory):
     return json.loads(path.read_text())
 
 
-@pytest.mark.parametrize(("edit", "match"), [
-    (lambda d: d["units"].update(force_offset="kN, sensor frame"), "force_offset is stated in 'kN, sensor frame'"),
-    (lambda d: d["units"].update(center_of_mass="mm, sensor frame"), "ftkin files are in 'm'"),
-    (lambda d: d.update(units="SI"), "expected an object or null"),
-    (lambda d: d.update(center_of_mass=[0.0, 0.0, 47.0]), "centre of mass is 47 m from the sensor"),
-    (lambda d: d.update(force_offset=[0.0, 2e6, 0.0]), r"beyond ±1e\+06"),
-    (lambda d: (d.update(g=98.0665), d.pop("tool_mass")), "g = 98.0665 m/s² is outside 1..30"),
-])
+@pytest.mark.parametrize(
+    ("edit", "match"),
+    [
+        (
+            lambda d: d["units"].update(force_offset="kN, sensor frame"),
+            "force_offset is stated in 'kN, sensor frame'",
+        ),
+        (lambda d: d["units"].update(center_of_mass="mm, sensor frame"), "ftkin files are in 'm'"),
+        (lambda d: d.update(units="SI"), "expected an object or null"),
+        (
+            lambda d: d.update(center_of_mass=[0.0, 0.0, 47.0]),
+            "centre of mass is 47 m from the sensor",
+        ),
+        (lambda d: d.update(force_offset=[0.0, 2e6, 0.0]), r"beyond ±1e\+06"),
+        (lambda d: (d.update(g=98.0665), d.pop("tool_mass")), "g = 98.0665 m/s² is outside 1..30"),
+    ],
+)
 def test_implausible_files_are_refused_naming_the_key(document, tmp_path, edit, match):
     edited = json.loads(json.dumps(document))
     edit(edited)
@@ -43,4 +54,6 @@ def test_the_middle_dot_and_missing_units_are_fine(document, tmp_path):
     assert load_calibration(tmp_path / "dot.json").torque_offset.shape == (3,)
     del edited["units"]
     (tmp_path / "none.json").write_text(json.dumps(edited))
-    assert load_calibration(tmp_path / "none.json").tool_weight == pytest.approx(document["tool_weight"])
+    assert load_calibration(tmp_path / "none.json").tool_weight == pytest.approx(
+        document["tool_weight"]
+    )

@@ -31,12 +31,23 @@ def arms(arm):
 
 
 def _table(header, rows) -> Table:
-    return Table("sim.csv", list(header), [[repr(float(v)) for v in row] for row in rows], list(range(2, 2 + len(rows))), 1)
+    return Table(
+        "sim.csv",
+        list(header),
+        [[repr(float(v)) for v in row] for row in rows],
+        list(range(2, 2 + len(rows))),
+        1,
+    )
 
 
 def _rotate(rotations, wrenches):
     """Sensor-frame wrenches expressed in the base frame (force and torque each by R_BS)."""
-    return np.hstack([np.einsum("nij,nj->ni", rotations, wrenches[:, :3]), np.einsum("nij,nj->ni", rotations, wrenches[:, 3:])])
+    return np.hstack(
+        [
+            np.einsum("nij,nj->ni", rotations, wrenches[:, :3]),
+            np.einsum("nij,nj->ni", rotations, wrenches[:, 3:]),
+        ]
+    )
 
 
 def _data(arm, rng, count=12):
@@ -51,15 +62,31 @@ def _mistakes(arm, q, rotations, wrenches):
     euler = matrix_to_euler_zyx(rotations)  # rad
     quaternion = matrix_to_quaternion(rotations)  # w, x, y, z
     return {
-        "Euler angles in radians": _table(["alpha", "beta", "gamma", *WRENCH], np.hstack([euler, wrenches])),
-        "the quaternion as x,y,z,w": _table(["qw", "qx", "qy", "qz", *WRENCH], np.hstack([quaternion[:, [1, 2, 3, 0]], wrenches])),
-        "the wrench in the base frame": _table([*joints, *WRENCH], np.hstack([q, _rotate(rotations, wrenches)])),
-        "the readings negated (the reaction)": _table([*joints, *WRENCH], np.hstack([q, -wrenches])),
-        "the sensor's x axis reversed": _table([*joints, *WRENCH], np.hstack([q, wrenches * [-1, 1, 1, 1, -1, -1]])),
-        "the sensor's y axis reversed": _table([*joints, *WRENCH], np.hstack([q, wrenches * [1, -1, 1, 1, -1, 1]])),
-        "the sensor's z axis reversed": _table([*joints, *WRENCH], np.hstack([q, wrenches * [1, 1, -1, -1, -1, 1]])),
+        "Euler angles in radians": _table(
+            ["alpha", "beta", "gamma", *WRENCH], np.hstack([euler, wrenches])
+        ),
+        "the quaternion as x,y,z,w": _table(
+            ["qw", "qx", "qy", "qz", *WRENCH], np.hstack([quaternion[:, [1, 2, 3, 0]], wrenches])
+        ),
+        "the wrench in the base frame": _table(
+            [*joints, *WRENCH], np.hstack([q, _rotate(rotations, wrenches)])
+        ),
+        "the readings negated (the reaction)": _table(
+            [*joints, *WRENCH], np.hstack([q, -wrenches])
+        ),
+        "the sensor's x axis reversed": _table(
+            [*joints, *WRENCH], np.hstack([q, wrenches * [-1, 1, 1, 1, -1, -1]])
+        ),
+        "the sensor's y axis reversed": _table(
+            [*joints, *WRENCH], np.hstack([q, wrenches * [1, -1, 1, 1, -1, 1]])
+        ),
+        "the sensor's z axis reversed": _table(
+            [*joints, *WRENCH], np.hstack([q, wrenches * [1, 1, -1, -1, -1, 1]])
+        ),
         "joint angles in degrees": _table([*joints, *WRENCH], np.hstack([np.rad2deg(q), wrenches])),
-        "torques in N·mm": _table([*joints, *WRENCH], np.hstack([q, wrenches * [1, 1, 1, 1e3, 1e3, 1e3]])),
+        "torques in N·mm": _table(
+            [*joints, *WRENCH], np.hstack([q, wrenches * [1, 1, 1, 1e3, 1e3, 1e3]])
+        ),
     }
 
 
@@ -72,8 +99,12 @@ def test_each_mistake_is_named(arms, arm_name):
     assert diagnose_table(clean, arm).verdict == "ok"
     for expected, table in _mistakes(arm, q, rotations, wrenches).items():
         report = diagnose_table(table, arm)
-        assert report.culprit is not None and report.culprit.reading.name == expected, (expected, report.reason)
-        # the reaction fits exactly as well as the given reading: only its gravity pointing up gives it away
+        assert report.culprit is not None and report.culprit.reading.name == expected, (
+            expected,
+            report.reason,
+        )
+        # the reaction fits exactly as well as the given reading: only its gravity pointing up gives
+        # it away
         assert report.verdict == ("suspect" if "reaction" in expected else "mistake"), expected
 
 
@@ -89,7 +120,9 @@ def test_the_fitted_alternative_recovers_the_truth(arm):
 
 
 def _clean_table(rng, arms):
-    """A clean data set drawn at random: arm, tool, bias, tilt, poses, noise, repeats, convention."""
+    """A clean data set drawn at random: arm, tool, bias, tilt, poses, noise, repeats,
+    convention.
+    """
     arm = arms[rng.choice(list(arms))]
     truth = SensorModel.from_tool(
         tool_mass=rng.uniform(0.05, 5.0),
@@ -106,11 +139,18 @@ def _clean_table(rng, arms):
     pose = np.repeat(np.arange(count), repeats)[:, None]
     kind = rng.choice(["joints", "euler", "quaternion"])
     if kind == "joints":
-        return arm, _table(["pose", *[f"q{i + 1}" for i in range(arm.nq)], *WRENCH], np.hstack([pose, q, wrenches]))
+        return arm, _table(
+            ["pose", *[f"q{i + 1}" for i in range(arm.nq)], *WRENCH], np.hstack([pose, q, wrenches])
+        )
     if kind == "euler":
         angles = np.rad2deg(matrix_to_euler_zyx(rotations))
-        return None, _table(["pose", "alpha", "beta", "gamma", *WRENCH], np.hstack([pose, angles, wrenches]))
-    return None, _table(["pose", "qw", "qx", "qy", "qz", *WRENCH], np.hstack([pose, matrix_to_quaternion(rotations), wrenches]))
+        return None, _table(
+            ["pose", "alpha", "beta", "gamma", *WRENCH], np.hstack([pose, angles, wrenches])
+        )
+    return None, _table(
+        ["pose", "qw", "qx", "qy", "qz", *WRENCH],
+        np.hstack([pose, matrix_to_quaternion(rotations), wrenches]),
+    )
 
 
 def test_no_false_alarm_on_clean_sets(arms):
@@ -128,10 +168,17 @@ def test_calibrate_refuses_and_doctor_explains(arm, tmp_path, capsys):
     rng = np.random.default_rng(3)
     q, rotations, wrenches = _data(arm, rng)
     euler = matrix_to_euler_zyx(rotations)  # radians under alpha, beta, gamma
-    path = write_csv(tmp_path / "rad.csv", ["alpha", "beta", "gamma", *WRENCH], np.hstack([euler, wrenches]).tolist())
+    path = write_csv(
+        tmp_path / "rad.csv",
+        ["alpha", "beta", "gamma", *WRENCH],
+        np.hstack([euler, wrenches]).tolist(),
+    )
     assert main(["calibrate", str(path)]) == 2
     err = capsys.readouterr().err
-    assert "the data fit when read with Euler angles in radians" in err and "give alpha, beta, gamma in degrees" in err
+    assert (
+        "the data fit when read with Euler angles in radians" in err
+        and "give alpha, beta, gamma in degrees" in err
+    )
     with pytest.raises(ftkin.ConventionMistake) as info:
         from ftkin.cli.doctor import check_conventions
 
@@ -140,9 +187,15 @@ def test_calibrate_refuses_and_doctor_explains(arm, tmp_path, capsys):
     assert main(["doctor", str(path)]) == 1
     out = capsys.readouterr().out
     assert "verdict: mistake" in out and "Euler angles in radians" in out
-    assert main(["calibrate", str(path), "--no-convention-check", "--method", "linear"]) == 0  # deliberate: fit as given
+    assert (
+        main(["calibrate", str(path), "--no-convention-check", "--method", "linear"]) == 0
+    )  # deliberate: fit as given
     capsys.readouterr()
-    clean = write_csv(tmp_path / "ok.csv", ["alpha", "beta", "gamma", *WRENCH], np.hstack([np.rad2deg(euler), wrenches]).tolist())
+    clean = write_csv(
+        tmp_path / "ok.csv",
+        ["alpha", "beta", "gamma", *WRENCH],
+        np.hstack([np.rad2deg(euler), wrenches]).tolist(),
+    )
     assert main(["doctor", str(clean)]) == 0
     assert "verdict: ok" in capsys.readouterr().out
 
@@ -151,7 +204,9 @@ def test_quaternion_message_names_the_columns(arm, tmp_path, capsys):
     rng = np.random.default_rng(4)
     _, rotations, wrenches = _data(arm, rng)
     xyzw = matrix_to_quaternion(rotations)[:, [1, 2, 3, 0]]
-    path = write_csv(tmp_path / "q.csv", ["qw", "qx", "qy", "qz", *WRENCH], np.hstack([xyzw, wrenches]).tolist())
+    path = write_csv(
+        tmp_path / "q.csv", ["qw", "qx", "qy", "qz", *WRENCH], np.hstack([xyzw, wrenches]).tolist()
+    )
     assert main(["calibrate", str(path)]) == 2
     err = capsys.readouterr().err
     assert "the quaternion as x,y,z,w" in err and "name the columns qx,qy,qz,qw" in err
@@ -159,9 +214,14 @@ def test_quaternion_message_names_the_columns(arm, tmp_path, capsys):
 
 def test_too_few_poses_is_undetermined_not_ok(tmp_path, capsys):
     path = tmp_path / "one.csv"
-    path.write_text("alpha,beta,gamma,fx,fy,fz,mx,my,mz\n0,0,0,1,2,3,0.1,0.2,0.3\n10,0,0,1,2,3,0.1,0.2,0.3\n")
+    path.write_text(
+        "alpha,beta,gamma,fx,fy,fz,mx,my,mz\n0,0,0,1,2,3,0.1,0.2,0.3\n10,0,0,1,2,3,0.1,0.2,0.3\n"
+    )
     assert main(["doctor", str(path)]) == 0
-    assert "verdict: undetermined: no reading could be fitted: fewer than 3 poses" in capsys.readouterr().out
+    assert (
+        "verdict: undetermined: no reading could be fitted: fewer than 3 poses"
+        in capsys.readouterr().out
+    )
 
 
 def test_pure_noise_is_never_explained_by_a_convention(arm):
@@ -172,7 +232,9 @@ def test_pure_noise_is_never_explained_by_a_convention(arm):
         count = int(rng.integers(3, 15))
         wrenches = rng.normal(size=(count, 6)) * 10 ** rng.uniform(-3, 3)
         angles = rng.uniform(-180, 180, (count, 3))
-        report = diagnose_table(_table(["alpha", "beta", "gamma", *WRENCH], np.hstack([angles, wrenches])))
+        report = diagnose_table(
+            _table(["alpha", "beta", "gamma", *WRENCH], np.hstack([angles, wrenches]))
+        )
         if report.verdict in ("mistake", "suspect"):
             named.append(report.message)
     assert named == []

@@ -1,4 +1,6 @@
-"""Samples CSV rules: separators, decimal commas, ROS names, did-you-mean, mixed conventions, limits."""
+"""Samples CSV rules: separators, decimal commas, ROS names, did-you-mean, mixed conventions,
+limits.
+"""
 
 from __future__ import annotations
 
@@ -34,7 +36,9 @@ def _text(header, rows, delimiter=",", decimal="."):
 def test_semicolon_and_tab_files_are_read_and_named(arm, data, tmp_path, caplog):
     q, _, wrenches = data
     header = [f"q{i + 1}" for i in range(6)] + WRENCH
-    reference = load_samples(_write(tmp_path / "comma.csv", _text(header, np.hstack([q, wrenches]))))
+    reference = load_samples(
+        _write(tmp_path / "comma.csv", _text(header, np.hstack([q, wrenches])))
+    )
     for delimiter, name in ((";", "semicolon"), ("\t", "tab")):
         path = _write(tmp_path / f"{name}.csv", _text(header, np.hstack([q, wrenches]), delimiter))
         with caplog.at_level(logging.WARNING):
@@ -48,13 +52,23 @@ def test_semicolon_and_tab_files_are_read_and_named(arm, data, tmp_path, caplog)
 def test_decimal_commas_are_named(data, tmp_path):
     q, _, wrenches = data
     header = [f"q{i + 1}" for i in range(6)] + WRENCH
-    path = _write(tmp_path / "semicolon_comma.csv", _text(header, np.hstack([q, wrenches]), ";", ","))
-    with pytest.raises(ftkin.InvalidSamples, match=r"line 2: column 'q1': '-?\d+,\d+' has a decimal comma"):
+    path = _write(
+        tmp_path / "semicolon_comma.csv", _text(header, np.hstack([q, wrenches]), ";", ",")
+    )
+    with pytest.raises(
+        ftkin.InvalidSamples, match=r"line 2: column 'q1': '-?\d+,\d+' has a decimal comma"
+    ):
         load_samples(path)
     path = _write(tmp_path / "comma_comma.csv", "fx,fy\n1,5,2,25\n")
-    with pytest.raises(ftkin.InvalidSamples, match="4 cells but the header has 2 columns; the numbers look like they have decimal commas"):
+    with pytest.raises(
+        ftkin.InvalidSamples,
+        match="4 cells but the header has 2 columns; the numbers "
+        "look like they have decimal commas",
+    ):
         read_table(path)
-    path = _write(tmp_path / "extra_cells.csv", "fx,fy\n1.5,2.25,3,4\n")  # numbers with decimal points: just extra cells
+    path = _write(
+        tmp_path / "extra_cells.csv", "fx,fy\n1.5,2.25,3,4\n"
+    )  # numbers with decimal points: just extra cells
     with pytest.raises(ftkin.InvalidSamples, match=r"4 cells but the header has 2 columns$"):
         read_table(path)
 
@@ -63,8 +77,14 @@ def test_decimal_commas_are_named(data, tmp_path):
     "names",
     [
         ["force.x", "force.y", "force.z", "torque.x", "torque.y", "torque.z"],
-        ["field.wrench.force.x", "field.wrench.force.y", "field.wrench.force.z",
-         "field.wrench.torque.x", "field.wrench.torque.y", "field.wrench.torque.z"],
+        [
+            "field.wrench.force.x",
+            "field.wrench.force.y",
+            "field.wrench.force.z",
+            "field.wrench.torque.x",
+            "field.wrench.torque.y",
+            "field.wrench.torque.z",
+        ],
         ["force_x", "force_y", "force_z", "torque_x", "torque_y", "torque_z"],
         ["fx", "fy", "fz", "tx", "ty", "tz"],
         ["Force.X", "Force.Y", "Force.Z", "Tx", "Ty", "Tz"],
@@ -72,7 +92,10 @@ def test_decimal_commas_are_named(data, tmp_path):
 )
 def test_ros_style_wrench_names_are_accepted(data, tmp_path, names):
     q, _, wrenches = data
-    path = _write(tmp_path / "ros.csv", _text([f"q{i + 1}" for i in range(6)] + names, np.hstack([q, wrenches])))
+    path = _write(
+        tmp_path / "ros.csv",
+        _text([f"q{i + 1}" for i in range(6)] + names, np.hstack([q, wrenches])),
+    )
     np.testing.assert_allclose(load_samples(path).samples.wrenches, wrenches, rtol=1e-15)
     assert wrench_aliases(["fx", "mx", "tx"]) == {}  # ftkin's own names win; nothing renamed
 
@@ -82,14 +105,20 @@ def test_did_you_mean_maps_the_users_name_to_ftkins(data, tmp_path, wrong, right
     q, _, wrenches = data
     header = [f"q{i + 1}" for i in range(6)] + [wrong if n == right else n for n in WRENCH]
     path = _write(tmp_path / "case.csv", _text(header, np.hstack([q, wrenches])))
-    with pytest.raises(ftkin.InvalidSamples, match=rf"did you mean: rename column '{wrong}' to '{right}'\?"):
+    with pytest.raises(
+        ftkin.InvalidSamples, match=rf"did you mean: rename column '{wrong}' to '{right}'\?"
+    ):
         load_samples(path)
 
 
 def test_mixed_conventions_refused_without_urdf(arm, data, tmp_path):
     q, rotations, wrenches = data
     euler = np.rad2deg(matrix_to_euler_zyx(rotations))
-    for joints in (arm.joint_names, [f"q{i + 1}" for i in range(6)], [f"my_joint_{i}" for i in range(6)]):
+    for joints in (
+        arm.joint_names,
+        [f"q{i + 1}" for i in range(6)],
+        [f"my_joint_{i}" for i in range(6)],
+    ):
         header = ["alpha", "beta", "gamma", *joints, *WRENCH]
         path = _write(tmp_path / "mixed.csv", _text(header, np.hstack([euler, q, wrenches])))
         with pytest.raises(ftkin.InvalidSamples, match="mixed orientation conventions"):
@@ -106,22 +135,35 @@ def test_joint_values_outside_limits_warn_once_per_column(arm, data, tmp_path, c
     q[0, 1] = min(upper[1] + 0.2, 6.2)
     q[1, 1] = min(upper[1] + 0.1, 6.2)
     q[2, 4] = max(lower[4] - 0.1, -6.2)
-    path = _write(tmp_path / "limits.csv", _text([f"q{i + 1}" for i in range(6)] + WRENCH, np.hstack([q, wrenches])))
+    path = _write(
+        tmp_path / "limits.csv",
+        _text([f"q{i + 1}" for i in range(6)] + WRENCH, np.hstack([q, wrenches])),
+    )
     with caplog.at_level(logging.WARNING):
         load_samples(path, arm)
-    warnings = [r.getMessage() for r in caplog.records if "outside the URDF limits" in r.getMessage()]
+    warnings = [
+        r.getMessage() for r in caplog.records if "outside the URDF limits" in r.getMessage()
+    ]
     assert len(warnings) == 2
-    assert f"'q2' has 2 value(s) outside the URDF limits [{lower[1]:g}, {upper[1]:g}] rad" in warnings[0]
+    assert (
+        f"'q2' has 2 value(s) outside the URDF limits [{lower[1]:g}, {upper[1]:g}] rad"
+        in warnings[0]
+    )
     assert "'q5' has 1 value(s)" in warnings[1]
     q[3, 0] = 90.0  # beyond 2π: still refused as degrees
-    path = _write(tmp_path / "degrees.csv", _text([f"q{i + 1}" for i in range(6)] + WRENCH, np.hstack([q, wrenches])))
+    path = _write(
+        tmp_path / "degrees.csv",
+        _text([f"q{i + 1}" for i in range(6)] + WRENCH, np.hstack([q, wrenches])),
+    )
     with pytest.raises(ftkin.InvalidSamples, match="look like degrees"):
         load_samples(path, arm)
 
 
 def test_duplicate_header_check_is_linear(tmp_path):
     header = [f"c{i}" for i in range(100_000)] + ["c5", "c77"]
-    path = _write(tmp_path / "wide.csv", ",".join(header) + "\n" + ",".join("0" for _ in header) + "\n")
+    path = _write(
+        tmp_path / "wide.csv", ",".join(header) + "\n" + ",".join("0" for _ in header) + "\n"
+    )
     start = time.perf_counter()
     with pytest.raises(ftkin.InvalidSamples, match=r"duplicated column\(s\) \['c5', 'c77'\]"):
         read_table(path)

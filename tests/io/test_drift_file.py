@@ -1,4 +1,6 @@
-"""Calibration file format 2: the bias trajectory round trip, old files, malformed drift; the samples CSV 't' column."""
+"""Calibration file format 2: the bias trajectory round trip, old files, malformed drift; the
+samples CSV 't' column.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +10,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ftkin import CalibrationFileError, SensorNoise, SimulatedSensor, calibrate, load_calibration, load_samples, save_calibration
+from ftkin import (
+    CalibrationFileError,
+    SensorNoise,
+    SimulatedSensor,
+    calibrate,
+    load_calibration,
+    load_samples,
+    save_calibration,
+)
 from ftkin.io.calibration_file import FORMAT_VERSION
 from ftkin.io.csv_table import write_csv
 from ftkin.sim.sensor import recording_times
@@ -33,8 +43,9 @@ def drifting(arm, truth):
     configurations = arm.random_configurations(16, rng, margin=0.3)
     times = recording_times(16, 3, 480.0, 0.02)
     drift = np.outer(times / 480.0, [0.2, -0.1, 0.1, 0.003, 0.0, 0.001])
-    return SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, configurations, rng, 3, times=times,
-                                                                                 bias_drift=drift)
+    return SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(
+        arm, configurations, rng, 3, times=times, bias_drift=drift
+    )
 
 
 @pytest.mark.parametrize("drift", ["poly:2", "random-walk", "none"])
@@ -65,7 +76,12 @@ def test_a_malformed_drift_names_its_key(drifting, tmp_path):
 
 def test_the_csv_time_column_becomes_samples_times(drifting, tmp_path):
     header = ["t", "pose", *[f"q{i + 1}" for i in range(6)], "fx", "fy", "fz", "mx", "my", "mz"]
-    rows = [[t, int(p), *q, *w] for t, p, q, w in zip(drifting.times, drifting.pose_ids, drifting.joint_positions, drifting.wrenches)]
+    rows = [
+        [t, int(p), *q, *w]
+        for t, p, q, w in zip(
+            drifting.times, drifting.pose_ids, drifting.joint_positions, drifting.wrenches
+        )
+    ]
     write_csv(tmp_path / "s.csv", header, rows)
     loaded = load_samples(tmp_path / "s.csv").samples
     np.testing.assert_array_equal(loaded.times, drifting.times)
@@ -73,15 +89,27 @@ def test_the_csv_time_column_becomes_samples_times(drifting, tmp_path):
     assert load_samples(tmp_path / "n.csv").samples.times is None
 
 
-@pytest.mark.parametrize(("change", "match"), [
-    ({"model": "banana"}, "unknown drift model"), ({"model": "auto"}, "unknown drift model"),
-    ({"rate": [-1.0, float("nan")]}, "rate must be"), ({"time_scale": 0.0}, "time_scale must be"),
-    ({"coefficients": np.zeros((1, 5))}, "coefficients must be"), ({"selected_by": "me"}, "selected_by"),
-])
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        ({"model": "banana"}, "unknown drift model"),
+        ({"model": "auto"}, "unknown drift model"),
+        ({"rate": [-1.0, float("nan")]}, "rate must be"),
+        ({"time_scale": 0.0}, "time_scale must be"),
+        ({"coefficients": np.zeros((1, 5))}, "coefficients must be"),
+        ({"selected_by": "me"}, "selected_by"),
+    ],
+)
 def test_a_bias_drift_refuses_what_no_fit_gives(change, match):
     from ftkin.calibration.drift import BiasDrift
     from ftkin.exceptions import InvalidInput
 
-    arguments = dict(model="poly:1", selected_by="given", times=[0.0, 1.0], bias=np.zeros((2, 6)), bias_std=np.zeros((2, 6)))
+    arguments = dict(
+        model="poly:1",
+        selected_by="given",
+        times=[0.0, 1.0],
+        bias=np.zeros((2, 6)),
+        bias_std=np.zeros((2, 6)),
+    )
     with pytest.raises(InvalidInput, match=match):
         BiasDrift(**{**arguments, **change})

@@ -42,7 +42,9 @@ def readings(truth, rng):
 
 
 def test_admittance_values_and_controller_formula(truth, readings):
-    level = SensorModel.from_tool(truth.tool_mass, truth.center_of_mass, truth.force_offset, truth.torque_offset, (0.0, 0.0))
+    level = SensorModel.from_tool(
+        truth.tool_mass, truth.center_of_mass, truth.force_offset, truth.torque_offset, (0.0, 0.0)
+    )
     params = yaml.safe_load(export_text(level, "admittance", frame_id="ati_sensor"))
     gc = params["admittance_controller"]["ros__parameters"]["gravity_compensation"]
     assert gc["frame"]["id"] == "ati_sensor"
@@ -77,16 +79,25 @@ def test_gravity_compensation_filter_keeps_the_tilt(truth, readings):
     for rotation, reading, expected in zip(rotations, raw - truth.bias, contact):
         force = rotation.T @ (p["tool"]["mass"] * field)
         np.testing.assert_allclose(reading[:3] - force, expected[:3], atol=1e-9)
-        np.testing.assert_allclose(reading[3:] - np.cross(p["tool"]["CoG"], force), expected[3:], atol=1e-9)
+        np.testing.assert_allclose(
+            reading[3:] - np.cross(p["tool"]["CoG"], force), expected[3:], atol=1e-9
+        )
 
 
 def test_ft_calib_values_and_node_formula(truth, readings):
     params = yaml.safe_load(export_text(truth, "ft-calib"))
-    assert set(params) == {"bias", "gripper_mass", "gripper_com_frame_id", "gripper_com_child_frame_id", "gripper_com_pose"}
+    assert set(params) == {
+        "bias",
+        "gripper_mass",
+        "gripper_com_frame_id",
+        "gripper_com_child_frame_id",
+        "gripper_com_pose",
+    }
     assert params["bias"] == list(truth.force_offset) + list(truth.torque_offset)
     assert params["gripper_mass"] == truth.tool_mass
     assert params["gripper_com_pose"] == list(truth.center_of_mass) + [0.0, 0.0, 0.0]
-    # gravity_compensation.cpp (KTH): zeroed = raw − bias; compensated = zeroed − [m g_S; r × m g_S],
+    # gravity_compensation.cpp (KTH): zeroed = raw − bias; compensated = zeroed − [m g_S; r × m
+    # g_S],
     # g_S = gravity acceleration in the sensor frame; fed here with the tilted gravity a / m.
     g_base = truth.gravity_in_base / truth.tool_mass
     rotations, raw, contact = readings
@@ -117,7 +128,9 @@ def test_unknown_format(truth):
 def test_bad_options_and_weightless_tool(truth):
     with pytest.raises(InvalidInput, match="ft-calib is a flat ROS 1 parameter file"):
         export_text(truth, "ft-calib", node_name="ft_node")
-    weightless = SensorModel(truth.force_offset, truth.torque_offset, [0.0, 0.0, 0.0], truth.center_of_mass)
+    weightless = SensorModel(
+        truth.force_offset, truth.torque_offset, [0.0, 0.0, 0.0], truth.center_of_mass
+    )
     with pytest.raises(InvalidInput, match="no tool weight"):
         export_text(weightless, "gravity-compensation")
 
@@ -125,7 +138,10 @@ def test_bad_options_and_weightless_tool(truth):
 def test_frame_names_are_quoted_for_yaml(truth):
     name = 'odd "frame"\\ with: colon'
     params = yaml.safe_load(export_text(truth, "admittance", frame_id=name))
-    assert params["admittance_controller"]["ros__parameters"]["gravity_compensation"]["frame"]["id"] == name
+    assert (
+        params["admittance_controller"]["ros__parameters"]["gravity_compensation"]["frame"]["id"]
+        == name
+    )
 
 
 def test_world_frame_from_urdf_root(arm):
@@ -136,14 +152,23 @@ def test_world_frame_from_urdf_root(arm):
 @pytest.mark.parametrize("fmt", EXPORT_FORMATS)
 def test_cli_export(fmt, tmp_path, arm, truth, rng, capsys):
     q = arm.random_configurations(10, rng, margin=0.1)
-    result = calibrate(SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, q, rng, 5))
+    result = calibrate(
+        SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, q, rng, 5)
+    )
     calib = tmp_path / "calib.json"
     save_calibration(result, calib)
     out = tmp_path / "out.yaml"
-    assert main(["export", str(calib), "--format", fmt, "-o", str(out), "--frame-id", "wrist_ft"]) == 0
+    assert (
+        main(["export", str(calib), "--format", fmt, "-o", str(out), "--frame-id", "wrist_ft"]) == 0
+    )
     text = out.read_text()
     assert "wrist_ft" in text and yaml.safe_load(text)
     if fmt == "gravity-compensation":  # world frame taken from the calibration's URDF
-        assert yaml.safe_load(text)["/**"]["ros__parameters"]["sensor_filter_chain"]["filter1"]["params"]["world_frame"] == "base_link"
+        assert (
+            yaml.safe_load(text)["/**"]["ros__parameters"]["sensor_filter_chain"]["filter1"][
+                "params"
+            ]["world_frame"]
+            == "base_link"
+        )
     printed = capsys.readouterr().out
     assert f"wrote {fmt}" in printed

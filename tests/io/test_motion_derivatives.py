@@ -1,4 +1,6 @@
-"""A moving recording's own joint velocities and accelerations: used when given, checked against the positions."""
+"""A moving recording's own joint velocities and accelerations: used when given, checked against the
+positions.
+"""
 
 from __future__ import annotations
 
@@ -33,28 +35,39 @@ def _write(path, arm, columns: dict):
 
 def test_given_derivatives_are_used_as_they_are(arm, tmp_path):
     t, q, dq, ddq = _trajectory(arm.nq)
-    columns = {**{f"dq{i + 1}": dq[:, i] for i in range(arm.nq)}, **{f"ddq{i + 1}": ddq[:, i] for i in range(arm.nq)}}
+    columns = {
+        **{f"dq{i + 1}": dq[:, i] for i in range(arm.nq)},
+        **{f"ddq{i + 1}": ddq[:, i] for i in range(arm.nq)},
+    }
     recording = load_motion_csv(_write(tmp_path / "m.csv", arm, columns), arm)
     np.testing.assert_allclose(recording.joint_accelerations, ddq, rtol=1e-12)
     motion = recording.motion_samples(arm)
     expected = MotionSamples.from_joint_trajectory(arm, q, dq, ddq, recording.wrenches, t)
     np.testing.assert_allclose(motion.accelerations, expected.accelerations, rtol=1e-9, atol=1e-12)
     # named by joint: the same
-    named = {**{f"{n}_velocity": dq[:, i] for i, n in enumerate(arm.joint_names)},
-             **{f"{n}_acceleration": ddq[:, i] for i, n in enumerate(arm.joint_names)}}
+    named = {
+        **{f"{n}_velocity": dq[:, i] for i, n in enumerate(arm.joint_names)},
+        **{f"{n}_acceleration": ddq[:, i] for i, n in enumerate(arm.joint_names)},
+    }
     again = load_motion_csv(_write(tmp_path / "n.csv", arm, named), arm)
     np.testing.assert_allclose(again.joint_velocities, dq, rtol=1e-12)
 
 
-@pytest.mark.parametrize(("edit", "match"), [
-    (lambda dq, ddq: (np.rad2deg(dq), ddq), "dq1..dq6 disagree with the time derivative"),
-    (lambda dq, ddq: (dq, -ddq), "ddq1..ddq6 disagree"),
-    (lambda dq, ddq: (dq[:, ::-1], ddq), "another order"),
-])
+@pytest.mark.parametrize(
+    ("edit", "match"),
+    [
+        (lambda dq, ddq: (np.rad2deg(dq), ddq), "dq1..dq6 disagree with the time derivative"),
+        (lambda dq, ddq: (dq, -ddq), "ddq1..ddq6 disagree"),
+        (lambda dq, ddq: (dq[:, ::-1], ddq), "another order"),
+    ],
+)
 def test_inconsistent_derivatives_are_refused(arm, tmp_path, edit, match):
     _, _, dq, ddq = _trajectory(arm.nq)
     dq, ddq = edit(dq, ddq)
-    columns = {**{f"dq{i + 1}": dq[:, i] for i in range(arm.nq)}, **{f"ddq{i + 1}": ddq[:, i] for i in range(arm.nq)}}
+    columns = {
+        **{f"dq{i + 1}": dq[:, i] for i in range(arm.nq)},
+        **{f"ddq{i + 1}": ddq[:, i] for i in range(arm.nq)},
+    }
     with pytest.raises(InvalidSamples, match=match):
         load_motion_csv(_write(tmp_path / "m.csv", arm, columns), arm)
 
@@ -62,9 +75,14 @@ def test_inconsistent_derivatives_are_refused(arm, tmp_path, edit, match):
 def test_partial_or_lone_derivatives(arm, tmp_path, caplog):
     _, _, dq, _ = _trajectory(arm.nq)
     with pytest.raises(InvalidSamples, match=r"joint velocity columns \['dq6'\] are missing"):
-        load_motion_csv(_write(tmp_path / "a.csv", arm, {f"dq{i + 1}": dq[:, i] for i in range(arm.nq - 1)}), arm)
+        load_motion_csv(
+            _write(tmp_path / "a.csv", arm, {f"dq{i + 1}": dq[:, i] for i in range(arm.nq - 1)}),
+            arm,
+        )
     with caplog.at_level(logging.WARNING, logger="ftkin"):
-        recording = load_motion_csv(_write(tmp_path / "b.csv", arm, {f"dq{i + 1}": dq[:, i] for i in range(arm.nq)}), arm)
+        recording = load_motion_csv(
+            _write(tmp_path / "b.csv", arm, {f"dq{i + 1}": dq[:, i] for i in range(arm.nq)}), arm
+        )
     assert recording.joint_velocities is None and "given without the other" in caplog.text
 
 
@@ -76,7 +94,11 @@ def test_nanosecond_stamps_and_ros_wrench_names_in_a_moving_recording(arm, tmp_p
     wrench = np.tile([1.0, -2.0, 3.0, 0.1, 0.2, -0.1], (len(t), 1))
     ros = ["force.x", "force.y", "force.z", "torque.x", "torque.y", "torque.z"]
     path = tmp_path / "ns.csv"
-    write_csv(path, ["stamp", *arm.joint_names, *ros], np.column_stack([1.7644e18 + t * 1e9, q, wrench]).tolist())
+    write_csv(
+        path,
+        ["stamp", *arm.joint_names, *ros],
+        np.column_stack([1.7644e18 + t * 1e9, q, wrench]).tolist(),
+    )
     with caplog.at_level(logging.WARNING, logger="ftkin"):
         assert not is_motion_table(read_table(path), arm)  # a static log then, not a crash
         with pytest.raises(InvalidSamples, match="missing time column"):

@@ -5,7 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftkin import InvalidSamples, calibrate_dynamic, load_motion_bag, load_motion_csv, plan_excitation
+from ftkin import (
+    InvalidSamples,
+    calibrate_dynamic,
+    load_motion_bag,
+    load_motion_csv,
+    plan_excitation,
+)
 from ftkin.io.csv_table import write_csv
 
 mujoco_recording = pytest.importorskip("ftkin.sim.mujoco.recording")
@@ -23,15 +29,22 @@ T0 = 1_700_000_000.0
 
 def _stamp(seconds):
     nanoseconds = int(round(seconds * 1e9))
-    stamp = TYPESTORE.types["builtin_interfaces/msg/Time"](sec=nanoseconds // 10**9, nanosec=nanoseconds % 10**9)
+    stamp = TYPESTORE.types["builtin_interfaces/msg/Time"](
+        sec=nanoseconds // 10**9, nanosec=nanoseconds % 10**9
+    )
     return TYPESTORE.types["std_msgs/msg/Header"](stamp=stamp, frame_id="ft_sensor")
 
 
 @pytest.fixture(scope="module")
 def excitation(arm):
-    plan = plan_excitation(arm, 6.0, rate=RATE, period=3.0, harmonics=3, candidates=2, optimize=False, seed=3)
+    plan = plan_excitation(
+        arm, 6.0, rate=RATE, period=3.0, harmonics=3, candidates=2, optimize=False, seed=3
+    )
     recorder = mujoco_recording.MujocoRecorder(joint_names=arm.joint_names, tool=TOOL)
-    wrenches = recorder.wrenches(plan.joint_positions, plan.joint_velocities, plan.joint_accelerations) + BIAS
+    wrenches = (
+        recorder.wrenches(plan.joint_positions, plan.joint_velocities, plan.joint_accelerations)
+        + BIAS
+    )
     return plan, wrenches, recorder
 
 
@@ -47,29 +60,56 @@ def test_bag_recording_identifies_the_tool(tmp_path, arm, excitation):
     path = tmp_path / "motion"
     jitter = np.random.default_rng(0).uniform(-2e-4, 2e-4, len(plan.times))  # 10 % of the period
     wrench_times = plan.times + jitter
-    wrenches = recorder.wrenches(*plan.trajectory.evaluate(wrench_times)) + BIAS  # measured at their stamps
+    wrenches = (
+        recorder.wrenches(*plan.trajectory.evaluate(wrench_times)) + BIAS
+    )  # measured at their stamps
     with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
-        joints = writer.add_connection("/joint_states", "sensor_msgs/msg/JointState", typestore=TYPESTORE)
-        wrench = writer.add_connection("/wrench", "geometry_msgs/msg/WrenchStamped", typestore=TYPESTORE)
+        joints = writer.add_connection(
+            "/joint_states", "sensor_msgs/msg/JointState", typestore=TYPESTORE
+        )
+        wrench = writer.add_connection(
+            "/wrench", "geometry_msgs/msg/WrenchStamped", typestore=TYPESTORE
+        )
         for t, q in zip(plan.times, plan.joint_positions):
             message = types["sensor_msgs/msg/JointState"](
-                header=_stamp(T0 + t), name=list(arm.joint_names), position=q, velocity=np.zeros(0), effort=np.zeros(0)
+                header=_stamp(T0 + t),
+                name=list(arm.joint_names),
+                position=q,
+                velocity=np.zeros(0),
+                effort=np.zeros(0),
             )
-            writer.write(joints, int((T0 + t) * 1e9), TYPESTORE.serialize_cdr(message, "sensor_msgs/msg/JointState"))
+            writer.write(
+                joints,
+                int((T0 + t) * 1e9),
+                TYPESTORE.serialize_cdr(message, "sensor_msgs/msg/JointState"),
+            )
         for t, w in zip(wrench_times, wrenches):
             vector = types["geometry_msgs/msg/Vector3"]
             message = types["geometry_msgs/msg/WrenchStamped"](
-                header=_stamp(T0 + t), wrench=types["geometry_msgs/msg/Wrench"](force=vector(*w[:3]), torque=vector(*w[3:]))
+                header=_stamp(T0 + t),
+                wrench=types["geometry_msgs/msg/Wrench"](
+                    force=vector(*w[:3]), torque=vector(*w[3:])
+                ),
             )
-            writer.write(wrench, int((T0 + t) * 1e9), TYPESTORE.serialize_cdr(message, "geometry_msgs/msg/WrenchStamped"))
+            writer.write(
+                wrench,
+                int((T0 + t) * 1e9),
+                TYPESTORE.serialize_cdr(message, "geometry_msgs/msg/WrenchStamped"),
+            )
     recording = load_motion_bag(path, arm)
     assert recording.times[1] - recording.times[0] == pytest.approx(1 / RATE, rel=0.05)
     _check(calibrate_dynamic(recording.motion_samples(arm)))
-    # the same bag read as base-frame wrenches (a UR TCP force): rotated into the sensor frame, R_BSᵀ w
+    # the same bag read as base-frame wrenches (a UR TCP force): rotated into the sensor frame,
+    # R_BSᵀ w
     as_base = load_motion_bag(path, arm, wrench_frame="base")
     rotations = arm.rotation_sensor_to_base(as_base.joint_positions)
-    expected = np.concatenate([np.einsum("nji,nj->ni", rotations, recording.wrenches[:, :3]),
-                               np.einsum("nji,nj->ni", rotations, recording.wrenches[:, 3:])], axis=1)
+    expected = np.concatenate(
+        [
+            np.einsum("nji,nj->ni", rotations, recording.wrenches[:, :3]),
+            np.einsum("nji,nj->ni", rotations, recording.wrenches[:, 3:]),
+        ],
+        axis=1,
+    )
     np.testing.assert_allclose(as_base.wrenches, expected, atol=2e-3)
 
 

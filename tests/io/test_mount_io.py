@@ -40,7 +40,9 @@ def mounted(arm, tool):
     clean = tool.predict(arm.rotation_sensor_to_base(q) @ MOUNT.T)
     raw = (clean + rng.normal(size=clean.shape) * NOISE.channel_std) * reading_signs(-1, "x")
     samples = Samples.from_joint_positions(arm, q, raw)
-    return calibrate(samples, estimate_mount="full", noise=NOISE, sensor_sign=-1, flip_axis="x"), samples
+    return calibrate(
+        samples, estimate_mount="full", noise=NOISE, sensor_sign=-1, flip_axis="x"
+    ), samples
 
 
 def test_file_round_trip_keeps_mount_sign_and_flip(mounted, tmp_path):
@@ -49,7 +51,11 @@ def test_file_round_trip_keeps_mount_sign_and_flip(mounted, tmp_path):
     document = json.loads(path.read_text())
     np.testing.assert_array_equal(document["mount_rotation"], result.mount_rotation)
     assert document["mount_rpy_deg"] == pytest.approx(list(result.mount_rpy_deg))
-    assert document["sensor_sign"] == -1 and document["flip_axis"] == "x" and document["mount_mode"] == "full"
+    assert (
+        document["sensor_sign"] == -1
+        and document["flip_axis"] == "x"
+        and document["mount_mode"] == "full"
+    )
     loaded = load_calibration(path)
     np.testing.assert_array_equal(loaded.mount_rotation, result.mount_rotation)
     np.testing.assert_array_equal(loaded.mount_covariance, result.mount_covariance)
@@ -60,12 +66,25 @@ def test_file_round_trip_keeps_mount_sign_and_flip(mounted, tmp_path):
 def test_old_file_loads_with_identity_mount_and_plus_sign(mounted, tmp_path):
     result, _ = mounted
     document = json.loads(save_calibration(result, tmp_path / "calib.json").read_text())
-    for key in ("mount_rotation", "mount_rpy_deg", "mount_mode", "mount_covariance", "mount_std_deg", "sensor_sign", "flip_axis"):
+    for key in (
+        "mount_rotation",
+        "mount_rpy_deg",
+        "mount_mode",
+        "mount_covariance",
+        "mount_std_deg",
+        "sensor_sign",
+        "flip_axis",
+    ):
         del document[key]
     (tmp_path / "old.json").write_text(json.dumps(document))
     old = load_calibration(tmp_path / "old.json")
     np.testing.assert_array_equal(old.mount_rotation, np.eye(3))
-    assert (old.sensor_sign, old.flip_axis, old.mount_mode, old.has_mount) == (1, None, "none", False)
+    assert (old.sensor_sign, old.flip_axis, old.mount_mode, old.has_mount) == (
+        1,
+        None,
+        "none",
+        False,
+    )
 
 
 def test_file_with_a_reflection_is_refused(mounted, tmp_path):
@@ -78,7 +97,9 @@ def test_file_with_a_reflection_is_refused(mounted, tmp_path):
 
 
 def _com_in_flange_by_kinematics(arm, calibration, flange):
-    """Hand computation through forward kinematics at a random pose: P_F = R_BFᵀ (R_BS_real P + p_S − p_F)."""
+    """Hand computation through forward kinematics at a random pose: P_F = R_BFᵀ (R_BS_real P + p_S
+    − p_F).
+    """
     q = arm.random_configurations(1, np.random.default_rng(0))[0]
     rotation_flange, origin_flange = arm.frame_placement(q, flange)
     rotation_sensor, origin_sensor = arm.frame_placement(q, "sensor")
@@ -92,8 +113,12 @@ def test_franka_load_parsed_back_matches_hand_computation(mounted, arm, tmp_path
     path = export_payload(result, arm, tmp_path / "load.yaml", "franka-load", inertia=inertia)
     request = yaml.safe_load(path.read_text())
     assert set(request) == {"mass", "center_of_mass", "load_inertia"}
-    assert request["mass"] == pytest.approx(np.linalg.norm(result.gravity_in_base) / result.g, rel=1e-12)
-    np.testing.assert_allclose(request["center_of_mass"], _com_in_flange_by_kinematics(arm, result, "flange"), atol=1e-12)
+    assert request["mass"] == pytest.approx(
+        np.linalg.norm(result.gravity_in_base) / result.g, rel=1e-12
+    )
+    np.testing.assert_allclose(
+        request["center_of_mass"], _com_in_flange_by_kinematics(arm, result, "flange"), atol=1e-12
+    )
     ixx, iyy, izz, ixy, ixz, iyz = inertia
     column_major = [ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz]
     np.testing.assert_allclose(request["load_inertia"], column_major)
@@ -104,18 +129,26 @@ def test_ur_payload_on_ur5_parsed_back(tool, tmp_path):
     rng = np.random.default_rng(22)
     q = ur5.random_configurations(12, rng, margin=0.3)
     clean = tool.predict(ur5.rotation_sensor_to_base(q) @ MOUNT.T)
-    samples = Samples.from_joint_positions(ur5, q, clean + rng.normal(size=clean.shape) * NOISE.channel_std)
+    samples = Samples.from_joint_positions(
+        ur5, q, clean + rng.normal(size=clean.shape) * NOISE.channel_std
+    )
     result = calibrate(samples, estimate_mount="full", noise=NOISE)
     expected = _com_in_flange_by_kinematics(ur5, result, "tool0")
-    request = yaml.safe_load(export_payload(result, ur5, tmp_path / "payload.yaml", "ur-payload").read_text())
+    request = yaml.safe_load(
+        export_payload(result, ur5, tmp_path / "payload.yaml", "ur-payload").read_text()
+    )
     assert request["mass"] == pytest.approx(result.tool_mass, rel=1e-12)
-    np.testing.assert_allclose([request["center_of_gravity"][k] for k in "xyz"], expected, atol=1e-12)
+    np.testing.assert_allclose(
+        [request["center_of_gravity"][k] for k in "xyz"], expected, atol=1e-12
+    )
     script = export_payload(result, ur5, tmp_path / "payload.script", "ur-payload").read_text()
     match = re.search(r"set_payload\(([^,]+), \[([^\]]+)\]\)", script)
     assert float(match.group(1)) == pytest.approx(result.tool_mass, rel=1e-12)
     np.testing.assert_allclose([float(v) for v in match.group(2).split(",")], expected, atol=1e-12)
     # the truth, through the mount: within a few standard errors of the COM
-    truth = _com_in_flange_by_kinematics(ur5, SimpleNamespace(mount_rotation=MOUNT, center_of_mass=tool.center_of_mass), "tool0")
+    truth = _com_in_flange_by_kinematics(
+        ur5, SimpleNamespace(mount_rotation=MOUNT, center_of_mass=tool.center_of_mass), "tool0"
+    )
     assert np.all(np.abs(expected - truth) < 5e-4)
     # without the mount the COM lands elsewhere: the mount matters
     assert np.linalg.norm(payload_in_flange(tool, ur5).center_of_mass - truth) > 5e-3
@@ -124,18 +157,27 @@ def test_ur_payload_on_ur5_parsed_back(tool, tmp_path):
 def test_cli_exports_payloads(mounted, tmp_path, capsys):
     result, _ = mounted
     calib = save_calibration(result, tmp_path / "calib.json")
-    assert main(["export", str(calib), "--format", "franka-load", "-o", str(tmp_path / "f.yaml")]) == 0
+    assert (
+        main(["export", str(calib), "--format", "franka-load", "-o", str(tmp_path / "f.yaml")]) == 0
+    )
     assert "flange frame 'flange'" in capsys.readouterr().out
     assert "load_inertia" in yaml.safe_load((tmp_path / "f.yaml").read_text())
-    assert main(["export", str(calib), "--format", "ur-payload", "-o", str(tmp_path / "u.yaml")]) == 0
+    assert (
+        main(["export", str(calib), "--format", "ur-payload", "-o", str(tmp_path / "u.yaml")]) == 0
+    )
 
 
 def test_base_frame_wrenches_are_converted(arm, caplog):
     rng = np.random.default_rng(23)
     rotations = arm.rotation_sensor_to_base(arm.random_configurations(5, rng))
     in_sensor = rng.normal(size=(5, 6))
-    in_base = np.concatenate([np.einsum("nij,nj->ni", rotations, in_sensor[:, :3]),
-                              np.einsum("nij,nj->ni", rotations, in_sensor[:, 3:])], axis=1)
+    in_base = np.concatenate(
+        [
+            np.einsum("nij,nj->ni", rotations, in_sensor[:, :3]),
+            np.einsum("nij,nj->ni", rotations, in_sensor[:, 3:]),
+        ],
+        axis=1,
+    )
     converted = wrenches_in_sensor_frame(in_base, rotations, "base_link", arm, "base")
     np.testing.assert_allclose(converted, in_sensor, atol=1e-12)
     with caplog.at_level(logging.WARNING):
@@ -160,19 +202,27 @@ def test_ros_exports_note_the_mount_and_the_sign(mounted):
 
 
 def test_franka_load_takes_a_dynamic_calibrations_inertia_into_flange_axes(mounted, arm, tmp_path):
-    """The inertia of a dynamic calibration (sensor axes) is exported in flange axes: I_F = R I_S Rᵀ by FK."""
+    """The inertia of a dynamic calibration (sensor axes) is exported in flange axes: I_F = R I_S Rᵀ
+    by FK.
+    """
     import dataclasses
 
     from ftkin import DynamicCalibrationResult
 
     result, _ = mounted
-    inertia_in_sensor = np.array([[0.012, 0.001, -0.002], [0.001, 0.02, 0.0005], [-0.002, 0.0005, 0.03]])
+    inertia_in_sensor = np.array(
+        [[0.012, 0.001, -0.002], [0.001, 0.02, 0.0005], [-0.002, 0.0005, 0.03]]
+    )
     fields = {f.name: getattr(result, f.name) for f in dataclasses.fields(result)}
     dynamic = DynamicCalibrationResult(**fields, inertia_about_com_in_sensor=inertia_in_sensor)
-    request = yaml.safe_load(export_payload(dynamic, arm, tmp_path / "load.yaml", "franka-load").read_text())
+    request = yaml.safe_load(
+        export_payload(dynamic, arm, tmp_path / "load.yaml", "franka-load").read_text()
+    )
     q = arm.random_configurations(1, np.random.default_rng(3))[0]
     rotation_flange, _ = arm.frame_placement(q, "flange")
     rotation_sensor, _ = arm.frame_placement(q, "sensor")
     sensor_to_flange = rotation_flange.T @ rotation_sensor @ result.mount_rotation.T
     expected = sensor_to_flange @ inertia_in_sensor @ sensor_to_flange.T
-    np.testing.assert_allclose(np.reshape(request["load_inertia"], (3, 3), order="F"), expected, atol=1e-12)
+    np.testing.assert_allclose(
+        np.reshape(request["load_inertia"], (3, 3), order="F"), expected, atol=1e-12
+    )

@@ -32,10 +32,22 @@ def test_four_orientation_conventions_agree(arm, poses, tmp_path):
     quaternions = matrix_to_quaternion(rotations)
     generic = [f"q{i + 1}" for i in range(arm.nq)]
     files = {
-        "joint names": _write(tmp_path / "names.csv", arm.joint_names + WRENCH, np.hstack([configurations, wrenches])),
-        "q1..qn": _write(tmp_path / "generic.csv", WRENCH + generic, np.hstack([wrenches, configurations])),
-        "euler": _write(tmp_path / "euler.csv", ["alpha", "beta", "gamma"] + WRENCH, np.hstack([euler_deg, wrenches])),
-        "quaternion": _write(tmp_path / "quat.csv", ["qw", "qx", "qy", "qz"] + WRENCH, np.hstack([quaternions, wrenches])),
+        "joint names": _write(
+            tmp_path / "names.csv", arm.joint_names + WRENCH, np.hstack([configurations, wrenches])
+        ),
+        "q1..qn": _write(
+            tmp_path / "generic.csv", WRENCH + generic, np.hstack([wrenches, configurations])
+        ),
+        "euler": _write(
+            tmp_path / "euler.csv",
+            ["alpha", "beta", "gamma"] + WRENCH,
+            np.hstack([euler_deg, wrenches]),
+        ),
+        "quaternion": _write(
+            tmp_path / "quat.csv",
+            ["qw", "qx", "qy", "qz"] + WRENCH,
+            np.hstack([quaternions, wrenches]),
+        ),
     }
     kinds = {}
     for name, path in files.items():
@@ -43,7 +55,12 @@ def test_four_orientation_conventions_agree(arm, poses, tmp_path):
         kinds[name] = loaded.orientation
         np.testing.assert_allclose(loaded.samples.rotations, rotations, atol=1e-12, err_msg=name)
         np.testing.assert_array_equal(loaded.samples.wrenches, wrenches)
-    assert kinds == {"joint names": "joints", "q1..qn": "joints", "euler": "euler", "quaternion": "quaternion"}
+    assert kinds == {
+        "joint names": "joints",
+        "q1..qn": "joints",
+        "euler": "euler",
+        "quaternion": "quaternion",
+    }
     # joint columns keep the joint angles and the URDF for the calibration file
     loaded = load_samples(files["joint names"], arm)
     np.testing.assert_array_equal(loaded.samples.joint_positions, configurations)
@@ -52,21 +69,35 @@ def test_four_orientation_conventions_agree(arm, poses, tmp_path):
 
 def test_joint_columns_without_arm_use_the_bundled_arm(arm, poses, tmp_path):
     configurations, rotations, wrenches = poses
-    path = _write(tmp_path / "generic.csv", [f"q{i + 1}" for i in range(6)] + WRENCH, np.hstack([configurations, wrenches]))
+    path = _write(
+        tmp_path / "generic.csv",
+        [f"q{i + 1}" for i in range(6)] + WRENCH,
+        np.hstack([configurations, wrenches]),
+    )
     np.testing.assert_allclose(load_samples(path).samples.rotations, rotations, atol=1e-15)
 
 
 def test_pose_column_groups_readings(arm, poses, tmp_path):
     configurations, _, wrenches = poses
-    configurations = np.repeat(configurations[::2], 2, axis=0)  # repeated readings of three static poses
+    configurations = np.repeat(
+        configurations[::2], 2, axis=0
+    )  # repeated readings of three static poses
     pose = np.array([4, 4, 9, 9, 2, 2])
-    path = _write(tmp_path / "grouped.csv", ["pose"] + arm.joint_names + WRENCH, np.column_stack([pose, configurations, wrenches]))
+    path = _write(
+        tmp_path / "grouped.csv",
+        ["pose"] + arm.joint_names + WRENCH,
+        np.column_stack([pose, configurations, wrenches]),
+    )
     samples = load_samples(path, arm).samples
     np.testing.assert_array_equal(samples.pose_ids, pose)
     averages = samples.pose_averages()
     np.testing.assert_array_equal(averages.pose_ids, [4, 9, 2])
     np.testing.assert_array_equal(averages.counts, [2, 2, 2])
-    np.testing.assert_allclose(averages.wrenches, [wrenches[0:2].mean(0), wrenches[2:4].mean(0), wrenches[4:6].mean(0)], atol=1e-15)
+    np.testing.assert_allclose(
+        averages.wrenches,
+        [wrenches[0:2].mean(0), wrenches[2:4].mean(0), wrenches[4:6].mean(0)],
+        atol=1e-15,
+    )
 
 
 def test_comments_blank_lines_and_extra_columns(tmp_path):
@@ -78,7 +109,9 @@ def test_comments_blank_lines_and_extra_columns(tmp_path):
     loaded = load_samples(path)
     assert loaded.table.lines == [5, 7]
     assert loaded.table.header[-1] == "time" and loaded.table.rows[1][-1] == "0.6"
-    np.testing.assert_allclose(loaded.samples.rotations[1], ftkin.euler_zyx_deg_to_matrix([0, 10, 20]), atol=1e-15)
+    np.testing.assert_allclose(
+        loaded.samples.rotations[1], ftkin.euler_zyx_deg_to_matrix([0, 10, 20]), atol=1e-15
+    )
 
 
 def test_write_csv_round_trips_floats_exactly(tmp_path, rng):
@@ -114,23 +147,51 @@ def test_missing_file(tmp_path):
 def test_misspelled_wrench_column_suggests(tmp_path):
     # regression: a case-only difference was not suggested (difflib ratio too low for 2 letters)
     text = HEADER.replace("fz", "Fz") + "\n" + ROW + "\n"
-    _assert_error(tmp_path, text, r"missing wrench column\(s\) \['fz'\] \(did you mean: rename column 'Fz' to 'fz'\?\)", line=1)
+    _assert_error(
+        tmp_path,
+        text,
+        r"missing wrench column\(s\) \['fz'\] \(did you mean: rename column 'Fz' to 'fz'\?\)",
+        line=1,
+    )
 
 
 def test_missing_orientation_columns(tmp_path):
     text = "fx,fy,fz,mx,my,mz,alpah,beta,gamma\n1,2,3,4,5,6,0,0,0\n"
-    _assert_error(tmp_path, text, r"missing Euler angle column\(s\) \['alpha'\].*did you mean: rename column 'alpah' to 'alpha'", arm=None)
+    _assert_error(
+        tmp_path,
+        text,
+        r"missing Euler angle column\(s\) \['alpha'\].*did you mean: rename column 'alpah' to "
+        r"'alpha'",
+        arm=None,
+    )
 
 
 def test_no_orientation_at_all(tmp_path, arm):
     text = "fx,fy,fz,mx,my,mz,time\n1,2,3,4,5,6,0\n"
-    _assert_error(tmp_path, text, r"no orientation columns: expected the arm's joint names \['joint1'.*alpha,beta,gamma", arm=arm)
+    _assert_error(
+        tmp_path,
+        text,
+        r"no orientation columns: expected the arm's joint names \['joint1'.*alpha,beta,gamma",
+        arm=arm,
+    )
 
 
 def test_joint_columns_of_another_robot(tmp_path, arm):
-    names = ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
+    names = [
+        "shoulder_pan_joint",
+        "shoulder_lift_joint",
+        "elbow_joint",
+        "wrist_1_joint",
+        "wrist_2_joint",
+        "wrist_3_joint",
+    ]
     text = ",".join(names) + ",fx,fy,fz,mx,my,mz\n" + ",".join(["0"] * 12) + "\n"
-    _assert_error(tmp_path, text, r"columns \['shoulder_pan_joint'.* look like joint names but are not this arm's", arm=arm)
+    _assert_error(
+        tmp_path,
+        text,
+        r"columns \['shoulder_pan_joint'.* look like joint names but are not this arm's",
+        arm=arm,
+    )
 
 
 def test_incomplete_quaternion(tmp_path):
@@ -161,18 +222,37 @@ def test_duplicated_columns(tmp_path):
 
 def test_mixed_orientation_conventions(tmp_path):
     text = HEADER + ",qw,qx,qy,qz\n" + ROW + ",1,0,0,0\n"
-    _assert_error(tmp_path, text, "mixed orientation conventions: euler columns.*quaternion columns.*exactly one")
+    _assert_error(
+        tmp_path,
+        text,
+        "mixed orientation conventions: euler columns.*quaternion columns.*exactly one",
+    )
 
 
 def test_joint_names_and_generic_columns_mixed(tmp_path, arm):
     text = "joint1,q2,fx,fy,fz,mx,my,mz\n0,0,1,2,3,4,5,6\n"
-    _assert_error(tmp_path, text, r"both URDF joint-name columns \['joint1'\] and generic columns \['q2'\]", arm=arm)
+    _assert_error(
+        tmp_path,
+        text,
+        r"both URDF joint-name columns \['joint1'\] and generic columns \['q2'\]",
+        arm=arm,
+    )
 
 
 def test_degrees_where_radians_expected(tmp_path, arm):
     rows = ["0,0,-30,0,-60,0,1,2,3,4,5,6", "0,0,-30,0,-60,0,1,2,3,4,5,6"]
-    text = "q1,q2,q3,q4,q5,q6,fx,fy,fz,mx,my,mz\n0,0,-0.5,0,-1,0,1,2,3,4,5,6\n" + "\n".join(rows) + "\n"
-    _assert_error(tmp_path, text, "joint column 'q3' holds -30, outside ±2π.*radians.*degrees", line=3, arm=arm)
+    text = (
+        "q1,q2,q3,q4,q5,q6,fx,fy,fz,mx,my,mz\n0,0,-0.5,0,-1,0,1,2,3,4,5,6\n"
+        + "\n".join(rows)
+        + "\n"
+    )
+    _assert_error(
+        tmp_path,
+        text,
+        "joint column 'q3' holds -30, outside ±2π.*radians.*degrees",
+        line=3,
+        arm=arm,
+    )
 
 
 def test_empty_file(tmp_path):
@@ -191,9 +271,20 @@ def test_row_with_wrong_cell_count(tmp_path):
 
 def test_joint_columns_that_do_not_match_the_arm(tmp_path, arm):
     text = "q1,q2,q3,q4,q5,fx,fy,fz,mx,my,mz\n0,0,0,0,0,1,2,3,4,5,6\n"
-    _assert_error(tmp_path, text, r"joint columns \['q1', .*'q5'\] do not match the arm's 6 joints.*'q6'.*joint1", arm=arm)
+    _assert_error(
+        tmp_path,
+        text,
+        r"joint columns \['q1', .*'q5'\] do not match the arm's 6 joints.*'q6'.*joint1",
+        arm=arm,
+    )
     text = "joint1,joint2,joint3,fx,fy,fz,mx,my,mz\n0,0,0,1,2,3,4,5,6\n"
-    _assert_error(tmp_path, text, r"missing joint column\(s\) \['joint4', 'joint5', 'joint6'\]", arm=arm, name="named.csv")
+    _assert_error(
+        tmp_path,
+        text,
+        r"missing joint column\(s\) \['joint4', 'joint5', 'joint6'\]",
+        arm=arm,
+        name="named.csv",
+    )
 
 
 def test_non_integer_pose_id(tmp_path):
@@ -210,13 +301,22 @@ def test_non_unit_quaternion(tmp_path):
 def test_missing_column_points_at_the_header_line(tmp_path):
     # regression: the line was the one before the first data row, a comment here
     text = "# c1\n" + HEADER.replace("my", "My") + "\n# c2\n# c3\n" + ROW + "\n"
-    _assert_error(tmp_path, text, r"missing wrench column\(s\) \['my'\] \(did you mean: rename column 'My' to 'my'", line=2)
+    _assert_error(
+        tmp_path,
+        text,
+        r"missing wrench column\(s\) \['my'\] \(did you mean: rename column 'My' to 'my'",
+        line=2,
+    )
 
 
 def test_excel_byte_order_mark_and_crlf(tmp_path):
     # regression: the UTF-8 byte-order mark stuck to the first column name
     path = tmp_path / "excel.csv"
-    path.write_bytes(("\ufeff" + HEADER + "\r\n" + ROW + "\r\n0,30,180,1,2,3,4,5,6\r\n").encode("utf-8"))
+    path.write_bytes(
+        ("\ufeff" + HEADER + "\r\n" + ROW + "\r\n0,30,180,1,2,3,4,5,6\r\n").encode("utf-8")
+    )
     loaded = load_samples(path)
     assert loaded.table.header[0] == "alpha"
-    np.testing.assert_allclose(loaded.samples.rotations[1], ftkin.euler_zyx_deg_to_matrix([0, 30, 180]), atol=1e-15)
+    np.testing.assert_allclose(
+        loaded.samples.rotations[1], ftkin.euler_zyx_deg_to_matrix([0, 30, 180]), atol=1e-15
+    )

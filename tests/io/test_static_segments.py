@@ -19,7 +19,9 @@ SPEED = 0.5  # [rad/s] while moving
 
 
 def trajectory(holds, rng=None, jitter=0.0, nq=3):
-    """Piecewise: hold for each duration, then ramp at SPEED for 1 s. Returns times, q, still intervals."""
+    """Piecewise: hold for each duration, then ramp at SPEED for 1 s. Returns times, q, still
+    intervals.
+    """
     times, values, still = [], [], []
     t, q = 0.0, np.zeros(nq)
     direction = np.array([1.0, -0.5, 0.25])[:nq] / 1.0
@@ -50,22 +52,34 @@ def test_joint_speed_on_a_ramp():
 
 
 def test_segments_match_known_holds():
-    parameters = SegmentParameters(speed_threshold=0.01, min_duration=1.0, settle_time=0.3, speed_window=0.1)
+    parameters = SegmentParameters(
+        speed_threshold=0.01, min_duration=1.0, settle_time=0.3, speed_window=0.1
+    )
     times, q, still = trajectory([2.0, 3.0, 0.8, 2.5])
     search = find_static_segments(times, q, parameters)
-    expected = [interval for interval in still if interval[1] - interval[0] - parameters.settle_time >= parameters.min_duration + 0.1]
+    expected = [
+        interval
+        for interval in still
+        if interval[1] - interval[0] - parameters.settle_time >= parameters.min_duration + 0.1
+    ]
     assert len(search.segments) == len(expected) == 3
     assert len(search.still_stretches) == 4  # the 0.8 s hold is still but too short
     slack = parameters.speed_window / 2 + 2 / RATE
     for segment, (start, end) in zip(search.segments, expected):
         first_still = start if start == 0 else start + parameters.speed_window / 2
-        assert first_still + parameters.settle_time - slack <= segment.start <= first_still + parameters.settle_time + slack
+        assert (
+            first_still + parameters.settle_time - slack
+            <= segment.start
+            <= first_still + parameters.settle_time + slack
+        )
         assert end - slack <= segment.end <= end
         assert segment.duration >= parameters.min_duration
 
 
 def test_encoder_jitter_does_not_split_segments(rng):
-    """1e-4 rad jitter at 500 Hz: consecutive differences would read 0.07 rad/s; the window does not."""
+    """1e-4 rad jitter at 500 Hz: consecutive differences would read 0.07 rad/s; the window does
+    not.
+    """
     times, q, _ = trajectory([2.0, 2.0, 2.0], rng, jitter=1e-4)
     naive = np.max(np.abs(np.diff(q, axis=0)), axis=1) * RATE
     assert np.median(naive) > SegmentParameters().speed_threshold
@@ -82,7 +96,9 @@ def test_no_segment_when_too_short_and_describe():
 
 def test_segment_index():
     segments = [StaticSegment(1.0, 2.0), StaticSegment(3.0, 4.0)]
-    np.testing.assert_array_equal(segment_index([0.5, 1.0, 1.5, 2.5, 3.5, 4.0, 5.0], segments), [-1, 0, 0, -1, 1, 1, -1])
+    np.testing.assert_array_equal(
+        segment_index([0.5, 1.0, 1.5, 2.5, 3.5, 4.0, 5.0], segments), [-1, 0, 0, -1, 1, 1, -1]
+    )
     np.testing.assert_array_equal(segment_index([0.5, 1.0], []), [-1, -1])
 
 
@@ -99,8 +115,12 @@ def test_segment_index_matches_a_scan_of_every_segment(rng):
 @pytest.mark.parametrize(
     "kwargs",
     [
-        {"speed_threshold": 0.0}, {"min_duration": -1.0}, {"settle_time": -0.1}, {"speed_window": float("nan")},
-        {"speed_threshold": "fast"}, {"settle_time": None},
+        {"speed_threshold": 0.0},
+        {"min_duration": -1.0},
+        {"settle_time": -0.1},
+        {"speed_window": float("nan")},
+        {"speed_threshold": "fast"},
+        {"settle_time": None},
     ],
 )
 def test_parameters_validated(kwargs):

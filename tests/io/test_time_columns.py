@@ -1,4 +1,6 @@
-"""Time columns: ``t`` [s], its aliases, and units converted only where the column name says them."""
+"""Time columns: ``t`` [s], its aliases, and units converted only where the column name says
+them.
+"""
 
 from __future__ import annotations
 
@@ -8,20 +10,36 @@ import pytest
 from ftkin.exceptions import InvalidSamples
 from ftkin.io.samples_csv import load_samples
 
-ROWS = [(0.0, 10.0, 0.0, 0.0, 1.0, 2.0, -9.0, 0.1, 0.2, 0.0), (1.0, 20.0, 90.0, 0.0, 1.5, 2.0, -3.0, 0.0, 0.3, 0.0),
-        (2.0, 30.0, 0.0, 90.0, -8.0, 2.0, 1.0, 0.2, 0.0, 0.1)]
+ROWS = [
+    (0.0, 10.0, 0.0, 0.0, 1.0, 2.0, -9.0, 0.1, 0.2, 0.0),
+    (1.0, 20.0, 90.0, 0.0, 1.5, 2.0, -3.0, 0.0, 0.3, 0.0),
+    (2.0, 30.0, 0.0, 90.0, -8.0, 2.0, 1.0, 0.2, 0.0, 0.1),
+]
 
 
 def _write(path, time_header):
     text = f"{time_header},alpha,beta,gamma,fx,fy,fz,mx,my,mz\n"
-    text += "".join(",".join(f"{v:g}" for v in (row[0] * 1000.0 if "ms" in time_header else row[0], *row[2:], 0.0))
-                    + "\n" for row in ROWS)
+    text += "".join(
+        ",".join(
+            f"{v:g}" for v in (row[0] * 1000.0 if "ms" in time_header else row[0], *row[2:], 0.0)
+        )
+        + "\n"
+        for row in ROWS
+    )
     path.write_text(text)
     return path
 
 
-@pytest.mark.parametrize(("header", "expected"), [("t", [0, 1, 2]), ("time", [0, 1, 2]), ("timestamp", [0, 1, 2]),
-                                                  ("t_ms", [0, 1, 2]), ("time_ms", [0, 1, 2])])
+@pytest.mark.parametrize(
+    ("header", "expected"),
+    [
+        ("t", [0, 1, 2]),
+        ("time", [0, 1, 2]),
+        ("timestamp", [0, 1, 2]),
+        ("t_ms", [0, 1, 2]),
+        ("time_ms", [0, 1, 2]),
+    ],
+)
 def test_time_aliases(tmp_path, header, expected):
     loaded = load_samples(_write(tmp_path / "s.csv", header))
     np.testing.assert_allclose(loaded.samples.times, expected)
@@ -38,9 +56,11 @@ def test_a_textual_timestamp_column_is_left_alone(tmp_path, caplog):
     import logging
 
     path = tmp_path / "s.csv"
-    path.write_text("timestamp,alpha,beta,gamma,fx,fy,fz,mx,my,mz\n"
-                    "2026-11-29T10:00:00,0,0,0,1,2,-9,0.1,0.2,0\n2026-11-29T10:00:30,90,0,0,1.5,2,-3,0,0.3,0\n"
-                    "2026-11-29T10:01:00,0,90,0,-8,2,1,0.2,0,0.1\n")
+    path.write_text(
+        "timestamp,alpha,beta,gamma,fx,fy,fz,mx,my,mz\n"
+        "2026-11-29T10:00:00,0,0,0,1,2,-9,0.1,0.2,0\n2026-11-29T10:00:30,90,0,0,1.5,2,-3,0,0.3,0\n"
+        "2026-11-29T10:01:00,0,90,0,-8,2,1,0.2,0,0.1\n"
+    )
     with caplog.at_level(logging.WARNING, logger="ftkin"):
         loaded = load_samples(path)
     assert loaded.samples.times is None

@@ -22,7 +22,9 @@ def _rpy_matrix(rpy):
 
 
 def _axis_angle(axis, angle):
-    return Rotation.from_rotvec(np.asarray(axis, dtype=float) / np.linalg.norm(axis) * angle).as_matrix()
+    return Rotation.from_rotvec(
+        np.asarray(axis, dtype=float) / np.linalg.norm(axis) * angle
+    ).as_matrix()
 
 
 def _hand_chain_rotation(urdf_path, q_by_joint, tip="ft_sensor", root="base_link"):
@@ -35,9 +37,21 @@ def _hand_chain_rotation(urdf_path, q_by_joint, tip="ft_sensor", root="base_link
             "name": joint.get("name"),
             "type": joint.get("type"),
             "parent": joint.find("parent").get("link"),
-            "xyz": np.array([float(v) for v in (origin.get("xyz", "0 0 0") if origin is not None else "0 0 0").split()]),
-            "rpy": np.array([float(v) for v in (origin.get("rpy", "0 0 0") if origin is not None else "0 0 0").split()]),
-            "axis": np.array([float(v) for v in (axis.get("xyz") if axis is not None else "1 0 0").split()]),
+            "xyz": np.array(
+                [
+                    float(v)
+                    for v in (origin.get("xyz", "0 0 0") if origin is not None else "0 0 0").split()
+                ]
+            ),
+            "rpy": np.array(
+                [
+                    float(v)
+                    for v in (origin.get("rpy", "0 0 0") if origin is not None else "0 0 0").split()
+                ]
+            ),
+            "axis": np.array(
+                [float(v) for v in (axis.get("xyz") if axis is not None else "1 0 0").split()]
+            ),
         }
     rotation, translation = np.eye(3), np.zeros(3)
     link = tip
@@ -114,7 +128,9 @@ def test_bad_configurations_are_refused(arm, q, pattern):
 
 
 def test_bad_configuration_for_jacobian_and_placement(arm):
-    with pytest.raises(ftkin.InvalidInput, match=r"joint positions q \(joints joint1.*shape \(6,\)"):
+    with pytest.raises(
+        ftkin.InvalidInput, match=r"joint positions q \(joints joint1.*shape \(6,\)"
+    ):
         arm.jacobian(np.zeros(4))
     with pytest.raises(ftkin.InvalidInput, match="finite"):
         arm.frame_placement([np.inf, 0, 0, 0, 0, 0])
@@ -197,23 +213,35 @@ def test_sensor_mount_is_parent_placement_times_offset(arm, rng):
     frame = mounted.model.frames[mounted.sensor_frame_id]
     parent_id = mounted.model.getFrameId("flange")
     assert frame.parentFrame == parent_id
-    assert frame.parentJoint == mounted.model.frames[parent_id].parentJoint == mounted.model.getJointId("joint6")
+    assert (
+        frame.parentJoint
+        == mounted.model.frames[parent_id].parentJoint
+        == mounted.model.getJointId("joint6")
+    )
     for q in arm.random_configurations(10, rng):
         parent_rotation, parent_position = mounted.frame_placement(q, "flange")
         rotation, position = mounted.frame_placement(q, "sensor")
         np.testing.assert_allclose(rotation, parent_rotation @ offset_rotation, atol=1e-13)
-        np.testing.assert_allclose(position, parent_position + parent_rotation @ translation, atol=1e-13)
+        np.testing.assert_allclose(
+            position, parent_position + parent_rotation @ translation, atol=1e-13
+        )
         np.testing.assert_allclose(mounted.rotation_sensor_to_base(q), rotation, atol=0)
 
 
 def test_sensor_mount_reproduces_the_urdf_sensor_frame(arm, rng):
     # the URDF's ft_sensor_joint: xyz 0 0 0.02, rpy 0 0 pi/2 from flange
     mounted = Arm.from_urdf(
-        bundled_urdf_path(), "copy", sensor_mount=SensorMount("flange", (0, 0, 0.02), (0, 0, 1.570796327))
+        bundled_urdf_path(),
+        "copy",
+        sensor_mount=SensorMount("flange", (0, 0, 0.02), (0, 0, 1.570796327)),
     )
     for q in arm.random_configurations(5, rng):
-        np.testing.assert_allclose(mounted.frame_placement(q)[0], arm.frame_placement(q)[0], atol=1e-14)
-        np.testing.assert_allclose(mounted.frame_placement(q)[1], arm.frame_placement(q)[1], atol=1e-14)
+        np.testing.assert_allclose(
+            mounted.frame_placement(q)[0], arm.frame_placement(q)[0], atol=1e-14
+        )
+        np.testing.assert_allclose(
+            mounted.frame_placement(q)[1], arm.frame_placement(q)[1], atol=1e-14
+        )
 
 
 def test_sensor_mount_errors():
@@ -224,7 +252,9 @@ def test_sensor_mount_errors():
     with pytest.raises(ftkin.InvalidInput, match=r"translation must have shape \(3,\)"):
         Arm.from_urdf(bundled_urdf_path(), "s", sensor_mount=SensorMount("flange", (0.0, 0.1)))
     with pytest.raises(ftkin.InvalidInput, match="rpy must be finite"):
-        Arm.from_urdf(bundled_urdf_path(), "s", sensor_mount=SensorMount("flange", rpy=(0, np.nan, 0)))
+        Arm.from_urdf(
+            bundled_urdf_path(), "s", sensor_mount=SensorMount("flange", rpy=(0, np.nan, 0))
+        )
 
 
 # ------------------------------------------------------------ locked joints
@@ -234,8 +264,12 @@ def test_locked_joint_removed_from_q(arm, rng):
     assert locked.joint_names == arm.joint_names[:5]
     for q in arm.random_configurations(5, rng):
         q[5] = 0.7
-        np.testing.assert_allclose(locked.rotation_sensor_to_base(q[:5]), arm.rotation_sensor_to_base(q), atol=1e-14)
-        np.testing.assert_allclose(locked.frame_placement(q[:5], "tool")[1], arm.frame_placement(q, "tool")[1], atol=1e-14)
+        np.testing.assert_allclose(
+            locked.rotation_sensor_to_base(q[:5]), arm.rotation_sensor_to_base(q), atol=1e-14
+        )
+        np.testing.assert_allclose(
+            locked.frame_placement(q[:5], "tool")[1], arm.frame_placement(q, "tool")[1], atol=1e-14
+        )
 
 
 def test_locked_joint_geometry_matches_reduced_model():
@@ -285,7 +319,9 @@ def _write(tmp_path, text, name="robot.urdf"):
 def test_small_valid_urdf_loads(tmp_path):
     arm = Arm.from_urdf(_write(tmp_path, _urdf(GOOD_LINKS, GOOD_JOINT)), "l1")
     assert arm.nq == 1
-    np.testing.assert_allclose(arm.rotation_sensor_to_base([0.3]), _axis_angle([0, 0, 1], 0.3), atol=1e-15)
+    np.testing.assert_allclose(
+        arm.rotation_sensor_to_base([0.3]), _axis_angle([0, 0, 1], 0.3), atol=1e-15
+    )
 
 
 def test_missing_file(tmp_path):
@@ -296,7 +332,9 @@ def test_missing_file(tmp_path):
 
 
 def test_broken_xml_names_line(tmp_path):
-    path = _write(tmp_path, '<?xml version="1.0"?>\n<robot name="r">\n  <link name="base">\n</robot>\n')
+    path = _write(
+        tmp_path, '<?xml version="1.0"?>\n<robot name="r">\n  <link name="base">\n</robot>\n'
+    )
     with pytest.raises(ftkin.UrdfError, match="not well-formed XML at line 4"):
         Arm.from_urdf(path, "base")
 
@@ -327,8 +365,10 @@ def test_continuous_joint_is_explained(tmp_path):
 
 def test_missing_mesh_detected_when_geometry_requested(tmp_path):
     links = (
-        '  <link name="base"><collision><geometry><mesh filename="meshes/base.stl"/></geometry></collision>'
-        '<visual><geometry><mesh filename="meshes/base.stl"/></geometry></visual></link>\n  <link name="l1"/>'
+        '  <link name="base"><collision><geometry><mesh '
+        'filename="meshes/base.stl"/></geometry></collision>'
+        '<visual><geometry><mesh filename="meshes/base.stl"/></geometry></visual></link>\n  <link '
+        'name="l1"/>'
     )
     path = _write(tmp_path, _urdf(links, GOOD_JOINT))
     arm = Arm.from_urdf(path, "l1")  # kinematics need no meshes
@@ -342,17 +382,27 @@ def test_missing_mesh_detected_when_geometry_requested(tmp_path):
 @pytest.mark.parametrize(
     ("change", "pattern"),
     [
-        (lambda links, joint: (links, joint.replace('type="revolute"', 'type="revolut"')), r"no known type \[revolut\]"),
-        (lambda links, joint: (links, joint.replace('<parent link="base"/>', "")), r"\[j1\] is missing a parent"),
+        (
+            lambda links, joint: (links, joint.replace('type="revolute"', 'type="revolut"')),
+            r"no known type \[revolut\]",
+        ),
+        (
+            lambda links, joint: (links, joint.replace('<parent link="base"/>', "")),
+            r"\[j1\] is missing a parent",
+        ),
         (lambda links, joint: (links + '\n  <link name="l1"/>', joint), "link 'l1' is not unique"),
-        (lambda links, joint: (links, joint.replace(LIMIT, "")), "REVOLUTE but it does not specify limits"),
+        (
+            lambda links, joint: (links, joint.replace(LIMIT, "")),
+            "REVOLUTE but it does not specify limits",
+        ),
     ],
 )
 def test_pinocchio_refusals_carry_the_parser_reason(tmp_path, change, pattern):
     path = _write(tmp_path, _urdf(*change(GOOD_LINKS, GOOD_JOINT)))
     with pytest.raises(ftkin.UrdfError, match=pattern) as info:
         Arm.from_urdf(path, "l1")
-    # regression: the parser's own source locations ("at line 262 in model.cpp") read like URDF lines
+    # regression: the parser's own source locations ("at line 262 in model.cpp") read like URDF
+    # lines
     assert ".cpp" not in str(info.value)
     assert all(reason.strip() for reason in info.value.reasons)
 
@@ -366,4 +416,6 @@ def test_sensor_mount_with_locked_joints(arm, rng):
     )
     for q in arm.random_configurations(5, rng):
         q[5] = 0.3
-        np.testing.assert_allclose(mounted.rotation_sensor_to_base(q[:5]), arm.rotation_sensor_to_base(q), atol=1e-14)
+        np.testing.assert_allclose(
+            mounted.rotation_sensor_to_base(q[:5]), arm.rotation_sensor_to_base(q), atol=1e-14
+        )

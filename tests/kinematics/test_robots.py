@@ -10,13 +10,23 @@ import pinocchio as pin
 import pytest
 
 from ftkin import calibrate
-from ftkin.calibration.information import SensorNoise, covariance_from_information, fisher_information
+from ftkin.calibration.information import (
+    SensorNoise,
+    covariance_from_information,
+    fisher_information,
+)
 from ftkin.calibration.model import WRENCH_CHANNELS
 from ftkin.cli import main
 from ftkin.exceptions import FrameNotFound, InvalidInput, MissingDependency
 from ftkin.io.calibration_file import load_calibration
 from ftkin.io.csv_table import write_csv
-from ftkin.kinematics.robots import DEFAULT_ROBOT, ROBOT_SPECS, ROBOTS, example_robot_data_share, load_robot
+from ftkin.kinematics.robots import (
+    DEFAULT_ROBOT,
+    ROBOT_SPECS,
+    ROBOTS,
+    example_robot_data_share,
+    load_robot,
+)
 from ftkin.sim.sensor import SimulatedSensor
 
 READINGS = 20
@@ -62,7 +72,9 @@ def test_ur5_sensor_offset_composes_with_tool0(rng):
         flange_rotation, flange_position = arm.frame_placement(configuration, "tool0")
         rotation, position = arm.frame_placement(configuration, "sensor")
         np.testing.assert_allclose(rotation, flange_rotation @ mount.rotation, atol=1e-12)
-        np.testing.assert_allclose(position, flange_position + flange_rotation @ mount.translation, atol=1e-12)
+        np.testing.assert_allclose(
+            position, flange_position + flange_rotation @ mount.translation, atol=1e-12
+        )
 
 
 def test_every_registered_robot_loads():
@@ -128,10 +140,22 @@ def test_cli_calibrate_with_robot_and_offset(tmp_path, truth, rng):
     samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, q, rng, 5)
     csv_path = tmp_path / "ur10.csv"
     header = ["pose", *arm.joint_names, *WRENCH_CHANNELS]
-    rows = [[int(p), *map(float, c), *map(float, w)] for p, c, w in zip(samples.pose_ids, samples.joint_positions, samples.wrenches)]
+    rows = [
+        [int(p), *map(float, c), *map(float, w)]
+        for p, c, w in zip(samples.pose_ids, samples.joint_positions, samples.wrenches)
+    ]
     write_csv(csv_path, header, rows)
     out = tmp_path / "calib.json"
-    args = ["calibrate", str(csv_path), "--robot", "ur10", "--sensor-offset", *map(str, offset), "-o", str(out)]
+    args = [
+        "calibrate",
+        str(csv_path),
+        "--robot",
+        "ur10",
+        "--sensor-offset",
+        *map(str, offset),
+        "-o",
+        str(out),
+    ]
     assert main(args) == 0
     loaded = load_calibration(out)
     np.testing.assert_allclose(loaded.tool_weight, truth.tool_weight, atol=0.05)
@@ -148,7 +172,10 @@ def test_cli_report_and_view_read_samples_with_the_calibration_robot(tmp_path, t
     q = arm.random_configurations(8, rng, margin=0.05)
     samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, q, rng, 3)
     csv_path = tmp_path / "ur5.csv"
-    rows = [[int(p), *map(float, c), *map(float, w)] for p, c, w in zip(samples.pose_ids, samples.joint_positions, samples.wrenches)]
+    rows = [
+        [int(p), *map(float, c), *map(float, w)]
+        for p, c, w in zip(samples.pose_ids, samples.joint_positions, samples.wrenches)
+    ]
     write_csv(csv_path, ["pose", *[f"q{i + 1}" for i in range(arm.nq)], *WRENCH_CHANNELS], rows)
     calib = tmp_path / "calib.json"
     assert main(["calibrate", str(csv_path), "--robot", "ur5", "-o", str(calib)]) == 0
@@ -157,16 +184,26 @@ def test_cli_report_and_view_read_samples_with_the_calibration_robot(tmp_path, t
     assert main(["report", str(calib), str(csv_path), "-o", str(tmp_path / "r0.png")]) == 0
     assert main(["view", str(calib), str(csv_path), "--html", str(tmp_path / "v.html")]) == 0
     capsys.readouterr()
-    # a file without that record (older ftkin): q1..q6 fit the bundled arm too, the UR5 is not silently swapped for it
+    # a file without that record (older ftkin): q1..q6 fit the bundled arm too, the UR5 is not
+    # silently swapped for it
     document = json.loads(calib.read_text())
     del document["kinematics"]
     calib.write_text(json.dumps(document))
-    for command in (["report", str(calib), str(csv_path), "-o", str(tmp_path / "r.png")], ["view", str(calib), str(csv_path), "--no-wait"]):
+    for command in (
+        ["report", str(calib), str(csv_path), "-o", str(tmp_path / "r.png")],
+        ["view", str(calib), str(csv_path), "--no-wait"],
+    ):
         assert main(command) == 2
         error = capsys.readouterr().err
-        assert error.startswith("ftkin: error: the calibration was made with") and "same robot options" in error
+        assert (
+            error.startswith("ftkin: error: the calibration was made with")
+            and "same robot options" in error
+        )
         assert "--robot ur5" in error  # the recorded URDF names the robot to give
-    assert main(["report", str(calib), str(csv_path), "-o", str(tmp_path / "r.png"), "--robot", "ur5"]) == 0
+    assert (
+        main(["report", str(calib), str(csv_path), "-o", str(tmp_path / "r.png"), "--robot", "ur5"])
+        == 0
+    )
 
 
 def test_cli_offset_errors(capsys):

@@ -1,4 +1,6 @@
-"""Excitation trajectories: at rest at the start, within limits, collision-free, better than random."""
+"""Excitation trajectories: at rest at the start, within limits, collision-free, better than
+random.
+"""
 
 from __future__ import annotations
 
@@ -11,7 +13,14 @@ from ftkin.planning.constraints import FeasibilityChecker
 
 def test_planned_excitation_meets_limits_and_beats_random(arm):
     constraints = PoseConstraints(floor_height=0.15)
-    kwargs = dict(rate=100.0, period=6.0, harmonics=3, acceleration_limit=6.0, constraints=constraints, candidates=3)
+    kwargs = dict(
+        rate=100.0,
+        period=6.0,
+        harmonics=3,
+        acceleration_limit=6.0,
+        constraints=constraints,
+        candidates=3,
+    )
     planned = plan_excitation(arm, 6.0, max_iterations=25, seed=0, **kwargs)
     random = plan_excitation(arm, 6.0, optimize=False, seed=0, **kwargs)
     assert planned.log_det > random.log_det
@@ -25,7 +34,9 @@ def test_planned_excitation_meets_limits_and_beats_random(arm):
         checker = FeasibilityChecker(arm, constraints)
         assert all(checker.within_bounds(row) and checker.check(row) is not None for row in q[::5])
         # Derivatives are the analytic ones (finite differences of the positions).
-        np.testing.assert_allclose(np.gradient(q, plan.times, axis=0)[1:-1], dq[1:-1], atol=2e-3 * np.abs(dq).max())
+        np.testing.assert_allclose(
+            np.gradient(q, plan.times, axis=0)[1:-1], dq[1:-1], atol=2e-3 * np.abs(dq).max()
+        )
     header, rows = planned.table()
     assert header[0] == "t" and header[1:7] == arm.joint_names and rows.shape == (600, 19)
 

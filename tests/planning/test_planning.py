@@ -1,4 +1,6 @@
-"""Pose planning: constraints met (checked independently), predictions vs Monte-Carlo, determinism, errors, CLI."""
+"""Pose planning: constraints met (checked independently), predictions vs Monte-Carlo, determinism,
+errors, CLI.
+"""
 
 from __future__ import annotations
 
@@ -18,7 +20,13 @@ from ftkin.exceptions import InvalidInput, UnobservableParameters
 from ftkin.kinematics.collision import SelfCollision
 from ftkin.planning.design import d_optimal_selection, information_factors, log_det
 from ftkin.planning.evaluation import evaluate_poses
-from ftkin.planning.order import joint_distances, path_length, revolute_mask, short_travel_order, unwind_revolute
+from ftkin.planning.order import (
+    joint_distances,
+    path_length,
+    revolute_mask,
+    short_travel_order,
+    unwind_revolute,
+)
 from ftkin.planning.plan import plan_poses
 from ftkin.sim.paper import paper_samples
 from ftkin.sim.sensor import SimulatedSensor, paper_like_truth
@@ -31,18 +39,35 @@ JOINT1_RANGE = (-1.2, 1.5)  # [rad]
 
 @pytest.fixture(scope="module")
 def constrained_plan(arm):
-    return plan_poses(arm, 9, margin=MARGIN, floor_height=FLOOR, max_tilt=MAX_TILT,
-                      joint_ranges={"joint1": JOINT1_RANGE}, seed=3, candidates=1500)
+    return plan_poses(
+        arm,
+        9,
+        margin=MARGIN,
+        floor_height=FLOOR,
+        max_tilt=MAX_TILT,
+        joint_ranges={"joint1": JOINT1_RANGE},
+        seed=3,
+        candidates=1500,
+    )
 
 
 @pytest.fixture(scope="module")
 def plan(arm):
     truth = paper_like_truth()
-    return plan_poses(arm, 8, tool_weight=truth.tool_weight, center_of_mass=truth.center_of_mass, seed=1, candidates=1500)
+    return plan_poses(
+        arm,
+        8,
+        tool_weight=truth.tool_weight,
+        center_of_mass=truth.center_of_mass,
+        seed=1,
+        candidates=1500,
+    )
 
 
 def independent_collision_check(arm):
-    """A collision checker built from the URDF here, without ftkin.kinematics.collision: adjacency by the joint tree."""
+    """A collision checker built from the URDF here, without ftkin.kinematics.collision: adjacency
+    by the joint tree.
+    """
     model, geometry, _ = pin.buildModelsFromUrdf(str(arm.urdf_path))
     geometry.addAllCollisionPairs()
     objects = geometry.geometryObjects
@@ -61,7 +86,9 @@ def independent_collision_check(arm):
 def test_planned_poses_meet_every_constraint(arm, constrained_plan, rng):
     q = constrained_plan.joint_positions
     assert q.shape == (9, arm.nq)
-    assert np.all(q >= arm.lower_limits + MARGIN - 1e-12) and np.all(q <= arm.upper_limits - MARGIN + 1e-12)
+    assert np.all(q >= arm.lower_limits + MARGIN - 1e-12) and np.all(
+        q <= arm.upper_limits - MARGIN + 1e-12
+    )
     assert np.all(q[:, 0] >= JOINT1_RANGE[0]) and np.all(q[:, 0] <= JOINT1_RANGE[1])
     collides = independent_collision_check(arm)
     # The independent checker does find collisions among random configurations (so it can fail).
@@ -72,7 +99,9 @@ def test_planned_poses_meet_every_constraint(arm, constrained_plan, rng):
             assert arm.frame_placement(x, frame)[1][2] >= FLOOR
         tool_z_axis = arm.frame_placement(x, "tool")[0][:, 2]
         assert np.arccos(-tool_z_axis[2]) <= MAX_TILT + 1e-9
-    np.testing.assert_allclose(constrained_plan.rotations, arm.rotation_sensor_to_base(q), atol=1e-12)
+    np.testing.assert_allclose(
+        constrained_plan.rotations, arm.rotation_sensor_to_base(q), atol=1e-12
+    )
 
 
 def test_predicted_standard_errors_match_monte_carlo(arm, plan):
@@ -81,10 +110,14 @@ def test_predicted_standard_errors_match_monte_carlo(arm, plan):
     sensor = SimulatedSensor(truth, noise)
     rng = np.random.default_rng(7)
     method = "ml" if "ml" in METHODS else METHODS[0]
-    estimates = np.array([
-        calibrate(sensor.samples_at_configurations(arm, plan.joint_positions, rng), method=method).to_vector()
-        for _ in range(400)
-    ])
+    estimates = np.array(
+        [
+            calibrate(
+                sensor.samples_at_configurations(arm, plan.joint_positions, rng), method=method
+            ).to_vector()
+            for _ in range(400)
+        ]
+    )
     observed = estimates.std(axis=0, ddof=1)
     predicted = plan.evaluation.vector_std
     if method == "ml":
@@ -95,21 +128,39 @@ def test_predicted_standard_errors_match_monte_carlo(arm, plan):
         compared = np.arange(3, 9)
     np.testing.assert_allclose(observed[compared], predicted[compared], rtol=0.2)
     # The estimator's mean is the truth (no bias larger than three standard errors of the mean).
-    assert np.all(np.abs(estimates.mean(axis=0) - truth.to_vector()) < 3 * observed / np.sqrt(400) + 1e-12)
+    assert np.all(
+        np.abs(estimates.mean(axis=0) - truth.to_vector()) < 3 * observed / np.sqrt(400) + 1e-12
+    )
 
 
 def test_planned_set_beats_the_papers_nine(arm, plan):
     paper = evaluate_poses(paper_samples().rotations)
     nine = plan_poses(arm, 9, seed=0, candidates=1500)
     assert np.all(nine.evaluation.vector_std <= paper.vector_std)
-    np.testing.assert_allclose(nine.evaluation.vector_std[3:9], nine.evaluation.bias_bound, rtol=0.05)
+    np.testing.assert_allclose(
+        nine.evaluation.vector_std[3:9], nine.evaluation.bias_bound, rtol=0.05
+    )
 
 
 def test_same_seed_same_plan(arm, plan):
     truth = paper_like_truth()
-    again = plan_poses(arm, 8, tool_weight=truth.tool_weight, center_of_mass=truth.center_of_mass, seed=1, candidates=1500)
+    again = plan_poses(
+        arm,
+        8,
+        tool_weight=truth.tool_weight,
+        center_of_mass=truth.center_of_mass,
+        seed=1,
+        candidates=1500,
+    )
     np.testing.assert_array_equal(again.joint_positions, plan.joint_positions)
-    other = plan_poses(arm, 8, tool_weight=truth.tool_weight, center_of_mass=truth.center_of_mass, seed=2, candidates=1500)
+    other = plan_poses(
+        arm,
+        8,
+        tool_weight=truth.tool_weight,
+        center_of_mass=truth.center_of_mass,
+        seed=2,
+        candidates=1500,
+    )
     assert not np.array_equal(other.joint_positions, plan.joint_positions)
 
 
@@ -121,7 +172,9 @@ def test_fewer_than_three_poses_refused(arm):
 
 
 def test_tilt_limit_zero_names_the_unobservable_parameters(arm):
-    with pytest.raises(UnobservableParameters, match="tool axis within 0° of straight down") as caught:
+    with pytest.raises(
+        UnobservableParameters, match="tool axis within 0° of straight down"
+    ) as caught:
         plan_poses(arm, 9, max_tilt=0.0)
     assert {"gravity_in_base[z]", "force_offset[z]", "center_of_mass[z]"} <= set(caught.value.names)
 
@@ -140,14 +193,19 @@ def test_collision_pairs_follow_the_documented_rule(arm):
         assert a != b and parents[a] != b and parents[b] != a
     reasons = {(r.first, r.second): r.reason for r in checker.removed}
     assert reasons[("link5_0", "gripper_0")] == "adjacent links"
-    assert ("link6_0", "gripper_1") not in checker.pair_names  # one rigid body (Pinocchio skips or we remove)
+    assert (
+        "link6_0",
+        "gripper_1",
+    ) not in checker.pair_names  # one rigid body (Pinocchio skips or we remove)
     assert reasons[("base_link_0", "link1_0")] == "adjacent links"
     assert ("link3_0", "gripper_0") in checker.pair_names
 
 
 def test_d_optimal_selection_is_a_local_optimum_near_the_best(rng):
     rotations = np.array([pin.exp3(v) for v in rng.normal(size=(10, 3))])
-    factors = information_factors(rotations, [0, 0, -3.15], [0, 0, 0.047], SensorNoise.paper().channel_std)
+    factors = information_factors(
+        rotations, [0, 0, -3.15], [0, 0, 0.047], SensorNoise.paper().channel_std
+    )
     chosen, value = d_optimal_selection(factors, 4)
     contributions = np.einsum("nki,nkj->nij", factors, factors)
     assert value == pytest.approx(log_det(contributions[chosen].sum(axis=0)))
@@ -157,7 +215,9 @@ def test_d_optimal_selection_is_a_local_optimum_near_the_best(rng):
         swapped = chosen.copy()
         swapped[slot] = candidate
         assert log_det(contributions[swapped].sum(axis=0)) <= value + 1e-9
-    best = max(log_det(contributions[list(c)].sum(axis=0)) for c in itertools.combinations(range(10), 4))
+    best = max(
+        log_det(contributions[list(c)].sum(axis=0)) for c in itertools.combinations(range(10), 4)
+    )
     assert value >= best - 0.5
 
 
@@ -170,10 +230,13 @@ def test_entrywise_cholesky_log_det_equals_lapack(rng):
     def entries(m):
         return np.ascontiguousarray(np.transpose(m, (1, 2, 0)))
 
-    np.testing.assert_allclose(_cholesky_log_det(entries(matrices)), np.linalg.slogdet(matrices)[1],
-                               rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(
+        _cholesky_log_det(entries(matrices)), np.linalg.slogdet(matrices)[1], rtol=1e-12, atol=1e-12
+    )
     huge = matrices[:3] * 1e120  # pivot product beyond the float range: sum of logs
-    np.testing.assert_allclose(_cholesky_log_det(entries(huge)), np.linalg.slogdet(huge)[1], rtol=1e-12)
+    np.testing.assert_allclose(
+        _cholesky_log_det(entries(huge)), np.linalg.slogdet(huge)[1], rtol=1e-12
+    )
     matrices[7, 2, 2] = -1.0  # not positive definite
     assert _cholesky_log_det(entries(matrices)) is None
 
@@ -187,9 +250,15 @@ def test_exchange_gains_equal_the_log_det_increase(rng, monkeypatch):
     expected = [log_det(information + f.T @ f) - log_det(information) for f in factors]
     gains = _gains(np.ascontiguousarray(np.transpose(factors, (1, 2, 0))), information)
     np.testing.assert_allclose(gains, expected, rtol=1e-9, atol=1e-9)
-    monkeypatch.setattr("ftkin.planning.design._cholesky_log_det", lambda entries: None)  # the LU fallback
-    np.testing.assert_allclose(_gains(np.ascontiguousarray(np.transpose(factors, (1, 2, 0))), information),
-                               expected, rtol=1e-9, atol=1e-9)
+    monkeypatch.setattr(
+        "ftkin.planning.design._cholesky_log_det", lambda entries: None
+    )  # the LU fallback
+    np.testing.assert_allclose(
+        _gains(np.ascontiguousarray(np.transpose(factors, (1, 2, 0))), information),
+        expected,
+        rtol=1e-9,
+        atol=1e-9,
+    )
 
 
 def test_travel_order_close_to_brute_force(rng):
@@ -203,11 +272,15 @@ def test_travel_order_close_to_brute_force(rng):
 
 def test_unwinding_keeps_the_pose(arm):
     lower, upper = arm.lower_limits, arm.upper_limits
-    q = np.array([0.1, -0.2, 0.5, 3.0, 0.3, 5.5])  # joint6 allows ±2π: 5.5 rad is -0.78 rad a turn back
+    q = np.array(
+        [0.1, -0.2, 0.5, 3.0, 0.3, 5.5]
+    )  # joint6 allows ±2π: 5.5 rad is -0.78 rad a turn back
     unwound = unwind_revolute(q, lower, upper, revolute_mask(arm.model))
     np.testing.assert_allclose(unwound[:5], q[:5])
     assert unwound[5] == pytest.approx(5.5 - 2 * np.pi)
-    np.testing.assert_allclose(arm.rotation_sensor_to_base(unwound), arm.rotation_sensor_to_base(q), atol=1e-12)
+    np.testing.assert_allclose(
+        arm.rotation_sensor_to_base(unwound), arm.rotation_sensor_to_base(q), atol=1e-12
+    )
 
 
 def test_cli_plan_then_evaluate(tmp_path, capsys):
@@ -218,7 +291,9 @@ def test_cli_plan_then_evaluate(tmp_path, capsys):
     assert header == ["pose", "joint1", "joint2", "joint3", "joint4", "joint5", "joint6"]
     assert main(["evaluate-poses", str(out)]) == 0
     evaluated = capsys.readouterr().out
-    table = lambda text: [line for line in text.splitlines() if line.startswith(("fx0", "mz0", "pz"))]  # noqa: E731
+    table = lambda text: [
+        line for line in text.splitlines() if line.startswith(("fx0", "mz0", "pz"))
+    ]  # noqa: E731
     assert table(evaluated) == table(planned) and len(table(planned)) == 3
 
 
@@ -232,7 +307,11 @@ def test_cli_formats_and_orientation_columns(tmp_path, capsys, arm):
     np.testing.assert_allclose(document["predicted_standard_errors"]["force_offset"], expected)
     quaternions = np.array([pin.Quaternion(r).coeffs() for r in rotations])[:, [3, 0, 1, 2]]
     csv_path = tmp_path / "quaternions.csv"
-    csv_path.write_text("qw,qx,qy,qz\n" + "\n".join(",".join(repr(float(v)) for v in row) for row in quaternions) + "\n")
+    csv_path.write_text(
+        "qw,qx,qy,qz\n"
+        + "\n".join(",".join(repr(float(v)) for v in row) for row in quaternions)
+        + "\n"
+    )
     capsys.readouterr()
     assert main(["evaluate-poses", str(csv_path)]) == 0
     assert f"{expected[0]:>14.3e}" in capsys.readouterr().out
@@ -270,7 +349,9 @@ def test_cli_package_dir_resolves_meshes(capsys):
     urdf = share / "example-robot-data" / "robots" / "ur_description" / "urdf" / "ur5_robot.urdf"
     assert main(["plan", "--n", "3", "--urdf", str(urdf), "--sensor-frame", "tool0"]) == 2
     assert "give --package-dir DIR" in capsys.readouterr().err
-    args = argparse.Namespace(urdf=str(urdf), sensor_frame="tool0", tool_frame=None, package_dir=[str(share)])
+    args = argparse.Namespace(
+        urdf=str(urdf), sensor_frame="tool0", tool_frame=None, package_dir=[str(share)]
+    )
     arm = load_arm(args)
     assert arm.package_dirs == [str(share)]
     assert arm.geometry("collision").ngeoms > 0

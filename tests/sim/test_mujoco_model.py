@@ -19,13 +19,25 @@ TILT = np.deg2rad([0.8, -0.5])
 
 
 def _urdf_gripper():
-    """Mass [kg], COM [m] and inertia about the COM [kg·m²] of the gripper link, read from the URDF text."""
-    link = next(node for node in ET.parse(bundled_urdf_path()).getroot().iter("link") if node.get("name") == "gripper")
+    """Mass [kg], COM [m] and inertia about the COM [kg·m²] of the gripper link, read from the URDF
+    text.
+    """
+    link = next(
+        node
+        for node in ET.parse(bundled_urdf_path()).getroot().iter("link")
+        if node.get("name") == "gripper"
+    )
     inertial = link.find("inertial")
     mass = float(inertial.find("mass").get("value"))
     com = np.array([float(x) for x in inertial.find("origin").get("xyz").split()])
     i = {k: float(v) for k, v in inertial.find("inertia").attrib.items()}
-    inertia = np.array([[i["ixx"], i["ixy"], i["ixz"]], [i["ixy"], i["iyy"], i["iyz"]], [i["ixz"], i["iyz"], i["izz"]]])
+    inertia = np.array(
+        [
+            [i["ixx"], i["ixy"], i["ixz"]],
+            [i["ixy"], i["iyy"], i["iyz"]],
+            [i["ixz"], i["iyz"], i["izz"]],
+        ]
+    )
     return mass, com, inertia
 
 
@@ -49,9 +61,12 @@ def test_static_wrench_equals_sensor_model_from_the_urdf(sim, arm):
     measured = np.array([_inverse(sim, q, np.zeros(6), np.zeros(6)) for q in configurations])
     expected = model.predict(arm.rotation_sensor_to_base(configurations)).reshape(-1, 6)
     np.testing.assert_allclose(measured, expected, rtol=0, atol=1e-9)
-    # the sign: the tool hangs from the sensor, so with the sensor z down the load is +weight along z
+    # the sign: the tool hangs from the sensor, so with the sensor z down the load is +weight along
+    # z
     load = _inverse(sim, sim.q0, np.zeros(6), np.zeros(6))
-    assert load[2] == pytest.approx(mass * 9.80665, rel=1e-3) and sim.sensor_rotation()[2, 2] == pytest.approx(-1.0, abs=1e-9)
+    assert load[2] == pytest.approx(mass * 9.80665, rel=1e-3) and sim.sensor_rotation()[
+        2, 2
+    ] == pytest.approx(-1.0, abs=1e-9)
 
 
 def test_moving_wrench_equals_pinocchio_body_regressor(sim, arm):
@@ -69,12 +84,16 @@ def test_moving_wrench_equals_pinocchio_body_regressor(sim, arm):
         acceleration = pin.getFrameAcceleration(model, data, frame, pin.LOCAL)
         rotation = data.oMf[frame].rotation
         lifted = pin.Motion(acceleration.linear - rotation.T @ gravity, acceleration.angular)
-        on_tool = pin.bodyRegressor(velocity, lifted) @ parameters  # the wrench the sensor exerts on the tool
+        on_tool = (
+            pin.bodyRegressor(velocity, lifted) @ parameters
+        )  # the wrench the sensor exerts on the tool
         np.testing.assert_allclose(_inverse(sim, q, v, a), -on_tool, atol=1e-6)
 
 
 def test_object_adds_its_weight_and_inertia_excludes_it(arm):
-    held = build_arm_model(arm, grasped_object=GraspedObject(mass=0.5), surfaces=(), surface_under=None)
+    held = build_arm_model(
+        arm, grasped_object=GraspedObject(mass=0.5), surfaces=(), surface_under=None
+    )
     bare = build_arm_model(arm, surfaces=(), surface_under=None)
     for sim in (held, bare):
         sim.data.qvel[:] = 0
@@ -94,7 +113,9 @@ def test_sensor_bias_noise_saturation_and_delay():
     slow = MujocoSensor(sample_rate=250.0, delay_ticks=0)
     readings = [slow.read(w, 1e-3)[0] for w in ideal]
     assert readings == [1.0, 1.0, 1.0, 1.0, 5.0]  # a new sample every 4 ms, held in between
-    noisy = MujocoSensor(noise=pytest.importorskip("ftkin").SensorNoise(0.5, 0.01), delay_ticks=0, seed=1)
+    noisy = MujocoSensor(
+        noise=pytest.importorskip("ftkin").SensorNoise(0.5, 0.01), delay_ticks=0, seed=1
+    )
     spread = np.std([noisy.read(np.zeros(6), 1e-3)[0] for _ in range(2000)])
     assert spread == pytest.approx(0.5, rel=0.1)
 

@@ -61,10 +61,16 @@ def test_library_reproduces_printed_values(result):
 
 
 def _paper_table():
-    lines = [line for line in Path(str(paper_csv_path())).read_text().splitlines() if not line.startswith("#")]
+    lines = [
+        line
+        for line in Path(str(paper_csv_path())).read_text().splitlines()
+        if not line.startswith("#")
+    ]
     rows = list(csv.DictReader(lines))
     angles = np.array([[float(row[k]) for k in ("alpha", "beta", "gamma")] for row in rows])
-    wrenches = np.array([[float(row[k]) for k in ("fx", "fy", "fz", "mx", "my", "mz")] for row in rows])
+    wrenches = np.array(
+        [[float(row[k]) for k in ("fx", "fy", "fz", "mx", "my", "mz")] for row in rows]
+    )
     return angles, wrenches
 
 
@@ -74,7 +80,9 @@ def test_mean_relative_error_is_the_papers_definition(result):
     np.testing.assert_array_equal(result.pose_wrenches, measured)
     compensated = measured - result.predict(euler_zyx_deg_to_matrix(angles))
     np.testing.assert_allclose(compensated, result.residuals, atol=1e-15)
-    np.testing.assert_allclose(np.mean(np.abs(compensated) / np.abs(measured), axis=0), result.mean_relative_error)
+    np.testing.assert_allclose(
+        np.mean(np.abs(compensated) / np.abs(measured), axis=0), result.mean_relative_error
+    )
 
 
 def _bracket(text: str, label: str) -> list[str]:
@@ -103,7 +111,9 @@ def test_cli_calibrate_prints_the_papers_numbers(capsys):
 def test_cli_paper_every_match_is_yes_or_the_last_digit(capsys):
     assert main(["paper"]) == 0
     out = capsys.readouterr().out
-    rows = [line for line in out.splitlines() if line.rstrip().endswith(("yes", "NO", "last digit"))]
+    rows = [
+        line for line in out.splitlines() if line.rstrip().endswith(("yes", "NO", "last digit"))
+    ]
     names = {line.split()[0] for line in rows}
     assert names == {
         "base_tilt_deg",
@@ -115,12 +125,25 @@ def test_cli_paper_every_match_is_yes_or_the_last_digit(capsys):
     }
     verdicts = {line.split()[0]: line.rstrip().rsplit("  ", 1)[-1].strip() for line in rows}
     assert verdicts == {
-        "base_tilt_deg": "yes", "tool_weight": "yes", "force_offset": "yes", "center_of_mass": "yes",
-        "torque_offset": "last digit", "mean_relative_error_pct": "last digit",
+        "base_tilt_deg": "yes",
+        "tool_weight": "yes",
+        "force_offset": "yes",
+        "center_of_mass": "yes",
+        "torque_offset": "last digit",
+        "mean_relative_error_pct": "last digit",
     }, out
     # the paper column shows the numbers the paper printed, not re-run ones relabelled
     table = "\n".join(rows)
-    for value in ("-0.204", "3.153", "-0.8613", "1.1015", "-0.0605", "0.0470", "0.0255", "1.99, 2.98, 0.27, 3.89, 3.34, 0.69"):
+    for value in (
+        "-0.204",
+        "3.153",
+        "-0.8613",
+        "1.1015",
+        "-0.0605",
+        "0.0470",
+        "0.0255",
+        "1.99, 2.98, 0.27, 3.89, 3.34, 0.69",
+    ):
         assert value in table
     assert "torque_offset: 0.0255 printed, 0.0254 re-run" in out
     assert "mean_relative_error_pct: 3.89 printed, 3.87 re-run; 0.69 printed, 0.71 re-run" in out
@@ -131,6 +154,10 @@ def test_packaged_paper_data_is_the_shared_copy():
         pytest.skip("the shared data folder is not beside this checkout")
 
     def rows(path):
-        return [line for line in Path(path).read_text().splitlines() if line and not line.startswith("#")]
+        return [
+            line
+            for line in Path(path).read_text().splitlines()
+            if line and not line.startswith("#")
+        ]
 
     assert rows(str(paper_csv_path())) == rows(SHARED_CSV)

@@ -25,8 +25,12 @@ FAST = PlacementScenario(dt=2e-3, k2=2e-3)
 def runs(arm) -> dict[tuple[str, str], PlacementRun]:
     out = {}
     for surface in (SPONGE, BOOK):
-        out[surface.name, "position"] = simulate_placement(replace(FAST, surface=surface, mode="position", duration=1.0), arm)
-        out[surface.name, "admittance"] = simulate_placement(replace(FAST, surface=surface, duration=3.0), arm)
+        out[surface.name, "position"] = simulate_placement(
+            replace(FAST, surface=surface, mode="position", duration=1.0), arm
+        )
+        out[surface.name, "admittance"] = simulate_placement(
+            replace(FAST, surface=surface, duration=3.0), arm
+        )
     out["sponge", "admittance-uncompensated"] = simulate_placement(
         replace(FAST, mode="admittance-uncompensated", duration=3.0), arm
     )
@@ -36,11 +40,15 @@ def runs(arm) -> dict[tuple[str, str], PlacementRun]:
 def test_position_control_presses_harder_on_the_book(runs):
     sponge, book = runs["sponge", "position"], runs["book", "position"]
     assert book.peak_contact_force > 3 * sponge.peak_contact_force
-    assert sponge.final_force < 0 and book.final_force < sponge.final_force  # the paper's sign: pressing is negative
+    assert (
+        sponge.final_force < 0 and book.final_force < sponge.final_force
+    )  # the paper's sign: pressing is negative
     # It stops at the target, 5 mm into the surface, whatever the force: N = k δ.
     for run, surface in ((sponge, SPONGE), (book, BOOK)):
         assert run.penetration[-1] == pytest.approx(FAST.target_depth, abs=1e-6)
-        assert run.normal_force[-1] == pytest.approx(surface.stiffness * FAST.target_depth, rel=1e-4)
+        assert run.normal_force[-1] == pytest.approx(
+            surface.stiffness * FAST.target_depth, rel=1e-4
+        )
         assert not run.placed
 
 
@@ -61,7 +69,8 @@ def test_without_compensation_the_arm_pushes_further_down(runs):
     compensated, raw = runs["sponge", "admittance"], runs["sponge", "admittance-uncompensated"]
     assert raw.penetration[-1] > 2 * compensated.penetration[-1]
     assert not raw.placed
-    # It settles where the raw z reading is zero: the true F'z is minus the bias + tool weight along z.
+    # It settles where the raw z reading is zero: the true F'z is minus the bias + tool weight along
+    # z.
     unloaded_z = paper_like_truth().predict(np.eye(3) @ _sensor_rotation())[2]
     assert raw.final_force == pytest.approx(-unloaded_z, abs=0.05)
 
@@ -137,22 +146,65 @@ def test_surface_pushes_but_never_pulls():
 # --------------------------------------------------------------------- CLI
 def test_cli_writes_the_time_series_and_a_plot(tmp_path, capsys):
     csv_path, png_path = tmp_path / "run.csv", tmp_path / "run.png"
-    code = main(["simulate", "placement", "--engine", "simple", "--surface", "book", "--mode", "admittance", "--k1", "0.1", "--k2", "2",
-                 "--duration", "0.5", "--dt", "0.002", "-o", str(csv_path), "--plot", str(png_path)])
+    code = main(
+        [
+            "simulate",
+            "placement",
+            "--engine",
+            "simple",
+            "--surface",
+            "book",
+            "--mode",
+            "admittance",
+            "--k1",
+            "0.1",
+            "--k2",
+            "2",
+            "--duration",
+            "0.5",
+            "--dt",
+            "0.002",
+            "-o",
+            str(csv_path),
+            "--plot",
+            str(png_path),
+        ]
+    )
     assert code == 0
     assert "peak contact force" in capsys.readouterr().out
     table = read_table(csv_path)
     assert table.header == list(PlacementRun.COLUMNS)
     values = table.floats(table.header)
-    expected = simulate_placement(replace(FAST, surface=BOOK, k1=1e-4, k2=2e-3, duration=0.5)).rows()
+    expected = simulate_placement(
+        replace(FAST, surface=BOOK, k1=1e-4, k2=2e-3, duration=0.5)
+    ).rows()
     np.testing.assert_allclose(values, expected, rtol=1e-12, atol=1e-15)
     assert png_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_cli_sweep_adds_a_gain_column(tmp_path):
     csv_path = tmp_path / "sweep.csv"
-    assert main(["simulate", "placement", "--engine", "simple", "--sweep", "k2", "--values", "1,2", "--duration", "0.2", "--dt", "0.002",
-                 "-o", str(csv_path)]) == 0
+    assert (
+        main(
+            [
+                "simulate",
+                "placement",
+                "--engine",
+                "simple",
+                "--sweep",
+                "k2",
+                "--values",
+                "1,2",
+                "--duration",
+                "0.2",
+                "--dt",
+                "0.002",
+                "-o",
+                str(csv_path),
+            ]
+        )
+        == 0
+    )
     table = read_table(csv_path)
     gains = table.floats(["gain"])[:, 0]
     assert table.header[0] == "gain" and sorted(set(gains)) == [1.0, 2.0] and len(gains) == 200
@@ -175,6 +227,10 @@ def test_held_object_wrench_matches_np_cross(rng):
     rotation, origin, tool = pin.exp3(rng.normal(size=3)), rng.normal(size=3), rng.normal(size=3)
     height, weight, normal = 0.04, 2.214, 1.3  # m, N, N
     axis = rotation[:, 2]
-    moment = np.cross(tool + axis * height - origin, [0, 0, normal]) + np.cross(tool + axis * height / 2 - origin, [0, 0, -weight])
+    moment = np.cross(tool + axis * height - origin, [0, 0, normal]) + np.cross(
+        tool + axis * height / 2 - origin, [0, 0, -weight]
+    )
     expected = np.concatenate([rotation.T @ [0, 0, normal - weight], rotation.T @ moment])
-    np.testing.assert_allclose(held_object_wrench(rotation, origin, tool, height, weight, normal), expected, atol=1e-14)
+    np.testing.assert_allclose(
+        held_object_wrench(rotation, origin, tool, height, weight, normal), expected, atol=1e-14
+    )

@@ -22,13 +22,16 @@ image = pytest.importorskip("matplotlib.image")
 
 if find_chromium() is None:
     pytest.skip(
-        "headless Chromium not found (install the Debian package chromium: bash scripts/install-system-deps.sh)",
+        "headless Chromium not found (install the Debian package chromium: bash "
+        "scripts/install-system-deps.sh)",
         allow_module_level=True,
     )
 
 from ftkin.viz import CalibrationViewer  # noqa: E402
 
-Q_SIDE = np.array([0.3, 0.2, -0.3, 0.0, 0.2, 0.0])  # rad: tool roughly horizontal, gravity arrow hangs free
+Q_SIDE = np.array(
+    [0.3, 0.2, -0.3, 0.0, 0.2, 0.0]
+)  # rad: tool roughly horizontal, gravity arrow hangs free
 TOLERANCE = 40  # per channel, 0-255
 SIZE = (640, 480)
 
@@ -46,14 +49,18 @@ def _mask(rgb: np.ndarray, color) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def viewer(arm):
-    with CalibrationViewer(SensorModel.from_tool(0.4, [0.0, 0.0, 0.05]), arm) as view:  # calibration replaced per test
+    with CalibrationViewer(
+        SensorModel.from_tool(0.4, [0.0, 0.0, 0.05]), arm
+    ) as view:  # calibration replaced per test
         yield view
 
 
 def _render(viewer, tmp_path, name: str, visible: set[str]) -> np.ndarray:
     for layer in LAYERS:
         viewer.set_visible(layer.name, layer.name in visible)
-    png = screenshot_html(viewer.static_html(legend=False), tmp_path / f"{name}.png", window_size=SIZE)
+    png = screenshot_html(
+        viewer.static_html(legend=False), tmp_path / f"{name}.png", window_size=SIZE
+    )
     return _read_rgb(png)
 
 
@@ -65,24 +72,37 @@ def test_colours_are_not_used_by_the_scene(viewer, tmp_path, arm, truth):
     _use(viewer, truth)
     viewer.show_pose(Q_SIDE, truth.predict(arm.rotation_sensor_to_base(Q_SIDE)))
     rgb = _render(viewer, tmp_path, "none", set())
-    counts = {layer.name: int(_mask(rgb, layer.rgb).sum()) for layer in (MEASURED, GRAVITY, CONTACT, CENTER_OF_MASS, BASE_GRAVITY)}
+    counts = {
+        layer.name: int(_mask(rgb, layer.rgb).sum())
+        for layer in (MEASURED, GRAVITY, CONTACT, CENTER_OF_MASS, BASE_GRAVITY)
+    }
     print("pixels near the arrow colours with every arrow hidden:", counts)
     assert max(counts.values()) < 20
 
 
-def test_every_arrow_is_on_screen_and_gravity_lies_on_the_measured_force(viewer, tmp_path, arm, truth):
+def test_every_arrow_is_on_screen_and_gravity_lies_on_the_measured_force(
+    viewer, tmp_path, arm, truth
+):
     rotation = arm.rotation_sensor_to_base(Q_SIDE)
     _use(viewer, truth)
-    push_in_base = np.array([1.6, 1.2, 2.0])  # N: up and to the right on screen, so every arrow points elsewhere
+    push_in_base = np.array(
+        [1.6, 1.2, 2.0]
+    )  # N: up and to the right on screen, so every arrow points elsewhere
     push = np.concatenate([rotation.T @ push_in_base, np.zeros(3)])
     viewer.show_pose(Q_SIDE, truth.predict(rotation) + push)
     rgb = _render(viewer, tmp_path, "all", {layer.name for layer in LAYERS})
-    counts = {layer.name: int(_mask(rgb, layer.rgb).sum()) for layer in (MEASURED, GRAVITY, CONTACT, CENTER_OF_MASS, BASE_GRAVITY)}
+    counts = {
+        layer.name: int(_mask(rgb, layer.rgb).sum())
+        for layer in (MEASURED, GRAVITY, CONTACT, CENTER_OF_MASS, BASE_GRAVITY)
+    }
     print("pixels per colour, all layers, contact (1.6, 1.2, 2.0) N in the base frame:", counts)
     assert counts["center_of_mass"] > 30, counts
-    assert min(counts[layer.name] for layer in (MEASURED, GRAVITY, CONTACT, BASE_GRAVITY)) > 100, counts
+    assert min(counts[layer.name] for layer in (MEASURED, GRAVITY, CONTACT, BASE_GRAVITY)) > 100, (
+        counts
+    )
 
-    # No contact: render the measured and the predicted-gravity arrow alone and compare where they are.
+    # No contact: render the measured and the predicted-gravity arrow alone and compare where they
+    # are.
     raw = truth.predict(rotation)
     viewer.show_pose(Q_SIDE, raw)
     measured = _mask(_render(viewer, tmp_path, "measured", {"measured"}), MEASURED.rgb)
@@ -91,19 +111,27 @@ def test_every_arrow_is_on_screen_and_gravity_lies_on_the_measured_force(viewer,
     # the needle's pixels that lie on the sleeve.
     good = (measured & gravity).sum() / measured.sum()
 
-    wrong = SensorModel(truth.force_offset, truth.torque_offset, -truth.gravity_in_base, truth.center_of_mass)  # sign flip
+    wrong = SensorModel(
+        truth.force_offset, truth.torque_offset, -truth.gravity_in_base, truth.center_of_mass
+    )  # sign flip
     _use(viewer, wrong)
-    viewer.auto_camera = False  # keep the camera of the right calibration (framing depends on the predicted gravity)
+    viewer.auto_camera = (
+        False  # keep the camera of the right calibration (framing depends on the predicted gravity)
+    )
     try:
         viewer.show_pose(Q_SIDE, raw)
-        measured_wrong = _mask(_render(viewer, tmp_path, "measured_wrong", {"measured"}), MEASURED.rgb)
+        measured_wrong = _mask(
+            _render(viewer, tmp_path, "measured_wrong", {"measured"}), MEASURED.rgb
+        )
         gravity_wrong = _mask(_render(viewer, tmp_path, "gravity_wrong", {"gravity"}), GRAVITY.rgb)
     finally:
         viewer.auto_camera = True
     bad = (measured_wrong & gravity_wrong).sum() / measured_wrong.sum()
     print(
-        f"measured/gravity pixels: right calibration {measured.sum()}/{gravity.sum()} needle on the sleeve {good:.3f}; "
-        f"gravity sign flipped {measured_wrong.sum()}/{gravity_wrong.sum()} needle on the sleeve {bad:.3f}"
+        f"measured/gravity pixels: right calibration {measured.sum()}/{gravity.sum()} needle on "
+        f"the sleeve {good:.3f}; "
+        f"gravity sign flipped {measured_wrong.sum()}/{gravity_wrong.sum()} needle on the sleeve "
+        f"{bad:.3f}"
     )
     assert measured.sum() > 150 and gravity.sum() > 150
     assert good > 0.8

@@ -1,4 +1,5 @@
-"""Contact sheet: the cells' angles and outlier flags, the tiled figure, and ``ftkin view --png`` without ``--pose``.
+"""Contact sheet: the cells' angles and outlier flags, the tiled figure, and ``ftkin view --png``
+without ``--pose``.
 
 Screenshots are replaced by flat images here (the browser test renders real ones).
 """
@@ -31,17 +32,26 @@ def files(tmp_path_factory):
     folder = tmp_path_factory.mktemp("sheet")
     rng = np.random.default_rng(11)
     arm = Arm.default()
-    truth = SensorModel.from_tool(0.32, [0.002, -0.001, 0.047], [0.4, -0.3, 0.2], [0.01, 0.02, -0.01])
+    truth = SensorModel.from_tool(
+        0.32, [0.002, -0.001, 0.047], [0.4, -0.3, 0.2], [0.01, 0.02, -0.01]
+    )
     q = arm.random_configurations(8, rng, margin=0.3)
-    samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, q, rng, readings_per_pose=5)
+    samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(
+        arm, q, rng, readings_per_pose=5
+    )
     wrenches = samples.wrenches.copy()
     wrenches[samples.pose_ids == PUSHED, 0] += 1.0  # N
     header = [f"q{i + 1}" for i in range(arm.nq)] + ["fx", "fy", "fz", "mx", "my", "mz", "pose"]
-    rows = [[*map(float, a), *map(float, w), int(p)] for a, w, p in zip(samples.joint_positions, wrenches, samples.pose_ids)]
+    rows = [
+        [*map(float, a), *map(float, w), int(p)]
+        for a, w, p in zip(samples.joint_positions, wrenches, samples.pose_ids)
+    ]
     write_csv(folder / "samples.csv", header, rows)
     from ftkin import load_samples
 
-    save_calibration(calibrate(load_samples(folder / "samples.csv", arm=arm).samples), folder / "calib.json")
+    save_calibration(
+        calibrate(load_samples(folder / "samples.csv", arm=arm).samples), folder / "calib.json"
+    )
     return folder / "calib.json", folder / "samples.csv"
 
 
@@ -58,7 +68,9 @@ def test_cells_angle_is_between_measured_and_predicted_gravity(arm, truth, rng):
     push = np.array([0.0, 1.1, 0.0])  # N, base frame
     raws[1, :3] += rotations[1].T @ push
     a = truth.gravity_in_base
-    expected = np.degrees(np.arccos(a @ (a + push) / (np.linalg.norm(a) * np.linalg.norm(a + push))))
+    expected = np.degrees(
+        np.arccos(a @ (a + push) / (np.linalg.norm(a) * np.linalg.norm(a + push)))
+    )
     with CalibrationViewer(truth, arm) as viewer:
         cells = sheet_cells(viewer, ["a", "b", "c"], raws, configurations=q, outliers=[1])
     np.testing.assert_allclose([c.angle_deg for c in cells], [0.0, expected, 0.0], atol=1e-6)
@@ -73,7 +85,11 @@ def test_figure_tiles_labels_and_outlines_outliers():
     figure = sheet_figure(cells, images, "title")
     shown = [ax for ax in figure.axes if ax.images]
     assert len(shown) == 5 and len(figure.axes) == 6  # 3 × 2 grid, one empty
-    assert [ax.get_title() for ax in shown][:3] == ["pose 0: angle 0.00°", "pose 1: angle 1.00°", "pose 2: angle 2.00° (outlier)"]
+    assert [ax.get_title() for ax in shown][:3] == [
+        "pose 0: angle 0.00°",
+        "pose 1: angle 1.00°",
+        "pose 2: angle 2.00° (outlier)",
+    ]
     for k, ax in enumerate(shown):
         np.testing.assert_array_equal(ax.images[0].get_array(), images[k])
         edge = ax.spines["top"].get_edgecolor()
@@ -85,7 +101,9 @@ def test_view_png_without_pose_writes_a_sheet_of_every_pose(files, tmp_path, mon
     assert load_calibration(calib).diagnostics.outlier_pose_ids == (PUSHED,)
     seen = {}
 
-    def fake_render(cells, size=contact_sheet.CELL_SIZE, workers=contact_sheet.WORKERS, timeout=0.0):
+    def fake_render(
+        cells, size=contact_sheet.CELL_SIZE, workers=contact_sheet.WORKERS, timeout=0.0
+    ):
         seen["cells"] = list(cells)
         return [np.zeros((size[1], size[0], 3), dtype=np.uint8) for _ in cells]
 

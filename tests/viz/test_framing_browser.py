@@ -1,4 +1,5 @@
-"""Every pose of a 9-pose plan, in headless Chromium: the arrows are on screen and outside the legend.
+"""Every pose of a 9-pose plan, in headless Chromium: the arrows are on screen and outside the
+legend.
 
 For the bundled arm and UR5, each pose of ``plan_poses(arm, 9)`` is drawn with
 simulated readings of a calibrated tool, saved as a static page with the
@@ -26,7 +27,8 @@ image = pytest.importorskip("matplotlib.image")
 
 if find_chromium() is None:
     pytest.skip(
-        "headless Chromium not found (install the Debian package chromium: bash scripts/install-system-deps.sh)",
+        "headless Chromium not found (install the Debian package chromium: bash "
+        "scripts/install-system-deps.sh)",
         allow_module_level=True,
     )
 
@@ -53,7 +55,11 @@ def _pages(arm) -> list[tuple[str, object]]:
 
 def _counts(png) -> tuple[int, int, int]:
     pixels = image.imread(str(png))
-    rgb = np.round(pixels[..., :3] * 255).astype(np.int16) if pixels.dtype != np.uint8 else pixels[..., :3].astype(np.int16)
+    rgb = (
+        np.round(pixels[..., :3] * 255).astype(np.int16)
+        if pixels.dtype != np.uint8
+        else pixels[..., :3].astype(np.int16)
+    )
     left, top, right, bottom = LEGEND_BOX
     outside = np.ones(rgb.shape[:2], dtype=bool)
     outside[top:bottom, left:right] = False
@@ -62,7 +68,11 @@ def _counts(png) -> tuple[int, int, int]:
         return np.all(np.abs(rgb - np.asarray(color, dtype=np.int16)) <= TOLERANCE, axis=-1)
 
     measured, gravity = near(MEASURED.rgb), near(GRAVITY.rgb)
-    return int((measured & outside).sum()), int((gravity & outside).sum()), int((measured & ~outside).sum())
+    return (
+        int((measured & outside).sum()),
+        int((gravity & outside).sum()),
+        int((measured & ~outside).sum()),
+    )
 
 
 @pytest.mark.parametrize("robot", ["bundled", "ur5"])
@@ -71,14 +81,23 @@ def test_arrows_are_visible_outside_the_legend_at_every_pose(robot, tmp_path):
     pages = _pages(arm)
 
     def shoot(k: int):
-        return _counts(screenshot_html(pages[k][0], tmp_path / f"pose{k}.png", window_size=SIZE, timeout=240))
+        return _counts(
+            screenshot_html(pages[k][0], tmp_path / f"pose{k}.png", window_size=SIZE, timeout=240)
+        )
 
     with ThreadPoolExecutor(max_workers=2) as pool:
         counts = list(pool.map(shoot, range(len(pages))))
-    print(f"\n{robot}: pixels outside the legend per pose (magenta measured / cyan predicted; legend swatch)")
+    print(
+        f"\n{robot}: pixels outside the legend per pose (magenta measured / cyan predicted; legend "
+        "swatch)"
+    )
     for k, ((measured, gravity, swatch), (_, view)) in enumerate(zip(counts, pages)):
-        print(f"  pose {k}: measured {measured:5d}  predicted {gravity:5d}  legend swatch {swatch:3d}  "
-              f"camera offset {np.round(view.offset, 2)} m, floor {'shown' if view.floor_visible else 'hidden'}")
+        print(
+            f"  pose {k}: measured {measured:5d}  predicted {gravity:5d}  legend swatch "
+            f"{swatch:3d}  "
+            f"camera offset {np.round(view.offset, 2)} m, floor "
+            f"{'shown' if view.floor_visible else 'hidden'}"
+        )
     for k, (measured, gravity, swatch) in enumerate(counts):
         assert measured >= MIN_PIXELS and gravity >= MIN_PIXELS, (robot, k, counts[k])
         assert swatch >= 50, (robot, k, "the legend is not inside LEGEND_BOX")

@@ -44,7 +44,9 @@ def test_a_paced_control_loop_is_drawn_at_20_fps_and_the_view_gets_the_latest_st
     controller = admittance_controller(PlacementScenario(), arm, truth)
     q = np.array([0.0, 0.3, 1.2, 0.0, 1.2, 0.0])
     rng = np.random.default_rng(4)
-    raws = SimulatedSensor(truth, SensorNoise.paper()).read(np.repeat(arm.rotation_sensor_to_base(q)[None], 2000, axis=0), rng)
+    raws = SimulatedSensor(truth, SensorNoise.paper()).read(
+        np.repeat(arm.rotation_sensor_to_base(q)[None], 2000, axis=0), rng
+    )
     raws[:, 2] += 0.5  # N along the sensor z: the arm moves
     with LiveView.for_controller(controller, fps=30.0) as view:
         name, process = view._block.name, view._process
@@ -65,7 +67,9 @@ def test_a_paced_control_loop_is_drawn_at_20_fps_and_the_view_gets_the_latest_st
         shared = view._state[view.layout.body].copy()
         print(f"{ticks} ticks in {elapsed:.2f} s, the view drew {fps:.1f} frames/s")
         assert fps >= 20.0
-        assert view._latest[0] is q_tick and view._latest[1] is status.contact_wrench  # references, not copies
+        assert (
+            view._latest[0] is q_tick and view._latest[1] is status.contact_wrench
+        )  # references, not copies
         expected = np.concatenate([q_tick, status.contact_wrench, status.twist])
         np.testing.assert_array_equal(shared, expected)
         assert view.alive
@@ -79,11 +83,15 @@ def test_on_tick_sees_every_admittance_tick_and_changes_nothing(arm):
 
     scenario = PlacementScenario(duration=0.05)
     seen = []
-    hooked = simulate_placement(scenario, arm, on_tick=lambda q, w, t: seen.append((q.copy(), w.copy(), t.copy())))
+    hooked = simulate_placement(
+        scenario, arm, on_tick=lambda q, w, t: seen.append((q.copy(), w.copy(), t.copy()))
+    )
     plain = simulate_placement(scenario, arm)
     assert len(seen) == round(scenario.duration / scenario.dt)
     np.testing.assert_array_equal(hooked.rows(), plain.rows())
-    np.testing.assert_array_equal([w[2] for _, w, _ in seen], plain.measured_force)  # the controller's F'z per tick
+    np.testing.assert_array_equal(
+        [w[2] for _, w, _ in seen], plain.measured_force
+    )  # the controller's F'z per tick
 
 
 def test_simulate_placement_view(capsys):

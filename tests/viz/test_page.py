@@ -18,8 +18,12 @@ def _fetch(data: bytes) -> str:
 
 
 def test_fetches_become_direct_calls_in_order():
-    page = ("<script>var viewer = new MeshCat.Viewer(document.getElementById(\"meshcat-pane\"));"
-            + _fetch(b"first") + _fetch(b"\x00\xffsecond") + "</script>")
+    page = (
+        '<script>var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));'
+        + _fetch(b"first")
+        + _fetch(b"\x00\xffsecond")
+        + "</script>"
+    )
     out = inline_commands(page)
     assert "fetch(" not in out
     assert out.index("function ftkinCommand") < out.index("var viewer = new MeshCat.Viewer(")

@@ -33,7 +33,9 @@ def test_report_data_matches_hand_computation(calibrated):
     data = report_data(result, samples)
     for index, pose in enumerate(data["pose_ids"]):
         rows = samples.pose_ids == pose
-        np.testing.assert_allclose(data["measured"][index], samples.wrenches[rows].mean(axis=0), atol=1e-12)
+        np.testing.assert_allclose(
+            data["measured"][index], samples.wrenches[rows].mean(axis=0), atol=1e-12
+        )
         expected_se = samples.wrenches[rows].std(axis=0, ddof=1) / np.sqrt(rows.sum())
         np.testing.assert_allclose(data["standard_error"][index], expected_se, rtol=1e-9)
     # residuals are the calibration's own per-pose residuals
@@ -77,7 +79,10 @@ def test_cli_report(calibrated, arm, tmp_path, capsys):
     calib = tmp_path / "calib.json"
     save_calibration(result, calib)
     csv_path = tmp_path / "samples.csv"
-    rows = [[int(p), *map(float, q), *map(float, w)] for p, q, w in zip(samples.pose_ids, samples.joint_positions, samples.wrenches)]
+    rows = [
+        [int(p), *map(float, q), *map(float, w)]
+        for p, q, w in zip(samples.pose_ids, samples.joint_positions, samples.wrenches)
+    ]
     write_csv(csv_path, ["pose", *arm.joint_names, *WRENCH_CHANNELS], rows)
     out = tmp_path / "report.png"
     assert main(["report", str(calib), str(csv_path), "-o", str(out)]) == 0
@@ -93,13 +98,17 @@ def test_a_drift_aware_report_predicts_with_the_bias_at_each_pose_time(arm):
     rng = np.random.default_rng(8)
     q = arm.random_configurations(16, rng, margin=0.3)
     sensor = SimulatedSensor(paper_like_truth(), SensorNoise(0.02, 0.001), SensorDrift.typical())
-    samples = sensor.samples_at_configurations(arm, q, rng, 5, times=recording_times(16, 5, 900.0, 0.01))
+    samples = sensor.samples_at_configurations(
+        arm, q, rng, 5, times=recording_times(16, 5, 900.0, 0.01)
+    )
     result = calibrate(samples, drift="poly:2")
     data = report_data(result, samples)
     poses = samples.pose_averages()
     expected = result.tool_gravity_wrench(poses.rotations) + result.bias_at(poses.times)  # by hand
     np.testing.assert_allclose(data["predicted"], expected, atol=1e-12)
-    assert np.sqrt(np.mean(data["residuals"][:, :3] ** 2)) < 0.05  # the drift is not left in the residuals
+    assert (
+        np.sqrt(np.mean(data["residuals"][:, :3] ** 2)) < 0.05
+    )  # the drift is not left in the residuals
     long = "  WARNING: " + "word " * 80
     assert all(len(line) <= SUMMARY_WIDTH for line in _wrapped(long).splitlines())
     assert _wrapped(long).splitlines()[1].startswith(" " * 6)

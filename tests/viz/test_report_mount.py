@@ -15,8 +15,15 @@ def test_report_residuals_vanish_for_the_true_mounted_sensor(arm, tool):
     q = arm.random_configurations(6, np.random.default_rng(61), margin=0.3)
     raw = tool.predict(arm.rotation_sensor_to_base(q) @ mount.T) * reading_signs(-1, "z")
     samples = Samples.from_joint_positions(arm, q, raw)
-    calibration = CalibrationResult(tool.force_offset, tool.torque_offset, tool.gravity_in_base, tool.center_of_mass,
-                                    mount_rotation=mount, sensor_sign=-1, flip_axis="z")
+    calibration = CalibrationResult(
+        tool.force_offset,
+        tool.torque_offset,
+        tool.gravity_in_base,
+        tool.center_of_mass,
+        mount_rotation=mount,
+        sensor_sign=-1,
+        flip_axis="z",
+    )
     data = report_data(calibration, samples)
     np.testing.assert_allclose(data["residuals"], 0.0, atol=1e-12)
     np.testing.assert_allclose(data["measured"], raw * reading_signs(-1, "z"), atol=1e-12)

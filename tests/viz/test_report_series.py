@@ -1,4 +1,6 @@
-"""Optional time-series panels of the report: found when present, plotted as given, absent otherwise."""
+"""Optional time-series panels of the report: found when present, plotted as given, absent
+otherwise.
+"""
 
 from __future__ import annotations
 
@@ -30,7 +32,14 @@ class DriftingModel(SensorModel):
 
 
 def _model(truth, **series) -> DriftingModel:
-    return DriftingModel(truth.force_offset, truth.torque_offset, truth.gravity_in_base, truth.center_of_mass, truth.g, **series)
+    return DriftingModel(
+        truth.force_offset,
+        truth.torque_offset,
+        truth.gravity_in_base,
+        truth.center_of_mass,
+        truth.g,
+        **series,
+    )
 
 
 def _series(rng, n=50):
@@ -50,7 +59,12 @@ def test_forms_of_a_series_are_read_alike(rng):
         series = as_series("bias_trajectory", "bias", form)
         np.testing.assert_array_equal(series.times, times)
         np.testing.assert_array_equal(series.values, values)
-    for bad in [(times, values[:, :5]), (times[:-1], values), {"times": times}, (times, np.full_like(values, np.nan))]:
+    for bad in [
+        (times, values[:, :5]),
+        (times[:-1], values),
+        {"times": times},
+        (times, np.full_like(values, np.nan)),
+    ]:
         with pytest.raises(InvalidInput, match="bias_trajectory"):
             as_series("bias_trajectory", "bias", bad)
 
@@ -64,15 +78,30 @@ def test_panels_appear_only_for_the_series_present_and_plot_the_given_values(arm
 
     bias_times, bias = _series(rng, 40)
     residual_times, residual = _series(rng, 70)
-    drifting = _model(truth, bias_trajectory=(bias_times, bias), motion_residual={"times": residual_times, "residual": residual})
+    drifting = _model(
+        truth,
+        bias_trajectory=(bias_times, bias),
+        motion_residual={"times": residual_times, "residual": residual},
+    )
     figure = report_figure(drifting, samples)
     assert len(figure.axes) == base_axes + 4
     extra = figure.axes[base_axes:]
     titles = [ax.get_title() for ax in extra]
-    assert titles == ["bias of a drifting sensor: forces", "bias of a drifting sensor: torques",
-                      "residual during motion: forces", "residual during motion: torques"]
-    for ax, (times, values, first) in zip(extra, [(bias_times, bias, 0), (bias_times, bias, 3),
-                                                 (residual_times, residual, 0), (residual_times, residual, 3)]):
+    assert titles == [
+        "bias of a drifting sensor: forces",
+        "bias of a drifting sensor: torques",
+        "residual during motion: forces",
+        "residual during motion: torques",
+    ]
+    for ax, (times, values, first) in zip(
+        extra,
+        [
+            (bias_times, bias, 0),
+            (bias_times, bias, 3),
+            (residual_times, residual, 0),
+            (residual_times, residual, 3),
+        ],
+    ):
         assert len(ax.lines) == 3
         for k, line in enumerate(ax.lines):
             np.testing.assert_array_equal(line.get_xdata(), times)
@@ -85,12 +114,16 @@ def test_panels_appear_only_for_the_series_present_and_plot_the_given_values(arm
 def test_a_report_with_series_is_written(tmp_path, arm, truth, rng):
     q = arm.random_configurations(6, rng, margin=0.1)
     samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, q, rng)
-    path = save_report(_model(truth, bias_trajectory=_series(rng)), samples, tmp_path / "report.png")
+    path = save_report(
+        _model(truth, bias_trajectory=_series(rng)), samples, tmp_path / "report.png"
+    )
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_a_drift_aware_calibration_draws_its_bias_trajectory(arm, truth):
-    """The ``drift`` of a real drift-aware calibration is a series: its times and its bias at each time."""
+    """The ``drift`` of a real drift-aware calibration is a series: its times and its bias at each
+    time.
+    """
     from ftkin import SensorNoise, SimulatedSensor, calibrate
     from ftkin.sim.sensor import recording_times
 
@@ -98,8 +131,9 @@ def test_a_drift_aware_calibration_draws_its_bias_trajectory(arm, truth):
     configurations = arm.random_configurations(16, rng, margin=0.3)
     times = recording_times(16, 3, 480.0, 0.02)
     drift = np.outer(times / 480.0, [0.2, -0.1, 0.1, 0.003, 0.0, 0.001])
-    samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, configurations, rng, 3, times=times,
-                                                                                    bias_drift=drift)
+    samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(
+        arm, configurations, rng, 3, times=times, bias_drift=drift
+    )
     result = calibrate(samples, drift="poly:1")
     series = {one.name: one for one in report_series(result)}
     np.testing.assert_array_equal(series["drift"].times, result.drift.times)

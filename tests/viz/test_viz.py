@@ -1,4 +1,6 @@
-"""ftkin.viz without a browser: arrow geometry, the transforms sent to meshcat, server lifecycle, CLI."""
+"""ftkin.viz without a browser: arrow geometry, the transforms sent to meshcat, server lifecycle,
+CLI.
+"""
 
 from __future__ import annotations
 
@@ -66,7 +68,17 @@ class Recorder:
 
 # ------------------------------------------------------------------ arrows
 @pytest.mark.parametrize(
-    "direction", [(0, 1, 0), (0, -1, 0), (1, 0, 0), (-1, 0, 0), (0, 0, 1), (0, 0, -1), (0.3, -0.2, 0.9), (1, 1e-9, 0)]
+    "direction",
+    [
+        (0, 1, 0),
+        (0, -1, 0),
+        (1, 0, 0),
+        (-1, 0, 0),
+        (0, 0, 1),
+        (0, 0, -1),
+        (0.3, -0.2, 0.9),
+        (1, 1e-9, 0),
+    ],
 )
 def test_rotation_y_to_is_a_rotation_with_y_along_direction(direction):
     rotation = rotation_y_to(direction)
@@ -85,10 +97,15 @@ def test_arrow_tip_base_and_length_match_vector_times_scale(rng):
         arrow = arrow_placement(origin, vector, scale, style)
         expected_tip = origin + vector * scale
         head, shaft = arrow.head.matrix(), arrow.shaft.matrix()
-        # The unit shaft spans local y in [-0.5, 0.5]; the cone spans [-h/2, h/2] with its tip at +h/2.
+        # The unit shaft spans local y in [-0.5, 0.5]; the cone spans [-h/2, h/2] with its tip at
+        # +h/2.
         np.testing.assert_allclose(_point(shaft, [0, -0.5, 0]), origin, atol=1e-12)
-        np.testing.assert_allclose(_point(head, [0, style.head_length / 2, 0]), expected_tip, atol=1e-12)
-        np.testing.assert_allclose(_point(shaft, [0, 0.5, 0]), _point(head, [0, -style.head_length / 2, 0]), atol=1e-12)
+        np.testing.assert_allclose(
+            _point(head, [0, style.head_length / 2, 0]), expected_tip, atol=1e-12
+        )
+        np.testing.assert_allclose(
+            _point(shaft, [0, 0.5, 0]), _point(head, [0, -style.head_length / 2, 0]), atol=1e-12
+        )
         assert arrow.length == pytest.approx(np.linalg.norm(vector) * scale)
         assert _axis_angle_deg(shaft[:3, 1], vector) < 1e-6
         # The shaft keeps its radius: local x and z stay unit length.
@@ -99,7 +116,9 @@ def test_arrow_tip_base_and_length_match_vector_times_scale(rng):
 def test_short_and_zero_arrows_shrink_the_head_and_stay_finite():
     style = ArrowStyle(head_length=0.05)
     short = arrow_placement(np.zeros(3), [0.0, 0.0, 0.02], 1.0, style)
-    np.testing.assert_allclose(_point(short.head.matrix(), [0, style.head_length / 2, 0]), [0, 0, 0.02], atol=1e-12)
+    np.testing.assert_allclose(
+        _point(short.head.matrix(), [0, style.head_length / 2, 0]), [0, 0, 0.02], atol=1e-12
+    )
     assert short.head.scale[0] == pytest.approx(0.01 / 0.05)  # head is half the arrow
     zero = arrow_placement(np.ones(3), np.zeros(3), 0.1, style)
     assert zero.length == 0.0
@@ -112,11 +131,15 @@ def test_exaggerate_tilt_multiplies_the_angle_and_keeps_the_azimuth(rng):
     for _ in range(20):
         tilt = rng.uniform(1e-4, 0.02)
         azimuth = rng.uniform(-np.pi, np.pi)
-        direction = np.array([np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth), -np.cos(tilt)])
+        direction = np.array(
+            [np.sin(tilt) * np.cos(azimuth), np.sin(tilt) * np.sin(azimuth), -np.cos(tilt)]
+        )
         for factor in (1.0, 5.0, 40.0):
             drawn = exaggerate_tilt(3.0 * direction, factor)
             assert np.linalg.norm(drawn) == pytest.approx(1.0)
-            assert _axis_angle_deg(drawn, [0, 0, -1]) == pytest.approx(np.degrees(tilt * factor), rel=1e-9)
+            assert _axis_angle_deg(drawn, [0, 0, -1]) == pytest.approx(
+                np.degrees(tilt * factor), rel=1e-9
+            )
             assert np.arctan2(drawn[1], drawn[0]) == pytest.approx(azimuth, abs=1e-9)
     np.testing.assert_allclose(exaggerate_tilt([0, 0, -2.0], 50.0), [0, 0, -1.0])
 
@@ -130,7 +153,9 @@ def test_pose_vectors_measured_minus_gravity_is_the_contact(arm, truth, rng):
     np.testing.assert_allclose(vectors.gravity_force, truth.gravity_in_base)
     np.testing.assert_allclose(vectors.contact_wrench, contact_in_sensor, atol=1e-12)
     np.testing.assert_allclose(vectors.contact_force, rotation @ contact_in_sensor[:3], atol=1e-12)
-    np.testing.assert_allclose(vectors.measured_force - vectors.gravity_force, vectors.contact_force, atol=1e-12)
+    np.testing.assert_allclose(
+        vectors.measured_force - vectors.gravity_force, vectors.contact_force, atol=1e-12
+    )
     np.testing.assert_allclose(vectors.center_of_mass, origin + rotation @ truth.center_of_mass)
 
 
@@ -154,9 +179,13 @@ def test_show_pose_sends_arrows_equal_to_force_times_scale(arm, truth):
         head = sent[f"/ftkin/{name}/head"]
         shaft = sent[f"/ftkin/{name}/shaft"]
         np.testing.assert_allclose(_point(shaft, [0, -0.5, 0]), origin, atol=1e-9)
-        np.testing.assert_allclose(_point(head, [0, head_length / 2, 0]), origin + 0.04 * force, atol=1e-9)
+        np.testing.assert_allclose(
+            _point(head, [0, head_length / 2, 0]), origin + 0.04 * force, atol=1e-9
+        )
     np.testing.assert_allclose(sent["/ftkin/sensor"][:3, :3], rotation, atol=1e-12)
-    np.testing.assert_allclose(sent["/ftkin/center_of_mass"][:3, 3], origin + rotation @ truth.center_of_mass)
+    np.testing.assert_allclose(
+        sent["/ftkin/center_of_mass"][:3, 3], origin + rotation @ truth.center_of_mass
+    )
     # The arm went through Pinocchio's visualizer into the same viewer.
     assert any(path.startswith("/pinocchio/visuals/") for path in sent)
     viewer.close()  # not our server: nothing to stop
@@ -175,7 +204,9 @@ def test_tilt_arrow_shows_the_exaggerated_tilt(truth):
 def test_animation_tracks_hold_each_pose_and_scale_the_shaft(arm, truth):
     recorder = Recorder()
     viewer = CalibrationViewer(truth, arm, visualizer=recorder, scale=0.05)
-    recorder.set_animation = lambda animation, play=True, repetitions=1: recorder.store.setdefault("animation", animation)
+    recorder.set_animation = lambda animation, play=True, repetitions=1: recorder.store.setdefault(
+        "animation", animation
+    )
     q = np.array([Q_SIDE, Q_SIDE + 0.2, Q_SIDE - 0.2])
     raw = truth.predict(arm.rotation_sensor_to_base(q))
     vectors = viewer.animate(raw, configurations=q, hold=0.5, fps=20)
@@ -215,18 +246,31 @@ def calibration_files(tmp_path_factory):
     folder = tmp_path_factory.mktemp("view")
     rng = np.random.default_rng(3)
     arm = Arm.default()
-    truth = SensorModel.from_tool(0.32, [0.002, -0.001, 0.047], [0.4, -0.3, 0.2], [0.01, 0.02, -0.01], base_tilt=(0.003, -0.002))
+    truth = SensorModel.from_tool(
+        0.32,
+        [0.002, -0.001, 0.047],
+        [0.4, -0.3, 0.2],
+        [0.01, 0.02, -0.01],
+        base_tilt=(0.003, -0.002),
+    )
     sensor = SimulatedSensor(truth, SensorNoise.paper())
     q = np.vstack([Q_SIDE, arm.random_configurations(7, rng, margin=0.3)])
     samples = sensor.samples_at_configurations(arm, q, rng, readings_per_pose=5)
     save_calibration(calibrate(samples), folder / "calib.json")
     header = [f"q{i + 1}" for i in range(arm.nq)] + ["fx", "fy", "fz", "mx", "my", "mz", "pose"]
-    rows = [[*map(float, qq), *map(float, w), int(p)] for qq, w, p in zip(samples.joint_positions, samples.wrenches, samples.pose_ids)]
+    rows = [
+        [*map(float, qq), *map(float, w), int(p)]
+        for qq, w, p in zip(samples.joint_positions, samples.wrenches, samples.pose_ids)
+    ]
     write_csv(folder / "samples.csv", header, rows)
     t = np.arange(60) * 0.05
     q_log = Q_SIDE + 0.3 * np.sin(t)[:, None]
     raw_log = sensor.read(arm.rotation_sensor_to_base(q_log), rng)
-    write_csv(folder / "log.csv", ["t", *header[:-1]], [[float(a), *map(float, b), *map(float, c)] for a, b, c in zip(t, q_log, raw_log)])
+    write_csv(
+        folder / "log.csv",
+        ["t", *header[:-1]],
+        [[float(a), *map(float, b), *map(float, c)] for a, b, c in zip(t, q_log, raw_log)],
+    )
     return folder / "calib.json", folder / "samples.csv", folder / "log.csv"
 
 
@@ -261,11 +305,19 @@ def test_cli_view_writes_animated_html_and_replay(calibration_files, tmp_path, c
     assert main(["view", str(calib), str(samples), "--html", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "8 poses, animated" in out.read_text() and "pose 7" in printed
-    # At the calibration poses the measured force lies on the predicted gravity (angle column small).
-    angles = [float(line.split()[4]) for line in printed.splitlines() if line.strip().startswith("pose ")]
+    # At the calibration poses the measured force lies on the predicted gravity (angle column
+    # small).
+    angles = [
+        float(line.split()[4]) for line in printed.splitlines() if line.strip().startswith("pose ")
+    ]
     assert len(angles) == 8 and max(angles) < 1.0
     replay = tmp_path / "replay.html"
-    assert main(["view", str(calib), "--replay", str(log), "--html", str(replay), "--max-frames", "20"]) == 0
+    assert (
+        main(
+            ["view", str(calib), "--replay", str(log), "--html", str(replay), "--max-frames", "20"]
+        )
+        == 0
+    )
     assert "row 59" in capsys.readouterr().out and replay.stat().st_size > 10_000
     assert main(["view", str(calib), str(samples), "--pose", "0", "--no-wait"]) == 0
 

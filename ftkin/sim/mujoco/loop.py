@@ -27,8 +27,18 @@ from ...exceptions import InvalidInput
 from .sensor import MujocoSensor
 from .simulation import ArmSimulation
 
-PLACEMENT_COLUMNS = ("t", "displacement", "velocity", "force", "measured_force", "penetration", "normal_force")
-"""The placement CSV's columns (s, m, m/s, N, N, m, N), as :attr:`~ftkin.sim.placement.PlacementRun.COLUMNS`."""
+PLACEMENT_COLUMNS = (
+    "t",
+    "displacement",
+    "velocity",
+    "force",
+    "measured_force",
+    "penetration",
+    "normal_force",
+)
+"""The placement CSV's columns (s, m, m/s, N, N, m, N), as
+:attr:`~ftkin.sim.placement.PlacementRun.COLUMNS`.
+"""
 
 WRENCH_COLUMNS = tuple(f"ideal_{c}" for c in ("fx", "fy", "fz", "mx", "my", "mz"))
 """Ideal load on the sensor [N, N·m], sensor frame, ftkin's sign."""
@@ -65,11 +75,19 @@ class ClosedLoopRun:
 
     def placement_rows(self) -> np.ndarray:
         """The ``(ticks, 7)`` placement columns (:data:`PLACEMENT_COLUMNS`)."""
-        return self.table[:, :len(PLACEMENT_COLUMNS)]
+        return self.table[:, : len(PLACEMENT_COLUMNS)]
 
 
-def run_closed_loop(sim: ArmSimulation, controller, duration: float, dt: float, *, sensor: MujocoSensor | None = None,
-                    tool_model: SensorModel | None = None, reset: bool = True) -> ClosedLoopRun:
+def run_closed_loop(
+    sim: ArmSimulation,
+    controller,
+    duration: float,
+    dt: float,
+    *,
+    sensor: MujocoSensor | None = None,
+    tool_model: SensorModel | None = None,
+    reset: bool = True,
+) -> ClosedLoopRun:
     """Step MuJoCo with ``controller`` in the loop for ``duration`` [s] at period ``dt`` [s].
 
     Args:
@@ -79,15 +97,19 @@ def run_closed_loop(sim: ArmSimulation, controller, duration: float, dt: float, 
         duration: Simulated time [s].
         dt: Control period [s] (e.g. 1/125, 1/500, 1/1000); a multiple of the MuJoCo timestep.
         sensor: Sensor model; default: noiseless, unbiased, one-tick delay.
-        tool_model: The tool's true weight for the ``force`` column, ``F'z = ideal fz − (R_BSᵀ a)_z``
-            (default: :meth:`ArmSimulation.tool_sensor_model`, from the model's tool inertia; its bias is ignored).
+        tool_model: The tool's true weight for the ``force`` column, ``F'z = ideal fz − (R_BSᵀ
+        a)_z``
+            (default: :meth:`ArmSimulation.tool_sensor_model`, from the model's tool inertia; its
+            bias is ignored).
         reset: Start from ``sim``'s build pose at rest (else continue from the current state).
     """
     if not (math.isfinite(duration) and duration > 0 and math.isfinite(dt) and dt > 0):
         raise InvalidInput(f"duration and dt must be finite and > 0 [s], got {duration!r}, {dt!r}")
     substeps = dt / sim.model.opt.timestep
     if abs(substeps - round(substeps)) > 1e-6 or round(substeps) < 1:
-        raise InvalidInput(f"dt = {dt} s must be a multiple of MuJoCo's timestep {sim.model.opt.timestep} s")
+        raise InvalidInput(
+            f"dt = {dt} s must be a multiple of MuJoCo's timestep {sim.model.opt.timestep} s"
+        )
     if reset:
         sim.reset()
     sensor = MujocoSensor() if sensor is None else sensor
@@ -97,9 +119,18 @@ def run_closed_loop(sim: ArmSimulation, controller, duration: float, dt: float, 
     nq = sim.arm.nq
     tool_body = sim.tool_body_id
     if getattr(controller, "step", None) is None:
-        raise InvalidInput(f"controller must have a step(q, raw_wrench, dt) method, got {type(controller).__name__}")
-    columns = PLACEMENT_COLUMNS + tuple(f"q{i + 1}" for i in range(nq)) + tuple(f"dq{i + 1}" for i in range(nq)) \
-        + tuple(f"cmd{i + 1}" for i in range(nq)) + WRENCH_COLUMNS + ("held",)
+        raise InvalidInput(
+            "controller must have a step(q, raw_wrench, dt) method, got "
+            f"{type(controller).__name__}"
+        )
+    columns = (
+        PLACEMENT_COLUMNS
+        + tuple(f"q{i + 1}" for i in range(nq))
+        + tuple(f"dq{i + 1}" for i in range(nq))
+        + tuple(f"cmd{i + 1}" for i in range(nq))
+        + WRENCH_COLUMNS
+        + ("held",)
+    )
     ticks = int(round(duration / dt))
     table = np.zeros((ticks, len(columns)))
     events, last_event, first_hold = [], "", math.inf
@@ -128,7 +159,9 @@ def run_closed_loop(sim: ArmSimulation, controller, duration: float, dt: float, 
             measured = raw[2]
         z = data.xpos[tool_body][2]
         row[0], row[1], row[2] = i * dt, z - z_start, (z - z_before) / dt
-        r02, r12, r22 = data.site_xmat[site][2::3].tolist()  # R_BS's third column: the sensor z axis in the base
+        r02, r12, r22 = data.site_xmat[site][
+            2::3
+        ].tolist()  # R_BS's third column: the sensor z axis in the base
         row[3] = ideal[2] - (r02 * ax + r12 * ay + r22 * az)
         row[4] = measured
         if surface is not None:

@@ -46,7 +46,9 @@ PAD_SPACING = 0.15
 
 
 def import_mujoco():
-    """The ``mujoco`` module, or :class:`~ftkin.exceptions.MissingDependency` naming the ``sim`` extra."""
+    """The ``mujoco`` module, or :class:`~ftkin.exceptions.MissingDependency` naming the ``sim``
+    extra.
+    """
     try:
         import mujoco
     except ImportError:
@@ -72,7 +74,9 @@ class GraspedObject:
         for name in ("mass", "height", "half_width"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise InvalidInput(f"GraspedObject.{name} must be a finite number > 0, got {value!r}")
+                raise InvalidInput(
+                    f"GraspedObject.{name} must be a finite number > 0, got {value!r}"
+                )
 
     @property
     def weight(self) -> float:
@@ -80,52 +84,93 @@ class GraspedObject:
         return self.mass * STANDARD_GRAVITY
 
 
-def build_arm_model(arm: Arm | None = None, *, measured_body: str | None = None, grasped_object: GraspedObject | None = None,
-                    surfaces: tuple[Surface, ...] = (SPONGE, BOOK), surface_under: str | None = "sponge", q0=None,
-                    start_gap: float = 0.002, base_tilt=(0.0, 0.0), g: float = STANDARD_GRAVITY, timestep: float = 5e-4,
-                    servo_bandwidth: float = 60.0) -> ArmSimulation:
+def build_arm_model(
+    arm: Arm | None = None,
+    *,
+    measured_body: str | None = None,
+    grasped_object: GraspedObject | None = None,
+    surfaces: tuple[Surface, ...] = (SPONGE, BOOK),
+    surface_under: str | None = "sponge",
+    q0=None,
+    start_gap: float = 0.002,
+    base_tilt=(0.0, 0.0),
+    g: float = STANDARD_GRAVITY,
+    timestep: float = 5e-4,
+    servo_bandwidth: float = 60.0,
+) -> ArmSimulation:
     """Build the MuJoCo scene of ``arm`` (default: the bundled arm with its ``tool`` frame).
 
     Args:
         arm: An ftkin arm loaded from a URDF (``arm.urdf_path``); its sensor frame must be a link.
-        measured_body: The body whose subtree the sensor measures. Default: the only child link of the sensor link.
-        grasped_object: The held object (None: nothing held). Attached to the tool frame's link (sensor link's child if no tool).
+        measured_body: The body whose subtree the sensor measures. Default: the only child link of
+        the sensor link.
+        grasped_object: The held object (None: nothing held). Attached to the tool frame's link
+        (sensor link's child if no tool).
         surfaces: Pads on the table, spaced :data:`PAD_SPACING` along base y.
-        surface_under: Name of the pad placed ``start_gap`` [m] below the object (or the tool point) at ``q0``; None: no table.
-        q0: Start configuration [rad] (default :data:`Q_DOWN` for a 6-joint arm, else the zero configuration).
+        surface_under: Name of the pad placed ``start_gap`` [m] below the object (or the tool point)
+        at ``q0``; None: no table.
+        q0: Start configuration [rad] (default :data:`Q_DOWN` for a 6-joint arm, else the zero
+        configuration).
         start_gap: Air gap at the start [m].
-        base_tilt: ``(U, V)`` [rad]: gravity in the base frame is ``g`` along ``[cosU sinV, -sinU, -cosU cosV]``.
+        base_tilt: ``(U, V)`` [rad]: gravity in the base frame is ``g`` along ``[cosU sinV, -sinU,
+        -cosU cosV]``.
         g: Gravity [m/s²].
         timestep: MuJoCo's integration step [s].
         servo_bandwidth: Natural frequency of each joint's position servo [Hz] (critically damped).
 
     Raises:
-        InvalidInput: the arm has no URDF, its sensor frame is not a link, or the measured body is ambiguous.
+        InvalidInput: the arm has no URDF, its sensor frame is not a link, or the measured body is
+        ambiguous.
         MissingDependency: ``mujoco`` is not installed (the ``sim`` extra).
     """
     mujoco = import_mujoco()
     arm = Arm.default() if arm is None else arm
     if arm.urdf_path is None:
         raise InvalidInput("build_arm_model needs an arm loaded from a URDF file (Arm.from_urdf)")
-    if not (math.isfinite(timestep) and timestep > 0 and math.isfinite(servo_bandwidth) and servo_bandwidth > 0):
-        raise InvalidInput(f"timestep [s] and servo_bandwidth [Hz] must be > 0, got {timestep!r}, {servo_bandwidth!r}")
-    q0 = np.asarray((Q_DOWN if arm.nq == 6 else np.zeros(arm.nq)) if q0 is None else q0, dtype=float)
+    if not (
+        math.isfinite(timestep)
+        and timestep > 0
+        and math.isfinite(servo_bandwidth)
+        and servo_bandwidth > 0
+    ):
+        raise InvalidInput(
+            f"timestep [s] and servo_bandwidth [Hz] must be > 0, got {timestep!r}, "
+            f"{servo_bandwidth!r}"
+        )
+    q0 = np.asarray(
+        (Q_DOWN if arm.nq == 6 else np.zeros(arm.nq)) if q0 is None else q0, dtype=float
+    )
     q0 = arm.check_configuration(q0).copy()
     spec = mujoco.MjSpec.from_file(str(arm.urdf_path))
     spec.compiler.fusestatic = False
     bodies = {body.name: body for body in spec.bodies}
     if arm.sensor_frame not in bodies:
-        raise InvalidInput(f"the sensor frame {arm.sensor_frame!r} is not a link of {arm.urdf_path.name}; MuJoCo needs a sensor link")
+        raise InvalidInput(
+            f"the sensor frame {arm.sensor_frame!r} is not a link of {arm.urdf_path.name}; MuJoCo "
+            "needs a sensor link"
+        )
     measured = _measured_body(spec, bodies, arm.sensor_frame, measured_body)
     for geom in spec.geoms:  # the arm collides with nothing: only the object touches the pads
         geom.contype, geom.conaffinity = 0, 0
     for name, body in bodies.items():
         if name != "world" and not _is_descendant(body, measured):
-            body.gravcomp = 1.0  # the controller does not compensate the arm's own weight: its servo would sag
+            body.gravcomp = (
+                1.0  # the controller does not compensate the arm's own weight: its servo would sag
+            )
     site_pos, site_quat = _inverse_pose(measured)
     measured.add_site(name="ftkin_sensor", pos=site_pos, quat=site_quat)
-    spec.add_sensor(name="ftkin_force", type=mujoco.mjtSensor.mjSENS_FORCE, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="ftkin_sensor")
-    spec.add_sensor(name="ftkin_torque", type=mujoco.mjtSensor.mjSENS_TORQUE, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="ftkin_sensor")
+    spec.add_sensor(
+        name="ftkin_force",
+        type=mujoco.mjtSensor.mjSENS_FORCE,
+        objtype=mujoco.mjtObj.mjOBJ_SITE,
+        objname="ftkin_sensor",
+    )
+    spec.add_sensor(
+        name="ftkin_torque",
+        type=mujoco.mjtSensor.mjSENS_TORQUE,
+        objtype=mujoco.mjtObj.mjOBJ_SITE,
+        objname="ftkin_sensor",
+    )
     holder = bodies.get(arm.tool_frame, measured) if arm.tool_frame else measured
     if grasped_object is not None:
         _add_object(mujoco, holder, grasped_object)
@@ -141,23 +186,44 @@ def build_arm_model(arm: Arm | None = None, *, measured_body: str | None = None,
         centre = bottom[:2] + np.array([0.0, PAD_SPACING * (index - under)])
         _add_pad(mujoco, spec, surface, centre, top, timestep)
     if surfaces:
-        spec.worldbody.add_geom(name="table", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.3, 0.4, 0.01],
-                                pos=[bottom[0], bottom[1], top - 0.03], contype=0, conaffinity=0, rgba=[0.6, 0.45, 0.3, 1])
+        spec.worldbody.add_geom(
+            name="table",
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=[0.3, 0.4, 0.01],
+            pos=[bottom[0], bottom[1], top - 0.03],
+            contype=0,
+            conaffinity=0,
+            rgba=[0.6, 0.45, 0.3, 1],
+        )
     for name in arm.joint_names:
         joint = spec.joint(name)
         limit = arm.velocity_limits[arm.joint_names.index(name)]
-        actuator = spec.add_actuator(name=f"{name}_speed", target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        actuator = spec.add_actuator(
+            name=f"{name}_speed", target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT
+        )
         actuator.set_to_intvelocity(kp=1.0, kv=0.0)
         actuator.ctrllimited, actuator.ctrlrange = 1, [-limit, limit]
         actuator.actlimited, actuator.actrange = 1, list(joint.range)
         joint.armature = 0.05
     spec.option.timestep = float(timestep)
     integrators = mujoco.mjtIntegrator
-    spec.option.integrator = getattr(integrators, "mjINT_IMPLICITFAST", None) or integrators.mjINTEGRATOR_IMPLICITFAST
-    spec.option.gravity = gravity_in_base_from_tilt(float(g), float(base_tilt[0]), float(base_tilt[1]))
+    spec.option.integrator = (
+        getattr(integrators, "mjINT_IMPLICITFAST", None) or integrators.mjINTEGRATOR_IMPLICITFAST
+    )
+    spec.option.gravity = gravity_in_base_from_tilt(
+        float(g), float(base_tilt[0]), float(base_tilt[1])
+    )
     model = spec.compile()
-    sim = ArmSimulation(mujoco, model, arm, q0, {s.name: s for s in surfaces}, surface_under if surfaces else None,
-                        (float(base_tilt[0]), float(base_tilt[1])), float(g))
+    sim = ArmSimulation(
+        mujoco,
+        model,
+        arm,
+        q0,
+        {s.name: s for s in surfaces},
+        surface_under if surfaces else None,
+        (float(base_tilt[0]), float(base_tilt[1])),
+        float(g),
+    )
     _tune_servos(sim, 2.0 * math.pi * servo_bandwidth)
     sim.reset()  # again: the equilibrium targets depend on the servo gains
     return sim
@@ -168,11 +234,18 @@ def _measured_body(spec, bodies: dict, sensor: str, name: str | None):
         if name not in bodies:
             raise InvalidInput(f"measured_body {name!r} is not a link; links: {sorted(bodies)}")
         if bodies[name].parent is None or bodies[name].parent.name != sensor:
-            raise InvalidInput(f"measured_body {name!r} must be a child link of the sensor link {sensor!r}")
+            raise InvalidInput(
+                f"measured_body {name!r} must be a child link of the sensor link {sensor!r}"
+            )
         return bodies[name]
-    children = [body for body in bodies.values() if body.parent is not None and body.parent.name == sensor]
+    children = [
+        body for body in bodies.values() if body.parent is not None and body.parent.name == sensor
+    ]
     if len(children) != 1:
-        raise InvalidInput(f"the sensor link {sensor!r} has {len(children)} child links; name the measured one (measured_body=...)")
+        raise InvalidInput(
+            f"the sensor link {sensor!r} has {len(children)} child links; name the measured one "
+            "(measured_body=...)"
+        )
     return children[0]
 
 
@@ -189,29 +262,54 @@ def _inverse_pose(body) -> tuple[list, list]:
     w, x, y, z = (float(v) for v in body.quat)
     norm = math.sqrt(w * w + x * x + y * y + z * z)
     w, x, y, z = w / norm, x / norm, y / norm, z / norm
-    rotation = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    rotation = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
     return (-(rotation.T @ np.asarray(body.pos, dtype=float))).tolist(), [w, -x, -y, -z]
 
 
 def _add_object(mujoco, holder, obj: GraspedObject) -> None:
     body = holder.add_body(name="ftkin_object", pos=[0.0, 0.0, obj.height / 2])
-    body.add_geom(name="ftkin_object", type=mujoco.mjtGeom.mjGEOM_BOX, size=[obj.half_width, obj.half_width, obj.height / 2],
-                  mass=obj.mass, contype=1, conaffinity=0, rgba=[0.2, 0.5, 0.9, 1])
+    body.add_geom(
+        name="ftkin_object",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[obj.half_width, obj.half_width, obj.height / 2],
+        mass=obj.mass,
+        contype=1,
+        conaffinity=0,
+        rgba=[0.2, 0.5, 0.9, 1],
+    )
 
 
 def _add_pad(mujoco, spec, surface: Surface, centre, top: float, timestep: float) -> None:
-    """A pad on a vertical slide joint: its spring and damper are the surface's ``k`` and ``c``; the contact is stiff."""
+    """A pad on a vertical slide joint: its spring and damper are the surface's ``k`` and ``c``; the
+    contact is stiff.
+    """
     thickness = 0.01
-    body = spec.worldbody.add_body(name=f"{surface.name}_pad", pos=[centre[0], centre[1], top - thickness])
+    body = spec.worldbody.add_body(
+        name=f"{surface.name}_pad", pos=[centre[0], centre[1], top - thickness]
+    )
     body.gravcomp = 1.0
-    joint = body.add_joint(name=f"{surface.name}_pad", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
+    joint = body.add_joint(
+        name=f"{surface.name}_pad", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1]
+    )
     _set_first(joint, "stiffness", surface.stiffness)
     _set_first(joint, "damping", surface.damping)
-    body.add_geom(name=f"{surface.name}_pad", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.06, 0.06, thickness], mass=PAD_MASS,
-                  contype=0, conaffinity=1, solref=[2.0 * timestep, 1.0], solimp=[0.99, 0.99, 0.001, 0.5, 2.0],
-                  rgba=[0.9, 0.9, 0.3, 1] if surface.name == "sponge" else [0.5, 0.2, 0.2, 1])
+    body.add_geom(
+        name=f"{surface.name}_pad",
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[0.06, 0.06, thickness],
+        mass=PAD_MASS,
+        contype=0,
+        conaffinity=1,
+        solref=[2.0 * timestep, 1.0],
+        solimp=[0.99, 0.99, 0.001, 0.5, 2.0],
+        rgba=[0.9, 0.9, 0.3, 1] if surface.name == "sponge" else [0.5, 0.2, 0.2, 1],
+    )
 
 
 def _set_first(obj, name: str, value: float) -> None:
@@ -226,7 +324,9 @@ def _set_first(obj, name: str, value: float) -> None:
 
 
 def _tune_servos(sim: ArmSimulation, omega: float) -> None:
-    """Critically damped position servos: ``kp = ω² M_ii``, ``kv = 2 ω M_ii`` with the joint-space inertia at ``q0``."""
+    """Critically damped position servos: ``kp = ω² M_ii``, ``kv = 2 ω M_ii`` with the joint-space
+    inertia at ``q0``.
+    """
     mujoco, model, data = sim.mujoco, sim.model, sim.data
     full = np.zeros((model.nv, model.nv))
     if hasattr(data, "qM"):

@@ -35,7 +35,8 @@ from .simulation import ArmSimulation
 
 
 class PositionLowering:
-    """Position control: lower the tool point at ``speed`` [m/s] to base height ``z_target`` [m], ignoring force.
+    """Position control: lower the tool point at ``speed`` [m/s] to base height ``z_target`` [m],
+    ignoring force.
 
     The commanded height ``z_cmd`` starts at the tool's height on the first step and moves
     at ``speed`` until it reaches ``z_target`` (a trajectory, as a robot's position mode
@@ -50,7 +51,9 @@ class PositionLowering:
 
     def step(self, q, raw_wrench, dt: float) -> np.ndarray:
         arm = self.arm
-        jacobian = pin.computeFrameJacobian(arm.model, arm.data, q, arm.tool_frame_id, pin.LOCAL_WORLD_ALIGNED)
+        jacobian = pin.computeFrameJacobian(
+            arm.model, arm.data, q, arm.tool_frame_id, pin.LOCAL_WORLD_ALIGNED
+        )
         if self.z_command is None:
             self.z_command = float(arm.data.oMf[arm.tool_frame_id].translation[2])
         speed = max(-self.speed, (self.z_target - self.z_command) / dt)
@@ -61,21 +64,37 @@ class PositionLowering:
 def placement_scene(scenario: PlacementScenario, arm: Arm | None = None) -> ArmSimulation:
     """The MuJoCo scene of a scenario: its object, its surface below, the paper-like base tilt."""
     truth = paper_like_truth()
-    grasped = GraspedObject(mass=scenario.object_weight / STANDARD_GRAVITY, height=scenario.object_height)
-    return build_arm_model(arm, grasped_object=grasped, surface_under=scenario.surface.name,
-                           surfaces=_surfaces(scenario), start_gap=scenario.start_gap, base_tilt=truth.base_tilt)
+    grasped = GraspedObject(
+        mass=scenario.object_weight / STANDARD_GRAVITY, height=scenario.object_height
+    )
+    return build_arm_model(
+        arm,
+        grasped_object=grasped,
+        surface_under=scenario.surface.name,
+        surfaces=_surfaces(scenario),
+        start_gap=scenario.start_gap,
+        base_tilt=truth.base_tilt,
+    )
 
 
 def _surfaces(scenario: PlacementScenario):
     from ..surfaces import SURFACES
 
-    others = tuple(surface for name, surface in sorted(SURFACES.items()) if name != scenario.surface.name)
+    others = tuple(
+        surface for name, surface in sorted(SURFACES.items()) if name != scenario.surface.name
+    )
     return (scenario.surface, *others)
 
 
-def simulate_placement_mujoco(scenario: PlacementScenario, arm: Arm | None = None, *, sim: ArmSimulation | None = None,
-                              sample_rate: float | None = None, delay_ticks: int = 1,
-                              controller=None) -> tuple[PlacementRun, ClosedLoopRun]:
+def simulate_placement_mujoco(
+    scenario: PlacementScenario,
+    arm: Arm | None = None,
+    *,
+    sim: ArmSimulation | None = None,
+    sample_rate: float | None = None,
+    delay_ticks: int = 1,
+    controller=None,
+) -> tuple[PlacementRun, ClosedLoopRun]:
     """Run one scenario in MuJoCo at the scenario's ``dt``.
 
     Args:
@@ -89,13 +108,23 @@ def simulate_placement_mujoco(scenario: PlacementScenario, arm: Arm | None = Non
     arm = Arm.default() if arm is None else arm
     sim = placement_scene(scenario, arm) if sim is None else sim
     simulated = SimulatedSensor(paper_like_truth(), scenario.noise)
-    sensor = MujocoSensor.from_simulated(simulated, sample_rate=sample_rate, delay_ticks=delay_ticks, seed=scenario.seed)
+    sensor = MujocoSensor.from_simulated(
+        simulated, sample_rate=sample_rate, delay_ticks=delay_ticks, seed=scenario.seed
+    )
     if controller is None:
         if scenario.mode == "position":
             _, tool_start = arm.frame_placement(sim.q0, "tool")
-            controller = PositionLowering(arm, tool_start[2] - scenario.start_gap - scenario.target_depth, scenario.lowering_speed)
+            controller = PositionLowering(
+                arm,
+                tool_start[2] - scenario.start_gap - scenario.target_depth,
+                scenario.lowering_speed,
+            )
         else:
-            calibration = sim.tool_sensor_model(bias=simulated.truth.bias) if scenario.mode == "admittance" else None
+            calibration = (
+                sim.tool_sensor_model(bias=simulated.truth.bias)
+                if scenario.mode == "admittance"
+                else None
+            )
             controller = admittance_controller(scenario, arm, calibration)
     run = run_closed_loop(sim, controller, scenario.duration, scenario.dt, sensor=sensor)
     safety = bool(getattr(controller, "safety_latched", False))
@@ -103,10 +132,20 @@ def simulate_placement_mujoco(scenario: PlacementScenario, arm: Arm | None = Non
 
 
 def placement_table(runs) -> list[dict]:
-    """One row per run: surface, mode, peak normal force [N], settle time [s], final depth [mm], final F'z [N]."""
-    return [{"surface": run.scenario.surface.name, "mode": run.scenario.mode, "peak_force": run.peak_contact_force,
-             "settle_time": run.settle_time, "final_depth_mm": float(run.penetration[-1]) * 1e3,
-             "final_force": run.final_force} for run in runs]
+    """One row per run: surface, mode, peak normal force [N], settle time [s], final depth [mm],
+    final F'z [N].
+    """
+    return [
+        {
+            "surface": run.scenario.surface.name,
+            "mode": run.scenario.mode,
+            "peak_force": run.peak_contact_force,
+            "settle_time": run.settle_time,
+            "final_depth_mm": float(run.penetration[-1]) * 1e3,
+            "final_force": run.final_force,
+        }
+        for run in runs
+    ]
 
 
 def with_mode(scenario: PlacementScenario, mode: str) -> PlacementScenario:

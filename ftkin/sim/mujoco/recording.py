@@ -31,7 +31,9 @@ def _mujoco():
     try:
         import mujoco
     except ImportError:
-        raise MissingDependency("mujoco", "sim", "recording wrenches with MuJoCo (ftkin.sim.mujoco.recording)") from None
+        raise MissingDependency(
+            "mujoco", "sim", "recording wrenches with MuJoCo (ftkin.sim.mujoco.recording)"
+        ) from None
     return mujoco
 
 
@@ -47,15 +49,24 @@ class MujocoRecorder:
         base_tilt: Base tilt ``(U, V)`` [rad] (``R_WB = Rx(U) Ry(V)``): gravity in the base frame.
     """
 
-    def __init__(self, urdf=None, joint_names=None, sensor_body: str = "gripper", tool: ToolInertia | None = None,
-                 g: float = STANDARD_GRAVITY, base_tilt=(0.0, 0.0)):
+    def __init__(
+        self,
+        urdf=None,
+        joint_names=None,
+        sensor_body: str = "gripper",
+        tool: ToolInertia | None = None,
+        g: float = STANDARD_GRAVITY,
+        base_tilt=(0.0, 0.0),
+    ):
         mujoco = _mujoco()
         self._mujoco = mujoco
         spec = mujoco.MjSpec.from_file(str(urdf if urdf is not None else bundled_urdf_path()))
         spec.compiler.fusestatic = False
         bodies = {body.name: body for body in spec.bodies}
         if sensor_body not in bodies:
-            raise InvalidInput(f"no body {sensor_body!r} in the MuJoCo model; bodies: {', '.join(sorted(bodies))}")
+            raise InvalidInput(
+                f"no body {sensor_body!r} in the MuJoCo model; bodies: {', '.join(sorted(bodies))}"
+            )
         body = bodies[sensor_body]
         if tool is not None:
             body.explicitinertial = True
@@ -63,12 +74,26 @@ class MujocoRecorder:
             body.ipos = tool.center_of_mass
             body.iquat = [1.0, 0.0, 0.0, 0.0]
             inertia = tool.inertia_about_com
-            body.fullinertia = [inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2], inertia[1, 2]]
+            body.fullinertia = [
+                inertia[0, 0],
+                inertia[1, 1],
+                inertia[2, 2],
+                inertia[0, 1],
+                inertia[0, 2],
+                inertia[1, 2],
+            ]
         body.add_site(name="ftkin_sensor_site", pos=[0.0, 0.0, 0.0])
-        for name, kind in (("ftkin_force", mujoco.mjtSensor.mjSENS_FORCE), ("ftkin_torque", mujoco.mjtSensor.mjSENS_TORQUE)):
-            spec.add_sensor(name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="ftkin_sensor_site")
+        for name, kind in (
+            ("ftkin_force", mujoco.mjtSensor.mjSENS_FORCE),
+            ("ftkin_torque", mujoco.mjtSensor.mjSENS_TORQUE),
+        ):
+            spec.add_sensor(
+                name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="ftkin_sensor_site"
+            )
         self.model = spec.compile()
-        self.model.opt.gravity[:] = gravity_in_base_from_tilt(as_positive(g, "g"), float(base_tilt[0]), float(base_tilt[1]))
+        self.model.opt.gravity[:] = gravity_in_base_from_tilt(
+            as_positive(g, "g"), float(base_tilt[0]), float(base_tilt[1])
+        )
         # Prescribed motion: no contacts (they would add forces where links overlap).
         self.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
         self.data = mujoco.MjData(self.model)
@@ -86,17 +111,31 @@ class MujocoRecorder:
         """Number of joints driven (ftkin's ``q`` length)."""
         return len(self.joint_names)
 
-    def wrenches(self, joint_positions, joint_velocities=None, joint_accelerations=None) -> np.ndarray:
-        """ftkin raw readings ``(N, 6)`` [N, N·m] (load on the sensor, no bias, no noise) at ``(N, nq)`` ``q, dq, ddq``.
+    def wrenches(
+        self, joint_positions, joint_velocities=None, joint_accelerations=None
+    ) -> np.ndarray:
+        """ftkin raw readings ``(N, 6)`` [N, N·m] (load on the sensor, no bias, no noise) at ``(N,
+        nq)`` ``q, dq, ddq``.
 
         Velocities and accelerations default to zero (static poses).
         """
         mujoco, model, data = self._mujoco, self.model, self.data
         q, _ = as_batch(joint_positions, self.nq, "joint positions q")
-        dq = np.zeros_like(q) if joint_velocities is None else as_batch(joint_velocities, self.nq, "dq")[0]
-        ddq = np.zeros_like(q) if joint_accelerations is None else as_batch(joint_accelerations, self.nq, "ddq")[0]
+        dq = (
+            np.zeros_like(q)
+            if joint_velocities is None
+            else as_batch(joint_velocities, self.nq, "dq")[0]
+        )
+        ddq = (
+            np.zeros_like(q)
+            if joint_accelerations is None
+            else as_batch(joint_accelerations, self.nq, "ddq")[0]
+        )
         if not (len(q) == len(dq) == len(ddq)):
-            raise InvalidInput(f"q, dq and ddq must have the same number of rows, got {len(q)}, {len(dq)}, {len(ddq)}")
+            raise InvalidInput(
+                f"q, dq and ddq must have the same number of rows, got {len(q)}, {len(dq)}, "
+                f"{len(ddq)}"
+            )
         out = np.empty((len(q), 6))
         for i in range(len(q)):
             data.qpos[self._qpos] = q[i]
@@ -113,10 +152,14 @@ class MujocoRecorder:
         return self.data.site_xmat[self._site].reshape(3, 3).copy()
 
     def true_parameters(self) -> np.ndarray:
-        """θ (10,) of everything the sensor carries (``sensor_body``'s subtree), about the sensor origin, sensor axes."""
+        """θ (10,) of everything the sensor carries (``sensor_body``'s subtree), about the sensor
+        origin, sensor axes.
+        """
         mujoco, model, data = self._mujoco, self.model, self.data
         mujoco.mj_kinematics(model, data)
-        site = pin.SE3(data.site_xmat[self._site].reshape(3, 3).copy(), data.site_xpos[self._site].copy())
+        site = pin.SE3(
+            data.site_xmat[self._site].reshape(3, 3).copy(), data.site_xpos[self._site].copy()
+        )
         total = pin.Inertia.Zero()
         for body in range(model.nbody):
             ancestor = body
@@ -125,7 +168,9 @@ class MujocoRecorder:
             if ancestor != self._body or model.body_mass[body] == 0.0:
                 continue
             # Body inertia: principal moments in the frame (xipos, ximat).
-            principal = pin.Inertia(float(model.body_mass[body]), np.zeros(3), np.diag(model.body_inertia[body]))
+            principal = pin.Inertia(
+                float(model.body_mass[body]), np.zeros(3), np.diag(model.body_inertia[body])
+            )
             inertial_frame = pin.SE3(data.ximat[body].reshape(3, 3).copy(), data.xipos[body].copy())
             total += (site.actInv(inertial_frame)).act(principal)
         return np.asarray(total.toDynamicParameters(), dtype=float)

@@ -39,14 +39,28 @@ class MujocoSensor:
         seed: Seed of the noise generator.
     """
 
-    def __init__(self, bias=(0.0,) * 6, noise: SensorNoise | None = None, *, force_range: float = 250.0,
-                 torque_range: float = 6.0, sample_rate: float | None = None, delay_ticks: int = 1, seed: int = 0):
+    def __init__(
+        self,
+        bias=(0.0,) * 6,
+        noise: SensorNoise | None = None,
+        *,
+        force_range: float = 250.0,
+        torque_range: float = 6.0,
+        sample_rate: float | None = None,
+        delay_ticks: int = 1,
+        seed: int = 0,
+    ):
         self.bias = as_vector(bias, 6, "bias")
         self.noise = noise
         if not (force_range > 0 and torque_range > 0):
-            raise InvalidInput(f"force_range [N] and torque_range [N·m] must be > 0, got {force_range!r}, {torque_range!r}")
+            raise InvalidInput(
+                f"force_range [N] and torque_range [N·m] must be > 0, got {force_range!r}, "
+                f"{torque_range!r}"
+            )
         if sample_rate is not None and not (math.isfinite(sample_rate) and sample_rate > 0):
-            raise InvalidInput(f"sample_rate must be a finite number of Hz > 0 or None, got {sample_rate!r}")
+            raise InvalidInput(
+                f"sample_rate must be a finite number of Hz > 0 or None, got {sample_rate!r}"
+            )
         if not (isinstance(delay_ticks, int) and delay_ticks >= 0):
             raise InvalidInput(f"delay_ticks must be an integer >= 0, got {delay_ticks!r}")
         self.range = np.array([force_range] * 3 + [torque_range] * 3, dtype=float)
@@ -57,7 +71,9 @@ class MujocoSensor:
 
     @classmethod
     def from_simulated(cls, sensor: SimulatedSensor, **options) -> MujocoSensor:
-        """The bias and noise of a :class:`SimulatedSensor` (its tool gravity is left to the physics)."""
+        """The bias and noise of a :class:`SimulatedSensor` (its tool gravity is left to the
+        physics).
+        """
         return cls(sensor.truth.bias, sensor.noise, **options)
 
     def reset(self) -> None:
@@ -75,13 +91,21 @@ class MujocoSensor:
             ideal_wrench: Load on the sensor now ``(6,)`` [N, N·m], sensor frame, ftkin's sign.
             dt: Control period [s] (advances the sensor's clock).
         """
-        if self._sample is None or self.sample_rate is None or self._time >= self._next_sample - 1e-12:
-            if self._noise_row == len(self._noise):  # noise drawn in blocks: one generator call per 1024 samples
+        if (
+            self._sample is None
+            or self.sample_rate is None
+            or self._time >= self._next_sample - 1e-12
+        ):
+            if self._noise_row == len(
+                self._noise
+            ):  # noise drawn in blocks: one generator call per 1024 samples
                 self._noise, self._noise_row = self._rng.standard_normal((1024, 6)) * self._std, 0
             sample = ideal_wrench + self.bias
             sample += self._noise[self._noise_row]
             self._noise_row += 1
-            np.minimum(sample, self.range, out=sample)  # saturation (ufuncs: np.clip's wrapper costs more)
+            np.minimum(
+                sample, self.range, out=sample
+            )  # saturation (ufuncs: np.clip's wrapper costs more)
             self._sample = np.maximum(sample, self._negative_range, out=sample)
             if self.sample_rate is not None:
                 self._next_sample += 1.0 / self.sample_rate

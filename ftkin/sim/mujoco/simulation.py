@@ -21,12 +21,22 @@ class ArmSimulation:
     Build it with :func:`build_arm_model`. Attributes: ``model`` (``MjModel``),
     ``data`` (``MjData``), ``arm`` (the ftkin :class:`~ftkin.kinematics.arm.Arm`),
     ``sensor_site_id``, ``force_sensor_id``, ``torque_sensor_id``,
-    ``object_body_id`` (or -1), ``tool_body_id`` (the tool link's body, else the measured one), ``surfaces`` (name → :class:`Surface`),
+    ``object_body_id`` (or -1), ``tool_body_id`` (the tool link's body, else the measured one),
+    ``surfaces`` (name → :class:`Surface`),
     ``surface_under`` (the pad below the object), ``base_tilt`` [rad], ``g`` [m/s²].
     """
 
-    def __init__(self, mujoco, model, arm: Arm, q0: np.ndarray, surfaces: dict, surface_under: str | None,
-                 base_tilt: tuple[float, float], g: float):
+    def __init__(
+        self,
+        mujoco,
+        model,
+        arm: Arm,
+        q0: np.ndarray,
+        surfaces: dict,
+        surface_under: str | None,
+        base_tilt: tuple[float, float],
+        g: float,
+    ):
         self.mujoco, self.model, self.arm = mujoco, model, arm
         self.data = mujoco.MjData(model)
         name_id = lambda kind, name: mujoco.mj_name2id(model, kind, name)
@@ -39,16 +49,28 @@ class ArmSimulation:
         tool = name_id(mujoco.mjtObj.mjOBJ_BODY, arm.tool_frame) if arm.tool_frame else -1
         self.tool_body_id = tool if tool >= 0 else int(model.site_bodyid[self.sensor_site_id])
         self.surfaces, self.surface_under = surfaces, surface_under
-        self._pad_qpos = {name: int(model.jnt_qposadr[name_id(mujoco.mjtObj.mjOBJ_JOINT, f"{name}_pad")]) for name in surfaces}
-        self._arm_qpos = np.array([model.jnt_qposadr[name_id(mujoco.mjtObj.mjOBJ_JOINT, n)] for n in arm.joint_names])
-        self._arm_dof = np.array([model.jnt_dofadr[name_id(mujoco.mjtObj.mjOBJ_JOINT, n)] for n in arm.joint_names])
+        self._pad_qpos = {
+            name: int(model.jnt_qposadr[name_id(mujoco.mjtObj.mjOBJ_JOINT, f"{name}_pad")])
+            for name in surfaces
+        }
+        self._arm_qpos = np.array(
+            [model.jnt_qposadr[name_id(mujoco.mjtObj.mjOBJ_JOINT, n)] for n in arm.joint_names]
+        )
+        self._arm_dof = np.array(
+            [model.jnt_dofadr[name_id(mujoco.mjtObj.mjOBJ_JOINT, n)] for n in arm.joint_names]
+        )
         self.base_tilt, self.g = base_tilt, g
         self.q0 = q0
-        # contiguous addresses (the usual case) read as one slice: cheaper than fancy indexing per tick
+        # contiguous addresses (the usual case) read as one slice: cheaper than fancy indexing per
+        # tick
         self._q_index = _as_slice(self._arm_qpos)
         self._dq_index = _as_slice(self._arm_dof)
         adr = (self._force_adr, self._torque_adr)
-        self._wrench_index = slice(adr[0], adr[0] + 6) if adr[1] == adr[0] + 3 else np.r_[adr[0]:adr[0] + 3, adr[1]:adr[1] + 3]
+        self._wrench_index = (
+            slice(adr[0], adr[0] + 6)
+            if adr[1] == adr[0] + 3
+            else np.r_[adr[0] : adr[0] + 3, adr[1] : adr[1] + 3]
+        )
         self._substeps: dict[float, int] = {}
         self._contact_force = np.zeros(6)
         self.reset()
@@ -66,7 +88,7 @@ class ArmSimulation:
         mujoco.mj_resetData(model, data)
         data.qpos[self._arm_qpos] = q
         mujoco.mj_inverse(model, data)
-        data.act[:] = q + data.qfrc_inverse[self._arm_dof] / model.actuator_gainprm[:len(q), 0]
+        data.act[:] = q + data.qfrc_inverse[self._arm_dof] / model.actuator_gainprm[: len(q), 0]
         data.ctrl[:] = 0.0
         mujoco.mj_forward(model, data)
 
@@ -81,16 +103,22 @@ class ArmSimulation:
         return self.data.qvel[self._dq_index].copy()
 
     def step(self, dq_command, duration: float) -> None:
-        """Command joint velocities [rad/s] (speedJ-like) and advance the physics by ``duration`` [s]."""
+        """Command joint velocities [rad/s] (speedJ-like) and advance the physics by ``duration``
+        [s].
+        """
         self.data.ctrl[:] = dq_command
         substeps = self._substeps.get(duration)
         if substeps is None:
-            substeps = self._substeps[duration] = max(1, int(round(duration / self.model.opt.timestep)))
+            substeps = self._substeps[duration] = max(
+                1, int(round(duration / self.model.opt.timestep))
+            )
         self.mujoco.mj_step(self.model, self.data, substeps)
 
     # ------------------------------------------------------------- readings
     def ideal_wrench_in_sensor(self) -> np.ndarray:
-        """Load on the sensor ``(6,)`` [N, N·m], sensor frame, ftkin's sign (``-`` MuJoCo's sensors), no bias or noise."""
+        """Load on the sensor ``(6,)`` [N, N·m], sensor frame, ftkin's sign (``-`` MuJoCo's
+        sensors), no bias or noise.
+        """
         return -self.data.sensordata[self._wrench_index]
 
     def sensor_rotation(self) -> np.ndarray:
@@ -122,11 +150,17 @@ class ArmSimulation:
 
     # ------------------------------------------------------------ the truth
     def tool_inertia(self) -> ToolInertia:
-        """Mass, COM and inertia of the measured subtree without the object, in the sensor frame (from MuJoCo)."""
+        """Mass, COM and inertia of the measured subtree without the object, in the sensor frame
+        (from MuJoCo).
+        """
         model, data = self.model, self.data
         site_body = int(model.site_bodyid[self.sensor_site_id])
-        bodies = [b for b in range(model.nbody) if _in_subtree(model, b, site_body)
-                  and not (self.object_body_id >= 0 and _in_subtree(model, b, self.object_body_id))]
+        bodies = [
+            b
+            for b in range(model.nbody)
+            if _in_subtree(model, b, site_body)
+            and not (self.object_body_id >= 0 and _in_subtree(model, b, self.object_body_id))
+        ]
         rotation, origin = self.sensor_rotation(), self.sensor_origin()
         masses = np.array([model.body_mass[b] for b in bodies])
         centers = np.array([rotation.T @ (data.xipos[b] - origin) for b in bodies])
@@ -141,16 +175,24 @@ class ArmSimulation:
         return ToolInertia(mass, com, inertia)
 
     def tool_sensor_model(self, bias=(0.0,) * 6) -> SensorModel:
-        """ftkin's :class:`SensorModel` of this tool: its mass and COM from the model, this gravity and tilt, ``bias`` [N, N·m]."""
+        """ftkin's :class:`SensorModel` of this tool: its mass and COM from the model, this gravity
+        and tilt, ``bias`` [N, N·m].
+        """
         tool = self.tool_inertia()
         bias = np.asarray(bias, dtype=float)
-        return SensorModel.from_tool(tool.mass, tool.center_of_mass, bias[:3], bias[3:], self.base_tilt, self.g)
+        return SensorModel.from_tool(
+            tool.mass, tool.center_of_mass, bias[:3], bias[3:], self.base_tilt, self.g
+        )
 
 
 def _as_slice(indices: np.ndarray):
     """``indices`` as a slice when they run consecutively, else unchanged."""
     start = int(indices[0])
-    return slice(start, start + len(indices)) if np.array_equal(indices, np.arange(start, start + len(indices))) else indices
+    return (
+        slice(start, start + len(indices))
+        if np.array_equal(indices, np.arange(start, start + len(indices)))
+        else indices
+    )
 
 
 def _in_subtree(model, body: int, root: int) -> bool:

@@ -31,12 +31,23 @@ class ToolInertia:
 
     def __post_init__(self):
         object.__setattr__(self, "mass", as_positive(self.mass, "mass"))
-        object.__setattr__(self, "center_of_mass", as_vector(self.center_of_mass, 3, "center_of_mass"))
+        object.__setattr__(
+            self, "center_of_mass", as_vector(self.center_of_mass, 3, "center_of_mass")
+        )
         inertia = np.asarray(self.inertia_about_com, dtype=float)
-        if inertia.shape != (3, 3) or not np.allclose(inertia, inertia.T) or np.linalg.eigvalsh(inertia)[0] <= 0:
-            raise InvalidInput(f"inertia_about_com must be a symmetric positive definite (3, 3) matrix, got {inertia!r}")
+        if (
+            inertia.shape != (3, 3)
+            or not np.allclose(inertia, inertia.T)
+            or np.linalg.eigvalsh(inertia)[0] <= 0
+        ):
+            raise InvalidInput(
+                "inertia_about_com must be a symmetric positive definite (3, 3) matrix, got "
+                f"{inertia!r}"
+            )
         object.__setattr__(self, "inertia_about_com", inertia)
 
     def parameters(self) -> np.ndarray:
-        """The ten inertial parameters θ about the sensor origin, ``[m, m·c, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]`` (Pinocchio's order)."""
+        """The ten inertial parameters θ about the sensor origin, ``[m, m·c, Ixx, Ixy, Iyy, Ixz,
+        Iyz, Izz]`` (Pinocchio's order).
+        """
         return parameters_from_body(self.mass, self.center_of_mass, self.inertia_about_com)
