@@ -83,7 +83,7 @@ _EXPORTS = {
     "diagnose_samples": ".io.conventions",
     "euler_zyx_deg_to_matrix": ".kinematics.rotations",
     "evaluate_poses": ".planning.evaluation",
-    "export_payload": ".io.payload_export",
+    "export_payload": ".io.export",
     "fisher_information": ".calibration.information",
     "joint_derivatives": ".calibration.derivatives",
     "load_calibration": ".io.calibration_file",

@@ -6,6 +6,8 @@ them can assume clean ``float64`` arrays of the right shape.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from .exceptions import InvalidInput
@@ -236,3 +238,45 @@ def is_rotation_rows(rows: list, atol: float = 1e-6) -> bool:
         and -atol <= b * c + e * f + h * i <= atol
         and a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0.0
     )
+
+
+_ROS_TOKEN = r"[A-Za-z_][A-Za-z0-9_]*"
+_ROS_NAME_RULES = {
+    "node": (
+        rf"(/({_ROS_TOKEN}/)*)?{_ROS_TOKEN}|/\*\*",
+        "letters, digits and underscores, not starting with a digit, optionally after a "
+        "namespace /ns/ (or the wildcard /**)",
+    ),
+    "frame": (
+        rf"{_ROS_TOKEN}(/{_ROS_TOKEN})*",
+        "tokens of letters, digits and underscores, each not starting with a digit, joined by "
+        "single '/', no leading '/' (tf2)",
+    ),
+    "topic": (
+        rf"/?{_ROS_TOKEN}(/{_ROS_TOKEN})*",
+        "tokens of letters, digits and underscores, each not starting with a digit, joined by "
+        "single '/', optionally absolute",
+    ),
+}
+"""ROS 2 name rules by kind (design.ros2.org "Topic and Service name mapping", REP 105 and tf2's
+frame ids): the regular expression and what it allows, for messages.
+"""
+
+
+def as_ros_name(value, kind: str, name: str) -> str:
+    """``value`` if it is a valid ROS name of ``kind`` (``"node"``, ``"frame"`` or ``"topic"``).
+
+    Besides the pattern, ROS 2 refuses ``__`` (reserved) and a trailing ``/``. The check runs
+    before a name is written into a file the target system would then reject.
+
+    Raises:
+        InvalidInput: not a string, or a string the rules refuse (the message quotes the rule).
+    """
+    pattern, rule = _ROS_NAME_RULES[kind]
+    if not isinstance(value, str):
+        raise InvalidInput(f"{name} must be a ROS {kind} name (a string), got {value!r}")
+    if not re.fullmatch(pattern, value) or "__" in value:
+        raise InvalidInput(
+            f"{name} {value!r} is not a valid ROS {kind} name: expected {rule}, no '__'"
+        )
+    return value

@@ -1,101 +1,71 @@
 """``ftkin export CALIB.json --format FORMAT -o OUT.yaml``: parameters for ROS controllers and robot
-payloads.
+payloads; the formats and their options come from the registry (:mod:`ftkin.io.export`).
 """
 
 from __future__ import annotations
 
+from ..io.atomic import atomic_write_text
 from ..io.calibration_file import load_calibration
-from ..io.export import EXPORT_FORMATS, export_calibration, export_notes
-from ..io.payload_export import PAYLOAD_FORMATS, export_payload, payload_in_flange
+from ..io.export import EXPORT_FORMATS, export_request
 from ..kinematics.arm import Arm
-from .common import add_arm_arguments, arm_for_calibration
+from .common import add_arm_arguments, arm_for_calibration, arm_from_args
 
 
 def register(subparsers) -> None:
+    formats = "; ".join(f"'{name}': {fmt.summary}" for name, fmt in EXPORT_FORMATS.items())
     parser = subparsers.add_parser(
         "export",
         help="write a calibration as ROS controller parameters or as the robot's payload (Franka, "
         "UR)",
-        description="Export a calibration file to: 'admittance' (ros2_controllers "
-        "admittance_controller "
-        "gravity_compensation.*), 'gravity-compensation' (control_toolbox "
-        "GravityCompensationWrench filter "
-        "tool.CoG/mass/gravity_field, with the tilted gravity), 'ft-calib' (force_torque_tools "
-        "ft_calib YAML: "
-        "bias, gripper_mass, gripper_com_pose). What a format cannot hold is printed and written "
-        "as comments. "
-        "Robot payloads, centre of mass in the flange frame through the mount and the URDF: "
-        "'franka-load' "
-        "(franka_msgs/srv/SetLoad request: mass, center_of_mass, load_inertia), 'ur-payload' "
-        "(ur_msgs/srv/SetPayload "
-        "request for the ROS 2 UR driver, URScript set_payload as a comment; OUT.script: the "
-        "URScript line only).",
+        description=f"Export a calibration file to: {formats}. What a format cannot hold is "
+        "printed and written as comments; names written (nodes, frames) are checked against "
+        "ROS's rules. Payloads: the centre of mass in the flange frame, through the mount and the "
+        "URDF.",
     )
     parser.add_argument("calibration", metavar="CALIB.json")
     parser.add_argument(
-        "--format",
-        required=True,
-        choices=EXPORT_FORMATS + PAYLOAD_FORMATS,
-        dest="fmt",
-        help="target format",
+        "--format", required=True, choices=tuple(EXPORT_FORMATS), dest="fmt", help="target format"
     )
     parser.add_argument("-o", "--output", required=True, metavar="OUT.yaml")
+    takers: dict[str, list] = {}
+    for fmt in EXPORT_FORMATS.values():
+        for option in fmt.options:
+            takers.setdefault(option.name, [option]).append(fmt.name)
+    group = parser.add_argument_group("format options (each format takes its own)")
+    for option, *names in takers.values():
+        group.add_argument(
+            option.flag,
+            dest=option.name,
+            default=None,
+            help=f"{option.help} [{', '.join(names)}]",
+            **option.argparse,
+        )
     parser.add_argument(
-        "--frame-id",
-        metavar="NAME",
-        help="sensor frame name in ROS (default: the calibration's sensor frame)",
-    )
-    parser.add_argument(
-        "--world-frame",
-        metavar="NAME",
-        help="gravity-compensation: fixed frame (default: the URDF root link)",
-    )
-    parser.add_argument(
-        "--node-name",
-        metavar="NAME",
-        help="ROS 2 node the parameters belong to (admittance, gravity-compensation)",
-    )
-    payload = parser.add_argument_group("robot payloads (franka-load, ur-payload)")
-    payload.add_argument(
-        "--flange-frame",
-        metavar="NAME",
-        help="flange frame of the URDF (default: tool0, flange, panda_link8 "
-        "or fr3_link8 when present, else the sensor frame's parent)",
-    )
-    payload.add_argument(
-        "--inertia",
-        type=float,
-        nargs=6,
-        metavar=("IXX", "IYY", "IZZ", "IXY", "IXZ", "IYZ"),
-        help="tool inertia about its centre of mass in flange axes [kg·m²] (default: unknown, "
-        "written as zero)",
+        "--allow-other-arm",
+        action="store_true",
+        help="accept robot options that differ from the arm recorded in the calibration "
+        "(deliberate reuse)",
     )
     add_arm_arguments(parser)
-    parser.set_defaults(func=run)
+    parser.set_defaults(func=run, export_options=tuple(takers))
 
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
-    if args.fmt in PAYLOAD_FORMATS:
+    arm = arm_from_args(args)
+    if arm is None and EXPORT_FORMATS[args.fmt].needs_arm:
         arm = arm_for_calibration(args, calibration) or Arm.default()
-        export_payload(calibration, arm, args.output, args.fmt, args.flange_frame, args.inertia)
-        payload = payload_in_flange(calibration, arm, args.flange_frame, args.inertia)
-        com = ", ".join(f"{value:.6g}" for value in payload.center_of_mass)
-        print(
-            f"wrote {args.fmt} to {args.output}: mass {payload.mass:.6g} kg, centre of mass "
-            f"[{com}] m "
-            f"in the flange frame {payload.flange_frame!r}"
-        )
-        return 0
-    export_calibration(
+    options = {name: getattr(args, name) for name in args.export_options}
+    chosen, request = export_request(
         calibration,
-        args.output,
         args.fmt,
-        frame_id=args.frame_id,
-        world_frame=args.world_frame,
-        node_name=args.node_name,
+        arm,
+        path=args.output,
+        allow_other_arm=args.allow_other_arm,
+        **options,
     )
-    print(f"wrote {args.fmt} parameters to {args.output}")
-    for note in export_notes(calibration, args.fmt):
+    atomic_write_text(request.path, chosen.text(request))
+    print(f"wrote {args.fmt} to {args.output}{chosen.summary_line(request)}")
+    for note in chosen.notes(request):
         print(f"  note: {note}")
     return 0

@@ -18,7 +18,7 @@ _EXPORTS = {
     "MotionRecording": ".motion_recording",
     "Payload": ".payload_export",
     "diagnose_samples": ".conventions",
-    "export_payload": ".payload_export",
+    "export_payload": ".export",
     "load_calibration": ".calibration_file",
     "load_motion_bag": ".motion_recording",
     "load_motion_csv": ".motion_recording",

@@ -9,14 +9,14 @@ through the mount and the URDF:
 
 with ``(R_FS, t_FS)`` the URDF placement of the sensor frame in the flange
 frame and ``R_M`` the estimated mount (identity if none). The flange frame is,
-unless named, the first of :data:`FLANGE_FRAMES` the model has (``tool0`` for
-UR, ``panda_link8`` for Franka, the bundled arm's ``flange``), else the frame
-the sensor frame hangs from. The mass is the tool's ``G / g``: everything below
+unless named, the robot table's (:func:`ftkin.kinematics.robots.flange_frame_name`:
+``tool0`` for UR, ``panda_link8`` for Franka, the bundled arm's ``flange``), else
+the frame the sensor frame hangs from. The mass is the tool's ``G / g``: everything below
 the sensor's measuring plane (the sensor's sensitive end included; the
 sensor's own body above that plane is not seen by it and belongs to the robot
 or must be added by hand).
 
-Formats (:data:`PAYLOAD_FORMATS`):
+Formats (registered in :mod:`ftkin.io.export`):
 
 ``franka-load``
     The request of ``franka_msgs/srv/SetLoad`` (franka_ros2): ``mass`` [kg],
@@ -38,24 +38,31 @@ A static calibration does not determine the inertia: it is written when given
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from ..calibration.model import SensorModel
 from ..exceptions import InvalidInput
-from .atomic import atomic_write_text
-from .yaml_text import yaml_text
-
-PAYLOAD_FORMATS = ("franka-load", "ur-payload")
-"""Robot-controller payload formats of :func:`payload_text`."""
-
-FLANGE_FRAMES = ("tool0", "flange", "panda_link8", "fr3_link8")
-"""Frames taken as the robot flange, in order of preference."""
+from ..kinematics.robots import flange_frame_name
+from .export_format import ExportFormat, ExportOption, ExportRequest
 
 UR_SET_PAYLOAD_SERVICE = "/io_and_status_controller/set_payload"
 FRANKA_SET_LOAD_SERVICE = "/service_server/set_load"
+
+FLANGE_FRAME = ExportOption(
+    "flange_frame",
+    "--flange-frame",
+    "flange frame of the URDF (default: the robot table's flange, e.g. tool0 or panda_link8; for "
+    "a URDF the table's flange frame it has, else the sensor frame's parent)",
+    {"metavar": "NAME"},
+)
+INERTIA = ExportOption(
+    "inertia",
+    "--inertia",
+    "tool inertia about its centre of mass in flange axes [kg·m²] (default: a dynamic "
+    "calibration's, else unknown, written as zero)",
+    {"type": float, "nargs": 6, "metavar": ("IXX", "IYY", "IZZ", "IXY", "IXZ", "IYZ")},
+)
 
 
 @dataclass(frozen=True)
@@ -67,23 +74,13 @@ class Payload:
         center_of_mass: Centre of mass in the flange frame [m].
         flange_frame: Name of that frame in the URDF.
         inertia: ``(3, 3)`` inertia about the centre of mass, flange axes [kg·m²], or None
-        (unknown).
+            (unknown).
     """
 
     mass: float
     center_of_mass: np.ndarray
     flange_frame: str
     inertia: np.ndarray | None = None
-
-
-def flange_frame_name(arm) -> str:
-    """The arm's flange frame: the first of :data:`FLANGE_FRAMES` it has, else the sensor frame's
-    parent frame.
-    """
-    for name in FLANGE_FRAMES:
-        if arm.model.existFrame(name):
-            return name
-    return arm.model.frames[arm.model.frames[arm.sensor_frame_id].parentFrame].name
 
 
 def sensor_in_flange(arm, flange_frame: str) -> pin.SE3:
@@ -95,22 +92,20 @@ def sensor_in_flange(arm, flange_frame: str) -> pin.SE3:
     if flange.parentJoint != sensor.parentJoint:
         raise InvalidInput(
             f"the flange frame {flange_frame!r} and the sensor frame {arm.sensor_frame!r} are not "
-            "fixed to each other "
-            f"(they hang from joints {arm.model.names[flange.parentJoint]!r} and "
-            f"{arm.model.names[sensor.parentJoint]!r})"
+            f"fixed to each other (they hang from joints {arm.model.names[flange.parentJoint]!r} "
+            f"and {arm.model.names[sensor.parentJoint]!r})"
         )
     return flange.placement.inverse() * sensor.placement
 
 
-def payload_in_flange(
-    calibration: SensorModel, arm, flange_frame: str | None = None, inertia=None
-) -> Payload:
+def payload_in_flange(calibration, arm, flange_frame: str | None = None, inertia=None) -> Payload:
     """The calibrated tool as a payload in the flange frame (see the module docstring).
 
     Args:
         calibration: A calibration (its mount, if any, is applied).
         arm: The arm **as its URDF describes it** (the sensor frame not mounted).
-        flange_frame: Flange frame name (default: :func:`flange_frame_name`).
+        flange_frame: Flange frame name (default:
+            :func:`~ftkin.kinematics.robots.flange_frame_name`).
         inertia: ``(3, 3)`` inertia about the centre of mass in flange axes
             [kg·m²], or ``(6,)`` ``[ixx, iyy, izz, ixy, ixz, iyz]``; None: the
             calibration's own (a dynamic calibration's
@@ -130,19 +125,12 @@ def payload_in_flange(
     flange_frame = flange_frame or flange_frame_name(arm)
     placement = sensor_in_flange(arm, flange_frame)
     mount = np.asarray(getattr(calibration, "mount_rotation", np.eye(3)), dtype=float)
-    rotation_sensor_to_flange = placement.rotation @ mount.T
-    com = (
-        rotation_sensor_to_flange @ np.asarray(calibration.center_of_mass, dtype=float)
-        + placement.translation
-    )
+    sensor_to_flange = placement.rotation @ mount.T
+    com = sensor_to_flange @ np.asarray(calibration.center_of_mass, dtype=float)
     in_sensor = getattr(calibration, "inertia_about_com_in_sensor", None)
     if inertia is None and in_sensor is not None:
-        inertia = (
-            rotation_sensor_to_flange
-            @ np.asarray(in_sensor, dtype=float)
-            @ rotation_sensor_to_flange.T
-        )
-    return Payload(mass, com, flange_frame, _inertia(inertia))
+        inertia = sensor_to_flange @ np.asarray(in_sensor, dtype=float) @ sensor_to_flange.T
+    return Payload(mass, com + placement.translation, flange_frame, _inertia(inertia))
 
 
 def _inertia(value) -> np.ndarray | None:
@@ -166,21 +154,66 @@ def _numbers(values) -> list[float]:
     return [float(v) for v in np.asarray(values, dtype=float).reshape(-1)]
 
 
-def payload_tree(payload: Payload, fmt: str) -> dict:
-    """The service request of ``fmt`` as a dict (what :func:`payload_text` writes as YAML)."""
-    if fmt not in PAYLOAD_FORMATS:
-        raise InvalidInput(
-            f"unknown payload format {fmt!r}; expected one of {', '.join(PAYLOAD_FORMATS)}"
+class PayloadFormat(ExportFormat):
+    """A robot controller's payload request: the tool in the flange frame."""
+
+    needs_arm = True
+    options = (FLANGE_FRAME,)
+
+    def payload(self, request: ExportRequest) -> Payload:
+        """The request's calibration as a payload in the flange frame."""
+        return payload_in_flange(
+            request.calibration,
+            request.arm,
+            request.option("flange_frame"),
+            request.option("inertia"),
         )
-    com = _numbers(payload.center_of_mass)
-    if fmt == "franka-load":
+
+    def header(self, request: ExportRequest) -> list[str]:
+        return [
+            f"ftkin payload for {self.name}: centre of mass in the flange frame "
+            f"{self.payload(request).flange_frame!r} [m], mass [kg]"
+        ]
+
+    def summary_line(self, request: ExportRequest) -> str:
+        payload = self.payload(request)
+        com = ", ".join(f"{value:.6g}" for value in payload.center_of_mass)
+        return (
+            f": mass {payload.mass:.6g} kg, centre of mass [{com}] m in the flange frame "
+            f"{payload.flange_frame!r}"
+        )
+
+
+class FrankaLoad(PayloadFormat):
+    name = "franka-load"
+    options = (FLANGE_FRAME, INERTIA)
+    summary = "franka_msgs/srv/SetLoad request: mass, center_of_mass, load_inertia"
+
+    def document(self, request: ExportRequest) -> dict:
+        payload = self.payload(request)
         inertia = np.zeros((3, 3)) if payload.inertia is None else payload.inertia
         return {
             "mass": float(payload.mass),
-            "center_of_mass": com,
+            "center_of_mass": _numbers(payload.center_of_mass),
             "load_inertia": _numbers(inertia.T),
         }
-    return {"mass": float(payload.mass), "center_of_gravity": dict(zip("xyz", com))}
+
+    def header(self, request: ExportRequest) -> list[str]:
+        return [
+            *super().header(request),
+            f"franka_msgs/srv/SetLoad request (ros2 service call {FRANKA_SET_LOAD_SERVICE} "
+            "franka_msgs/srv/SetLoad ...);",
+            "libfranka: robot.setLoad(mass, F_x_Cload = center_of_mass, load_inertia) "
+            "(column-major 3x3 [kg*m^2])",
+        ]
+
+    def notes(self, request: ExportRequest) -> list[str]:
+        if self.payload(request).inertia is not None:
+            return []
+        return [
+            "a static calibration does not determine the inertia: load_inertia is zero (point "
+            "mass); give --inertia if known"
+        ]
 
 
 def urscript_line(payload: Payload) -> str:
@@ -189,51 +222,31 @@ def urscript_line(payload: Payload) -> str:
     return f"set_payload({float(payload.mass)!r}, [{cx!r}, {cy!r}, {cz!r}])"
 
 
-def payload_text(payload: Payload, fmt: str, urscript_only: bool = False) -> str:
-    """The payload file of ``fmt`` (see the module docstring): YAML request with explanatory
-    comments.
-    """
-    if urscript_only:
-        if fmt != "ur-payload":
-            raise InvalidInput("a URScript file is for --format ur-payload only")
+class UrPayload(PayloadFormat):
+    name = "ur-payload"
+    summary = (
+        "ur_msgs/srv/SetPayload request for the ROS 2 UR driver, URScript set_payload as a "
+        "comment; OUT.script: the URScript line only"
+    )
+
+    def document(self, request: ExportRequest) -> dict:
+        payload = self.payload(request)
+        com = _numbers(payload.center_of_mass)
+        return {"mass": float(payload.mass), "center_of_gravity": dict(zip("xyz", com))}
+
+    def header(self, request: ExportRequest) -> list[str]:
+        return [
+            *super().header(request),
+            f"ur_msgs/srv/SetPayload request: ros2 service call {UR_SET_PAYLOAD_SERVICE} "
+            'ur_msgs/srv/SetPayload "{mass: ..., center_of_gravity: {x: ..., y: ..., z: ...}}"',
+            f"URScript: {urscript_line(self.payload(request))}",
+        ]
+
+    def text(self, request: ExportRequest) -> str:
+        """YAML, or for a ``.script`` / ``.urscript`` path the URScript line alone."""
+        if request.path is None or request.path.suffix.lower() not in (".script", ".urscript"):
+            return super().text(request)
         return (
-            "# ftkin payload: mass [kg], centre of gravity [m] in the tool flange "
-            f"frame\n{urscript_line(payload)}\n"
+            "# ftkin payload: mass [kg], centre of gravity [m] in the tool flange frame\n"
+            f"{urscript_line(self.payload(request))}\n"
         )
-    tree = payload_tree(payload, fmt)
-    header = [
-        f"# ftkin payload for {fmt}: centre of mass in the flange frame {payload.flange_frame!r} "
-        "[m], mass [kg]"
-    ]
-    if fmt == "franka-load":
-        header += [
-            f"# franka_msgs/srv/SetLoad request (ros2 service call {FRANKA_SET_LOAD_SERVICE} "
-            "franka_msgs/srv/SetLoad ...);",
-            "# libfranka: robot.setLoad(mass, F_x_Cload = center_of_mass, load_inertia) "
-            "(column-major 3x3 [kg*m^2])",
-        ]
-        if payload.inertia is None:
-            header.append(
-                "# NOTE: a static calibration does not determine the inertia: load_inertia is zero "
-                "(point mass); "
-                "give --inertia if known"
-            )
-    else:
-        header += [
-            f"# ur_msgs/srv/SetPayload request: ros2 service call {UR_SET_PAYLOAD_SERVICE} "
-            "ur_msgs/srv/SetPayload "
-            '"{mass: ..., center_of_gravity: {x: ..., y: ..., z: ...}}"',
-            f"# URScript: {urscript_line(payload)}",
-        ]
-    return yaml_text(tree, [line.removeprefix("# ") for line in header])
-
-
-def export_payload(
-    calibration: SensorModel, arm, path, fmt: str, flange_frame: str | None = None, inertia=None
-) -> Path:
-    """Write the payload of ``calibration`` in ``fmt`` to ``path`` atomically (``.script``: URScript
-    only).
-    """
-    payload = payload_in_flange(calibration, arm, flange_frame, inertia)
-    urscript = Path(path).suffix.lower() in (".script", ".urscript")
-    return atomic_write_text(Path(path), payload_text(payload, fmt, urscript_only=urscript))

@@ -28,6 +28,8 @@ from ..validation import as_float_array
 from .arm import Arm, SensorMount
 
 DEFAULT_ROBOT = "ftkin_c4"
+BUNDLED_FLANGE_FRAME = "flange"
+"""The bundled arm's flange frame (z out of the flange face)."""
 SENSOR_FRAME = "ft_sensor"
 _DISTRIBUTION = "example-robot-data"
 _PACKAGE_XML = "share/example-robot-data/package.xml"
@@ -173,6 +175,22 @@ ROBOTS: dict[str, Callable[..., Arm]] = {
 """Loaders by robot name; each takes an optional sensor offset and tool frame (see
 :func:`load_robot`).
 """
+
+
+def flange_frame_name(arm: Arm) -> str:
+    """The arm's flange frame, from the robot table (:data:`ROBOT_SPECS`).
+
+    A robot loaded by name: its spec's ``flange_frame``. An arm from a URDF: the first flange
+    frame of the table (the bundled arm's ``flange`` first) that its model has, else the frame
+    the sensor frame hangs from.
+    """
+    spec = ROBOT_SPECS.get(arm.robot_name or "")
+    if spec is not None:
+        return spec.flange_frame
+    for name in (BUNDLED_FLANGE_FRAME, *(spec.flange_frame for spec in ROBOT_SPECS.values())):
+        if arm.model.existFrame(name):
+            return name
+    return arm.model.frames[arm.model.frames[arm.sensor_frame_id].parentFrame].name
 
 
 def load_robot(

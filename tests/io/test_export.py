@@ -17,7 +17,8 @@ from ftkin.calibration.model import SensorModel
 from ftkin.cli import main
 from ftkin.exceptions import InvalidInput
 from ftkin.io.calibration_file import save_calibration
-from ftkin.io.export import EXPORT_FORMATS, export_notes, export_text, urdf_root_link
+from ftkin.io.export import export_notes, export_text
+from ftkin.io.ros_controllers import urdf_root_link
 from ftkin.sim.sensor import SimulatedSensor
 
 yaml = pytest.importorskip("yaml")
@@ -126,7 +127,7 @@ def test_unknown_format(truth):
 
 
 def test_bad_options_and_weightless_tool(truth):
-    with pytest.raises(InvalidInput, match="ft-calib is a flat ROS 1 parameter file"):
+    with pytest.raises(InvalidInput, match="ft-calib takes no node_name; its options: frame_id"):
         export_text(truth, "ft-calib", node_name="ft_node")
     weightless = SensorModel(
         truth.force_offset, truth.torque_offset, [0.0, 0.0, 0.0], truth.center_of_mass
@@ -135,13 +136,26 @@ def test_bad_options_and_weightless_tool(truth):
         export_text(weightless, "gravity-compensation")
 
 
-def test_frame_names_are_quoted_for_yaml(truth):
-    name = 'odd "frame"\\ with: colon'
-    params = yaml.safe_load(export_text(truth, "admittance", frame_id=name))
-    assert (
-        params["admittance_controller"]["ros__parameters"]["gravity_compensation"]["frame"]["id"]
-        == name
-    )
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ({"frame_id": 'odd "frame"\\ with: colon'}, "--frame-id 'odd .* is not a valid ROS frame"),
+        ({"frame_id": "/ft_sensor"}, "no leading '/'"),
+        ({"frame_id": "ft__sensor"}, "no '__'"),
+        ({"node_name": "2nd_node"}, "--node-name '2nd_node' is not a valid ROS node name"),
+        ({"node_name": "admittance-controller"}, "not a valid ROS node name"),
+    ],
+)
+def test_names_the_ros_side_would_reject_are_refused(truth, options, message):
+    with pytest.raises(InvalidInput, match=message):
+        export_text(truth, "admittance", **options)
+
+
+def test_ros_names_that_are_valid_pass(truth):
+    for node in ("admittance_controller", "/robot1/admittance_controller", "_private"):
+        assert node in yaml.safe_load(export_text(truth, "admittance", node_name=node))
+    text = export_text(truth, "gravity-compensation", frame_id="wrist/ft_sensor", world_frame="w")
+    assert "wrist/ft_sensor" in text
 
 
 def test_world_frame_from_urdf_root(arm):
@@ -149,7 +163,7 @@ def test_world_frame_from_urdf_root(arm):
     assert urdf_root_link("/no/such.urdf") is None
 
 
-@pytest.mark.parametrize("fmt", EXPORT_FORMATS)
+@pytest.mark.parametrize("fmt", ["admittance", "gravity-compensation", "ft-calib"])
 def test_cli_export(fmt, tmp_path, arm, truth, rng, capsys):
     q = arm.random_configurations(10, rng, margin=0.1)
     result = calibrate(

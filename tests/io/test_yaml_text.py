@@ -66,12 +66,11 @@ def test_no_key_or_value_can_inject_structure(name):
 
 
 def test_export_cannot_be_injected_through_the_node_name(truth):
+    """Names are checked against ROS's rules before the YAML writer sees them."""
+    from ftkin.exceptions import InvalidInput
     from ftkin.io.export import export_text
 
-    text = export_text(truth, "admittance", node_name="ctrl\ninjected: 1", frame_id="f\nx: 2")
-    parsed = yaml.safe_load(text)
-    assert list(parsed) == ["ctrl\ninjected: 1"]
-    assert (
-        parsed["ctrl\ninjected: 1"]["ros__parameters"]["gravity_compensation"]["frame"]["id"]
-        == "f\nx: 2"
-    )
+    with pytest.raises(InvalidInput, match="--node-name 'ctrl.*' is not a valid ROS node name"):
+        export_text(truth, "admittance", node_name="ctrl\ninjected: 1")
+    with pytest.raises(InvalidInput, match="--frame-id 'f.*' is not a valid ROS frame"):
+        export_text(truth, "admittance", frame_id="f\nx: 2")
