@@ -55,15 +55,14 @@ def run(args) -> int:
     table = read_table(args.poses)
     rotations = pose_rotations(table, args)
     print(f"{args.poses}: {len(rotations)} poses")
-    options = expectation_from_args(args)
+    expected, pose_times_given = expectation_from_args(args), None
     if (
         args.drift_rate is not None
         and args.pose_interval is None
         and (times := pose_times(table)) is not None
     ):
-        options["pose_times"] = times  # the recording's own times (the poses as visited)
-        order = np.argsort(times, kind="stable")
-        rotations, options["pose_times"] = rotations[order], times[order]
+        order = np.argsort(times, kind="stable")  # the recording's own times (as visited)
+        rotations, pose_times_given = rotations[order], times[order]
         print(f"poses in the order of their time column, {times.min():g} to {times.max():g} s")
-    print(evaluate_poses(rotations, **options).report())
+    print(evaluate_poses(rotations, expected, pose_times=pose_times_given).report())
     return 0

@@ -14,10 +14,10 @@ from ..io.csv_table import write_csv
 from ..io.samples_csv import POSE_COLUMN
 from ..io.yaml_text import yaml_text
 from ..kinematics.arm import Arm
-from ..planning.constraints import DEFAULT_MARGIN
+from ..planning.constraints import DEFAULT_MARGIN, PoseConstraints
 from ..planning.drift_order import DEFAULT_POSE_INTERVAL
-from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT
-from ..planning.plan import plan_poses
+from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT, ExpectedCalibration
+from ..planning.plan import PlanSpec, plan_poses
 from .arg_types import bounded_int, non_negative_float, positive_float, seed, whole_number
 from .common import add_arm_arguments, arm_from_args
 from .motion import add_excitation_arguments, run_excitation
@@ -26,8 +26,14 @@ FORMATS = ("csv", "yaml", "json")
 
 
 def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
-    """Expected tool and sensor noise the predicted standard errors are for."""
-    group = parser.add_argument_group("expected tool and sensor noise (defaults: the paper's)")
+    """Expected tool, sensor noise and estimation the predicted standard errors are for."""
+    _add_tool_arguments(
+        parser.add_argument_group("expected tool and sensor noise (defaults: the paper's)")
+    )
+    _add_estimation_arguments(parser.add_argument_group("what the calibration will estimate"))
+
+
+def _add_tool_arguments(group) -> None:
     group.add_argument(
         "--tool-weight",
         type=positive_float,
@@ -65,6 +71,9 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="K",
         help="independent readings averaged at each pose (default: %(default)s)",
     )
+
+
+def _add_estimation_arguments(group) -> None:
     group.add_argument(
         "--estimate-mount",
         choices=("yaw", "full"),
@@ -80,9 +89,8 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar=("N/√s", "NM/√s"),
         help="the bias drifts as a random walk of these rates (force, torque; e.g. a past "
-        "calibration's "
-        "drift rate): visit the poses in the order the drift spoils least (longer joint travel) "
-        "and predict errors with the drift",
+        "calibration's drift rate): visit the poses in the order the drift spoils least (longer "
+        "joint travel) and predict errors with the drift",
     )
     group.add_argument(
         "--pose-interval",
@@ -94,28 +102,24 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def expectation_from_args(args) -> dict:
-    """Keyword arguments for :func:`ftkin.planning.plan_poses` /
-    :func:`ftkin.planning.evaluation.evaluate_poses`.
+def expectation_from_args(args) -> ExpectedCalibration:
+    """The calibration :func:`ftkin.planning.plan_poses` and
+    :func:`ftkin.planning.evaluation.evaluate_poses` predict for.
     """
-    if args.readings_per_pose < 1:
-        raise InvalidInput(f"--readings-per-pose must be at least 1, got {args.readings_per_pose}")
     if args.pose_interval is not None and args.drift_rate is None:
         raise InvalidInput(
             "--pose-interval applies with --drift-rate (the time between poses matters only to a "
             "drift)"
         )
-    return {
-        "tool_weight": args.tool_weight,
-        "center_of_mass": args.com,
-        "noise": SensorNoise(args.noise_force, args.noise_torque),
-        "readings_per_pose": args.readings_per_pose,
-        "estimate_mount": args.estimate_mount or "none",
-        "drift_rate": args.drift_rate,
-        "pose_interval": DEFAULT_POSE_INTERVAL
-        if args.pose_interval is None
-        else args.pose_interval,
-    }
+    return ExpectedCalibration(
+        tool_weight=args.tool_weight,
+        center_of_mass=args.com,
+        noise=SensorNoise(args.noise_force, args.noise_torque),
+        readings_per_pose=args.readings_per_pose,
+        estimate_mount=args.estimate_mount or "none",
+        drift_rate=args.drift_rate,
+        pose_interval=DEFAULT_POSE_INTERVAL if args.pose_interval is None else args.pose_interval,
+    )
 
 
 DEFAULT_FLOOR_HEIGHT = 0.05
@@ -178,10 +182,9 @@ def register(subparsers) -> None:
         "plan",
         help="plan calibration poses (joint configurations) for the most accurate calibration",
         description="Choose N joint configurations (D-optimal: largest log det of the Fisher "
-        "information) "
-        "within joint limits, free of self-collision and above the floor, ordered for short joint "
-        "travel; "
-        "print the predicted standard error of every calibration parameter.",
+        "information) within joint limits, free of self-collision and above the floor, ordered "
+        "for short joint travel; print the predicted standard error of every calibration "
+        "parameter.",
     )
     parser.add_argument(
         "-n",
@@ -197,7 +200,28 @@ def register(subparsers) -> None:
         default=None,
         help="output format (default: from the file name, else csv)",
     )
-    group = parser.add_argument_group("constraints")
+    _add_constraint_arguments(parser.add_argument_group("constraints"))
+    parser.add_argument(
+        "--seed",
+        type=seed,
+        default=0,
+        help="random seed; the same seed gives the same plan (default: 0)",
+    )
+    parser.add_argument(
+        "--max-travel-ratio",
+        type=positive_float,
+        default=None,
+        metavar="R",
+        help="with --drift-rate: keep the joint travel within R (≥ 1) times the short-travel "
+        "order's (default: unbounded, about 2x)",
+    )
+    add_expectation_arguments(parser)
+    add_excitation_arguments(parser)
+    add_arm_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def _add_constraint_arguments(group) -> None:
     group.add_argument(
         "--margin",
         type=non_negative_float,
@@ -211,8 +235,7 @@ def register(subparsers) -> None:
         default=DEFAULT_FLOOR_HEIGHT,
         metavar="M",
         help="sensor and tool origins stay above this height in the base frame [m] (default: "
-        "%(default)s, "
-        "a floor at base z = 0 with a 5 cm margin)",
+        "%(default)s, a floor at base z = 0 with a 5 cm margin)",
     )
     group.add_argument(
         "--no-floor",
@@ -237,25 +260,21 @@ def register(subparsers) -> None:
     group.add_argument(
         "--no-self-collision", action="store_true", help="do not check self-collision"
     )
-    parser.add_argument(
-        "--seed",
-        type=seed,
-        default=0,
-        help="random seed; the same seed gives the same plan (default: 0)",
+
+
+def constraints_from_args(args) -> PoseConstraints:
+    """The pose constraints named on the command line."""
+    if args.max_tilt_deg is not None and args.max_tilt_deg > 180.0:
+        raise InvalidInput(
+            f"--max-tilt-deg must be between 0 and 180 [deg], got {args.max_tilt_deg:g}"
+        )
+    return PoseConstraints(
+        margin=args.margin,
+        floor_height=None if args.no_floor else args.floor_height,
+        max_tilt=None if args.max_tilt_deg is None else float(np.deg2rad(args.max_tilt_deg)),
+        joint_ranges=args.joint_range,
+        self_collision=not args.no_self_collision,
     )
-    parser.add_argument(
-        "--max-travel-ratio",
-        type=positive_float,
-        default=None,
-        metavar="R",
-        help="with --drift-rate: keep the joint travel within R (≥ 1) times the short-travel "
-        "order's "
-        "(default: unbounded, about 2x)",
-    )
-    add_expectation_arguments(parser)
-    add_excitation_arguments(parser)
-    add_arm_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 def load_arm(args) -> Arm:
@@ -268,10 +287,6 @@ def run(args) -> int:
         raise InvalidInput(
             f"--format {args.format} needs -o/--output FILE (the plan is printed as a table "
             "otherwise)"
-        )
-    if args.max_tilt_deg is not None and args.max_tilt_deg > 180.0:
-        raise InvalidInput(
-            f"--max-tilt-deg must be between 0 and 180 [deg], got {args.max_tilt_deg:g}"
         )
     if args.excitation:
         if (
@@ -290,21 +305,15 @@ def run(args) -> int:
         return run_excitation(args, load_arm(args))
     if args.n is None:
         raise InvalidInput("give --n N (the number of poses), or --excitation for a trajectory")
-    arm = load_arm(args)
-    max_tilt = None if args.max_tilt_deg is None else float(np.deg2rad(args.max_tilt_deg))
+    spec = PlanSpec(
+        args.n,
+        constraints=constraints_from_args(args),
+        expected=expectation_from_args(args),
+        seed=args.seed,
+        max_travel_ratio=args.max_travel_ratio,
+    )
     try:
-        plan = plan_poses(
-            arm,
-            args.n,
-            margin=args.margin,
-            floor_height=None if args.no_floor else args.floor_height,
-            max_tilt=max_tilt,
-            joint_ranges=args.joint_range,
-            self_collision=not args.no_self_collision,
-            seed=args.seed,
-            max_travel_ratio=args.max_travel_ratio,
-            **expectation_from_args(args),
-        )
+        plan = plan_poses(load_arm(args), spec)
     except UrdfError as error:  # only the collision geometry is loaded here: meshes not found
         hint = (
             "give --package-dir DIR (the folder holding the package:// packages) or "

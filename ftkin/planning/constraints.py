@@ -75,7 +75,7 @@ class PoseConstraints:
         if isinstance(self.joint_ranges, Mapping):
             ranges = [(name, *bounds) for name, bounds in self.joint_ranges.items()]
         else:
-            ranges = list(self.joint_ranges)
+            ranges = list(self.joint_ranges or ())
         cleaned = []
         for entry in ranges:
             if len(entry) != 3:

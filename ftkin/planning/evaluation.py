@@ -10,7 +10,7 @@ report shows how close a set comes.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -25,7 +25,7 @@ from ..calibration.mount import MOUNT_NAMES, check_mount_mode, split_information
 from ..calibration.observability import check_pose_count
 from ..calibration.random_walk import walk_gains
 from ..exceptions import InvalidInput
-from ..validation import as_float_array, as_in_range, as_positive, as_rotation_batch, as_vector
+from ..validation import as_float_array, as_in_range, as_rotation_batch, as_vector
 from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_options, walk_information
 
 PAPER_TOOL_WEIGHT = 3.15
@@ -174,25 +174,35 @@ def _pose_times(value, count: int) -> np.ndarray:
     return times
 
 
-def evaluate_poses(
-    rotation_sensor_to_base,
-    *,
-    tool_weight: float | None = None,
-    center_of_mass=None,
-    noise: SensorNoise | None = None,
-    readings_per_pose: int = 1,
-    estimate_mount: str = "none",
-    drift_rate=None,
-    pose_interval: float = DEFAULT_POSE_INTERVAL,
-    pose_times=None,
-) -> PoseEvaluation:
-    """Predict the calibration's standard errors for sensor orientations ``(N, 3, 3)``.
+def whole_number(value, name: str, minimum: int = 0) -> int:
+    """``value`` as an int (no bools, no fractions), at least ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        if isinstance(value, bool) or not isinstance(value, (float, np.floating)):
+            raise InvalidInput(f"{name} must be an integer (a whole number), got {value!r}")
+        if not float(value).is_integer():
+            raise InvalidInput(f"{name} must be an integer (a whole number), got {value!r}")
+    if value < minimum:
+        raise InvalidInput(f"{name} must be at least {minimum}, got {value}")
+    return int(value)
 
-    Args:
-        rotation_sensor_to_base: ``R_BS`` of each pose.
-        tool_weight: Expected tool weight [N] (default 3.15 N, the paper's).
-        center_of_mass: Expected COM in the sensor frame [m] (default 47 mm along z).
-        noise: Per-reading noise (default :meth:`SensorNoise.paper`: 0.02 N, 0.002 N·m).
+
+def from_fields(cls, options: dict, what: str):
+    """``cls(**options)``, an unknown keyword named with the known ones (:class:`InvalidInput`)."""
+    known = [item.name for item in fields(cls) if item.init]
+    unknown = sorted(set(options) - set(known))
+    if unknown:
+        raise InvalidInput(f"{what} takes no {', '.join(unknown)}; expected: {', '.join(known)}")
+    return cls(**options)
+
+
+@dataclass(frozen=True, eq=False)
+class ExpectedCalibration:
+    """The calibration a pose set is planned or evaluated for: tool, noise and estimation.
+
+    Attributes:
+        tool_weight: Expected tool weight [N] (None: 3.15 N, the paper's).
+        center_of_mass: Expected COM in the sensor frame [m] (None: 47 mm along z).
+        noise: Per-reading noise (None: :meth:`SensorNoise.paper`: 0.02 N, 0.002 N·m).
         readings_per_pose: Independent readings averaged at each pose.
         estimate_mount: ``"yaw"`` or ``"full"``: the calibration will also
             estimate the sensor's mount (:mod:`ftkin.calibration.mount`; the
@@ -200,32 +210,73 @@ def evaluate_poses(
         drift_rate: ``[force N/√s, torque N·m/√s]``: the bias drifts as a
             random walk of this rate, and the prediction is for a
             ``random-walk`` calibration (the walk integrated out,
-            :mod:`ftkin.planning.drift_order`); the order of the rotations is
-            the visiting order. Not with ``estimate_mount``.
+            :mod:`ftkin.planning.drift_order`; stored per channel, ``(6,)``).
+            Not with ``estimate_mount``.
         pose_interval: Time from one pose to the next [s] (with ``drift_rate``).
-        pose_times: ``(N,)`` time of each pose [s] (with ``drift_rate``;
-            instead of one every ``pose_interval``), strictly increasing.
+        model: The expected tool as a :class:`SensorModel` (derived; biases play no role).
+    """
+
+    tool_weight: float | None = None
+    center_of_mass: object = None
+    noise: SensorNoise | None = None
+    readings_per_pose: int = 1
+    estimate_mount: str = "none"
+    drift_rate: object = None
+    pose_interval: float = DEFAULT_POSE_INTERVAL
+    model: SensorModel = field(init=False, repr=False)
+
+    def __post_init__(self):
+        if self.noise is not None and not isinstance(self.noise, SensorNoise):
+            raise InvalidInput(
+                f"noise must be an ftkin.SensorNoise, got {type(self.noise).__name__}"
+            )
+        check_mount_mode(self.estimate_mount)
+        drift_rate, interval = check_drift_options(
+            self.drift_rate, self.pose_interval, self.estimate_mount
+        )
+        values = {
+            "model": expected_tool(self.tool_weight, self.center_of_mass),
+            "noise": self.noise if self.noise is not None else SensorNoise.paper(),
+            "readings_per_pose": whole_number(self.readings_per_pose, "readings_per_pose", 1),
+            "drift_rate": drift_rate,
+            "pose_interval": interval,
+        }
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+
+def evaluate_poses(
+    rotation_sensor_to_base,
+    expected: ExpectedCalibration | None = None,
+    *,
+    pose_times=None,
+    **options,
+) -> PoseEvaluation:
+    """Predict the calibration's standard errors for sensor orientations ``(N, 3, 3)``.
+
+    Args:
+        rotation_sensor_to_base: ``R_BS`` of each pose (in visiting order, for a drift).
+        expected: The calibration to predict for; or give its fields as keywords
+            (``evaluate_poses(rotations, tool_weight=15.0, noise=...)``).
+        pose_times: ``(N,)`` time of each pose [s] (with a drift rate; instead of one
+            every ``pose_interval``), strictly increasing.
 
     Raises:
         UnobservableParameters: fewer than three poses, or orientations that
             leave parameters undetermined (named).
         InvalidInput: not rotation matrices, or a bad tool, noise or reading count.
     """
+    if expected is None:
+        expected = from_fields(ExpectedCalibration, options, "evaluate_poses")
+    elif options:
+        raise InvalidInput("give an ExpectedCalibration or its fields as keywords, not both")
     rotations, _ = as_rotation_batch(rotation_sensor_to_base)
     check_pose_count(len(rotations))
-    model = expected_tool(tool_weight, center_of_mass)
-    if noise is not None and not isinstance(noise, SensorNoise):
-        raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
-    noise = noise if noise is not None else SensorNoise.paper()
-    readings = as_positive(readings_per_pose, "readings_per_pose")
-    if readings != int(readings):
-        raise InvalidInput(f"readings_per_pose must be a whole number, got {readings_per_pose!r}")
-    readings = int(readings)
-    check_mount_mode(estimate_mount)
-    drift_rate, pose_interval = check_drift_options(drift_rate, pose_interval, estimate_mount)
+    model, noise, readings = expected.model, expected.noise, expected.readings_per_pose
+    drift_rate, times = expected.drift_rate, None
     if drift_rate is not None:
         times = (
-            np.arange(len(rotations)) * pose_interval
+            np.arange(len(rotations)) * expected.pose_interval
             if pose_times is None
             else _pose_times(pose_times, len(rotations))
         )
@@ -234,11 +285,12 @@ def evaluate_poses(
         )
         information = walk_information(model.parameter_jacobian(rotations), gains)
     else:
-        information = fisher_information(model, rotations, noise, readings, estimate_mount)
+        information = fisher_information(model, rotations, noise, readings, expected.estimate_mount)
     mount_covariance = None
-    if estimate_mount != "none":
+    if expected.estimate_mount != "none":
         information, mount_covariance = split_information(information)
     covariance = covariance_from_information(information)
+    timed = drift_rate is not None and pose_times is not None
     return PoseEvaluation(
         rotations=rotations,
         model=model,
@@ -247,11 +299,11 @@ def evaluate_poses(
         information=information,
         covariance=covariance,
         standard_errors=standard_errors(model, covariance),
-        mount_mode=estimate_mount,
+        mount_mode=expected.estimate_mount,
         mount_covariance=mount_covariance,
         drift_rate=None if drift_rate is None else drift_rate[[0, 3]],
         pose_interval=None
         if drift_rate is None
-        else (pose_interval if pose_times is None else float(np.median(np.diff(times)))),
-        pose_times=None if drift_rate is None or pose_times is None else times,
+        else (float(np.median(np.diff(times))) if timed else expected.pose_interval),
+        pose_times=times if timed else None,
     )

@@ -23,7 +23,7 @@ checked on a fine grid.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -34,6 +34,7 @@ from ..calibration.regressor import body_regressor, sensor_motion
 from ..exceptions import InvalidInput
 from ..validation import as_positive
 from .constraints import FeasibilityChecker, PoseConstraints
+from .evaluation import from_fields
 
 DEFAULT_ACCELERATION_LIMIT = 10.0
 """Default joint acceleration limit [rad/s²] (URDFs carry none)."""
@@ -141,29 +142,89 @@ def _log_det(information: np.ndarray) -> tuple[float, float]:
     )
 
 
-class _Design:
-    """Maps free coefficients to a trajectory inside the joint limits."""
+@dataclass(frozen=True, eq=False)
+class ExcitationSpec:
+    """What excitation to plan (see :func:`plan_excitation`).
 
-    def __init__(
-        self,
-        arm,
-        checker,
-        period,
-        harmonics,
-        velocity_limits,
-        acceleration_limits,
-        grid,
-        center,
-        amplitude,
-    ):
-        self.arm, self.checker, self.period, self.harmonics = arm, checker, period, harmonics
-        self.center, self.amplitude = center, amplitude
-        self.velocity_limits, self.acceleration_limits, self.grid = (
-            velocity_limits,
-            acceleration_limits,
-            grid,
+    Attributes:
+        duration: Length of the recording [s].
+        rate: Sample rate of the written trajectory [Hz].
+        period: Period of the Fourier series [s] (None: ``duration``).
+        harmonics: Number of harmonics ``K`` (≥ 2).
+        velocity_fraction: Fraction of the URDF joint velocity limits allowed.
+        acceleration_limit: Joint acceleration limit [rad/s²], scalar or ``(nq,)``.
+        center: Configuration the motion swings about [rad] (None: the zero
+            configuration clipped into the joint bounds); the optimiser may shift it.
+        amplitude: Largest excursion of each joint from the centre [rad], scalar or ``(nq,)``.
+        constraints: Joint margin, floor height, self-collision (:class:`PoseConstraints`;
+            the tilt limit does not apply to a moving tool and is dropped).
+        noise: Sensor noise weighting the information (None: the paper's sensor).
+        candidates: Random starts.
+        optimize: False: the first random candidate that meets the constraints,
+            unranked and unoptimised (a random Fourier trajectory, for comparisons).
+        max_iterations: Cost evaluations of the local optimisation ((1+1) evolution strategy).
+        seed: Random seed.
+    """
+
+    duration: float
+    rate: float = 1000.0
+    period: float | None = None
+    harmonics: int = 5
+    velocity_fraction: float = DEFAULT_VELOCITY_FRACTION
+    acceleration_limit: object = DEFAULT_ACCELERATION_LIMIT
+    center: object = None
+    amplitude: object = DEFAULT_AMPLITUDE
+    constraints: PoseConstraints = field(default_factory=PoseConstraints)
+    noise: SensorNoise | None = None
+    candidates: int = 8
+    optimize: bool = True
+    max_iterations: int = 150
+    seed: int = 0
+
+    def __post_init__(self):
+        duration = as_positive(self.duration, "duration")
+        if self.harmonics < 2:
+            raise InvalidInput(f"harmonics must be at least 2, got {self.harmonics}")
+        constraints = self.constraints if self.constraints is not None else PoseConstraints()
+        values = {
+            "duration": duration,
+            "rate": as_positive(self.rate, "rate"),
+            "period": duration if self.period is None else as_positive(self.period, "period"),
+            "velocity_fraction": as_positive(self.velocity_fraction, "velocity_fraction"),
+            "constraints": dataclasses.replace(constraints, max_tilt=None),
+            "noise": self.noise if self.noise is not None else SensorNoise.paper(),
+        }
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+
+def _per_joint(value, nq: int, name: str, unit: str) -> np.ndarray:
+    """A positive scalar or ``(nq,)`` as ``(nq,)``."""
+    array = np.broadcast_to(np.asarray(value, dtype=float), (nq,)).copy()
+    if not np.all(np.isfinite(array) & (array > 0)):
+        raise InvalidInput(f"{name} must be positive [{unit}], got {value!r}")
+    return array
+
+
+class _Design:
+    """Maps free coefficients to a trajectory inside the joint limits of ``spec``."""
+
+    def __init__(self, arm, spec: ExcitationSpec):
+        self.arm, self.spec, self.nq = arm, spec, arm.nq
+        self.checker = checker = FeasibilityChecker(arm, spec.constraints)
+        self.period, self.harmonics = spec.period, spec.harmonics
+        self.velocity_limits = spec.velocity_fraction * arm.velocity_limits
+        self.acceleration_limits = _per_joint(
+            spec.acceleration_limit, arm.nq, "acceleration_limit", "rad/s²"
         )
-        self.nq = arm.nq
+        self.center = np.clip(
+            np.zeros(arm.nq) if spec.center is None else arm.check_configuration(spec.center),
+            checker.lower,
+            checker.upper,
+        )
+        self.amplitude = _per_joint(spec.amplitude, arm.nq, "amplitude", "rad")
+        self.grid = np.linspace(0.0, spec.period, 120, endpoint=False)
+        self.check_grid = np.linspace(0.0, spec.period, 60, endpoint=False)
 
     @property
     def size(self) -> int:
@@ -204,6 +265,19 @@ class _Design:
         q, _, _ = trajectory.evaluate(times)
         return sum(self.checker.check(row) is None for row in q)
 
+    def log_det(self, trajectory: FourierTrajectory) -> tuple[float, float]:
+        """``log det`` and condition number of the trajectory's information on the grid."""
+        return _log_det(_information(self.arm, *trajectory.evaluate(self.grid), self.spec.noise))
+
+    def cost(self, x: np.ndarray) -> float:
+        """What the search minimises: −log det, plus a penalty per grid point off the limits."""
+        trajectory = self.trajectory(x)
+        value, _ = self.log_det(trajectory)
+        constraints = self.spec.constraints
+        checked = constraints.self_collision or constraints.floor_height is not None
+        penalty = _PENALTY * self.violations(trajectory, self.check_grid) if checked else 0.0
+        return (-value if np.isfinite(value) else 1e6) + penalty
+
 
 def _evolve(
     cost, x: np.ndarray, iterations: int, rng: np.random.Generator, step: float = 0.3
@@ -222,125 +296,56 @@ def _evolve(
     return x
 
 
-def plan_excitation(
-    arm,
-    duration: float,
-    *,
-    rate: float = 1000.0,
-    period: float | None = None,
-    harmonics: int = 5,
-    velocity_fraction: float = DEFAULT_VELOCITY_FRACTION,
-    acceleration_limit=DEFAULT_ACCELERATION_LIMIT,
-    center=None,
-    amplitude=DEFAULT_AMPLITUDE,
-    constraints: PoseConstraints | None = None,
-    noise: SensorNoise | None = None,
-    candidates: int = 8,
-    optimize: bool = True,
-    max_iterations: int = 150,
-    seed: int = 0,
-) -> ExcitationPlan:
+def plan_excitation(arm, spec: ExcitationSpec | float, **options) -> ExcitationPlan:
     """Plan a periodic excitation trajectory for
     :func:`~ftkin.calibration.dynamic.calibrate_dynamic`.
 
     Args:
         arm: The arm (:class:`~ftkin.kinematics.Arm`).
-        duration: Length of the recording [s].
-        rate: Sample rate of the written trajectory [Hz].
-        period: Period of the Fourier series [s] (default: ``duration``).
-        harmonics: Number of harmonics ``K`` (≥ 2).
-        velocity_fraction: Fraction of the URDF joint velocity limits allowed.
-        acceleration_limit: Joint acceleration limit [rad/s²], scalar or ``(nq,)``.
-        center: Configuration the motion swings about [rad] (default: the zero
-            configuration clipped into the joint bounds); the optimiser may shift it.
-        amplitude: Largest excursion of each joint from the centre [rad], scalar or ``(nq,)``.
-        constraints: Joint margin, floor height, self-collision (:class:`PoseConstraints`;
-            the tilt limit does not apply to a moving tool and is ignored).
-        noise: Sensor noise weighting the information (default the paper's sensor).
-        candidates: Random starts.
-        optimize: False returns the first random candidate that meets the
-            constraints, unranked and unoptimised (a random Fourier trajectory, for comparisons).
-        max_iterations: Cost evaluations of the local optimisation ((1+1) evolution strategy).
-        seed: Random seed.
+        spec: An :class:`ExcitationSpec`, or the duration [s] with the spec's other fields as
+            keywords (``plan_excitation(arm, 30.0, period=10.0, seed=0)``).
 
     Raises:
         InvalidInput: bad arguments, or no candidate meets the floor and self-collision constraints.
     """
-    duration = as_positive(duration, "duration")
-    rate = as_positive(rate, "rate")
-    period = duration if period is None else as_positive(period, "period")
-    if harmonics < 2:
-        raise InvalidInput(f"harmonics must be at least 2, got {harmonics}")
-    constraints = constraints if constraints is not None else PoseConstraints()
-    if constraints.max_tilt is not None:
-        constraints = dataclasses.replace(constraints, max_tilt=None)
-    noise = noise if noise is not None else SensorNoise.paper()
-    checker = FeasibilityChecker(arm, constraints)
-    velocity_limits = as_positive(velocity_fraction, "velocity_fraction") * arm.velocity_limits
-    acceleration_limits = np.broadcast_to(
-        np.asarray(acceleration_limit, dtype=float), (arm.nq,)
-    ).copy()
-    if not np.all(np.isfinite(acceleration_limits) & (acceleration_limits > 0)):
-        raise InvalidInput(
-            f"acceleration_limit must be positive [rad/s²], got {acceleration_limit!r}"
-        )
-    grid = np.linspace(0.0, period, 120, endpoint=False)
-    check_grid = np.linspace(0.0, period, 60, endpoint=False)
-    center = np.clip(
-        np.zeros(arm.nq) if center is None else arm.check_configuration(center),
-        checker.lower,
-        checker.upper,
-    )
-    amplitude = np.broadcast_to(np.asarray(amplitude, dtype=float), (arm.nq,)).copy()
-    if not np.all(np.isfinite(amplitude) & (amplitude > 0)):
-        raise InvalidInput(f"amplitude must be positive [rad], got {amplitude!r}")
-    design = _Design(
-        arm,
-        checker,
-        period,
-        harmonics,
-        velocity_limits,
-        acceleration_limits,
-        grid,
-        center,
-        amplitude,
-    )
-
-    def cost(x):
-        trajectory = design.trajectory(x)
-        value, _ = _log_det(_information(arm, *trajectory.evaluate(grid), noise))
-        checked = constraints.self_collision or constraints.floor_height is not None
-        penalty = _PENALTY * design.violations(trajectory, check_grid) if checked else 0.0
-        return (-value if np.isfinite(value) else 1e6) + penalty
-
-    rng = np.random.default_rng(seed)
+    if not isinstance(spec, ExcitationSpec):
+        spec = from_fields(ExcitationSpec, {"duration": spec, **options}, "plan_excitation")
+    elif options:
+        raise InvalidInput("give an ExcitationSpec or the duration with keywords, not both")
+    design = _Design(arm, spec)
+    rng = np.random.default_rng(spec.seed)
     starts = [
         np.concatenate([rng.normal(size=design.size - arm.nq), rng.normal(0.0, 0.05, arm.nq)])
-        for _ in range(candidates)
+        for _ in range(spec.candidates)
     ]
     # Optimising: best start first. Not optimising: seed order, i.e. a random feasible Fourier
     # trajectory.
     scored = (
-        sorted(((cost(x), i) for i, x in enumerate(starts)))
-        if optimize
+        sorted(((design.cost(x), i) for i, x in enumerate(starts)))
+        if spec.optimize
         else [(0.0, i) for i in range(len(starts))]
     )
-    fine_grid = np.arange(0.0, period, min(0.01, period / 200))
+    fine_grid = np.arange(0.0, spec.period, min(0.01, spec.period / 200))
     for _, index in scored:
         x = starts[index]
-        if optimize:
-            x = _evolve(cost, x, max_iterations, rng)
+        if spec.optimize:
+            x = _evolve(design.cost, x, spec.max_iterations, rng)
         trajectory = design.trajectory(x)
         if design.violations(trajectory, fine_grid) == 0:
             break
     else:
         raise InvalidInput(
-            f"no excitation candidate meets the constraints ({constraints.describe()}); widen them "
-            "or try more candidates"
+            f"no excitation candidate meets the constraints ({spec.constraints.describe()}); "
+            "widen them or try more candidates"
         )
-    times = np.arange(int(round(duration * rate))) / rate
-    q, dq, ddq = trajectory.evaluate(times)
-    log_det, condition = _log_det(_information(arm, *trajectory.evaluate(grid), noise))
+    times = np.arange(int(round(spec.duration * spec.rate))) / spec.rate
+    log_det, condition = design.log_det(trajectory)
     return ExcitationPlan(
-        trajectory, list(arm.joint_names), times, q, dq, ddq, log_det, condition, optimize
+        trajectory,
+        list(arm.joint_names),
+        times,
+        *trajectory.evaluate(times),
+        log_det,
+        condition,
+        spec.optimize,
     )

@@ -21,31 +21,28 @@ reaches it, and lowers the other parameters' errors with it.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from ..calibration.information import SensorNoise
-from ..calibration.mount import check_mount_mode
 from ..calibration.observability import check_pose_count
 from ..exceptions import InvalidInput
 from ..progress import Progress
 from .constraints import (
-    DEFAULT_MARGIN,
     FeasibilityChecker,
     PoseConstraints,
     check_information,
     check_tilt_observability,
 )
 from .design import d_optimal_selection, information_factors, log_det
-from .drift_order import (
-    DEFAULT_POSE_INTERVAL,
-    check_drift_options,
-    check_travel_ratio,
-    drift_robust_order,
+from .drift_order import check_travel_ratio, drift_robust_order
+from .evaluation import (
+    ExpectedCalibration,
+    PoseEvaluation,
+    evaluate_poses,
+    from_fields,
+    whole_number,
 )
-from .evaluation import PoseEvaluation, evaluate_poses, expected_tool
 from .order import joint_distances, path_length, revolute_mask, short_travel_order, unwind_revolute
 
 CRITERION = (
@@ -127,60 +124,87 @@ class PosePlan:
         return "\n".join(lines) + "\n" + self.evaluation.report()
 
 
-def plan_poses(
-    arm,
-    n: int,
-    *,
-    margin: float = DEFAULT_MARGIN,
-    floor_height: float | None = None,
-    max_tilt: float | None = None,
-    joint_ranges: Mapping | None = None,
-    self_collision: bool = True,
-    tool_weight: float | None = None,
-    center_of_mass=None,
-    noise: SensorNoise | None = None,
-    readings_per_pose: int = 1,
-    seed: int = 0,
-    candidates: int = 3000,
-    max_samples: int = 200_000,
-    progress: bool | None = None,
-    estimate_mount: str = "none",
-    drift_rate=None,
-    pose_interval: float = DEFAULT_POSE_INTERVAL,
-    max_travel_ratio: float | None = None,
-) -> PosePlan:
-    """Plan ``n`` calibration poses for ``arm``.
+@dataclass(frozen=True, eq=False)
+class PlanSpec:
+    """What to plan: how many poses, within which limits, for which calibration, how to search.
+
+    Attributes:
+        n: Number of poses (≥ 3).
+        constraints: Limits every pose meets (:class:`PoseConstraints`).
+        expected: The calibration the poses are for: tool, noise, readings per pose, mount,
+            drift (:class:`~ftkin.planning.evaluation.ExpectedCalibration`).
+        seed: Random seed; the plan is deterministic for a seed.
+        candidates: Feasible configurations to collect for the pool (at least ``n``).
+        max_samples: Give up after drawing this many random configurations.
+        max_travel_ratio: With a drift rate: the joint travel along the
+            drift-robust order stays within this multiple (≥ 1) of the
+            short-travel order's (None: unbounded, about 2× on the bundled arm).
+    """
+
+    n: int
+    constraints: PoseConstraints = field(default_factory=PoseConstraints)
+    expected: ExpectedCalibration = field(default_factory=ExpectedCalibration)
+    seed: int = 0
+    candidates: int = 3000
+    max_samples: int = 200_000
+    max_travel_ratio: float | None = None
+
+    def __post_init__(self):
+        n = whole_number(self.n, "n (number of poses)")
+        check_pose_count(n)
+        if not isinstance(self.constraints, PoseConstraints):
+            raise InvalidInput(f"constraints must be PoseConstraints, got {self.constraints!r}")
+        if not isinstance(self.expected, ExpectedCalibration):
+            raise InvalidInput(f"expected must be ExpectedCalibration, got {self.expected!r}")
+        values = {
+            "n": n,
+            "seed": whole_number(self.seed, "seed"),
+            "candidates": max(whole_number(self.candidates, "candidates", 1), n),
+            "max_samples": whole_number(self.max_samples, "max_samples", 1),
+            "max_travel_ratio": check_travel_ratio(self.max_travel_ratio, self.expected.drift_rate),
+        }
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+    @classmethod
+    def from_options(cls, n: int, **options) -> PlanSpec:
+        """A spec from flat keywords: the fields of :class:`PoseConstraints` (``margin``,
+        ``floor_height``, ``max_tilt``, ``joint_ranges``, ``self_collision``), of
+        :class:`~ftkin.planning.evaluation.ExpectedCalibration` (``tool_weight``, ``noise``,
+        ``drift_rate``, ...) and of the spec itself (``seed``, ``candidates``, ...).
+        """
+        parts: dict[type, dict] = {PoseConstraints: {}, ExpectedCalibration: {}, cls: {}}
+        for name, value in options.items():
+            owner = next((part for part in parts if name in _field_names(part)), cls)
+            parts[owner][name] = value
+        constraints = from_fields(PoseConstraints, parts[PoseConstraints], "PoseConstraints")
+        expected = from_fields(ExpectedCalibration, parts[ExpectedCalibration], "plan_poses")
+        own = {"n": n, "constraints": constraints, "expected": expected, **parts[cls]}
+        return from_fields(cls, own, "plan_poses")
+
+
+def _field_names(cls) -> set[str]:
+    return {item.name for item in fields(cls) if item.init}
+
+
+def plan_poses(arm, spec: PlanSpec | int, *, progress: bool | None = None, **options) -> PosePlan:
+    """Plan calibration poses for ``arm`` (see the module docstring).
+
+    Two ways to call it: ``plan_poses(arm, PlanSpec(12, constraints=..., expected=...))``, or
+    the shortcut ``plan_poses(arm, 12, floor_height=0.3, max_tilt=1.0, seed=0)`` with any field
+    of :class:`PlanSpec`, :class:`PoseConstraints` and
+    :class:`~ftkin.planning.evaluation.ExpectedCalibration` as a keyword
+    (:meth:`PlanSpec.from_options`).
 
     Args:
         arm: :class:`~ftkin.kinematics.arm.Arm` with the sensor frame (and optionally a tool frame).
-        n: Number of poses (≥ 3).
-        margin: Distance kept from the joint limits [rad].
-        floor_height: Sensor and tool origins stay above this base-frame height [m].
-        max_tilt: Largest angle of the tool axis from straight down [rad].
-        joint_ranges: ``{joint name: (lower, upper)}`` extra limits [rad].
-        self_collision: Reject self-colliding configurations (URDF collision geometry).
-        tool_weight: Expected tool weight [N] (default 3.15 N, the paper's).
-        center_of_mass: Expected tool COM in the sensor frame [m] (default 47 mm along z).
-        noise: Sensor noise per reading (default :meth:`SensorNoise.paper`).
-        readings_per_pose: Independent readings averaged at each pose.
-        seed: Random seed; the plan is deterministic for a seed.
-        candidates: Feasible configurations to collect for the pool.
-        max_samples: Give up after drawing this many random configurations.
+        spec: The plan specification, or the number of poses.
         progress: Draw a progress bar (default: when stderr is a terminal).
-        estimate_mount: ``"yaw"`` or ``"full"``: plan for a calibration that
-            also estimates the sensor's mount (D-optimality over ``[θ, mount
-            angles]``, the mount assumed near identity).
-        drift_rate: ``[force N/√s, torque N·m/√s]``, the expected random-walk
-            rate of the bias (e.g. a past calibration's ``drift.rate``): the
-            poses are then visited in the order that keeps the most
-            information with the drift integrated out
-            (:func:`~ftkin.planning.drift_order.drift_robust_order`; longer
-            joint travel), and the predicted standard errors include the
-            drift. Not with ``estimate_mount``.
-        pose_interval: Time from one pose to the next [s] (with ``drift_rate``).
-        max_travel_ratio: With ``drift_rate``: the joint travel along the
-            drift-robust order stays within this multiple (≥ 1) of the
-            short-travel order's (None: unbounded, about 2× on the bundled arm).
+        **options: With a number of poses: the specification's fields by name.
+
+    With a drift rate, the poses are visited in the order that keeps the most information with
+    the drift integrated out (:func:`~ftkin.planning.drift_order.drift_robust_order`; longer
+    joint travel), and the predicted standard errors include the drift.
 
     Raises:
         UnobservableParameters: ``n < 3``, or the constraints leave a
@@ -188,103 +212,77 @@ def plan_poses(
         InvalidInput: bad arguments, or too few feasible configurations
             (the message names the constraints and what rejected them).
     """
-    n = _integer(n, "n (number of poses)")
-    check_pose_count(n)
-    readings_per_pose = _integer(readings_per_pose, "readings_per_pose", minimum=1)
-    candidates = max(_integer(candidates, "candidates", minimum=1), n)
-    max_samples = _integer(max_samples, "max_samples", minimum=1)
-    seed = _integer(seed, "seed", minimum=0)
-    if noise is not None and not isinstance(noise, SensorNoise):
-        raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
-    check_mount_mode(estimate_mount)
-    drift_rate, pose_interval = check_drift_options(drift_rate, pose_interval, estimate_mount)
-    max_travel_ratio = check_travel_ratio(max_travel_ratio, drift_rate)
-    constraints = PoseConstraints(
-        margin, floor_height, max_tilt, joint_ranges or (), self_collision
-    )
-    model = expected_tool(tool_weight, center_of_mass)
-    noise = noise if noise is not None else SensorNoise.paper()
-    checker = FeasibilityChecker(arm, constraints)
-    rng = np.random.default_rng(seed)
-
-    channel_std = noise.channel_std
+    if not isinstance(spec, PlanSpec):
+        spec = PlanSpec.from_options(spec, **options)
+    elif options:
+        raise InvalidInput("give a PlanSpec or the number of poses with keywords, not both")
+    expected = spec.expected
+    checker = FeasibilityChecker(arm, spec.constraints)
+    rng = np.random.default_rng(spec.seed)
 
     def factors(rotations):
         return information_factors(
             rotations,
-            model.gravity_in_base,
-            model.center_of_mass,
-            channel_std,
-            readings_per_pose,
-            estimate_mount,
+            expected.model.gravity_in_base,
+            expected.model.center_of_mass,
+            expected.noise.channel_std,
+            expected.readings_per_pose,
+            expected.estimate_mount,
         )
 
     check_tilt_observability(checker, factors)
     pool_q, pool_rotations, sampled = _candidate_pool(
-        checker, rng, candidates, max_samples, n, progress
+        checker, rng, spec.candidates, spec.max_samples, spec.n, progress
     )
     pool_factors = factors(pool_rotations)
-    check_information(pool_factors, constraints)
-    chosen, _ = d_optimal_selection(pool_factors, n)
+    check_information(pool_factors, spec.constraints)
+    chosen, _ = d_optimal_selection(pool_factors, spec.n)
     q, rotations = pool_q[chosen].copy(), pool_rotations[chosen].copy()
     q, rotations = _refine(checker, q, rotations, factors, rng, progress)
     q = unwind_revolute(q, checker.lower, checker.upper, revolute_mask(arm.model))
-    order = short_travel_order(q)
-    criterion = CRITERION
-    if drift_rate is not None:
-        distances = joint_distances(q)
-        max_length = (
-            None if max_travel_ratio is None else max_travel_ratio * path_length(distances, order)
-        )
-        order, _ = drift_robust_order(
-            model,
-            rotations,
-            rate=drift_rate,
-            noise_std=channel_std,
-            readings_per_pose=readings_per_pose,
-            pose_interval=pose_interval,
-            rng=rng,
-            initial_order=order,
-            distances=distances,
-            max_length=max_length,
-        )
-        criterion = DRIFT_CRITERION
+    order = _visiting_order(q, rotations, spec, rng)
     q, rotations = q[order], rotations[order]
-    evaluation = evaluate_poses(
-        rotations,
-        tool_weight=tool_weight,
-        center_of_mass=center_of_mass,
-        noise=noise,
-        readings_per_pose=readings_per_pose,
-        estimate_mount=estimate_mount,
-        drift_rate=None if drift_rate is None else drift_rate[[0, 3]],
-        pose_interval=pose_interval,
-    )
-    full_information = (
+    evaluation = evaluate_poses(rotations, expected)
+    drifting = expected.drift_rate is not None
+    information = (
         evaluation.information
-        if drift_rate is not None
+        if drifting
         else np.einsum("nki,nkj->ij", *(2 * (factors(rotations),)))
     )
     return PosePlan(
         joint_positions=q,
         joint_names=tuple(arm.joint_names),
         evaluation=evaluation,
-        criterion=criterion,
-        criterion_value=log_det(full_information),
-        seed=seed,
-        constraints=constraints,
+        criterion=DRIFT_CRITERION if drifting else CRITERION,
+        criterion_value=log_det(information),
+        seed=spec.seed,
+        constraints=spec.constraints,
         candidate_count=len(pool_q),
         sampled_count=sampled,
     )
 
 
-def _integer(value, name: str, minimum: int | None = None) -> int:
-    """``value`` as an int (no bools, no fractions), at least ``minimum``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise InvalidInput(f"{name} must be an integer, got {value!r}")
-    if minimum is not None and value < minimum:
-        raise InvalidInput(f"{name} must be at least {minimum}, got {value}")
-    return int(value)
+def _visiting_order(q, rotations, spec: PlanSpec, rng) -> np.ndarray:
+    """Short joint travel; with a drift rate, the drift-robust order (within the travel bound)."""
+    order = short_travel_order(q)
+    expected = spec.expected
+    if expected.drift_rate is None:
+        return order
+    distances = joint_distances(q)
+    ratio = spec.max_travel_ratio
+    order, _ = drift_robust_order(
+        expected.model,
+        rotations,
+        rate=expected.drift_rate,
+        noise_std=expected.noise.channel_std,
+        readings_per_pose=expected.readings_per_pose,
+        pose_interval=expected.pose_interval,
+        rng=rng,
+        initial_order=order,
+        distances=distances,
+        max_length=None if ratio is None else ratio * path_length(distances, order),
+    )
+    return order
 
 
 def _candidate_pool(checker, rng, wanted, max_samples, n, progress):

@@ -46,3 +46,17 @@ def test_excitation_refuses_bad_arguments(arm):
         plan_excitation(arm, 5.0, harmonics=1)
     with pytest.raises(InvalidInput, match="acceleration_limit"):
         plan_excitation(arm, 5.0, acceleration_limit=-1.0)
+
+
+def test_excitation_spec_and_the_keyword_shortcut_agree(arm):
+    from ftkin import ExcitationSpec
+
+    spec = ExcitationSpec(4.0, rate=50.0, harmonics=3, optimize=False, seed=2)
+    from_spec = plan_excitation(arm, spec)
+    shortcut = plan_excitation(arm, 4.0, rate=50.0, harmonics=3, optimize=False, seed=2)
+    np.testing.assert_allclose(from_spec.joint_positions, shortcut.joint_positions, atol=1e-12)
+    assert from_spec.times.shape == (200,)
+    with pytest.raises(InvalidInput, match="plan_excitation takes no speed"):
+        plan_excitation(arm, 4.0, speed=1.0)
+    with pytest.raises(InvalidInput, match="not both"):
+        plan_excitation(arm, spec, seed=1)

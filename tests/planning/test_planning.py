@@ -324,7 +324,7 @@ def test_bad_counts_and_seed_refused(arm):
         plan_poses(arm, 4, seed=-1)
     with pytest.raises(InvalidInput, match="readings_per_pose must be an integer"):
         plan_poses(arm, 4, readings_per_pose=2.5)
-    with pytest.raises(InvalidInput, match="readings_per_pose must be a whole number"):
+    with pytest.raises(InvalidInput, match="readings_per_pose must be an integer"):
         evaluate_poses(paper_samples().rotations, readings_per_pose=0.5)
     with pytest.raises(InvalidInput, match="noise must be an ftkin.SensorNoise"):
         evaluate_poses(paper_samples().rotations, noise=0.02)
@@ -355,3 +355,39 @@ def test_cli_package_dir_resolves_meshes(capsys):
     arm = load_arm(args)
     assert arm.package_dirs == [str(share)]
     assert arm.geometry("collision").ngeoms > 0
+
+
+def test_plan_spec_and_the_keyword_shortcut_agree(arm):
+    """One plan from a PlanSpec and from flat keywords: the same seed gives the same poses."""
+    from ftkin.planning import ExpectedCalibration, PlanSpec, PoseConstraints
+
+    spec = PlanSpec(
+        6,
+        constraints=PoseConstraints(floor_height=FLOOR, max_tilt=MAX_TILT),
+        expected=ExpectedCalibration(tool_weight=10.0, readings_per_pose=2),
+        seed=4,
+        candidates=300,
+    )
+    from_spec = plan_poses(arm, spec)
+    shortcut = plan_poses(
+        arm,
+        6,
+        floor_height=FLOOR,
+        max_tilt=MAX_TILT,
+        tool_weight=10.0,
+        readings_per_pose=2,
+        seed=4,
+        candidates=300,
+    )
+    np.testing.assert_allclose(from_spec.joint_positions, shortcut.joint_positions, atol=1e-12)
+    assert from_spec.constraints == spec.constraints
+    assert from_spec.evaluation.readings_per_pose == 2
+    assert from_spec.evaluation.model.tool_weight == pytest.approx(10.0, rel=1e-12)
+    with pytest.raises(InvalidInput, match="plan_poses takes no colour; expected: n, constraints"):
+        plan_poses(arm, 6, colour="red")
+    with pytest.raises(InvalidInput, match="a PlanSpec or the number of poses with keywords"):
+        plan_poses(arm, spec, seed=1)
+    with pytest.raises(InvalidInput, match="constraints must be PoseConstraints"):
+        PlanSpec(6, constraints={"margin": 0.1})
+    with pytest.raises(InvalidInput, match="evaluate_poses takes no margin; expected: tool_weight"):
+        evaluate_poses(paper_samples().rotations, margin=0.1)
