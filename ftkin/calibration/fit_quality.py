@@ -19,6 +19,7 @@
 """
 
 import logging
+from dataclasses import replace
 
 import numpy as np
 
@@ -141,18 +142,12 @@ def diagnose(
 
     Warnings are also sent to the ``ftkin.calibration.fit_quality`` logger.
     """
-    theta = fit.model.to_vector()
-    problem = fit.problem
+    theta, problem = fit.model.to_vector(), fit.problem
     whitened = problem.whitened_residuals(theta).reshape(-1, 6)
     count = len(whitened)
     if parameter_count is None:  # 12 for θ, plus the mount angles when a mount is estimated
         parameter_count = getattr(problem, "parameter_count", 12)
-    dof = 6 * count - parameter_count
-    chi_square = float(np.sum(whitened**2))
-    if fit.noise_source == "residuals" or dof <= 0:
-        p_value = np.nan
-    else:
-        p_value = float(_f_sf(chi_square / dof, dof, fit.noise_dof))
+    chi_square, dof, p_value = _fit_test(fit, whitened, parameter_count)
     fit_ok = not (p_value < FIT_ALPHA)
     normalized, pose_p, leverage = _pose_statistics(
         whitened,
@@ -166,12 +161,7 @@ def diagnose(
         channel_chi_square = np.sum(whitened**2, axis=0) / np.sum(1.0 - leverage, axis=0)
     scale = chi_square / dof if (not fit_ok and chi_square > dof) else 1.0
     covariance = fit.covariance * scale
-    information = fit.information
-    diagonal = np.sqrt(np.diag(information))
-    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(diagonal, diagonal))
-    weakest = eigenvectors[:, 0] * np.sign(eigenvectors[np.argmax(np.abs(eigenvectors[:, 0])), 0])
-    sigma, scales = np.sqrt(np.clip(np.diag(covariance), 0.0, None)), _block_scales(theta)
-    relative = sigma / scales
+    condition, weakest = _weakest_direction(fit.information)
     pose_ids = np.asarray(pose_ids)
     exact = (
         wrenches is not None
@@ -181,57 +171,7 @@ def diagnose(
     outliers = (
         () if exact else tuple(int(i) for i in pose_ids[pose_p < OUTLIER_ALPHA / max(count, 1)])
     )
-
-    messages = []
-    if exact:
-        messages.append(
-            "the readings fit the model to rounding (noise estimated at its floor, "
-            f"{NOISE_FLOOR_RELATIVE:g} of the "
-            "largest reading): noise-free data, e.g. a simulation without sensor noise? The "
-            "estimates are exact, but "
-            "the standard errors, the fit test and the outlier test mean nothing; add sensor noise "
-            "to simulated "
-            "readings or give the noise level (noise=, --noise-force/--noise-torque)"
-        )
-    if not fit_ok:
-        messages.append(
-            f"the readings do not fit the model within their noise (chi-square {chi_square:.1f} "
-            f"for {dof} "
-            f"degrees of freedom, p = {p_value:.1e}): sensor crosstalk, a contact or cable at some "
-            "poses, or "
-            f"noise underestimated; standard errors scaled by {np.sqrt(scale):.2f}"
-        )
-    if outliers:
-        worst = ", ".join(
-            f"{i} ({normalized[pose_ids == i][0]:.1f}σ, p = {pose_p[pose_ids == i][0]:.1e})"
-            for i in outliers
-        )
-        messages.append(
-            f"outlier pose(s), far outside the noise: {worst} (RMS normalized residual over the "
-            "six channels; "
-            f"threshold p < {OUTLIER_ALPHA / count:.1e}); check them or refit without them "
-            "(drop_outliers=True, --drop-outliers)"
-        )
-    for block, name in enumerate(PARAMETER_NAMES):
-        part = slice(3 * block, 3 * block + 3)
-        if np.any(relative[part] > RELATIVE_STD_ERROR_WARNING):
-            messages.append(
-                f"{name} is poorly determined: standard errors "
-                f"[{', '.join(f'{s:.3g}' for s in sigma[part])}] "
-                f"{_UNITS[name]} are up to {100 * relative[part].max():.0f} % of its scale "
-                f"{scales[3 * block]:.3g} {_UNITS[name]}; add poses that turn gravity into other "
-                f"sensor directions (condition number {eigenvalues[-1] / eigenvalues[0]:.3g}, "
-                "weakest direction "
-                + ", ".join(f"{weight:+.2f} {label}" for label, weight in main_components(weakest))
-                + ")"
-            )
-    if fit.noise_source == "residuals" and fit.noise_dof < MIN_NOISE_DOF:
-        messages.append(
-            f"the noise levels come from the residuals with only {fit.noise_dof:.1f} degrees of "
-            "freedom, so the "
-            "standard errors are rough; record several readings per pose (pose column), add poses, "
-            "or give the noise"
-        )
+    scales = _block_scales(theta)
     diagnostics = FitDiagnostics(
         loss=fit.loss,
         noise=fit.noise,
@@ -247,14 +187,89 @@ def diagnose(
         pose_p_values=pose_p,
         outlier_pose_ids=outliers,
         dropped_pose_ids=tuple(int(i) for i in dropped_pose_ids),
-        condition_number=float(eigenvalues[-1] / eigenvalues[0]),
+        condition_number=condition,
         weakest_direction=weakest,
-        relative_std_errors=relative,
-        warnings=tuple(messages),
+        relative_std_errors=np.sqrt(np.clip(np.diag(covariance), 0.0, None)) / scales,
+        warnings=(),
     )
+    diagnostics = replace(diagnostics, warnings=_warnings(diagnostics, exact, scales))
     if log:
         log_warnings(diagnostics)
     return diagnostics, covariance
+
+
+def _fit_test(fit, whitened, parameter_count: int) -> tuple[float, int, float]:
+    """``(χ², degrees of freedom, p-value)`` of the fit; NaN p-value when the test does not apply
+    (noise from the residuals, or no degrees of freedom).
+    """
+    dof = whitened.size - parameter_count
+    chi_square = float(np.sum(whitened**2))
+    if fit.noise_source == "residuals" or dof <= 0:
+        return chi_square, dof, np.nan
+    return chi_square, dof, float(_f_sf(chi_square / dof, dof, fit.noise_dof))
+
+
+def _weakest_direction(information) -> tuple[float, np.ndarray]:
+    """Condition number and weakest direction (sign: largest entry positive) of the information
+    normalized to unit diagonal.
+    """
+    diagonal = np.sqrt(np.diag(information))
+    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(diagonal, diagonal))
+    weakest = eigenvectors[:, 0] * np.sign(eigenvectors[np.argmax(np.abs(eigenvectors[:, 0])), 0])
+    return float(eigenvalues[-1] / eigenvalues[0]), weakest
+
+
+def _warnings(diagnostics: FitDiagnostics, exact: bool, scales: np.ndarray) -> tuple[str, ...]:
+    """The warnings the diagnostics call for, one sentence each (``exact``: noise at its floor)."""
+    d, messages = diagnostics, []
+    if exact:
+        messages.append(
+            "the readings fit the model to rounding (noise estimated at its floor, "
+            f"{NOISE_FLOOR_RELATIVE:g} of the largest reading): noise-free data, e.g. a "
+            "simulation without sensor noise? The estimates are exact, but the standard errors, "
+            "the fit test and the outlier test mean nothing; add sensor noise to simulated "
+            "readings or give the noise level (noise=, --noise-force/--noise-torque)"
+        )
+    if d.p_value < FIT_ALPHA:
+        messages.append(
+            f"the readings do not fit the model within their noise (chi-square "
+            f"{d.chi_square:.1f} for {d.dof} degrees of freedom, p = {d.p_value:.1e}): sensor "
+            "crosstalk, a contact or cable at some poses, or noise underestimated; standard "
+            f"errors scaled by {np.sqrt(d.covariance_scale):.2f}"
+        )
+    if d.outlier_pose_ids:
+        worst = ", ".join(
+            f"{i} ({d.pose_normalized_residuals[d.pose_ids == i][0]:.1f}σ, "
+            f"p = {d.pose_p_values[d.pose_ids == i][0]:.1e})"
+            for i in d.outlier_pose_ids
+        )
+        messages.append(
+            f"outlier pose(s), far outside the noise: {worst} (RMS normalized residual over the "
+            f"six channels; threshold p < {OUTLIER_ALPHA / len(d.pose_ids):.1e}); check them or "
+            "refit without them (drop_outliers=True, --drop-outliers)"
+        )
+    relative, sigma = d.relative_std_errors, d.relative_std_errors * scales
+    weakest = ", ".join(
+        f"{weight:+.2f} {label}" for label, weight in main_components(d.weakest_direction)
+    )
+    for block, name in enumerate(PARAMETER_NAMES):
+        part = slice(3 * block, 3 * block + 3)
+        if np.any(relative[part] > RELATIVE_STD_ERROR_WARNING):
+            messages.append(
+                f"{name} is poorly determined: standard errors "
+                f"[{', '.join(f'{s:.3g}' for s in sigma[part])}] "
+                f"{_UNITS[name]} are up to {100 * relative[part].max():.0f} % of its scale "
+                f"{scales[3 * block]:.3g} {_UNITS[name]}; add poses that turn gravity into other "
+                f"sensor directions (condition number {d.condition_number:.3g}, weakest "
+                f"direction {weakest})"
+            )
+    if d.noise_source == "residuals" and d.noise_dof < MIN_NOISE_DOF:
+        messages.append(
+            f"the noise levels come from the residuals with only {d.noise_dof:.1f} degrees of "
+            "freedom, so the standard errors are rough; record several readings per pose (pose "
+            "column), add poses, or give the noise"
+        )
+    return tuple(messages)
 
 
 def log_warnings(diagnostics: FitDiagnostics) -> None:

@@ -139,6 +139,84 @@ def _stamps(header_times: list[float], log_times: list[float], topic: str) -> np
     return stamps
 
 
+class _Messages:
+    """The two topics' messages as they are read: stamps, wrench rows, joint series by name."""
+
+    def __init__(self, source: str):
+        self.source = source
+        self.joint_header, self.joint_log, self.wrench_header, self.wrench_log = [], [], [], []
+        self.wrench_rows: list[tuple] = []
+        self.frame_id = ""
+        self.series: dict[str, tuple[list[int], list[float]]] = {}  # name -> (messages, values)
+
+    def add(self, connection, log_time: int, message) -> None:
+        """One deserialized message of either topic."""
+        if connection.msgtype == WRENCH_TYPE:
+            force, torque = message.wrench.force, message.wrench.torque
+            self.wrench_rows.append((force.x, force.y, force.z, torque.x, torque.y, torque.z))
+            self.wrench_header.append(_seconds(message.header.stamp))
+            self.wrench_log.append(log_time)
+            self.frame_id = self.frame_id or message.header.frame_id
+            return
+        if len(message.position) != len(message.name):
+            raise InvalidSamples(
+                f"{connection.topic}: a JointState has {len(message.name)} names but "
+                f"{len(message.position)} positions",
+                self.source,
+            )
+        index = len(self.joint_header)
+        self.joint_header.append(_seconds(message.header.stamp))
+        self.joint_log.append(log_time)
+        for name, value in zip(message.name, message.position):
+            indices, positions = self.series.setdefault(name, ([], []))
+            indices.append(index)
+            positions.append(float(value))
+
+
+def _read_messages(path: Path, source: str, joint_topic, wrench_topic, progress):
+    """The joint and wrench connections chosen and their messages (:class:`_Messages`)."""
+    any_reader, typestore = _rosbags()
+    from rosbags.highlevel import AnyReaderError
+
+    messages = _Messages(source)
+    try:
+        with any_reader([path], default_typestore=typestore) as reader:
+            joints = _pick_topic(
+                reader.connections, joint_topic, JOINT_STATE_TYPE, "--joint-topic", source
+            )
+            wrench = _pick_topic(
+                reader.connections, wrench_topic, WRENCH_TYPE, "--wrench-topic", source
+            )
+            total = sum(c.msgcount for c in joints + wrench)
+            with Progress(total, "reading bag", enabled=progress) as bar:
+                for connection, log_time, raw in reader.messages(connections=joints + wrench):
+                    messages.add(connection, log_time, reader.deserialize(raw, connection.msgtype))
+                    bar.advance()
+    except AnyReaderError as error:
+        raise InvalidSamples(f"cannot read the bag: {error}", source) from None
+    except InvalidSamples:
+        raise
+    except Exception as error:  # a corrupt bag: rosbags raises struct, decode, index, memory errors
+        raise InvalidSamples(
+            f"cannot read the bag (corrupt or truncated?): {type(error).__name__}: {error}", source
+        ) from None
+    return joints[0].topic, wrench[0].topic, messages
+
+
+def _joint_trajectory(messages: _Messages, topic: str, expected: list[str]):
+    """``(joint_times (K,), trajectory (K, nq))``: every joint interpolated to every stamp."""
+    message_times = _stamps(messages.joint_header, messages.joint_log, topic)
+    series = messages.series
+    joint_times = np.unique(np.concatenate([message_times[series[name][0]] for name in expected]))
+    trajectory = np.empty((len(joint_times), len(expected)))
+    for column, name in enumerate(expected):
+        times = message_times[series[name][0]]
+        order = np.argsort(times, kind="stable")
+        values = np.asarray(series[name][1])[order]
+        trajectory[:, column] = np.interp(joint_times, times[order], values)
+    return joint_times, trajectory
+
+
 def read_bag(
     path,
     arm,
@@ -161,99 +239,32 @@ def read_bag(
             wrench inside the joint-state time range.
         MissingDependency: ``rosbags`` is not installed.
     """
-    any_reader, typestore = _rosbags()
-    from rosbags.highlevel import AnyReaderError
-
     path = Path(path)
     source = str(path)
     if not path.exists():
         raise InvalidSamples("file not found", source)
-    if path.suffix.lower() == ".db3":
-        path = path.parent
-    expected = list(arm.joint_names)
-    series: dict[
-        str, tuple[list[int], list[float]]
-    ] = {}  # joint name -> (message indices, positions)
-    joint_header, joint_log, wrench_header, wrench_log, wrench_rows, frame_id = (
-        [],
-        [],
-        [],
-        [],
-        [],
-        "",
+    folder = path.parent if path.suffix.lower() == ".db3" else path
+    joint_topic, wrench_topic, messages = _read_messages(
+        folder, source, joint_topic, wrench_topic, progress
     )
-    try:
-        with any_reader([path], default_typestore=typestore) as reader:
-            joints = _pick_topic(
-                reader.connections, joint_topic, JOINT_STATE_TYPE, "--joint-topic", source
-            )
-            wrench = _pick_topic(
-                reader.connections, wrench_topic, WRENCH_TYPE, "--wrench-topic", source
-            )
-            total = sum(c.msgcount for c in joints + wrench)
-            with Progress(total, "reading bag", enabled=progress) as bar:
-                for connection, log_time, raw in reader.messages(connections=joints + wrench):
-                    message = reader.deserialize(raw, connection.msgtype)
-                    if connection.msgtype == WRENCH_TYPE:
-                        force, torque = message.wrench.force, message.wrench.torque
-                        wrench_rows.append(
-                            (force.x, force.y, force.z, torque.x, torque.y, torque.z)
-                        )
-                        wrench_header.append(_seconds(message.header.stamp))
-                        wrench_log.append(log_time)
-                        frame_id = frame_id or message.header.frame_id
-                    else:
-                        if len(message.position) != len(message.name):
-                            raise InvalidSamples(
-                                f"{connection.topic}: a JointState has {len(message.name)} names "
-                                "but "
-                                f"{len(message.position)} positions",
-                                source,
-                            )
-                        index = len(joint_header)
-                        joint_header.append(_seconds(message.header.stamp))
-                        joint_log.append(log_time)
-                        for name, value in zip(message.name, message.position):
-                            indices, positions = series.setdefault(name, ([], []))
-                            indices.append(index)
-                            positions.append(float(value))
-                    bar.advance()
-    except AnyReaderError as error:
-        raise InvalidSamples(f"cannot read the bag: {error}", source) from None
-    except InvalidSamples:
-        raise
-    except (
-        Exception
-    ) as error:  # a corrupt bag makes rosbags raise struct, decode, index or memory errors
-        raise InvalidSamples(
-            f"cannot read the bag (corrupt or truncated?): {type(error).__name__}: {error}", source
-        ) from None
-    joint_topic_name, wrench_topic_name = joints[0].topic, wrench[0].topic
-    missing = [name for name in expected if name not in series]
+    expected = list(arm.joint_names)
+    missing = [name for name in expected if name not in messages.series]
     if missing:
         raise InvalidSamples(
-            f"joint names on {joint_topic_name} do not match the arm: missing {missing}; "
-            f"the bag has {sorted(series)}; the arm ({arm.urdf_path}) expects {expected}",
+            f"joint names on {joint_topic} do not match the arm: missing {missing}; "
+            f"the bag has {sorted(messages.series)}; the arm ({arm.urdf_path}) expects {expected}",
             source,
         )
-    if not wrench_rows:
-        raise InvalidSamples(f"no messages on {wrench_topic_name}", source)
-    message_times = _stamps(joint_header, joint_log, joint_topic_name)
-    joint_times = np.unique(np.concatenate([message_times[series[name][0]] for name in expected]))
-    trajectory = np.empty((len(joint_times), len(expected)))
-    for column, name in enumerate(expected):
-        times = message_times[series[name][0]]
-        order = np.argsort(times, kind="stable")
-        trajectory[:, column] = np.interp(
-            joint_times, times[order], np.asarray(series[name][1])[order]
-        )
-    times = _stamps(wrench_header, wrench_log, wrench_topic_name)
+    if not messages.wrench_rows:
+        raise InvalidSamples(f"no messages on {wrench_topic}", source)
+    joint_times, trajectory = _joint_trajectory(messages, joint_topic, expected)
+    times = _stamps(messages.wrench_header, messages.wrench_log, wrench_topic)
     order = np.argsort(times, kind="stable")
-    times, wrenches = times[order], np.asarray(wrench_rows, dtype=float)[order]
+    times, wrenches = times[order], np.asarray(messages.wrench_rows, dtype=float)[order]
     inside = (times >= joint_times[0]) & (times <= joint_times[-1])
     if not np.any(inside):
         raise InvalidSamples(
-            f"no {wrench_topic_name} stamp falls inside the {joint_topic_name} time range "
+            f"no {wrench_topic} stamp falls inside the {joint_topic} time range "
             f"[{joint_times[0]:.3f}, {joint_times[-1]:.3f}] s (wrench stamps [{times[0]:.3f}, "
             f"{times[-1]:.3f}] s)",
             source,
@@ -264,9 +275,9 @@ def read_bag(
     )
     return BagRecording(
         source,
-        joint_topic_name,
-        wrench_topic_name,
-        frame_id,
+        joint_topic,
+        wrench_topic,
+        messages.frame_id,
         expected,
         joint_times,
         trajectory,
