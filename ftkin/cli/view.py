@@ -54,6 +54,13 @@ def register(subparsers) -> None:
         metavar="LOG.csv",
         help="play a recorded run instead: joint columns, fx..mz, optional t [s]",
     )
+    _add_output_arguments(parser)
+    _add_drawing_arguments(parser)
+    add_samples_arguments(parser)
+    parser.set_defaults(func=run)
+
+
+def _add_output_arguments(parser) -> None:
     parser.add_argument(
         "--html",
         metavar="OUT.html",
@@ -63,8 +70,8 @@ def register(subparsers) -> None:
         "--png",
         metavar="OUT.png",
         help="write a screenshot with headless Chromium: the --pose (1024×768), else a contact "
-        "sheet of every pose "
-        f"(at most {SHEET_CELLS} evenly spaced rows of a replay; outlier poses outlined in red)",
+        f"sheet of every pose (at most {SHEET_CELLS} evenly spaced rows of a replay; outlier "
+        "poses outlined in red)",
     )
     parser.add_argument(
         "--pose",
@@ -72,6 +79,14 @@ def register(subparsers) -> None:
         metavar="K",
         help="only this pose: pose id of SAMPLES.csv, or row index of the replay log",
     )
+    parser.add_argument(
+        "--no-wait",
+        action="store_true",
+        help="do not keep the live viewer running (scripts, tests)",
+    )
+
+
+def _add_drawing_arguments(parser) -> None:
     parser.add_argument(
         "--scale",
         type=positive_float,
@@ -99,13 +114,6 @@ def register(subparsers) -> None:
         metavar="N",
         help="replay: keep at most N rows (evenly spaced)",
     )
-    parser.add_argument(
-        "--no-wait",
-        action="store_true",
-        help="do not keep the live viewer running (scripts, tests)",
-    )
-    add_samples_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 @dataclass(frozen=True)
@@ -175,19 +183,17 @@ def _pick(frames: Frames, pose: int, replay: bool) -> int:
     return frames.labels.index(wanted)
 
 
+def _where(frames: Frames, rows=slice(None)) -> dict:
+    """The frames' placement for the viewer: joint angles when known, else sensor orientations."""
+    if frames.configurations is not None:
+        return {"configurations": frames.configurations[rows]}
+    return {"rotations": frames.rotations[rows]}
+
+
 def _show(viewer, frames: Frames, k: int):
     if frames.configurations is not None:
         return viewer.show_pose(frames.configurations[k], frames.raw_wrenches[k])
     return viewer.show_rotation(frames.rotations[k], frames.raw_wrenches[k])
-
-
-def _animate(viewer, frames: Frames, hold: float):
-    kind = (
-        {"configurations": frames.configurations}
-        if frames.configurations is not None
-        else {"rotations": frames.rotations}
-    )
-    return viewer.animate(frames.raw_wrenches, times=frames.times, hold=hold, **kind)
 
 
 def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
@@ -227,17 +233,55 @@ def _contact_sheet(viewer, frames: Frames, calibration, path: str, title: str) -
     }
     labels = [frames.labels[k] for k in rows]
     outliers = [i for i, label in enumerate(labels) if label in flagged]
-    kind = (
-        {"configurations": frames.configurations[rows]}
-        if frames.configurations is not None
-        else {"rotations": frames.rotations[rows]}
-    )
-    cells = sheet_cells(viewer, labels, frames.raw_wrenches[rows], outliers=outliers, **kind)
+    where = _where(frames, rows)
+    cells = sheet_cells(viewer, labels, frames.raw_wrenches[rows], outliers=outliers, **where)
     save_contact_sheet(cells, path, title=title)
     print(
         f"wrote {path} (contact sheet of {len(cells)} poses, {len(outliers)} outliers outlined in "
         "red)"
     )
+
+
+def _load_frames(args, calibration, source: str):
+    """The frames to show and the arm to draw them on (None: orientations only)."""
+    arm = arm_for_calibration(args, calibration) or Arm.default()
+    loaded = load_samples_from_args(source, args, static_only=not args.replay, arm=arm)
+    warn_if_kinematics_differ(loaded, calibration)
+    # the real sensor: stored sign and axis flip applied to the readings, the mount to the
+    # sensor frame
+    loaded = dataclasses.replace(loaded, samples=as_real_sensor(loaded.samples, calibration))
+    frames = _replay_rows(loaded, args.max_frames) if args.replay else _calibration_poses(loaded)
+    if loaded.samples.times is not None:  # the rows' own times, or each pose's mean time
+        times = frames.times if args.replay else loaded.samples.pose_averages().times
+        frames = _with_bias_at_times(frames, calibration, times)
+    if frames.configurations is None:
+        return frames, None  # orientations without joint angles: no arm to draw
+    return frames, mounted_arm(arm, calibration.mount_rotation)
+
+
+def _write_outputs(viewer, frames: Frames, chosen: int | None, shown, args, source: str) -> None:
+    """The screenshot or contact sheet, the animation (or the one pose ``shown``) and the page."""
+    if args.png and chosen is not None:
+        from ..viz.browser import screenshot_html
+
+        label = frames.labels[chosen]
+        screenshot_html(viewer.static_html(caption=f"{source}: {label}"), args.png)
+        print(f"wrote {args.png} ({label})")
+    elif args.png:
+        _contact_sheet(viewer, frames, viewer.calibration, args.png, title=str(source))
+    if chosen is None:
+        vectors = viewer.animate(
+            frames.raw_wrenches, times=frames.times, hold=args.hold, **_where(frames)
+        )
+        _print_table(frames.labels, vectors)
+    else:
+        _print_table([frames.labels[chosen]], [shown])
+    if args.html:
+        caption = f"{source}: " + (
+            frames.labels[chosen] if chosen is not None else f"{len(frames.labels)} poses, animated"
+        )
+        viewer.save_html(args.html, caption=caption)
+        print(f"wrote {args.html}")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -247,54 +291,18 @@ def run(args: argparse.Namespace) -> int:
         raise InvalidInput("give SAMPLES.csv (calibration poses) or --replay LOG.csv, exactly one")
     calibration = load_calibration(args.calibration)
     source = args.replay or args.samples
-    arm = arm_for_calibration(args, calibration) or Arm.default()
-    loaded = load_samples_from_args(source, args, static_only=not args.replay, arm=arm)
-    warn_if_kinematics_differ(loaded, calibration)
-    # the real sensor: stored sign and axis flip applied to the readings, the mount to the sensor
-    # frame
-    loaded = dataclasses.replace(loaded, samples=as_real_sensor(loaded.samples, calibration))
-    arm = mounted_arm(arm, calibration.mount_rotation)
-    frames = _replay_rows(loaded, args.max_frames) if args.replay else _calibration_poses(loaded)
-    if (
-        loaded.samples.times is not None
-    ):  # per-frame times: the rows' own, or each calibration pose's mean time
-        frames = _with_bias_at_times(
-            frames,
-            calibration,
-            frames.times if args.replay else loaded.samples.pose_averages().times,
-        )
-    if frames.configurations is None:
-        arm = None  # orientations without joint angles: no arm to draw
+    frames, arm = _load_frames(args, calibration, source)
     chosen = _pick(frames, args.pose, bool(args.replay)) if args.pose is not None else None
-    caption = f"{source}: " + (
-        frames.labels[chosen] if chosen is not None else f"{len(frames.labels)} poses, animated"
-    )
-
     with CalibrationViewer(
         calibration, arm, scale=args.scale, tilt_exaggeration=args.tilt_exaggeration
     ) as viewer:
-        vectors = _show(viewer, frames, chosen if chosen is not None else 0)
+        shown = _show(viewer, frames, chosen if chosen is not None else 0)
         print(
             f"scale: 1 N = {100 * viewer.scale:.3g} cm; magenta = measured force − bias, cyan = "
-            "predicted tool gravity, "
-            "yellow = contact force, green = tool COM, purple = base gravity direction"
+            "predicted tool gravity, yellow = contact force, green = tool COM, purple = base "
+            "gravity direction"
         )
-        if args.png and chosen is not None:
-            from ..viz.browser import screenshot_html
-
-            shown = frames.labels[chosen]
-            screenshot_html(viewer.static_html(caption=f"{source}: {shown}"), args.png)
-            print(f"wrote {args.png} ({shown})")
-        elif args.png:
-            _contact_sheet(viewer, frames, calibration, args.png, title=str(source))
-        if chosen is None:
-            all_vectors = _animate(viewer, frames, args.hold)
-            _print_table(frames.labels, all_vectors)
-        else:
-            _print_table([frames.labels[chosen]], [vectors])
-        if args.html:
-            viewer.save_html(args.html, caption=caption)
-            print(f"wrote {args.html}")
+        _write_outputs(viewer, frames, chosen, shown, args, source)
         if args.no_wait or args.html or args.png:
             return 0
         print(

@@ -251,70 +251,55 @@ class CalibrationViewer:
         return out
 
     def _draw(self, sink, q, rotation_and_origin, raw_wrench, animated: bool) -> PoseVectors:
-        points = None
+        """Draw one reading into ``sink`` (the viewer, or an animation frame): the arm at ``q``
+        or the sensor at ``(R_BS, origin)``, the force arrows, the COM, the gravity direction.
+        """
         if q is not None:
-            if self.arm is None:
-                raise InvalidInput(
-                    "this viewer has no arm: use show_rotation(R_BS, raw_wrench) or pass arm="
-                )
-            q = self.arm.check_configuration(q)
-            rotation, origin = self.arm.frame_placement(q, "sensor")
-            points = arm_points(self.arm, q) if self.auto_camera else None
-            if self._robot is not None:
-                self._robot.viewer = sink
-                try:
-                    self._robot.display(q)
-                finally:
-                    self._robot.viewer = self.visualizer
+            rotation, origin, points = self._draw_arm(sink, q)
         else:
-            rotation, origin = rotation_and_origin
+            (rotation, origin), points = rotation_and_origin, None
         vectors = pose_vectors(self.calibration, rotation, origin, raw_wrench)
-        place = _place_animated if animated else _place_live
-        place(
-            sink,
-            f"{ROOT}/sensor",
-            NodePose(
-                rigid_transform(vectors.rotation_sensor_to_base, vectors.sensor_origin), np.ones(3)
-            ),
-        )
-        for layer, force in zip(
-            ARROWS, (vectors.measured_force, vectors.gravity_force, vectors.contact_force)
-        ):
-            arrow = arrow_placement(vectors.sensor_origin, force, self.scale, self.style)
-            place(sink, f"{ROOT}/{layer.name}/shaft", arrow.shaft)
-            place(sink, f"{ROOT}/{layer.name}/head", arrow.head)
-        place(
-            sink,
-            f"{ROOT}/{CENTER_OF_MASS.name}",
-            NodePose(rigid_transform(np.eye(3), vectors.center_of_mass), np.ones(3)),
-        )
-        anchor, length = self.gravity_anchor, 0.3
-        if anchor is None:
-            anchor, length = self._anchor
+        origin, place = vectors.sensor_origin, _place_animated if animated else _place_live
+        sensor = rigid_transform(vectors.rotation_sensor_to_base, vectors.sensor_origin)
+        place(sink, f"{ROOT}/sensor", NodePose(sensor, np.ones(3)))
+        forces = (vectors.measured_force, vectors.gravity_force, vectors.contact_force)
+        for layer, force in zip(ARROWS, forces):
+            _place_arrow(place, sink, layer, arrow_placement(origin, force, self.scale, self.style))
+        com = NodePose(rigid_transform(np.eye(3), vectors.center_of_mass), np.ones(3))
+        place(sink, f"{ROOT}/{CENTER_OF_MASS.name}", com)
         if self.auto_camera:
-            forces = (vectors.measured_force, vectors.gravity_force, vectors.contact_force)
             tool_size = 2.0 * float(np.linalg.norm(self.calibration.center_of_mass))
             self.view = frame_pose(
-                vectors.sensor_origin, [self.scale * f for f in forces], points, tool_size=tool_size
+                origin, [self.scale * f for f in forces], points, tool_size=tool_size
             )
             apply_view(sink, self.view, animated)
-            if (
-                self.gravity_anchor is None
-            ):  # beside the sensor, right of it and a little up on screen
-                anchor = self.view.target + self.view.radius * (
-                    0.8 * self.view.right + np.array([0.0, 0.0, 0.3])
-                )
-                length = min(0.3, 0.6 * self.view.radius)
-                self._anchor = (anchor, length)
+            if self.gravity_anchor is None:  # beside the sensor, right of it, a little up
+                view = self.view
+                anchor = view.target + view.radius * (0.8 * view.right + np.array([0, 0, 0.3]))
+                self._anchor = (anchor, min(0.3, 0.6 * view.radius))
+        anchor, length = self._anchor if self.gravity_anchor is None else (self.gravity_anchor, 0.3)
         drawn_direction = exaggerate_tilt(vectors.gravity_direction, self.tilt_exaggeration)
-        for layer, direction in (
-            (BASE_GRAVITY, drawn_direction),
-            (VERTICAL, np.array([0.0, 0.0, -1.0])),
-        ):
-            arrow = arrow_placement(anchor, direction, length, self.style)
-            place(sink, f"{ROOT}/{layer.name}/shaft", arrow.shaft)
-            place(sink, f"{ROOT}/{layer.name}/head", arrow.head)
+        for layer, direction in ((BASE_GRAVITY, drawn_direction), (VERTICAL, (0.0, 0.0, -1.0))):
+            _place_arrow(place, sink, layer, arrow_placement(anchor, direction, length, self.style))
         return vectors
+
+    def _draw_arm(self, sink, q):
+        """The arm drawn at ``q`` [rad]; returns the sensor's ``R_BS``, origin [m] and the arm's
+        points for the camera (None without auto camera).
+        """
+        if self.arm is None:
+            raise InvalidInput(
+                "this viewer has no arm: use show_rotation(R_BS, raw_wrench) or pass arm="
+            )
+        q = self.arm.check_configuration(q)
+        rotation, origin = self.arm.frame_placement(q, "sensor")
+        if self._robot is not None:
+            self._robot.viewer = sink
+            try:
+                self._robot.display(q)
+            finally:
+                self._robot.viewer = self.visualizer
+        return rotation, origin, arm_points(self.arm, q) if self.auto_camera else None
 
     # ---------------------------------------------------------------- export
     def legend(self, caption: str = "") -> str:
@@ -341,6 +326,11 @@ def _check_calibration(calibration) -> None:
             "calibration must be an ftkin SensorModel or CalibrationResult, got "
             f"{type(calibration).__name__}"
         )
+
+
+def _place_arrow(place, sink, layer, arrow) -> None:
+    place(sink, f"{ROOT}/{layer.name}/shaft", arrow.shaft)
+    place(sink, f"{ROOT}/{layer.name}/head", arrow.head)
 
 
 def _place_live(sink, path: str, pose: NodePose) -> None:
