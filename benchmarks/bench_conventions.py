@@ -2,7 +2,7 @@
 
 Draws seeded data sets on the bundled arm and UR5 (random tool, bias, tilt,
 4-20 poses, 1-3 readings per pose, noise 0.1-20 x the paper's, orientation as
-joints, Euler angles or quaternions) and runs :func:`ftkin.io.conventions.diagnose_table`:
+joints, Euler angles or quaternions) and runs :func:`ftkin.io.table_readings.diagnose_table`:
 
 * clean sets: no verdict may be "mistake" or "suspect" (target: 0 false alarms in 1,000);
 * each mistake written into clean sets: the share named correctly;
@@ -20,9 +20,9 @@ import time
 import numpy as np
 
 from ftkin import Arm, SensorModel, calibrate
-from ftkin.io.conventions import diagnose_table
 from ftkin.io.csv_table import Table
 from ftkin.io.samples_csv import samples_from_table
+from ftkin.io.table_readings import diagnose_table
 from ftkin.kinematics.robots import load_robot
 from ftkin.kinematics.rotations import matrix_to_euler_zyx, matrix_to_quaternion
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from ftkin import Arm
 from ftkin.control.stability import max_stable_k1
-from ftkin.sim.mujoco.placement import placement_scene, simulate_placement_mujoco
+from ftkin.sim.mujoco.mujoco_placement import placement_scene, simulate_placement_mujoco
 from ftkin.sim.placement import PlacementScenario
 from ftkin.sim.surfaces import BOOK, SPONGE
 

@@ -24,7 +24,7 @@ the data:
   down when the readings are negated (the sensor reports the reaction, or the
   arm hangs from a ceiling: a suspicion only).
 
-The readings themselves are built by the caller (:mod:`ftkin.io.conventions`
+The readings themselves are built by the caller (:mod:`ftkin.io.table_readings`
 builds them from a samples table); :func:`wrench_readings` adds the
 alternatives that only change the wrench.
 """

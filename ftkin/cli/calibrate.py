@@ -17,7 +17,7 @@ from ..io.calibration_file import save_calibration
 from ..kinematics.record import KinematicsRecord
 from .arg_types import bounded_int, gravity, positive_float
 from .common import add_samples_arguments, arm_from_args, load_samples_from_args
-from .doctor import check_conventions
+from .doctor import refuse_convention_mistakes
 from .motion import add_derivative_arguments, calibrate_motion
 
 
@@ -224,7 +224,7 @@ def run(args) -> int:
         # frame; with a
         # stated sign, axis, base mount or an estimated mount calibrate() checks the conventions
         # itself.
-        check_conventions(loaded, arm)
+        refuse_convention_mistakes(loaded, arm)
     options = dict(
         method=args.method,
         g=args.g,

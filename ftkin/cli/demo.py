@@ -125,7 +125,7 @@ def run(args) -> int:
 
 def _closed_loop(arm: Arm, calibration, seconds: float, seed: int) -> None:
     """Place the paper's object on the book in MuJoCo, compensating with ``calibration``."""
-    from ..sim.mujoco.placement import simulate_placement_mujoco
+    from ..sim.mujoco.mujoco_placement import simulate_placement_mujoco
     from ..sim.placement import PlacementScenario, admittance_controller
     from ..sim.surfaces import BOOK
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import logging
 
 from ..exceptions import ConventionMistake
-from ..io.conventions import diagnose_table
 from ..io.csv_table import read_table
+from ..io.table_readings import diagnose_table
 from .common import add_arm_arguments, arm_from_args
 
 logger = logging.getLogger("ftkin.cli")
@@ -45,7 +45,7 @@ def run(args) -> int:
     return 1 if report.verdict == "mistake" else 0
 
 
-def check_conventions(loaded, arm) -> None:
+def refuse_convention_mistakes(loaded, arm) -> None:
     """Refuse samples whose data fit only under a common mistake; warn on a suspicion
     (``calibrate``).
     """

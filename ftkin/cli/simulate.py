@@ -184,7 +184,7 @@ def _simulate(scenario: PlacementScenario, args):
     if args.engine == "simple":
         run_ = simulate_placement(scenario)
         return run_, list(PlacementRun.COLUMNS), run_.rows()
-    from ..sim.mujoco.placement import simulate_placement_mujoco
+    from ..sim.mujoco.mujoco_placement import simulate_placement_mujoco
 
     run_, full = simulate_placement_mujoco(
         scenario, sample_rate=args.sample_rate, delay_ticks=args.delay_ticks

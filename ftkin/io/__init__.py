@@ -17,7 +17,7 @@ from .._lazy import lazy_exports
 _EXPORTS = {
     "MotionRecording": ".motion_recording",
     "Payload": ".payload_export",
-    "diagnose_samples": ".conventions",
+    "diagnose_samples": ".table_readings",
     "export_payload": ".export",
     "load_calibration": ".calibration_file",
     "load_motion_bag": ".motion_recording",

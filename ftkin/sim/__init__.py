@@ -19,7 +19,7 @@ _EXPORTS = {
     "MujocoRecorder": ".mujoco",
     "PlacementRun": ".placement",
     "PlacementScenario": ".placement",
-    "SensorDrift": ".drift",
+    "SensorDrift": ".drifting_sensor",
     "SimulatedSensor": ".sensor",
     "Surface": ".surfaces",
     "ToolInertia": ".mujoco",

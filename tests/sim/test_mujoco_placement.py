@@ -9,7 +9,7 @@ import pytest
 
 pytest.importorskip("mujoco")
 
-from ftkin.sim.mujoco.placement import simulate_placement_mujoco  # noqa: E402
+from ftkin.sim.mujoco.mujoco_placement import simulate_placement_mujoco  # noqa: E402
 from ftkin.sim.placement import PlacementScenario, simulate_placement  # noqa: E402
 from ftkin.sim.surfaces import BOOK, SPONGE  # noqa: E402
 

@@ -11,7 +11,7 @@ pytest.importorskip("mujoco")
 
 from ftkin.control import SensorFault  # noqa: E402
 from ftkin.control.stability import max_stable_k1  # noqa: E402
-from ftkin.sim.mujoco.placement import simulate_placement_mujoco  # noqa: E402
+from ftkin.sim.mujoco.mujoco_placement import simulate_placement_mujoco  # noqa: E402
 from ftkin.sim.placement import PlacementScenario  # noqa: E402
 from ftkin.sim.surfaces import BOOK  # noqa: E402
 

@@ -3,7 +3,7 @@
 Each control tick of :func:`run_closed_loop`:
 
 1. MuJoCo's ideal wrench (ftkin's sign) becomes a raw reading through the
-   :class:`~ftkin.sim.mujoco.sensor.MujocoSensor` (bias, noise, saturation,
+   :class:`~ftkin.sim.mujoco.mujoco_sensor.MujocoSensor` (bias, noise, saturation,
    sample rate, one-tick delay);
 2. the controller turns the measured joint positions and the reading into
    joint velocities (``controller.step(q, raw, dt)``, e.g.
@@ -24,7 +24,7 @@ import numpy as np
 
 from ...calibration.model import SensorModel
 from ...exceptions import InvalidInput
-from .sensor import MujocoSensor
+from .mujoco_sensor import MujocoSensor
 from .simulation import ArmSimulation
 
 PLACEMENT_COLUMNS = (

@@ -11,7 +11,7 @@ sensor body exerts on the load's subtree. ftkin's raw reading is the load on
 the sensor, i.e. minus that.
 
 This is deliberately small: the full MuJoCo model of the arm with its scene and
-the closed loop is :func:`~ftkin.sim.mujoco.model.build_arm_model`; this module only records.
+the closed loop is :func:`~ftkin.sim.mujoco.arm_model.build_arm_model`; this module only records.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The compiled MuJoCo scene with ftkin-side accessors (state, readings, the tool's truth).
 
-Built by :func:`~ftkin.sim.mujoco.model.build_arm_model`. MuJoCo's world frame
+Built by :func:`~ftkin.sim.mujoco.arm_model.build_arm_model`. MuJoCo's world frame
 is the arm's base frame. Sign: MuJoCo's force/torque sensors read the wrench the
 parent body exerts on the measured subtree (site frame, torque about the site
 origin); ftkin's raw reading is the load on the sensor, its negative.

@@ -15,8 +15,8 @@ import pytest
 import ftkin
 from ftkin import SensorModel
 from ftkin.cli import main
-from ftkin.io.conventions import diagnose_table
 from ftkin.io.csv_table import Table, write_csv
+from ftkin.io.table_readings import diagnose_table
 from ftkin.kinematics.rotations import matrix_to_euler_zyx, matrix_to_quaternion
 
 WRENCH = ["fx", "fy", "fz", "mx", "my", "mz"]
@@ -180,9 +180,9 @@ def test_calibrate_refuses_and_doctor_explains(arm, tmp_path, capsys):
         and "give alpha, beta, gamma in degrees" in err
     )
     with pytest.raises(ftkin.ConventionMistake) as info:
-        from ftkin.cli.doctor import check_conventions
+        from ftkin.cli.doctor import refuse_convention_mistakes
 
-        check_conventions(ftkin.load_samples(path), None)
+        refuse_convention_mistakes(ftkin.load_samples(path), None)
     assert info.value.reading == "Euler angles in radians"
     assert main(["doctor", str(path)]) == 1
     out = capsys.readouterr().out

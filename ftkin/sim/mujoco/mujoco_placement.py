@@ -3,7 +3,7 @@
 The same :class:`~ftkin.sim.placement.PlacementScenario` as the simple engine,
 run in a physics engine instead: the arm's servos, the tool's and the object's
 inertia, a spring-loaded sponge or book pad and a sensor with bias, noise and a
-one-tick delay (:class:`~ftkin.sim.mujoco.sensor.MujocoSensor`, the paper-like
+one-tick delay (:class:`~ftkin.sim.mujoco.mujoco_sensor.MujocoSensor`, the paper-like
 bias of :func:`~ftkin.sim.sensor.paper_like_truth`, gravity tilted by its base tilt).
 
 * ``"position"``: :class:`PositionLowering` lowers the tool at the scenario's speed to
@@ -28,9 +28,9 @@ from ...control.damped_least_squares import damped_least_squares
 from ...kinematics.arm import Arm
 from ..placement import PlacementRun, PlacementScenario, admittance_controller
 from ..sensor import SimulatedSensor, paper_like_truth
+from .arm_model import GraspedObject, build_arm_model
 from .loop import ClosedLoopRun, run_closed_loop
-from .model import GraspedObject, build_arm_model
-from .sensor import MujocoSensor
+from .mujoco_sensor import MujocoSensor
 from .simulation import ArmSimulation
 
 
