@@ -22,8 +22,8 @@ import numpy as np
 from ..exceptions import InvalidInput
 from .atomic import atomic_write_text
 from .export_format import ExportFormat, ExportRequest
-from .payload_export import FrankaLoad, UrPayload
-from .ros_controllers import Admittance, FtCalib, GravityCompensation
+from .payload_export import FrankaLoadExport, UrPayloadExport
+from .ros_controllers import AdmittanceExport, FtCalibExport, GravityCompensationExport
 
 EXPORT_FORMATS: dict[str, ExportFormat] = {}
 """The registered formats by name, in ``--help`` order."""
@@ -45,7 +45,13 @@ def register_export_format(export_format: ExportFormat, *, replace: bool = False
     return export_format
 
 
-_BUILT_IN = (Admittance(), GravityCompensation(), FtCalib(), FrankaLoad(), UrPayload())
+_BUILT_IN = (
+    AdmittanceExport(),
+    GravityCompensationExport(),
+    FtCalibExport(),
+    FrankaLoadExport(),
+    UrPayloadExport(),
+)
 for _format in _BUILT_IN:
     register_export_format(_format)
 

@@ -184,7 +184,7 @@ class PayloadFormat(ExportFormat):
         )
 
 
-class FrankaLoad(PayloadFormat):
+class FrankaLoadExport(PayloadFormat):
     name = "franka-load"
     options = (FLANGE_FRAME, INERTIA)
     summary = "franka_msgs/srv/SetLoad request: mass, center_of_mass, load_inertia"
@@ -222,7 +222,7 @@ def urscript_line(payload: Payload) -> str:
     return f"set_payload({float(payload.mass)!r}, [{cx!r}, {cy!r}, {cz!r}])"
 
 
-class UrPayload(PayloadFormat):
+class UrPayloadExport(PayloadFormat):
     name = "ur-payload"
     summary = (
         "ur_msgs/srv/SetPayload request for the ROS 2 UR driver, URScript set_payload as a "

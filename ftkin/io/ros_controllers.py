@@ -148,7 +148,7 @@ class RosControllerFormat(ExportFormat):
         return notes
 
 
-class Admittance(RosControllerFormat):
+class AdmittanceExport(RosControllerFormat):
     name = "admittance"
     summary = "ros2_controllers admittance_controller gravity_compensation.*"
     options = (FRAME_ID, NODE_NAME)
@@ -168,7 +168,7 @@ class Admittance(RosControllerFormat):
         return {node: {"ros__parameters": {"gravity_compensation": parameters}}}
 
 
-class GravityCompensation(RosControllerFormat):
+class GravityCompensationExport(RosControllerFormat):
     name = "gravity-compensation"
     summary = (
         "control_toolbox GravityCompensationWrench filter tool.CoG/mass/gravity_field, with the "
@@ -213,7 +213,7 @@ class GravityCompensation(RosControllerFormat):
         return {node: {"ros__parameters": {"sensor_filter_chain": chain}}}
 
 
-class FtCalib(RosControllerFormat):
+class FtCalibExport(RosControllerFormat):
     name = "ft-calib"
     summary = (
         "force_torque_tools ft_calib YAML (a flat ROS 1 parameter file): bias, gripper_mass, "
