@@ -170,3 +170,15 @@ def test_ros_name_rules(kind, good, bad):
     for name in bad:
         with pytest.raises(InvalidInput, match=f"ROS {kind} name"):
             as_ros_name(name, kind, "name")
+
+
+def test_cli_refuses_a_bad_ros_name_before_writing(calibration_file, tmp_path, capsys):
+    _, path = calibration_file
+    out = tmp_path / "a.yaml"
+    command = ["export", str(path), "--format", "admittance", "-o", str(out)]
+    assert main([*command, "--node-name", "admittance controller"]) == 2
+    assert "--node-name 'admittance controller' is not a valid ROS node name" in (
+        capsys.readouterr().err
+    )
+    assert main([*command, "--frame-id", "/ft_sensor"]) == 2
+    assert "no leading '/'" in capsys.readouterr().err and not out.exists()
