@@ -29,7 +29,7 @@ from ..calibration.mount import MOUNT_NAMES
 from ..exceptions import InvalidInput, UnobservableParameters
 from ..kinematics.collision import SelfCollision
 from ..kinematics.rotations import euler_zyx_to_matrix
-from ..validation import as_float_array
+from ..validation import as_in_range
 
 _MOUNT_MODE_BY_SIZE = {12: "none", 13: "yaw", 15: "full"}
 
@@ -58,43 +58,14 @@ class PoseConstraints:
     self_collision: bool = True
 
     def __post_init__(self):
-        margin = float(as_float_array(self.margin, "margin"))
-        if not np.isfinite(margin) or margin < 0:
-            raise InvalidInput(f"margin must be a finite number ≥ 0 [rad], got {self.margin!r}")
-        object.__setattr__(self, "margin", margin)
-        if self.floor_height is not None:
-            floor = float(as_float_array(self.floor_height, "floor_height"))
-            if not np.isfinite(floor):
-                raise InvalidInput(f"floor_height must be finite [m], got {self.floor_height!r}")
-            object.__setattr__(self, "floor_height", floor)
-        if self.max_tilt is not None:
-            tilt = float(as_float_array(self.max_tilt, "max_tilt"))
-            if not (0.0 <= tilt <= np.pi):
-                raise InvalidInput(f"max_tilt must be between 0 and π [rad], got {self.max_tilt!r}")
-            object.__setattr__(self, "max_tilt", tilt)
-        if isinstance(self.joint_ranges, Mapping):
-            ranges = [(name, *bounds) for name, bounds in self.joint_ranges.items()]
-        else:
-            ranges = list(self.joint_ranges or ())
-        cleaned = []
-        for entry in ranges:
-            if len(entry) != 3:
-                raise InvalidInput(
-                    f"a joint range must be (name, lower, upper) [rad], got {entry!r}"
-                )
-            try:
-                name, lower, upper = str(entry[0]), float(entry[1]), float(entry[2])
-            except (TypeError, ValueError):
-                raise InvalidInput(
-                    f"a joint range must be (name, lower, upper) [rad], got {entry!r}"
-                ) from None
-            if not (np.isfinite(lower) and np.isfinite(upper) and lower < upper):
-                raise InvalidInput(
-                    f"joint range for {name!r} must be finite with lower < upper [rad], got "
-                    f"({lower}, {upper})"
-                )
-            cleaned.append((name, lower, upper))
-        object.__setattr__(self, "joint_ranges", tuple(cleaned))
+        values = {
+            "margin": as_in_range(self.margin, "margin", 0.0, 2.0 * np.pi, "rad"),
+            "floor_height": _optional(self.floor_height, "floor_height", 100.0, "m"),
+            "max_tilt": _optional(self.max_tilt, "max_tilt", np.pi, "rad", low=0.0),
+            "joint_ranges": _joint_ranges(self.joint_ranges),
+        }
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
 
     def describe(self) -> str:
         """One line naming every active constraint (for reports and errors)."""
@@ -108,6 +79,38 @@ class PoseConstraints:
             parts.append(f"tool axis within {np.rad2deg(self.max_tilt):g}° of straight down")
         parts.append("no self-collision" if self.self_collision else "self-collision not checked")
         return "; ".join(parts)
+
+
+def _optional(value, name: str, bound: float, unit: str, low: float | None = None):
+    """None, or a finite float within ``[low, bound]`` (``low`` default ``-bound``)."""
+    if value is None:
+        return None
+    return as_in_range(value, name, -bound if low is None else low, bound, unit)
+
+
+def _joint_ranges(value) -> tuple[tuple[str, float, float], ...]:
+    """``((name, lower, upper), ...)`` [rad] from such entries or ``{name: (lower, upper)}``."""
+    entries = (
+        [(name, *bounds) for name, bounds in value.items()]
+        if isinstance(value, Mapping)
+        else list(value or ())
+    )
+    cleaned = []
+    for entry in entries:
+        try:
+            name, lower, upper = entry
+            name, lower, upper = str(name), float(lower), float(upper)
+        except (TypeError, ValueError):
+            raise InvalidInput(
+                f"a joint range must be (name, lower, upper) [rad], got {entry!r}"
+            ) from None
+        if not (np.isfinite(lower) and np.isfinite(upper) and lower < upper):
+            raise InvalidInput(
+                f"joint range for {name!r} must be finite with lower < upper [rad], got "
+                f"({lower}, {upper})"
+            )
+        cleaned.append((name, lower, upper))
+    return tuple(cleaned)
 
 
 class FeasibilityChecker:
