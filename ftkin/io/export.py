@@ -104,8 +104,11 @@ def export_request(
     given = {name: value for name, value in options.items() if value is not None}
     unknown = sorted(set(given) - set(known))
     if unknown:
+        flags = {o.name: o.flag for f in EXPORT_FORMATS.values() for o in f.options}
+        named = [f"{name} ({flags[name]})" if name in flags else name for name in unknown]
+        takes = [f"{name} ({option.flag})" for name, option in known.items()]
         raise InvalidInput(
-            f"{fmt} takes no {', '.join(unknown)}; its options: {', '.join(known) or 'none'}"
+            f"{fmt} takes no {', '.join(named)}; its options: {', '.join(takes) or 'none'}"
         )
     if chosen.needs_arm and arm is None:
         raise InvalidInput(f"{fmt} needs the arm (the centre of mass is written in its flange)")

@@ -127,7 +127,10 @@ def test_unknown_format(truth):
 
 
 def test_bad_options_and_weightless_tool(truth):
-    with pytest.raises(InvalidInput, match="ft-calib takes no node_name; its options: frame_id"):
+    with pytest.raises(
+        InvalidInput,
+        match=r"ft-calib takes no node_name \(--node-name\); its options: frame_id \(--frame-id\)",
+    ):
         export_text(truth, "ft-calib", node_name="ft_node")
     weightless = SensorModel(
         truth.force_offset, truth.torque_offset, [0.0, 0.0, 0.0], truth.center_of_mass
