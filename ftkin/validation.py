@@ -6,6 +6,7 @@ them can assume clean ``float64`` arrays of the right shape.
 
 from __future__ import annotations
 
+import dataclasses
 import re
 
 import numpy as np
@@ -280,3 +281,12 @@ def as_ros_name(value, kind: str, name: str) -> str:
             f"{name} {value!r} is not a valid ROS {kind} name: expected {rule}, no '__'"
         )
     return value
+
+
+def from_fields(cls, options: dict, what: str):
+    """``cls(**options)``, an unknown keyword named with the known ones (:class:`InvalidInput`)."""
+    known = [item.name for item in dataclasses.fields(cls) if item.init]
+    unknown = sorted(set(options) - set(known))
+    if unknown:
+        raise InvalidInput(f"{what} takes no {', '.join(unknown)}; expected: {', '.join(known)}")
+    return cls(**options)

@@ -10,7 +10,7 @@ report shows how close a set comes.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -25,7 +25,13 @@ from ..calibration.mount import MOUNT_NAMES, check_mount_mode, split_information
 from ..calibration.observability import check_pose_count
 from ..calibration.random_walk import walk_gains
 from ..exceptions import InvalidInput
-from ..validation import as_float_array, as_in_range, as_rotation_batch, as_vector
+from ..validation import (
+    as_float_array,
+    as_in_range,
+    as_rotation_batch,
+    as_vector,
+    from_fields,
+)
 from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_options, walk_information
 
 PAPER_TOOL_WEIGHT = 3.15
@@ -184,15 +190,6 @@ def whole_number(value, name: str, minimum: int = 0) -> int:
     if value < minimum:
         raise InvalidInput(f"{name} must be at least {minimum}, got {value}")
     return int(value)
-
-
-def from_fields(cls, options: dict, what: str):
-    """``cls(**options)``, an unknown keyword named with the known ones (:class:`InvalidInput`)."""
-    known = [item.name for item in fields(cls) if item.init]
-    unknown = sorted(set(options) - set(known))
-    if unknown:
-        raise InvalidInput(f"{what} takes no {', '.join(unknown)}; expected: {', '.join(known)}")
-    return cls(**options)
 
 
 @dataclass(frozen=True, eq=False)

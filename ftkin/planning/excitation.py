@@ -32,9 +32,8 @@ from ..calibration.information import SensorNoise
 from ..calibration.model import STANDARD_GRAVITY
 from ..calibration.regressor import body_regressor, sensor_motion
 from ..exceptions import InvalidInput
-from ..validation import as_positive
+from ..validation import as_positive, from_fields
 from .constraints import FeasibilityChecker, PoseConstraints
-from .evaluation import from_fields
 
 DEFAULT_ACCELERATION_LIMIT = 10.0
 """Default joint acceleration limit [rad/s²] (URDFs carry none)."""

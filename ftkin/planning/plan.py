@@ -28,6 +28,7 @@ import numpy as np
 from ..calibration.observability import check_pose_count
 from ..exceptions import InvalidInput
 from ..progress import Progress
+from ..validation import from_fields
 from .constraints import (
     FeasibilityChecker,
     PoseConstraints,
@@ -40,7 +41,6 @@ from .evaluation import (
     ExpectedCalibration,
     PoseEvaluation,
     evaluate_poses,
-    from_fields,
     whole_number,
 )
 from .order import joint_distances, path_length, revolute_mask, short_travel_order, unwind_revolute

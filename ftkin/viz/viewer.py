@@ -19,6 +19,7 @@ of each other and the yellow one vanishes.
 from __future__ import annotations
 
 import atexit
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +28,7 @@ from ..calibration.model import SensorModel
 from ..exceptions import InvalidInput
 from ..io.atomic import atomic_write_text
 from ..kinematics.arm import Arm
-from ..validation import as_batch, as_positive, as_vector
+from ..validation import as_batch, as_positive, as_vector, from_fields
 from .arrows import ArrowStyle, NodePose, arrow_placement, exaggerate_tilt, rigid_transform
 from .framing import PoseView, arm_points, frame_pose
 from .legend import (
@@ -48,6 +49,43 @@ DEFAULT_ARROW_LENGTH = 0.25
 """Drawn length of the tool-weight arrow when no scale is given [m]."""
 
 
+@dataclass(frozen=True)
+class DrawingOptions:
+    """How a :class:`CalibrationViewer` draws.
+
+    Attributes:
+        scale: Arrow scale [m per N]; None: the tool weight is drawn
+            :data:`DEFAULT_ARROW_LENGTH` long.
+        tilt_exaggeration: Factor applied to the base tilt angle when drawing
+            the gravity direction (1 = true angle).
+        style: Arrow sizes [m].
+        gravity_anchor: Where the gravity-direction arrow starts (base frame) [m];
+            None: beside the sensor, right of it on screen.
+        auto_camera: At each pose aim the camera at the sensor origin and see the
+            arrows side-on (:func:`ftkin.viz.framing.frame_pose`);
+            :meth:`CalibrationViewer.set_camera` turns it off.
+    """
+
+    scale: float | None = None
+    tilt_exaggeration: float = 1.0
+    style: ArrowStyle = field(default_factory=ArrowStyle)
+    gravity_anchor: object = None
+    auto_camera: bool = True
+
+    def __post_init__(self):
+        values = {
+            "scale": None if self.scale is None else as_positive(self.scale, "scale [m/N]"),
+            "tilt_exaggeration": as_positive(self.tilt_exaggeration, "tilt_exaggeration"),
+            "style": self.style or ArrowStyle(),
+            "gravity_anchor": None
+            if self.gravity_anchor is None
+            else as_vector(self.gravity_anchor, 3, "gravity_anchor [m]"),
+            "auto_camera": bool(self.auto_camera),
+        }
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+
+
 class CalibrationViewer:
     """Show a calibration at poses of an arm in meshcat.
 
@@ -57,15 +95,8 @@ class CalibrationViewer:
         zmq_url: Attach to a running meshcat server (``meshcat-server``) instead
             of starting one; an attached server is left running on :meth:`close`.
         visualizer: An existing ``meshcat.Visualizer`` to draw into (left running).
-        scale: Arrow scale [m per N]; default: the tool weight is drawn
-            :data:`DEFAULT_ARROW_LENGTH` long.
-        tilt_exaggeration: Factor applied to the base tilt angle when drawing
-            the gravity direction (1 = true angle).
-        style: Arrow sizes [m].
-        gravity_anchor: Where the gravity-direction arrow starts (base frame) [m];
-            default: beside the sensor, right of it on screen.
-        auto_camera: At each pose aim the camera at the sensor origin and see the
-            arrows side-on (:func:`ftkin.viz.framing.frame_pose`); :meth:`set_camera` turns it off.
+        drawing: How to draw (:class:`DrawingOptions`); or give its fields as keywords
+            (``CalibrationViewer(calibration, arm, scale=0.04)``).
     """
 
     def __init__(
@@ -75,29 +106,25 @@ class CalibrationViewer:
         *,
         zmq_url: str | None = None,
         visualizer=None,
-        scale: float | None = None,
-        tilt_exaggeration: float = 1.0,
-        style: ArrowStyle | None = None,
-        gravity_anchor=None,
-        auto_camera: bool = True,
+        drawing: DrawingOptions | None = None,
+        **options,
     ):
         _check_calibration(calibration)
         if arm is not None and not isinstance(arm, Arm):
             raise InvalidInput(f"arm must be an ftkin Arm or None, got {type(arm).__name__}")
+        if drawing is not None and options:
+            raise InvalidInput("give DrawingOptions or their fields as keywords, not both")
+        if drawing is None:
+            drawing = from_fields(DrawingOptions, options, "CalibrationViewer")
         self.calibration = calibration
         self.arm = arm
-        weight = calibration.tool_weight
         self.scale = (
-            as_positive(scale, "scale [m/N]")
-            if scale is not None
-            else DEFAULT_ARROW_LENGTH / max(weight, 1e-9)
+            drawing.scale
+            if drawing.scale is not None
+            else DEFAULT_ARROW_LENGTH / max(calibration.tool_weight, 1e-9)
         )
-        self.tilt_exaggeration = as_positive(tilt_exaggeration, "tilt_exaggeration")
-        self.style = style or ArrowStyle()
-        self.gravity_anchor = (
-            None if gravity_anchor is None else as_vector(gravity_anchor, 3, "gravity_anchor [m]")
-        )
-        self.auto_camera = bool(auto_camera)
+        self.tilt_exaggeration, self.style = drawing.tilt_exaggeration, drawing.style
+        self.gravity_anchor, self.auto_camera = drawing.gravity_anchor, drawing.auto_camera
         self.view: PoseView | None = None
         self._anchor = (
             np.array([-0.25, -0.3, 0.4]),

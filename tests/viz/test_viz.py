@@ -328,3 +328,17 @@ def test_cli_view_errors(calibration_files, capsys):
     assert "exactly one" in capsys.readouterr().err
     assert main(["view", str(calib), str(samples), "--pose", "99", "--no-wait"]) == 2
     assert "no pose 99; available: pose 0" in capsys.readouterr().err
+
+
+def test_drawing_options_or_their_fields(truth):
+    """The viewer's drawing settings are one object; the keywords are its shortcut."""
+    from ftkin.viz.viewer import DrawingOptions
+
+    options = DrawingOptions(scale=0.04, tilt_exaggeration=3.0, auto_camera=False)
+    assert options.scale == 0.04 and options.tilt_exaggeration == 3.0
+    with pytest.raises(InvalidInput, match="tilt_exaggeration must be a finite positive number"):
+        DrawingOptions(tilt_exaggeration=0.0)
+    with pytest.raises(InvalidInput, match="CalibrationViewer takes no colour; expected: scale"):
+        CalibrationViewer(truth, colour="red")
+    with pytest.raises(InvalidInput, match="not both"):
+        CalibrationViewer(truth, drawing=options, scale=0.1)
