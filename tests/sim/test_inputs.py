@@ -75,6 +75,18 @@ def test_cli_mount_and_sign_are_recovered(tmp_path):
     _within(result, paper_like_truth())
 
 
+def test_cli_drift_has_times_and_is_found(tmp_path):
+    samples, calib = tmp_path / "s.csv", tmp_path / "c.json"
+    assert main(["simulate", "samples", "--drift", "--n", "30", "-o", str(samples)]) == 0
+    loaded = load_samples(samples)
+    times = loaded.samples.times
+    assert times is not None and times.max() > 200.0  # 30 poses, 10 s apart [s]
+    assert main(["calibrate", str(samples), "--drift", "auto", "-o", str(calib)]) == 0
+    result = load_calibration(calib)
+    assert result.drift is not None and result.drift.model != "none"
+    np.testing.assert_allclose(result.tool_mass, paper_like_truth().tool_mass, rtol=2e-3)
+
+
 def test_cli_tool_options_and_noise_scale(tmp_path):
     samples, calib = tmp_path / "s.csv", tmp_path / "c.json"
     argv = ["simulate", "samples", "--tool-mass", "1.5", "--com", "0.01", "-0.02", "0.08"]
