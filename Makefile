@@ -26,8 +26,8 @@ test: $(STAMP)
 	$(PY) -m pytest -q
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff format --check ftkin tests benchmarks docs scripts
-	$(VENV)/bin/ruff check ftkin tests benchmarks docs scripts
+	$(VENV)/bin/ruff format --check ftkin tests benchmarks docs scripts conftest.py
+	$(VENV)/bin/ruff check ftkin tests benchmarks docs scripts conftest.py
 	$(VENV)/bin/lint-imports
 
 docs: $(STAMP)

@@ -113,4 +113,3 @@ def pytest_terminal_summary(terminalreporter) -> None:
             f"docs code blocks: {_COUNTS['executed']} executed, {_COUNTS['fragment']} marked as "
             f"fragments, {_COUNTS['slow']} slow (make docs-test), {_COUNTS['failed']} failed"
         )
-
