@@ -102,3 +102,23 @@ def test_method_is_cited_through_its_page():
     for page in PAGES:
         if page.name != "method.md":
             assert "METHOD.md" not in page.read_text(), f"{page.name} cites METHOD.md"
+
+
+def test_documented_file_version_is_the_written_one():
+    from ftkin.io.calibration_file import FORMAT_VERSION
+
+    text = (ROOT / "docs" / "calibration.md").read_text()
+    assert f'"version": {FORMAT_VERSION}`' in text
+
+
+def test_paper_values_are_quoted_as_printed_beside_ftkins():
+    from ftkin.sim.paper import PAPER_RESULTS, paper_calibration
+
+    printed_z = PAPER_RESULTS["torque_offset"][2]
+    ours_z = round(float(paper_calibration("linear").torque_offset[2]), 4)
+    assert (printed_z, ours_z) == (0.0255, 0.0254)
+    for page in (ROOT / "README.md", ROOT / "docs" / "calibration.md"):
+        rows = [line for line in page.read_text().splitlines() if line.startswith("| M0 |")]
+        assert rows == [
+            "| M0 | [−0.0002, −0.0605, 0.0255] N·m | [−0.0002, −0.0605, 0.0254] N·m |"
+        ], page.name
