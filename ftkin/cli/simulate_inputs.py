@@ -13,14 +13,15 @@ from __future__ import annotations
 import numpy as np
 
 from ..exceptions import InvalidInput
-from .arg_types import bounded_int, non_negative_float, number_list, positive_float, seed
+from .arg_types import bounded_int, number_list, positive_float, seed
 from .common import add_arm_arguments, arm_from_args
 
 KINDS = {
     "samples": "a samples CSV at static poses (for ftkin calibrate)",
     "log": "a log of a slow move with a known 2 N push on the tool (for ftkin compensate)",
     "recording": "a moving recording along an excitation, MuJoCo inverse dynamics (for "
-    "ftkin calibrate --dynamic; extra 'sim')",
+    "ftkin calibrate --dynamic; extra 'sim'; a URDF with a 'gripper' link on the sensor, such as "
+    "the bundled arm's)",
     "bag": "a ROS 2 bag (MCAP) of a session holding each pose (for ftkin calibrate BAG and "
     "ftkin extract; extra 'bags')",
 }
@@ -80,7 +81,7 @@ def _add_sensor_arguments(parser) -> None:
     )
     group.add_argument(
         "--noise-scale",
-        type=non_negative_float,
+        type=positive_float,
         default=1.0,
         metavar="K",
         help="noise = K × the paper's 0.02 N, 0.002 N·m per reading (default: %(default)g)",
@@ -212,7 +213,13 @@ def run(args) -> int:
             inputs.truth.tool_mass, inputs.truth.center_of_mass, np.diag([2e-3, 2e-3, 1e-3])
         )
         times, q, dq, ddq = _trajectory(args, arm)
-        header, rows = sim_inputs.recording_table(inputs, arm, times, q, dq, ddq, rng, tool)
+        try:
+            header, rows = sim_inputs.recording_table(inputs, arm, times, q, dq, ddq, rng, tool)
+        except InvalidInput as error:
+            raise InvalidInput(
+                f"ftkin simulate recording needs a URDF whose link 'gripper' is bolted to the "
+                f"sensor (the bundled arm): {error}"
+            ) from None
         what = f"{len(rows)} rows over {times[-1]:.1f} s, tool inertia diag(2e-3, 2e-3, 1e-3) kg·m²"
     write_csv(args.output, header, rows)
     print(f"wrote {args.output}: {what}")

@@ -153,5 +153,7 @@ def test_bad_inputs_are_refused(tmp_path, capsys):
     poses.write_text("alpha,beta,gamma\n0,0,0\n")
     assert main(["simulate", "samples", "--poses", str(poses), "-o", out]) == 2
     assert "expected 6 joint columns" in capsys.readouterr().err
+    assert main(["simulate", "samples", "--noise-scale", "0", "-o", out]) == 2
+    assert main(["simulate", "samples", "--poses", str(poses), "-o", str(poses)]) == 2
     with pytest.raises(Exception, match="rotation"):
         SimulatedInputs(mount_rotation=np.ones((3, 3)))
