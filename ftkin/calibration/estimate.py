@@ -230,49 +230,20 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
         static = _Static(fit_linear(poses, options.g), None, None, np.eye(3), None, None, poses)
     else:
         static = _fit_static(poses, options, log=not drift_models)
-    model, diagnostics, covariance, trajectory = (
-        static.model,
-        static.diagnostics,
-        static.covariance,
-        None,
-    )
-    poses = static.poses
     if drift_models:
-        start = DriftStart(
-            static.fit.model.to_vector(),
-            np.asarray(static.fit.problem.channel_std),
-            static.fit.noise_source,
-            static.fit.noise_dof,
-            options.noise_floor(poses.wrenches),
-            options.resolution is not None,
-        )
-        drift_fit, criteria, notes = select_drift(drift_models, poses, start)
-        if drift_fit is None:
-            log_warnings(diagnostics)
-        else:
-            diagnostics, covariance = diagnose(
-                drift_fit,
-                poses.pose_ids,
-                parameter_count=drift_fit.parameter_count,
-                wrenches=poses.wrenches,
-                noise_free=_noise_free(poses),
-            )
-            model = SensorModel.from_vector(drift_fit.model.to_vector(), options.g)
-            trajectory = drift_fit.drift
-        diagnostics = replace(diagnostics, warnings=diagnostics.warnings + notes)
-        trajectory = trajectory or _constant_trajectory(model, poses, covariance, criteria)
+        static = _fit_drift(static, drift_models, options)
     elif samples.times is not None:
-        trajectory = _constant_trajectory(model, poses, covariance, {})
-    if trajectory is not None:
+        static = replace(static, drift=_constant_trajectory(static, {}))
+    if static.drift is not None:
         span = np.array([np.min(samples.times), np.max(samples.times)])
-        trajectory = replace(trajectory, recorded_span=span)
-    return _result(samples, options, static, model, diagnostics, covariance, trajectory)
+        static = replace(static, drift=replace(static.drift, recorded_span=span))
+    return _result(samples, options, static)
 
 
 @dataclass(frozen=True)
 class _Static:
-    """The constant-bias fit: model, ML fit (None for ``linear``), its diagnostics and covariance,
-    mount, and the poses fitted (after any dropped outliers).
+    """A fit: model, ML fit (None for ``linear``), its diagnostics and covariance, mount, the
+    poses fitted (after any dropped outliers) and the bias trajectory.
     """
 
     model: SensorModel
@@ -282,6 +253,7 @@ class _Static:
     mount_covariance: np.ndarray | None
     covariance: np.ndarray | None
     poses: PoseAverages
+    drift: BiasDrift | None = None
 
 
 def _noise_free(poses: PoseAverages) -> bool:
@@ -344,23 +316,54 @@ def _subset(poses: PoseAverages, keep: np.ndarray) -> PoseAverages:
     )
 
 
-def _constant_trajectory(
-    model: SensorModel, poses: PoseAverages, covariance, criteria: dict
-) -> BiasDrift:
+def _fit_drift(static: _Static, models: tuple, options: CalibrationOptions) -> _Static:
+    """The constant-bias fit ``static`` with the best of the drift ``models`` (or kept)."""
+    poses, fit = static.poses, static.fit
+    floor = options.noise_floor(poses.wrenches)
+    start = DriftStart(
+        fit.model.to_vector(),
+        np.asarray(fit.problem.channel_std),
+        fit.noise_source,
+        fit.noise_dof,
+        floor,
+        options.resolution is not None,
+    )
+    drift_fit, criteria, notes = select_drift(models, poses, start)
+    if drift_fit is None:
+        log_warnings(static.diagnostics)
+        static = replace(static, drift=_constant_trajectory(static, criteria))
+    else:
+        diagnostics, covariance = diagnose(
+            drift_fit,
+            poses.pose_ids,
+            parameter_count=drift_fit.parameter_count,
+            wrenches=poses.wrenches,
+            noise_free=_noise_free(poses),
+        )
+        model = SensorModel.from_vector(drift_fit.model.to_vector(), options.g)
+        static = replace(static, model=model, diagnostics=diagnostics, covariance=covariance)
+        static = replace(static, drift=drift_fit.drift)
+    warnings = static.diagnostics.warnings + notes
+    return replace(static, diagnostics=replace(static.diagnostics, warnings=warnings))
+
+
+def _constant_trajectory(static: _Static, criteria: dict) -> BiasDrift:
     """The constant bias as a :class:`BiasDrift` (``"none"``), for samples that had times."""
-    times = np.sort(poses.times)
+    times = np.sort(static.poses.times)
+    covariance = static.covariance
     std = np.sqrt(np.diag(covariance)[3:9]) if covariance is not None else np.zeros(6)
     return BiasDrift(
         "none",
         "auto" if criteria else "given",
         times,
-        np.tile(model.bias, (len(times), 1)),
+        np.tile(static.model.bias, (len(times), 1)),
         np.tile(std, (len(times), 1)),
         criteria=criteria,
     )
 
 
-def _result(samples, options, static, model, diagnostics, covariance, trajectory):
+def _result(samples: Samples, options: CalibrationOptions, static: _Static) -> CalibrationResult:
+    model, trajectory = static.model, static.drift
     poses, rotations = static.poses, static.poses.rotations @ static.mount.T
     if trajectory is None or trajectory.model == "none":
         residuals = poses.wrenches - model.predict(rotations)
@@ -380,8 +383,8 @@ def _result(samples, options, static, model, diagnostics, covariance, trajectory
         sample_count=int(np.sum(poses.counts)),
         urdf=samples.urdf,
         sensor_frame=samples.sensor_frame,
-        covariance=covariance,
-        diagnostics=diagnostics,
+        covariance=static.covariance,
+        diagnostics=static.diagnostics,
         mount_rotation=static.mount,
         mount_mode=options.estimate_mount,
         mount_covariance=static.mount_covariance,

@@ -245,6 +245,23 @@ def _solve(problem: WeightedProblem, start: np.ndarray, loss: str) -> tuple[np.n
     return solution.x, int(solution.nfev)
 
 
+def _noise(poses: PoseAverages, problem, theta0, noise, loss: str, floor):
+    """``(channel_std (6,), dof, source)``: the noise given, else from the spread of repeated
+    readings, else from the residuals at the start ``theta0`` (refined after the fit).
+    """
+    if noise is not None:
+        return noise.channel_std, np.inf, "given"
+    spread = noise_from_spread(poses)
+    if spread is not None:
+        return (*spread, "spread")
+    # rough levels (no leverage correction) to weight the channels for the leverages
+    rms = np.sqrt(np.mean(problem.residuals(theta0) ** 2 * problem.counts[:, None], axis=0))
+    rough = np.repeat([rms[_FORCE].mean(), rms[_TORQUE].mean()], 3)
+    rough = np.maximum(rough, 1e-12 * np.maximum(1.0, np.abs(poses.wrenches).max(axis=0)))
+    problem = replace(problem, channel_std=rough)
+    return (*noise_from_residuals(problem, theta0, loss != "linear", floor), "residuals")
+
+
 def fit_ml(
     poses: PoseAverages,
     g: float = STANDARD_GRAVITY,
@@ -282,23 +299,7 @@ def fit_ml(
             poses.rotations, poses.wrenches, counts, np.ones(6), mount0, estimate_mount
         )
         theta0 = np.concatenate([start.to_vector(), np.zeros(problem.parameter_count - 12)])
-    if noise is not None:
-        channel_std, dof, source = noise.channel_std, np.inf, "given"
-    else:
-        spread = noise_from_spread(poses)
-        if spread is not None:
-            (channel_std, dof), source = spread, "spread"
-        else:
-            source = "residuals"
-            # rough levels (no leverage correction) to weight the channels for the leverages
-            rms = np.sqrt(np.mean(problem.residuals(theta0) ** 2 * counts[:, None], axis=0))
-            rough = np.concatenate(
-                [np.full(3, rms[_FORCE].mean()), np.full(3, rms[_TORQUE].mean())]
-            )
-            rough = np.maximum(rough, 1e-12 * np.maximum(1.0, np.abs(poses.wrenches).max(axis=0)))
-            channel_std, dof = noise_from_residuals(
-                replace(problem, channel_std=rough), theta0, loss != "linear", floor
-            )
+    channel_std, dof, source = _noise(poses, problem, theta0, noise, loss, floor)
     problem = replace(problem, channel_std=channel_std)
     if estimate_mount != "none":
         check_mount_observable(problem, theta0)
