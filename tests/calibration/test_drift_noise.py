@@ -52,16 +52,18 @@ def test_one_reading_per_pose_keeps_the_noise_under_a_fast_walk(arm, tool, poses
 def test_a_few_long_static_segments(arm, tool, caplog):
     """8 still phases of 60 s at 10 Hz under a walk: with every reading, the spread gives the
     noise; each phase averaged to one row (what a segment extraction gives), the noise of a row
-    is estimated and does not collapse, or the fit says why it keeps no walk.
+    is estimated and does not collapse, or the fit says why it keeps no walk. (With this seed the
+    plain likelihood put the noise at its floor and called the data a simulation without noise.)
     """
-    rng = np.random.default_rng(5)
+    rng = np.random.default_rng(0)
     configurations = arm.random_configurations(8, rng, margin=0.3)
     times = recording_times(8, 600, 900.0, 0.1)
     sensor = SimulatedSensor(tool, NOISE, SensorDrift(random_walk=[0.004, 0.0001]))
     samples = sensor.samples_at_configurations(arm, configurations, rng, 600, times=times)
     result = calibrate(samples, drift="random-walk")
     assert result.diagnostics.noise_source == "spread"
-    np.testing.assert_allclose(result.diagnostics.noise.channel_std, NOISE.channel_std, rtol=0.1)
+    # the spread about each phase's mean carries the walk within the phase too (a few %)
+    np.testing.assert_allclose(result.diagnostics.noise.channel_std, NOISE.channel_std, rtol=0.15)
     poses = samples.pose_averages()
     averaged = Samples(poses.wrenches, poses.rotations, poses.pose_ids, times=poses.times)
     with caplog.at_level(logging.WARNING, logger="ftkin"):
@@ -70,6 +72,7 @@ def test_a_few_long_static_segments(arm, tool, caplog):
     kept = result.drift.model == "random-walk"
     told = any("cannot be told apart" in w for w in result.warnings)
     assert kept != told  # either a sound walk fit or a fallback that says why
+    assert told and result.drift.model == "poly:2"  # this seed: the fallback
     if kept:
         assert np.all(result.diagnostics.noise.channel_std > 0.3 * row_noise)
     assert not any("simulation" in w for w in result.warnings)
