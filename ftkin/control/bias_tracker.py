@@ -39,6 +39,7 @@ from collections import deque
 
 import numpy as np
 
+from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from ..validation import as_six_channels, as_vector
 
@@ -113,7 +114,12 @@ class BiasTracker:
             InvalidInput: neither given nor in the calibration (e.g. a
                 calibration without times: give ``rate=``).
         """
-        drift = getattr(calibration, "drift", None)
+        full = isinstance(calibration, CalibrationResult)  # a bare SensorModel has none of them
+        drift, diagnostics, errors = (
+            (calibration.drift, calibration.diagnostics, calibration.std_errors)
+            if full
+            else (None, None, None)
+        )
         if rate is None:
             if drift is None or drift.rate is None:
                 raise InvalidInput(
@@ -121,13 +127,11 @@ class BiasTracker:
                 )
             rate = drift.rate
         if noise is None:
-            diagnostics = getattr(calibration, "diagnostics", None)
             if diagnostics is None:
                 raise InvalidInput(
                     "the calibration has no noise estimate (method 'linear'?): give noise=[N, N·m]"
                 )
             noise = diagnostics.noise.channel_std
-        errors = getattr(calibration, "std_errors", None)
         if errors is not None and "initial_std" not in options:
             options["initial_std"] = np.concatenate(
                 [errors["force_offset"], errors["torque_offset"]]
