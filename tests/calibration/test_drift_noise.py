@@ -142,3 +142,9 @@ def test_planning_information_of_every_model_is_the_dense_one(spec, rotations, r
     information = model.information(jacobians, times, variance, rate)
     expected = _dense_information(model, jacobians, times, variance, rate)
     np.testing.assert_allclose(information, expected, rtol=1e-7, atol=1e-9 * np.abs(expected).max())
+    if spec == "random-walk":  # the planner's batched form is the same information
+        from ftkin.calibration.random_walk import walk_gains
+        from ftkin.planning.drift_order import walk_information
+
+        planner = walk_information(jacobians, walk_gains(times, variance, rate))
+        np.testing.assert_allclose(planner, information, rtol=1e-12)
