@@ -226,8 +226,9 @@ def parse_drift(spec) -> DriftModel:
         return parts[0]
     if "none" in names or len(set(names)) < len(names) or sum(p.walk for p in parts) > 1:
         raise InvalidInput(f"drift {spec!r}: a sum of distinct models with at most one walk")
+    name = "+".join(part.name for part in parts)  # canonical: poly:02 is poly:2
     columns = sum(part.columns for part in parts)
-    return DriftSum(spec, columns, any(part.walk for part in parts), tuple(parts))
+    return DriftSum(name, columns, any(part.walk for part in parts), tuple(parts))
 
 
 def drift_candidates(spec) -> tuple[DriftModel, ...]:
