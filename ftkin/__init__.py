@@ -63,7 +63,7 @@ _EXPORTS = {
     "ROBOTS": ".kinematics.robots",
     "STANDARD_GRAVITY": ".calibration.model",
     "Samples": ".calibration.samples",
-    "SensorDrift": ".sim.drift",
+    "SensorDrift": ".sim.sensor_drift",
     "SensorFault": ".control.sensor_faults",
     "SensorLimits": ".control.sensor_faults",
     "SensorModel": ".calibration.model",
