@@ -126,6 +126,7 @@ def diagnose(
     parameter_count: int | None = None,
     log: bool = True,
     wrenches=None,
+    noise_free: bool = False,
 ) -> tuple[FitDiagnostics, np.ndarray]:
     """Assess an :class:`~ftkin.calibration.ml.MlFit`; returns its diagnostics and the (scaled)
     covariance.
@@ -139,6 +140,8 @@ def diagnose(
     estimated at its floor (:func:`~ftkin.calibration.information.noise_floor`:
     readings that fit the model to rounding, e.g. noise-free simulated data)
     is said in a warning, and no pose is called an outlier for a rounding error.
+    ``noise_free``: the raw readings themselves are noise-free (repeated readings
+    identical); only then does the warning call the data noise-free.
 
     Warnings are also sent to the ``ftkin.calibration.fit_quality`` logger.
     """
@@ -163,7 +166,7 @@ def diagnose(
     covariance = fit.covariance * scale
     condition, weakest = _weakest_direction(fit.information)
     pose_ids = np.asarray(pose_ids)
-    exact = (
+    exact = noise_free or (
         wrenches is not None
         and fit.noise_source == "residuals"
         and at_noise_floor(fit.noise.channel_std, wrenches)
@@ -192,7 +195,7 @@ def diagnose(
         relative_std_errors=np.sqrt(np.clip(np.diag(covariance), 0.0, None)) / scales,
         warnings=(),
     )
-    diagnostics = replace(diagnostics, warnings=_warnings(diagnostics, exact, scales))
+    diagnostics = replace(diagnostics, warnings=_warnings(diagnostics, exact, noise_free, scales))
     if log:
         log_warnings(diagnostics)
     return diagnostics, covariance
@@ -219,16 +222,28 @@ def _weakest_direction(information) -> tuple[float, np.ndarray]:
     return float(eigenvalues[-1] / eigenvalues[0]), weakest
 
 
-def _warnings(diagnostics: FitDiagnostics, exact: bool, scales: np.ndarray) -> tuple[str, ...]:
-    """The warnings the diagnostics call for, one sentence each (``exact``: noise at its floor)."""
+def _warnings(
+    diagnostics: FitDiagnostics, exact: bool, noise_free: bool, scales: np.ndarray
+) -> tuple[str, ...]:
+    """The warnings the diagnostics call for, one sentence each (``exact``: noise at its floor;
+    ``noise_free``: the repeated raw readings are identical).
+    """
     d, messages = diagnostics, []
-    if exact:
+    if exact and not noise_free:
         messages.append(
-            "the readings fit the model to rounding (noise estimated at its floor, "
-            f"{NOISE_FLOOR_RELATIVE:g} of the largest reading): noise-free data, e.g. a "
-            "simulation without sensor noise? The estimates are exact, but the standard errors, "
-            "the fit test and the outlier test mean nothing; add sensor noise to simulated "
-            "readings or give the noise level (noise=, --noise-force/--noise-torque)"
+            "the residuals are at rounding level (noise estimated at its floor, "
+            f"{NOISE_FLOOR_RELATIVE:g} of the largest reading): the standard errors, the fit test "
+            "and the outlier test rest on that floor; record several readings per pose (a pose "
+            "column) or give the noise level (noise=, --noise-force/--noise-torque)"
+        )
+    elif exact:
+        messages.append(
+            "the repeated readings of each pose are identical and the readings fit the model to "
+            f"rounding (noise estimated at its floor, {NOISE_FLOOR_RELATIVE:g} of the largest "
+            "reading): noise-free data, e.g. a simulation without sensor noise? The estimates are "
+            "exact, but the standard errors, the fit test and the outlier test mean nothing; add "
+            "sensor noise to simulated readings or give the noise level (noise=, "
+            "--noise-force/--noise-torque)"
         )
     if d.p_value < FIT_ALPHA:
         messages.append(
