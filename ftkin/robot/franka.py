@@ -1,4 +1,4 @@
-"""A Franka FR3 (or Panda) through franky-control: the :class:`~ftkin.robot.protocols.Robot` contract.
+"""A Franka FR3 (or Panda) through franky-control, as a :class:`~ftkin.robot.protocols.Robot`.
 
 franky (``pip install 'ftkin[franka]'``) bundles libfranka and talks to the robot's FCI, or to
 franky-sim on localhost. libfranka refuses to run its control thread without real-time
@@ -178,7 +178,8 @@ class FrankaRobot:
             raise
         except TimeoutError as error:
             self.stop()
-            raise RobotError(f"moving to {target.round(3).tolist()}", self.host, str(error))
+            doing = f"moving to {target.round(3).tolist()}"
+            raise RobotError(doing, self.host, str(error)) from None
         except Exception as error:
             self._recover()
             raise self._wrap(error, f"moving to {np.round(target, 3).tolist()}") from None
@@ -271,9 +272,7 @@ class FrankaRobot:
         measured = payload_in_flange(calibration, arm, None, inertia)
         if end_effector is None:
             end_effector = self.end_effector()
-        sensor_body = (
-            RigidBody.point(sensor_mass, sensor_com) if float(sensor_mass) > 0.0 else None
-        )
+        sensor_body = RigidBody.point(sensor_mass, sensor_com) if float(sensor_mass) > 0.0 else None
         load = controller_load(measured, end_effector, sensor_body, setting=END_EFFECTOR_SETTING)
         body = RigidBody(
             load.mass,
@@ -281,9 +280,7 @@ class FrankaRobot:
             np.zeros((3, 3)) if load.inertia is None else load.inertia,
         )
         try:
-            self._robot.set_load(
-                body.mass, body.center_of_mass.tolist(), body.franka_inertia()
-            )
+            self._robot.set_load(body.mass, body.center_of_mass.tolist(), body.franka_inertia())
         except Exception as error:
             self._recover()
             raise self._wrap(error, f"setting the load ({body.mass:.4g} kg)") from None

@@ -48,8 +48,8 @@ class SamplesLog:
         exists = self.path.exists() and self.path.stat().st_size > 0
         if exists and not resume:
             raise InvalidInput(
-                f"{self.path} already exists: pass resume=True (--resume) to continue that session, "
-                "or choose another samples file"
+                f"{self.path} already exists: pass resume=True (--resume) to continue that "
+                "session, or choose another samples file"
             )
         if exists:
             self._read_existing()

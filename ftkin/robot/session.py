@@ -195,7 +195,9 @@ def calibrate_on_robot(
             with _stopping(robot, log, len(poses)):
                 robot.move_to(poses[pose_id])
                 readings = record_still(robot, checked, readings_per_pose, stillness)
-                log.append_pose(pose_id, readings.joint_positions, readings.wrenches, readings.times)
+                log.append_pose(
+                    pose_id, readings.joint_positions, readings.wrenches, readings.times
+                )
             logger.info("pose %d recorded (waited %.2f s to settle)", pose_id, readings.wait)
             bar.advance()
     samples = load_samples(log.path, arm).samples
@@ -262,17 +264,22 @@ def verify_on_robot(
     """Visit ``poses`` and compensate the still readings there with ``calibration``.
 
     Without contact the compensated wrench is the sensor's noise plus the calibration's error.
+    Any failure stops the arm and is raised.
     """
     stillness = stillness if stillness is not None else Stillness()
     compensator = Compensator(calibration, arm)
     checked = CheckedSensor(sensor, stillness.stale_after)
     poses = np.asarray(poses, dtype=float).reshape(-1, arm.nq)
     wrenches = []
-    for q in poses:
-        robot.move_to(q)
-        taken = record_still(robot, checked, readings, stillness)
-        contact = compensator.compensate_joint_positions(taken.joint_positions, taken.wrenches)
-        wrenches.append(contact.mean(axis=0))
+    try:
+        for q in poses:
+            robot.move_to(q)
+            taken = record_still(robot, checked, readings, stillness)
+            contact = compensator.compensate_joint_positions(taken.joint_positions, taken.wrenches)
+            wrenches.append(contact.mean(axis=0))
+    except BaseException:
+        robot.stop()
+        raise
     return Verification(poses, np.array(wrenches))
 
 

@@ -191,5 +191,6 @@ def record_still(robot, sensor: CheckedSensor, count: int, stillness: Stillness)
                 ):
                     rows_q, rows_w, rows_t = [q], [wrench], [stamp]
             if len(rows_w) == count:
-                return PoseReadings(np.array(rows_q), np.array(rows_w), np.array(rows_t), now - start)
+                taken = (np.array(rows_q), np.array(rows_w), np.array(rows_t))
+                return PoseReadings(*taken, now - start)
         time.sleep(stillness.poll_period)
