@@ -19,6 +19,9 @@ import numpy as np
 from ..exceptions import InvalidInput
 from .arg_types import bounded_int, positive_float, seed
 
+GUIDING_HOME = (0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785)
+"""The demo's hand-guiding start pose [rad] (the hand above the table, pointing down)."""
+
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
@@ -298,6 +301,7 @@ def run_demo(args) -> int:
     from ..robot.guiding import hand_guiding
     from ..robot.loop import run_admittance
     from ..robot.session import calibrate_on_robot, default_samples_path
+    from ..robot.stillness import wait_still
 
     arm = fr3_arm()
     with tempfile.TemporaryDirectory(prefix="ftkin-robot-demo-") as folder:
@@ -330,7 +334,8 @@ def run_demo(args) -> int:
             )
             _print_load("payload sent", load.mass, load.center_of_mass)
             _print_load("robot reports", *robot.payload()[:2])
-            robot.move_to([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
+            robot.move_to(GUIDING_HOME)
+            wait_still(robot)
             controller = hand_guiding(arm, result)
             start = sim.hand_position()
             sim.push([args.push, 0.0, 0.0], 1.0, delay=0.3)

@@ -68,7 +68,7 @@ class RigidBody:
 
     @classmethod
     def from_franka(cls, mass: float, com, inertia_column_major) -> RigidBody:
-        """From libfranka's ``(m, F_x_C (3,), I (9,) column-major)`` (e.g. ``m_ee, F_x_Cee, I_ee``)."""
+        """From libfranka's ``m``, ``F_x_C`` (3,) and ``I`` (9,) column-major (``m_ee``, ...)."""
         inertia = np.asarray(inertia_column_major, dtype=float).reshape(-1)
         if inertia.shape != (9,):
             raise InvalidInput(f"expected a 9-element inertia, got shape {inertia.shape}")

@@ -1,4 +1,4 @@
-"""A simulated FR3 with a wrist F/T sensor, served on localhost by franky-sim (extra ``franka``).
+"""A simulated FR3 with a wrist F/T sensor, served on localhost by franky-sim (``franka-sim``).
 
 :class:`FrankaSim` builds franky-sim's MuJoCo scene with a force/torque sensor between the
 flange and the Franka Hand (the sensor's own body fixed to the flange, the measuring plane at
@@ -207,7 +207,9 @@ class FrankaSim:
             import franky_sim  # noqa: F401
             import mujoco  # noqa: F401
         except ImportError as error:
-            raise MissingDependency("franky-sim", "franka", "the simulated Franka robot") from error
+            raise MissingDependency(
+                "franky-sim", "franka-sim", "the simulated Franka robot"
+            ) from error
         self.tool, self.spec = tool, sensor
         self.initial_q = None if initial_q is None else as_vector(initial_q, 7, "initial_q [rad]")
         self.realtime = bool(realtime)

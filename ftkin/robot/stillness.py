@@ -194,3 +194,32 @@ def record_still(robot, sensor: CheckedSensor, count: int, stillness: Stillness)
                 taken = (np.array(rows_q), np.array(rows_w), np.array(rows_t))
                 return PoseReadings(*taken, now - start)
         time.sleep(stillness.poll_period)
+
+
+def wait_still(robot, stillness: Stillness | None = None) -> float:
+    """Wait until every joint speed stays below ``stillness.joint_speed`` for its settle time.
+
+    Returns the time waited [s]. Start a control loop from a still arm: after a move a real
+    arm (and franky-sim's) still catches up with the trajectory for a moment.
+
+    Raises:
+        RobotError: the arm did not come to rest within ``stillness.timeout``.
+    """
+    stillness = stillness if stillness is not None else Stillness()
+    start = time.monotonic()
+    still_since = None
+    while True:
+        now = time.monotonic()
+        speed = float(np.max(np.abs(robot.joint_state()[1])))
+        if speed > stillness.joint_speed:
+            still_since = None
+        elif still_since is None:
+            still_since = now
+        elif now - still_since >= stillness.settle_time:
+            return now - start
+        if now - start > stillness.timeout:
+            raise RobotError(
+                f"the arm did not come to rest within {stillness.timeout:g} s (joint speed "
+                f"{speed:.3g} rad/s, limit {stillness.joint_speed:g})"
+            )
+        time.sleep(stillness.poll_period)
