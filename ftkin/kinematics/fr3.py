@@ -36,6 +36,4 @@ def fr3_urdf_path() -> Path:
 def fr3_arm(tool_frame: str | None = FR3_TOOL_FRAME) -> Arm:
     """The bundled FR3 as an :class:`Arm`: sensor frame ``fr3_hand``, 7 joints (fingers locked)."""
     path = fr3_urdf_path()
-    arm = Arm.from_urdf(path, FR3_SENSOR_FRAME, tool_frame, package_dirs=[str(path.parent)])
-    arm.robot_name = "fr3"
-    return arm
+    return Arm.from_urdf(path, FR3_SENSOR_FRAME, tool_frame, package_dirs=[str(path.parent)])
