@@ -64,6 +64,8 @@ class FrankaRobot:
         poll_period: Sleep between checks while :meth:`move_to` waits [s] (Ctrl-C is answered
             within it).
         move_timeout: :meth:`move_to` gives up (stops the arm, raises) after this long [s].
+        state_timeout: :meth:`joint_state` raises :class:`RobotConnectionLost` when the robot's
+            clock has not advanced for this long [s] (libfranka itself notices after ~2 s).
 
     Raises:
         MissingDependency: franky-control is not installed.
@@ -82,6 +84,7 @@ class FrankaRobot:
         watchdog: float = 0.05,
         poll_period: float = 0.005,
         move_timeout: float = 60.0,
+        state_timeout: float = 0.1,
     ):
         if not isinstance(host, str) or not host.strip():
             raise InvalidInput(f"host must be the robot's address, got {host!r}")
@@ -115,6 +118,8 @@ class FrankaRobot:
             float(move_timeout),
         )
         self._streaming = False
+        self.state_timeout = float(state_timeout)
+        self._robot_time, self._state_at = -1, time.monotonic()
 
     def __repr__(self) -> str:
         return f"FrankaRobot({self.host!r})"
@@ -123,7 +128,8 @@ class FrankaRobot:
     def _wrap(self, error: BaseException, doing: str) -> RobotError:
         franky = self._franky
         text = str(error)
-        if isinstance(error, franky.NetworkException) or "UDP" in text or "TCP" in text:
+        lost = ("UDP", "TCP", "Net Exception", "onnection")
+        if isinstance(error, franky.NetworkException) or any(word in text for word in lost):
             return RobotConnectionLost(f"{doing}: the connection is lost", self.host, text)
         return RobotError(f"{doing}: the robot refused", self.host, text)
 
@@ -136,12 +142,26 @@ class FrankaRobot:
 
     # -------------------------------------------------------------- state
     def joint_state(self) -> tuple[np.ndarray, np.ndarray]:
-        """Joint positions ``(7,)`` [rad] and velocities ``(7,)`` [rad/s], one state."""
+        """Joint positions ``(7,)`` [rad] and velocities ``(7,)`` [rad/s], one state.
+
+        Raises:
+            RobotConnectionLost: the robot's clock has not advanced for ``state_timeout`` (no
+                state arrives: the robot or its server is gone) or the connection failed.
+        """
         try:
-            state = self._robot.current_joint_state
+            state = self._robot.state
         except Exception as error:
             raise self._wrap(error, "reading the joint state") from None
-        return np.array(state.position, dtype=float), np.array(state.velocity, dtype=float)
+        now, robot_time = time.monotonic(), state.time.to_msec()
+        if robot_time != self._robot_time:
+            self._robot_time, self._state_at = robot_time, now
+        elif now - self._state_at > self.state_timeout:
+            raise RobotConnectionLost(
+                f"no new state from the robot for {now - self._state_at:.3f} s (limit "
+                f"{self.state_timeout:g} s): the robot or its server is gone",
+                self.host,
+            )
+        return np.array(state.q, dtype=float), np.array(state.dq, dtype=float)
 
     def joint_positions(self) -> np.ndarray:
         """Joint positions ``(7,)`` [rad]."""

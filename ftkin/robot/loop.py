@@ -112,7 +112,8 @@ def run_admittance(
         robot: A :class:`~ftkin.robot.protocols.Robot`.
         sensor: A :class:`~ftkin.robot.protocols.ForceTorqueSensor`.
         controller: A :class:`~ftkin.control.joint_admittance.JointAdmittance` (anything with
-            ``step(q, raw_wrench, dt) -> dq`` and ``last_status``) for this robot's joints.
+            ``step(q, raw_wrench, dt) -> dq``, ``last_status`` and ``reset()``) for this robot's
+            joints. One warm-up step (not commanded) runs before the loop, then ``reset()``.
         duration: Run time [s]; None runs until stopped.
         rate_hz: Loop rate [Hz].
         stale_after: The sensor's stamp not advancing this long is a fault [s] (default: 10
@@ -136,6 +137,12 @@ def run_admittance(
     faults: dict[str, int] = {}
     stamps: list[float] = []
     reason, message, fault_time = FINISHED, "", None
+    try:  # a warm-up tick, not commanded: the first step of a controller loads what it needs
+        q, _ = robot.joint_state()
+        controller.step(q, checked.read()[1], period)
+        controller.reset()
+    except (SensorError, RobotError, KeyboardInterrupt):
+        pass  # the loop's first tick meets it again and stops as for any tick
     start = time.monotonic()
     deadline = math.inf if duration is None else start + float(duration)
     next_tick = start

@@ -61,10 +61,13 @@ class Stillness:
             self.torque_std,
             self.timeout,
             self.stale_after,
-            self.poll_period,
         ]
-        if not all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in numbers):
-            raise InvalidInput(f"stillness thresholds must be finite and > 0, got {self}")
+        if not all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in numbers) or (
+            not (isinstance(self.poll_period, (int, float)) and 0.0 <= self.poll_period < 1.0)
+        ):
+            raise InvalidInput(
+                f"stillness thresholds must be finite and > 0 (poll_period in [0, 1) s), got {self}"
+            )
         if isinstance(self.window, bool) or not isinstance(self.window, int) or self.window < 4:
             raise InvalidInput(f"window must be an integer >= 4 readings, got {self.window!r}")
 
