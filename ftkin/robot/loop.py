@@ -104,7 +104,7 @@ def run_admittance(
     duration: float | None = None,
     rate_hz: float = DEFAULT_RATE,
     stale_after: float | None = None,
-    on_tick: Callable[[float, np.ndarray, np.ndarray], None] | None = None,
+    on_tick: Callable[[float, np.ndarray, np.ndarray], bool | None] | None = None,
 ) -> LoopStats:
     """Run the admittance loop until ``duration`` [s] (None: until a fault or Ctrl-C).
 
@@ -119,7 +119,8 @@ def run_admittance(
         stale_after: The sensor's stamp not advancing this long is a fault [s] (default: 10
             periods, at least 20 ms).
         on_tick: Called after each command with ``(time.monotonic(), q, dq_cmd)`` (logging,
-            tests); it must be fast.
+            tests, an end condition); it must be fast. Returning True ends the loop as its
+            duration would.
 
     Returns:
         :class:`LoopStats` (the robot is stopped).
@@ -170,8 +171,8 @@ def run_admittance(
                     break
             robot.command_velocity(command)
             stamps.append(now)
-            if on_tick is not None:
-                on_tick(now, q, command)
+            if on_tick is not None and on_tick(now, q, command):
+                break
             next_tick += period
             delay = next_tick - time.monotonic()
             if delay > 0.0:

@@ -22,8 +22,8 @@ def test_point_mass_difference_and_sensor_body():
     sensor = RigidBody.point(0.25, [0.0, 0.0, -0.01])
     load = controller_load(measured, hand, sensor)
     mass = 1.96 - 0.73 + 0.25
-    moment = 1.96 * measured.center_of_mass - 0.73 * hand.center_of_mass + 0.25 * np.array(
-        [0, 0, -0.01]
+    moment = (
+        1.96 * measured.center_of_mass - 0.73 * hand.center_of_mass + 0.25 * np.array([0, 0, -0.01])
     )
     np.testing.assert_allclose(load.mass, mass, rtol=1e-12)
     np.testing.assert_allclose(load.center_of_mass, moment / mass, rtol=1e-12, atol=1e-15)
