@@ -21,6 +21,7 @@ import numpy as np
 
 from ..calibration.model import SensorModel
 from ..exceptions import (
+    FtkinError,
     InvalidInput,
     MissingDependency,
     RealtimeUnavailable,
@@ -172,11 +173,13 @@ class FrankaRobot:
         return self.joint_state()[1]
 
     # -------------------------------------------------------------- motion
-    def move_to(self, q) -> None:
+    def move_to(self, q, while_moving=None) -> None:
         """Move to ``q`` ``(7,)`` [rad] and return when the motion is done (speed-limited).
 
-        The motion runs asynchronously and is polled, so Ctrl-C stops the arm within
-        ``poll_period``; any error stops it too.
+        The motion runs asynchronously and is polled every ``poll_period``: the robot's state
+        is checked (:meth:`joint_state`: a robot that stops sending state is a lost
+        connection), ``while_moving()`` is called if given (an exception from it stops the arm
+        and is raised: e.g. a sensor fault), and Ctrl-C stops the arm.
 
         Raises:
             RobotError: the robot refused or aborted the motion (the arm is stopped).
@@ -191,9 +194,12 @@ class FrankaRobot:
             while not self._robot.poll_motion():
                 if time.monotonic() > deadline:
                     raise TimeoutError(f"the motion took longer than {self.move_timeout:g} s")
+                self.joint_state()
+                if while_moving is not None:
+                    while_moving()
                 time.sleep(self.poll_period)
             self._robot.join_motion()
-        except KeyboardInterrupt:
+        except (KeyboardInterrupt, FtkinError):
             self.stop()
             raise
         except TimeoutError as error:

@@ -32,7 +32,8 @@ class Robot(Protocol):
 
     * ``joint_state()``: joint positions ``(nq,)`` [rad] and velocities ``(nq,)`` [rad/s];
       ``joint_positions()`` and ``joint_velocities()`` each half of it;
-    * ``move_to(q)``: move to ``q`` [rad], speed-limited, return when done;
+    * ``move_to(q, while_moving=None)``: move to ``q`` [rad], speed-limited, return when done;
+      call ``while_moving()`` regularly meanwhile (if it raises: stop the arm, raise it);
     * ``command_velocity(dq)``: joint velocities [rad/s], without waiting; the robot stops by
       itself (a watchdog) when the command is not renewed within its hold time;
     * ``stop()``: stop any motion now; never raises;
@@ -50,7 +51,7 @@ class Robot(Protocol):
 
     def joint_velocities(self) -> np.ndarray: ...
 
-    def move_to(self, q) -> None: ...
+    def move_to(self, q, while_moving=None) -> None: ...
 
     def command_velocity(self, dq) -> None: ...
 

@@ -193,7 +193,7 @@ def calibrate_on_robot(
         bar.advance(len(poses) - len(todo))
         for pose_id in todo:
             with _stopping(robot, log, len(poses)):
-                robot.move_to(poses[pose_id])
+                robot.move_to(poses[pose_id], while_moving=checked.read)
                 readings = record_still(robot, checked, readings_per_pose, stillness)
                 log.append_pose(
                     pose_id, readings.joint_positions, readings.wrenches, readings.times
@@ -273,7 +273,7 @@ def verify_on_robot(
     wrenches = []
     try:
         for q in poses:
-            robot.move_to(q)
+            robot.move_to(q, while_moving=checked.read)
             taken = record_still(robot, checked, readings, stillness)
             contact = compensator.compensate_joint_positions(taken.joint_positions, taken.wrenches)
             wrenches.append(contact.mean(axis=0))

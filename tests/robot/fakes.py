@@ -37,7 +37,9 @@ class FakeRobot:
     def joint_velocities(self):
         return self.joint_state()[1]
 
-    def move_to(self, q):
+    def move_to(self, q, while_moving=None):
+        if while_moving is not None:
+            while_moving()
         self.moves.append(np.asarray(q, dtype=float))
         self.q = np.asarray(q, dtype=float).copy()
 

@@ -175,11 +175,11 @@ class _Interrupting:
     def __init__(self, robot, at_move, action):
         self.robot, self.at_move, self.action, self.moves = robot, at_move, action, 0
 
-    def move_to(self, q):
+    def move_to(self, q, while_moving=None):
         self.moves += 1
         if self.moves == self.at_move:
             self.action()
-        return self.robot.move_to(q)
+        return self.robot.move_to(q, while_moving)
 
     def __getattr__(self, name):
         return getattr(self.robot, name)

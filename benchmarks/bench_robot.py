@@ -1,0 +1,346 @@
+"""ftkin on a robot, through franky, against franky-sim: the targets of issue 23.
+
+Each repeat starts a simulated FR3 (:class:`ftkin.robot.FrankaSim`: a wrist sensor between flange
+and hand with bias and noise, a 1.2 kg tool) and connects to it with
+:class:`ftkin.robot.FrankaRobot` exactly as to a real robot, then:
+
+1. **Calibration session**, 12 planned poses, 50 readings each, then 3 verification poses
+   (:func:`ftkin.robot.calibrate_on_robot`): mass, centre of mass and force bias against the
+   simulation's truth (hand + fingers + tool below the sensor); wall time of the whole session
+   (planning, moves, settling, recording, fit, save, verification).
+2. **Payload round trip**: ``set_payload`` without a sensor body, read back with ``payload()``
+   (float32 on the wire), against the measured load minus the configured end effector
+   (``m_ee``, ``F_x_Cee``), computed here by hand in the flange frame.
+3. **Hand-guiding** (after the payload hand-off with the sensor body): a 15 N push along base x
+   on the tool for 1 s; the hand's travel along and across it, the distance it takes to stop
+   after release, and its travel in the 0.5 s after it stopped (the command back to exactly
+   zero). The loop runs at 300 Hz; its achieved rate and p99 period are the loop row.
+
+Then once, faults in a 6-pose session (injected as the arm starts for the third pose): a NaN
+sensor, a stale sensor, a killed server, SIGINT. Each must stop the arm within one tick of the
+moment it can be seen (the sensor and the robot are polled every 5 ms while the arm moves; a
+stale stamp is visible after 0.1 s, a silent robot after its 0.1 s state timeout), leave a
+samples file of whole poses, and ``resume=True`` must finish the session with no pose twice.
+The same NaN, stale and killed-server faults in the control loop stop it within one tick.
+
+The simulation shares the machine's cores with this process: on a loaded machine it runs
+slower than real time, and the wall time and loop rows show it.
+
+Run: ``python benchmarks/bench_robot.py [--repeats 3]`` (about 4 minutes). Exit code 1 when a
+target row fails, 2 when franky or franky-sim is missing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import signal
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HOME = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
+PLAN = {"joint_ranges": {"fr3_joint1": (-0.8, 0.8)}}
+SPEED = 0.8
+GUIDE_RATE = 300.0
+SESSION_TICK = 0.005  # FrankaRobot.poll_period: the session's tick while the arm moves
+STALE_AFTER = 0.1  # Stillness.stale_after
+STATE_TIMEOUT = 0.1  # FrankaRobot.state_timeout
+
+
+class StopRecorder:
+    """A robot whose ``stop()`` calls are timed (and whose ``move_to`` can trigger a fault)."""
+
+    def __init__(self, robot, at_move=None, action=None):
+        self.robot, self.at_move, self.action = robot, at_move, action
+        self.moves, self.stops, self.fault_time = 0, [], None
+
+    def move_to(self, q, while_moving=None):
+        self.moves += 1
+        if self.moves == self.at_move:
+            self.fault_time = time.monotonic()
+            self.action()
+        return self.robot.move_to(q, while_moving)
+
+    def stop(self):
+        self.stops.append(time.monotonic())
+        self.robot.stop()
+
+    def __getattr__(self, name):
+        return getattr(self.robot, name)
+
+
+def session_and_guiding(repeat: int, folder: Path) -> dict:
+    from ftkin.io.payload_export import payload_in_flange
+    from ftkin.kinematics.fr3 import fr3_arm
+    from ftkin.robot import (
+        FrankaRobot,
+        FrankaSim,
+        SimSensorSpec,
+        calibrate_on_robot,
+        hand_guiding,
+        run_admittance,
+        wait_still,
+    )
+
+    arm = fr3_arm()
+    out = {}
+    with FrankaSim(sensor=SimSensorSpec(seed=repeat)) as sim:
+        truth = sim.truth
+        robot = FrankaRobot(sim.hostname, realtime=False, speed=SPEED)
+        started = time.monotonic()
+        result = calibrate_on_robot(
+            robot,
+            sim.sensor,
+            arm,
+            n_poses=12,
+            readings_per_pose=50,
+            samples_path=folder / f"session{repeat}.csv",
+            output=folder / f"calib{repeat}.json",
+            verify_poses=3,
+            seed=repeat,
+            g=truth.g,
+            plan_options=PLAN,
+        )
+        out["wall"] = time.monotonic() - started
+        out["mass"] = abs(result.tool_mass / truth.mass - 1.0) * 100.0
+        out["com"] = np.linalg.norm(result.center_of_mass - truth.center_of_mass) * 1e3
+        out["bias"] = float(np.abs(result.force_offset - truth.bias[:3]).max())
+        # payload round trip: measured − configured end effector, by hand
+        end_effector = robot.end_effector()
+        measured = payload_in_flange(result, arm)
+        robot.set_payload(result, end_effector=end_effector)
+        mass, com, _ = robot.payload()
+        expected_mass = measured.mass - end_effector.mass
+        expected_com = (
+            measured.mass * measured.center_of_mass
+            - end_effector.mass * end_effector.center_of_mass
+        ) / expected_mass
+        out["payload_mass"] = abs(mass / expected_mass - 1.0) * 100.0
+        out["payload_com"] = np.linalg.norm(com - expected_com) * 1e3
+        # hand-guiding, the sensor body added as the datasheet would give it
+        robot.set_payload(result, sensor_mass=truth.sensor_mass, sensor_com=truth.sensor_com_flange)
+        robot.move_to(HOME)
+        wait_still(robot)
+        out.update(guide(sim, robot, hand_guiding(arm, result), run_admittance))
+    return out
+
+
+def guide(sim, robot, controller, run_admittance) -> dict:
+    """Push 15 N along x for 1 s; travel along/across, stopping distance, creep after the stop."""
+    track = []
+    release = sim.time + 0.2 + 1.0
+    end = release + 1.2
+
+    def on_tick(now, q, dq):
+        track.append((sim.time, *sim.hand_position(), float(dq.any())))
+        return track[-1][0] > end
+
+    sim.push([15.0, 0.0, 0.0], 1.0, delay=0.2)
+    stats = run_admittance(
+        robot, sim.sensor, controller, duration=60.0, rate_hz=GUIDE_RATE, on_tick=on_tick
+    )
+    track = np.array(track)
+    t, position, moving = track[:, 0], track[:, 1:4], track[:, 4]
+    at_release = np.searchsorted(t, release)
+    stopped = at_release + np.flatnonzero(moving[at_release:] == 0.0)
+    stop_index = int(stopped[0]) if stopped.size else len(t) - 1
+    later = min(np.searchsorted(t, t[stop_index] + 0.5), len(t) - 1)
+    moved = position[at_release] - position[0]
+    return {
+        "along": moved[0] * 1e3,
+        "across": np.hypot(moved[1], moved[2]) * 1e3,
+        "stopping": np.linalg.norm(position[stop_index] - position[at_release]) * 1e3,
+        "creep": np.linalg.norm(position[later] - position[stop_index]) * 1e3,
+        "creep_window": t[later] - t[stop_index],
+        "rate": stats.rate_hz,
+        "p99": stats.period_p99 * 1e3,
+        "loop_stop": stats.stop_reason,
+    }
+
+
+def session_fault(kind: str, folder: Path) -> dict:
+    """A 6-pose session with ``kind`` injected at the third move, then resumed."""
+    from ftkin.exceptions import SessionInterrupted
+    from ftkin.io.samples_csv import load_samples
+    from ftkin.kinematics.fr3 import fr3_arm
+    from ftkin.robot import FrankaRobot, FrankaSim, calibrate_on_robot
+    from ftkin.robot.session import session_poses
+
+    arm = fr3_arm()
+    poses = session_poses(arm, 6, seed=7, readings_per_pose=30, plan_options=PLAN)
+    path = folder / f"fault-{kind}.csv"
+    options = {"poses": poses, "readings_per_pose": 30, "samples_path": path, "verify_poses": 0}
+    sim = FrankaSim()
+    sim.start()
+    try:
+        robot = FrankaRobot(sim.hostname, realtime=False, speed=SPEED)
+        actions = {
+            "nan": lambda: sim.sensor.inject("nan"),
+            "stale": lambda: sim.sensor.inject("stale"),
+            "killed server": sim.kill,
+            "SIGINT": lambda: os.kill(os.getpid(), signal.SIGINT),
+        }
+        detectable = {"nan": 0.0, "stale": STALE_AFTER, "killed server": STATE_TIMEOUT}
+        recorder = StopRecorder(robot, 3, actions[kind])
+        reason = ""
+        try:
+            calibrate_on_robot(recorder, sim.sensor, arm, g=sim.truth.g, **options)
+        except SessionInterrupted as error:
+            reason = error.reason
+        sim.sensor.inject(None)
+        latency = recorder.stops[0] - recorder.fault_time if recorder.stops else np.inf
+        late = latency - detectable.get(kind, 0.0)
+        samples = load_samples(path, arm).samples
+        ids, counts = np.unique(samples.pose_ids, return_counts=True)
+        intact = bool(ids.tolist() == list(range(len(ids))) and np.all(counts == 30))
+        if not sim.alive:
+            sim.close()
+            sim = FrankaSim()
+            sim.start()
+            robot = FrankaRobot(sim.hostname, realtime=False, speed=SPEED)
+        calibrate_on_robot(robot, sim.sensor, arm, resume=True, g=sim.truth.g, **options)
+        ids, counts = np.unique(load_samples(path, arm).samples.pose_ids, return_counts=True)
+        resumed = bool(ids.tolist() == list(range(6)) and np.all(counts == 30))
+    finally:
+        sim.close()
+    return {
+        "late": late * 1e3,
+        "interrupted": bool(reason),
+        "intact": intact,
+        "resumed": resumed,
+        "recorded": int(len(np.unique(samples.pose_ids))),
+        "reason": reason,
+    }
+
+
+def loop_fault(kind: str) -> dict:
+    """The hand-guiding loop with ``kind`` injected after 50 ticks."""
+    from ftkin.calibration.model import SensorModel
+    from ftkin.kinematics.fr3 import fr3_arm
+    from ftkin.robot import FrankaRobot, FrankaSim, hand_guiding, run_admittance
+
+    arm = fr3_arm()
+    calibration = SensorModel.from_tool(1.96, [0.0, 0.0, 0.07], [0, 0, 0], [0, 0, 0])
+    with FrankaSim() as sim:
+        robot = StopRecorder(FrankaRobot(sim.hostname, realtime=False))
+        ticks = []
+        stale_after = 0.05
+        actions = {
+            "nan": lambda: sim.sensor.inject("nan"),
+            "stale": lambda: sim.sensor.inject("stale"),
+            "killed server": sim.kill,
+        }
+
+        def on_tick(now, q, dq):
+            ticks.append(now)
+            if len(ticks) == 50:
+                robot.fault_time = time.monotonic()
+                actions[kind]()
+
+        controller = hand_guiding(arm, calibration, force_deadband=100.0)
+        stats = run_admittance(
+            robot,
+            sim.sensor,
+            controller,
+            duration=20.0,
+            rate_hz=GUIDE_RATE,
+            stale_after=stale_after,
+            on_tick=on_tick,
+        )
+    detectable = {"nan": 0.0, "stale": stale_after, "killed server": STATE_TIMEOUT}[kind]
+    latency = robot.stops[0] - robot.fault_time - detectable if robot.stops else np.inf
+    return {"late": latency * 1e3, "reason": stats.stop_reason}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeats", type=int, default=3, help="sessions (medians are shown)")
+    args = parser.parse_args(argv)
+    try:
+        import franky  # noqa: F401
+        import franky_sim  # noqa: F401
+    except ImportError:
+        print("bench_robot: needs franky-control and franky-sim (pip install 'ftkin[franka-sim]')")
+        return 2
+    logging.basicConfig(level=logging.ERROR)
+    rows = []
+
+    def row(name, value, goal, ok, unit=""):
+        rows.append((name, value, goal, bool(ok), unit))
+
+    started = time.monotonic()
+    with tempfile.TemporaryDirectory(prefix="ftkin-bench-robot-") as folder:
+        folder = Path(folder)
+        runs = [session_and_guiding(repeat, folder) for repeat in range(args.repeats)]
+
+        def median(key):
+            return float(np.median([run[key] for run in runs]))
+
+        row("session: tool mass error", median("mass"), "≤ 0.5", median("mass") <= 0.5, "%")
+        row("session: COM error", median("com"), "≤ 1", median("com") <= 1.0, "mm")
+        row("session: force bias error", median("bias"), "≤ 0.03", median("bias") <= 0.03, "N")
+        row("session: wall time, 12 poses", median("wall"), "≤ 60", median("wall") <= 60.0, "s")
+        row(
+            "payload: mass read back",
+            median("payload_mass"),
+            "≤ 0.5",
+            median("payload_mass") <= 0.5,
+            "%",
+        )
+        row(
+            "payload: COM read back",
+            median("payload_com"),
+            "≤ 1",
+            median("payload_com") <= 1.0,
+            "mm",
+        )
+        row("guiding: along the push", median("along"), "≥ 40", median("along") >= 40.0, "mm")
+        row("guiding: across the push", median("across"), "≤ 5", median("across") <= 5.0, "mm")
+        row("guiding: stopping distance", median("stopping"), "(info)", True, "mm")
+        row(
+            "guiding: travel 0.5 s after stop", median("creep"), "≤ 1", median("creep") <= 1.0, "mm"
+        )
+        row("loop: achieved rate", median("rate"), "≥ 250", median("rate") >= 250.0, "Hz")
+        tick = 1e3 / GUIDE_RATE
+        row("loop: p99 period", median("p99"), f"≤ {3 * tick:.1f}", median("p99") <= 3 * tick, "ms")
+        for kind in ("nan", "stale", "killed server", "SIGINT"):
+            fault = session_fault(kind, folder)
+            late = fault["late"]
+            row(
+                f"session fault {kind}: stop after visible",
+                late,
+                f"≤ {SESSION_TICK * 1e3:g}",
+                late <= SESSION_TICK * 1e3,
+                "ms",
+            )
+            row(
+                f"session fault {kind}: file intact, resumed",
+                float(fault["recorded"]),
+                "whole poses, none twice",
+                fault["interrupted"] and fault["intact"] and fault["resumed"],
+                "poses kept",
+            )
+        for kind in ("nan", "stale", "killed server"):
+            fault = loop_fault(kind)
+            ok = fault["late"] <= tick and fault["reason"] in ("not_finite", "stale", "connection")
+            row(f"loop fault {kind}: stop after visible", fault["late"], f"≤ {tick:.1f}", ok, "ms")
+    print(
+        f"ftkin robot benchmark on franky-sim ({args.repeats} sessions, medians; "
+        f"{time.monotonic() - started:.0f} s)"
+    )
+    print(f"{'target':44s} {'value':>10s}  {'goal':>24s}  result")
+    failed = 0
+    for name, value, goal, ok, unit in rows:
+        failed += not ok
+        print(f"{name:44s} {value:10.3f}  {goal + ' ' + unit:>24s}  {'PASS' if ok else 'FAIL'}")
+    print(f"{len(rows) - failed} of {len(rows)} rows pass")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
