@@ -19,7 +19,8 @@ and hand with bias and noise, a 1.2 kg tool) and connects to it with
 Then once, faults in a 6-pose session (injected as the arm starts for the third pose): a NaN
 sensor, a stale sensor, a killed server, SIGINT. Each must stop the arm within one tick of the
 moment it can be seen (the sensor and the robot are polled every 5 ms while the arm moves; a
-stale stamp is visible after 0.1 s, a silent robot after its 0.1 s state timeout), leave a
+stale stamp is visible after 0.5 s, a silent robot after its 0.5 s state timeout: both 0.1 s
+by default, raised here because a loaded machine pauses the simulation for longer), leave a
 samples file of whole poses, and ``resume=True`` must finish the session with no pose twice.
 The same NaN, stale and killed-server faults in the control loop stop it within one tick.
 
@@ -48,8 +49,8 @@ PLAN = {"joint_ranges": {"fr3_joint1": (-0.8, 0.8)}}
 SPEED = 0.8
 GUIDE_RATE = 300.0
 SESSION_TICK = 0.005  # FrankaRobot.poll_period: the session's tick while the arm moves
-STALE_AFTER = 0.1  # Stillness.stale_after
-STATE_TIMEOUT = 0.1  # FrankaRobot.state_timeout
+STALE_AFTER = 0.5  # Stillness.stale_after (default 0.1 s: a loaded machine pauses the simulation)
+STATE_TIMEOUT = 0.5  # FrankaRobot.state_timeout (default 0.1 s, same reason)
 
 
 class StopRecorder:
@@ -81,6 +82,7 @@ def session_and_guiding(repeat: int, folder: Path) -> dict:
         FrankaRobot,
         FrankaSim,
         SimSensorSpec,
+        Stillness,
         calibrate_on_robot,
         hand_guiding,
         run_admittance,
@@ -91,7 +93,7 @@ def session_and_guiding(repeat: int, folder: Path) -> dict:
     out = {}
     with FrankaSim(sensor=SimSensorSpec(seed=repeat)) as sim:
         truth = sim.truth
-        robot = FrankaRobot(sim.hostname, realtime=False, speed=SPEED)
+        robot = FrankaRobot(sim.hostname, realtime=False, speed=SPEED, state_timeout=STATE_TIMEOUT)
         started = time.monotonic()
         result = calibrate_on_robot(
             robot,
@@ -103,6 +105,7 @@ def session_and_guiding(repeat: int, folder: Path) -> dict:
             output=folder / f"calib{repeat}.json",
             verify_poses=3,
             seed=repeat,
+            stillness=Stillness(stale_after=STALE_AFTER),
             g=truth.g,
             plan_options=PLAN,
         )
@@ -142,7 +145,13 @@ def guide(sim, robot, controller, run_admittance) -> dict:
 
     sim.push([15.0, 0.0, 0.0], 1.0, delay=0.2)
     stats = run_admittance(
-        robot, sim.sensor, controller, duration=60.0, rate_hz=GUIDE_RATE, on_tick=on_tick
+        robot,
+        sim.sensor,
+        controller,
+        duration=60.0,
+        rate_hz=GUIDE_RATE,
+        stale_after=STALE_AFTER,
+        on_tick=on_tick,
     )
     track = np.array(track)
     t, position, moving = track[:, 0], track[:, 1:4], track[:, 4]
@@ -168,17 +177,23 @@ def session_fault(kind: str, folder: Path) -> dict:
     from ftkin.exceptions import SessionInterrupted
     from ftkin.io.samples_csv import load_samples
     from ftkin.kinematics.fr3 import fr3_arm
-    from ftkin.robot import FrankaRobot, FrankaSim, calibrate_on_robot
+    from ftkin.robot import FrankaRobot, FrankaSim, Stillness, calibrate_on_robot
     from ftkin.robot.session import session_poses
 
     arm = fr3_arm()
     poses = session_poses(arm, 6, seed=7, readings_per_pose=30, plan_options=PLAN)
     path = folder / f"fault-{kind}.csv"
-    options = {"poses": poses, "readings_per_pose": 30, "samples_path": path, "verify_poses": 0}
+    options = {
+        "poses": poses,
+        "readings_per_pose": 30,
+        "samples_path": path,
+        "verify_poses": 0,
+        "stillness": Stillness(stale_after=STALE_AFTER),
+    }
     sim = FrankaSim()
     sim.start()
     try:
-        robot = FrankaRobot(sim.hostname, realtime=False, speed=SPEED)
+        robot = FrankaRobot(sim.hostname, realtime=False, speed=SPEED, state_timeout=STATE_TIMEOUT)
         actions = {
             "nan": lambda: sim.sensor.inject("nan"),
             "stale": lambda: sim.sensor.inject("stale"),
@@ -202,7 +217,9 @@ def session_fault(kind: str, folder: Path) -> dict:
             sim.close()
             sim = FrankaSim()
             sim.start()
-            robot = FrankaRobot(sim.hostname, realtime=False, speed=SPEED)
+            robot = FrankaRobot(
+                sim.hostname, realtime=False, speed=SPEED, state_timeout=STATE_TIMEOUT
+            )
         calibrate_on_robot(robot, sim.sensor, arm, resume=True, g=sim.truth.g, **options)
         ids, counts = np.unique(load_samples(path, arm).samples.pose_ids, return_counts=True)
         resumed = bool(ids.tolist() == list(range(6)) and np.all(counts == 30))
@@ -227,9 +244,9 @@ def loop_fault(kind: str) -> dict:
     arm = fr3_arm()
     calibration = SensorModel.from_tool(1.96, [0.0, 0.0, 0.07], [0, 0, 0], [0, 0, 0])
     with FrankaSim() as sim:
-        robot = StopRecorder(FrankaRobot(sim.hostname, realtime=False))
+        robot = StopRecorder(FrankaRobot(sim.hostname, realtime=False, state_timeout=STATE_TIMEOUT))
         ticks = []
-        stale_after = 0.05
+        stale_after = STALE_AFTER
         actions = {
             "nan": lambda: sim.sensor.inject("nan"),
             "stale": lambda: sim.sensor.inject("stale"),
