@@ -62,16 +62,16 @@ class Verification:
 
     @property
     def force_norms(self) -> np.ndarray:
-        """``(k,)`` |F'| per pose [N]."""
+        """``(k,)`` norm of the compensated force per pose [N]."""
         return np.linalg.norm(self.contact_wrenches[:, :3], axis=1)
 
     @property
     def torque_norms(self) -> np.ndarray:
-        """``(k,)`` |M'| per pose [N·m]."""
+        """``(k,)`` norm of the compensated torque per pose [N·m]."""
         return np.linalg.norm(self.contact_wrenches[:, 3:], axis=1)
 
     def report(self) -> str:
-        """One line per pose: |F'| [N] and |M'| [N·m]."""
+        """One line per pose: the compensated force and torque norms [N, N·m]."""
         lines = [f"verification at {len(self.force_norms)} pose(s) not used by the fit:"]
         for i, (force, torque) in enumerate(zip(self.force_norms, self.torque_norms)):
             lines.append(f"  pose {i}: |F'| = {force:.3f} N, |M'| = {torque:.4f} N·m")
