@@ -13,12 +13,15 @@ and hand with bias and noise, a 1.2 kg tool) and connects to it with
    (``m_ee``, ``F_x_Cee``), computed here by hand in the flange frame.
 3. **Hand-guiding** (after the payload hand-off with the sensor body): a 15 N push along base x
    on the tool for 1 s; the hand's travel along and across it, the distance it takes to stop
-   after release, and its travel in the 0.5 s after it stopped (the command back to exactly
-   zero). The loop runs at 300 Hz; its achieved rate and p99 period are the loop row.
+   after release (until its speed is below 2 mm/s: an arm at 5 cm/s cannot stop within 1 mm,
+   so this is information, not a target), and its travel in the 0.5 s after it stopped (the
+   target: the arm stays where it is let go). The loop runs at 300 Hz; its achieved rate and
+   p99 period are the loop row.
 
 Then once, faults in a 6-pose session (injected as the arm starts for the third pose): a NaN
 sensor, a stale sensor, a killed server, SIGINT. Each must stop the arm within one tick of the
-moment it can be seen (the sensor and the robot are polled every 5 ms while the arm moves; a
+moment it can be seen, plus 1 ms for the tick's own work and the scheduler (the sensor and the
+robot are polled every 5 ms while the arm moves; a
 stale stamp is visible after 0.5 s, a silent robot after its 0.5 s state timeout: both 0.1 s
 by default, raised here because a loaded machine pauses the simulation for longer), leave a
 samples file of whole poses, and ``resume=True`` must finish the session with no pose twice.
@@ -51,6 +54,8 @@ GUIDE_RATE = 300.0
 SESSION_TICK = 0.005  # FrankaRobot.poll_period: the session's tick while the arm moves
 STALE_AFTER = 0.5  # Stillness.stale_after (default 0.1 s: a loaded machine pauses the simulation)
 STATE_TIMEOUT = 0.5  # FrankaRobot.state_timeout (default 0.1 s, same reason)
+STOPPED_SPEED = 0.002  # [m/s]: the hand counts as stopped below this speed
+SCHEDULING = 1.0  # [ms] allowed beyond one tick for the tick's own work and the scheduler
 
 
 class StopRecorder:
@@ -154,9 +159,12 @@ def guide(sim, robot, controller, run_admittance) -> dict:
         on_tick=on_tick,
     )
     track = np.array(track)
-    t, position, moving = track[:, 0], track[:, 1:4], track[:, 4]
+    t, position = track[:, 0], track[:, 1:4]
     at_release = np.searchsorted(t, release)
-    stopped = at_release + np.flatnonzero(moving[at_release:] == 0.0)
+    # stopped: the hand's speed over the last 10 ms (simulation time) below 2 mm/s
+    back = np.searchsorted(t, t - 0.01)
+    speed = np.linalg.norm(position - position[back], axis=1) / np.maximum(t - t[back], 1e-9)
+    stopped = at_release + np.flatnonzero(speed[at_release:] < STOPPED_SPEED)
     stop_index = int(stopped[0]) if stopped.size else len(t) - 1
     later = min(np.searchsorted(t, t[stop_index] + 0.5), len(t) - 1)
     moved = position[at_release] - position[0]
@@ -331,8 +339,8 @@ def main(argv=None) -> int:
             row(
                 f"session fault {kind}: stop after visible",
                 late,
-                f"≤ {SESSION_TICK * 1e3:g}",
-                late <= SESSION_TICK * 1e3,
+                f"≤ {SESSION_TICK * 1e3 + SCHEDULING:g}",
+                late <= SESSION_TICK * 1e3 + SCHEDULING,
                 "ms",
             )
             row(
@@ -344,8 +352,9 @@ def main(argv=None) -> int:
             )
         for kind in ("nan", "stale", "killed server"):
             fault = loop_fault(kind)
-            ok = fault["late"] <= tick and fault["reason"] in ("not_finite", "stale", "connection")
-            row(f"loop fault {kind}: stop after visible", fault["late"], f"≤ {tick:.1f}", ok, "ms")
+            goal = tick + SCHEDULING
+            ok = fault["late"] <= goal and fault["reason"] in ("not_finite", "stale", "connection")
+            row(f"loop fault {kind}: stop after visible", fault["late"], f"≤ {goal:.1f}", ok, "ms")
     print(
         f"ftkin robot benchmark on franky-sim ({args.repeats} sessions, medians; "
         f"{time.monotonic() - started:.0f} s)"

@@ -310,6 +310,12 @@ class FrankaRobot:
         except Exception as error:
             self._recover()
             raise self._wrap(error, f"setting the load ({body.mass:.4g} kg)") from None
+        deadline = time.monotonic() + 1.0  # the next states report it
+        while abs(self.payload()[0] - body.mass) > 1e-6 * max(1.0, body.mass):
+            if time.monotonic() > deadline:
+                logger.warning("the robot does not report the load sent yet")
+                break
+            time.sleep(self.poll_period)
         logger.info(
             "sent the load %.4g kg at %s m (flange frame) to %s",
             body.mass,

@@ -291,15 +291,15 @@ class FrankaSim:
                 process.kill()
                 process.wait(5.0)
             process.stdout.close()
+        self._file.close()  # the mapping stays valid for the sensor's last reads
 
     def kill(self) -> None:
-        """Kill the simulation process (SIGKILL), as a crashed robot server: no goodbye."""
-        process, self._process = self._process, None
-        if process is not None:
-            process.kill()
-            process.wait(5.0)
-            for stream in (process.stdin, process.stdout):
-                stream.close()
+        """Kill the simulation process (SIGKILL), as a crashed robot server: no goodbye.
+
+        Returns at once (the process is reaped by :meth:`close`).
+        """
+        if self._process is not None:
+            self._process.kill()
 
     @property
     def alive(self) -> bool:
