@@ -191,14 +191,14 @@ class FrankaRobot:
             self._robot.move(franky.JointMotion(franky.JointState(target)), asynchronous=True)
             self._streaming = False
             deadline = time.monotonic() + self.move_timeout
-            while not self._robot.poll_motion():
+            # join with a timeout, not poll_motion: a motion whose robot vanished counts as
+            # finished for poll_motion while join_motion waits for libfranka's timeout
+            while not self._robot.join_motion(timeout=self.poll_period):
                 if time.monotonic() > deadline:
                     raise TimeoutError(f"the motion took longer than {self.move_timeout:g} s")
                 self.joint_state()
                 if while_moving is not None:
                     while_moving()
-                time.sleep(self.poll_period)
-            self._robot.join_motion()
         except (KeyboardInterrupt, FtkinError):
             self.stop()
             raise
