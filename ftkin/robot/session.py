@@ -147,7 +147,8 @@ def calibrate_on_robot(
         resume: Continue ``samples_path``: poses already in it are skipped (they must match
             the plan: same ``n_poses``, ``seed`` and options).
         output: Save the calibration there (atomically); None: not saved.
-        verify_poses: Extra poses for :func:`verify_on_robot` (logged; 0: none).
+        verify_poses: Extra poses for :func:`verify_on_robot` (logged; 0: none). A fault there
+            stops the arm and is logged; the calibration is returned all the same.
         seed: Seed of the planner (and of the verification poses, ``seed + 1``).
         plan_options: More :func:`~ftkin.planning.plan.plan_poses` keywords (default floor
             height 0.1 m, tool weight 15 N), e.g. ``joint_ranges``.
@@ -208,9 +209,12 @@ def calibrate_on_robot(
         logger.info("saved the calibration to %s", output)
     if verify_poses:
         extra = verification_poses(arm, verify_poses, seed=seed + 1, plan_options=plan_options)
-        with _stopping(robot, log, len(poses)):
+        try:  # the calibration is done (and saved): a failure here stops the arm, not the result
             verification = verify_on_robot(robot, sensor, arm, result, extra, stillness=stillness)
-        logger.info("%s", verification.report())
+        except (FtkinError, KeyboardInterrupt) as error:
+            logger.warning("verification stopped (the arm is stopped): %s", error or "Ctrl-C")
+        else:
+            logger.info("%s", verification.report())
     return result
 
 

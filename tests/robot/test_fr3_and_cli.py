@@ -129,3 +129,23 @@ def test_export_end_effector_only_for_franka_load(tmp_path, capsys):
         == 2
     )
     assert "negative mass" in capsys.readouterr().err
+
+
+def test_the_contract_as_written():
+    import dataclasses
+    import inspect
+
+    import ftkin.robot
+    from ftkin.robot import FrankaRobot, LoopStats, calibrate_on_robot, run_admittance
+
+    assert ftkin.robot.__all__ == sorted(ftkin.robot.__all__)
+    for name in ftkin.robot.__all__:
+        assert getattr(ftkin.robot, name) is not None, name
+    realtime = inspect.signature(FrankaRobot).parameters["realtime"]
+    assert realtime.kind is inspect.Parameter.KEYWORD_ONLY and realtime.default is True
+    session = inspect.signature(calibrate_on_robot).parameters
+    assert list(session)[:3] == ["robot", "sensor", "arm"]
+    assert session["n_poses"].default == 12 and session["readings_per_pose"].default == 50
+    assert {"poses", "samples_path", "resume"} <= set(session)
+    assert "rate_hz" in {field.name for field in dataclasses.fields(LoopStats)}
+    assert {"duration", "rate_hz"} <= set(inspect.signature(run_admittance).parameters)
