@@ -151,7 +151,7 @@ def _guide_parser(commands) -> None:
     parser.add_argument("--rate", type=positive_float, default=250.0, help="loop rate [Hz]")
     parser.add_argument("--rotation", action="store_true", help="let the hand turn the tool")
     parser.add_argument(
-        "--gain", type=positive_float, help="translation gain [m/(s·N)] (default: 0.004)"
+        "--gain", type=positive_float, help="translation gain [m/(s·N)] (default: 0.0035)"
     )
     parser.set_defaults(func=run_guide)
 

@@ -18,8 +18,8 @@ from ..control.oscillation import OscillationLimits
 from ..control.sensor_faults import SensorLimits
 from ..exceptions import InvalidInput
 
-GUIDING_FORCE_GAIN = 0.004
-"""Default translation gain K2 [m/(s·N)]: 10 N moves the tool at 4 cm/s."""
+GUIDING_FORCE_GAIN = 0.0035
+"""Default translation gain K2 [m/(s·N)]: 10 N moves the tool at 3.5 cm/s."""
 GUIDING_TORQUE_GAIN = 0.1
 """Default rotation gain [rad/(s·N·m)] when rotation is free."""
 GUIDING_OSCILLATION = OscillationLimits(force_step=4.0)
