@@ -89,12 +89,15 @@ class FrankaRobot:
     ):
         if not isinstance(host, str) or not host.strip():
             raise InvalidInput(f"host must be the robot's address, got {host!r}")
-        numbers = as_vector([speed, watchdog, poll_period, move_timeout], 4, "robot timing")
+        numbers = as_vector(
+            [speed, watchdog, poll_period, move_timeout, state_timeout], 5, "robot timing"
+        )
         if not 0.0 < speed <= 1.0 or np.any(numbers[1:] <= 0.0) or watchdog < 0.001:
             raise InvalidInput(
-                "speed must be in (0, 1], watchdog >= 0.001 s, poll_period and move_timeout > 0; "
-                f"got speed={speed!r}, watchdog={watchdog!r}, poll_period={poll_period!r}, "
-                f"move_timeout={move_timeout!r}"
+                "speed must be in (0, 1], watchdog >= 0.001 s, poll_period, move_timeout and "
+                f"state_timeout > 0 s; got speed={speed!r}, watchdog={watchdog!r}, "
+                f"poll_period={poll_period!r}, move_timeout={move_timeout!r}, "
+                f"state_timeout={state_timeout!r}"
             )
         self.host = host
         self._franky = franky = import_franky()
@@ -118,7 +121,6 @@ class FrankaRobot:
             float(poll_period),
             float(move_timeout),
         )
-        self._streaming = False
         self.state_timeout = float(state_timeout)
         self._robot_time, self._state_at = -1, time.monotonic()
 
@@ -189,7 +191,6 @@ class FrankaRobot:
         franky = self._franky
         try:
             self._robot.move(franky.JointMotion(franky.JointState(target)), asynchronous=True)
-            self._streaming = False
             deadline = time.monotonic() + self.move_timeout
             # join with a timeout, not poll_motion: a motion whose robot vanished counts as
             # finished for poll_motion while join_motion waits for libfranka's timeout
@@ -222,7 +223,6 @@ class FrankaRobot:
                 franky.JointVelocityMotion(np.asarray(dq, dtype=float), duration=self._watchdog),
                 asynchronous=True,
             )
-            self._streaming = True
         except Exception as error:
             self._recover()
             raise self._wrap(error, "commanding joint velocities") from None
@@ -241,7 +241,6 @@ class FrankaRobot:
             self._robot.join_motion(timeout=1.0)
         except Exception as error:  # "Move command preempted!" is the stop itself
             logger.debug("after stop: %s", error)
-        self._streaming = False
         self._recover()
 
     # -------------------------------------------------------------- payload

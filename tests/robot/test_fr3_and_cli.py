@@ -149,3 +149,16 @@ def test_the_contract_as_written():
     assert {"poses", "samples_path", "resume"} <= set(session)
     assert "rate_hz" in {field.name for field in dataclasses.fields(LoopStats)}
     assert {"duration", "rate_hz"} <= set(inspect.signature(run_admittance).parameters)
+
+
+def test_franka_robot_checks_its_arguments_and_names_a_missing_robot():
+    from ftkin.exceptions import RobotConnectionLost
+    from ftkin.robot import FrankaRobot
+
+    with pytest.raises(InvalidInput, match="host"):
+        FrankaRobot("")
+    with pytest.raises(InvalidInput, match="speed must be in"):
+        FrankaRobot(NOWHERE, speed=1.5)
+    pytest.importorskip("franky", reason="franky-control is not installed (extra 'franka')")
+    with pytest.raises(RobotConnectionLost, match=f"cannot connect to the robot at {NOWHERE}"):
+        FrankaRobot(NOWHERE, realtime=False)
