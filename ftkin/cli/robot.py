@@ -21,6 +21,9 @@ from .arg_types import bounded_int, positive_float, seed
 
 GUIDING_HOME = (0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785)
 """The demo's hand-guiding start pose [rad] (the hand above the table, pointing down)."""
+SIM_TIMEOUT = 0.5
+"""The demo's stale-sensor and robot-state limits [s] (0.1 s on a real robot): a busy machine
+pauses franky-sim's physics for longer than that."""
 
 
 def register(subparsers) -> None:
@@ -301,7 +304,7 @@ def run_demo(args) -> int:
     from ..robot.guiding import hand_guiding
     from ..robot.loop import run_admittance
     from ..robot.session import calibrate_on_robot, default_samples_path
-    from ..robot.stillness import wait_still
+    from ..robot.stillness import Stillness, wait_still
 
     arm = fr3_arm()
     with tempfile.TemporaryDirectory(prefix="ftkin-robot-demo-") as folder:
@@ -309,7 +312,12 @@ def run_demo(args) -> int:
         samples = default_samples_path(output)
         print("starting franky-sim (FR3, wrist sensor between flange and hand, a 1.2 kg tool)")
         with FrankaSim() as sim:
-            robot = FrankaRobot(sim.hostname, realtime=False, speed=min(args.speed, 1.0))
+            robot = FrankaRobot(
+                sim.hostname,
+                realtime=False,
+                speed=min(args.speed, 1.0),
+                state_timeout=SIM_TIMEOUT,
+            )
             started = time.monotonic()
             result = calibrate_on_robot(
                 robot,
@@ -320,6 +328,7 @@ def run_demo(args) -> int:
                 output=output,
                 g=sim.truth.g,
                 plan_options={"joint_ranges": {"fr3_joint1": (-0.8, 0.8)}},
+                stillness=Stillness(stale_after=SIM_TIMEOUT),
             )
             truth = sim.truth
             print(f"session: {args.poses} poses in {time.monotonic() - started:.1f} s")
@@ -339,7 +348,9 @@ def run_demo(args) -> int:
             controller = hand_guiding(arm, result)
             start = sim.hand_position()
             sim.push([args.push, 0.0, 0.0], 1.0, delay=0.3)
-            stats = run_admittance(robot, sim.sensor, controller, duration=2.5, stale_after=0.5)
+            stats = run_admittance(
+                robot, sim.sensor, controller, duration=2.5, stale_after=SIM_TIMEOUT
+            )
             moved = (sim.hand_position() - start) * 1e3
             print(
                 f"hand-guiding: a {args.push:g} N push along x for 1 s moved the hand "
