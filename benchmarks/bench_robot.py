@@ -43,7 +43,6 @@ import argparse
 import logging
 import os
 import signal
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -412,4 +411,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from _targets import run_benchmark
+
+    raise SystemExit(run_benchmark(main))
