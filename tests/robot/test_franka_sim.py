@@ -117,6 +117,20 @@ def test_payload_round_trip(sim, robot, arm, session):
     np.testing.assert_allclose(mass, truth.mass - end_effector.mass + truth.sensor_mass, rtol=0.01)
 
 
+def test_cli_payload_sends_and_reads_back(session, capsys):
+    from ftkin.cli import main
+
+    _, folder = session
+    with FrankaSim() as other:  # a robot takes one client: the module's robot holds the other sim
+        argv = ["robot", "payload", str(folder / "calib.json"), "--franka", other.hostname]
+        assert main([*argv, "--no-realtime", "--sensor-body", "0.25", "0", "0", "-0.01"]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        sent, reported = (line.split(": ", 1)[1] for line in lines[:2])
+        assert lines[0].startswith("sent:") and sent == reported  # to the printed digits
+        assert main([*argv, "--no-realtime", "--end-effector", "5", "0", "0", "0"]) == 2
+        assert "negative mass" in capsys.readouterr().err
+
+
 def test_hand_guiding_follows_a_push_and_stops(sim, robot, arm, session):
     result, _ = session
     robot.move_to(HOME)
