@@ -28,7 +28,7 @@ import numpy as np
 
 from ftkin import Arm
 from ftkin.control.stability import max_stable_k1
-from ftkin.sim.mujoco.loop import run_closed_loop
+from ftkin.sim.mujoco.closed_loop import run_closed_loop
 from ftkin.sim.mujoco.mujoco_placement import placement_scene, simulate_placement_mujoco
 from ftkin.sim.mujoco.mujoco_sensor import MujocoSensor
 from ftkin.sim.placement import MODES, PlacementScenario, admittance_controller, simulate_placement

@@ -104,8 +104,16 @@ def export_request(
     given = {name: value for name, value in options.items() if value is not None}
     unknown = sorted(set(given) - set(known))
     if unknown:
-        flags = {o.name: o.flag for f in EXPORT_FORMATS.values() for o in f.options}
-        named = [f"{name} ({flags[name]})" if name in flags else name for name in unknown]
+        takers: dict[str, list[str]] = {}
+        for other in EXPORT_FORMATS.values():
+            for option in other.options:
+                takers.setdefault(option.name, [option.flag]).append(other.name)
+        named = [
+            f"{name} ({takers[name][0]}: --format {', '.join(takers[name][1:])})"
+            if name in takers
+            else name
+            for name in unknown
+        ]
         takes = [f"{name} ({option.flag})" for name, option in known.items()]
         raise InvalidInput(
             f"{fmt} takes no {', '.join(named)}; its options: {', '.join(takes) or 'none'}"
@@ -141,8 +149,13 @@ def export_calibration(calibration, path, fmt: str, arm=None, **options) -> Path
     return atomic_write_text(Path(path), export_text(calibration, fmt, arm, path=path, **options))
 
 
-def export_payload(calibration, arm, path, fmt: str, flange_frame=None, inertia=None) -> Path:
-    """Write a payload format (``franka-load``, ``ur-payload``; ``.script``: URScript only)."""
+def export_payload(calibration, arm, path, fmt: str, flange_frame=None, inertia=None, **bodies):
+    """Write a payload format (``franka-load``, ``ur-payload``; ``.script``: URScript only).
+
+    ``bodies``: ``end_effector=`` and ``sensor_body=`` (``franka-load``; flange-frame
+    :class:`~ftkin.io.payload_inertia.RigidBody`): write ``measured − end_effector +
+    sensor_body``, the load for a controller that already models the end effector.
+    """
     return export_calibration(
-        calibration, path, fmt, arm, flange_frame=flange_frame, inertia=inertia
+        calibration, path, fmt, arm, flange_frame=flange_frame, inertia=inertia, **bodies
     )

@@ -64,6 +64,20 @@ INERTIA = ExportOption(
     {"type": float, "nargs": 6, "metavar": ("IXX", "IYY", "IZZ", "IXY", "IXZ", "IYZ")},
 )
 
+END_EFFECTOR = ExportOption(
+    "end_effector",
+    "--end-effector",
+    "subtract the end effector the controller already models (libfranka m_ee, F_x_Cee) "
+    "[kg, m, flange frame]",
+    {"type": float, "nargs": 4, "metavar": ("MASS", "CX", "CY", "CZ")},
+)
+SENSOR_BODY = ExportOption(
+    "sensor_body",
+    "--sensor-body",
+    "add the sensor's own body above its measuring plane (datasheet) [kg, m, flange frame]",
+    {"type": float, "nargs": 4, "metavar": ("MASS", "CX", "CY", "CZ")},
+)
+
 
 @dataclass(frozen=True)
 class Payload:
@@ -150,6 +164,17 @@ def _inertia(value) -> np.ndarray | None:
     return array
 
 
+def _body(value):
+    """A :class:`~ftkin.io.payload_inertia.RigidBody`, or ``[mass, cx, cy, cz]`` [kg, m, flange
+    frame] as a point mass; None stays None.
+    """
+    from .payload_inertia import RigidBody  # it imports this module
+
+    if value is None or isinstance(value, RigidBody):
+        return value
+    return RigidBody.point(value[0], value[1:])
+
+
 def _numbers(values) -> list[float]:
     return [float(v) for v in np.asarray(values, dtype=float).reshape(-1)]
 
@@ -186,8 +211,20 @@ class PayloadFormat(ExportFormat):
 
 class FrankaLoadExport(PayloadFormat):
     name = "franka-load"
-    options = (FLANGE_FRAME, INERTIA)
+    options = (FLANGE_FRAME, INERTIA, END_EFFECTOR, SENSOR_BODY)
     summary = "franka_msgs/srv/SetLoad request: mass, center_of_mass, load_inertia"
+
+    def payload(self, request: ExportRequest) -> Payload:
+        """The measured payload, minus ``end_effector`` plus ``sensor_body`` when given
+        (:func:`ftkin.io.payload_inertia.controller_load`).
+        """
+        measured = super().payload(request)
+        bodies = [_body(request.option(name)) for name in ("end_effector", "sensor_body")]
+        if all(body is None for body in bodies):
+            return measured
+        from .payload_inertia import controller_load  # it imports this module
+
+        return controller_load(measured, *bodies)
 
     def document(self, request: ExportRequest) -> dict:
         payload = self.payload(request)

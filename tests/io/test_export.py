@@ -129,7 +129,8 @@ def test_unknown_format(truth):
 def test_bad_options_and_weightless_tool(truth):
     with pytest.raises(
         InvalidInput,
-        match=r"ft-calib takes no node_name \(--node-name\); its options: frame_id \(--frame-id\)",
+        match=r"ft-calib takes no node_name \(--node-name: --format admittance, "
+        r"gravity-compensation\); its options: frame_id \(--frame-id\)",
     ):
         export_text(truth, "ft-calib", node_name="ft_node")
     weightless = SensorModel(

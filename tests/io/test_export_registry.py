@@ -80,7 +80,9 @@ def test_a_format_registered_from_a_test_file_is_a_cli_choice(
     assert "wrote tool-json to" in capsys.readouterr().out
     # the option is the format's own: another format refuses it
     assert main(["export", str(path), "--format", "ft-calib", "-o", str(out), "--digits", "3"]) == 2
-    assert "ft-calib takes no digits (--digits); its options: frame_id" in capsys.readouterr().err
+    assert "ft-calib takes no digits (--digits: --format tool-json); its options: frame_id" in (
+        capsys.readouterr().err
+    )
 
 
 def test_registry_refuses_a_taken_name_and_a_non_format(tool_json):

@@ -9,7 +9,7 @@ the loop. ``mujoco`` is imported only when a model is built.
 """
 
 from .arm_model import GraspedObject, build_arm_model
-from .loop import ClosedLoopRun, run_closed_loop
+from .closed_loop import ClosedLoopRun, run_closed_loop
 from .mujoco_placement import simulate_placement_mujoco
 from .mujoco_sensor import MujocoSensor
 from .recording import MujocoRecorder

@@ -29,7 +29,7 @@ from ...kinematics.arm import Arm
 from ..placement import PlacementRun, PlacementScenario, admittance_controller
 from ..sensor import SimulatedSensor, paper_like_truth
 from .arm_model import GraspedObject, build_arm_model
-from .loop import ClosedLoopRun, run_closed_loop
+from .closed_loop import ClosedLoopRun, run_closed_loop
 from .mujoco_sensor import MujocoSensor
 from .simulation import ArmSimulation
 
