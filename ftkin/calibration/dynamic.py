@@ -45,7 +45,7 @@ from .log_cholesky import (
     nearest_consistent,
 )
 from .model import STANDARD_GRAVITY
-from .regressor import MotionSamples, point_mass_parameters
+from .regressor import MotionSamples
 from .samples import Samples
 
 
@@ -57,13 +57,10 @@ class DynamicCalibrationResult(CalibrationResult):
     ``g``) and their ``(12, 12)`` ``covariance`` come from the same fit, so this
     result compensates statically like any calibration.
 
+    The inertia (``inertia_about_com_in_sensor``, ``inertial_parameters``, their errors and
+    covariance) is a declared part of every calibration; this adds the fit over the motion.
+
     Attributes:
-        inertia_about_com_in_sensor: ``(3, 3)`` inertia about the COM, sensor axes [kg·m²],
-            or None when the inertia was not estimated.
-        inertia_std_errors: ``(3, 3)`` its standard errors [kg·m²], or None.
-        inertial_parameters: ``(10,)`` θ in the sensor frame (see
-        :mod:`ftkin.calibration.log_cholesky`).
-        inertial_covariance: ``(10, 10)`` covariance of θ, or None.
         motion_residual_rms: ``(6,)`` RMS of measured minus predicted per channel [N, N·m].
         channel_std: ``(6,)`` noise per reading used as weights [N, N·m].
         unconstrained_parameters: θ of the unconstrained least squares (before
@@ -71,43 +68,16 @@ class DynamicCalibrationResult(CalibrationResult):
         unconstrained_consistent: Whether that θ was physically consistent.
     """
 
-    inertia_about_com_in_sensor: np.ndarray | None = None
-    inertia_std_errors: np.ndarray | None = None
-    inertial_parameters: np.ndarray | None = None
-    inertial_covariance: np.ndarray | None = None
     motion_residual_rms: np.ndarray | None = None
     channel_std: np.ndarray | None = None
     unconstrained_parameters: np.ndarray | None = None
     unconstrained_consistent: bool | None = None
 
-    def __post_init__(self):
-        super().__post_init__()
-        for name in (
-            "inertia_about_com_in_sensor",
-            "inertia_std_errors",
-            "inertial_parameters",
-            "inertial_covariance",
-            "motion_residual_rms",
-            "channel_std",
-            "unconstrained_parameters",
-        ):
-            value = getattr(self, name)
-            if value is not None:
-                value = np.array(value, dtype=float)
-                value.setflags(write=False)
-                object.__setattr__(self, name, value)
-
-    @property
-    def has_inertia(self) -> bool:
-        """True when the inertia was identified (compensation may then remove inertial forces)."""
-        return self.inertia_about_com_in_sensor is not None
-
-    @property
-    def dynamic_parameters(self) -> np.ndarray:
-        """θ (10,) for compensation: the identified one, or ``[m, m·c, 0…]`` without inertia."""
-        if self.inertial_parameters is not None:
-            return np.array(self.inertial_parameters)
-        return point_mass_parameters(self)
+    _OPTIONAL_ARRAYS = CalibrationResult._OPTIONAL_ARRAYS + (
+        "motion_residual_rms",
+        "channel_std",
+        "unconstrained_parameters",
+    )
 
     def summary(self) -> str:
         """Static summary plus the inertia (± standard errors) and the fit over the motion."""

@@ -25,7 +25,8 @@ import math
 
 import numpy as np
 
-from ..calibration.model import SensorModel
+from ..calibration.model import FloatModel, SensorModel, contact_batch, gravity_in_sensor
+from ..calibration.result import CalibrationResult
 from ..calibration.samples import Samples
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
@@ -33,9 +34,6 @@ from ..kinematics.mounting import mounted_arm
 from ..validation import FLOAT64, as_batch, as_rotation_batch, is_rotation_rows, rotation_rows
 from .bias_control import BiasControl
 from .bias_tracker import BiasTracker
-
-_BLOCK = 8192
-"""Samples per block of the batch compensation's column updates."""
 
 
 class Compensator(BiasControl):
@@ -75,7 +73,8 @@ class Compensator(BiasControl):
             raise InvalidInput(
                 f"tracker must be an ftkin BiasTracker or None, got {type(tracker).__name__}"
             )
-        record = getattr(calibration, "kinematics", None)
+        calibration = CalibrationResult.from_model(calibration)
+        record = calibration.kinematics
         if arm is not None and record is not None and not allow_other_arm:
             problems = record.mismatches(arm)
             if problems:
@@ -88,43 +87,33 @@ class Compensator(BiasControl):
                     "is deliberate."
                 )
         self.calibration = calibration
-        mount = getattr(calibration, "mount_rotation", None)
-        self.arm = mounted_arm(arm, mount) if arm is not None and mount is not None else arm
-        signs = getattr(calibration, "reading_signs", None)
-        self._reading_signs = None if signs is None or np.all(signs == 1.0) else np.array(signs)
-        if self._reading_signs is not None:
-            # Shadow the two kernels (every other path calls one of them) with ones that apply the
-            # signs.
-            self.contact_floats = self._signed_contact_floats
-            self._contact_batch = self._signed_contact_batch
+        self.arm = mounted_arm(arm, calibration.mount_rotation) if arm is not None else arm
+        signs = calibration.reading_signs
+        self._reading_signs = None if np.all(signs == 1.0) else signs
         self._gravity_in_base = np.array(calibration.gravity_in_base)
         self._bias = np.array(calibration.bias)
         self._com = np.array(calibration.center_of_mass)
+        self._floats = FloatModel(self._gravity_in_base, self._com, self._bias)
+        # Every one-sample path (and JointAdmittance.step) runs the float kernel of the model.
+        self.contact_floats = (
+            self._floats.contact if self._reading_signs is None else self._signed_contact_floats
+        )
         self._q_shape = (self.arm.nq,) if self.arm is not None else None
-        self.refresh_floats()
         self.tracker = tracker
         if tracker is not None:
             tracker.reset(self._bias, tracker.std)
 
     def _signed_contact_floats(self, rotation_rows, raw) -> tuple[float, ...]:
+        """:meth:`FloatModel.contact` of the readings times the stored signs."""
         s0, s1, s2, s3, s4, s5 = self._reading_signs.tolist()
         w0, w1, w2, w3, w4, w5 = raw
-        return Compensator.contact_floats(
-            self, rotation_rows, (w0 * s0, w1 * s1, w2 * s2, w3 * s3, w4 * s4, w5 * s5)
+        return self._floats.contact(
+            rotation_rows, (w0 * s0, w1 * s1, w2 * s2, w3 * s3, w4 * s4, w5 * s5)
         )
-
-    def _signed_contact_batch(
-        self, raw: np.ndarray, gravity_in_sensor: np.ndarray, bias=None
-    ) -> np.ndarray:
-        return Compensator._contact_batch(self, raw * self._reading_signs, gravity_in_sensor, bias)
 
     def __repr__(self) -> str:
         calibration = self.calibration
-        arm = (
-            "none"
-            if self.arm is None
-            else f"{self.arm.sensor_frame} of {getattr(self.arm.urdf_path, 'name', '?')}"
-        )
+        arm = "none" if self.arm is None else f"{self.arm.sensor_frame} of {self.arm.urdf_path}"
         return (
             f"Compensator(tool {calibration.tool_weight:.4g} N, COM "
             f"{np.round(calibration.center_of_mass, 4).tolist()} m, "
@@ -138,9 +127,7 @@ class Compensator(BiasControl):
         The one-sample path reads Python floats: call this after replacing a
         parameter array at run time (e.g. a re-zeroed bias).
         """
-        self._gravity_floats = tuple(self._gravity_in_base.tolist())
-        self._com_floats = tuple(self._com.tolist())
-        self._bias_floats = tuple(self._bias.tolist())
+        self._floats.set(self._gravity_in_base, self._com, self._bias)
 
     def _require_arm(self) -> Arm:
         if self.arm is None:
@@ -236,31 +223,6 @@ class Compensator(BiasControl):
         """
         return np.array(self.contact_floats(rotation.tolist(), raw.tolist()))
 
-    def contact_floats(self, rotation_rows, raw) -> tuple[float, ...]:
-        """The compensation on Python floats: ``R_BS.tolist()`` and six raw floats → six contact
-        floats.
-
-        Every one-sample path (and ``JointAdmittance.step``) runs here: numpy's
-        per-call overhead dominates on 3-vectors; the IEEE operations are those
-        of the batch form.
-        """
-        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation_rows
-        ax, ay, az = self._gravity_floats
-        px, py, pz = self._com_floats
-        b0, b1, b2, b3, b4, b5 = self._bias_floats
-        w0, w1, w2, w3, w4, w5 = raw
-        gx = r00 * ax + r10 * ay + r20 * az  # Gs = R_BSᵀ a
-        gy = r01 * ax + r11 * ay + r21 * az
-        gz = r02 * ax + r12 * ay + r22 * az
-        return (
-            (w0 - b0) - gx,
-            (w1 - b1) - gy,
-            (w2 - b2) - gz,
-            (w3 - b3) - (py * gz - pz * gy),  # M' = M − M0 − P × Gs
-            (w4 - b4) - (pz * gx - px * gz),
-            (w5 - b5) - (px * gy - py * gx),
-        )
-
     # ----------------------------------------------------------------- batch
     def compensate_batch(self, rotation_sensor_to_base, raw_wrenches, times=None) -> np.ndarray:
         """Contact wrenches ``(N, 6)`` from ``(N, 3, 3)`` ``R_BS`` and ``(N, 6)`` raw readings
@@ -288,39 +250,16 @@ class Compensator(BiasControl):
 
         ``bias``: ``(N, 6)`` per-reading bias [N, N·m] (default: the current one).
         """
-        return self._contact_batch(
-            raw, np.einsum("nji,j->ni", rotations, self._gravity_in_base), bias
-        )
+        return self._contact_batch(raw, gravity_in_sensor(rotations, self._gravity_in_base), bias)
 
     def _contact_batch(
         self, raw: np.ndarray, gravity_in_sensor: np.ndarray, bias: np.ndarray | None = None
     ) -> np.ndarray:
-        """``raw − bias − [Gs, P × Gs]`` ``(N, 6)`` from the tool weight in the sensor frame ``Gs``
-        ``(N, 3)``.
-
-        Computed column by column on blocks (no ``(N, 3)`` temporary for ``P × Gs``).
-        """
-        bias = self._bias if bias is None else bias
-        out = np.empty_like(raw)
-        px, py, pz = self._com_floats
-        per_sample, gravity = np.ndim(bias) == 2, gravity_in_sensor.T
-        # Column by column on blocks: (N,) operations run as one vectorised loop each, where (N, 6)
-        # with a (6,)
-        # operand loops over rows of six; the block's temporaries stay below the mmap threshold.
-        for start in range(0, len(out), _BLOCK):
-            stop = start + _BLOCK
-            block, readings = out[start:stop], raw[start:stop]
-            offsets = bias[start:stop].T if per_sample else bias
-            for column in range(6):
-                np.subtract(readings[:, column], offsets[column], out=block[:, column])
-            gx, gy, gz = gravity[:, start:stop]
-            block[:, 0] -= gx
-            block[:, 1] -= gy
-            block[:, 2] -= gz
-            block[:, 3] -= py * gz - pz * gy
-            block[:, 4] -= pz * gx - px * gz
-            block[:, 5] -= px * gy - py * gx
-        return out
+        """:func:`~ftkin.calibration.model.contact_batch` with the signs and the current bias."""
+        raw = raw if self._reading_signs is None else raw * self._reading_signs
+        return contact_batch(
+            raw, gravity_in_sensor, self._com, self._bias if bias is None else bias
+        )
 
     def compensate_joint_positions(self, joint_positions, raw_wrenches) -> np.ndarray:
         """Contact wrenches ``(N, 6)`` from ``(N, nq)`` joint angles [rad] and ``(N, 6)`` raw
@@ -347,9 +286,8 @@ class Compensator(BiasControl):
         to them.
         """
         rotations = samples.rotations
-        mount = getattr(self.calibration, "mount_rotation", None)
-        if samples.joint_positions is not None and mount is not None:
-            rotations = rotations @ mount.T
+        if samples.joint_positions is not None and self.calibration.has_mount:
+            rotations = rotations @ self.calibration.mount_rotation.T
         bias = self.bias_at(samples.times) if samples.times is not None else None
         return self.compensate_batch_unchecked(rotations, samples.wrenches, bias)
 

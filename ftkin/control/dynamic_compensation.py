@@ -27,19 +27,11 @@ import pinocchio as pin
 
 from ..calibration.derivatives import CausalDifferentiator
 from ..calibration.model import SensorModel
-from ..calibration.regressor import MotionSamples, point_mass_parameters
+from ..calibration.regressor import MotionSamples
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
 from ..validation import FLOAT64, as_vector
 from .compensation import Compensator
-
-
-def _dynamic_parameters(calibration: SensorModel, inertial_parameters) -> np.ndarray:
-    if inertial_parameters is not None:
-        return as_vector(inertial_parameters, 10, "inertial_parameters")
-    if hasattr(calibration, "dynamic_parameters"):
-        return np.asarray(calibration.dynamic_parameters, dtype=float)
-    return point_mass_parameters(calibration)
 
 
 class DynamicCompensator:
@@ -66,11 +58,15 @@ class DynamicCompensator:
         if not isinstance(arm, Arm):
             raise InvalidInput(f"arm must be an ftkin Arm, got {type(arm).__name__}")
         self.static = Compensator(calibration, arm, allow_other_arm=allow_other_arm)
-        self.calibration = calibration
+        self.calibration = self.static.calibration
         self.arm = (
             self.static.arm
         )  # with the calibration's mount folded into the sensor frame, if any
-        self.inertial_parameters = _dynamic_parameters(calibration, inertial_parameters)
+        self.inertial_parameters = (
+            self.calibration.dynamic_parameters
+            if inertial_parameters is None
+            else as_vector(inertial_parameters, 10, "inertial_parameters")
+        )
         self._data = self.arm.model.createData()
         self._model, self._frame = self.arm.model, self.arm.sensor_frame_id
         self._nq = arm.nq

@@ -105,9 +105,8 @@ def _std_errors_document(result: CalibrationResult) -> dict | None:
     if errors is None:
         return None
     document = {**errors, "base_tilt_deg": np.rad2deg(errors["base_tilt"])}
-    inertia_errors = getattr(result, "inertia_std_errors", None)
-    if inertia_errors is not None:
-        document["inertia"] = inertia_errors
+    if result.inertia_std_errors is not None:
+        document["inertia"] = result.inertia_std_errors
     return document
 
 

@@ -4,8 +4,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from ..calibration.dynamic import DynamicCalibrationResult
@@ -17,8 +15,11 @@ def inertia_document(result: CalibrationResult) -> dict:
     """``inertia`` (3×3 about the COM, sensor axes [kg·m²]) of a dynamic calibration, else
     nothing.
     """
-    inertia = getattr(result, "inertia_about_com_in_sensor", None)
-    return {} if inertia is None else {"inertia": inertia}
+    return (
+        {}
+        if result.inertia_about_com_in_sensor is None
+        else {"inertia": result.inertia_about_com_in_sensor}
+    )
 
 
 def with_inertia(reader, result: CalibrationResult, inertia: np.ndarray) -> CalibrationResult:
@@ -41,10 +42,9 @@ def with_inertia(reader, result: CalibrationResult, inertia: np.ndarray) -> Cali
             "is negative or violates the triangle inequality)",
             "inertia",
         )
-    fields = {f.name: getattr(result, f.name) for f in dataclasses.fields(result)}
-    return DynamicCalibrationResult(
-        **fields,
-        inertia_about_com_in_sensor=inertia,
-        inertia_std_errors=inertia_errors,
-        inertial_parameters=theta,
-    )
+    inertia_fields = {
+        "inertia_about_com_in_sensor": inertia,
+        "inertia_std_errors": inertia_errors,
+        "inertial_parameters": theta,
+    }
+    return DynamicCalibrationResult(**{**vars(result), **inertia_fields})
