@@ -88,14 +88,14 @@ def format_summary(result) -> str:
 def _mount_lines(result) -> list[str]:
     """The estimated mount and a non-default reading convention, if any."""
     lines = []
-    if getattr(result, "mount_mode", "none") != "none":
+    if result.mount_mode != "none":
         errors = ", ".join(f"{name} ± {value:.3f}°" for name, value in result.mount_std_deg.items())
         lines.append(
             f"  mount_rpy_deg   R_M = {_vector(result.mount_rpy_deg, 3)}° (roll, pitch, yaw; URDF "
             "sensor frame → "
             f"real sensor frame, estimated: {result.mount_mode}; {errors})"
         )
-    if getattr(result, "sensor_sign", 1) != 1 or getattr(result, "flip_axis", None) is not None:
+    if result.sensor_sign != 1 or result.flip_axis is not None:
         flip = f", {result.flip_axis} axis reversed" if result.flip_axis else ""
         lines.append(
             f"  readings: sensor_sign {result.sensor_sign:+d}{flip} (applied to every reading)"

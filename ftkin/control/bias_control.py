@@ -94,7 +94,7 @@ class BiasControl:
         """
         times = as_float_array(times, "times").reshape(-1)
         out = np.tile(self._bias, (len(times), 1))
-        drift = getattr(self.calibration, "drift", None)
+        drift = self.calibration.drift
         if drift is not None and drift.model != "none":
             inside = drift.covers(times)
             out[inside] = drift.bias_at(times[inside])

@@ -39,6 +39,7 @@ from collections import deque
 
 import numpy as np
 
+from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from ..validation import as_six_channels, as_vector
 
@@ -113,7 +114,8 @@ class BiasTracker:
             InvalidInput: neither given nor in the calibration (e.g. a
                 calibration without times: give ``rate=``).
         """
-        drift = getattr(calibration, "drift", None)
+        calibration = CalibrationResult.from_model(calibration)
+        drift = calibration.drift
         if rate is None:
             if drift is None or drift.rate is None:
                 raise InvalidInput(
@@ -121,13 +123,13 @@ class BiasTracker:
                 )
             rate = drift.rate
         if noise is None:
-            diagnostics = getattr(calibration, "diagnostics", None)
+            diagnostics = calibration.diagnostics
             if diagnostics is None:
                 raise InvalidInput(
                     "the calibration has no noise estimate (method 'linear'?): give noise=[N, N·m]"
                 )
             noise = diagnostics.noise.channel_std
-        errors = getattr(calibration, "std_errors", None)
+        errors = calibration.std_errors
         if errors is not None and "initial_std" not in options:
             options["initial_std"] = np.concatenate(
                 [errors["force_offset"], errors["torque_offset"]]

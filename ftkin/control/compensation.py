@@ -113,7 +113,12 @@ class Compensator(BiasControl):
 
     def __repr__(self) -> str:
         calibration = self.calibration
-        arm = "none" if self.arm is None else f"{self.arm.sensor_frame} of {self.arm.urdf_path}"
+        path = None if self.arm is None else self.arm.urdf_path
+        arm = (
+            "none"
+            if self.arm is None
+            else f"{self.arm.sensor_frame} of {path.name if path else '?'}"
+        )
         return (
             f"Compensator(tool {calibration.tool_weight:.4g} N, COM "
             f"{np.round(calibration.center_of_mass, 4).tolist()} m, "
