@@ -35,7 +35,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .model import STANDARD_GRAVITY, SensorModel
+from ..kinematics.rotations import wrenches_base_to_sensor
+from .model import STANDARD_GRAVITY, SensorModel, cross_rows, gravity_in_sensor, predict
 from .observability import MIN_POSES, MIN_RELATIVE_SINGULAR_VALUE, force_regressor, torque_regressor
 from .samples import PoseAverages, Samples
 
@@ -155,18 +156,11 @@ def wrench_readings(given: Samples | PoseAverages) -> list[Reading]:
             np.ones(6) if scale is None else np.asarray(scale, float),
         )
 
-    to_sensor = np.transpose(rotations, (0, 2, 1))
-    in_sensor = np.hstack(
-        [
-            np.einsum("nij,nj->ni", to_sensor, wrenches[:, :3]),
-            np.einsum("nij,nj->ni", to_sensor, wrenches[:, 3:]),
-        ]
-    )
     out = [
         make(
             "the wrench in the base frame",
             "give the wrench in the sensor frame (rotate it by R_BS^T)",
-            in_sensor,
+            wrenches_base_to_sensor(rotations, wrenches),
         ),
         make(
             "the readings negated (the reaction)",
@@ -233,7 +227,7 @@ def _fit_group(readings: list[Reading], g: float = STANDARD_GRAVITY) -> list[Rea
         gravity_in_base, force_offset = solutions[:3, k], solutions[3:, k]
         measured = reading.poses.wrenches
         weight = float(np.linalg.norm(gravity_in_base))
-        directions = np.einsum("nji,j->ni", rotations, gravity_in_base / max(weight, 1e-300))
+        directions = gravity_in_sensor(rotations, gravity_in_base / max(weight, 1e-300))
         if (
             weight == 0.0
             or _relative_condition(torque_regressor(directions)) < MIN_RELATIVE_SINGULAR_VALUE
@@ -248,19 +242,13 @@ def _fit_group(readings: list[Reading], g: float = STANDARD_GRAVITY) -> list[Rea
             torque_regressor(measured[:, :3]), measured[:, 3:].reshape(-1), rcond=None
         )
         center_of_mass, auxiliary = step2[:3], step2[3:]
-        torque_offset = auxiliary - np.cross(force_offset, center_of_mass)
-        gravity_in_sensor = np.einsum("nji,j->ni", rotations, gravity_in_base)
-        predicted = np.hstack(
-            [
-                force_offset + gravity_in_sensor,
-                torque_offset + np.cross(center_of_mass, gravity_in_sensor),
-            ]
-        )
-        residuals = (measured - predicted) * reading.unit_scale
+        torque_offset = auxiliary - cross_rows(force_offset, center_of_mass)
+        theta = np.concatenate([gravity_in_base, force_offset, torque_offset, center_of_mass])
+        residuals = (measured - predict(rotations, theta)) * reading.unit_scale
         if not np.all(np.isfinite(residuals)):
             fits.append(ReadingFit(reading, None, None, failure="non-finite residuals"))
             continue
-        model = SensorModel(force_offset, torque_offset, gravity_in_base, center_of_mass, g)
+        model = SensorModel.from_vector(theta, g)
         rss = np.sum(residuals**2, axis=0)
         spread = np.sum(((measured - measured.mean(axis=0)) * reading.unit_scale) ** 2, axis=0)
         explained = min(
