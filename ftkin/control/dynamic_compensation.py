@@ -93,26 +93,15 @@ class DynamicCompensator:
         validated the same way.
         """
         try:  # float64 arrays (the control loop's) pass as they are
-            q = (
-                q
-                if type(q) is np.ndarray and q.dtype is FLOAT64
-                else np.asarray(q, dtype=np.float64)
-            )
-            dq = (
-                dq
-                if type(dq) is np.ndarray and dq.dtype is FLOAT64
-                else np.asarray(dq, dtype=np.float64)
-            )
-            ddq = (
-                ddq
-                if type(ddq) is np.ndarray and ddq.dtype is FLOAT64
-                else np.asarray(ddq, dtype=np.float64)
-            )
-            raw = (
-                raw_wrench
-                if type(raw_wrench) is np.ndarray and raw_wrench.dtype is FLOAT64
-                else np.asarray(raw_wrench, dtype=np.float64)
-            )
+            if type(q) is not np.ndarray or q.dtype is not FLOAT64:
+                q = np.asarray(q, dtype=np.float64)
+            if type(dq) is not np.ndarray or dq.dtype is not FLOAT64:
+                dq = np.asarray(dq, dtype=np.float64)
+            if type(ddq) is not np.ndarray or ddq.dtype is not FLOAT64:
+                ddq = np.asarray(ddq, dtype=np.float64)
+            raw = raw_wrench
+            if type(raw) is not np.ndarray or raw.dtype is not FLOAT64:
+                raw = np.asarray(raw, dtype=np.float64)
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q, dq, ddq and raw_wrench must be numeric: {error}") from None
         shape = self._q_shape
@@ -126,12 +115,7 @@ class DynamicCompensator:
         # the test below passes).
         if not math.isfinite(
             sum(q.tolist()) + sum(dq.tolist()) + sum(ddq.tolist()) + sum(values)
-        ) and not (
-            np.isfinite(q).all()
-            and np.isfinite(dq).all()
-            and np.isfinite(ddq).all()
-            and np.isfinite(raw).all()
-        ):
+        ) and not all(np.isfinite(value).all() for value in (q, dq, ddq, raw)):
             raise InvalidInput(
                 f"q, dq, ddq and raw_wrench must be finite, got q={q} dq={dq} ddq={ddq} "
                 f"raw_wrench={raw}"
