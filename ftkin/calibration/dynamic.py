@@ -80,27 +80,12 @@ class DynamicCalibrationResult(CalibrationResult):
     )
 
     def summary(self) -> str:
-        """Static summary plus the inertia (± standard errors) and the fit over the motion."""
+        """Static summary (with the inertia) plus the fit over the motion."""
         lines = super().summary().split("\n")
         lines[0] = (
             f"ftkin calibration: method {self.method}, moving recording of {self.sample_count} "
             "readings"
         )
-        if self.has_inertia:
-            errors = (
-                self.inertia_std_errors
-                if self.inertia_std_errors is not None
-                else np.full((3, 3), np.nan)
-            )
-            lines.append("  inertia_about_com_in_sensor [kg·m²] (± standard error):")
-            for row, error in zip(self.inertia_about_com_in_sensor, errors):
-                lines.append(
-                    "    [" + ", ".join(f"{v:+.6f} ± {e:.6f}" for v, e in zip(row, error)) + "]"
-                )
-            moments = np.linalg.eigvalsh(self.inertia_about_com_in_sensor)
-            lines.append(
-                "  principal moments: " + ", ".join(f"{m:.6f}" for m in moments) + " kg·m²"
-            )
         if self.unconstrained_consistent is False:
             lines.append(
                 "  NOTE: the unconstrained least squares was not physically consistent; the ML fit "

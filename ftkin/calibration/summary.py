@@ -53,7 +53,7 @@ def format_summary(result) -> str:
         f"  base_tilt       U  = {_scalar(tilt_u, 3, tilt_errors[0])}°, V = "
         f"{_scalar(tilt_v, 3, tilt_errors[1])}°",
     ]
-    lines.extend(_mount_lines(result))
+    lines.extend(_mount_lines(result) + _inertia_lines(result))
     if result.drift is not None:
         lines.append(f"  bias drift: {result.drift.describe()}")
         if result.drift.model != "none":
@@ -83,6 +83,21 @@ def format_summary(result) -> str:
     if result.urdf:
         lines.append(f"  kinematics: {result.urdf} (sensor frame {result.sensor_frame})")
     return "\n".join(lines)
+
+
+def _inertia_lines(result) -> list[str]:
+    """The identified inertia (± standard errors) and its principal moments, if any."""
+    if not result.has_inertia:
+        return []
+    inertia = result.inertia_about_com_in_sensor
+    errors = result.inertia_std_errors
+    errors = np.full((3, 3), np.nan) if errors is None else errors
+    lines = ["  inertia_about_com_in_sensor [kg·m²] (± standard error):"]
+    for row, error in zip(inertia, errors):
+        lines.append("    [" + ", ".join(f"{v:+.6f} ± {e:.6f}" for v, e in zip(row, error)) + "]")
+    moments = np.linalg.eigvalsh(inertia)
+    lines.append("  principal moments: " + ", ".join(f"{m:.6f}" for m in moments) + " kg·m²")
+    return lines
 
 
 def _mount_lines(result) -> list[str]:
