@@ -169,6 +169,28 @@ def _covariance(problem: DynamicProblem, x: np.ndarray, phi_space: bool) -> np.n
     return gradient @ cov_x @ gradient.T
 
 
+def _refuse_non_positive_mass(motion: MotionSamples, mass: float, g: float) -> None:
+    """Name the likely convention behind a non-positive mass estimate, else refuse it [kg]."""
+    # a negative mass is most often a convention: readings negated (the reaction) or a base
+    # mounted upside down
+    static = Samples(motion.wrenches, motion.rotations).pose_averages()
+    try:
+        check_conventions(detect_sign_and_handedness(static, g=g))
+    except SuspectConvention as error:
+        raise SuspectConvention(
+            f"{error} The dynamic calibration takes none of these options yet: negate the "
+            "readings (sign) or "
+            "calibrate from static poses, where they apply.",
+            error.explanations,
+            error.fixes,
+            error.sensor_sign,
+            error.flip_axis,
+        ) from None
+    raise InvalidInput(
+        f"the estimated tool mass is {mass:.4g} kg (not positive): is there a tool on the sensor?"
+    )
+
+
 def calibrate_dynamic(
     motion: MotionSamples | Samples,
     *,
@@ -220,25 +242,7 @@ def calibrate_dynamic(
     x = fit_unconstrained(problem, x)
     theta_unconstrained = problem.theta(x[8:])
     if theta_unconstrained[0] <= 0.0:
-        # a negative mass is most often a convention: readings negated (the reaction) or a base
-        # mounted upside down
-        static = Samples(motion.wrenches, motion.rotations).pose_averages()
-        try:
-            check_conventions(detect_sign_and_handedness(static, g=g))
-        except SuspectConvention as error:
-            raise SuspectConvention(
-                f"{error} The dynamic calibration takes none of these options yet: negate the "
-                "readings (sign) or "
-                "calibrate from static poses, where they apply.",
-                error.explanations,
-                error.fixes,
-                error.sensor_sign,
-                error.flip_axis,
-            ) from None
-        raise InvalidInput(
-            f"the estimated tool mass is {theta_unconstrained[0]:.4g} kg (not positive): is there "
-            "a tool on the sensor?"
-        )
+        _refuse_non_positive_mass(motion, theta_unconstrained[0], g)
     consistent = is_physically_consistent(theta_unconstrained) if estimate_inertia else None
     phi_space = estimate_inertia
     if estimate_inertia:

@@ -249,6 +249,20 @@ def noise_from_residuals(
     return std, min(dofs)
 
 
+def _information(
+    problem: WeightedProblem, theta: np.ndarray, loss: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Robust weights ``(P, 6)``, θ's Fisher information ``(12, 12)`` (marginal with a mount) and
+    the mount covariance ``(k, k)`` [rad²] (None without a mount) at the solution.
+    """
+    robust_weights = _robust_weights(problem.whitened_residuals(theta).reshape(-1, 6), loss)
+    jac = problem.whitened_jacobian(theta) * np.sqrt(robust_weights).reshape(-1, 1)
+    information = jac.T @ jac
+    if problem.mode == "none":
+        return robust_weights, information, None
+    return robust_weights, *split_information(information)
+
+
 def _solve(problem: WeightedProblem, start: np.ndarray, loss: str) -> tuple[np.ndarray, int]:
     """Minimize the (robust) whitened residuals from ``start``; ``θ`` and the function evaluations
     used.
@@ -336,14 +350,8 @@ def fit_ml(
             break
         theta, more = _solve(problem, theta, loss)
         evaluations += more
-    mount_covariance = None
     problem, theta = problem.recentred(theta)
-    whitened = problem.whitened_residuals(theta).reshape(-1, 6)
-    robust_weights = _robust_weights(whitened, loss)
-    jac = problem.whitened_jacobian(theta) * np.sqrt(robust_weights).reshape(-1, 1)
-    information = jac.T @ jac
-    if estimate_mount != "none":
-        information, mount_covariance = split_information(information)
+    robust_weights, information, mount_covariance = _information(problem, theta, loss)
     return MlFit(
         model=SensorModel.from_vector(theta, g),
         start=start,
