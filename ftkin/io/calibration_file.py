@@ -48,7 +48,9 @@ from pathlib import Path
 import numpy as np
 
 from ..calibration.diagnostics import FitDiagnostics
+from ..calibration.dynamic import DynamicCalibrationResult
 from ..calibration.estimate import CalibrationResult
+from ..calibration.log_cholesky import is_physically_consistent, parameters_from_body
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from ..kinematics.record import KinematicsRecord
 from .atomic import atomic_write_text
@@ -59,7 +61,6 @@ from .calibration_checks import (
     parse_calibration_json,
     short_repr,
 )
-from .calibration_inertia import inertia_document, with_inertia
 from .drift_file import drift_from_document, drift_to_document
 from .json_reader import JsonReader
 
@@ -108,6 +109,45 @@ def _std_errors_document(result: CalibrationResult) -> dict | None:
     if result.inertia_std_errors is not None:
         document["inertia"] = result.inertia_std_errors
     return document
+
+
+def inertia_document(result: CalibrationResult) -> dict:
+    """``inertia`` (3×3 about the COM, sensor axes [kg·m²]) of a dynamic calibration, else
+    nothing.
+    """
+    return (
+        {}
+        if result.inertia_about_com_in_sensor is None
+        else {"inertia": result.inertia_about_com_in_sensor}
+    )
+
+
+def with_inertia(reader, result: CalibrationResult, inertia: np.ndarray) -> CalibrationResult:
+    """The :class:`~ftkin.calibration.dynamic.DynamicCalibrationResult` of a file with an
+    ``inertia``.
+    """
+    if not np.allclose(
+        inertia, inertia.T, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(inertia).max()))
+    ):
+        reader.fail("the inertia must be a symmetric 3×3 matrix [kg·m²]", "inertia")
+    errors = reader.get("std_errors", required=False)
+    inertia_errors = None
+    if isinstance(errors, dict) and errors.get("inertia") is not None:
+        inertia_errors = reader.array("std_errors.inertia", (3, 3), source=errors["inertia"])
+    theta = parameters_from_body(result.tool_mass, result.center_of_mass, inertia)
+    if not is_physically_consistent(theta, tolerance=-1e-12):
+        reader.fail(
+            "the inertia is not physically consistent with the mass and centre of mass (a "
+            "principal moment "
+            "is negative or violates the triangle inequality)",
+            "inertia",
+        )
+    inertia_fields = {
+        "inertia_about_com_in_sensor": inertia,
+        "inertia_std_errors": inertia_errors,
+        "inertial_parameters": theta,
+    }
+    return DynamicCalibrationResult(**{**vars(result), **inertia_fields})
 
 
 def calibration_to_dict(result: CalibrationResult) -> dict:
