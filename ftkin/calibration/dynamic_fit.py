@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import UnobservableParameters
+from ..kinematics.rotations import gravity_in_base_from_tilt
 from .log_cholesky import (
     INERTIAL_PARAMETER_NAMES,
     log_cholesky_jacobian,
@@ -54,7 +55,7 @@ def upward_gravity(
     ``V``.
     """
     cu, su, cv, sv = np.cos(tilt_u), np.sin(tilt_u), np.cos(tilt_v), np.sin(tilt_v)
-    gamma = -g * np.array([cu * sv, -su, -cu * cv])
+    gamma = -gravity_in_base_from_tilt(g, tilt_u, tilt_v)
     d_u = -g * np.array([-su * sv, -cu, su * cv])
     d_v = -g * np.array([cu * cv, 0.0, cu * sv])
     return gamma, d_u, d_v
