@@ -27,6 +27,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pinocchio as pin
 
 from ..exceptions import InvalidInput, UnobservableParameters
 from .linear import fit_linear
@@ -73,27 +74,15 @@ def check_mount_mode(estimate_mount: str) -> str:
 
 
 def exp_so3(rotation_vector) -> np.ndarray:
-    """``Exp(w)``: rotation matrix of a rotation vector ``w`` [rad] (Rodrigues)."""
-    w = np.asarray(rotation_vector, dtype=float)
-    angle = float(np.linalg.norm(w))
-    k = skew(w)
-    if angle < 1e-8:
-        return np.eye(3) + k + 0.5 * k @ k
-    return np.eye(3) + np.sin(angle) / angle * k + (1.0 - np.cos(angle)) / angle**2 * k @ k
+    """``Exp(w)``: rotation matrix of a rotation vector ``w`` [rad] (Pinocchio's ``exp3``)."""
+    return pin.exp3(np.asarray(rotation_vector, dtype=float))
 
 
 def right_jacobian_so3(rotation_vector) -> np.ndarray:
-    """Right Jacobian ``J_r(w)`` of SO(3): ``Exp(w + dw) ≈ Exp(w) Exp(J_r(w) dw)``."""
-    w = np.asarray(rotation_vector, dtype=float)
-    angle = float(np.linalg.norm(w))
-    k = skew(w)
-    if angle < 1e-6:
-        return np.eye(3) - 0.5 * k + k @ k / 6.0
-    return (
-        np.eye(3)
-        - (1.0 - np.cos(angle)) / angle**2 * k
-        + (angle - np.sin(angle)) / angle**3 * k @ k
-    )
+    """Right Jacobian ``J_r(w)`` of SO(3): ``Exp(w + dw) ≈ Exp(w) Exp(J_r(w) dw)`` (Pinocchio's
+    ``Jexp3``).
+    """
+    return pin.Jexp3(np.asarray(rotation_vector, dtype=float))
 
 
 def mount_rotation(base: np.ndarray, mode: str, increment) -> np.ndarray:
