@@ -126,6 +126,9 @@ def mount_start(poses: PoseAverages, g: float):
 def check_mount_observable(problem, x: np.ndarray) -> None:
     """Refuse pose sets that cannot determine the mount (see the module docstring).
 
+    ``problem`` is the ML fit's :class:`~ftkin.calibration.ml.WeightedProblem` with a mount mode,
+    ``x = [θ, δ]`` its parameters.
+
     The whitened Jacobian with unit-norm columns must have a smallest singular
     value of at least :data:`~ftkin.calibration.observability.MIN_RELATIVE_SINGULAR_VALUE`
     relative to its largest; the error names the mount angles (and any other
