@@ -149,7 +149,7 @@ def diagnose(
     whitened = problem.whitened_residuals(theta).reshape(-1, 6)
     count = len(whitened)
     if parameter_count is None:  # 12 for θ, plus the mount angles when a mount is estimated
-        parameter_count = getattr(problem, "parameter_count", 12)
+        parameter_count = problem.parameter_count
     chi_square, dof, p_value = _fit_test(fit, whitened, parameter_count)
     fit_ok = not (p_value < FIT_ALPHA)
     normalized, pose_p, leverage = _pose_statistics(

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from .atomic import atomic_write_text
 from .export_format import ExportFormat, ExportRequest
@@ -69,7 +70,7 @@ def arm_problems(calibration, arm) -> list[str]:
     """How ``arm`` differs from the arm ``calibration`` was made with (empty: the same, or no
     record); a sensor offset the arm lacks comes first, with the error it would cause.
     """
-    record = getattr(calibration, "kinematics", None)
+    record = CalibrationResult.from_model(calibration).kinematics
     if record is None:
         return []
     problems = []
@@ -122,7 +123,7 @@ def export_request(
         raise InvalidInput(f"{fmt} needs the arm (the centre of mass is written in its flange)")
     problems = [] if arm is None or allow_other_arm else arm_problems(calibration, arm)
     if problems:
-        record = calibration.kinematics.describe()
+        record = CalibrationResult.from_model(calibration).kinematics.describe()
         raise InvalidInput(
             f"this arm is not the one the calibration was made with ({record}): "
             + "; ".join(problems)

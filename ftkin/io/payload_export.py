@@ -42,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from ..kinematics.robots import flange_frame_name
 from .export_format import ExportFormat, ExportOption, ExportRequest
@@ -129,19 +130,19 @@ def payload_in_flange(calibration, arm, flange_frame: str | None = None, inertia
         InvalidInput: no tool weight, a bad inertia, or a flange frame not fixed to the sensor.
         FrameNotFound: ``flange_frame`` is not in the model.
     """
-    if getattr(arm, "mount_rotation", None) is not None:
+    if arm.mount_rotation is not None:
         raise InvalidInput(
             "give the arm as its URDF describes it (not the mounted copy of a Compensator)"
         )
+    calibration = CalibrationResult.from_model(calibration)
     mass = float(calibration.tool_mass)
     if not mass > 0.0:
         raise InvalidInput("the calibration has no tool weight: there is no payload to export")
     flange_frame = flange_frame or flange_frame_name(arm)
     placement = sensor_in_flange(arm, flange_frame)
-    mount = np.asarray(getattr(calibration, "mount_rotation", np.eye(3)), dtype=float)
-    sensor_to_flange = placement.rotation @ mount.T
+    sensor_to_flange = placement.rotation @ calibration.mount_rotation.T
     com = sensor_to_flange @ np.asarray(calibration.center_of_mass, dtype=float)
-    in_sensor = getattr(calibration, "inertia_about_com_in_sensor", None)
+    in_sensor = calibration.inertia_about_com_in_sensor
     if inertia is None and in_sensor is not None:
         inertia = sensor_to_flange @ np.asarray(in_sensor, dtype=float) @ sensor_to_flange.T
     return Payload(mass, com + placement.translation, flange_frame, _inertia(inertia))

@@ -37,6 +37,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from ..validation import as_ros_name
 from .export_format import ExportFormat, ExportOption, ExportRequest
@@ -90,8 +91,8 @@ def sensor_frame_id(request: ExportRequest) -> str:
     """``--frame-id``, else the calibration's sensor frame, else ``ft_sensor``; a valid ROS
     frame id.
     """
-    calibration = request.calibration
-    default = getattr(calibration, "sensor_frame", None) or DEFAULT_SENSOR_FRAME
+    calibration = CalibrationResult.from_model(request.calibration)
+    default = calibration.sensor_frame or DEFAULT_SENSOR_FRAME
     return as_ros_name(request.option("frame_id", default), "frame", "the sensor frame id")
 
 
@@ -115,7 +116,7 @@ class RosControllerFormat(ExportFormat):
         ]
 
     def notes(self, request: ExportRequest) -> list[str]:
-        calibration, notes = request.calibration, []
+        calibration, notes = CalibrationResult.from_model(request.calibration), []
         if self.bias_target is not None:
             f0, m0 = calibration.force_offset, calibration.torque_offset
             notes.append(
@@ -131,15 +132,15 @@ class RosControllerFormat(ExportFormat):
                 f"representable ({self.tilt_target}); ignoring it leaves up to {error:.4f} N of "
                 "force error"
             )
-        if getattr(calibration, "has_mount", False):
+        if calibration.has_mount:
             rpy = ", ".join(f"{value:.3f}" for value in calibration.mount_rpy_deg)
             notes.append(
                 "the real sensor frame is turned from the URDF's by the estimated mount (R_M "
                 f"roll, pitch, yaw = {rpy}°): the values are in the real sensor frame; the ROS "
                 "sensor frame must be the real one (fix the URDF's sensor joint rpy by R_M^T)"
             )
-        flip = getattr(calibration, "flip_axis", None)
-        if getattr(calibration, "sensor_sign", 1) != 1 or flip:
+        flip = calibration.flip_axis
+        if calibration.sensor_sign != 1 or flip:
             notes.append(
                 f"the readings need sensor_sign {calibration.sensor_sign:+d}"
                 + (f" and the {flip} axis reversed" if flip else "")
@@ -190,7 +191,7 @@ class GravityCompensationExport(RosControllerFormat):
             raise InvalidInput(
                 "the calibration has no tool weight (a = 0): gravity_field = a / mass is undefined"
             )
-        urdf = getattr(calibration, "urdf", None)
+        urdf = CalibrationResult.from_model(calibration).urdf
         world = (urdf_root_link(urdf) if urdf else None) or DEFAULT_WORLD_FRAME
         field = np.asarray(calibration.gravity_in_base, dtype=float) / mass
         parameters = {
