@@ -128,15 +128,9 @@ class JointAdmittance:
             raise InvalidInput(
                 f"limits, thresholds and gains must be finite and > 0, got {numbers}"
             )
-        mount = (
-            getattr(compensator.calibration, "mount_rotation", None)
-            if compensator is not None
-            else None
-        )
-        if mount is not None:
-            arm = mounted_arm(
-                arm, mount
-            )  # the real sensor frame, folded into the model: no work per tick
+        if compensator is not None and compensator.calibration.has_mount:
+            # the real sensor frame, folded into the model: no work per tick
+            arm = mounted_arm(arm, compensator.calibration.mount_rotation)
         self.arm, self.admittance, self.compensator = arm, admittance, compensator
         self.frame = control_frame_for(arm, admittance.frame, control_point)
         self.force_limit, self.torque_limit = float(force_limit), float(torque_limit)
