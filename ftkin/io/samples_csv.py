@@ -16,6 +16,14 @@ modelled, see :mod:`ftkin.calibration.drift`); without ``t``, one column named
 it [s], and ``t_ms``/``time_ms``, ``t_us``/``time_us``, ``t_ns``/``time_ns``
 are converted from the unit their name gives.
 Other columns are carried along untouched (``ftkin compensate`` copies them).
+
+A table with a time column and no ``pose`` column whose orientation stays put
+over consecutive rows is a *continuous recording* (the arm moving between still
+phases): its still segments are found from the orientation by the bag reader's
+algorithm (:mod:`ftkin.io.static_segments`), each becomes one pose, and the
+moving rows are left out (``segments=None``, the CLI's ``--all-rows``, keeps
+every row as a static pose). A recording in motion with no usable still segment
+is refused.
 """
 
 from __future__ import annotations
@@ -23,7 +31,7 @@ from __future__ import annotations
 import functools
 import logging
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -32,6 +40,7 @@ from ..calibration.samples import Samples
 from ..exceptions import InvalidSamples
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from .csv_table import Table, missing_columns, read_table, rename_columns
+from .static_segments import SegmentParameters, SegmentSearch, find_static_segments, segment_index
 from .time_columns import times_from_table
 
 logger = logging.getLogger(__name__)
@@ -43,6 +52,8 @@ _GENERIC_JOINT = re.compile(r"^q(\d+)$")
 _DEGREES_THRESHOLD = 2.0 * np.pi + 0.01
 _ROS_WRENCH = re.compile(r"^(?:.*[./_])?(force|torque)[._]([xyz])$", re.IGNORECASE)
 _TORQUE_T = {"tx": "mx", "ty": "my", "tz": "mz"}
+DEFAULT_SEGMENTS = SegmentParameters()
+"""How still segments of a continuous recording are found unless told otherwise."""
 MAX_POSE_ID = 2**53
 """Largest pose id magnitude: every integer up to it is exact in a float64 cell."""
 
@@ -301,27 +312,85 @@ def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
 
 @dataclass(frozen=True)
 class LoadedSamples:
-    """Samples read from a CSV, with the table they came from."""
+    """Samples read from a CSV, with the table they came from.
+
+    ``search`` holds the still segments found in a continuous recording (each
+    one pose of ``samples``; ``table`` then has their rows and a ``pose`` column).
+    """
 
     samples: Samples
     table: Table
     orientation: str
     orientation_columns: list[str]
+    search: SegmentSearch | None = None
 
 
-def samples_from_table(table: Table, arm=None) -> LoadedSamples:
+def still_rows(table: Table, orientations: TableOrientations, times, parameters):
+    """The still segments of a continuous recording: ``(search, segment of each row or -1)``.
+
+    None when the table is not a recording (no two consecutive still rows: one
+    reading per pose, each row its own pose).
+
+    Raises:
+        InvalidSamples: the arm moves and no still segment is long enough.
+    """
+    if len(times) < 3 or np.any(np.diff(times) <= 0):
+        return None
+    joints = orientations.joint_positions is not None
+    signal = orientations.joint_positions if joints else orientations.rotations.reshape(-1, 9)
+    quantity = "joint speed" if joints else "orientation speed"
+    search = find_static_segments(times, signal, parameters, quantity)
+    if not np.any(search.still[1:] & search.still[:-1]):
+        return None
+    if not search.segments:
+        raise InvalidSamples(
+            f"a continuous recording ({times[-1] - times[0]:.3g} s) with no usable still segment: "
+            f"{search.motion()}; {search.describe()}; lower --min-static-duration/--settle-time "
+            "or raise --speed-threshold, fit every row as a pose with --all-rows, or use the "
+            "motion with 'calibrate --dynamic'",
+            table.source,
+        )
+    return search, segment_index(times, search.segments)
+
+
+def _static_part(table: Table, orientations: TableOrientations, index: np.ndarray):
+    """The rows inside a segment, with a ``pose`` column (the segment number)."""
+    keep = np.flatnonzero(index >= 0)
+    rows = [[*table.rows[i], str(int(index[i]))] for i in keep]
+    lines = [table.lines[i] for i in keep]
+    table = replace(table, header=[*table.header, POSE_COLUMN], rows=rows, lines=lines)
+    positions = orientations.joint_positions
+    return table, replace(
+        orientations,
+        rotations=orientations.rotations[keep],
+        joint_positions=None if positions is None else positions[keep],
+    )
+
+
+def samples_from_table(
+    table: Table, arm=None, segments: SegmentParameters | None = DEFAULT_SEGMENTS
+) -> LoadedSamples:
     """Build :class:`Samples` from a table; ``arm`` is needed for joint columns.
 
     When the table has joint columns and ``arm`` is None, the bundled arm is used.
     ROS-style wrench names (``force.x``, ``torque.x``, ``tx``) are read as ftkin's.
+    ``segments``: how still segments of a continuous recording are found (see
+    the module docstring); None keeps every row.
     """
     table = rename_columns(table, wrench_aliases(table.header))
     missing_columns(table, WRENCH_CHANNELS, "wrench")
     orientations = orientations_from_table(table, arm)
+    times = times_from_table(table)
+    found = None
+    if segments is not None and times is not None and POSE_COLUMN not in table.header:
+        found = still_rows(table, orientations, times, segments)
+    if found is not None:
+        table, orientations = _static_part(table, orientations, found[1])
+        times = times[found[1] >= 0]
+        logger.info("%s: continuous recording, %s", table.source, found[0].describe())
     wrenches = table.floats(WRENCH_CHANNELS)
     check_wrench_magnitude(table, wrenches)
     pose_ids = pose_ids_from_table(table)
-    times = times_from_table(table)
     if orientations.arm is None:
         samples = Samples(wrenches, orientations.rotations, pose_ids, times=times)
     else:
@@ -333,9 +402,12 @@ def samples_from_table(table: Table, arm=None) -> LoadedSamples:
             orientations.rotations,
             times,
         )
-    return LoadedSamples(samples, table, orientations.kind, orientations.columns)
+    search = None if found is None else found[0]
+    return LoadedSamples(samples, table, orientations.kind, orientations.columns, search)
 
 
-def load_samples(path, arm=None) -> LoadedSamples:
-    """Read a samples CSV (see the module docstring for its columns)."""
-    return samples_from_table(read_table(path), arm)
+def load_samples(
+    path, arm=None, segments: SegmentParameters | None = DEFAULT_SEGMENTS
+) -> LoadedSamples:
+    """Read a samples CSV (see the module docstring for its columns and ``segments``)."""
+    return samples_from_table(read_table(path), arm, segments)
