@@ -10,14 +10,44 @@ import numpy as np
 
 from .exceptions import InvalidInput
 
+_KIND_NAMES = {"b": "booleans", "c": "complex numbers", "O": "objects", "U": "text", "S": "bytes"}
+
 
 def as_float_array(value, name: str) -> np.ndarray:
-    """Convert to a float64 array or raise :class:`InvalidInput`."""
+    """Convert real numbers to a float64 array or raise :class:`InvalidInput`.
+
+    Booleans, complex numbers, text and object arrays (``None``, integers beyond int64, mixed
+    types) are refused, not converted: ``True`` is not 1 N and ``"1.5"`` is not a number here.
+    """
     try:
-        array = np.asarray(value, dtype=np.float64)
+        array = value if isinstance(value, np.ndarray) else np.asarray(value)
     except (TypeError, ValueError) as error:
         raise InvalidInput(f"{name} must be numeric, got {type(value).__name__}: {error}") from None
-    return array
+    kind = array.dtype.kind
+    if kind not in "iuf" or (kind == "f" and isinstance(value, (list, tuple)) and _has_bool(value)):
+        what = _KIND_NAMES.get("b" if kind == "f" else kind, f"dtype {array.dtype}")
+        raise InvalidInput(f"{name} must be numeric (real numbers), got {what}: {_short(value)}")
+    return array.astype(np.float64, copy=False)
+
+
+def _has_bool(value) -> bool:
+    """Whether a nested list holds a boolean (numpy turns ``[True, 1.5]`` into floats)."""
+    if isinstance(value, (list, tuple)):
+        return any(map(_has_bool, value))
+    return isinstance(value, (bool, np.bool_))
+
+
+def _short(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:60] + "..."
+
+
+def as_real(value, name: str) -> float:
+    """One real number as a float (a size-1 array too); booleans, text and complex refused."""
+    array = as_float_array(value, name)
+    if array.size != 1:
+        raise InvalidInput(f"{name} must be a number, got shape {array.shape}")
+    return float(array.reshape(-1)[0])
 
 
 def check_finite(array: np.ndarray, name: str) -> None:
@@ -163,10 +193,7 @@ def _raise_not_rotation(array: np.ndarray, name: str, atol: float) -> None:
 
 def as_positive(value, name: str) -> float:
     """A finite, strictly positive float."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError, OverflowError):
-        raise InvalidInput(f"{name} must be a number, got {value!r}") from None
+    number = as_real(value, name)
     if not np.isfinite(number) or number <= 0.0:
         raise InvalidInput(f"{name} must be a finite positive number, got {value!r}")
     return number
@@ -186,10 +213,7 @@ def as_in_range(value, name: str, low: float, high: float, unit: str = "") -> fl
 
 
 def _finite(value, name: str) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError, OverflowError):
-        raise InvalidInput(f"{name} must be a number, got {value!r}") from None
+    number = as_real(value, name)
     if not np.isfinite(number):
         raise InvalidInput(f"{name} must be finite, got {value!r}")
     return number
