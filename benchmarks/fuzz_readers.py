@@ -18,6 +18,7 @@ import sys
 import tempfile
 import time
 import traceback
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -72,20 +73,26 @@ def mutate_text(text: str, rng: random.Random) -> str:
 
 
 def mutate_document(document, rng: random.Random):
-    """A structured edit of a JSON document: drop, retype or corrupt one value."""
+    """A structured edit of a JSON document: drop, retype or corrupt one value, at any depth (the
+    nested ``diagnostics``, ``drift``, ``kinematics`` and ``poses`` objects too).
+    """
     document = json.loads(json.dumps(document))
-    keys = list(document)
-    key = rng.choice(keys)
-    replacements = [None, "text", -1, 0, 1e308, [], {}, [1.0], [[1.0, 2.0]], True, float("nan"), 99]
+    parent = document
+    while rng.random() < 0.5:  # descend into a nested object now and then
+        nested = [key for key, value in parent.items() if isinstance(value, dict) and value]
+        if not nested:
+            break
+        parent = parent[rng.choice(nested)]
+    key = rng.choice(list(parent))
+    replacements = [None, "text", "1.5", -1, 0, 1e308, [], {}, [1.0], [[1.0, 2.0]], True, 99]
+    replacements += [float("nan"), [None], [True], 2**64, -(2**63) - 1]
     kind = rng.randrange(3)
     if kind == 0:
-        del document[key]
-    elif kind == 1:
-        document[key] = rng.choice(replacements)
-    elif isinstance(document[key], list) and document[key]:
-        document[key][rng.randrange(len(document[key]))] = rng.choice(replacements)
+        del parent[key]
+    elif kind == 1 or not (isinstance(parent[key], list) and parent[key]):
+        parent[key] = rng.choice(replacements)
     else:
-        document[key] = rng.choice(replacements)
+        parent[key][rng.randrange(len(parent[key]))] = rng.choice(replacements)
     return document
 
 
@@ -186,9 +193,8 @@ def _read_bag_quietly(path: Path, arm):
 
 
 def run(seconds: float, seed: int) -> int:
-    logging.disable(
-        logging.WARNING
-    )  # readers log warnings about odd but accepted input; not the point here
+    logging.disable(logging.WARNING)  # readers log warnings about odd but accepted input
+    warnings.simplefilter("ignore", RuntimeWarning)  # overflow on the way to a refusal
     rng = random.Random(seed)
     workdir = Path(tempfile.mkdtemp(prefix="ftkin-fuzz-"))
     csv_seeds = [paper_csv_path().read_text()]

@@ -55,13 +55,12 @@ from .atomic import atomic_write_text
 from .calibration_checks import (
     check_document,
     check_plausible,
-    has_bool,
     parse_calibration_json,
     short_repr,
 )
 from .calibration_inertia import inertia_document, with_inertia
 from .drift_file import drift_from_document, drift_to_document
-from .json_reader import JsonReader
+from .json_reader import JsonReader, NestedReader
 
 FORMAT_NAME = "ftkin-calibration"
 FORMAT_VERSION = 2
@@ -186,13 +185,25 @@ def save_calibration(result: CalibrationResult, path, *, rezero: dict | None = N
     return atomic_write_text(path, text)
 
 
+DIAGNOSTICS_TYPES = {
+    **dict.fromkeys(("loss", "noise_source"), "string"),
+    **dict.fromkeys(("noise_dof", "chi_square", "p_value", "covariance_scale"), "number?"),
+    **dict.fromkeys(("condition_number",), "number?"),
+    **dict.fromkeys(("noise_force_std", "noise_torque_std", "channel_chi_square"), "numbers?"),
+    **dict.fromkeys(("pose_normalized_residuals", "pose_p_values"), "numbers?"),
+    **dict.fromkeys(("weakest_direction", "relative_std_errors"), "numbers?"),
+    **dict.fromkeys(("pose_ids", "outlier_pose_ids", "dropped_pose_ids"), "integers"),
+    "dof": "integer",
+    "warnings": "strings",
+}
+"""The JSON kind of each ``diagnostics`` key (see ``JsonReader.check_types``)."""
+
+
 def _diagnostics(reader: JsonReader) -> FitDiagnostics | None:
     data = reader.optional_object("diagnostics")
     if data is None:
         return None
-    flags = [key for key, value in data.items() if has_bool(value)]
-    if flags:
-        reader.fail(f"{flags[0]!r} holds a boolean; true/false are not numbers", "diagnostics")
+    NestedReader(reader.path, data, "diagnostics").check_types(DIAGNOSTICS_TYPES)
     try:
         return FitDiagnostics.from_dict(data)
     except KeyError as error:
@@ -222,18 +233,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             f"{FORMAT_NAME!r})",
             "format",
         )
-    version = document.get("version")
-    if isinstance(version, bool) or not isinstance(version, int):
-        reader.fail(f"expected an integer version, got {version!r}", "version")
-    if version > FORMAT_VERSION:
-        reader.fail(
-            f"written by a newer ftkin (file format version {version}); this ftkin reads versions "
-            "up to "
-            f"{FORMAT_VERSION}: upgrade ftkin",
-            "version",
-        )
-    if version < 1:
-        reader.fail(f"unknown format version {version}", "version")
+    reader.version(FORMAT_VERSION)
     poses = reader.get("poses", required=False) or {}
     if not isinstance(poses, dict):
         reader.fail("expected an object with ids, measured, residuals", "poses")

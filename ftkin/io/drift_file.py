@@ -42,6 +42,9 @@ def drift_from_document(reader: JsonReader) -> BiasDrift | None:
     criteria = data.get("criteria") or {}
     if not isinstance(criteria, dict):
         reader.fail("expected an object of numbers", "drift.criteria")
+    NestedReader(reader.path, criteria, "drift.criteria").check_types(
+        dict.fromkeys(criteria, "number")
+    )
     try:
         return BiasDrift(
             model=model,
