@@ -199,6 +199,13 @@ DIAGNOSTICS_TYPES = {
 """The JSON kind of each ``diagnostics`` key (see ``JsonReader.check_types``)."""
 
 
+DOCUMENT_TYPES = {
+    **dict.fromkeys(("created", "ftkin_version"), "string"),
+    **dict.fromkeys(("residual_rms", "mount_rpy_deg"), "numbers?"),
+}
+"""The JSON kind of the keys written for people (read back only to be checked)."""
+
+
 def _diagnostics(reader: JsonReader) -> FitDiagnostics | None:
     data = reader.optional_object("diagnostics")
     if data is None:
@@ -234,6 +241,10 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             "format",
         )
     reader.version(FORMAT_VERSION)
+    reader.check_types(DOCUMENT_TYPES)
+    for name in ("std_errors", "mount_std_deg"):  # objects of numbers
+        numbers = reader.optional_object(name) or {}
+        NestedReader(path, numbers, name).check_types(dict.fromkeys(numbers, "numbers?"))
     poses = reader.get("poses", required=False) or {}
     if not isinstance(poses, dict):
         reader.fail("expected an object with ids, measured, residuals", "poses")

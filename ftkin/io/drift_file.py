@@ -36,7 +36,8 @@ def drift_from_document(reader: JsonReader) -> BiasDrift | None:
         check_model_name(model)
     except InvalidInput as error:
         reader.fail(str(error), "drift.model")
-    times = sub.array("times", (len(data.get("times") or []),))
+    times = data.get("times")
+    times = sub.array("times", (len(times) if isinstance(times, list) else 0,))
     count = len(times)
     coefficients = data.get("coefficients")
     criteria = data.get("criteria") or {}

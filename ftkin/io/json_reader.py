@@ -77,21 +77,23 @@ class JsonReader:
 
     def version(self, supported: int, key: str = "version") -> int:
         """The file's integer format version, refused when unknown or newer than ``supported``."""
-        value = self.get(key)
-        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= supported:
-            newer = isinstance(value, int) and not isinstance(value, bool) and value > supported
+        value, versions = self.get(key), f"this ftkin reads versions 1 to {supported}"
+        if isinstance(value, bool) or not isinstance(value, int):
+            self.fail(f"expected an integer version, got {json_repr(value)}; {versions}", key)
+        if value > supported:
             self.fail(
-                f"format version {json_repr(value)}"
-                + (" (written by a newer ftkin: upgrade ftkin)" if newer else " is unknown")
-                + f"; this ftkin reads versions 1 to {supported}",
+                f"written by a newer ftkin (file format version {value}); {versions}: upgrade "
+                "ftkin",
                 key,
             )
+        if value < 1:
+            self.fail(f"unknown format version {value}; {versions}", key)
         return value
 
     def check_types(self, types: dict) -> None:
         """Refuse a present key whose value is not of its JSON kind.
 
-        ``types`` maps keys to ``"number"``, ``"numbers"`` (a nested list), ``"integer"``,
+        ``types`` maps keys to ``"number"``, ``"numbers"`` (one, or a nested list), ``"integer"``,
         ``"integers"``, ``"string"`` or ``"strings"``; a trailing ``"?"`` also allows null
         (for lists: null entries, read as NaN).
         """
@@ -101,9 +103,9 @@ class JsonReader:
                 continue
             listed = base.endswith("s")
             leaf = _LEAF_CHECKS[base.removesuffix("s")]
-            if listed and not isinstance(value, list):
-                leaf = _never
-            for item in _flatten([value] if not listed or not isinstance(value, list) else value):
+            if listed and not isinstance(value, list) and base != "numbers":
+                leaf = _never  # "numbers": one number or a nested list of them
+            for item in _flatten([value]) if listed else [value]:
                 if not (leaf(item) or (listed and nullable and item is None)):
                     expected = f"a list of {base}" if listed else f"a {base}"
                     self.fail(f"expected {expected}, got {json_repr(item)}", key)
