@@ -50,6 +50,30 @@ def as_real(value, name: str) -> float:
     return float(array.reshape(-1)[0])
 
 
+MAX_ID = 2**53
+"""Largest id or count magnitude: every integer up to it is exact in a float64 (a CSV cell)."""
+
+
+def as_integers(value, name: str, limit: int = MAX_ID) -> np.ndarray:
+    """An int64 array of whole numbers of magnitude at most ``limit``, checked *before* the cast.
+
+    Ids beyond the int64 range would wrap around in ``astype``; floats with a fraction, NaN,
+    booleans and text are refused.
+    """
+    array = value if isinstance(value, np.ndarray) else np.asarray(value)
+    numbers = array if array.dtype.kind in "iu" else as_float_array(array, name)
+    beyond = ~((numbers >= -limit) & (numbers <= limit))  # NaN is beyond too
+    if np.any(beyond):
+        bad = numbers.reshape(-1)[np.flatnonzero(beyond.reshape(-1))[0]]
+        bound = "2**53" if limit == MAX_ID else f"{limit}"
+        raise InvalidInput(
+            f"{name} must be integers of magnitude at most {bound}, got {bad.item()}"
+        )
+    if numbers.dtype.kind == "f" and np.any(numbers != np.round(numbers)):
+        raise InvalidInput(f"{name} must be integers, got a fraction")
+    return numbers.astype(np.int64)
+
+
 def check_finite(array: np.ndarray, name: str) -> None:
     """Raise :class:`InvalidInput` naming the first non-finite entry."""
     if not np.all(np.isfinite(array)):

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import InvalidSamples
+from ..exceptions import InvalidInput, InvalidSamples
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
-from ..validation import as_batch, as_float_array, as_rotation_batch
+from ..validation import as_batch, as_float_array, as_integers, as_rotation_batch
 
 logger = logging.getLogger(__name__)
 
@@ -139,11 +139,10 @@ class Samples:
             raise InvalidSamples(
                 f"pose_ids must have shape ({len(wrenches)},), got {pose_ids.shape}"
             )
-        if not np.issubdtype(pose_ids.dtype, np.integer):
-            as_float = as_float_array(pose_ids, "pose_ids")
-            if not np.all(np.isfinite(as_float)) or np.any(as_float != np.round(as_float)):
-                raise InvalidSamples("pose ids must be integers")
-            pose_ids = as_float.astype(np.int64)
+        try:
+            pose_ids = as_integers(pose_ids, "pose ids")
+        except InvalidInput as error:
+            raise InvalidSamples(str(error)) from None
         times = self.times
         if times is not None:
             times = as_float_array(times, "times [s]").copy()

@@ -39,6 +39,7 @@ from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.samples import Samples
 from ..exceptions import InvalidSamples
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
+from ..validation import MAX_ID
 from .csv_table import Table, missing_columns, read_table, rename_columns
 from .static_segments import SegmentParameters, SegmentSearch, find_static_segments, segment_index
 from .time_columns import times_from_table
@@ -54,7 +55,7 @@ _ROS_WRENCH = re.compile(r"^(?:.*[./_])?(force|torque)[._]([xyz])$", re.IGNORECA
 _TORQUE_T = {"tx": "mx", "ty": "my", "tz": "mz"}
 DEFAULT_SEGMENTS = SegmentParameters()
 """How still segments of a continuous recording are found unless told otherwise."""
-MAX_POSE_ID = 2**53
+MAX_POSE_ID = MAX_ID
 """Largest pose id magnitude: every integer up to it is exact in a float64 cell."""
 
 
