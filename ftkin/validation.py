@@ -16,16 +16,17 @@ _KIND_NAMES = {"b": "booleans", "c": "complex numbers", "O": "objects", "U": "te
 def as_float_array(value, name: str) -> np.ndarray:
     """Convert real numbers to a float64 array or raise :class:`InvalidInput`.
 
-    Booleans, complex numbers, text and object arrays (``None``, integers beyond int64, mixed
-    types) are refused, not converted: ``True`` is not 1 N and ``"1.5"`` is not a number here.
+    Booleans (also inside a list: numpy would turn ``[True, 1.5]`` into floats), complex numbers,
+    text and object arrays (``None``, integers beyond int64, mixed types) are refused, not
+    converted: ``True`` is not 1 N and ``"1.5"`` is not a number here.
     """
     try:
         array = value if isinstance(value, np.ndarray) else np.asarray(value)
     except (TypeError, ValueError) as error:
         raise InvalidInput(f"{name} must be numeric, got {type(value).__name__}: {error}") from None
     kind = array.dtype.kind
-    if kind not in "iuf" or (kind == "f" and isinstance(value, (list, tuple)) and _has_bool(value)):
-        what = _KIND_NAMES.get("b" if kind == "f" else kind, f"dtype {array.dtype}")
+    if kind not in "iuf" or (isinstance(value, (list, tuple)) and _has_bool(value)):
+        what = _KIND_NAMES.get("b" if kind in "iuf" else kind, f"dtype {array.dtype}")
         raise InvalidInput(f"{name} must be numeric (real numbers), got {what}: {_short(value)}")
     return array.astype(np.float64, copy=False)
 
@@ -50,6 +51,23 @@ def as_real(value, name: str) -> float:
     return float(array.reshape(-1)[0])
 
 
+MAX_WRENCH = 1e6
+"""Largest plausible reading, bias or tool weight [N, N·m]: beyond it a value is a raw count or a
+unit mistake, not a load (and it would overflow the fit rather than inform it)."""
+
+
+def check_wrench_magnitude(wrenches: np.ndarray, name: str) -> None:
+    """Refuse an ``(N, 6)`` array with an entry beyond ±:data:`MAX_WRENCH` (names row, channel)."""
+    beyond = np.argwhere(np.abs(wrenches) > MAX_WRENCH)
+    if beyond.size:
+        row, channel = (int(i) for i in beyond[0])
+        raise InvalidInput(
+            f"{name}[{row}] channel {'fx fy fz mx my mz'.split()[channel]} is "
+            f"{wrenches[row, channel]:g}, beyond ±{MAX_WRENCH:g}: expected N and N·m, not raw "
+            "counts or another unit"
+        )
+
+
 MAX_ID = 2**53
 """Largest id or count magnitude: every integer up to it is exact in a float64 (a CSV cell)."""
 
@@ -60,8 +78,8 @@ def as_integers(value, name: str, limit: int = MAX_ID) -> np.ndarray:
     Ids beyond the int64 range would wrap around in ``astype``; floats with a fraction, NaN,
     booleans and text are refused.
     """
-    array = value if isinstance(value, np.ndarray) else np.asarray(value)
-    numbers = array if array.dtype.kind in "iu" else as_float_array(array, name)
+    integers = isinstance(value, np.ndarray) and value.dtype.kind in "iu"
+    numbers = value if integers else as_float_array(value, name)
     beyond = ~((numbers >= -limit) & (numbers <= limit))  # NaN is beyond too
     if np.any(beyond):
         bad = numbers.reshape(-1)[np.flatnonzero(beyond.reshape(-1))[0]]

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..calibration.model import GRAVITY_RANGE
 from ..exceptions import CalibrationFileError
-from .samples_csv import MAX_WRENCH
+from ..validation import MAX_WRENCH
 
 
 def short_repr(value) -> str:

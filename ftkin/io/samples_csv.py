@@ -39,7 +39,7 @@ from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.samples import Samples
 from ..exceptions import InvalidSamples
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
-from ..validation import MAX_ID
+from ..validation import MAX_ID, MAX_WRENCH
 from .csv_table import Table, missing_columns, read_table, rename_columns
 from .static_segments import SegmentParameters, SegmentSearch, find_static_segments, segment_index
 from .time_columns import times_from_table
@@ -289,12 +289,6 @@ def pose_ids_from_table(table: Table) -> np.ndarray | None:
             f"pose id {float(pose_ids[row])!r} is not an integer", table.source, table.lines[row]
         )
     return pose_ids.astype(np.int64)
-
-
-MAX_WRENCH = 1e6
-"""Largest accepted reading magnitude [N, N·m]: beyond it a value is a raw count or a unit mistake,
-not a load.
-"""
 
 
 def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
