@@ -190,7 +190,7 @@ def _simulate(scenario: PlacementScenario, args):
         scenario, sample_rate=args.sample_rate, delay_ticks=args.delay_ticks
     )
     for time, event in full.events:
-        if event:
+        if event:  # "" is the end of an event
             print(f"  t = {time:.3f} s: {event}")
     return run_, list(full.columns), full.table
 
@@ -256,6 +256,7 @@ def run(args) -> int:
     if args.view:  # the live view draws the simple engine's run, paced to the wall clock
         if args.engine != "simple":
             print("--view: running the simple engine (the live view follows its ticks)")
+            args.engine = "simple"  # the labels below say what ran
         viewed = _run_viewed(scenarios[0])
         results = [(viewed, list(PlacementRun.COLUMNS), viewed.rows())]
     else:

@@ -147,7 +147,7 @@ def run_closed_loop(
         row = table[i]
         if status is not None:
             measured = status.contact_wrench[2]
-            event = status.event or status.fault
+            event = status.event or ("" if status.fault == "none" else str(status.fault))
             if event != last_event:
                 events.append((i * dt, str(event)))
                 last_event = event
