@@ -5,6 +5,7 @@ columns of the samples CSV (the URDF's joint names or ``q1..qn`` [rad]) and
 the wrench columns ``fx..mz`` [N, N·m] (see :mod:`ftkin.io.samples_csv`),
 and optionally the joint velocities and accelerations the recording already
 has (a simulator's): ``dq1..dqn`` and ``ddq1..ddqn`` [rad/s, rad/s²], or
+``<joint>_vel`` and ``<joint>_acc`` (what ``ftkin plan --excitation`` writes), or
 ``<joint>_velocity`` and ``<joint>_acceleration``; given, they are used as they
 are instead of differentiating the positions, once checked against the
 positions' time derivatives (:func:`given_derivatives`). Other columns are
@@ -146,10 +147,12 @@ finite-difference derivative of the positions (velocities)."""
 
 
 def _derivative_columns(table: Table, columns: list[str], kind: str) -> list[str] | None:
-    prefix, suffix = ("dq", "_velocity") if kind == "velocity" else ("ddq", "_acceleration")
+    prefix, suffixes = (
+        ("dq", ("_vel", "_velocity")) if kind == "velocity" else ("ddq", ("_acc", "_acceleration"))
+    )
     for names in (
         [f"{prefix}{i + 1}" for i in range(len(columns))],
-        [f"{c}{suffix}" for c in columns],
+        *([f"{c}{suffix}" for c in columns] for suffix in suffixes),
     ):
         present = [name in table.header for name in names]
         if all(present):
