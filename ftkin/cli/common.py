@@ -133,10 +133,7 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
         "continuous recordings (a CSV with a time column and no pose column)"
     )
     group.add_argument(
-        "--all-rows",
-        action="store_true",
-        help="every reading its own static pose: no search for still segments in a bag or a "
-        "continuous recording",
+        "--all-rows", action="store_true", help="every reading its own pose: no still segments"
     )
     group.add_argument(
         "--joint-topic",

@@ -116,25 +116,7 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
             table.source,
         )
     if not found:
-        joints = (
-            f"the arm's joint names {list(joint_names)} or q1..q{len(joint_names)}"
-            if joint_names
-            else "joint columns"
-        )
-        unknown = [name for name in header if "joint" in name.lower()]
-        hint = (
-            f"; columns {unknown} look like joint names but are not this arm's (wrong "
-            "--urdf/--robot?)"
-            if unknown
-            else ""
-        )
-        raise InvalidSamples(
-            f"no orientation columns: expected {joints} [rad], or alpha,beta,gamma [deg], or "
-            f"qw,qx,qy,qz{hint}; "
-            f"the header has {header}",
-            table.source,
-            table.header_line,
-        )
+        _no_orientation(table, joint_names)
     kind, columns = next(iter(found.items()))
     if kind == "euler":
         missing_columns(table, EULER_COLUMNS, "Euler angle")
@@ -154,6 +136,27 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
                 table.source,
             )
     return kind, generic
+
+
+def _no_orientation(table: Table, joint_names) -> None:
+    """The :class:`InvalidSamples` for a table without orientation columns (hints at wrong arms)."""
+    joints = (
+        f"the arm's joint names {list(joint_names)} or q1..q{len(joint_names)}"
+        if joint_names
+        else "joint columns"
+    )
+    unknown = [name for name in table.header if "joint" in name.lower()]
+    hint = (
+        f"; columns {unknown} look like joint names but are not this arm's (wrong --urdf/--robot?)"
+        if unknown
+        else ""
+    )
+    raise InvalidSamples(
+        f"no orientation columns: expected {joints} [rad], or alpha,beta,gamma [deg], or "
+        f"qw,qx,qy,qz{hint}; the header has {table.header}",
+        table.source,
+        table.header_line,
+    )
 
 
 def check_radians(table: Table, columns, values: np.ndarray) -> None:
