@@ -29,13 +29,6 @@ def short_repr(value) -> str:
     return text if len(text) <= 80 else text[:80] + "..."
 
 
-def has_bool(value) -> bool:
-    """Whether a JSON value (or any item of a nested list) is a boolean."""
-    if isinstance(value, bool):
-        return True
-    return isinstance(value, list) and any(has_bool(item) for item in value)
-
-
 def _refuse_duplicate_keys(pairs):
     document = {}
     for key, value in pairs:
