@@ -46,7 +46,7 @@ import pinocchio as pin
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm, bundled_urdf_path
 from ..kinematics.mounting import mounted_arm
-from ..validation import as_positive
+from ..validation import FLOAT64, as_positive
 from .admittance import Admittance
 from .compensation import Compensator
 from .control_frame import control_frame_for
@@ -225,9 +225,10 @@ class JointAdmittance:
         """
         # The tick runs on Python floats (numpy's per-call overhead dominates on 3- and 6-vectors);
         # numpy only for the Jacobian products. The status is built when asked (last_status).
-        try:
-            q, raw = np.asarray(q, dtype=np.float64), np.asarray(raw_wrench, dtype=np.float64)
-            dt = float(dt)
+        try:  # arrays of float64 already (the control loop's case) pass without a call
+            if type(q) is not np.ndarray or q.dtype is not FLOAT64:
+                q = np.asarray(q, dtype=np.float64)
+            raw, dt = np.asarray(raw_wrench, dtype=np.float64), float(dt)
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
         rates = joint_velocities is not None
