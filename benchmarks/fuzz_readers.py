@@ -209,6 +209,13 @@ def run(seconds: float, seed: int) -> int:
         "0,1,0,0,0,0,-3,0,0,0\n0.7071,0.7071,0,0,0,3,0,0,0,0\n"
     )
     csv_seeds.append(quat_seed)
+    still = np.repeat(q, 15, axis=0)  # a continuous recording at 10 Hz: 1.5 s holds
+    recording = [",".join(["t", *arm.joint_names, "fx", "fy", "fz", "mx", "my", "mz"])]
+    for i, row in enumerate(still):
+        recording.append(
+            f"{i / 10:.1f}," + ",".join(f"{v:.6f}" for v in row) + ",0.1,0.2,3.1,0,0,0"
+        )
+    csv_seeds.append("\n".join(recording) + "\n")
     calibration_document = calibration_to_dict(paper_calibration())
     json_seed = json.dumps(calibration_document, indent=2)
 
