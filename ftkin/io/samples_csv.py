@@ -323,11 +323,26 @@ class LoadedSamples:
     search: SegmentSearch | None = None
 
 
+def sampled_motion(times: np.ndarray, signal: np.ndarray) -> bool:
+    """Whether rows look like a uniformly sampled smooth motion, not one reading per pose.
+
+    A steady time step (90 % of the steps within 20 % of the median) and consecutive changes
+    alike: the median second difference of the orientation signal under half the median first
+    difference (independent poses give about √2 times it).
+    """
+    steps, median_dt = np.diff(signal, axis=0), np.median(np.diff(times))
+    if np.mean(np.abs(np.diff(times) - median_dt) <= 0.2 * median_dt) < 0.9:
+        return False
+    first = np.median(np.linalg.norm(steps, axis=1))
+    return bool(first > 0 and np.median(np.linalg.norm(np.diff(steps, axis=0), axis=1)) < first / 2)
+
+
 def still_rows(table: Table, orientations: TableOrientations, times, parameters):
     """The still segments of a continuous recording: ``(search, segment of each row or -1)``.
 
-    None when the table is not a recording (no two consecutive still rows: one
-    reading per pose, each row its own pose).
+    None when the table is not a recording: no two consecutive rows hold still and the rows are
+    not a sampled motion either (:func:`sampled_motion`): one reading per pose, each row its own
+    pose.
 
     Raises:
         InvalidSamples: the arm moves and no still segment is long enough.
@@ -338,7 +353,8 @@ def still_rows(table: Table, orientations: TableOrientations, times, parameters)
     signal = orientations.joint_positions if joints else orientations.rotations.reshape(-1, 9)
     quantity = "joint speed" if joints else "orientation speed"
     search = find_static_segments(times, signal, parameters, quantity)
-    if not np.any(search.still[1:] & search.still[:-1]):
+    held = np.any(search.still[1:] & search.still[:-1])
+    if not (held or sampled_motion(times, signal)):
         return None
     if not search.segments:
         raise InvalidSamples(

@@ -121,6 +121,14 @@ def test_motion_without_a_usable_still_segment_is_refused(arm, truth, tmp_path):
     assert len(load_samples(path, arm, segments=None).samples) == len(times)  # --all-rows
 
 
+def test_a_recording_in_motion_throughout_is_refused(arm, truth, tmp_path):
+    times, q, wrenches, moving = recording(arm, truth, np.random.default_rng(6), poses=4, hold=0.0)
+    assert moving > 0.9  # an excitation-like recording: never held still
+    path = write_recording(tmp_path / "moving.csv", arm, times, q, wrenches)
+    with pytest.raises(InvalidSamples, match="no usable still segment: .* in motion"):
+        load_samples(path, arm)
+
+
 def test_one_timed_reading_per_pose_is_not_a_recording(arm, truth, rng, tmp_path):
     q = arm.random_configurations(12, rng, margin=0.3)
     wrenches = SimulatedSensor(truth, NOISE).read(arm.rotation_sensor_to_base(q), rng)
