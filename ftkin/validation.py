@@ -52,8 +52,11 @@ def as_real(value, name: str) -> float:
 
 
 MAX_WRENCH = 1e6
-"""Largest plausible reading, bias or tool weight [N, N·m]: beyond it a value is a raw count or a
-unit mistake, not a load (and it would overflow the fit rather than inform it)."""
+"""Largest plausible load on the sensor [N, N·m] (a reading, a sensor offset, a tool weight).
+
+Beyond it a value is a raw count or a unit mistake, and it would overflow the fit rather than
+inform it.
+"""
 
 
 def check_wrench_magnitude(wrenches: np.ndarray, name: str) -> None:
