@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import InvalidInput
-from ..validation import as_float_array, as_positive
+from ..validation import as_float_array, as_in_range, as_positive
 
 
 @dataclass(frozen=True)
@@ -46,14 +46,7 @@ class SegmentParameters:
     def __post_init__(self):
         for name in ("speed_threshold", "min_duration", "speed_window"):
             object.__setattr__(self, name, as_positive(getattr(self, name), name))
-        try:
-            settle_time = float(self.settle_time)
-        except (TypeError, ValueError):
-            settle_time = float("nan")
-        if not (np.isfinite(settle_time) and settle_time >= 0):
-            raise InvalidInput(
-                f"settle_time must be a finite number ≥ 0 [s], got {self.settle_time!r}"
-            )
+        settle_time = as_in_range(self.settle_time, "settle_time", 0.0, 1e6, "s")
         object.__setattr__(self, "settle_time", settle_time)
 
 
