@@ -323,16 +323,26 @@ class LoadedSamples:
     search: SegmentSearch | None = None
 
 
-def sampled_motion(times: np.ndarray, signal: np.ndarray) -> bool:
-    """Whether rows look like a uniformly sampled smooth motion, not one reading per pose.
+MAX_GAP = 20.0
+"""Longest time step of a continuous recording, in median steps: a table with longer gaps was
+logged only while the arm stood still (stop and go), and each of its rows stays a pose."""
 
-    A steady time step (90 % of the steps within 20 % of the median) and consecutive changes
-    alike: the median second difference of the orientation signal under half the median first
-    difference (independent poses give about √2 times it).
-    """
-    steps, median_dt = np.diff(signal, axis=0), np.median(np.diff(times))
-    if np.mean(np.abs(np.diff(times) - median_dt) <= 0.2 * median_dt) < 0.9:
-        return False
+
+def uniformly_sampled(times: np.ndarray) -> bool:
+    """Whether reading times are those of a recorder: 80 % of the steps within half the median
+    step of it, none longer than :data:`MAX_GAP` median steps."""
+    steps = np.diff(times)
+    median = np.median(steps)
+    return bool(
+        steps.max() <= MAX_GAP * median and np.mean(np.abs(steps - median) <= 0.5 * median) >= 0.8
+    )
+
+
+def smooth_motion(signal: np.ndarray) -> bool:
+    """Whether consecutive rows change alike (a sampled motion, not independent poses): the
+    median second difference of the orientation signal under half the median first difference
+    (independent poses give about √2 times it)."""
+    steps = np.diff(signal, axis=0)
     first = np.median(np.linalg.norm(steps, axis=1))
     return bool(first > 0 and np.median(np.linalg.norm(np.diff(steps, axis=0), axis=1)) < first / 2)
 
@@ -340,21 +350,21 @@ def sampled_motion(times: np.ndarray, signal: np.ndarray) -> bool:
 def still_rows(table: Table, orientations: TableOrientations, times, parameters):
     """The still segments of a continuous recording: ``(search, segment of each row or -1)``.
 
-    None when the table is not a recording: no two consecutive rows hold still and the rows are
-    not a sampled motion either (:func:`sampled_motion`): one reading per pose, each row its own
-    pose.
+    None when the table is not a recording: its times are not a recorder's
+    (:func:`uniformly_sampled`), or no two consecutive rows hold still and the rows are not a
+    smooth motion either (:func:`smooth_motion`): one reading per pose, each row its own pose.
 
     Raises:
         InvalidSamples: the arm moves and no still segment is long enough.
     """
-    if len(times) < 3 or np.any(np.diff(times) <= 0):
+    if len(times) < 3 or np.any(np.diff(times) <= 0) or not uniformly_sampled(times):
         return None
     joints = orientations.joint_positions is not None
     signal = orientations.joint_positions if joints else orientations.rotations.reshape(-1, 9)
     quantity = "joint speed" if joints else "orientation speed"
     search = find_static_segments(times, signal, parameters, quantity)
     held = np.any(search.still[1:] & search.still[:-1])
-    if not (held or sampled_motion(times, signal)):
+    if not (held or smooth_motion(signal)):
         return None
     if not search.segments:
         raise InvalidSamples(

@@ -18,7 +18,7 @@ from ftkin.cli import main
 from ftkin.exceptions import InvalidSamples
 from ftkin.io.csv_table import read_table, write_csv
 from ftkin.io.samples_csv import load_samples
-from ftkin.sim.sensor import SimulatedSensor
+from ftkin.sim.sensor import SimulatedSensor, recording_times
 
 RATE = 10.0  # [Hz]
 HOLD, MOVE = 1.9, 1.6  # [s] still, then moving to the next pose: 45 % of the time in motion
@@ -135,3 +135,13 @@ def test_one_timed_reading_per_pose_is_not_a_recording(arm, truth, rng, tmp_path
     path = write_recording(tmp_path / "poses.csv", arm, 30.0 * np.arange(12), q, wrenches)
     loaded = load_samples(path, arm)
     assert loaded.search is None and len(loaded.samples) == 12
+
+
+def test_a_stop_and_go_log_keeps_every_row_as_before(arm, truth, rng, tmp_path):
+    """Readings logged only while still (3 at 1 kHz per pose, 10 s apart): not a recording."""
+    q = np.repeat(arm.random_configurations(6, rng, margin=0.3), 3, axis=0)
+    wrenches = SimulatedSensor(truth, NOISE).read(arm.rotation_sensor_to_base(q), rng)
+    times = recording_times(6, 3, 60.0)  # [s]
+    path = write_recording(tmp_path / "stop_and_go.csv", arm, times, q, wrenches)
+    loaded = load_samples(path, arm)
+    assert loaded.search is None and len(np.unique(loaded.samples.pose_ids)) == 18
