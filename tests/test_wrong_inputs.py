@@ -72,3 +72,14 @@ def test_absurd_readings_are_refused_before_the_fit(arm, truth, rng, scale):
     with pytest.raises(InvalidSamples, match="beyond ±1e\\+06: expected N and N·m") as info:
         ftkin.calibrate(ftkin.Samples(samples.wrenches * scale, samples.rotations))
     assert not isinstance(info.value, UnobservableParameters)
+
+
+def test_tick_counts_refuse_booleans_and_absurd_delays():
+    from ftkin.control.sensor_faults import SensorLimits
+    from ftkin.control.stability import MAX_DELAY_TICKS, max_stable_k1
+
+    with pytest.raises(InvalidInput, match="recovery_ticks"):
+        SensorLimits(recovery_ticks=True)
+    for delay in (True, MAX_DELAY_TICKS + 1, 10**12):
+        with pytest.raises(InvalidInput, match="delay_ticks"):
+            max_stable_k1(1e4, 50.0, 1e-3, 30.0, delay_ticks=delay)

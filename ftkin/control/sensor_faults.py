@@ -112,8 +112,8 @@ class SensorLimits:
 
 
 def _is_number(value, test) -> bool:
-    """``test(value)`` for a real number, False for anything else."""
-    return isinstance(value, Real) and bool(test(value))
+    """``test(value)`` for a real number, False for anything else (a boolean included)."""
+    return isinstance(value, Real) and not isinstance(value, bool) and bool(test(value))
 
 
 def _is_count(x) -> bool:
