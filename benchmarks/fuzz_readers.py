@@ -1,7 +1,9 @@
 """Fuzz ftkin's file readers for a fixed budget and print how many inputs were tried.
 
 Mutates valid files (byte edits, truncation, duplicated or dropped lines,
-structured JSON edits) and feeds them to the readers. Every input must end in a
+structured JSON edits) and feeds them to the readers: samples CSVs (a continuous
+recording among them), moving recordings (``calibrate --dynamic``), calibration
+JSON and ROS 2 bags. Every input must end in a
 result with finite numbers or an ``ftkin.FtkinError``; anything else (a numpy,
 Pinocchio or Python traceback) is a bug: the script prints it and exits 1.
 
@@ -25,6 +27,7 @@ import numpy as np
 
 import ftkin
 from ftkin.io.calibration_file import calibration_to_dict, load_calibration
+from ftkin.io.motion_recording import load_motion_csv
 from ftkin.io.samples_csv import load_samples
 from ftkin.sim.paper import paper_calibration, paper_csv_path
 
@@ -186,6 +189,24 @@ def check_calibration(result) -> None:
     assert np.all(np.isfinite(result.to_vector())), "non-finite calibration"
 
 
+def check_motion(motion) -> None:
+    for values in (motion.wrenches, motion.rotations, motion.velocities, motion.accelerations):
+        assert np.all(np.isfinite(values)), "non-finite motion samples"
+
+
+def _motion_seed(arm) -> str:
+    """A moving recording (``calibrate --dynamic``): 100 Hz, sines on every joint, the rates
+    given as ``<joint>_vel``/``<joint>_acc`` (what ``plan --excitation`` writes)."""
+    times = np.arange(60) / 100.0
+    phase = 2 * np.pi * times[:, None] + np.arange(arm.nq)[None, :]
+    q, dq, ddq = 0.3 * np.sin(phase), 0.6 * np.pi * np.cos(phase), -1.2 * np.pi**2 * np.sin(phase)
+    names = arm.joint_names
+    header = ["t", *names, *(f"{n}_vel" for n in names), *(f"{n}_acc" for n in names)]
+    header += ["fx", "fy", "fz", "mx", "my", "mz"]
+    rows = np.column_stack([times, q, dq, ddq, np.tile([0.1, 0.2, 3.1, 0.0, 0.0, 0.0], (60, 1))])
+    return "\n".join([",".join(header), *(",".join(f"{v:.9g}" for v in row) for row in rows)])
+
+
 def _read_bag_quietly(path: Path, arm):
     from ftkin.io.bags import bag_samples
 
@@ -218,8 +239,9 @@ def run(seconds: float, seed: int) -> int:
     csv_seeds.append("\n".join(recording) + "\n")
     calibration_document = calibration_to_dict(paper_calibration())
     json_seed = json.dumps(calibration_document, indent=2)
+    motion_seed = _motion_seed(arm)
 
-    counts = {"csv": 0, "json-text": 0, "json-structured": 0}
+    counts = {"csv": 0, "json-text": 0, "json-structured": 0, "motion-csv": 0}
     bag_seed = None
     try:
         bag_seed = write_small_bag(workdir / "seed.mcap", arm, seed).read_bytes()
@@ -240,6 +262,9 @@ def run(seconds: float, seed: int) -> int:
             bag_path.write_bytes(mutate_bytes(bag_seed, rng))
             target_path = bag_path
             reader, check = (lambda p: _read_bag_quietly(p, arm)), check_samples
+        elif target == "motion-csv":
+            path.write_text(mutate_text(motion_seed, rng), errors="surrogateescape")
+            reader, check = (lambda p: load_motion_csv(p, arm).motion_samples(arm)), check_motion
         elif target == "json-text":
             path.write_text(mutate_text(json_seed, rng))
             reader, check = load_calibration, check_calibration

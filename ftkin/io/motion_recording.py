@@ -111,7 +111,7 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
 
     Raises:
         InvalidSamples: missing ``t``, joint or wrench columns, joint angles in
-            degrees, or times not increasing (with file and line).
+            degrees, fewer than 3 rows, or times not increasing (with file and line).
     """
     table = rename_columns(
         table, wrench_aliases(table.header)
@@ -129,6 +129,11 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
         )
     joints = table.floats(columns)
     check_radians(table, columns, joints)
+    if len(times) < 3:
+        raise InvalidSamples(
+            f"{len(times)} row(s); a moving recording needs at least 3 (its derivatives)",
+            table.source,
+        )
     steps = np.diff(times)
     if np.any(steps <= 0):
         row = int(np.flatnonzero(steps <= 0)[0]) + 1

@@ -66,3 +66,14 @@ def _parameters(model) -> dict:
         center_of_mass=model.center_of_mass,
         g=model.g,
     )
+
+
+def test_a_one_row_recording_with_rates_is_refused(excitation, arm, tmp_path):
+    """Regression (found by the fuzzer once the rate columns were read): no IndexError."""
+    from ftkin.exceptions import InvalidSamples
+
+    table = read_table(excitation)
+    short = tmp_path / "one_row.csv"
+    write_csv(short, [*table.header, "fx", "fy", "fz", "mx", "my", "mz"], [table.rows[0] + [0] * 6])
+    with pytest.raises(InvalidSamples, match="1 row\\(s\\); a moving recording needs at least 3"):
+        load_motion_csv(short, arm)
