@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test install lint docs bench fuzz soak clean
+.PHONY: demo test install lint docs docs-test docs-images bench fuzz soak clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -27,15 +27,25 @@ test: $(STAMP)
 	$(PY) benchmarks/fuzz_readers.py --seconds 20
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff format --check ftkin tests benchmarks docs scripts
-	$(VENV)/bin/ruff check ftkin tests benchmarks docs scripts
+	$(VENV)/bin/ruff format --check ftkin tests benchmarks docs scripts conftest.py
+	$(VENV)/bin/ruff check ftkin tests benchmarks docs scripts conftest.py
 	$(VENV)/bin/lint-imports
 
 docs: $(STAMP)
 	$(VENV)/bin/sphinx-build -W --keep-going -q -b html docs docs/_build/html
 
+# Each script exits 1 when a target row fails; make bench stops there. Outputs are recorded in
+# benchmarks/results/<script>.txt (date, machine, load), which the docs quote.
 bench: $(STAMP)
-	for script in benchmarks/bench_*.py; do echo "== $$script"; $(PY) $$script || exit 1; done
+	for script in benchmarks/bench_*.py; do echo "== $$script"; FTKIN_BENCH_RECORD=1 $(PY) $$script || exit 1; done
+
+# The docs' code blocks alone, the slow ones (browser, live server) included.
+docs-test: $(STAMP)
+	FTKIN_DOCS_SLOW=1 $(PY) -m pytest -q -p no:cacheprovider README.md docs tests/test_docs_reference.py
+
+# Regenerate docs/images with the code their captions name.
+docs-images: $(STAMP)
+	PYTHONPATH=. $(PY) scripts/docs_images.py
 
 fuzz: $(STAMP)
 	$(PY) benchmarks/fuzz_readers.py --seconds $${FUZZ_SECONDS:-60}

@@ -179,4 +179,6 @@ def main(repeats: int = 41) -> None:
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 41)
+    from _targets import run_benchmark
+
+    raise SystemExit(run_benchmark(main, int(sys.argv[1]) if len(sys.argv) > 1 else 41))

@@ -360,4 +360,6 @@ def main(argv=None) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from _targets import run_benchmark
+
+    raise SystemExit(run_benchmark(main))

@@ -185,4 +185,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from _targets import run_benchmark
+
+    raise SystemExit(run_benchmark(main))

@@ -141,4 +141,6 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    from _targets import run_benchmark
+
+    raise SystemExit(run_benchmark(main))

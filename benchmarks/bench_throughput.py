@@ -255,4 +255,6 @@ def main(quick: bool = False) -> None:
 
 
 if __name__ == "__main__":
-    main("--quick" in sys.argv)
+    from _targets import run_benchmark
+
+    raise SystemExit(run_benchmark(main, "--quick" in sys.argv))

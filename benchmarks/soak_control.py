@@ -310,4 +310,6 @@ def report(
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from _targets import run_benchmark
+
+    raise SystemExit(run_benchmark(main))

@@ -99,4 +99,6 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from _targets import run_benchmark
+
+    raise SystemExit(run_benchmark(main))

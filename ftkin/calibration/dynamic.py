@@ -62,7 +62,7 @@ class DynamicCalibrationResult(CalibrationResult):
             or None when the inertia was not estimated.
         inertia_std_errors: ``(3, 3)`` its standard errors [kg·m²], or None.
         inertial_parameters: ``(10,)`` θ in the sensor frame (see
-        :mod:`ftkin.calibration.log_cholesky`).
+            :mod:`ftkin.calibration.log_cholesky`).
         inertial_covariance: ``(10, 10)`` covariance of θ, or None.
         motion_residual_rms: ``(6,)`` RMS of measured minus predicted per channel [N, N·m].
         channel_std: ``(6,)`` noise per reading used as weights [N, N·m].

@@ -22,7 +22,7 @@ def _number(text: str, accept, expected: str) -> float:
     return value
 
 
-NUMBER_LIST_OPTIONS = ("--sensor-offset",)
+NUMBER_LIST_OPTIONS = ("--sensor-offset", "--mount-rpy-deg", "--com")
 """Options that take several numbers; their values end at the first token that is not a number."""
 
 

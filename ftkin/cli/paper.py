@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from ..calibration.estimate import METHODS
-from ..sim.paper import comparison_table, paper_calibration
+from ..io.atomic import atomic_write_bytes
+from ..sim.paper import comparison_table, paper_calibration, paper_csv_path
 
 
 def register(subparsers) -> None:
@@ -20,6 +21,12 @@ def register(subparsers) -> None:
         action="store_false",
         help="do not also print the ml fit with standard errors after the linear one",
     )
+    parser.add_argument(
+        "-o",
+        "--output",
+        metavar="SAMPLES.csv",
+        help="also write the paper's 9 poses (Tables 1-2) as a samples CSV, for ftkin calibrate",
+    )
     parser.set_defaults(func=run)
 
 
@@ -35,4 +42,7 @@ def run(args) -> int:
             "error:"
         )
         print(paper_calibration("ml").summary())
+    if args.output:
+        atomic_write_bytes(args.output, paper_csv_path().read_bytes())
+        print(f"wrote {args.output}")
     return 0

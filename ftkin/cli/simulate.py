@@ -1,5 +1,8 @@
 """``ftkin simulate placement``: the paper's placement experiment on the bundled arm.
 
+(``ftkin simulate samples|log|recording|bag``, example inputs, are in
+:mod:`ftkin.cli.simulate_inputs`.)
+
 Gains are given as in the paper, k13 [mm/N] and k23 [mm/(s·N)], and converted
 to SI. The CSV has one row per control tick: ``t`` [s], ``displacement`` (tool
 z from the start) [m], ``velocity`` [m/s], ``force`` (true compensated F'z,
@@ -31,13 +34,16 @@ from ..io.csv_table import write_csv
 from ..sim.placement import MODES, PlacementRun, PlacementScenario, simulate_placement
 from ..sim.surfaces import SURFACES, surface_by_name
 from .arg_types import bounded_int, positive_float, seed
+from .simulate_inputs import add_input_parsers
 
 _DEFAULT = PlacementScenario()
 
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
-        "simulate", help="simulated experiments (the paper's placement test)"
+        "simulate",
+        help="simulated experiments (the paper's placement test) and example inputs (samples, "
+        "log, recording, bag)",
     )
     experiments = parser.add_subparsers(dest="experiment", metavar="EXPERIMENT", required=True)
     placement = experiments.add_parser(
@@ -45,35 +51,22 @@ def register(subparsers) -> None:
         help="lower a grasped object onto a sponge or a book: position vs admittance control",
         description="Lower a grasped object onto a surface with position control, admittance "
         "control with "
-        "compensation, or admittance control on raw readings (METHOD.md §6).",
+        "compensation, or admittance control on raw readings (docs/method.md §6).",
     )
+    _add_scenario_arguments(placement)
+    _add_run_arguments(placement)
+    placement.set_defaults(func=run)
+    add_input_parsers(experiments)
+
+
+def _add_scenario_arguments(placement) -> None:
+    """The experiment: surface, controller, gains, object, timing."""
     placement.add_argument("--surface", choices=sorted(SURFACES), default="sponge")
     placement.add_argument(
         "--mode",
         choices=(*MODES, "all"),
         default="admittance",
         help="controller; 'all' runs the three and plots them together (default: %(default)s)",
-    )
-    placement.add_argument(
-        "--engine",
-        choices=ENGINES,
-        default=default_engine(),
-        help="mujoco (physics engine, extra 'sim') or simple (kinematic arm, spring-damper "
-        "formula); "
-        "default: mujoco when installed (here: %(default)s)",
-    )
-    placement.add_argument(
-        "--sample-rate",
-        type=positive_float,
-        metavar="HZ",
-        help="MuJoCo engine: sensor sample rate [Hz] (default: one sample per control tick)",
-    )
-    placement.add_argument(
-        "--delay-ticks",
-        type=bounded_int(0, 10_000, "ticks"),
-        default=1,
-        metavar="N",
-        help="MuJoCo engine: sensor delay in control ticks (default: %(default)s)",
     )
     placement.add_argument(
         "--k1",
@@ -119,6 +112,31 @@ def register(subparsers) -> None:
         default=0,
         help="random seed of the sensor noise (default: %(default)s)",
     )
+
+
+def _add_run_arguments(placement) -> None:
+    """How it runs (engine, sensor timing, sweep) and what it writes."""
+    placement.add_argument(
+        "--engine",
+        choices=ENGINES,
+        default=default_engine(),
+        help="mujoco (physics engine, extra 'sim') or simple (kinematic arm, spring-damper "
+        "formula); "
+        "default: mujoco when installed (here: %(default)s)",
+    )
+    placement.add_argument(
+        "--sample-rate",
+        type=positive_float,
+        metavar="HZ",
+        help="MuJoCo engine: sensor sample rate [Hz] (default: one sample per control tick)",
+    )
+    placement.add_argument(
+        "--delay-ticks",
+        type=bounded_int(0, 10_000, "ticks"),
+        default=1,
+        metavar="N",
+        help="MuJoCo engine: sensor delay in control ticks (default: %(default)s)",
+    )
     placement.add_argument(
         "--sweep", choices=("k1", "k2"), help="repeat the run over --values of this gain"
     )
@@ -140,7 +158,6 @@ def register(subparsers) -> None:
         help="watch the run live in meshcat (arm, contact wrench, commanded twist), paced to real "
         "time",
     )
-    placement.set_defaults(func=run)
 
 
 ENGINES = ("mujoco", "simple")
@@ -190,7 +207,7 @@ def _simulate(scenario: PlacementScenario, args):
         scenario, sample_rate=args.sample_rate, delay_ticks=args.delay_ticks
     )
     for time, event in full.events:
-        if event:  # "" is the end of an event
+        if event:
             print(f"  t = {time:.3f} s: {event}")
     return run_, list(full.columns), full.table
 
@@ -222,8 +239,8 @@ def _run_viewed(scenario: PlacementScenario) -> PlacementRun:
     return result
 
 
-def run(args) -> int:
-    scenario = PlacementScenario(
+def _scenario(args) -> PlacementScenario:
+    return PlacementScenario(
         surface=surface_by_name(args.surface),
         mode=MODES[0] if args.mode == "all" else args.mode,
         k1=args.k1 * 1e-3,
@@ -234,6 +251,10 @@ def run(args) -> int:
         dt=args.dt,
         seed=args.seed,
     )
+
+
+def _scenarios(args, scenario: PlacementScenario) -> tuple[list[PlacementScenario], list]:
+    """The runs the options ask for and their labels (gain values or mode indices)."""
     if args.view and (args.sweep or args.mode in ("position", "all")):
         raise InvalidInput(
             "--view draws one run of an admittance controller: drop --sweep, use --mode admittance"
@@ -246,30 +267,16 @@ def run(args) -> int:
                 "--sweep varies admittance gains; use --mode admittance or admittance-uncompensated"
             )
         scenarios = [replace(scenario, **{args.sweep: value * 1e-3}) for value in args.values]
-        labels = list(args.values)
-    else:
-        if args.values:
-            raise InvalidInput("--values needs --sweep k1 or --sweep k2")
-        modes = MODES if args.mode == "all" else (args.mode,)
-        scenarios = [replace(scenario, mode=mode) for mode in modes]
-        labels = list(range(len(modes)))
-    if args.view:  # the live view draws the simple engine's run, paced to the wall clock
-        if args.engine != "simple":
-            print("--view: running the simple engine (the live view follows its ticks)")
-            args.engine = "simple"  # the labels below say what ran
-        viewed = _run_viewed(scenarios[0])
-        results = [(viewed, list(PlacementRun.COLUMNS), viewed.rows())]
-    else:
-        results = [_simulate(one, args) for one in scenarios]
+        return scenarios, list(args.values)
+    if args.values:
+        raise InvalidInput("--values needs --sweep k1 or --sweep k2")
+    modes = MODES if args.mode == "all" else (args.mode,)
+    return [replace(scenario, mode=mode) for mode in modes], list(range(len(modes)))
+
+
+def _write(args, results, labels) -> None:
+    """The time series (``-o``) and the plots (``--plot``) of the runs."""
     runs = [result[0] for result in results]
-    for one in runs:
-        prefix = (
-            f"{'k13' if args.sweep == 'k1' else 'k23'} = "
-            f"{getattr(one.scenario, args.sweep) * 1e3:g}: "
-            if args.sweep
-            else ""
-        )
-        print(f"{args.surface}, {one.scenario.mode} ({args.engine}): {prefix}{_summary(one)}")
     if args.output:
         header = results[0][1]
         if len(results) > 1:
@@ -292,4 +299,25 @@ def run(args) -> int:
         else:
             plot_runs(runs, args.plot, title)
         print(f"wrote {args.plot}")
+
+
+def run(args) -> int:
+    scenarios, labels = _scenarios(args, _scenario(args))
+    if args.view:  # the live view draws the simple engine's run, paced to the wall clock
+        if args.engine != "simple":
+            print("--view: running the simple engine (the live view follows its ticks)")
+            args.engine = "simple"  # the labels below say what ran
+        viewed = _run_viewed(scenarios[0])
+        results = [(viewed, list(PlacementRun.COLUMNS), viewed.rows())]
+    else:
+        results = [_simulate(one, args) for one in scenarios]
+    for one, _, _ in results:
+        prefix = (
+            f"{'k13' if args.sweep == 'k1' else 'k23'} = "
+            f"{getattr(one.scenario, args.sweep) * 1e3:g}: "
+            if args.sweep
+            else ""
+        )
+        print(f"{args.surface}, {one.scenario.mode} ({args.engine}): {prefix}{_summary(one)}")
+    _write(args, results, labels)
     return 0

@@ -309,7 +309,7 @@ def bag_samples(
             segment number (for calibration). False: every reading, one pose
             each, no segment search (for compensation).
         wrench_frame: ``"sensor"`` or ``"base"`` (see
-        :func:`~ftkin.io.wrench_frames.wrenches_in_sensor_frame`).
+            :func:`~ftkin.io.wrench_frames.wrenches_in_sensor_frame`).
 
     Returns:
         :class:`BagSamples` whose ``table`` has columns ``t`` [s], ``pose``

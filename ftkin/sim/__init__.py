@@ -3,6 +3,8 @@
 :class:`SimulatedSensor` produces raw readings [N, N·m] from known calibration
 parameters at given ``R_BS`` (bias + drift + tool gravity + contact + noise;
 the drift, :class:`SensorDrift`, warms up, wanders and follows temperature).
+:mod:`ftkin.sim.inputs` writes example input files from it (samples, logs,
+recordings, bags: ``ftkin simulate samples|log|recording|bag``).
 :func:`simulate_placement` runs the paper's placement experiment (METHOD.md §6)
 with :class:`~ftkin.control.JointAdmittance` in the loop against a
 :class:`Surface`. :mod:`ftkin.sim.paper` reproduces the paper's calibration.
@@ -20,6 +22,7 @@ _EXPORTS = {
     "PlacementRun": ".placement",
     "PlacementScenario": ".placement",
     "SensorDrift": ".drift",
+    "SimulatedInputs": ".inputs",
     "SimulatedSensor": ".sensor",
     "Surface": ".surfaces",
     "ToolInertia": ".mujoco",
@@ -38,6 +41,7 @@ __all__ = [
     "PlacementRun",
     "PlacementScenario",
     "SensorDrift",
+    "SimulatedInputs",
     "SimulatedSensor",
     "Surface",
     "ToolInertia",

@@ -97,12 +97,30 @@ def run_closed_loop(
         duration: Simulated time [s].
         dt: Control period [s] (e.g. 1/125, 1/500, 1/1000); a multiple of the MuJoCo timestep.
         sensor: Sensor model; default: noiseless, unbiased, one-tick delay.
-        tool_model: The tool's true weight for the ``force`` column, ``F'z = ideal fz − (R_BSᵀ
-        a)_z``
-            (default: :meth:`ArmSimulation.tool_sensor_model`, from the model's tool inertia; its
-            bias is ignored).
+        tool_model: The tool's true weight for the ``force`` column,
+            ``F'z = ideal fz − (R_BSᵀ a)_z`` (default: :meth:`ArmSimulation.tool_sensor_model`,
+            from the model's tool inertia; its bias is ignored).
         reset: Start from ``sim``'s build pose at rest (else continue from the current state).
     """
+    _check_loop(sim, controller, duration, dt)
+    if reset:
+        sim.reset()
+    sensor = MujocoSensor() if sensor is None else sensor
+    sensor.reset()
+    tool_model = sim.tool_sensor_model() if tool_model is None else tool_model
+    ticks = int(round(duration / dt))
+    recorder = _Recorder(sim, tool_model, ticks, float(dt))
+    for i in range(ticks):
+        ideal = sim.ideal_wrench_in_sensor()
+        q = sim.q
+        raw = sensor.read(ideal, dt)
+        dq = controller.step(q, raw, dt)
+        recorder.record(i, q, raw, dq, ideal, getattr(controller, "last_status", None))
+        sim.step(dq, dt)
+    return recorder.run()
+
+
+def _check_loop(sim: ArmSimulation, controller, duration: float, dt: float) -> None:
     if not (math.isfinite(duration) and duration > 0 and math.isfinite(dt) and dt > 0):
         raise InvalidInput(f"duration and dt must be finite and > 0 [s], got {duration!r}, {dt!r}")
     substeps = dt / sim.model.opt.timestep
@@ -110,66 +128,62 @@ def run_closed_loop(
         raise InvalidInput(
             f"dt = {dt} s must be a multiple of MuJoCo's timestep {sim.model.opt.timestep} s"
         )
-    if reset:
-        sim.reset()
-    sensor = MujocoSensor() if sensor is None else sensor
-    sensor.reset()
-    tool_model = sim.tool_sensor_model() if tool_model is None else tool_model
-    ax, ay, az = np.asarray(tool_model.gravity_in_base, dtype=float).tolist()
-    nq = sim.arm.nq
-    tool_body = sim.tool_body_id
     if getattr(controller, "step", None) is None:
         raise InvalidInput(
             "controller must have a step(q, raw_wrench, dt) method, got "
             f"{type(controller).__name__}"
         )
-    columns = (
-        PLACEMENT_COLUMNS
-        + tuple(f"q{i + 1}" for i in range(nq))
-        + tuple(f"dq{i + 1}" for i in range(nq))
-        + tuple(f"cmd{i + 1}" for i in range(nq))
-        + WRENCH_COLUMNS
-        + ("held",)
-    )
-    ticks = int(round(duration / dt))
-    table = np.zeros((ticks, len(columns)))
-    events, last_event, first_hold = [], "", math.inf
-    data, site, surface = sim.data, sim.sensor_site_id, sim.surface_under
-    z_start = z_before = float(data.xpos[tool_body][2])
-    q_columns, dq_columns = slice(7, 7 + nq), slice(7 + nq, 7 + 2 * nq)
-    cmd_columns, wrench_columns = slice(7 + 2 * nq, 7 + 3 * nq), slice(7 + 3 * nq, 13 + 3 * nq)
-    for i in range(ticks):
-        ideal = sim.ideal_wrench_in_sensor()
-        q = sim.q
-        raw = sensor.read(ideal, dt)
-        dq = controller.step(q, raw, dt)
-        status = getattr(controller, "last_status", None)
-        row = table[i]
+
+
+class _Recorder:
+    """The table of a closed-loop run, one row per tick, and the controller's events."""
+
+    def __init__(self, sim: ArmSimulation, tool_model: SensorModel, ticks: int, dt: float):
+        nq = sim.arm.nq
+        self.columns = (
+            PLACEMENT_COLUMNS
+            + tuple(f"q{i + 1}" for i in range(nq))
+            + tuple(f"dq{i + 1}" for i in range(nq))
+            + tuple(f"cmd{i + 1}" for i in range(nq))
+            + WRENCH_COLUMNS
+            + ("held",)
+        )
+        self.table = np.zeros((ticks, len(self.columns)))
+        self.sim, self.dt = sim, dt
+        self.gravity = np.asarray(tool_model.gravity_in_base, dtype=float).tolist()
+        self.events, self.last_event, self.first_hold = [], "", math.inf
+        self.z_start = self.z_before = float(sim.data.xpos[sim.tool_body_id][2])
+        self.q_columns, self.dq_columns = slice(7, 7 + nq), slice(7 + nq, 7 + 2 * nq)
+        self.cmd_columns = slice(7 + 2 * nq, 7 + 3 * nq)
+        self.wrench_columns = slice(7 + 3 * nq, 13 + 3 * nq)
+
+    def record(self, i: int, q, raw, dq, ideal, status) -> None:
+        """Row ``i``: time, tool height and speed, true and measured F'z, the surface, q, dq."""
+        sim, data, row, dt = self.sim, self.sim.data, self.table[i], self.dt
+        measured = raw[2]
         if status is not None:
             measured = status.contact_wrench[2]
             event = status.event or ("" if status.fault == "none" else str(status.fault))
-            if event != last_event:
-                events.append((i * dt, str(event)))
-                last_event = event
+            if event != self.last_event:
+                self.events.append((i * dt, str(event)))
+                self.last_event = event
             if status.held:
                 row[-1] = 1.0
-                if first_hold == math.inf:
-                    first_hold = i * dt
-        else:
-            measured = raw[2]
-        z = data.xpos[tool_body][2]
-        row[0], row[1], row[2] = i * dt, z - z_start, (z - z_before) / dt
-        r02, r12, r22 = data.site_xmat[site][
-            2::3
-        ].tolist()  # R_BS's third column: the sensor z axis in the base
+                self.first_hold = min(self.first_hold, i * dt)
+        z = data.xpos[sim.tool_body_id][2]
+        row[0], row[1], row[2] = i * dt, z - self.z_start, (z - self.z_before) / dt
+        # R_BS's third column: the sensor z axis in the base
+        r02, r12, r22 = data.site_xmat[sim.sensor_site_id][2::3].tolist()
+        ax, ay, az = self.gravity
         row[3] = ideal[2] - (r02 * ax + r12 * ay + r22 * az)
         row[4] = measured
-        if surface is not None:
+        if sim.surface_under is not None:
             row[5], row[6] = sim.surface_depth(), sim.normal_force()
-        row[q_columns] = q
-        row[dq_columns] = data.qvel[sim._dq_index]
-        row[cmd_columns] = dq
-        row[wrench_columns] = ideal
-        z_before = z
-        sim.step(dq, dt)
-    return ClosedLoopRun(columns, table, float(dt), tuple(events), first_hold)
+        row[self.q_columns] = q
+        row[self.dq_columns] = data.qvel[sim._dq_index]
+        row[self.cmd_columns] = dq
+        row[self.wrench_columns] = ideal
+        self.z_before = z
+
+    def run(self) -> ClosedLoopRun:
+        return ClosedLoopRun(self.columns, self.table, self.dt, tuple(self.events), self.first_hold)

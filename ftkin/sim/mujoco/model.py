@@ -102,29 +102,73 @@ def build_arm_model(
 
     Args:
         arm: An ftkin arm loaded from a URDF (``arm.urdf_path``); its sensor frame must be a link.
-        measured_body: The body whose subtree the sensor measures. Default: the only child link of
-        the sensor link.
+        measured_body: The body whose subtree the sensor measures. Default: the only child link
+            of the sensor link.
         grasped_object: The held object (None: nothing held). Attached to the tool frame's link
-        (sensor link's child if no tool).
+            (sensor link's child if no tool).
         surfaces: Pads on the table, spaced :data:`PAD_SPACING` along base y.
-        surface_under: Name of the pad placed ``start_gap`` [m] below the object (or the tool point)
-        at ``q0``; None: no table.
+        surface_under: Name of the pad placed ``start_gap`` [m] below the object (or the tool
+            point) at ``q0``; None: no table.
         q0: Start configuration [rad] (default :data:`Q_DOWN` for a 6-joint arm, else the zero
-        configuration).
+            configuration).
         start_gap: Air gap at the start [m].
-        base_tilt: ``(U, V)`` [rad]: gravity in the base frame is ``g`` along ``[cosU sinV, -sinU,
-        -cosU cosV]``.
+        base_tilt: ``(U, V)`` [rad]: gravity in the base frame is ``g`` along
+            ``[cosU sinV, -sinU, -cosU cosV]``.
         g: Gravity [m/s²].
         timestep: MuJoCo's integration step [s].
         servo_bandwidth: Natural frequency of each joint's position servo [Hz] (critically damped).
 
     Raises:
-        InvalidInput: the arm has no URDF, its sensor frame is not a link, or the measured body is
-        ambiguous.
+        InvalidInput: the arm has no URDF, its sensor frame is not a link, or the measured body
+            is ambiguous.
         MissingDependency: ``mujoco`` is not installed (the ``sim`` extra).
     """
     mujoco = import_mujoco()
     arm = Arm.default() if arm is None else arm
+    q0 = _check_arguments(arm, q0, timestep, servo_bandwidth)
+    spec = mujoco.MjSpec.from_file(str(arm.urdf_path))
+    spec.compiler.fusestatic = False
+    bodies = {body.name: body for body in spec.bodies}
+    if arm.sensor_frame not in bodies:
+        raise InvalidInput(
+            f"the sensor frame {arm.sensor_frame!r} is not a link of {arm.urdf_path.name}; MuJoCo "
+            "needs a sensor link"
+        )
+    measured = _measured_body(spec, bodies, arm.sensor_frame, measured_body)
+    _add_sensor(mujoco, spec, bodies, measured)
+    holder = bodies.get(arm.tool_frame, measured) if arm.tool_frame else measured
+    if grasped_object is not None:
+        _add_object(mujoco, holder, grasped_object)
+    rotation, tool_point = arm.frame_placement(q0, "tool" if arm.tool_frame else "sensor")
+    drop = grasped_object.height if grasped_object is not None else 0.0
+    bottom = tool_point + rotation[:, 2] * drop  # of the object (or the tool point) at q0
+    _add_table(mujoco, spec, surfaces, surface_under, bottom, start_gap, timestep)
+    _add_servos(mujoco, spec, arm)
+    spec.option.timestep = float(timestep)
+    integrators = mujoco.mjtIntegrator
+    spec.option.integrator = (
+        getattr(integrators, "mjINT_IMPLICITFAST", None) or integrators.mjINTEGRATOR_IMPLICITFAST
+    )
+    spec.option.gravity = gravity_in_base_from_tilt(
+        float(g), float(base_tilt[0]), float(base_tilt[1])
+    )
+    sim = ArmSimulation(
+        mujoco,
+        spec.compile(),
+        arm,
+        q0,
+        {s.name: s for s in surfaces},
+        surface_under if surfaces else None,
+        (float(base_tilt[0]), float(base_tilt[1])),
+        float(g),
+    )
+    _tune_servos(sim, 2.0 * math.pi * servo_bandwidth)
+    sim.reset()  # again: the equilibrium targets depend on the servo gains
+    return sim
+
+
+def _check_arguments(arm: Arm, q0, timestep: float, servo_bandwidth: float) -> np.ndarray:
+    """The start configuration ``q0`` [rad], after checking the arm and the numbers."""
     if arm.urdf_path is None:
         raise InvalidInput("build_arm_model needs an arm loaded from a URDF file (Arm.from_urdf)")
     if not (
@@ -140,43 +184,33 @@ def build_arm_model(
     q0 = np.asarray(
         (Q_DOWN if arm.nq == 6 else np.zeros(arm.nq)) if q0 is None else q0, dtype=float
     )
-    q0 = arm.check_configuration(q0).copy()
-    spec = mujoco.MjSpec.from_file(str(arm.urdf_path))
-    spec.compiler.fusestatic = False
-    bodies = {body.name: body for body in spec.bodies}
-    if arm.sensor_frame not in bodies:
-        raise InvalidInput(
-            f"the sensor frame {arm.sensor_frame!r} is not a link of {arm.urdf_path.name}; MuJoCo "
-            "needs a sensor link"
-        )
-    measured = _measured_body(spec, bodies, arm.sensor_frame, measured_body)
-    for geom in spec.geoms:  # the arm collides with nothing: only the object touches the pads
+    return arm.check_configuration(q0).copy()
+
+
+def _add_sensor(mujoco, spec, bodies: dict, measured) -> None:
+    """Force and torque sensors on a site at the sensor frame; the arm weightless and contact-free.
+
+    The arm collides with nothing (only the object touches the pads) and its own links are
+    gravity-compensated (the robot controller's job; its servo would sag otherwise).
+    """
+    for geom in spec.geoms:
         geom.contype, geom.conaffinity = 0, 0
     for name, body in bodies.items():
         if name != "world" and not _is_descendant(body, measured):
-            body.gravcomp = (
-                1.0  # the controller does not compensate the arm's own weight: its servo would sag
-            )
+            body.gravcomp = 1.0
     site_pos, site_quat = _inverse_pose(measured)
     measured.add_site(name="ftkin_sensor", pos=site_pos, quat=site_quat)
-    spec.add_sensor(
-        name="ftkin_force",
-        type=mujoco.mjtSensor.mjSENS_FORCE,
-        objtype=mujoco.mjtObj.mjOBJ_SITE,
-        objname="ftkin_sensor",
-    )
-    spec.add_sensor(
-        name="ftkin_torque",
-        type=mujoco.mjtSensor.mjSENS_TORQUE,
-        objtype=mujoco.mjtObj.mjOBJ_SITE,
-        objname="ftkin_sensor",
-    )
-    holder = bodies.get(arm.tool_frame, measured) if arm.tool_frame else measured
-    if grasped_object is not None:
-        _add_object(mujoco, holder, grasped_object)
-    rotation, tool_point = arm.frame_placement(q0, "tool" if arm.tool_frame else "sensor")
-    drop = grasped_object.height if grasped_object is not None else 0.0
-    bottom = tool_point + rotation[:, 2] * drop
+    for name, kind in (
+        ("ftkin_force", mujoco.mjtSensor.mjSENS_FORCE),
+        ("ftkin_torque", mujoco.mjtSensor.mjSENS_TORQUE),
+    ):
+        spec.add_sensor(
+            name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="ftkin_sensor"
+        )
+
+
+def _add_table(mujoco, spec, surfaces, surface_under, bottom: np.ndarray, start_gap, timestep):
+    """The pads, ``surface_under`` ``start_gap`` [m] below ``bottom`` [m], on a table."""
     names = [surface.name for surface in surfaces]
     if surface_under is not None and surface_under not in names:
         raise InvalidInput(f"surface_under must be one of {names} or None, got {surface_under!r}")
@@ -195,6 +229,10 @@ def build_arm_model(
             conaffinity=0,
             rgba=[0.6, 0.45, 0.3, 1],
         )
+
+
+def _add_servos(mujoco, spec, arm: Arm) -> None:
+    """One speedJ-like ``intvelocity`` actuator per joint, within the URDF's speed limits."""
     for name in arm.joint_names:
         joint = spec.joint(name)
         limit = arm.velocity_limits[arm.joint_names.index(name)]
@@ -205,28 +243,6 @@ def build_arm_model(
         actuator.ctrllimited, actuator.ctrlrange = 1, [-limit, limit]
         actuator.actlimited, actuator.actrange = 1, list(joint.range)
         joint.armature = 0.05
-    spec.option.timestep = float(timestep)
-    integrators = mujoco.mjtIntegrator
-    spec.option.integrator = (
-        getattr(integrators, "mjINT_IMPLICITFAST", None) or integrators.mjINTEGRATOR_IMPLICITFAST
-    )
-    spec.option.gravity = gravity_in_base_from_tilt(
-        float(g), float(base_tilt[0]), float(base_tilt[1])
-    )
-    model = spec.compile()
-    sim = ArmSimulation(
-        mujoco,
-        model,
-        arm,
-        q0,
-        {s.name: s for s in surfaces},
-        surface_under if surfaces else None,
-        (float(base_tilt[0]), float(base_tilt[1])),
-        float(g),
-    )
-    _tune_servos(sim, 2.0 * math.pi * servo_bandwidth)
-    sim.reset()  # again: the equilibrium targets depend on the servo gains
-    return sim
 
 
 def _measured_body(spec, bodies: dict, sensor: str, name: str | None):
