@@ -29,6 +29,7 @@ import ftkin
 from ftkin.io.calibration_file import calibration_to_dict, load_calibration
 from ftkin.io.motion_recording import load_motion_csv
 from ftkin.io.samples_csv import load_samples
+from ftkin.io.static_segments import SegmentParameters
 from ftkin.sim.paper import paper_calibration, paper_csv_path
 
 ALPHABET = list(",\n\r#.-+eE0123456789 \t\"'") + [
@@ -256,7 +257,7 @@ def run(seconds: float, seed: int) -> int:
         target_path = path
         if target == "csv":
             path.write_text(mutate_text(rng.choice(csv_seeds), rng), errors="surrogateescape")
-            reader, check = (lambda p: load_samples(p, arm)), check_samples
+            reader, check = (lambda p: load_samples(p, arm, SegmentParameters())), check_samples
         elif target == "bag":
             bag_path = workdir / "input.mcap"
             bag_path.write_bytes(mutate_bytes(bag_seed, rng))

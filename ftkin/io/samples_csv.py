@@ -21,9 +21,12 @@ A table with a time column and no ``pose`` column whose orientation stays put
 over consecutive rows is a *continuous recording* (the arm moving between still
 phases): its still segments are found from the orientation by the bag reader's
 algorithm (:mod:`ftkin.io.static_segments`), each becomes one pose, and the
-moving rows are left out (``segments=None``, the CLI's ``--all-rows``, keeps
-every row as a static pose). A recording in motion with no usable still segment
-is refused.
+moving rows are left out, when ``segments``
+(:class:`~ftkin.io.static_segments.SegmentParameters`) is
+given: ``ftkin calibrate``, ``report``, ``extract`` and ``view`` give it unless
+``--all-rows``. Without it (the library's default: a log to compensate is read
+whole) every row is kept. A recording in motion with no usable still segment is
+refused.
 """
 
 from __future__ import annotations
@@ -53,8 +56,6 @@ _GENERIC_JOINT = re.compile(r"^q(\d+)$")
 _DEGREES_THRESHOLD = 2.0 * np.pi + 0.01
 _ROS_WRENCH = re.compile(r"^(?:.*[./_])?(force|torque)[._]([xyz])$", re.IGNORECASE)
 _TORQUE_T = {"tx": "mx", "ty": "my", "tz": "mz"}
-DEFAULT_SEGMENTS = SegmentParameters()
-"""How still segments of a continuous recording are found unless told otherwise."""
 MAX_POSE_ID = MAX_ID
 """Largest pose id magnitude: every integer up to it is exact in a float64 cell."""
 
@@ -392,14 +393,14 @@ def _static_part(table: Table, orientations: TableOrientations, index: np.ndarra
 
 
 def samples_from_table(
-    table: Table, arm=None, segments: SegmentParameters | None = DEFAULT_SEGMENTS
+    table: Table, arm=None, segments: SegmentParameters | None = None
 ) -> LoadedSamples:
     """Build :class:`Samples` from a table; ``arm`` is needed for joint columns.
 
     When the table has joint columns and ``arm`` is None, the bundled arm is used.
     ROS-style wrench names (``force.x``, ``torque.x``, ``tx``) are read as ftkin's.
     ``segments``: how still segments of a continuous recording are found (see
-    the module docstring); None keeps every row.
+    the module docstring); None (the default) keeps every row.
     """
     table = rename_columns(table, wrench_aliases(table.header))
     missing_columns(table, WRENCH_CHANNELS, "wrench")
@@ -430,8 +431,6 @@ def samples_from_table(
     return LoadedSamples(samples, table, orientations.kind, orientations.columns, search)
 
 
-def load_samples(
-    path, arm=None, segments: SegmentParameters | None = DEFAULT_SEGMENTS
-) -> LoadedSamples:
+def load_samples(path, arm=None, segments: SegmentParameters | None = None) -> LoadedSamples:
     """Read a samples CSV (see the module docstring for its columns and ``segments``)."""
     return samples_from_table(read_table(path), arm, segments)

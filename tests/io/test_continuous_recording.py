@@ -18,11 +18,13 @@ from ftkin.cli import main
 from ftkin.exceptions import InvalidSamples
 from ftkin.io.csv_table import read_table, write_csv
 from ftkin.io.samples_csv import load_samples
+from ftkin.io.static_segments import SegmentParameters
 from ftkin.sim.sensor import SimulatedSensor, recording_times
 
 RATE = 10.0  # [Hz]
 HOLD, MOVE = 1.9, 1.6  # [s] still, then moving to the next pose: 45 % of the time in motion
 NOISE = SensorNoise.paper()
+STILL = SegmentParameters()  # what calibrate, report, extract and view pass (not --all-rows)
 
 
 def recording(arm, truth, rng, poses=12, hold=HOLD):
@@ -62,13 +64,13 @@ def recorded(tmp_path_factory, arm, truth):
 def test_still_segments_are_fitted_and_the_all_rows_fit_is_biased(recorded, arm, truth):
     path, moving = recorded
     assert 0.40 < moving < 0.50  # the recording: 45 % of the rows in motion
-    loaded = load_samples(path, arm)
+    loaded = load_samples(path, arm, STILL)
     assert len(loaded.search.segments) == 12  # one per hold
     assert len(np.unique(loaded.samples.pose_ids)) == 12
     result = calibrate(loaded.samples, drift="none")
     weight_se = result.std_errors["tool_weight"]
     assert abs(result.tool_weight - truth.tool_weight) < 4 * weight_se  # within noise
-    every_row = calibrate(load_samples(path, arm, segments=None).samples, drift="none")
+    every_row = calibrate(load_samples(path, arm).samples, drift="none")
     assert abs(every_row.tool_weight - truth.tool_weight) > 10 * weight_se  # biased by motion
 
 
@@ -80,8 +82,8 @@ def test_only_still_rows_are_kept_and_extract_writes_them(recorded, arm, tmp_pat
     assert "12 static segment(s)" in printed and "joint speed" in printed
     table = read_table(out)
     assert table.header[-1] == "pose"
-    kept = load_samples(out, arm)
-    direct = load_samples(path, arm)
+    kept = load_samples(out, arm, STILL)
+    direct = load_samples(path, arm, STILL)
     np.testing.assert_allclose(kept.samples.wrenches, direct.samples.wrenches, rtol=1e-12)
     np.testing.assert_array_equal(kept.samples.pose_ids, direct.samples.pose_ids)
     speed = np.abs(np.diff(table.floats(arm.joint_names), axis=0)).max(axis=1)
@@ -108,7 +110,7 @@ def test_quaternion_recording_uses_the_orientation_speed(recorded, arm, tmp_path
     wrenches = table.floats(["fx", "fy", "fz", "mx", "my", "mz"])
     rows = np.column_stack([table.floats(["t"]), xyzw[:, [3, 0, 1, 2]], wrenches])
     quaternions = write_csv(tmp_path / "quaternions.csv", header, rows.tolist())
-    loaded = load_samples(quaternions)
+    loaded = load_samples(quaternions, segments=STILL)
     assert loaded.search.quantity == "orientation speed"
     assert len(loaded.search.segments) == 12
 
@@ -117,8 +119,8 @@ def test_motion_without_a_usable_still_segment_is_refused(arm, truth, tmp_path):
     times, q, wrenches, _ = recording(arm, truth, np.random.default_rng(5), poses=5, hold=0.8)
     path = write_recording(tmp_path / "short_holds.csv", arm, times, q, wrenches)
     with pytest.raises(InvalidSamples, match=r"no usable still segment: \d+ of \d+ samples"):
-        load_samples(path, arm)
-    assert len(load_samples(path, arm, segments=None).samples) == len(times)  # --all-rows
+        load_samples(path, arm, STILL)
+    assert len(load_samples(path, arm).samples) == len(times)  # --all-rows
 
 
 def test_a_recording_in_motion_throughout_is_refused(arm, truth, tmp_path):
@@ -126,14 +128,14 @@ def test_a_recording_in_motion_throughout_is_refused(arm, truth, tmp_path):
     assert moving > 0.9  # an excitation-like recording: never held still
     path = write_recording(tmp_path / "moving.csv", arm, times, q, wrenches)
     with pytest.raises(InvalidSamples, match="no usable still segment: .* in motion"):
-        load_samples(path, arm)
+        load_samples(path, arm, STILL)
 
 
 def test_one_timed_reading_per_pose_is_not_a_recording(arm, truth, rng, tmp_path):
     q = arm.random_configurations(12, rng, margin=0.3)
     wrenches = SimulatedSensor(truth, NOISE).read(arm.rotation_sensor_to_base(q), rng)
     path = write_recording(tmp_path / "poses.csv", arm, 30.0 * np.arange(12), q, wrenches)
-    loaded = load_samples(path, arm)
+    loaded = load_samples(path, arm, STILL)
     assert loaded.search is None and len(loaded.samples) == 12
 
 
@@ -143,5 +145,5 @@ def test_a_stop_and_go_log_keeps_every_row_as_before(arm, truth, rng, tmp_path):
     wrenches = SimulatedSensor(truth, NOISE).read(arm.rotation_sensor_to_base(q), rng)
     times = recording_times(6, 3, 60.0)  # [s]
     path = write_recording(tmp_path / "stop_and_go.csv", arm, times, q, wrenches)
-    loaded = load_samples(path, arm)
+    loaded = load_samples(path, arm, STILL)
     assert loaded.search is None and len(np.unique(loaded.samples.pose_ids)) == 18
