@@ -225,21 +225,10 @@ class JointAdmittance:
         """
         # The tick runs on Python floats (numpy's per-call overhead dominates on 3- and 6-vectors);
         # numpy only for the Jacobian products. The status is built when asked (last_status).
-        try:  # arrays of float64 already (the control loop's case) pass without a call
-            if type(q) is not np.ndarray or q.dtype is not FLOAT64:
-                q = np.asarray(q, dtype=np.float64)
-            raw, dt = np.asarray(raw_wrench, dtype=np.float64), float(dt)
-        except (TypeError, ValueError) as error:
-            raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
+        q, raw, positions, dt = self._tick_inputs(q, raw_wrench, dt, joint_velocities)
         rates = joint_velocities is not None
-        if (
-            q.shape != (self._nq,)
-            or raw.shape != (6,)
-            or rates != (joint_accelerations is not None)
-            or (rates and self.dynamic is None)
-        ):
-            self._refuse(q, raw)
-        raw, positions = raw.tolist(), q.tolist()
+        if rates != (joint_accelerations is not None):
+            self._refuse()
         fault, event = self._check(positions, raw, dt)
         if fault is not SensorFault.NONE:
             if self._tracked:
@@ -286,15 +275,34 @@ class JointAdmittance:
         self._status_parts = (dq, contact, twist, manipulability, damping, scale)
         return dq
 
-    def _refuse(self, q: np.ndarray, raw: np.ndarray) -> None:
-        """The :class:`InvalidInput` for a tick :meth:`step` cannot run: wrong shapes, or joint
-        rates without a dynamic compensator.
+    def _tick_inputs(self, q, raw_wrench, dt, joint_velocities):
+        """``q`` (float64 array), the reading and ``q`` as lists of floats, ``dt`` as a float.
+
+        Float64 arrays (the control loop's case) pass without a conversion.
+
+        Raises:
+            InvalidInput: not numbers, wrong shapes, or joint rates without a dynamic compensator.
         """
+        try:
+            if type(q) is not np.ndarray or q.dtype is not FLOAT64:
+                q = np.asarray(q, dtype=np.float64)
+            raw = raw_wrench
+            if type(raw) is not np.ndarray or raw.dtype is not FLOAT64:
+                raw = np.asarray(raw, dtype=np.float64)
+            dt = float(dt)
+        except (TypeError, ValueError) as error:
+            raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
         if q.shape != (self._nq,) or raw.shape != (6,):
             raise InvalidInput(
                 f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} "
                 f"and {raw.shape}"
             )
+        if joint_velocities is not None and self.dynamic is None:
+            self._refuse()
+        return q, raw.tolist(), q.tolist(), dt
+
+    def _refuse(self) -> None:
+        """The :class:`InvalidInput` for joint rates :meth:`step` cannot use."""
         raise InvalidInput(
             "joint_velocities and joint_accelerations go together, and with a "
             "DynamicCompensator only (a static compensator has no inertial term to use them)"
