@@ -44,8 +44,18 @@ channel with a 5-minute time constant plus a random walk of 0.002 N/√s
    ratio depends much on its walk (a fixed bias is as good as the walk is
    quiet): hence several sessions.
 
-Run: ``python benchmarks/bench_drift.py [--trials 100] [--sessions 5] [--seed 0]`` (about 5
-minutes).
+4. **Reading noise with one reading per pose** (``--noise-trials``, 200 by default): the same
+   40 poses with a single reading each, a random-walk drift at the typical rate (no warm-up),
+   ``drift="random-walk"`` with the noise estimated (neither given nor from repeated
+   readings). The reported force and torque noise over the truth (mean, median and the share
+   of trials within ±30 %), and the mean reported standard error over the RMS error of every
+   quantity. A second row has a walk five times faster (the walk between poses larger than
+   the noise of a reading): there the plain likelihood put the force noise at ~0 in most
+   trials. Targets, each row: mean and median noise within ±30 % of the truth, SE÷RMSE
+   within 0.8–1.25 (PASS/FAIL per row; the script exits with status 1 when one fails).
+
+Run: ``python benchmarks/bench_drift.py [--trials 100] [--sessions 5] [--noise-trials 200]
+[--seed 0] [--only-noise]`` (about 5 minutes; ``--only-noise`` about 1).
 """
 
 from __future__ import annotations
@@ -295,17 +305,79 @@ def calibration_table(arm, configurations, trials, rng, title) -> float:
     return cv["none"] / cv["auto"]
 
 
-def main(argv=None) -> None:
+NOISE_TARGET, SE_TARGET = 0.3, (0.8, 1.25)  # section 4: |mean noise / truth − 1|, SE÷RMSE range
+
+
+def noise_trials(arm, configurations, trials, rate, rng):
+    """Reported noise over the truth ``(T, 2)``, errors and standard errors ``(T, 6)``, models."""
+    sensor = SimulatedSensor(TRUTH, NOISE, SensorDrift(random_walk=rate))
+    times = recording_times(POSES, 1, DURATION, READING_INTERVAL)
+    ratios, errors, reported, models = [], [], [], []
+    for _ in range(trials):
+        samples = sensor.samples_at_configurations(arm, configurations, rng, 1, times=times)
+        result = calibrate(samples, drift="random-walk")
+        ratios.append(result.diagnostics.noise.channel_std[[0, 3]] / NOISE.channel_std[[0, 3]])
+        errors.append(quantities(result) - quantities(TRUTH))
+        reported.append(quantity_errors(result, result.covariance))
+        models.append(result.drift.model)
+    return np.array(ratios), np.array(errors), np.array(reported), models
+
+
+def noise_table(arm, configurations, trials, rng) -> bool:
+    """Section 4; True when every target is met."""
+    print(
+        f"4. Reading noise, one reading per pose: {POSES} poses over {DURATION / 60:.0f} min, "
+        f"{trials} trials, drift='random-walk', noise estimated (truth {NOISE.channel_std[0]} N, "
+        f"{NOISE.channel_std[3]} N·m per reading)"
+    )
+    labels = ["mass", "COM x", "COM y", "COM z", "tilt U", "tilt V"]
+    print(
+        f"{'walk [N/√s, N·m/√s]':<22}{'noise÷truth F':>14}{'T':>6}{'median F':>9}{'T':>6}"
+        f"{'±30 % F':>8}{'T':>6}  SE÷RMSE {' '.join(f'{label:>6}' for label in labels)}"
+        f"{'fallbacks':>10}  target"
+    )
+    passed = True
+    for rate in (DRIFT.random_walk[[0, 3]], 5 * DRIFT.random_walk[[0, 3]]):
+        ratios, errors, reported, models = noise_trials(arm, configurations, trials, rate, rng)
+        se_rmse = np.mean(reported, axis=0) / np.sqrt(np.mean(errors**2, axis=0))
+        mean, median = np.mean(ratios, axis=0), np.median(ratios, axis=0)
+        within = np.mean(np.abs(ratios - 1.0) <= NOISE_TARGET, axis=0)
+        ok = bool(
+            np.all(np.abs(np.concatenate([mean, median]) - 1.0) <= NOISE_TARGET)
+            and np.all((se_rmse >= SE_TARGET[0]) & (se_rmse <= SE_TARGET[1]))
+        )
+        passed &= ok
+        fallbacks = sum(model != "random-walk" for model in models)
+        print(
+            f"{f'{rate[0]:g}, {rate[1]:g}':<22}{mean[0]:>14.2f}{mean[1]:>6.2f}{median[0]:>9.2f}"
+            f"{median[1]:>6.2f}{100 * within[0]:>7.0f}%{100 * within[1]:>5.0f}%          "
+            f"{' '.join(f'{value:>6.2f}' for value in se_rmse)}{fallbacks:>10}  "
+            f"{'PASS' if ok else 'FAIL'}"
+        )
+    print(
+        f"targets: mean and median noise within ±{100 * NOISE_TARGET:.0f} % of the truth, SE÷RMSE "
+        "within "
+        f"{SE_TARGET[0]}–{SE_TARGET[1]}\n"
+    )
+    return passed
+
+
+def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=100)
     parser.add_argument("--sessions", type=int, default=5)
+    parser.add_argument("--noise-trials", type=int, default=200)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--only-noise", action="store_true", help="run section 4 alone")
     args = parser.parse_args(argv)
     logging.getLogger("ftkin").setLevel(logging.ERROR)
     rng = np.random.default_rng(args.seed)
     arm = Arm.default()
     configurations = arm.random_configurations(POSES, rng, margin=0.3)
     start = time.perf_counter()
+    noise_rng = np.random.default_rng([args.seed, 4])  # section 4 draws apart from the others
+    if args.only_noise:
+        return 0 if noise_table(arm, configurations, args.noise_trials, noise_rng) else 1
     calibration_table(
         arm, configurations, args.trials, rng, "1a. Calibration, random poses in a random order"
     )
@@ -356,7 +428,10 @@ def main(argv=None) -> None:
             else f"{np.median(ratios):>11.1f}x{f'({ratios.min():.1f}–{ratios.max():.1f})':>14}"
         )
         print(f"{name:<34}{rms:>14.4f}{worst:>10.4f}{updates_text}{ratio_text}")
-    print(f"\n(total {time.perf_counter() - start:.0f} s)")
+    print()
+    noise_ok = noise_table(arm, configurations, args.noise_trials, noise_rng)
+    print(f"(total {time.perf_counter() - start:.0f} s)")
+    return 0 if noise_ok else 1
 
 
 if __name__ == "__main__":

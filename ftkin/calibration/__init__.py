@@ -15,12 +15,14 @@ from .._lazy import lazy_exports
 
 _EXPORTS = {
     "BiasDrift": ".drift",
+    "CalibrationOptions": ".estimate",
     "CalibrationResult": ".estimate",
     "CausalDifferentiator": ".derivatives",
     "ConventionCheck": ".conventions",
     "ConventionReport": ".doctor",
     "CrossValidation": ".cross_validation",
     "DRIFT_CHOICES": ".drift",
+    "DriftModel": ".drift",
     "DynamicCalibrationResult": ".dynamic",
     "FitDiagnostics": ".diagnostics",
     "METHODS": ".estimate",
@@ -37,6 +39,7 @@ _EXPORTS = {
     "diagnose_readings": ".doctor",
     "fisher_information": ".information",
     "joint_derivatives": ".derivatives",
+    "register_drift_model": ".drift",
 }
 """Public name → module: each loads on first access (PEP 562), so importing one calibration module
 (the CLI's
@@ -44,12 +47,14 @@ start) does not import them all."""
 
 __all__ = [
     "BiasDrift",
+    "CalibrationOptions",
     "CalibrationResult",
     "CausalDifferentiator",
     "ConventionCheck",
     "ConventionReport",
     "CrossValidation",
     "DRIFT_CHOICES",
+    "DriftModel",
     "DynamicCalibrationResult",
     "FitDiagnostics",
     "METHODS",
@@ -66,6 +71,7 @@ __all__ = [
     "diagnose_readings",
     "fisher_information",
     "joint_derivatives",
+    "register_drift_model",
 ]
 
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

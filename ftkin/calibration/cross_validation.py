@@ -113,26 +113,8 @@ def _subset(samples: Samples, mask: np.ndarray) -> Samples:
     )
 
 
-def cross_validate(
-    samples: Samples, drifts=("none", "auto"), folds: int = 5, seed: int = 0, **options
-) -> CrossValidation:
-    """Compensate each fold's poses with a calibration on the others, for each drift setting.
-
-    Args:
-        samples: The calibration samples (several readings per pose are averaged per pose).
-        drifts: Drift settings to compare (:func:`~ftkin.calibration.estimate.calibrate`'s
-        ``drift``).
-        folds: Number of folds ``k`` (2..50, at most the number of poses).
-        seed: Seed of the random split into folds.
-        **options: Passed to every :func:`~ftkin.calibration.estimate.calibrate` (method, noise,
-        mount, signs, ...).
-
-    Raises:
-        InvalidInput: bad ``folds`` or drift settings, or too few poses for
-            ``k`` folds (each training set must determine the parameters).
-    """
-    from .estimate import calibrate  # estimate imports the whole estimator; keep this module light
-
+def _folds(samples: Samples, folds, seed: int) -> tuple[np.ndarray, int]:
+    """Fold ``(N,)`` of each reading (its pose's, at random) and the number of poses."""
     if (
         isinstance(folds, bool)
         or not isinstance(folds, (int, np.integer))
@@ -141,25 +123,57 @@ def cross_validate(
         raise InvalidInput(
             f"folds must be an integer from {MIN_FOLDS} to {MAX_FOLDS}, got {folds!r}"
         )
-    if "drift" in options:
+    pose_ids, reading_pose = np.unique(samples.pose_ids, return_inverse=True)
+    if len(pose_ids) < folds:
+        raise InvalidInput(
+            f"{len(pose_ids)} poses cannot be split into {folds} folds; use fewer folds"
+        )
+    pose_fold = np.random.default_rng(seed).permutation(len(pose_ids)) % folds
+    return pose_fold[reading_pose], len(pose_ids)
+
+
+def _held_out_squares(result, test: Samples) -> np.ndarray:
+    """``(P, 2)`` squared compensated force and torque at the held-out poses [N², N²·m²]."""
+    poses = as_real_sensor(test, result).pose_averages()
+    bias = result.bias if poses.times is None else result.bias_at(poses.times)
+    residual = poses.wrenches - result.tool_gravity_wrench(poses.rotations) - bias
+    return np.column_stack([np.sum(residual[:, :3] ** 2, 1), np.sum(residual[:, 3:] ** 2, 1)])
+
+
+def cross_validate(
+    samples: Samples,
+    drifts=("none", "auto"),
+    folds: int = 5,
+    seed: int = 0,
+    options=None,
+    **keywords,
+) -> CrossValidation:
+    """Compensate each fold's poses with a calibration on the others, for each drift setting.
+
+    Args:
+        samples: The calibration samples (several readings per pose are averaged per pose).
+        drifts: Drift settings to compare (:func:`~ftkin.calibration.estimate.calibrate`'s
+            ``drift``).
+        folds: Number of folds ``k`` (2..50, at most the number of poses).
+        seed: Seed of the random split into folds.
+        options: :class:`~ftkin.calibration.estimate.CalibrationOptions` of every fit (its
+            drift replaced by each setting).
+        **keywords: Further calibrate options (method, noise, mount, signs, ...), not ``drift``.
+
+    Raises:
+        InvalidInput: bad ``folds`` or drift settings, or too few poses for
+            ``k`` folds (each training set must determine the parameters).
+    """
+    from .estimate import calibrate  # estimate imports the whole estimator; keep this module light
+
+    if "drift" in keywords:
         raise InvalidInput("give the drift settings to compare as drifts=(...), not drift=")
     drifts = tuple(drifts)
     if not drifts or len(set(drifts)) != len(drifts) or not all(isinstance(d, str) for d in drifts):
         raise InvalidInput(
             f"drifts must be distinct drift settings (e.g. ('none', 'auto')), got {drifts!r}"
         )
-    pose_ids = np.unique(samples.pose_ids)
-    if len(pose_ids) < folds:
-        raise InvalidInput(
-            f"{len(pose_ids)} poses cannot be split into {folds} folds; use fewer folds"
-        )
-    fold_of = dict(
-        zip(
-            pose_ids.tolist(),
-            (np.random.default_rng(seed).permutation(len(pose_ids)) % folds).tolist(),
-        )
-    )
-    reading_fold = np.array([fold_of[int(i)] for i in samples.pose_ids])
+    reading_fold, pose_count = _folds(samples, folds, seed)
     squares = {drift: [] for drift in drifts}
     models = {drift: [] for drift in drifts}
     for k in range(folds):
@@ -167,28 +181,18 @@ def cross_validate(
         for drift in drifts:
             try:
                 with _quiet_fits():
-                    result = calibrate(train, drift=drift, **options)
+                    result = calibrate(train, options, drift=drift, **keywords)
             except UnobservableParameters as error:
                 raise InvalidInput(
                     f"fold {k + 1} of {folds}: the other folds' {len(np.unique(train.pose_ids))} "
-                    "poses "
-                    f"cannot determine the parameters ({error}); use fewer folds"
+                    f"poses cannot determine the parameters ({error}); use fewer folds"
                 ) from None
-            poses = as_real_sensor(test, result).pose_averages()
-            bias = result.bias if poses.times is None else result.bias_at(poses.times)
-            residual = poses.wrenches - result.tool_gravity_wrench(poses.rotations) - bias
-            squares[drift].append(
-                np.column_stack(
-                    [np.sum(residual[:, :3] ** 2, axis=1), np.sum(residual[:, 3:] ** 2, axis=1)]
-                )
-            )
+            squares[drift].append(_held_out_squares(result, test))
             models[drift].append(result.drift.model if result.drift is not None else "none")
-    rms = {
-        drift: np.sqrt(np.mean(np.concatenate(values), axis=0)) for drift, values in squares.items()
-    }
+    rms = {d: np.sqrt(np.mean(np.concatenate(v), axis=0)) for d, v in squares.items()}
     return CrossValidation(
         folds,
-        len(pose_ids),
+        pose_count,
         {d: float(v[0]) for d, v in rms.items()},
         {d: float(v[1]) for d, v in rms.items()},
         {d: tuple(m) for d, m in models.items()},

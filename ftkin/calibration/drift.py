@@ -1,31 +1,35 @@
-"""A sensor bias that drifts with time: the models and the estimated trajectory.
+"""A sensor bias that drifts with time: the trajectory, the drift-model protocol and its registry.
 
 Strain-gauge sensors drift (warm-up after power-on, temperature): when the
 samples carry reading times, :func:`~ftkin.calibration.calibrate` can model the
-bias ``[F0(t), M0(t)]`` [N, N·m, sensor frame] as a function of time while the
-tool weight ``a`` and centre of mass ``P`` stay constant:
+bias ``b(t) = [F0(t), M0(t)]`` [N, N·m, sensor frame] as a function of time while the
+tool weight ``a`` and centre of mass ``P`` stay constant. Every drift model has the form
 
-* ``"none"``: a constant bias (the static model of METHOD.md §3);
-* ``"poly:N"``: a polynomial of degree ``N`` in time (``1 ≤ N ≤ 5``),
-  ``b(t) = b(T) + Σ_k c_k ((t − T) / span)^k``;
-* ``"random-walk"``: ``b(t) − b(s) ~ N(0, q² |t − s|)`` per channel with a
-  drift rate ``q`` [N/√s] shared by the forces and one [N·m/√s] by the torques,
-  estimated by maximum marginal likelihood (Kalman filter and
-  Rauch–Tung–Striebel smoother, :mod:`ftkin.calibration.random_walk`);
-* ``"random-walk+poly:N"``: a random walk around a polynomial trend (a
-  warm-up plus wandering);
-* ``"auto"``: the candidate with the lowest Bayesian information criterion
-  among none, poly:1..3, random-walk and random-walk+poly:1..2 (see
-  :mod:`ftkin.calibration.drift_fit`).
+    b(t) = b(T) + basis((t − T) / span) · c  (+ a random walk pinned at ``T``)
+
+with ``T`` the last pose time, ``basis`` ``K`` functions of the scaled time that vanish
+at 0 and ``c`` ``(K, 6)`` coefficients. A model is a :class:`DriftModel` (the
+protocol: fit, bias at ``t``, information for planning, serialisation), registered
+by name with :func:`register_drift_model`; a drift spec names one, or a sum of them
+joined by ``+``, or ``"auto"``. The built-in models:
+
+* ``"none"``: a constant bias (the static model of METHOD.md §3; this module);
+* ``"poly:N"``: a polynomial of degree ``N`` (``1 ≤ N ≤ 5``, :mod:`ftkin.calibration.drift_poly`);
+* ``"random-walk"``: ``b(t) − b(s) ~ N(0, q² |t − s|)`` per channel with a rate ``q``
+  [N/√s] shared by the forces and one [N·m/√s] by the torques
+  (:mod:`ftkin.calibration.random_walk`);
+* ``"random-walk+poly:N"``: a random walk around a polynomial trend (a warm-up plus wandering);
+* ``"auto"``: the candidate with the lowest Bayesian information criterion among the
+  registered ``auto`` candidates (:mod:`ftkin.calibration.drift_fit`).
 
 In every model the bias reported as ``force_offset``/``torque_offset`` is the
-bias at the end of the recording ``T`` (the last pose time): the one to use
-when compensating afterwards. :class:`BiasDrift` carries the whole trajectory.
+bias at the end of the recording ``T``: the one to use when compensating
+afterwards. :class:`BiasDrift` carries the whole trajectory.
 """
 
 from __future__ import annotations
 
-import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -33,53 +37,221 @@ import numpy as np
 from ..exceptions import InvalidInput
 from ..validation import as_float_array
 
-MAX_POLY_DEGREE = 5
-"""Highest polynomial degree accepted for ``drift="poly:N"``."""
 
-DRIFT_CHOICES = ("auto", "none", "poly:N", "random-walk", "random-walk+poly:N")
-"""The ``drift=`` values :func:`~ftkin.calibration.calibrate` accepts (``N`` a degree)."""
+def trend_columns(basis: np.ndarray) -> np.ndarray:
+    """``(P, 6, 6K)`` Jacobian of the bias trend ``basis · c`` ``(P, 6)`` with respect to ``c``
+    flattened row by row (``c[k, d]`` is column ``6k + d``).
+    """
+    return np.einsum("pk,cd->pckd", basis, np.eye(6)).reshape(len(basis), 6, -1)
 
-_POLY = re.compile(r"^(random-walk\+)?poly:(\d+)$")
+
+@dataclass(frozen=True)
+class DriftModel:
+    """A drift model: ``K`` basis functions of the scaled time, and whether a random walk is added.
+
+    The base class is the constant bias (``"none"``: no basis, no walk). A new
+    model subclasses it (at least :meth:`basis` and :attr:`columns`) and registers a
+    factory with :func:`register_drift_model`; fitting, the bias at any time,
+    the planning information and the calibration file then work for it unchanged.
+    A model whose basis has parameters of its own can override :meth:`fit`.
+
+    Attributes:
+        name: The spec that names this model (``"poly:2"``).
+        columns: Number ``K`` of basis functions (rows of six coefficients).
+        walk: True when a random walk (rates estimated) is part of the bias.
+    """
+
+    name: str = "none"
+    columns: int = 0
+    walk: bool = False
+
+    def basis(self, tau: np.ndarray) -> np.ndarray:
+        """``(N, K)`` basis functions at scaled times ``tau = (t − T) / span`` ``(N,)`` (0 at
+        ``T``).
+        """
+        return np.zeros((len(tau), 0))
+
+    def fit(self, poses, start, selected_by: str = "given"):
+        """Fit ``θ`` and this drift from a constant-bias start
+        (:func:`~ftkin.calibration.drift_fit.fit_drift_model`).
+        """
+        from .drift_fit import fit_drift_model  # the fit imports this module
+
+        return fit_drift_model(self, poses, start, selected_by)
+
+    def bias_at(self, drift: BiasDrift, times: np.ndarray) -> np.ndarray:
+        """``(N, 6)`` bias [N, N·m] at ``times`` ``(N,)`` [s] inside the pose times.
+
+        With a walk, the smoothed bias linear between pose times (the exact
+        conditional mean of a random walk); otherwise the trend.
+        """
+        if self.walk:
+            return np.column_stack([np.interp(times, drift.times, b) for b in drift.bias.T])
+        tau = (times - drift.end_time) / drift.time_scale
+        trend = self.basis(tau) @ drift.coefficients if self.columns else 0.0
+        return drift.end_bias + trend
+
+    def information(self, jacobians, times, noise_variance, rate=None) -> np.ndarray:
+        """Fisher information ``(..., 12, 12)`` of ``θ`` with the drift marginalized, for poses
+        visited at ``times`` ``(P,)`` [s] (planning).
+
+        ``jacobians`` ``(..., P, 6, 12)`` of the prediction (leading axes:
+        candidate pose orders), ``noise_variance`` ``(P, 6)`` of the pose means
+        [N², N²·m²], ``rate`` ``(6,)`` of the walk [N/√s, N·m/√s] (with a walk).
+        """
+        from .random_walk import walk_gains, whiten
+
+        times = np.asarray(times, dtype=float)
+        span = max(float(times[-1] - times[0]), 1e-300)
+        trend = trend_columns(self.basis((times - times[-1]) / span))
+        trend = np.broadcast_to(trend, jacobians.shape[:-1] + trend.shape[-1:])
+        rate = np.zeros(6) if rate is None or not self.walk else np.asarray(rate, dtype=float)
+        white = whiten(
+            walk_gains(times, noise_variance, rate), np.concatenate([jacobians, trend], -1)
+        )
+        full = np.einsum("...pki,...pkj->...ij", white, white)
+        if not self.columns:
+            return full
+        nuisance = full[..., 12:, 12:]
+        return full[..., :12, :12] - full[..., :12, 12:] @ np.linalg.solve(
+            nuisance, full[..., 12:, :12]
+        )
+
+    def to_document(self, drift: BiasDrift) -> dict:
+        """This model's entries of the calibration file's ``drift`` object."""
+        return {"rate": drift.rate, "coefficients": drift.coefficients}
+
+    def from_document(self, reader) -> dict:
+        """This model's :class:`BiasDrift` arguments from the file's ``drift`` object (a
+        :class:`~ftkin.io.json_reader.NestedReader`).
+        """
+        rows = reader.get("coefficients", required=False)
+        return {
+            "rate": reader.array("rate", (2,), required=False),
+            "coefficients": None if rows is None else reader.array("coefficients", (len(rows), 6)),
+        }
 
 
-def parse_drift(drift: str) -> tuple[str, int]:
-    """``("auto"|"none"|"poly"|"random-walk", degree)`` from a ``drift=`` value (degree > 0 with a
-    walk: its trend).
+@dataclass(frozen=True)
+class DriftSum(DriftModel):
+    """The sum of drift models (``"random-walk+poly:2"``): their bases side by side, at most one
+    walk.
+    """
+
+    parts: tuple[DriftModel, ...] = ()
+
+    def basis(self, tau: np.ndarray) -> np.ndarray:
+        return np.concatenate([part.basis(tau) for part in self.parts], axis=1)
+
+
+@dataclass(frozen=True)
+class DriftEntry:
+    """A registered drift model.
+
+    Attributes:
+        name: The name in a drift spec (``"poly"``).
+        make: ``make(argument)`` returns the :class:`DriftModel` for ``name:argument`` (argument
+            None without a colon); it raises :class:`~ftkin.exceptions.InvalidInput` for a bad one.
+        usage: How a spec writes it (``"poly:N"``).
+        auto: Specs ``drift="auto"`` compares because of this entry.
+        walk: True when the model is a random walk (it may then carry another model's trend).
+    """
+
+    name: str
+    make: Callable[[str | None], DriftModel]
+    usage: str
+    auto: tuple[str, ...] = ()
+    walk: bool = False
+
+
+DRIFT_MODELS: dict[str, DriftEntry] = {}
+"""The registry: drift models by name (:func:`register_drift_model`)."""
+
+
+def register_drift_model(
+    name: str,
+    make: Callable,
+    *,
+    usage: str | None = None,
+    auto: tuple[str, ...] = (),
+    walk: bool = False,
+) -> DriftEntry:
+    """Register a drift model under ``name`` (see :class:`DriftEntry`); returns the entry.
 
     Raises:
-        InvalidInput: anything else, or a degree outside ``1..MAX_POLY_DEGREE``.
+        InvalidInput: a name that is taken, ``"auto"``, or not a plain word.
     """
-    if not isinstance(drift, str):
-        raise InvalidInput(
-            f"drift must be a string ({', '.join(DRIFT_CHOICES)}), got {type(drift).__name__}"
-        )
-    if drift in ("auto", "none", "random-walk"):
-        return drift, 0
-    match = _POLY.match(drift)
-    if match is None:
-        raise InvalidInput(
-            f"unknown drift model {drift!r}; expected one of {', '.join(DRIFT_CHOICES)}"
-        )
-    degree = int(match.group(2))
-    if not 1 <= degree <= MAX_POLY_DEGREE:
-        raise InvalidInput(
-            f"drift polynomial degree must be 1..{MAX_POLY_DEGREE}, got {degree} (poly:0 is "
-            "drift='none')"
-        )
-    return ("random-walk" if match.group(1) else "poly"), degree
+    if name in DRIFT_MODELS or name == "auto" or not name.replace("-", "").isalnum():
+        raise InvalidInput(f"cannot register a drift model named {name!r} (taken or not a word)")
+    DRIFT_MODELS[name] = DriftEntry(name, make, usage or name, tuple(auto), walk)
+    return DRIFT_MODELS[name]
 
 
-def check_model_name(model) -> None:
-    """Refuse anything but a fitted model's name (``"none"``, ``"poly:N"``, ``"random-walk"``,
-    ``"random-walk+poly:N"``).
+def drift_choices() -> tuple[str, ...]:
+    """The drift specs :func:`~ftkin.calibration.calibrate` accepts now (``N`` a number)."""
+    entries = DRIFT_MODELS.values()
+    trends = [entry.usage for entry in entries if not entry.walk and entry.name != "none"]
+    sums = [f"{entry.usage}+{trend}" for entry in entries if entry.walk for trend in trends]
+    return ("auto", *(entry.usage for entry in entries), *sums)
+
+
+def auto_candidates() -> tuple[str, ...]:
+    """The specs ``drift="auto"`` compares, ``"none"`` first."""
+    return ("none", *(spec for entry in DRIFT_MODELS.values() for spec in entry.auto))
+
+
+def parse_drift(spec) -> DriftModel:
+    """The :class:`DriftModel` a spec names (``"none"``, ``"poly:2"``, ``"random-walk+poly:1"``,
+    any registered name; not ``"auto"``).
+
+    Raises:
+        InvalidInput: not a string, an unknown name, a bad argument, ``none`` or
+            a model twice in a sum, or two walks.
     """
-    if model == "auto" or not isinstance(model, str):
+    if not isinstance(spec, str) or spec == "auto":
         raise InvalidInput(
-            f"unknown drift model {model!r}; a fitted trajectory is 'none', 'poly:N', "
-            "'random-walk' "
-            "or 'random-walk+poly:N'"
+            f"unknown drift model {spec!r}; a fitted model is one of "
+            f"{', '.join(drift_choices()[1:])}"
         )
-    parse_drift(model)
+    parts = []
+    for text in spec.split("+"):
+        name, colon, argument = text.partition(":")
+        if name not in DRIFT_MODELS:
+            raise InvalidInput(
+                f"unknown drift model {spec!r}; expected one of {', '.join(drift_choices())}"
+            )
+        parts.append(DRIFT_MODELS[name].make(argument if colon else None))
+    names = [part.name.partition(":")[0] for part in parts]
+    if len(parts) == 1:
+        return parts[0]
+    if "none" in names or len(set(names)) < len(names) or sum(p.walk for p in parts) > 1:
+        raise InvalidInput(f"drift {spec!r}: a sum of distinct models with at most one walk")
+    name = "+".join(part.name for part in parts)  # canonical: poly:02 is poly:2
+    columns = sum(part.columns for part in parts)
+    return DriftSum(name, columns, any(part.walk for part in parts), tuple(parts))
+
+
+def drift_candidates(spec) -> tuple[DriftModel, ...]:
+    """The models a ``drift=`` value asks to fit: all :func:`auto_candidates` for ``"auto"``,
+    else the one it names.
+    """
+    if spec == "auto":
+        return tuple(parse_drift(name) for name in auto_candidates())
+    return (parse_drift(spec),)
+
+
+def _check_array(value, name: str, shape: tuple, positive: bool = False) -> np.ndarray | None:
+    if value is None:
+        return None
+    value = as_float_array(value, name).copy()  # frozen below: never the caller's array
+    if value.shape != shape or not np.all(np.isfinite(value)) or (positive and np.any(value < 0)):
+        rule = "≥ 0 " if positive else ""
+        raise InvalidInput(
+            f"drift {name} must be finite {rule}with shape {shape}, got {value.shape}"
+            + (f" {value.tolist()}" if value.size < 8 else "")
+        )
+    value.setflags(write=False)
+    return value
 
 
 @dataclass(frozen=True)
@@ -87,17 +259,16 @@ class BiasDrift:
     """The bias trajectory a drift-aware calibration found.
 
     Attributes:
-        model: ``"none"``, ``"poly:N"``, ``"random-walk"`` or ``"random-walk+poly:N"``.
+        model: The fitted model's spec (``"none"``, ``"poly:N"``, ``"random-walk"``, ...).
         selected_by: ``"auto"`` (chosen by the information criterion) or ``"given"``.
         times: ``(P,)`` pose times, ascending [s] (mean time of each pose's readings).
         bias: ``(P, 6)`` bias ``[F0, M0]`` at those times [N, N·m, sensor frame].
         bias_std: ``(P, 6)`` its standard deviation (the drift model's
             uncertainty at each time plus that of the end bias) [N, N·m].
-        rate: ``(2,)`` random-walk rate [N/√s, N·m/√s] (``"random-walk"``), else None.
-        coefficients: ``(N, 6)`` polynomial coefficients ``c_1..c_N`` [N, N·m]
-            of ``((t − T) / time_scale)^k`` (``"poly:N"``, or the trend under a
-            walk), else None.
-        time_scale: ``span`` of the polynomial's time variable [s] (the recording's length).
+        rate: ``(2,)`` random-walk rate [N/√s, N·m/√s] (a model with a walk), else None.
+        coefficients: ``(K, 6)`` coefficients ``c`` [N, N·m] of the model's basis
+            of ``(t − T) / time_scale`` (a model with a basis), else None.
+        time_scale: ``span`` of the basis's time variable [s] (the recording's length).
         criteria: BIC of each candidate model ``auto`` compared (empty otherwise).
         recorded_span: ``(2,)`` first and last reading time of the recording [s]
             (the pose times are means, inside it), or None (the pose times' span).
@@ -113,54 +284,37 @@ class BiasDrift:
     time_scale: float = 1.0
     criteria: dict = field(default_factory=dict)
     recorded_span: np.ndarray | None = None
+    kind: DriftModel = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        check_model_name(self.model)
+        kind = parse_drift(self.model)
+        object.__setattr__(self, "kind", kind)
         if self.selected_by not in ("auto", "given"):
             raise InvalidInput(f"selected_by must be 'auto' or 'given', got {self.selected_by!r}")
         if not (np.isfinite(self.time_scale) and self.time_scale > 0):
             raise InvalidInput(f"time_scale must be a finite time > 0 [s], got {self.time_scale!r}")
-        times = as_float_array(self.times, "times").reshape(-1).copy()  # frozen below: a copy
+        times = as_float_array(self.times, "times").reshape(-1)
         if len(times) == 0 or np.any(np.diff(times) < 0) or not np.all(np.isfinite(times)):
             raise InvalidInput("drift times must be finite, ascending and not empty [s]")
-        for name in ("bias", "bias_std"):
-            value = as_float_array(
-                getattr(self, name), name
-            ).copy()  # frozen: a copy, never the caller's array
-            if value.shape != (len(times), 6):
-                raise InvalidInput(
-                    f"drift {name} must have shape ({len(times)}, 6), got {value.shape}"
-                )
-            value.setflags(write=False)
-            object.__setattr__(self, name, value)
-        times.setflags(write=False)
-        object.__setattr__(self, "times", times)
-        if self.rate is not None:
-            rate = as_float_array(self.rate, "rate").reshape(-1)
-            if rate.shape != (2,) or not np.all(np.isfinite(rate)) or np.any(rate < 0):
-                raise InvalidInput(
-                    f"rate must be [force N/√s, torque N·m/√s], finite and ≥ 0, got {rate.tolist()}"
-                )
-            object.__setattr__(self, "rate", rate)
-        if self.recorded_span is not None:
-            span = as_float_array(self.recorded_span, "recorded_span").reshape(-1)
-            if span.shape != (2,) or not np.all(np.isfinite(span)) or span[0] > span[1]:
-                raise InvalidInput(
-                    f"recorded_span must be [first, last] reading time [s], got {span}"
-                )
-            object.__setattr__(self, "recorded_span", span)
-        if self.coefficients is not None:
-            coefficients = as_float_array(self.coefficients, "coefficients")
-            if (
-                coefficients.ndim != 2
-                or coefficients.shape[1] != 6
-                or not np.all(np.isfinite(coefficients))
-            ):
-                raise InvalidInput(
-                    "coefficients must be finite, one row of six per degree, got shape "
-                    f"{coefficients.shape}"
-                )
-            object.__setattr__(self, "coefficients", coefficients)
+        count = len(times)
+        rows = None if self.coefficients is None else np.shape(self.coefficients)[0]
+        for name, shape, positive in (
+            ("times", (count,), False),
+            ("bias", (count, 6), False),
+            ("bias_std", (count, 6), False),
+            ("rate", (2,), True),
+            ("coefficients", (rows, 6), False),
+            ("recorded_span", (2,), False),
+        ):
+            object.__setattr__(self, name, _check_array(getattr(self, name), name, shape, positive))
+        if self.recorded_span is not None and self.recorded_span[0] > self.recorded_span[1]:
+            raise InvalidInput(f"recorded_span must be [first, last] [s], got {self.recorded_span}")
+        if (self.rate is not None) != kind.walk or (rows or 0) != kind.columns:
+            raise InvalidInput(
+                f"drift {self.model!r} has {kind.columns} coefficient rows and "
+                f"{'a' if kind.walk else 'no'} rate, got {rows or 0} and "
+                f"{'a' if self.rate is not None else 'no'} rate"
+            )
 
     @property
     def start_time(self) -> float:
@@ -178,11 +332,8 @@ class BiasDrift:
         """``(N,)`` True where ``times`` [s] fall inside the recording (:attr:`recorded_span`, else
         the pose times).
         """
-        first, last = (
-            self.recorded_span
-            if self.recorded_span is not None
-            else (self.times[0], self.times[-1])
-        )
+        span = self.recorded_span
+        first, last = span if span is not None else (self.times[0], self.times[-1])
         times = as_float_array(times, "times").reshape(-1)
         return (times >= first) & (times <= last)
 
@@ -199,20 +350,13 @@ class BiasDrift:
     def bias_at(self, times) -> np.ndarray:
         """Bias ``(N, 6)`` [N, N·m] at ``times`` ``(N,)`` [s] (``(6,)`` for a scalar).
 
-        Inside the recorded span: the polynomial, or the smoothed random walk
-        (linear between pose times: the exact conditional mean of a random
-        walk). Outside: held at the first or last value (no extrapolation).
+        Inside the pose times the model's (:meth:`DriftModel.bias_at`); outside
+        held at the first or last value (no extrapolation).
         """
         times = as_float_array(times, "times")
-        single = times.ndim == 0
-        times = np.clip(times.reshape(-1), self.times[0], self.times[-1])
-        if self.coefficients is not None and self.rate is None:
-            tau = (times - self.times[-1]) / self.time_scale
-            powers = tau[:, None] ** np.arange(1, len(self.coefficients) + 1)[None, :]
-            out = self.end_bias + powers @ self.coefficients
-        else:
-            out = np.column_stack([np.interp(times, self.times, self.bias[:, c]) for c in range(6)])
-        return out[0] if single else out
+        clipped = np.clip(times.reshape(-1), self.times[0], self.times[-1])
+        out = np.broadcast_to(self.kind.bias_at(self, clipped), (len(clipped), 6)).copy()
+        return out[0] if times.ndim == 0 else out
 
     def describe(self) -> str:
         """One line: model, how it was chosen, range of the bias over the recording."""
@@ -225,3 +369,20 @@ class BiasDrift:
         if self.rate is not None:
             text += f"; rate {self.rate[0]:.3g} N/√s, {self.rate[1]:.3g} N·m/√s"
         return text
+
+
+def _constant(argument: str | None) -> DriftModel:
+    if argument is not None:
+        raise InvalidInput(f"drift 'none' takes no argument, got 'none:{argument}'")
+    return DriftModel()
+
+
+register_drift_model("none", _constant)
+
+# the built-in models register themselves when their module loads
+from . import drift_poly, random_walk  # noqa: E402, F401
+
+DRIFT_CHOICES = drift_choices()
+"""The ``drift=`` values :func:`~ftkin.calibration.calibrate` accepts with the built-in models
+(:func:`drift_choices` includes models registered later).
+"""

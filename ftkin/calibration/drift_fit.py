@@ -1,55 +1,103 @@
-"""Fitting the drift models of :mod:`ftkin.calibration.drift` and choosing among them.
+"""Fitting any drift model of :mod:`ftkin.calibration.drift`, and ``drift="auto"``.
 
-Both drift models extend the maximum-likelihood problem of :mod:`ftkin.calibration.ml`
-(per-pose mean readings, per-reading noise ``σ`` per channel) and keep its
+Every model extends the maximum-likelihood problem of :mod:`ftkin.calibration.ml`
+(per-pose mean readings, per-reading noise ``σ`` per channel) and keeps its
 parameters ``θ = [a, F0, M0, P]``, with ``F0``, ``M0`` the bias at the end ``T``
-of the recording:
+of the recording. One fit serves them all:
 
-* ``poly:N`` adds ``6N`` coefficients (linear in them): ``θ`` and the
-  coefficients are fitted together by Gauss–Newton on the whitened residuals,
-  and ``θ``'s covariance is its block of the inverse of the full information
-  (so the standard errors include what the drift costs).
-* ``random-walk`` integrates the walk out: the residuals and the Jacobian of
-  ``θ`` are whitened by the Kalman filter (:mod:`ftkin.calibration.random_walk`),
-  ``θ`` is the generalized least-squares fit and the rates [N/√s, N·m/√s] (and
-  the noise, when neither given nor measured by the spread of repeated readings)
-  maximize the marginal likelihood (Nelder–Mead on their logarithms). The
-  covariance of ``θ`` is conditional on the rates.
+* ``φ = [θ, c]`` (``c`` the coefficients of the model's basis, linear) is found
+  by Gauss–Newton on the residuals whitened by the random-walk filter of
+  :mod:`ftkin.calibration.random_walk` (a model without a walk: rate 0, the
+  filter is plain weighting). ``θ``'s covariance is its block of the inverse
+  of the whitened information, so the standard errors include what the drift
+  costs; with a walk they are conditional on the rates.
+* **The noise a drift cannot swallow.** With a walk, the rates [N/√s, N·m/√s]
+  (and the noise levels, when neither given nor measured by the spread of
+  repeated readings) maximize the *restricted* likelihood
+  ``log L − ½ log det(Jᵀ J)`` (``J`` the whitened Jacobian of ``φ``;
+  Nelder–Mead on their logarithms after a coarse grid): the plain likelihood
+  lets ``φ`` and the walk take the noise's degrees of freedom, and with one
+  reading per pose its maximum can sit at zero noise. When the noise still
+  cannot be told from the walk (its estimate at the numeric floor, or the
+  walk between consecutive poses more than :data:`NOISE_WALK_RATIO` times the
+  noise of a pose mean) the walk is not used and the fit says why.
+  Without a walk, an estimated noise is ``Σ n e² / Σ (1 − h)`` per group
+  (leverages ``h``), iterated with the fit: the same restricted estimate.
 
-``random-walk+poly:N`` is the walk around a polynomial trend (its
-coefficients join ``θ`` in the generalized least squares).
-
-``auto`` compares none, poly:1..3, random-walk and random-walk+poly:1..2 by the Bayesian information
-criterion ``BIC = −2 log L + k log(6P)`` (``k`` parameters including the
-estimated noise levels and rates, ``P`` poses): a drift must pay for itself, so
-on a constant bias ``none`` wins (a slightly looser penalty than cross-validation,
-and cheap).
+``auto`` compares the registered candidates (:func:`~ftkin.calibration.drift.auto_candidates`)
+by the Bayesian information criterion ``BIC = −2 log L + k log(6P)`` (``k``
+parameters including the estimated noise levels and rates, ``P`` poses): a
+drift must pay for itself, so on a constant bias ``none`` wins.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import logging
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..exceptions import UnobservableParameters
-from .drift import BiasDrift
-from .information import SensorNoise, noise_floor
+from .drift import BiasDrift, DriftModel, auto_candidates, parse_drift, trend_columns
+from .information import SensorNoise
 from .model import COMPONENT_NAMES, SensorModel, cross_rows, parameter_jacobian
+from .random_walk import log_likelihood, smooth, walk_gains, whiten
 from .samples import PoseAverages
 
-AUTO_CANDIDATES = (
-    "none",
-    "poly:1",
-    "poly:2",
-    "poly:3",
-    "random-walk",
-    "random-walk+poly:1",
-    "random-walk+poly:2",
-)
-"""Models ``drift="auto"`` compares."""
+logger = logging.getLogger(__name__)
+
+MAX_AUTO_WALK_POSES = 500
+"""Above this many poses, ``auto`` leaves the walks out (``drift="random-walk"`` still fits one):
+a stream without a pose column makes every reading a pose, and the walk's search would take
+minutes.
+"""
+
+SEARCH_ITERATIONS = 2
+"""Gauss–Newton steps of ``φ`` per likelihood evaluation while the rates are searched
+(warm-started)."""
+
+FINAL_ITERATIONS = 20
+"""Most Gauss–Newton steps of ``φ`` at the chosen rates and noise."""
+
+NOISE_PASSES = 4
+"""Most re-estimations of an estimated noise without a walk (each followed by a refit)."""
+
+RATE_GRID = 10.0 ** np.arange(-4.0, 1.5, 1.0)
+"""Multiples of the reference rate (noise of a pose mean over √(pose spacing)) tried before the
+Nelder–Mead search."""
+
+NOISE_WALK_RATIO = 10.0
+"""Walk between consecutive poses [multiples of the noise of a pose mean] beyond which an
+estimated noise cannot be told from the walk."""
 
 _GROUPS = (slice(0, 3), slice(3, 6))
+
+
+@dataclass(frozen=True)
+class DriftStart:
+    """What the constant-bias fit hands a drift fit.
+
+    Attributes:
+        theta: ``(12,)`` ``θ`` of the constant-bias fit.
+        channel_std: ``(6,)`` per-reading noise [N, N·m] (a start when estimated).
+        noise_source: ``"given"``, ``"spread"`` or ``"residuals"`` (estimated here).
+        noise_dof: Degrees of freedom of a given or spread noise (``inf`` if given).
+        floor: ``(6,)`` lowest noise an estimate may take [N, N·m].
+        floor_given: True when the floor is the user's sensor resolution (then a
+            noise on it is a sound estimate, not a collapse).
+    """
+
+    theta: np.ndarray
+    channel_std: np.ndarray
+    noise_source: str
+    noise_dof: float
+    floor: np.ndarray
+    floor_given: bool = False
+
+    @property
+    def estimated(self) -> bool:
+        """True when the drift fit estimates the noise."""
+        return self.noise_source == "residuals"
 
 
 @dataclass(frozen=True)
@@ -82,10 +130,10 @@ class DriftFit:
         noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
         noise_dof: Degrees of freedom of the noise estimate.
         information: ``(12, 12)`` information of ``θ`` with the drift parameters marginalized.
-        parameter_count: Fitted parameters (``θ``, drift coefficients or rates, estimated noise
-        levels).
+        parameter_count: Fitted parameters (``θ``, coefficients, rates, estimated noise levels).
         log_likelihood: Gaussian log-likelihood of the pose means at the fit.
         drift: The bias trajectory.
+        collapse: Why the noise cannot be told from the walk, or None (a sound fit).
     """
 
     model: SensorModel
@@ -97,6 +145,7 @@ class DriftFit:
     parameter_count: int
     log_likelihood: float
     drift: BiasDrift
+    collapse: str | None = None
     loss: str = "linear"
 
     @property
@@ -112,9 +161,8 @@ class DriftFit:
     @property
     def bic(self) -> float:
         """Bayesian information criterion ``−2 log L + k log(6P)``."""
-        return -2.0 * self.log_likelihood + self.parameter_count * np.log(
-            self.problem.residuals.size
-        )
+        size = self.problem.residuals.size
+        return -2.0 * self.log_likelihood + self.parameter_count * np.log(size)
 
 
 def predict_with_jacobian(
@@ -122,210 +170,288 @@ def predict_with_jacobian(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Prediction ``(P, 6)`` and its Jacobian ``(P, 6, 12)`` for ``θ``."""
     gravity_in_sensor = np.einsum("nji,j->ni", rotations, theta[0:3])
-    prediction = (
-        np.concatenate([gravity_in_sensor, cross_rows(theta[9:12], gravity_in_sensor)], axis=1)
-        + theta[3:9]
-    )
-    return prediction, parameter_jacobian(rotations, theta[0:3], theta[9:12])
+    prediction = np.concatenate([gravity_in_sensor, cross_rows(theta[9:12], gravity_in_sensor)], 1)
+    return prediction + theta[3:9], parameter_jacobian(rotations, theta[0:3], theta[9:12])
 
 
 def invert_information(information: np.ndarray, names: list[str]) -> np.ndarray:
     """Inverse of an information matrix, or :class:`UnobservableParameters` when it is singular."""
     scale = np.sqrt(np.diag(information))
     if np.any(scale == 0):
-        raise UnobservableParameters(
-            [names[i] for i in np.flatnonzero(scale == 0)],
-            "the poses carry no information about them",
-        )
+        missing = [names[i] for i in np.flatnonzero(scale == 0)]
+        raise UnobservableParameters(missing, "the poses carry no information about them")
     eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
     if eigenvalues[0] <= 1e-12 * eigenvalues[-1]:
-        weakest = eigenvectors[:, 0]
         raise UnobservableParameters(
-            [names[i] for i in np.flatnonzero(np.abs(weakest) > 0.3)],
+            [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)],
             "the drift model cannot be told apart from them with these poses and times (record the "
-            "poses in a "
-            "mixed order, or choose a simpler drift model)",
+            "poses in a mixed order, or choose a simpler drift model)",
             singular_values=eigenvalues[::-1],
         )
     return (eigenvectors / eigenvalues) @ eigenvectors.T / np.outer(scale, scale)
-
-
-def _leverage_dof(
-    whitened_jacobian: np.ndarray, covariance: np.ndarray
-) -> tuple[np.ndarray, float]:
-    """Per-pose hat blocks ``(P, 6, 6)`` and the smaller channel group's ``Σ (1 − h)``."""
-    hat = whitened_jacobian @ covariance @ np.transpose(whitened_jacobian, (0, 2, 1))
-    leverage = np.diagonal(hat, axis1=1, axis2=2)
-    return hat, float(min(np.sum(1.0 - leverage[:, group]) for group in _GROUPS))
 
 
 def _gaussian_log_likelihood(residuals: np.ndarray, variance: np.ndarray) -> float:
     return float(-0.5 * np.sum(residuals**2 / variance + np.log(2.0 * np.pi * variance)))
 
 
-def _profiled_std(residuals: np.ndarray, counts: np.ndarray, wrenches: np.ndarray) -> np.ndarray:
-    """ML per-reading noise ``(6,)`` (forces and torques pooled) from raw residuals of pose means,
-    at least the floor.
+def _pooled_std(squares: np.ndarray, dof: np.ndarray, floor: np.ndarray) -> np.ndarray:
+    """``(6,)`` noise per group (forces, torques) from ``Σ n e²`` and degrees of freedom per
+    channel, at least ``floor``.
     """
-    scaled = residuals**2 * counts[:, None]
-    std = np.concatenate([np.full(3, np.sqrt(np.mean(scaled[:, group]))) for group in _GROUPS])
-    return np.maximum(std, noise_floor(wrenches))
+    std = [np.sqrt(np.sum(squares[g]) / max(np.sum(dof[g]), 1e-12)) for g in _GROUPS]
+    return np.maximum(np.repeat(std, 3), floor)
 
 
-def constant_log_likelihood(
-    poses: PoseAverages, theta: np.ndarray, channel_std: np.ndarray, estimated: bool
-) -> float:
-    """Log-likelihood of the constant-bias fit ``θ`` (at the ML noise when the noise is
-    ``estimated``).
-    """
-    residuals = poses.wrenches - predict_with_jacobian(theta, poses.rotations)[0]
-    counts = np.asarray(poses.counts, dtype=float)
-    std = _profiled_std(residuals, counts, poses.wrenches) if estimated else channel_std
-    return _gaussian_log_likelihood(residuals, std[None, :] ** 2 / counts[:, None])
+def constant_log_likelihood(poses: PoseAverages, start: DriftStart) -> float:
+    """Log-likelihood of the constant-bias fit (at the ML noise when the noise is estimated)."""
+    residuals = poses.wrenches - predict_with_jacobian(start.theta, poses.rotations)[0]
+    counts = np.asarray(poses.counts, dtype=float)[:, None]
+    std = start.channel_std
+    if start.estimated:
+        std = _pooled_std(np.sum(residuals**2 * counts, 0), np.full(6, len(counts)), start.floor)
+    return _gaussian_log_likelihood(residuals, std**2 / counts)
 
 
 class SortedPoses:
-    """Poses in time order, and the permutation back."""
+    """Poses in time order, the permutation back, and a model's trend columns."""
 
-    def __init__(self, poses: PoseAverages):
+    def __init__(self, poses: PoseAverages, model: DriftModel):
         self.order = np.argsort(poses.times, kind="stable")
         self.times = np.asarray(poses.times)[self.order]
         self.rotations = poses.rotations[self.order]
         self.wrenches = poses.wrenches[self.order]
         self.counts = np.asarray(poses.counts, dtype=float)[self.order]
-        self.span = float(self.times[-1] - self.times[0])
+        span = float(self.times[-1] - self.times[0])
+        self.scale = span if span > 0 else 1.0
+        self.basis = model.basis((self.times - self.times[-1]) / self.scale)
+        self.trend = trend_columns(self.basis)
+        self.names = list(COMPONENT_NAMES) + [
+            f"drift c{k + 1}[{c}]" for k in range(model.columns) for c in range(6)
+        ]
 
     def unsort(self, array: np.ndarray) -> np.ndarray:
         out = np.empty_like(array)
         out[self.order] = array
         return out
 
-
-def finish_fit(
-    data: SortedPoses,
-    theta,
-    channel_std,
-    source,
-    whitened,
-    jacobian,
-    covariance,
-    count,
-    log_l,
-    drift,
-) -> DriftFit:
-    hat, dof = _leverage_dof(jacobian, covariance)
-    information = np.linalg.inv(covariance[:12, :12])
-    return DriftFit(
-        SensorModel.from_vector(theta),
-        WhitenedFit(data.unsort(whitened), data.unsort(hat)),
-        channel_std,
-        source,
-        dof if source == "residuals" else np.inf,
-        information,
-        count,
-        log_l,
-        drift,
-    )
+    def raw_residuals(self, phi: np.ndarray) -> np.ndarray:
+        """``(P, 6)`` readings minus ``θ``'s prediction minus the trend [N, N·m]."""
+        trend = self.basis @ phi[12:].reshape(-1, 6)
+        return self.wrenches - predict_with_jacobian(phi[:12], self.rotations)[0] - trend
 
 
-def polynomial_columns(
-    data: SortedPoses, degree: int
-) -> tuple[np.ndarray, np.ndarray, float, list[str]]:
-    """Powers ``((t − T)/span)^k`` ``(P, K)``, their Jacobian columns ``(P, 6, 6K)``, the span [s]
-    and the parameter names.
+def gauss_newton(data: SortedPoses, phi, std, rate, iterations: int):
+    """Gauss–Newton on ``φ = [θ, c]`` at fixed noise ``(6,)`` and walk rates ``(6,)``.
+
+    Returns ``(restricted log L, log L, φ, whitened residuals (P, 6), whitened Jacobian
+    (P, 6, n), gains)``. During a search (``iterations ≤ SEARCH_ITERATIONS``) the
+    residuals after the last step are linearized, so an evaluation costs one filter
+    pass per step.
     """
-    scale = data.span if data.span > 0 else 1.0
-    powers = ((data.times - data.times[-1]) / scale)[:, None] ** np.arange(1, degree + 1)[None, :]
-    columns = np.zeros((len(data.times), 6, 6 * degree))
-    for k in range(degree):
-        columns[:, :, 6 * k : 6 * k + 6] = powers[:, k, None, None] * np.eye(6)
-    names = list(COMPONENT_NAMES) + [
-        f"drift c{k + 1}[{c}]" for k in range(degree) for c in range(6)
-    ]
-    return powers, columns, scale, names
+    gains = walk_gains(data.times, std[None, :] ** 2 / data.counts[:, None], rate)
 
+    def whitened(phi):
+        jacobian = predict_with_jacobian(phi[:12], data.rotations)[1]
+        columns = [data.raw_residuals(phi)[:, :, None], jacobian, data.trend]
+        white = whiten(gains, np.concatenate(columns, axis=2))
+        return white[:, :, 0], white[:, :, 1:]
 
-def trend_std(powers: np.ndarray, covariance: np.ndarray) -> np.ndarray:
-    """``(P, 6)`` standard deviation of ``b(T) + Σ c_k τ^k`` from the covariance of ``[θ, c]``."""
-    degree = powers.shape[1]
-    rows = np.column_stack([np.ones(len(powers)), powers])
-    out = np.empty((len(powers), 6))
-    for c in range(6):
-        indices = [3 + c] + [12 + 6 * k + c for k in range(degree)]
-        block = covariance[np.ix_(indices, indices)]
-        out[:, c] = np.sqrt(np.clip(np.einsum("ni,ij,nj->n", rows, block, rows), 0.0, None))
-    return out
-
-
-def fit_polynomial(
-    poses: PoseAverages,
-    theta0: np.ndarray,
-    channel_std: np.ndarray,
-    source: str,
-    degree: int,
-    selected_by: str = "given",
-) -> DriftFit:
-    """Fit ``θ`` and a degree-``degree`` polynomial bias drift (noise re-estimated from the
-    residuals if ``source`` says so).
-    """
-    data = SortedPoses(poses)
-    powers, drift_jacobian, scale, names = polynomial_columns(data, degree)
-    count = 12 + 6 * degree
-    phi = np.concatenate([theta0, np.zeros(6 * degree)])
-    std = np.array(channel_std, dtype=float)
-    for _ in range(4 if source == "residuals" else 1):
-        weights = np.sqrt(data.counts)[:, None] / std[None, :]
-        for _ in range(30):
-            prediction, jacobian = predict_with_jacobian(phi[:12], data.rotations)
-            residuals = data.wrenches - prediction - powers @ phi[12:].reshape(degree, 6)
-            full = np.concatenate([jacobian, drift_jacobian], axis=2) * weights[:, :, None]
-            whitened = residuals * weights
-            step = np.linalg.lstsq(full.reshape(-1, count), whitened.reshape(-1), rcond=None)[0]
-            phi = phi + step
-            if np.sum((full.reshape(-1, count) @ step) ** 2) < 1e-12 * (1.0 + np.sum(whitened**2)):
-                break
-        prediction, jacobian = predict_with_jacobian(phi[:12], data.rotations)
-        residuals = data.wrenches - prediction - powers @ phi[12:].reshape(degree, 6)
-        full = np.concatenate([jacobian, drift_jacobian], axis=2) * weights[:, :, None]
-        covariance = invert_information(full.reshape(-1, count).T @ full.reshape(-1, count), names)
-        if source != "residuals":
+    for _ in range(iterations):
+        residuals, jacobian = whitened(phi)
+        flat = jacobian.reshape(-1, len(phi))
+        step = np.linalg.lstsq(flat, residuals.reshape(-1), rcond=None)[0]
+        phi, change = phi + step, jacobian @ step
+        if np.sum(change**2) < 1e-12 * (1.0 + np.sum(residuals**2)):
             break
-        hat, _ = _leverage_dof(full, covariance)
-        leverage = np.diagonal(hat, axis1=1, axis2=2)
-        scaled = residuals**2 * data.counts[:, None]
-        new = np.concatenate(
-            [
-                np.full(3, np.sqrt(np.sum(scaled[:, g]) / max(np.sum(1.0 - leverage[:, g]), 1e-12)))
-                for g in _GROUPS
-            ]
-        )
-        new = np.maximum(new, noise_floor(data.wrenches))
-        converged = np.allclose(new, std, rtol=1e-3)
-        std = new
+    if iterations <= SEARCH_ITERATIONS:
+        residuals = residuals - change
+    else:
+        residuals, jacobian = whitened(phi)
+    flat = jacobian.reshape(-1, len(phi))
+    log_l = log_likelihood(gains, residuals)
+    restricted = log_l - 0.5 * np.linalg.slogdet(flat.T @ flat)[1]
+    return restricted, log_l, phi, residuals, jacobian, gains
+
+
+def _search_walk(data: SortedPoses, phi, start: DriftStart):
+    """Rates (and noise, when estimated) ``(6,)``, ``(6,)`` of maximum restricted likelihood, and
+    the ``φ`` found on the way.
+    """
+    from scipy.optimize import minimize  # scipy loads where it is used (import ftkin stays light)
+
+    std0 = np.asarray(start.channel_std, dtype=float)
+    per_pose = std0 / np.sqrt(np.median(data.counts))
+    spacing = max(float(np.median(np.diff(data.times))) if len(data.times) > 1 else 1.0, 1e-9)
+    reference = np.log([per_pose[g].mean() / np.sqrt(spacing) for g in _GROUPS])
+    noise_part = np.log([std0[g].mean() for g in _GROUPS]) if start.estimated else []
+    best = {"phi": phi, "value": np.inf}
+
+    def unpack(x):
+        std = np.maximum(np.repeat(np.exp(x[2:4]), 3), start.floor) if start.estimated else std0
+        return np.repeat(np.exp(x[:2]), 3), std
+
+    def objective(x):
+        rate, std = unpack(x)
+        value, _, phi = gauss_newton(data, best["phi"], std, rate, SEARCH_ITERATIONS)[:3]
+        value = -value if np.isfinite(value) else np.inf
+        if value < best["value"]:
+            best.update(phi=phi, value=value)
+        return value
+
+    grid = [objective(np.concatenate([reference + np.log(f), noise_part])) for f in RATE_GRID]
+    x0 = np.concatenate([reference + np.log(RATE_GRID[int(np.argmin(grid))]), noise_part])
+    options = {"xatol": 0.05, "fatol": 0.01, "maxfev": 40 * len(x0)}
+    solution = minimize(objective, x0, method="Nelder-Mead", options=options)
+    return (*unpack(solution.x), best["phi"])
+
+
+def _collapse(data: SortedPoses, std, rate, start: DriftStart) -> str | None:
+    """Why an estimated noise cannot be told from the walk, or None."""
+    if not start.estimated or start.floor_given:
+        return None
+    per_pose = std / np.sqrt(np.median(data.counts))
+    step = rate * np.sqrt(max(float(np.median(np.diff(data.times))), 0.0))
+    for g, name, unit in zip(_GROUPS, ("force", "torque"), ("N", "N·m")):
+        if (
+            np.all(std[g] <= start.floor[g] * (1.0 + 1e-3))
+            or step[g][0] > NOISE_WALK_RATIO * per_pose[g][0]
+        ):
+            return (
+                f"the {name} noise and the random walk cannot be told apart (noise "
+                f"{std[g][0]:.3g} {unit} per reading, walk {step[g][0]:.3g} {unit} between "
+                "consecutive poses): the walk would take the noise"
+            )
+    return None
+
+
+def _noise_without_walk(data: SortedPoses, phi, start: DriftStart):
+    """Gauss–Newton with a leverage-corrected noise re-estimated between passes (if estimated)."""
+    std = np.asarray(start.channel_std, dtype=float)
+    for _ in range(NOISE_PASSES if start.estimated else 1):
+        fit = gauss_newton(data, phi, std, np.zeros(6), FINAL_ITERATIONS)
+        phi, jacobian = fit[2], fit[4]
+        if not start.estimated:
+            break
+        covariance = invert_information(np.einsum("pki,pkj->ij", jacobian, jacobian), data.names)
+        leverage = np.einsum("pki,ij,pkj->pk", jacobian, covariance, jacobian)
+        squares = np.sum(data.raw_residuals(phi) ** 2 * data.counts[:, None], axis=0)
+        new = _pooled_std(squares, np.sum(1.0 - leverage, axis=0), start.floor)
+        converged, std = np.allclose(new, std, rtol=1e-3), new
         if converged:
             break
-    estimated = source == "residuals"
-    log_l_std = _profiled_std(residuals, data.counts, data.wrenches) if estimated else std
-    log_l = _gaussian_log_likelihood(residuals, log_l_std[None, :] ** 2 / data.counts[:, None])
-    bias = phi[3:9] + powers @ phi[12:].reshape(degree, 6)
+    return std, phi
+
+
+def fit_drift_model(
+    model: DriftModel, poses: PoseAverages, start: DriftStart, selected_by: str = "given"
+) -> DriftFit:
+    """Fit ``θ`` and the drift ``model`` from the constant-bias ``start`` (see the module)."""
+    data = SortedPoses(poses, model)
+    phi = np.concatenate([start.theta, np.zeros(6 * model.columns)])
+    if model.walk:
+        rate, std, phi = _search_walk(data, phi, start)
+    else:
+        (std, phi), rate = _noise_without_walk(data, phi, start), np.zeros(6)
+    _, log_l, phi, white, jacobian, gains = gauss_newton(data, phi, std, rate, FINAL_ITERATIONS)
+    flat = jacobian.reshape(-1, len(phi))
+    covariance = invert_information(flat.T @ flat, data.names)
+    hat = jacobian @ covariance @ np.transpose(jacobian, (0, 2, 1))
+    leverage = np.diagonal(hat, axis1=1, axis2=2)
+    residuals = data.raw_residuals(phi)
+    if start.estimated and not model.walk:  # the likelihood at the ML noise, for the BIC
+        squares = np.sum(residuals**2 * data.counts[:, None], axis=0)
+        ml_std = _pooled_std(squares, np.full(6, len(data.times)), start.floor)
+        log_l = _gaussian_log_likelihood(residuals, ml_std**2 / data.counts[:, None])
+    walk, variance = smooth(gains, data.times, residuals, rate)
+    rows = np.column_stack([np.ones(len(data.times)), data.basis])
+    trend_variance = np.column_stack(
+        [
+            np.einsum("ni,ij,nj->n", rows, covariance[np.ix_(index, index)], rows)
+            for index in (
+                [3 + c] + [12 + 6 * k + c for k in range(model.columns)] for c in range(6)
+            )
+        ]
+    )
+    coefficients = phi[12:].reshape(-1, 6)
     drift = BiasDrift(
-        f"poly:{degree}",
+        model.name,
         selected_by,
         data.times,
-        bias,
-        trend_std(powers, covariance),
-        coefficients=phi[12:].reshape(degree, 6),
-        time_scale=scale,
+        phi[3:9] + data.basis @ coefficients + walk,
+        np.sqrt(np.clip(variance + trend_variance, 0.0, None)),
+        rate=rate[[0, 3]] if model.walk else None,
+        coefficients=coefficients if model.columns else None,
+        time_scale=data.scale,
     )
-    return finish_fit(
-        data,
-        phi[:12],
+    dof = min(float(np.sum(1.0 - leverage[:, g])) for g in _GROUPS)
+    return DriftFit(
+        SensorModel.from_vector(phi[:12]),
+        WhitenedFit(data.unsort(white), data.unsort(hat)),
         std,
-        source,
-        residuals * weights,
-        full,
-        covariance,
-        count + 2 * estimated,
+        start.noise_source,
+        dof if start.estimated else start.noise_dof,
+        np.linalg.inv(covariance[:12, :12]),
+        len(phi) + 2 * model.walk + 2 * start.estimated,
         log_l,
         drift,
+        _collapse(data, std, rate, start) if model.walk else None,
     )
+
+
+def _fit_candidates(models, poses: PoseAverages, start: DriftStart, selected_by: str):
+    """Fits and BIC of the candidate ``models`` that can be fitted, and why the others cannot."""
+    auto = selected_by == "auto"
+    observations = 6 * len(poses)
+    criteria, fits, notes = {}, {}, []
+    for model in models:
+        if model.name == "none":
+            count = 12 + 2 * start.estimated
+            criteria["none"] = -2.0 * constant_log_likelihood(poses, start) + count * np.log(
+                observations
+            )
+            continue
+        count = 12 + 6 * model.columns + 2 * model.walk + 2 * start.estimated
+        if auto and (count > observations - 6 or (model.walk and len(poses) > MAX_AUTO_WALK_POSES)):
+            continue  # the walk's filter costs a Python pass per pose and evaluation
+        try:
+            fit = model.fit(poses, start, selected_by)
+        except UnobservableParameters:
+            if not auto:
+                raise
+            continue
+        if fit.collapse is not None:
+            notes.append(f"drift {model.name}: {fit.collapse}")
+            continue
+        fits[model.name], criteria[model.name] = fit, fit.bic
+    return fits, criteria, notes
+
+
+def select_drift(models, poses: PoseAverages, start: DriftStart):
+    """Fit the candidate drift ``models`` (one given, or several for ``auto``) and keep the best.
+
+    Returns ``(fit or None when the constant bias wins, BIC by candidate (auto), warnings)``.
+    A given walk whose noise collapses falls back to ``auto`` among the models without a
+    walk, and a warning says why.
+    """
+    selected_by = "auto" if len(models) > 1 else "given"
+    fits, criteria, notes = _fit_candidates(models, poses, start, selected_by)
+    if not criteria:  # the one given model collapsed: the models without a walk
+        fallback = [m for m in map(parse_drift, auto_candidates()) if not m.walk]
+        selected_by = "auto"
+        fits, criteria, more = _fit_candidates(fallback, poses, start, selected_by)
+        notes += more
+    choice = min(criteria, key=criteria.get)
+    notes = tuple(
+        f"{note}; kept {choice} instead. Record several readings per pose (a pose column), or "
+        "give the noise (noise=, --noise-force/--noise-torque) or the sensor resolution "
+        "(resolution=, --resolution)"
+        for note in notes
+    )
+    for note in notes:
+        logger.warning(note)
+    criteria = criteria if selected_by == "auto" else {}
+    fit = fits.get(choice)
+    if fit is not None and criteria:
+        fit = replace(fit, drift=replace(fit.drift, criteria=criteria))
+    return fit, criteria, notes

@@ -1,4 +1,4 @@
-"""Static calibration of a wrist F/T sensor: :func:`calibrate` and its result.
+"""Static calibration of a wrist F/T sensor: :func:`calibrate`, its options and its result.
 
 From readings at several static poses, estimate the sensor bias (``F0``,
 ``M0``), the tool's weight vector in the base frame (``a``, which carries the
@@ -8,18 +8,18 @@ base tilt ``U``, ``V``) and the tool's centre of mass ``P`` in the sensor frame.
 from __future__ import annotations
 
 import logging
-from dataclasses import replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
 from ..exceptions import InvalidInput, InvalidSamples
-from ..validation import as_positive
+from ..validation import as_float_array, as_positive
 from .conventions import check_conventions, detect_sign_and_handedness, reading_signs
 from .diagnostics import FitDiagnostics
-from .drift import BiasDrift, parse_drift
-from .drift_select import fit_drift
+from .drift import BiasDrift, drift_candidates
+from .drift_fit import DriftStart, select_drift
 from .fit_quality import diagnose, log_warnings
-from .information import SensorNoise
+from .information import SensorNoise, noise_floor
 from .linear import fit_linear
 from .ml import LOSSES, fit_ml
 from .model import STANDARD_GRAVITY, SensorModel
@@ -34,6 +34,257 @@ MOUNT_STD_WARNING_DEG = 1.0
 
 METHODS = ("ml", "linear")
 """Estimators :func:`calibrate` accepts; the first is the default."""
+
+
+@dataclass(frozen=True)
+class CalibrationOptions:
+    """How :func:`calibrate` fits; every combination is checked here, once.
+
+    Attributes:
+        method: ``"ml"`` (default): joint maximum-likelihood fit of all six
+            channels with standard errors and diagnostics (:mod:`ftkin.calibration.ml`);
+            ``"linear"``: the paper's two-step least squares.
+        g: Gravity used to report the tool mass [m/s²] (the paper used 9.8).
+        noise: ``ml`` only: noise of one raw reading [N, N·m]. None estimates
+            it from the spread of repeated readings per pose, else from the
+            residuals (jointly with a drift, :mod:`ftkin.calibration.drift_fit`).
+        loss: ``ml`` only: ``"linear"`` (Gaussian likelihood), ``"soft_l1"``
+            or ``"huber"`` (robust to outlying poses).
+        drop_outliers: ``ml`` only: refit once without the poses flagged as
+            outliers (see :mod:`ftkin.calibration.fit_quality`).
+        estimate_mount: ``ml`` only: ``"none"`` (default), ``"yaw"`` (the
+            sensor turned about its z axis on the flange) or ``"full"`` (any
+            rotation): estimate the mount ``R_M`` jointly (samples from joint
+            angles only; :mod:`ftkin.calibration.mount`).
+        sensor_sign: ``+1`` (default) or ``-1``: negate every reading (a sensor
+            reporting the reaction); see :mod:`ftkin.calibration.conventions`.
+        flip_axis: None or ``"x"``, ``"y"``, ``"z"``: negate that axis's force
+            and torque channels (a mirrored axis).
+        base_mount: ``"floor"`` (default: gravity along base −z),
+            ``"ceiling"`` (+z) or ``"wall"`` (no direction check).
+        expected_gravity: Expected gravity direction [base frame]; overrides ``base_mount``.
+        drift: How the bias may change with time when the samples carry
+            times (:mod:`ftkin.calibration.drift`): ``"auto"`` (default: the
+            model the information criterion prefers; the constant bias without
+            times, with ``method="linear"``, a robust loss, ``drop_outliers`` or
+            a mount estimate), ``"none"`` (constant), or a registered model
+            (``"poly:N"``, ``"random-walk"``, ...; these need times and the plain ``ml`` fit).
+        resolution: ``ml`` only: ``(force [N], torque [N·m])`` resolution of one
+            reading (its quantization step): an estimated noise is at least
+            ``resolution / √12``, so a drift model cannot take all of it.
+    """
+
+    method: str = "ml"
+    g: float = STANDARD_GRAVITY
+    noise: SensorNoise | None = None
+    loss: str = "linear"
+    drop_outliers: bool = False
+    estimate_mount: str = "none"
+    sensor_sign: int = 1
+    flip_axis: str | None = None
+    base_mount: str = "floor"
+    expected_gravity: object = None
+    drift: str = "auto"
+    resolution: object = None
+
+    def __post_init__(self):
+        for name, value, allowed in (
+            ("calibration method", self.method, METHODS),
+            ("loss", self.loss, LOSSES),
+        ):
+            if value not in allowed:
+                raise InvalidInput(
+                    f"unknown {name} {value!r}; expected one of {', '.join(allowed)}"
+                )
+        if self.noise is not None and not isinstance(self.noise, SensorNoise):
+            raise InvalidInput(
+                f"noise must be an ftkin.SensorNoise, got {type(self.noise).__name__}"
+            )
+        ml_only = self.noise is not None or self.loss != "linear" or self.drop_outliers
+        if self.method == "linear" and (ml_only or self.resolution is not None):
+            raise InvalidInput(
+                "noise, resolution, loss and drop_outliers apply to method='ml' only"
+            )
+        if check_mount_mode(self.estimate_mount) != "none" and self.method != "ml":
+            raise InvalidInput("estimate_mount applies to method='ml' only")
+        object.__setattr__(self, "g", as_positive(self.g, "g"))
+        if self.resolution is not None:
+            resolution = as_float_array(self.resolution, "resolution").reshape(-1)
+            if resolution.shape != (2,) or not np.all(np.isfinite(resolution) & (resolution > 0)):
+                raise InvalidInput(
+                    "resolution must be [force N, torque N·m], finite and > 0, got "
+                    f"{self.resolution}"
+                )
+            object.__setattr__(self, "resolution", resolution)
+        drift_candidates(self.drift)  # an unknown model or a bad argument is refused here
+        if self.drift in ("auto", "none"):
+            return
+        if self.method != "ml" or ml_only:
+            raise InvalidInput(
+                f"drift={self.drift!r} needs method='ml' with loss='linear' and no drop_outliers"
+            )
+        if self.estimate_mount != "none":
+            raise InvalidInput(
+                f"drift={self.drift!r} and estimate_mount={self.estimate_mount!r} cannot be fitted "
+                "together yet: estimate the mount from a short recording (drift='none'), then the "
+                "drift"
+            )
+
+    def check(self, samples: Samples) -> tuple:
+        """Check the options against ``samples``; the drift models to fit (empty: a constant bias).
+
+        Raises:
+            InvalidInput: a mount estimate for samples whose rotations were given
+                directly; a drift model without times, with all times equal, or
+                with a pose revisited (``auto`` keeps the constant bias instead).
+        """
+        if not isinstance(samples, Samples):
+            raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
+        if self.estimate_mount != "none" and samples.joint_positions is None:
+            raise InvalidInput(
+                "estimate_mount needs samples from joint angles (Samples.from_joint_positions): "
+                "rotations given directly are taken as the real sensor orientation, so any mount "
+                "is already in them (absorbed)"
+            )
+        auto, timed = self.drift == "auto", samples.times is not None
+        if self.drift == "none" or (auto and not self._auto_fits_drift(samples)):
+            return ()
+        if not timed:
+            raise InvalidInput(
+                f"drift={self.drift!r} needs the time of each reading (Samples.times, a 't' column "
+                "in the CSV)"
+            )
+        if np.ptp(samples.times) <= 0.0:
+            raise InvalidInput(
+                f"drift={self.drift!r}: all readings have the same time; a drift needs readings "
+                "spread over time"
+            )
+        try:
+            check_one_visit_per_pose(samples)
+        except InvalidSamples as error:
+            if not auto:
+                raise
+            logger.warning("%s; drift='auto' keeps a constant bias", error)  # not asked for
+            return ()
+        return drift_candidates(self.drift)
+
+    def _auto_fits_drift(self, samples: Samples) -> bool:
+        """``auto`` looks for a drift: times that differ, the plain ``ml`` fit, no mount."""
+        plain = self.method == "ml" and self.loss == "linear" and not self.drop_outliers
+        timed = samples.times is not None and np.ptp(samples.times) > 0.0
+        return plain and timed and self.estimate_mount == "none"
+
+    def noise_floor(self, wrenches) -> np.ndarray:
+        """``(6,)`` lowest noise an estimate may take [N, N·m]: the numeric floor, or the
+        resolution's quantization noise.
+        """
+        floor = noise_floor(wrenches)
+        if self.resolution is None:
+            return floor
+        return np.maximum(floor, np.repeat(self.resolution, 3) / np.sqrt(12.0))
+
+
+def calibrate(samples: Samples, options: CalibrationOptions | None = None, **keywords):
+    """Estimate bias, tool gravity and base tilt from static-pose readings.
+
+    Args:
+        samples: Raw readings with sensor orientations (see :class:`Samples`);
+            readings sharing a pose id are averaged first.
+        options: A :class:`CalibrationOptions` (default: all defaults).
+        **keywords: Its fields, given directly (``method="linear"``, ``drift="poly:2"``, ...);
+            they replace those of ``options``.
+
+    Returns:
+        A frozen :class:`CalibrationResult`.
+
+    Raises:
+        UnobservableParameters: the poses cannot determine the parameters
+            (fewer than three, orientations alike, gravity along one sensor
+            direction); the error names them.
+        InvalidInput: an option or a combination of options
+            (:class:`CalibrationOptions`), or options the samples do not support.
+        SuspectConvention: the data fit with an axis reversed, or the tool
+            weight points more than 90° from the expected gravity direction.
+    """
+    unknown = set(keywords) - {f.name for f in fields(CalibrationOptions)}
+    if unknown:
+        raise InvalidInput(f"unknown calibrate option(s) {', '.join(sorted(unknown))}")
+    options = replace(options or CalibrationOptions(), **keywords)
+    drift_models = options.check(samples)
+    raw_poses = samples.pose_averages()
+    poses = replace(
+        raw_poses,
+        wrenches=raw_poses.wrenches * reading_signs(options.sensor_sign, options.flip_axis),
+    )
+    check = detect_sign_and_handedness(
+        raw_poses,
+        sensor_sign=options.sensor_sign,
+        flip_axis=options.flip_axis,
+        estimate_mount=options.estimate_mount,
+        base_mount=options.base_mount,
+        expected_gravity=options.expected_gravity,
+        g=options.g,
+    )
+    check_conventions(check, options.sensor_sign, options.base_mount)
+    if options.method == "linear":
+        static = _Static(fit_linear(poses, options.g), None, None, np.eye(3), None, None, poses)
+    else:
+        static = _fit_static(poses, options, log=not drift_models)
+    if drift_models:
+        static = _fit_drift(static, drift_models, options)
+    elif samples.times is not None:
+        static = replace(static, drift=_constant_trajectory(static, {}))
+    if static.drift is not None:
+        span = np.array([np.min(samples.times), np.max(samples.times)])
+        static = replace(static, drift=replace(static.drift, recorded_span=span))
+    return _result(samples, options, static)
+
+
+@dataclass(frozen=True)
+class _Static:
+    """A fit: model, ML fit (None for ``linear``), its diagnostics and covariance, mount, the
+    poses fitted (after any dropped outliers) and the bias trajectory.
+    """
+
+    model: SensorModel
+    fit: object
+    diagnostics: FitDiagnostics | None
+    mount: np.ndarray
+    mount_covariance: np.ndarray | None
+    covariance: np.ndarray | None
+    poses: PoseAverages
+    drift: BiasDrift | None = None
+
+
+def _noise_free(poses: PoseAverages) -> bool:
+    """True when the raw readings are noise-free: repeated readings per pose, all identical."""
+    repeated = poses.counts > 1
+    scale = np.maximum(np.abs(poses.wrenches).max(axis=0), 1.0)
+    return bool(np.any(repeated) and np.all(poses.spread[repeated] <= 1e-12 * scale))
+
+
+def _fit_static(poses: PoseAverages, options: CalibrationOptions, log: bool) -> _Static:
+    """The ``ml`` fit with a constant bias (and any mount), refitted without outliers if asked."""
+    floor = options.noise_floor(poses.wrenches)
+    fit = fit_ml(poses, options.g, options.noise, options.loss, options.estimate_mount, floor)
+    noise_free = _noise_free(poses)
+    diagnostics, covariance = diagnose(
+        fit, poses.pose_ids, log=log, wrenches=poses.wrenches, noise_free=noise_free
+    )
+    if options.drop_outliers and diagnostics.outlier_pose_ids:
+        dropped = diagnostics.outlier_pose_ids
+        poses = _subset(poses, ~np.isin(poses.pose_ids, dropped))
+        fit = fit_ml(poses, options.g, options.noise, options.loss, options.estimate_mount, floor)
+        diagnostics, covariance = diagnose(
+            fit, poses.pose_ids, dropped, wrenches=poses.wrenches, noise_free=noise_free
+        )
+    mount_covariance = fit.mount_covariance
+    if mount_covariance is not None:  # the same goodness-of-fit scaling as θ
+        mount_covariance = mount_covariance * diagnostics.covariance_scale
+        diagnostics = _with_mount_warning(diagnostics, options.estimate_mount, mount_covariance)
+    return _Static(
+        fit.model, fit, diagnostics, fit.mount_rotation, mount_covariance, covariance, poses
+    )
 
 
 def _with_mount_warning(
@@ -65,242 +316,79 @@ def _subset(poses: PoseAverages, keep: np.ndarray) -> PoseAverages:
     )
 
 
-def calibrate(
-    samples: Samples,
-    *,
-    method: str = "ml",
-    g: float = STANDARD_GRAVITY,
-    noise: SensorNoise | None = None,
-    loss: str = "linear",
-    drop_outliers: bool = False,
-    estimate_mount: str = "none",
-    sensor_sign: int = 1,
-    flip_axis: str | None = None,
-    base_mount: str = "floor",
-    expected_gravity=None,
-    drift: str = "auto",
-) -> CalibrationResult:
-    """Estimate bias, tool gravity and base tilt from static-pose readings.
-
-    Args:
-        samples: Raw readings with sensor orientations (see :class:`Samples`);
-            readings sharing a pose id are averaged first.
-        method: ``"ml"`` (default): joint maximum-likelihood fit of all six
-            channels with standard errors and diagnostics (:mod:`ftkin.calibration.ml`);
-            ``"linear"``: the paper's two-step least squares.
-        g: Gravity used to report the tool mass [m/s²] (the paper used 9.8).
-        noise: ``ml`` only: noise of one raw reading [N, N·m]. None estimates
-            it from the spread of repeated readings per pose, else from the
-            residuals.
-        loss: ``ml`` only: ``"linear"`` (Gaussian likelihood), ``"soft_l1"``
-            or ``"huber"`` (robust to outlying poses).
-        drop_outliers: ``ml`` only: refit once without the poses flagged as
-            outliers (see :mod:`ftkin.calibration.fit_quality`).
-        estimate_mount: ``ml`` only: ``"none"`` (default), ``"yaw"`` (the
-            sensor turned about its z axis on the flange) or ``"full"`` (any
-            rotation): estimate the mount ``R_M`` jointly (samples from joint
-            angles only; :mod:`ftkin.calibration.mount`).
-        sensor_sign: ``+1`` (default) or ``-1``: negate every reading (a sensor
-            reporting the reaction); see :mod:`ftkin.calibration.conventions`.
-        flip_axis: None or ``"x"``, ``"y"``, ``"z"``: negate that axis's force
-            and torque channels (a mirrored axis).
-        base_mount: ``"floor"`` (default: gravity along base −z),
-            ``"ceiling"`` (+z) or ``"wall"`` (no direction check).
-        expected_gravity: Expected gravity direction [base frame]; overrides ``base_mount``.
-        drift: How the bias may change with time when the samples carry
-            times (:mod:`ftkin.calibration.drift`): ``"auto"`` (default: the
-            model the information criterion prefers; the constant bias without
-            times, with ``method="linear"``, a robust loss or ``drop_outliers``),
-            ``"none"`` (constant), ``"poly:N"`` or ``"random-walk"`` (these two
-            need times and the plain ``ml`` fit).
-
-    Returns:
-        A frozen :class:`CalibrationResult`.
-
-    Raises:
-        UnobservableParameters: the poses cannot determine the parameters
-            (fewer than three, orientations alike, gravity along one sensor
-            direction); the error names them.
-        InvalidInput: unknown method, loss or drift model, bad ``g`` or
-            ``noise``, ml options with ``method="linear"``, a mount for samples
-            whose rotations were given directly, a drift model without times or
-            with options it does not support (a mount estimate among them).
-        SuspectConvention: the data fit with an axis reversed, or the tool
-            weight points more than 90° from the expected gravity direction.
-    """
-    if not isinstance(samples, Samples):
-        raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
-    if method not in METHODS:
-        raise InvalidInput(
-            f"unknown calibration method {method!r}; expected one of {', '.join(METHODS)}"
-        )
-    if loss not in LOSSES:
-        raise InvalidInput(f"unknown loss {loss!r}; expected one of {', '.join(LOSSES)}")
-    if noise is not None and not isinstance(noise, SensorNoise):
-        raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
-    if method == "linear" and (noise is not None or loss != "linear" or drop_outliers):
-        raise InvalidInput("noise, loss and drop_outliers apply to method='ml' only")
-    if check_mount_mode(estimate_mount) != "none" and method != "ml":
-        raise InvalidInput("estimate_mount applies to method='ml' only")
-    if estimate_mount != "none" and samples.joint_positions is None:
-        raise InvalidInput(
-            "estimate_mount needs samples from joint angles (Samples.from_joint_positions): "
-            "rotations given "
-            "directly are taken as the real sensor orientation, so any mount is already in them "
-            "(absorbed)"
-        )
-    g = as_positive(g, "g")
-    drift_kind, degree = _drift_kind(drift, samples, method, loss, drop_outliers)
-    if drift_kind != "none" and estimate_mount != "none":
-        if drift != "auto":
-            raise InvalidInput(
-                f"drift={drift!r} and estimate_mount={estimate_mount!r} cannot be fitted together "
-                "yet: "
-                "estimate the mount from a short recording (drift='none'), then the drift"
-            )
-        drift_kind = "none"  # documented: with a mount estimate, auto keeps the constant bias
-    if drift_kind != "none":
-        try:
-            check_one_visit_per_pose(samples)
-        except InvalidSamples as error:
-            if drift != "auto":
-                raise
-            logger.warning(
-                "%s; drift='auto' keeps a constant bias", error
-            )  # the user did not ask for a drift model
-            drift_kind = "none"
-    signs = reading_signs(sensor_sign, flip_axis)
-    raw_poses = samples.pose_averages()
-    poses = replace(raw_poses, wrenches=raw_poses.wrenches * signs)
-    check = detect_sign_and_handedness(
-        raw_poses,
-        sensor_sign=sensor_sign,
-        flip_axis=flip_axis,
-        estimate_mount=estimate_mount,
-        base_mount=base_mount,
-        expected_gravity=expected_gravity,
-        g=g,
+def _fit_drift(static: _Static, models: tuple, options: CalibrationOptions) -> _Static:
+    """The constant-bias fit ``static`` with the best of the drift ``models`` (or kept)."""
+    poses, fit = static.poses, static.fit
+    floor = options.noise_floor(poses.wrenches)
+    start = DriftStart(
+        fit.model.to_vector(),
+        np.asarray(fit.problem.channel_std),
+        fit.noise_source,
+        fit.noise_dof,
+        floor,
+        options.resolution is not None,
     )
-    check_conventions(check, sensor_sign, base_mount)
-    covariance = diagnostics = mount_covariance = None
-    mount = np.eye(3)
-    if method == "linear":
-        model = fit_linear(poses, g)
+    drift_fit, criteria, notes = select_drift(models, poses, start)
+    if drift_fit is None:
+        log_warnings(static.diagnostics)
+        static = replace(static, drift=_constant_trajectory(static, criteria))
     else:
-        fit = fit_ml(poses, g, noise, loss, estimate_mount)
         diagnostics, covariance = diagnose(
-            fit, poses.pose_ids, log=drift_kind == "none", wrenches=poses.wrenches
+            drift_fit,
+            poses.pose_ids,
+            parameter_count=drift_fit.parameter_count,
+            wrenches=poses.wrenches,
+            noise_free=_noise_free(poses),
         )
-        if drop_outliers and diagnostics.outlier_pose_ids:
-            dropped = diagnostics.outlier_pose_ids
-            poses = _subset(poses, ~np.isin(poses.pose_ids, dropped))
-            fit = fit_ml(poses, g, noise, loss, estimate_mount)
-            diagnostics, covariance = diagnose(
-                fit, poses.pose_ids, dropped, wrenches=poses.wrenches
-            )
-        model, mount, mount_covariance = fit.model, fit.mount_rotation, fit.mount_covariance
-        if mount_covariance is not None:
-            mount_covariance = (
-                mount_covariance * diagnostics.covariance_scale
-            )  # the same goodness-of-fit scaling as θ
-            diagnostics = _with_mount_warning(diagnostics, estimate_mount, mount_covariance)
-    trajectory = None
-    if samples.times is not None and method == "ml" and drift_kind != "none":
-        drift_fit, criteria = fit_drift(poses, fit, drift_kind, degree)
-        if drift_fit is not None:
-            diagnostics, covariance = diagnose(
-                drift_fit,
-                poses.pose_ids,
-                parameter_count=drift_fit.parameter_count,
-                wrenches=poses.wrenches,
-            )
-            model, trajectory = (
-                SensorModel.from_vector(drift_fit.model.to_vector(), g),
-                drift_fit.drift,
-            )
-        else:
-            log_warnings(diagnostics)
-            trajectory = _constant_trajectory(model, poses, covariance, criteria)
-    elif samples.times is not None:
-        trajectory = _constant_trajectory(model, poses, covariance, {})
-    if trajectory is not None:
-        trajectory = replace(
-            trajectory, recorded_span=np.array([np.min(samples.times), np.max(samples.times)])
-        )
+        model = SensorModel.from_vector(drift_fit.model.to_vector(), options.g)
+        static = replace(static, model=model, diagnostics=diagnostics, covariance=covariance)
+        static = replace(static, drift=drift_fit.drift)
+    warnings = static.diagnostics.warnings + notes
+    return replace(static, diagnostics=replace(static.diagnostics, warnings=warnings))
+
+
+def _constant_trajectory(static: _Static, criteria: dict) -> BiasDrift:
+    """The constant bias as a :class:`BiasDrift` (``"none"``), for samples that had times."""
+    times = np.sort(static.poses.times)
+    covariance = static.covariance
+    std = np.sqrt(np.diag(covariance)[3:9]) if covariance is not None else np.zeros(6)
+    return BiasDrift(
+        "none",
+        "auto" if criteria else "given",
+        times,
+        np.tile(static.model.bias, (len(times), 1)),
+        np.tile(std, (len(times), 1)),
+        criteria=criteria,
+    )
+
+
+def _result(samples: Samples, options: CalibrationOptions, static: _Static) -> CalibrationResult:
+    model, trajectory = static.model, static.drift
+    poses, rotations = static.poses, static.poses.rotations @ static.mount.T
     if trajectory is None or trajectory.model == "none":
-        residuals = poses.wrenches - model.predict(poses.rotations @ mount.T)
+        residuals = poses.wrenches - model.predict(rotations)
     else:
-        residuals = (
-            poses.wrenches
-            - model.tool_gravity_wrench(poses.rotations @ mount.T)
-            - trajectory.bias_at(poses.times)
-        )
+        gravity = model.tool_gravity_wrench(rotations)
+        residuals = poses.wrenches - gravity - trajectory.bias_at(poses.times)
     return CalibrationResult(
         force_offset=model.force_offset,
         torque_offset=model.torque_offset,
         gravity_in_base=model.gravity_in_base,
         center_of_mass=model.center_of_mass,
-        g=g,
-        method=method,
+        g=options.g,
+        method=options.method,
         pose_ids=poses.pose_ids,
         pose_wrenches=poses.wrenches,
         residuals=residuals,
         sample_count=int(np.sum(poses.counts)),
         urdf=samples.urdf,
         sensor_frame=samples.sensor_frame,
-        covariance=covariance,
-        diagnostics=diagnostics,
-        mount_rotation=mount,
-        mount_mode=estimate_mount,
-        mount_covariance=mount_covariance,
-        sensor_sign=sensor_sign,
-        flip_axis=flip_axis,
+        covariance=static.covariance,
+        diagnostics=static.diagnostics,
+        mount_rotation=static.mount,
+        mount_mode=options.estimate_mount,
+        mount_covariance=static.mount_covariance,
+        sensor_sign=options.sensor_sign,
+        flip_axis=options.flip_axis,
         drift=trajectory,
-    )
-
-
-def _drift_kind(
-    drift, samples: Samples, method: str, loss: str, drop_outliers: bool
-) -> tuple[str, int]:
-    """The drift model to fit: ``("none"|"auto"|"poly"|"random-walk", degree)`` after checking the
-    options.
-    """
-    kind, degree = parse_drift(drift)
-    if kind in ("none", "auto"):
-        unsupported = method != "ml" or loss != "linear" or drop_outliers
-        if kind == "auto" and (
-            samples.times is None or unsupported or np.ptp(samples.times) <= 0.0
-        ):
-            return "none", 0
-        return kind, degree
-    if samples.times is None:
-        raise InvalidInput(
-            f"drift={drift!r} needs the time of each reading (Samples.times, a 't' column in the "
-            "CSV)"
-        )
-    if method != "ml" or loss != "linear" or drop_outliers:
-        raise InvalidInput(
-            f"drift={drift!r} needs method='ml' with loss='linear' and no drop_outliers"
-        )
-    if np.ptp(samples.times) <= 0.0:
-        raise InvalidInput(
-            f"drift={drift!r}: all readings have the same time; a drift needs readings spread over "
-            "time"
-        )
-    return kind, degree
-
-
-def _constant_trajectory(
-    model: SensorModel, poses: PoseAverages, covariance, criteria: dict
-) -> BiasDrift:
-    """The constant bias as a :class:`BiasDrift` (``"none"``), for samples that had times."""
-    times = np.sort(poses.times)
-    std = np.sqrt(np.diag(covariance)[3:9]) if covariance is not None else np.zeros(6)
-    return BiasDrift(
-        "none",
-        "auto" if criteria else "given",
-        times,
-        np.tile(model.bias, (len(times), 1)),
-        np.tile(std, (len(times), 1)),
-        criteria=criteria,
     )

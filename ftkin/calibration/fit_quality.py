@@ -125,6 +125,7 @@ def diagnose(
     parameter_count: int | None = None,
     log: bool = True,
     wrenches=None,
+    noise_free: bool = False,
 ) -> tuple[FitDiagnostics, np.ndarray]:
     """Assess an :class:`~ftkin.calibration.ml.MlFit`; returns its diagnostics and the (scaled)
     covariance.
@@ -138,6 +139,8 @@ def diagnose(
     estimated at its floor (:func:`~ftkin.calibration.information.noise_floor`:
     readings that fit the model to rounding, e.g. noise-free simulated data)
     is said in a warning, and no pose is called an outlier for a rounding error.
+    ``noise_free``: the raw readings themselves are noise-free (repeated readings
+    identical); only then does the warning call the data noise-free.
 
     Warnings are also sent to the ``ftkin.calibration.fit_quality`` logger.
     """
@@ -173,7 +176,7 @@ def diagnose(
     sigma, scales = np.sqrt(np.clip(np.diag(covariance), 0.0, None)), _block_scales(theta)
     relative = sigma / scales
     pose_ids = np.asarray(pose_ids)
-    exact = (
+    exact = noise_free or (
         wrenches is not None
         and fit.noise_source == "residuals"
         and at_noise_floor(fit.noise.channel_std, wrenches)
@@ -183,10 +186,17 @@ def diagnose(
     )
 
     messages = []
-    if exact:
+    if exact and not noise_free:
         messages.append(
-            "the readings fit the model to rounding (noise estimated at its floor, "
-            f"{NOISE_FLOOR_RELATIVE:g} of the "
+            "the residuals are at rounding level (noise estimated at its floor, "
+            f"{NOISE_FLOOR_RELATIVE:g} of the largest reading): the standard errors, the fit test "
+            "and the outlier test rest on that floor; record several readings per pose (a pose "
+            "column) or give the noise level (noise=, --noise-force/--noise-torque)"
+        )
+    elif exact:
+        messages.append(
+            "the repeated readings of each pose are identical and the readings fit the model to "
+            f"rounding (noise estimated at its floor, {NOISE_FLOOR_RELATIVE:g} of the "
             "largest reading): noise-free data, e.g. a simulation without sensor noise? The "
             "estimates are exact, but "
             "the standard errors, the fit test and the outlier test mean nothing; add sensor noise "

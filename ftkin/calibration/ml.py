@@ -190,22 +190,23 @@ def noise_from_spread(poses: PoseAverages) -> tuple[np.ndarray, float] | None:
 
 
 def noise_from_residuals(
-    problem: WeightedProblem, theta: np.ndarray, robust: bool = False
+    problem: WeightedProblem, theta: np.ndarray, robust: bool = False, floor=None
 ) -> tuple[np.ndarray, float]:
     """Per-reading noise ``(6,)`` from the fit residuals, force and torque channels pooled.
 
     ``σ_g² = Σ n_i e_ic² / Σ (1 − h_ic)`` over the channels of group ``g``
     (``h`` the leverages at the problem's current weights), so the twelve
     fitted parameters do not make the estimate too small. With ``robust`` a
-    median-based estimate ignores outlying poses. Returns also the smaller
-    group's degrees of freedom.
+    median-based estimate ignores outlying poses. ``floor`` ``(6,)`` [N, N·m]: the
+    lowest value (default :func:`~ftkin.calibration.information.noise_floor`).
+    Returns also the smaller group's degrees of freedom.
     """
     residuals = problem.residuals(theta)
     leverage = np.clip(np.diagonal(problem.hat_blocks(theta), axis1=1, axis2=2), 0.0, 1.0 - 1e-9)
     scaled = residuals * np.sqrt(problem.counts)[:, None]
     std = np.empty(6)
     dofs = []
-    floor = noise_floor(problem.wrenches)
+    floor = noise_floor(problem.wrenches) if floor is None else np.asarray(floor, dtype=float)
     for group in RESIDUAL_NOISE_GROUPS:
         dof = float(np.sum(1.0 - leverage[:, group]))
         if robust:
@@ -244,12 +245,30 @@ def _solve(problem: WeightedProblem, start: np.ndarray, loss: str) -> tuple[np.n
     return solution.x, int(solution.nfev)
 
 
+def _noise(poses: PoseAverages, problem, theta0, noise, loss: str, floor):
+    """``(channel_std (6,), dof, source)``: the noise given, else from the spread of repeated
+    readings, else from the residuals at the start ``theta0`` (refined after the fit).
+    """
+    if noise is not None:
+        return noise.channel_std, np.inf, "given"
+    spread = noise_from_spread(poses)
+    if spread is not None:
+        return (*spread, "spread")
+    # rough levels (no leverage correction) to weight the channels for the leverages
+    rms = np.sqrt(np.mean(problem.residuals(theta0) ** 2 * problem.counts[:, None], axis=0))
+    rough = np.repeat([rms[_FORCE].mean(), rms[_TORQUE].mean()], 3)
+    rough = np.maximum(rough, 1e-12 * np.maximum(1.0, np.abs(poses.wrenches).max(axis=0)))
+    problem = replace(problem, channel_std=rough)
+    return (*noise_from_residuals(problem, theta0, loss != "linear", floor), "residuals")
+
+
 def fit_ml(
     poses: PoseAverages,
     g: float = STANDARD_GRAVITY,
     noise: SensorNoise | None = None,
     loss: str = "linear",
     estimate_mount: str = "none",
+    floor=None,
 ) -> MlFit:
     """Maximum-likelihood fit of all channels on per-pose mean readings.
 
@@ -260,6 +279,8 @@ def fit_ml(
         loss: One of :data:`LOSSES`.
         estimate_mount: ``"none"``, ``"yaw"`` or ``"full"``: also fit the mount
             ``R_M`` (``poses.rotations`` are then the URDF's ``R_BS``).
+        floor: ``(6,)`` lowest noise a residual estimate may take [N, N·m] (default:
+            :func:`~ftkin.calibration.information.noise_floor`).
 
     Raises:
         UnobservableParameters: the poses cannot determine the parameters (or the mount).
@@ -278,29 +299,13 @@ def fit_ml(
             poses.rotations, poses.wrenches, counts, np.ones(6), mount0, estimate_mount
         )
         theta0 = np.concatenate([start.to_vector(), np.zeros(problem.parameter_count - 12)])
-    if noise is not None:
-        channel_std, dof, source = noise.channel_std, np.inf, "given"
-    else:
-        spread = noise_from_spread(poses)
-        if spread is not None:
-            (channel_std, dof), source = spread, "spread"
-        else:
-            source = "residuals"
-            # rough levels (no leverage correction) to weight the channels for the leverages
-            rms = np.sqrt(np.mean(problem.residuals(theta0) ** 2 * counts[:, None], axis=0))
-            rough = np.concatenate(
-                [np.full(3, rms[_FORCE].mean()), np.full(3, rms[_TORQUE].mean())]
-            )
-            rough = np.maximum(rough, 1e-12 * np.maximum(1.0, np.abs(poses.wrenches).max(axis=0)))
-            channel_std, dof = noise_from_residuals(
-                replace(problem, channel_std=rough), theta0, robust=loss != "linear"
-            )
+    channel_std, dof, source = _noise(poses, problem, theta0, noise, loss, floor)
     problem = replace(problem, channel_std=channel_std)
     if estimate_mount != "none":
         check_mount_observable(problem, theta0)
     theta, evaluations = _solve(problem, theta0, loss)
     for _ in range(RESIDUAL_NOISE_PASSES if source == "residuals" else 0):
-        channel_std, dof = noise_from_residuals(problem, theta, robust=loss != "linear")
+        channel_std, dof = noise_from_residuals(problem, theta, loss != "linear", floor)
         converged = np.allclose(channel_std, problem.channel_std, rtol=1e-2, atol=0.0)
         problem = replace(problem, channel_std=channel_std)
         if converged:

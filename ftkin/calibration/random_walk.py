@@ -1,4 +1,4 @@
-"""A sensor bias that wanders as a random walk: Kalman filter and Rauch–Tung–Striebel smoother.
+"""The random-walk drift ``"random-walk"``: Kalman filter and Rauch–Tung–Striebel smoother.
 
 Per channel ``c`` the per-pose mean reading is ``y_i = f_c(θ, R_i) + w_c(t_i) + e_i``
 with ``e_i ~ N(0, σ_c² / n_i)`` and ``w_c`` a random walk of rate ``q_c``
@@ -14,7 +14,12 @@ exact Gaussian log-likelihood ``−½ Σ (ν²/S + log 2πS)`` and, applied to t
 columns of ``∂f/∂θ``, the whitened Jacobian of a generalized least-squares fit
 of ``θ`` with the walk integrated out. The smoother then gives the bias at every
 pose time. Everything here works on poses sorted by time and on all six
-channels at once.
+channels at once. With a zero rate the filter is plain weighting by the noise
+(gain 0): the fits of :mod:`ftkin.calibration.drift_fit` use the same code for
+every model.
+
+The model registers as ``"random-walk"``; ``"random-walk+poly:N"`` is a walk
+around a polynomial trend (a warm-up that a walk alone would take for a fast one).
 """
 
 from __future__ import annotations
@@ -22,6 +27,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from ..exceptions import InvalidInput
+from .drift import DriftModel, register_drift_model
 
 
 @dataclass(frozen=True)
@@ -46,6 +54,9 @@ def walk_gains(times: np.ndarray, noise_variance: np.ndarray, rate: np.ndarray) 
     ``(6,)``.
     """
     count = len(times)
+    if not np.any(rate):  # no walk: plain weighting by the noise
+        zeros = np.zeros((count, 6))
+        return WalkGains(np.asarray(noise_variance, dtype=float), zeros, zeros, zeros)
     steps = np.diff(times)
     predicted, filtered = np.empty((count, 6)), np.empty((count, 6))
     rate_squared = rate**2
@@ -67,6 +78,8 @@ def whiten(gains: WalkGains, columns: np.ndarray) -> np.ndarray:
     Leading axes are independent sets of columns (e.g. candidate pose orders), whitened together.
     """
     count = columns.shape[-3]
+    if not np.any(gains.gain):  # no walk: the innovations are the columns
+        return columns / np.sqrt(gains.innovation_variance)[:, :, None]
     out = np.empty_like(columns)
     state = np.zeros(columns.shape[:-3] + columns.shape[-2:])
     gain = gains.gain[:, :, None]
@@ -110,3 +123,17 @@ def smooth(
         mean[i] = filtered[i] + gain * (mean[i - 1] - filtered[i])
         variance[i] = gains.filtered_variance[i] + gain**2 * (variance[i - 1] - predicted_variance)
     return mean, np.clip(variance, 0.0, None)
+
+
+def _random_walk(argument: str | None) -> DriftModel:
+    if argument is not None:
+        raise InvalidInput(f"drift 'random-walk' takes no argument, got 'random-walk:{argument}'")
+    return DriftModel("random-walk", walk=True)
+
+
+register_drift_model(
+    "random-walk",
+    _random_walk,
+    auto=("random-walk", "random-walk+poly:1", "random-walk+poly:2"),
+    walk=True,
+)

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import argparse
 from dataclasses import replace
 from pathlib import Path
 
 from ..calibration.conventions import BASE_MOUNTS
-from ..calibration.drift import DRIFT_CHOICES
-from ..calibration.estimate import METHODS, calibrate
+from ..calibration.drift import drift_candidates, drift_choices
+from ..calibration.estimate import METHODS, CalibrationOptions, calibrate
 from ..calibration.information import SensorNoise
 from ..calibration.ml import LOSSES
 from ..calibration.model import STANDARD_GRAVITY
@@ -20,18 +21,29 @@ from .common import add_samples_arguments, arm_from_args, load_samples_from_args
 from .doctor import check_conventions
 from .motion import add_derivative_arguments, calibrate_motion
 
+DESCRIPTION = (
+    "Calibrate from a samples CSV: wrench columns fx,fy,fz,mx,my,mz [N, N·m] and the orientation "
+    "as joint columns (URDF names or q1..qn, rad), alpha,beta,gamma (deg, R = Rz Ry Rx) or "
+    "qw,qx,qy,qz; optional integer 'pose' column groups repeated readings (their spread then "
+    "gives the noise levels of the ml fit); optional 't' column [s] (bags: the stamps) lets the "
+    "bias drift with time (--drift)."
+)
+
+
+def drift_spec(text: str) -> str:
+    """argparse type: a drift spec the registry knows (``auto``, ``none``, ``poly:2``, ...)."""
+    try:
+        drift_candidates(text)
+    except InvalidInput as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+    return text
+
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "calibrate",
         help="estimate sensor bias, tool weight, centre of mass and base tilt",
-        description="Calibrate from a samples CSV: wrench columns fx,fy,fz,mx,my,mz [N, N·m] and "
-        "the "
-        "orientation as joint columns (URDF names or q1..qn, rad), alpha,beta,gamma (deg, "
-        "R = Rz Ry Rx) or qw,qx,qy,qz; optional integer 'pose' column groups repeated readings "
-        "(their spread then gives the noise levels of the ml fit); optional 't' column [s] (bags: "
-        "the stamps) "
-        "lets the bias drift with time (--drift).",
+        description=DESCRIPTION,
     )
     parser.add_argument("samples", metavar="SAMPLES.csv")
     parser.add_argument(
@@ -50,87 +62,9 @@ def register(subparsers) -> None:
         default=STANDARD_GRAVITY,
         help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)",
     )
-    ml = parser.add_argument_group("ml estimator")
-    ml.add_argument(
-        "--noise-force",
-        type=positive_float,
-        metavar="N",
-        help="noise std of one force reading [N] (with --noise-torque; default: estimated from the "
-        "spread "
-        "of repeated readings per pose, else from the residuals)",
-    )
-    ml.add_argument(
-        "--noise-torque",
-        type=positive_float,
-        metavar="N·m",
-        help="noise std of one torque reading [N·m]",
-    )
-    ml.add_argument(
-        "--loss",
-        choices=LOSSES,
-        default="linear",
-        help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
-    )
-    ml.add_argument(
-        "--drop-outliers", action="store_true", help="refit without the poses flagged as outliers"
-    )
-    ml.add_argument(
-        "--drift",
-        default="auto",
-        metavar="MODEL",
-        help=f"bias drift over time, with a 't' column: {'|'.join(DRIFT_CHOICES)} (poly:N a "
-        "polynomial of degree N; "
-        "random-walk estimates the rate; auto picks by BIC and says which; default: %(default)s)",
-    )
-    ml.add_argument(
-        "--cross-validate",
-        type=bounded_int(2, 50, "folds"),
-        metavar="K",
-        default=None,
-        help="also print the K-fold cross-validated compensation error at held-out poses, with "
-        "drift none beside "
-        "the --drift model (does modelling a drift pay on this sensor?)",
-    )
-    ml.add_argument(
-        "--estimate-mount",
-        choices=MOUNT_MODES[1:],
-        metavar="yaw|full",
-        help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or full "
-        "(any rotation); "
-        "needs joint-angle samples (default: the URDF's sensor frame is right)",
-    )
-    conventions = parser.add_argument_group(
-        "sensor and robot conventions (stored in the calibration file)"
-    )
-    conventions.add_argument(
-        "--sensor-sign",
-        type=int,
-        choices=(1, -1),
-        default=1,
-        help="-1: the sensor reports the reaction, negate every reading (default: %(default)s, the "
-        "load on the sensor)",
-    )
-    conventions.add_argument(
-        "--flip-axis",
-        choices=("x", "y", "z"),
-        help="negate this axis's force and torque channels in every reading (a mirrored, "
-        "left-handed sensor axis)",
-    )
-    conventions.add_argument(
-        "--base-mount",
-        choices=BASE_MOUNTS,
-        default="floor",
-        help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall (no "
-        "check); a fitted "
-        "weight more than 90° off the expected direction is refused as a suspect sign (default: "
-        "%(default)s)",
-    )
-    conventions.add_argument(
-        "--expected-gravity",
-        type=float,
-        nargs=3,
-        metavar=("GX", "GY", "GZ"),
-        help="expected gravity direction in the base frame (overrides --base-mount)",
+    _add_ml_arguments(parser.add_argument_group("ml estimator"))
+    _add_convention_arguments(
+        parser.add_argument_group("sensor and robot conventions (stored in the calibration file)")
     )
     dynamic = parser.add_argument_group(
         "dynamic calibration (a moving recording: columns t, joints, fx..mz, or a bag)"
@@ -153,6 +87,92 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
+def _add_ml_arguments(ml) -> None:
+    ml.add_argument(
+        "--noise-force",
+        type=positive_float,
+        metavar="N",
+        help="noise std of one force reading [N] (with --noise-torque; default: estimated from the "
+        "spread of repeated readings per pose, else from the residuals)",
+    )
+    ml.add_argument(
+        "--noise-torque", type=positive_float, metavar="N·m", help="noise std of one torque reading"
+    )
+    ml.add_argument(
+        "--resolution",
+        type=positive_float,
+        nargs=2,
+        metavar=("N", "N·m"),
+        help="resolution (quantization step) of one force and one torque reading: an estimated "
+        "noise is at least resolution/√12, so a drift model cannot take all of it",
+    )
+    ml.add_argument(
+        "--loss",
+        choices=LOSSES,
+        default="linear",
+        help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
+    )
+    ml.add_argument(
+        "--drop-outliers", action="store_true", help="refit without the poses flagged as outliers"
+    )
+    ml.add_argument(
+        "--drift",
+        type=drift_spec,
+        default="auto",
+        metavar="MODEL",
+        help=f"bias drift over time, with a 't' column: {'|'.join(drift_choices())} (poly:N a "
+        "polynomial of degree N; random-walk estimates the rate; auto picks by BIC and says which; "
+        "default: %(default)s)",
+    )
+    ml.add_argument(
+        "--cross-validate",
+        type=bounded_int(2, 50, "folds"),
+        metavar="K",
+        default=None,
+        help="also print the K-fold cross-validated compensation error at held-out poses, with "
+        "drift none beside the --drift model (does modelling a drift pay on this sensor?)",
+    )
+    ml.add_argument(
+        "--estimate-mount",
+        choices=MOUNT_MODES[1:],
+        metavar="yaw|full",
+        help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or full "
+        "(any rotation); needs joint-angle samples (default: the URDF's sensor frame is right)",
+    )
+
+
+def _add_convention_arguments(conventions) -> None:
+    conventions.add_argument(
+        "--sensor-sign",
+        type=int,
+        choices=(1, -1),
+        default=1,
+        help="-1: the sensor reports the reaction, negate every reading (default: %(default)s, the "
+        "load on the sensor)",
+    )
+    conventions.add_argument(
+        "--flip-axis",
+        choices=("x", "y", "z"),
+        help="negate this axis's force and torque channels in every reading (a mirrored, "
+        "left-handed sensor axis)",
+    )
+    conventions.add_argument(
+        "--base-mount",
+        choices=BASE_MOUNTS,
+        default="floor",
+        help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall (no "
+        "check); a fitted weight more than 90° off the expected direction is refused as a suspect "
+        "sign (default: %(default)s)",
+    )
+    conventions.add_argument(
+        "--expected-gravity",
+        type=float,
+        nargs=3,
+        metavar=("GX", "GY", "GZ"),
+        help="expected gravity direction in the base frame (overrides --base-mount)",
+    )
+
+
 def _noise(args) -> SensorNoise | None:
     if (args.noise_force is None) != (args.noise_torque is None):
         raise InvalidInput(
@@ -172,44 +192,62 @@ def _bundled_if_used(loaded):
     return None
 
 
+def _run_dynamic(args, noise) -> int:
+    static_only = {
+        "--method": args.method != METHODS[0],
+        "--loss": args.loss != "linear",
+        "--drop-outliers": args.drop_outliers,
+        "--estimate-mount": args.estimate_mount,
+        "--sensor-sign": args.sensor_sign != 1,
+        "--flip-axis": args.flip_axis,
+        "--drift": args.drift != "auto",
+        "--resolution": args.resolution,
+        "--cross-validate": args.cross_validate,
+    }
+    given = [flag for flag, used in static_only.items() if used]
+    if given:
+        raise InvalidInput(
+            f"{', '.join(given)} apply to static calibration, not (yet) to --dynamic; calibrate "
+            "the mount and sign from static poses first"
+        )
+    from ..kinematics.arm import Arm
+
+    arm = arm_from_args(args) or Arm.default()
+    result = calibrate_motion(args, arm, noise)  # the file records its arm, as a static one does
+    return _report(replace(result, kinematics=KinematicsRecord.from_arm(arm)), args)
+
+
+def _options(args, noise) -> CalibrationOptions:
+    """The calibration options of the command line (their combinations checked there)."""
+    if args.no_inertia or args.sg_window is not None:
+        raise InvalidInput("--no-inertia and --sg-window apply to --dynamic only")
+    ml_only = noise is not None or args.loss != "linear" or args.drop_outliers or args.resolution
+    if args.method == "linear" and (ml_only or args.estimate_mount):
+        raise InvalidInput(
+            "--noise-force/--noise-torque, --resolution, --loss, --drop-outliers and "
+            "--estimate-mount apply to --method ml only"
+        )
+    return CalibrationOptions(
+        method=args.method,
+        g=args.g,
+        noise=noise,
+        loss=args.loss,
+        drop_outliers=args.drop_outliers,
+        estimate_mount=args.estimate_mount or "none",
+        sensor_sign=args.sensor_sign,
+        flip_axis=args.flip_axis,
+        base_mount=args.base_mount,
+        expected_gravity=args.expected_gravity,
+        drift=args.drift,
+        resolution=args.resolution,
+    )
+
+
 def run(args) -> int:
     noise = _noise(args)
     if args.dynamic:
-        if args.method != METHODS[0] or args.loss != "linear" or args.drop_outliers:
-            raise InvalidInput(
-                "--method, --loss and --drop-outliers apply to static calibration, not to --dynamic"
-            )
-        if (
-            args.estimate_mount
-            or args.sensor_sign != 1
-            or args.flip_axis
-            or args.drift != "auto"
-            or args.cross_validate
-        ):
-            raise InvalidInput(
-                "--estimate-mount, --sensor-sign, --flip-axis, --drift and --cross-validate apply "
-                "to static calibration, "
-                "not yet to "
-                "--dynamic; "
-                "calibrate the mount and sign from static poses first"
-            )
-        from ..kinematics.arm import Arm
-
-        arm = arm_from_args(args) or Arm.default()
-        result = calibrate_motion(
-            args, arm, noise
-        )  # the file records its arm, as a static calibration does
-        return _report(replace(result, kinematics=KinematicsRecord.from_arm(arm)), args)
-    if args.no_inertia or args.sg_window is not None:
-        raise InvalidInput("--no-inertia and --sg-window apply to --dynamic only")
-    if args.method == "linear" and (
-        noise is not None or args.loss != "linear" or args.drop_outliers
-    ):
-        raise InvalidInput(
-            "--noise-force/--noise-torque, --loss and --drop-outliers apply to --method ml only"
-        )
-    if args.method == "linear" and args.estimate_mount:
-        raise InvalidInput("--estimate-mount applies to --method ml only")
+        return _run_dynamic(args, noise)
+    options = _options(args, noise)
     arm = arm_from_args(args)
     loaded = load_samples_from_args(args.samples, args, arm=arm)
     stated = (
@@ -221,25 +259,12 @@ def run(args) -> int:
     )
     if not (args.no_convention_check or stated):
         # The doctor refits the readings as given, on a floor-mounted base with the URDF's sensor
-        # frame; with a
-        # stated sign, axis, base mount or an estimated mount calibrate() checks the conventions
-        # itself.
+        # frame; with a stated sign, axis, base mount or an estimated mount calibrate() checks
+        # the conventions itself.
         check_conventions(loaded, arm)
-    options = dict(
-        method=args.method,
-        g=args.g,
-        noise=noise,
-        loss=args.loss,
-        drop_outliers=args.drop_outliers,
-        estimate_mount=args.estimate_mount or "none",
-        sensor_sign=args.sensor_sign,
-        flip_axis=args.flip_axis,
-        base_mount=args.base_mount,
-        expected_gravity=args.expected_gravity,
-    )
-    result = calibrate(loaded.samples, drift=args.drift, **options)
-    samples_arm = getattr(loaded.samples, "urdf", None) and (arm or _bundled_if_used(loaded))
-    if samples_arm is not None:
+    result = calibrate(loaded.samples, options)
+    samples_arm = loaded.samples.urdf and (arm or _bundled_if_used(loaded))
+    if samples_arm:
         result = replace(result, kinematics=KinematicsRecord.from_arm(samples_arm))
     validation = None
     if args.cross_validate:  # before anything is written: a failure leaves no file behind
@@ -247,7 +272,9 @@ def run(args) -> int:
 
         timed = loaded.samples.times is not None and args.drift != "none"
         drifts = ("none", args.drift) if timed else ("none",)
-        validation = cross_validate(loaded.samples, drifts, folds=args.cross_validate, **options)
+        validation = cross_validate(
+            loaded.samples, drifts, folds=args.cross_validate, options=options
+        )
     status = _report(result, args)
     if validation is not None:
         print(validation.report())

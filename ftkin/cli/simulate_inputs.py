@@ -111,9 +111,9 @@ def _inputs(args):
     from ..calibration.information import SensorNoise
     from ..calibration.model import SensorModel
     from ..kinematics.rotations import euler_zyx_to_matrix
-    from ..sim.drift import SensorDrift
     from ..sim.inputs import SimulatedInputs
     from ..sim.sensor import paper_like_truth
+    from ..sim.sensor_drift import SensorDrift
 
     truth = paper_like_truth()
     if args.tool_mass is not None or args.com is not None:

@@ -39,6 +39,7 @@ from collections import deque
 
 import numpy as np
 
+from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from ..validation import as_six_channels, as_vector
 
@@ -113,7 +114,12 @@ class BiasTracker:
             InvalidInput: neither given nor in the calibration (e.g. a
                 calibration without times: give ``rate=``).
         """
-        drift = getattr(calibration, "drift", None)
+        full = isinstance(calibration, CalibrationResult)  # a bare SensorModel has none of them
+        drift, diagnostics, errors = (
+            (calibration.drift, calibration.diagnostics, calibration.std_errors)
+            if full
+            else (None, None, None)
+        )
         if rate is None:
             if drift is None or drift.rate is None:
                 raise InvalidInput(
@@ -121,13 +127,11 @@ class BiasTracker:
                 )
             rate = drift.rate
         if noise is None:
-            diagnostics = getattr(calibration, "diagnostics", None)
             if diagnostics is None:
                 raise InvalidInput(
                     "the calibration has no noise estimate (method 'linear'?): give noise=[N, N·m]"
                 )
             noise = diagnostics.noise.channel_std
-        errors = getattr(calibration, "std_errors", None)
         if errors is not None and "initial_std" not in options:
             options["initial_std"] = np.concatenate(
                 [errors["force_offset"], errors["torque_offset"]]
@@ -218,30 +222,7 @@ class BiasTracker:
             return False
         self._clock += dt
         self._tick += 1
-        speed = 0.0
-        # on Python floats, as the rest of the tick: numpy's per-call cost dominates on 6-vectors
-        try:
-            positions = (
-                None
-                if q is None
-                else q.tolist()
-                if type(q) is np.ndarray
-                else [float(value) for value in q]
-            )
-            contact = (
-                contact_wrench.tolist()
-                if type(contact_wrench) is np.ndarray
-                else [float(value) for value in contact_wrench]
-            )
-        except (TypeError, ValueError) as error:
-            raise InvalidInput(f"q and contact_wrench must be numbers: {error}") from None
-        if positions is not None:
-            previous = self._previous_q
-            if previous is not None and len(previous) == len(positions):
-                speed = max(map(abs, map(float.__sub__, positions, previous)), default=0.0) / dt
-            else:
-                speed = math.inf  # the first tick with positions: the speed is not known yet
-            self._previous_q = positions
+        contact, speed = self._read(contact_wrench, q, dt)
         if len(contact) != 6:
             raise InvalidInput(f"contact_wrench must have six values [N, N·m], got {len(contact)}")
         limit = self.max_speed if free else self.still_speed
@@ -277,6 +258,33 @@ class BiasTracker:
         if self._clock - self._waiting[0][0] < self.window + self.guard - tolerance:
             return False
         return self._use(self._clock - self.guard + tolerance)
+
+    def _read(self, contact_wrench, q, dt: float) -> tuple[list, float]:
+        """The tick's contact wrench as six floats and the fastest joint speed [rad/s] (0 without
+        ``q``; inf on the first tick with positions).
+        """
+        # on Python floats, as the rest of the tick: numpy's per-call cost dominates on 6-vectors
+        try:
+            positions = (
+                None
+                if q is None
+                else q.tolist()
+                if type(q) is np.ndarray
+                else [float(value) for value in q]
+            )
+            contact = (
+                contact_wrench.tolist()
+                if type(contact_wrench) is np.ndarray
+                else [float(value) for value in contact_wrench]
+            )
+        except (TypeError, ValueError) as error:
+            raise InvalidInput(f"q and contact_wrench must be numbers: {error}") from None
+        if positions is None:
+            return contact, 0.0
+        previous, self._previous_q = self._previous_q, positions
+        if previous is None or len(previous) != len(positions):
+            return contact, math.inf  # the first tick with positions: the speed is not known yet
+        return contact, max(map(abs, map(float.__sub__, positions, previous)), default=0.0) / dt
 
     def _use(self, until: float) -> bool:
         """Kalman updates, in time order, with every waiting tick taken at or before ``until``

@@ -1,8 +1,13 @@
-"""The ``drift`` entry of a calibration file (format version 2): the bias trajectory."""
+"""The ``drift`` entry of a calibration file (format version 2): the bias trajectory.
+
+The common keys are written here; each drift model writes and reads its own
+(:meth:`~ftkin.calibration.drift.DriftModel.to_document`), and the model name is
+looked up in the drift registry, so a registered model round-trips unchanged.
+"""
 
 from __future__ import annotations
 
-from ..calibration.drift import BiasDrift, check_model_name
+from ..calibration.drift import BiasDrift, parse_drift
 from ..exceptions import FtkinError, InvalidInput
 from .json_reader import JsonReader, NestedReader
 
@@ -17,8 +22,7 @@ def drift_to_document(drift: BiasDrift | None) -> dict | None:
         "times": drift.times,
         "bias": drift.bias,
         "bias_std": drift.bias_std,
-        "rate": drift.rate,
-        "coefficients": drift.coefficients,
+        **drift.kind.to_document(drift),
         "time_scale": drift.time_scale,
         "criteria": {name: float(value) for name, value in drift.criteria.items()},
         "recorded_span": drift.recorded_span,
@@ -31,15 +35,12 @@ def drift_from_document(reader: JsonReader) -> BiasDrift | None:
     if data is None:
         return None
     sub = NestedReader(reader.path, data, "drift")
-    model = sub.get("model")
     try:
-        check_model_name(model)
+        kind = parse_drift(sub.get("model"))
     except InvalidInput as error:
         reader.fail(str(error), "drift.model")
     times = data.get("times")
-    times = sub.array("times", (len(times) if isinstance(times, list) else 0,))
-    count = len(times)
-    coefficients = data.get("coefficients")
+    count = len(sub.array("times", (len(times) if isinstance(times, list) else 0,)))
     criteria = data.get("criteria") or {}
     if not isinstance(criteria, dict):
         reader.fail("expected an object of numbers", "drift.criteria")
@@ -48,18 +49,15 @@ def drift_from_document(reader: JsonReader) -> BiasDrift | None:
     )
     try:
         return BiasDrift(
-            model=model,
+            model=kind.name,
             selected_by=sub.optional("selected_by", str, "given"),
-            times=times,
+            times=sub.array("times", (count,)),
             bias=sub.array("bias", (count, 6)),
             bias_std=sub.array("bias_std", (count, 6)),
-            rate=sub.array("rate", (2,), required=False),
-            coefficients=None
-            if coefficients is None
-            else sub.array("coefficients", (len(coefficients), 6)),
             time_scale=sub.number("time_scale") if "time_scale" in data else 1.0,
             criteria={str(name): float(value) for name, value in criteria.items()},
             recorded_span=sub.array("recorded_span", (2,), required=False),
+            **kind.from_document(sub),
         )
     except (FtkinError, TypeError, ValueError) as error:
         reader.fail(f"malformed: {error}", "drift")

@@ -21,7 +21,7 @@ _EXPORTS = {
     "MujocoRecorder": ".mujoco",
     "PlacementRun": ".placement",
     "PlacementScenario": ".placement",
-    "SensorDrift": ".drift",
+    "SensorDrift": ".sensor_drift",
     "SimulatedInputs": ".inputs",
     "SimulatedSensor": ".sensor",
     "Surface": ".surfaces",

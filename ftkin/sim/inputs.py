@@ -32,8 +32,8 @@ from ..calibration.model import WRENCH_CHANNELS, SensorModel
 from ..exceptions import InvalidInput, MissingDependency
 from ..io.samples_csv import detect_orientation
 from ..validation import as_batch
-from .drift import SensorDrift
 from .sensor import SimulatedSensor, paper_like_truth, recording_times
+from .sensor_drift import SensorDrift
 
 PUSH = np.array([0.0, 0.0, 2.0, 0.0, 0.05, 0.0])
 """The known push of :func:`log_table`: the environment on the tool, sensor frame [N, N·m]."""

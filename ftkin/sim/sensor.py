@@ -17,7 +17,7 @@ from ..calibration.model import STANDARD_GRAVITY, SensorModel
 from ..calibration.samples import Samples
 from ..exceptions import InvalidInput
 from ..validation import as_batch, as_float_array, as_rotation_batch
-from .drift import SensorDrift
+from .sensor_drift import SensorDrift
 
 
 def paper_like_truth(g: float = STANDARD_GRAVITY) -> SensorModel:

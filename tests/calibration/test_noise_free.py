@@ -1,5 +1,6 @@
 """Noise-free readings (a simulation without sensor noise): exact estimates, a clear warning, no
-false outliers.
+false outliers; "noise-free" is said only when the repeated raw readings are identical, never from
+a fit's residuals.
 """
 
 from __future__ import annotations
@@ -18,34 +19,50 @@ TRUTH = SensorModel.from_tool(
 )
 
 
-@pytest.fixture(scope="module")
-def exact_samples(arm):
+def _exact(arm, readings: int) -> Samples:
     q = arm.random_configurations(12, np.random.default_rng(3), margin=0.3)
-    rotations = arm.rotation_sensor_to_base(q)
-    return Samples(TRUTH.predict(rotations), rotations, np.arange(12), times=10.0 * np.arange(12))
+    rotations = np.repeat(arm.rotation_sensor_to_base(q), readings, axis=0)
+    times = 10.0 * np.arange(12 * readings) / readings
+    ids = np.repeat(np.arange(12), readings)
+    return Samples(TRUTH.predict(rotations), rotations, ids, times=times)
 
 
 @pytest.mark.parametrize("drift", ["none", "auto", "random-walk", "poly:2"])
-def test_noise_free_readings_give_the_truth_and_say_so(exact_samples, drift, caplog):
+def test_identical_repeated_readings_give_the_truth_and_say_noise_free(arm, drift, caplog):
+    samples = _exact(arm, 3)
     with caplog.at_level(logging.WARNING, logger="ftkin"):
-        result = calibrate(exact_samples, drift=drift)
-    np.testing.assert_allclose(
-        result.to_vector(), TRUTH.to_vector(), atol=1e-6
-    )  # independent: the generating model
+        result = calibrate(samples, drift=drift)
+    # independent: the generating model
+    np.testing.assert_allclose(result.to_vector(), TRUTH.to_vector(), atol=1e-6)
     assert result.diagnostics.outlier_pose_ids == ()
-    assert any("fit the model to rounding" in w for w in result.diagnostics.warnings)
+    assert any("simulation without sensor noise" in w for w in result.diagnostics.warnings)
     assert np.all(
-        result.diagnostics.noise.channel_std >= noise_floor(exact_samples.wrenches) * (1 - 1e-9)
+        result.diagnostics.noise.channel_std >= noise_floor(samples.wrenches) * (1 - 1e-9)
     )
 
 
-def test_noisy_readings_are_not_called_exact(arm, exact_samples):
+@pytest.mark.parametrize("drift", ["none", "auto", "random-walk"])
+def test_one_exact_reading_per_pose_is_not_called_noise_free(arm, drift):
+    """Residuals at rounding level are a fact about the fit, not proof of noise-free readings."""
+    result = calibrate(_exact(arm, 1), drift=drift)
+    np.testing.assert_allclose(result.to_vector(), TRUTH.to_vector(), atol=1e-6)
+    warnings = result.diagnostics.warnings
+    assert not any("simulation" in w for w in warnings)
+    assert any("rounding level" in w for w in warnings)
+    assert result.diagnostics.outlier_pose_ids == ()
+    if drift == "random-walk":  # the walk would take the (zero) noise: the fit says so
+        assert result.drift.model == "none" and result.drift.selected_by == "auto"
+        assert any("cannot be told apart" in w for w in warnings)
+
+
+def test_noisy_readings_are_not_called_exact(arm):
+    exact = _exact(arm, 1)
     rng = np.random.default_rng(0)
     noisy = Samples(
-        exact_samples.wrenches + rng.normal(0, [1e-4] * 3 + [1e-5] * 3, (12, 6)),
-        exact_samples.rotations,
-        exact_samples.pose_ids,
-        times=exact_samples.times,
+        exact.wrenches + rng.normal(0, [1e-4] * 3 + [1e-5] * 3, (12, 6)),
+        exact.rotations,
+        exact.pose_ids,
+        times=exact.times,
     )
     result = calibrate(noisy, drift="none")
     assert not any("rounding" in w for w in result.diagnostics.warnings)
