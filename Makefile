@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test install lint docs docs-test docs-images bench fuzz soak clean
+.PHONY: demo demo-robot test install lint docs docs-test docs-images bench fuzz soak clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -18,6 +18,9 @@ install: $(STAMP)
 
 demo: $(STAMP)
 	$(VENV)/bin/ftkin demo
+
+demo-robot: $(STAMP)
+	$(VENV)/bin/ftkin robot demo
 
 test: $(STAMP)
 	bash scripts/install-system-deps.sh

@@ -62,6 +62,11 @@ STAGES = [
         "Visualisation",
         ["arrows", "legend", "scene", "server", "vectors", "viewer", "browser", "report"],
     ),
+    (
+        "robot",
+        "On the robot",
+        ["protocols", "franka", "session", "stillness", "samples_log", "loop", "guiding"],
+    ),
     ("cli", "Command line", []),
 ]
 BOTTOM = ["exceptions", "validation", "progress"]

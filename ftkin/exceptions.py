@@ -172,3 +172,71 @@ class SuspectConvention(FtkinError):
         self.sensor_sign = sensor_sign
         self.flip_axis = flip_axis
         super().__init__(message)
+
+
+class RobotError(FtkinError):
+    """The robot refused a command, reported an error, or cannot be reached.
+
+    Attributes:
+        host: The robot's address, when known.
+        driver_message: The driver's own message (e.g. libfranka's), when there is one.
+    """
+
+    def __init__(self, message: str, host: str | None = None, driver_message: str = ""):
+        self.host = host
+        self.driver_message = driver_message
+        super().__init__(message + (f" ({driver_message})" if driver_message else ""))
+
+
+class RobotConnectionLost(RobotError):
+    """The connection to the robot is lost or cannot be opened (network, server stopped)."""
+
+
+class RealtimeUnavailable(RobotError):
+    """The kernel has no real-time scheduling and ``realtime=True`` asked for it."""
+
+
+class SensorError(FtkinError):
+    """The force/torque sensor failed: its read raised, a value is not finite, or it is stale.
+
+    Attributes:
+        kind: ``"read_failed"``, ``"not_finite"`` or ``"stale"``.
+    """
+
+    def __init__(self, kind: str, message: str):
+        self.kind = kind
+        super().__init__(message)
+
+
+class NonPhysicalPayload(InvalidInput):
+    """A payload difference is not a rigid body (negative mass, inertia not positive definite).
+
+    Attributes:
+        setting: The setting to check (e.g. the robot's configured end effector).
+    """
+
+    def __init__(self, message: str, setting: str = ""):
+        self.setting = setting
+        super().__init__(message)
+
+
+class SessionInterrupted(FtkinError):
+    """A calibration session on a robot stopped before its end; the recorded poses are kept.
+
+    Attributes:
+        reason: What stopped it (a sensor fault, a robot error, Ctrl-C).
+        poses_recorded: Poses in the samples file.
+        poses_total: Poses of the session.
+        samples_path: The samples file (complete up to the last recorded pose).
+    """
+
+    def __init__(self, reason: str, poses_recorded: int, poses_total: int, samples_path):
+        self.reason = reason
+        self.poses_recorded = poses_recorded
+        self.poses_total = poses_total
+        self.samples_path = samples_path
+        super().__init__(
+            f"session stopped after {poses_recorded} of {poses_total} poses: {reason}; the "
+            f"samples recorded so far are in {samples_path}: run again with resume=True "
+            "(--resume) to finish"
+        )

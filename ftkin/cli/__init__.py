@@ -29,6 +29,7 @@ COMMAND_MODULES = (
     "view",
     "simulate",
     "doctor",
+    "robot",
 )
 """Subcommand modules of ``ftkin.cli``, in the order ``--help`` lists them."""
 

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 from ..io.calibration_file import load_calibration
 from ..io.export import EXPORT_FORMATS, export_calibration, export_notes
-from ..io.payload_export import PAYLOAD_FORMATS, export_payload, payload_in_flange
+from ..io.payload_export import PAYLOAD_FORMATS, controller_payload, export_payload
+from ..io.payload_inertia import RigidBody
 from ..kinematics.arm import Arm
 from .common import add_arm_arguments, arm_for_calibration
 
@@ -70,6 +71,22 @@ def register(subparsers) -> None:
         help="tool inertia about its centre of mass in flange axes [kg·m²] (default: unknown, "
         "written as zero)",
     )
+    payload.add_argument(
+        "--end-effector",
+        type=float,
+        nargs=4,
+        metavar=("MASS", "CX", "CY", "CZ"),
+        help="franka-load: subtract the end effector the controller already models (libfranka "
+        "m_ee, F_x_Cee) [kg, m, flange frame]",
+    )
+    payload.add_argument(
+        "--sensor-body",
+        type=float,
+        nargs=4,
+        metavar=("MASS", "CX", "CY", "CZ"),
+        help="franka-load: add the sensor's own body above its measuring plane (datasheet) "
+        "[kg, m, flange frame]",
+    )
     add_arm_arguments(parser)
     parser.set_defaults(func=run)
 
@@ -78,8 +95,23 @@ def run(args) -> int:
     calibration = load_calibration(args.calibration)
     if args.fmt in PAYLOAD_FORMATS:
         arm = arm_for_calibration(args, calibration) or Arm.default()
-        export_payload(calibration, arm, args.output, args.fmt, args.flange_frame, args.inertia)
-        payload = payload_in_flange(calibration, arm, args.flange_frame, args.inertia)
+        bodies = [
+            None if values is None else RigidBody.point(values[0], values[1:])
+            for values in (getattr(args, "end_effector", None), getattr(args, "sensor_body", None))
+        ]
+        export_payload(
+            calibration,
+            arm,
+            args.output,
+            args.fmt,
+            args.flange_frame,
+            args.inertia,
+            end_effector=bodies[0],
+            sensor_body=bodies[1],
+        )
+        payload = controller_payload(
+            calibration, arm, args.fmt, args.flange_frame, args.inertia, *bodies
+        )
         com = ", ".join(f"{value:.6g}" for value in payload.center_of_mass)
         print(
             f"wrote {args.fmt} to {args.output}: mass {payload.mass:.6g} kg, centre of mass "

@@ -228,12 +228,41 @@ def payload_text(payload: Payload, fmt: str, urscript_only: bool = False) -> str
     return yaml_text(tree, [line.removeprefix("# ") for line in header])
 
 
+def controller_payload(
+    calibration, arm, fmt, flange_frame=None, inertia=None, end_effector=None, sensor_body=None
+) -> Payload:
+    """:func:`payload_in_flange`, minus ``end_effector`` plus ``sensor_body`` when given."""
+    payload = payload_in_flange(calibration, arm, flange_frame, inertia)
+    if end_effector is None and sensor_body is None:
+        return payload
+    if fmt != "franka-load":
+        raise InvalidInput("--end-effector and --sensor-body go with --format franka-load")
+    from .payload_inertia import controller_load  # it imports this module
+
+    return controller_load(payload, end_effector, sensor_body)
+
+
 def export_payload(
-    calibration: SensorModel, arm, path, fmt: str, flange_frame: str | None = None, inertia=None
+    calibration: SensorModel,
+    arm,
+    path,
+    fmt: str,
+    flange_frame: str | None = None,
+    inertia=None,
+    *,
+    end_effector=None,
+    sensor_body=None,
 ) -> Path:
     """Write the payload of ``calibration`` in ``fmt`` to ``path`` atomically (``.script``: URScript
     only).
+
+    ``end_effector`` and ``sensor_body`` (``franka-load``; flange-frame
+    :class:`~ftkin.io.payload_inertia.RigidBody`): write ``measured − end_effector +
+    sensor_body``, the load for a controller that already models the end effector
+    (:mod:`ftkin.io.payload_inertia`).
     """
-    payload = payload_in_flange(calibration, arm, flange_frame, inertia)
+    payload = controller_payload(
+        calibration, arm, fmt, flange_frame, inertia, end_effector, sensor_body
+    )
     urscript = Path(path).suffix.lower() in (".script", ".urscript")
     return atomic_write_text(Path(path), payload_text(payload, fmt, urscript_only=urscript))

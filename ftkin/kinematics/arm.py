@@ -7,6 +7,7 @@ the URDF's root (Pinocchio's world frame).
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -17,7 +18,15 @@ from ..exceptions import FrameNotFound, InvalidInput, UrdfError
 from ..validation import as_batch, as_vector
 from .chain import RotationChain
 from .sensor_frame import SensorMount, add_sensor_frame
-from .urdf_loading import build_geometry, build_model, lock_joints, sensor_frame_hint
+from .urdf_loading import (
+    build_geometry,
+    build_model,
+    joints_beyond_frame,
+    lock_joints,
+    sensor_frame_hint,
+)
+
+logger = logging.getLogger(__name__)
 
 BUNDLED_URDF_NAME = "ftkin_c4.urdf"
 _BATCH_MINIMUM = (
@@ -130,7 +139,10 @@ class Arm:
                 frame (for URDFs without a sensor frame).
             package_dirs: Folders that ``package://`` mesh URIs resolve against.
             locked_joints: Joints to fix at a value [rad or m] (e.g. gripper
-                fingers), removed from ``q``.
+                fingers), removed from ``q``. None (default): the joints that do not
+                move the sensor frame (a gripper's fingers) are locked at their
+                neutral value (clipped to the limits) and a log line says so; ``{}``
+                keeps every joint.
 
         Raises:
             UrdfError: the file is missing or Pinocchio refuses it (with the reason).
@@ -141,6 +153,17 @@ class Arm:
         if sensor_mount is not None:
             add_sensor_frame(model, sensor_frame, sensor_mount)
         full_model, locked_ids, reference = None, [], None
+        if locked_joints is None:
+            locked_joints = joints_beyond_frame(model, sensor_frame)
+            if locked_joints:
+                logger.info(
+                    "%s: kept the %d joints between the base and the sensor frame %r; locked %s "
+                    "(locked_joints={} keeps them)",
+                    path.name,
+                    model.njoints - 1 - len(locked_joints),
+                    sensor_frame,
+                    ", ".join(f"{name} at {value:g}" for name, value in locked_joints.items()),
+                )
         if locked_joints:
             full_model, model, locked_ids, reference = lock_joints(model, locked_joints)
         arm = cls(

@@ -244,6 +244,27 @@ def sensor_frame_hint(model: pin.Model) -> str:
     )
 
 
+def joints_beyond_frame(model: pin.Model, frame: str) -> dict[str, float]:
+    """``{joint name: value}`` for the joints that do not move ``frame`` (a gripper's fingers).
+
+    The value is the joint's neutral position clipped to its limits [rad or m]. Empty when the
+    frame is not in the model (the caller reports that) or every joint moves it.
+    """
+    if not model.existFrame(frame):
+        return {}
+    support = set(model.supports[model.frames[model.getFrameId(frame)].parentJoint])
+    neutral = pin.neutral(model)
+    lower, upper = model.lowerPositionLimit, model.upperPositionLimit
+    beyond = {}
+    for joint_id in range(1, model.njoints):
+        joint = model.joints[joint_id]
+        if joint_id in support or joint.nq != 1:
+            continue
+        index = joint.idx_q
+        beyond[model.names[joint_id]] = float(min(max(neutral[index], lower[index]), upper[index]))
+    return beyond
+
+
 def lock_joints(model: pin.Model, locked_joints: Mapping[str, float]):
     """The model with ``{joint name: value [rad or m]}`` fixed: ``(full, reduced, locked ids,
     reference q)``.

@@ -84,6 +84,7 @@ def _commands(
             ],
             folder / "z.json",
         ),
+        "robot": (["robot", "calibrate", "--help"], None),  # the rest needs a robot: tests/robot
         "--help": (["--help"], None),
     }
 

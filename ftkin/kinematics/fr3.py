@@ -1,0 +1,39 @@
+"""The Franka FR3 with the Franka Hand, bundled: 7 joints, the wrist sensor at the hand frame.
+
+The URDF is franka_description's FR3 (Apache-2.0, Franka Robotics GmbH) as franky-sim ships it,
+with its collision meshes (``urdf/fr3/``, see the NOTICE there). The sensor frame is
+``fr3_hand``: the flange ``fr3_link8`` turned by −45° about z, where the hand (and a sensor
+mounted between flange and hand) sits. The fingers are locked (:meth:`Arm.from_urdf` keeps the
+joints between the base and the sensor), the tool frame is the hand's ``fr3_hand_tcp``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..exceptions import UrdfError
+from .arm import Arm
+
+FR3_URDF_NAME = "fr3.urdf"
+FR3_SENSOR_FRAME = "fr3_hand"
+"""The sensor frame of the bundled FR3: the hand frame."""
+FR3_TOOL_FRAME = "fr3_hand_tcp"
+FR3_FLANGE_FRAME = "fr3_link8"
+
+
+def fr3_urdf_path() -> Path:
+    """Path of the bundled FR3 URDF (installed package first, then the source checkout)."""
+    package_dir = Path(__file__).resolve().parent.parent
+    for candidate in (
+        package_dir / "urdf" / "fr3" / FR3_URDF_NAME,
+        package_dir.parent / "urdf" / "fr3" / FR3_URDF_NAME,
+    ):
+        if candidate.is_file():
+            return candidate
+    raise UrdfError(FR3_URDF_NAME, ["the bundled FR3 URDF is missing from this installation"])
+
+
+def fr3_arm(tool_frame: str | None = FR3_TOOL_FRAME) -> Arm:
+    """The bundled FR3 as an :class:`Arm`: sensor frame ``fr3_hand``, 7 joints (fingers locked)."""
+    path = fr3_urdf_path()
+    return Arm.from_urdf(path, FR3_SENSOR_FRAME, tool_frame, package_dirs=[str(path.parent)])

@@ -1,0 +1,37 @@
+"""ftkin on a real robot: the calibration session, the payload hand-off and the control loop.
+
+* :class:`Robot` and :class:`ForceTorqueSensor`: what ftkin needs from a robot and a sensor;
+* :class:`FrankaRobot`: a Franka FR3 or Panda through franky-control (extra ``franka``);
+* :func:`calibrate_on_robot`: plan, visit, wait for stillness, record, calibrate, save, verify;
+* :func:`run_admittance`: the paced loop read state → :class:`~ftkin.JointAdmittance` → joint
+  velocities, stopping cleanly on any fault; :func:`hand_guiding` its hand-guiding preset;
+* :class:`FrankaSim`: a franky-sim FR3 with a wrist sensor, a tool and pushes, for tests and
+  the demo.
+
+Names load their module on first use; franky is imported only when a robot is created.
+"""
+
+from .._lazy import lazy_exports
+
+_EXPORTS = {
+    "CheckedSensor": ".stillness",
+    "ForceTorqueSensor": ".protocols",
+    "FrankaRobot": ".franka",
+    "FrankaSim": ".franka_sim",
+    "LoopStats": ".loop",
+    "Robot": ".protocols",
+    "SamplesLog": ".samples_log",
+    "SimSensorSpec": ".franka_sim",
+    "SimTool": ".franka_sim",
+    "Stillness": ".stillness",
+    "Verification": ".session",
+    "calibrate_on_robot": ".session",
+    "hand_guiding": ".guiding",
+    "load_sensor_factory": ".sensor_factory",
+    "run_admittance": ".loop",
+    "verify_on_robot": ".session",
+    "wait_still": ".stillness",
+}
+
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

@@ -1,0 +1,216 @@
+"""The control loop on a robot: read the state and the sensor, step the controller, command.
+
+:func:`run_admittance` paces ``rate_hz`` ticks of
+
+    q, dq = robot.joint_state();  t, wrench = sensor.read();
+    dq_cmd = controller.step(q, wrench, dt);  robot.command_velocity(dq_cmd)
+
+(a :class:`~ftkin.control.joint_admittance.JointAdmittance`), and returns :class:`LoopStats`.
+It stops the robot, in the tick the fault shows, and returns (never raises for these) on:
+
+* a sensor fault: ``read()`` raising, a value that is not finite (``"read_failed"``,
+  ``"not_finite"``), or a stamp that does not advance for ``stale_after`` (``"stale"``);
+* a robot error (``"robot"``) or a lost connection (``"connection"``);
+* the controller's safety stop (contact beyond its limits, ``"safety"``) or an oscillating loop
+  (``"oscillation"``): both latch in the controller;
+* Ctrl-C (``"interrupt"``).
+
+Ticks the controller holds by itself (a saturated channel, a dropped tick, a stuck reading:
+:class:`~ftkin.control.sensor_faults.SensorFault`) are counted by kind and the loop goes on;
+the controller recovers from them. The robot's own watchdog stops the arm if the loop dies
+without a word: a velocity command is held only ``watchdog`` seconds.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..control.sensor_faults import SensorFault
+from ..exceptions import InvalidInput, RobotConnectionLost, RobotError, SensorError
+from .stillness import CheckedSensor
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_RATE = 250.0
+"""Default loop rate [Hz]."""
+
+FINISHED = "duration"
+"""The stop reason of a loop that ran its full duration."""
+
+
+@dataclass(frozen=True)
+class LoopStats:
+    """What a control loop did.
+
+    Attributes:
+        ticks: Ticks run (commands sent).
+        duration: Wall time from the first to the last tick [s].
+        rate_hz: Achieved rate, ``(ticks − 1) / duration`` [Hz].
+        nominal_rate_hz: The rate asked for [Hz].
+        period_p50: Median tick period [s].
+        period_p99: 99th percentile of the tick period [s].
+        period_max: Longest tick period [s].
+        faults: ``{kind: count}``: held ticks by the controller's fault kind, and the fault that
+            stopped the loop (counted once).
+        stop_reason: ``"duration"`` (ran to the end) or the fault that stopped it.
+        message: The stopping fault's message ("" when the loop ran to the end).
+        fault_time: ``time.monotonic()`` when the stopping fault showed, else None.
+        stop_time: ``time.monotonic()`` when the stop command was sent.
+    """
+
+    ticks: int
+    duration: float
+    rate_hz: float
+    nominal_rate_hz: float
+    period_p50: float
+    period_p99: float
+    period_max: float
+    faults: Mapping[str, int] = field(default_factory=dict)
+    stop_reason: str = FINISHED
+    message: str = ""
+    fault_time: float | None = None
+    stop_time: float | None = None
+
+    @property
+    def completed(self) -> bool:
+        """True when the loop ran its whole duration without a stopping fault."""
+        return self.stop_reason == FINISHED
+
+    def report(self) -> str:
+        """A few lines: rate, periods, faults, why it stopped."""
+        faults = ", ".join(f"{kind}: {count}" for kind, count in self.faults.items()) or "none"
+        lines = [
+            f"{self.ticks} ticks in {self.duration:.2f} s: {self.rate_hz:.1f} Hz "
+            f"(asked {self.nominal_rate_hz:g} Hz)",
+            f"period p50 {self.period_p50 * 1e3:.2f} ms, p99 {self.period_p99 * 1e3:.2f} ms, "
+            f"max {self.period_max * 1e3:.2f} ms",
+            f"faults: {faults}",
+            f"stopped: {self.stop_reason}" + (f" ({self.message})" if self.message else ""),
+        ]
+        return "\n".join(lines)
+
+
+def run_admittance(
+    robot,
+    sensor,
+    controller,
+    *,
+    duration: float | None = None,
+    rate_hz: float = DEFAULT_RATE,
+    stale_after: float | None = None,
+    on_tick: Callable[[float, np.ndarray, np.ndarray], bool | None] | None = None,
+) -> LoopStats:
+    """Run the admittance loop until ``duration`` [s] (None: until a fault or Ctrl-C).
+
+    Args:
+        robot: A :class:`~ftkin.robot.protocols.Robot`.
+        sensor: A :class:`~ftkin.robot.protocols.ForceTorqueSensor`.
+        controller: A :class:`~ftkin.control.joint_admittance.JointAdmittance` (anything with
+            ``step(q, raw_wrench, dt) -> dq``, ``last_status`` and ``reset()``) for this robot's
+            joints. One warm-up step (not commanded) runs before the loop, then ``reset()``.
+        duration: Run time [s]; None runs until stopped.
+        rate_hz: Loop rate [Hz].
+        stale_after: The sensor's stamp not advancing this long is a fault [s] (default: 10
+            periods, at least 20 ms).
+        on_tick: Called after each command with ``(time.monotonic(), q, dq_cmd)`` (logging,
+            tests, an end condition); it must be fast. Returning True ends the loop as its
+            duration would.
+
+    Returns:
+        :class:`LoopStats` (the robot is stopped).
+    """
+    rate_hz = float(rate_hz)
+    if not (math.isfinite(rate_hz) and 0.0 < rate_hz <= 1000.0):
+        raise InvalidInput(f"rate_hz must be in (0, 1000] Hz, got {rate_hz!r}")
+    if duration is not None and not (math.isfinite(float(duration)) and float(duration) > 0.0):
+        raise InvalidInput(f"duration must be > 0 s or None, got {duration!r}")
+    if not callable(getattr(controller, "step", None)):
+        raise InvalidInput(f"controller must have step(q, wrench, dt), got {controller!r}")
+    period = 1.0 / rate_hz
+    stale_after = max(10.0 * period, 0.02) if stale_after is None else float(stale_after)
+    checked = CheckedSensor(sensor, stale_after)
+    faults: dict[str, int] = {}
+    stamps: list[float] = []
+    reason, message, fault_time = FINISHED, "", None
+    try:  # a warm-up tick, not commanded: the first step of a controller loads what it needs
+        q, _ = robot.joint_state()
+        controller.step(q, checked.read()[1], period)
+        controller.reset()
+    except (SensorError, RobotError, KeyboardInterrupt):
+        pass  # the loop's first tick meets it again and stops as for any tick
+    start = time.monotonic()
+    deadline = math.inf if duration is None else start + float(duration)
+    next_tick = start
+    previous = start - period
+    try:
+        while True:
+            now = time.monotonic()
+            if now >= deadline:
+                break
+            q, _ = robot.joint_state()
+            _, wrench, _ = checked.read()
+            command = controller.step(q, wrench, now - previous)
+            previous = now
+            if not command.any():  # a held tick commands exactly zero: ask why
+                fault = controller.last_status.fault
+                if fault is not SensorFault.NONE:
+                    faults[str(fault)] = faults.get(str(fault), 0) + 1
+                    if fault is SensorFault.OSCILLATION:
+                        reason, message = "oscillation", controller.last_status.event
+                        fault_time = now
+                        break
+                elif controller.last_status.safety_stop:
+                    reason, message = "safety", controller.last_status.event
+                    fault_time = now
+                    break
+            robot.command_velocity(command)
+            stamps.append(now)
+            if on_tick is not None and on_tick(now, q, command):
+                break
+            next_tick += period
+            delay = next_tick - time.monotonic()
+            if delay > 0.0:
+                time.sleep(delay)
+            elif delay < -period:  # late by more than a tick: do not try to catch up
+                next_tick = time.monotonic()
+    except SensorError as error:
+        reason, message, fault_time = error.kind, str(error), time.monotonic()
+    except RobotConnectionLost as error:
+        reason, message, fault_time = "connection", str(error), time.monotonic()
+    except RobotError as error:
+        reason, message, fault_time = "robot", str(error), time.monotonic()
+    except KeyboardInterrupt:
+        reason, message, fault_time = "interrupt", "Ctrl-C", time.monotonic()
+    finally:
+        robot.stop()
+        stop_time = time.monotonic()
+    if reason != FINISHED:
+        faults[reason] = faults.get(reason, 0) + 1
+        logger.warning("control loop stopped: %s: %s", reason, message)
+    return _stats(stamps, rate_hz, faults, reason, message, fault_time, stop_time)
+
+
+def _stats(stamps, rate_hz, faults, reason, message, fault_time, stop_time) -> LoopStats:
+    ticks = len(stamps)
+    periods = np.diff(stamps) if ticks > 1 else np.zeros(1)
+    span = float(stamps[-1] - stamps[0]) if ticks > 1 else 0.0
+    return LoopStats(
+        ticks=ticks,
+        duration=span,
+        rate_hz=(ticks - 1) / span if span > 0 else 0.0,
+        nominal_rate_hz=rate_hz,
+        period_p50=float(np.percentile(periods, 50)),
+        period_p99=float(np.percentile(periods, 99)),
+        period_max=float(periods.max()),
+        faults=dict(faults),
+        stop_reason=reason,
+        message=message,
+        fault_time=fault_time,
+        stop_time=stop_time,
+    )

@@ -1,0 +1,293 @@
+"""A calibration session on a robot: plan, visit, wait, record, calibrate, save, verify.
+
+:func:`calibrate_on_robot` is what practitioners otherwise script by hand:
+
+1. plan the poses (:func:`~ftkin.planning.plan.plan_poses`: D-optimal, joint limits, floor and
+   self-collision checks) unless given, and visit them in the plan's order;
+2. at each pose wait until the arm is still and the readings stationary, never recording while
+   a joint moves (:mod:`ftkin.robot.stillness`);
+3. append the pose's readings to the samples CSV, flushed and synced before the arm moves on
+   (:mod:`ftkin.robot.samples_log`); ``resume=True`` skips the poses already in it;
+4. calibrate (:func:`~ftkin.calibration.estimate.calibrate`) from that file, save the calibration
+   (:func:`~ftkin.io.calibration_file.save_calibration`), and check it at a few other poses:
+   the compensated force there should be the sensor's noise (:func:`verify_on_robot`).
+
+Any failure (a sensor fault, a robot error or a lost connection, Ctrl-C) stops the arm at once
+and raises :class:`~ftkin.exceptions.SessionInterrupted`, the samples file complete up to the last
+recorded pose.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from ..calibration.estimate import calibrate
+from ..calibration.model import STANDARD_GRAVITY
+from ..calibration.result import CalibrationResult
+from ..control.compensation import Compensator
+from ..exceptions import FtkinError, InvalidInput, SessionInterrupted
+from ..io.calibration_file import save_calibration
+from ..io.samples_csv import load_samples
+from ..kinematics.record import KinematicsRecord
+from ..planning.constraints import FeasibilityChecker, PoseConstraints
+from ..planning.plan import plan_poses
+from ..progress import Progress
+from .samples_log import SamplesLog
+from .stillness import CheckedSensor, Stillness, record_still
+
+logger = logging.getLogger(__name__)
+
+RESUME_TOLERANCE = 0.02
+"""A recorded pose matches the plan when every joint is within this of it [rad]."""
+DEFAULT_TOOL_WEIGHT = 15.0
+"""Tool weight the planner assumes on a Franka-sized arm when none is given [N]."""
+
+
+@dataclass(frozen=True)
+class Verification:
+    """Compensated readings at poses the calibration did not use.
+
+    Attributes:
+        joint_positions: ``(k, nq)`` poses [rad].
+        contact_wrenches: ``(k, 6)`` mean compensated wrench per pose [N, N·m], sensor frame.
+    """
+
+    joint_positions: np.ndarray
+    contact_wrenches: np.ndarray
+
+    @property
+    def force_norms(self) -> np.ndarray:
+        """``(k,)`` norm of the compensated force per pose [N]."""
+        return np.linalg.norm(self.contact_wrenches[:, :3], axis=1)
+
+    @property
+    def torque_norms(self) -> np.ndarray:
+        """``(k,)`` norm of the compensated torque per pose [N·m]."""
+        return np.linalg.norm(self.contact_wrenches[:, 3:], axis=1)
+
+    def report(self) -> str:
+        """One line per pose: the compensated force and torque norms [N, N·m]."""
+        lines = [f"verification at {len(self.force_norms)} pose(s) not used by the fit:"]
+        for i, (force, torque) in enumerate(zip(self.force_norms, self.torque_norms)):
+            lines.append(f"  pose {i}: |F'| = {force:.3f} N, |M'| = {torque:.4f} N·m")
+        return "\n".join(lines)
+
+
+def session_poses(
+    arm,
+    n_poses: int,
+    *,
+    seed: int = 0,
+    readings_per_pose: int = 50,
+    plan_options: Mapping | None = None,
+) -> np.ndarray:
+    """The planned poses ``(n, nq)`` [rad] of a session, in visiting order (deterministic)."""
+    options = {"floor_height": 0.1, "tool_weight": DEFAULT_TOOL_WEIGHT, **(plan_options or {})}
+    plan = plan_poses(
+        arm, n_poses, seed=seed, readings_per_pose=readings_per_pose, progress=False, **options
+    )
+    return plan.joint_positions
+
+
+def verification_poses(
+    arm, count: int, *, seed: int = 1, plan_options: Mapping | None = None
+) -> np.ndarray:
+    """``count`` random configurations ``(count, nq)`` [rad] that meet the planner's constraints."""
+    options = {"floor_height": 0.1, **(plan_options or {})}
+    keys = {"margin", "floor_height", "max_tilt", "joint_ranges", "self_collision"}
+    constraints = PoseConstraints(
+        **{key: value for key, value in options.items() if key in keys and value is not None}
+    )
+    checker = FeasibilityChecker(arm, constraints)
+    rng = np.random.default_rng(seed)
+    found = []
+    for _ in range(200):
+        for q in checker.sample(100, rng):
+            if checker.check(q) is not None:
+                found.append(q)
+                if len(found) == count:
+                    return np.array(found)
+    raise InvalidInput(f"found only {len(found)} feasible verification poses of {count}")
+
+
+def calibrate_on_robot(
+    robot,
+    sensor,
+    arm,
+    *,
+    n_poses: int = 12,
+    poses=None,
+    readings_per_pose: int = 50,
+    samples_path,
+    resume: bool = False,
+    output=None,
+    verify_poses: int = 3,
+    seed: int = 0,
+    plan_options: Mapping | None = None,
+    stillness: Stillness | None = None,
+    g: float = STANDARD_GRAVITY,
+    calibrate_options: Mapping | None = None,
+    progress: bool | None = None,
+) -> CalibrationResult:
+    """Calibrate the wrist sensor on the robot (see the module docstring).
+
+    Args:
+        robot: A :class:`~ftkin.robot.protocols.Robot` (e.g. :class:`FrankaRobot`).
+        sensor: A :class:`~ftkin.robot.protocols.ForceTorqueSensor`.
+        arm: The robot's :class:`~ftkin.kinematics.arm.Arm` (same joints, in the same order).
+        n_poses: Poses to plan (with ``poses`` None).
+        poses: ``(n, nq)`` poses [rad] to visit instead of planning.
+        readings_per_pose: Readings recorded at each pose.
+        samples_path: The samples CSV written as the session goes.
+        resume: Continue ``samples_path``: poses already in it are skipped (they must match
+            the plan: same ``n_poses``, ``seed`` and options).
+        output: Save the calibration there (atomically); None: not saved.
+        verify_poses: Extra poses for :func:`verify_on_robot` (logged; 0: none). A fault there
+            stops the arm and is logged; the calibration is returned all the same.
+        seed: Seed of the planner (and of the verification poses, ``seed + 1``).
+        plan_options: More :func:`~ftkin.planning.plan.plan_poses` keywords (default floor
+            height 0.1 m, tool weight 15 N), e.g. ``joint_ranges``.
+        stillness: When the arm is still (default :class:`Stillness`).
+        g: Gravity for the tool mass [m/s²].
+        calibrate_options: More :func:`~ftkin.calibration.estimate.calibrate` keywords.
+        progress: Draw a progress bar (default: when stderr is a terminal).
+
+    Returns:
+        The calibration (with the arm's kinematics record).
+
+    Raises:
+        SessionInterrupted: a sensor fault, a robot error or Ctrl-C stopped the session (the arm
+            is stopped; the samples file keeps every recorded pose).
+        InvalidInput: bad arguments, an existing samples file without ``resume``, or a
+            resumed file recorded with another plan.
+    """
+    stillness = stillness if stillness is not None else Stillness()
+    if not isinstance(stillness, Stillness):
+        raise InvalidInput(f"stillness must be an ftkin Stillness, got {stillness!r}")
+    if poses is None:
+        poses = session_poses(
+            arm, n_poses, seed=seed, readings_per_pose=readings_per_pose, plan_options=plan_options
+        )
+    poses = np.asarray(poses, dtype=float)
+    if poses.ndim != 2 or poses.shape[1] != arm.nq or len(poses) < 3:
+        raise InvalidInput(
+            f"poses must be (n >= 3, {arm.nq}) joint positions [rad], got shape {poses.shape}"
+        )
+    log = SamplesLog(
+        samples_path,
+        arm.joint_names,
+        resume=resume,
+        comments=[
+            f"ftkin calibration session: {len(poses)} poses, {readings_per_pose} readings each",
+            "joints [rad], wrench [N, N·m] in the sensor frame (raw), pose = index in the plan, "
+            "t = sensor stamp [s]",
+        ],
+    )
+    todo = _poses_to_visit(log, poses)
+    checked = CheckedSensor(sensor, stillness.stale_after)
+    with Progress(len(poses), "calibration poses", enabled=progress) as bar:
+        bar.advance(len(poses) - len(todo))
+        for pose_id in todo:
+            with _stopping(robot, log, len(poses)):
+                robot.move_to(poses[pose_id], while_moving=checked.read)
+                readings = record_still(robot, checked, readings_per_pose, stillness)
+                log.append_pose(
+                    pose_id, readings.joint_positions, readings.wrenches, readings.times
+                )
+            logger.info("pose %d recorded (waited %.2f s to settle)", pose_id, readings.wait)
+            bar.advance()
+    samples = load_samples(log.path, arm).samples
+    result = calibrate(samples, g=g, **dict(calibrate_options or {}))
+    result = replace(result, kinematics=KinematicsRecord.from_arm(arm))
+    if output is not None:
+        save_calibration(result, output)
+        logger.info("saved the calibration to %s", output)
+    if verify_poses:
+        extra = verification_poses(arm, verify_poses, seed=seed + 1, plan_options=plan_options)
+        try:  # the calibration is done (and saved): a failure here stops the arm, not the result
+            verification = verify_on_robot(robot, sensor, arm, result, extra, stillness=stillness)
+        except (FtkinError, KeyboardInterrupt) as error:
+            logger.warning("verification stopped (the arm is stopped): %s", error or "Ctrl-C")
+        else:
+            logger.info("%s", verification.report())
+    return result
+
+
+def _poses_to_visit(log: SamplesLog, poses: np.ndarray) -> list[int]:
+    recorded = log.recorded_poses()
+    for pose_id, q in recorded.items():
+        if not 0 <= pose_id < len(poses) or np.max(np.abs(q - poses[pose_id])) > RESUME_TOLERANCE:
+            raise InvalidInput(
+                f"{log.path} holds pose {pose_id}, which is not this session's plan (another "
+                "n_poses, seed or plan option?): resume with the same ones, or start a new file"
+            )
+    if recorded:
+        logger.info("resuming: %d of %d poses already recorded", len(recorded), len(poses))
+    return [i for i in range(len(poses)) if i not in recorded]
+
+
+class _stopping:
+    """Stop the robot on any failure in the block and raise :class:`SessionInterrupted`."""
+
+    def __init__(self, robot, log: SamplesLog, total: int):
+        self.robot, self.log, self.total = robot, log, total
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, error, traceback):
+        if error is None:
+            return False
+        self.robot.stop()
+        if isinstance(error, KeyboardInterrupt):
+            reason = "interrupted (Ctrl-C)"
+        elif isinstance(error, FtkinError) and not isinstance(error, InvalidInput):
+            reason = str(error)
+        else:
+            return False  # a programming error or bad input: the arm is stopped, the error stays
+        raise SessionInterrupted(
+            reason, len(self.log.recorded_poses()), self.total, self.log.path
+        ) from error
+
+
+def verify_on_robot(
+    robot,
+    sensor,
+    arm,
+    calibration,
+    poses,
+    *,
+    readings: int = 50,
+    stillness: Stillness | None = None,
+) -> Verification:
+    """Visit ``poses`` and compensate the still readings there with ``calibration``.
+
+    Without contact the compensated wrench is the sensor's noise plus the calibration's error.
+    Any failure stops the arm and is raised.
+    """
+    stillness = stillness if stillness is not None else Stillness()
+    compensator = Compensator(calibration, arm)
+    checked = CheckedSensor(sensor, stillness.stale_after)
+    poses = np.asarray(poses, dtype=float).reshape(-1, arm.nq)
+    wrenches = []
+    try:
+        for q in poses:
+            robot.move_to(q, while_moving=checked.read)
+            taken = record_still(robot, checked, readings, stillness)
+            contact = compensator.compensate_joint_positions(taken.joint_positions, taken.wrenches)
+            wrenches.append(contact.mean(axis=0))
+    except BaseException:
+        robot.stop()
+        raise
+    return Verification(poses, np.array(wrenches))
+
+
+def default_samples_path(output) -> Path:
+    """The samples file beside a calibration output: ``calib.json`` → ``calib.samples.csv``."""
+    output = Path(output)
+    return output.with_name(output.stem + ".samples.csv")

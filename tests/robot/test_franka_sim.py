@@ -1,0 +1,283 @@
+"""End to end on franky-sim through franky, exactly as on a real FR3 (loopback only).
+
+One simulated robot serves the module's tests in order: the session, the payload round trip,
+hand-guiding, the loop's faults; the interrupted sessions and the killed server use their own.
+The benchmark (benchmarks/bench_robot.py) runs the full-size versions against the targets;
+these use fewer poses and shorter runs, and bounds that hold on a loaded CI machine.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("franky", reason="franky-control is not installed (extra 'franka')")
+pytest.importorskip("franky_sim", reason="franky-sim is not installed (extra 'franka-sim')")
+
+from ftkin.exceptions import RealtimeUnavailable, SessionInterrupted  # noqa: E402
+from ftkin.io.payload_export import payload_in_flange  # noqa: E402
+from ftkin.io.payload_inertia import controller_load  # noqa: E402
+from ftkin.io.samples_csv import load_samples  # noqa: E402
+from ftkin.kinematics.fr3 import fr3_arm  # noqa: E402
+from ftkin.robot import (  # noqa: E402
+    FrankaRobot,
+    FrankaSim,
+    Stillness,
+    calibrate_on_robot,
+    hand_guiding,
+    run_admittance,
+    wait_still,
+)
+from ftkin.robot.session import session_poses  # noqa: E402
+
+HOME = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
+PLAN = {"joint_ranges": {"fr3_joint1": (-0.8, 0.8)}}
+LOADED = {"state_timeout": 1.0}  # a loaded CI machine may pause the simulation for a while
+STILL = Stillness(stale_after=1.0)
+
+
+@pytest.fixture(scope="module")
+def arm():
+    return fr3_arm()
+
+
+@pytest.fixture(scope="module")
+def sim():
+    simulation = FrankaSim()
+    try:
+        simulation.start()
+        yield simulation
+    finally:
+        simulation.close()
+
+
+@pytest.fixture(scope="module")
+def robot(sim):
+    return FrankaRobot(sim.hostname, realtime=False, speed=0.8, **LOADED)
+
+
+@pytest.fixture(scope="module")
+def session(sim, robot, arm, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("session")
+    result = calibrate_on_robot(
+        robot,
+        sim.sensor,
+        arm,
+        n_poses=3,
+        readings_per_pose=30,
+        samples_path=folder / "samples.csv",
+        output=folder / "calib.json",
+        verify_poses=1,
+        stillness=STILL,
+        g=sim.truth.g,
+        plan_options=PLAN,
+    )
+    return result, folder
+
+
+def test_session_recovers_the_simulated_tool(sim, arm, session):
+    result, folder = session
+    truth = sim.truth
+    np.testing.assert_allclose(result.tool_mass, truth.mass, rtol=0.01)
+    np.testing.assert_allclose(result.center_of_mass, truth.center_of_mass, atol=0.002)
+    np.testing.assert_allclose(result.force_offset, truth.bias[:3], atol=0.05)
+    np.testing.assert_allclose(result.torque_offset, truth.bias[3:], atol=0.005)
+    samples = load_samples(folder / "samples.csv", arm).samples
+    ids, counts = np.unique(samples.pose_ids, return_counts=True)
+    assert ids.tolist() == [0, 1, 2] and set(counts.tolist()) == {30}
+    assert (folder / "calib.json").is_file()
+
+
+def test_payload_round_trip(sim, robot, arm, session):
+    result, _ = session
+    truth = sim.truth
+    end_effector = robot.end_effector()
+    sent = robot.set_payload(
+        result, sensor_mass=truth.sensor_mass, sensor_com=truth.sensor_com_flange
+    )
+    mass, com, inertia = robot.payload()
+    # read back (float32 on the wire) = measured − configured end effector + sensor body
+    expected = controller_load(
+        payload_in_flange(result, arm), end_effector, None
+    )  # without the sensor body, then add it by hand: an independent combination
+    expected_mass = expected.mass + truth.sensor_mass
+    expected_com = (
+        expected.mass * expected.center_of_mass + truth.sensor_mass * truth.sensor_com_flange
+    ) / expected_mass
+    np.testing.assert_allclose(mass, expected_mass, rtol=1e-6)
+    np.testing.assert_allclose(com, expected_com, atol=1e-6)
+    np.testing.assert_allclose(mass, sent.mass, rtol=1e-6)
+    assert inertia.shape == (3, 3)
+    # and against the simulation's truth: hand + fingers + tool − hand setting + sensor body
+    np.testing.assert_allclose(mass, truth.mass - end_effector.mass + truth.sensor_mass, rtol=0.01)
+
+
+def test_cli_payload_sends_and_reads_back(session, capsys):
+    from ftkin.cli import main
+
+    _, folder = session
+    with FrankaSim() as other:  # a robot takes one client: the module's robot holds the other sim
+        argv = ["robot", "payload", str(folder / "calib.json"), "--franka", other.hostname]
+        assert main([*argv, "--no-realtime", "--sensor-body", "0.25", "0", "0", "-0.01"]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        sent, reported = (line.split(": ", 1)[1] for line in lines[:2])
+        assert lines[0].startswith("sent:") and sent == reported  # to the printed digits
+        assert main([*argv, "--no-realtime", "--end-effector", "5", "0", "0", "0"]) == 2
+        assert "negative mass" in capsys.readouterr().err
+
+
+def test_hand_guiding_follows_a_push_and_stops(sim, robot, arm, session):
+    result, _ = session
+    robot.move_to(HOME)
+    wait_still(robot)
+    controller = hand_guiding(arm, result)
+    track = []
+    end = sim.time + 0.2 + 1.0 + 0.8  # simulation time: a loaded machine slows the simulation
+
+    def on_tick(now, q, dq):
+        track.append((sim.time, *sim.hand_position(), dq.any()))
+        return track[-1][0] > end
+
+    sim.push([15.0, 0.0, 0.0], 1.0, delay=0.2)
+    stats = run_admittance(
+        robot, sim.sensor, controller, duration=30.0, stale_after=1.0, on_tick=on_tick
+    )
+    assert stats.stop_reason == "duration", stats.report()
+    assert stats.rate_hz > 100.0
+    track = np.array(track)
+    moved = track[-1, 1:4] - track[0, 1:4]
+    assert moved[0] > 0.025, moved  # along the push (the benchmark asks ≥ 4 cm unloaded)
+    assert np.hypot(moved[1], moved[2]) < 0.3 * moved[0], moved
+    last_command = np.flatnonzero(track[:, 4])[-1]
+    assert last_command < len(track) - 1, "the command returns to exactly zero after release"
+    after = track[last_command + 1 :, 1:4]
+    assert np.linalg.norm(after[-1] - after[0]) < 0.001  # no creep once stopped
+
+
+@pytest.mark.parametrize(("fault", "reason"), [("nan", "not_finite"), ("stale", "stale")])
+def test_loop_stops_on_a_sensor_fault(sim, robot, arm, session, fault, reason):
+    result, _ = session
+    robot.move_to(HOME)
+    controller = hand_guiding(arm, result)
+    ticks, injected, stops = [], [], []
+
+    def on_tick(now, q, dq):
+        ticks.append(now)
+        if len(ticks) == 25:
+            sim.sensor.inject(fault)
+            injected.append(time.monotonic())
+
+    stop = robot.stop
+    robot.stop = lambda: (stops.append(time.monotonic()), stop())
+    try:
+        stats = run_admittance(
+            robot,
+            sim.sensor,
+            controller,
+            duration=5.0,
+            stale_after=0.05 if fault == "stale" else 1.0,  # a loaded machine pauses the sim
+            on_tick=on_tick,
+        )
+    finally:
+        sim.sensor.inject(None)
+        del robot.stop
+    assert stats.stop_reason == reason and len(stops) == 1
+    if fault == "nan":  # the next tick reads it and stops: nothing commanded after it
+        assert stats.ticks == 25 and stops[0] - injected[0] < 0.05
+    else:  # visible once the stamp is 0.05 s old; stopped in that tick
+        assert 0.04 <= stops[0] - injected[0] < 0.05 + 0.05
+
+
+class _Interrupting:
+    """The robot, with ``action()`` run once at the start of its ``at_move``-th ``move_to``."""
+
+    def __init__(self, robot, at_move, action):
+        self.robot, self.at_move, self.action, self.moves = robot, at_move, action, 0
+
+    def move_to(self, q, while_moving=None):
+        self.moves += 1
+        if self.moves == self.at_move:
+            self.action()
+        return self.robot.move_to(q, while_moving)
+
+    def __getattr__(self, name):
+        return getattr(self.robot, name)
+
+
+def test_interrupted_sessions_keep_their_samples_and_resume(sim, robot, arm, tmp_path):
+    """A NaN sensor stops the session at the second pose, Ctrl-C the resumed one at the third;
+    each leaves whole poses, and the last resume finishes with no pose twice.
+    """
+    poses = session_poses(arm, 3, seed=3, readings_per_pose=20, plan_options=PLAN)
+    path = tmp_path / "samples.csv"
+    options = {
+        "poses": poses,
+        "readings_per_pose": 20,
+        "samples_path": path,
+        "verify_poses": 0,
+        "stillness": STILL,
+        "g": sim.truth.g,
+    }
+    assert threading.main_thread().ident == threading.get_ident()  # SIGINT lands here
+    faults = [
+        (False, lambda: sim.sensor.inject("nan")),  # while the arm moves to the second pose
+        (True, lambda: os.kill(os.getpid(), signal.SIGINT)),  # Ctrl-C as it starts the third
+    ]
+    for done, (resume, action) in enumerate(faults, start=1):
+        try:
+            with pytest.raises(SessionInterrupted) as caught:
+                calibrate_on_robot(
+                    _Interrupting(robot, 2, action), sim.sensor, arm, resume=resume, **options
+                )
+        finally:
+            sim.sensor.inject(None)
+        assert caught.value.poses_recorded == done and caught.value.samples_path == path
+        assert ("interrupted" in caught.value.reason) == resume
+        recorded = load_samples(path, arm).samples  # intact: readable, whole poses only
+        ids, counts = np.unique(recorded.pose_ids, return_counts=True)
+        assert ids.tolist() == list(range(done)) and set(counts.tolist()) == {20}
+    result = calibrate_on_robot(robot, sim.sensor, arm, resume=True, **options)
+    ids, counts = np.unique(load_samples(path, arm).samples.pose_ids, return_counts=True)
+    assert ids.tolist() == [0, 1, 2] and set(counts.tolist()) == {20}  # no pose twice
+    np.testing.assert_allclose(result.tool_mass, sim.truth.mass, rtol=0.02)
+
+
+def test_realtime_true_on_a_kernel_without_it_names_the_option(sim):
+    if (
+        open("/sys/kernel/realtime").read().strip() == "1"
+        if os.path.exists("/sys/kernel/realtime")
+        else False
+    ):
+        pytest.skip("this kernel has real-time scheduling")
+    with pytest.raises(RealtimeUnavailable, match="realtime=False"):
+        FrankaRobot(sim.hostname, realtime=True)
+
+
+def test_a_killed_server_stops_the_loop_cleanly(arm):
+    from ftkin.calibration.model import SensorModel
+
+    calibration = SensorModel.from_tool(1.96, [0.0, 0.0, 0.07], [0, 0, 0], [0, 0, 0])
+    with FrankaSim() as other:
+        robot = FrankaRobot(other.hostname, realtime=False, state_timeout=0.2)
+        ticks = []
+
+        def on_tick(now, q, dq):
+            ticks.append(now)
+            if len(ticks) == 20:
+                other.kill()
+
+        stats = run_admittance(
+            robot,
+            other.sensor,
+            hand_guiding(arm, calibration, force_deadband=50.0),
+            duration=10.0,
+            stale_after=5.0,
+            on_tick=on_tick,
+        )
+    assert stats.stop_reason == "connection", stats.report()
+    assert stats.ticks < 20 + 250  # noticed within the state timeout, not libfranka's seconds
