@@ -276,14 +276,13 @@ def as_real_sensor(samples: Samples, calibration) -> Samples:
 
     Multiplies every reading by the calibration's ``reading_signs`` and, for
     samples read from joint angles, turns the URDF's ``R_BS`` into the real
-    sensor's ``R_BS · R_Mᵀ``. A :class:`~ftkin.calibration.model.SensorModel`
-    without these attributes returns ``samples`` unchanged.
+    sensor's ``R_BS · R_Mᵀ`` (``calibration``: a
+    :class:`~ftkin.calibration.result.CalibrationResult`).
     """
-    signs = getattr(calibration, "reading_signs", np.ones(6))
-    mount = getattr(calibration, "mount_rotation", np.eye(3))
+    signs = calibration.reading_signs
     rotations = samples.rotations
-    if samples.joint_positions is not None and not np.array_equal(mount, np.eye(3)):
-        rotations = rotations @ np.asarray(mount).T
+    if samples.joint_positions is not None and calibration.has_mount:
+        rotations = rotations @ calibration.mount_rotation.T
     if np.all(signs == 1.0) and rotations is samples.rotations:
         return samples
     return replace(samples, wrenches=samples.wrenches * signs, rotations=rotations)

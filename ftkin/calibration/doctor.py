@@ -4,8 +4,8 @@ A data set read with the wrong convention (Euler angles in radians, a
 quaternion in x,y,z,w order, the wrench in the base frame, ...) still gives a
 fit; only a poor one, or an implausible one. :func:`diagnose_readings` fits
 the data as given and under each alternative reading with the closed-form
-linear estimator (milliseconds each), and names the alternative that explains
-the data:
+linear estimator (:func:`~ftkin.calibration.linear.fit_linear`, milliseconds
+each), and names the alternative that explains the data:
 
 * **fit**: the residual chi-square of every reading is computed with one
   per-channel noise level, that of the best-fitting reading; an alternative
@@ -35,8 +35,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..exceptions import UnobservableParameters
+from ..kinematics.rotations import wrenches_base_to_sensor
+from .linear import fit_linear
 from .model import STANDARD_GRAVITY, SensorModel
-from .observability import MIN_POSES, MIN_RELATIVE_SINGULAR_VALUE, force_regressor, torque_regressor
+from .observability import MIN_POSES
 from .samples import PoseAverages, Samples
 
 MISTAKE_RATIO = 20.0
@@ -155,18 +158,11 @@ def wrench_readings(given: Samples | PoseAverages) -> list[Reading]:
             np.ones(6) if scale is None else np.asarray(scale, float),
         )
 
-    to_sensor = np.transpose(rotations, (0, 2, 1))
-    in_sensor = np.hstack(
-        [
-            np.einsum("nij,nj->ni", to_sensor, wrenches[:, :3]),
-            np.einsum("nij,nj->ni", to_sensor, wrenches[:, 3:]),
-        ]
-    )
     out = [
         make(
             "the wrench in the base frame",
             "give the wrench in the sensor frame (rotate it by R_BS^T)",
-            in_sensor,
+            wrenches_base_to_sensor(rotations, wrenches),
         ),
         make(
             "the readings negated (the reaction)",
@@ -199,91 +195,32 @@ def wrench_readings(given: Samples | PoseAverages) -> list[Reading]:
     return out
 
 
-def _relative_condition(regressor: np.ndarray) -> float:
-    scale = np.linalg.norm(regressor, axis=0)
-    scale[scale == 0] = 1.0
-    singular_values = np.linalg.svd(regressor / scale, compute_uv=False)
-    return float(singular_values[-1] / singular_values[0]) if singular_values[0] > 0 else 0.0
-
-
-def _fit_group(readings: list[Reading], g: float = STANDARD_GRAVITY) -> list[ReadingFit]:
-    """The paper's two-step linear fit of readings that share their poses' orientations.
-
-    The force step has the same regressor for all of them: one pseudo-inverse
-    serves every reading (the cheap path that keeps the check at a few
-    milliseconds). A step whose regressor is rank deficient (relative singular
-    value below the observability threshold) fails that reading.
+def _fit(reading: Reading, g: float = STANDARD_GRAVITY) -> ReadingFit:
+    """The paper's two-step linear fit (:func:`~ftkin.calibration.linear.fit_linear`) of one
+    reading, with its residual sum of squares per channel in the given units; a pose set that
+    cannot determine the parameters fails that reading.
     """
-    poses = readings[0].poses
-    rotations = poses.rotations
+    poses = reading.poses
+    if poses is None:
+        return ReadingFit(reading, None, None, failure=reading.failure)
     if len(poses) < MIN_POSES:
-        return [
-            ReadingFit(r, None, None, failure=f"fewer than {MIN_POSES} poses") for r in readings
-        ]
-    step1 = force_regressor(rotations)
-    if _relative_condition(step1) < MIN_RELATIVE_SINGULAR_VALUE:
-        return [
-            ReadingFit(r, None, None, failure="the poses cannot determine the tool's weight")
-            for r in readings
-        ]
-    forces = np.stack([r.poses.wrenches[:, :3].reshape(-1) for r in readings], axis=1)
-    solutions = np.linalg.pinv(step1) @ forces  # (6, K): [a; F0] per reading
-    fits = []
-    for k, reading in enumerate(readings):
-        gravity_in_base, force_offset = solutions[:3, k], solutions[3:, k]
-        measured = reading.poses.wrenches
-        weight = float(np.linalg.norm(gravity_in_base))
-        directions = np.einsum("nji,j->ni", rotations, gravity_in_base / max(weight, 1e-300))
-        if (
-            weight == 0.0
-            or _relative_condition(torque_regressor(directions)) < MIN_RELATIVE_SINGULAR_VALUE
-        ):
-            fits.append(
-                ReadingFit(
-                    reading, None, None, failure="the poses cannot determine the centre of mass"
-                )
-            )
-            continue
-        step2, *_ = np.linalg.lstsq(
-            torque_regressor(measured[:, :3]), measured[:, 3:].reshape(-1), rcond=None
-        )
-        center_of_mass, auxiliary = step2[:3], step2[3:]
-        torque_offset = auxiliary - np.cross(force_offset, center_of_mass)
-        gravity_in_sensor = np.einsum("nji,j->ni", rotations, gravity_in_base)
-        predicted = np.hstack(
-            [
-                force_offset + gravity_in_sensor,
-                torque_offset + np.cross(center_of_mass, gravity_in_sensor),
-            ]
-        )
-        residuals = (measured - predicted) * reading.unit_scale
-        if not np.all(np.isfinite(residuals)):
-            fits.append(ReadingFit(reading, None, None, failure="non-finite residuals"))
-            continue
-        model = SensorModel(force_offset, torque_offset, gravity_in_base, center_of_mass, g)
-        rss = np.sum(residuals**2, axis=0)
-        spread = np.sum(((measured - measured.mean(axis=0)) * reading.unit_scale) ** 2, axis=0)
-        explained = min(
-            1.0 - rss[:3].sum() / max(spread[:3].sum(), 1e-300),
-            1.0 - rss[3:].sum() / max(spread[3:].sum(), 1e-300),
-        )
-        fits.append(ReadingFit(reading, model, rss, explained=float(explained)))
-    return fits
-
-
-def _fit_all(readings: list[Reading]) -> list[ReadingFit]:
-    """Fit every reading, grouping those that share their orientations (same array object)."""
-    fits: dict[int, ReadingFit] = {}
-    groups: dict[int, list[int]] = {}
-    for index, reading in enumerate(readings):
-        if reading.poses is None:
-            fits[index] = ReadingFit(reading, None, None, failure=reading.failure)
-        else:
-            groups.setdefault(id(reading.poses.rotations), []).append(index)
-    for indices in groups.values():
-        for index, fit in zip(indices, _fit_group([readings[i] for i in indices])):
-            fits[index] = fit
-    return [fits[i] for i in range(len(readings))]
+        return ReadingFit(reading, None, None, failure=f"fewer than {MIN_POSES} poses")
+    try:
+        model = fit_linear(poses, g)
+    except UnobservableParameters as error:
+        what = "centre of mass" if "center_of_mass" in error.names else "tool's weight"
+        return ReadingFit(reading, None, None, failure=f"the poses cannot determine the {what}")
+    measured = poses.wrenches
+    residuals = (measured - model.predict(poses.rotations)) * reading.unit_scale
+    if not np.all(np.isfinite(residuals)):
+        return ReadingFit(reading, None, None, failure="non-finite residuals")
+    rss = np.sum(residuals**2, axis=0)
+    spread = np.sum(((measured - measured.mean(axis=0)) * reading.unit_scale) ** 2, axis=0)
+    explained = min(
+        1.0 - rss[:3].sum() / max(spread[:3].sum(), 1e-300),
+        1.0 - rss[3:].sum() / max(spread[3:].sum(), 1e-300),
+    )
+    return ReadingFit(reading, model, rss, explained=float(explained))
 
 
 def diagnose_readings(readings: list[Reading]) -> ConventionReport:
@@ -291,7 +228,7 @@ def diagnose_readings(readings: list[Reading]) -> ConventionReport:
 
     See the module docstring for the rules.
     """
-    fits = _fit_all(readings)
+    fits = [_fit(reading) for reading in readings]
     valid = [fit for fit in fits if fit.rss is not None]
     if not valid:
         return ConventionReport(

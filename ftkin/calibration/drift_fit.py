@@ -40,7 +40,7 @@ import numpy as np
 from ..exceptions import UnobservableParameters
 from .drift import BiasDrift, DriftModel, auto_candidates, parse_drift, trend_columns
 from .information import SensorNoise
-from .model import COMPONENT_NAMES, SensorModel, cross_rows, parameter_jacobian
+from .model import COMPONENT_NAMES, SensorModel, parameter_jacobian, predict
 from .random_walk import log_likelihood, smooth, walk_gains, whiten
 from .samples import PoseAverages
 
@@ -168,10 +168,8 @@ class DriftFit:
 def predict_with_jacobian(
     theta: np.ndarray, rotations: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Prediction ``(P, 6)`` and its Jacobian ``(P, 6, 12)`` for ``θ``."""
-    gravity_in_sensor = np.einsum("nji,j->ni", rotations, theta[0:3])
-    prediction = np.concatenate([gravity_in_sensor, cross_rows(theta[9:12], gravity_in_sensor)], 1)
-    return prediction + theta[3:9], parameter_jacobian(rotations, theta[0:3], theta[9:12])
+    """The model's prediction ``(P, 6)`` and its Jacobian ``(P, 6, 12)`` for ``θ``."""
+    return predict(rotations, theta), parameter_jacobian(rotations, theta[0:3], theta[9:12])
 
 
 def invert_information(information: np.ndarray, names: list[str]) -> np.ndarray:

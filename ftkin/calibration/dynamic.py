@@ -45,7 +45,7 @@ from .log_cholesky import (
     nearest_consistent,
 )
 from .model import STANDARD_GRAVITY
-from .regressor import MotionSamples, point_mass_parameters
+from .regressor import MotionSamples
 from .samples import Samples
 
 
@@ -57,13 +57,10 @@ class DynamicCalibrationResult(CalibrationResult):
     ``g``) and their ``(12, 12)`` ``covariance`` come from the same fit, so this
     result compensates statically like any calibration.
 
+    The inertia (``inertia_about_com_in_sensor``, ``inertial_parameters``, their errors and
+    covariance) is a declared part of every calibration; this adds the fit over the motion.
+
     Attributes:
-        inertia_about_com_in_sensor: ``(3, 3)`` inertia about the COM, sensor axes [kg·m²],
-            or None when the inertia was not estimated.
-        inertia_std_errors: ``(3, 3)`` its standard errors [kg·m²], or None.
-        inertial_parameters: ``(10,)`` θ in the sensor frame (see
-            :mod:`ftkin.calibration.log_cholesky`).
-        inertial_covariance: ``(10, 10)`` covariance of θ, or None.
         motion_residual_rms: ``(6,)`` RMS of measured minus predicted per channel [N, N·m].
         channel_std: ``(6,)`` noise per reading used as weights [N, N·m].
         unconstrained_parameters: θ of the unconstrained least squares (before
@@ -71,66 +68,24 @@ class DynamicCalibrationResult(CalibrationResult):
         unconstrained_consistent: Whether that θ was physically consistent.
     """
 
-    inertia_about_com_in_sensor: np.ndarray | None = None
-    inertia_std_errors: np.ndarray | None = None
-    inertial_parameters: np.ndarray | None = None
-    inertial_covariance: np.ndarray | None = None
     motion_residual_rms: np.ndarray | None = None
     channel_std: np.ndarray | None = None
     unconstrained_parameters: np.ndarray | None = None
     unconstrained_consistent: bool | None = None
 
-    def __post_init__(self):
-        super().__post_init__()
-        for name in (
-            "inertia_about_com_in_sensor",
-            "inertia_std_errors",
-            "inertial_parameters",
-            "inertial_covariance",
-            "motion_residual_rms",
-            "channel_std",
-            "unconstrained_parameters",
-        ):
-            value = getattr(self, name)
-            if value is not None:
-                value = np.array(value, dtype=float)
-                value.setflags(write=False)
-                object.__setattr__(self, name, value)
-
-    @property
-    def has_inertia(self) -> bool:
-        """True when the inertia was identified (compensation may then remove inertial forces)."""
-        return self.inertia_about_com_in_sensor is not None
-
-    @property
-    def dynamic_parameters(self) -> np.ndarray:
-        """θ (10,) for compensation: the identified one, or ``[m, m·c, 0…]`` without inertia."""
-        if self.inertial_parameters is not None:
-            return np.array(self.inertial_parameters)
-        return point_mass_parameters(self)
+    _OPTIONAL_ARRAYS = CalibrationResult._OPTIONAL_ARRAYS + (
+        "motion_residual_rms",
+        "channel_std",
+        "unconstrained_parameters",
+    )
 
     def summary(self) -> str:
-        """Static summary plus the inertia (± standard errors) and the fit over the motion."""
+        """Static summary (with the inertia) plus the fit over the motion."""
         lines = super().summary().split("\n")
         lines[0] = (
             f"ftkin calibration: method {self.method}, moving recording of {self.sample_count} "
             "readings"
         )
-        if self.has_inertia:
-            errors = (
-                self.inertia_std_errors
-                if self.inertia_std_errors is not None
-                else np.full((3, 3), np.nan)
-            )
-            lines.append("  inertia_about_com_in_sensor [kg·m²] (± standard error):")
-            for row, error in zip(self.inertia_about_com_in_sensor, errors):
-                lines.append(
-                    "    [" + ", ".join(f"{v:+.6f} ± {e:.6f}" for v, e in zip(row, error)) + "]"
-                )
-            moments = np.linalg.eigvalsh(self.inertia_about_com_in_sensor)
-            lines.append(
-                "  principal moments: " + ", ".join(f"{m:.6f}" for m in moments) + " kg·m²"
-            )
         if self.unconstrained_consistent is False:
             lines.append(
                 "  NOTE: the unconstrained least squares was not physically consistent; the ML fit "
@@ -214,6 +169,28 @@ def _covariance(problem: DynamicProblem, x: np.ndarray, phi_space: bool) -> np.n
     return gradient @ cov_x @ gradient.T
 
 
+def _refuse_non_positive_mass(motion: MotionSamples, mass: float, g: float) -> None:
+    """Name the likely convention behind a non-positive mass estimate, else refuse it [kg]."""
+    # a negative mass is most often a convention: readings negated (the reaction) or a base
+    # mounted upside down
+    static = Samples(motion.wrenches, motion.rotations).pose_averages()
+    try:
+        check_conventions(detect_sign_and_handedness(static, g=g))
+    except SuspectConvention as error:
+        raise SuspectConvention(
+            f"{error} The dynamic calibration takes none of these options yet: negate the "
+            "readings (sign) or "
+            "calibrate from static poses, where they apply.",
+            error.explanations,
+            error.fixes,
+            error.sensor_sign,
+            error.flip_axis,
+        ) from None
+    raise InvalidInput(
+        f"the estimated tool mass is {mass:.4g} kg (not positive): is there a tool on the sensor?"
+    )
+
+
 def calibrate_dynamic(
     motion: MotionSamples | Samples,
     *,
@@ -265,25 +242,7 @@ def calibrate_dynamic(
     x = fit_unconstrained(problem, x)
     theta_unconstrained = problem.theta(x[8:])
     if theta_unconstrained[0] <= 0.0:
-        # a negative mass is most often a convention: readings negated (the reaction) or a base
-        # mounted upside down
-        static = Samples(motion.wrenches, motion.rotations).pose_averages()
-        try:
-            check_conventions(detect_sign_and_handedness(static, g=g))
-        except SuspectConvention as error:
-            raise SuspectConvention(
-                f"{error} The dynamic calibration takes none of these options yet: negate the "
-                "readings (sign) or "
-                "calibrate from static poses, where they apply.",
-                error.explanations,
-                error.fixes,
-                error.sensor_sign,
-                error.flip_axis,
-            ) from None
-        raise InvalidInput(
-            f"the estimated tool mass is {theta_unconstrained[0]:.4g} kg (not positive): is there "
-            "a tool on the sensor?"
-        )
+        _refuse_non_positive_mass(motion, theta_unconstrained[0], g)
     consistent = is_physically_consistent(theta_unconstrained) if estimate_inertia else None
     phi_space = estimate_inertia
     if estimate_inertia:

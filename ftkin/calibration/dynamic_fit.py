@@ -24,12 +24,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import UnobservableParameters
+from ..kinematics.rotations import gravity_in_base_from_tilt
 from .log_cholesky import (
     INERTIAL_PARAMETER_NAMES,
     log_cholesky_jacobian,
     parameters_from_log_cholesky,
 )
-from .model import cross_rows
+from .model import gravity_in_sensor
 from .regressor import gravity_regressor
 
 BIAS_NAMES = tuple(
@@ -54,7 +55,7 @@ def upward_gravity(
     ``V``.
     """
     cu, su, cv, sv = np.cos(tilt_u), np.sin(tilt_u), np.cos(tilt_v), np.sin(tilt_v)
-    gamma = -g * np.array([cu * sv, -su, -cu * cv])
+    gamma = -gravity_in_base_from_tilt(g, tilt_u, tilt_v)
     d_u = -g * np.array([-su * sv, -cu, su * cv])
     d_v = -g * np.array([cu * cv, 0.0, cu * sv])
     return gamma, d_u, d_v
@@ -91,19 +92,12 @@ class DynamicProblem:
         theta[list(self.free)] = theta_free
         return theta
 
-    def _gravity_in_sensor(self, gamma: np.ndarray) -> np.ndarray:
-        return np.einsum("nji,j->ni", self.rotations, gamma)
-
     def predict(self, x: np.ndarray) -> np.ndarray:
-        """``(N, 6)`` predicted raw readings at ``x`` (θ-space)."""
+        """``(N, 6)`` predicted raw readings at ``x`` (θ-space): ``bias − (Y + Y_g) θ``."""
         theta = self.theta(x[8:])
         gamma, _, _ = upward_gravity(self.g, x[6], x[7])
-        gravity = self._gravity_in_sensor(gamma)
-        out = -(self.inertial_regressor @ theta)
-        out[:, :3] -= theta[0] * gravity
-        out[:, 3:] -= cross_rows(theta[1:4], gravity)
-        out += x[:6]
-        return out
+        weight = gravity_regressor(gravity_in_sensor(self.rotations, gamma))
+        return x[:6] - (self.inertial_regressor + weight) @ theta
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
         """``(N, 6, len(x))`` derivative of :meth:`predict` with respect to ``x`` (θ-space)."""
@@ -112,10 +106,10 @@ class DynamicProblem:
         out = np.zeros((len(self.wrenches), 6, len(x)))
         out[:, :, :6] = np.eye(6)
         for column, direction in ((6, d_u), (7, d_v)):
-            e = self._gravity_in_sensor(direction)
-            out[:, :3, column] = -theta[0] * e
-            out[:, 3:, column] = -cross_rows(theta[1:4], e)
-        full = self.inertial_regressor + gravity_regressor(self._gravity_in_sensor(gamma))
+            out[:, :, column] = (
+                -gravity_regressor(gravity_in_sensor(self.rotations, direction)) @ theta
+            )
+        full = self.inertial_regressor + gravity_regressor(gravity_in_sensor(self.rotations, gamma))
         out[:, :, 8:] = -full[:, :, list(self.free)]
         return out
 

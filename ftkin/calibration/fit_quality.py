@@ -149,7 +149,7 @@ def diagnose(
     whitened = problem.whitened_residuals(theta).reshape(-1, 6)
     count = len(whitened)
     if parameter_count is None:  # 12 for θ, plus the mount angles when a mount is estimated
-        parameter_count = getattr(problem, "parameter_count", 12)
+        parameter_count = problem.parameter_count
     dof = 6 * count - parameter_count
     chi_square = float(np.sum(whitened**2))
     if fit.noise_source == "residuals" or dof <= 0:

@@ -26,11 +26,13 @@ import numpy as np
 from ..exceptions import InvalidInput
 from .information import SensorNoise, covariance_from_information, noise_floor
 from .linear import fit_linear
-from .model import STANDARD_GRAVITY, SensorModel, cross_rows, parameter_jacobian
+from .model import STANDARD_GRAVITY, SensorModel, parameter_jacobian, predict
 from .mount import (
-    MountedProblem,
+    MOUNT_AXES,
     check_mount_mode,
     check_mount_observable,
+    mount_jacobian,
+    mount_rotation,
     mount_start,
     split_information,
 )
@@ -65,51 +67,80 @@ NOISE_SOURCES = ("given", "spread", "residuals")
 class WeightedProblem:
     """The whitened least-squares problem on per-pose means (inspectable on its own).
 
+    The parameters are ``x = [θ (12), δ (k)]``: ``θ = [a, F0, M0, P]`` and, when the mount is
+    estimated, its increment ``δ`` (:mod:`ftkin.calibration.mount`; ``k = 0`` for mode
+    ``"none"``). A bare 12-vector ``θ`` means ``δ = 0``. The prediction is the model's
+    (:func:`~ftkin.calibration.model.predict`) at the real orientations ``R_BS_urdf · R_Mᵀ``.
+
     Attributes:
-        rotations: ``(P, 3, 3)`` sensor orientations ``R_BS``.
+        rotations: ``(P, 3, 3)`` sensor orientations ``R_BS`` (the URDF's, with a mount).
         wrenches: ``(P, 6)`` mean raw reading per pose [N, N·m].
         counts: ``(P,)`` readings averaged at each pose.
         channel_std: ``(6,)`` per-reading noise ``σ`` [N, N·m].
+        mount_base: ``R_M0`` ``(3, 3)``, the mount at ``δ = 0``.
+        mode: ``"none"``, ``"yaw"`` (``k = 1``) or ``"full"`` (``k = 3``).
     """
 
     rotations: np.ndarray
     wrenches: np.ndarray
     counts: np.ndarray
     channel_std: np.ndarray
+    mount_base: np.ndarray = field(default_factory=lambda: np.eye(3))
+    mode: str = "none"
+
+    @property
+    def parameter_count(self) -> int:
+        """``12 + k``."""
+        return 12 + MOUNT_AXES[self.mode].shape[1]
 
     @property
     def weights(self) -> np.ndarray:
         """``(P, 6)`` whitening factors ``sqrt(n_i) / σ_c``."""
         return np.sqrt(self.counts)[:, None] / self.channel_std[None, :]
 
-    def residuals(self, theta: np.ndarray) -> np.ndarray:
+    def _full(self, x: np.ndarray) -> np.ndarray:
+        return np.concatenate([x, np.zeros(self.parameter_count - len(x))])
+
+    def mount(self, x: np.ndarray) -> np.ndarray:
+        """``R_M`` at parameters ``x``."""
+        return mount_rotation(self.mount_base, self.mode, self._full(x)[12:])
+
+    def residuals(self, x: np.ndarray) -> np.ndarray:
         """``(P, 6)`` measured minus predicted [N, N·m] (unchecked, hot path)."""
-        gravity_in_sensor = np.einsum("nji,j->ni", self.rotations, theta[0:3])
-        predicted = np.empty_like(self.wrenches)
-        predicted[:, _FORCE] = gravity_in_sensor + theta[3:6]
-        predicted[:, _TORQUE] = cross_rows(theta[9:12], gravity_in_sensor) + theta[6:9]
-        return self.wrenches - predicted
+        if self.mode == "none":
+            return self.wrenches - predict(self.rotations, x)
+        return self.wrenches - predict(self.rotations @ self.mount(x).T, x)
 
-    def whitened_residuals(self, theta: np.ndarray) -> np.ndarray:
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """``(P, 6, 12 + k)`` derivative of the prediction (not whitened)."""
+        if self.mode == "none":
+            return parameter_jacobian(self.rotations, x[0:3], x[9:12])
+        x = self._full(x)
+        return mount_jacobian(self.rotations, x[0:3], x[9:12], self.mode, self.mount(x), x[12:])
+
+    def whitened_residuals(self, x: np.ndarray) -> np.ndarray:
         """``(6P,)`` residuals in units of their standard deviation."""
-        return (self.residuals(theta) * self.weights).reshape(-1)
+        return (self.residuals(x) * self.weights).reshape(-1)
 
-    def whitened_jacobian(self, theta: np.ndarray) -> np.ndarray:
-        """``(6P, 12)`` derivative of the whitened *prediction* with respect to ``θ``."""
-        jac = parameter_jacobian(self.rotations, theta[0:3], theta[9:12])
-        return (jac * self.weights[:, :, None]).reshape(-1, 12)
+    def whitened_jacobian(self, x: np.ndarray) -> np.ndarray:
+        """``(6P, 12 + k)`` derivative of the whitened *prediction*."""
+        return (self.jacobian(x) * self.weights[:, :, None]).reshape(-1, self.parameter_count)
 
-    def hat_blocks(self, theta: np.ndarray) -> np.ndarray:
+    def hat_blocks(self, x: np.ndarray) -> np.ndarray:
         """``(P, 6, 6)`` per-pose diagonal blocks of the hat matrix ``J (JᵀJ)⁺ Jᵀ`` of the whitened
-        fit.
+        fit (mount columns included).
 
         Their diagonals are the leverages of the readings' channels.
         """
-        jac = self.whitened_jacobian(theta)
+        jac = self.whitened_jacobian(x)
         blocks = jac.reshape(-1, 6, jac.shape[1])
         return (
             blocks @ np.linalg.pinv(jac.T @ jac, hermitian=True) @ np.transpose(blocks, (0, 2, 1))
         )
+
+    def recentred(self, x: np.ndarray) -> tuple[WeightedProblem, np.ndarray]:
+        """The same problem with ``R_M0`` moved to ``x``'s mount, and ``θ`` (12,)."""
+        return replace(self, mount_base=self.mount(x)), np.asarray(x[:12], dtype=float)
 
 
 @dataclass(frozen=True)
@@ -219,6 +250,20 @@ def noise_from_residuals(
     return std, min(dofs)
 
 
+def _information(
+    problem: WeightedProblem, theta: np.ndarray, loss: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Robust weights ``(P, 6)``, θ's Fisher information ``(12, 12)`` (marginal with a mount) and
+    the mount covariance ``(k, k)`` [rad²] (None without a mount) at the solution.
+    """
+    robust_weights = _robust_weights(problem.whitened_residuals(theta).reshape(-1, 6), loss)
+    jac = problem.whitened_jacobian(theta) * np.sqrt(robust_weights).reshape(-1, 1)
+    information = jac.T @ jac
+    if problem.mode == "none":
+        return robust_weights, information, None
+    return robust_weights, *split_information(information)
+
+
 def _solve(problem: WeightedProblem, start: np.ndarray, loss: str) -> tuple[np.ndarray, int]:
     """Minimize the (robust) whitened residuals from ``start``; ``θ`` and the function evaluations
     used.
@@ -290,15 +335,13 @@ def fit_ml(
         raise InvalidInput(f"unknown loss {loss!r}; expected one of {', '.join(LOSSES)}")
     counts = np.asarray(poses.counts, dtype=float)
     if check_mount_mode(estimate_mount) == "none":
-        start = fit_linear(poses, g)
-        problem = WeightedProblem(poses.rotations, poses.wrenches, counts, np.ones(6))
-        theta0 = start.to_vector()
+        mount0, start = np.eye(3), fit_linear(poses, g)
     else:
         mount0, start = mount_start(poses, g)
-        problem = MountedProblem(
-            poses.rotations, poses.wrenches, counts, np.ones(6), mount0, estimate_mount
-        )
-        theta0 = np.concatenate([start.to_vector(), np.zeros(problem.parameter_count - 12)])
+    problem = WeightedProblem(
+        poses.rotations, poses.wrenches, counts, np.ones(6), mount0, estimate_mount
+    )
+    theta0 = np.concatenate([start.to_vector(), np.zeros(problem.parameter_count - 12)])
     channel_std, dof, source = _noise(poses, problem, theta0, noise, loss, floor)
     problem = replace(problem, channel_std=channel_std)
     if estimate_mount != "none":
@@ -312,15 +355,8 @@ def fit_ml(
             break
         theta, more = _solve(problem, theta, loss)
         evaluations += more
-    mount_covariance = None
-    if estimate_mount != "none":
-        problem, theta = problem.recentred(theta)
-    whitened = problem.whitened_residuals(theta).reshape(-1, 6)
-    robust_weights = _robust_weights(whitened, loss)
-    jac = problem.whitened_jacobian(theta) * np.sqrt(robust_weights).reshape(-1, 1)
-    information = jac.T @ jac
-    if estimate_mount != "none":
-        information, mount_covariance = split_information(information)
+    problem, theta = problem.recentred(theta)
+    robust_weights, information, mount_covariance = _information(problem, theta, loss)
     return MlFit(
         model=SensorModel.from_vector(theta, g),
         start=start,
@@ -331,7 +367,7 @@ def fit_ml(
         robust_weights=robust_weights,
         information=information,
         iterations=evaluations,
-        mount_rotation=problem.mount(theta) if estimate_mount != "none" else np.eye(3),
+        mount_rotation=problem.mount_base,
         mount_mode=estimate_mount,
         mount_covariance=mount_covariance,
     )

@@ -8,6 +8,13 @@ with ``a = gravity_in_base`` the tool's weight vector in the base frame [N],
 ``F0``/``M0`` the sensor bias [N]/[N·m] and ``P`` the tool's centre of mass in
 the sensor frame [m]. The twelve parameters, in this order, form the vector
 ``θ = [a, F0, M0, P]`` used by the estimators and the Fisher information.
+
+This is the one place the model is written: :class:`SensorModel` (validated), and
+:func:`predict`, :func:`tool_gravity` and :func:`parameter_jacobian` on validated arrays,
+which every fit, compensator, check and view calls. Two fast paths of the contact wrench
+``raw − predict`` sit beside them for the hot loops: :class:`FloatModel` (one reading on
+Python floats, the control tick) and :func:`contact_batch` (blocked columns, logs); tests
+check both against :func:`predict` to 1e-12.
 """
 
 from __future__ import annotations
@@ -164,39 +171,134 @@ class SensorModel:
             ``(6,)`` or ``(N, 6)``.
         """
         rotations, single = as_rotation_batch(rotation_sensor_to_base)
-        gravity_in_sensor = np.einsum("nji,j->ni", rotations, self.gravity_in_base)
-        out = np.empty((len(rotations), 6))
-        out[:, :3] = gravity_in_sensor
-        out[:, 3:] = cross_rows(self.center_of_mass, gravity_in_sensor)
+        out = tool_gravity(rotations, self.gravity_in_base, self.center_of_mass)
         return out[0] if single else out
 
     def predict(self, rotation_sensor_to_base) -> np.ndarray:
         """Reading without contact, ``bias + tool gravity`` [N, N·m]; ``(6,)`` or ``(N, 6)``."""
-        return self.tool_gravity_wrench(rotation_sensor_to_base) + self.bias
+        rotations, single = as_rotation_batch(rotation_sensor_to_base)
+        out = predict(rotations, self.to_vector())
+        return out[0] if single else out
 
     def parameter_jacobian(self, rotation_sensor_to_base) -> np.ndarray:
-        """Derivative of :meth:`predict` with respect to ``θ``, ``(N, 6, 12)``.
-
-        Blocks: ``∂F/∂a = R^T``, ``∂F/∂F0 = I``, ``∂M/∂a = [P]× R^T``,
-        ``∂M/∂M0 = I``, ``∂M/∂P = -[Gs]×``.
-        """
+        """Derivative of :meth:`predict` with respect to ``θ``, ``(N, 6, 12)``."""
         rotations, _ = as_rotation_batch(rotation_sensor_to_base)
         return parameter_jacobian(rotations, self.gravity_in_base, self.center_of_mass)
+
+
+# The model on validated arrays: ``rotations`` ``(N, 3, 3)`` ``R_BS``, ``θ = [a, F0, M0, P]``.
+# Every estimator, compensator and view calls these (or the fast paths below, tested against them).
+
+
+def gravity_in_sensor(rotations: np.ndarray, gravity_in_base: np.ndarray) -> np.ndarray:
+    """``Gs = R_BSᵀ a`` ``(N, 3)``: a base-frame vector [any unit] in each sensor frame."""
+    return np.einsum("nji,j->ni", rotations, gravity_in_base)
+
+
+def tool_gravity(
+    rotations: np.ndarray, gravity_in_base: np.ndarray, center_of_mass: np.ndarray
+) -> np.ndarray:
+    """``[Gs, P × Gs]`` ``(N, 6)`` [N, N·m]: the tool's weight and its torque about the sensor."""
+    weight = gravity_in_sensor(rotations, gravity_in_base)
+    return np.concatenate([weight, cross_rows(center_of_mass, weight)], axis=1)
+
+
+def predict(rotations: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """``[F0 + Gs, M0 + P × Gs]`` ``(N, 6)`` [N, N·m]: the reading without contact at ``θ``."""
+    gravity, force_offset, torque_offset, com = theta[0:3], theta[3:6], theta[6:9], theta[9:12]
+    weight = gravity_in_sensor(rotations, gravity)  # Gs = R_BSᵀ a
+    return np.hstack([force_offset + weight, torque_offset + cross_rows(com, weight)])
 
 
 def parameter_jacobian(
     rotations: np.ndarray, gravity_in_base: np.ndarray, center_of_mass: np.ndarray
 ) -> np.ndarray:
-    """Unchecked core of :meth:`SensorModel.parameter_jacobian` for validated ``(N, 3, 3)``
-    input.
+    """``(N, 6, 12)`` derivative of :func:`predict` with respect to ``θ = [a, F0, M0, P]``.
+
+    Blocks: ``∂F/∂a = Rᵀ``, ``∂F/∂F0 = I``, ``∂M/∂a = [P]× Rᵀ``, ``∂M/∂M0 = I``,
+    ``∂M/∂P = −[Gs]×``.
     """
-    count = len(rotations)
     rotations_t = np.transpose(rotations, (0, 2, 1))
-    gravity_in_sensor = rotations_t @ gravity_in_base
-    jac = np.zeros((count, 6, 12))
+    jac = np.zeros((len(rotations), 6, 12))
     jac[:, 0:3, 0:3] = rotations_t
-    jac[:, 0:3, 3:6] = np.eye(3)
+    jac[:, :, 3:9] = np.eye(6)
     jac[:, 3:6, 0:3] = skew(center_of_mass) @ rotations_t
-    jac[:, 3:6, 6:9] = np.eye(3)
-    jac[:, 3:6, 9:12] = -skew(gravity_in_sensor)
+    jac[:, 3:6, 9:12] = -skew(rotations_t @ gravity_in_base)
     return jac
+
+
+# Fast paths of ``raw − predict`` (the contact wrench), for the benchmark rows of the control tick
+# and the batch compensation. Tests check them against predict to 1e-12 relative.
+
+_BLOCK = 8192
+"""Samples per block of :func:`contact_batch` (its temporaries stay below the mmap threshold)."""
+
+
+class FloatModel:
+    """``raw − predict(R_BS)`` for one reading on Python floats: the control tick's fast path.
+
+    The formula of :func:`predict`, written out (numpy's per-call overhead dominates on
+    3-vectors)::
+
+        Gs = R_BSᵀ a,   F' = F − F0 − Gs,   M' = M − M0 − P × Gs
+
+    :meth:`set` replaces the parameters; a bound :meth:`contact` held elsewhere sees them.
+    """
+
+    __slots__ = ("_bias", "_com", "_gravity")
+
+    def __init__(self, gravity_in_base, center_of_mass, bias):
+        self.set(gravity_in_base, center_of_mass, bias)
+
+    def set(self, gravity_in_base, center_of_mass, bias) -> None:
+        """Use ``a`` (3,) [N], ``P`` (3,) [m] and the bias ``[F0, M0]`` (6,) [N, N·m]."""
+        self._gravity = tuple(np.asarray(gravity_in_base, dtype=float).tolist())
+        self._com = tuple(np.asarray(center_of_mass, dtype=float).tolist())
+        self._bias = tuple(np.asarray(bias, dtype=float).tolist())
+
+    def contact(self, rotation_rows, raw) -> tuple[float, ...]:
+        """``R_BS.tolist()`` and six raw floats [N, N·m] → the six contact floats."""
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation_rows
+        ax, ay, az = self._gravity
+        px, py, pz = self._com
+        b0, b1, b2, b3, b4, b5 = self._bias
+        w0, w1, w2, w3, w4, w5 = raw
+        gx = r00 * ax + r10 * ay + r20 * az  # Gs = R_BSᵀ a
+        gy = r01 * ax + r11 * ay + r21 * az
+        gz = r02 * ax + r12 * ay + r22 * az
+        return (
+            (w0 - b0) - gx,
+            (w1 - b1) - gy,
+            (w2 - b2) - gz,
+            (w3 - b3) - (py * gz - pz * gy),  # M' = M − M0 − P × Gs
+            (w4 - b4) - (pz * gx - px * gz),
+            (w5 - b5) - (px * gy - py * gx),
+        )
+
+
+def contact_batch(
+    raw: np.ndarray, gravity_in_sensor: np.ndarray, center_of_mass, bias: np.ndarray
+) -> np.ndarray:
+    """``raw − [F0 + Gs, M0 + P × Gs]`` ``(N, 6)``: :func:`predict` subtracted, column by column.
+
+    ``gravity_in_sensor`` is ``Gs`` ``(N, 3)`` [N]; ``bias`` ``(6,)`` or one row per reading
+    ``(N, 6)`` [N, N·m]. The ``(N,)`` column operations on blocks run as one vectorised loop each
+    (an ``(N, 6)`` operation with a ``(6,)`` operand loops over rows of six).
+    """
+    out = np.empty_like(raw)
+    px, py, pz = np.asarray(center_of_mass, dtype=float).tolist()
+    per_sample, gravity = np.ndim(bias) == 2, gravity_in_sensor.T
+    for start in range(0, len(out), _BLOCK):
+        stop = start + _BLOCK
+        block, readings = out[start:stop], raw[start:stop]
+        offsets = bias[start:stop].T if per_sample else bias
+        for column in range(6):
+            np.subtract(readings[:, column], offsets[column], out=block[:, column])
+        gx, gy, gz = gravity[:, start:stop]
+        block[:, 0] -= gx
+        block[:, 1] -= gy
+        block[:, 2] -= gz
+        block[:, 3] -= py * gz - pz * gy
+        block[:, 4] -= pz * gx - px * gz
+        block[:, 5] -= px * gy - py * gx
+    return out

@@ -24,13 +24,14 @@ reading. :func:`check_mount_observable` refuses such pose sets by name.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
+import pinocchio as pin
 
 from ..exceptions import InvalidInput, UnobservableParameters
 from .linear import fit_linear
-from .model import COMPONENT_NAMES, cross_rows, parameter_jacobian, skew
+from .model import COMPONENT_NAMES, gravity_in_sensor, parameter_jacobian, skew
 from .observability import MIN_RELATIVE_SINGULAR_VALUE, force_regressor
 from .samples import PoseAverages
 
@@ -43,7 +44,8 @@ MOUNT_NAMES = {"none": (), "yaw": ("mount[z]",), "full": ("mount[x]", "mount[y]"
 YAW_START_GRID = np.deg2rad(np.arange(0.0, 360.0, 15.0))
 """Yaw angles [rad] tried for the starting point (the linear fit's force residual picks one)."""
 
-_AXES = {"yaw": np.array([[0.0], [0.0], [1.0]]), "full": np.eye(3)}
+MOUNT_AXES = {"none": np.zeros((3, 0)), "yaw": np.array([[0.0], [0.0], [1.0]]), "full": np.eye(3)}
+"""Axes ``E`` of the mount increment per mode: ``R_M = R_M0 · Exp(E δ)``."""
 
 POSES_NEEDED = {
     "yaw": (
@@ -72,121 +74,20 @@ def check_mount_mode(estimate_mount: str) -> str:
 
 
 def exp_so3(rotation_vector) -> np.ndarray:
-    """``Exp(w)``: rotation matrix of a rotation vector ``w`` [rad] (Rodrigues)."""
-    w = np.asarray(rotation_vector, dtype=float)
-    angle = float(np.linalg.norm(w))
-    k = skew(w)
-    if angle < 1e-8:
-        return np.eye(3) + k + 0.5 * k @ k
-    return np.eye(3) + np.sin(angle) / angle * k + (1.0 - np.cos(angle)) / angle**2 * k @ k
+    """``Exp(w)``: rotation matrix of a rotation vector ``w`` [rad] (Pinocchio's ``exp3``)."""
+    return pin.exp3(np.asarray(rotation_vector, dtype=float))
 
 
 def right_jacobian_so3(rotation_vector) -> np.ndarray:
-    """Right Jacobian ``J_r(w)`` of SO(3): ``Exp(w + dw) ≈ Exp(w) Exp(J_r(w) dw)``."""
-    w = np.asarray(rotation_vector, dtype=float)
-    angle = float(np.linalg.norm(w))
-    k = skew(w)
-    if angle < 1e-6:
-        return np.eye(3) - 0.5 * k + k @ k / 6.0
-    return (
-        np.eye(3)
-        - (1.0 - np.cos(angle)) / angle**2 * k
-        + (angle - np.sin(angle)) / angle**3 * k @ k
-    )
+    """Right Jacobian ``J_r(w)`` of SO(3): ``Exp(w + dw) ≈ Exp(w) Exp(J_r(w) dw)`` (Pinocchio's
+    ``Jexp3``).
+    """
+    return pin.Jexp3(np.asarray(rotation_vector, dtype=float))
 
 
 def mount_rotation(base: np.ndarray, mode: str, increment) -> np.ndarray:
     """``R_M = base · Exp(E δ)`` for the mode's axes ``E``."""
-    return base @ exp_so3(_AXES[mode] @ np.asarray(increment, dtype=float))
-
-
-@dataclass(frozen=True)
-class MountedProblem:
-    """The whitened problem of :class:`~ftkin.calibration.ml.WeightedProblem` with the mount
-    increment appended to ``θ``.
-
-    The parameter vector is ``x = [θ (12), δ (k)]``; a bare 12-vector ``θ``
-    means ``δ = 0`` (the mount at :attr:`mount_base`).
-
-    Attributes:
-        rotations: ``(P, 3, 3)`` sensor orientations from the URDF, ``R_BS_urdf``.
-        wrenches: ``(P, 6)`` mean raw reading per pose [N, N·m].
-        counts: ``(P,)`` readings averaged at each pose.
-        channel_std: ``(6,)`` per-reading noise ``σ`` [N, N·m].
-        mount_base: ``R_M0`` ``(3, 3)``, the mount at ``δ = 0``.
-        mode: ``"yaw"`` (``k = 1``) or ``"full"`` (``k = 3``).
-    """
-
-    rotations: np.ndarray
-    wrenches: np.ndarray
-    counts: np.ndarray
-    channel_std: np.ndarray
-    mount_base: np.ndarray = field(default_factory=lambda: np.eye(3))
-    mode: str = "yaw"
-
-    @property
-    def weights(self) -> np.ndarray:
-        """``(P, 6)`` whitening factors ``sqrt(n_i) / σ_c``."""
-        return np.sqrt(self.counts)[:, None] / self.channel_std[None, :]
-
-    def whitened_residuals(self, x: np.ndarray) -> np.ndarray:
-        """``(6P,)`` residuals in units of their standard deviation."""
-        return (self.residuals(x) * self.weights).reshape(-1)
-
-    @property
-    def parameter_count(self) -> int:
-        """``12 + k``."""
-        return 12 + _AXES[self.mode].shape[1]
-
-    def _full(self, x: np.ndarray) -> np.ndarray:
-        return (
-            x
-            if len(x) == self.parameter_count
-            else np.concatenate([x, np.zeros(self.parameter_count - len(x))])
-        )
-
-    def mount(self, x: np.ndarray) -> np.ndarray:
-        """``R_M`` at parameters ``x``."""
-        return mount_rotation(self.mount_base, self.mode, self._full(x)[12:])
-
-    def residuals(self, x: np.ndarray) -> np.ndarray:
-        """``(P, 6)`` measured minus predicted [N, N·m]."""
-        x = self._full(x)
-        gravity_in_sensor = np.einsum("nji,j->ni", self.rotations, x[0:3]) @ self.mount(x).T
-        predicted = np.empty_like(self.wrenches)
-        predicted[:, 0:3] = gravity_in_sensor + x[3:6]
-        predicted[:, 3:6] = cross_rows(x[9:12], gravity_in_sensor) + x[6:9]
-        return self.wrenches - predicted
-
-    def jacobian(self, x: np.ndarray) -> np.ndarray:
-        """``(P, 6, 12 + k)`` derivative of the prediction (not whitened)."""
-        x = self._full(x)
-        axes = _AXES[self.mode]
-        rotation = self.mount(x)
-        rotations = self.rotations @ rotation.T
-        jac = np.empty((len(rotations), 6, self.parameter_count))
-        jac[:, :, :12] = parameter_jacobian(rotations, x[0:3], x[9:12])
-        gravity_urdf = np.einsum("nji,j->ni", self.rotations, x[0:3])
-        d_gravity = -rotation @ skew(gravity_urdf) @ right_jacobian_so3(axes @ x[12:]) @ axes
-        jac[:, 0:3, 12:] = d_gravity
-        jac[:, 3:6, 12:] = skew(x[9:12]) @ d_gravity
-        return jac
-
-    def whitened_jacobian(self, x: np.ndarray) -> np.ndarray:
-        """``(6P, 12 + k)`` derivative of the whitened prediction."""
-        return (self.jacobian(x) * self.weights[:, :, None]).reshape(-1, self.parameter_count)
-
-    def hat_blocks(self, x: np.ndarray) -> np.ndarray:
-        """``(P, 6, 6)`` diagonal blocks of the hat matrix, mount columns included."""
-        jac = self.whitened_jacobian(x)
-        blocks = jac.reshape(-1, 6, self.parameter_count)
-        return (
-            blocks @ np.linalg.pinv(jac.T @ jac, hermitian=True) @ np.transpose(blocks, (0, 2, 1))
-        )
-
-    def recentred(self, x: np.ndarray) -> tuple[MountedProblem, np.ndarray]:
-        """The same problem with ``R_M0`` moved to ``x``'s mount, and ``θ`` (12,)."""
-        return replace(self, mount_base=self.mount(x)), np.asarray(x[:12], dtype=float)
+    return base @ exp_so3(MOUNT_AXES[mode] @ np.asarray(increment, dtype=float))
 
 
 def force_step_cost(
@@ -222,8 +123,11 @@ def mount_start(poses: PoseAverages, g: float):
     return rotation, fit_linear(replace(poses, rotations=poses.rotations @ rotation.T), g)
 
 
-def check_mount_observable(problem: MountedProblem, x: np.ndarray) -> None:
+def check_mount_observable(problem, x: np.ndarray) -> None:
     """Refuse pose sets that cannot determine the mount (see the module docstring).
+
+    ``problem`` is the ML fit's :class:`~ftkin.calibration.ml.WeightedProblem` with a mount mode,
+    ``x = [θ, δ]`` its parameters.
 
     The whitened Jacobian with unit-norm columns must have a smallest singular
     value of at least :data:`~ftkin.calibration.observability.MIN_RELATIVE_SINGULAR_VALUE`
@@ -256,20 +160,25 @@ def check_mount_observable(problem: MountedProblem, x: np.ndarray) -> None:
 
 
 def mount_jacobian(
-    rotations: np.ndarray, gravity_in_base, center_of_mass, mode: str, mount=None
+    rotations: np.ndarray, gravity_in_base, center_of_mass, mode: str, mount=None, increment=None
 ) -> np.ndarray:
-    """``(N, 6, 12 + k)`` derivative of the prediction with respect to ``[θ, δ]`` at ``δ = 0``.
+    """``(N, 6, 12 + k)`` derivative of the prediction with respect to ``[θ, δ]``.
 
-    ``rotations`` are the URDF's ``R_BS``; ``mount`` is ``R_M`` (default the
-    identity, what a plan assumes before the mount is known). ``mode="none"``
-    gives the ``(N, 6, 12)`` Jacobian of :func:`~ftkin.calibration.model.parameter_jacobian`.
+    ``rotations`` are the URDF's ``R_BS``; ``mount`` is ``R_M`` at ``δ = increment`` (default
+    the identity at ``δ = 0``, what a plan assumes before the mount is known). The ``θ`` columns
+    are :func:`~ftkin.calibration.model.parameter_jacobian` at the real orientations; the mount
+    columns are ``∂Gs/∂δ = −R_M [u]× J_r(E δ) E`` (``u = R_BS_urdfᵀ a``) and ``[P]× ∂Gs/∂δ``.
+    ``mode="none"`` gives the ``(N, 6, 12)`` Jacobian of θ alone.
     """
     mount = np.eye(3) if mount is None else np.asarray(mount, dtype=float)
     gravity, com = np.asarray(gravity_in_base, dtype=float), np.asarray(center_of_mass, dtype=float)
     jac = parameter_jacobian(rotations @ mount.T, gravity, com)
-    if check_mount_mode(mode) == "none":
+    axes = MOUNT_AXES[check_mount_mode(mode)]
+    if mode == "none":
         return jac
-    d_gravity = -mount @ skew(np.einsum("nji,j->ni", rotations, gravity)) @ _AXES[mode]
+    if increment is not None:
+        axes = right_jacobian_so3(axes @ np.asarray(increment, dtype=float)) @ axes
+    d_gravity = -mount @ skew(gravity_in_sensor(rotations, gravity)) @ axes
     return np.concatenate([jac, np.concatenate([d_gravity, skew(com) @ d_gravity], axis=1)], axis=2)
 
 

@@ -60,15 +60,6 @@ def body_regressor(velocity, acceleration) -> np.ndarray:
     return out
 
 
-def point_mass_parameters(model) -> np.ndarray:
-    """θ (10,) of a point-mass tool ``[m, m·c, 0…]`` [kg, kg·m, kg·m²] from a model's mass and
-    centre of mass (sensor frame).
-    """
-    return np.concatenate(
-        [[model.tool_mass], model.tool_mass * np.asarray(model.center_of_mass), np.zeros(6)]
-    )
-
-
 def gravity_regressor(upward_gravity_in_sensor) -> np.ndarray:
     """``(N, 6, 10)`` regressor of the weight alone: :func:`body_regressor` at rest with ``a_lin =
     g_S``.

@@ -62,6 +62,12 @@ class CalibrationResult(SensorModel):
             ``force_offset``/``torque_offset`` are the bias at the end of the
             recording and ``residuals`` are taken against the bias at each
             pose's time.
+        inertia_about_com_in_sensor: ``(3, 3)`` tool inertia about the COM, sensor axes
+            [kg·m²], when a dynamic calibration identified it, else None.
+        inertia_std_errors: ``(3, 3)`` its standard errors [kg·m²], or None.
+        inertial_parameters: ``(10,)`` inertial parameters θ in the sensor frame (see
+            :mod:`ftkin.calibration.log_cholesky`), or None.
+        inertial_covariance: ``(10, 10)`` covariance of θ, or None.
 
     The parameters are those of the real sensor frame: :meth:`predict` and
     :meth:`tool_gravity_wrench` take the real ``R_BS`` (with the mount) and
@@ -82,9 +88,28 @@ class CalibrationResult(SensorModel):
     mount_covariance: np.ndarray | None = None
     sensor_sign: int = 1
     flip_axis: str | None = None
+    drift: BiasDrift | None = None
+    kinematics: KinematicsRecord | None = None
+    inertia_about_com_in_sensor: np.ndarray | None = None
+    inertia_std_errors: np.ndarray | None = None
+    inertial_parameters: np.ndarray | None = None
+    inertial_covariance: np.ndarray | None = None
+
+    _OPTIONAL_ARRAYS = (
+        "inertia_about_com_in_sensor",
+        "inertia_std_errors",
+        "inertial_parameters",
+        "inertial_covariance",
+    )
 
     def __post_init__(self):
         super().__post_init__()
+        for name in self._OPTIONAL_ARRAYS:
+            value = self.__dict__[name]
+            if value is not None:
+                value = np.array(value, dtype=float)
+                value.setflags(write=False)
+                object.__setattr__(self, name, value)
         rotation = np.array(self.mount_rotation, dtype=float)
         if (
             rotation.shape != (3, 3)
@@ -128,8 +153,30 @@ class CalibrationResult(SensorModel):
         """
         return reading_signs(self.sensor_sign, self.flip_axis)
 
-    drift: BiasDrift | None = None
-    kinematics: KinematicsRecord | None = None
+    @classmethod
+    def from_model(cls, model: SensorModel) -> CalibrationResult:
+        """``model`` itself if it is a calibration, else a calibration of its bare parameters."""
+        if isinstance(model, CalibrationResult):
+            return model
+        return cls(
+            model.force_offset,
+            model.torque_offset,
+            model.gravity_in_base,
+            model.center_of_mass,
+            model.g,
+        )
+
+    @property
+    def has_inertia(self) -> bool:
+        """True when the inertia was identified (compensation may then remove inertial forces)."""
+        return self.inertia_about_com_in_sensor is not None
+
+    @property
+    def dynamic_parameters(self) -> np.ndarray:
+        """θ (10,) for compensation: the identified one, or ``[m, m·c, 0…]`` (a point mass)."""
+        if self.inertial_parameters is not None:
+            return np.array(self.inertial_parameters)
+        return np.concatenate([[self.tool_mass], self.tool_mass * self.center_of_mass, np.zeros(6)])
 
     @property
     def pose_count(self) -> int:

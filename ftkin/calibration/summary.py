@@ -53,7 +53,7 @@ def format_summary(result) -> str:
         f"  base_tilt       U  = {_scalar(tilt_u, 3, tilt_errors[0])}°, V = "
         f"{_scalar(tilt_v, 3, tilt_errors[1])}°",
     ]
-    lines.extend(_mount_lines(result))
+    lines.extend(_mount_lines(result) + _inertia_lines(result))
     if result.drift is not None:
         lines.append(f"  bias drift: {result.drift.describe()}")
         if result.drift.model != "none":
@@ -85,17 +85,32 @@ def format_summary(result) -> str:
     return "\n".join(lines)
 
 
+def _inertia_lines(result) -> list[str]:
+    """The identified inertia (± standard errors) and its principal moments, if any."""
+    if not result.has_inertia:
+        return []
+    inertia = result.inertia_about_com_in_sensor
+    errors = result.inertia_std_errors
+    errors = np.full((3, 3), np.nan) if errors is None else errors
+    lines = ["  inertia_about_com_in_sensor [kg·m²] (± standard error):"]
+    for row, error in zip(inertia, errors):
+        lines.append("    [" + ", ".join(f"{v:+.6f} ± {e:.6f}" for v, e in zip(row, error)) + "]")
+    moments = np.linalg.eigvalsh(inertia)
+    lines.append("  principal moments: " + ", ".join(f"{m:.6f}" for m in moments) + " kg·m²")
+    return lines
+
+
 def _mount_lines(result) -> list[str]:
     """The estimated mount and a non-default reading convention, if any."""
     lines = []
-    if getattr(result, "mount_mode", "none") != "none":
+    if result.mount_mode != "none":
         errors = ", ".join(f"{name} ± {value:.3f}°" for name, value in result.mount_std_deg.items())
         lines.append(
             f"  mount_rpy_deg   R_M = {_vector(result.mount_rpy_deg, 3)}° (roll, pitch, yaw; URDF "
             "sensor frame → "
             f"real sensor frame, estimated: {result.mount_mode}; {errors})"
         )
-    if getattr(result, "sensor_sign", 1) != 1 or getattr(result, "flip_axis", None) is not None:
+    if result.sensor_sign != 1 or result.flip_axis is not None:
         flip = f", {result.flip_axis} axis reversed" if result.flip_axis else ""
         lines.append(
             f"  readings: sensor_sign {result.sensor_sign:+d}{flip} (applied to every reading)"

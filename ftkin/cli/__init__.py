@@ -49,13 +49,13 @@ def check_outputs(args: argparse.Namespace) -> None:
     """
     from ..io.atomic import check_output_path
 
-    inputs = [
-        getattr(args, name) for name in INPUT_OPTIONS if isinstance(getattr(args, name, None), str)
-    ]
+    inputs = []
     for name in INPUT_OPTIONS:
         value = getattr(args, name, None)
         if isinstance(value, str) and not value.strip():
             raise InvalidInput(f"the {name} file name is empty; expected a path to read")
+        if isinstance(value, str):
+            inputs.append(value)
     seen: dict[str, str] = {}
     for name, flag in OUTPUT_OPTIONS.items():
         value = getattr(args, name, None)

@@ -60,16 +60,7 @@ def number_list(text: str) -> list[float]:
     parts = [part for part in text.replace(",", " ").split()]
     if not parts:
         raise argparse.ArgumentTypeError("expected numbers, got nothing")
-    values = []
-    for part in parts:
-        try:
-            value = float(part)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a number, got {part!r}") from None
-        if value != value or abs(value) == float("inf"):
-            raise argparse.ArgumentTypeError(f"expected a finite number, got {part!r}")
-        values.append(value)
-    return values
+    return [_number(part, lambda value: value == value, "a finite number") for part in parts]
 
 
 def whole_number(text: str, what: str = "") -> int:

@@ -196,7 +196,7 @@ def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:
     arm = arm_from_args(args)
     if arm is not None:
         return arm
-    record = getattr(calibration, "kinematics", None)
+    record = calibration.kinematics
     if (
         record is not None
     ):  # the calibration says how its sensor frame was obtained: no options to repeat

@@ -54,7 +54,7 @@ def run(args) -> int:
     compensator = Compensator(
         calibration, arm, allow_other_arm=args.allow_other_arm
     )  # checks arm against the record
-    if getattr(calibration, "has_inertia", False):
+    if calibration.has_inertia:
         done = compensate_motion(args, calibration, arm)
         if done is not None:
             return done

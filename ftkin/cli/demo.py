@@ -108,9 +108,8 @@ def run(args) -> int:
     raw = sensor.read(arm.rotation_sensor_to_base(q_check), rng, contact)[0]
     recovered = compensator.compensate(q_check, raw)
     print("\nCompensation at a new pose with a known contact wrench [N, N·m]:")
-    print("  injected  " + " ".join(f"{v:+.4f}" for v in contact))
-    print("  recovered " + " ".join(f"{v:+.4f}" for v in recovered))
-    print("  raw       " + " ".join(f"{v:+.4f}" for v in raw))
+    for label, values in (("injected", contact), ("recovered", recovered), ("raw", raw)):
+        print(f"  {label:<10}" + " ".join(f"{v:+.4f}" for v in values))
     print(
         f"  max error {np.max(np.abs(recovered - contact)):.4f} (noise of one reading: 0.02 N, "
         "0.002 N·m)"

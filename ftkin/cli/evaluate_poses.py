@@ -29,26 +29,23 @@ def register(subparsers) -> None:
 
 def pose_rotations(table, args) -> np.ndarray:
     """``R_BS`` ``(N, 3, 3)`` of the table's poses, one per distinct ``pose`` id (its first row)."""
-    rotations = orientations_from_table(
-        table, arm_from_args(args)
-    ).rotations  # joint columns: bundled arm by default
-    pose_ids = pose_ids_from_table(table)
-    if pose_ids is None:
-        return rotations
-    _, first_rows = np.unique(pose_ids, return_index=True)
-    return rotations[np.sort(first_rows)]
+    # joint columns: the bundled arm by default
+    return _first_rows(table, orientations_from_table(table, arm_from_args(args)).rotations)
 
 
 def pose_times(table) -> np.ndarray | None:
     """Time [s] of each pose (its first row), from the table's time column, or None."""
     times = times_from_table(table)
-    if times is None:
-        return None
+    return None if times is None else _first_rows(table, times)
+
+
+def _first_rows(table, values: np.ndarray) -> np.ndarray:
+    """``values`` (one per table row) at the first row of each distinct ``pose`` id, if any."""
     pose_ids = pose_ids_from_table(table)
     if pose_ids is None:
-        return times
+        return values
     _, first_rows = np.unique(pose_ids, return_index=True)
-    return times[np.sort(first_rows)]
+    return values[np.sort(first_rows)]
 
 
 def run(args) -> int:

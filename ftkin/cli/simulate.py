@@ -23,7 +23,6 @@ kinematic arm and the spring-damper formula (:mod:`ftkin.sim.placement`).
 
 from __future__ import annotations
 
-import argparse
 import importlib.util
 from dataclasses import replace
 
@@ -33,7 +32,7 @@ from ..exceptions import InvalidInput
 from ..io.csv_table import write_csv
 from ..sim.placement import MODES, PlacementRun, PlacementScenario, simulate_placement
 from ..sim.surfaces import SURFACES, surface_by_name
-from .arg_types import bounded_int, positive_float, seed
+from .arg_types import bounded_int, non_negative_float, positive_float, seed
 from .simulate_inputs import add_input_parsers
 
 _DEFAULT = PlacementScenario()
@@ -70,14 +69,14 @@ def _add_scenario_arguments(placement) -> None:
     )
     placement.add_argument(
         "--k1",
-        type=_non_negative,
+        type=non_negative_float,
         default=_DEFAULT.k1 * 1e3,
         metavar="MM_PER_N",
         help="position gain k13 [mm/N] (default: %(default)g)",
     )
     placement.add_argument(
         "--k2",
-        type=_non_negative,
+        type=non_negative_float,
         default=_DEFAULT.k2 * 1e3,
         metavar="MM_PER_S_N",
         help="velocity gain k23 [mm/(s·N)] (default: %(default)g; the paper swept around 0.1)",
@@ -90,7 +89,7 @@ def _add_scenario_arguments(placement) -> None:
     )
     placement.add_argument(
         "--gap",
-        type=_non_negative,
+        type=non_negative_float,
         default=_DEFAULT.start_gap * 1e3,
         help="object bottom above the surface at the start [mm] (default: %(default)g)",
     )
@@ -169,18 +168,8 @@ def default_engine() -> str:
     return "mujoco" if importlib.util.find_spec("mujoco") is not None else "simple"
 
 
-def _non_negative(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (value >= 0 and np.isfinite(value)):
-        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
-    return value
-
-
 def _value_list(text: str) -> list[float]:
-    return [_non_negative(part) for part in text.split(",") if part.strip()]
+    return [non_negative_float(part) for part in text.split(",") if part.strip()]
 
 
 def _summary(run: PlacementRun) -> str:

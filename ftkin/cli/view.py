@@ -142,7 +142,7 @@ def _with_bias_at_times(frames: Frames, calibration, times: np.ndarray) -> Frame
     recording); with this shift it effectively subtracts the bias at the
     reading's time, as ``ftkin compensate`` does (held outside the recording).
     """
-    if getattr(calibration, "drift", None) is None:
+    if calibration.drift is None:
         return frames
     shift = calibration.bias_at(times) - calibration.bias
     return dataclasses.replace(frames, raw_wrenches=frames.raw_wrenches - shift)
@@ -220,7 +220,7 @@ def _contact_sheet(viewer, frames: Frames, calibration, path: str, title: str) -
     rows = np.arange(len(frames.labels))
     if len(rows) > SHEET_CELLS:
         rows = np.unique(np.linspace(0, len(rows) - 1, SHEET_CELLS).round().astype(int))
-    diagnostics = getattr(calibration, "diagnostics", None)
+    diagnostics = calibration.diagnostics
     flagged = {
         f"pose {int(pid)}"
         for pid in (diagnostics.outlier_pose_ids if diagnostics is not None else ())

@@ -15,8 +15,8 @@ sensor sign or reversed axis (:mod:`ftkin.calibration.conventions`) multiplies
 every raw reading by ``±1`` first; without one the hot path is unchanged.
 
 The bias is an attribute the caller can move without slowing the control path
-(:class:`~ftkin.control.bias_control.BiasControl`: re-zero, driver-zeroed
-readings, a bias tracker, the bias trajectory of a drifting calibration).
+(re-zero, driver-zeroed readings, a bias tracker, the bias trajectory of a
+drifting calibration).
 """
 
 from __future__ import annotations
@@ -25,20 +25,25 @@ import math
 
 import numpy as np
 
-from ..calibration.model import SensorModel
+from ..calibration.model import FloatModel, SensorModel, contact_batch, gravity_in_sensor
+from ..calibration.result import CalibrationResult
 from ..calibration.samples import Samples
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
 from ..kinematics.mounting import mounted_arm
-from ..validation import FLOAT64, as_batch, as_rotation_batch, is_rotation_rows, rotation_rows
-from .bias_control import BiasControl
+from ..validation import (
+    FLOAT64,
+    as_batch,
+    as_float_array,
+    as_rotation_batch,
+    as_vector,
+    is_rotation_rows,
+    rotation_rows,
+)
 from .bias_tracker import BiasTracker
 
-_BLOCK = 8192
-"""Samples per block of the batch compensation's column updates."""
 
-
-class Compensator(BiasControl):
+class Compensator:
     """Remove the sensor bias and the tool's weight from raw readings.
 
     Args:
@@ -75,7 +80,8 @@ class Compensator(BiasControl):
             raise InvalidInput(
                 f"tracker must be an ftkin BiasTracker or None, got {type(tracker).__name__}"
             )
-        record = getattr(calibration, "kinematics", None)
+        calibration = CalibrationResult.from_model(calibration)
+        record = calibration.kinematics
         if arm is not None and record is not None and not allow_other_arm:
             problems = record.mismatches(arm)
             if problems:
@@ -88,42 +94,37 @@ class Compensator(BiasControl):
                     "is deliberate."
                 )
         self.calibration = calibration
-        mount = getattr(calibration, "mount_rotation", None)
-        self.arm = mounted_arm(arm, mount) if arm is not None and mount is not None else arm
-        signs = getattr(calibration, "reading_signs", None)
-        self._reading_signs = None if signs is None or np.all(signs == 1.0) else np.array(signs)
-        if self._reading_signs is not None:
-            # Shadow the two kernels (every other path calls one of them) with ones that apply the
-            # signs.
-            self.contact_floats = self._signed_contact_floats
-            self._contact_batch = self._signed_contact_batch
+        self.arm = mounted_arm(arm, calibration.mount_rotation) if arm is not None else arm
+        signs = calibration.reading_signs
+        self._reading_signs = None if np.all(signs == 1.0) else signs
         self._gravity_in_base = np.array(calibration.gravity_in_base)
         self._bias = np.array(calibration.bias)
         self._com = np.array(calibration.center_of_mass)
+        self._floats = FloatModel(self._gravity_in_base, self._com, self._bias)
+        # Every one-sample path (and JointAdmittance.step) runs the float kernel of the model.
+        self.contact_floats = (
+            self._floats.contact if self._reading_signs is None else self._signed_contact_floats
+        )
         self._q_shape = (self.arm.nq,) if self.arm is not None else None
-        self.refresh_floats()
         self.tracker = tracker
         if tracker is not None:
             tracker.reset(self._bias, tracker.std)
 
     def _signed_contact_floats(self, rotation_rows, raw) -> tuple[float, ...]:
+        """:meth:`FloatModel.contact` of the readings times the stored signs."""
         s0, s1, s2, s3, s4, s5 = self._reading_signs.tolist()
         w0, w1, w2, w3, w4, w5 = raw
-        return Compensator.contact_floats(
-            self, rotation_rows, (w0 * s0, w1 * s1, w2 * s2, w3 * s3, w4 * s4, w5 * s5)
+        return self._floats.contact(
+            rotation_rows, (w0 * s0, w1 * s1, w2 * s2, w3 * s3, w4 * s4, w5 * s5)
         )
-
-    def _signed_contact_batch(
-        self, raw: np.ndarray, gravity_in_sensor: np.ndarray, bias=None
-    ) -> np.ndarray:
-        return Compensator._contact_batch(self, raw * self._reading_signs, gravity_in_sensor, bias)
 
     def __repr__(self) -> str:
         calibration = self.calibration
+        path = None if self.arm is None else self.arm.urdf_path
         arm = (
             "none"
             if self.arm is None
-            else f"{self.arm.sensor_frame} of {getattr(self.arm.urdf_path, 'name', '?')}"
+            else f"{self.arm.sensor_frame} of {path.name if path else '?'}"
         )
         return (
             f"Compensator(tool {calibration.tool_weight:.4g} N, COM "
@@ -138,9 +139,7 @@ class Compensator(BiasControl):
         The one-sample path reads Python floats: call this after replacing a
         parameter array at run time (e.g. a re-zeroed bias).
         """
-        self._gravity_floats = tuple(self._gravity_in_base.tolist())
-        self._com_floats = tuple(self._com.tolist())
-        self._bias_floats = tuple(self._bias.tolist())
+        self._floats.set(self._gravity_in_base, self._com, self._bias)
 
     def _require_arm(self) -> Arm:
         if self.arm is None:
@@ -236,30 +235,108 @@ class Compensator(BiasControl):
         """
         return np.array(self.contact_floats(rotation.tolist(), raw.tolist()))
 
-    def contact_floats(self, rotation_rows, raw) -> tuple[float, ...]:
-        """The compensation on Python floats: ``R_BS.tolist()`` and six raw floats → six contact
-        floats.
+    # ------------------------------------------------------------------ bias
+    @property
+    def bias(self) -> np.ndarray:
+        """The bias ``[F0, M0]`` [N, N·m] subtracted now (a copy)."""
+        return self._bias.copy()
 
-        Every one-sample path (and ``JointAdmittance.step``) runs here: numpy's
-        per-call overhead dominates on 3-vectors; the IEEE operations are those
-        of the batch form.
+    def _apply_bias(self, bias: np.ndarray) -> None:
+        self._bias = np.array(bias, dtype=float)
+        self.refresh_floats()
+
+    def set_bias(self, bias) -> None:
+        """Use ``bias`` ``(6,)`` [N, N·m] from now on (the tracker, if any, restarts from it)."""
+        bias = as_vector(bias, 6, "bias [F0, M0]")
+        self._apply_bias(bias)
+        if self.tracker is not None:
+            self.tracker.reset(bias)
+
+    def rezero_rotation(self, rotation_sensor_to_base, raw_wrench) -> np.ndarray:
+        """:meth:`rezero` from ``R_BS`` ``(3, 3)``; returns the new bias ``(6,)``."""
+        rotations, _ = as_rotation_batch(rotation_sensor_to_base)
+        raw = as_vector(raw_wrench, 6, "raw_wrench")
+        if len(rotations) != 1:
+            raise InvalidInput("rezero takes one (3, 3) rotation")
+        if (
+            self._reading_signs is not None
+        ):  # a stored sensor sign or reversed axis applies to this reading too
+            raw = raw * self._reading_signs
+        bias = raw - self.calibration.tool_gravity_wrench(rotations[0])
+        self.set_bias(bias)
+        return bias
+
+    def rezero(self, q, raw_wrench) -> np.ndarray:
+        """Re-zero at joint angles ``q`` [rad]: the contact wrench of ``raw_wrench`` becomes zero.
+
+        The new bias is the reading minus the predicted tool gravity at ``q``
+        (not the whole reading, which would subtract the tool's weight at
+        this pose and make it appear at every other). The tool must be free
+        of contact and the arm still. Returns the new bias ``(6,)`` [N, N·m].
         """
-        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation_rows
-        ax, ay, az = self._gravity_floats
-        px, py, pz = self._com_floats
-        b0, b1, b2, b3, b4, b5 = self._bias_floats
-        w0, w1, w2, w3, w4, w5 = raw
-        gx = r00 * ax + r10 * ay + r20 * az  # Gs = R_BSᵀ a
-        gy = r01 * ax + r11 * ay + r21 * az
-        gz = r02 * ax + r12 * ay + r22 * az
-        return (
-            (w0 - b0) - gx,
-            (w1 - b1) - gy,
-            (w2 - b2) - gz,
-            (w3 - b3) - (py * gz - pz * gy),  # M' = M − M0 − P × Gs
-            (w4 - b4) - (pz * gx - px * gz),
-            (w5 - b5) - (px * gy - py * gx),
-        )
+        arm = self._require_arm()
+        q = as_vector(q, arm.nq, "q")
+        return self.rezero_rotation(arm.sensor_rotation_unchecked(q), raw_wrench)
+
+    def driver_zeroed_at_rotation(self, rotation_sensor_to_base) -> np.ndarray:
+        """:meth:`driver_zeroed_at` from ``R_BS`` ``(3, 3)``; returns the new bias ``(6,)``."""
+        rotations, _ = as_rotation_batch(rotation_sensor_to_base)
+        if len(rotations) != 1:
+            raise InvalidInput("driver_zeroed_at takes one (3, 3) rotation")
+        bias = -self.calibration.tool_gravity_wrench(rotations[0])
+        self.set_bias(bias)
+        return bias
+
+    def driver_zeroed_at(self, q0) -> np.ndarray:
+        """The sensor driver was zeroed (tool on, no contact) at joint angles ``q0`` [rad].
+
+        Its readings are then ``raw − raw(q0)``: the true bias and the tool
+        gravity at ``q0`` are gone. The bias to subtract from them is minus the
+        tool gravity wrench at ``q0`` (``−[Gs(q0), P × Gs(q0)]``), after which
+        the contact wrenches are right at every pose. Returns that bias ``(6,)``.
+        """
+        arm = self._require_arm()
+        q0 = as_vector(q0, arm.nq, "q0")
+        return self.driver_zeroed_at_rotation(arm.sensor_rotation_unchecked(q0))
+
+    def bias_at(self, times) -> np.ndarray:
+        """Bias ``(N, 6)`` [N, N·m] for readings at ``times`` ``(N,)`` [s].
+
+        Inside the recording of a drifting calibration: its trajectory
+        (:meth:`~ftkin.calibration.drift.BiasDrift.bias_at`). Outside it (after
+        its end, or before its start, e.g. a log on another clock), or without
+        a drift model: the current bias (calibration's last, or as re-zeroed
+        or tracked since).
+        """
+        times = as_float_array(times, "times").reshape(-1)
+        out = np.tile(self._bias, (len(times), 1))
+        drift = self.calibration.drift
+        if drift is not None and drift.model != "none":
+            inside = drift.covers(times)
+            out[inside] = drift.bias_at(times[inside])
+        return out
+
+    def compensate_tracked(
+        self, q, raw_wrench, dt: float, *, free: bool | None = None
+    ) -> np.ndarray:
+        """:meth:`compensate`, then feed the tracker (if any) with the result; see
+        :meth:`observe_bias`.
+        """
+        contact = self.compensate(q, raw_wrench)
+        self.observe_bias(contact, dt, q=q, free=free)
+        return contact
+
+    def observe_bias(
+        self, contact_wrench, dt: float, *, q=None, free: bool | None = None, fault: bool = False
+    ) -> bool:
+        """Give the tracker this tick's contact wrench; True when it moved the bias (used from the
+        next call).
+        """
+        tracker = self.tracker
+        if tracker is None or not tracker.observe(contact_wrench, dt, q=q, free=free, fault=fault):
+            return False
+        self._apply_bias(tracker.bias)
+        return True
 
     # ----------------------------------------------------------------- batch
     def compensate_batch(self, rotation_sensor_to_base, raw_wrenches, times=None) -> np.ndarray:
@@ -288,39 +365,16 @@ class Compensator(BiasControl):
 
         ``bias``: ``(N, 6)`` per-reading bias [N, N·m] (default: the current one).
         """
-        return self._contact_batch(
-            raw, np.einsum("nji,j->ni", rotations, self._gravity_in_base), bias
-        )
+        return self._contact_batch(raw, gravity_in_sensor(rotations, self._gravity_in_base), bias)
 
     def _contact_batch(
         self, raw: np.ndarray, gravity_in_sensor: np.ndarray, bias: np.ndarray | None = None
     ) -> np.ndarray:
-        """``raw − bias − [Gs, P × Gs]`` ``(N, 6)`` from the tool weight in the sensor frame ``Gs``
-        ``(N, 3)``.
-
-        Computed column by column on blocks (no ``(N, 3)`` temporary for ``P × Gs``).
-        """
-        bias = self._bias if bias is None else bias
-        out = np.empty_like(raw)
-        px, py, pz = self._com_floats
-        per_sample, gravity = np.ndim(bias) == 2, gravity_in_sensor.T
-        # Column by column on blocks: (N,) operations run as one vectorised loop each, where (N, 6)
-        # with a (6,)
-        # operand loops over rows of six; the block's temporaries stay below the mmap threshold.
-        for start in range(0, len(out), _BLOCK):
-            stop = start + _BLOCK
-            block, readings = out[start:stop], raw[start:stop]
-            offsets = bias[start:stop].T if per_sample else bias
-            for column in range(6):
-                np.subtract(readings[:, column], offsets[column], out=block[:, column])
-            gx, gy, gz = gravity[:, start:stop]
-            block[:, 0] -= gx
-            block[:, 1] -= gy
-            block[:, 2] -= gz
-            block[:, 3] -= py * gz - pz * gy
-            block[:, 4] -= pz * gx - px * gz
-            block[:, 5] -= px * gy - py * gx
-        return out
+        """:func:`~ftkin.calibration.model.contact_batch` with the signs and the current bias."""
+        raw = raw if self._reading_signs is None else raw * self._reading_signs
+        return contact_batch(
+            raw, gravity_in_sensor, self._com, self._bias if bias is None else bias
+        )
 
     def compensate_joint_positions(self, joint_positions, raw_wrenches) -> np.ndarray:
         """Contact wrenches ``(N, 6)`` from ``(N, nq)`` joint angles [rad] and ``(N, 6)`` raw
@@ -347,9 +401,8 @@ class Compensator(BiasControl):
         to them.
         """
         rotations = samples.rotations
-        mount = getattr(self.calibration, "mount_rotation", None)
-        if samples.joint_positions is not None and mount is not None:
-            rotations = rotations @ mount.T
+        if samples.joint_positions is not None and self.calibration.has_mount:
+            rotations = rotations @ self.calibration.mount_rotation.T
         bias = self.bias_at(samples.times) if samples.times is not None else None
         return self.compensate_batch_unchecked(rotations, samples.wrenches, bias)
 

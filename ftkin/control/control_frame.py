@@ -2,14 +2,17 @@
 
 :class:`ControlFrame` moves the compensated wrench from the sensor to the
 control point (lever arm and axes) and the admittance's twist back to the
-sensor origin, on Python floats (a few µs per tick; the 3-vector arithmetic
-is written out on purpose). :func:`control_frame_for` builds one from an
+sensor origin: Pinocchio's force and motion transports
+(:meth:`ControlFrame.wrench_from_sensor`, :meth:`ControlFrame.twist_to_sensor_origin`), and
+their fast paths on Python floats for the control tick (the 3-vector arithmetic is written
+out on purpose). :func:`control_frame_for` builds one from an
 arm's sensor and tool frames.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
@@ -62,23 +65,40 @@ class ControlFrame:
         self._rotation_rows = self.rotation_tool_to_sensor.tolist()
         self._inverse_rows = self.rotation_tool_to_sensor.T.tolist()
 
+    def placement_in_sensor(self, rotation_sensor_to_base: np.ndarray) -> pin.SE3:
+        """The control frame in the sensor frame: origin ``r`` [m] and axes ``R_SC``."""
+        axes = {
+            "sensor": np.eye(3),
+            "tool": self.rotation_tool_to_sensor,
+            "base": np.asarray(rotation_sensor_to_base, dtype=float).T,
+        }[self.frame]
+        return pin.SE3(axes, self.point_in_sensor)
+
     def wrench_from_sensor(
         self, wrench_in_sensor: np.ndarray, rotation_sensor_to_base: np.ndarray
     ) -> np.ndarray:
-        """``(6,)`` wrench at the control point in this frame's axes, from the sensor's ``(6,)``."""
-        return np.array(
-            self.wrench_floats(wrench_in_sensor.tolist(), rotation_sensor_to_base.tolist())
-        )
+        """``(6,)`` wrench at the control point in this frame's axes, from the sensor's ``(6,)``.
+
+        Pinocchio's force transport ``M_SC⁻¹ · f``; :meth:`wrench_floats` is its fast path.
+        """
+        placement = self.placement_in_sensor(rotation_sensor_to_base)
+        return placement.actInv(pin.Force(np.asarray(wrench_in_sensor, dtype=float))).vector
 
     def twist_to_sensor_origin(
         self, twist: np.ndarray, rotation_sensor_to_base: np.ndarray
     ) -> np.ndarray:
         """Twist ``[v; ω]`` of the sensor origin in base axes, from a control-point twist in this
         frame's axes.
-        """
-        return np.array(self.twist_floats(twist.tolist(), rotation_sensor_to_base.tolist()))
 
-    # The two transports on Python floats (the control tick's path; the methods above wrap them).
+        Pinocchio's motion transport ``(R_BS, 0) · M_SC · ν``; :meth:`twist_floats` is its fast
+        path.
+        """
+        rotation = np.asarray(rotation_sensor_to_base, dtype=float)
+        placement = pin.SE3(rotation, np.zeros(3)) * self.placement_in_sensor(rotation)
+        return placement.act(pin.Motion(np.asarray(twist, dtype=float))).vector
+
+    # The two transports on Python floats (the control tick's path, several times faster than
+    # Pinocchio through Python); tests check them against the methods above to 1e-12.
     def wrench_floats(self, wrench_in_sensor, rotation_rows) -> tuple[float, ...]:
         """:meth:`wrench_from_sensor` on six floats and ``R_BS.tolist()``; returns six floats."""
         fx, fy, fz, mx, my, mz = wrench_in_sensor

@@ -27,19 +27,11 @@ import pinocchio as pin
 
 from ..calibration.derivatives import CausalDifferentiator
 from ..calibration.model import SensorModel
-from ..calibration.regressor import MotionSamples, point_mass_parameters
+from ..calibration.regressor import MotionSamples
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
 from ..validation import FLOAT64, as_vector
 from .compensation import Compensator
-
-
-def _dynamic_parameters(calibration: SensorModel, inertial_parameters) -> np.ndarray:
-    if inertial_parameters is not None:
-        return as_vector(inertial_parameters, 10, "inertial_parameters")
-    if hasattr(calibration, "dynamic_parameters"):
-        return np.asarray(calibration.dynamic_parameters, dtype=float)
-    return point_mass_parameters(calibration)
 
 
 class DynamicCompensator:
@@ -66,11 +58,15 @@ class DynamicCompensator:
         if not isinstance(arm, Arm):
             raise InvalidInput(f"arm must be an ftkin Arm, got {type(arm).__name__}")
         self.static = Compensator(calibration, arm, allow_other_arm=allow_other_arm)
-        self.calibration = calibration
+        self.calibration = self.static.calibration
         self.arm = (
             self.static.arm
         )  # with the calibration's mount folded into the sensor frame, if any
-        self.inertial_parameters = _dynamic_parameters(calibration, inertial_parameters)
+        self.inertial_parameters = (
+            self.calibration.dynamic_parameters
+            if inertial_parameters is None
+            else as_vector(inertial_parameters, 10, "inertial_parameters")
+        )
         self._data = self.arm.model.createData()
         self._model, self._frame = self.arm.model, self.arm.sensor_frame_id
         self._nq = arm.nq
@@ -97,26 +93,15 @@ class DynamicCompensator:
         validated the same way.
         """
         try:  # float64 arrays (the control loop's) pass as they are
-            q = (
-                q
-                if type(q) is np.ndarray and q.dtype is FLOAT64
-                else np.asarray(q, dtype=np.float64)
-            )
-            dq = (
-                dq
-                if type(dq) is np.ndarray and dq.dtype is FLOAT64
-                else np.asarray(dq, dtype=np.float64)
-            )
-            ddq = (
-                ddq
-                if type(ddq) is np.ndarray and ddq.dtype is FLOAT64
-                else np.asarray(ddq, dtype=np.float64)
-            )
-            raw = (
-                raw_wrench
-                if type(raw_wrench) is np.ndarray and raw_wrench.dtype is FLOAT64
-                else np.asarray(raw_wrench, dtype=np.float64)
-            )
+            if type(q) is not np.ndarray or q.dtype is not FLOAT64:
+                q = np.asarray(q, dtype=np.float64)
+            if type(dq) is not np.ndarray or dq.dtype is not FLOAT64:
+                dq = np.asarray(dq, dtype=np.float64)
+            if type(ddq) is not np.ndarray or ddq.dtype is not FLOAT64:
+                ddq = np.asarray(ddq, dtype=np.float64)
+            raw = raw_wrench
+            if type(raw) is not np.ndarray or raw.dtype is not FLOAT64:
+                raw = np.asarray(raw, dtype=np.float64)
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q, dq, ddq and raw_wrench must be numeric: {error}") from None
         shape = self._q_shape
@@ -130,12 +115,7 @@ class DynamicCompensator:
         # the test below passes).
         if not math.isfinite(
             sum(q.tolist()) + sum(dq.tolist()) + sum(ddq.tolist()) + sum(values)
-        ) and not (
-            np.isfinite(q).all()
-            and np.isfinite(dq).all()
-            and np.isfinite(ddq).all()
-            and np.isfinite(raw).all()
-        ):
+        ) and not all(np.isfinite(value).all() for value in (q, dq, ddq, raw)):
             raise InvalidInput(
                 f"q, dq, ddq and raw_wrench must be finite, got q={q} dq={dq} ddq={ddq} "
                 f"raw_wrench={raw}"

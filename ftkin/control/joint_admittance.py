@@ -124,13 +124,9 @@ class JointAdmittance:
             max_damping=max_damping,
         )
         numbers = [as_positive(value, name) for name, value in numbers.items()]
-        mount = (
-            None
-            if compensator is None
-            else getattr(compensator.calibration, "mount_rotation", None)
-        )
-        if mount is not None:  # the real sensor frame, folded into the model: no work per tick
-            arm = mounted_arm(arm, mount)
+        if compensator is not None and compensator.calibration.has_mount:
+            # the real sensor frame, folded into the model: no work per tick
+            arm = mounted_arm(arm, compensator.calibration.mount_rotation)
         self.arm, self.admittance, self.compensator = arm, admittance, compensator
         self.frame = control_frame_for(arm, admittance.frame, control_point)
         self.force_limit, self.torque_limit = numbers[0], numbers[1]

@@ -48,7 +48,9 @@ from pathlib import Path
 import numpy as np
 
 from ..calibration.diagnostics import FitDiagnostics
+from ..calibration.dynamic import DynamicCalibrationResult
 from ..calibration.estimate import CalibrationResult
+from ..calibration.log_cholesky import is_physically_consistent, parameters_from_body
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from ..kinematics.record import KinematicsRecord
 from .atomic import atomic_write_text
@@ -58,7 +60,6 @@ from .calibration_checks import (
     parse_calibration_json,
     short_repr,
 )
-from .calibration_inertia import inertia_document, with_inertia
 from .drift_file import drift_from_document, drift_to_document
 from .json_reader import JsonReader, NestedReader
 
@@ -104,10 +105,48 @@ def _std_errors_document(result: CalibrationResult) -> dict | None:
     if errors is None:
         return None
     document = {**errors, "base_tilt_deg": np.rad2deg(errors["base_tilt"])}
-    inertia_errors = getattr(result, "inertia_std_errors", None)
-    if inertia_errors is not None:
-        document["inertia"] = inertia_errors
+    if result.inertia_std_errors is not None:
+        document["inertia"] = result.inertia_std_errors
     return document
+
+
+def inertia_document(result: CalibrationResult) -> dict:
+    """``inertia`` (3×3 about the COM, sensor axes [kg·m²]) of a dynamic calibration, else
+    nothing.
+    """
+    return (
+        {}
+        if result.inertia_about_com_in_sensor is None
+        else {"inertia": result.inertia_about_com_in_sensor}
+    )
+
+
+def with_inertia(reader, result: CalibrationResult, inertia: np.ndarray) -> CalibrationResult:
+    """The :class:`~ftkin.calibration.dynamic.DynamicCalibrationResult` of a file with an
+    ``inertia``.
+    """
+    if not np.allclose(
+        inertia, inertia.T, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(inertia).max()))
+    ):
+        reader.fail("the inertia must be a symmetric 3×3 matrix [kg·m²]", "inertia")
+    errors = reader.get("std_errors", required=False)
+    inertia_errors = None
+    if isinstance(errors, dict) and errors.get("inertia") is not None:
+        inertia_errors = reader.array("std_errors.inertia", (3, 3), source=errors["inertia"])
+    theta = parameters_from_body(result.tool_mass, result.center_of_mass, inertia)
+    if not is_physically_consistent(theta, tolerance=-1e-12):
+        reader.fail(
+            "the inertia is not physically consistent with the mass and centre of mass (a "
+            "principal moment "
+            "is negative or violates the triangle inequality)",
+            "inertia",
+        )
+    inertia_fields = {
+        "inertia_about_com_in_sensor": inertia,
+        "inertia_std_errors": inertia_errors,
+        "inertial_parameters": theta,
+    }
+    return DynamicCalibrationResult(**{**vars(result), **inertia_fields})
 
 
 def calibration_to_dict(result: CalibrationResult) -> dict:
@@ -229,11 +268,8 @@ def _kinematics(reader: JsonReader) -> KinematicsRecord | None:
         reader.fail(f"malformed: {error}", "kinematics")
 
 
-def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationResult:
-    """Rebuild a :class:`CalibrationResult` from a parsed calibration document."""
-    if not isinstance(document, dict):
-        raise CalibrationFileError(path, f"expected a JSON object, got {type(document).__name__}")
-    reader = JsonReader(path, document)
+def _check_version(reader: JsonReader, document: dict) -> None:
+    """Refuse another format, or a version this ftkin does not read."""
     if document.get("format") != FORMAT_NAME:
         reader.fail(
             f"not an ftkin calibration file (format {document.get('format')!r}, expected "
@@ -244,13 +280,16 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     reader.check_types(DOCUMENT_TYPES)
     for name in ("std_errors", "mount_std_deg"):  # objects of numbers
         numbers = reader.optional_object(name) or {}
-        NestedReader(path, numbers, name).check_types(dict.fromkeys(numbers, "numbers?"))
+        NestedReader(reader.path, numbers, name).check_types(dict.fromkeys(numbers, "numbers?"))
+
+
+def _poses(reader: JsonReader, document: dict) -> dict:
+    """The per-pose fields (``pose_ids``, ``pose_wrenches``, ``residuals``, ``sample_count``)."""
     poses = reader.get("poses", required=False) or {}
     if not isinstance(poses, dict):
         reader.fail("expected an object with ids, measured, residuals", "poses")
     raw_ids = poses.get("ids")
-    if raw_ids is None:
-        raw_ids = []
+    raw_ids = [] if raw_ids is None else raw_ids
     if not isinstance(raw_ids, list) or not all(
         isinstance(i, int) and not isinstance(i, bool) and abs(i) <= 2**53 for i in raw_ids
     ):
@@ -259,31 +298,48 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             f"{short_repr(raw_ids)}",
             "poses.ids",
         )
-    pose_ids = np.array(raw_ids, dtype=np.int64)
-    count = len(pose_ids)
-    measured = reader.array(
-        "poses.measured", (count, 6), source=poses.get("measured", np.zeros((0, 6)))
-    )
-    residuals = reader.array(
-        "poses.residuals", (count, 6), source=poses.get("residuals", np.zeros((0, 6)))
-    )
-    method = reader.optional("method", str, "unknown")
-    urdf, sensor_frame = reader.optional("urdf", str), reader.optional("sensor_frame", str)
-    sample_count = reader.count("sample_count", count)
+    count = len(raw_ids)
     if "pose_count" in document and reader.count("pose_count", count) != count:
         reader.fail(
             f"{document['pose_count']} disagrees with the {count} pose ids in poses.ids",
             "pose_count",
         )
+    return {
+        "pose_ids": np.array(raw_ids, dtype=np.int64),
+        "pose_wrenches": reader.array(
+            "poses.measured", (count, 6), source=poses.get("measured", np.zeros((0, 6)))
+        ),
+        "residuals": reader.array(
+            "poses.residuals", (count, 6), source=poses.get("residuals", np.zeros((0, 6)))
+        ),
+        "sample_count": reader.count("sample_count", count),
+    }
+
+
+def _mount(reader: JsonReader) -> dict:
+    """The real sensor's fields: mount (identity when absent), its covariance, sign and flip."""
     mount = reader.array("mount_rotation", (3, 3), required=False)
-    mount_mode = reader.optional("mount_mode", str, "none")
-    mount_size = {"yaw": 1, "full": 3}.get(mount_mode, 0)
-    mount_covariance = (
-        reader.array("mount_covariance", (mount_size, mount_size), required=False)
-        if mount_size
-        else None
-    )
-    sensor_sign = reader.optional("sensor_sign", int, 1)
+    mode = reader.optional("mount_mode", str, "none")
+    size = {"yaw": 1, "full": 3}.get(mode, 0)
+    return {
+        "mount_rotation": np.eye(3) if mount is None else mount,
+        "mount_mode": mode,
+        "mount_covariance": (
+            reader.array("mount_covariance", (size, size), required=False) if size else None
+        ),
+        "sensor_sign": reader.optional("sensor_sign", int, 1),
+        "flip_axis": reader.optional("flip_axis", str),
+    }
+
+
+def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationResult:
+    """Rebuild a :class:`CalibrationResult` from a parsed calibration document."""
+    if not isinstance(document, dict):
+        raise CalibrationFileError(path, f"expected a JSON object, got {type(document).__name__}")
+    reader = JsonReader(path, document)
+    _check_version(reader, document)
+    poses = _poses(reader, document)
+    mount = _mount(reader)
     inertia = reader.array("inertia", (3, 3), required=False)
     try:
         result = CalibrationResult(
@@ -292,22 +348,15 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             gravity_in_base=reader.array("gravity_in_base", (3,)),
             center_of_mass=reader.array("center_of_mass", (3,)),
             g=reader.number("g"),
-            method=method,
-            pose_ids=pose_ids,
-            pose_wrenches=measured,
-            residuals=residuals,
-            sample_count=sample_count,
-            urdf=urdf,
-            sensor_frame=sensor_frame,
+            method=reader.optional("method", str, "unknown"),
+            urdf=reader.optional("urdf", str),
+            sensor_frame=reader.optional("sensor_frame", str),
             covariance=reader.array("covariance", (12, 12), required=False),
             diagnostics=_diagnostics(reader),
-            mount_rotation=np.eye(3) if mount is None else mount,
-            mount_mode=mount_mode,
-            mount_covariance=mount_covariance,
-            sensor_sign=sensor_sign,
-            flip_axis=reader.optional("flip_axis", str),
             drift=drift_from_document(reader),
             kinematics=_kinematics(reader),
+            **poses,
+            **mount,
         )
     except (ValueError, TypeError) as error:
         raise CalibrationFileError(path, str(error)) from None
@@ -317,9 +366,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             "gravity_in_base",
         )
     check_document(reader, document, result, UNITS)
-    if inertia is not None:
-        result = with_inertia(reader, result, inertia)
-    return result
+    return result if inertia is None else with_inertia(reader, result, inertia)
 
 
 def load_calibration(path) -> CalibrationResult:

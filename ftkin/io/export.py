@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..calibration.model import SensorModel
+from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from .atomic import atomic_write_text
 from .yaml_text import yaml_text
@@ -70,6 +71,7 @@ def urdf_root_link(urdf) -> str | None:
 def export_notes(calibration: SensorModel, fmt: str) -> list[str]:
     """What ``fmt`` cannot represent about ``calibration``, one sentence each."""
     _check_format(fmt)
+    calibration = CalibrationResult.from_model(calibration)
     notes = []
     f0, m0 = np.asarray(calibration.force_offset), np.asarray(calibration.torque_offset)
     if fmt in ("admittance", "gravity-compensation"):
@@ -95,7 +97,7 @@ def export_notes(calibration: SensorModel, fmt: str) -> list[str]:
             f"({where}); "
             f"ignoring it leaves up to {error:.4f} N of force error"
         )
-    if getattr(calibration, "has_mount", False):
+    if calibration.has_mount:
         rpy = ", ".join(f"{value:.3f}" for value in calibration.mount_rpy_deg)
         notes.append(
             "the real sensor frame is turned from the URDF's by the estimated mount (R_M roll, "
@@ -104,7 +106,7 @@ def export_notes(calibration: SensorModel, fmt: str) -> list[str]:
             "the URDF's sensor joint "
             "rpy by R_M^T)"
         )
-    if getattr(calibration, "sensor_sign", 1) != 1 or getattr(calibration, "flip_axis", None):
+    if calibration.sensor_sign != 1 or calibration.flip_axis:
         notes.append(
             f"the readings need sensor_sign {calibration.sensor_sign:+d}"
             + (f" and the {calibration.flip_axis} axis reversed" if calibration.flip_axis else "")
@@ -134,7 +136,8 @@ def export_tree(
             link, else ``base_link``); ftkin's base frame is the URDF root.
     """
     _check_format(fmt)
-    frame_id = frame_id or getattr(calibration, "sensor_frame", None) or DEFAULT_SENSOR_FRAME
+    calibration = CalibrationResult.from_model(calibration)
+    frame_id = frame_id or calibration.sensor_frame or DEFAULT_SENSOR_FRAME
     com = [float(v) for v in calibration.center_of_mass]
     if fmt == "admittance":
         return {
@@ -150,7 +153,7 @@ def export_tree(
                 "the calibration has no tool weight (a = 0): gravity_field = a / mass is undefined"
             )
         if world_frame is None:
-            urdf = getattr(calibration, "urdf", None)
+            urdf = calibration.urdf
             world_frame = (urdf_root_link(urdf) if urdf else None) or DEFAULT_WORLD_FRAME
         field = np.asarray(calibration.gravity_in_base, dtype=float) / mass
         return {

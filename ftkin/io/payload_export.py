@@ -44,6 +44,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..calibration.model import SensorModel
+from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from .atomic import atomic_write_text
 from .yaml_text import yaml_text
@@ -120,22 +121,22 @@ def payload_in_flange(
         InvalidInput: no tool weight, a bad inertia, or a flange frame not fixed to the sensor.
         FrameNotFound: ``flange_frame`` is not in the model.
     """
-    if getattr(arm, "mount_rotation", None) is not None:
+    if arm.mount_rotation is not None:
         raise InvalidInput(
             "give the arm as its URDF describes it (not the mounted copy of a Compensator)"
         )
+    calibration = CalibrationResult.from_model(calibration)
     mass = float(calibration.tool_mass)
     if not mass > 0.0:
         raise InvalidInput("the calibration has no tool weight: there is no payload to export")
     flange_frame = flange_frame or flange_frame_name(arm)
     placement = sensor_in_flange(arm, flange_frame)
-    mount = np.asarray(getattr(calibration, "mount_rotation", np.eye(3)), dtype=float)
-    rotation_sensor_to_flange = placement.rotation @ mount.T
+    rotation_sensor_to_flange = placement.rotation @ calibration.mount_rotation.T
     com = (
         rotation_sensor_to_flange @ np.asarray(calibration.center_of_mass, dtype=float)
         + placement.translation
     )
-    in_sensor = getattr(calibration, "inertia_about_com_in_sensor", None)
+    in_sensor = calibration.inertia_about_com_in_sensor
     if inertia is None and in_sensor is not None:
         inertia = (
             rotation_sensor_to_flange

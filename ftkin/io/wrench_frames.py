@@ -17,6 +17,7 @@ import logging
 import numpy as np
 
 from ..exceptions import InvalidInput
+from ..kinematics.rotations import wrenches_base_to_sensor
 
 logger = logging.getLogger(__name__)
 
@@ -69,10 +70,7 @@ def wrenches_in_sensor_frame(
                 source,
                 frame_id,
             )
-        out = np.empty_like(wrenches)
-        out[:, :3] = np.einsum("nji,nj->ni", rotations, wrenches[:, :3])
-        out[:, 3:] = np.einsum("nji,nj->ni", rotations, wrenches[:, 3:])
-        return out
+        return wrenches_base_to_sensor(rotations, wrenches)
     if frame_id and frame_id != arm.sensor_frame:
         if frame_id in base_frame_names(arm):
             logger.warning(

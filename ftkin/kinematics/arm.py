@@ -114,6 +114,7 @@ class Arm:
             None  # set by from_urdf when the sensor frame was added
         )
         self.robot_name: str | None = None  # set by load_robot
+        self.mount_rotation: np.ndarray | None = None  # R_M, set by mounting.mounted_arm
         self._geometry: dict[str, pin.GeometryModel] = {}
         self._chain: RotationChain | None | bool = False  # False: not built yet
 

@@ -44,7 +44,7 @@ def mounted_arm(arm: Arm, mount_rotation) -> Arm:
         raise InvalidInput(
             f"mount_rotation must be a (3, 3) rotation matrix, got {rotation.tolist()}"
         )
-    current = getattr(arm, "mount_rotation", None)
+    current = arm.mount_rotation
     if current is not None:
         if np.allclose(current, rotation, atol=1e-12):
             return arm

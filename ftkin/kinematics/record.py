@@ -80,14 +80,14 @@ class KinematicsRecord:
         """The record of an :class:`~ftkin.kinematics.arm.Arm` (its robot name and mount when it has
         them).
         """
-        mount = getattr(arm, "sensor_mount", None)
+        mount = arm.sensor_mount
         joint, placement = sensor_placement(arm)
         offset = None
         if mount is not None:
             offset = tuple(float(v) for v in (*mount.translation, *mount.rpy))
         return cls(
             sensor_frame=arm.sensor_frame,
-            robot=getattr(arm, "robot_name", None),
+            robot=arm.robot_name,
             urdf=str(arm.urdf_path) if arm.urdf_path is not None else None,
             urdf_sha256=file_sha256(arm.urdf_path) if arm.urdf_path is not None else None,
             sensor_parent=mount.parent_frame if mount is not None else None,

@@ -158,3 +158,12 @@ def tilt_from_gravity_in_base(gravity_in_base) -> tuple[float, float]:
     tilt_u = float(np.arcsin(np.clip(-a[1] / weight, -1.0, 1.0)))
     tilt_v = float(np.arctan2(a[0], -a[2]))
     return tilt_u, tilt_v
+
+
+def wrenches_base_to_sensor(rotations: np.ndarray, wrenches: np.ndarray) -> np.ndarray:
+    """``[R_BSᵀ F_B, R_BSᵀ M_B]`` ``(N, 6)`` [N, N·m]: base-axes wrenches in sensor axes.
+
+    The moment stays about the same point (the sensor origin); the transport to another point
+    is :class:`~ftkin.control.control_frame.ControlFrame`'s.
+    """
+    return np.einsum("nji,nkj->nki", rotations, wrenches.reshape(-1, 2, 3)).reshape(-1, 6)

@@ -15,7 +15,9 @@ errors are cleared with ``recover_from_errors`` so the next command can run).
 from __future__ import annotations
 
 import logging
+import os
 import time
+from contextlib import contextmanager, suppress
 
 import numpy as np
 
@@ -49,6 +51,29 @@ def import_franky():
             "franky-control", "franka", "driving a Franka robot (FR3, Panda)"
         ) from error
     return franky
+
+
+@contextmanager
+def calling_thread_scheduling_kept():
+    """Restore the calling thread's scheduling policy and priority on exit.
+
+    libfranka raises the thread that creates a robot to ``SCHED_FIFO`` 99 whenever it may (as
+    root, even with ``RealtimeConfig.Ignore``). For ftkin's Python thread that is harmful: every
+    process it starts afterwards (a browser for a screenshot, a simulator) inherits the policy,
+    and a busy child at FIFO 99 starves the machine. franky's control loops raise their own
+    threads, so the calling thread keeps the policy it had.
+    """
+    try:
+        policy, param = os.sched_getscheduler(0), os.sched_getparam(0)
+    except (AttributeError, OSError):  # not Linux: nothing to keep
+        yield
+        return
+    try:
+        yield
+    finally:
+        with suppress(OSError):
+            if os.sched_getscheduler(0) != policy:
+                os.sched_setscheduler(0, policy, param)
 
 
 class FrankaRobot:
@@ -103,7 +128,8 @@ class FrankaRobot:
         self._franky = franky = import_franky()
         config = franky.RealtimeConfig.Enforce if realtime else franky.RealtimeConfig.Ignore
         try:
-            self._robot = franky.Robot(host, realtime_config=config)
+            with calling_thread_scheduling_kept():
+                self._robot = franky.Robot(host, realtime_config=config)
         except franky.RealtimeException as error:
             raise RealtimeUnavailable(
                 "this kernel has no real-time scheduling and FrankaRobot(realtime=True) asked for "

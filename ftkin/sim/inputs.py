@@ -276,32 +276,34 @@ def write_bag(
     wrench_times = np.arange(0.0, duration, 1.0 / session.wrench_rate)
     wrenches = inputs.readings(arm, session.positions(configurations, wrench_times), rng)
     types = typestore.types
+    joint_messages = (
+        types["sensor_msgs/msg/JointState"](
+            header=_header(types, session.start + t, ""),
+            name=list(arm.joint_names),
+            position=q,
+            velocity=np.zeros(0),
+            effort=np.zeros(0),
+        )
+        for t, q in zip(joint_times, session.positions(configurations, joint_times))
+    )
+    wrench_messages = (
+        types["geometry_msgs/msg/WrenchStamped"](
+            header=_header(types, session.start + t, arm.sensor_frame),
+            wrench=types["geometry_msgs/msg/Wrench"](
+                force=_vector(types, w[:3]), torque=_vector(types, w[3:])
+            ),
+        )
+        for t, w in zip(wrench_times, wrenches)
+    )
     with writer_class(path, version=9, storage_plugin=storage.MCAP) as writer:
-        joints = writer.add_connection(
-            joint_topic, "sensor_msgs/msg/JointState", typestore=typestore
-        )
-        wrench = writer.add_connection(
-            wrench_topic, "geometry_msgs/msg/WrenchStamped", typestore=typestore
-        )
-        for t, q in zip(joint_times, session.positions(configurations, joint_times)):
-            message = types["sensor_msgs/msg/JointState"](
-                header=_header(types, session.start + t, ""),
-                name=list(arm.joint_names),
-                position=q,
-                velocity=np.zeros(0),
-                effort=np.zeros(0),
-            )
-            data = typestore.serialize_cdr(message, "sensor_msgs/msg/JointState")
-            writer.write(joints, _nanoseconds(session.start + t), data)
-        for t, w in zip(wrench_times, wrenches):
-            message = types["geometry_msgs/msg/WrenchStamped"](
-                header=_header(types, session.start + t, arm.sensor_frame),
-                wrench=types["geometry_msgs/msg/Wrench"](
-                    force=_vector(types, w[:3]), torque=_vector(types, w[3:])
-                ),
-            )
-            data = typestore.serialize_cdr(message, "geometry_msgs/msg/WrenchStamped")
-            writer.write(wrench, _nanoseconds(session.start + t), data)
+        for topic, kind, times, messages in (
+            (joint_topic, "sensor_msgs/msg/JointState", joint_times, joint_messages),
+            (wrench_topic, "geometry_msgs/msg/WrenchStamped", wrench_times, wrench_messages),
+        ):
+            connection = writer.add_connection(topic, kind, typestore=typestore)
+            for t, message in zip(times, messages):
+                data = typestore.serialize_cdr(message, kind)
+                writer.write(connection, _nanoseconds(session.start + t), data)
     return path
 
 

@@ -138,6 +138,18 @@ def arrow_placement(
     return ArrowPlacement(shaft, head, length)
 
 
+def add_arrow_objects(node, geometry, style: ArrowStyle, material, radius_factor: float = 1.0):
+    """Put an arrow's unit shaft and cone head (``node["shaft"]``, ``node["head"]``) in a scene.
+
+    ``node`` is a meshcat scene node, ``geometry`` the ``meshcat.geometry`` module; the radii
+    of ``style`` are multiplied by ``radius_factor``. :func:`arrow_placement` places them.
+    """
+    node["shaft"].set_object(geometry.Cylinder(1.0, style.shaft_radius * radius_factor), material)
+    head_radius = style.head_radius * radius_factor
+    cone = geometry.Cylinder(style.head_length, radiusTop=0.0, radiusBottom=head_radius)
+    node["head"].set_object(cone, material)
+
+
 def exaggerate_tilt(gravity_direction, factor: float) -> np.ndarray:
     """Unit gravity direction with its angle from ``-z`` multiplied by ``factor``.
 

@@ -100,7 +100,7 @@ def render_cells(
     """Screenshot every cell's page (``timeout`` [s] each); returns ``(H, W, 3)`` uint8 images in
     order.
     """
-    image = _import_matplotlib_image()
+    image = _matplotlib()[2]
     with tempfile.TemporaryDirectory(prefix="ftkin-sheet-") as scratch:
 
         def shoot(k: int) -> np.ndarray:
@@ -125,7 +125,7 @@ def sheet_figure(
     """A matplotlib ``Figure`` (not attached to pyplot) tiling ``images`` with labels and red
     outlier frames.
     """
-    Figure, FigureCanvasAgg = _import_figure()
+    Figure, FigureCanvasAgg, _ = _matplotlib()
     count = len(cells)
     columns = columns or int(math.ceil(math.sqrt(count)))
     rows = int(math.ceil(count / columns))
@@ -187,22 +187,14 @@ def save_contact_sheet(
     return atomic_write_bytes(path, buffer.getvalue())
 
 
-def _import_figure():
+def _matplotlib():
+    """``(Figure, FigureCanvasAgg, matplotlib.image)``, or :class:`MissingDependency` (plots)."""
     try:
+        import matplotlib.image as image
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
     except ImportError:
         raise MissingDependency(
             "matplotlib", "plots", "the contact sheet of ftkin view --png"
         ) from None
-    return Figure, FigureCanvasAgg
-
-
-def _import_matplotlib_image():
-    try:
-        import matplotlib.image as image
-    except ImportError:
-        raise MissingDependency(
-            "matplotlib", "plots", "the contact sheet of ftkin view --png"
-        ) from None
-    return image
+    return Figure, FigureCanvasAgg, image

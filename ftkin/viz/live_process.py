@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arrows import ArrowStyle, arrow_placement
+from .arrows import ArrowStyle, add_arrow_objects, arrow_placement
 from .legend import CONTACT, Layer
 
 TORQUE = Layer("torque", 0xFF8000, "contact torque, R_BS M′ (right-hand axis)")
@@ -134,15 +134,7 @@ def run_view(settings: ViewSettings, report) -> None:
         style = ArrowStyle()
         for layer in LIVE_LAYERS:
             material = meshcat.geometry.MeshBasicMaterial(color=layer.color)
-            visualizer[f"live/{layer.name}/shaft"].set_object(
-                meshcat.geometry.Cylinder(1.0, style.shaft_radius), material
-            )
-            visualizer[f"live/{layer.name}/head"].set_object(
-                meshcat.geometry.Cylinder(
-                    style.head_length, radiusTop=0.0, radiusBottom=style.head_radius
-                ),
-                material,
-            )
+            add_arrow_objects(visualizer[f"live/{layer.name}"], meshcat.geometry, style, material)
         batch = PipelinedSender(visualizer.window)
         report("ready", visualizer.url())
     except BaseException as error:  # report to the parent instead of dying silently

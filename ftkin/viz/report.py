@@ -20,6 +20,7 @@ import numpy as np
 
 from ..calibration.conventions import as_real_sensor
 from ..calibration.model import WRENCH_CHANNELS, SensorModel
+from ..calibration.result import CalibrationResult
 from ..calibration.samples import Samples
 from ..exceptions import InvalidInput, MissingDependency
 from ..io.atomic import atomic_write_bytes
@@ -69,6 +70,15 @@ def _pyplot_free_figure(height: float = 10.0):
     return figure
 
 
+def _as_calibration(calibration) -> CalibrationResult:
+    if not isinstance(calibration, SensorModel):
+        raise InvalidInput(
+            "calibration must be an ftkin SensorModel or CalibrationResult, got "
+            f"{type(calibration).__name__}"
+        )
+    return CalibrationResult.from_model(calibration)
+
+
 def report_data(calibration, samples: Samples) -> dict[str, np.ndarray]:
     """Per-pose arrays the report plots.
 
@@ -78,18 +88,14 @@ def report_data(calibration, samples: Samples) -> dict[str, np.ndarray]:
     with the bias at the pose's time), ``residuals`` = measured − predicted, and
     ``standard_error`` ``(P, 6)`` (spread / √count; NaN for single readings).
     """
-    if not isinstance(calibration, SensorModel):
-        raise InvalidInput(
-            "calibration must be an ftkin SensorModel or CalibrationResult, got "
-            f"{type(calibration).__name__}"
-        )
+    calibration = _as_calibration(calibration)
     if not isinstance(samples, Samples):
         raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
     poses = as_real_sensor(
         samples, calibration
     ).pose_averages()  # the stored sign, axis flip and mount applied
     predicted = calibration.predict(poses.rotations)
-    if poses.times is not None and getattr(calibration, "drift", None) is not None:
+    if poses.times is not None and calibration.drift is not None:
         predicted = calibration.tool_gravity_wrench(poses.rotations) + calibration.bias_at(
             poses.times
         )
@@ -102,16 +108,22 @@ def report_data(calibration, samples: Samples) -> dict[str, np.ndarray]:
     }
 
 
-def report_figure(calibration, samples: Samples, title: str | None = None):
+def report_figure(calibration, samples: Samples, title: str | None = None, series=()):
     """A matplotlib ``Figure`` (not attached to pyplot) with the report.
+
+    ``series``: more time series to plot (:class:`~ftkin.viz.report_series.Series`, e.g. the
+    residual during motion) after the calibration's own bias trajectory.
 
     Raises:
         MissingDependency: matplotlib is not installed (extra ``plots``).
     """
     data = report_data(calibration, samples)
-    series = report_series(calibration)
-    summary = calibration.summary() if hasattr(calibration, "summary") else repr(calibration)
-    if getattr(calibration, "std_errors", None) is None:
+    summary = (
+        calibration.summary() if isinstance(calibration, CalibrationResult) else repr(calibration)
+    )
+    calibration = _as_calibration(calibration)
+    series = report_series(calibration, series)
+    if calibration.std_errors is None:
         summary += "\n  (no standard errors: the calibration has no covariance)"
     summary = _wrapped(summary)
     text_height = (
@@ -160,7 +172,7 @@ def report_figure(calibration, samples: Samples, title: str | None = None):
 
 
 def save_report(
-    calibration, samples: Samples, path, title: str | None = None, dpi: int = 100
+    calibration, samples: Samples, path, title: str | None = None, dpi: int = 100, series=()
 ) -> Path:
     """Draw :func:`report_figure` and write it (format from the suffix: .png, .pdf, .svg)
     atomically.
@@ -169,7 +181,7 @@ def save_report(
     fmt = path.suffix.lstrip(".").lower() or "png"
     if fmt not in ("png", "pdf", "svg"):
         raise InvalidInput(f"report file must end in .png, .pdf or .svg, got {path.name!r}")
-    figure = report_figure(calibration, samples, title)
+    figure = report_figure(calibration, samples, title, series)
     buffer = io.BytesIO()
     figure.savefig(buffer, format=fmt, dpi=dpi)
     return atomic_write_bytes(path, buffer.getvalue())

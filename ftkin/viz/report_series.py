@@ -1,12 +1,11 @@
 """Optional time-series panels of the calibration report.
 
-A calibration may carry quantities that vary over time, added by other
-features: the bias trajectory of a drifting sensor, the residual during
-motion. :func:`report_series` finds the ones a calibration has and
-:func:`draw_series` plots each as a row of two panels (forces [N], torques
-[N·m]) against time [s]. A series is read from an attribute of the
-calibration (see :data:`SERIES`; a drift-aware calibration's ``drift``,
-:class:`~ftkin.calibration.drift.BiasDrift`, is one) holding any of:
+Quantities that vary over time: the bias trajectory of a drifting sensor (a
+calibration's declared ``drift``, :class:`~ftkin.calibration.drift.BiasDrift`)
+and any series the caller adds (e.g. the residual during motion).
+:func:`report_series` lists them and :func:`draw_series` plots each as a row of
+two panels (forces [N], torques [N·m]) against time [s]. An added series
+(:func:`as_series`) is any of:
 
 * a pair ``(times, values)``;
 * a mapping with ``"times"`` and ``"values"`` (or the attribute's own kind:
@@ -14,7 +13,7 @@ calibration (see :data:`SERIES`; a drift-aware calibration's ``drift``,
 * an object with such attributes.
 
 ``times`` is ``(N,)`` [s], ``values`` ``(N, 6)`` ``[fx, fy, fz, mx, my, mz]``
-[N, N·m], sensor frame. An attribute that is absent or None draws nothing.
+[N, N·m], sensor frame.
 """
 
 from __future__ import annotations
@@ -26,13 +25,7 @@ import numpy as np
 from ..calibration.model import WRENCH_CHANNELS
 from ..exceptions import InvalidInput
 
-SERIES = (
-    ("drift", "bias of a drifting sensor"),
-    ("bias_trajectory", "bias of a drifting sensor"),
-    ("motion_residual", "residual during motion"),
-)
-"""``(attribute, title)`` of the optional series, in drawing order."""
-
+DRIFT_TITLE = "bias of a drifting sensor"
 _VALUE_KEYS = ("values", "bias", "residual", "residuals")
 
 
@@ -87,16 +80,15 @@ def as_series(name: str, title: str, source) -> Series:
     return Series(name, title, times, values)
 
 
-def report_series(calibration) -> list[Series]:
-    """The optional series the calibration carries, in :data:`SERIES` order."""
-    out = []
-    for name, title in SERIES:
-        source = getattr(calibration, name, None)
-        if name == "drift" and getattr(source, "model", None) == "none":
-            continue  # a constant bias: nothing moves over time
-        if source is not None:
-            out.append(as_series(name, title, source))
-    return out
+def report_series(calibration, extra=()) -> list[Series]:
+    """The calibration's bias trajectory (unless constant), then the ``extra`` series."""
+    drift = calibration.drift
+    own = (
+        []
+        if drift is None or drift.model == "none"
+        else [Series("drift", DRIFT_TITLE, drift.times, drift.bias)]
+    )
+    return own + list(extra)
 
 
 def draw_series(figure, grid_row, series: Series) -> list:

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..kinematics.arm import Arm
 from ..validation import as_vector
-from .arrows import ArrowStyle, rigid_transform
+from .arrows import ArrowStyle, add_arrow_objects, rigid_transform
 from .framing import PoseView
 from .legend import ARROWS, BASE_GRAVITY, CENTER_OF_MASS, GRAVITY, MEASURED, VERTICAL
 
@@ -44,14 +44,8 @@ def add_markers(visualizer, geometry, style: ArrowStyle) -> None:
         # measured-force needle inside it stays visible when the two coincide (a good calibration).
         side = BACK_SIDE if layer is GRAVITY else 2
         material = geometry.MeshBasicMaterial(color=layer.color, side=side)
-        visualizer[f"{ROOT}/{layer.name}/shaft"].set_object(
-            geometry.Cylinder(1.0, style.shaft_radius * radius_factor), material
-        )
-        visualizer[f"{ROOT}/{layer.name}/head"].set_object(
-            geometry.Cylinder(
-                style.head_length, radiusTop=0.0, radiusBottom=style.head_radius * radius_factor
-            ),
-            material,
+        add_arrow_objects(
+            visualizer[f"{ROOT}/{layer.name}"], geometry, style, material, radius_factor
         )
     visualizer[f"{ROOT}/{CENTER_OF_MASS.name}"].set_object(
         geometry.Sphere(0.7 * style.head_radius),

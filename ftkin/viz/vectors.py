@@ -6,7 +6,8 @@ is what is left. Drawn in the base frame B, anchored at the sensor origin:
 
 * ``measured``: ``R_BS (F - F0)`` [N], the raw force with the bias removed;
 * ``gravity``: ``R_BS Gs = a`` [N], the predicted tool weight;
-* ``contact``: ``R_BS F'`` [N], ``F' = F - F0 - Gs`` (the compensated force);
+* ``contact``: ``R_BS F'`` [N], ``F' = F - F0 - Gs`` (the compensated force, from the
+  model's :meth:`~ftkin.calibration.model.SensorModel.predict`);
 * ``center_of_mass``: ``p_S + R_BS P`` [m], the tool's centre of mass;
 * ``base_gravity``: the unit direction of ``a`` (the estimated base tilt).
 """
@@ -18,7 +19,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..calibration.model import SensorModel
-from ..control.compensation import Compensator
 from ..exceptions import InvalidInput
 from ..validation import as_rotation_batch, as_vector
 
@@ -57,7 +57,8 @@ def pose_vectors(
         calibration: The calibration to check (bias, tool weight, COM).
         rotation_sensor_to_base: ``R_BS`` ``(3, 3)`` at this pose.
         sensor_origin: Sensor origin in the base frame [m] (zero without an arm).
-        raw_wrench: Raw reading ``[fx, fy, fz, mx, my, mz]`` [N, N·m], sensor frame.
+        raw_wrench: Raw reading ``[fx, fy, fz, mx, my, mz]`` [N, N·m] of the real sensor
+            (its reading signs applied: :func:`~ftkin.calibration.conventions.as_real_sensor`).
     """
     rotations, _ = as_rotation_batch(rotation_sensor_to_base)
     if len(rotations) != 1:
@@ -65,7 +66,7 @@ def pose_vectors(
     rotation = rotations[0]
     origin = as_vector(sensor_origin, 3, "sensor origin")
     raw = as_vector(raw_wrench, 6, "raw wrench [fx, fy, fz, mx, my, mz]")
-    contact = Compensator(calibration).compensate_rotation(rotation, raw)
+    contact = raw - calibration.predict(rotation)  # F' = F − F0 − Gs, M' = M − M0 − P × Gs
     gravity = np.array(calibration.gravity_in_base, dtype=float)
     weight = np.linalg.norm(gravity)
     direction = gravity / weight if weight > 0 else np.array([0.0, 0.0, -1.0])

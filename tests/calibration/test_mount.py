@@ -15,8 +15,8 @@ from ftkin import (
     calibrate,
     evaluate_poses,
 )
+from ftkin.calibration.ml import WeightedProblem
 from ftkin.calibration.mount import (
-    MountedProblem,
     exp_so3,
     mount_jacobian,
     right_jacobian_so3,
@@ -63,7 +63,7 @@ def test_mount_jacobian_matches_finite_differences(mode, tool, rotations):
     count = 3 if mode == "full" else 1
     rng = np.random.default_rng(2)
     base = exp_so3([0.05, -0.03, 0.6])
-    problem = MountedProblem(
+    problem = WeightedProblem(
         rotations, np.zeros((len(rotations), 6)), np.ones(len(rotations)), np.ones(6), base, mode
     )
     x = np.concatenate([tool.to_vector(), rng.normal(size=count) * 0.3])

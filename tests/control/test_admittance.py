@@ -223,3 +223,25 @@ def test_filter_state_reads_and_writes_arrays_and_the_update_uses_them(rng):
         state.previous_error = np.zeros(5)
     with pytest.raises(InvalidInput, match="finite"):
         state.filtered_derivative = np.full(6, np.nan)
+
+
+@pytest.mark.parametrize("name", ["sensor", "tool", "base"])
+def test_float_transports_equal_the_pinocchio_transports(rng, name):
+    """The tick's float transports are the fast paths of Pinocchio's: equal to 1e-12."""
+    for _ in range(20):
+        rotation_tool_to_sensor, point = _random_tool(rng)
+        rotation = pin.exp3(rng.normal(size=3))
+        frame = ControlFrame(name, point, rotation_tool_to_sensor)
+        wrench, twist = rng.normal(size=6), rng.normal(size=6)
+        np.testing.assert_allclose(
+            frame.wrench_floats(wrench.tolist(), rotation.tolist()),
+            frame.wrench_from_sensor(wrench, rotation),
+            rtol=1e-12,
+            atol=1e-14,
+        )
+        np.testing.assert_allclose(
+            frame.twist_floats(twist.tolist(), rotation.tolist()),
+            frame.twist_to_sensor_origin(twist, rotation),
+            rtol=1e-12,
+            atol=1e-14,
+        )

@@ -286,7 +286,7 @@ def test_replaced_bias_reaches_the_float_path(arm):
 
 
 def test_blocked_batch_compensation_equals_the_formula_over_several_blocks(arm, rng):
-    from ftkin.control.compensation import _BLOCK
+    from ftkin.calibration.model import _BLOCK
 
     truth = paper_like_truth()
     compensator = Compensator(truth, arm)

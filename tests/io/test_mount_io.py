@@ -214,7 +214,8 @@ def test_franka_load_takes_a_dynamic_calibrations_inertia_into_flange_axes(mount
         [[0.012, 0.001, -0.002], [0.001, 0.02, 0.0005], [-0.002, 0.0005, 0.03]]
     )
     fields = {f.name: getattr(result, f.name) for f in dataclasses.fields(result)}
-    dynamic = DynamicCalibrationResult(**fields, inertia_about_com_in_sensor=inertia_in_sensor)
+    fields["inertia_about_com_in_sensor"] = inertia_in_sensor
+    dynamic = DynamicCalibrationResult(**fields)
     request = yaml.safe_load(
         export_payload(dynamic, arm, tmp_path / "load.yaml", "franka-load").read_text()
     )

@@ -39,6 +39,7 @@ HOME = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
 PLAN = {"joint_ranges": {"fr3_joint1": (-0.8, 0.8)}}
 LOADED = {"state_timeout": 1.0}  # a loaded CI machine may pause the simulation for a while
 STILL = Stillness(stale_after=1.0)
+SCHEDULING_AT_IMPORT = (os.sched_getscheduler(0), os.sched_getparam(0).sched_priority)
 
 
 @pytest.fixture(scope="module")
@@ -281,3 +282,12 @@ def test_a_killed_server_stops_the_loop_cleanly(arm):
         )
     assert stats.stop_reason == "connection", stats.report()
     assert stats.ticks < 20 + 250  # noticed within the state timeout, not libfranka's seconds
+
+
+def test_connecting_leaves_the_calling_threads_scheduling_alone(robot, sim):
+    # libfranka raises the connecting thread to SCHED_FIFO 99 when it may (as root, even with
+    # RealtimeConfig.Ignore); every process started afterwards (a browser, a simulator) would
+    # inherit it and starve the machine. The robot fixture connected already.
+    with pytest.raises(RealtimeUnavailable):
+        FrankaRobot(sim.hostname, realtime=True)
+    assert (os.sched_getscheduler(0), os.sched_getparam(0).sched_priority) == SCHEDULING_AT_IMPORT

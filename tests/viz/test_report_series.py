@@ -4,13 +4,12 @@ otherwise.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from ftkin import SensorModel
+from ftkin import CalibrationResult
 from ftkin.calibration.information import SensorNoise
 from ftkin.exceptions import InvalidInput
 from ftkin.sim.sensor import SimulatedSensor
@@ -18,28 +17,6 @@ from ftkin.viz.report import report_figure, save_report
 from ftkin.viz.report_series import as_series, report_series
 
 pytest.importorskip("matplotlib")
-
-
-@dataclass(frozen=True)
-class DriftingModel(SensorModel):
-    """A calibration that also carries the time series other features add."""
-
-    bias_trajectory: object = None
-    motion_residual: object = None
-
-    def summary(self) -> str:
-        return "a drifting sensor (synthetic)"
-
-
-def _model(truth, **series) -> DriftingModel:
-    return DriftingModel(
-        truth.force_offset,
-        truth.torque_offset,
-        truth.gravity_in_base,
-        truth.center_of_mass,
-        truth.g,
-        **series,
-    )
 
 
 def _series(rng, n=50):
@@ -72,18 +49,21 @@ def test_forms_of_a_series_are_read_alike(rng):
 def test_panels_appear_only_for_the_series_present_and_plot_the_given_values(arm, truth, rng):
     q = arm.random_configurations(6, rng, margin=0.1)
     samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, q, rng)
-    plain = report_figure(_model(truth), samples)
-    assert report_series(_model(truth)) == []
+    plain = report_figure(truth, samples)
+    assert report_series(CalibrationResult.from_model(truth)) == []
     base_axes = len(plain.axes)
 
     bias_times, bias = _series(rng, 40)
     residual_times, residual = _series(rng, 70)
-    drifting = _model(
-        truth,
-        bias_trajectory=(bias_times, bias),
-        motion_residual={"times": residual_times, "residual": residual},
-    )
-    figure = report_figure(drifting, samples)
+    added = [
+        as_series("bias_trajectory", "bias of a drifting sensor", (bias_times, bias)),
+        as_series(
+            "motion_residual",
+            "residual during motion",
+            {"times": residual_times, "residual": residual},
+        ),
+    ]
+    figure = report_figure(truth, samples, series=added)
     assert len(figure.axes) == base_axes + 4
     extra = figure.axes[base_axes:]
     titles = [ax.get_title() for ax in extra]
@@ -107,16 +87,14 @@ def test_panels_appear_only_for_the_series_present_and_plot_the_given_values(arm
             np.testing.assert_array_equal(line.get_xdata(), times)
             np.testing.assert_array_equal(line.get_ydata(), values[:, first + k])
 
-    only_bias = _model(truth, bias_trajectory=(bias_times, bias))
-    assert len(report_figure(only_bias, samples).axes) == base_axes + 2
+    assert len(report_figure(truth, samples, series=added[:1]).axes) == base_axes + 2
 
 
 def test_a_report_with_series_is_written(tmp_path, arm, truth, rng):
     q = arm.random_configurations(6, rng, margin=0.1)
     samples = SimulatedSensor(truth, SensorNoise.paper()).samples_at_configurations(arm, q, rng)
-    path = save_report(
-        _model(truth, bias_trajectory=_series(rng)), samples, tmp_path / "report.png"
-    )
+    added = [as_series("bias_trajectory", "bias", _series(rng))]
+    path = save_report(truth, samples, tmp_path / "report.png", series=added)
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 

@@ -24,18 +24,11 @@ import numpy as np
 
 from ...calibration.model import SensorModel
 from ...exceptions import InvalidInput
+from ..placement import PlacementRun
 from .sensor import MujocoSensor
 from .simulation import ArmSimulation
 
-PLACEMENT_COLUMNS = (
-    "t",
-    "displacement",
-    "velocity",
-    "force",
-    "measured_force",
-    "penetration",
-    "normal_force",
-)
+PLACEMENT_COLUMNS = PlacementRun.COLUMNS
 """The placement CSV's columns (s, m, m/s, N, N, m, N), as
 :attr:`~ftkin.sim.placement.PlacementRun.COLUMNS`.
 """

@@ -45,15 +45,24 @@ PAD_SPACING = 0.15
 """Distance [m] along base y between the sponge and the book on the table."""
 
 
-def import_mujoco():
+def import_mujoco(purpose: str = "simulating in MuJoCo"):
     """The ``mujoco`` module, or :class:`~ftkin.exceptions.MissingDependency` naming the ``sim``
-    extra.
+    extra and ``purpose``.
     """
     try:
         import mujoco
     except ImportError:
-        raise MissingDependency("mujoco", "sim", "simulating in MuJoCo") from None
+        raise MissingDependency("mujoco", "sim", purpose) from None
     return mujoco
+
+
+def add_wrench_sensor(mujoco, spec, site: str) -> None:
+    """MuJoCo's force and torque sensors ``ftkin_force``, ``ftkin_torque`` at the site ``site``."""
+    for name, kind in (
+        ("ftkin_force", mujoco.mjtSensor.mjSENS_FORCE),
+        ("ftkin_torque", mujoco.mjtSensor.mjSENS_TORQUE),
+    ):
+        spec.add_sensor(name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_SITE, objname=site)
 
 
 @dataclass(frozen=True)
@@ -200,13 +209,7 @@ def _add_sensor(mujoco, spec, bodies: dict, measured) -> None:
             body.gravcomp = 1.0
     site_pos, site_quat = _inverse_pose(measured)
     measured.add_site(name="ftkin_sensor", pos=site_pos, quat=site_quat)
-    for name, kind in (
-        ("ftkin_force", mujoco.mjtSensor.mjSENS_FORCE),
-        ("ftkin_torque", mujoco.mjtSensor.mjSENS_TORQUE),
-    ):
-        spec.add_sensor(
-            name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="ftkin_sensor"
-        )
+    add_wrench_sensor(mujoco, spec, "ftkin_sensor")
 
 
 def _add_table(mujoco, spec, surfaces, surface_under, bottom: np.ndarray, start_gap, timestep):

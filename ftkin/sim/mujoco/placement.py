@@ -18,8 +18,6 @@ bias of :func:`~ftkin.sim.sensor.paper_like_truth`, gravity tilted by its base t
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pinocchio as pin
 
@@ -129,25 +127,3 @@ def simulate_placement_mujoco(
     run = run_closed_loop(sim, controller, scenario.duration, scenario.dt, sensor=sensor)
     safety = bool(getattr(controller, "safety_latched", False))
     return PlacementRun(scenario, *run.placement_rows().T.copy(), safety_stop=safety), run
-
-
-def placement_table(runs) -> list[dict]:
-    """One row per run: surface, mode, peak normal force [N], settle time [s], final depth [mm],
-    final F'z [N].
-    """
-    return [
-        {
-            "surface": run.scenario.surface.name,
-            "mode": run.scenario.mode,
-            "peak_force": run.peak_contact_force,
-            "settle_time": run.settle_time,
-            "final_depth_mm": float(run.penetration[-1]) * 1e3,
-            "final_force": run.final_force,
-        }
-        for run in runs
-    ]
-
-
-def with_mode(scenario: PlacementScenario, mode: str) -> PlacementScenario:
-    """``scenario`` with another mode."""
-    return replace(scenario, mode=mode)

@@ -20,21 +20,12 @@ import numpy as np
 import pinocchio as pin
 
 from ...calibration.model import STANDARD_GRAVITY
-from ...exceptions import InvalidInput, MissingDependency
+from ...exceptions import InvalidInput
 from ...kinematics.arm import bundled_urdf_path
 from ...kinematics.rotations import gravity_in_base_from_tilt
 from ...validation import as_batch, as_positive, as_vector
+from .model import add_wrench_sensor, import_mujoco
 from .tool_inertia import ToolInertia
-
-
-def _mujoco():
-    try:
-        import mujoco
-    except ImportError:
-        raise MissingDependency(
-            "mujoco", "sim", "recording wrenches with MuJoCo (ftkin.sim.mujoco.recording)"
-        ) from None
-    return mujoco
 
 
 class MujocoRecorder:
@@ -58,7 +49,7 @@ class MujocoRecorder:
         g: float = STANDARD_GRAVITY,
         base_tilt=(0.0, 0.0),
     ):
-        mujoco = _mujoco()
+        mujoco = import_mujoco("recording wrenches with MuJoCo (ftkin.sim.mujoco.recording)")
         self._mujoco = mujoco
         spec = mujoco.MjSpec.from_file(str(urdf if urdf is not None else bundled_urdf_path()))
         spec.compiler.fusestatic = False
@@ -83,13 +74,7 @@ class MujocoRecorder:
                 inertia[1, 2],
             ]
         body.add_site(name="ftkin_sensor_site", pos=[0.0, 0.0, 0.0])
-        for name, kind in (
-            ("ftkin_force", mujoco.mjtSensor.mjSENS_FORCE),
-            ("ftkin_torque", mujoco.mjtSensor.mjSENS_TORQUE),
-        ):
-            spec.add_sensor(
-                name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_SITE, objname="ftkin_sensor_site"
-            )
+        add_wrench_sensor(mujoco, spec, "ftkin_sensor_site")
         self.model = spec.compile()
         self.model.opt.gravity[:] = gravity_in_base_from_tilt(
             as_positive(g, "g"), float(base_tilt[0]), float(base_tilt[1])
