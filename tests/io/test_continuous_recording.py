@@ -13,7 +13,7 @@ import pytest
 
 from ftkin import calibrate
 from ftkin.calibration.information import SensorNoise
-from ftkin.calibration.regressor import body_regressor, point_mass_parameters, sensor_motion
+from ftkin.calibration.regressor import body_regressor, sensor_motion
 from ftkin.cli import main
 from ftkin.exceptions import InvalidSamples
 from ftkin.io.csv_table import read_table, write_csv
@@ -41,7 +41,9 @@ def recording(arm, truth, rng, poses=12, hold=HOLD):
     q, dq, ddq = targets[k] + s[:, None] * step, ds[:, None] * step, dds[:, None] * step
     rotations, velocities, accelerations = sensor_motion(arm, q, dq, ddq)
     wrenches = SimulatedSensor(truth, NOISE).read(rotations, rng)
-    wrenches -= body_regressor(velocities, accelerations) @ point_mass_parameters(truth)
+    mass = truth.tool_mass  # a point-mass tool: θ = [m, m·c, 0...] [kg, kg·m, kg·m²]
+    theta = np.concatenate([[mass], mass * np.asarray(truth.center_of_mass), np.zeros(6)])
+    wrenches -= body_regressor(velocities, accelerations) @ theta
     return times, q, wrenches, float(np.mean((phase > 0) & (phase < 1)))
 
 
