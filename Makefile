@@ -27,6 +27,7 @@ test: $(STAMP)
 	$(VENV)/bin/lint-imports
 	$(MAKE) docs
 	$(PY) -m pytest -q
+	$(PY) benchmarks/fuzz_readers.py --seconds 20
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff format --check ftkin tests benchmarks docs scripts conftest.py

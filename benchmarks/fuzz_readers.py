@@ -1,7 +1,9 @@
 """Fuzz ftkin's file readers for a fixed budget and print how many inputs were tried.
 
 Mutates valid files (byte edits, truncation, duplicated or dropped lines,
-structured JSON edits) and feeds them to the readers. Every input must end in a
+structured JSON edits) and feeds them to the readers: samples CSVs (a continuous
+recording among them), moving recordings (``calibrate --dynamic``), calibration
+JSON and ROS 2 bags. Every input must end in a
 result with finite numbers or an ``ftkin.FtkinError``; anything else (a numpy,
 Pinocchio or Python traceback) is a bug: the script prints it and exits 1.
 
@@ -18,13 +20,16 @@ import sys
 import tempfile
 import time
 import traceback
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 import ftkin
 from ftkin.io.calibration_file import calibration_to_dict, load_calibration
+from ftkin.io.motion_recording import load_motion_csv
 from ftkin.io.samples_csv import load_samples
+from ftkin.io.static_segments import SegmentParameters
 from ftkin.sim.paper import paper_calibration, paper_csv_path
 
 ALPHABET = list(",\n\r#.-+eE0123456789 \t\"'") + [
@@ -72,20 +77,26 @@ def mutate_text(text: str, rng: random.Random) -> str:
 
 
 def mutate_document(document, rng: random.Random):
-    """A structured edit of a JSON document: drop, retype or corrupt one value."""
+    """A structured edit of a JSON document: drop, retype or corrupt one value, at any depth (the
+    nested ``diagnostics``, ``drift``, ``kinematics`` and ``poses`` objects too).
+    """
     document = json.loads(json.dumps(document))
-    keys = list(document)
-    key = rng.choice(keys)
-    replacements = [None, "text", -1, 0, 1e308, [], {}, [1.0], [[1.0, 2.0]], True, float("nan"), 99]
+    parent = document
+    while rng.random() < 0.5:  # descend into a nested object now and then
+        nested = [key for key, value in parent.items() if isinstance(value, dict) and value]
+        if not nested:
+            break
+        parent = parent[rng.choice(nested)]
+    key = rng.choice(list(parent))
+    replacements = [None, "text", "1.5", -1, 0, 1e308, [], {}, [1.0], [[1.0, 2.0]], True, 99]
+    replacements += [float("nan"), [None], [True], 2**64, -(2**63) - 1]
     kind = rng.randrange(3)
     if kind == 0:
-        del document[key]
-    elif kind == 1:
-        document[key] = rng.choice(replacements)
-    elif isinstance(document[key], list) and document[key]:
-        document[key][rng.randrange(len(document[key]))] = rng.choice(replacements)
+        del parent[key]
+    elif kind == 1 or not (isinstance(parent[key], list) and parent[key]):
+        parent[key] = rng.choice(replacements)
     else:
-        document[key] = rng.choice(replacements)
+        parent[key][rng.randrange(len(parent[key]))] = rng.choice(replacements)
     return document
 
 
@@ -179,6 +190,24 @@ def check_calibration(result) -> None:
     assert np.all(np.isfinite(result.to_vector())), "non-finite calibration"
 
 
+def check_motion(motion) -> None:
+    for values in (motion.wrenches, motion.rotations, motion.velocities, motion.accelerations):
+        assert np.all(np.isfinite(values)), "non-finite motion samples"
+
+
+def _motion_seed(arm) -> str:
+    """A moving recording (``calibrate --dynamic``): 100 Hz, sines on every joint, the rates
+    given as ``<joint>_vel``/``<joint>_acc`` (what ``plan --excitation`` writes)."""
+    times = np.arange(60) / 100.0
+    phase = 2 * np.pi * times[:, None] + np.arange(arm.nq)[None, :]
+    q, dq, ddq = 0.3 * np.sin(phase), 0.6 * np.pi * np.cos(phase), -1.2 * np.pi**2 * np.sin(phase)
+    names = arm.joint_names
+    header = ["t", *names, *(f"{n}_vel" for n in names), *(f"{n}_acc" for n in names)]
+    header += ["fx", "fy", "fz", "mx", "my", "mz"]
+    rows = np.column_stack([times, q, dq, ddq, np.tile([0.1, 0.2, 3.1, 0.0, 0.0, 0.0], (60, 1))])
+    return "\n".join([",".join(header), *(",".join(f"{v:.9g}" for v in row) for row in rows)])
+
+
 def _read_bag_quietly(path: Path, arm):
     from ftkin.io.bags import bag_samples
 
@@ -186,9 +215,8 @@ def _read_bag_quietly(path: Path, arm):
 
 
 def run(seconds: float, seed: int) -> int:
-    logging.disable(
-        logging.WARNING
-    )  # readers log warnings about odd but accepted input; not the point here
+    logging.disable(logging.WARNING)  # readers log warnings about odd but accepted input
+    warnings.simplefilter("ignore", RuntimeWarning)  # overflow on the way to a refusal
     rng = random.Random(seed)
     workdir = Path(tempfile.mkdtemp(prefix="ftkin-fuzz-"))
     csv_seeds = [paper_csv_path().read_text()]
@@ -203,10 +231,18 @@ def run(seconds: float, seed: int) -> int:
         "0,1,0,0,0,0,-3,0,0,0\n0.7071,0.7071,0,0,0,3,0,0,0,0\n"
     )
     csv_seeds.append(quat_seed)
+    still = np.repeat(q, 15, axis=0)  # a continuous recording at 10 Hz: 1.5 s holds
+    recording = [",".join(["t", *arm.joint_names, "fx", "fy", "fz", "mx", "my", "mz"])]
+    for i, row in enumerate(still):
+        recording.append(
+            f"{i / 10:.1f}," + ",".join(f"{v:.6f}" for v in row) + ",0.1,0.2,3.1,0,0,0"
+        )
+    csv_seeds.append("\n".join(recording) + "\n")
     calibration_document = calibration_to_dict(paper_calibration())
     json_seed = json.dumps(calibration_document, indent=2)
+    motion_seed = _motion_seed(arm)
 
-    counts = {"csv": 0, "json-text": 0, "json-structured": 0}
+    counts = {"csv": 0, "json-text": 0, "json-structured": 0, "motion-csv": 0}
     bag_seed = None
     try:
         bag_seed = write_small_bag(workdir / "seed.mcap", arm, seed).read_bytes()
@@ -221,12 +257,15 @@ def run(seconds: float, seed: int) -> int:
         target_path = path
         if target == "csv":
             path.write_text(mutate_text(rng.choice(csv_seeds), rng), errors="surrogateescape")
-            reader, check = (lambda p: load_samples(p, arm)), check_samples
+            reader, check = (lambda p: load_samples(p, arm, SegmentParameters())), check_samples
         elif target == "bag":
             bag_path = workdir / "input.mcap"
             bag_path.write_bytes(mutate_bytes(bag_seed, rng))
             target_path = bag_path
             reader, check = (lambda p: _read_bag_quietly(p, arm)), check_samples
+        elif target == "motion-csv":
+            path.write_text(mutate_text(motion_seed, rng), errors="surrogateescape")
+            reader, check = (lambda p: load_motion_csv(p, arm).motion_samples(arm)), check_motion
         elif target == "json-text":
             path.write_text(mutate_text(json_seed, rng))
             reader, check = load_calibration, check_calibration

@@ -13,14 +13,89 @@ import numpy as np
 
 from .exceptions import InvalidInput
 
+_KIND_NAMES = {"b": "booleans", "c": "complex numbers", "O": "objects", "U": "text", "S": "bytes"}
+
 
 def as_float_array(value, name: str) -> np.ndarray:
-    """Convert to a float64 array or raise :class:`InvalidInput`."""
+    """Convert real numbers to a float64 array or raise :class:`InvalidInput`.
+
+    Booleans (also inside a list: numpy would turn ``[True, 1.5]`` into floats), complex numbers,
+    text and object arrays (``None``, integers beyond int64, mixed types) are refused, not
+    converted: ``True`` is not 1 N and ``"1.5"`` is not a number here.
+    """
     try:
-        array = np.asarray(value, dtype=np.float64)
+        array = value if isinstance(value, np.ndarray) else np.asarray(value)
     except (TypeError, ValueError) as error:
         raise InvalidInput(f"{name} must be numeric, got {type(value).__name__}: {error}") from None
-    return array
+    kind = array.dtype.kind
+    if kind not in "iuf" or (isinstance(value, (list, tuple)) and _has_bool(value)):
+        what = _KIND_NAMES.get("b" if kind in "iuf" else kind, f"dtype {array.dtype}")
+        raise InvalidInput(f"{name} must be numeric (real numbers), got {what}: {_short(value)}")
+    return array.astype(np.float64, copy=False)
+
+
+def _has_bool(value) -> bool:
+    """Whether a nested list holds a boolean (numpy turns ``[True, 1.5]`` into floats)."""
+    if isinstance(value, (list, tuple)):
+        return any(map(_has_bool, value))
+    return isinstance(value, (bool, np.bool_))
+
+
+def _short(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:60] + "..."
+
+
+def as_real(value, name: str) -> float:
+    """One real number as a float (a size-1 array too); booleans, text and complex refused."""
+    array = as_float_array(value, name)
+    if array.size != 1:
+        raise InvalidInput(f"{name} must be a number, got shape {array.shape}")
+    return float(array.reshape(-1)[0])
+
+
+MAX_WRENCH = 1e6
+"""Largest plausible load on the sensor [N, N·m] (a reading, a sensor offset, a tool weight).
+
+Beyond it a value is a raw count or a unit mistake, and it would overflow the fit rather than
+inform it.
+"""
+
+
+def check_wrench_magnitude(wrenches: np.ndarray, name: str) -> None:
+    """Refuse an ``(N, 6)`` array with an entry beyond ±:data:`MAX_WRENCH` (names row, channel)."""
+    beyond = np.argwhere(np.abs(wrenches) > MAX_WRENCH)
+    if beyond.size:
+        row, channel = (int(i) for i in beyond[0])
+        raise InvalidInput(
+            f"{name}[{row}] channel {'fx fy fz mx my mz'.split()[channel]} is "
+            f"{wrenches[row, channel]:g}, beyond ±{MAX_WRENCH:g}: expected N and N·m, not raw "
+            "counts or another unit"
+        )
+
+
+MAX_ID = 2**53
+"""Largest id or count magnitude: every integer up to it is exact in a float64 (a CSV cell)."""
+
+
+def as_integers(value, name: str, limit: int = MAX_ID) -> np.ndarray:
+    """An int64 array of whole numbers of magnitude at most ``limit``, checked *before* the cast.
+
+    Ids beyond the int64 range would wrap around in ``astype``; floats with a fraction, NaN,
+    booleans and text are refused.
+    """
+    integers = isinstance(value, np.ndarray) and value.dtype.kind in "iu"
+    numbers = value if integers else as_float_array(value, name)
+    beyond = ~((numbers >= -limit) & (numbers <= limit))  # NaN is beyond too
+    if np.any(beyond):
+        bad = numbers.reshape(-1)[np.flatnonzero(beyond.reshape(-1))[0]]
+        bound = "2**53" if limit == MAX_ID else f"{limit}"
+        raise InvalidInput(
+            f"{name} must be integers of magnitude at most {bound}, got {bad.item()}"
+        )
+    if numbers.dtype.kind == "f" and np.any(numbers != np.round(numbers)):
+        raise InvalidInput(f"{name} must be integers, got a fraction")
+    return numbers.astype(np.int64)
 
 
 def check_finite(array: np.ndarray, name: str) -> None:
@@ -166,10 +241,7 @@ def _raise_not_rotation(array: np.ndarray, name: str, atol: float) -> None:
 
 def as_positive(value, name: str) -> float:
     """A finite, strictly positive float."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError, OverflowError):
-        raise InvalidInput(f"{name} must be a number, got {value!r}") from None
+    number = as_real(value, name)
     if not np.isfinite(number) or number <= 0.0:
         raise InvalidInput(f"{name} must be a finite positive number, got {value!r}")
     return number
@@ -189,10 +261,7 @@ def as_in_range(value, name: str, low: float, high: float, unit: str = "") -> fl
 
 
 def _finite(value, name: str) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError, OverflowError):
-        raise InvalidInput(f"{name} must be a number, got {value!r}") from None
+    number = as_real(value, name)
     if not np.isfinite(number):
         raise InvalidInput(f"{name} must be finite, got {value!r}")
     return number

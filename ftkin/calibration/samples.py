@@ -17,9 +17,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import InvalidSamples
+from ..exceptions import InvalidInput, InvalidSamples
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
-from ..validation import as_batch, as_float_array, as_rotation_batch
+from ..validation import (
+    as_batch,
+    as_float_array,
+    as_integers,
+    as_rotation_batch,
+    check_wrench_magnitude,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -124,6 +130,10 @@ class Samples:
 
     def __post_init__(self):
         wrenches, _ = as_batch(self.wrenches, 6, "wrenches [fx, fy, fz, mx, my, mz]")
+        try:  # before any fit: an absurd load is a unit mistake, not an unobservable parameter
+            check_wrench_magnitude(wrenches, "wrenches")
+        except InvalidInput as error:
+            raise InvalidSamples(str(error)) from None
         rotations, _ = as_rotation_batch(self.rotations)
         if len(rotations) != len(wrenches):
             raise InvalidSamples(
@@ -134,16 +144,14 @@ class Samples:
         pose_ids = self.pose_ids
         if pose_ids is None:
             pose_ids = np.arange(len(wrenches))
-        pose_ids = np.asarray(pose_ids)
+        try:
+            pose_ids = as_integers(pose_ids, "pose ids")
+        except InvalidInput as error:
+            raise InvalidSamples(str(error)) from None
         if pose_ids.shape != (len(wrenches),):
             raise InvalidSamples(
                 f"pose_ids must have shape ({len(wrenches)},), got {pose_ids.shape}"
             )
-        if not np.issubdtype(pose_ids.dtype, np.integer):
-            as_float = as_float_array(pose_ids, "pose_ids")
-            if not np.all(np.isfinite(as_float)) or np.any(as_float != np.round(as_float)):
-                raise InvalidSamples("pose ids must be integers")
-            pose_ids = as_float.astype(np.int64)
         times = self.times
         if times is not None:
             times = as_float_array(times, "times [s]").copy()

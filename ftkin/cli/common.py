@@ -129,7 +129,11 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
 
     defaults = SegmentParameters()
     group = parser.add_argument_group(
-        "ROS 2 bags (a rosbag2 folder, .mcap or .db3 instead of a CSV; needs ftkin[bags])"
+        "ROS 2 bags (a rosbag2 folder, .mcap or .db3 instead of a CSV; needs ftkin[bags]) and "
+        "continuous recordings (a CSV with a time column and no pose column)"
+    )
+    group.add_argument(
+        "--all-rows", action="store_true", help="every reading its own pose: no still segments"
     )
     group.add_argument(
         "--joint-topic",
@@ -154,7 +158,8 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
         type=positive_float,
         default=defaults.speed_threshold,
         metavar="RAD_S",
-        help="static when every joint is slower than this [rad/s] (default: %(default)s)",
+        help="static when every joint (every R_BS entry of a CSV without joint columns) is "
+        "slower than this [rad/s] (default: %(default)s)",
     )
     group.add_argument(
         "--min-static-duration",
@@ -247,18 +252,17 @@ def load_samples_from_args(
     """Read a samples CSV or a ROS 2 bag named on the command line.
 
     Returns a :class:`~ftkin.io.samples_csv.LoadedSamples` (a :class:`~ftkin.io.bags.BagSamples`
-    for a bag). ``static_only`` applies to bags: True keeps the readings of the
-    static segments (calibration), False every reading (compensation). ``arm``
-    overrides the arm the options name (see :func:`arm_for_calibration`).
+    for a bag). ``static_only`` (off with ``--all-rows``) applies to bags and continuous
+    recordings: True keeps the readings of the static segments (calibration), False every
+    reading (compensation). ``arm`` overrides the arm the options name (see
+    :func:`arm_for_calibration`).
     """
     from ..io.bags import bag_samples, is_bag_path
+    from ..io.static_segments import SegmentParameters
 
     if arm is None:
         arm = arm_from_args(args)
-    if not is_bag_path(path):
-        return load_samples(path, arm)
-    from ..io.static_segments import SegmentParameters
-
+    static_only = static_only and not getattr(args, "all_rows", False)
     defaults = SegmentParameters()
     parameters = SegmentParameters(
         speed_threshold=getattr(args, "speed_threshold", defaults.speed_threshold),
@@ -266,12 +270,18 @@ def load_samples_from_args(
         settle_time=getattr(args, "settle_time", defaults.settle_time),
         speed_window=getattr(args, "speed_window", defaults.speed_window),
     )
-    return bag_samples(
-        path,
-        arm,
-        joint_topic=getattr(args, "joint_topic", None),
-        wrench_topic=getattr(args, "wrench_topic", None),
-        parameters=parameters,
-        static_only=static_only,
-        wrench_frame=getattr(args, "wrench_frame", "sensor"),
-    )
+    if not is_bag_path(path):
+        loaded = load_samples(path, arm, parameters if static_only else None)
+    else:
+        loaded = bag_samples(
+            path,
+            arm,
+            joint_topic=getattr(args, "joint_topic", None),
+            wrench_topic=getattr(args, "wrench_topic", None),
+            parameters=parameters,
+            static_only=static_only,
+            wrench_frame=getattr(args, "wrench_frame", "sensor"),
+        )
+    if loaded.search is not None:  # the segments the fit will use
+        print(f"{path}: {loaded.search.describe()}")
+    return loaded

@@ -13,11 +13,11 @@ def register(subparsers) -> None:
         "extract",
         help="write the samples extracted from a ROS 2 bag (or a samples CSV) as a CSV",
         description="Read a ROS 2 bag (rosbag2 folder, .mcap or .db3), align joint states to the "
-        "wrench "
-        "stamps, find the static segments and write one row per reading: t [s], pose (static "
-        "segment "
-        "number), the arm's joint angles [rad] and fx..mz [N, N·m]. The CSV is a valid input of "
-        "'ftkin calibrate'. With --all, every reading (no pose column) is written.",
+        "wrench stamps, find the static segments and write one row per reading: t [s], pose "
+        "(static segment number), the arm's joint angles [rad] and fx..mz [N, N·m]. A continuous "
+        "recording in a CSV (a time column, no pose column) gets the same search; its still rows "
+        "are written with a pose column. The CSV is a valid input of 'ftkin calibrate'. With "
+        "--all, every reading (no pose column) is written.",
     )
     parser.add_argument("recording", metavar="RECORDING")
     parser.add_argument("-o", "--output", metavar="SAMPLES.csv", required=True)
@@ -29,9 +29,9 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    loaded = load_samples_from_args(args.recording, args, static_only=not args.all)
+    loaded = load_samples_from_args(args.recording, args, static_only=not args.all)  # or --all-rows
     write_csv(args.output, loaded.table.header, loaded.table.rows)
-    search = getattr(loaded, "search", None)
+    search = loaded.search
     poses = len(np.unique(loaded.samples.pose_ids))
     print(
         f"wrote {len(loaded.table.rows)} readings"
@@ -49,6 +49,4 @@ def run(args) -> int:
                 f"  {recording.dropped} wrench readings outside the joint-state time range were "
                 "dropped"
             )
-    if search is not None:
-        print(f"  {search.describe()}")
     return 0

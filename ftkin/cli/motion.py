@@ -127,27 +127,14 @@ def add_excitation_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="plan a periodic Fourier-series excitation trajectory instead of poses",
     )
-    group.add_argument(
-        "--duration",
-        type=positive_float,
-        default=30.0,
-        metavar="S",
-        help="recording length [s] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--rate",
-        type=positive_float,
-        default=1000.0,
-        metavar="HZ",
-        help="sample rate of the CSV [Hz] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--period",
-        type=positive_float,
-        default=None,
-        metavar="S",
-        help="period of the series [s] (default: the duration)",
-    )
+    for flag, default, metavar, help_text in (
+        ("--duration", 30.0, "S", "recording length [s] (default: %(default)s)"),
+        ("--rate", 1000.0, "HZ", "sample rate of the CSV [Hz] (default: %(default)s)"),
+        ("--period", None, "S", "period of the series [s] (default: the duration)"),
+    ):
+        group.add_argument(
+            flag, type=positive_float, default=default, metavar=metavar, help=help_text
+        )
     group.add_argument(
         "--harmonics",
         type=bounded_int(1, 50, "harmonics"),
@@ -155,28 +142,29 @@ def add_excitation_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="K",
         help="harmonics per joint (default: %(default)s)",
     )
-    group.add_argument(
-        "--velocity-fraction",
-        type=positive_float,
-        default=DEFAULT_VELOCITY_FRACTION,
-        metavar="F",
-        help="fraction of the URDF velocity limits (default: %(default)s)",
-    )
-    group.add_argument(
-        "--acceleration-limit",
-        type=positive_float,
-        default=DEFAULT_ACCELERATION_LIMIT,
-        metavar="RAD_S2",
-        help="joint acceleration limit [rad/s²] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--amplitude",
-        type=positive_float,
-        default=DEFAULT_AMPLITUDE,
-        metavar="RAD",
-        help="largest excursion of a joint from the zero "
-        "configuration [rad] (default: %(default)s)",
-    )
+    for flag, default, metavar, help_text in (
+        (
+            "--velocity-fraction",
+            DEFAULT_VELOCITY_FRACTION,
+            "F",
+            "fraction of the URDF velocity limits (default: %(default)s)",
+        ),
+        (
+            "--acceleration-limit",
+            DEFAULT_ACCELERATION_LIMIT,
+            "RAD_S2",
+            "joint acceleration limit [rad/s²] (default: %(default)s)",
+        ),
+        (
+            "--amplitude",
+            DEFAULT_AMPLITUDE,
+            "RAD",
+            "largest excursion of a joint from the zero configuration [rad] (default: %(default)s)",
+        ),
+    ):
+        group.add_argument(
+            flag, type=positive_float, default=default, metavar=metavar, help=help_text
+        )
     group.add_argument(
         "--iterations",
         type=bounded_int(0, 100_000, "evaluations"),

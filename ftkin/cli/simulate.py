@@ -295,6 +295,7 @@ def run(args) -> int:
     if args.view:  # the live view draws the simple engine's run, paced to the wall clock
         if args.engine != "simple":
             print("--view: running the simple engine (the live view follows its ticks)")
+            args.engine = "simple"  # the labels below say what ran
         viewed = _run_viewed(scenarios[0])
         results = [(viewed, list(PlacementRun.COLUMNS), viewed.rows())]
     else:

@@ -21,8 +21,11 @@
    ``fault = SensorFault.OSCILLATION`` and a message naming the gain to lower.
 
 Before all that, a :class:`~ftkin.control.sensor_faults.FaultMonitor` checks the tick
-(NaN/inf in ``q`` or the reading, a ``dt`` jump, a saturated channel, a stuck
-sensor). A faulty tick commands ``dq = 0``, names the fault in
+(NaN/inf in ``q`` or the reading, a ``dt`` jump or a ``dt`` below
+:data:`~ftkin.control.sensor_faults.MIN_DT`, a saturated channel, a stuck
+sensor); a tick whose ``dq`` comes out non-finite (huge but finite inputs
+overflowing on the way) is held the same way, its filter restarted. A faulty
+tick commands ``dq = 0``, names the fault in
 ``last_status.fault`` and leaves the admittance filter untouched, so no bad
 sample enters the state; faults are not latched: after
 ``SensorLimits.recovery_ticks`` good ticks the arm moves again, its derivative
@@ -43,6 +46,7 @@ import pinocchio as pin
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm, bundled_urdf_path
 from ..kinematics.mounting import mounted_arm
+from ..validation import FLOAT64, as_positive
 from .admittance import Admittance
 from .compensation import Compensator
 from .control_frame import control_frame_for
@@ -113,53 +117,28 @@ class JointAdmittance:
                 "compensator must be an ftkin Compensator or None, got "
                 f"{type(compensator).__name__}"
             )
-        numbers = np.array(
-            [
-                force_limit,
-                torque_limit,
-                manipulability_threshold,
-                max_damping,
-                velocity_scale,
-                limit_gain,
-            ],
-            dtype=float,
+        numbers = dict(
+            force_limit=force_limit,
+            torque_limit=torque_limit,
+            manipulability_threshold=manipulability_threshold,
+            max_damping=max_damping,
         )
-        if not np.all(np.isfinite(numbers)) or np.any(numbers <= 0):
-            raise InvalidInput(
-                f"limits, thresholds and gains must be finite and > 0, got {numbers}"
-            )
+        numbers = [as_positive(value, name) for name, value in numbers.items()]
         if compensator is not None and compensator.calibration.has_mount:
             # the real sensor frame, folded into the model: no work per tick
             arm = mounted_arm(arm, compensator.calibration.mount_rotation)
         self.arm, self.admittance, self.compensator = arm, admittance, compensator
         self.frame = control_frame_for(arm, admittance.frame, control_point)
-        self.force_limit, self.torque_limit = float(force_limit), float(torque_limit)
-        self.manipulability_threshold, self.max_damping = (
-            float(manipulability_threshold),
-            float(max_damping),
-        )
-        self.limit_gain = float(limit_gain)
-        self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
-        self._rotation = arm.data.oMf[
-            arm.sensor_frame_id
-        ].rotation  # a view: follows every kinematics update
-        lower, upper = arm.lower_limits.tolist(), arm.upper_limits.tolist()
-        speeds = (arm.velocity_limits * float(velocity_scale)).tolist()
-        self._lower, self._upper, self._speeds = (
-            lower,
-            upper,
-            speeds,
-        )  # as floats, for limit scaling's shortcut
-        self._gains = [self.limit_gain] * arm.nq
-        self._nq = arm.nq
+        self.force_limit, self.torque_limit = numbers[0], numbers[1]
+        self.manipulability_threshold, self.max_damping = numbers[2], numbers[3]
+        self._bind_limits(arm, as_positive(velocity_scale, "velocity_scale"), limit_gain)
         if sensor_limits is None and (
             arm.urdf_path is None or arm.urdf_path != bundled_urdf_path().resolve()
         ):
             raise InvalidInput(
                 "give sensor_limits=SensorLimits(force_range=..., torque_range=...) with your "
-                "sensor's "
-                "measuring range [N, N·m]: the default ±250 N / ±6 N·m is the bundled arm's (the "
-                "paper's) sensor"
+                "sensor's measuring range [N, N·m]: the default ±250 N / ±6 N·m is the bundled "
+                "arm's (the paper's) sensor"
             )
         self.monitor = FaultMonitor(sensor_limits)
         self.detector = OscillationDetector(oscillation) if oscillation is not None else None
@@ -171,6 +150,18 @@ class JointAdmittance:
         self._contact_floats = compensator.contact_floats if compensator is not None else None
         self._tracked = compensator is not None and compensator.tracker is not None
         self.reset()
+
+    def _bind_limits(self, arm: Arm, velocity_scale: float, limit_gain: float) -> None:
+        """The kinematics and joint limits the tick reads, as Python floats (limit scaling's
+        shortcut).
+        """
+        self.limit_gain = as_positive(limit_gain, "limit_gain")
+        self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
+        # a view: follows every kinematics update
+        self._rotation = arm.data.oMf[arm.sensor_frame_id].rotation
+        self._lower, self._upper = arm.lower_limits.tolist(), arm.upper_limits.tolist()
+        self._speeds = (arm.velocity_limits * velocity_scale).tolist()
+        self._gains, self._nq = [self.limit_gain] * arm.nq, arm.nq
 
     def reset(self) -> None:
         """Clear the admittance filter, the safety latch and the fault monitor's state."""
@@ -230,26 +221,10 @@ class JointAdmittance:
         """
         # The tick runs on Python floats (numpy's per-call overhead dominates on 3- and 6-vectors);
         # numpy only for the Jacobian products. The status is built when asked (last_status).
-        try:
-            q = np.asarray(q, dtype=np.float64)
-            raw = np.asarray(raw_wrench, dtype=np.float64)
-            dt = float(dt)
-        except (TypeError, ValueError) as error:
-            raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
-        if q.shape != (self._nq,) or raw.shape != (6,):
-            raise InvalidInput(
-                f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} "
-                f"and {raw.shape}"
-            )
-        if (joint_velocities is None) != (joint_accelerations is None) or (
-            joint_velocities is not None and self.dynamic is None
-        ):
-            raise InvalidInput(
-                "joint_velocities and joint_accelerations go together, and with a "
-                "DynamicCompensator "
-                "only (a static compensator has no inertial term to use them)"
-            )
-        raw, positions = raw.tolist(), q.tolist()
+        q, raw, positions, dt = self._tick_inputs(q, raw_wrench, dt, joint_velocities)
+        rates = joint_velocities is not None
+        if rates != (joint_accelerations is not None):
+            self._refuse()
         fault, event = self._check(positions, raw, dt)
         if fault is not SensorFault.NONE:
             if self._tracked:
@@ -262,7 +237,7 @@ class JointAdmittance:
         rotation = self._rotation.tolist()  # R_BS, updated by the call above
         # 2. compensation (six floats, sensor frame), the bias tracker, the oscillation detector and
         # the safety stop
-        if joint_velocities is not None and self.dynamic is not None:
+        if rates:
             contact = self.dynamic.contact_rates_floats(
                 q, raw, joint_velocities, joint_accelerations
             )
@@ -271,10 +246,8 @@ class JointAdmittance:
         if self._tracked:
             self.compensator.observe_bias(contact, dt, q=q, free=free)
         fx, fy, fz, mx, my, mz = contact
-        force, torque = (
-            math.sqrt(fx * fx + fy * fy + fz * fz),
-            math.sqrt(mx * mx + my * my + mz * mz),
-        )
+        force = math.sqrt(fx * fx + fy * fy + fz * fz)
+        torque = math.sqrt(mx * mx + my * my + mz * mz)
         if (self._detect is not None and self._detect(force, torque, dt)) or self.oscillation_event:
             return self._hold_oscillation(np.array(contact))
         if self.safety_latched or force > self.force_limit or torque > self.torque_limit:
@@ -292,8 +265,44 @@ class JointAdmittance:
         scale = self._limit_scale(positions, dq.tolist())
         if scale < 1.0:
             dq *= scale
+        elif scale != 1.0:  # NaN: dq overflowed on the way (huge but finite inputs)
+            self.admittance.reset()  # the filter holds the overflowed values: restart it
+            return self._hold(SensorFault.NOT_FINITE, f"dq not finite: {dq}: holding")
         self._status_parts = (dq, contact, twist, manipulability, damping, scale)
         return dq
+
+    def _tick_inputs(self, q, raw_wrench, dt, joint_velocities):
+        """``q`` (float64 array), the reading and ``q`` as lists of floats, ``dt`` as a float.
+
+        Float64 arrays (the control loop's case) pass without a conversion.
+
+        Raises:
+            InvalidInput: not numbers, wrong shapes, or joint rates without a dynamic compensator.
+        """
+        try:
+            if type(q) is not np.ndarray or q.dtype is not FLOAT64:
+                q = np.asarray(q, dtype=np.float64)
+            raw = raw_wrench
+            if type(raw) is not np.ndarray or raw.dtype is not FLOAT64:
+                raw = np.asarray(raw, dtype=np.float64)
+            dt = float(dt)
+        except (TypeError, ValueError) as error:
+            raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
+        if q.shape != (self._nq,) or raw.shape != (6,):
+            raise InvalidInput(
+                f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} "
+                f"and {raw.shape}"
+            )
+        if joint_velocities is not None and self.dynamic is None:
+            self._refuse()
+        return q, raw.tolist(), q.tolist(), dt
+
+    def _refuse(self) -> None:
+        """The :class:`InvalidInput` for joint rates :meth:`step` cannot use."""
+        raise InvalidInput(
+            "joint_velocities and joint_accelerations go together, and with a "
+            "DynamicCompensator only (a static compensator has no inertial term to use them)"
+        )
 
     def _hold(self, fault: SensorFault, event: str) -> np.ndarray:
         """``dq = 0`` for a sensor fault; the filter and the latch are left alone.
@@ -381,7 +390,7 @@ class JointAdmittance:
 
     def _limit_scale(self, q: list, dq: list) -> float:
         """Largest ``s ≤ 1`` keeping every joint's ``s·dq`` within its bound (0 if one is at or past
-        its limit).
+        its limit); NaN when a ``dq`` is not finite.
 
         A joint moving towards its position limit may go at most ``limit_gain · distance``
         [rad/s], and never beyond its (scaled) velocity limit.
@@ -392,7 +401,9 @@ class JointAdmittance:
             and all(map(le, dq, map(mul, self._gains, map(sub, self._upper, q))))
             and all(map(ge, dq, map(mul, self._gains, map(sub, self._lower, q))))
         ):
-            return 1.0  # every joint within both of its bounds: the loop below gives 1.0 too
+            return 1.0  # every joint within both of its bounds (so finite): the loop gives 1.0 too
+        if not all(map(math.isfinite, dq)):
+            return math.nan
         for position, velocity, lower, upper, speed in zip(
             q, dq, self._lower, self._upper, self._speeds
         ):

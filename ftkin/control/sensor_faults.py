@@ -5,7 +5,8 @@ A control loop must not crash on bad data, and must not move on it either.
 reading [N, N·m] and time step ``dt`` [s] and names the first fault it finds:
 
 * :attr:`SensorFault.NOT_FINITE`: a NaN or inf in ``q`` or in the reading;
-* :attr:`SensorFault.DT_JUMP`: ``dt`` not finite, ``<= 0``, or more than
+* :attr:`SensorFault.DT_JUMP`: ``dt`` not finite, below :data:`MIN_DT` (a
+  subnormal or zero step would blow the derivative up), or more than
   ``dt_ratio`` times the nominal step (dropped ticks; the nominal step is
   ``nominal_dt`` or a running average of the accepted steps);
 * :attr:`SensorFault.SATURATED`: ``|raw_i| >= range_i`` on any channel
@@ -111,8 +112,8 @@ class SensorLimits:
 
 
 def _is_number(value, test) -> bool:
-    """``test(value)`` for a real number, False for anything else."""
-    return isinstance(value, Real) and bool(test(value))
+    """``test(value)`` for a real number, False for anything else (a boolean included)."""
+    return isinstance(value, Real) and not isinstance(value, bool) and bool(test(value))
 
 
 def _is_count(x) -> bool:
@@ -133,6 +134,10 @@ def _range(value, name: str, unit: str) -> np.ndarray:
         )
     return array
 
+
+MIN_DT = 1e-6
+"""Shortest accepted control step [s] (1 MHz): below it ``ΔF / dt`` is no derivative but an
+overflow."""
 
 _ALPHA = 0.01
 """Weight of a new step in the running average of ``dt`` (about 100 ticks of memory)."""
@@ -208,13 +213,15 @@ class FaultMonitor:
         positions = q if type(q) is list else q.tolist()
         # One test for the common case: the sum is finite only if every input is (or they overflow:
         # the tests below pass).
-        if not (math.isfinite(sum(raw) + sum(positions)) and 0.0 < dt < math.inf):
+        if not (math.isfinite(sum(raw) + sum(positions)) and 1e-6 <= dt < math.inf):  # MIN_DT
             if not all(map(math.isfinite, raw)):
                 return SensorFault.NOT_FINITE, f"raw_wrench not finite: {raw}: holding"
             if not all(map(math.isfinite, positions)):
                 return SensorFault.NOT_FINITE, f"q not finite: {positions}: holding"
-            if not (math.isfinite(dt) and dt > 0.0):
-                return SensorFault.DT_JUMP, f"dt = {dt!r} s is not a positive time step: holding"
+            if not (math.isfinite(dt) and dt >= MIN_DT):
+                return SensorFault.DT_JUMP, (
+                    f"dt = {dt!r} s is not a time step of at least {MIN_DT:g} s: holding"
+                )
         reference = self._reference_dt
         if reference is None:
             reference = self._reference_dt = dt

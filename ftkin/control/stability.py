@@ -36,6 +36,9 @@ import numpy as np
 
 from ..exceptions import InvalidInput
 
+MAX_DELAY_TICKS = 1000
+"""Longest sensor delay :func:`max_stable_k1` takes [ticks] (the state grows by one per tick)."""
+
 
 def derivative_alpha(dt: float, cutoff: float) -> float:
     """The exact discretisation ``α = 1 − exp(−dt/τ)``, ``τ = 1/(2π f_c)``, of a first-order
@@ -192,7 +195,7 @@ def max_stable_k1(
     Raises:
         InvalidInput: a non-positive stiffness, period or cutoff, a negative damping, gain or delay.
     """
-    real = lambda v: isinstance(v, (int, float)) and math.isfinite(v)
+    real = lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
     servo_ok = (
         servo_bandwidth is None
         and mass == 0
@@ -209,13 +212,14 @@ def max_stable_k1(
         and servo_ok
         and felt > 0
         and isinstance(delay_ticks, int)
-        and delay_ticks >= 0
+        and not isinstance(delay_ticks, bool)
+        and 0 <= delay_ticks <= MAX_DELAY_TICKS
     ):
         raise InvalidInput(
             "max_stable_k1 needs dt, cutoff > 0; stiffness, damping, k2, mass >= 0, something felt "
             "(k, c, or m "
             "with a servo_bandwidth > 0; mass needs a servo_bandwidth) and an integer delay_ticks "
-            ">= 0; got "
+            f"0..{MAX_DELAY_TICKS}; got "
             f"k={stiffness!r}, c={damping!r}, dt={dt!r}, cutoff={cutoff!r}, k2={k2!r}, "
             f"delay_ticks={delay_ticks!r}, "
             f"servo_bandwidth={servo_bandwidth!r}, mass={mass!r}"

@@ -34,7 +34,7 @@ from ..exceptions import InvalidSamples, MissingDependency
 from ..progress import Progress
 from .csv_table import Table, format_float
 from .samples_csv import POSE_COLUMN, LoadedSamples
-from .static_segments import SegmentParameters, SegmentSearch, find_static_segments, segment_index
+from .static_segments import SegmentParameters, find_static_segments, segment_index
 from .time_columns import TIME_COLUMN
 from .wrench_frames import wrenches_in_sensor_frame
 
@@ -87,8 +87,7 @@ class BagRecording:
 class BagSamples(LoadedSamples):
     """:class:`~ftkin.io.samples_csv.LoadedSamples` from a bag, with what was found in it."""
 
-    recording: BagRecording
-    search: SegmentSearch | None
+    recording: BagRecording | None = None
 
 
 def _rosbags():
@@ -382,4 +381,6 @@ def bag_samples(
     )
     table = _table(recording.source, header, columns)
     samples = Samples.from_joint_positions(arm, positions, wrenches, pose_ids, times=times)
-    return BagSamples(samples, table, "joints", list(recording.joint_names), recording, search)
+    return BagSamples(
+        samples, table, "joints", list(recording.joint_names), search, recording=recording
+    )

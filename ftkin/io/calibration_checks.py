@@ -20,20 +20,13 @@ import numpy as np
 
 from ..calibration.model import GRAVITY_RANGE
 from ..exceptions import CalibrationFileError
-from .samples_csv import MAX_WRENCH
+from ..validation import MAX_WRENCH
 
 
 def short_repr(value) -> str:
     """``repr`` cut to 80 characters for messages."""
     text = repr(value)
     return text if len(text) <= 80 else text[:80] + "..."
-
-
-def has_bool(value) -> bool:
-    """Whether a JSON value (or any item of a nested list) is a boolean."""
-    if isinstance(value, bool):
-        return True
-    return isinstance(value, list) and any(has_bool(item) for item in value)
 
 
 def _refuse_duplicate_keys(pairs):

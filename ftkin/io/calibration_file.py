@@ -57,12 +57,11 @@ from .atomic import atomic_write_text
 from .calibration_checks import (
     check_document,
     check_plausible,
-    has_bool,
     parse_calibration_json,
     short_repr,
 )
 from .drift_file import drift_from_document, drift_to_document
-from .json_reader import JsonReader
+from .json_reader import JsonReader, NestedReader
 
 FORMAT_NAME = "ftkin-calibration"
 FORMAT_VERSION = 2
@@ -225,13 +224,32 @@ def save_calibration(result: CalibrationResult, path, *, rezero: dict | None = N
     return atomic_write_text(path, text)
 
 
+DIAGNOSTICS_TYPES = {
+    **dict.fromkeys(("loss", "noise_source"), "string"),
+    **dict.fromkeys(("noise_dof", "chi_square", "p_value", "covariance_scale"), "number?"),
+    **dict.fromkeys(("condition_number",), "number?"),
+    **dict.fromkeys(("noise_force_std", "noise_torque_std", "channel_chi_square"), "numbers?"),
+    **dict.fromkeys(("pose_normalized_residuals", "pose_p_values"), "numbers?"),
+    **dict.fromkeys(("weakest_direction", "relative_std_errors"), "numbers?"),
+    **dict.fromkeys(("pose_ids", "outlier_pose_ids", "dropped_pose_ids"), "integers"),
+    "dof": "integer",
+    "warnings": "strings",
+}
+"""The JSON kind of each ``diagnostics`` key (see ``JsonReader.check_types``)."""
+
+
+DOCUMENT_TYPES = {
+    **dict.fromkeys(("created", "ftkin_version"), "string"),
+    **dict.fromkeys(("residual_rms", "mount_rpy_deg"), "numbers?"),
+}
+"""The JSON kind of the keys written for people (read back only to be checked)."""
+
+
 def _diagnostics(reader: JsonReader) -> FitDiagnostics | None:
     data = reader.optional_object("diagnostics")
     if data is None:
         return None
-    flags = [key for key, value in data.items() if has_bool(value)]
-    if flags:
-        reader.fail(f"{flags[0]!r} holds a boolean; true/false are not numbers", "diagnostics")
+    NestedReader(reader.path, data, "diagnostics").check_types(DIAGNOSTICS_TYPES)
     try:
         return FitDiagnostics.from_dict(data)
     except KeyError as error:
@@ -258,17 +276,11 @@ def _check_version(reader: JsonReader, document: dict) -> None:
             f"{FORMAT_NAME!r})",
             "format",
         )
-    version = document.get("version")
-    if isinstance(version, bool) or not isinstance(version, int):
-        reader.fail(f"expected an integer version, got {version!r}", "version")
-    if version > FORMAT_VERSION:
-        reader.fail(
-            f"written by a newer ftkin (file format version {version}); this ftkin reads versions "
-            f"up to {FORMAT_VERSION}: upgrade ftkin",
-            "version",
-        )
-    if version < 1:
-        reader.fail(f"unknown format version {version}", "version")
+    reader.version(FORMAT_VERSION)
+    reader.check_types(DOCUMENT_TYPES)
+    for name in ("std_errors", "mount_std_deg"):  # objects of numbers
+        numbers = reader.optional_object(name) or {}
+        NestedReader(reader.path, numbers, name).check_types(dict.fromkeys(numbers, "numbers?"))
 
 
 def _poses(reader: JsonReader, document: dict) -> dict:

@@ -100,30 +100,8 @@ def read_table(path) -> Table:
             columns, a row with the wrong number of cells (decimal commas are
             named), or a cell the csv module cannot parse (too long, NUL byte).
     """
-    path = Path(path)
     source = str(path)
-    try:
-        text = path.read_text(
-            encoding="utf-8-sig"
-        )  # a byte-order mark (Excel) is not part of the header
-    except FileNotFoundError:
-        raise InvalidSamples("file not found", source) from None
-    except IsADirectoryError:
-        raise InvalidSamples(
-            "is a folder; expected a CSV file (or a ROS 2 bag folder with metadata.yaml)", source
-        ) from None
-    except UnicodeDecodeError as error:
-        raise InvalidSamples(
-            f"not UTF-8 text (a binary file?): {error.reason} at byte {error.start}", source
-        ) from None
-    except OSError as error:
-        raise InvalidSamples(f"cannot read: {error.strerror or error}", source) from None
-    if text.lstrip()[:1] in ("{", "["):
-        raise InvalidSamples(
-            "this is a JSON file (an ftkin calibration?), not a CSV table; expected a header row "
-            "and data rows",
-            source,
-        )
+    text = _read_text(Path(path))
     delimiter = sniff_delimiter(text)
     if delimiter != ",":
         logger.warning(
@@ -164,6 +142,32 @@ def read_table(path) -> Table:
     if not rows:
         raise InvalidSamples("no data rows after the header", source)
     return Table(source, header, rows, lines, header_line)
+
+
+def _read_text(path: Path) -> str:
+    """The text of a CSV file, or :class:`InvalidSamples` (missing, a folder, binary, JSON)."""
+    source = str(path)
+    try:
+        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark (Excel) is not a header
+    except FileNotFoundError:
+        raise InvalidSamples("file not found", source) from None
+    except IsADirectoryError:
+        raise InvalidSamples(
+            "is a folder; expected a CSV file (or a ROS 2 bag folder with metadata.yaml)", source
+        ) from None
+    except UnicodeDecodeError as error:
+        raise InvalidSamples(
+            f"not UTF-8 text (a binary file?): {error.reason} at byte {error.start}", source
+        ) from None
+    except OSError as error:
+        raise InvalidSamples(f"cannot read: {error.strerror or error}", source) from None
+    if text.lstrip()[:1] in ("{", "["):
+        raise InvalidSamples(
+            "this is a JSON file (an ftkin calibration?), not a CSV table; expected a header row "
+            "and data rows",
+            source,
+        )
+    return text
 
 
 def _cell_count_message(record, header, delimiter) -> str:

@@ -39,10 +39,14 @@ def drift_from_document(reader: JsonReader) -> BiasDrift | None:
         kind = parse_drift(sub.get("model"))
     except InvalidInput as error:
         reader.fail(str(error), "drift.model")
-    count = len(sub.array("times", (len(data.get("times") or []),)))
+    times = data.get("times")
+    count = len(sub.array("times", (len(times) if isinstance(times, list) else 0,)))
     criteria = data.get("criteria") or {}
     if not isinstance(criteria, dict):
         reader.fail("expected an object of numbers", "drift.criteria")
+    NestedReader(reader.path, criteria, "drift.criteria").check_types(
+        dict.fromkeys(criteria, "number")
+    )
     try:
         return BiasDrift(
             model=kind.name,

@@ -1,5 +1,10 @@
 """Typed access to a parsed JSON document, failing with
 :class:`~ftkin.exceptions.CalibrationFileError` naming the key.
+
+The one reader of ftkin's JSON files: every getter is strict. ``null``, a
+string, a boolean or a list where a number belongs is refused with the key and
+what arrived (``true`` is not 1, ``"1.5"`` is not a number); a format version
+outside the supported range is refused with the versions this ftkin reads.
 """
 
 from __future__ import annotations
@@ -9,7 +14,29 @@ import math
 import numpy as np
 
 from ..exceptions import CalibrationFileError
-from .calibration_checks import has_bool, short_repr
+from .calibration_checks import short_repr
+
+
+def json_repr(value) -> str:
+    """A JSON value as the file spells it (``null``, ``true``), cut to 80 characters."""
+    if value is None or isinstance(value, bool):
+        return {None: "null", True: "true", False: "false"}[value]
+    return short_repr(value)
+
+
+def first_non_number(value):
+    """The first leaf of a nested JSON list that is not a number (``null``, a boolean, a string,
+    an object), or None when every leaf is one.
+    """
+    if isinstance(value, list):
+        for item in value:
+            bad = first_non_number(item)
+            if bad is not None:
+                return bad
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return (value,)  # wrapped: a null leaf is not "no bad leaf"
+    return None
 
 
 class JsonReader:
@@ -36,7 +63,7 @@ class JsonReader:
         if value is None:
             return default
         if isinstance(value, bool) or not isinstance(value, kind):
-            self.fail(f"expected {kind.__name__} or null, got {short_repr(value)}", key)
+            self.fail(f"expected {kind.__name__} or null, got {json_repr(value)}", key)
         return value
 
     def optional_object(self, key: str) -> dict | None:
@@ -48,6 +75,41 @@ class JsonReader:
             self.fail(f"expected an object or null, got {type(value).__name__}", key)
         return value
 
+    def version(self, supported: int, key: str = "version") -> int:
+        """The file's integer format version, refused when unknown or newer than ``supported``."""
+        value, versions = self.get(key), f"this ftkin reads versions 1 to {supported}"
+        if isinstance(value, bool) or not isinstance(value, int):
+            self.fail(f"expected an integer version, got {json_repr(value)}; {versions}", key)
+        if value > supported:
+            self.fail(
+                f"written by a newer ftkin (file format version {value}); {versions}: upgrade "
+                "ftkin",
+                key,
+            )
+        if value < 1:
+            self.fail(f"unknown format version {value}; {versions}", key)
+        return value
+
+    def check_types(self, types: dict) -> None:
+        """Refuse a present key whose value is not of its JSON kind.
+
+        ``types`` maps keys to ``"number"``, ``"numbers"`` (one, or a nested list), ``"integer"``,
+        ``"integers"``, ``"string"`` or ``"strings"``; a trailing ``"?"`` also allows null
+        (for lists: null entries, read as NaN).
+        """
+        for key, kind in types.items():
+            value, nullable, base = self.document.get(key), kind.endswith("?"), kind.rstrip("?")
+            if key not in self.document or (value is None and nullable):
+                continue
+            listed = base.endswith("s")
+            leaf = _LEAF_CHECKS[base.removesuffix("s")]
+            if listed and not isinstance(value, list) and base != "numbers":
+                leaf = _never  # "numbers": one number or a nested list of them
+            for item in _flatten([value]) if listed else [value]:
+                if not (leaf(item) or (listed and nullable and item is None)):
+                    expected = f"a list of {base}" if listed else f"a {base}"
+                    self.fail(f"expected {expected}, got {json_repr(item)}", key)
+
     def count(self, key: str, default: int) -> int:
         """An optional non-negative integer count (``sample_count``, ``pose_count``)."""
         value = self.optional(key, int, default)
@@ -56,14 +118,16 @@ class JsonReader:
         return value
 
     def array(self, key: str, shape: tuple, required: bool = True, source=None):
+        """A float array of ``shape`` (null or absent: None when not ``required``)."""
         value = self.get(key, required) if source is None else source
         if value is None:
+            if required:
+                self.fail(f"expected numbers of shape {shape}, got null", key)
             return None
-        if has_bool(value):
-            self.fail(
-                f"expected numbers of shape {shape}, got a boolean (true/false are not numbers)",
-                key,
-            )
+        if not isinstance(value, np.ndarray):
+            bad = first_non_number(value)
+            if bad is not None:
+                self.fail(f"expected numbers of shape {shape}, got {json_repr(bad[0])}", key)
         try:
             array = np.array(value, dtype=np.float64)
         except (TypeError, ValueError, OverflowError):
@@ -85,8 +149,31 @@ class JsonReader:
         except OverflowError:
             finite = False
         if not finite:
-            self.fail(f"expected a finite number, got {short_repr(value)}", key)
+            self.fail(f"expected a finite number, got {json_repr(value)}", key)
         return float(value)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+_LEAF_CHECKS = {
+    "number": _is_number,
+    "integer": lambda value: isinstance(value, int) and not isinstance(value, bool),
+    "string": lambda value: isinstance(value, str),
+}
+
+
+def _never(value) -> bool:
+    return False
+
+
+def _flatten(items):
+    for item in items:
+        if isinstance(item, list):
+            yield from _flatten(item)
+        else:
+            yield item
 
 
 class NestedReader(JsonReader):

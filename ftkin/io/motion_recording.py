@@ -5,6 +5,7 @@ columns of the samples CSV (the URDF's joint names or ``q1..qn`` [rad]) and
 the wrench columns ``fx..mz`` [N, N·m] (see :mod:`ftkin.io.samples_csv`),
 and optionally the joint velocities and accelerations the recording already
 has (a simulator's): ``dq1..dqn`` and ``ddq1..ddqn`` [rad/s, rad/s²], or
+``<joint>_vel`` and ``<joint>_acc`` (what ``ftkin plan --excitation`` writes), or
 ``<joint>_velocity`` and ``<joint>_acceleration``; given, they are used as they
 are instead of differentiating the positions, once checked against the
 positions' time derivatives (:func:`given_derivatives`). Other columns are
@@ -110,7 +111,7 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
 
     Raises:
         InvalidSamples: missing ``t``, joint or wrench columns, joint angles in
-            degrees, or times not increasing (with file and line).
+            degrees, fewer than 3 rows, or times not increasing (with file and line).
     """
     table = rename_columns(
         table, wrench_aliases(table.header)
@@ -128,6 +129,11 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
         )
     joints = table.floats(columns)
     check_radians(table, columns, joints)
+    if len(times) < 3:
+        raise InvalidSamples(
+            f"{len(times)} row(s); a moving recording needs at least 3 (its derivatives)",
+            table.source,
+        )
     steps = np.diff(times)
     if np.any(steps <= 0):
         row = int(np.flatnonzero(steps <= 0)[0]) + 1
@@ -146,10 +152,12 @@ finite-difference derivative of the positions (velocities)."""
 
 
 def _derivative_columns(table: Table, columns: list[str], kind: str) -> list[str] | None:
-    prefix, suffix = ("dq", "_velocity") if kind == "velocity" else ("ddq", "_acceleration")
+    prefix, suffixes = (
+        ("dq", ("_vel", "_velocity")) if kind == "velocity" else ("ddq", ("_acc", "_acceleration"))
+    )
     for names in (
         [f"{prefix}{i + 1}" for i in range(len(columns))],
-        [f"{c}{suffix}" for c in columns],
+        *([f"{c}{suffix}" for c in columns] for suffix in suffixes),
     ):
         present = [name in table.header for name in names]
         if all(present):

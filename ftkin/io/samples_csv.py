@@ -16,6 +16,17 @@ modelled, see :mod:`ftkin.calibration.drift`); without ``t``, one column named
 it [s], and ``t_ms``/``time_ms``, ``t_us``/``time_us``, ``t_ns``/``time_ns``
 are converted from the unit their name gives.
 Other columns are carried along untouched (``ftkin compensate`` copies them).
+
+A table with a time column and no ``pose`` column whose orientation stays put
+over consecutive rows is a *continuous recording* (the arm moving between still
+phases): its still segments are found from the orientation by the bag reader's
+algorithm (:mod:`ftkin.io.static_segments`), each becomes one pose, and the
+moving rows are left out, when ``segments``
+(:class:`~ftkin.io.static_segments.SegmentParameters`) is
+given: ``ftkin calibrate``, ``report``, ``extract`` and ``view`` give it unless
+``--all-rows``. Without it (the library's default: a log to compensate is read
+whole) every row is kept. A recording in motion with no usable still segment is
+refused.
 """
 
 from __future__ import annotations
@@ -23,7 +34,7 @@ from __future__ import annotations
 import functools
 import logging
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -31,7 +42,9 @@ from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.samples import Samples
 from ..exceptions import InvalidSamples
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
+from ..validation import MAX_ID, MAX_WRENCH
 from .csv_table import Table, missing_columns, read_table, rename_columns
+from .static_segments import SegmentParameters, SegmentSearch, find_static_segments, segment_index
 from .time_columns import times_from_table
 
 logger = logging.getLogger(__name__)
@@ -43,7 +56,7 @@ _GENERIC_JOINT = re.compile(r"^q(\d+)$")
 _DEGREES_THRESHOLD = 2.0 * np.pi + 0.01
 _ROS_WRENCH = re.compile(r"^(?:.*[./_])?(force|torque)[._]([xyz])$", re.IGNORECASE)
 _TORQUE_T = {"tx": "mx", "ty": "my", "tz": "mz"}
-MAX_POSE_ID = 2**53
+MAX_POSE_ID = MAX_ID
 """Largest pose id magnitude: every integer up to it is exact in a float64 cell."""
 
 
@@ -104,25 +117,7 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
             table.source,
         )
     if not found:
-        joints = (
-            f"the arm's joint names {list(joint_names)} or q1..q{len(joint_names)}"
-            if joint_names
-            else "joint columns"
-        )
-        unknown = [name for name in header if "joint" in name.lower()]
-        hint = (
-            f"; columns {unknown} look like joint names but are not this arm's (wrong "
-            "--urdf/--robot?)"
-            if unknown
-            else ""
-        )
-        raise InvalidSamples(
-            f"no orientation columns: expected {joints} [rad], or alpha,beta,gamma [deg], or "
-            f"qw,qx,qy,qz{hint}; "
-            f"the header has {header}",
-            table.source,
-            table.header_line,
-        )
+        _no_orientation(table, joint_names)
     kind, columns = next(iter(found.items()))
     if kind == "euler":
         missing_columns(table, EULER_COLUMNS, "Euler angle")
@@ -142,6 +137,27 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
                 table.source,
             )
     return kind, generic
+
+
+def _no_orientation(table: Table, joint_names) -> None:
+    """The :class:`InvalidSamples` for a table without orientation columns (hints at wrong arms)."""
+    joints = (
+        f"the arm's joint names {list(joint_names)} or q1..q{len(joint_names)}"
+        if joint_names
+        else "joint columns"
+    )
+    unknown = [name for name in table.header if "joint" in name.lower()]
+    hint = (
+        f"; columns {unknown} look like joint names but are not this arm's (wrong --urdf/--robot?)"
+        if unknown
+        else ""
+    )
+    raise InvalidSamples(
+        f"no orientation columns: expected {joints} [rad], or alpha,beta,gamma [deg], or "
+        f"qw,qx,qy,qz{hint}; the header has {table.header}",
+        table.source,
+        table.header_line,
+    )
 
 
 def check_radians(table: Table, columns, values: np.ndarray) -> None:
@@ -279,12 +295,6 @@ def pose_ids_from_table(table: Table) -> np.ndarray | None:
     return pose_ids.astype(np.int64)
 
 
-MAX_WRENCH = 1e6
-"""Largest accepted reading magnitude [N, N·m]: beyond it a value is a raw count or a unit mistake,
-not a load.
-"""
-
-
 def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
     """Refuse readings beyond ±:data:`MAX_WRENCH` (they would overflow the fit, not inform it)."""
     _refuse_beyond(
@@ -301,27 +311,111 @@ def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
 
 @dataclass(frozen=True)
 class LoadedSamples:
-    """Samples read from a CSV, with the table they came from."""
+    """Samples read from a CSV, with the table they came from.
+
+    ``search`` holds the still segments found in a continuous recording (each
+    one pose of ``samples``; ``table`` then has their rows and a ``pose`` column).
+    """
 
     samples: Samples
     table: Table
     orientation: str
     orientation_columns: list[str]
+    search: SegmentSearch | None = None
 
 
-def samples_from_table(table: Table, arm=None) -> LoadedSamples:
+MAX_GAP = 20.0
+"""Longest time step of a continuous recording, in median steps: a table with longer gaps was
+logged only while the arm stood still (stop and go), and each of its rows stays a pose."""
+
+
+def uniformly_sampled(times: np.ndarray) -> bool:
+    """Whether reading times are those of a recorder: 80 % of the steps within half the median
+    step of it, none longer than :data:`MAX_GAP` median steps."""
+    steps = np.diff(times)
+    median = np.median(steps)
+    return bool(
+        steps.max() <= MAX_GAP * median and np.mean(np.abs(steps - median) <= 0.5 * median) >= 0.8
+    )
+
+
+def smooth_motion(signal: np.ndarray) -> bool:
+    """Whether consecutive rows change alike (a sampled motion, not independent poses): the
+    median second difference of the orientation signal under half the median first difference
+    (independent poses give about √2 times it)."""
+    steps = np.diff(signal, axis=0)
+    first = np.median(np.linalg.norm(steps, axis=1))
+    return bool(first > 0 and np.median(np.linalg.norm(np.diff(steps, axis=0), axis=1)) < first / 2)
+
+
+def still_rows(table: Table, orientations: TableOrientations, times, parameters):
+    """The still segments of a continuous recording: ``(search, segment of each row or -1)``.
+
+    None when the table is not a recording: its times are not a recorder's
+    (:func:`uniformly_sampled`), or no two consecutive rows hold still and the rows are not a
+    smooth motion either (:func:`smooth_motion`): one reading per pose, each row its own pose.
+
+    Raises:
+        InvalidSamples: the arm moves and no still segment is long enough.
+    """
+    if len(times) < 3 or np.any(np.diff(times) <= 0) or not uniformly_sampled(times):
+        return None
+    joints = orientations.joint_positions is not None
+    signal = orientations.joint_positions if joints else orientations.rotations.reshape(-1, 9)
+    quantity = "joint speed" if joints else "orientation speed"
+    search = find_static_segments(times, signal, parameters, quantity)
+    held = np.any(search.still[1:] & search.still[:-1])
+    if not (held or smooth_motion(signal)):
+        return None
+    if not search.segments:
+        raise InvalidSamples(
+            f"a continuous recording ({times[-1] - times[0]:.3g} s) with no usable still segment: "
+            f"{search.motion()}; {search.describe()}; lower --min-static-duration/--settle-time "
+            "or raise --speed-threshold, fit every row as a pose with --all-rows, or use the "
+            "motion with 'calibrate --dynamic'",
+            table.source,
+        )
+    return search, segment_index(times, search.segments)
+
+
+def _static_part(table: Table, orientations: TableOrientations, index: np.ndarray):
+    """The rows inside a segment, with a ``pose`` column (the segment number)."""
+    keep = np.flatnonzero(index >= 0)
+    rows = [[*table.rows[i], str(int(index[i]))] for i in keep]
+    lines = [table.lines[i] for i in keep]
+    table = replace(table, header=[*table.header, POSE_COLUMN], rows=rows, lines=lines)
+    positions = orientations.joint_positions
+    return table, replace(
+        orientations,
+        rotations=orientations.rotations[keep],
+        joint_positions=None if positions is None else positions[keep],
+    )
+
+
+def samples_from_table(
+    table: Table, arm=None, segments: SegmentParameters | None = None
+) -> LoadedSamples:
     """Build :class:`Samples` from a table; ``arm`` is needed for joint columns.
 
     When the table has joint columns and ``arm`` is None, the bundled arm is used.
     ROS-style wrench names (``force.x``, ``torque.x``, ``tx``) are read as ftkin's.
+    ``segments``: how still segments of a continuous recording are found (see
+    the module docstring); None (the default) keeps every row.
     """
     table = rename_columns(table, wrench_aliases(table.header))
     missing_columns(table, WRENCH_CHANNELS, "wrench")
     orientations = orientations_from_table(table, arm)
+    times = times_from_table(table)
+    found = None
+    if segments is not None and times is not None and POSE_COLUMN not in table.header:
+        found = still_rows(table, orientations, times, segments)
+    if found is not None:
+        table, orientations = _static_part(table, orientations, found[1])
+        times = times[found[1] >= 0]
+        logger.info("%s: continuous recording, %s", table.source, found[0].describe())
     wrenches = table.floats(WRENCH_CHANNELS)
     check_wrench_magnitude(table, wrenches)
     pose_ids = pose_ids_from_table(table)
-    times = times_from_table(table)
     if orientations.arm is None:
         samples = Samples(wrenches, orientations.rotations, pose_ids, times=times)
     else:
@@ -333,9 +427,10 @@ def samples_from_table(table: Table, arm=None) -> LoadedSamples:
             orientations.rotations,
             times,
         )
-    return LoadedSamples(samples, table, orientations.kind, orientations.columns)
+    search = None if found is None else found[0]
+    return LoadedSamples(samples, table, orientations.kind, orientations.columns, search)
 
 
-def load_samples(path, arm=None) -> LoadedSamples:
-    """Read a samples CSV (see the module docstring for its columns)."""
-    return samples_from_table(read_table(path), arm)
+def load_samples(path, arm=None, segments: SegmentParameters | None = None) -> LoadedSamples:
+    """Read a samples CSV (see the module docstring for its columns and ``segments``)."""
+    return samples_from_table(read_table(path), arm, segments)

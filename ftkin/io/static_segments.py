@@ -1,9 +1,11 @@
 """Find the stretches of a recording where the arm stands still.
 
-A recording (e.g. a ROS 2 bag) holds joint positions over time while the arm
-moves from pose to pose. Static calibration needs the readings taken while
-the arm is still, after vibrations have died out. :func:`find_static_segments`
-finds them from the joint positions alone:
+A recording (a ROS 2 bag, or a samples CSV with a time column and no pose
+column) holds joint positions or orientations over time while the arm moves
+from pose to pose. Static calibration needs the readings taken while the arm
+is still, after vibrations have died out. :func:`find_static_segments` finds
+them from the positions alone (joint angles, or the entries of ``R_BS`` for a
+recording of orientations); the bag reader and the samples CSV share it:
 
 1. joint speed at each joint sample: ``max_j |q_j(t + w/2) - q_j(t - w/2)| / w``
    over a window ``w`` (``speed_window`` [s]; positions linearly interpolated),
@@ -21,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import InvalidInput
-from ..validation import as_float_array, as_positive
+from ..validation import as_float_array, as_in_range, as_positive
 
 
 @dataclass(frozen=True)
@@ -44,14 +46,7 @@ class SegmentParameters:
     def __post_init__(self):
         for name in ("speed_threshold", "min_duration", "speed_window"):
             object.__setattr__(self, name, as_positive(getattr(self, name), name))
-        try:
-            settle_time = float(self.settle_time)
-        except (TypeError, ValueError):
-            settle_time = float("nan")
-        if not (np.isfinite(settle_time) and settle_time >= 0):
-            raise InvalidInput(
-                f"settle_time must be a finite number ≥ 0 [s], got {self.settle_time!r}"
-            )
+        settle_time = as_in_range(self.settle_time, "settle_time", 0.0, 1e6, "s")
         object.__setattr__(self, "settle_time", settle_time)
 
 
@@ -81,11 +76,28 @@ class SegmentSearch:
         segments: The static segments, in time order.
         still_stretches: Durations of every still stretch before settling [s].
         parameters: The parameters used.
+        speeds: ``(N,)`` speed at each sample [rad/s or m/s, or 1/s for ``R_BS`` entries].
+        quantity: What the speed is of (``"joint speed"``, ``"orientation speed"``).
     """
 
     segments: list[StaticSegment]
     still_stretches: list[float]
     parameters: SegmentParameters
+    speeds: np.ndarray | None = None
+    quantity: str = "joint speed"
+
+    @property
+    def still(self) -> np.ndarray:
+        """``(N,)`` True where the sample counts as still."""
+        return self.speeds < self.parameters.speed_threshold
+
+    def motion(self) -> str:
+        """How much of the recording moves: the share of samples in motion and the peak speed."""
+        moving = int(np.count_nonzero(~self.still))
+        return (
+            f"{moving} of {len(self.speeds)} samples ({100 * moving / len(self.speeds):.0f} %) in "
+            f"motion, {self.quantity} up to {self.speeds.max():.3g} rad/s"
+        )
 
     def describe(self) -> str:
         """One line: how many stretches, the longest, and the parameters."""
@@ -94,7 +106,7 @@ class SegmentSearch:
         return (
             f"{len(self.segments)} static segment(s) from {len(self.still_stretches)} still "
             "stretch(es) "
-            f"(longest {longest:.3g} s); still = joint speed < {p.speed_threshold:g} rad/s, "
+            f"(longest {longest:.3g} s); still = {self.quantity} < {p.speed_threshold:g} rad/s, "
             f"usable ≥ {p.min_duration:g} s after skipping {p.settle_time:g} s of settling"
         )
 
@@ -124,14 +136,19 @@ def joint_speed(times, joint_positions, window: float) -> np.ndarray:
 
 
 def find_static_segments(
-    times, joint_positions, parameters: SegmentParameters | None = None
+    times,
+    joint_positions,
+    parameters: SegmentParameters | None = None,
+    quantity: str = "joint speed",
 ) -> SegmentSearch:
-    """Static segments of a joint trajectory.
+    """Static segments of a joint trajectory (or of any position signal).
 
     Args:
         times: ``(N,)`` sample times [s], sorted.
-        joint_positions: ``(N, nq)`` joint positions [rad or m].
+        joint_positions: ``(N, nq)`` joint positions [rad or m] (or the nine
+            entries of ``R_BS`` per sample for a recording of orientations).
         parameters: Thresholds (default :class:`SegmentParameters`).
+        quantity: What the speed is of, for messages.
 
     Returns:
         A :class:`SegmentSearch` (possibly with no segments; callers decide
@@ -149,7 +166,7 @@ def find_static_segments(
         usable_start = start_time + parameters.settle_time
         if end_time - usable_start >= parameters.min_duration:
             segments.append(StaticSegment(float(usable_start), float(end_time)))
-    return SegmentSearch(segments, stretches, parameters)
+    return SegmentSearch(segments, stretches, parameters, speed, quantity)
 
 
 def segment_index(times, segments: list[StaticSegment]) -> np.ndarray:

@@ -20,6 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import InvalidInput
+from ..validation import as_vector
 
 _PLACEMENT_TOLERANCE = 1e-9  # m and rad
 
@@ -125,19 +126,12 @@ class KinematicsRecord:
         for key in ("sensor_offset", "placement"):
             value = data.get(key)
             if value is not None:
-                if (
-                    not isinstance(value, list)
-                    or len(value) != 6
-                    or any(isinstance(v, bool) for v in value)
-                ):
+                if not isinstance(value, list) or len(value) != 6:
                     raise InvalidInput(
                         f"{key} must be 6 numbers [x, y, z, roll, pitch, yaw] or null, got "
                         f"{value!r}"
                     )
-                array = np.asarray(value, dtype=float)
-                if not np.all(np.isfinite(array)):
-                    raise InvalidInput(f"{key} must be finite, got {value!r}")
-                value = tuple(float(v) for v in array)
+                value = tuple(as_vector(value, 6, key).tolist())
             numbers[key] = value
         return cls(sensor_frame=data["sensor_frame"], **strings, **numbers)
 

@@ -59,6 +59,53 @@ def xml_reasons(text: str) -> list[str]:
         return [f"not well-formed XML at line {line}, column {column}: {error}"]
     if root.tag != "robot":
         return [f"root element is <{root.tag}>, expected <robot>"]
+    return tree_reasons(root)
+
+
+def tree_reasons(root) -> list[str]:
+    """Problems of the link/joint tree: a joint naming a missing link, a link with two parent
+    joints or a cycle (a kinematic loop: URDF describes trees), no root or several roots.
+    """
+    links = {link.get("name") for link in root.findall("link")}
+    parent_of, reasons = {}, []
+    for joint in root.findall("joint"):
+        name = joint.get("name")
+        ends = {
+            end: (joint.find(end).get("link") if joint.find(end) is not None else None)
+            for end in ("parent", "child")
+        }
+        for end, link in ends.items():
+            if link is None:
+                reasons.append(f'joint [{name}] is missing a {end} link (<{end} link="..."/>)')
+            elif link not in links:
+                reasons.append(
+                    f"joint [{name}] names {end} link {link!r}, which is not a <link> of this URDF"
+                )
+        child = ends["child"]
+        if child in parent_of:
+            reasons.append(
+                f"link {child!r} is the child of two joints ([{parent_of[child][0]}] and "
+                f"[{name}]): a kinematic loop; URDF describes a tree"
+            )
+        parent_of.setdefault(child, (name, ends["parent"]))
+    if reasons:
+        return reasons
+    for start in parent_of:  # walk up from every child: a cycle never reaches a root
+        seen, link = [start], parent_of[start][1]
+        while link in parent_of and link not in seen:
+            seen.append(link)
+            link = parent_of[link][1]
+        if link in seen:
+            return [
+                f"the joints form a cycle through links {seen}: a kinematic loop; URDF "
+                "describes a tree"
+            ]
+    roots = sorted(links - set(parent_of))
+    if len(roots) != 1 and links:
+        return [
+            f"{len(roots)} root links {roots[:10]}; a URDF tree has exactly one (a link no "
+            "joint has as its child)"
+        ]
     return []
 
 
@@ -96,6 +143,12 @@ _XACRO_MARK = re.compile(r"<xacro:|\$\{|\$\(")  # macros, properties, substituti
 
 def read_urdf_text(path: Path) -> str:
     """Read a URDF file or raise :class:`UrdfError` (missing, unreadable, not text)."""
+    if path.is_dir():
+        inside = sorted(p.name for p in path.glob("*.urdf"))[:5]
+        raise UrdfError(
+            str(path),
+            [f"is a folder, expected a URDF file{f' (it holds {inside})' if inside else ''}"],
+        )
     if not path.is_file():
         raise UrdfError(str(path), ["file not found"])
     try:

@@ -145,8 +145,10 @@ def test_constant_bias_with_times_keeps_the_constant_model_and_its_efficiency(ar
         picked.append(result.drift.model)
         if result.drift.model == "none":
             plain = calibrate(Samples(samples.wrenches, samples.rotations, samples.pose_ids))
-            np.testing.assert_array_equal(extended_parameters(result), extended_parameters(plain))
-            np.testing.assert_array_equal(result.covariance, plain.covariance)
+            np.testing.assert_allclose(
+                extended_parameters(result), extended_parameters(plain), rtol=1e-12, atol=1e-12
+            )
+            np.testing.assert_allclose(result.covariance, plain.covariance, rtol=1e-12, atol=0)
         errors.append(extended_parameters(result) - extended_parameters(tool))
     assert picked.count("none") >= trials - 1
     crlb = extended_standard_errors(
@@ -157,8 +159,8 @@ def test_constant_bias_with_times_keeps_the_constant_model_and_its_efficiency(ar
 
 
 def test_without_times_nothing_changes(arm, truth):
-    """Bit for bit the numbers a format-1 file written by the previous ftkin holds (same seed and
-    poses).
+    """The numbers a format-1 file written by the previous ftkin holds (same seed and poses), to
+    1e-12 relative: another CPU's BLAS may differ in the last digits.
     """
     stored = json.loads((DATA / "calibration_v1.json").read_text())
     rng = np.random.default_rng(5)
@@ -169,9 +171,13 @@ def test_without_times_nothing_changes(arm, truth):
     result = calibrate(samples)
     assert result.drift is None
     for key in ("force_offset", "torque_offset", "gravity_in_base", "center_of_mass"):
-        assert getattr(result, key).tolist() == stored[key]
-    assert result.covariance.tolist() == stored["covariance"]
-    assert result.residuals.tolist() == stored["poses"]["residuals"]
+        np.testing.assert_allclose(getattr(result, key), stored[key], rtol=1e-12, atol=1e-15)
+    covariance = np.array(stored["covariance"])
+    scale = np.abs(covariance).max()
+    np.testing.assert_allclose(result.covariance, covariance, rtol=1e-12, atol=1e-12 * scale)
+    np.testing.assert_allclose(
+        result.residuals, stored["poses"]["residuals"], rtol=1e-12, atol=1e-15
+    )
 
 
 def test_drift_options_are_checked(tool, rotations, rng):

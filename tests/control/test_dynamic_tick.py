@@ -93,9 +93,11 @@ def test_one_sample_path_equals_the_written_out_newton_euler_sum(arm):
         np.testing.assert_allclose(
             dynamic.compensate_moving(q, dq, ddq, raw), expected, rtol=0, atol=1e-12
         )
-        np.testing.assert_array_equal(
+        np.testing.assert_allclose(
             dynamic.compensate_moving(q.tolist(), dq.tolist(), ddq.tolist(), raw.tolist()),
             dynamic.compensate_moving(q, dq, ddq, raw),
+            rtol=1e-12,
+            atol=1e-12,
         )
     for position in range(4):  # a non-finite value in any input is refused
         inputs = [q.copy(), dq.copy(), ddq.copy(), raw.copy()]

@@ -201,9 +201,11 @@ def test_compensation_paths_agree(arm, rng):
         np.testing.assert_allclose(
             compensator.compensate(q[i], raw[i]), expected[i], rtol=0, atol=1e-12
         )
-        np.testing.assert_array_equal(
+        np.testing.assert_allclose(
             compensator.compensate_rotation(rotations[i], raw[i]),
             compensator.compensate_rotation_unchecked(rotations[i], raw[i]),
+            rtol=1e-12,
+            atol=1e-12,
         )
     np.testing.assert_allclose(
         compensator.compensate_batch(rotations, raw), expected, rtol=0, atol=1e-12
@@ -254,11 +256,17 @@ def test_compensate_rotation_fast_path_agrees_with_the_array_checks_at_the_toler
             else:
                 accepted += 1
                 expected = compensator.compensate_rotation_unchecked(candidate, raw)
-                np.testing.assert_array_equal(
-                    compensator.compensate_rotation(candidate, raw), expected
+                np.testing.assert_allclose(
+                    compensator.compensate_rotation(candidate, raw),
+                    expected,
+                    rtol=1e-12,
+                    atol=1e-12,
                 )
-                np.testing.assert_array_equal(
-                    compensator.compensate_rotation(candidate.tolist(), raw.tolist()), expected
+                np.testing.assert_allclose(
+                    compensator.compensate_rotation(candidate.tolist(), raw.tolist()),
+                    expected,
+                    rtol=1e-12,
+                    atol=1e-12,
                 )
     assert accepted > 20 and refused > 20
     for bad_raw in ([np.nan, 0, 0, 0, 0, 0], [np.inf, 0, 0, 0, 0, 0]):
@@ -320,12 +328,15 @@ def test_compensate_rotation_takes_a_batch_of_one_like_one_sample():
         np.arange(6.0),
     )
     expected = compensator.compensate_rotation_unchecked(rotation, raw)
-    np.testing.assert_array_equal(
-        compensator.compensate_rotation(rotation[np.newaxis], raw), expected
+    np.testing.assert_allclose(
+        compensator.compensate_rotation(rotation[np.newaxis], raw), expected, rtol=1e-12, atol=1e-12
     )
-    np.testing.assert_array_equal(
-        compensator.compensate_rotation(rotation, raw[np.newaxis]), expected
+    np.testing.assert_allclose(
+        compensator.compensate_rotation(rotation, raw[np.newaxis]), expected, rtol=1e-12, atol=1e-12
     )
-    np.testing.assert_array_equal(
-        compensator.compensate_rotation(rotation.astype(np.float32), raw.astype(int)), expected
+    np.testing.assert_allclose(
+        compensator.compensate_rotation(rotation.astype(np.float32), raw.astype(int)),
+        expected,
+        rtol=1e-12,
+        atol=1e-12,
     )

@@ -187,8 +187,10 @@ def test_storages_give_identical_samples(session, arm):
     reference = bag_samples(session["mcap"], arm).samples
     for kind in ("sqlite", "bare", "db3"):
         other = bag_samples(session[kind], arm).samples
-        np.testing.assert_array_equal(other.wrenches, reference.wrenches)
-        np.testing.assert_array_equal(other.joint_positions, reference.joint_positions)
+        np.testing.assert_allclose(other.wrenches, reference.wrenches, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(
+            other.joint_positions, reference.joint_positions, rtol=1e-12, atol=1e-15
+        )
 
 
 def test_joints_matched_by_name_and_interpolated_to_wrench_stamps(session, arm):

@@ -145,6 +145,6 @@ def test_booleans_in_diagnostics_are_not_numbers(document, tmp_path):
         tmp_path,
         document,
         lambda d: d["diagnostics"].__setitem__("chi_square", True),
-        "diagnostics",
-        "'chi_square' holds a boolean",
+        "diagnostics.chi_square",
+        "expected a number, got true",
     )

@@ -44,7 +44,9 @@ def test_semicolon_and_tab_files_are_read_and_named(arm, data, tmp_path, caplog)
         with caplog.at_level(logging.WARNING):
             loaded = load_samples(path)
         assert f"read as a {name}-separated file" in caplog.text
-        np.testing.assert_array_equal(loaded.samples.wrenches, reference.samples.wrenches)
+        np.testing.assert_allclose(
+            loaded.samples.wrenches, reference.samples.wrenches, rtol=1e-12, atol=1e-12
+        )
         caplog.clear()
     assert sniff_delimiter("# comment, with commas\nfx;fy\n1;2\n") == ";"
 

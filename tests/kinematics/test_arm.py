@@ -102,8 +102,10 @@ def test_batch_equals_singles(arm, rng):
     for q, rotation in zip(configurations, batch):
         single = arm.rotation_sensor_to_base(q)
         assert single.shape == (3, 3)
-        np.testing.assert_array_equal(single, rotation)
-        np.testing.assert_array_equal(arm.sensor_rotation_unchecked(q), rotation)
+        np.testing.assert_allclose(single, rotation, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(
+            arm.sensor_rotation_unchecked(q), rotation, rtol=1e-12, atol=1e-15
+        )
 
 
 def test_random_configurations_respect_limits_and_margin(arm, rng):
@@ -168,11 +170,13 @@ def test_jacobian_matches_finite_differences(arm, rng, frame, reference):
 
 def test_jacobian_default_is_sensor_local_world_aligned(arm):
     q = TOOL_DOWN + 0.1
-    np.testing.assert_array_equal(arm.jacobian(q), arm.jacobian(q, "sensor", "local_world_aligned"))
+    np.testing.assert_allclose(
+        arm.jacobian(q), arm.jacobian(q, "sensor", "local_world_aligned"), rtol=1e-12, atol=1e-15
+    )
     # the returned array must not alias Pinocchio's buffer
     first = arm.jacobian(q, "sensor").copy()
     arm.jacobian(q + 0.3, "tool")
-    np.testing.assert_array_equal(arm.jacobian(q, "sensor"), first)
+    np.testing.assert_allclose(arm.jacobian(q, "sensor"), first, rtol=1e-12, atol=1e-15)
 
 
 def test_unknown_reference_is_refused(arm):

@@ -52,7 +52,7 @@ def test_euler_single_and_batch_agree(rng):
     for row, matrix in zip(angles, batch):
         single = euler_zyx_deg_to_matrix(row)
         assert single.shape == (3, 3)
-        np.testing.assert_array_equal(single, matrix)
+        np.testing.assert_allclose(single, matrix, rtol=1e-12, atol=1e-15)
 
 
 def test_paper_first_pose_is_tool_down():

@@ -110,6 +110,7 @@ def test_cli_runs_all_modes_in_mujoco(tmp_path, capsys):
     )
     out = capsys.readouterr().out
     assert out.count("(mujoco)") == 3 and "admittance-uncompensated" in out
+    assert ": none" not in out  # no event line without an event
     table = read_table(csv_path)
     assert table.header[:8] == [
         "mode",

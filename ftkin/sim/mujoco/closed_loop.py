@@ -156,7 +156,7 @@ class _Recorder:
         measured = raw[2]
         if status is not None:
             measured = status.contact_wrench[2]
-            event = status.event or status.fault
+            event = status.event or ("" if status.fault == "none" else str(status.fault))
             if event != self.last_event:
                 self.events.append((i * dt, str(event)))
                 self.last_event = event
