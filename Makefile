@@ -22,12 +22,13 @@ demo: $(STAMP)
 demo-robot: $(STAMP)
 	$(VENV)/bin/ftkin robot demo
 
+# pytest last, so that its summary closes the output.
 test: $(STAMP)
 	bash scripts/install-system-deps.sh
-	$(VENV)/bin/lint-imports
+	$(MAKE) lint
 	$(MAKE) docs
-	$(PY) -m pytest -q
 	$(PY) benchmarks/fuzz_readers.py --seconds 20
+	$(PY) -m pytest -q
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff format --check ftkin tests benchmarks docs scripts conftest.py

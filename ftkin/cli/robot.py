@@ -301,10 +301,8 @@ def run_demo(args) -> int:
     from ..kinematics.fr3 import fr3_arm
     from ..robot.franka import FrankaRobot
     from ..robot.franka_sim import FrankaSim
-    from ..robot.guiding import hand_guiding
-    from ..robot.loop import run_admittance
     from ..robot.session import calibrate_on_robot, default_samples_path
-    from ..robot.stillness import Stillness, wait_still
+    from ..robot.stillness import Stillness
 
     arm = fr3_arm()
     with tempfile.TemporaryDirectory(prefix="ftkin-robot-demo-") as folder:
@@ -343,18 +341,25 @@ def run_demo(args) -> int:
             )
             _print_load("payload sent", load.mass, load.center_of_mass)
             _print_load("robot reports", *robot.payload()[:2])
-            robot.move_to(GUIDING_HOME)
-            wait_still(robot)
-            controller = hand_guiding(arm, result)
-            start = sim.hand_position()
-            sim.push([args.push, 0.0, 0.0], 1.0, delay=0.3)
-            stats = run_admittance(
-                robot, sim.sensor, controller, duration=2.5, stale_after=SIM_TIMEOUT
-            )
-            moved = (sim.hand_position() - start) * 1e3
-            print(
-                f"hand-guiding: a {args.push:g} N push along x for 1 s moved the hand "
-                f"[{', '.join(f'{v:+.1f}' for v in moved)}] mm"
-            )
-            print(stats.report())
+            _demo_guiding(args, sim, robot, arm, result)
     return 0
+
+
+def _demo_guiding(args, sim, robot, arm, result) -> None:
+    """The demo's last act: a push on the simulated hand while the hand-guiding loop runs."""
+    from ..robot.guiding import hand_guiding
+    from ..robot.loop import run_admittance
+    from ..robot.stillness import wait_still
+
+    robot.move_to(GUIDING_HOME)
+    wait_still(robot)
+    controller = hand_guiding(arm, result)
+    start = sim.hand_position()
+    sim.push([args.push, 0.0, 0.0], 1.0, delay=0.3)
+    stats = run_admittance(robot, sim.sensor, controller, duration=2.5, stale_after=SIM_TIMEOUT)
+    moved = (sim.hand_position() - start) * 1e3
+    print(
+        f"hand-guiding: a {args.push:g} N push along x for 1 s moved the hand "
+        f"[{', '.join(f'{v:+.1f}' for v in moved)}] mm"
+    )
+    print(stats.report())
