@@ -125,25 +125,14 @@ def run_admittance(
     Returns:
         :class:`LoopStats` (the robot is stopped).
     """
-    rate_hz = float(rate_hz)
-    if not (math.isfinite(rate_hz) and 0.0 < rate_hz <= 1000.0):
-        raise InvalidInput(f"rate_hz must be in (0, 1000] Hz, got {rate_hz!r}")
-    if duration is not None and not (math.isfinite(float(duration)) and float(duration) > 0.0):
-        raise InvalidInput(f"duration must be > 0 s or None, got {duration!r}")
-    if not callable(getattr(controller, "step", None)):
-        raise InvalidInput(f"controller must have step(q, wrench, dt), got {controller!r}")
+    rate_hz = _check_loop_inputs(rate_hz, duration, controller)
     period = 1.0 / rate_hz
     stale_after = max(10.0 * period, 0.02) if stale_after is None else float(stale_after)
     checked = CheckedSensor(sensor, stale_after)
     faults: dict[str, int] = {}
     stamps: list[float] = []
     reason, message, fault_time = FINISHED, "", None
-    try:  # a warm-up tick, not commanded: the first step of a controller loads what it needs
-        q, _ = robot.joint_state()
-        controller.step(q, checked.read()[1], period)
-        controller.reset()
-    except (SensorError, RobotError, KeyboardInterrupt):
-        pass  # the loop's first tick meets it again and stops as for any tick
+    _warm_up(robot, checked, controller, period)
     start = time.monotonic()
     deadline = math.inf if duration is None else start + float(duration)
     next_tick = start
@@ -158,16 +147,9 @@ def run_admittance(
             command = controller.step(q, wrench, now - previous)
             previous = now
             if not command.any():  # a held tick commands exactly zero: ask why
-                fault = controller.last_status.fault
-                if fault is not SensorFault.NONE:
-                    faults[str(fault)] = faults.get(str(fault), 0) + 1
-                    if fault is SensorFault.OSCILLATION:
-                        reason, message = "oscillation", controller.last_status.event
-                        fault_time = now
-                        break
-                elif controller.last_status.safety_stop:
-                    reason, message = "safety", controller.last_status.event
-                    fault_time = now
+                ending = _held_tick(controller.last_status, faults)
+                if ending is not None:
+                    (reason, message), fault_time = ending, now
                     break
             robot.command_velocity(command)
             stamps.append(now)
@@ -194,6 +176,41 @@ def run_admittance(
         faults[reason] = faults.get(reason, 0) + 1
         logger.warning("control loop stopped: %s: %s", reason, message)
     return _stats(stamps, rate_hz, faults, reason, message, fault_time, stop_time)
+
+
+def _check_loop_inputs(rate_hz, duration, controller) -> float:
+    """``rate_hz`` as a float [Hz], once the loop's arguments are checked."""
+    rate_hz = float(rate_hz)
+    if not (math.isfinite(rate_hz) and 0.0 < rate_hz <= 1000.0):
+        raise InvalidInput(f"rate_hz must be in (0, 1000] Hz, got {rate_hz!r}")
+    if duration is not None and not (math.isfinite(float(duration)) and float(duration) > 0.0):
+        raise InvalidInput(f"duration must be > 0 s or None, got {duration!r}")
+    if not callable(getattr(controller, "step", None)):
+        raise InvalidInput(f"controller must have step(q, wrench, dt), got {controller!r}")
+    return rate_hz
+
+
+def _warm_up(robot, checked: CheckedSensor, controller, period: float) -> None:
+    """A warm-up tick, not commanded: the first step of a controller loads what it needs."""
+    try:
+        q, _ = robot.joint_state()
+        controller.step(q, checked.read()[1], period)
+        controller.reset()
+    except (SensorError, RobotError, KeyboardInterrupt):
+        pass  # the loop's first tick meets it again and stops as for any tick
+
+
+def _held_tick(status, faults: dict[str, int]) -> tuple[str, str] | None:
+    """Count a held tick's fault; ``(reason, message)`` when it ends the loop, else None."""
+    fault = status.fault
+    if fault is not SensorFault.NONE:
+        faults[str(fault)] = faults.get(str(fault), 0) + 1
+        if fault is SensorFault.OSCILLATION:
+            return "oscillation", status.event
+        return None
+    if status.safety_stop:
+        return "safety", status.event
+    return None
 
 
 def _stats(stamps, rate_hz, faults, reason, message, fault_time, stop_time) -> LoopStats:
