@@ -86,17 +86,13 @@ def run(args) -> int:
         f"\n  {'parameter':<16}{'truth':<36}{'estimate':<36}{'max |error|':<14}max |error| / std "
         "error"
     )
-    for name, unit, decimals in (
-        ("force_offset", "N", 4),
-        ("torque_offset", "N·m", 5),
-        ("center_of_mass", "m", 5),
-        ("gravity_in_base", "N", 4),
+    for name, unit, true_value, estimate, decimals in (
+        ("force_offset", "N", truth.force_offset, result.force_offset, 4),
+        ("torque_offset", "N·m", truth.torque_offset, result.torque_offset, 5),
+        ("center_of_mass", "m", truth.center_of_mass, result.center_of_mass, 5),
+        ("gravity_in_base", "N", truth.gravity_in_base, result.gravity_in_base, 4),
     ):
-        print(
-            _row(
-                name, unit, getattr(truth, name), getattr(result, name), decimals, errors.get(name)
-            )
-        )
+        print(_row(name, unit, true_value, estimate, decimals, errors.get(name)))
     tilt_error = np.rad2deg(errors["base_tilt"]) if "base_tilt" in errors else None
     print(_row("base_tilt_deg", "deg", truth.base_tilt_deg, result.base_tilt_deg, 3, tilt_error))
 

@@ -217,9 +217,10 @@ def test_samples_times_are_validated(tool, rotations, rng):
         Samples(samples.wrenches, samples.rotations, times=np.zeros(3))
     with pytest.raises(Exception, match="finite"):
         Samples(samples.wrenches, samples.rotations, times=np.full(12, np.nan))
-    assert Samples(
-        samples.wrenches, samples.rotations, times=np.arange(12.0)
-    ).pose_averages().times.tolist() == list(range(12))
+    times = (
+        Samples(samples.wrenches, samples.rotations, times=np.arange(12.0)).pose_averages().times
+    )
+    np.testing.assert_allclose(times, np.arange(12.0), rtol=1e-12, atol=0)
 
 
 def test_sensor_drift_parts(rng):

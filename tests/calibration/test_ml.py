@@ -125,7 +125,8 @@ def test_paper_data_with_uninformative_torques_give_the_papers_force_step():
     ml = calibrate(paper_samples(), g=PAPER_G, noise=SensorNoise(0.02, 1e6))
     np.testing.assert_allclose(ml.gravity_in_base, linear.gravity_in_base, rtol=0, atol=1e-9)
     np.testing.assert_allclose(ml.force_offset, linear.force_offset, rtol=0, atol=1e-9)
-    assert np.round(ml.base_tilt_deg, 3).tolist() == [-0.204, -0.129]
+    # the paper's printed digits: within half a unit of the last one
+    np.testing.assert_allclose(ml.base_tilt_deg, [-0.204, -0.129], rtol=0, atol=5e-4)
 
 
 # ------------------------------------------------------------ standard errors
