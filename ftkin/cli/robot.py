@@ -189,7 +189,7 @@ def _arm(args):
 def _robot(args):
     from ..robot.franka import FrankaRobot
 
-    return FrankaRobot(args.franka, realtime=not args.no_realtime, speed=min(args.speed, 1.0))
+    return FrankaRobot(args.franka, realtime=not args.no_realtime, speed=args.speed)
 
 
 def _sensor(args):
@@ -313,7 +313,7 @@ def run_demo(args) -> int:
             robot = FrankaRobot(
                 sim.hostname,
                 realtime=False,
-                speed=min(args.speed, 1.0),
+                speed=args.speed,
                 state_timeout=SIM_TIMEOUT,
             )
             started = time.monotonic()

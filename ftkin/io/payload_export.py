@@ -45,6 +45,7 @@ import pinocchio as pin
 from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from ..kinematics.robots import flange_frame_name
+from ..validation import as_float_array
 from .export_format import ExportFormat, ExportOption, ExportRequest
 
 UR_SET_PAYLOAD_SERVICE = "/io_and_status_controller/set_payload"
@@ -145,13 +146,19 @@ def payload_in_flange(calibration, arm, flange_frame: str | None = None, inertia
     in_sensor = calibration.inertia_about_com_in_sensor
     if inertia is None and in_sensor is not None:
         inertia = sensor_to_flange @ np.asarray(in_sensor, dtype=float) @ sensor_to_flange.T
-    return Payload(mass, com + placement.translation, flange_frame, _inertia(inertia))
+    return Payload(mass, com + placement.translation, flange_frame, checked_inertia(inertia))
 
 
-def _inertia(value) -> np.ndarray | None:
+def checked_inertia(value) -> np.ndarray | None:
+    """A rotational inertia [kg·m²] as a symmetric positive semidefinite ``(3, 3)`` matrix, from
+    a ``(3, 3)`` matrix or ``[ixx, iyy, izz, ixy, ixz, iyz]``; None stays None.
+
+    Raises:
+        InvalidInput: another shape, not finite, not symmetric, or a negative principal moment.
+    """
     if value is None:
         return None
-    array = np.asarray(value, dtype=float)
+    array = as_float_array(value, "inertia [kg·m²]")
     if array.shape == (6,):
         ixx, iyy, izz, ixy, ixz, iyz = array
         array = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
@@ -160,8 +167,12 @@ def _inertia(value) -> np.ndarray | None:
             "inertia must be a symmetric (3, 3) matrix or [ixx, iyy, izz, ixy, ixz, iyz] [kg·m²], "
             f"got {value!r}"
         )
-    if np.linalg.eigvalsh(array)[0] < -1e-12:
-        raise InvalidInput("inertia must be positive semidefinite")
+    array = 0.5 * (array + array.T)
+    if np.linalg.eigvalsh(array)[0] < -1e-9 * max(1.0, float(np.abs(array).max())):
+        raise InvalidInput(
+            f"inertia must be positive semidefinite, got principal moments "
+            f"{np.linalg.eigvalsh(array).tolist()} kg·m²"
+        )
     return array
 
 
@@ -173,7 +184,12 @@ def _body(value):
 
     if value is None or isinstance(value, RigidBody):
         return value
-    return RigidBody.point(value[0], value[1:])
+    numbers = as_float_array(value, "a body [mass, cx, cy, cz]")
+    if numbers.shape != (4,):
+        raise InvalidInput(
+            f"a body must be [mass, cx, cy, cz] [kg, m, flange frame], got shape {numbers.shape}"
+        )
+    return RigidBody.point(numbers[0], numbers[1:])
 
 
 def _numbers(values) -> list[float]:

@@ -26,7 +26,7 @@ import pinocchio as pin
 
 from ..exceptions import InvalidInput, NonPhysicalPayload
 from ..validation import as_vector
-from .payload_export import Payload
+from .payload_export import Payload, checked_inertia
 
 MASS_TOLERANCE = 1e-4
 """Masses within this of zero are zero [kg] (float32 round trips, calibration noise)."""
@@ -54,7 +54,7 @@ class RigidBody:
         if not np.isfinite(mass) or mass < 0.0:
             raise InvalidInput(f"a body's mass must be finite and >= 0 kg, got {self.mass!r}")
         com = as_vector(self.center_of_mass, 3, "centre of mass [m]")
-        inertia = _inertia_matrix(self.inertia)
+        inertia = checked_inertia(self.inertia)
         for array in (com, inertia):
             array.setflags(write=False)
         object.__setattr__(self, "mass", mass)
@@ -82,21 +82,6 @@ class RigidBody:
     def franka_inertia(self) -> list[float]:
         """The inertia as libfranka's 9 numbers, column-major [kg·m²]."""
         return [float(v) for v in self.inertia.reshape(-1, order="F")]
-
-
-def _inertia_matrix(value) -> np.ndarray:
-    array = np.asarray(value, dtype=float)
-    if array.shape == (6,):
-        ixx, iyy, izz, ixy, ixz, iyz = array
-        array = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-    if array.shape != (3, 3) or not np.all(np.isfinite(array)):
-        raise InvalidInput(
-            "an inertia must be a finite (3, 3) matrix or [ixx, iyy, izz, ixy, ixz, iyz] "
-            f"[kg·m²], got {value!r}"
-        )
-    if not np.allclose(array, array.T, atol=1e-9):
-        raise InvalidInput(f"an inertia must be symmetric, got {array.tolist()}")
-    return 0.5 * (array + array.T)
 
 
 def payload_body(payload: Payload) -> RigidBody:

@@ -30,6 +30,7 @@ from ..exceptions import (
     RobotConnectionLost,
     RobotError,
 )
+from ..io.export import arm_problems
 from ..io.payload_export import Payload, payload_in_flange
 from ..io.payload_inertia import RigidBody, controller_load
 from ..validation import as_vector
@@ -291,6 +292,7 @@ class FrankaRobot:
         sensor_mass: float = 0.0,
         sensor_com=(0.0, 0.0, 0.0),
         inertia=None,
+        allow_other_arm: bool = False,
     ) -> Payload:
         """Send the load below the sensor, minus the configured end effector, to the robot.
 
@@ -308,22 +310,33 @@ class FrankaRobot:
             sensor_com: Its centre of mass in the flange frame [m].
             inertia: The measured load's inertia about its centre of mass, flange axes
                 [kg·m²] (default: the calibration's, if dynamic, else a point mass).
+            allow_other_arm: Accept an ``arm`` other than the one the calibration recorded
+                (another robot, URDF or sensor offset), as ``ftkin export --allow-other-arm``.
 
         Returns:
             The load sent (flange frame).
 
         Raises:
             NonPhysicalPayload: the difference is not a body (names the end-effector setting).
+            InvalidInput: ``arm`` differs from the calibration's (the centre of mass would be off
+                by the sensor offset), or a negative sensor mass.
             RobotError: the robot refused the load.
         """
         if arm is None:
             from ..kinematics.fr3 import fr3_arm
 
             arm = fr3_arm()
+        problems = [] if allow_other_arm else arm_problems(calibration, arm)
+        if problems:
+            raise InvalidInput(
+                "the arm differs from the one the calibration was made with: "
+                + "; ".join(problems)
+                + ". Pass the calibration's arm, or allow_other_arm=True if that is deliberate"
+            )
         measured = payload_in_flange(calibration, arm, None, inertia)
         if end_effector is None:
             end_effector = self.end_effector()
-        sensor_body = RigidBody.point(sensor_mass, sensor_com) if float(sensor_mass) > 0.0 else None
+        sensor_body = RigidBody.point(sensor_mass, sensor_com)  # refuses a negative mass
         load = controller_load(measured, end_effector, sensor_body, setting=END_EFFECTOR_SETTING)
         body = RigidBody(
             load.mass,

@@ -132,12 +132,11 @@ def run_admittance(
     faults: dict[str, int] = {}
     stamps: list[float] = []
     reason, message, fault_time = FINISHED, "", None
-    _warm_up(robot, checked, controller, period)
-    start = time.monotonic()
-    deadline = math.inf if duration is None else start + float(duration)
-    next_tick = start
-    previous = start - period
     try:
+        _warm_up(robot, checked, controller, period)
+        start = next_tick = time.monotonic()
+        deadline = math.inf if duration is None else start + float(duration)
+        previous = start - period
         while True:
             now = time.monotonic()
             if now >= deadline:
@@ -191,13 +190,18 @@ def _check_loop_inputs(rate_hz, duration, controller) -> float:
 
 
 def _warm_up(robot, checked: CheckedSensor, controller, period: float) -> None:
-    """A warm-up tick, not commanded: the first step of a controller loads what it needs."""
+    """A warm-up tick, not commanded: the first step of a controller loads what it needs.
+
+    A sensor or robot fault here is met again by the loop's first tick, which stops as for any
+    tick; a Ctrl-C (it comes once) propagates and stops the loop.
+    """
     try:
         q, _ = robot.joint_state()
         controller.step(q, checked.read()[1], period)
+    except (SensorError, RobotError):
+        pass
+    finally:
         controller.reset()
-    except (SensorError, RobotError, KeyboardInterrupt):
-        pass  # the loop's first tick meets it again and stops as for any tick
 
 
 def _held_tick(status, faults: dict[str, int]) -> tuple[str, str] | None:

@@ -86,3 +86,19 @@ def test_a_saturated_channel_holds_ticks_and_the_loop_goes_on(controller_factory
     stats = run_admittance(robot, sensor, controller_factory(), duration=0.2)
     assert stats.completed and stats.faults["saturated"] == stats.ticks
     assert all(not command.any() for _, command in robot.commands)
+
+
+def test_ctrl_c_during_the_warm_up_tick_stops_the_loop_without_a_command(controller_factory):
+    # Ctrl-C comes once: swallowed in the warm-up, the loop would command the arm until a second
+    robot = _home_robot()
+
+    class InterruptedOnce(FakeSensor):
+        def read(self):
+            self.calls = getattr(self, "calls", 0) + 1
+            if self.calls == 1:
+                raise KeyboardInterrupt
+            return super().read()
+
+    stats = run_admittance(robot, InterruptedOnce(), controller_factory(), duration=1.0)
+    assert stats.stop_reason == "interrupt" and stats.faults["interrupt"] == 1
+    assert robot.commands == [] and len(robot.stops) == 1

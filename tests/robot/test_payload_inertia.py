@@ -73,3 +73,19 @@ def test_franka_inertia_is_column_major():
     body = RigidBody.from_franka(0.5, [0, 0, 0.1], inertia.reshape(-1, order="F"))
     np.testing.assert_allclose(body.inertia, inertia, rtol=1e-12)
     np.testing.assert_allclose(body.franka_inertia(), inertia.reshape(-1, order="F"), rtol=1e-12)
+
+
+def test_bodies_refuse_what_is_not_a_body():
+    import numpy as np
+    import pytest
+
+    from ftkin.exceptions import InvalidInput
+    from ftkin.io.payload_export import _body
+    from ftkin.io.payload_inertia import RigidBody
+
+    with pytest.raises(InvalidInput, match="positive semidefinite"):
+        RigidBody(1.0, np.zeros(3), np.diag([1e-3, 1e-3, -1e-3]))
+    with pytest.raises(InvalidInput, match=r"\[mass, cx, cy, cz\]"):
+        _body(0.7)
+    with pytest.raises(InvalidInput, match="mass must be finite and >= 0"):
+        _body([-0.2, 0.0, 0.0, 0.01])
