@@ -125,10 +125,9 @@ class DriftModel:
         """This model's :class:`BiasDrift` arguments from the file's ``drift`` object (a
         :class:`~ftkin.io.json_reader.NestedReader`).
         """
-        rows = reader.get("coefficients", required=False)
         return {
             "rate": reader.array("rate", (2,), required=False),
-            "coefficients": None if rows is None else reader.array("coefficients", (len(rows), 6)),
+            "coefficients": reader.array("coefficients", (self.columns, 6), required=False),
         }
 
 
@@ -297,7 +296,7 @@ class BiasDrift:
         if len(times) == 0 or np.any(np.diff(times) < 0) or not np.all(np.isfinite(times)):
             raise InvalidInput("drift times must be finite, ascending and not empty [s]")
         count = len(times)
-        rows = None if self.coefficients is None else np.shape(self.coefficients)[0]
+        rows = None if self.coefficients is None else kind.columns  # the shape check names others
         for name, shape, positive in (
             ("times", (count,), False),
             ("bias", (count, 6), False),

@@ -165,13 +165,6 @@ class DriftFit:
         return -2.0 * self.log_likelihood + self.parameter_count * np.log(size)
 
 
-def predict_with_jacobian(
-    theta: np.ndarray, rotations: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The model's prediction ``(P, 6)`` and its Jacobian ``(P, 6, 12)`` for ``θ``."""
-    return predict(rotations, theta), parameter_jacobian(rotations, theta[0:3], theta[9:12])
-
-
 def invert_information(information: np.ndarray, names: list[str]) -> np.ndarray:
     """Inverse of an information matrix, or :class:`UnobservableParameters` when it is singular."""
     scale = np.sqrt(np.diag(information))
@@ -203,7 +196,7 @@ def _pooled_std(squares: np.ndarray, dof: np.ndarray, floor: np.ndarray) -> np.n
 
 def constant_log_likelihood(poses: PoseAverages, start: DriftStart) -> float:
     """Log-likelihood of the constant-bias fit (at the ML noise when the noise is estimated)."""
-    residuals = poses.wrenches - predict_with_jacobian(start.theta, poses.rotations)[0]
+    residuals = poses.wrenches - predict(poses.rotations, start.theta)
     counts = np.asarray(poses.counts, dtype=float)[:, None]
     std = start.channel_std
     if start.estimated:
@@ -236,7 +229,7 @@ class SortedPoses:
     def raw_residuals(self, phi: np.ndarray) -> np.ndarray:
         """``(P, 6)`` readings minus ``θ``'s prediction minus the trend [N, N·m]."""
         trend = self.basis @ phi[12:].reshape(-1, 6)
-        return self.wrenches - predict_with_jacobian(phi[:12], self.rotations)[0] - trend
+        return self.wrenches - predict(self.rotations, phi[:12]) - trend
 
 
 def gauss_newton(data: SortedPoses, phi, std, rate, iterations: int):
@@ -250,7 +243,7 @@ def gauss_newton(data: SortedPoses, phi, std, rate, iterations: int):
     gains = walk_gains(data.times, std[None, :] ** 2 / data.counts[:, None], rate)
 
     def whitened(phi):
-        jacobian = predict_with_jacobian(phi[:12], data.rotations)[1]
+        jacobian = parameter_jacobian(data.rotations, phi[0:3], phi[9:12])
         columns = [data.raw_residuals(phi)[:, :, None], jacobian, data.trend]
         white = whiten(gains, np.concatenate(columns, axis=2))
         return white[:, :, 0], white[:, :, 1:]

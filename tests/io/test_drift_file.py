@@ -57,17 +57,25 @@ def test_the_bias_trajectory_round_trips_bit_for_bit(drifting, tmp_path, drift):
     for name in ("times", "bias", "bias_std", "recorded_span"):
         np.testing.assert_array_equal(getattr(loaded.drift, name), getattr(result.drift, name))
     probe = np.linspace(-10.0, 600.0, 23)
-    np.testing.assert_array_equal(loaded.bias_at(probe), result.bias_at(probe))
+    # the stored numbers round-trip exactly (repr); the bias computed from them within 1e-12
+    np.testing.assert_allclose(loaded.bias_at(probe), result.bias_at(probe), rtol=1e-12, atol=1e-15)
     assert loaded.drift.criteria == result.drift.criteria
 
 
 def test_a_malformed_drift_names_its_key(drifting, tmp_path):
     save_calibration(calibrate(drifting, drift="poly:1"), tmp_path / "c.json")
     document = json.loads((tmp_path / "c.json").read_text())
-    document["drift"]["bias"] = document["drift"]["bias"][:-1]
+    bias = document["drift"]["bias"]
+    document["drift"]["bias"] = bias[:-1]
     (tmp_path / "c.json").write_text(json.dumps(document))
     with pytest.raises(CalibrationFileError, match="drift.bias"):
         load_calibration(tmp_path / "c.json")
+    for wrong in (3, "x", [[1.0] * 6] * 3):  # not poly:1's coefficient rows of six numbers
+        document["drift"]["bias"] = bias
+        document["drift"]["coefficients"] = wrong
+        (tmp_path / "c.json").write_text(json.dumps(document))
+        with pytest.raises(CalibrationFileError, match="drift.coefficients"):
+            load_calibration(tmp_path / "c.json")
     document["drift"] = {"model": "wobble"}
     (tmp_path / "c.json").write_text(json.dumps(document))
     with pytest.raises(CalibrationFileError, match="unknown drift model"):
@@ -97,6 +105,8 @@ def test_the_csv_time_column_becomes_samples_times(drifting, tmp_path):
         ({"rate": [-1.0, float("nan")]}, "rate must be"),
         ({"time_scale": 0.0}, "time_scale must be"),
         ({"coefficients": np.zeros((1, 5))}, "coefficients must be"),
+        ({"coefficients": 1.0}, "coefficients must be"),
+        ({"coefficients": np.zeros((3, 6))}, "coefficients must be"),
         ({"selected_by": "me"}, "selected_by"),
     ],
 )
