@@ -97,6 +97,7 @@ class Compensator:
         self.arm = mounted_arm(arm, calibration.mount_rotation) if arm is not None else arm
         signs = calibration.reading_signs
         self._reading_signs = None if np.all(signs == 1.0) else signs
+        self._sign_floats = tuple(signs.tolist())  # the tick's copy (no conversion per sample)
         self._gravity_in_base = np.array(calibration.gravity_in_base)
         self._bias = np.array(calibration.bias)
         self._com = np.array(calibration.center_of_mass)
@@ -112,7 +113,7 @@ class Compensator:
 
     def _signed_contact_floats(self, rotation_rows, raw) -> tuple[float, ...]:
         """:meth:`FloatModel.contact` of the readings times the stored signs."""
-        s0, s1, s2, s3, s4, s5 = self._reading_signs.tolist()
+        s0, s1, s2, s3, s4, s5 = self._sign_floats
         w0, w1, w2, w3, w4, w5 = raw
         return self._floats.contact(
             rotation_rows, (w0 * s0, w1 * s1, w2 * s2, w3 * s3, w4 * s4, w5 * s5)

@@ -39,20 +39,20 @@ _REFERENCE_FRAMES = {
 }
 
 
-def bundled_urdf_path() -> Path:
-    """Path of the bundled six-axis arm (modelled on the EPSON C4-A901S).
+def bundled_urdf_path(relative: str = BUNDLED_URDF_NAME) -> Path:
+    """Path of a bundled URDF, by default the six-axis arm (modelled on the EPSON C4-A901S).
 
     Looks in the installed package (``ftkin/urdf/``, wheels) and then in the
     source checkout (``urdf/`` beside the ``ftkin`` folder, editable installs).
+
+    Args:
+        relative: The file's path under ``urdf/`` (e.g. ``"fr3/fr3.urdf"``).
     """
     package_dir = Path(__file__).resolve().parent.parent
-    for candidate in (
-        package_dir / "urdf" / BUNDLED_URDF_NAME,
-        package_dir.parent / "urdf" / BUNDLED_URDF_NAME,
-    ):
+    for candidate in (package_dir / "urdf" / relative, package_dir.parent / "urdf" / relative):
         if candidate.is_file():
             return candidate
-    raise UrdfError(BUNDLED_URDF_NAME, ["the bundled URDF is missing from this installation"])
+    raise UrdfError(relative, ["the bundled URDF is missing from this installation"])
 
 
 class Arm:

@@ -11,8 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..exceptions import UrdfError
-from .arm import Arm
+from .arm import Arm, bundled_urdf_path
 
 FR3_URDF_NAME = "fr3.urdf"
 FR3_SENSOR_FRAME = "fr3_hand"
@@ -23,14 +22,7 @@ FR3_FLANGE_FRAME = "fr3_link8"
 
 def fr3_urdf_path() -> Path:
     """Path of the bundled FR3 URDF (installed package first, then the source checkout)."""
-    package_dir = Path(__file__).resolve().parent.parent
-    for candidate in (
-        package_dir / "urdf" / "fr3" / FR3_URDF_NAME,
-        package_dir.parent / "urdf" / "fr3" / FR3_URDF_NAME,
-    ):
-        if candidate.is_file():
-            return candidate
-    raise UrdfError(FR3_URDF_NAME, ["the bundled FR3 URDF is missing from this installation"])
+    return bundled_urdf_path(f"fr3/{FR3_URDF_NAME}")
 
 
 def fr3_arm(tool_frame: str | None = FR3_TOOL_FRAME) -> Arm:
