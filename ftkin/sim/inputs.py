@@ -31,7 +31,7 @@ from ..calibration.information import SensorNoise
 from ..calibration.model import WRENCH_CHANNELS, SensorModel
 from ..exceptions import InvalidInput, MissingDependency
 from ..io.samples_csv import detect_orientation
-from ..validation import as_batch
+from ..validation import as_batch, as_rotation_batch
 from .sensor import SimulatedSensor, paper_like_truth, recording_times
 from .sensor_drift import SensorDrift
 
@@ -58,9 +58,11 @@ class SimulatedInputs:
     sign: float = 1.0
 
     def __post_init__(self):
-        rotation = np.asarray(self.mount_rotation, dtype=float)
-        if rotation.shape != (3, 3) or not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-9):
-            raise InvalidInput(f"mount_rotation must be a (3, 3) rotation, got {rotation!r}")
+        shape = np.shape(self.mount_rotation)
+        if shape != (3, 3):
+            raise InvalidInput(f"mount_rotation must be a (3, 3) rotation, got shape {shape}")
+        rotations, _ = as_rotation_batch(self.mount_rotation, "mount_rotation")  # refuses mirrors
+        rotation = rotations[0]
         if self.sign not in (1.0, -1.0):
             raise InvalidInput(f"sign must be +1 or -1, got {self.sign!r}")
         object.__setattr__(self, "mount_rotation", rotation)
@@ -207,7 +209,13 @@ def recording_table(
     load = recorder.wrenches(q, joint_velocities, joint_accelerations)
     load[:, :3] = load[:, :3] @ inputs.mount_rotation.T  # into the real sensor axes
     load[:, 3:] = load[:, 3:] @ inputs.mount_rotation.T
-    raw = load + inputs.truth.bias + rng.standard_normal(load.shape) * inputs.noise.channel_std
+    drift = inputs.sensor.bias_drift(times, rng)  # the bias after power-on at t = 0
+    raw = (
+        load
+        + inputs.truth.bias
+        + drift
+        + rng.standard_normal(load.shape) * inputs.noise.channel_std
+    )
     header = ["t", *arm.joint_names, *WRENCH_CHANNELS]
     return header, np.hstack([times[:, None], q, inputs.sign * raw])
 

@@ -157,3 +157,10 @@ def test_bad_inputs_are_refused(tmp_path, capsys):
     assert main(["simulate", "samples", "--poses", str(poses), "-o", str(poses)]) == 2
     with pytest.raises(Exception, match="rotation"):
         SimulatedInputs(mount_rotation=np.ones((3, 3)))
+
+
+def test_a_mirrored_mount_is_refused():
+    from ftkin.exceptions import InvalidInput
+
+    with pytest.raises(InvalidInput, match="mount_rotation"):
+        SimulatedInputs(mount_rotation=np.diag([1.0, 1.0, -1.0]))
