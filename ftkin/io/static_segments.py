@@ -87,6 +87,11 @@ class SegmentSearch:
     quantity: str = "joint speed"
 
     @property
+    def unit(self) -> str:
+        """The speed's unit: rad/s for joint speeds, 1/s for the rate of the ``R_BS`` entries."""
+        return "1/s" if self.quantity == "orientation speed" else "rad/s"
+
+    @property
     def still(self) -> np.ndarray:
         """``(N,)`` True where the sample counts as still."""
         return self.speeds < self.parameters.speed_threshold
@@ -96,7 +101,7 @@ class SegmentSearch:
         moving = int(np.count_nonzero(~self.still))
         return (
             f"{moving} of {len(self.speeds)} samples ({100 * moving / len(self.speeds):.0f} %) in "
-            f"motion, {self.quantity} up to {self.speeds.max():.3g} rad/s"
+            f"motion, {self.quantity} up to {self.speeds.max():.3g} {self.unit}"
         )
 
     def describe(self) -> str:
@@ -106,7 +111,7 @@ class SegmentSearch:
         return (
             f"{len(self.segments)} static segment(s) from {len(self.still_stretches)} still "
             "stretch(es) "
-            f"(longest {longest:.3g} s); still = {self.quantity} < {p.speed_threshold:g} rad/s, "
+            f"(longest {longest:.3g} s); still = {self.quantity} < {p.speed_threshold:g} {self.unit}, "
             f"usable ≥ {p.min_duration:g} s after skipping {p.settle_time:g} s of settling"
         )
 
