@@ -280,9 +280,9 @@ def rotation_rows(value, atol: float = 1e-6) -> list | None:
     A None tells the caller to run :func:`as_rotation_batch` for the detailed error.
     """
     if type(value) is not np.ndarray or value.dtype is not FLOAT64:
-        try:
-            value = np.asarray(value, dtype=np.float64)
-        except (TypeError, ValueError):
+        try:  # real numbers only: booleans and text are not converted
+            value = as_float_array(value, "rotation")
+        except InvalidInput:
             return None
     if value.shape != (3, 3):
         return None

@@ -210,9 +210,9 @@ class Compensator:
         rows = rotation_rows(
             rotation_sensor_to_base
         )  # closed-form check on floats, None if not a rotation
-        try:
-            raw = np.asarray(raw_wrench, dtype=np.float64)
-        except (TypeError, ValueError):
+        try:  # real numbers only: booleans and text are not converted
+            raw = as_float_array(raw_wrench, "raw_wrench")
+        except InvalidInput:
             raw = None
         if rows is not None and raw is not None and raw.shape == (6,):
             values = raw.tolist()

@@ -198,3 +198,18 @@ def test_payload_weight_refuses_bad_input(wrench, pattern):
     # regression: a (5,) wrench gave a norm, NaN went through
     with pytest.raises(ftkin.InvalidInput, match=pattern):
         Compensator.payload_weight(wrench)
+
+
+@pytest.mark.parametrize(
+    ("rotation", "raw"),
+    [
+        (np.eye(3), ["1.5", 0, 0, 0, 0, 0]),  # text is not a number here
+        (np.eye(3), [True, 0.0, 0.0, 0.0, 0.0, 0.0]),  # True is not 1 N
+        ([[True, 0, 0], [0, 1, 0], [0, 0, 1]], np.zeros(6)),
+    ],
+)
+def test_one_sample_compensation_refuses_text_and_booleans(truth, rotation, raw):
+    from ftkin.exceptions import InvalidInput
+
+    with pytest.raises(InvalidInput, match="numeric"):
+        Compensator(truth).compensate_rotation(rotation, raw)
