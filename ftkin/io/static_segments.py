@@ -110,8 +110,8 @@ class SegmentSearch:
         longest = max(self.still_stretches, default=0.0)
         return (
             f"{len(self.segments)} static segment(s) from {len(self.still_stretches)} still "
-            "stretch(es) "
-            f"(longest {longest:.3g} s); still = {self.quantity} < {p.speed_threshold:g} {self.unit}, "
+            f"stretch(es) (longest {longest:.3g} s); "
+            f"still = {self.quantity} < {p.speed_threshold:g} {self.unit}, "
             f"usable ≥ {p.min_duration:g} s after skipping {p.settle_time:g} s of settling"
         )
 
