@@ -21,15 +21,15 @@ def register(subparsers) -> None:
     )
     parser.add_argument("recording", metavar="RECORDING")
     parser.add_argument("-o", "--output", metavar="SAMPLES.csv", required=True)
-    parser.add_argument(
-        "--all", action="store_true", help="every reading, not only the static segments"
+    parser.add_argument(  # the older name of the samples option --all-rows: one setting
+        "--all", dest="all_rows", action="store_true", help="the same as --all-rows"
     )
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
-    loaded = load_samples_from_args(args.recording, args, static_only=not args.all)  # or --all-rows
+    loaded = load_samples_from_args(args.recording, args)
     write_csv(args.output, loaded.table.header, loaded.table.rows)
     search = loaded.search
     poses = len(np.unique(loaded.samples.pose_ids))
