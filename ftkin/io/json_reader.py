@@ -26,16 +26,12 @@ def json_repr(value) -> str:
 
 def first_non_number(value):
     """The first leaf of a nested JSON list that is not a number (``null``, a boolean, a string,
-    an object), or None when every leaf is one.
+    an object), wrapped in a tuple (a null leaf is not "no bad leaf"), or None when every leaf is
+    one.
     """
-    if isinstance(value, list):
-        for item in value:
-            bad = first_non_number(item)
-            if bad is not None:
-                return bad
-        return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return (value,)  # wrapped: a null leaf is not "no bad leaf"
+    for leaf in _flatten([value]):
+        if isinstance(leaf, bool) or not isinstance(leaf, (int, float)):
+            return (leaf,)
     return None
 
 
