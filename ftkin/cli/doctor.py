@@ -49,19 +49,16 @@ def refuse_convention_mistakes(loaded, arm) -> None:
     """Refuse samples whose data fit only under a common mistake; warn on a suspicion
     (``calibrate``).
     """
-    table = getattr(loaded, "table", None)
-    if (
-        table is None or getattr(loaded, "recording", None) is not None
-    ):  # bags carry their own conventions
+    if loaded.recording is not None:  # bags carry their own conventions
         return
-    report = diagnose_table(table, arm)
+    report = diagnose_table(loaded.table, arm)
     if report.verdict == "mistake":
         reading = report.culprit.reading
         raise ConventionMistake(
             report.message + " (run 'ftkin doctor' for the fit of every reading)",
-            table.source,
+            loaded.table.source,
             reading.name,
             reading.fix,
         )
     if report.verdict == "suspect":
-        logger.warning("%s: %s", table.source, report.message)
+        logger.warning("%s: %s", loaded.table.source, report.message)

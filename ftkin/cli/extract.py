@@ -38,7 +38,7 @@ def run(args) -> int:
         + (f" in {poses} static poses" if search is not None else "")
         + f" to {args.output}"
     )
-    recording = getattr(loaded, "recording", None)
+    recording = loaded.recording
     if recording is not None:
         print(
             f"  topics: {recording.joint_topic} (joints), {recording.wrench_topic} (wrench, frame "

@@ -85,9 +85,9 @@ class BagRecording:
 
 @dataclass(frozen=True)
 class BagSamples(LoadedSamples):
-    """:class:`~ftkin.io.samples_csv.LoadedSamples` from a bag, with what was found in it."""
-
-    recording: BagRecording | None = None
+    """:class:`~ftkin.io.samples_csv.LoadedSamples` from a bag, with what was found in it
+    (``recording``).
+    """
 
 
 def _rosbags():

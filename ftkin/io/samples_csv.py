@@ -35,6 +35,7 @@ import functools
 import logging
 import re
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -46,6 +47,9 @@ from ..validation import MAX_ID, MAX_WRENCH
 from .csv_table import Table, missing_columns, read_table, rename_columns
 from .static_segments import SegmentParameters, SegmentSearch, find_static_segments, segment_index
 from .time_columns import times_from_table
+
+if TYPE_CHECKING:  # the bag reader imports this module
+    from .bags import BagRecording
 
 logger = logging.getLogger(__name__)
 
@@ -315,6 +319,7 @@ class LoadedSamples:
 
     ``search`` holds the still segments found in a continuous recording (each
     one pose of ``samples``; ``table`` then has their rows and a ``pose`` column).
+    ``recording`` is what a bag held (:class:`~ftkin.io.bags.BagSamples`), None for a CSV.
     """
 
     samples: Samples
@@ -322,6 +327,7 @@ class LoadedSamples:
     orientation: str
     orientation_columns: list[str]
     search: SegmentSearch | None = None
+    recording: BagRecording | None = None
 
 
 MAX_GAP = 20.0
