@@ -60,7 +60,7 @@ STAGES = [
     (
         "viz",
         "Visualisation",
-        ["arrows", "legend", "scene", "server", "vectors", "viewer", "browser", "report"],
+        ["arrows", "legend", "server", "viewer", "browser", "report"],
     ),
     (
         "robot",

@@ -25,13 +25,13 @@ _EXPORTS = {
     "Layer": ".legend",
     "LiveView": ".live",
     "NodePose": ".arrows",
-    "PoseVectors": ".vectors",
+    "PoseVectors": ".viewer",
     "PoseView": ".framing",
     "PublishingController": ".live",
     "arrow_placement": ".arrows",
     "exaggerate_tilt": ".arrows",
     "frame_pose": ".framing",
-    "pose_vectors": ".vectors",
+    "pose_vectors": ".viewer",
     "rotation_y_to": ".arrows",
 }
 """Public name → module, loaded on first access (PEP 562): importing one module of this stage does

@@ -38,9 +38,7 @@ class NodePose:
 
     def matrix(self) -> np.ndarray:
         """The transform a live viewer gets: ``rigid @ diag(scale, 1)``."""
-        out = self.rigid.copy()
-        out[:3, :3] = self.rigid[:3, :3] * self.scale[None, :]
-        return out
+        return rigid_transform(self.rigid[:3, :3] * self.scale, self.rigid[:3, 3])
 
 
 @dataclass(frozen=True)
@@ -66,10 +64,7 @@ def rigid_transform(rotation: np.ndarray, translation) -> np.ndarray:
     """``(4, 4)`` homogeneous transform from a rotation ``(3, 3)`` and a translation ``(3,)``
     [m].
     """
-    out = np.eye(4)
-    out[:3, :3] = rotation
-    out[:3, 3] = translation
-    return out
+    return np.vstack([np.column_stack([rotation, translation]), [0.0, 0.0, 0.0, 1.0]])
 
 
 def rotation_y_to(direction) -> np.ndarray:
@@ -81,11 +76,7 @@ def rotation_y_to(direction) -> np.ndarray:
     Raises:
         InvalidInput: ``direction`` is not a finite non-zero 3-vector.
     """
-    direction = as_vector(direction, 3, "arrow direction")
-    norm = np.linalg.norm(direction)
-    if norm == 0.0:
-        raise InvalidInput("arrow direction must be non-zero")
-    y_axis = direction / norm
+    y_axis = _unit(direction, "arrow direction")
     helper = np.array([1.0, 0.0, 0.0]) if abs(y_axis[0]) < 0.9 else np.array([0.0, 0.0, 1.0])
     x_axis = helper - y_axis * (helper @ y_axis)
     x_axis /= np.linalg.norm(x_axis)
@@ -117,23 +108,18 @@ def arrow_placement(
     style = style or ArrowStyle()
     origin = as_vector(origin, 3, "arrow origin")
     vector = as_vector(vector, 3, "arrow vector")
-    scale = as_positive(scale, "arrow scale")
-    length = float(np.linalg.norm(vector)) * scale
-    if length > 0.0:
-        direction = vector / np.linalg.norm(vector)
-    else:
-        direction = np.array([0.0, 0.0, 1.0])
+    norm = float(np.linalg.norm(vector))
+    length = norm * as_positive(scale, "arrow scale")
+    direction = vector / norm if length > 0.0 else np.array([0.0, 0.0, 1.0])
     rotation = rotation_y_to(direction)
     head_length = min(style.head_length, 0.5 * length)
-    head_factor = max(head_length / style.head_length, MIN_SCALE)
-    shaft_length = max(length - head_length, MIN_SCALE)
     shaft = NodePose(
         rigid_transform(rotation, origin + direction * (0.5 * (length - head_length))),
-        np.array([1.0, shaft_length, 1.0]),
+        np.array([1.0, max(length - head_length, MIN_SCALE), 1.0]),
     )
     head = NodePose(
         rigid_transform(rotation, origin + direction * (length - 0.5 * head_length)),
-        np.full(3, head_factor),
+        np.full(3, max(head_length / style.head_length, MIN_SCALE)),
     )
     return ArrowPlacement(shaft, head, length)
 
@@ -145,28 +131,30 @@ def add_arrow_objects(node, geometry, style: ArrowStyle, material, radius_factor
     of ``style`` are multiplied by ``radius_factor``. :func:`arrow_placement` places them.
     """
     node["shaft"].set_object(geometry.Cylinder(1.0, style.shaft_radius * radius_factor), material)
-    head_radius = style.head_radius * radius_factor
-    cone = geometry.Cylinder(style.head_length, radiusTop=0.0, radiusBottom=head_radius)
+    cone = geometry.Cylinder(
+        style.head_length, radiusTop=0.0, radiusBottom=style.head_radius * radius_factor
+    )
     node["head"].set_object(cone, material)
 
 
 def exaggerate_tilt(gravity_direction, factor: float) -> np.ndarray:
     """Unit gravity direction with its angle from ``-z`` multiplied by ``factor``.
 
-    Used to make a base tilt of a fraction of a degree visible. The rotation
-    axis is ``-z × direction``; the angle is capped at 180°.
+    Used to make a base tilt of a fraction of a degree visible. The direction turns in the
+    vertical plane through ``-z`` and itself (its azimuth kept); the angle is capped at 180°.
     """
-    direction = as_vector(gravity_direction, 3, "gravity direction")
-    norm = np.linalg.norm(direction)
-    if norm == 0.0:
-        raise InvalidInput("gravity direction must be non-zero")
-    direction = direction / norm
-    down = np.array([0.0, 0.0, -1.0])
-    axis = np.array([direction[1], -direction[0], 0.0])  # down × direction
-    sin_angle = np.linalg.norm(axis)
+    direction = _unit(gravity_direction, "gravity direction")
+    horizontal = np.array([direction[0], direction[1], 0.0])  # towards ``direction``
+    sin_angle = np.linalg.norm(horizontal)
     if sin_angle < 1e-12:
         return direction
-    angle = min(np.arctan2(sin_angle, down @ direction) * factor, np.pi)
-    axis /= sin_angle
-    perpendicular = np.cross(axis, down)  # horizontal, towards ``direction``
-    return np.cos(angle) * down + np.sin(angle) * perpendicular
+    angle = min(np.arctan2(sin_angle, -direction[2]) * factor, np.pi)
+    return np.array([0.0, 0.0, -np.cos(angle)]) + np.sin(angle) * horizontal / sin_angle
+
+
+def _unit(vector, name: str) -> np.ndarray:
+    vector = as_vector(vector, 3, name)
+    norm = np.linalg.norm(vector)
+    if norm == 0.0:
+        raise InvalidInput(f"{name} must be non-zero")
+    return vector / norm

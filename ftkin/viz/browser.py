@@ -47,11 +47,7 @@ def find_chromium() -> str | None:
     override = os.environ.get("FTKIN_CHROMIUM")
     if override:
         return shutil.which(override) or (override if os.access(override, os.X_OK) else None)
-    for name in CANDIDATES:
-        path = shutil.which(name)
-        if path:
-            return path
-    return None
+    return next(filter(None, map(shutil.which, CANDIDATES)), None)
 
 
 def screenshot_file(page, png_path, window_size=(1024, 768), timeout: float = 60.0) -> Path:
@@ -94,7 +90,25 @@ def screenshot_file(page, png_path, window_size=(1024, 768), timeout: float = 60
             f"--user-data-dir={Path(scratch) / 'profile'}",
             page.as_uri(),
         ]
-        _run(command, timeout)
+        try:  # in its own process group: on timeout stop the group (Chromium forks helpers)
+            process = subprocess.Popen(
+                command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
+            )
+        except OSError as error:
+            raise BrowserError(f"cannot start Chromium ({executable}): {error}") from None
+        try:
+            _, stderr = process.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.communicate()
+            raise BrowserError(
+                f"Chromium did not finish the screenshot within {timeout:g} s"
+            ) from None
+        if process.returncode != 0:
+            tail = stderr.decode("utf-8", "replace").strip().splitlines()[-3:]
+            raise BrowserError(
+                f"Chromium failed (exit code {process.returncode}): " + " | ".join(tail)
+            )
         if not shot.is_file() or shot.stat().st_size == 0:
             raise BrowserError(f"Chromium ({executable}) wrote no screenshot of {page}")
         return atomic_write_bytes(png_path, shot.read_bytes())
@@ -105,24 +119,3 @@ def screenshot_html(html: str, png_path, window_size=(1024, 768), timeout: float
     with tempfile.TemporaryDirectory(prefix="ftkin-page-") as scratch:
         page = atomic_write_text(Path(scratch) / "page.html", html)
         return screenshot_file(page, png_path, window_size, timeout)
-
-
-def _run(command: list[str], timeout: float) -> None:
-    """Run Chromium in its own process group; on timeout stop that group (Chromium forks
-    helpers).
-    """
-    try:
-        process = subprocess.Popen(
-            command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
-        )
-    except OSError as error:
-        raise BrowserError(f"cannot start Chromium ({command[0]}): {error}") from None
-    try:
-        _, stderr = process.communicate(timeout=timeout)
-    except subprocess.TimeoutExpired:
-        os.killpg(process.pid, signal.SIGKILL)
-        process.communicate()
-        raise BrowserError(f"Chromium did not finish the screenshot within {timeout:g} s") from None
-    if process.returncode != 0:
-        tail = stderr.decode("utf-8", "replace").strip().splitlines()[-3:]
-        raise BrowserError(f"Chromium failed (exit code {process.returncode}): " + " | ".join(tail))

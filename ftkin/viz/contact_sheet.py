@@ -11,7 +11,6 @@ get a red frame.
 
 from __future__ import annotations
 
-import io
 import math
 import tempfile
 from collections.abc import Sequence
@@ -22,9 +21,9 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import InvalidInput, MissingDependency
-from ..io.atomic import atomic_write_bytes
 from .browser import screenshot_html
 from .legend import ARROWS, CENTER_OF_MASS, add_legend
+from .report import new_figure, save_figure
 
 WORKERS = 2
 """Chromium screenshots run at the same time."""
@@ -35,6 +34,8 @@ CELL_SIZE = (512, 384)
 
 HIDE_CONTROLS = "<style>.dg{display:none !important}</style>"
 """CSS that hides meshcat's "Open Controls" bar in a cell."""
+
+_PURPOSE = "the contact sheet of ftkin view --png"  # what matplotlib is needed for
 
 
 @dataclass(frozen=True)
@@ -82,7 +83,7 @@ def sheet_cells(
             f"contact sheet: {len(labels)} labels for {len(raw)} readings; expected the same "
             "non-zero count"
         )
-    cells = []
+    outliers, cells = set(outliers), []
     for k, label in enumerate(labels):
         if configurations is not None:
             vectors = viewer.show_pose(configurations[k], raw[k])
@@ -90,7 +91,7 @@ def sheet_cells(
             vectors = viewer.show_rotation(rotations[k], raw[k])
         angle = force_angle_deg(vectors.measured_force, vectors.gravity_force)
         page = add_legend(viewer.static_html(legend=False), HIDE_CONTROLS)
-        cells.append(SheetCell(label, angle, k in set(outliers), page))
+        cells.append(SheetCell(label, angle, k in outliers, page))
     return cells
 
 
@@ -100,14 +101,17 @@ def render_cells(
     """Screenshot every cell's page (``timeout`` [s] each); returns ``(H, W, 3)`` uint8 images in
     order.
     """
-    image = _matplotlib()[2]
+    try:  # before the screenshots: matplotlib reads them
+        from matplotlib.image import imread
+    except ImportError:
+        raise MissingDependency("matplotlib", "plots", _PURPOSE) from None
     with tempfile.TemporaryDirectory(prefix="ftkin-sheet-") as scratch:
 
         def shoot(k: int) -> np.ndarray:
             png = screenshot_html(
                 cells[k].page, Path(scratch) / f"cell{k}.png", window_size=size, timeout=timeout
             )
-            pixels = image.imread(str(png))
+            pixels = imread(str(png))
             if pixels.dtype != np.uint8:
                 pixels = np.round(pixels * 255).astype(np.uint8)
             return pixels[..., :3]
@@ -125,26 +129,17 @@ def sheet_figure(
     """A matplotlib ``Figure`` (not attached to pyplot) tiling ``images`` with labels and red
     outlier frames.
     """
-    Figure, FigureCanvasAgg, _ = _matplotlib()
     count = len(cells)
-    columns = columns or int(math.ceil(math.sqrt(count)))
-    rows = int(math.ceil(count / columns))
+    columns = columns or math.ceil(math.sqrt(count))
+    rows = math.ceil(count / columns)
     height, width = images[0].shape[:2]
-    cell_inches = 3.2
-    figure = Figure(
-        figsize=(columns * cell_inches, rows * cell_inches * height / width + 0.9),
-        layout="constrained",
-    )
-    FigureCanvasAgg(figure)
-    axes = figure.subplots(rows, columns, squeeze=False)
-    for k, ax in enumerate(axes.ravel()):
-        if k >= count:
-            ax.axis("off")
-            continue
-        cell = cells[k]
-        ax.imshow(images[k])
-        ax.set_xticks([])
-        ax.set_yticks([])
+    figure = new_figure((3.2 * columns, 3.2 * rows * height / width + 0.9), _PURPOSE)  # [in]
+    axes = figure.subplots(rows, columns, squeeze=False).ravel()
+    for ax in axes[count:]:
+        ax.axis("off")
+    for ax, cell, image in zip(axes, cells, images):
+        ax.imshow(image)
+        ax.set(xticks=[], yticks=[])
         angle = "n/a" if math.isnan(cell.angle_deg) else f"{cell.angle_deg:.2f}°"
         ax.set_title(
             f"{cell.label}: angle {angle}" + (" (outlier)" if cell.outlier else ""),
@@ -152,8 +147,9 @@ def sheet_figure(
             color="red" if cell.outlier else "black",
         )
         for spine in ax.spines.values():
-            spine.set_edgecolor("red" if cell.outlier else "0.6")
-            spine.set_linewidth(4.0 if cell.outlier else 0.8)
+            spine.set(
+                edgecolor="red" if cell.outlier else "0.6", linewidth=4.0 if cell.outlier else 0.8
+            )
     key = ", ".join(
         f"{name} = {layer.label}" for name, layer in zip(("magenta", "cyan", "yellow"), ARROWS)
     )
@@ -181,20 +177,4 @@ def save_contact_sheet(
     if path.suffix.lower() != ".png":
         raise InvalidInput(f"contact sheet file must end in .png, got {path.name!r}")
     images = render_cells(cells, size, workers)
-    figure = sheet_figure(cells, images, title)
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=dpi)
-    return atomic_write_bytes(path, buffer.getvalue())
-
-
-def _matplotlib():
-    """``(Figure, FigureCanvasAgg, matplotlib.image)``, or :class:`MissingDependency` (plots)."""
-    try:
-        import matplotlib.image as image
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-    except ImportError:
-        raise MissingDependency(
-            "matplotlib", "plots", "the contact sheet of ftkin view --png"
-        ) from None
-    return Figure, FigureCanvasAgg, image
+    return save_figure(sheet_figure(cells, images, title), path, "png", dpi)

@@ -81,8 +81,7 @@ class PoseView:
 
 def candidate_directions() -> np.ndarray:
     """``(K, 3)`` unit directions from the target towards the camera."""
-    azimuth, elevation = np.meshgrid(AZIMUTHS, ELEVATIONS, indexing="ij")
-    azimuth, elevation = azimuth.ravel(), elevation.ravel()
+    azimuth, elevation = (grid.ravel() for grid in np.meshgrid(AZIMUTHS, ELEVATIONS, indexing="ij"))
     return np.column_stack(
         [
             np.cos(elevation) * np.cos(azimuth),
@@ -108,15 +107,8 @@ def hidden_fractions(
         return np.zeros(len(cameras))
     sight = cameras[:, None, :] - arrow_points[None, :, :]  # (K, J, 3)
     length2 = np.einsum("kjd,kjd->kj", sight, sight)
-    relative = arm_points[None, None, :, :] - arrow_points[None, :, None, :]  # (1, J, P, 3)
-    along = (
-        np.einsum(
-            "kjpd,kjd->kjp",
-            np.broadcast_to(relative, (*sight.shape[:2], *relative.shape[2:])),
-            sight,
-        )
-        / length2[..., None]
-    )
+    relative = arm_points[None, :, :] - arrow_points[:, None, :]  # (J, P, 3)
+    along = np.einsum("jpd,kjd->kjp", relative, sight) / length2[..., None]  # (K, J, P)
     closest = arrow_points[None, :, None, :] + along[..., None] * sight[:, :, None, :]
     distance = np.linalg.norm(arm_points[None, None, :, :] - closest, axis=-1)
     in_between = (along > link_radius / np.sqrt(length2)[..., None]) & (along < 1.0)
@@ -147,26 +139,20 @@ def frame_pose(
     """
     target = as_vector(sensor_origin, 3, "sensor origin [m]")
     arrows = np.asarray(arrows, dtype=float).reshape(-1, 3)
-    arm_points = (
-        np.zeros((0, 3))
-        if arm_points is None
-        else np.asarray(arm_points, dtype=float).reshape(-1, 3)
-    )
+    arm_points = np.asarray([] if arm_points is None else arm_points, dtype=float).reshape(-1, 3)
     lengths = np.linalg.norm(arrows, axis=1)
     radius = max(1.2 * float(lengths.max(initial=0.0)), float(tool_size), 0.15)
     distance = radius / (FILL * np.tan(np.radians(FIELD_OF_VIEW_DEG) / 2))
     directions = candidate_directions()
     cameras = target + distance * directions
-    samples = np.linspace(0.15, 1.0, 6)
-    arrow_points = (target + samples[:, None, None] * arrows[None, :, :]).reshape(-1, 3)
+    samples = np.linspace(0.15, 1.0, 6)[:, None, None]  # along each arrow
+    arrow_points = (target + samples * arrows[None, :, :]).reshape(-1, 3)
     hidden = hidden_fractions(arrow_points, arm_points, cameras)
 
     cost = 4.0 * hidden
-    drawn = lengths > 1e-9
-    if np.any(drawn):
-        units = arrows[drawn] / lengths[drawn, None]
-        weights = lengths[drawn] / lengths[drawn].sum()
-        cost += 1.0 * ((directions @ units.T) ** 2) @ weights  # end-on
+    drawn = lengths > 1e-9  # none drawn: no end-on term
+    units = arrows[drawn] / lengths[drawn, None]
+    cost += 1.0 * ((directions @ units.T) ** 2) @ (lengths[drawn] / lengths[drawn].sum())  # end-on
     if len(arrows) >= 2 and lengths[0] > 1e-9 and lengths[1] > 1e-9:
         normal = np.cross(arrows[0] / lengths[0], arrows[1] / lengths[1])
         sine = float(np.linalg.norm(normal))
@@ -176,20 +162,13 @@ def frame_pose(
     cost += 0.6 * np.abs(elevation - PREFERRED_ELEVATION) / np.radians(45.0)
     if floor_height is not None:
         cost += 2.0 * (cameras[:, 2] < floor_height + 0.05)
-    away = (
-        np.array([target[0], target[1], 0.0])
-        if outward is None
-        else as_vector(outward, 3, "outward")
-    )
-    away[2] = 0.0
+    away = (target if outward is None else as_vector(outward, 3, "outward")) * [1.0, 1.0, 0.0]
     if np.linalg.norm(away) > 1e-6:
         cost -= 0.2 * (directions @ (away / np.linalg.norm(away)))
     best = int(np.argmin(cost))
     offset = distance * directions[best]
-    floor_visible = False
-    if floor_height is not None:
-        lowest = min(float(arrow_points[:, 2].min(initial=target[2])), float(target[2]))
-        floor_visible = lowest > floor_height + 0.01 and target[2] + offset[2] > floor_height + 0.01
+    lowest = min(arrow_points[:, 2].min(initial=target[2]), target[2] + offset[2])  # or the camera
+    floor_visible = floor_height is not None and bool(lowest > floor_height + 0.01)
     return PoseView(target, offset, floor_visible, radius, float(hidden[best]))
 
 

@@ -61,19 +61,18 @@ def legend_html(
     """A small HTML block (top-left corner, inside :data:`LEGEND_BOX`) listing the colours and the
     scale.
     """
-    rows = []
-    for layer in LAYERS:
-        label = layer.label
-        if layer is BASE_GRAVITY:
-            label += f": U={tilt_deg[0]:+.3f}°, V={tilt_deg[1]:+.3f}°"
-            if exaggeration != 1.0:
-                label += f" (drawn ×{exaggeration:g})"
-        rows.append(
-            f'<div><span style="display:inline-block;width:10px;height:10px;margin-right:5px;'
-            f'vertical-align:middle;background:{layer.css}"></span>{html.escape(label)}</div>'
-        )
-    scale_cm = 100.0 * scale_m_per_n
-    rows.append(f"<div>1 N = {scale_cm:.3g} cm from the sensor origin; triad x,y,z = r,g,b</div>")
+    drawn = f" (drawn ×{exaggeration:g})" if exaggeration != 1.0 else ""
+    tilt = f": U={tilt_deg[0]:+.3f}°, V={tilt_deg[1]:+.3f}°{drawn}"
+    rows = [
+        f'<div><span style="display:inline-block;width:10px;height:10px;margin-right:5px;'
+        f'vertical-align:middle;background:{layer.css}"></span>'
+        f"{html.escape(layer.label + (tilt if layer is BASE_GRAVITY else ''))}</div>"
+        for layer in LAYERS
+    ]
+    rows.append(
+        f"<div>1 N = {100.0 * scale_m_per_n:.3g} cm from the sensor origin; "
+        "triad x,y,z = r,g,b</div>"
+    )
     if caption:
         rows.append(
             "<div "
@@ -91,10 +90,8 @@ def legend_html(
 
 def add_legend(page: str, legend: str) -> str:
     """Insert ``legend`` just before the page's closing ``</body>``."""
-    index = page.rfind("</body>")
-    if index < 0:
-        return page + legend
-    return page[:index] + legend + page[index:]
+    head, body_end, tail = page.rpartition("</body>")
+    return head + legend + body_end + tail if body_end else page + legend
 
 
 _FETCH = re.compile(
@@ -118,10 +115,5 @@ def inline_commands(page: str) -> str:
     the same base64 bytes. A page without such commands is returned unchanged.
     """
     replaced, count = _FETCH.subn(lambda match: f'ftkinCommand("{match.group(1)}");', page)
-    if count == 0:
-        return page
-    anchor = "var viewer = new MeshCat.Viewer("
-    index = replaced.find(anchor)
-    if index < 0:
-        return page
-    return replaced[:index] + _DECODE + replaced[index:]
+    head, anchor, tail = replaced.partition("var viewer = new MeshCat.Viewer(")
+    return head + _DECODE + anchor + tail if count and anchor else page

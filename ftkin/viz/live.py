@@ -29,7 +29,6 @@ import select
 import subprocess
 import sys
 import threading
-import time
 from multiprocessing import shared_memory
 
 import numpy as np
@@ -80,24 +79,22 @@ class LiveView:
             )
         import_meshcat()  # fail here, with the extra's name, not in the child
         self.fps = as_positive(fps, "fps [1/s]")
+        scales = (
+            as_positive(force_scale, "force_scale [m/N]"),
+            as_positive(twist_scale, "twist_scale [s]"),
+        )
         self.layout = StateLayout(arm.nq)
         self._block = shared_memory.SharedMemory(create=True, size=8 * self.layout.size)
         self._state = np.ndarray((self.layout.size,), dtype=np.float64, buffer=self._block.buf)
         self._state[:] = 0.0
         self._latest = None
         self._closed = False
-        frame = control_frame or ControlFrame("base")
-        settings = ViewSettings(
-            arm,
-            self._block.name,
-            self.fps,
-            as_positive(force_scale, "force_scale [m/N]"),
-            as_positive(twist_scale, "twist_scale [s]"),
-            frame.frame,
-            frame.rotation_tool_to_sensor.copy(),
-            frame.point_in_sensor.copy(),
-            zmq_url,
+        self._stop = threading.Event()
+        self._sampler = threading.Thread(
+            target=self._sample, name="ftkin-liveview-sampler", daemon=True
         )
+        frame = control_frame or ControlFrame("base")
+        settings = ViewSettings(arm, self._block.name, self.fps, *scales, frame, zmq_url)
         environment = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
         self._process = subprocess.Popen(
             [sys.executable, "-c", CHILD_COMMAND],
@@ -111,17 +108,15 @@ class LiveView:
             self._process.stdin.close()
         except BrokenPipeError:
             pass  # the process died at once: reported below as no answer
-        line = _read_line(self._process.stdout, STARTUP_TIMEOUT)
-        kind, _, message = line.partition(" ")
+        # One status line (written at once), or nothing within the timeout.
+        answered = select.select([self._process.stdout], [], [], STARTUP_TIMEOUT)[0]
+        line = self._process.stdout.readline() if answered else b""
+        kind, _, message = line.decode("utf-8", "replace").partition(" ")
         if kind != "ready":
             self.close()
             reason = message.strip() or f"no answer within {STARTUP_TIMEOUT:g} s"
             raise FtkinError(f"the live view process failed: {reason}")
         self.url: str = message.strip()
-        self._stop = threading.Event()
-        self._sampler = threading.Thread(
-            target=self._sample, name="ftkin-liveview-sampler", daemon=True
-        )
         self._sampler.start()
 
     @classmethod
@@ -183,9 +178,8 @@ class LiveView:
             return
         self._closed = True
         atexit.unregister(self.close)
-        stop = getattr(self, "_stop", None)
-        if stop is not None:
-            stop.set()
+        self._stop.set()
+        if self._sampler.is_alive():
             self._sampler.join(timeout)
         self._state[self.layout.stop] = 1.0
         try:
@@ -203,20 +197,6 @@ class LiveView:
 
     def __exit__(self, *exc_info) -> None:
         self.close()
-
-
-def _read_line(stream, timeout: float) -> str:
-    """One line from a pipe, or ``""`` after ``timeout`` [s]."""
-    deadline, data = time.monotonic() + timeout, b""
-    while not data.endswith(b"\n"):
-        remaining = deadline - time.monotonic()
-        if remaining <= 0 or not select.select([stream], [], [], remaining)[0]:
-            break
-        chunk = os.read(stream.fileno(), 4096)
-        if not chunk:
-            break
-        data += chunk
-    return data.decode("utf-8", "replace")
 
 
 class PublishingController:

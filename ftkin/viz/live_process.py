@@ -13,13 +13,18 @@ control point, and counts the frames it drew.
 from __future__ import annotations
 
 import os
+import pickle
+import sys
 import time
 from dataclasses import dataclass
+from multiprocessing import resource_tracker, shared_memory
 
 import numpy as np
 
+from ..control.control_frame import ControlFrame
 from .arrows import ArrowStyle, add_arrow_objects, arrow_placement
 from .legend import CONTACT, Layer
+from .server import import_meshcat, load_arm, start_visualizer, stop_server
 
 TORQUE = Layer("torque", 0xFF8000, "contact torque, R_BS M′ (right-hand axis)")
 VELOCITY = Layer("velocity", 0x00C000, "commanded linear velocity at the control point")
@@ -28,37 +33,21 @@ LIVE_LAYERS = (CONTACT, TORQUE, VELOCITY, ANGULAR)
 """Arrows of the live view."""
 
 
-@dataclass(frozen=True)
 class StateLayout:
     """Float64 slots of the shared block: ``[seq, q (nq), wrench (6), twist (6), frames drawn,
     stop]``.
+
+    Attributes:
+        nq: Number of joint angles.
+        size: Number of float64 slots.
+        body: Slice of ``q``, wrench and twist together (what the sampler writes).
+        frames: Index of the drawn-frames counter (written by the view process).
+        stop: Index of the stop flag (set to 1 by the control process).
     """
 
-    nq: int
-
-    @property
-    def size(self) -> int:
-        """Number of float64 slots."""
-        return self.nq + 15
-
-    @property
-    def q(self) -> slice:
-        return slice(1, 1 + self.nq)
-
-    @property
-    def body(self) -> slice:
-        """``q``, wrench and twist together (what the sampler writes)."""
-        return slice(1, 13 + self.nq)
-
-    @property
-    def frames(self) -> int:
-        """Index of the drawn-frames counter (written by the view process)."""
-        return 13 + self.nq
-
-    @property
-    def stop(self) -> int:
-        """Index of the stop flag (set to 1 by the control process)."""
-        return 14 + self.nq
+    def __init__(self, nq: int):
+        self.nq, self.size, self.body = nq, nq + 15, slice(1, 13 + nq)
+        self.frames, self.stop = 13 + nq, 14 + nq
 
 
 @dataclass(frozen=True)
@@ -71,9 +60,8 @@ class ViewSettings:
         fps: Frames per second drawn [1/s].
         force_scale: Arrow length per newton [m/N] (torque: per N·m).
         twist_scale: Arrow length per m/s (angular: per rad/s) [s].
-        twist_axes: ``"base"``, ``"sensor"`` or ``"tool"``: the axes of the published twist.
-        rotation_tool_to_sensor: ``R_ST`` for ``"tool"`` axes.
-        point_in_sensor: Control point in the sensor frame [m].
+        control_frame: The :class:`~ftkin.control.control_frame.ControlFrame` of the published
+            twist: its axes and the control point.
         zmq_url: A running meshcat server to draw into, or None to start one.
     """
 
@@ -82,9 +70,7 @@ class ViewSettings:
     fps: float
     force_scale: float
     twist_scale: float
-    twist_axes: str
-    rotation_tool_to_sensor: np.ndarray
-    point_in_sensor: np.ndarray
+    control_frame: ControlFrame
     zmq_url: str | None
 
 
@@ -113,24 +99,19 @@ def run_view(settings: ViewSettings, report) -> None:
 
     Stops when the stop flag is set or the parent process is gone.
     """
-    from multiprocessing import shared_memory
-
-    from .server import import_meshcat, import_pinocchio_visualizer, start_visualizer, stop_server
-
     arm = settings.arm
     layout = StateLayout(arm.nq)
     block = shared_memory.SharedMemory(name=settings.shared_name)
-    _untrack(block)
+    try:  # keep this process's resource tracker from unlinking the parent's block (Python < 3.13)
+        resource_tracker.unregister(block._name, "shared_memory")
+    except Exception:  # noqa: BLE001 - only a warning at exit is at stake
+        pass
     state = np.ndarray((layout.size,), dtype=np.float64, buffer=block.buf)
     visualizer = None
     try:
         meshcat = import_meshcat()
         visualizer = start_visualizer(settings.zmq_url)
-        robot = import_pinocchio_visualizer()(
-            arm.model, arm.geometry("collision"), arm.geometry("visual")
-        )
-        robot.initViewer(viewer=visualizer)
-        robot.loadViewerModel(rootNodeName="pinocchio")
+        robot = load_arm(arm, visualizer)
         style = ArrowStyle()
         for layer in LIVE_LAYERS:
             material = meshcat.geometry.MeshBasicMaterial(color=layer.color)
@@ -143,7 +124,7 @@ def run_view(settings: ViewSettings, report) -> None:
         if visualizer is not None:
             stop_server(visualizer)
         return
-    parent, period, seq, frames = os.getppid(), 1.0 / settings.fps, -1.0, 0
+    parent, period, seq = os.getppid(), 1.0 / settings.fps, -1.0
     try:
         while state[layout.stop] == 0.0 and os.getppid() == parent:
             start = time.perf_counter()
@@ -151,8 +132,7 @@ def run_view(settings: ViewSettings, report) -> None:
             if body is not None:
                 _draw(visualizer, robot, arm, settings, body, style)
                 batch.flush()
-                frames += 1
-                state[layout.frames] = frames
+                state[layout.frames] += 1.0
             time.sleep(max(period - (time.perf_counter() - start), 0.0))
     finally:
         del state
@@ -197,35 +177,18 @@ class PipelinedSender:
         self.socket.close(linger=0)
 
 
-def _untrack(block) -> None:
-    """Keep this process's resource tracker from unlinking the block the control process owns
-    (Python < 3.13).
-    """
-    try:
-        from multiprocessing import resource_tracker
-
-        resource_tracker.unregister(getattr(block, "_name", "/" + block.name), "shared_memory")
-    except Exception:  # noqa: BLE001 - only a warning at exit is at stake
-        pass
-
-
 def _draw(
     visualizer, robot, arm, settings: ViewSettings, body: np.ndarray, style: ArrowStyle
 ) -> None:
     nq = arm.nq
-    q, wrench, twist = body[:nq], body[nq : nq + 6], body[nq + 6 : nq + 12]
+    q, wrench, twist = body[:nq], body[nq : nq + 6], body[nq + 6 :]
     if not np.all(np.isfinite(q)):
         return
     robot.display(q)
     rotation, origin = arm.frame_placement(q, "sensor")
     wrench = np.nan_to_num(wrench)  # a sensor-fault tick publishes NaN
-    if settings.twist_axes == "sensor":
-        twist_rotation = rotation
-    elif settings.twist_axes == "tool":
-        twist_rotation = rotation @ settings.rotation_tool_to_sensor
-    else:
-        twist_rotation = np.eye(3)
-    point = origin + rotation @ settings.point_in_sensor
+    control = settings.control_frame.placement_in_sensor(rotation)  # point r, axes R_SC
+    point, twist_rotation = origin + rotation @ control.translation, rotation @ control.rotation
     vectors = (
         (CONTACT, origin, rotation @ wrench[:3], settings.force_scale),
         (TORQUE, origin, rotation @ wrench[3:], settings.force_scale),
@@ -242,13 +205,8 @@ def main() -> None:
     """The view process: pickled :class:`ViewSettings` on stdin, one status line on stdout, then
     draw.
     """
-    import pickle
-    import sys
+    run_view(pickle.loads(sys.stdin.buffer.read()), _report)
 
-    settings = pickle.loads(sys.stdin.buffer.read())
 
-    def report(kind: str, text: str) -> None:
-        sys.stdout.write(f"{kind} {text}\n")
-        sys.stdout.flush()
-
-    run_view(settings, report)
+def _report(kind: str, text: str) -> None:
+    print(f"{kind} {text}", flush=True)  # the status line the control process waits for

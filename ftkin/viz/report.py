@@ -59,15 +59,26 @@ def _wrapped(text: str) -> str:
     return "\n".join(lines)
 
 
-def _pyplot_free_figure(height: float = 10.0):
+def new_figure(figsize: tuple[float, float], purpose: str):
+    """A matplotlib ``Figure`` of ``figsize`` [in] on the Agg canvas (no display, not attached to
+    pyplot; constrained layout), or :class:`MissingDependency` (extra ``plots``) naming
+    ``purpose``.
+    """
     try:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
     except ImportError:
-        raise MissingDependency("matplotlib", "plots", "plotting a calibration report") from None
-    figure = Figure(figsize=(14, height), layout="constrained")
+        raise MissingDependency("matplotlib", "plots", purpose) from None
+    figure = Figure(figsize=figsize, layout="constrained")
     FigureCanvasAgg(figure)
     return figure
+
+
+def save_figure(figure, path, fmt: str, dpi: int) -> Path:
+    """Write ``figure`` to ``path`` in the format ``fmt`` atomically; returns the path."""
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format=fmt, dpi=dpi)
+    return atomic_write_bytes(path, buffer.getvalue())
 
 
 def _as_calibration(calibration) -> CalibrationResult:
@@ -126,11 +137,9 @@ def report_figure(calibration, samples: Samples, title: str | None = None, serie
     if calibration.std_errors is None:
         summary += "\n  (no standard errors: the calibration has no covariance)"
     summary = _wrapped(summary)
-    text_height = (
-        0.2 + len(summary.splitlines()) * SUMMARY_FONT_SIZE * 1.25 / 72.0
-    )  # [in]: the text's own height
+    text_height = 0.2 + len(summary.splitlines()) * SUMMARY_FONT_SIZE * 1.25 / 72.0  # [in]
     heights = [2.6, 1.2, 2.6, 1.2, text_height] + [2.3] * len(series)  # [in]
-    figure = _pyplot_free_figure(sum(heights) + 0.6)
+    figure = new_figure((14, sum(heights) + 0.6), "plotting a calibration report")
     grid = figure.add_gridspec(5 + len(series), 3, height_ratios=heights)
     x = np.arange(len(data["pose_ids"]))
     error = np.nan_to_num(data["standard_error"], nan=0.0)
@@ -141,8 +150,7 @@ def report_figure(calibration, samples: Samples, title: str | None = None, serie
             x, data["measured"][:, channel], yerr=error[:, channel], fmt="o", ms=3, label="measured"
         )
         top.plot(x, data["predicted"][:, channel], "-", lw=1, label="predicted")
-        top.set_ylabel(f"{name} [{unit}]")
-        top.set_title(name)
+        top.set(ylabel=f"{name} [{unit}]", title=name)
         top.tick_params(labelbottom=False)
         if channel == 0:
             top.legend(loc="best", fontsize="small")
@@ -151,8 +159,7 @@ def report_figure(calibration, samples: Samples, title: str | None = None, serie
         bottom.errorbar(
             x, data["residuals"][:, channel], yerr=error[:, channel], fmt=".", ms=3, color="C3"
         )
-        bottom.set_ylabel(f"residual [{unit}]")
-        bottom.set_xlabel("pose")
+        bottom.set(ylabel=f"residual [{unit}]", xlabel="pose")
     text = figure.add_subplot(grid[4, :])
     text.axis("off")
     text.text(
@@ -181,7 +188,4 @@ def save_report(
     fmt = path.suffix.lstrip(".").lower() or "png"
     if fmt not in ("png", "pdf", "svg"):
         raise InvalidInput(f"report file must end in .png, .pdf or .svg, got {path.name!r}")
-    figure = report_figure(calibration, samples, title, series)
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format=fmt, dpi=dpi)
-    return atomic_write_bytes(path, buffer.getvalue())
+    return save_figure(report_figure(calibration, samples, title, series), path, fmt, dpi)

@@ -95,15 +95,12 @@ def draw_series(figure, grid_row, series: Series) -> list:
     """Plot ``series`` into the two halves of ``grid_row`` (a gridspec row); returns the two
     axes.
     """
-    force = figure.add_subplot(grid_row[0, :2])
-    torque = figure.add_subplot(grid_row[0, 2:])
-    for k, ax in ((0, force), (3, torque)):
-        for channel in range(k, k + 3):
+    axes = [figure.add_subplot(grid_row[0, :2]), figure.add_subplot(grid_row[0, 2:])]
+    for first, ax, quantity, unit in zip((0, 3), axes, ("force", "torque"), ("N", "N·m")):
+        for channel in range(first, first + 3):
             ax.plot(series.times, series.values[:, channel], lw=1, label=WRENCH_CHANNELS[channel])
-        ax.set_xlabel("time [s]")
+        ax.set(
+            xlabel="time [s]", ylabel=f"{quantity} [{unit}]", title=f"{series.title}: {quantity}s"
+        )
         ax.legend(loc="best", fontsize="small")
-    force.set_ylabel("force [N]")
-    torque.set_ylabel("torque [N·m]")
-    force.set_title(f"{series.title}: forces")
-    torque.set_title(f"{series.title}: torques")
-    return [force, torque]
+    return axes

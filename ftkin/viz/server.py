@@ -27,8 +27,10 @@ def import_meshcat():
     return meshcat
 
 
-def import_pinocchio_visualizer():
-    """Pinocchio's ``MeshcatVisualizer`` class (needs meshcat)."""
+def load_arm(arm, visualizer):
+    """Pinocchio's ``MeshcatVisualizer`` of ``arm`` (an :class:`~ftkin.kinematics.arm.Arm`) loaded
+    into ``visualizer`` as the scene node ``pinocchio``: visual geometry, collision geometry hidden.
+    """
     import_meshcat()
     try:
         from pinocchio.visualize import MeshcatVisualizer
@@ -36,7 +38,10 @@ def import_pinocchio_visualizer():
         raise MissingDependency(
             "meshcat", "viz", "drawing the arm (pinocchio.visualize.MeshcatVisualizer)"
         ) from None
-    return MeshcatVisualizer
+    robot = MeshcatVisualizer(arm.model, arm.geometry("collision"), arm.geometry("visual"))
+    robot.initViewer(viewer=visualizer)
+    robot.loadViewerModel(rootNodeName="pinocchio")
+    return robot
 
 
 def start_visualizer(zmq_url: str | None = None):
@@ -66,13 +71,12 @@ def stop_server(visualizer, timeout: float = 5.0) -> None:
     """
     window = visualizer.window
     socket = getattr(window, "zmq_socket", None)
-    if socket is not None and not socket.closed:
-        socket.close(linger=0)
+    if socket is not None:
+        socket.close(linger=0)  # a no-op on a closed socket
     process = getattr(window, "server_proc", None)
-    if process is not None and process.poll() is None:
-        process.kill()
-        process.wait(timeout=timeout)
     if process is not None:
-        for stream in (process.stdout, process.stderr):
-            if stream is not None and not stream.closed:
-                stream.close()
+        if process.poll() is None:
+            process.kill()
+            process.wait(timeout=timeout)
+        for stream in filter(None, (process.stdout, process.stderr)):
+            stream.close()  # a no-op on a closed stream

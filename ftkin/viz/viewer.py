@@ -5,15 +5,28 @@
 * the arm (Pinocchio's ``MeshcatVisualizer``, visual geometry; collision
   geometry loaded hidden), when an :class:`~ftkin.kinematics.arm.Arm` is given;
 * the sensor frame triad (x, y, z = red, green, blue);
-* arrows anchored at the sensor origin, scaled ``scale`` [m per N]: the
-  measured force minus the bias (magenta), the predicted tool gravity (cyan),
-  the compensated contact force (yellow) — see :mod:`ftkin.viz.vectors`;
-* the tool's centre of mass (green sphere);
-* beside the base: the gravity direction the calibration estimates (purple),
-  its tilt from the base's −z (dark grey) multiplied by ``tilt_exaggeration``.
+* arrows anchored at the sensor origin, scaled ``scale`` [m per N]
+  (:func:`pose_vectors`):
 
-At a calibration pose without contact the magenta and cyan arrows lie on top
-of each other and the yellow one vanishes.
+  * ``measured`` (magenta): ``R_BS (F - F0)`` [N], the raw force with the bias removed;
+  * ``gravity`` (cyan): ``R_BS Gs = a`` [N], the predicted tool weight;
+  * ``contact`` (yellow): ``R_BS F'`` [N], ``F' = F - F0 - Gs`` (the compensated force, from
+    the model's :meth:`~ftkin.calibration.model.SensorModel.predict`);
+
+* the tool's centre of mass ``p_S + R_BS P`` [m] (green sphere);
+* beside the sensor: the gravity direction the calibration estimates (the unit
+  direction of ``a``, purple), its tilt from the base's −z (dark grey)
+  multiplied by ``tilt_exaggeration``.
+
+At a static calibration pose without contact the measured force minus the
+bias equals the tool weight the calibration predicts: the magenta and cyan
+arrows lie on top of each other and the yellow one vanishes.
+
+meshcat 0.3.2 cannot move the camera's orbit target, so the whole scene
+(``/meshcat``, ``/Axes``) is shifted to put the target at the origin, and the
+camera is placed through ``/Cameras/default/rotated/<object>`` (three.js axes:
+``[x, z, -y]``). meshcat's grid does not follow a transform; it is hidden and
+a translucent floor plate is drawn under the arm instead.
 """
 
 from __future__ import annotations
@@ -28,25 +41,104 @@ from ..calibration.model import SensorModel
 from ..exceptions import InvalidInput
 from ..io.atomic import atomic_write_text
 from ..kinematics.arm import Arm
-from ..validation import as_batch, as_positive, as_vector, from_fields
-from .arrows import ArrowStyle, NodePose, arrow_placement, exaggerate_tilt, rigid_transform
+from ..validation import as_batch, as_positive, as_rotation_batch, as_vector, from_fields
+from .arrows import (
+    ArrowStyle,
+    NodePose,
+    add_arrow_objects,
+    arrow_placement,
+    exaggerate_tilt,
+    rigid_transform,
+)
 from .framing import PoseView, arm_points, frame_pose
 from .legend import (
     ARROWS,
     BASE_GRAVITY,
     CENTER_OF_MASS,
+    GRAVITY,
     LAYERS,
+    MEASURED,
     VERTICAL,
     add_legend,
     inline_commands,
     legend_html,
 )
-from .scene import ROOT, add_markers, apply_view, frame_view, set_camera
-from .server import import_meshcat, import_pinocchio_visualizer, start_visualizer, stop_server
-from .vectors import PoseVectors, pose_vectors
+from .server import import_meshcat, load_arm, start_visualizer, stop_server
 
 DEFAULT_ARROW_LENGTH = 0.25
 """Drawn length of the tool-weight arrow when no scale is given [m]."""
+
+ROOT = "ftkin"
+"""Scene folder of everything ftkin draws besides the arm."""
+
+CAMERA_PATH = "/Cameras/default/rotated/<object>"
+"""meshcat's camera object (three.js axes ``[x, z, -y]``, y up)."""
+
+RADIUS_FACTORS = {MEASURED.name: 0.5, GRAVITY.name: 1.6, VERTICAL.name: 0.5}
+"""Arrow radii relative to the style: a thin measured-force needle inside a wide predicted-gravity
+sleeve.
+"""
+
+CAMERA_DIRECTION = np.array([0.55, -0.75, 0.35]) / np.linalg.norm([0.55, -0.75, 0.35])
+"""From the orbit target towards the camera (base axes): front right, above."""
+
+
+@dataclass(frozen=True)
+class PoseVectors:
+    """Everything drawn for one pose (base frame B).
+
+    Attributes:
+        rotation_sensor_to_base: ``R_BS`` ``(3, 3)``.
+        sensor_origin: Sensor origin in the base frame [m].
+        measured_force: ``R_BS (F - F0)`` [N].
+        gravity_force: Predicted tool weight ``a`` [N].
+        contact_force: ``R_BS F'`` [N], the compensated contact force.
+        contact_wrench: ``F'`` and ``M'`` in the sensor frame [N, N·m].
+        center_of_mass: Tool centre of mass in the base frame [m].
+        gravity_direction: Unit vector along ``a`` (base frame).
+    """
+
+    rotation_sensor_to_base: np.ndarray
+    sensor_origin: np.ndarray
+    measured_force: np.ndarray
+    gravity_force: np.ndarray
+    contact_force: np.ndarray
+    contact_wrench: np.ndarray
+    center_of_mass: np.ndarray
+    gravity_direction: np.ndarray
+
+
+def pose_vectors(
+    calibration: SensorModel, rotation_sensor_to_base, sensor_origin, raw_wrench
+) -> PoseVectors:
+    """Compute the drawn vectors of one pose (pure numpy).
+
+    Args:
+        calibration: The calibration to check (bias, tool weight, COM).
+        rotation_sensor_to_base: ``R_BS`` ``(3, 3)`` at this pose.
+        sensor_origin: Sensor origin in the base frame [m] (zero without an arm).
+        raw_wrench: Raw reading ``[fx, fy, fz, mx, my, mz]`` [N, N·m] of the real sensor
+            (its reading signs applied: :func:`~ftkin.calibration.conventions.as_real_sensor`).
+    """
+    rotations, _ = as_rotation_batch(rotation_sensor_to_base)
+    if len(rotations) != 1:
+        raise InvalidInput("pose_vectors takes one (3, 3) rotation, got a batch")
+    rotation = rotations[0]
+    origin = as_vector(sensor_origin, 3, "sensor origin")
+    raw = as_vector(raw_wrench, 6, "raw wrench [fx, fy, fz, mx, my, mz]")
+    contact = raw - calibration.predict(rotation)  # F' = F − F0 − Gs, M' = M − M0 − P × Gs
+    gravity = np.array(calibration.gravity_in_base, dtype=float)
+    weight = np.linalg.norm(gravity)
+    return PoseVectors(
+        rotation_sensor_to_base=rotation,
+        sensor_origin=origin,
+        measured_force=rotation @ (raw[:3] - calibration.force_offset),
+        gravity_force=gravity,
+        contact_force=rotation @ contact[:3],
+        contact_wrench=contact,
+        center_of_mass=origin + rotation @ calibration.center_of_mass,
+        gravity_direction=gravity / weight if weight > 0 else np.array([0.0, 0.0, -1.0]),
+    )
 
 
 @dataclass(frozen=True)
@@ -109,33 +201,27 @@ class CalibrationViewer:
         drawing: DrawingOptions | None = None,
         **options,
     ):
-        _check_calibration(calibration)
+        self.calibration = _checked(calibration)
         if arm is not None and not isinstance(arm, Arm):
             raise InvalidInput(f"arm must be an ftkin Arm or None, got {type(arm).__name__}")
         if drawing is not None and options:
             raise InvalidInput("give DrawingOptions or their fields as keywords, not both")
-        if drawing is None:
-            drawing = from_fields(DrawingOptions, options, "CalibrationViewer")
-        self.calibration = calibration
+        drawing = drawing or from_fields(DrawingOptions, options, "CalibrationViewer")
         self.arm = arm
-        self.scale = (
-            drawing.scale
-            if drawing.scale is not None
-            else DEFAULT_ARROW_LENGTH / max(calibration.tool_weight, 1e-9)
-        )
+        self.scale = drawing.scale or DEFAULT_ARROW_LENGTH / max(calibration.tool_weight, 1e-9)
         self.tilt_exaggeration, self.style = drawing.tilt_exaggeration, drawing.style
         self.gravity_anchor, self.auto_camera = drawing.gravity_anchor, drawing.auto_camera
         self.view: PoseView | None = None
-        self._anchor = (
-            np.array([-0.25, -0.3, 0.4]),
-            0.3,
-        )  # gravity arrow beside the base until a pose is framed
+        # Start [m] and length [m] of the gravity-direction arrow: beside the base until a pose
+        # is framed.
+        anchor = (
+            np.array([-0.25, -0.3, 0.4]) if self.gravity_anchor is None else self.gravity_anchor
+        )
+        self._anchor = (anchor, 0.3)
         self._meshcat = import_meshcat()
         self._owns_server = visualizer is None and zmq_url is None
         self.visualizer = visualizer if visualizer is not None else start_visualizer(zmq_url)
         self._closed = False
-        self._robot = None
-        self._animation = None
         atexit.register(self.close)
         try:
             self._build_scene()
@@ -171,27 +257,56 @@ class CalibrationViewer:
 
     # ----------------------------------------------------------------- scene
     def _build_scene(self) -> None:
-        if self.arm is not None:
-            visualizer_class = import_pinocchio_visualizer()
-            self._robot = visualizer_class(
-                self.arm.model, self.arm.geometry("collision"), self.arm.geometry("visual")
+        """The arm, the markers (sensor triad; arrows: unit shaft + cone head, unlit; the COM
+        sphere), the floor, and the camera on the arm's frame origins at ``q = 0`` (clipped to the
+        limits).
+        """
+        geometry, arm = self._meshcat.geometry, self.arm
+        self._robot = None if arm is None else load_arm(arm, self.visualizer)
+        self.visualizer[f"{ROOT}/sensor"].set_object(geometry.triad(0.12))
+        for layer in (*ARROWS, BASE_GRAVITY, VERTICAL):
+            # The predicted-gravity arrow shows only its inner faces (THREE.BackSide = 1, else
+            # DoubleSide = 2): unlit it looks the same, but the measured-force needle inside it
+            # stays visible when the two coincide (a good calibration).
+            material = geometry.MeshBasicMaterial(
+                color=layer.color, side=1 if layer is GRAVITY else 2
             )
-            self._robot.initViewer(viewer=self.visualizer)
-            self._robot.loadViewerModel(rootNodeName="pinocchio")
-        add_markers(self.visualizer, self._meshcat.geometry, self.style)
-        frame_view(self.visualizer, self._meshcat.geometry, self.arm)
+            node = self.visualizer[f"{ROOT}/{layer.name}"]
+            add_arrow_objects(
+                node, geometry, self.style, material, RADIUS_FACTORS.get(layer.name, 1)
+            )
+        self.visualizer[f"{ROOT}/{CENTER_OF_MASS.name}"].set_object(
+            geometry.Sphere(0.7 * self.style.head_radius),
+            geometry.MeshBasicMaterial(color=CENTER_OF_MASS.color, depthTest=False),  # seen through
+        )
+        if arm is None:
+            target, extent = np.zeros(3), 0.6
+        else:
+            q = np.clip(np.zeros(arm.nq), arm.lower_limits, arm.upper_limits)
+            origins = np.array([arm.frame_placement(q, name)[1] for name in arm.frame_names])
+            target = 0.5 * (origins.min(axis=0) + origins.max(axis=0))
+            extent = max(float(np.ptp(origins, axis=0).max()), 0.5)
+        self.visualizer["/Grid"].set_property("visible", False)
+        floor = self.visualizer[f"{ROOT}/floor"]  # translucent: the arm may reach below
+        floor.set_object(
+            geometry.Box([2.0 * extent, 2.0 * extent, 0.004]),
+            geometry.MeshLambertMaterial(color=0xD8D8D8, transparent=True, opacity=0.45),
+        )
+        floor.set_transform(rigid_transform(np.eye(3), [target[0], target[1], -0.003]))
+        view = PoseView(target, 1.25 * extent * CAMERA_DIRECTION, True, extent, 0.0)
+        _apply_view(self.visualizer, view, animated=False)
 
     def set_calibration(self, calibration: SensorModel) -> None:
         """Show another calibration from the next pose on (the arrow scale stays)."""
-        _check_calibration(calibration)
-        self.calibration = calibration
+        self.calibration = _checked(calibration)
 
     def set_camera(self, position) -> None:
         """Camera position relative to the orbit target, base axes [m]; stops the per-pose
         framing.
         """
         self.auto_camera = False
-        set_camera(self.visualizer, position)
+        x, y, z = as_vector(position, 3, "camera position [m]")
+        self.visualizer[CAMERA_PATH].set_property("position", [float(x), float(z), float(-y)])
 
     def set_visible(self, name: str, visible: bool) -> None:
         """Show or hide a layer (``measured``, ``gravity``, ``contact``, ``center_of_mass``,
@@ -205,7 +320,7 @@ class CalibrationViewer:
     # ----------------------------------------------------------------- poses
     def show_pose(self, q, raw_wrench) -> PoseVectors:
         """Draw the arm at joint angles ``q`` [rad] with the vectors of one raw reading [N, N·m]."""
-        return self._draw(self.visualizer, q, None, raw_wrench, animated=False)
+        return self._draw(self.visualizer, raw_wrench, animated=False, q=q)
 
     def show_rotation(
         self, rotation_sensor_to_base, raw_wrench, sensor_origin=(0.0, 0.0, 0.0)
@@ -215,10 +330,10 @@ class CalibrationViewer:
         """
         return self._draw(
             self.visualizer,
-            None,
-            (rotation_sensor_to_base, sensor_origin),
             raw_wrench,
             animated=False,
+            rotation=rotation_sensor_to_base,
+            origin=sensor_origin,
         )
 
     def animate(
@@ -245,88 +360,84 @@ class CalibrationViewer:
             repetitions: How many times the page plays it.
         """
         raw, _ = as_batch(raw_wrenches, 6, "raw wrenches")
-        count = len(raw)
         if (configurations is None) == (rotations is None):
             raise InvalidInput("give exactly one of configurations= (joint angles) or rotations=")
-        if times is None:
+        if times is None:  # each pose's first and last frame
             step = max(int(round(as_positive(hold, "hold [s]") * fps)), 1)
-            starts = np.arange(count) * step
-            frames = [(int(s), int(s + step - 1)) for s in starts]
+            frames = [(k * step, k * step + step - 1) for k in range(len(raw))]
         else:
             times = np.asarray(times, dtype=float).reshape(-1)
             if (
-                times.shape != (count,)
+                times.shape != (len(raw),)
                 or not np.all(np.isfinite(times))
                 or np.any(np.diff(times) < 0)
             ):
-                raise InvalidInput(f"times must be {count} finite non-decreasing values [s]")
+                raise InvalidInput(f"times must be {len(raw)} finite non-decreasing values [s]")
             frames = [(int(round(f)),) for f in (times - times[0]) * fps]
         animation = self._meshcat.animation.Animation(default_framerate=fps)
         out = []
-        for k in range(count):
-            for frame in frames[k]:
+        for k, pose_frames in enumerate(frames):
+            pose = {"q": configurations[k]} if rotations is None else {"rotation": rotations[k]}
+            for frame in pose_frames:
                 sink = animation.at_frame(self.visualizer, frame)
-                if configurations is not None:
-                    vectors = self._draw(sink, configurations[k], None, raw[k], animated=True)
-                else:
-                    vectors = self._draw(
-                        sink, None, (rotations[k], (0.0, 0.0, 0.0)), raw[k], animated=True
-                    )
+                vectors = self._draw(sink, raw[k], animated=True, **pose)
             out.append(vectors)
         self.visualizer.set_animation(animation, play=play, repetitions=repetitions)
-        self._animation = animation
         return out
 
-    def _draw(self, sink, q, rotation_and_origin, raw_wrench, animated: bool) -> PoseVectors:
+    def _draw(
+        self, sink, raw_wrench, animated: bool, q=None, rotation=None, origin=(0.0, 0.0, 0.0)
+    ) -> PoseVectors:
         """Draw one reading into ``sink`` (the viewer, or an animation frame): the arm at ``q``
-        or the sensor at ``(R_BS, origin)``, the force arrows, the COM, the gravity direction.
+        [rad] or the sensor at ``rotation`` (``R_BS``) and ``origin`` [m], the force arrows, the
+        COM, the gravity direction.
         """
+        points = None  # the arm's, for the camera
         if q is not None:
-            rotation, origin, points = self._draw_arm(sink, q)
-        else:
-            (rotation, origin), points = rotation_and_origin, None
-        vectors = pose_vectors(self.calibration, rotation, origin, raw_wrench)
-        origin, place = vectors.sensor_origin, _place_animated if animated else _place_live
-        sensor = rigid_transform(vectors.rotation_sensor_to_base, vectors.sensor_origin)
-        place(sink, f"{ROOT}/sensor", NodePose(sensor, np.ones(3)))
-        forces = (vectors.measured_force, vectors.gravity_force, vectors.contact_force)
-        for layer, force in zip(ARROWS, forces):
-            _place_arrow(place, sink, layer, arrow_placement(origin, force, self.scale, self.style))
-        com = NodePose(rigid_transform(np.eye(3), vectors.center_of_mass), np.ones(3))
-        place(sink, f"{ROOT}/{CENTER_OF_MASS.name}", com)
-        if self.auto_camera:
-            tool_size = 2.0 * float(np.linalg.norm(self.calibration.center_of_mass))
-            self.view = frame_pose(
-                origin, [self.scale * f for f in forces], points, tool_size=tool_size
-            )
-            apply_view(sink, self.view, animated)
-            if self.gravity_anchor is None:  # beside the sensor, right of it, a little up
-                view = self.view
-                anchor = view.target + view.radius * (0.8 * view.right + np.array([0, 0, 0.3]))
-                self._anchor = (anchor, min(0.3, 0.6 * view.radius))
-        anchor, length = self._anchor if self.gravity_anchor is None else (self.gravity_anchor, 0.3)
-        drawn_direction = exaggerate_tilt(vectors.gravity_direction, self.tilt_exaggeration)
-        for layer, direction in ((BASE_GRAVITY, drawn_direction), (VERTICAL, (0.0, 0.0, -1.0))):
-            _place_arrow(place, sink, layer, arrow_placement(anchor, direction, length, self.style))
-        return vectors
-
-    def _draw_arm(self, sink, q):
-        """The arm drawn at ``q`` [rad]; returns the sensor's ``R_BS``, origin [m] and the arm's
-        points for the camera (None without auto camera).
-        """
-        if self.arm is None:
-            raise InvalidInput(
-                "this viewer has no arm: use show_rotation(R_BS, raw_wrench) or pass arm="
-            )
-        q = self.arm.check_configuration(q)
-        rotation, origin = self.arm.frame_placement(q, "sensor")
-        if self._robot is not None:
+            if self.arm is None:
+                raise InvalidInput(
+                    "this viewer has no arm: use show_rotation(R_BS, raw_wrench) or pass arm="
+                )
+            q = self.arm.check_configuration(q)
+            rotation, origin = self.arm.frame_placement(q, "sensor")
             self._robot.viewer = sink
             try:
                 self._robot.display(q)
             finally:
                 self._robot.viewer = self.visualizer
-        return rotation, origin, arm_points(self.arm, q) if self.auto_camera else None
+            points = arm_points(self.arm, q) if self.auto_camera else None
+        vectors = pose_vectors(self.calibration, rotation, origin, raw_wrench)
+        origin = vectors.sensor_origin
+        forces = (vectors.measured_force, vectors.gravity_force, vectors.contact_force)
+        if self.auto_camera:
+            tool_size = 2.0 * float(np.linalg.norm(self.calibration.center_of_mass))
+            view = frame_pose(origin, [self.scale * f for f in forces], points, tool_size=tool_size)
+            _apply_view(sink, view, animated)
+            self.view = view
+            if self.gravity_anchor is None:  # beside the sensor, right of it, a little up
+                anchor = view.target + view.radius * (0.8 * view.right + np.array([0, 0, 0.3]))
+                self._anchor = (anchor, min(0.3, 0.6 * view.radius))
+        anchor, length = self._anchor
+        tilted = exaggerate_tilt(vectors.gravity_direction, self.tilt_exaggeration)
+        arrows = [(layer, origin, force, self.scale) for layer, force in zip(ARROWS, forces)]
+        arrows += [(BASE_GRAVITY, anchor, tilted, length), (VERTICAL, anchor, (0, 0, -1.0), length)]
+        nodes = {
+            "sensor": NodePose(
+                rigid_transform(vectors.rotation_sensor_to_base, origin), np.ones(3)
+            ),
+            CENTER_OF_MASS.name: NodePose(
+                rigid_transform(np.eye(3), vectors.center_of_mass), np.ones(3)
+            ),
+        }
+        for layer, start, vector, scale in arrows:
+            arrow = arrow_placement(start, vector, scale, self.style)
+            nodes[f"{layer.name}/shaft"], nodes[f"{layer.name}/head"] = arrow.shaft, arrow.head
+        for name, pose in nodes.items():
+            # meshcat's animation frames record no scale in set_transform: it is sent apart
+            sink[f"{ROOT}/{name}"].set_transform(pose.rigid if animated else pose.matrix())
+            if animated:
+                sink[f"{ROOT}/{name}"].set_property("scale", "vector3", pose.scale.tolist())
+        return vectors
 
     # ---------------------------------------------------------------- export
     def legend(self, caption: str = "") -> str:
@@ -347,24 +458,30 @@ class CalibrationViewer:
         return atomic_write_text(path, self.static_html(legend, caption))
 
 
-def _check_calibration(calibration) -> None:
+def _checked(calibration) -> SensorModel:
     if not isinstance(calibration, SensorModel):
         raise InvalidInput(
             "calibration must be an ftkin SensorModel or CalibrationResult, got "
             f"{type(calibration).__name__}"
         )
+    return calibration
 
 
-def _place_arrow(place, sink, layer, arrow) -> None:
-    place(sink, f"{ROOT}/{layer.name}/shaft", arrow.shaft)
-    place(sink, f"{ROOT}/{layer.name}/head", arrow.head)
-
-
-def _place_live(sink, path: str, pose: NodePose) -> None:
-    sink[path].set_transform(pose.matrix())
-
-
-def _place_animated(sink, path: str, pose: NodePose) -> None:
-    node = sink[path]
-    node.set_transform(pose.rigid)
-    node.set_property("scale", "vector3", [float(v) for v in pose.scale])
+def _apply_view(sink, view: PoseView, animated: bool) -> None:
+    """Aim the camera of ``sink`` (the viewer or an animation frame) at ``view.target``: the scene
+    shifted by ``-target``, the camera at ``view.offset``, the floor shown only when it cannot
+    hide an arrow.
+    """
+    shift = rigid_transform(np.eye(3), -view.target)
+    sink["/meshcat"].set_transform(shift)
+    sink["/Axes"].set_transform(shift)
+    x, y, z = (float(v) for v in view.offset)
+    properties = (
+        (CAMERA_PATH, "position", "vector3", [x, z, -y]),
+        (f"/meshcat/{ROOT}/floor", "visible", "boolean", bool(view.floor_visible)),
+    )
+    for path, key, kind, value in properties:  # an animation frame also records the kind
+        if animated:
+            sink[path].set_property(key, kind, value)
+        else:
+            sink[path].set_property(key, value)
