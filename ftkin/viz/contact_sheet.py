@@ -111,10 +111,7 @@ def render_cells(
             png = screenshot_html(
                 cells[k].page, Path(scratch) / f"cell{k}.png", window_size=size, timeout=timeout
             )
-            pixels = imread(str(png))
-            if pixels.dtype != np.uint8:
-                pixels = np.round(pixels * 255).astype(np.uint8)
-            return pixels[..., :3]
+            return np.round(imread(str(png))[..., :3] * 255).astype(np.uint8)  # PNG: floats 0–1
 
         with ThreadPoolExecutor(max_workers=max(int(workers), 1)) as pool:
             return list(pool.map(shoot, range(len(cells))))

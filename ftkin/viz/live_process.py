@@ -181,12 +181,12 @@ def _draw(
     visualizer, robot, arm, settings: ViewSettings, body: np.ndarray, style: ArrowStyle
 ) -> None:
     nq = arm.nq
-    q, wrench, twist = body[:nq], body[nq : nq + 6], body[nq + 6 :]
+    q, twist = body[:nq], body[nq + 6 :]
+    wrench = np.nan_to_num(body[nq : nq + 6])  # a sensor-fault tick publishes NaN
     if not np.all(np.isfinite(q)):
         return
     robot.display(q)
     rotation, origin = arm.frame_placement(q, "sensor")
-    wrench = np.nan_to_num(wrench)  # a sensor-fault tick publishes NaN
     control = settings.control_frame.placement_in_sensor(rotation)  # point r, axes R_SC
     point, twist_rotation = origin + rotation @ control.translation, rotation @ control.rotation
     vectors = (

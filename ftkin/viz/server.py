@@ -53,9 +53,8 @@ def start_visualizer(zmq_url: str | None = None):
         FtkinError: the server cannot be started or reached.
     """
     meshcat = import_meshcat()
-    captured = io.StringIO()
     try:
-        with contextlib.redirect_stdout(captured):
+        with contextlib.redirect_stdout(io.StringIO()):
             visualizer = meshcat.Visualizer(zmq_url=zmq_url)
     except Exception as error:  # meshcat raises RuntimeError / zmq errors
         where = f"at {zmq_url}" if zmq_url else "as a subprocess"
