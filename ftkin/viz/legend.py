@@ -75,8 +75,8 @@ def legend_html(
     )
     if caption:
         rows.append(
-            "<div "
-            f'style="white-space:nowrap;overflow:hidden;text-overflow:ellipsis">{html.escape(caption)}</div>'
+            '<div style="white-space:nowrap;overflow:hidden;text-overflow:ellipsis">'
+            f"{html.escape(caption)}</div>"
         )
     left, top, right, bottom = LEGEND_BOX
     return (

@@ -38,6 +38,9 @@ def test_bad_arguments(arm):
         LiveView("not an arm")
     with pytest.raises(InvalidInput, match="ControlFrame"):
         LiveView(arm, control_frame="tool")
+    # checked before the shared block and the view process are made
+    with pytest.raises(InvalidInput, match="force_scale"):
+        LiveView(arm, force_scale=0.0)
 
 
 def test_a_paced_control_loop_is_drawn_at_20_fps_and_the_view_gets_the_latest_state(arm, truth):
