@@ -85,10 +85,11 @@ def sheet_cells(
         )
     outliers, cells = set(outliers), []
     for k, label in enumerate(labels):
-        if configurations is not None:
-            vectors = viewer.show_pose(configurations[k], raw[k])
-        else:
-            vectors = viewer.show_rotation(rotations[k], raw[k])
+        vectors = (
+            viewer.show_pose(configurations[k], raw[k])
+            if configurations is not None
+            else viewer.show_rotation(rotations[k], raw[k])
+        )
         angle = force_angle_deg(vectors.measured_force, vectors.gravity_force)
         page = add_legend(viewer.static_html(legend=False), HIDE_CONTROLS)
         cells.append(SheetCell(label, angle, k in outliers, page))

@@ -4,7 +4,7 @@
 twist)``); it neither copies, locks nor waits. A sampler thread in the
 control process copies the latest state into a small shared-memory block at
 the view's frame rate, and a separate process (:mod:`ftkin.viz.live_process`,
-started with ``spawn``) draws it in meshcat: the arm, the contact force and
+a fresh interpreter) draws it in meshcat: the arm, the contact force and
 torque at the sensor and the commanded twist at the control point.
 
 Attach to a :class:`~ftkin.control.joint_admittance.JointAdmittance` without
@@ -95,12 +95,11 @@ class LiveView:
         )
         frame = control_frame or ControlFrame("base")
         settings = ViewSettings(arm, self._block.name, self.fps, *scales, frame, zmq_url)
-        environment = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
         self._process = subprocess.Popen(
             [sys.executable, "-c", CHILD_COMMAND],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
-            env=environment,
+            env=dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p)),
         )
         atexit.register(self.close)
         try:
