@@ -8,12 +8,11 @@ the physics with a controller (e.g. :class:`~ftkin.control.JointAdmittance`) in
 the loop. ``mujoco`` is imported only when a model is built.
 """
 
-from .arm_model import GraspedObject, build_arm_model
+from .arm_model import ArmSimulation, GraspedObject, build_arm_model
 from .closed_loop import ClosedLoopRun, run_closed_loop
 from .mujoco_placement import simulate_placement_mujoco
 from .mujoco_sensor import MujocoSensor
 from .recording import MujocoRecorder
-from .simulation import ArmSimulation
 from .tool_inertia import ToolInertia
 
 __all__ = [

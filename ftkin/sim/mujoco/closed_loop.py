@@ -25,8 +25,8 @@ import numpy as np
 from ...calibration.model import SensorModel
 from ...exceptions import InvalidInput
 from ..placement import PlacementRun
+from .arm_model import ArmSimulation
 from .mujoco_sensor import MujocoSensor
-from .simulation import ArmSimulation
 
 PLACEMENT_COLUMNS = PlacementRun.COLUMNS
 """The placement CSV's columns (s, m, m/s, N, N, m, N), as
@@ -173,7 +173,7 @@ class _Recorder:
         if sim.surface_under is not None:
             row[5], row[6] = sim.surface_depth(), sim.normal_force()
         row[self.q_columns] = q
-        row[self.dq_columns] = data.qvel[sim._dq_index]
+        row[self.dq_columns] = data.qvel[sim._arm_dof]
         row[self.cmd_columns] = dq
         row[self.wrench_columns] = ideal
         self.z_before = z

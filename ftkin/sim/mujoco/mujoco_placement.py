@@ -26,10 +26,9 @@ from ...control.damped_least_squares import damped_least_squares
 from ...kinematics.arm import Arm
 from ..placement import PlacementRun, PlacementScenario, admittance_controller
 from ..sensor import SimulatedSensor, paper_like_truth
-from .arm_model import GraspedObject, build_arm_model
+from .arm_model import ArmSimulation, GraspedObject, build_arm_model
 from .closed_loop import ClosedLoopRun, run_closed_loop
 from .mujoco_sensor import MujocoSensor
-from .simulation import ArmSimulation
 
 
 class PositionLowering:
