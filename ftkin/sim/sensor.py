@@ -79,11 +79,9 @@ class SimulatedSensor:
             bias_drift: ``(N, 6)`` bias change to add instead (e.g. from
                 :meth:`bias_drift`, to know the truth).
         """
-        rotations, _ = as_rotation_batch(rotation_sensor_to_base)
-        raw = self.truth.predict(rotations).reshape(-1, 6)
+        raw = self.truth.predict(rotation_sensor_to_base).reshape(-1, 6)  # checks the rotations
         if contact_wrench is not None:
-            contact, _ = as_batch(contact_wrench, 6, "contact_wrench")
-            raw = raw + contact
+            raw = raw + as_batch(contact_wrench, 6, "contact_wrench")[0]
         if bias_drift is None and times is not None and self.drift is not None:
             bias_drift = self.bias_drift(times, rng)
         if bias_drift is not None:
