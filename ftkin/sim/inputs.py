@@ -58,9 +58,11 @@ class SimulatedInputs:
     sign: float = 1.0
 
     def __post_init__(self):
-        shape = np.shape(self.mount_rotation)
-        if shape != (3, 3):
-            raise InvalidInput(f"mount_rotation must be a (3, 3) rotation, got shape {shape}")
+        if np.shape(self.mount_rotation) != (3, 3):
+            raise InvalidInput(
+                "mount_rotation must be a (3, 3) rotation, got shape "
+                f"{np.shape(self.mount_rotation)}"
+            )
         rotations, _ = as_rotation_batch(self.mount_rotation, "mount_rotation")  # refuses mirrors
         if self.sign not in (1.0, -1.0):
             raise InvalidInput(f"sign must be +1 or -1, got {self.sign!r}")
@@ -81,7 +83,7 @@ class SimulatedInputs:
         ``times`` [s] drive the drift; ``contact`` ``(6,)`` or ``(N, 6)`` is the
         environment's wrench on the tool, real sensor frame [N, N·m].
         """
-        rotations = self.rotations(arm, as_batch(configurations, arm.nq, "joint positions q")[0])
+        rotations = self.rotations(arm, configurations)  # the arm checks the joint angles
         return self.sign * self.sensor.read(rotations, rng, contact, times)
 
 
@@ -193,15 +195,14 @@ def recording_table(
     q, _ = as_batch(joint_positions, arm.nq, "joint positions q")
     if arm.urdf_path is None:
         raise InvalidInput("a MuJoCo recording needs an arm loaded from a URDF file")
-    recorder = MujocoRecorder(
+    load = MujocoRecorder(
         arm.urdf_path,
         joint_names=arm.joint_names,
         sensor_body=sensor_body,
         tool=tool,
         g=inputs.truth.g,
         base_tilt=inputs.truth.base_tilt,
-    )
-    load = recorder.wrenches(q, joint_velocities, joint_accelerations)
+    ).wrenches(q, joint_velocities, joint_accelerations)
     load = (load.reshape(-1, 2, 3) @ inputs.mount_rotation.T).reshape(-1, 6)  # real sensor axes
     raw = (
         load

@@ -108,7 +108,7 @@ class PlacementScenario:
     def __post_init__(self):
         if self.mode not in MODES:
             raise InvalidInput(f"mode must be one of {MODES}, got {self.mode!r}")
-        if not (_finite(self.k1) and self.k1 >= 0 and _finite(self.k2) and self.k2 >= 0):
+        if not all(isinstance(k, Real) and 0 <= k < math.inf for k in (self.k1, self.k2)):
             raise InvalidInput(
                 f"gains must be finite numbers >= 0, got k1={self.k1!r} m/N, k2={self.k2!r} m/(s·N)"
             )
@@ -120,11 +120,10 @@ class PlacementScenario:
             "duration",
             "dt",
         ):
-            if not (_finite(getattr(self, name)) and getattr(self, name) > 0):
-                raise InvalidInput(
-                    f"{name} must be a finite number > 0, got {getattr(self, name)!r}"
-                )
-        if not (_finite(self.start_gap) and self.start_gap >= 0):
+            value = getattr(self, name)
+            if not (isinstance(value, Real) and 0 < value < math.inf):
+                raise InvalidInput(f"{name} must be a finite number > 0, got {value!r}")
+        if not (isinstance(self.start_gap, Real) and 0 <= self.start_gap < math.inf):
             raise InvalidInput(
                 f"start_gap must be a finite number >= 0 [m], got {self.start_gap!r}"
             )
@@ -140,10 +139,6 @@ MAX_TICKS = 1_000_000
 """Longest simulation, in control ticks (duration / dt): beyond it the run's arrays exhaust
 memory.
 """
-
-
-def _finite(value) -> bool:
-    return isinstance(value, Real) and math.isfinite(value)
 
 
 @dataclass(frozen=True)
@@ -252,7 +247,7 @@ def simulate_placement(
     surface = scenario.surface.at_height(
         (tool_start + rotation[:, 2] * scenario.object_height)[2] - scenario.start_gap
     )
-    calibration = truth if scenario.mode == "admittance" else None
+    calibration = truth if scenario.mode == "admittance" else None  # else raw readings
     controller = (
         None if scenario.mode == "position" else admittance_controller(scenario, arm, calibration)
     )

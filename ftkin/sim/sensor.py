@@ -154,6 +154,4 @@ def recording_times(
             "recording_times needs positive counts, duration [s] and reading_interval [s]"
         )
     pose_starts = start + np.arange(pose_count) * (duration / pose_count)
-    return (
-        pose_starts[:, None] + np.arange(readings_per_pose)[None, :] * reading_interval
-    ).reshape(-1)
+    return (pose_starts[:, None] + np.arange(readings_per_pose) * reading_interval).reshape(-1)

@@ -50,7 +50,7 @@ class Surface:
         """Upward force [N] on an object ``penetration`` [m] deep, moving in at ``penetration_rate``
         [m/s].
         """
-        if penetration <= 0.0:
+        if penetration <= 0.0:  # it pushes, it never pulls
             return 0.0
         return max(0.0, self.stiffness * penetration + self.damping * penetration_rate)
 
