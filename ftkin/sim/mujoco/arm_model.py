@@ -85,8 +85,7 @@ def subtree_inertia(model, data, site: int, root: int, without: int = -1) -> pin
     return total
 
 
-def _in_subtree(model, body: int, root: int) -> bool:
-    """Whether body ``body`` is ``root`` or below it (never for ``root`` -1)."""
+def _in_subtree(model, body: int, root: int) -> bool:  # never for root -1
     while body > 0:
         if body == root:
             return True
@@ -170,8 +169,8 @@ def build_arm_model(
             f"timestep [s] and servo_bandwidth [Hz] must be > 0, got {timestep!r}, "
             f"{servo_bandwidth!r}"
         )
-    q0 = (Q_DOWN if arm.nq == 6 else np.zeros(arm.nq)) if q0 is None else q0
-    q0 = arm.check_configuration(np.asarray(q0, dtype=float)).copy()
+    default = Q_DOWN if arm.nq == 6 else np.zeros(arm.nq)
+    q0 = arm.check_configuration(default if q0 is None else q0).copy()
     spec = mujoco.MjSpec.from_file(str(arm.urdf_path))
     spec.compiler.fusestatic = False
     bodies = {body.name: body for body in spec.bodies}
@@ -200,13 +199,12 @@ def build_arm_model(
     )
     tilt = (float(base_tilt[0]), float(base_tilt[1]))
     spec.option.gravity = gravity_in_base_from_tilt(float(g), *tilt)
-    surfaces_by_name = {s.name: s for s in surfaces}
     sim = ArmSimulation(
         mujoco,
         spec.compile(),
         arm,
         q0,
-        surfaces_by_name,
+        {surface.name: surface for surface in surfaces},
         surface_under if surfaces else None,
         tilt,
         float(g),
