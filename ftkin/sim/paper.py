@@ -88,12 +88,14 @@ def comparison_table(result: CalibrationResult) -> str:
         match = "yes" if paper_text == ours_text else "last digit" if last_digit else "NO"
         lines.append(f"{key:<26}{paper_text:<44}{ours_text:<44}{match}")
         if last_digit:
-            differing = (
-                f"{p:.{decimals}f} printed, {o:.{decimals}f} re-run"
-                for p, o, u in zip(paper_values, rounded, units)
-                if u
+            notes.append(
+                f"  {key}: "
+                + "; ".join(
+                    f"{p:.{decimals}f} printed, {o:.{decimals}f} re-run"
+                    for p, o, u in zip(paper_values, rounded, units)
+                    if u
+                )
             )
-            notes.append(f"  {key}: " + "; ".join(differing))
     if notes:
         lines += [
             "where the re-run of the paper's own data differs from its print in the last digit:",

@@ -476,7 +476,7 @@ class ArmSimulation:
         (from MuJoCo).
         """
         site = self.sensor_site_id
-        root = int(self.model.site_bodyid[site])
+        root = int(self.model.site_bodyid[site])  # the measured body
         inertia = subtree_inertia(self.model, self.data, site, root, without=self.object_body_id)
         return ToolInertia(inertia.mass, inertia.lever, inertia.inertia)
 

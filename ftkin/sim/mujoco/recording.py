@@ -48,8 +48,9 @@ class MujocoRecorder:
         g: float = STANDARD_GRAVITY,
         base_tilt=(0.0, 0.0),
     ):
-        purpose = "recording wrenches with MuJoCo (ftkin.sim.mujoco.recording)"
-        self._mujoco = mujoco = import_mujoco(purpose)
+        self._mujoco = mujoco = import_mujoco(
+            "recording wrenches with MuJoCo (ftkin.sim.mujoco.recording)"
+        )
         spec = mujoco.MjSpec.from_file(str(urdf if urdf is not None else bundled_urdf_path()))
         spec.compiler.fusestatic = False
         bodies = {body.name: body for body in spec.bodies}
@@ -129,5 +130,5 @@ class MujocoRecorder:
         origin, sensor axes.
         """
         self._mujoco.mj_kinematics(self.model, self.data)
-        inertia = subtree_inertia(self.model, self.data, self._site, self._body)
-        return np.asarray(inertia.toDynamicParameters(), dtype=float)
+        carried = subtree_inertia(self.model, self.data, self._site, self._body)
+        return np.asarray(carried.toDynamicParameters(), dtype=float)
