@@ -127,13 +127,12 @@ class SimulatedSensor:
     ) -> Samples:
         """Like :meth:`samples` with orientations from joint angles ``(N, nq)`` [rad]."""
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
-        rotations = np.repeat(
-            arm.rotation_sensor_to_base(configurations), readings_per_pose, axis=0
-        )  # FK once per pose
-        pose_ids = np.repeat(np.arange(len(configurations)), readings_per_pose)
+        rotations = arm.rotation_sensor_to_base(configurations)  # FK once per pose
+        read = self.samples(rotations, rng, readings_per_pose, times, bias_drift)
         repeated = np.repeat(configurations, readings_per_pose, axis=0)
-        wrenches = self.read(rotations, rng, times=times, bias_drift=bias_drift)
-        return Samples.from_joint_positions(arm, repeated, wrenches, pose_ids, rotations, times)
+        return Samples.from_joint_positions(
+            arm, repeated, read.wrenches, read.pose_ids, read.rotations, times
+        )
 
 
 def recording_times(
