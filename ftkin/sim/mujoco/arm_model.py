@@ -18,10 +18,11 @@ gripper are separate), adds
 
 Sign: MuJoCo's sensors read the wrench the parent exerts on the measured
 subtree, in the site frame; ftkin's raw reading is the load *on* the sensor,
-its negative: :meth:`ArmSimulation.ideal_wrench_in_sensor` returns ``-sensordata``.
+its negative: :meth:`ArmSimulation.ideal_wrench_in_sensor` returns ``-sensordata``
+(torque about the site origin).
 
 :class:`ArmSimulation` is the compiled scene with ftkin-side accessors (state,
-readings, the tool's truth); MuJoCo's world frame is the arm's base frame.
+readings, the tool's truth).
 """
 
 from __future__ import annotations
@@ -354,10 +355,7 @@ class ArmSimulation:
     ``object_body_id`` (or -1), ``tool_body_id`` (the tool link's body, else the measured one),
     ``surfaces`` (name → :class:`Surface`),
     ``surface_under`` (the pad below the object), ``base_tilt`` [rad], ``g`` [m/s²].
-
-    Sign: MuJoCo's force/torque sensors read the wrench the parent body exerts on the measured
-    subtree (site frame, torque about the site origin); ftkin's raw reading is the load on the
-    sensor, its negative.
+    MuJoCo's world frame is the arm's base frame; the sign of the readings is the module's.
     """
 
     def __init__(
