@@ -371,12 +371,8 @@ class ArmSimulation:
     ):
         self.mujoco, self.model, self.arm, self.q0 = mujoco, model, arm, q0
         self.data = mujoco.MjData(model)
-        self.surfaces, self.surface_under, self.base_tilt, self.g = (
-            surfaces,
-            surface_under,
-            base_tilt,
-            g,
-        )
+        self.surfaces, self.surface_under = surfaces, surface_under
+        self.base_tilt, self.g = base_tilt, g
         self.sensor_site_id = model.site("ftkin_sensor").id
         self.force_sensor_id = model.sensor("ftkin_force").id
         self.torque_sensor_id = model.sensor("ftkin_torque").id
