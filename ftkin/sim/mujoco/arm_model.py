@@ -290,10 +290,9 @@ def _add_table(mujoco, spec, surfaces, surface_under, bottom: np.ndarray, start_
             name=f"{surface.name}_pad", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1]
         )
         for field, value in (("stiffness", surface.stiffness), ("damping", surface.damping)):
-            current = getattr(joint, field)  # newer MuJoCo made it an array: set its first entry
-            array = np.zeros(np.shape(current))
-            array.flat[0] = value
-            setattr(joint, field, float(value) if array.ndim == 0 else array)
+            current = getattr(joint, field)  # newer MuJoCo: an array, set its first entry
+            first = np.r_[value, np.zeros(np.size(current) - 1)]
+            setattr(joint, field, float(value) if np.ndim(current) == 0 else first)
         pad.add_geom(
             name=f"{surface.name}_pad",
             type=mujoco.mjtGeom.mjGEOM_BOX,
