@@ -58,14 +58,15 @@ class SimulatedInputs:
     sign: float = 1.0
 
     def __post_init__(self):
-        shape = np.shape(self.mount_rotation)
-        if shape != (3, 3):
-            raise InvalidInput(f"mount_rotation must be a (3, 3) rotation, got shape {shape}")
+        if np.shape(self.mount_rotation) != (3, 3):
+            raise InvalidInput(
+                "mount_rotation must be a (3, 3) rotation, got shape "
+                f"{np.shape(self.mount_rotation)}"
+            )
         rotations, _ = as_rotation_batch(self.mount_rotation, "mount_rotation")  # refuses mirrors
-        rotation = rotations[0]
         if self.sign not in (1.0, -1.0):
             raise InvalidInput(f"sign must be +1 or -1, got {self.sign!r}")
-        object.__setattr__(self, "mount_rotation", rotation)
+        object.__setattr__(self, "mount_rotation", rotations[0])
 
     @property
     def sensor(self) -> SimulatedSensor:
@@ -82,9 +83,8 @@ class SimulatedInputs:
         ``times`` [s] drive the drift; ``contact`` ``(6,)`` or ``(N, 6)`` is the
         environment's wrench on the tool, real sensor frame [N, N·m].
         """
-        configurations, _ = as_batch(configurations, arm.nq, "joint positions q")
-        raw = self.sensor.read(self.rotations(arm, configurations), rng, contact, times)
-        return self.sign * raw
+        rotations = self.rotations(arm, configurations)  # the arm checks the joint angles
+        return self.sign * self.sensor.read(rotations, rng, contact, times)
 
 
 def configurations_from_table(table, arm) -> np.ndarray:
@@ -98,11 +98,10 @@ def configurations_from_table(table, arm) -> np.ndarray:
             f"{table.source}: expected {arm.nq} joint columns ({', '.join(arm.joint_names)} or "
             f"q1..q{arm.nq}) [rad], found {kind} columns {columns}"
         )
-    values = table.floats(columns)
-    if "pose" in table.header:
-        _, first = np.unique(table.floats(["pose"])[:, 0], return_index=True)
-        values = values[np.sort(first)]
-    return values
+    if "pose" not in table.header:
+        return table.floats(columns)
+    _, first = np.unique(table.floats(["pose"])[:, 0], return_index=True)
+    return table.floats(columns)[np.sort(first)]
 
 
 def samples_table(
@@ -128,22 +127,20 @@ def samples_table(
     count = len(configurations)
     repeated = np.repeat(configurations, readings_per_pose, axis=0)
     pose_ids = np.repeat(np.arange(count), readings_per_pose)
-    times = None
-    header = ["pose"]
-    if inputs.drift is not None:
-        times = recording_times(count, readings_per_pose, count * pose_duration)
-        header.append("t")
+    drifts = inputs.drift is not None
+    times = recording_times(count, readings_per_pose, count * pose_duration) if drifts else None
     wrenches = inputs.readings(arm, repeated, rng, times=times)
-    columns = [pose_ids[:, None]] + ([times[:, None]] if times is not None else [])
-    header += list(arm.joint_names) + list(WRENCH_CHANNELS)
-    values = np.hstack([*columns[1:], repeated, wrenches]).tolist()
+    header = ["pose", *(["t"] if drifts else []), *arm.joint_names, *WRENCH_CHANNELS]
+    values = np.hstack([*([times[:, None]] if drifts else []), repeated, wrenches]).tolist()
     return header, [[int(pose), *row] for pose, row in zip(pose_ids, values)]
 
 
 def _blend(start, end, fraction) -> np.ndarray:
-    """Cosine blend ``(N, nq)`` from ``start`` to ``end`` at ``fraction`` ``(N,)`` in [0, 1]."""
+    """Cosine blend ``(N, nq)`` from ``start`` to ``end`` (``(nq,)`` or ``(N, nq)``) at
+    ``fraction`` ``(N,)``, clipped to [0, 1].
+    """
     s = 0.5 - 0.5 * np.cos(np.pi * np.clip(fraction, 0.0, 1.0))
-    return start[None, :] + s[:, None] * (end - start)[None, :]
+    return start + s[:, None] * (end - start)
 
 
 def log_table(
@@ -198,35 +195,24 @@ def recording_table(
     q, _ = as_batch(joint_positions, arm.nq, "joint positions q")
     if arm.urdf_path is None:
         raise InvalidInput("a MuJoCo recording needs an arm loaded from a URDF file")
-    recorder = MujocoRecorder(
+    load = MujocoRecorder(
         arm.urdf_path,
         joint_names=arm.joint_names,
         sensor_body=sensor_body,
         tool=tool,
         g=inputs.truth.g,
         base_tilt=inputs.truth.base_tilt,
-    )
-    load = recorder.wrenches(q, joint_velocities, joint_accelerations)
-    load[:, :3] = load[:, :3] @ inputs.mount_rotation.T  # into the real sensor axes
-    load[:, 3:] = load[:, 3:] @ inputs.mount_rotation.T
-    drift = inputs.sensor.bias_drift(times, rng)  # the bias after power-on at t = 0
+    ).wrenches(q, joint_velocities, joint_accelerations)
+    load = (load.reshape(-1, 2, 3) @ inputs.mount_rotation.T).reshape(-1, 6)  # real sensor axes
     raw = (
         load
         + inputs.truth.bias
-        + drift
+        + inputs.sensor.bias_drift(times, rng)  # the bias after power-on at t = 0
         + rng.standard_normal(load.shape) * inputs.noise.channel_std
     )
-    header = ["t", *arm.joint_names, *WRENCH_CHANNELS]
-    return header, np.hstack([times[:, None], q, inputs.sign * raw])
-
-
-def _rosbags():
-    try:
-        from rosbags.rosbag2 import StoragePlugin, Writer
-        from rosbags.typesys import Stores, get_typestore
-    except ImportError:
-        raise MissingDependency("rosbags", "bags", "writing a ROS 2 bag") from None
-    return Writer, StoragePlugin, get_typestore(Stores.ROS2_HUMBLE)
+    return ["t", *arm.joint_names, *WRENCH_CHANNELS], np.hstack(
+        [times[:, None], q, inputs.sign * raw]
+    )
 
 
 @dataclass(frozen=True)
@@ -251,11 +237,9 @@ class BagSession:
         """Joint angles ``(N, nq)`` [rad] at ``times`` [s since the start]."""
         period = self.hold + self.move
         index = np.clip((times // period).astype(int), 0, len(configurations) - 1)
-        phase = (times - index * period - self.hold) / self.move
+        phase = (times - index * period - self.hold) / self.move  # <= 0 while holding
         following = np.minimum(index + 1, len(configurations) - 1)
-        s = np.where(phase > 0, 0.5 - 0.5 * np.cos(np.pi * np.clip(phase, 0.0, 1.0)), 0.0)
-        start, end = configurations[index], configurations[following]
-        return start + s[:, None] * (end - start)
+        return _blend(configurations[index], configurations[following], phase)
 
 
 def write_bag(
@@ -273,7 +257,11 @@ def write_bag(
     Joint states and wrenches have their own rates and header stamps; the
     wrench's ``frame_id`` is the arm's sensor frame. The folder must not exist.
     """
-    writer_class, storage, typestore = _rosbags()
+    try:
+        from rosbags.rosbag2 import StoragePlugin, Writer
+        from rosbags.typesys import Stores, get_typestore
+    except ImportError:
+        raise MissingDependency("rosbags", "bags", "writing a ROS 2 bag") from None
     session = session or BagSession()
     configurations, _ = as_batch(configurations, arm.nq, "joint positions q")
     path = Path(path)
@@ -283,51 +271,40 @@ def write_bag(
     joint_times = np.arange(0.0, duration, 1.0 / session.joint_rate)
     wrench_times = np.arange(0.0, duration, 1.0 / session.wrench_rate)
     wrenches = inputs.readings(arm, session.positions(configurations, wrench_times), rng)
+    typestore = get_typestore(Stores.ROS2_HUMBLE)
     types = typestore.types
-    joint_messages = (
-        types["sensor_msgs/msg/JointState"](
-            header=_header(types, session.start + t, ""),
-            name=list(arm.joint_names),
-            position=q,
-            velocity=np.zeros(0),
-            effort=np.zeros(0),
-        )
-        for t, q in zip(joint_times, session.positions(configurations, joint_times))
+    vector = types["geometry_msgs/msg/Vector3"]
+    joint_fields = (
+        {
+            "name": list(arm.joint_names),
+            "position": q,
+            "velocity": np.zeros(0),
+            "effort": np.zeros(0),
+        }
+        for q in session.positions(configurations, joint_times)
     )
-    wrench_messages = (
-        types["geometry_msgs/msg/WrenchStamped"](
-            header=_header(types, session.start + t, arm.sensor_frame),
-            wrench=types["geometry_msgs/msg/Wrench"](
-                force=_vector(types, w[:3]), torque=_vector(types, w[3:])
+    wrench_fields = (
+        {"wrench": types["geometry_msgs/msg/Wrench"](force=vector(*w[:3]), torque=vector(*w[3:]))}
+        for w in wrenches
+    )
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        for topic, kind, times, frame_id, messages in (
+            (joint_topic, "sensor_msgs/msg/JointState", joint_times, "", joint_fields),
+            (
+                wrench_topic,
+                "geometry_msgs/msg/WrenchStamped",
+                wrench_times,
+                arm.sensor_frame,
+                wrench_fields,
             ),
-        )
-        for t, w in zip(wrench_times, wrenches)
-    )
-    with writer_class(path, version=9, storage_plugin=storage.MCAP) as writer:
-        for topic, kind, times, messages in (
-            (joint_topic, "sensor_msgs/msg/JointState", joint_times, joint_messages),
-            (wrench_topic, "geometry_msgs/msg/WrenchStamped", wrench_times, wrench_messages),
         ):
             connection = writer.add_connection(topic, kind, typestore=typestore)
-            for t, message in zip(times, messages):
-                data = typestore.serialize_cdr(message, kind)
-                writer.write(connection, _nanoseconds(session.start + t), data)
+            for t, fields in zip(times, messages):
+                stamp = int(round((session.start + t) * 1e9))  # [ns]
+                time = types["builtin_interfaces/msg/Time"](
+                    sec=stamp // 10**9, nanosec=stamp % 10**9
+                )
+                header = types["std_msgs/msg/Header"](stamp=time, frame_id=frame_id)
+                message = types[kind](header=header, **fields)
+                writer.write(connection, stamp, typestore.serialize_cdr(message, kind))
     return path
-
-
-def _nanoseconds(seconds: float) -> int:
-    return int(round(seconds * 1e9))
-
-
-def _header(types, seconds: float, frame_id: str):
-    nanoseconds = _nanoseconds(seconds)
-    stamp = types["builtin_interfaces/msg/Time"](
-        sec=nanoseconds // 10**9, nanosec=nanoseconds % 10**9
-    )
-    return types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
-
-
-def _vector(types, values):
-    return types["geometry_msgs/msg/Vector3"](
-        x=float(values[0]), y=float(values[1]), z=float(values[2])
-    )

@@ -60,18 +60,6 @@ def paper_calibration(method: str = "linear") -> CalibrationResult:
     return calibrate(paper_samples(), method=method, g=PAPER_G)
 
 
-def ftkin_values(result: CalibrationResult) -> dict[str, np.ndarray]:
-    """ftkin's numbers under the keys of :data:`PAPER_RESULTS`."""
-    return {
-        "base_tilt_deg": np.array(result.base_tilt_deg),
-        "tool_weight": np.array(result.tool_weight),
-        "force_offset": result.force_offset,
-        "torque_offset": result.torque_offset,
-        "center_of_mass": result.center_of_mass,
-        "mean_relative_error_pct": 100.0 * result.mean_relative_error,
-    }
-
-
 def comparison_table(result: CalibrationResult) -> str:
     """Side-by-side text table: the values the paper printed and ftkin's, rounded alike.
 
@@ -79,7 +67,14 @@ def comparison_table(result: CalibrationResult) -> str:
     ``last digit`` when some differ by at most 9 units of the last printed
     digit (the paper's print against a re-run of its own data), else ``NO``.
     """
-    ours = ftkin_values(result)
+    ours = {  # ftkin's numbers under the keys of PAPER_RESULTS
+        "base_tilt_deg": result.base_tilt_deg,
+        "tool_weight": result.tool_weight,
+        "force_offset": result.force_offset,
+        "torque_offset": result.torque_offset,
+        "center_of_mass": result.center_of_mass,
+        "mean_relative_error_pct": 100.0 * result.mean_relative_error,
+    }
     lines = [f"{'quantity':<26}{'paper (as printed)':<44}{'ftkin':<44}match"]
     notes = []
     for key, printed in PAPER_RESULTS.items():
@@ -89,22 +84,21 @@ def comparison_table(result: CalibrationResult) -> str:
         paper_text = ", ".join(f"{value:.{decimals}f}" for value in paper_values)
         ours_text = ", ".join(f"{value:.{decimals}f}" for value in rounded)
         units = np.abs(np.round((rounded - paper_values) * 10**decimals))
-        if paper_text == ours_text:
-            match = "yes"
-        elif np.all(units <= 9):
-            match = "last digit"
-            differing = [
-                f"{p:.{decimals}f} printed, {o:.{decimals}f} re-run"
-                for p, o, u in zip(paper_values, rounded, units)
-                if u
-            ]
-            notes.append(f"  {key}: " + "; ".join(differing))
-        else:
-            match = "NO"
+        last_digit = paper_text != ours_text and np.all(units <= 9)
+        match = "yes" if paper_text == ours_text else "last digit" if last_digit else "NO"
         lines.append(f"{key:<26}{paper_text:<44}{ours_text:<44}{match}")
+        if last_digit:
+            notes.append(
+                f"  {key}: "
+                + "; ".join(
+                    f"{p:.{decimals}f} printed, {o:.{decimals}f} re-run"
+                    for p, o, u in zip(paper_values, rounded, units)
+                    if u
+                )
+            )
     if notes:
-        lines.append(
-            "where the re-run of the paper's own data differs from its print in the last digit:"
-        )
-        lines.extend(notes)
+        lines += [
+            "where the re-run of the paper's own data differs from its print in the last digit:",
+            *notes,
+        ]
     return "\n".join(lines)

@@ -50,7 +50,7 @@ from ..control.damped_least_squares import damped_least_squares
 from ..control.joint_admittance import JointAdmittance
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
-from .sensor import SimulatedSensor, paper_like_truth
+from .sensor import paper_like_truth
 from .surfaces import SPONGE, Surface, held_object_wrench
 
 MODES = ("position", "admittance", "admittance-uncompensated")
@@ -108,7 +108,7 @@ class PlacementScenario:
     def __post_init__(self):
         if self.mode not in MODES:
             raise InvalidInput(f"mode must be one of {MODES}, got {self.mode!r}")
-        if not (_finite(self.k1) and self.k1 >= 0 and _finite(self.k2) and self.k2 >= 0):
+        if not all(isinstance(k, Real) and 0 <= k < math.inf for k in (self.k1, self.k2)):
             raise InvalidInput(
                 f"gains must be finite numbers >= 0, got k1={self.k1!r} m/N, k2={self.k2!r} m/(s·N)"
             )
@@ -120,11 +120,10 @@ class PlacementScenario:
             "duration",
             "dt",
         ):
-            if not (_finite(getattr(self, name)) and getattr(self, name) > 0):
-                raise InvalidInput(
-                    f"{name} must be a finite number > 0, got {getattr(self, name)!r}"
-                )
-        if not (_finite(self.start_gap) and self.start_gap >= 0):
+            value = getattr(self, name)
+            if not (isinstance(value, Real) and 0 < value < math.inf):
+                raise InvalidInput(f"{name} must be a finite number > 0, got {value!r}")
+        if not (isinstance(self.start_gap, Real) and 0 <= self.start_gap < math.inf):
             raise InvalidInput(
                 f"start_gap must be a finite number >= 0 [m], got {self.start_gap!r}"
             )
@@ -140,10 +139,6 @@ MAX_TICKS = 1_000_000
 """Longest simulation, in control ticks (duration / dt): beyond it the run's arrays exhaust
 memory.
 """
-
-
-def _finite(value) -> bool:
-    return isinstance(value, Real) and math.isfinite(value)
 
 
 @dataclass(frozen=True)
@@ -193,12 +188,11 @@ class PlacementRun:
 
     def mean_speed(self) -> np.ndarray:
         """Trailing average of the tool z velocity over :data:`SPEED_WINDOW` [m/s], per tick."""
-        dt = self.scenario.dt
-        width = max(1, int(round(SPEED_WINDOW / dt)))
+        width = max(1, int(round(SPEED_WINDOW / self.scenario.dt)))
         total = np.concatenate(([0.0], np.cumsum(self.velocity)))
-        index = np.arange(1, len(self.velocity) + 1)
-        start = np.maximum(index - width, 0)
-        return (total[index] - total[start]) / (index - start)
+        index = np.arange(1, len(total))
+        count = np.minimum(index, width)  # ticks in the window (fewer at the start)
+        return (total[index] - total[index - count]) / count
 
     def settled_mask(self) -> np.ndarray:
         """Per tick: ``|F'z| < 0.05 N`` and the tool's mean speed below :data:`STOPPED_SPEED`."""
@@ -245,7 +239,7 @@ def simulate_placement(
     if arm.tool_frame_id is None:
         raise InvalidInput("the placement simulation needs an arm with a tool frame")
     rng = np.random.default_rng(scenario.seed)
-    sensor = SimulatedSensor(paper_like_truth(), scenario.noise)
+    truth = paper_like_truth()
     q = arm.check_configuration(Q_DOWN[: arm.nq]).copy()
     model, data, sensor_id, tool_id = arm.model, arm.data, arm.sensor_frame_id, arm.tool_frame_id
     _, tool_start = arm.frame_placement(q, "tool")
@@ -253,17 +247,16 @@ def simulate_placement(
     surface = scenario.surface.at_height(
         (tool_start + rotation[:, 2] * scenario.object_height)[2] - scenario.start_gap
     )
-    controller = None
-    if scenario.mode != "position":
-        controller = admittance_controller(
-            scenario, arm, sensor.truth if scenario.mode == "admittance" else None
-        )
+    calibration = truth if scenario.mode == "admittance" else None  # else raw readings
+    controller = (
+        None if scenario.mode == "position" else admittance_controller(scenario, arm, calibration)
+    )
     # The sensor's no-contact reading (bias + tool gravity) is -compensate(R, 0): same model as
     # SimulatedSensor.read.
-    unloaded = Compensator(sensor.truth)
+    unloaded = Compensator(truth)
     zero = np.zeros(6)
     steps = int(round(scenario.duration / scenario.dt))
-    noise = rng.standard_normal((steps, 6)) * sensor.noise.channel_std
+    noise = rng.standard_normal((steps, 6)) * scenario.noise.channel_std
     z_target = tool_start[2] - scenario.start_gap - scenario.target_depth
     height, weight = scenario.object_height, scenario.object_weight
     out = np.zeros((steps, 7))
@@ -297,8 +290,9 @@ def simulate_placement(
             normal,
         )
         q = q + dq * scenario.dt
-    safety = bool(controller is not None and controller.safety_latched)
-    return PlacementRun(scenario, *out.T, safety_stop=safety)
+    return PlacementRun(
+        scenario, *out.T, safety_stop=controller is not None and controller.safety_latched
+    )
 
 
 def admittance_controller(

@@ -11,6 +11,7 @@ the non-interactive Agg backend.
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -53,42 +54,39 @@ def plot_runs(
     figure, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 8))
     for run, label in zip(runs, labels):
         style = {"label": label, "linestyle": "--" if run.scenario.mode == "position" else "-"}
-        axes[0].plot(run.time, run.displacement * 1e3, **style)
-        axes[1].plot(run.time, run.mean_speed() * 1e3, **style)
-        axes[2].plot(run.time, run.force, **style)
-    axes[0].set_ylabel("tool z displacement [mm]")
-    axes[1].set_ylabel("tool z velocity [mm/s]\n(0.1 s mean)")
-    axes[2].set_ylabel("F'z (sensor z, down) [N]")
+        for axis, values in zip(axes, (run.displacement * 1e3, run.mean_speed() * 1e3, run.force)):
+            axis.plot(run.time, values, **style)
+    for axis, label in zip(
+        axes,
+        (
+            "tool z displacement [mm]",
+            "tool z velocity [mm/s]\n(0.1 s mean)",
+            "F'z (sensor z, down) [N]",
+        ),
+    ):
+        axis.set_ylabel(label)
+        axis.grid(True, alpha=0.3)
     for level in (-PLACED_FORCE, PLACED_FORCE):
         axes[2].axhline(level, color="grey", linewidth=0.6, linestyle=":")
     axes[2].set_xlabel("time [s]")
-    for axis in axes:
-        axis.grid(True, alpha=0.3)
     axes[0].legend(fontsize=8)
     if title:
         figure.suptitle(title)
     figure.tight_layout()
-    return _save(plt, figure, path)
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=110)
+    plt.close(figure)
+    return atomic_write_bytes(path, buffer.getvalue())
 
 
 def plot_sweep(runs: Sequence[PlacementRun], gain: str, path, title: str | None = None) -> Path:
     """Write a PNG of a gain sweep (``gain`` is ``"k1"`` or ``"k2"``), with each run's settle
     time.
     """
-    unit = "mm/N" if gain == "k1" else "mm/(s·N)"
-    name = "k13" if gain == "k1" else "k23"
-    labels = []
-    for run in runs:
-        settle = run.settle_time
-        when = f"placed at {settle:.2f} s" if settle != float("inf") else "not placed"
-        labels.append(f"{name} = {getattr(run.scenario, gain) * 1e3:g} {unit}: {when}")
+    name, unit = ("k13", "mm/N") if gain == "k1" else ("k23", "mm/(s·N)")
+    labels = [
+        f"{name} = {getattr(run.scenario, gain) * 1e3:g} {unit}: "
+        + (f"placed at {run.settle_time:.2f} s" if run.placed else "not placed")
+        for run in runs
+    ]
     return plot_runs(runs, path, title, labels)
-
-
-def _save(plt, figure, path) -> Path:
-    import io
-
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=110)
-    plt.close(figure)
-    return atomic_write_bytes(path, buffer.getvalue())

@@ -79,11 +79,9 @@ class SimulatedSensor:
             bias_drift: ``(N, 6)`` bias change to add instead (e.g. from
                 :meth:`bias_drift`, to know the truth).
         """
-        rotations, _ = as_rotation_batch(rotation_sensor_to_base)
-        raw = self.truth.predict(rotations).reshape(-1, 6)
+        raw = self.truth.predict(rotation_sensor_to_base).reshape(-1, 6)  # checks the rotations
         if contact_wrench is not None:
-            contact, _ = as_batch(contact_wrench, 6, "contact_wrench")
-            raw = raw + contact
+            raw = raw + as_batch(contact_wrench, 6, "contact_wrench")[0]
         if bias_drift is None and times is not None and self.drift is not None:
             bias_drift = self.bias_drift(times, rng)
         if bias_drift is not None:
@@ -129,13 +127,12 @@ class SimulatedSensor:
     ) -> Samples:
         """Like :meth:`samples` with orientations from joint angles ``(N, nq)`` [rad]."""
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
-        rotations = np.repeat(
-            arm.rotation_sensor_to_base(configurations), readings_per_pose, axis=0
-        )  # FK once per pose
-        pose_ids = np.repeat(np.arange(len(configurations)), readings_per_pose)
+        rotations = arm.rotation_sensor_to_base(configurations)  # FK once per pose
+        read = self.samples(rotations, rng, readings_per_pose, times, bias_drift)
         repeated = np.repeat(configurations, readings_per_pose, axis=0)
-        wrenches = self.read(rotations, rng, times=times, bias_drift=bias_drift)
-        return Samples.from_joint_positions(arm, repeated, wrenches, pose_ids, rotations, times)
+        return Samples.from_joint_positions(
+            arm, repeated, read.wrenches, read.pose_ids, read.rotations, times
+        )
 
 
 def recording_times(
@@ -156,6 +153,4 @@ def recording_times(
             "recording_times needs positive counts, duration [s] and reading_interval [s]"
         )
     pose_starts = start + np.arange(pose_count) * (duration / pose_count)
-    return (
-        pose_starts[:, None] + np.arange(readings_per_pose)[None, :] * reading_interval
-    ).reshape(-1)
+    return (pose_starts[:, None] + np.arange(readings_per_pose) * reading_interval).reshape(-1)

@@ -53,12 +53,13 @@ class SensorDrift:
         if (self.temperature_times is None) != (self.temperatures is None):
             raise InvalidInput("give both temperature_times [s] and temperatures, or neither")
         if self.temperature_times is not None:
-            times = as_float_array(self.temperature_times, "temperature_times").reshape(-1)
-            temperatures = as_float_array(self.temperatures, "temperatures").reshape(-1)
+            for name in ("temperature_times", "temperatures"):
+                object.__setattr__(
+                    self, name, as_float_array(getattr(self, name), name).reshape(-1)
+                )
+            times, temperatures = self.temperature_times, self.temperatures
             if len(times) != len(temperatures) or len(times) == 0 or np.any(np.diff(times) < 0):
                 raise InvalidInput("temperature_times must be ascending, one per temperature")
-            object.__setattr__(self, "temperature_times", times)
-            object.__setattr__(self, "temperatures", temperatures)
 
     @classmethod
     def typical(cls) -> SensorDrift:
@@ -93,10 +94,9 @@ class SensorDrift:
             raise InvalidInput("drift times must be finite and ≥ 0 [s] (since power-on)")
         order = np.argsort(times, kind="stable")
         steps = np.diff(np.concatenate([[0.0], times[order]]))
-        walk_sorted = (
+        walk = np.empty((len(times), 6))
+        walk[order] = (  # the walk in time order, put back in the given order
             np.cumsum(rng.standard_normal((len(times), 6)) * np.sqrt(steps)[:, None], axis=0)
             * self.random_walk
         )
-        walk = np.empty_like(walk_sorted)
-        walk[order] = walk_sorted
         return self.deterministic(times) + walk

@@ -17,7 +17,6 @@ from numbers import Real
 
 import numpy as np
 
-from ..calibration.model import cross_rows
 from ..exceptions import InvalidInput
 
 
@@ -51,7 +50,7 @@ class Surface:
         """Upward force [N] on an object ``penetration`` [m] deep, moving in at ``penetration_rate``
         [m/s].
         """
-        if penetration <= 0.0:
+        if penetration <= 0.0:  # it pushes, it never pulls
             return 0.0
         return max(0.0, self.stiffness * penetration + self.damping * penetration_rate)
 
@@ -77,9 +76,6 @@ def surface_by_name(name: str) -> Surface:
     return SURFACES[name]
 
 
-_UP = np.array([0.0, 0.0, 1.0])
-
-
 def held_object_wrench(
     rotation,
     sensor_origin,
@@ -98,8 +94,7 @@ def held_object_wrench(
     """
     axis = rotation[:, 2]
     bottom, middle = tool_point + axis * object_height, tool_point + axis * (0.5 * object_height)
-    # r_b × (N ẑ) + r_m × (−W ẑ) = (N r_b − W r_m) × ẑ
-    moment_base = cross_rows(
-        normal_force * (bottom - sensor_origin) - object_weight * (middle - sensor_origin), _UP
-    )
+    # r_b × (N ẑ) + r_m × (−W ẑ) = (N r_b − W r_m) × ẑ = (v_y, −v_x, 0)
+    v = normal_force * (bottom - sensor_origin) - object_weight * (middle - sensor_origin)
+    moment_base = np.array([v[1], -v[0], 0.0])
     return np.concatenate((rotation[2] * (normal_force - object_weight), rotation.T @ moment_base))

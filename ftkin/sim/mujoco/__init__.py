@@ -8,13 +8,20 @@ the physics with a controller (e.g. :class:`~ftkin.control.JointAdmittance`) in
 the loop. ``mujoco`` is imported only when a model is built.
 """
 
-from .arm_model import GraspedObject, build_arm_model
-from .closed_loop import ClosedLoopRun, run_closed_loop
-from .mujoco_placement import simulate_placement_mujoco
-from .mujoco_sensor import MujocoSensor
-from .recording import MujocoRecorder
-from .simulation import ArmSimulation
-from .tool_inertia import ToolInertia
+from ..._lazy import lazy_exports
+
+_EXPORTS = {
+    "ArmSimulation": ".arm_model",
+    "ClosedLoopRun": ".closed_loop",
+    "GraspedObject": ".arm_model",
+    "MujocoRecorder": ".recording",
+    "MujocoSensor": ".mujoco_sensor",
+    "ToolInertia": ".tool_inertia",
+    "build_arm_model": ".arm_model",
+    "run_closed_loop": ".closed_loop",
+    "simulate_placement_mujoco": ".mujoco_placement",
+}
+"""Public name → module, loaded on first access (PEP 562)."""
 
 __all__ = [
     "ArmSimulation",
@@ -27,3 +34,5 @@ __all__ = [
     "run_closed_loop",
     "simulate_placement_mujoco",
 ]
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

@@ -25,8 +25,8 @@ import numpy as np
 from ...calibration.model import SensorModel
 from ...exceptions import InvalidInput
 from ..placement import PlacementRun
+from .arm_model import ArmSimulation
 from .mujoco_sensor import MujocoSensor
-from .simulation import ArmSimulation
 
 PLACEMENT_COLUMNS = PlacementRun.COLUMNS
 """The placement CSV's columns (s, m, m/s, N, N, m, N), as
@@ -95,26 +95,7 @@ def run_closed_loop(
             from the model's tool inertia; its bias is ignored).
         reset: Start from ``sim``'s build pose at rest (else continue from the current state).
     """
-    _check_loop(sim, controller, duration, dt)
-    if reset:
-        sim.reset()
-    sensor = MujocoSensor() if sensor is None else sensor
-    sensor.reset()
-    tool_model = sim.tool_sensor_model() if tool_model is None else tool_model
-    ticks = int(round(duration / dt))
-    recorder = _Recorder(sim, tool_model, ticks, float(dt))
-    for i in range(ticks):
-        ideal = sim.ideal_wrench_in_sensor()
-        q = sim.q
-        raw = sensor.read(ideal, dt)
-        dq = controller.step(q, raw, dt)
-        recorder.record(i, q, raw, dq, ideal, getattr(controller, "last_status", None))
-        sim.step(dq, dt)
-    return recorder.run()
-
-
-def _check_loop(sim: ArmSimulation, controller, duration: float, dt: float) -> None:
-    if not (math.isfinite(duration) and duration > 0 and math.isfinite(dt) and dt > 0):
+    if not (0 < duration < math.inf and 0 < dt < math.inf):
         raise InvalidInput(f"duration and dt must be finite and > 0 [s], got {duration!r}, {dt!r}")
     substeps = dt / sim.model.opt.timestep
     if abs(substeps - round(substeps)) > 1e-6 or round(substeps) < 1:
@@ -126,57 +107,47 @@ def _check_loop(sim: ArmSimulation, controller, duration: float, dt: float) -> N
             "controller must have a step(q, raw_wrench, dt) method, got "
             f"{type(controller).__name__}"
         )
-
-
-class _Recorder:
-    """The table of a closed-loop run, one row per tick, and the controller's events."""
-
-    def __init__(self, sim: ArmSimulation, tool_model: SensorModel, ticks: int, dt: float):
-        nq = sim.arm.nq
-        self.columns = (
-            PLACEMENT_COLUMNS
-            + tuple(f"q{i + 1}" for i in range(nq))
-            + tuple(f"dq{i + 1}" for i in range(nq))
-            + tuple(f"cmd{i + 1}" for i in range(nq))
-            + WRENCH_COLUMNS
-            + ("held",)
-        )
-        self.table = np.zeros((ticks, len(self.columns)))
-        self.sim, self.dt = sim, dt
-        self.gravity = np.asarray(tool_model.gravity_in_base, dtype=float).tolist()
-        self.events, self.last_event, self.first_hold = [], "", math.inf
-        self.z_start = self.z_before = float(sim.data.xpos[sim.tool_body_id][2])
-        self.q_columns, self.dq_columns = slice(7, 7 + nq), slice(7 + nq, 7 + 2 * nq)
-        self.cmd_columns = slice(7 + 2 * nq, 7 + 3 * nq)
-        self.wrench_columns = slice(7 + 3 * nq, 13 + 3 * nq)
-
-    def record(self, i: int, q, raw, dq, ideal, status) -> None:
-        """Row ``i``: time, tool height and speed, true and measured F'z, the surface, q, dq."""
-        sim, data, row, dt = self.sim, self.sim.data, self.table[i], self.dt
-        measured = raw[2]
+    if reset:
+        sim.reset()
+    sensor = MujocoSensor() if sensor is None else sensor
+    sensor.reset()
+    tool_model = sim.tool_sensor_model() if tool_model is None else tool_model
+    ax, ay, az = np.asarray(tool_model.gravity_in_base, dtype=float).tolist()
+    nq, dt, data = sim.arm.nq, float(dt), sim.data
+    columns = (
+        PLACEMENT_COLUMNS
+        + tuple(f"{kind}{i + 1}" for kind in ("q", "dq", "cmd") for i in range(nq))
+        + WRENCH_COLUMNS
+        + ("held",)
+    )
+    table = np.zeros((int(round(duration / dt)), len(columns)))
+    events, last_event, first_hold = [], "", math.inf
+    z_start = z_before = float(data.xpos[sim.tool_body_id][2])
+    for i, row in enumerate(table):
+        ideal = sim.ideal_wrench_in_sensor()
+        q = sim.q
+        raw = sensor.read(ideal, dt)
+        dq = controller.step(q, raw, dt)
+        status = getattr(controller, "last_status", None)
+        # The row: time, tool height and speed, true and measured F'z, the surface, q, dq, ...
+        row[4] = raw[2] if status is None else status.contact_wrench[2]
         if status is not None:
-            measured = status.contact_wrench[2]
             event = status.event or ("" if status.fault == "none" else str(status.fault))
-            if event != self.last_event:
-                self.events.append((i * dt, str(event)))
-                self.last_event = event
+            if event != last_event:
+                events.append((i * dt, str(event)))
+                last_event = event
             if status.held:
                 row[-1] = 1.0
-                self.first_hold = min(self.first_hold, i * dt)
+                first_hold = min(first_hold, i * dt)
         z = data.xpos[sim.tool_body_id][2]
-        row[0], row[1], row[2] = i * dt, z - self.z_start, (z - self.z_before) / dt
+        row[0], row[1], row[2] = i * dt, z - z_start, (z - z_before) / dt
         # R_BS's third column: the sensor z axis in the base
         r02, r12, r22 = data.site_xmat[sim.sensor_site_id][2::3].tolist()
-        ax, ay, az = self.gravity
         row[3] = ideal[2] - (r02 * ax + r12 * ay + r22 * az)
-        row[4] = measured
         if sim.surface_under is not None:
             row[5], row[6] = sim.surface_depth(), sim.normal_force()
-        row[self.q_columns] = q
-        row[self.dq_columns] = data.qvel[sim._dq_index]
-        row[self.cmd_columns] = dq
-        row[self.wrench_columns] = ideal
-        self.z_before = z
-
-    def run(self) -> ClosedLoopRun:
-        return ClosedLoopRun(self.columns, self.table, self.dt, tuple(self.events), self.first_hold)
+        row[7 : 7 + nq], row[7 + nq : 7 + 2 * nq] = q, data.qvel[sim._arm_dof]
+        row[7 + 2 * nq : 7 + 3 * nq], row[7 + 3 * nq : 13 + 3 * nq] = dq, ideal
+        z_before = z
+        sim.step(dq, dt)
+    return ClosedLoopRun(columns, table, dt, tuple(events), first_hold)

@@ -25,11 +25,11 @@ from ...calibration.model import STANDARD_GRAVITY
 from ...control.damped_least_squares import damped_least_squares
 from ...kinematics.arm import Arm
 from ..placement import PlacementRun, PlacementScenario, admittance_controller
-from ..sensor import SimulatedSensor, paper_like_truth
-from .arm_model import GraspedObject, build_arm_model
+from ..sensor import paper_like_truth
+from ..surfaces import SURFACES
+from .arm_model import ArmSimulation, GraspedObject, build_arm_model
 from .closed_loop import ClosedLoopRun, run_closed_loop
 from .mujoco_sensor import MujocoSensor
-from .simulation import ArmSimulation
 
 
 class PositionLowering:
@@ -60,28 +60,22 @@ class PositionLowering:
 
 
 def placement_scene(scenario: PlacementScenario, arm: Arm | None = None) -> ArmSimulation:
-    """The MuJoCo scene of a scenario: its object, its surface below, the paper-like base tilt."""
-    truth = paper_like_truth()
-    grasped = GraspedObject(
-        mass=scenario.object_weight / STANDARD_GRAVITY, height=scenario.object_height
-    )
+    """The MuJoCo scene of a scenario: its object, its surface below (the other surfaces beside
+    it), the paper-like base tilt.
+    """
+    others = [
+        surface for name, surface in sorted(SURFACES.items()) if name != scenario.surface.name
+    ]
     return build_arm_model(
         arm,
-        grasped_object=grasped,
+        grasped_object=GraspedObject(
+            mass=scenario.object_weight / STANDARD_GRAVITY, height=scenario.object_height
+        ),
         surface_under=scenario.surface.name,
-        surfaces=_surfaces(scenario),
+        surfaces=(scenario.surface, *others),
         start_gap=scenario.start_gap,
-        base_tilt=truth.base_tilt,
+        base_tilt=paper_like_truth().base_tilt,
     )
-
-
-def _surfaces(scenario: PlacementScenario):
-    from ..surfaces import SURFACES
-
-    others = tuple(
-        surface for name, surface in sorted(SURFACES.items()) if name != scenario.surface.name
-    )
-    return (scenario.surface, *others)
 
 
 def simulate_placement_mujoco(
@@ -105,25 +99,17 @@ def simulate_placement_mujoco(
     """
     arm = Arm.default() if arm is None else arm
     sim = placement_scene(scenario, arm) if sim is None else sim
-    simulated = SimulatedSensor(paper_like_truth(), scenario.noise)
-    sensor = MujocoSensor.from_simulated(
-        simulated, sample_rate=sample_rate, delay_ticks=delay_ticks, seed=scenario.seed
+    bias = paper_like_truth().bias
+    sensor = MujocoSensor(
+        bias, scenario.noise, sample_rate=sample_rate, delay_ticks=delay_ticks, seed=scenario.seed
     )
-    if controller is None:
-        if scenario.mode == "position":
-            _, tool_start = arm.frame_placement(sim.q0, "tool")
-            controller = PositionLowering(
-                arm,
-                tool_start[2] - scenario.start_gap - scenario.target_depth,
-                scenario.lowering_speed,
-            )
-        else:
-            calibration = (
-                sim.tool_sensor_model(bias=simulated.truth.bias)
-                if scenario.mode == "admittance"
-                else None
-            )
-            controller = admittance_controller(scenario, arm, calibration)
+    if controller is None and scenario.mode == "position":
+        z_start = arm.frame_placement(sim.q0, "tool")[1][2]
+        z_target = z_start - scenario.start_gap - scenario.target_depth
+        controller = PositionLowering(arm, z_target, scenario.lowering_speed)
+    elif controller is None:
+        calibration = sim.tool_sensor_model(bias) if scenario.mode == "admittance" else None
+        controller = admittance_controller(scenario, arm, calibration)
     run = run_closed_loop(sim, controller, scenario.duration, scenario.dt, sensor=sensor)
     safety = bool(getattr(controller, "safety_latched", False))
     return PlacementRun(scenario, *run.placement_rows().T.copy(), safety_stop=safety), run

@@ -96,21 +96,17 @@ class MujocoSensor:
             or self.sample_rate is None
             or self._time >= self._next_sample - 1e-12
         ):
-            if self._noise_row == len(
-                self._noise
-            ):  # noise drawn in blocks: one generator call per 1024 samples
+            if self._noise_row == len(self._noise):  # noise drawn in blocks of 1024 samples
                 self._noise, self._noise_row = self._rng.standard_normal((1024, 6)) * self._std, 0
             sample = ideal_wrench + self.bias
             sample += self._noise[self._noise_row]
             self._noise_row += 1
-            np.minimum(
-                sample, self.range, out=sample
-            )  # saturation (ufuncs: np.clip's wrapper costs more)
-            self._sample = np.maximum(sample, self._negative_range, out=sample)
+            # saturation (ufuncs: np.clip's wrapper costs more)
+            self._sample = np.maximum(
+                np.minimum(sample, self.range, out=sample), self._negative_range, out=sample
+            )
             if self.sample_rate is not None:
                 self._next_sample += 1.0 / self.sample_rate
         self._time += dt
         self._line.append(self._sample)
-        if len(self._line) > self.delay_ticks:
-            return self._line.popleft()
-        return self._line[0]
+        return self._line.popleft() if len(self._line) > self.delay_ticks else self._line[0]

@@ -17,14 +17,13 @@ the closed loop is :func:`~ftkin.sim.mujoco.arm_model.build_arm_model`; this mod
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 
 from ...calibration.model import STANDARD_GRAVITY
 from ...exceptions import InvalidInput
 from ...kinematics.arm import bundled_urdf_path
 from ...kinematics.rotations import gravity_in_base_from_tilt
 from ...validation import as_batch, as_positive, as_vector
-from .arm_model import add_wrench_sensor, import_mujoco
+from .arm_model import add_wrench_sensor, import_mujoco, subtree_inertia
 from .tool_inertia import ToolInertia
 
 
@@ -49,8 +48,9 @@ class MujocoRecorder:
         g: float = STANDARD_GRAVITY,
         base_tilt=(0.0, 0.0),
     ):
-        mujoco = import_mujoco("recording wrenches with MuJoCo (ftkin.sim.mujoco.recording)")
-        self._mujoco = mujoco
+        self._mujoco = mujoco = import_mujoco(
+            "recording wrenches with MuJoCo (ftkin.sim.mujoco.recording)"
+        )
         spec = mujoco.MjSpec.from_file(str(urdf if urdf is not None else bundled_urdf_path()))
         spec.compiler.fusestatic = False
         bodies = {body.name: body for body in spec.bodies}
@@ -64,15 +64,8 @@ class MujocoRecorder:
             body.mass = tool.mass
             body.ipos = tool.center_of_mass
             body.iquat = [1.0, 0.0, 0.0, 0.0]
-            inertia = tool.inertia_about_com
-            body.fullinertia = [
-                inertia[0, 0],
-                inertia[1, 1],
-                inertia[2, 2],
-                inertia[0, 1],
-                inertia[0, 2],
-                inertia[1, 2],
-            ]
+            # MuJoCo's order: Ixx, Iyy, Izz, Ixy, Ixz, Iyz
+            body.fullinertia = tool.inertia_about_com[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]]
         body.add_site(name="ftkin_sensor_site", pos=[0.0, 0.0, 0.0])
         add_wrench_sensor(mujoco, spec, "ftkin_sensor_site")
         self.model = spec.compile()
@@ -83,9 +76,11 @@ class MujocoRecorder:
         self.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
         self.data = mujoco.MjData(self.model)
         self.sensor_body = sensor_body
-        if joint_names is None:
-            joint_names = [self.model.joint(i).name for i in range(self.model.njnt)]
-        self.joint_names = list(joint_names)
+        self.joint_names = list(
+            [self.model.joint(i).name for i in range(self.model.njnt)]
+            if joint_names is None
+            else joint_names
+        )
         self._qpos = np.array([self.model.joint(name).qposadr[0] for name in self.joint_names])
         self._dof = np.array([self.model.joint(name).dofadr[0] for name in self.joint_names])
         self._site = self.model.site("ftkin_sensor_site").id
@@ -106,15 +101,9 @@ class MujocoRecorder:
         """
         mujoco, model, data = self._mujoco, self.model, self.data
         q, _ = as_batch(joint_positions, self.nq, "joint positions q")
-        dq = (
-            np.zeros_like(q)
-            if joint_velocities is None
-            else as_batch(joint_velocities, self.nq, "dq")[0]
-        )
-        ddq = (
-            np.zeros_like(q)
-            if joint_accelerations is None
-            else as_batch(joint_accelerations, self.nq, "ddq")[0]
+        dq, ddq = (
+            np.zeros_like(q) if value is None else as_batch(value, self.nq, name)[0]
+            for value, name in ((joint_velocities, "dq"), (joint_accelerations, "ddq"))
         )
         if not (len(q) == len(dq) == len(ddq)):
             raise InvalidInput(
@@ -140,22 +129,6 @@ class MujocoRecorder:
         """θ (10,) of everything the sensor carries (``sensor_body``'s subtree), about the sensor
         origin, sensor axes.
         """
-        mujoco, model, data = self._mujoco, self.model, self.data
-        mujoco.mj_kinematics(model, data)
-        site = pin.SE3(
-            data.site_xmat[self._site].reshape(3, 3).copy(), data.site_xpos[self._site].copy()
-        )
-        total = pin.Inertia.Zero()
-        for body in range(model.nbody):
-            ancestor = body
-            while ancestor not in (0, self._body):
-                ancestor = model.body_parentid[ancestor]
-            if ancestor != self._body or model.body_mass[body] == 0.0:
-                continue
-            # Body inertia: principal moments in the frame (xipos, ximat).
-            principal = pin.Inertia(
-                float(model.body_mass[body]), np.zeros(3), np.diag(model.body_inertia[body])
-            )
-            inertial_frame = pin.SE3(data.ximat[body].reshape(3, 3).copy(), data.xipos[body].copy())
-            total += (site.actInv(inertial_frame)).act(principal)
-        return np.asarray(total.toDynamicParameters(), dtype=float)
+        self._mujoco.mj_kinematics(self.model, self.data)
+        carried = subtree_inertia(self.model, self.data, self._site, self._body)
+        return np.asarray(carried.toDynamicParameters(), dtype=float)

@@ -1,6 +1,6 @@
 """A rigid load carried by the sensor: its mass, centre of mass and inertia (sensor frame).
 
-Shared by the MuJoCo scene (:class:`~ftkin.sim.mujoco.simulation.ArmSimulation`)
+Shared by the MuJoCo scene (:class:`~ftkin.sim.mujoco.arm_model.ArmSimulation`)
 and the inverse-dynamics recorder (:class:`~ftkin.sim.mujoco.recording.MujocoRecorder`).
 """
 
