@@ -61,9 +61,11 @@ class ControlFrame:
                 self.rotation_tool_to_sensor = rotations[0].copy()
         # The transports' constants as Python floats (the arrays above are copies: the caller's stay
         # theirs).
-        self._r = self.point_in_sensor.tolist()
-        self._rotation_rows = self.rotation_tool_to_sensor.tolist()
-        self._inverse_rows = self.rotation_tool_to_sensor.T.tolist()
+        self._r, self._rotation_rows, self._inverse_rows = (
+            self.point_in_sensor.tolist(),
+            self.rotation_tool_to_sensor.tolist(),
+            self.rotation_tool_to_sensor.T.tolist(),
+        )
 
     def placement_in_sensor(self, rotation_sensor_to_base: np.ndarray) -> pin.SE3:
         """The control frame in the sensor frame: origin ``r`` [m] and axes ``R_SC``."""
@@ -81,8 +83,11 @@ class ControlFrame:
 
         Pinocchio's force transport ``M_SC⁻¹ · f``; :meth:`wrench_floats` is its fast path.
         """
-        placement = self.placement_in_sensor(rotation_sensor_to_base)
-        return placement.actInv(pin.Force(np.asarray(wrench_in_sensor, dtype=float))).vector
+        return (
+            self.placement_in_sensor(rotation_sensor_to_base)
+            .actInv(pin.Force(np.asarray(wrench_in_sensor, dtype=float)))
+            .vector
+        )
 
     def twist_to_sensor_origin(
         self, twist: np.ndarray, rotation_sensor_to_base: np.ndarray

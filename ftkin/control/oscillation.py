@@ -87,10 +87,13 @@ class OscillationDetector:
                 "oscillation limits must be an ftkin OscillationLimits or None, got "
                 f"{type(limits).__name__}"
             )
-        self._threshold = float(self.limits.force_step)
+        self._threshold, self._window, self._reversals = (
+            float(self.limits.force_step),
+            self.limits.window,
+            self.limits.reversals,
+        )
         self._energy_floor = 0.25 * self._threshold * self._threshold
         self._inverse_lever = 1.0 / float(self.limits.lever)
-        self._window, self._reversals = self.limits.window, self.limits.reversals
         self.reset()
 
     def reset(self) -> None:
