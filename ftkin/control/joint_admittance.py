@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from operator import ge, le, mul, sub
 
 import numpy as np
 import pinocchio as pin
@@ -173,7 +172,7 @@ class JointAdmittance:
         self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
         self._rotation = arm.data.oMf[arm.sensor_frame_id].rotation  # a view: follows every FK call
         self._lower, self._upper = arm.lower_limits.tolist(), arm.upper_limits.tolist()
-        self._gains, self._nq = [self.limit_gain] * arm.nq, arm.nq
+        self._nq = arm.nq
         if sensor_limits is None and (
             arm.urdf_path is None or arm.urdf_path != bundled_urdf_path().resolve()
         ):
@@ -199,11 +198,8 @@ class JointAdmittance:
         self.monitor.reset()
         if self.detector is not None:
             self.detector.reset()
-        self.safety_latched = False
-        self.oscillation_event = ""
-        self._holding = False
-        self._status: StepStatus | None = None
-        self._status_parts: tuple | None = None
+        self.safety_latched, self.oscillation_event, self._holding = False, "", False
+        self._status = self._status_parts = None  # the last StepStatus, or the parts to build it
 
     @property
     def last_status(self) -> StepStatus | None:
@@ -394,17 +390,15 @@ class JointAdmittance:
         [rad/s], and never beyond its (scaled) velocity limit.
         """
         gain, scale = self.limit_gain, 1.0
-        if (
-            all(map(le, map(abs, dq), self._speeds))
-            and all(map(le, dq, map(mul, self._gains, map(sub, self._upper, q))))
-            and all(map(ge, dq, map(mul, self._gains, map(sub, self._lower, q))))
-        ):
-            return 1.0  # every joint within both of its bounds (so finite): the loop gives 1.0 too
-        if not all(map(math.isfinite, dq)):
-            return math.nan
         for position, velocity, lower, upper, speed in zip(
             q, dq, self._lower, self._upper, self._speeds
         ):
+            if -speed <= velocity <= speed and (
+                gain * (lower - position) <= velocity <= gain * (upper - position)
+            ):
+                continue  # within both of its bounds (so finite): the scale stays
+            if not math.isfinite(velocity):
+                return math.nan
             if velocity > 0.0:
                 scale = min(scale, max(0.0, min(speed, gain * (upper - position))) / velocity)
             elif velocity < 0.0:
