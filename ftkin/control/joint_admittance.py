@@ -247,26 +247,9 @@ class JointAdmittance:
         """
         # The tick runs on Python floats (numpy's per-call overhead dominates on 3- and 6-vectors);
         # numpy only for the Jacobian products. The status is built when asked (last_status).
-        try:  # float64 arrays (the control loop's case) pass without a conversion
-            if not (
-                type(q) is type(raw_wrench) is np.ndarray and q.dtype is raw_wrench.dtype is FLOAT64
-            ):
-                q, raw_wrench = np.asarray(q, dtype=np.float64), np.asarray(raw_wrench, np.float64)
-            dt = float(dt)
-        except (TypeError, ValueError) as error:
-            raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
-        if q.shape != (self._nq,) or raw_wrench.shape != (6,):
-            raise InvalidInput(
-                f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} "
-                f"and {raw_wrench.shape}"
-            )
-        rates = joint_velocities is not None
-        if rates != (joint_accelerations is not None) or rates and self.dynamic is None:
-            raise InvalidInput(
-                "joint_velocities and joint_accelerations go together, and with a "
-                "DynamicCompensator only (a static compensator has no inertial term to use them)"
-            )
-        raw, positions = raw_wrench.tolist(), q.tolist()
+        q, raw, positions, dt = self._tick_inputs(
+            q, raw_wrench, dt, joint_velocities, joint_accelerations
+        )
         fault, event = self._check(positions, raw, dt)
         if fault is not SensorFault.NONE:
             if self._tracked:
@@ -277,9 +260,8 @@ class JointAdmittance:
             self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED
         )
         rotation = self._rotation.tolist()  # R_BS, updated by the call above
-        # 2. compensation (six floats, sensor frame), the bias tracker, the oscillation detector and
-        # the safety stop
-        if rates:
+        # 2. compensation (six floats, sensor frame), bias tracker, oscillation check, safety stop
+        if joint_velocities is not None:
             contact = self.dynamic.contact_rates_floats(
                 q, raw, joint_velocities, joint_accelerations
             )
@@ -312,6 +294,36 @@ class JointAdmittance:
             return self._hold(SensorFault.NOT_FINITE, f"dq not finite: {dq}: holding")
         self._status_parts = (dq, contact, twist, manipulability, damping, scale)
         return dq
+
+    def _tick_inputs(self, q, raw_wrench, dt, joint_velocities, joint_accelerations) -> tuple:
+        """``q`` (float64 array), the reading and ``q`` as lists of floats, ``dt`` as a float.
+
+        Float64 arrays (the control loop's case) pass without a conversion.
+
+        Raises:
+            InvalidInput: not numbers, wrong shapes, or joint rates without a dynamic compensator
+                (or one without the other).
+        """
+        try:  # float64 arrays (the control loop's case) pass without a conversion
+            if not (
+                type(q) is type(raw_wrench) is np.ndarray and q.dtype is raw_wrench.dtype is FLOAT64
+            ):
+                q, raw_wrench = np.asarray(q, dtype=np.float64), np.asarray(raw_wrench, np.float64)
+            dt = float(dt)
+        except (TypeError, ValueError) as error:
+            raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
+        if q.shape != (self._nq,) or raw_wrench.shape != (6,):
+            raise InvalidInput(
+                f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} "
+                f"and {raw_wrench.shape}"
+            )
+        rates = joint_velocities is not None
+        if rates != (joint_accelerations is not None) or rates and self.dynamic is None:
+            raise InvalidInput(
+                "joint_velocities and joint_accelerations go together, and with a "
+                "DynamicCompensator only (a static compensator has no inertial term to use them)"
+            )
+        return q, raw_wrench.tolist(), q.tolist(), dt
 
     def _hold(self, fault: SensorFault, event: str, contact: np.ndarray | None = None):
         """``dq = 0``: a sensor fault, an oscillation or a safety stop (the caller latches those).
