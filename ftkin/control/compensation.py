@@ -95,9 +95,11 @@ class Compensator:
             )
         self.calibration = calibration
         self.arm = mounted_arm(arm, calibration.mount_rotation) if arm is not None else arm
-        signs = calibration.reading_signs
-        self._reading_signs = None if np.all(signs == 1.0) else signs
-        self._sign_floats = tuple(signs.tolist())  # the tick's copy (no conversion per sample)
+        signs = calibration.reading_signs  # the tick's copy is _sign_floats (no conversion)
+        self._reading_signs, self._sign_floats = (
+            None if np.all(signs == 1.0) else signs,
+            tuple(signs.tolist()),
+        )
         self._gravity_in_base, self._bias, self._com = (
             np.array(calibration.gravity_in_base),
             np.array(calibration.bias),

@@ -181,8 +181,10 @@ class JointAdmittance:
                 "sensor's measuring range [N, N·m]: the default ±250 N / ±6 N·m is the bundled "
                 "arm's (the paper's) sensor"
             )
-        self.monitor = FaultMonitor(sensor_limits)
-        self.detector = OscillationDetector(oscillation) if oscillation is not None else None
+        self.monitor, self.detector = (
+            FaultMonitor(sensor_limits),
+            OscillationDetector(oscillation) if oscillation is not None else None,
+        )
         # Bound once: the tick calls these without attribute lookups (the compensator's kernel is
         # fixed at its creation).
         self._detect = self.detector.update if self.detector is not None else None
