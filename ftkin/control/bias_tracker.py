@@ -210,7 +210,7 @@ class BiasTracker:
         contact, speed = self._read(contact_wrench, q, dt)
         if len(contact) != 6:
             raise InvalidInput(f"contact_wrench must have six values [N, N·m], got {len(contact)}")
-        limit = self.max_speed if free else self.still_speed
+        limit = self.max_speed if free else self.still_speed  # declared free: up to max_speed
         if fault or free is False or speed > limit or not all(map(math.isfinite, contact)):
             return self._end_run(dt)
         elapsed, k = self._clock - self._filter_time, self.k

@@ -385,8 +385,11 @@ class Compensator:
         rotations = samples.rotations
         if samples.joint_positions is not None and self.calibration.has_mount:
             rotations = rotations @ self.calibration.mount_rotation.T
-        bias = self.bias_at(samples.times) if samples.times is not None else None
-        return self.compensate_batch_unchecked(rotations, samples.wrenches, bias)
+        return self.compensate_batch_unchecked(
+            rotations,
+            samples.wrenches,
+            None if samples.times is None else self.bias_at(samples.times),
+        )
 
     @staticmethod
     def payload_weight(contact_wrench) -> np.ndarray | float:

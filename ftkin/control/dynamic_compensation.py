@@ -195,8 +195,10 @@ class DynamicCompensator:
         """Contact wrenches ``(N, 6)`` of :class:`~ftkin.calibration.regressor.MotionSamples`
         (vectorized).
         """
-        static = self.static.compensate_batch_unchecked(motion.rotations, motion.wrenches)
-        return static + motion.regressor() @ self.inertial_parameters
+        return (
+            self.static.compensate_batch_unchecked(motion.rotations, motion.wrenches)
+            + motion.regressor() @ self.inertial_parameters
+        )
 
     def compensate_trajectory(
         self, joint_positions, joint_velocities, joint_accelerations, raw_wrenches

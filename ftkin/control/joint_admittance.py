@@ -356,12 +356,11 @@ class JointAdmittance:
         """
         if not self.oscillation_event:
             law, state = self.admittance, self.admittance.state
-            derivative_part = float(np.linalg.norm(law._k1s * state.filtered_derivative))
-            proportional_part = float(np.linalg.norm(law._k2s * state.previous_error))
-            gain = (
+            gain = (  # the term that contributes more to the commanded twist
                 "k1 (K1, the dΔF/dt term: see ftkin.control.stability.max_stable_k1) or "
                 "derivative_cutoff"
-                if derivative_part >= proportional_part
+                if np.linalg.norm(law._k1s * state.filtered_derivative)
+                >= np.linalg.norm(law._k2s * state.previous_error)
                 else "k2 (K2, the ΔF term)"
             )
             limits = self.detector.limits

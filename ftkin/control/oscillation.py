@@ -50,9 +50,11 @@ class OscillationLimits:
     lever: float = 0.1
 
     def __post_init__(self):
-        values = (self.force_step, self.reversals, self.window, self.lever)
         if (
-            not all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in values)
+            not all(
+                isinstance(v, (int, float)) and math.isfinite(v) and v > 0
+                for v in (self.force_step, self.reversals, self.window, self.lever)
+            )
             or self.reversals < 2
         ):
             raise InvalidInput(

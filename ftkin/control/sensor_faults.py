@@ -85,12 +85,11 @@ class SensorLimits:
     def __post_init__(self):
         for name, expected in _EXPECTED.items():
             value = getattr(self, name)
-            count = expected.startswith("an integer")
             valid = (
                 isinstance(value, Real)
                 and not isinstance(value, bool)
                 and math.isfinite(value)
-                and (value >= 1 and value == int(value) if count else value > 0)
+                and (value >= 1 and value == int(value) if "integer" in expected else value > 0)
             )
             if not (valid or value is None and expected.endswith("or None")):
                 raise InvalidInput(f"{name} must be {expected}, got {value!r}")
@@ -120,6 +119,7 @@ class SensorLimits:
         return np.concatenate(parts)
 
 
+# what each scalar field of SensorLimits must be (the refusal says it)
 _EXPECTED = {
     "stuck_time": "a finite number > 0 or None",
     "dt_ratio": "a finite number > 0 or None",
@@ -127,7 +127,6 @@ _EXPECTED = {
     "stuck_ticks": "an integer >= 1 or None",
     "recovery_ticks": "an integer >= 1",
 }
-"""What each scalar field of :class:`SensorLimits` must be (the refusal says it)."""
 
 
 MIN_DT = 1e-6
