@@ -39,6 +39,7 @@ from ..validation import (
     as_rotation_batch,
     as_vector,
     is_rotation_rows,
+    rotation_rows,
 )
 from .bias_tracker import BiasTracker
 
@@ -189,18 +190,22 @@ class Compensator:
                 or ``raw_wrench`` not six finite numbers.
         """
         rotation, raw = rotation_sensor_to_base, raw_wrench
-        if type(rotation) is type(raw) is np.ndarray and rotation.dtype is raw.dtype is FLOAT64:
-            # The common case, two float64 arrays: no conversion, the closed-form check on their
-            # floats. A wrong shape fails there (unpacking R's rows, or a nested reading in the
-            # sum): the general path names it.
-            try:
+        try:
+            if type(rotation) is type(raw) is np.ndarray and rotation.dtype is raw.dtype is FLOAT64:
+                # The common case, two float64 arrays: no conversion, the closed-form check on
+                # their floats. A wrong shape fails there (unpacking R's rows, or a nested reading
+                # in the sum).
                 rows, values = rotation.tolist(), raw.tolist()
-                if is_rotation_rows(rows) and len(values) == 6 and math.isfinite(sum(values)):
-                    return np.array(self.contact_floats(rows, values))
-            except (TypeError, ValueError):
-                pass
-        # Anything else (lists, other dtypes, a batch of one), something wrong, or a huge reading
-        # that overflowed the sum: the array checks accept it or name what is wrong.
+                valid = is_rotation_rows(rows)
+            else:  # the same check after a conversion (real numbers only: no booleans or text)
+                rows = rotation_rows(rotation)  # None if not one rotation
+                values, valid = as_float_array(raw, "raw_wrench").tolist(), rows is not None
+            if valid and len(values) == 6 and math.isfinite(sum(values)):
+                return np.array(self.contact_floats(rows, values))
+        except (InvalidInput, TypeError, ValueError):
+            pass
+        # Something is wrong, a batch of one, or a huge reading that overflowed the sum: the array
+        # checks accept it or name what is wrong.
         rotations, _ = as_rotation_batch(rotation_sensor_to_base)
         batch, _ = as_batch(raw_wrench, 6, "raw_wrench")
         if len(rotations) != 1 or len(batch) != 1:
