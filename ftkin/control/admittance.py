@@ -159,8 +159,7 @@ class Admittance:
         bumpless: bool = True,
         saturation: str = "separate",
     ):
-        self.k1 = _diagonal(k1, "k1")
-        self.k2 = _diagonal(k2, "k2")
+        self.k1, self.k2 = _diagonal(k1, "k1"), _diagonal(k2, "k2")
         self.selection = _diagonal(selection, "selection")
         if np.any((self.selection != 0.0) & (self.selection != 1.0)):
             raise InvalidInput(f"selection must hold 0 or 1 per axis, got {self.selection}")
