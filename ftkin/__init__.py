@@ -73,7 +73,7 @@ _EXPORTS = {
     "SensorMount": ".kinematics.arm",
     "SensorNoise": ".calibration.information",
     "SimulatedSensor": ".sim.sensor",
-    "StepStatus": ".control.step_status",
+    "StepStatus": ".control.joint_admittance",
     "Surface": ".sim.surfaces",
     "SuspectConvention": ".exceptions",
     "ToolInertia": ".sim.mujoco",

@@ -27,7 +27,7 @@ _EXPORTS = {
     "OscillationLimits": ".oscillation",
     "SensorFault": ".sensor_faults",
     "SensorLimits": ".sensor_faults",
-    "StepStatus": ".step_status",
+    "StepStatus": ".joint_admittance",
     "max_stable_k1": ".stability",
 }
 """Public name → module, loaded on first access (PEP 562): importing one module of this stage does

@@ -159,8 +159,7 @@ class Admittance:
         bumpless: bool = True,
         saturation: str = "separate",
     ):
-        self.k1 = _diagonal(k1, "k1")
-        self.k2 = _diagonal(k2, "k2")
+        self.k1, self.k2 = _diagonal(k1, "k1"), _diagonal(k2, "k2")
         self.selection = _diagonal(selection, "selection")
         if np.any((self.selection != 0.0) & (self.selection != 1.0)):
             raise InvalidInput(f"selection must hold 0 or 1 per axis, got {self.selection}")
@@ -168,40 +167,29 @@ class Admittance:
         if frame not in FRAMES:
             raise InvalidInput(f"frame must be one of {FRAMES}, got {frame!r}")
         self.frame = frame
-        names = (
-            "force_deadband",
-            "torque_deadband",
-            "derivative_cutoff",
-            "max_linear_velocity",
-            "max_angular_velocity",
+        limits = dict(
+            force_deadband=force_deadband,
+            torque_deadband=torque_deadband,
+            derivative_cutoff=derivative_cutoff,
+            max_linear_velocity=max_linear_velocity,
+            max_angular_velocity=max_angular_velocity,
         )
-        limits = as_vector(
-            [
-                force_deadband,
-                torque_deadband,
-                derivative_cutoff,
-                max_linear_velocity,
-                max_angular_velocity,
-            ],
-            5,
-            "deadbands, cutoff and velocity limits",
-        )
-        if np.any(limits[:2] < 0) or np.any(limits[2:] <= 0):
+        values = as_vector(list(limits.values()), 5, "deadbands, cutoff and velocity limits")
+        if np.any(values[:2] < 0) or np.any(values[2:] <= 0):
             raise InvalidInput(
                 "deadbands must be >= 0; derivative_cutoff and velocity limits must be > 0, "
-                f"got {dict(zip(names, limits.tolist()))}"
+                f"got {dict(zip(limits, values.tolist()))}"
             )
-        self.deadband = np.repeat(limits[:2], 3)
-        self.derivative_cutoff = float(limits[2])
-        self.max_linear_velocity = float(limits[3])
-        self.max_angular_velocity = float(limits[4])
+        self.deadband = np.repeat(values[:2], 3)
+        self.derivative_cutoff, self.max_linear_velocity, self.max_angular_velocity = values[
+            2:
+        ].tolist()
         self.bumpless = bool(bumpless)
         if saturation not in ("separate", "common"):
             raise InvalidInput(f"saturation must be 'separate' or 'common', got {saturation!r}")
         self.common_saturation = saturation == "common"
         self._alpha_dt, self._alpha = math.nan, 0.0
-        self._k1s = self.selection * self.k1
-        self._k2s = self.selection * self.k2
+        self._k1s, self._k2s = self.selection * self.k1, self.selection * self.k2
         self._k1s_floats, self._k2s_floats = self._k1s.tolist(), self._k2s.tolist()
         self.state = AdmittanceState()
 

@@ -97,9 +97,7 @@ class BiasTracker:
             (self.rate**2).tolist(),
             (self.noise**2).tolist(),
         )  # the per-tick gate runs on floats
-        self.update_count = 0
-        self.last_update_span = 0
-        self.last_update_ticks = (0, 0)
+        self.update_count, self.last_update_span, self.last_update_ticks = 0, 0, (0, 0)
         self.reset(np.zeros(6))
 
     @classmethod
@@ -114,11 +112,10 @@ class BiasTracker:
             InvalidInput: neither given nor in the calibration (e.g. a
                 calibration without times: give ``rate=``).
         """
-        full = isinstance(calibration, CalibrationResult)  # a bare SensorModel has none of them
         drift, diagnostics, errors = (
             (calibration.drift, calibration.diagnostics, calibration.std_errors)
-            if full
-            else (None, None, None)
+            if isinstance(calibration, CalibrationResult)
+            else (None, None, None)  # a bare SensorModel has none of them
         )
         if rate is None:
             if drift is None or drift.rate is None:
@@ -149,22 +146,16 @@ class BiasTracker:
         self._filter_variance = (
             self._initial_std if std is None else as_six_channels(std, "std", non_negative=True)
         ) ** 2
-        self._clock = 0.0
-        self._filter_time = (
-            0.0  # time of the filter's last measurement (the delayed filter's clock) [s]
-        )
-        self._tick = 0
-        self._previous_q = None
+        # the clock and the time of the filter's last measurement (the delayed filter's clock) [s]
+        self._clock = self._filter_time = 0.0
+        self._tick, self._previous_q = 0, None
         self.interrupt()
 
     def interrupt(self) -> None:
         """Throw the readings not yet used away (a fault, a contact, a jump)."""
-        self._waiting = (
-            deque()
-        )  # (time [s], tick, measured bias: six floats) of consistent ticks not yet used
-        self._waiting_sum = [0.0] * 6
-        self._settle = 0.0
-        self._run_start = None  # time of the first waiting tick of this run [s]
+        # (time [s], tick, measured bias: six floats) of consistent ticks not yet used, their sum
+        self._waiting, self._waiting_sum = deque(), [0.0] * 6
+        self._settle, self._run_start = 0.0, None  # _run_start: first waiting tick's time [s]
 
     def _end_run(self, dt: float) -> bool:
         """A failed tick at the clock: use the waiting ticks that had ``guard`` s of consistent
@@ -172,14 +163,12 @@ class BiasTracker:
 
         True when that moved the bias.
         """
-        tolerance = 1e-9 * max(dt, 1.0)
-        last_consistent = self._clock - dt
-        used = False
-        if (
+        tolerance, last_consistent = 1e-9 * max(dt, 1.0), self._clock - dt
+        used = (
             self._run_start is not None
             and last_consistent - self._run_start >= self.window + self.guard - tolerance
-        ):
-            used = self._use(last_consistent - self.guard + tolerance)
+            and self._use(last_consistent - self.guard + tolerance)
+        )
         self.interrupt()
         return used
 
@@ -194,13 +183,9 @@ class BiasTracker:
         return self._bias.copy()
 
     @property
-    def _variance(self) -> np.ndarray:
-        return self._filter_variance + self.rate**2 * (self._clock - self._filter_time)
-
-    @property
     def std(self) -> np.ndarray:
         """Its standard deviation ``(6,)`` [N, N·m]."""
-        return np.sqrt(self._variance)
+        return np.sqrt(self._filter_variance + self.rate**2 * (self._clock - self._filter_time))
 
     # -------------------------------------------------------------- tick
     def observe(
@@ -225,7 +210,7 @@ class BiasTracker:
         contact, speed = self._read(contact_wrench, q, dt)
         if len(contact) != 6:
             raise InvalidInput(f"contact_wrench must have six values [N, N·m], got {len(contact)}")
-        limit = self.max_speed if free else self.still_speed
+        limit = self.max_speed if free else self.still_speed  # declared free: up to max_speed
         if fault or free is False or speed > limit or not all(map(math.isfinite, contact)):
             return self._end_run(dt)
         elapsed, k = self._clock - self._filter_time, self.k
@@ -318,6 +303,8 @@ class BiasTracker:
             filter_time,
         )
         self.update_count += 1
-        self.last_update_span = self._tick - first_tick
-        self.last_update_ticks = (first_tick, last_tick)
+        self.last_update_span, self.last_update_ticks = (
+            self._tick - first_tick,
+            (first_tick, last_tick),
+        )
         return True

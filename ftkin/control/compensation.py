@@ -22,6 +22,7 @@ drifting calibration).
 from __future__ import annotations
 
 import math
+from operator import mul
 
 import numpy as np
 
@@ -82,25 +83,29 @@ class Compensator:
             )
         calibration = CalibrationResult.from_model(calibration)
         record = calibration.kinematics
-        if arm is not None and record is not None and not allow_other_arm:
-            problems = record.mismatches(arm)
-            if problems:
-                raise InvalidInput(
-                    "this arm is not the one the calibration was made with ("
-                    + record.describe()
-                    + "): "
-                    + "; ".join(problems)
-                    + ". Pass allow_other_arm=True (ftkin compensate: --allow-other-arm) if that "
-                    "is deliberate."
-                )
+        if (
+            arm is not None
+            and record is not None
+            and not allow_other_arm
+            and record.mismatches(arm)
+        ):
+            raise InvalidInput(
+                f"this arm is not the one the calibration was made with ({record.describe()}): "
+                f"{'; '.join(record.mismatches(arm))}. Pass allow_other_arm=True (ftkin "
+                "compensate: --allow-other-arm) if that is deliberate."
+            )
         self.calibration = calibration
         self.arm = mounted_arm(arm, calibration.mount_rotation) if arm is not None else arm
-        signs = calibration.reading_signs
-        self._reading_signs = None if np.all(signs == 1.0) else signs
-        self._sign_floats = tuple(signs.tolist())  # the tick's copy (no conversion per sample)
-        self._gravity_in_base = np.array(calibration.gravity_in_base)
-        self._bias = np.array(calibration.bias)
-        self._com = np.array(calibration.center_of_mass)
+        signs = calibration.reading_signs  # the tick's copy is _sign_floats (no conversion)
+        self._reading_signs, self._sign_floats = (
+            None if np.all(signs == 1.0) else signs,
+            tuple(signs.tolist()),
+        )
+        self._gravity_in_base, self._bias, self._com = (
+            np.array(calibration.gravity_in_base),
+            np.array(calibration.bias),
+            np.array(calibration.center_of_mass),
+        )
         self._floats = FloatModel(self._gravity_in_base, self._com, self._bias)
         # Every one-sample path (and JointAdmittance.step) runs the float kernel of the model.
         self.contact_floats = (
@@ -113,14 +118,9 @@ class Compensator:
 
     def _signed_contact_floats(self, rotation_rows, raw) -> tuple[float, ...]:
         """:meth:`FloatModel.contact` of the readings times the stored signs."""
-        s0, s1, s2, s3, s4, s5 = self._sign_floats
-        w0, w1, w2, w3, w4, w5 = raw
-        return self._floats.contact(
-            rotation_rows, (w0 * s0, w1 * s1, w2 * s2, w3 * s3, w4 * s4, w5 * s5)
-        )
+        return self._floats.contact(rotation_rows, list(map(mul, raw, self._sign_floats)))
 
     def __repr__(self) -> str:
-        calibration = self.calibration
         path = None if self.arm is None else self.arm.urdf_path
         arm = (
             "none"
@@ -128,9 +128,9 @@ class Compensator:
             else f"{self.arm.sensor_frame} of {path.name if path else '?'}"
         )
         return (
-            f"Compensator(tool {calibration.tool_weight:.4g} N, COM "
-            f"{np.round(calibration.center_of_mass, 4).tolist()} m, "
-            f"bias {np.round(calibration.bias, 4).tolist()} [N, N·m], arm {arm})"
+            f"Compensator(tool {self.calibration.tool_weight:.4g} N, COM "
+            f"{np.round(self.calibration.center_of_mass, 4).tolist()} m, "
+            f"bias {np.round(self.calibration.bias, 4).tolist()} [N, N·m], arm {arm})"
         )
 
     def refresh_floats(self) -> None:
@@ -190,35 +190,22 @@ class Compensator:
                 or ``raw_wrench`` not six finite numbers.
         """
         rotation, raw = rotation_sensor_to_base, raw_wrench
-        if (
-            type(rotation) is np.ndarray
-            and type(raw) is np.ndarray
-            and rotation.dtype is FLOAT64
-            and raw.dtype is FLOAT64
-        ):
-            # The common case, two float64 arrays: no conversion, the closed-form check on their
-            # floats. A wrong
-            # shape fails there (unpacking R's rows, or a nested reading in the sum): the general
-            # path names it.
-            try:
+        try:
+            if type(rotation) is type(raw) is np.ndarray and rotation.dtype is raw.dtype is FLOAT64:
+                # The common case, two float64 arrays: no conversion, the closed-form check on
+                # their floats. A wrong shape fails there (unpacking R's rows, or a nested reading
+                # in the sum).
                 rows, values = rotation.tolist(), raw.tolist()
-                valid = is_rotation_rows(rows) and len(values) == 6 and math.isfinite(sum(values))
-            except (TypeError, ValueError):
-                valid = False
-            if valid:
+                valid = is_rotation_rows(rows)
+            else:  # the same check after a conversion (real numbers only: no booleans or text)
+                rows = rotation_rows(rotation)  # None if not one rotation
+                values, valid = as_float_array(raw, "raw_wrench").tolist(), rows is not None
+            if valid and len(values) == 6 and math.isfinite(sum(values)):
                 return np.array(self.contact_floats(rows, values))
-        rows = rotation_rows(
-            rotation_sensor_to_base
-        )  # closed-form check on floats, None if not a rotation
-        try:  # real numbers only: booleans and text are not converted
-            raw = as_float_array(raw_wrench, "raw_wrench")
-        except InvalidInput:
-            raw = None
-        if rows is not None and raw is not None and raw.shape == (6,):
-            values = raw.tolist()
-            if math.isfinite(sum(values)):
-                return np.array(self.contact_floats(rows, values))
-        # Something is wrong (or a huge reading overflowed the sum): the array checks name it.
+        except (InvalidInput, TypeError, ValueError):
+            pass
+        # Something is wrong, a batch of one, or a huge reading that overflowed the sum: the array
+        # checks accept it or name what is wrong.
         rotations, _ = as_rotation_batch(rotation_sensor_to_base)
         batch, _ = as_batch(raw_wrench, 6, "raw_wrench")
         if len(rotations) != 1 or len(batch) != 1:
@@ -253,19 +240,24 @@ class Compensator:
         if self.tracker is not None:
             self.tracker.reset(bias)
 
-    def rezero_rotation(self, rotation_sensor_to_base, raw_wrench) -> np.ndarray:
-        """:meth:`rezero` from ``R_BS`` ``(3, 3)``; returns the new bias ``(6,)``."""
+    def _zero_at(self, rotation_sensor_to_base, raw: np.ndarray, what: str) -> np.ndarray:
+        """Set and return the bias that makes ``raw`` ``(6,)`` a reading without contact at
+        ``R_BS``.
+        """
         rotations, _ = as_rotation_batch(rotation_sensor_to_base)
-        raw = as_vector(raw_wrench, 6, "raw_wrench")
         if len(rotations) != 1:
-            raise InvalidInput("rezero takes one (3, 3) rotation")
-        if (
-            self._reading_signs is not None
-        ):  # a stored sensor sign or reversed axis applies to this reading too
+            raise InvalidInput(f"{what} takes one (3, 3) rotation")
+        if self._reading_signs is not None:  # a stored sign or reversed axis applies here too
             raw = raw * self._reading_signs
         bias = raw - self.calibration.tool_gravity_wrench(rotations[0])
         self.set_bias(bias)
         return bias
+
+    def rezero_rotation(self, rotation_sensor_to_base, raw_wrench) -> np.ndarray:
+        """:meth:`rezero` from ``R_BS`` ``(3, 3)``; returns the new bias ``(6,)``."""
+        return self._zero_at(
+            rotation_sensor_to_base, as_vector(raw_wrench, 6, "raw_wrench"), "rezero"
+        )
 
     def rezero(self, q, raw_wrench) -> np.ndarray:
         """Re-zero at joint angles ``q`` [rad]: the contact wrench of ``raw_wrench`` becomes zero.
@@ -281,12 +273,7 @@ class Compensator:
 
     def driver_zeroed_at_rotation(self, rotation_sensor_to_base) -> np.ndarray:
         """:meth:`driver_zeroed_at` from ``R_BS`` ``(3, 3)``; returns the new bias ``(6,)``."""
-        rotations, _ = as_rotation_batch(rotation_sensor_to_base)
-        if len(rotations) != 1:
-            raise InvalidInput("driver_zeroed_at takes one (3, 3) rotation")
-        bias = -self.calibration.tool_gravity_wrench(rotations[0])
-        self.set_bias(bias)
-        return bias
+        return self._zero_at(rotation_sensor_to_base, np.zeros(6), "driver_zeroed_at")
 
     def driver_zeroed_at(self, q0) -> np.ndarray:
         """The sensor driver was zeroed (tool on, no contact) at joint angles ``q0`` [rad].
@@ -333,11 +320,12 @@ class Compensator:
         """Give the tracker this tick's contact wrench; True when it moved the bias (used from the
         next call).
         """
-        tracker = self.tracker
-        if tracker is None or not tracker.observe(contact_wrench, dt, q=q, free=free, fault=fault):
-            return False
-        self._apply_bias(tracker.bias)
-        return True
+        moved = self.tracker is not None and self.tracker.observe(
+            contact_wrench, dt, q=q, free=free, fault=fault
+        )
+        if moved:
+            self._apply_bias(self.tracker.bias)
+        return moved
 
     # ----------------------------------------------------------------- batch
     def compensate_batch(self, rotation_sensor_to_base, raw_wrenches, times=None) -> np.ndarray:
@@ -352,11 +340,9 @@ class Compensator:
             raise InvalidInput(
                 f"{len(rotations)} rotations but {len(raw)} wrenches; expected one each"
             )
-        bias = None
-        if times is not None:
-            bias = self.bias_at(times)
-            if len(bias) != len(raw):
-                raise InvalidInput(f"{len(bias)} times but {len(raw)} wrenches; expected one each")
+        bias = None if times is None else self.bias_at(times)
+        if bias is not None and len(bias) != len(raw):
+            raise InvalidInput(f"{len(bias)} times but {len(raw)} wrenches; expected one each")
         return self.compensate_batch_unchecked(rotations, raw, bias)
 
     def compensate_batch_unchecked(
@@ -404,8 +390,11 @@ class Compensator:
         rotations = samples.rotations
         if samples.joint_positions is not None and self.calibration.has_mount:
             rotations = rotations @ self.calibration.mount_rotation.T
-        bias = self.bias_at(samples.times) if samples.times is not None else None
-        return self.compensate_batch_unchecked(rotations, samples.wrenches, bias)
+        return self.compensate_batch_unchecked(
+            rotations,
+            samples.wrenches,
+            None if samples.times is None else self.bias_at(samples.times),
+        )
 
     @staticmethod
     def payload_weight(contact_wrench) -> np.ndarray | float:

@@ -61,18 +61,17 @@ class ControlFrame:
                 self.rotation_tool_to_sensor = rotations[0].copy()
         # The transports' constants as Python floats (the arrays above are copies: the caller's stay
         # theirs).
-        self._r = self.point_in_sensor.tolist()
-        self._rotation_rows = self.rotation_tool_to_sensor.tolist()
-        self._inverse_rows = self.rotation_tool_to_sensor.T.tolist()
+        self._r, self._rotation_rows, self._inverse_rows = (
+            self.point_in_sensor.tolist(),
+            self.rotation_tool_to_sensor.tolist(),
+            self.rotation_tool_to_sensor.T.tolist(),
+        )
 
     def placement_in_sensor(self, rotation_sensor_to_base: np.ndarray) -> pin.SE3:
         """The control frame in the sensor frame: origin ``r`` [m] and axes ``R_SC``."""
-        axes = {
-            "sensor": np.eye(3),
-            "tool": self.rotation_tool_to_sensor,
-            "base": np.asarray(rotation_sensor_to_base, dtype=float).T,
-        }[self.frame]
-        return pin.SE3(axes, self.point_in_sensor)
+        if self.frame == "base":
+            return pin.SE3(np.asarray(rotation_sensor_to_base, dtype=float).T, self.point_in_sensor)
+        return pin.SE3(self.rotation_tool_to_sensor, self.point_in_sensor)  # identity for "sensor"
 
     def wrench_from_sensor(
         self, wrench_in_sensor: np.ndarray, rotation_sensor_to_base: np.ndarray
@@ -81,8 +80,11 @@ class ControlFrame:
 
         Pinocchio's force transport ``M_SC⁻¹ · f``; :meth:`wrench_floats` is its fast path.
         """
-        placement = self.placement_in_sensor(rotation_sensor_to_base)
-        return placement.actInv(pin.Force(np.asarray(wrench_in_sensor, dtype=float))).vector
+        return (
+            self.placement_in_sensor(rotation_sensor_to_base)
+            .actInv(pin.Force(np.asarray(wrench_in_sensor, dtype=float)))
+            .vector
+        )
 
     def twist_to_sensor_origin(
         self, twist: np.ndarray, rotation_sensor_to_base: np.ndarray
@@ -94,8 +96,11 @@ class ControlFrame:
         path.
         """
         rotation = np.asarray(rotation_sensor_to_base, dtype=float)
-        placement = pin.SE3(rotation, np.zeros(3)) * self.placement_in_sensor(rotation)
-        return placement.act(pin.Motion(np.asarray(twist, dtype=float))).vector
+        return (
+            (pin.SE3(rotation, np.zeros(3)) * self.placement_in_sensor(rotation))
+            .act(pin.Motion(np.asarray(twist, dtype=float)))
+            .vector
+        )
 
     # The two transports on Python floats (the control tick's path, several times faster than
     # Pinocchio through Python); tests check them against the methods above to 1e-12.

@@ -58,22 +58,17 @@ class DynamicCompensator:
         if not isinstance(arm, Arm):
             raise InvalidInput(f"arm must be an ftkin Arm, got {type(arm).__name__}")
         self.static = Compensator(calibration, arm, allow_other_arm=allow_other_arm)
-        self.calibration = self.static.calibration
-        self.arm = (
-            self.static.arm
-        )  # with the calibration's mount folded into the sensor frame, if any
+        # the arm with the calibration's mount folded into the sensor frame, if any
+        self.calibration, self.arm = self.static.calibration, self.static.arm
         self.inertial_parameters = (
             self.calibration.dynamic_parameters
             if inertial_parameters is None
             else as_vector(inertial_parameters, 10, "inertial_parameters")
         )
-        self._data = self.arm.model.createData()
         self._model, self._frame = self.arm.model, self.arm.sensor_frame_id
-        self._nq = arm.nq
-        self._q_shape = (arm.nq,)
-        self._contact_floats = (
-            self.static.contact_floats
-        )  # its kernel: current bias (re-zeroed or tracked), reading signs
+        self._data, self._q_shape = self._model.createData(), (arm.nq,)
+        # the static kernel: current bias (re-zeroed or tracked), reading signs
+        self._contact_floats = self.static.contact_floats
         self._stream: CausalDifferentiator | None = None
         self._raw_buffer: deque = deque()
 
@@ -92,16 +87,13 @@ class DynamicCompensator:
         """:meth:`compensate_moving` returning six Python floats (``JointAdmittance.step``'s path);
         validated the same way.
         """
+        raw = raw_wrench
         try:  # float64 arrays (the control loop's) pass as they are
-            if type(q) is not np.ndarray or q.dtype is not FLOAT64:
-                q = np.asarray(q, dtype=np.float64)
-            if type(dq) is not np.ndarray or dq.dtype is not FLOAT64:
-                dq = np.asarray(dq, dtype=np.float64)
-            if type(ddq) is not np.ndarray or ddq.dtype is not FLOAT64:
-                ddq = np.asarray(ddq, dtype=np.float64)
-            raw = raw_wrench
-            if type(raw) is not np.ndarray or raw.dtype is not FLOAT64:
-                raw = np.asarray(raw, dtype=np.float64)
+            if not (
+                type(q) is type(dq) is type(ddq) is type(raw) is np.ndarray
+                and q.dtype is dq.dtype is ddq.dtype is raw.dtype is FLOAT64
+            ):
+                q, dq, ddq, raw = (np.asarray(v, dtype=np.float64) for v in (q, dq, ddq, raw))
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q, dq, ddq and raw_wrench must be numeric: {error}") from None
         shape = self._q_shape
@@ -174,7 +166,7 @@ class DynamicCompensator:
         """Estimate ``dq, ddq`` online from the stream of ``q`` (:class:`CausalDifferentiator`);
         returns its delay [s].
         """
-        self._stream = CausalDifferentiator(self._nq, sample_period, window, polyorder)
+        self._stream = CausalDifferentiator(self.arm.nq, sample_period, window, polyorder)
         self._raw_buffer = deque(maxlen=self._stream.window)
         return self._stream.delay
 
@@ -194,16 +186,19 @@ class DynamicCompensator:
         self._raw_buffer.append(raw)
         if estimate is None:
             return None
-        centre = self._raw_buffer[(self._stream.window - 1) // 2]
-        return self.compensate_moving_unchecked(estimate[0], estimate[1], estimate[2], centre)
+        return self.compensate_moving_unchecked(
+            estimate[0], estimate[1], estimate[2], self._raw_buffer[(self._stream.window - 1) // 2]
+        )
 
     # ----------------------------------------------------------------- batch
     def compensate_motion(self, motion: MotionSamples) -> np.ndarray:
         """Contact wrenches ``(N, 6)`` of :class:`~ftkin.calibration.regressor.MotionSamples`
         (vectorized).
         """
-        static = self.static.compensate_batch_unchecked(motion.rotations, motion.wrenches)
-        return static + motion.regressor() @ self.inertial_parameters
+        return (
+            self.static.compensate_batch_unchecked(motion.rotations, motion.wrenches)
+            + motion.regressor() @ self.inertial_parameters
+        )
 
     def compensate_trajectory(
         self, joint_positions, joint_velocities, joint_accelerations, raw_wrenches
@@ -211,7 +206,8 @@ class DynamicCompensator:
         """Contact wrenches ``(N, 6)`` from ``(N, nq)`` ``q, dq, ddq`` and ``(N, 6)`` raw
         readings.
         """
-        motion = MotionSamples.from_joint_trajectory(
-            self.arm, joint_positions, joint_velocities, joint_accelerations, raw_wrenches
+        return self.compensate_motion(
+            MotionSamples.from_joint_trajectory(
+                self.arm, joint_positions, joint_velocities, joint_accelerations, raw_wrenches
+            )
         )
-        return self.compensate_motion(motion)

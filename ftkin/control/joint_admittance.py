@@ -38,7 +38,7 @@ non-numeric inputs raise :class:`~ftkin.exceptions.InvalidInput`. Each tick leav
 from __future__ import annotations
 
 import math
-from operator import ge, le, mul, sub
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -54,7 +54,40 @@ from .damped_least_squares import damped_least_squares
 from .dynamic_compensation import DynamicCompensator
 from .oscillation import DEFAULT_OSCILLATION_LIMITS, OscillationDetector, OscillationLimits
 from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
-from .step_status import StepStatus
+
+
+@dataclass(frozen=True)
+class StepStatus:
+    """What one :meth:`JointAdmittance.step` did.
+
+    Attributes:
+        dq: Commanded joint velocities ``(nq,)`` [rad/s].
+        contact_wrench: Compensated wrench in the sensor frame [N, N·m] (NaN on a sensor-fault
+        tick).
+        twist: Admittance output at the control point, control-frame axes [m/s, rad/s].
+        manipulability: ``w = sqrt(det(J Jᵀ))`` of the sensor Jacobian.
+        damping: ``λ`` used in the least-squares inverse.
+        limit_scale: Uniform factor applied for joint velocity/position limits (1 = none).
+        safety_stop: True when the contact exceeded the limit (this tick or latched).
+        event: ``""`` or a short description of why the arm was stopped.
+        fault: The sensor fault holding the arm this tick (or being recovered
+            from), :attr:`SensorFault.NONE` when there is none.
+    """
+
+    dq: np.ndarray
+    contact_wrench: np.ndarray
+    twist: np.ndarray
+    manipulability: float
+    damping: float
+    limit_scale: float
+    safety_stop: bool
+    event: str
+    fault: SensorFault = SensorFault.NONE
+
+    @property
+    def held(self) -> bool:
+        """True when ``dq`` is zero because of a safety stop or a sensor fault."""
+        return self.safety_stop or self.fault is not SensorFault.NONE
 
 
 class JointAdmittance:
@@ -110,28 +143,36 @@ class JointAdmittance:
         if not isinstance(arm, Arm) or not isinstance(admittance, Admittance):
             raise InvalidInput("JointAdmittance needs an ftkin Arm and an ftkin Admittance")
         self.dynamic = compensator if isinstance(compensator, DynamicCompensator) else None
-        if self.dynamic is not None:
-            compensator = self.dynamic.static
+        compensator = compensator if self.dynamic is None else self.dynamic.static
         if compensator is not None and not isinstance(compensator, Compensator):
             raise InvalidInput(
                 "compensator must be an ftkin Compensator or None, got "
                 f"{type(compensator).__name__}"
             )
-        numbers = dict(
-            force_limit=force_limit,
-            torque_limit=torque_limit,
-            manipulability_threshold=manipulability_threshold,
-            max_damping=max_damping,
+        self.force_limit, self.torque_limit, self.manipulability_threshold, self.max_damping = (
+            as_positive(value, name)
+            for name, value in (
+                ("force_limit", force_limit),
+                ("torque_limit", torque_limit),
+                ("manipulability_threshold", manipulability_threshold),
+                ("max_damping", max_damping),
+            )
         )
-        numbers = [as_positive(value, name) for name, value in numbers.items()]
         if compensator is not None and compensator.calibration.has_mount:
             # the real sensor frame, folded into the model: no work per tick
             arm = mounted_arm(arm, compensator.calibration.mount_rotation)
         self.arm, self.admittance, self.compensator = arm, admittance, compensator
         self.frame = control_frame_for(arm, admittance.frame, control_point)
-        self.force_limit, self.torque_limit = numbers[0], numbers[1]
-        self.manipulability_threshold, self.max_damping = numbers[2], numbers[3]
-        self._bind_limits(arm, as_positive(velocity_scale, "velocity_scale"), limit_gain)
+        # The kinematics and joint limits the tick reads, as Python floats (limit scaling's
+        # shortcut).
+        self._speeds = (
+            arm.velocity_limits * as_positive(velocity_scale, "velocity_scale")
+        ).tolist()
+        self.limit_gain = as_positive(limit_gain, "limit_gain")
+        self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
+        self._rotation = arm.data.oMf[arm.sensor_frame_id].rotation  # a view: follows every FK call
+        self._lower, self._upper = arm.lower_limits.tolist(), arm.upper_limits.tolist()
+        self._nq = arm.nq
         if sensor_limits is None and (
             arm.urdf_path is None or arm.urdf_path != bundled_urdf_path().resolve()
         ):
@@ -140,8 +181,10 @@ class JointAdmittance:
                 "sensor's measuring range [N, N·m]: the default ±250 N / ±6 N·m is the bundled "
                 "arm's (the paper's) sensor"
             )
-        self.monitor = FaultMonitor(sensor_limits)
-        self.detector = OscillationDetector(oscillation) if oscillation is not None else None
+        self.monitor, self.detector = (
+            FaultMonitor(sensor_limits),
+            OscillationDetector(oscillation) if oscillation is not None else None,
+        )
         # Bound once: the tick calls these without attribute lookups (the compensator's kernel is
         # fixed at its creation).
         self._detect = self.detector.update if self.detector is not None else None
@@ -151,29 +194,14 @@ class JointAdmittance:
         self._tracked = compensator is not None and compensator.tracker is not None
         self.reset()
 
-    def _bind_limits(self, arm: Arm, velocity_scale: float, limit_gain: float) -> None:
-        """The kinematics and joint limits the tick reads, as Python floats (limit scaling's
-        shortcut).
-        """
-        self.limit_gain = as_positive(limit_gain, "limit_gain")
-        self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
-        # a view: follows every kinematics update
-        self._rotation = arm.data.oMf[arm.sensor_frame_id].rotation
-        self._lower, self._upper = arm.lower_limits.tolist(), arm.upper_limits.tolist()
-        self._speeds = (arm.velocity_limits * velocity_scale).tolist()
-        self._gains, self._nq = [self.limit_gain] * arm.nq, arm.nq
-
     def reset(self) -> None:
         """Clear the admittance filter, the safety latch and the fault monitor's state."""
         self.admittance.reset()
         self.monitor.reset()
         if self.detector is not None:
             self.detector.reset()
-        self.safety_latched = False
-        self.oscillation_event = ""
-        self._holding = False
-        self._status: StepStatus | None = None
-        self._status_parts: tuple | None = None
+        self.safety_latched, self.oscillation_event, self._holding = False, "", False
+        self._status = self._status_parts = None  # the last StepStatus, or the parts to build it
 
     @property
     def last_status(self) -> StepStatus | None:
@@ -221,10 +249,9 @@ class JointAdmittance:
         """
         # The tick runs on Python floats (numpy's per-call overhead dominates on 3- and 6-vectors);
         # numpy only for the Jacobian products. The status is built when asked (last_status).
-        q, raw, positions, dt = self._tick_inputs(q, raw_wrench, dt, joint_velocities)
-        rates = joint_velocities is not None
-        if rates != (joint_accelerations is not None):
-            self._refuse()
+        q, raw, positions, dt = self._tick_inputs(
+            q, raw_wrench, dt, joint_velocities, joint_accelerations
+        )
         fault, event = self._check(positions, raw, dt)
         if fault is not SensorFault.NONE:
             if self._tracked:
@@ -235,9 +262,8 @@ class JointAdmittance:
             self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED
         )
         rotation = self._rotation.tolist()  # R_BS, updated by the call above
-        # 2. compensation (six floats, sensor frame), the bias tracker, the oscillation detector and
-        # the safety stop
-        if rates:
+        # 2. compensation (six floats, sensor frame), bias tracker, oscillation check, safety stop
+        if joint_velocities is not None:
             contact = self.dynamic.contact_rates_floats(
                 q, raw, joint_velocities, joint_accelerations
             )
@@ -271,51 +297,49 @@ class JointAdmittance:
         self._status_parts = (dq, contact, twist, manipulability, damping, scale)
         return dq
 
-    def _tick_inputs(self, q, raw_wrench, dt, joint_velocities):
+    def _tick_inputs(self, q, raw_wrench, dt, joint_velocities, joint_accelerations) -> tuple:
         """``q`` (float64 array), the reading and ``q`` as lists of floats, ``dt`` as a float.
 
         Float64 arrays (the control loop's case) pass without a conversion.
 
         Raises:
-            InvalidInput: not numbers, wrong shapes, or joint rates without a dynamic compensator.
+            InvalidInput: not numbers, wrong shapes, or joint rates without a dynamic compensator
+                (or one without the other).
         """
-        try:
-            if type(q) is not np.ndarray or q.dtype is not FLOAT64:
-                q = np.asarray(q, dtype=np.float64)
-            raw = raw_wrench
-            if type(raw) is not np.ndarray or raw.dtype is not FLOAT64:
-                raw = np.asarray(raw, dtype=np.float64)
+        try:  # float64 arrays (the control loop's case) pass without a conversion
+            if not (
+                type(q) is type(raw_wrench) is np.ndarray and q.dtype is raw_wrench.dtype is FLOAT64
+            ):
+                q, raw_wrench = np.asarray(q, dtype=np.float64), np.asarray(raw_wrench, np.float64)
             dt = float(dt)
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None
-        if q.shape != (self._nq,) or raw.shape != (6,):
+        if q.shape != (self._nq,) or raw_wrench.shape != (6,):
             raise InvalidInput(
                 f"expected q of shape ({self._nq},) and raw_wrench of shape (6,), got {q.shape} "
-                f"and {raw.shape}"
+                f"and {raw_wrench.shape}"
             )
-        if joint_velocities is not None and self.dynamic is None:
-            self._refuse()
-        return q, raw.tolist(), q.tolist(), dt
+        rates = joint_velocities is not None
+        if rates != (joint_accelerations is not None) or rates and self.dynamic is None:
+            raise InvalidInput(
+                "joint_velocities and joint_accelerations go together, and with a "
+                "DynamicCompensator only (a static compensator has no inertial term to use them)"
+            )
+        return q, raw_wrench.tolist(), q.tolist(), dt
 
-    def _refuse(self) -> None:
-        """The :class:`InvalidInput` for joint rates :meth:`step` cannot use."""
-        raise InvalidInput(
-            "joint_velocities and joint_accelerations go together, and with a "
-            "DynamicCompensator only (a static compensator has no inertial term to use them)"
-        )
+    def _hold(self, fault: SensorFault, event: str, contact: np.ndarray | None = None):
+        """``dq = 0``: a sensor fault, an oscillation or a safety stop (the caller latches those).
 
-    def _hold(self, fault: SensorFault, event: str) -> np.ndarray:
-        """``dq = 0`` for a sensor fault; the filter and the latch are left alone.
-
-        The status's contact wrench is NaN (not measured: a supervisor's
-        ``|F'| < threshold`` test must not pass on a faulty tick), its twist zero.
+        A sensor fault leaves the filter and the latch alone; its status's contact wrench is NaN
+        (not measured: a supervisor's ``|F'| < threshold`` test must not pass on a faulty tick).
+        The status's twist is zero.
         """
         self._holding = True
         dq = np.zeros(self._nq)
         self._status_parts = None
         self._status = StepStatus(
             dq,
-            np.full(6, math.nan),
+            np.full(6, math.nan) if contact is None else contact,
             np.zeros(6),
             math.nan,
             math.nan,
@@ -332,12 +356,11 @@ class JointAdmittance:
         """
         if not self.oscillation_event:
             law, state = self.admittance, self.admittance.state
-            derivative_part = float(np.linalg.norm(law._k1s * state.filtered_derivative))
-            proportional_part = float(np.linalg.norm(law._k2s * state.previous_error))
-            gain = (
+            gain = (  # the term that contributes more to the commanded twist
                 "k1 (K1, the dΔF/dt term: see ftkin.control.stability.max_stable_k1) or "
                 "derivative_cutoff"
-                if derivative_part >= proportional_part
+                if np.linalg.norm(law._k1s * state.filtered_derivative)
+                >= np.linalg.norm(law._k2s * state.previous_error)
                 else "k2 (K2, the ΔF term)"
             )
             limits = self.detector.limits
@@ -347,20 +370,7 @@ class JointAdmittance:
                 f"{limits.force_step:g} N within ~{limits.window:g} s: holding (reset() to "
                 f"resume); lower {gain}"
             )
-        dq = np.zeros(self._nq)
-        self._status_parts = None
-        self._status = StepStatus(
-            dq,
-            contact,
-            np.zeros(6),
-            math.nan,
-            math.nan,
-            0.0,
-            self.safety_latched,
-            self.oscillation_event,
-            SensorFault.OSCILLATION,
-        )
-        return dq
+        return self._hold(SensorFault.OSCILLATION, self.oscillation_event, contact)
 
     def _restart_derivative(self, wrench: np.ndarray) -> None:
         """After a hold: take this tick's force error as the previous one and zero the filtered
@@ -383,10 +393,7 @@ class JointAdmittance:
                 "resume)"
             )
         self.safety_latched = True
-        dq = np.zeros(self._nq)
-        self._status_parts = None
-        self._status = StepStatus(dq, contact, np.zeros(6), math.nan, math.nan, 0.0, True, event)
-        return dq
+        return self._hold(SensorFault.NONE, event, contact)
 
     def _limit_scale(self, q: list, dq: list) -> float:
         """Largest ``s ≤ 1`` keeping every joint's ``s·dq`` within its bound (0 if one is at or past
@@ -396,17 +403,15 @@ class JointAdmittance:
         [rad/s], and never beyond its (scaled) velocity limit.
         """
         gain, scale = self.limit_gain, 1.0
-        if (
-            all(map(le, map(abs, dq), self._speeds))
-            and all(map(le, dq, map(mul, self._gains, map(sub, self._upper, q))))
-            and all(map(ge, dq, map(mul, self._gains, map(sub, self._lower, q))))
-        ):
-            return 1.0  # every joint within both of its bounds (so finite): the loop gives 1.0 too
-        if not all(map(math.isfinite, dq)):
-            return math.nan
         for position, velocity, lower, upper, speed in zip(
             q, dq, self._lower, self._upper, self._speeds
         ):
+            if -speed <= velocity <= speed and (
+                gain * (lower - position) <= velocity <= gain * (upper - position)
+            ):
+                continue  # within both of its bounds (so finite): the scale stays
+            if not math.isfinite(velocity):
+                return math.nan
             if velocity > 0.0:
                 scale = min(scale, max(0.0, min(speed, gain * (upper - position))) / velocity)
             elif velocity < 0.0:

@@ -50,9 +50,11 @@ class OscillationLimits:
     lever: float = 0.1
 
     def __post_init__(self):
-        values = (self.force_step, self.reversals, self.window, self.lever)
         if (
-            not all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in values)
+            not all(
+                isinstance(v, (int, float)) and math.isfinite(v) and v > 0
+                for v in (self.force_step, self.reversals, self.window, self.lever)
+            )
             or self.reversals < 2
         ):
             raise InvalidInput(
@@ -87,10 +89,13 @@ class OscillationDetector:
                 "oscillation limits must be an ftkin OscillationLimits or None, got "
                 f"{type(limits).__name__}"
             )
-        self._threshold = float(self.limits.force_step)
+        self._threshold, self._window, self._reversals = (
+            float(self.limits.force_step),
+            self.limits.window,
+            self.limits.reversals,
+        )
         self._energy_floor = 0.25 * self._threshold * self._threshold
         self._inverse_lever = 1.0 / float(self.limits.lever)
-        self._window, self._reversals = self.limits.window, self.limits.reversals
         self.reset()
 
     def reset(self) -> None:

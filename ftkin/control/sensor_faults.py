@@ -83,64 +83,55 @@ class SensorLimits:
     recovery_ticks: int = 5
 
     def __post_init__(self):
-        for name in ("stuck_time", "dt_ratio", "nominal_dt"):
+        for name, expected in _EXPECTED.items():
             value = getattr(self, name)
-            if value is not None and not _is_number(value, lambda x: math.isfinite(x) and x > 0):
-                raise InvalidInput(f"{name} must be a finite number > 0 or None, got {value!r}")
+            valid = (
+                isinstance(value, Real)
+                and not isinstance(value, bool)
+                and math.isfinite(value)
+                and (value >= 1 and value == int(value) if "integer" in expected else value > 0)
+            )
+            if not (valid or value is None and expected.endswith("or None")):
+                raise InvalidInput(f"{name} must be {expected}, got {value!r}")
         if self.dt_ratio is not None and self.dt_ratio <= 1.0:
             raise InvalidInput(
                 f"dt_ratio must be > 1 (a multiple of the nominal step), got {self.dt_ratio!r}"
             )
-        if self.stuck_ticks is not None and not _is_number(self.stuck_ticks, _is_count):
-            raise InvalidInput(
-                f"stuck_ticks must be an integer >= 1 or None, got {self.stuck_ticks!r}"
-            )
-        if not _is_number(self.recovery_ticks, _is_count):
-            raise InvalidInput(
-                f"recovery_ticks must be an integer >= 1, got {self.recovery_ticks!r}"
-            )
         self.ranges()
 
     def ranges(self) -> np.ndarray:
-        """Saturation limits ``(6,)`` [N, N·m] per channel (``inf`` where disabled)."""
-        return np.concatenate(
-            [
-                _range(self.force_range, "force_range", "N"),
-                _range(self.torque_range, "torque_range", "N·m"),
-            ]
-        )
+        """Saturation limits ``(6,)`` [N, N·m] per channel (``inf`` where disabled).
+
+        Each part is None (``inf``), a number or a 3-vector, all > 0.
+        """
+        parts = []
+        for name, unit in (("force_range", "N"), ("torque_range", "N·m")):
+            value = getattr(self, name)
+            try:
+                array = np.broadcast_to(np.asarray(np.inf if value is None else value, float), 3)
+            except (TypeError, ValueError):
+                array = np.full(3, np.nan)
+            if np.isnan(array).any() or np.any(array <= 0):
+                raise InvalidInput(
+                    f"{name} must be None, or a number or 3-vector > 0 [{unit}], got {value!r}"
+                )
+            parts.append(array)
+        return np.concatenate(parts)
 
 
-def _is_number(value, test) -> bool:
-    """``test(value)`` for a real number, False for anything else (a boolean included)."""
-    return isinstance(value, Real) and not isinstance(value, bool) and bool(test(value))
-
-
-def _is_count(x) -> bool:
-    return x >= 1 and math.isfinite(x) and x == int(x)
-
-
-def _range(value, name: str, unit: str) -> np.ndarray:
-    """A ``(3,)`` saturation limit from None (``inf``), a number or a 3-vector, all > 0."""
-    if value is None:
-        return np.full(3, np.inf)
-    try:
-        array = np.broadcast_to(np.asarray(value, dtype=np.float64), (3,)).copy()
-    except (TypeError, ValueError):
-        array = None
-    if array is None or np.isnan(array).any() or np.any(array <= 0):
-        raise InvalidInput(
-            f"{name} must be None, or a number or 3-vector > 0 [{unit}], got {value!r}"
-        )
-    return array
+# what each scalar field of SensorLimits must be (the refusal says it)
+_EXPECTED = {
+    "stuck_time": "a finite number > 0 or None",
+    "dt_ratio": "a finite number > 0 or None",
+    "nominal_dt": "a finite number > 0 or None",
+    "stuck_ticks": "an integer >= 1 or None",
+    "recovery_ticks": "an integer >= 1",
+}
 
 
 MIN_DT = 1e-6
 """Shortest accepted control step [s] (1 MHz): below it ``ΔF / dt`` is no derivative but an
 overflow."""
-
-_ALPHA = 0.01
-"""Weight of a new step in the running average of ``dt`` (about 100 ticks of memory)."""
 
 
 class FaultMonitor:
@@ -159,13 +150,10 @@ class FaultMonitor:
             )
         self._ranges = self.limits.ranges().tolist()
         self._check_range = any(math.isfinite(r) for r in self._ranges)
-        self._stuck_ticks = (
-            math.inf if self.limits.stuck_ticks is None else int(self.limits.stuck_ticks)
+        self._stuck_ticks, self._stuck_time, self._ratio = (
+            math.inf if value is None else float(value)
+            for value in (self.limits.stuck_ticks, self.limits.stuck_time, self.limits.dt_ratio)
         )
-        self._stuck_time = (
-            math.inf if self.limits.stuck_time is None else float(self.limits.stuck_time)
-        )
-        self._ratio = math.inf if self.limits.dt_ratio is None else float(self.limits.dt_ratio)
         self._running_dt = self.limits.nominal_dt is None
         self.counts = {fault: 0 for fault in SensorFault if fault is not SensorFault.NONE}
         self.reset()
@@ -225,8 +213,8 @@ class FaultMonitor:
         reference = self._reference_dt
         if reference is None:
             reference = self._reference_dt = dt
-        elif self._running_dt:
-            self._reference_dt = reference + _ALPHA * (min(dt, self._ratio * reference) - reference)
+        elif self._running_dt:  # weight 0.01 per accepted step: about 100 ticks of memory
+            self._reference_dt = reference + 0.01 * (min(dt, self._ratio * reference) - reference)
         if dt > self._ratio * reference:
             return SensorFault.DT_JUMP, (
                 f"dt = {dt:.4g} s is more than {self._ratio:g} x the nominal "

@@ -62,20 +62,13 @@ def loop_matrix(
     ``s[n+1] = A s[n]``.
     """
     d = int(delay_ticks)
-    history = d + 3
-    alpha = derivative_alpha(dt, cutoff)
-    matrix = np.zeros((history + 1, history + 1))
-    for column in range(history + 1):
-        state = np.zeros(history + 1)
-        state[column] = 1.0
-        x, filtered = state[:history], state[history]
-        error = -(stiffness * x[d] + damping * (x[d] - x[d + 1]) / dt)  # -N[n-d]
-        error_before = -(stiffness * x[d + 1] + damping * (x[d + 1] - x[d + 2]) / dt)  # -N[n-d-1]
-        derivative = filtered + alpha * ((error - error_before) / dt - filtered)
-        matrix[0, column] = x[0] + dt * (k1 * derivative + k2 * error)
-        matrix[1:history, column] = x[: history - 1]
-        matrix[history, column] = derivative
-    return matrix
+    # The loop is linear: each row below is one entry of A s for the unit states s (the columns).
+    state = np.eye(d + 4)
+    x, filtered = state[: d + 3], state[d + 3]
+    error = -(stiffness * x[d] + damping * (x[d] - x[d + 1]) / dt)  # -N[n-d]
+    error_before = -(stiffness * x[d + 1] + damping * (x[d + 1] - x[d + 2]) / dt)  # -N[n-d-1]
+    derivative = filtered + derivative_alpha(dt, cutoff) * ((error - error_before) / dt - filtered)
+    return np.vstack([x[0] + dt * (k1 * derivative + k2 * error), x[: d + 2], derivative])
 
 
 def servo_loop_matrix(
@@ -101,30 +94,21 @@ def servo_loop_matrix(
     from scipy.linalg import expm
 
     d, omega = int(delay_ticks), 2.0 * math.pi * servo_bandwidth
-    continuous = np.zeros((4, 4))
-    continuous[1, 2] = 1.0
-    continuous[2, :3] = (omega * omega, -omega * omega, -2.0 * omega)
-    continuous[0, 3] = 1.0  # dr/dt = V
-    discrete = expm(continuous * dt)
-    phi, gamma = discrete[:3, :3], discrete[:3, 3]
-    felt = np.array(
-        [mass * omega * omega, stiffness - mass * omega * omega, damping - 2.0 * omega * mass]
+    square = omega * omega
+    # (r, p, ṗ, V): dr/dt = V, dp/dt = ṗ, dṗ/dt = ω²(r − p) − 2ω ṗ, V held
+    continuous = [[0, 0, 0, 1], [0, 0, 1, 0], [square, -square, -2.0 * omega, 0], [0, 0, 0, 0]]
+    discrete = expm(np.array(continuous, dtype=float) * dt)
+    felt = np.array([mass * square, stiffness - mass * square, damping - 2.0 * omega * mass])
+    # The loop is linear: each row below is one entry of A s for the unit states s (the columns).
+    state = np.eye(d + 5)
+    z, filtered = state[:3], state[-1]
+    forces = np.vstack([felt @ z, state[3 : 4 + d]])  # N[n], N[n-1], ..., N[n-d-1]
+    error, error_before = -forces[d], -forces[d + 1]
+    derivative = filtered + derivative_alpha(dt, cutoff) * ((error - error_before) / dt - filtered)
+    velocity = k1 * derivative + k2 * error
+    return np.vstack(
+        [discrete[:3, :3] @ z + np.outer(discrete[:3, 3], velocity), forces[: d + 1], derivative]
     )
-    alpha = derivative_alpha(dt, cutoff)
-    size = 3 + (d + 1) + 1
-    matrix = np.zeros((size, size))
-    for column in range(size):
-        state = np.zeros(size)
-        state[column] = 1.0
-        z, history, filtered = state[:3], state[3 : 4 + d], state[-1]
-        forces = np.concatenate(([felt @ z], history))  # N[n], N[n-1], ..., N[n-d-1]
-        error, error_before = -forces[d], -forces[d + 1]
-        derivative = filtered + alpha * ((error - error_before) / dt - filtered)
-        velocity = k1 * derivative + k2 * error
-        matrix[:3, column] = phi @ z + gamma * velocity
-        matrix[3 : 4 + d, column] = forces[: d + 1]
-        matrix[-1, column] = derivative
-    return matrix
 
 
 def spectral_radius(
@@ -144,13 +128,13 @@ def spectral_radius(
     penetration is a fixed point, an eigenvalue exactly 1 for every K1. That
     neutral mode is left out (the one eigenvalue nearest 1).
     """
-    if servo_bandwidth is None:
-        matrix = loop_matrix(k1, stiffness, damping, dt, cutoff, k2, delay_ticks)
-    else:
-        matrix = servo_loop_matrix(
+    eigenvalues = np.linalg.eigvals(
+        loop_matrix(k1, stiffness, damping, dt, cutoff, k2, delay_ticks)
+        if servo_bandwidth is None
+        else servo_loop_matrix(
             k1, stiffness, damping, dt, cutoff, k2, delay_ticks, servo_bandwidth, mass
         )
-    eigenvalues = np.linalg.eigvals(matrix)
+    )
     if k2 == 0.0 or stiffness == 0.0:
         eigenvalues = np.delete(eigenvalues, int(np.argmin(np.abs(eigenvalues - 1.0))))
     return float(np.abs(eigenvalues).max())
@@ -230,16 +214,12 @@ def max_stable_k1(
     if radius(0.0) >= 1.0:
         return 0.0
     # scan up in factors of 1.25 from a tiny gain (the radius need not be monotonic far past the
-    # bound)
+    # bound), then bisect
     low, high = 0.0, upper * 1e-9
     while radius(high) < 1.0:
-        low, high = high, high * 1.25
-        if high > upper:
-            return upper if radius(upper) < 1.0 else _bisect(radius, low, upper)
-    return _bisect(radius, low, high)
-
-
-def _bisect(radius, low: float, high: float) -> float:
+        if high == upper:
+            return upper
+        low, high = high, min(high * 1.25, upper)
     while high - low > 1e-6 * high:
         middle = 0.5 * (low + high)
         low, high = (middle, high) if radius(middle) < 1.0 else (low, middle)
