@@ -14,25 +14,18 @@ import math
 import numpy as np
 
 from ..exceptions import CalibrationFileError
-from .calibration_checks import short_repr
+
+
+def short_repr(value) -> str:
+    """``repr`` cut to 80 characters for messages."""
+    text = repr(value)
+    return text if len(text) <= 80 else text[:80] + "..."
 
 
 def json_repr(value) -> str:
     """A JSON value as the file spells it (``null``, ``true``), cut to 80 characters."""
-    if value is None or isinstance(value, bool):
-        return {None: "null", True: "true", False: "false"}[value]
-    return short_repr(value)
-
-
-def first_non_number(value):
-    """The first leaf of a nested JSON list that is not a number (``null``, a boolean, a string,
-    an object), wrapped in a tuple (a null leaf is not "no bad leaf"), or None when every leaf is
-    one.
-    """
-    for leaf in _flatten([value]):
-        if isinstance(leaf, bool) or not isinstance(leaf, (int, float)):
-            return (leaf,)
-    return None
+    special = value is None or isinstance(value, bool)
+    return {None: "null", True: "true", False: "false"}[value] if special else short_repr(value)
 
 
 class JsonReader:
@@ -99,8 +92,8 @@ class JsonReader:
                 continue
             listed = base.endswith("s")
             leaf = _LEAF_CHECKS[base.removesuffix("s")]
-            if listed and not isinstance(value, list) and base != "numbers":
-                leaf = _never  # "numbers": one number or a nested list of them
+            if listed and not isinstance(value, list) and base != "numbers":  # "numbers": or one
+                self.fail(f"expected a list of {base}, got {json_repr(value)}", key)
             for item in _flatten([value]) if listed else [value]:
                 if not (leaf(item) or (listed and nullable and item is None)):
                     expected = f"a list of {base}" if listed else f"a {base}"
@@ -120,9 +113,9 @@ class JsonReader:
             if required:
                 self.fail(f"expected numbers of shape {shape}, got null", key)
             return None
-        if not isinstance(value, np.ndarray):
-            bad = first_non_number(value)
-            if bad is not None:
+        if not isinstance(value, np.ndarray):  # null, a boolean, a string or an object leaf
+            bad = [leaf for leaf in _flatten([value]) if not _is_number(leaf)]
+            if bad:
                 self.fail(f"expected numbers of shape {shape}, got {json_repr(bad[0])}", key)
         try:
             array = np.array(value, dtype=np.float64)
@@ -158,10 +151,6 @@ _LEAF_CHECKS = {
     "integer": lambda value: isinstance(value, int) and not isinstance(value, bool),
     "string": lambda value: isinstance(value, str),
 }
-
-
-def _never(value) -> bool:
-    return False
 
 
 def _flatten(items):
