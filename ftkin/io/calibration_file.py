@@ -98,8 +98,6 @@ UNITS = {
 
 MAX_COM_DISTANCE = 10.0
 """Farthest plausible centre of mass from the sensor [m] (the planner's bound too)."""
-MAX_LOAD = MAX_WRENCH
-"""Largest plausible bias or tool weight [N, N·m]: the samples reader's bound on a reading."""
 
 
 def _plain(value):
@@ -500,9 +498,10 @@ def _check_plausible(reader, result) -> None:
         ("torque_offset", result.torque_offset),
         ("gravity_in_base", result.gravity_in_base),
     ):
-        if float(np.max(np.abs(value))) > MAX_LOAD:
+        if float(np.max(np.abs(value))) > MAX_WRENCH:  # the samples reader's bound on a reading
             reader.fail(
-                f"{np.asarray(value).tolist()} is beyond ±{MAX_LOAD:g} (N or N·m): not a load", key
+                f"{np.asarray(value).tolist()} is beyond ±{MAX_WRENCH:g} (N or N·m): not a load",
+                key,
             )
     if not GRAVITY_RANGE[0] <= result.g <= GRAVITY_RANGE[1]:
         reader.fail(

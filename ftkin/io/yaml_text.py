@@ -22,10 +22,8 @@ def _plain(value):
     """``value`` as plain Python (dict, list, str, int, float, bool, None), or
     :class:`InvalidInput`.
     """
-    if isinstance(value, np.ndarray):
+    if isinstance(value, (np.ndarray, np.generic)):
         value = value.tolist()
-    elif isinstance(value, np.generic):
-        value = value.item()
     if isinstance(value, dict):
         return {str(key): _plain(item) for key, item in value.items()}
     if isinstance(value, (list, tuple)):
