@@ -202,20 +202,6 @@ def _read_messages(path: Path, source: str, joint_topic, wrench_topic, progress)
     return joints[0].topic, wrench[0].topic, messages
 
 
-def _joint_trajectory(messages: _Messages, topic: str, expected: list[str]):
-    """``(joint_times (K,), trajectory (K, nq))``: every joint interpolated to every stamp."""
-    message_times = _stamps(messages.joint_header, messages.joint_log, topic)
-    series = messages.series
-    joint_times = np.unique(np.concatenate([message_times[series[name][0]] for name in expected]))
-    trajectory = np.empty((len(joint_times), len(expected)))
-    for column, name in enumerate(expected):
-        times = message_times[series[name][0]]
-        order = np.argsort(times, kind="stable")
-        values = np.asarray(series[name][1])[order]
-        trajectory[:, column] = np.interp(joint_times, times[order], values)
-    return joint_times, trajectory
-
-
 def read_bag(
     path,
     arm,
@@ -256,7 +242,17 @@ def read_bag(
         )
     if not messages.wrench_rows:
         raise InvalidSamples(f"no messages on {wrench_topic}", source)
-    joint_times, trajectory = _joint_trajectory(messages, joint_topic, expected)
+    # every joint interpolated to every joint-state stamp
+    message_times = _stamps(messages.joint_header, messages.joint_log, joint_topic)
+    series = {
+        name: (message_times[messages.series[name][0]], messages.series[name][1])
+        for name in expected
+    }
+    joint_times = np.unique(np.concatenate([stamps for stamps, _ in series.values()]))
+    trajectory = np.empty((len(joint_times), len(expected)))
+    for column, (stamps, values) in enumerate(series.values()):
+        order = np.argsort(stamps, kind="stable")
+        trajectory[:, column] = np.interp(joint_times, stamps[order], np.asarray(values)[order])
     times = _stamps(messages.wrench_header, messages.wrench_log, wrench_topic)
     order = np.argsort(times, kind="stable")
     times, wrenches = times[order], np.asarray(messages.wrench_rows, dtype=float)[order]
