@@ -9,7 +9,7 @@ outside the supported range is refused with the versions this ftkin reads.
 
 from __future__ import annotations
 
-import math
+import sys
 
 import numpy as np
 
@@ -38,11 +38,9 @@ class JsonReader:
         raise CalibrationFileError(self.path, message, key)
 
     def get(self, key: str, required: bool = True):
-        if key not in self.document:
-            if required:
-                self.fail("missing", key)
-            return None
-        return self.document[key]
+        if required and key not in self.document:
+            self.fail("missing", key)
+        return self.document.get(key)
 
     def optional(self, key: str, kind: type, default=None):
         """An optional value of JSON type ``kind`` (``str``, ``int``), ``default`` when absent or
@@ -129,15 +127,8 @@ class JsonReader:
 
     def number(self, key: str) -> float:
         value = self.get(key)
-        try:
-            finite = (
-                not isinstance(value, bool)
-                and isinstance(value, (int, float))
-                and math.isfinite(value)
-            )
-        except OverflowError:
-            finite = False
-        if not finite:
+        # NaN fails the comparison; an integer beyond the float range is compared exactly
+        if not (_is_number(value) and abs(value) <= sys.float_info.max):
             self.fail(f"expected a finite number, got {json_repr(value)}", key)
         return float(value)
 
