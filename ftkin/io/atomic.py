@@ -18,6 +18,7 @@ survives.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import stat
 import tempfile
@@ -63,18 +64,13 @@ def check_output_path(path, inputs=(), what: str = "output") -> Path:
             "refusing to replace it: expected a regular file or a new name"
         )
     for source in inputs:
-        if source is None or not str(source):
-            continue
-        try:
-            same = os.path.samefile(path, source)
-        except OSError:
-            continue
-        if same:
-            raise InvalidInput(
-                f"{what} {path} is the input {source} of this command (same file); refusing to "
-                "overwrite an input: "
-                "write to another file"
-            )
+        with contextlib.suppress(OSError):  # an input that does not exist is skipped
+            if source is not None and str(source) and os.path.samefile(path, source):
+                raise InvalidInput(
+                    f"{what} {path} is the input {source} of this command (same file); refusing to "
+                    "overwrite an input: "
+                    "write to another file"
+                )
     return path
 
 
@@ -106,10 +102,8 @@ def atomic_write_bytes(path, data: bytes) -> Path:
         os.chmod(temporary, target.stat().st_mode & 0o777 if target.exists() else 0o644)
         os.replace(temporary, target)
     except BaseException as error:
-        try:
+        with contextlib.suppress(OSError):
             os.unlink(temporary)
-        except OSError:
-            pass
         if isinstance(error, OSError):
             raise FtkinError(f"cannot write {path}: {error}") from None
         raise

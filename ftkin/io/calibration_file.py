@@ -232,27 +232,21 @@ DOCUMENT_TYPES = {
 """The JSON kind of the keys written for people (read back only to be checked)."""
 
 
-def _diagnostics(reader: JsonReader) -> FitDiagnostics | None:
-    data = reader.optional_object("diagnostics")
+def _part(reader: JsonReader, key: str, from_dict, types: dict | None = None):
+    """The optional object ``key`` rebuilt by ``from_dict`` (None when absent or null), its
+    entries first checked against ``types`` (see :meth:`JsonReader.check_types`).
+    """
+    data = reader.optional_object(key)
     if data is None:
         return None
-    NestedReader(reader.path, data, "diagnostics").check_types(DIAGNOSTICS_TYPES)
+    if types is not None:
+        NestedReader(reader.path, data, key).check_types(types)
     try:
-        return FitDiagnostics.from_dict(data)
+        return from_dict(data)
     except KeyError as error:
-        reader.fail(f"missing {error.args[0]!r}", "diagnostics")
+        reader.fail(f"missing {error.args[0]!r}", key)
     except (TypeError, ValueError, OverflowError, FtkinError) as error:
-        reader.fail(f"malformed: {str(error)[:200]}", "diagnostics")
-
-
-def _kinematics(reader: JsonReader) -> KinematicsRecord | None:
-    data = reader.optional_object("kinematics")
-    if data is None:
-        return None
-    try:
-        return KinematicsRecord.from_dict(data)
-    except FtkinError as error:
-        reader.fail(f"malformed: {error}", "kinematics")
+        reader.fail(f"malformed: {str(error)[:200]}", key)
 
 
 def _drift(reader: JsonReader) -> BiasDrift | None:
@@ -396,9 +390,9 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             urdf=reader.optional("urdf", str),
             sensor_frame=reader.optional("sensor_frame", str),
             covariance=reader.array("covariance", (12, 12), required=False),
-            diagnostics=_diagnostics(reader),
+            diagnostics=_part(reader, "diagnostics", FitDiagnostics.from_dict, DIAGNOSTICS_TYPES),
             drift=_drift(reader),
-            kinematics=_kinematics(reader),
+            kinematics=_part(reader, "kinematics", KinematicsRecord.from_dict),
             **poses,
             **mount,
         )

@@ -46,8 +46,8 @@ class SegmentParameters:
     def __post_init__(self):
         for name in ("speed_threshold", "min_duration", "speed_window"):
             object.__setattr__(self, name, as_positive(getattr(self, name), name))
-        settle_time = as_in_range(self.settle_time, "settle_time", 0.0, 1e6, "s")
-        object.__setattr__(self, "settle_time", settle_time)
+        settle = as_in_range(self.settle_time, "settle_time", 0.0, 1e6, "s")
+        object.__setattr__(self, "settle_time", settle)
 
 
 @dataclass(frozen=True)
