@@ -283,16 +283,16 @@ def read_bag(
     )
 
 
-def _table(source: str, header: list[str], columns: list[np.ndarray]) -> Table:
+def _table(source: str, columns: dict[str, np.ndarray]) -> Table:
     """A :class:`Table` of text cells (integers as integers, floats round-tripping exactly)."""
     cells = [
         [str(int(v)) for v in column]
         if np.issubdtype(column.dtype, np.integer)
         else [format_float(v) for v in column]
-        for column in columns
+        for column in columns.values()
     ]
     rows = [list(row) for row in zip(*cells)]
-    return Table(source, header, rows, list(range(1, len(rows) + 1)))
+    return Table(source, list(columns), rows, list(range(1, len(rows) + 1)))
 
 
 def bag_samples(
@@ -341,7 +341,6 @@ def bag_samples(
         recording.source,
     )
     search, pose_ids = None, None
-    header = [TIME_COLUMN, *recording.joint_names, *WRENCH_CHANNELS]
     if static_only:
         search = find_static_segments(recording.joint_times, recording.joint_trajectory, parameters)
         index = segment_index(times, search.segments)
@@ -362,20 +361,19 @@ def bag_samples(
             )
         times, wrenches, positions = times[keep], wrenches[keep], positions[keep]
         pose_ids = np.searchsorted(used, index[keep])
-        header.insert(1, POSE_COLUMN)
     logger.info(
         "%s: %d readings%s",
         recording.source,
         len(times),
         f", {search.describe()}" if search is not None else "",
     )
-    columns = (
-        [times]
-        + ([pose_ids] if pose_ids is not None else [])
-        + list(positions.T)
-        + list(wrenches.T)
-    )
-    table = _table(recording.source, header, columns)
+    columns = {
+        TIME_COLUMN: times,
+        **({} if pose_ids is None else {POSE_COLUMN: pose_ids}),
+        **dict(zip(recording.joint_names, positions.T)),
+        **dict(zip(WRENCH_CHANNELS, wrenches.T)),
+    }
+    table = _table(recording.source, columns)
     samples = Samples.from_joint_positions(arm, positions, wrenches, pose_ids, times=times)
     return BagSamples(
         samples, table, "joints", list(recording.joint_names), search, recording=recording
