@@ -91,12 +91,10 @@ class MotionRecording:
 def is_motion_table(table: Table, arm) -> bool:
     """True when the table has a ``t`` column and joint columns (a moving recording)."""
     try:
-        if times_from_table(table) is None:
-            return False
-        kind, _ = detect_orientation(table, arm.joint_names)
+        has_times = times_from_table(table) is not None
+        return has_times and detect_orientation(table, arm.joint_names)[0] == "joints"
     except InvalidSamples:
         return False
-    return kind == "joints"
 
 
 def motion_from_table(table: Table, arm) -> MotionRecording:
