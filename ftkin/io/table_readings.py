@@ -16,7 +16,7 @@ from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.samples import Samples
 from ..exceptions import FtkinError
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
-from .csv_table import Table, rename_columns
+from .csv_table import Table, missing_columns, rename_columns
 from .samples_csv import (
     EULER_COLUMNS,
     QUATERNION_COLUMNS,
@@ -48,6 +48,7 @@ def table_readings(table: Table, arm=None) -> list[Reading]:
     from ..kinematics.arm import Arm
 
     table = rename_columns(table, wrench_aliases(table.header))
+    missing_columns(table, WRENCH_CHANNELS, "wrench")
     wrenches = table.floats(WRENCH_CHANNELS)
     check_wrench_magnitude(table, wrenches)
     pose_ids = pose_ids_from_table(table)
