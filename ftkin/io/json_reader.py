@@ -10,6 +10,7 @@ outside the supported range is refused with the versions this ftkin reads.
 from __future__ import annotations
 
 import sys
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -28,11 +29,12 @@ def json_repr(value) -> str:
     return {None: "null", True: "true", False: "false"}[value] if special else short_repr(value)
 
 
+@dataclass
 class JsonReader:
     """Typed access to a parsed document, raising CalibrationFileError with the key."""
 
-    def __init__(self, path: str, document: dict):
-        self.path, self.document = path, document
+    path: str
+    document: dict
 
     def fail(self, message: str, key: str | None = None):
         raise CalibrationFileError(self.path, message, key)
@@ -152,14 +154,13 @@ def _flatten(items):
             yield item
 
 
+@dataclass
 class NestedReader(JsonReader):
     """A :class:`JsonReader` for an object inside the document; keys are reported as
     ``prefix.key``.
     """
 
-    def __init__(self, path: str, document: dict, prefix: str):
-        super().__init__(path, document)
-        self.prefix = prefix
+    prefix: str
 
     def fail(self, message: str, key: str | None = None):
         super().fail(message, f"{self.prefix}.{key}" if key else self.prefix)

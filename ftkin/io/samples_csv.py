@@ -163,8 +163,9 @@ def check_radians(table: Table, columns, values: np.ndarray) -> None:
         table,
         values,
         _DEGREES_THRESHOLD,
-        lambda column, value: (
-            f"joint column {columns[column]!r} holds {value:g}, outside ±2π: joint angles must be "
+        lambda row, column: (
+            f"joint column {columns[column]!r} holds {values[row, column]:g}, outside ±2π: joint "
+            "angles must be "
             "in radians "
             "(these look like degrees)"
         ),
@@ -172,13 +173,13 @@ def check_radians(table: Table, columns, values: np.ndarray) -> None:
 
 
 def _refuse_beyond(table: Table, values: np.ndarray, limit: float, describe) -> None:
-    """:class:`InvalidSamples` at the first cell of ``values`` beyond ``±limit``: ``describe(column,
-    value)``, its line.
+    """:class:`InvalidSamples` at the first cell of ``values`` ``(N, k)`` beyond ``±limit``:
+    ``describe(row, column)``, its line.
     """
     bad = np.argwhere(np.abs(values) > limit)
     if bad.size:
         row, column = bad[0]
-        raise InvalidSamples(describe(column, values[row, column]), table.source, table.lines[row])
+        raise InvalidSamples(describe(row, column), table.source, table.lines[row])
 
 
 def warn_outside_limits(table: Table, columns, values: np.ndarray, arm) -> None:
@@ -257,24 +258,23 @@ def pose_ids_from_table(table: Table) -> np.ndarray | None:
     """The integer ``pose`` column ``(N,)``, or None when the table has none."""
     if POSE_COLUMN not in table.header:
         return None
-    pose_ids = table.floats([POSE_COLUMN])[:, 0]
-    huge = np.flatnonzero(np.abs(pose_ids) > MAX_POSE_ID)
-    if huge.size:
-        row = int(huge[0])
-        raise InvalidSamples(
+    pose_ids = table.floats([POSE_COLUMN])
+    _refuse_beyond(
+        table,
+        pose_ids,
+        MAX_POSE_ID,
+        lambda row, _: (
             f"pose id {table.rows[row][table.column_index(POSE_COLUMN)].strip()!r} is too large; "
-            "expected an integer "
-            f"of magnitude at most 2**53",
-            table.source,
-            table.lines[row],
-        )
-    fractional = np.flatnonzero(pose_ids != np.round(pose_ids))
-    if fractional.size:
-        row = int(fractional[0])
-        raise InvalidSamples(
-            f"pose id {float(pose_ids[row])!r} is not an integer", table.source, table.lines[row]
-        )
-    return pose_ids.astype(np.int64)
+            "expected an integer of magnitude at most 2**53"
+        ),
+    )
+    _refuse_beyond(  # a fractional part
+        table,
+        pose_ids - np.round(pose_ids),
+        0.0,
+        lambda row, _: f"pose id {float(pose_ids[row, 0])!r} is not an integer",
+    )
+    return pose_ids[:, 0].astype(np.int64)
 
 
 def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
@@ -283,8 +283,9 @@ def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
         table,
         wrenches,
         MAX_WRENCH,
-        lambda column, value: (
-            f"column {WRENCH_CHANNELS[column]!r} holds {value:g}, beyond ±{MAX_WRENCH:g}: expected "
+        lambda row, column: (
+            f"column {WRENCH_CHANNELS[column]!r} holds {wrenches[row, column]:g}, beyond "
+            f"±{MAX_WRENCH:g}: expected "
             "N (fx, fy, fz) and N·m "
             "(mx, my, mz), not raw counts"
         ),
