@@ -92,11 +92,11 @@ class BagSamples(LoadedSamples):
 
 def _rosbags():
     try:
-        from rosbags.highlevel import AnyReader
+        from rosbags.highlevel import AnyReader, AnyReaderError
         from rosbags.typesys import Stores, get_typestore
     except ImportError:
         raise MissingDependency("rosbags", "bags", "reading ROS 2 bags") from None
-    return AnyReader, get_typestore(Stores.ROS2_HUMBLE)
+    return AnyReader, AnyReaderError, get_typestore(Stores.ROS2_HUMBLE)
 
 
 def _topic_listing(connections) -> str:
@@ -174,8 +174,7 @@ class _Messages:
 
 def _read_messages(path: Path, source: str, joint_topic, wrench_topic, progress):
     """The joint and wrench connections chosen and their messages (:class:`_Messages`)."""
-    any_reader, typestore = _rosbags()
-    from rosbags.highlevel import AnyReaderError
+    any_reader, reader_error, typestore = _rosbags()
 
     messages = _Messages(source)
     try:
@@ -191,7 +190,7 @@ def _read_messages(path: Path, source: str, joint_topic, wrench_topic, progress)
                 for connection, log_time, raw in reader.messages(connections=joints + wrench):
                     messages.add(connection, log_time, reader.deserialize(raw, connection.msgtype))
                     bar.advance()
-    except AnyReaderError as error:
+    except reader_error as error:
         raise InvalidSamples(f"cannot read the bag: {error}", source) from None
     except InvalidSamples:
         raise
