@@ -403,16 +403,16 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             f"|gravity_in_base| must be finite and positive, got {result.tool_weight}",
             "gravity_in_base",
         )
-    _check_derived(reader, document, result)
-    _check_units(reader, document)
+    _check_consistent(reader, document, result)
     _check_plausible(reader, result)
-    _check_covariance(reader, result.covariance)
     return result if inertia is None else _with_inertia(reader, result, inertia)
 
 
-def _check_derived(reader, document: dict, result) -> None:
-    """Refuse a derived field (``tool_weight``, ``tool_mass``, ``base_tilt_deg``) that disagrees
-    with the parameters.
+def _check_consistent(reader, document: dict, result) -> None:
+    """Refuse a document that disagrees with itself: a derived field (``tool_weight``,
+    ``tool_mass``, ``base_tilt_deg``) that disagrees with the parameters, ``units`` naming another
+    unit than ftkin's for a key (e.g. ``"force_offset": "kN"``), or a covariance that is not
+    symmetric positive semi-definite.
     """
     derived = (
         ("tool_weight", result.tool_weight, "N", "|gravity_in_base|"),
@@ -437,42 +437,34 @@ def _check_derived(reader, document: dict, result) -> None:
                 "(file edited by hand?)",
                 "base_tilt_deg",
             )
-
-
-def _check_covariance(reader, covariance) -> None:
-    """Refuse a covariance that is not symmetric positive semi-definite."""
-    if covariance is None:
-        return
-    scale = max(float(np.max(np.abs(covariance))), 1e-300)
-    asymmetry = float(np.max(np.abs(covariance - covariance.T)))
-    if asymmetry > 1e-9 * scale:
-        reader.fail(
-            f"not symmetric (largest |C - C^T| = {asymmetry:.3g}); expected a covariance matrix",
-            "covariance",
-        )
-    smallest = float(np.linalg.eigvalsh(0.5 * (covariance + covariance.T))[0])
-    if smallest < -1e-9 * scale:
-        reader.fail(
-            f"not positive semi-definite (eigenvalue {smallest:.3g}); expected a covariance matrix",
-            "covariance",
-        )
-
-
-def _check_units(reader, document: dict) -> None:
-    """Refuse a file whose ``units`` name another unit than ftkin's for a key (e.g.
-    ``"force_offset": "kN"``).
-    """
-    stated = reader.optional_object("units") or {}
-    for key, expected in UNITS.items():
-        if key in stated and key in document:
-            value = stated[key]
-            unit, ours = (str(value).split(",")[0].strip(), expected.split(",")[0].strip())
+    stated_units = reader.optional_object("units") or {}
+    for key, our_unit in UNITS.items():
+        if key in stated_units and key in document:
+            value = stated_units[key]
+            unit, ours = (str(value).split(",")[0].strip(), our_unit.split(",")[0].strip())
             if not isinstance(value, str) or unit.replace("·", "*") != ours:
                 reader.fail(
                     f"{key} is stated in {short_repr(value)}, but ftkin files are in {ours!r} "
                     "(convert the values, or the file is not ftkin's)",
                     "units",
                 )
+    covariance = result.covariance
+    if covariance is not None:
+        scale = max(float(np.max(np.abs(covariance))), 1e-300)
+        asymmetry = float(np.max(np.abs(covariance - covariance.T)))
+        if asymmetry > 1e-9 * scale:
+            reader.fail(
+                f"not symmetric (largest |C - C^T| = {asymmetry:.3g}); expected a covariance "
+                "matrix",
+                "covariance",
+            )
+        smallest = float(np.linalg.eigvalsh(0.5 * (covariance + covariance.T))[0])
+        if smallest < -1e-9 * scale:
+            reader.fail(
+                f"not positive semi-definite (eigenvalue {smallest:.3g}); expected a covariance "
+                "matrix",
+                "covariance",
+            )
 
 
 def _check_plausible(reader, result) -> None:
