@@ -87,11 +87,12 @@ def atomic_write_bytes(path, data: bytes) -> Path:
     path = check_output_path(path)
     # a symlink is written through: the final target is replaced
     target = Path(os.path.realpath(path)) if path.is_symlink() else path
-    folder = target.parent
-    if not folder.is_dir():
-        raise FtkinError(f"cannot write {path}: folder {folder} does not exist")
+    if not target.parent.is_dir():
+        raise FtkinError(f"cannot write {path}: folder {target.parent} does not exist")
     try:
-        handle, temporary = tempfile.mkstemp(dir=folder, prefix=f".{target.name}.", suffix=".tmp")
+        handle, temporary = tempfile.mkstemp(
+            dir=target.parent, prefix=f".{target.name}.", suffix=".tmp"
+        )
     except OSError as error:
         raise FtkinError(f"cannot write {path}: {error}") from None
     try:

@@ -111,13 +111,14 @@ def _std_errors_document(result: CalibrationResult) -> dict | None:
     """Standard errors under the keys of the values (``base_tilt_deg`` in degrees; ``base_tilt``
     kept, rad).
     """
-    errors = result.std_errors
+    errors, inertia = result.std_errors, result.inertia_std_errors
     if errors is None:
         return None
-    document = {**errors, "base_tilt_deg": np.rad2deg(errors["base_tilt"])}
-    if result.inertia_std_errors is not None:
-        document["inertia"] = result.inertia_std_errors
-    return document
+    return {
+        **errors,
+        "base_tilt_deg": np.rad2deg(errors["base_tilt"]),
+        **({} if inertia is None else {"inertia": inertia}),
+    }
 
 
 def _drift_document(drift: BiasDrift | None) -> dict | None:

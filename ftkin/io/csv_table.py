@@ -168,19 +168,17 @@ def _read_text(path: Path) -> str:
 
 def _cell_count_message(record, header, delimiter) -> str:
     message = f"{len(record)} cells but the header has {len(header)} columns"
-    if delimiter == "," and len(record) > len(header):
-        joined = ",".join(record)
-        decimal_points = any("." in cell for cell in record)  # a file with decimal commas has none
-        if (
-            not decimal_points
-            and re.search(r"\d,\d", joined)
-            and any(re.fullmatch(r"\d+", cell.strip()) for cell in record[1:])
-        ):
-            message += (
-                "; the numbers look like they have decimal commas (e.g. 1,5): write them with a "
-                "decimal point, "
-                "or separate the cells with semicolons"
-            )
+    if (
+        delimiter == ","
+        and len(record) > len(header)
+        and not any("." in cell for cell in record)  # a file with decimal commas has no points
+        and re.search(r"\d,\d", ",".join(record))
+        and any(re.fullmatch(r"\d+", cell.strip()) for cell in record[1:])
+    ):
+        message += (
+            "; the numbers look like they have decimal commas (e.g. 1,5): write them with a "
+            "decimal point, or separate the cells with semicolons"
+        )
     return message
 
 

@@ -165,9 +165,7 @@ def check_radians(table: Table, columns, values: np.ndarray) -> None:
         _DEGREES_THRESHOLD,
         lambda row, column: (
             f"joint column {columns[column]!r} holds {values[row, column]:g}, outside ±2π: joint "
-            "angles must be "
-            "in radians "
-            "(these look like degrees)"
+            "angles must be in radians (these look like degrees)"
         ),
     )
 
