@@ -126,16 +126,12 @@ def _pick_topic(connections, topic, msgtype, flag, source):
     return [c for c in connections if c.topic == topics[0]]
 
 
-def _seconds(stamp) -> float:
-    return stamp.sec + stamp.nanosec * 1e-9
-
-
-def _stamps(header_times: list[float], log_times: list[float], topic: str) -> np.ndarray:
-    stamps = np.asarray(header_times, dtype=float)
-    if len(stamps) and not np.any(stamps):
+def _stamps(header_times: np.ndarray, log_times: np.ndarray, topic: str) -> np.ndarray:
+    """The header stamps [s], or the bag's receive times [ns → s] when the stamps are all zero."""
+    if len(header_times) and not np.any(header_times):
         logger.warning("%s: all header stamps are zero; using the bag's receive times", topic)
-        stamps = np.asarray(log_times, dtype=float) * 1e-9
-    return stamps
+        return log_times * 1e-9
+    return header_times
 
 
 class _Messages:
@@ -143,18 +139,19 @@ class _Messages:
 
     def __init__(self, source: str):
         self.source = source
-        self.joint_header, self.joint_log, self.wrench_header, self.wrench_log = [], [], [], []
-        self.wrench_rows: list[tuple] = []
+        self.joint_stamps: list[tuple[float, int]] = []  # (header stamp [s], receive time [ns])
+        self.wrench_rows: list[tuple] = []  # (fx, fy, fz, mx, my, mz, header stamp, receive time)
         self.frame_id = ""
         self.series: dict[str, tuple[list[int], list[float]]] = {}  # name -> (messages, values)
 
     def add(self, connection, log_time: int, message) -> None:
         """One deserialized message of either topic."""
+        stamp = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
         if connection.msgtype == WRENCH_TYPE:
             force, torque = message.wrench.force, message.wrench.torque
-            self.wrench_rows.append((force.x, force.y, force.z, torque.x, torque.y, torque.z))
-            self.wrench_header.append(_seconds(message.header.stamp))
-            self.wrench_log.append(log_time)
+            self.wrench_rows.append(
+                (force.x, force.y, force.z, torque.x, torque.y, torque.z, stamp, log_time)
+            )
             self.frame_id = self.frame_id or message.header.frame_id
             return
         if len(message.position) != len(message.name):
@@ -163,13 +160,11 @@ class _Messages:
                 f"{len(message.position)} positions",
                 self.source,
             )
-        index = len(self.joint_header)
-        self.joint_header.append(_seconds(message.header.stamp))
-        self.joint_log.append(log_time)
         for name, value in zip(message.name, message.position):
             indices, positions = self.series.setdefault(name, ([], []))
-            indices.append(index)
+            indices.append(len(self.joint_stamps))
             positions.append(float(value))
+        self.joint_stamps.append((stamp, log_time))
 
 
 def _read_messages(path: Path, source: str, joint_topic, wrench_topic, progress):
@@ -242,7 +237,8 @@ def read_bag(
     if not messages.wrench_rows:
         raise InvalidSamples(f"no messages on {wrench_topic}", source)
     # every joint interpolated to every joint-state stamp
-    message_times = _stamps(messages.joint_header, messages.joint_log, joint_topic)
+    joint_stamps = np.asarray(messages.joint_stamps, dtype=float)
+    message_times = _stamps(joint_stamps[:, 0], joint_stamps[:, 1], joint_topic)
     series = {
         name: (message_times[messages.series[name][0]], messages.series[name][1])
         for name in expected
@@ -252,9 +248,10 @@ def read_bag(
     for column, (stamps, values) in enumerate(series.values()):
         order = np.argsort(stamps, kind="stable")
         trajectory[:, column] = np.interp(joint_times, stamps[order], np.asarray(values)[order])
-    times = _stamps(messages.wrench_header, messages.wrench_log, wrench_topic)
+    rows = np.asarray(messages.wrench_rows, dtype=float)
+    times = _stamps(rows[:, 6], rows[:, 7], wrench_topic)
     order = np.argsort(times, kind="stable")
-    times, wrenches = times[order], np.asarray(messages.wrench_rows, dtype=float)[order]
+    times, wrenches = times[order], rows[order, :6]
     inside = (times >= joint_times[0]) & (times <= joint_times[-1])
     if not np.any(inside):
         raise InvalidSamples(
