@@ -166,6 +166,20 @@ class _Messages:
             positions.append(float(value))
         self.joint_stamps.append((stamp, log_time))
 
+    def joint_trajectory(self, topic: str, names: list[str]):
+        """``(joint_times (K,), trajectory (K, nq))``: every joint interpolated to every stamp."""
+        joint_stamps = np.asarray(self.joint_stamps, dtype=float)
+        message_times = _stamps(joint_stamps[:, 0], joint_stamps[:, 1], topic)
+        series = {
+            name: (message_times[self.series[name][0]], self.series[name][1]) for name in names
+        }
+        joint_times = np.unique(np.concatenate([stamps for stamps, _ in series.values()]))
+        trajectory = np.empty((len(joint_times), len(names)))
+        for column, (stamps, values) in enumerate(series.values()):
+            order = np.argsort(stamps, kind="stable")
+            trajectory[:, column] = np.interp(joint_times, stamps[order], np.asarray(values)[order])
+        return joint_times, trajectory
+
 
 def _read_messages(path: Path, source: str, joint_topic, wrench_topic, progress):
     """The joint and wrench connections chosen and their messages (:class:`_Messages`)."""
@@ -236,18 +250,7 @@ def read_bag(
         )
     if not messages.wrench_rows:
         raise InvalidSamples(f"no messages on {wrench_topic}", source)
-    # every joint interpolated to every joint-state stamp
-    joint_stamps = np.asarray(messages.joint_stamps, dtype=float)
-    message_times = _stamps(joint_stamps[:, 0], joint_stamps[:, 1], joint_topic)
-    series = {
-        name: (message_times[messages.series[name][0]], messages.series[name][1])
-        for name in expected
-    }
-    joint_times = np.unique(np.concatenate([stamps for stamps, _ in series.values()]))
-    trajectory = np.empty((len(joint_times), len(expected)))
-    for column, (stamps, values) in enumerate(series.values()):
-        order = np.argsort(stamps, kind="stable")
-        trajectory[:, column] = np.interp(joint_times, stamps[order], np.asarray(values)[order])
+    joint_times, trajectory = messages.joint_trajectory(joint_topic, expected)
     rows = np.asarray(messages.wrench_rows, dtype=float)
     times = _stamps(rows[:, 6], rows[:, 7], wrench_topic)
     order = np.argsort(times, kind="stable")
