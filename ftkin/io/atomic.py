@@ -18,6 +18,7 @@ survives.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import stat
 import tempfile
@@ -25,18 +26,13 @@ from pathlib import Path
 
 from ..exceptions import FtkinError, InvalidInput
 
-
-def _kind(mode: int) -> str:
-    for test, name in (
-        (stat.S_ISDIR, "a folder"),
-        (stat.S_ISCHR, "a character device"),
-        (stat.S_ISBLK, "a block device"),
-        (stat.S_ISFIFO, "a FIFO (named pipe)"),
-        (stat.S_ISSOCK, "a socket"),
-    ):
-        if test(mode):
-            return name
-    return "not a regular file"
+_KINDS = {
+    stat.S_IFDIR: "a folder",
+    stat.S_IFCHR: "a character device",
+    stat.S_IFBLK: "a block device",
+    stat.S_IFIFO: "a FIFO (named pipe)",
+    stat.S_IFSOCK: "a socket",
+}  # what an existing output that is not a regular file is, by its ``stat`` file type
 
 
 def check_output_path(path, inputs=(), what: str = "output") -> Path:
@@ -63,28 +59,19 @@ def check_output_path(path, inputs=(), what: str = "output") -> Path:
         raise InvalidInput(f"{what} {path}: cannot check the output: {error}") from None
     if not stat.S_ISREG(status.st_mode):
         raise InvalidInput(
-            f"{what} {path} exists and is {_kind(status.st_mode)}; refusing to replace it: "
-            "expected a regular file or a new name"
+            f"{what} {path} exists and is "
+            f"{_KINDS.get(stat.S_IFMT(status.st_mode), 'not a regular file')}; "
+            "refusing to replace it: expected a regular file or a new name"
         )
     for source in inputs:
-        if source is None or not str(source):
-            continue
-        try:
-            same = os.path.samefile(path, source)
-        except OSError:
-            continue
-        if same:
-            raise InvalidInput(
-                f"{what} {path} is the input {source} of this command (same file); refusing to "
-                "overwrite an input: "
-                "write to another file"
-            )
+        with contextlib.suppress(OSError):  # an input that does not exist is skipped
+            if source is not None and str(source) and os.path.samefile(path, source):
+                raise InvalidInput(
+                    f"{what} {path} is the input {source} of this command (same file); refusing to "
+                    "overwrite an input: "
+                    "write to another file"
+                )
     return path
-
-
-def _target(path: Path) -> Path:
-    """The file a write to ``path`` should replace: the final target when ``path`` is a symlink."""
-    return Path(os.path.realpath(path)) if path.is_symlink() else path
 
 
 def atomic_write_bytes(path, data: bytes) -> Path:
@@ -97,13 +84,15 @@ def atomic_write_bytes(path, data: bytes) -> Path:
         InvalidInput: empty name, or an existing path that is not a regular file.
         FtkinError: the folder does not exist or is not writable.
     """
-    path = Path(check_output_path(path))
-    target = _target(path)
-    folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
-        raise FtkinError(f"cannot write {path}: folder {folder} does not exist")
+    path = check_output_path(path)
+    # a symlink is written through: the final target is replaced
+    target = Path(os.path.realpath(path)) if path.is_symlink() else path
+    if not target.parent.is_dir():
+        raise FtkinError(f"cannot write {path}: folder {target.parent} does not exist")
     try:
-        handle, temporary = tempfile.mkstemp(dir=folder, prefix=f".{target.name}.", suffix=".tmp")
+        handle, temporary = tempfile.mkstemp(
+            dir=target.parent, prefix=f".{target.name}.", suffix=".tmp"
+        )
     except OSError as error:
         raise FtkinError(f"cannot write {path}: {error}") from None
     try:
@@ -111,16 +100,11 @@ def atomic_write_bytes(path, data: bytes) -> Path:
             stream.write(data)
             stream.flush()
             os.fsync(stream.fileno())
-        if target.exists():
-            os.chmod(temporary, target.stat().st_mode & 0o777)
-        else:
-            os.chmod(temporary, 0o644)
+        os.chmod(temporary, target.stat().st_mode & 0o777 if target.exists() else 0o644)
         os.replace(temporary, target)
     except BaseException as error:
-        try:
+        with contextlib.suppress(OSError):
             os.unlink(temporary)
-        except OSError:
-            pass
         if isinstance(error, OSError):
             raise FtkinError(f"cannot write {path}: {error}") from None
         raise

@@ -92,11 +92,11 @@ class BagSamples(LoadedSamples):
 
 def _rosbags():
     try:
-        from rosbags.highlevel import AnyReader
+        from rosbags.highlevel import AnyReader, AnyReaderError
         from rosbags.typesys import Stores, get_typestore
     except ImportError:
         raise MissingDependency("rosbags", "bags", "reading ROS 2 bags") from None
-    return AnyReader, get_typestore(Stores.ROS2_HUMBLE)
+    return AnyReader, AnyReaderError, get_typestore(Stores.ROS2_HUMBLE)
 
 
 def _topic_listing(connections) -> str:
@@ -126,16 +126,12 @@ def _pick_topic(connections, topic, msgtype, flag, source):
     return [c for c in connections if c.topic == topics[0]]
 
 
-def _seconds(stamp) -> float:
-    return stamp.sec + stamp.nanosec * 1e-9
-
-
-def _stamps(header_times: list[float], log_times: list[float], topic: str) -> np.ndarray:
-    stamps = np.asarray(header_times, dtype=float)
-    if len(stamps) and not np.any(stamps):
+def _stamps(header_times: np.ndarray, log_times: np.ndarray, topic: str) -> np.ndarray:
+    """The header stamps [s], or the bag's receive times [ns → s] when the stamps are all zero."""
+    if len(header_times) and not np.any(header_times):
         logger.warning("%s: all header stamps are zero; using the bag's receive times", topic)
-        stamps = np.asarray(log_times, dtype=float) * 1e-9
-    return stamps
+        return log_times * 1e-9
+    return header_times
 
 
 class _Messages:
@@ -143,18 +139,19 @@ class _Messages:
 
     def __init__(self, source: str):
         self.source = source
-        self.joint_header, self.joint_log, self.wrench_header, self.wrench_log = [], [], [], []
-        self.wrench_rows: list[tuple] = []
+        self.joint_stamps: list[tuple[float, int]] = []  # (header stamp [s], receive time [ns])
+        self.wrench_rows: list[tuple] = []  # (fx, fy, fz, mx, my, mz, header stamp, receive time)
         self.frame_id = ""
         self.series: dict[str, tuple[list[int], list[float]]] = {}  # name -> (messages, values)
 
     def add(self, connection, log_time: int, message) -> None:
         """One deserialized message of either topic."""
+        stamp = message.header.stamp.sec + message.header.stamp.nanosec * 1e-9
         if connection.msgtype == WRENCH_TYPE:
             force, torque = message.wrench.force, message.wrench.torque
-            self.wrench_rows.append((force.x, force.y, force.z, torque.x, torque.y, torque.z))
-            self.wrench_header.append(_seconds(message.header.stamp))
-            self.wrench_log.append(log_time)
+            self.wrench_rows.append(
+                (force.x, force.y, force.z, torque.x, torque.y, torque.z, stamp, log_time)
+            )
             self.frame_id = self.frame_id or message.header.frame_id
             return
         if len(message.position) != len(message.name):
@@ -163,19 +160,30 @@ class _Messages:
                 f"{len(message.position)} positions",
                 self.source,
             )
-        index = len(self.joint_header)
-        self.joint_header.append(_seconds(message.header.stamp))
-        self.joint_log.append(log_time)
         for name, value in zip(message.name, message.position):
             indices, positions = self.series.setdefault(name, ([], []))
-            indices.append(index)
+            indices.append(len(self.joint_stamps))
             positions.append(float(value))
+        self.joint_stamps.append((stamp, log_time))
+
+    def joint_trajectory(self, topic: str, names: list[str]):
+        """``(joint_times (K,), trajectory (K, nq))``: every joint interpolated to every stamp."""
+        joint_stamps = np.asarray(self.joint_stamps, dtype=float)
+        message_times = _stamps(joint_stamps[:, 0], joint_stamps[:, 1], topic)
+        series = {
+            name: (message_times[self.series[name][0]], self.series[name][1]) for name in names
+        }
+        joint_times = np.unique(np.concatenate([stamps for stamps, _ in series.values()]))
+        trajectory = np.empty((len(joint_times), len(names)))
+        for column, (stamps, values) in enumerate(series.values()):
+            order = np.argsort(stamps, kind="stable")
+            trajectory[:, column] = np.interp(joint_times, stamps[order], np.asarray(values)[order])
+        return joint_times, trajectory
 
 
 def _read_messages(path: Path, source: str, joint_topic, wrench_topic, progress):
     """The joint and wrench connections chosen and their messages (:class:`_Messages`)."""
-    any_reader, typestore = _rosbags()
-    from rosbags.highlevel import AnyReaderError
+    any_reader, reader_error, typestore = _rosbags()
 
     messages = _Messages(source)
     try:
@@ -191,7 +199,7 @@ def _read_messages(path: Path, source: str, joint_topic, wrench_topic, progress)
                 for connection, log_time, raw in reader.messages(connections=joints + wrench):
                     messages.add(connection, log_time, reader.deserialize(raw, connection.msgtype))
                     bar.advance()
-    except AnyReaderError as error:
+    except reader_error as error:
         raise InvalidSamples(f"cannot read the bag: {error}", source) from None
     except InvalidSamples:
         raise
@@ -200,20 +208,6 @@ def _read_messages(path: Path, source: str, joint_topic, wrench_topic, progress)
             f"cannot read the bag (corrupt or truncated?): {type(error).__name__}: {error}", source
         ) from None
     return joints[0].topic, wrench[0].topic, messages
-
-
-def _joint_trajectory(messages: _Messages, topic: str, expected: list[str]):
-    """``(joint_times (K,), trajectory (K, nq))``: every joint interpolated to every stamp."""
-    message_times = _stamps(messages.joint_header, messages.joint_log, topic)
-    series = messages.series
-    joint_times = np.unique(np.concatenate([message_times[series[name][0]] for name in expected]))
-    trajectory = np.empty((len(joint_times), len(expected)))
-    for column, name in enumerate(expected):
-        times = message_times[series[name][0]]
-        order = np.argsort(times, kind="stable")
-        values = np.asarray(series[name][1])[order]
-        trajectory[:, column] = np.interp(joint_times, times[order], values)
-    return joint_times, trajectory
 
 
 def read_bag(
@@ -256,10 +250,11 @@ def read_bag(
         )
     if not messages.wrench_rows:
         raise InvalidSamples(f"no messages on {wrench_topic}", source)
-    joint_times, trajectory = _joint_trajectory(messages, joint_topic, expected)
-    times = _stamps(messages.wrench_header, messages.wrench_log, wrench_topic)
+    joint_times, trajectory = messages.joint_trajectory(joint_topic, expected)
+    rows = np.asarray(messages.wrench_rows, dtype=float)
+    times = _stamps(rows[:, 6], rows[:, 7], wrench_topic)
     order = np.argsort(times, kind="stable")
-    times, wrenches = times[order], np.asarray(messages.wrench_rows, dtype=float)[order]
+    times, wrenches = times[order], rows[order, :6]
     inside = (times >= joint_times[0]) & (times <= joint_times[-1])
     if not np.any(inside):
         raise InvalidSamples(
@@ -287,16 +282,16 @@ def read_bag(
     )
 
 
-def _table(source: str, header: list[str], columns: list[np.ndarray]) -> Table:
+def _table(source: str, columns: dict[str, np.ndarray]) -> Table:
     """A :class:`Table` of text cells (integers as integers, floats round-tripping exactly)."""
     cells = [
         [str(int(v)) for v in column]
         if np.issubdtype(column.dtype, np.integer)
         else [format_float(v) for v in column]
-        for column in columns
+        for column in columns.values()
     ]
     rows = [list(row) for row in zip(*cells)]
-    return Table(source, header, rows, list(range(1, len(rows) + 1)))
+    return Table(source, list(columns), rows, list(range(1, len(rows) + 1)))
 
 
 def bag_samples(
@@ -345,7 +340,6 @@ def bag_samples(
         recording.source,
     )
     search, pose_ids = None, None
-    header = [TIME_COLUMN, *recording.joint_names, *WRENCH_CHANNELS]
     if static_only:
         search = find_static_segments(recording.joint_times, recording.joint_trajectory, parameters)
         index = segment_index(times, search.segments)
@@ -366,20 +360,19 @@ def bag_samples(
             )
         times, wrenches, positions = times[keep], wrenches[keep], positions[keep]
         pose_ids = np.searchsorted(used, index[keep])
-        header.insert(1, POSE_COLUMN)
     logger.info(
         "%s: %d readings%s",
         recording.source,
         len(times),
         f", {search.describe()}" if search is not None else "",
     )
-    columns = (
-        [times]
-        + ([pose_ids] if pose_ids is not None else [])
-        + list(positions.T)
-        + list(wrenches.T)
-    )
-    table = _table(recording.source, header, columns)
+    columns = {
+        TIME_COLUMN: times,
+        **({} if pose_ids is None else {POSE_COLUMN: pose_ids}),
+        **dict(zip(recording.joint_names, positions.T)),
+        **dict(zip(WRENCH_CHANNELS, wrenches.T)),
+    }
+    table = _table(recording.source, columns)
     samples = Samples.from_joint_positions(arm, positions, wrenches, pose_ids, times=times)
     return BagSamples(
         samples, table, "joints", list(recording.joint_names), search, recording=recording

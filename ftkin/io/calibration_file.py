@@ -37,31 +37,41 @@ rezero`` and not read back). Version 1 files load with ``drift`` None.
 
 Floats are written with Python's shortest round-trip repr, so
 save → load gives back the same numbers bit for bit.
+
+Reading refuses duplicate JSON keys (which value is meant would be
+ambiguous) and absurd nesting; the parameters must agree with the derived
+fields written beside them (``tool_weight``, ``tool_mass``, ``base_tilt_deg``);
+a covariance must be symmetric positive semi-definite; the units a file
+states must be ftkin's; the parameters must be physically plausible (centre of
+mass within 10 m of the sensor, bias and weight at most 1e6 N or N·m,
+g between 1 and 30 m/s²). Booleans are not numbers. Each failure is a
+:class:`~ftkin.exceptions.CalibrationFileError` naming the key. The ``drift``
+entry's common keys are read here; each drift model reads its own
+(:meth:`~ftkin.calibration.drift.DriftModel.to_document`), looked up by name in the drift
+registry, so a registered model round-trips unchanged.
 """
 
 from __future__ import annotations
 
 import datetime
 import json
+import math
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
 
 from ..calibration.diagnostics import FitDiagnostics
+from ..calibration.drift import BiasDrift, parse_drift
 from ..calibration.dynamic import DynamicCalibrationResult
 from ..calibration.estimate import CalibrationResult
 from ..calibration.log_cholesky import is_physically_consistent, parameters_from_body
+from ..calibration.model import GRAVITY_RANGE
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from ..kinematics.record import KinematicsRecord
+from ..validation import MAX_WRENCH
 from .atomic import atomic_write_text
-from .calibration_checks import (
-    check_document,
-    check_plausible,
-    parse_calibration_json,
-    short_repr,
-)
-from .drift_file import drift_from_document, drift_to_document
-from .json_reader import JsonReader, NestedReader
+from .json_reader import JsonReader, NestedReader, short_repr
 
 FORMAT_NAME = "ftkin-calibration"
 FORMAT_VERSION = 2
@@ -86,73 +96,53 @@ UNITS = {
     "inertia": "kg*m^2, about the centre of mass, sensor axes",
 }
 
+MAX_COM_DISTANCE = 10.0
+"""Farthest plausible centre of mass from the sensor [m] (the planner's bound too)."""
 
-def _jsonable(value):
-    if isinstance(value, np.ndarray):
+
+def _plain(value):
+    """A numpy array or scalar as plain Python (the ``default`` of ``json.dumps``)."""
+    if isinstance(value, (np.ndarray, np.generic)):
         return value.tolist()
-    if isinstance(value, dict):
-        return {key: _jsonable(item) for key, item in value.items()}
-    if isinstance(value, (np.floating, np.integer)):
-        return value.item()
-    return value
+    raise TypeError(f"Object of type {type(value).__name__} is not JSON serializable")
 
 
 def _std_errors_document(result: CalibrationResult) -> dict | None:
     """Standard errors under the keys of the values (``base_tilt_deg`` in degrees; ``base_tilt``
     kept, rad).
     """
-    errors = result.std_errors
+    errors, inertia = result.std_errors, result.inertia_std_errors
     if errors is None:
         return None
-    document = {**errors, "base_tilt_deg": np.rad2deg(errors["base_tilt"])}
-    if result.inertia_std_errors is not None:
-        document["inertia"] = result.inertia_std_errors
-    return document
-
-
-def inertia_document(result: CalibrationResult) -> dict:
-    """``inertia`` (3×3 about the COM, sensor axes [kg·m²]) of a dynamic calibration, else
-    nothing.
-    """
-    return (
-        {}
-        if result.inertia_about_com_in_sensor is None
-        else {"inertia": result.inertia_about_com_in_sensor}
-    )
-
-
-def with_inertia(reader, result: CalibrationResult, inertia: np.ndarray) -> CalibrationResult:
-    """The :class:`~ftkin.calibration.dynamic.DynamicCalibrationResult` of a file with an
-    ``inertia``.
-    """
-    if not np.allclose(
-        inertia, inertia.T, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(inertia).max()))
-    ):
-        reader.fail("the inertia must be a symmetric 3×3 matrix [kg·m²]", "inertia")
-    errors = reader.get("std_errors", required=False)
-    inertia_errors = None
-    if isinstance(errors, dict) and errors.get("inertia") is not None:
-        inertia_errors = reader.array("std_errors.inertia", (3, 3), source=errors["inertia"])
-    theta = parameters_from_body(result.tool_mass, result.center_of_mass, inertia)
-    if not is_physically_consistent(theta, tolerance=-1e-12):
-        reader.fail(
-            "the inertia is not physically consistent with the mass and centre of mass (a "
-            "principal moment "
-            "is negative or violates the triangle inequality)",
-            "inertia",
-        )
-    inertia_fields = {
-        "inertia_about_com_in_sensor": inertia,
-        "inertia_std_errors": inertia_errors,
-        "inertial_parameters": theta,
+    return {
+        **errors,
+        "base_tilt_deg": np.rad2deg(errors["base_tilt"]),
+        **({} if inertia is None else {"inertia": inertia}),
     }
-    return DynamicCalibrationResult(**{**vars(result), **inertia_fields})
+
+
+def _drift_document(drift: BiasDrift | None) -> dict | None:
+    """The ``drift`` entry of a calibration file (None without a trajectory)."""
+    if drift is None:
+        return None
+    return {
+        "model": drift.model,
+        "selected_by": drift.selected_by,
+        "times": drift.times,
+        "bias": drift.bias,
+        "bias_std": drift.bias_std,
+        **drift.kind.to_document(drift),
+        "time_scale": drift.time_scale,
+        "criteria": {name: float(value) for name, value in drift.criteria.items()},
+        "recorded_span": drift.recorded_span,
+    }
 
 
 def calibration_to_dict(result: CalibrationResult) -> dict:
     """The JSON document of a calibration (plain Python types)."""
     from .._version import __version__
 
+    inertia = result.inertia_about_com_in_sensor  # a dynamic calibration's, 3×3 [kg·m²]
     document = {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
@@ -165,7 +155,7 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         "center_of_mass": result.center_of_mass,
         "base_tilt_deg": list(result.base_tilt_deg),
         "g": result.g,
-        **inertia_document(result),
+        **({} if inertia is None else {"inertia": inertia}),
         "method": result.method,
         "pose_count": result.pose_count,
         "sample_count": result.sample_count,
@@ -187,12 +177,12 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         "sensor_sign": result.sensor_sign,
         "flip_axis": result.flip_axis,
         **({"diagnostics": result.diagnostics.to_dict()} if result.diagnostics is not None else {}),
-        "drift": drift_to_document(result.drift),
+        "drift": _drift_document(result.drift),
         **({"kinematics": result.kinematics.to_dict()} if result.kinematics is not None else {}),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "ftkin_version": __version__,
     }
-    return _jsonable(document)
+    return json.loads(json.dumps(document, default=_plain))
 
 
 def save_calibration(result: CalibrationResult, path, *, rezero: dict | None = None) -> Path:
@@ -204,21 +194,19 @@ def save_calibration(result: CalibrationResult, path, *, rezero: dict | None = N
     Raises:
         InvalidInput: ``result`` is not a :class:`CalibrationResult`.
         CalibrationFileError: it holds NaN or infinite numbers, or parameters no
-            tool has (:func:`~ftkin.io.calibration_checks.check_plausible`).
+            tool has (see the module docstring).
     """
     if not isinstance(result, CalibrationResult):
         raise InvalidInput(
             "result must be an ftkin.CalibrationResult (from calibrate or load_calibration), got "
             f"{type(result).__name__}"
         )
-    check_plausible(
-        JsonReader(str(path), {}), result
-    )  # never write what load_calibration would refuse
+    _check_plausible(JsonReader(str(path), {}), result)  # never write what loading would refuse
     try:
         document = calibration_to_dict(result)
         if rezero is not None:
-            document["rezero"] = _jsonable(rezero)
-        text = json.dumps(document, indent=2, allow_nan=False) + "\n"
+            document["rezero"] = rezero
+        text = json.dumps(document, indent=2, allow_nan=False, default=_plain) + "\n"
     except ValueError as error:  # NaN or infinity in a hand-built result
         raise CalibrationFileError(str(path), f"cannot write: {error}") from None
     return atomic_write_text(path, text)
@@ -245,42 +233,55 @@ DOCUMENT_TYPES = {
 """The JSON kind of the keys written for people (read back only to be checked)."""
 
 
-def _diagnostics(reader: JsonReader) -> FitDiagnostics | None:
-    data = reader.optional_object("diagnostics")
+def _part(reader: JsonReader, key: str, from_dict, types: dict | None = None):
+    """The optional object ``key`` rebuilt by ``from_dict`` (None when absent or null), its
+    entries first checked against ``types`` (see :meth:`JsonReader.check_types`).
+    """
+    data = reader.optional_object(key)
     if data is None:
         return None
-    NestedReader(reader.path, data, "diagnostics").check_types(DIAGNOSTICS_TYPES)
+    if types is not None:
+        NestedReader(reader.path, data, key).check_types(types)
     try:
-        return FitDiagnostics.from_dict(data)
+        return from_dict(data)
     except KeyError as error:
-        reader.fail(f"missing {error.args[0]!r}", "diagnostics")
+        reader.fail(f"missing {error.args[0]!r}", key)
     except (TypeError, ValueError, OverflowError, FtkinError) as error:
-        reader.fail(f"malformed: {str(error)[:200]}", "diagnostics")
+        reader.fail(f"malformed: {str(error)[:200]}", key)
 
 
-def _kinematics(reader: JsonReader) -> KinematicsRecord | None:
-    data = reader.optional_object("kinematics")
+def _drift(reader: JsonReader) -> BiasDrift | None:
+    """The :class:`BiasDrift` of the ``drift`` entry (None when absent or null)."""
+    data = reader.optional_object("drift")
     if data is None:
         return None
+    sub = NestedReader(reader.path, data, "drift")
     try:
-        return KinematicsRecord.from_dict(data)
-    except FtkinError as error:
-        reader.fail(f"malformed: {error}", "kinematics")
-
-
-def _check_version(reader: JsonReader, document: dict) -> None:
-    """Refuse another format, or a version this ftkin does not read."""
-    if document.get("format") != FORMAT_NAME:
-        reader.fail(
-            f"not an ftkin calibration file (format {document.get('format')!r}, expected "
-            f"{FORMAT_NAME!r})",
-            "format",
+        kind = parse_drift(sub.get("model"))
+    except InvalidInput as error:
+        reader.fail(str(error), "drift.model")
+    times = sub.array("times", (len(data["times"]) if isinstance(data.get("times"), list) else 0,))
+    count = len(times)
+    criteria = data.get("criteria") or {}
+    if not isinstance(criteria, dict):
+        reader.fail("expected an object of numbers", "drift.criteria")
+    NestedReader(reader.path, criteria, "drift.criteria").check_types(
+        dict.fromkeys(criteria, "number")
+    )
+    try:
+        return BiasDrift(
+            model=kind.name,
+            selected_by=sub.optional("selected_by", str, "given"),
+            times=times,
+            bias=sub.array("bias", (count, 6)),
+            bias_std=sub.array("bias_std", (count, 6)),
+            time_scale=sub.number("time_scale") if "time_scale" in data else 1.0,
+            criteria={str(name): float(value) for name, value in criteria.items()},
+            recorded_span=sub.array("recorded_span", (2,), required=False),
+            **kind.from_document(sub),
         )
-    reader.version(FORMAT_VERSION)
-    reader.check_types(DOCUMENT_TYPES)
-    for name in ("std_errors", "mount_std_deg"):  # objects of numbers
-        numbers = reader.optional_object(name) or {}
-        NestedReader(reader.path, numbers, name).check_types(dict.fromkeys(numbers, "numbers?"))
+    except (FtkinError, TypeError, ValueError) as error:
+        reader.fail(f"malformed: {error}", "drift")
 
 
 def _poses(reader: JsonReader, document: dict) -> dict:
@@ -332,12 +333,50 @@ def _mount(reader: JsonReader) -> dict:
     }
 
 
+def _with_inertia(reader, result: CalibrationResult, inertia: np.ndarray) -> CalibrationResult:
+    """The :class:`~ftkin.calibration.dynamic.DynamicCalibrationResult` of a file with an
+    ``inertia``.
+    """
+    if not np.allclose(
+        inertia, inertia.T, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(inertia).max()))
+    ):
+        reader.fail("the inertia must be a symmetric 3×3 matrix [kg·m²]", "inertia")
+    errors = reader.optional_object("std_errors") or {}
+    inertia_errors = reader.array(
+        "std_errors.inertia", (3, 3), required=False, source=errors.get("inertia")
+    )
+    theta = parameters_from_body(result.tool_mass, result.center_of_mass, inertia)
+    if not is_physically_consistent(theta, tolerance=-1e-12):
+        reader.fail(
+            "the inertia is not physically consistent with the mass and centre of mass (a "
+            "principal moment "
+            "is negative or violates the triangle inequality)",
+            "inertia",
+        )
+    inertia_fields = {
+        "inertia_about_com_in_sensor": inertia,
+        "inertia_std_errors": inertia_errors,
+        "inertial_parameters": theta,
+    }
+    return DynamicCalibrationResult(**{**vars(result), **inertia_fields})
+
+
 def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationResult:
     """Rebuild a :class:`CalibrationResult` from a parsed calibration document."""
     if not isinstance(document, dict):
         raise CalibrationFileError(path, f"expected a JSON object, got {type(document).__name__}")
     reader = JsonReader(path, document)
-    _check_version(reader, document)
+    if document.get("format") != FORMAT_NAME:
+        reader.fail(
+            f"not an ftkin calibration file (format {document.get('format')!r}, expected "
+            f"{FORMAT_NAME!r})",
+            "format",
+        )
+    reader.version(FORMAT_VERSION)
+    reader.check_types(DOCUMENT_TYPES)
+    for name in ("std_errors", "mount_std_deg"):  # objects of numbers
+        numbers = reader.optional_object(name) or {}
+        NestedReader(reader.path, numbers, name).check_types(dict.fromkeys(numbers, "numbers?"))
     poses = _poses(reader, document)
     mount = _mount(reader)
     inertia = reader.array("inertia", (3, 3), required=False)
@@ -352,9 +391,9 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             urdf=reader.optional("urdf", str),
             sensor_frame=reader.optional("sensor_frame", str),
             covariance=reader.array("covariance", (12, 12), required=False),
-            diagnostics=_diagnostics(reader),
-            drift=drift_from_document(reader),
-            kinematics=_kinematics(reader),
+            diagnostics=_part(reader, "diagnostics", FitDiagnostics.from_dict, DIAGNOSTICS_TYPES),
+            drift=_drift(reader),
+            kinematics=_part(reader, "kinematics", KinematicsRecord.from_dict),
             **poses,
             **mount,
         )
@@ -365,8 +404,98 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             f"|gravity_in_base| must be finite and positive, got {result.tool_weight}",
             "gravity_in_base",
         )
-    check_document(reader, document, result, UNITS)
-    return result if inertia is None else with_inertia(reader, result, inertia)
+    _check_consistent(reader, document, result)
+    _check_plausible(reader, result)
+    return result if inertia is None else _with_inertia(reader, result, inertia)
+
+
+def _check_consistent(reader, document: dict, result) -> None:
+    """Refuse a document that disagrees with itself: a derived field (``tool_weight``,
+    ``tool_mass``, ``base_tilt_deg``) that disagrees with the parameters, ``units`` naming another
+    unit than ftkin's for a key (e.g. ``"force_offset": "kN"``), or a covariance that is not
+    symmetric positive semi-definite.
+    """
+    derived = (
+        ("tool_weight", result.tool_weight, "N", "|gravity_in_base|"),
+        ("tool_mass", result.tool_mass, "kg", "|gravity_in_base| / g"),
+    )
+    for key, value, unit, source in derived:
+        if key in document:
+            stated = reader.number(key)
+            if not math.isclose(stated, value, rel_tol=1e-9, abs_tol=1e-12):
+                reader.fail(
+                    f"{stated} {unit} disagrees with {source} = {value} {unit} (file edited by "
+                    "hand?)",
+                    key,
+                )
+    if "base_tilt_deg" in document:
+        stated = reader.array("base_tilt_deg", (2,))
+        expected = np.array(result.base_tilt_deg)
+        if not np.allclose(stated, expected, rtol=1e-9, atol=1e-9):
+            reader.fail(
+                f"{stated.tolist()} deg disagrees with the tilt of gravity_in_base = "
+                f"{expected.tolist()} deg "
+                "(file edited by hand?)",
+                "base_tilt_deg",
+            )
+    stated_units = reader.optional_object("units") or {}
+    for key, our_unit in UNITS.items():
+        if key in stated_units and key in document:
+            value = stated_units[key]
+            unit, ours = (str(value).split(",")[0].strip(), our_unit.split(",")[0].strip())
+            if not isinstance(value, str) or unit.replace("·", "*") != ours:
+                reader.fail(
+                    f"{key} is stated in {short_repr(value)}, but ftkin files are in {ours!r} "
+                    "(convert the values, or the file is not ftkin's)",
+                    "units",
+                )
+    covariance = result.covariance
+    if covariance is not None:
+        scale = max(float(np.max(np.abs(covariance))), 1e-300)
+        asymmetry = float(np.max(np.abs(covariance - covariance.T)))
+        if asymmetry > 1e-9 * scale:
+            reader.fail(
+                f"not symmetric (largest |C - C^T| = {asymmetry:.3g}); expected a covariance "
+                "matrix",
+                "covariance",
+            )
+        smallest = float(np.linalg.eigvalsh(0.5 * (covariance + covariance.T))[0])
+        if smallest < -1e-9 * scale:
+            reader.fail(
+                f"not positive semi-definite (eigenvalue {smallest:.3g}); expected a covariance "
+                "matrix",
+                "covariance",
+            )
+
+
+def _check_plausible(reader, result) -> None:
+    """Refuse parameters no tool on a wrist sensor has: a wrong unit or a corrupt file that still
+    parses.
+    """
+    distance = float(np.linalg.norm(result.center_of_mass))
+    if distance > MAX_COM_DISTANCE:
+        reader.fail(
+            f"the centre of mass is {distance:.4g} m from the sensor; expected at most "
+            f"{MAX_COM_DISTANCE:g} m "
+            "(millimetres written as metres?)",
+            "center_of_mass",
+        )
+    for key, value in (
+        ("force_offset", result.force_offset),
+        ("torque_offset", result.torque_offset),
+        ("gravity_in_base", result.gravity_in_base),
+    ):
+        if float(np.max(np.abs(value))) > MAX_WRENCH:  # the samples reader's bound on a reading
+            reader.fail(
+                f"{np.asarray(value).tolist()} is beyond ±{MAX_WRENCH:g} (N or N·m): not a load",
+                key,
+            )
+    if not GRAVITY_RANGE[0] <= result.g <= GRAVITY_RANGE[1]:
+        reader.fail(
+            f"g = {result.g:g} m/s² is outside {GRAVITY_RANGE[0]:g}..{GRAVITY_RANGE[1]:g} (Earth: "
+            "9.80665)",
+            "g",
+        )
 
 
 def load_calibration(path) -> CalibrationResult:
@@ -377,18 +506,43 @@ def load_calibration(path) -> CalibrationResult:
             another format, a newer version, or a missing or malformed key.
     """
     path = Path(path)
+    source = str(path)
+
+    def unique_keys(pairs):  # which of two values under one key is meant would be ambiguous
+        repeated = [key for key, count in Counter(key for key, _ in pairs).items() if count > 1]
+        if repeated:
+            raise CalibrationFileError(
+                source,
+                "duplicate key in a JSON object: which value is meant is ambiguous",
+                repeated[0],
+            )
+        return dict(pairs)
+
     try:
         text = path.read_text(encoding="utf-8")
+        if not text.strip():
+            raise CalibrationFileError(
+                source, "file is empty; expected an ftkin calibration JSON document"
+            )
+        document = json.loads(text, object_pairs_hook=unique_keys)
     except FileNotFoundError:
-        raise CalibrationFileError(str(path), "file not found") from None
+        raise CalibrationFileError(source, "file not found") from None
     except IsADirectoryError:
         raise CalibrationFileError(
-            str(path), "is a folder; expected a calibration JSON file"
+            source, "is a folder; expected a calibration JSON file"
+        ) from None
+    except json.JSONDecodeError as error:
+        raise CalibrationFileError(
+            source,
+            f"not valid JSON (truncated or corrupt?) at line {error.lineno}, column {error.colno}: "
+            f"{error.msg}",
         ) from None
     except (OSError, UnicodeDecodeError) as error:
-        raise CalibrationFileError(str(path), f"cannot read: {error}") from None
-    if not text.strip():
+        raise CalibrationFileError(source, f"cannot read: {error}") from None
+    except RecursionError:
         raise CalibrationFileError(
-            str(path), "file is empty; expected an ftkin calibration JSON document"
-        )
-    return calibration_from_dict(parse_calibration_json(text, str(path)), str(path))
+            source, "JSON nested too deeply; expected an ftkin calibration document"
+        ) from None
+    except ValueError as error:  # a number with too many digits
+        raise CalibrationFileError(source, f"not a valid calibration document: {error}") from None
+    return calibration_from_dict(document, source)

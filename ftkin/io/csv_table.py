@@ -77,14 +77,10 @@ def sniff_delimiter(text: str) -> str:
     The first line that is neither blank nor a ``#`` comment is the header; a
     header with semicolons or tabs and no commas is read with that separator.
     """
-    for line in io.StringIO(text):
-        stripped = line.strip()
-        if not stripped or stripped.startswith("#"):
-            continue
-        counts = {delimiter: line.count(delimiter) for delimiter in DELIMITER_NAMES}
-        if counts[","] == 0 and max(counts[";"], counts["\t"]) > 0:
-            return ";" if counts[";"] >= counts["\t"] else "\t"
-        return ","
+    header = next((line for line in io.StringIO(text) if line.strip()[:1] not in ("", "#")), "")
+    semicolons, tabs = header.count(";"), header.count("\t")
+    if "," not in header and max(semicolons, tabs) > 0:
+        return ";" if semicolons >= tabs else "\t"
     return ","
 
 
@@ -172,56 +168,47 @@ def _read_text(path: Path) -> str:
 
 def _cell_count_message(record, header, delimiter) -> str:
     message = f"{len(record)} cells but the header has {len(header)} columns"
-    if delimiter == "," and len(record) > len(header):
-        joined = ",".join(record)
-        decimal_points = any("." in cell for cell in record)  # a file with decimal commas has none
-        if (
-            not decimal_points
-            and re.search(r"\d,\d", joined)
-            and any(re.fullmatch(r"\d+", cell.strip()) for cell in record[1:])
-        ):
-            message += (
-                "; the numbers look like they have decimal commas (e.g. 1,5): write them with a "
-                "decimal point, "
-                "or separate the cells with semicolons"
-            )
+    if (
+        delimiter == ","
+        and len(record) > len(header)
+        and not any("." in cell for cell in record)  # a file with decimal commas has no points
+        and re.search(r"\d,\d", ",".join(record))
+        and any(re.fullmatch(r"\d+", cell.strip()) for cell in record[1:])
+    ):
+        message += (
+            "; the numbers look like they have decimal commas (e.g. 1,5): write them with a "
+            "decimal point, or separate the cells with semicolons"
+        )
     return message
 
 
 def rename_columns(table: Table, aliases: dict[str, str]) -> Table:
     """A copy of ``table`` with header names replaced by ``aliases`` (``{old: new}``)."""
-    if not aliases:
-        return table
     return replace(table, header=[aliases.get(name, name) for name in table.header])
 
 
 def missing_columns(table: Table, wanted, what: str) -> None:
+    """Refuse a table without the ``wanted`` columns, naming a column that may be meant."""
     missing = [name for name in wanted if name not in table.header]
-    if missing:
-        hints = []
-        lowered = {}
-        for column in table.header:
-            lowered.setdefault(column.lower(), column)
-        for name in missing:
-            close = lowered.get(name.lower())
-            if close is None:
-                import difflib  # only for an error message
+    if not missing:
+        return
+    lowered = {column.lower(): column for column in reversed(table.header)}  # the first one
+    hints = []
+    for name in missing:
+        close = lowered.get(name.lower())
+        if close is None and len(table.header) <= 1000:
+            import difflib  # only for an error message
 
-                matches = (
-                    difflib.get_close_matches(name, table.header, n=1)
-                    if len(table.header) <= 1000
-                    else []
-                )
-                close = matches[0] if matches else None
-            if close is not None:
-                hints.append(f"rename column {close!r} to {name!r}")
-        hint = (" (did you mean: " + "; ".join(hints) + "?)") if hints else ""
-        shown = table.header if len(table.header) <= 30 else [*table.header[:30], "..."]
-        raise InvalidSamples(
-            f"missing {what} column(s) {missing}{hint}; the header has {shown}",
-            table.source,
-            table.header_line if table.header_line is not None else table.lines[0] - 1,
-        )
+            close = next(iter(difflib.get_close_matches(name, table.header, n=1)), None)
+        if close is not None:
+            hints.append(f"rename column {close!r} to {name!r}")
+    hint = (" (did you mean: " + "; ".join(hints) + "?)") if hints else ""
+    shown = table.header if len(table.header) <= 30 else [*table.header[:30], "..."]
+    raise InvalidSamples(
+        f"missing {what} column(s) {missing}{hint}; the header has {shown}",
+        table.source,
+        table.header_line if table.header_line is not None else table.lines[0] - 1,
+    )
 
 
 def format_float(value: float) -> str:
@@ -234,8 +221,8 @@ def write_csv(path, header, rows) -> Path:
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(header)
-    for row in rows:
-        writer.writerow(
-            [format_float(cell) if isinstance(cell, (float, np.floating)) else cell for cell in row]
-        )
+    writer.writerows(
+        [format_float(cell) if isinstance(cell, (float, np.floating)) else cell for cell in row]
+        for row in rows
+    )
     return atomic_write_text(path, buffer.getvalue())

@@ -75,16 +75,19 @@ class ExportFormat(ABC):
     """An export format; subclass, set the class attributes, implement :meth:`document`.
 
     Register an instance with :func:`ftkin.io.export.register_export_format`.
+
+    Attributes:
+        name: The ``--format`` choice.
+        summary: One line for ``ftkin export --help``: the target and what is written.
+        needs_arm: True when the format needs the arm (the CLI then builds it from the robot
+            options).
+        options: The format's own options.
     """
 
     name: ClassVar[str]
-    """The ``--format`` choice."""
     summary: ClassVar[str]
-    """One line for ``ftkin export --help``: the target and what is written."""
     needs_arm: ClassVar[bool] = False
-    """True when the format needs the arm (the CLI then builds it from the robot options)."""
     options: ClassVar[tuple[ExportOption, ...]] = ()
-    """The format's own options."""
 
     @abstractmethod
     def document(self, request: ExportRequest) -> dict:

@@ -9,47 +9,40 @@ outside the supported range is refused with the versions this ftkin reads.
 
 from __future__ import annotations
 
-import math
+import sys
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..exceptions import CalibrationFileError
-from .calibration_checks import short_repr
+
+
+def short_repr(value) -> str:
+    """``repr`` cut to 80 characters for messages."""
+    text = repr(value)
+    return text if len(text) <= 80 else text[:80] + "..."
 
 
 def json_repr(value) -> str:
     """A JSON value as the file spells it (``null``, ``true``), cut to 80 characters."""
-    if value is None or isinstance(value, bool):
-        return {None: "null", True: "true", False: "false"}[value]
-    return short_repr(value)
+    special = value is None or isinstance(value, bool)
+    return {None: "null", True: "true", False: "false"}[value] if special else short_repr(value)
 
 
-def first_non_number(value):
-    """The first leaf of a nested JSON list that is not a number (``null``, a boolean, a string,
-    an object), wrapped in a tuple (a null leaf is not "no bad leaf"), or None when every leaf is
-    one.
-    """
-    for leaf in _flatten([value]):
-        if isinstance(leaf, bool) or not isinstance(leaf, (int, float)):
-            return (leaf,)
-    return None
-
-
+@dataclass
 class JsonReader:
     """Typed access to a parsed document, raising CalibrationFileError with the key."""
 
-    def __init__(self, path: str, document: dict):
-        self.path, self.document = path, document
+    path: str
+    document: dict
 
     def fail(self, message: str, key: str | None = None):
         raise CalibrationFileError(self.path, message, key)
 
     def get(self, key: str, required: bool = True):
-        if key not in self.document:
-            if required:
-                self.fail("missing", key)
-            return None
-        return self.document[key]
+        if required and key not in self.document:
+            self.fail("missing", key)
+        return self.document.get(key)
 
     def optional(self, key: str, kind: type, default=None):
         """An optional value of JSON type ``kind`` (``str``, ``int``), ``default`` when absent or
@@ -99,8 +92,8 @@ class JsonReader:
                 continue
             listed = base.endswith("s")
             leaf = _LEAF_CHECKS[base.removesuffix("s")]
-            if listed and not isinstance(value, list) and base != "numbers":
-                leaf = _never  # "numbers": one number or a nested list of them
+            if listed and not isinstance(value, list) and base != "numbers":  # "numbers": or one
+                self.fail(f"expected a list of {base}, got {json_repr(value)}", key)
             for item in _flatten([value]) if listed else [value]:
                 if not (leaf(item) or (listed and nullable and item is None)):
                     expected = f"a list of {base}" if listed else f"a {base}"
@@ -120,9 +113,9 @@ class JsonReader:
             if required:
                 self.fail(f"expected numbers of shape {shape}, got null", key)
             return None
-        if not isinstance(value, np.ndarray):
-            bad = first_non_number(value)
-            if bad is not None:
+        if not isinstance(value, np.ndarray):  # null, a boolean, a string or an object leaf
+            bad = [leaf for leaf in _flatten([value]) if not _is_number(leaf)]
+            if bad:
                 self.fail(f"expected numbers of shape {shape}, got {json_repr(bad[0])}", key)
         try:
             array = np.array(value, dtype=np.float64)
@@ -136,15 +129,8 @@ class JsonReader:
 
     def number(self, key: str) -> float:
         value = self.get(key)
-        try:
-            finite = (
-                not isinstance(value, bool)
-                and isinstance(value, (int, float))
-                and math.isfinite(value)
-            )
-        except OverflowError:
-            finite = False
-        if not finite:
+        # NaN fails the comparison; an integer beyond the float range is compared exactly
+        if not (_is_number(value) and abs(value) <= sys.float_info.max):
             self.fail(f"expected a finite number, got {json_repr(value)}", key)
         return float(value)
 
@@ -160,10 +146,6 @@ _LEAF_CHECKS = {
 }
 
 
-def _never(value) -> bool:
-    return False
-
-
 def _flatten(items):
     for item in items:
         if isinstance(item, list):
@@ -172,14 +154,13 @@ def _flatten(items):
             yield item
 
 
+@dataclass
 class NestedReader(JsonReader):
     """A :class:`JsonReader` for an object inside the document; keys are reported as
     ``prefix.key``.
     """
 
-    def __init__(self, path: str, document: dict, prefix: str):
-        super().__init__(path, document)
-        self.prefix = prefix
+    prefix: str
 
     def fail(self, message: str, key: str | None = None):
         super().fail(message, f"{self.prefix}.{key}" if key else self.prefix)

@@ -79,31 +79,22 @@ class MotionRecording:
         Raises:
             InvalidSamples: the times are not uniform or too few for the window.
         """
-        if self.joint_velocities is not None and self.joint_accelerations is not None:
-            return MotionSamples.from_joint_trajectory(
-                arm,
-                self.joint_positions,
-                self.joint_velocities,
-                self.joint_accelerations,
-                self.wrenches,
-                self.times,
-            )
-        try:
-            q, dq, ddq = joint_derivatives(self.times, self.joint_positions, window, polyorder)
-        except InvalidInput as error:
-            raise InvalidSamples(str(error), self.source) from None
+        q, dq, ddq = self.joint_positions, self.joint_velocities, self.joint_accelerations
+        if dq is None or ddq is None:
+            try:
+                q, dq, ddq = joint_derivatives(self.times, q, window, polyorder)
+            except InvalidInput as error:
+                raise InvalidSamples(str(error), self.source) from None
         return MotionSamples.from_joint_trajectory(arm, q, dq, ddq, self.wrenches, self.times)
 
 
 def is_motion_table(table: Table, arm) -> bool:
     """True when the table has a ``t`` column and joint columns (a moving recording)."""
     try:
-        if times_from_table(table) is None:
-            return False
-        kind, _ = detect_orientation(table, arm.joint_names)
+        has_times = times_from_table(table) is not None
+        return has_times and detect_orientation(table, arm.joint_names)[0] == "joints"
     except InvalidSamples:
         return False
-    return kind == "joints"
 
 
 def motion_from_table(table: Table, arm) -> MotionRecording:
@@ -113,9 +104,8 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
         InvalidSamples: missing ``t``, joint or wrench columns, joint angles in
             degrees, fewer than 3 rows, or times not increasing (with file and line).
     """
-    table = rename_columns(
-        table, wrench_aliases(table.header)
-    )  # ROS names (force.x, ...) as for static samples
+    # ROS names (force.x, ...) as for static samples
+    table = rename_columns(table, wrench_aliases(table.header))
     times = times_from_table(table)
     if times is None:
         missing_columns(table, (TIME_COLUMN,), "time")
@@ -134,11 +124,14 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
             f"{len(times)} row(s); a moving recording needs at least 3 (its derivatives)",
             table.source,
         )
-    steps = np.diff(times)
-    if np.any(steps <= 0):
-        row = int(np.flatnonzero(steps <= 0)[0]) + 1
-        message = f"time {times[row]!r} s does not increase; expected strictly increasing stamps"
-        raise InvalidSamples(message, table.source, table.lines[row])
+    stalled = np.flatnonzero(np.diff(times) <= 0)
+    if stalled.size:
+        row = int(stalled[0]) + 1
+        raise InvalidSamples(
+            f"time {times[row]!r} s does not increase; expected strictly increasing stamps",
+            table.source,
+            table.lines[row],
+        )
     velocities, accelerations = given_derivatives(table, columns, times, joints)
     wrenches = table.floats(WRENCH_CHANNELS)
     check_wrench_magnitude(table, wrenches)

@@ -197,10 +197,13 @@ def _numbers(values) -> list[float]:
 
 
 class PayloadFormat(ExportFormat):
-    """A robot controller's payload request: the tool in the flange frame."""
+    """A robot controller's payload request: the tool in the flange frame (``header_lines``:
+    how to send it).
+    """
 
     needs_arm = True
     options = (FLANGE_FRAME,)
+    header_lines: tuple[str, ...] = ()
 
     def payload(self, request: ExportRequest) -> Payload:
         """The request's calibration as a payload in the flange frame."""
@@ -214,7 +217,8 @@ class PayloadFormat(ExportFormat):
     def header(self, request: ExportRequest) -> list[str]:
         return [
             f"ftkin payload for {self.name}: centre of mass in the flange frame "
-            f"{self.payload(request).flange_frame!r} [m], mass [kg]"
+            f"{self.payload(request).flange_frame!r} [m], mass [kg]",
+            *self.header_lines,
         ]
 
     def summary_line(self, request: ExportRequest) -> str:
@@ -230,6 +234,12 @@ class FrankaLoadExport(PayloadFormat):
     name = "franka-load"
     options = (FLANGE_FRAME, INERTIA, END_EFFECTOR, SENSOR_BODY)
     summary = "franka_msgs/srv/SetLoad request: mass, center_of_mass, load_inertia"
+    header_lines = (
+        f"franka_msgs/srv/SetLoad request (ros2 service call {FRANKA_SET_LOAD_SERVICE} "
+        "franka_msgs/srv/SetLoad ...);",
+        "libfranka: robot.setLoad(mass, F_x_Cload = center_of_mass, load_inertia) "
+        "(column-major 3x3 [kg*m^2])",
+    )
 
     def payload(self, request: ExportRequest) -> Payload:
         """The measured payload, minus ``end_effector`` plus ``sensor_body`` when given
@@ -251,15 +261,6 @@ class FrankaLoadExport(PayloadFormat):
             "center_of_mass": _numbers(payload.center_of_mass),
             "load_inertia": _numbers(inertia.T),
         }
-
-    def header(self, request: ExportRequest) -> list[str]:
-        return [
-            *super().header(request),
-            f"franka_msgs/srv/SetLoad request (ros2 service call {FRANKA_SET_LOAD_SERVICE} "
-            "franka_msgs/srv/SetLoad ...);",
-            "libfranka: robot.setLoad(mass, F_x_Cload = center_of_mass, load_inertia) "
-            "(column-major 3x3 [kg*m^2])",
-        ]
 
     def notes(self, request: ExportRequest) -> list[str]:
         if self.payload(request).inertia is not None:

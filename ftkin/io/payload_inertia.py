@@ -84,12 +84,6 @@ class RigidBody:
         return [float(v) for v in self.inertia.reshape(-1, order="F")]
 
 
-def payload_body(payload: Payload) -> RigidBody:
-    """The measured payload as a :class:`RigidBody` (a point mass when its inertia is unknown)."""
-    inertia = np.zeros((3, 3)) if payload.inertia is None else payload.inertia
-    return RigidBody(payload.mass, payload.center_of_mass, inertia)
-
-
 def controller_load(
     measured: Payload,
     end_effector: RigidBody | None = None,
@@ -134,7 +128,8 @@ def controller_load(
 
 def _difference(measured: Payload, end_effector: RigidBody | None, setting: str) -> pin.Inertia:
     """``Y_measured − Y_end_effector``, checked to be a body (a point mass without inertias)."""
-    body = payload_body(measured)
+    inertia = np.zeros((3, 3)) if measured.inertia is None else measured.inertia
+    body = RigidBody(measured.mass, measured.center_of_mass, inertia)  # a point mass if unknown
     if end_effector is None:
         return body.to_pin()
     mass = body.mass - end_effector.mass

@@ -101,11 +101,12 @@ class RosControllerFormat(ExportFormat):
 
     ``bias_target`` names the controller when it has no sensor bias (None: it has one);
     ``tilt_target`` says where the controller takes gravity from when it cannot hold the
-    estimated base tilt (None: it can).
+    estimated base tilt (None: it can); ``header_lines`` explain the format's parameters.
     """
 
     bias_target: ClassVar[str | None] = None
     tilt_target: ClassVar[str | None] = None
+    header_lines: ClassVar[tuple[str, ...]] = ()
 
     def header(self, request: ExportRequest) -> list[str]:
         calibration = request.calibration
@@ -113,6 +114,7 @@ class RosControllerFormat(ExportFormat):
             f"ftkin calibration exported for {self.name}",
             f"tool mass {float(calibration.tool_mass):.6g} kg (g = {float(calibration.g):.6g} "
             f"m/s²), weight {float(calibration.tool_weight):.6g} N, COM in the sensor frame [m]",
+            *self.header_lines,
         ]
 
     def notes(self, request: ExportRequest) -> list[str]:
@@ -177,12 +179,9 @@ class GravityCompensationExport(RosControllerFormat):
     )
     options = (FRAME_ID, WORLD_FRAME, NODE_NAME)
     bias_target = "the GravityCompensation filter"
-
-    def header(self, request: ExportRequest) -> list[str]:
-        return [
-            *super().header(request),
-            "gravity_field = tilted gravity in world_frame, tool weight = mass · gravity_field",
-        ]
+    header_lines = (
+        "gravity_field = tilted gravity in world_frame, tool weight = mass · gravity_field",
+    )
 
     def document(self, request: ExportRequest) -> dict:
         calibration = request.calibration
@@ -222,14 +221,11 @@ class FtCalibExport(RosControllerFormat):
     )
     options = (FRAME_ID,)
     tilt_target = "ft_calib takes gravity from an IMU/TF, not from this file"
-
-    def header(self, request: ExportRequest) -> list[str]:
-        return [
-            *super().header(request),
-            "bias = [fx, fy, fz, tx, ty, tz] subtracted from the raw reading; the model is",
-            "raw = bias + [m·g_S; com × m·g_S] with g_S the gravity acceleration (pointing down) "
-            "in the sensor frame",
-        ]
+    header_lines = (
+        "bias = [fx, fy, fz, tx, ty, tz] subtracted from the raw reading; the model is",
+        "raw = bias + [m·g_S; com × m·g_S] with g_S the gravity acceleration (pointing down) "
+        "in the sensor frame",
+    )
 
     def document(self, request: ExportRequest) -> dict:
         calibration, frame_id = request.calibration, sensor_frame_id(request)

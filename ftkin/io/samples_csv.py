@@ -31,9 +31,9 @@ refused.
 
 from __future__ import annotations
 
-import functools
 import logging
 import re
+from collections import Counter
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -58,8 +58,11 @@ QUATERNION_COLUMNS = ("qw", "qx", "qy", "qz")
 POSE_COLUMN = "pose"
 _GENERIC_JOINT = re.compile(r"^q(\d+)$")
 _DEGREES_THRESHOLD = 2.0 * np.pi + 0.01
-_ROS_WRENCH = re.compile(r"^(?:.*[./_])?(force|torque)[._]([xyz])$", re.IGNORECASE)
-_TORQUE_T = {"tx": "mx", "ty": "my", "tz": "mz"}
+_ROS_WRENCH = re.compile(r"^(?:(?:.*[./_])?(force|torque)[._]|t)([xyz])$", re.IGNORECASE)
+_ANGLE_COLUMNS = {
+    "euler": (EULER_COLUMNS, "Euler angle"),
+    "quaternion": (QUATERNION_COLUMNS, "quaternion"),
+}
 MAX_POSE_ID = MAX_ID
 """Largest pose id magnitude: every integer up to it is exact in a float64 cell."""
 
@@ -71,19 +74,14 @@ def wrench_aliases(header) -> dict[str, str]:
     ``field.wrench.torque.z``, any prefix ending in ``.``, ``_`` or ``/``) and
     ``tx,ty,tz`` for the torques.
     """
-    aliases = {}
-    for name in header:
-        match = _ROS_WRENCH.match(name)
-        if match:
-            aliases[name] = ("f" if match.group(1).lower() == "force" else "m") + match.group(
-                2
-            ).lower()
-        elif name.lower() in _TORQUE_T:
-            aliases[name] = _TORQUE_T[name.lower()]
-    targets = list(aliases.values())
-    return {
-        old: new for old, new in aliases.items() if new not in header and targets.count(new) == 1
+    matches = {name: _ROS_WRENCH.match(name) for name in header}
+    aliases = {
+        name: ("f" if (match[1] or "").lower() == "force" else "m") + match[2].lower()
+        for name, match in matches.items()
+        if match
     }
+    counts = Counter(aliases.values())
+    return {old: new for old, new in aliases.items() if new not in header and counts[new] == 1}
 
 
 def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
@@ -93,24 +91,22 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
         InvalidSamples: none found, several mixed, or an incomplete set.
     """
     header = table.header
-    found = {}
-    euler = [name for name in EULER_COLUMNS if name in header]
-    if euler:
-        found["euler"] = euler
-    quaternion = [name for name in QUATERNION_COLUMNS if name in header]
-    if quaternion:
-        found["quaternion"] = quaternion
+    angles = {
+        kind: [name for name in names if name in header]
+        for kind, (names, _) in _ANGLE_COLUMNS.items()
+    }
     generic = sorted(
         (name for name in header if _GENERIC_JOINT.match(name)), key=lambda n: int(n[1:])
     )
     named = [name for name in (joint_names or []) if name in header]
-    if euler or quaternion:  # joint columns of any arm would be mixed in
+    if any(angles.values()):  # joint columns of any arm would be mixed in
         named = named or [name for name in header if "joint" in name.lower()]
     if named and generic:
         raise InvalidSamples(
             f"both URDF joint-name columns {named} and generic columns {generic}; use one",
             table.source,
         )
+    found = {kind: columns for kind, columns in angles.items() if columns}
     if named or generic:
         found["joints"] = named or generic
     if len(found) > 1:
@@ -122,24 +118,21 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
         )
     if not found:
         _no_orientation(table, joint_names)
-    kind, columns = next(iter(found.items()))
-    if kind == "euler":
-        missing_columns(table, EULER_COLUMNS, "Euler angle")
-        return kind, list(EULER_COLUMNS)
-    if kind == "quaternion":
-        missing_columns(table, QUATERNION_COLUMNS, "quaternion")
-        return kind, list(QUATERNION_COLUMNS)
+    kind = next(iter(found))
+    if kind in _ANGLE_COLUMNS:
+        columns, what = _ANGLE_COLUMNS[kind]
+        missing_columns(table, columns, what)
+        return kind, list(columns)
     if named:
         missing_columns(table, joint_names, "joint")
         return kind, list(joint_names)
-    if joint_names is not None:
-        expected = [f"q{i + 1}" for i in range(len(joint_names))]
-        if generic != expected:
-            raise InvalidSamples(
-                f"joint columns {generic} do not match the arm's {len(joint_names)} joints; "
-                f"expected {expected} or the URDF names {list(joint_names)}",
-                table.source,
-            )
+    expected = [f"q{i + 1}" for i in range(len(joint_names or ()))]
+    if joint_names is not None and generic != expected:
+        raise InvalidSamples(
+            f"joint columns {generic} do not match the arm's {len(joint_names)} joints; "
+            f"expected {expected} or the URDF names {list(joint_names)}",
+            table.source,
+        )
     return kind, generic
 
 
@@ -170,29 +163,21 @@ def check_radians(table: Table, columns, values: np.ndarray) -> None:
         table,
         values,
         _DEGREES_THRESHOLD,
-        lambda column, value: (
-            f"joint column {columns[column]!r} holds {value:g}, outside ±2π: joint angles must be "
-            "in radians "
-            "(these look like degrees)"
+        lambda row, column: (
+            f"joint column {columns[column]!r} holds {values[row, column]:g}, outside ±2π: joint "
+            "angles must be in radians (these look like degrees)"
         ),
     )
 
 
 def _refuse_beyond(table: Table, values: np.ndarray, limit: float, describe) -> None:
-    """:class:`InvalidSamples` at the first cell of ``values`` beyond ``±limit``: ``describe(column,
-    value)``, its line.
+    """:class:`InvalidSamples` at the first cell of ``values`` ``(N, k)`` beyond ``±limit``:
+    ``describe(row, column)``, its line.
     """
     bad = np.argwhere(np.abs(values) > limit)
     if bad.size:
         row, column = bad[0]
-        raise InvalidSamples(describe(column, values[row, column]), table.source, table.lines[row])
-
-
-@functools.lru_cache(maxsize=1)
-def _bundled_joint_names() -> tuple[str, ...]:
-    from ..kinematics.arm import Arm
-
-    return tuple(Arm.default().joint_names)
+        raise InvalidSamples(describe(row, column), table.source, table.lines[row])
 
 
 def warn_outside_limits(table: Table, columns, values: np.ndarray, arm) -> None:
@@ -202,22 +187,20 @@ def warn_outside_limits(table: Table, columns, values: np.ndarray, arm) -> None:
     lower, upper = np.asarray(arm.lower_limits, float), np.asarray(arm.upper_limits, float)
     if lower.shape != (values.shape[1],):
         return
-    for c, name in enumerate(columns):
-        below, above = values[:, c] < lower[c] - 1e-9, values[:, c] > upper[c] + 1e-9
-        count = int(np.sum(below | above))
-        if count:
-            row = int(np.flatnonzero(below | above)[0])
-            logger.warning(
-                "%s: joint column %r has %d value(s) outside the URDF limits [%g, %g] rad (first "
-                "%g at line %d)",
-                table.source,
-                name,
-                count,
-                lower[c],
-                upper[c],
-                values[row, c],
-                table.lines[row],
-            )
+    outside = (values < lower - 1e-9) | (values > upper + 1e-9)
+    for c in np.flatnonzero(outside.any(axis=0)):
+        row = int(np.argmax(outside[:, c]))
+        logger.warning(
+            "%s: joint column %r has %d value(s) outside the URDF limits [%g, %g] rad (first "
+            "%g at line %d)",
+            table.source,
+            columns[c],
+            int(np.count_nonzero(outside[:, c])),
+            lower[c],
+            upper[c],
+            values[row, c],
+            table.lines[row],
+        )
 
 
 @dataclass(frozen=True)
@@ -253,19 +236,13 @@ def orientations_from_table(table: Table, arm=None) -> TableOrientations:
 
     if arm is None and not any(name in table.header for name in EULER_COLUMNS + QUATERNION_COLUMNS):
         arm = Arm.default()
-    if (
-        arm is None
-    ):  # Euler or quaternion columns: joint columns of the bundled arm would be mixed in
-        detect_orientation(table, _bundled_joint_names())
+    # with Euler or quaternion columns (no arm), any joint column is refused as mixed in
     kind, columns = detect_orientation(table, arm.joint_names if arm is not None else None)
     values = table.floats(columns)
+    convert = {"euler": euler_zyx_deg_to_matrix, "quaternion": quaternion_to_matrix}.get(kind)
     try:
-        if kind == "euler":
-            return TableOrientations(
-                euler_zyx_deg_to_matrix(values).reshape(-1, 3, 3), kind, columns
-            )
-        if kind == "quaternion":
-            return TableOrientations(quaternion_to_matrix(values).reshape(-1, 3, 3), kind, columns)
+        if convert is not None:
+            return TableOrientations(convert(values).reshape(-1, 3, 3), kind, columns)
         check_radians(table, columns, values)
         warn_outside_limits(table, columns, values, arm)
         return TableOrientations(arm.rotation_sensor_to_base(values), kind, columns, values, arm)
@@ -279,24 +256,23 @@ def pose_ids_from_table(table: Table) -> np.ndarray | None:
     """The integer ``pose`` column ``(N,)``, or None when the table has none."""
     if POSE_COLUMN not in table.header:
         return None
-    pose_ids = table.floats([POSE_COLUMN])[:, 0]
-    huge = np.flatnonzero(np.abs(pose_ids) > MAX_POSE_ID)
-    if huge.size:
-        row = int(huge[0])
-        raise InvalidSamples(
+    pose_ids = table.floats([POSE_COLUMN])
+    _refuse_beyond(
+        table,
+        pose_ids,
+        MAX_POSE_ID,
+        lambda row, _: (
             f"pose id {table.rows[row][table.column_index(POSE_COLUMN)].strip()!r} is too large; "
-            "expected an integer "
-            f"of magnitude at most 2**53",
-            table.source,
-            table.lines[row],
-        )
-    fractional = np.flatnonzero(pose_ids != np.round(pose_ids))
-    if fractional.size:
-        row = int(fractional[0])
-        raise InvalidSamples(
-            f"pose id {float(pose_ids[row])!r} is not an integer", table.source, table.lines[row]
-        )
-    return pose_ids.astype(np.int64)
+            "expected an integer of magnitude at most 2**53"
+        ),
+    )
+    _refuse_beyond(  # a fractional part
+        table,
+        pose_ids - np.round(pose_ids),
+        0.0,
+        lambda row, _: f"pose id {float(pose_ids[row, 0])!r} is not an integer",
+    )
+    return pose_ids[:, 0].astype(np.int64)
 
 
 def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
@@ -305,8 +281,9 @@ def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
         table,
         wrenches,
         MAX_WRENCH,
-        lambda column, value: (
-            f"column {WRENCH_CHANNELS[column]!r} holds {value:g}, beyond ±{MAX_WRENCH:g}: expected "
+        lambda row, column: (
+            f"column {WRENCH_CHANNELS[column]!r} holds {wrenches[row, column]:g}, beyond "
+            f"±{MAX_WRENCH:g}: expected "
             "N (fx, fy, fz) and N·m "
             "(mx, my, mz), not raw counts"
         ),
@@ -354,25 +331,26 @@ def smooth_motion(signal: np.ndarray) -> bool:
     return bool(first > 0 and np.median(np.linalg.norm(np.diff(steps, axis=0), axis=1)) < first / 2)
 
 
-def still_rows(table: Table, orientations: TableOrientations, times, parameters):
-    """The still segments of a continuous recording: ``(search, segment of each row or -1)``.
+def still_part(table: Table, orientations: TableOrientations, times, parameters):
+    """The still segments of a continuous recording: ``(table, orientations, times, search)`` of
+    the rows inside a segment, the table with a ``pose`` column (the segment number).
 
-    None when the table is not a recording: its times are not a recorder's
-    (:func:`uniformly_sampled`), or no two consecutive rows hold still and the rows are not a
-    smooth motion either (:func:`smooth_motion`): one reading per pose, each row its own pose.
+    The inputs as they are (search None) when the table is not a recording: its times are not a
+    recorder's (:func:`uniformly_sampled`), or no two consecutive rows hold still and the rows are
+    not a smooth motion either (:func:`smooth_motion`): one reading per pose, each row its own
+    pose.
 
     Raises:
         InvalidSamples: the arm moves and no still segment is long enough.
     """
     if len(times) < 3 or np.any(np.diff(times) <= 0) or not uniformly_sampled(times):
-        return None
-    joints = orientations.joint_positions is not None
-    signal = orientations.joint_positions if joints else orientations.rotations.reshape(-1, 9)
-    quantity = "joint speed" if joints else "orientation speed"
+        return table, orientations, times, None
+    positions = orientations.joint_positions
+    signal = orientations.rotations.reshape(-1, 9) if positions is None else positions
+    quantity = "orientation speed" if positions is None else "joint speed"
     search = find_static_segments(times, signal, parameters, quantity)
-    held = np.any(search.still[1:] & search.still[:-1])
-    if not (held or smooth_motion(signal)):
-        return None
+    if not (np.any(search.still[1:] & search.still[:-1]) or smooth_motion(signal)):
+        return table, orientations, times, None
     if not search.segments:
         raise InvalidSamples(
             f"a continuous recording ({times[-1] - times[0]:.3g} s) with no usable still segment: "
@@ -381,21 +359,18 @@ def still_rows(table: Table, orientations: TableOrientations, times, parameters)
             "motion with 'calibrate --dynamic'",
             table.source,
         )
-    return search, segment_index(times, search.segments)
-
-
-def _static_part(table: Table, orientations: TableOrientations, index: np.ndarray):
-    """The rows inside a segment, with a ``pose`` column (the segment number)."""
+    index = segment_index(times, search.segments)
     keep = np.flatnonzero(index >= 0)
     rows = [[*table.rows[i], str(int(index[i]))] for i in keep]
     lines = [table.lines[i] for i in keep]
     table = replace(table, header=[*table.header, POSE_COLUMN], rows=rows, lines=lines)
-    positions = orientations.joint_positions
-    return table, replace(
+    orientations = replace(
         orientations,
         rotations=orientations.rotations[keep],
         joint_positions=None if positions is None else positions[keep],
     )
+    logger.info("%s: continuous recording, %s", table.source, search.describe())
+    return table, orientations, times[keep], search
 
 
 def samples_from_table(
@@ -412,13 +387,9 @@ def samples_from_table(
     missing_columns(table, WRENCH_CHANNELS, "wrench")
     orientations = orientations_from_table(table, arm)
     times = times_from_table(table)
-    found = None
+    search = None
     if segments is not None and times is not None and POSE_COLUMN not in table.header:
-        found = still_rows(table, orientations, times, segments)
-    if found is not None:
-        table, orientations = _static_part(table, orientations, found[1])
-        times = times[found[1] >= 0]
-        logger.info("%s: continuous recording, %s", table.source, found[0].describe())
+        table, orientations, times, search = still_part(table, orientations, times, segments)
     wrenches = table.floats(WRENCH_CHANNELS)
     check_wrench_magnitude(table, wrenches)
     pose_ids = pose_ids_from_table(table)
@@ -433,7 +404,6 @@ def samples_from_table(
             orientations.rotations,
             times,
         )
-    search = None if found is None else found[0]
     return LoadedSamples(samples, table, orientations.kind, orientations.columns, search)
 
 

@@ -46,8 +46,8 @@ class SegmentParameters:
     def __post_init__(self):
         for name in ("speed_threshold", "min_duration", "speed_window"):
             object.__setattr__(self, name, as_positive(getattr(self, name), name))
-        settle_time = as_in_range(self.settle_time, "settle_time", 0.0, 1e6, "s")
-        object.__setattr__(self, "settle_time", settle_time)
+        settle = as_in_range(self.settle_time, "settle_time", 0.0, 1e6, "s")
+        object.__setattr__(self, "settle_time", settle)
 
 
 @dataclass(frozen=True)
@@ -132,12 +132,8 @@ def joint_speed(times, joint_positions, window: float) -> np.ndarray:
         raise InvalidInput("times must be sorted (non-decreasing)")
     ahead = np.clip(times + window / 2, times[0], times[-1])
     behind = np.clip(times - window / 2, times[0], times[-1])
-    span = np.maximum(ahead - behind, 1e-12)
-    speed = np.zeros(len(times))
-    for column in q.T:
-        change = np.abs(np.interp(ahead, times, column) - np.interp(behind, times, column))
-        speed = np.maximum(speed, change / span)
-    return speed
+    change = [np.abs(np.interp(ahead, times, c) - np.interp(behind, times, c)) for c in q.T]
+    return np.max(change, axis=0, initial=0.0) / np.maximum(ahead - behind, 1e-12)
 
 
 def find_static_segments(

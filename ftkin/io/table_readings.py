@@ -16,7 +16,7 @@ from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.samples import Samples
 from ..exceptions import FtkinError
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
-from .csv_table import Table, rename_columns
+from .csv_table import Table, missing_columns, rename_columns
 from .samples_csv import (
     EULER_COLUMNS,
     QUATERNION_COLUMNS,
@@ -28,9 +28,11 @@ from .samples_csv import (
 )
 
 
-def _reading(name: str, fix: str, build) -> Reading:
+def _reading(name: str, fix: str, rotations, wrenches, pose_ids) -> Reading:
+    """The poses of the readings under ``rotations()`` (``R_BS``), or why they cannot be read."""
     try:
-        poses = build().pose_averages()
+        rotations = np.asarray(rotations()).reshape(-1, 3, 3)
+        poses = Samples(wrenches, rotations, pose_ids).pose_averages()
     except (FtkinError, ValueError) as error:
         return Reading(name, fix, None, failure=str(error).split(": ")[-1][:80])
     return Reading(name, fix, poses)
@@ -46,6 +48,7 @@ def table_readings(table: Table, arm=None) -> list[Reading]:
     from ..kinematics.arm import Arm
 
     table = rename_columns(table, wrench_aliases(table.header))
+    missing_columns(table, WRENCH_CHANNELS, "wrench")
     wrenches = table.floats(WRENCH_CHANNELS)
     check_wrench_magnitude(table, wrenches)
     pose_ids = pose_ids_from_table(table)
@@ -55,39 +58,31 @@ def table_readings(table: Table, arm=None) -> list[Reading]:
     kind, columns = detect_orientation(table, arm.joint_names if arm is not None else None)
     values = table.floats(columns)
 
-    def from_rotations(rotations):
-        return Samples(wrenches, np.asarray(rotations).reshape(-1, 3, 3), pose_ids)
-
+    mistakes = {  # the orientation columns read the way people get them wrong
+        "euler": (
+            "Euler angles in radians",
+            "give alpha, beta, gamma in degrees (multiply by 180/π)",
+            lambda: euler_zyx_deg_to_matrix(np.rad2deg(values)),
+        ),
+        "quaternion": (
+            "the quaternion as x,y,z,w",
+            "name the columns qx,qy,qz,qw (the order they hold)",
+            lambda: quaternion_to_matrix(values[:, [3, 0, 1, 2]]),
+        ),
+        "joints": (
+            "joint angles in degrees",
+            "give the joint angles in radians (multiply by π/180)",
+            lambda: arm.rotation_sensor_to_base(np.deg2rad(values)),
+        ),
+    }
     given = _reading(
         "the data as given",
         "",
-        lambda: from_rotations(orientations_from_table(table, arm).rotations),
+        lambda: orientations_from_table(table, arm).rotations,
+        wrenches,
+        pose_ids,
     )
-    readings = [given]
-    if kind == "euler":
-        readings.append(
-            _reading(
-                "Euler angles in radians",
-                "give alpha, beta, gamma in degrees (multiply by 180/π)",
-                lambda: from_rotations(euler_zyx_deg_to_matrix(np.rad2deg(values))),
-            )
-        )
-    elif kind == "quaternion":
-        readings.append(
-            _reading(
-                "the quaternion as x,y,z,w",
-                "name the columns qx,qy,qz,qw (the order they hold)",
-                lambda: from_rotations(quaternion_to_matrix(values[:, [3, 0, 1, 2]])),
-            )
-        )
-    else:
-        readings.append(
-            _reading(
-                "joint angles in degrees",
-                "give the joint angles in radians (multiply by π/180)",
-                lambda: from_rotations(arm.rotation_sensor_to_base(np.deg2rad(values))),
-            )
-        )
+    readings = [given, _reading(*mistakes[kind], wrenches, pose_ids)]
     if given.poses is not None:
         readings.extend(wrench_readings(given.poses))
     return readings

@@ -62,12 +62,13 @@ def _numeric(table: Table, name: str) -> bool:
     return True
 
 
-def time_column(table: Table) -> tuple[str, float] | None:
-    """The time column's name and its factor to seconds (``t``, or its one numeric alias), or
-    None.
+def times_from_table(table: Table) -> np.ndarray | None:
+    """The ``t`` column ``(N,)`` [s] (or its one numeric alias, converted), or None when the table
+    has none.
     """
     if TIME_COLUMN in table.header:
-        return TIME_COLUMN, 1.0
+        # ftkin's own column: a span beyond a year is refused by Samples, naming the likely unit
+        return table.floats([TIME_COLUMN])[:, 0]
     found = [
         name for name in table.header if name.lower() in TIME_ALIASES and _numeric(table, name)
     ]
@@ -77,21 +78,8 @@ def time_column(table: Table) -> tuple[str, float] | None:
         raise InvalidSamples(
             f"several time columns {found}: name the one to use 't' (seconds)", table.source
         )
-    return found[0], TIME_ALIASES[found[0].lower()]
-
-
-def times_from_table(table: Table) -> np.ndarray | None:
-    """The ``t`` column ``(N,)`` [s] (or its one alias, converted), or None when the table has
-    none.
-    """
-    column = time_column(table)
-    if column is None:
-        return None
-    name, factor = column
+    name, factor = found[0], TIME_ALIASES[found[0].lower()]
     times = table.floats([name])[:, 0] * factor
-    if name == TIME_COLUMN:
-        # ftkin's own column: a span beyond a year is refused by Samples, naming the likely unit
-        return times
     span = float(np.ptp(times))
     if span > LONGEST_TIME_SPAN:
         logger.warning(

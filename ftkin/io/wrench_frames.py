@@ -32,9 +32,10 @@ def base_frame_names(arm) -> set[str]:
     """Names that denote the arm's base: :data:`BASE_FRAME_NAMES` and the frames fixed to the
     root.
     """
-    names = set(BASE_FRAME_NAMES)
-    names.update(frame.name for frame in arm.model.frames if frame.parentJoint == 0)
-    return names
+    return {
+        *BASE_FRAME_NAMES,
+        *(frame.name for frame in arm.model.frames if frame.parentJoint == 0),
+    }
 
 
 def wrenches_in_sensor_frame(

@@ -22,10 +22,8 @@ def _plain(value):
     """``value`` as plain Python (dict, list, str, int, float, bool, None), or
     :class:`InvalidInput`.
     """
-    if isinstance(value, np.ndarray):
+    if isinstance(value, (np.ndarray, np.generic)):
         value = value.tolist()
-    elif isinstance(value, np.generic):
-        value = value.item()
     if isinstance(value, dict):
         return {str(key): _plain(item) for key, item in value.items()}
     if isinstance(value, (list, tuple)):
@@ -39,13 +37,6 @@ def _plain(value):
     )
 
 
-def comment_lines(comments) -> list[str]:
-    """``#`` lines for ``comments`` (one per line of each comment)."""
-    return [
-        f"# {line}".rstrip() for comment in comments for line in str(comment).splitlines() or [""]
-    ]
-
-
 def yaml_text(tree: dict, comments=()) -> str:
     """``tree`` as a YAML document (ends with a newline), with ``comments`` as ``#`` lines above it.
 
@@ -57,4 +48,5 @@ def yaml_text(tree: dict, comments=()) -> str:
     body = yaml.safe_dump(
         _plain(tree), sort_keys=False, default_flow_style=None, allow_unicode=True, width=4096
     )
-    return "".join(f"{line}\n" for line in comment_lines(comments)) + body
+    lines = (line for comment in comments for line in str(comment).splitlines() or [""])
+    return "".join(f"# {line}".rstrip() + "\n" for line in lines) + body

@@ -238,3 +238,11 @@ def test_pure_noise_is_never_explained_by_a_convention(arm):
         if report.verdict in ("mistake", "suspect"):
             named.append(report.message)
     assert named == []
+
+
+def test_a_table_without_wrench_columns_is_refused_by_name(tmp_path):
+    """A missing wrench column is an ftkin error naming it (it was a bare ValueError)."""
+    path = tmp_path / "no_fx.csv"
+    path.write_text("alpha,beta,gamma,fy,fz,mx,my,mz\n0,0,0,2,3,0.1,0.2,0.3\n")
+    with pytest.raises(ftkin.InvalidSamples, match=r"missing wrench column\(s\) \['fx'\]"):
+        ftkin.diagnose_samples(path)
