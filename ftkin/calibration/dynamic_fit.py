@@ -30,13 +30,9 @@ from .log_cholesky import (
     log_cholesky_jacobian,
     parameters_from_log_cholesky,
 )
-from .model import gravity_in_sensor
+from .model import COMPONENT_NAMES, gravity_in_sensor
 from .regressor import gravity_regressor
 
-BIAS_NAMES = tuple(
-    f"{block}[{axis}]" for block in ("force_offset", "torque_offset") for axis in "xyz"
-)
-TILT_NAMES = ("base_tilt[u]", "base_tilt[v]")
 THETA_NAMES = ("mass", "first_moment[x]", "first_moment[y]", "first_moment[z]") + tuple(
     f"inertia_about_sensor[{name[1:].lower()}]" for name in INERTIAL_PARAMETER_NAMES[4:]
 )
@@ -84,7 +80,8 @@ class DynamicProblem:
     @property
     def names(self) -> tuple[str, ...]:
         """Names of ``x = [bias, tilt, θ_free]``."""
-        return BIAS_NAMES + TILT_NAMES + tuple(THETA_NAMES[i] for i in self.free)
+        free = tuple(THETA_NAMES[i] for i in self.free)
+        return COMPONENT_NAMES[3:9] + ("base_tilt[u]", "base_tilt[v]") + free
 
     def theta(self, theta_free: np.ndarray) -> np.ndarray:
         """The full θ (10,) from its free entries."""
@@ -113,13 +110,24 @@ class DynamicProblem:
         out[:, :, 8:] = -full[:, :, list(self.free)]
         return out
 
-    def whitened_residuals(self, x: np.ndarray) -> np.ndarray:
-        """``(6N,)`` ``(measured − predicted) / σ``."""
-        return ((self.wrenches - self.predict(x)) / self.channel_std).ravel()
+    def whitened_residuals(self, x: np.ndarray, phi: bool = False) -> np.ndarray:
+        """``(6N,)`` ``(measured − predicted) / σ`` at ``x`` (θ-space, or φ-space with ``phi``)."""
+        predicted = self.predict(theta_space(x) if phi else x)
+        return ((self.wrenches - predicted) / self.channel_std).ravel()
 
-    def whitened_jacobian(self, x: np.ndarray) -> np.ndarray:
-        """``(6N, len(x))`` derivative of :meth:`whitened_residuals`."""
-        return (-self.jacobian(x) / self.channel_std[None, :, None]).reshape(-1, len(x))
+    def whitened_jacobian(self, x: np.ndarray, phi: bool = False) -> np.ndarray:
+        """``(6N, len(x))`` derivative of :meth:`whitened_residuals` (θ-space, or φ-space)."""
+        jac = (-self.jacobian(theta_space(x) if phi else x) / self.channel_std[:, None]).reshape(
+            -1, len(x)
+        )
+        if phi:
+            jac[:, 8:] = jac[:, 8:] @ log_cholesky_jacobian(x[8:])
+        return jac
+
+
+def theta_space(x_phi: np.ndarray) -> np.ndarray:
+    """``[bias, U, V, θ]`` of the φ-space ``x = [bias, U, V, φ]`` (all ten θ free)."""
+    return np.concatenate([x_phi[:8], parameters_from_log_cholesky(x_phi[8:])])
 
 
 def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
@@ -177,53 +185,22 @@ def fit_linear(problem: DynamicProblem) -> np.ndarray:
     return x0
 
 
-def fit_unconstrained(problem: DynamicProblem, x0: np.ndarray) -> np.ndarray:
-    """Stage 2: nonlinear weighted least squares over ``[bias, U, V, θ_free]``."""
+def fit_nonlinear(problem: DynamicProblem, x0: np.ndarray, phi: bool = False) -> np.ndarray:
+    """Stage 2 (``phi`` False) or 3: nonlinear weighted least squares from ``x0``.
+
+    Stage 2 runs over ``[bias, U, V, θ_free]``; stage 3 is the maximum likelihood over
+    ``[bias, U, V, φ]`` (all ten θ free) and returns the φ-space ``x``.
+    """
     from scipy.optimize import least_squares  # scipy loads where it is used
 
-    solution = least_squares(
+    return least_squares(
         problem.whitened_residuals,
         x0,
         jac=problem.whitened_jacobian,
+        args=(phi,),
         method="lm",
         xtol=1e-14,
         ftol=1e-14,
         gtol=1e-14,
-    )
-    return solution.x
-
-
-def theta_from_phi(phi: np.ndarray) -> np.ndarray:
-    """θ (10,) of log-Cholesky φ."""
-    return parameters_from_log_cholesky(phi)
-
-
-def fit_consistent(problem: DynamicProblem, x0_phi: np.ndarray) -> np.ndarray:
-    """Stage 3: maximum likelihood over ``[bias, U, V, φ]`` (all ten θ free); returns the φ-space
-    ``x``.
-    """
-
-    def to_theta_space(x):
-        return np.concatenate([x[:8], theta_from_phi(x[8:])])
-
-    def residuals(x):
-        return problem.whitened_residuals(to_theta_space(x))
-
-    def jacobian(x):
-        jac = problem.whitened_jacobian(to_theta_space(x))
-        jac[:, 8:] = jac[:, 8:] @ log_cholesky_jacobian(x[8:])
-        return jac
-
-    from scipy.optimize import least_squares
-
-    solution = least_squares(
-        residuals,
-        x0_phi,
-        jac=jacobian,
-        method="lm",
-        xtol=1e-14,
-        ftol=1e-14,
-        gtol=1e-14,
-        max_nfev=2000,
-    )
-    return solution.x
+        max_nfev=2000 if phi else None,
+    ).x
