@@ -82,8 +82,7 @@ def reading_signs(sensor_sign: int = 1, flip_axis: str | None = None) -> np.ndar
     """``(6,)`` factors ``±1`` that turn a raw reading into ftkin's convention (``signs · raw``)."""
     signs = np.full(6, float(check_sensor_sign(sensor_sign)))
     if check_flip_axis(flip_axis) is not None:
-        axis = "xyz".index(flip_axis)
-        signs[[axis, axis + 3]] *= -1.0
+        signs["xyz".index(flip_axis) :: 3] *= -1.0  # its force and torque channels
     return signs
 
 
@@ -185,28 +184,27 @@ def detect_sign_and_handedness(
         UnobservableParameters: the poses cannot determine the tool weight at all.
     """
     poses = samples.pose_averages() if isinstance(samples, Samples) else samples
-    check_sensor_sign(sensor_sign)
-    check_flip_axis(flip_axis)
     check_mount_mode(estimate_mount)
     expected = expected_gravity_direction(base_mount, expected_gravity)
-    costs = {}
-    alternatives = FLIP_AXES if len(poses) >= MIN_POSES_FOR_FLIP else (flip_axis,)
-    for alternative in alternatives:
-        forces = poses.wrenches[:, :3] * reading_signs(sensor_sign, alternative)[:3]
-        costs[alternative], _ = force_step_cost(poses.rotations, forces, estimate_mount)
+    # reading_signs checks sensor_sign and flip_axis before any result is formed
+    costs = {
+        alternative: force_step_cost(
+            poses.rotations,
+            poses.wrenches[:, :3] * reading_signs(sensor_sign, alternative)[:3],
+            estimate_mount,
+        )[0]
+        for alternative in (FLIP_AXES if len(poses) >= MIN_POSES_FOR_FLIP else (flip_axis,))
+    }
     best = min(costs, key=costs.get)
     corrected = replace(poses, wrenches=poses.wrenches * reading_signs(sensor_sign, flip_axis))
-    if estimate_mount == "none":
-        gravity = fit_linear(corrected, g).gravity_in_base
-    else:
-        gravity = mount_start(corrected, g)[1].gravity_in_base
+    fit = fit_linear(corrected, g) if estimate_mount == "none" else mount_start(corrected, g)[1]
+    gravity = fit.gravity_in_base
     angle = np.nan
     if expected is not None and np.linalg.norm(gravity) > 0.0:
         cosine = float(gravity @ expected / np.linalg.norm(gravity))
         angle = float(np.rad2deg(np.arccos(np.clip(cosine, -1.0, 1.0))))
-    equivalent = ()
-    if estimate_mount != "none" and best in ("x", "y"):
-        equivalent = ("y",) if best == "x" else ("x",)
+    # with a yaw estimated, a reversed x axis reads as a reversed y axis turned 180° about z
+    equivalent = {"x": ("y",), "y": ("x",)}.get(best, ()) if estimate_mount != "none" else ()
     return ConventionCheck(costs, flip_axis, best, angle, gravity, equivalent, estimate_mount)
 
 

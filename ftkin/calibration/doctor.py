@@ -37,6 +37,7 @@ import numpy as np
 
 from ..exceptions import UnobservableParameters
 from ..kinematics.rotations import wrenches_base_to_sensor
+from .conventions import reading_signs
 from .linear import fit_linear
 from .model import STANDARD_GRAVITY, SensorModel
 from .observability import MIN_POSES
@@ -148,48 +149,38 @@ class ConventionReport:
 def wrench_readings(given: Samples | PoseAverages) -> list[Reading]:
     """Alternatives that change only the wrench: base frame, reaction, N·mm, one axis reversed."""
     poses = given.pose_averages() if isinstance(given, Samples) else given
-    rotations, wrenches = poses.rotations, poses.wrenches
-
-    def make(name, fix, new_wrenches, scale=None):
-        return Reading(
-            name,
-            fix,
-            replace(poses, wrenches=new_wrenches),
-            np.ones(6) if scale is None else np.asarray(scale, float),
-        )
-
+    wrenches = poses.wrenches
     out = [
-        make(
+        Reading(
             "the wrench in the base frame",
             "give the wrench in the sensor frame (rotate it by R_BS^T)",
-            wrenches_base_to_sensor(rotations, wrenches),
+            replace(poses, wrenches=wrenches_base_to_sensor(poses.rotations, wrenches)),
         ),
-        make(
+        Reading(
             "the readings negated (the reaction)",
             "calibrate with --sensor-sign -1 (the sensor reports the reaction, not the "
             "load), or with --base-mount ceiling if the robot hangs from a ceiling",
-            -wrenches,
+            replace(poses, wrenches=-wrenches),
         ),
-        make(
+        Reading(
             "torques in N·mm",
             "give the torques in N·m (divide mx, my, mz by 1000)",
-            wrenches * [1, 1, 1, 1e-3, 1e-3, 1e-3],
-            [1, 1, 1, 1e3, 1e3, 1e3],
+            replace(poses, wrenches=wrenches * [1, 1, 1, 1e-3, 1e-3, 1e-3]),
+            np.array([1, 1, 1, 1e3, 1e3, 1e3], dtype=float),
         ),
     ]
-    for k, axis in enumerate("xyz"):
+    for axis in "xyz":
         others = [a for a in "xyz" if a != axis]
-        handed = np.ones(6)
-        handed[k] = -1.0
-        handed[[3 + i for i in range(3) if i != k]] = -1.0
+        # a mirror image: the axis reversed (its force and torque) with every torque negated
+        handed = reading_signs(1, axis) * [1, 1, 1, -1, -1, -1]
         out.append(
-            make(
+            Reading(
                 f"the sensor's {axis} axis reversed",
                 f"calibrate with --flip-axis {axis} (flip_axis={axis!r}: negates f{axis} and "
                 f"m{axis}; a true mirror image negates f{axis}, m{others[0]} and m{others[1]} "
                 "instead: static data cannot tell "
                 "the two apart, they differ in the sign of the centre of mass)",
-                wrenches * handed,
+                replace(poses, wrenches=wrenches * handed),
             )
         )
     return out
@@ -245,19 +236,12 @@ def diagnose_readings(readings: list[Reading]) -> ConventionReport:
     # the best reading by a scale-free measure sets the per-channel noise of all
     best = min(valid, key=lambda fit: float(np.sum(np.log(fit.rss / channel_dof + floor))))
     variance = best.rss / channel_dof + floor
-    fits = [
-        fit
-        if fit.rss is None
-        else ReadingFit(
-            fit.reading,
-            fit.model,
-            fit.rss,
-            float(np.sum(fit.rss / variance)),
-            explained=fit.explained,
+    return _verdict(
+        tuple(
+            fit if fit.rss is None else replace(fit, chi_square=float(np.sum(fit.rss / variance)))
+            for fit in fits
         )
-        for fit in fits
-    ]
-    return _verdict(tuple(fits))
+    )
 
 
 def _verdict(fits: tuple[ReadingFit, ...]) -> ConventionReport:

@@ -141,8 +141,7 @@ class SensorModel:
     @property
     def base_tilt_deg(self) -> tuple[float, float]:
         """Base tilt ``(U, V)`` [deg]."""
-        tilt_u, tilt_v = self.base_tilt
-        return float(np.rad2deg(tilt_u)), float(np.rad2deg(tilt_v))
+        return tuple(float(np.rad2deg(angle)) for angle in self.base_tilt)
 
     @property
     def bias(self) -> np.ndarray:
@@ -252,9 +251,10 @@ class FloatModel:
 
     def set(self, gravity_in_base, center_of_mass, bias) -> None:
         """Use ``a`` (3,) [N], ``P`` (3,) [m] and the bias ``[F0, M0]`` (6,) [N, N·m]."""
-        self._gravity = tuple(np.asarray(gravity_in_base, dtype=float).tolist())
-        self._com = tuple(np.asarray(center_of_mass, dtype=float).tolist())
-        self._bias = tuple(np.asarray(bias, dtype=float).tolist())
+        self._gravity, self._com, self._bias = (
+            tuple(np.asarray(values, dtype=float).tolist())
+            for values in (gravity_in_base, center_of_mass, bias)
+        )
 
     def contact(self, rotation_rows, raw) -> tuple[float, ...]:
         """``R_BS.tolist()`` and six raw floats [N, N·m] → the six contact floats."""

@@ -222,6 +222,4 @@ def rotation_to_rpy(rotation) -> np.ndarray:
     """URDF roll-pitch-yaw [rad] of a rotation ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
     r = np.asarray(rotation, dtype=float)
     pitch = np.arctan2(-r[2, 0], np.hypot(r[0, 0], r[1, 0]))
-    roll = np.arctan2(r[2, 1], r[2, 2])
-    yaw = np.arctan2(r[1, 0], r[0, 0])
-    return np.array([roll, pitch, yaw])
+    return np.array([np.arctan2(r[2, 1], r[2, 2]), pitch, np.arctan2(r[1, 0], r[0, 0])])

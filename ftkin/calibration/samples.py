@@ -38,36 +38,27 @@ LONG_TIME_SPAN = 7 * 86400.0
 _UNITS = (("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9))
 
 
-def _likely_unit(span: float, smallest: float, largest: float) -> tuple[str | None, float]:
-    """The unit that makes reading times plausible: the one in which every |time| is an epoch stamp
-    (seconds since
-    1970 in 2001–2286), else the unit bringing the span nearest ten minutes (in decades) within a
-    week.
-    """
-    for name, factor in _UNITS:
-        if 1e9 <= smallest / factor and largest / factor < 1e10:
-            return name, factor
-    candidates = [
-        (abs(np.log10(span / factor / 600.0)), name, factor)
-        for name, factor in _UNITS
-        if span / factor <= LONG_TIME_SPAN
-    ]
-    return (min(candidates)[1:]) if candidates else (None, 1.0)
-
-
 def check_time_span(times: np.ndarray) -> None:
     """Refuse reading times spanning more than a year, warn beyond a week: ``t`` is in seconds, not
     ms, µs or ns.
+
+    The hint names the unit in which every |time| is an epoch stamp (seconds since 1970 in
+    2001–2286), else the unit bringing the span nearest ten minutes (in decades) within a week.
     """
-    span = float(np.max(times) - np.min(times)) if len(times) else 0.0
+    span = float(np.ptp(times))
     if span <= LONG_TIME_SPAN:
         return
-    name, factor = _likely_unit(span, float(np.min(np.abs(times))), float(np.max(np.abs(times))))
-    hint = f"; they look like {name} (divide by {factor:g}: {span / factor:.4g} s)" if name else ""
-    message = (
-        f"the reading times span {span:.4g} s ({span / 86400.0:.4g} days): t must be in "
-        f"seconds{hint}"
+    smallest, largest = float(np.min(np.abs(times))), float(np.max(np.abs(times)))
+    units = [unit for unit in _UNITS if 1e9 <= smallest / unit[1] and largest / unit[1] < 1e10]
+    units = units or sorted(
+        (unit for unit in _UNITS if span / unit[1] <= LONG_TIME_SPAN),
+        key=lambda unit: abs(np.log10(span / unit[1] / 600.0)),
     )
+    message = (
+        f"the reading times span {span:.4g} s ({span / 86400.0:.4g} days): t must be in seconds"
+    )
+    for name, factor in units[:1]:
+        message += f"; they look like {name} (divide by {factor:g}: {span / factor:.4g} s)"
     if span > LONGEST_TIME_SPAN:
         raise InvalidSamples(message)
     logger.warning(message)
@@ -212,8 +203,8 @@ class Samples:
     @classmethod
     def from_quaternions(cls, quaternions_wxyz, wrenches, pose_ids=None, times=None) -> Samples:
         """From ``(N, 4)`` unit quaternions ``[qw, qx, qy, qz]`` of the sensor in the base frame."""
-        rotations = quaternion_to_matrix(quaternions_wxyz)
-        return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids, times=times)
+        rotations = quaternion_to_matrix(quaternions_wxyz).reshape(-1, 3, 3)
+        return cls(wrenches, rotations, pose_ids, times=times)
 
     @classmethod
     def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None, times=None) -> Samples:
@@ -234,22 +225,18 @@ class Samples:
             self.pose_ids, return_index=True, return_inverse=True, return_counts=True
         )
         order = np.argsort(first)  # keep order of first appearance
-        rank = np.empty_like(order)
-        rank[order] = np.arange(len(order))
-        group = rank[inverse]
-        counts = counts[order]
-        sums = np.zeros((len(unique), 6))
-        np.add.at(sums, group, self.wrenches)
-        means = sums / counts[:, None]
-        squares = np.zeros((len(unique), 6))
-        np.add.at(squares, group, (self.wrenches - means[group]) ** 2)
+        group, counts = np.argsort(order)[inverse], counts[order]
+
+        def total(values: np.ndarray) -> np.ndarray:  # the sum of values over each pose
+            out = np.zeros((len(unique),) + values.shape[1:])
+            np.add.at(out, group, values)
+            return out
+
+        means = total(self.wrenches) / counts[:, None]
         with np.errstate(invalid="ignore", divide="ignore"):
-            spread = np.sqrt(squares / (counts[:, None] - 1))
-        rotation_sums = np.zeros((len(unique), 3, 3))
-        np.add.at(rotation_sums, group, self.rotations)
-        u, _, vt = np.linalg.svd(rotation_sums)
-        det = np.linalg.det(u @ vt)
-        u[:, :, 2] *= det[:, None]
+            spread = np.sqrt(total((self.wrenches - means[group]) ** 2) / (counts[:, None] - 1))
+        u, _, vt = np.linalg.svd(total(self.rotations))
+        u[:, :, 2] *= np.linalg.det(u @ vt)[:, None]
         mean_rotations = u @ vt
         cosines = (np.einsum("nij,nij->n", mean_rotations[group], self.rotations) - 1.0) / 2.0
         deviation = np.arccos(np.clip(cosines, -1.0, 1.0))
@@ -261,11 +248,7 @@ class Samples:
                 f"{np.rad2deg(MAX_POSE_SPREAD):.0f}°): a pose id must "
                 "group readings of one static pose; check the pose column"
             )
-        pose_times = None
-        if self.times is not None:
-            time_sums = np.zeros(len(unique))
-            np.add.at(time_sums, group, self.times)
-            pose_times = time_sums / counts
+        pose_times = None if self.times is None else total(self.times) / counts
         return PoseAverages(unique[order], mean_rotations, means, counts, spread, pose_times)
 
 
