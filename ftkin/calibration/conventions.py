@@ -55,12 +55,6 @@ MIN_POSES_FOR_FLIP = 6
 fits).
 """
 
-_EXPECTED = {
-    "floor": np.array([0.0, 0.0, -1.0]),
-    "ceiling": np.array([0.0, 0.0, 1.0]),
-    "wall": None,
-}
-
 
 def check_sensor_sign(sensor_sign) -> int:
     """``sensor_sign`` as ``+1`` or ``-1``, else :class:`InvalidInput`."""
@@ -104,7 +98,11 @@ def expected_gravity_direction(
         if norm == 0.0:
             raise InvalidInput("expected_gravity must be a non-zero direction in the base frame")
         return direction / norm
-    return _EXPECTED[base_mount]
+    return (
+        None
+        if base_mount == "wall"
+        else np.array([0.0, 0.0, -1.0 if base_mount == "floor" else 1.0])
+    )
 
 
 @dataclass(frozen=True)
@@ -213,7 +211,6 @@ def check_conventions(
 ) -> None:
     """Raise :class:`~ftkin.exceptions.SuspectConvention` for a suspected reversed axis or sign."""
     if check.flip_suspected:
-        rms = {key: float(np.sqrt(value)) for key, value in check.flip_costs.items()}
         found = (
             f"the sensor's {check.best_flip} axis reversed"
             if check.best_flip
@@ -226,12 +223,11 @@ def check_conventions(
                 + " or ".join(check.equivalent_flips)
                 + " axis)"
             )
-        keyword = f"flip_axis={check.best_flip!r}"
         raise SuspectConvention(
-            f"the data fit with {found}: {flag} ({keyword}); force residual "
-            f"{rms[check.best_flip]:.3g} N against "
-            f"{rms[check.assumed_flip]:.3g} N as assumed (root sum of squares over the poses). A "
-            "mirrored axis "
+            f"the data fit with {found}: {flag} (flip_axis={check.best_flip!r}); force residual "
+            f"{np.sqrt(check.flip_costs[check.best_flip]):.3g} N against "
+            f"{np.sqrt(check.flip_costs[check.assumed_flip]):.3g} N as assumed (root sum of "
+            "squares over the poses). A mirrored axis "
             "(left-handed sensor frame) fits no rotation of the model; recalibrate with that "
             "setting",
             explanations=[
@@ -243,14 +239,14 @@ def check_conventions(
             flip_axis=check.best_flip,
         )
     if check.sign_suspected:
-        weight = ", ".join(f"{value:+.3g}" for value in check.gravity_in_base)
         other = "ceiling" if base_mount == "floor" else "floor"
         sign_fix = f"--sensor-sign {-sensor_sign}"
         if check.estimate_mount != "none" and check.assumed_flip is None:
             # −I = diag(1, 1, −1) · Rz(π): with the yaw estimated, a reversed z axis reads the same
             sign_fix += " (or, the same readings with the mount turned 180° about z, --flip-axis z)"
         raise SuspectConvention(
-            f"the fitted tool weight gravity_in_base = [{weight}] N points "
+            "the fitted tool weight gravity_in_base = "
+            f"[{', '.join(f'{value:+.3g}' for value in check.gravity_in_base)}] N points "
             f"{check.gravity_angle_deg:.0f}° away from "
             "the expected gravity direction (base -z for a floor mount, +z for a ceiling mount). "
             "Either the sensor "
@@ -277,10 +273,10 @@ def as_real_sensor(samples: Samples, calibration) -> Samples:
     sensor's ``R_BS · R_Mᵀ`` (``calibration``: a
     :class:`~ftkin.calibration.result.CalibrationResult`).
     """
-    signs = calibration.reading_signs
-    rotations = samples.rotations
-    if samples.joint_positions is not None and calibration.has_mount:
-        rotations = rotations @ calibration.mount_rotation.T
-    if np.all(signs == 1.0) and rotations is samples.rotations:
+    mounted = samples.joint_positions is not None and calibration.has_mount
+    if not mounted and np.all(calibration.reading_signs == 1.0):
         return samples
-    return replace(samples, wrenches=samples.wrenches * signs, rotations=rotations)
+    rotations = samples.rotations @ calibration.mount_rotation.T if mounted else samples.rotations
+    return replace(
+        samples, wrenches=samples.wrenches * calibration.reading_signs, rotations=rotations
+    )

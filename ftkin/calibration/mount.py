@@ -182,25 +182,6 @@ def mount_jacobian(
     return np.concatenate([jac, np.concatenate([d_gravity, skew(com) @ d_gravity], axis=1)], axis=2)
 
 
-def check_information_observable(information: np.ndarray, mode: str, rcond: float = 1e-10) -> None:
-    """Refuse a singular ``(12 + k)`` information matrix, naming the weak parameters (and the poses
-    a mount needs).
-    """
-    names = COMPONENT_NAMES + MOUNT_NAMES[mode]
-    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
-    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
-    if eigenvalues[0] > rcond * eigenvalues[-1]:
-        return
-    involved = [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)]
-    mount_names = [name for name in involved if name.startswith("mount")]
-    reason = (
-        POSES_NEEDED[mode]
-        if mount_names
-        else "the information matrix is singular along a combination of them"
-    )
-    raise UnobservableParameters(involved, reason, singular_values=eigenvalues[::-1])
-
-
 def split_information(information: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Split a ``(12 + k)`` information matrix into θ's marginal information and the mount
     covariance.
@@ -208,14 +189,28 @@ def split_information(information: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Returns the Schur complement ``I_θθ − I_θm I_mm⁻¹ I_mθ`` (12, 12), whose
     inverse is θ's covariance with the mount estimated, and the ``(k, k)``
     covariance of the mount increments [rad²] (the mount block of the inverse).
+
+    Raises:
+        UnobservableParameters: the information matrix is singular (relative to 1e-10), naming
+            the weak parameters (and the poses a mount needs).
     """
-    check_information_observable(information, "yaw" if information.shape[0] == 13 else "full")
-    theta, mount = information[:12, :12], information[12:, 12:]
-    cross = information[:12, 12:]
+    mode = "yaw" if information.shape[0] == 13 else "full"
+    names = COMPONENT_NAMES + MOUNT_NAMES[mode]
+    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
+    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
+    if eigenvalues[0] <= 1e-10 * eigenvalues[-1]:
+        involved = [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)]
+        raise UnobservableParameters(
+            involved,
+            POSES_NEEDED[mode]
+            if any(name.startswith("mount") for name in involved)
+            else "the information matrix is singular along a combination of them",
+            singular_values=eigenvalues[::-1],
+        )
+    theta, mount, cross = information[:12, :12], information[12:, 12:], information[:12, 12:]
     marginal = theta - cross @ np.linalg.solve(mount, cross.T)
-    marginal = 0.5 * (marginal + marginal.T)
     mount_marginal = mount - cross.T @ np.linalg.solve(theta, cross)
-    return marginal, np.linalg.inv(0.5 * (mount_marginal + mount_marginal.T))
+    return 0.5 * (marginal + marginal.T), np.linalg.inv(0.5 * (mount_marginal + mount_marginal.T))
 
 
 def rotation_to_rpy(rotation) -> np.ndarray:
