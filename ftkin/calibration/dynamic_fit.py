@@ -51,10 +51,11 @@ def upward_gravity(
     ``V``.
     """
     cu, su, cv, sv = np.cos(tilt_u), np.sin(tilt_u), np.cos(tilt_v), np.sin(tilt_v)
-    gamma = -gravity_in_base_from_tilt(g, tilt_u, tilt_v)
-    d_u = -g * np.array([-su * sv, -cu, su * cv])
-    d_v = -g * np.array([cu * cv, 0.0, cu * sv])
-    return gamma, d_u, d_v
+    return (
+        -gravity_in_base_from_tilt(g, tilt_u, tilt_v),
+        -g * np.array([-su * sv, -cu, su * cv]),
+        -g * np.array([cu * cv, 0.0, cu * sv]),
+    )
 
 
 @dataclass(frozen=True)
@@ -91,10 +92,9 @@ class DynamicProblem:
 
     def predict(self, x: np.ndarray) -> np.ndarray:
         """``(N, 6)`` predicted raw readings at ``x`` (θ-space): ``bias − (Y + Y_g) θ``."""
-        theta = self.theta(x[8:])
-        gamma, _, _ = upward_gravity(self.g, x[6], x[7])
+        gamma = upward_gravity(self.g, x[6], x[7])[0]
         weight = gravity_regressor(gravity_in_sensor(self.rotations, gamma))
-        return x[:6] - (self.inertial_regressor + weight) @ theta
+        return x[:6] - (self.inertial_regressor + weight) @ self.theta(x[8:])
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
         """``(N, 6, len(x))`` derivative of :meth:`predict` with respect to ``x`` (θ-space)."""
@@ -106,14 +106,15 @@ class DynamicProblem:
             out[:, :, column] = (
                 -gravity_regressor(gravity_in_sensor(self.rotations, direction)) @ theta
             )
-        full = self.inertial_regressor + gravity_regressor(gravity_in_sensor(self.rotations, gamma))
-        out[:, :, 8:] = -full[:, :, list(self.free)]
+        weight = gravity_regressor(gravity_in_sensor(self.rotations, gamma))
+        out[:, :, 8:] = -(self.inertial_regressor + weight)[:, :, list(self.free)]
         return out
 
     def whitened_residuals(self, x: np.ndarray, phi: bool = False) -> np.ndarray:
         """``(6N,)`` ``(measured − predicted) / σ`` at ``x`` (θ-space, or φ-space with ``phi``)."""
-        predicted = self.predict(theta_space(x) if phi else x)
-        return ((self.wrenches - predicted) / self.channel_std).ravel()
+        return (
+            (self.wrenches - self.predict(theta_space(x) if phi else x)) / self.channel_std
+        ).ravel()
 
     def whitened_jacobian(self, x: np.ndarray, phi: bool = False) -> np.ndarray:
         """``(6N, len(x))`` derivative of :meth:`whitened_residuals` (θ-space, or φ-space)."""
@@ -138,10 +139,10 @@ def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
             free (its columns of the regressor vanish), or the normalized
             information at zero tilt is singular along some parameters.
     """
-    count = len(problem.wrenches)
     inertia = [i for i in problem.free if i >= 4]
     if inertia:
-        rms = np.sqrt(np.sum(problem.inertial_regressor[:, :, inertia] ** 2, axis=(0, 1)) / count)
+        columns = problem.inertial_regressor[:, :, inertia]
+        rms = np.sqrt(np.sum(columns**2, axis=(0, 1)) / len(problem.wrenches))
         if np.all(rms < MIN_INERTIAL_EXCITATION):
             raise UnobservableParameters(
                 ["inertia_about_com_in_sensor"] + [THETA_NAMES[i] for i in inertia],
@@ -161,13 +162,11 @@ def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
             "the recording carries no information about them",
         )
     normalized = jac / scale
-    eigenvalues, eigenvectors = np.linalg.eigh(
-        normalized.T @ normalized
-    )  # the normal matrix: cheap for tall regressors
+    # the normal matrix: cheap for tall regressors
+    eigenvalues, eigenvectors = np.linalg.eigh(normalized.T @ normalized)
     if eigenvalues[0] <= rcond * eigenvalues[-1]:
-        weakest = eigenvectors[:, 0]
         raise UnobservableParameters(
-            [names[i] for i in np.flatnonzero(np.abs(weakest) > 0.3)],
+            [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)],
             "the regressor is singular along a combination of them (too few distinct orientations "
             "or motions)",
             singular_values=np.sqrt(np.clip(eigenvalues[::-1], 0.0, None)),
@@ -177,11 +176,10 @@ def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
 def fit_linear(problem: DynamicProblem) -> np.ndarray:
     """Stage 1: weighted linear least squares at zero tilt; returns ``x`` (θ-space, tilt zero)."""
     x0 = np.zeros(8 + len(problem.free))
-    jac = problem.whitened_jacobian(x0)
     columns = [i for i in range(len(x0)) if i not in (6, 7)]
     target = (problem.wrenches / problem.channel_std).ravel()
     # At fixed tilt the prediction is linear in [bias, θ]: residual = target + J x.
-    x0[columns] = np.linalg.lstsq(jac[:, columns], -target, rcond=None)[0]
+    x0[columns] = np.linalg.lstsq(problem.whitened_jacobian(x0)[:, columns], -target, rcond=None)[0]
     return x0
 
 

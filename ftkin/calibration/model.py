@@ -204,9 +204,7 @@ def tool_gravity(
 
 def predict(rotations: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """``[F0 + Gs, M0 + P × Gs]`` ``(N, 6)`` [N, N·m]: the reading without contact at ``θ``."""
-    gravity, force_offset, torque_offset, com = theta[0:3], theta[3:6], theta[6:9], theta[9:12]
-    weight = gravity_in_sensor(rotations, gravity)  # Gs = R_BSᵀ a
-    return np.hstack([force_offset + weight, torque_offset + cross_rows(com, weight)])
+    return theta[3:9] + tool_gravity(rotations, theta[0:3], theta[9:12])  # [F0, M0] + [Gs, P × Gs]
 
 
 def parameter_jacobian(

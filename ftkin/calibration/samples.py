@@ -132,20 +132,18 @@ class Samples:
             )
         if len(wrenches) == 0:
             raise InvalidSamples("no samples")
-        pose_ids = self.pose_ids
-        if pose_ids is None:
-            pose_ids = np.arange(len(wrenches))
         try:
-            pose_ids = as_integers(pose_ids, "pose ids")
+            given = np.arange(len(wrenches)) if self.pose_ids is None else self.pose_ids
+            pose_ids = as_integers(given, "pose ids")
         except InvalidInput as error:
             raise InvalidSamples(str(error)) from None
         if pose_ids.shape != (len(wrenches),):
             raise InvalidSamples(
                 f"pose_ids must have shape ({len(wrenches)},), got {pose_ids.shape}"
             )
-        times = self.times
-        if times is not None:
-            times = as_float_array(times, "times [s]").copy()
+        arrays = {"wrenches": wrenches, "rotations": rotations, "pose_ids": pose_ids}
+        if self.times is not None:
+            times = as_float_array(self.times, "times [s]")
             if times.shape != (len(wrenches),):
                 raise InvalidSamples(
                     f"times must have shape ({len(wrenches)},) (one per reading) [s], got "
@@ -156,23 +154,14 @@ class Samples:
                     f"times must be finite [s]; reading {int(np.argmin(np.isfinite(times)))} is not"
                 )
             check_time_span(times)
-            times.setflags(write=False)
-            object.__setattr__(self, "times", times)
-        # Frozen copies: freezing the caller's own arrays (or sharing them) would change them behind
-        # their back.
-        wrenches, rotations, pose_ids = (
-            array if array.base is None and array is not given else array.copy()
-            for array, given in (
-                (wrenches, self.wrenches),
-                (rotations, self.rotations),
-                (pose_ids, self.pose_ids),
-            )
-        )
-        for array in (wrenches, rotations, pose_ids):
+            arrays["times"] = times
+        for name, array in arrays.items():
+            # Frozen copies: freezing the caller's own arrays (or sharing them) would change them
+            # behind their back.
+            if array.base is not None or array is self.__dict__[name]:
+                array = array.copy()
             array.setflags(write=False)
-        object.__setattr__(self, "wrenches", wrenches)
-        object.__setattr__(self, "rotations", rotations)
-        object.__setattr__(self, "pose_ids", pose_ids)
+            object.__setattr__(self, name, array)
 
     def __len__(self) -> int:
         return len(self.wrenches)
