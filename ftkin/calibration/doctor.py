@@ -135,14 +135,13 @@ class ConventionReport:
                 lines.append(
                     f"  {fit.reading.name:<46}{'-':>12}  {fit.failure or fit.reading.failure}"
                 )
-                continue
-            up = "up" if fit.model.gravity_in_base[2] > 0 else "down"
-            lines.append(
-                "  "
-                f"{fit.reading.name:<46}{fit.chi_square / best:>12.3g}"
-                f"{fit.model.tool_weight:>10.4g}"
-                f"{np.linalg.norm(fit.model.center_of_mass):>10.4g}{up:>11}"
-            )
+            else:
+                lines.append(
+                    "  "
+                    f"{fit.reading.name:<46}{fit.chi_square / best:>12.3g}"
+                    f"{fit.model.tool_weight:>10.4g}{np.linalg.norm(fit.model.center_of_mass):>10.4g}"
+                    f"{'up' if fit.model.gravity_in_base[2] > 0 else 'down':>11}"
+                )
         return "\n".join(lines)
 
 
@@ -208,8 +207,7 @@ def _fit(reading: Reading, g: float = STANDARD_GRAVITY) -> ReadingFit:
     rss = np.sum(residuals**2, axis=0)
     spread = np.sum(((measured - measured.mean(axis=0)) * reading.unit_scale) ** 2, axis=0)
     explained = min(
-        1.0 - rss[:3].sum() / max(spread[:3].sum(), 1e-300),
-        1.0 - rss[3:].sum() / max(spread[3:].sum(), 1e-300),
+        1.0 - rss[part].sum() / max(spread[part].sum(), 1e-300) for part in (slice(3), slice(3, 6))
     )
     return ReadingFit(reading, model, rss, explained=float(explained))
 

@@ -203,12 +203,13 @@ def calibrate_dynamic(
     if noise is not None and not isinstance(noise, SensorNoise):
         raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
     g = as_positive(g, "g")
-    free = ALL_INDICES if estimate_inertia else STATIC_INDICES
-    initial_std = (
-        noise.channel_std if noise is not None else np.array([1.0, 1.0, 1.0, 0.1, 0.1, 0.1])
-    )
     problem = DynamicProblem(
-        motion.wrenches, motion.rotations, motion.regressor(), initial_std, g, free
+        motion.wrenches,
+        motion.rotations,
+        motion.regressor(),
+        np.array([1.0, 1.0, 1.0, 0.1, 0.1, 0.1]) if noise is None else noise.channel_std,
+        g,
+        ALL_INDICES if estimate_inertia else STATIC_INDICES,
     )
     check_observability(problem)
     x = fit_linear(problem)
@@ -225,12 +226,11 @@ def calibrate_dynamic(
         x = fit_nonlinear(
             problem, np.concatenate([x[:8], log_cholesky_from_parameters(start)]), True
         )
+    x_theta = theta_space(x) if estimate_inertia else x
     if noise is None:
-        problem = _with_noise_estimate(problem, theta_space(x) if estimate_inertia else x)
+        problem = _with_noise_estimate(problem, x_theta)
     values = _outputs(problem, x, estimate_inertia)
     covariance = _covariance(problem, x, estimate_inertia)
-    theta = values[12:22]
-    residuals = problem.wrenches - problem.predict(np.concatenate([x[:8], theta[list(free)]]))
     return DynamicCalibrationResult(
         force_offset=values[3:6],
         torque_offset=values[6:9],
@@ -248,9 +248,11 @@ def calibrate_dynamic(
             if estimate_inertia
             else None
         ),
-        inertial_parameters=theta if estimate_inertia else None,
+        inertial_parameters=values[12:22] if estimate_inertia else None,
         inertial_covariance=covariance[12:22, 12:22] if estimate_inertia else None,
-        motion_residual_rms=np.sqrt(np.mean(residuals**2, axis=0)),
+        motion_residual_rms=np.sqrt(
+            np.mean((problem.wrenches - problem.predict(x_theta)) ** 2, axis=0)
+        ),
         channel_std=problem.channel_std,
         unconstrained_parameters=theta_unconstrained if estimate_inertia else None,
         unconstrained_consistent=consistent,

@@ -100,12 +100,11 @@ def force_step_cost(
     rotations ``R_i R_Mᵀ``).
     """
     values = forces.reshape(-1)
-    grid = YAW_START_GRID if mode != "none" else np.zeros(1)
     best_cost, best_rotation = np.inf, np.eye(3)
-    for yaw in grid:
+    for yaw in YAW_START_GRID if mode != "none" else np.zeros(1):
         rotation = mount_rotation(np.eye(3), "yaw", [yaw])
         regressor = force_regressor(rotations @ rotation.T)
-        solution, *_ = np.linalg.lstsq(regressor, values, rcond=None)
+        solution = np.linalg.lstsq(regressor, values, rcond=None)[0]
         cost = float(np.sum((values - regressor @ solution) ** 2))
         if cost < best_cost:
             best_cost, best_rotation = cost, rotation

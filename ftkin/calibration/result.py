@@ -144,7 +144,7 @@ class CalibrationResult(SensorModel):
         if self.mount_covariance is None:
             return {}
         sigma = np.rad2deg(np.sqrt(np.clip(np.diag(self.mount_covariance), 0.0, None)))
-        return dict(zip(MOUNT_NAMES[self.mount_mode], (float(value) for value in sigma)))
+        return dict(zip(MOUNT_NAMES[self.mount_mode], sigma.tolist()))
 
     @property
     def reading_signs(self) -> np.ndarray:
@@ -210,9 +210,7 @@ class CalibrationResult(SensorModel):
         """Standard errors per parameter (see
         :func:`ftkin.calibration.information.standard_errors`), or None.
         """
-        if self.covariance is None:
-            return None
-        return standard_errors(self, self.covariance)
+        return None if self.covariance is None else standard_errors(self, self.covariance)
 
     @property
     def warnings(self) -> tuple[str, ...]:
