@@ -196,8 +196,7 @@ def detect_sign_and_handedness(
     best = min(costs, key=costs.get)
     corrected = replace(poses, wrenches=poses.wrenches * reading_signs(sensor_sign, flip_axis))
     fit = fit_linear(corrected, g) if estimate_mount == "none" else mount_start(corrected, g)[1]
-    gravity = fit.gravity_in_base
-    angle = np.nan
+    gravity, angle = fit.gravity_in_base, np.nan
     if expected is not None and np.linalg.norm(gravity) > 0.0:
         cosine = float(gravity @ expected / np.linalg.norm(gravity))
         angle = float(np.rad2deg(np.arccos(np.clip(cosine, -1.0, 1.0))))

@@ -170,8 +170,6 @@ def wrench_readings(given: Samples | PoseAverages) -> list[Reading]:
     ]
     for axis in "xyz":
         others = [a for a in "xyz" if a != axis]
-        # a mirror image: the axis reversed (its force and torque) with every torque negated
-        handed = reading_signs(1, axis) * [1, 1, 1, -1, -1, -1]
         out.append(
             Reading(
                 f"the sensor's {axis} axis reversed",
@@ -179,7 +177,8 @@ def wrench_readings(given: Samples | PoseAverages) -> list[Reading]:
                 f"m{axis}; a true mirror image negates f{axis}, m{others[0]} and m{others[1]} "
                 "instead: static data cannot tell "
                 "the two apart, they differ in the sign of the centre of mass)",
-                replace(poses, wrenches=wrenches * handed),
+                # a mirror image: the axis reversed (its force and torque), every torque negated
+                replace(poses, wrenches=wrenches * reading_signs(1, axis) * [1, 1, 1, -1, -1, -1]),
             )
         )
     return out
@@ -253,17 +252,16 @@ def _verdict(fits: tuple[ReadingFit, ...]) -> ConventionReport:
         best = min(plausible, key=lambda fit: fit.chi_square)
         ratio = given.chi_square / max(best.chi_square, 1e-300)
         if ratio >= SUSPECT_RATIO:
-            verdict = (
+            return ConventionReport(
+                fits,
                 "mistake"
                 if ratio >= MISTAKE_RATIO and best.explained >= EXPLAINED[1]
-                else "suspect"
-            )
-            reason = (
+                else "suspect",
+                best,
                 "the data as given cannot be fitted"
                 if given.model is None
-                else f"{ratio:.3g} times smaller chi-square than as given"
+                else f"{ratio:.3g} times smaller chi-square than as given",
             )
-            return ConventionReport(fits, verdict, best, reason)
     if given.model is None:
         return ConventionReport(
             fits, "undetermined", None, f"the data as given cannot be fitted: {given.failure}"
@@ -276,22 +274,20 @@ def _plausibility(fits, given: ReadingFit, alternatives) -> ConventionReport:
     distance = float(np.linalg.norm(given.model.center_of_mass))
     millimetres = by_name.get("torques in N·mm")
     if millimetres is not None and distance >= FAR_COM[0] and given.explained >= EXPLAINED[0]:
-        verdict = (
-            "mistake" if distance >= FAR_COM[1] and given.explained >= EXPLAINED[1] else "suspect"
-        )
-        reason = (
+        return ConventionReport(
+            fits,
+            "mistake" if distance >= FAR_COM[1] and given.explained >= EXPLAINED[1] else "suspect",
+            millimetres,
             f"the centre of mass would be {distance:.3g} m from the sensor, {distance:.3g} mm in "
-            "N·mm"
+            "N·mm",
         )
-        return ConventionReport(fits, verdict, millimetres, reason)
     base = by_name.get("the wrench in the base frame")
     if (
         base is not None
         and given.model.tool_weight < 0.05 * base.model.tool_weight
         and base.explained >= EXPLAINED[1]
     ):
-        ratio = given.chi_square / max(base.chi_square, 1e-300)
-        if ratio >= 0.5:
+        if given.chi_square / max(base.chi_square, 1e-300) >= 0.5:
             reason = (
                 f"as given the tool weighs {given.model.tool_weight:.3g} N, in the sensor frame "
                 f"{base.model.tool_weight:.3g} N"

@@ -149,8 +149,8 @@ def _refuse_non_positive_mass(motion: MotionSamples, mass: float, g: float) -> N
     """Name the likely convention behind a non-positive mass estimate, else refuse it [kg]."""
     # a negative mass is most often a convention: readings negated (the reaction) or a base
     # mounted upside down
-    static = Samples(motion.wrenches, motion.rotations).pose_averages()
     try:
+        static = Samples(motion.wrenches, motion.rotations).pose_averages()
         check_conventions(detect_sign_and_handedness(static, g=g))
     except SuspectConvention as error:
         raise SuspectConvention(

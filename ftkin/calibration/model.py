@@ -108,7 +108,7 @@ class SensorModel:
         g: float = STANDARD_GRAVITY,
     ) -> SensorModel:
         """Build from a tool mass [kg], COM [m, sensor frame], biases and base tilt (U, V) [rad]."""
-        weight = as_positive(tool_mass, "tool_mass") * as_positive(g, "g")
+        weight = as_positive(tool_mass, "tool_mass") * as_positive(g, "g")  # [N]
         gravity = gravity_in_base_from_tilt(weight, float(base_tilt[0]), float(base_tilt[1]))
         return cls(force_offset, torque_offset, gravity, center_of_mass, g)
 

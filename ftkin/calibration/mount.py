@@ -104,8 +104,8 @@ def force_step_cost(
     for yaw in YAW_START_GRID if mode != "none" else np.zeros(1):
         rotation = mount_rotation(np.eye(3), "yaw", [yaw])
         regressor = force_regressor(rotations @ rotation.T)
-        solution = np.linalg.lstsq(regressor, values, rcond=None)[0]
-        cost = float(np.sum((values - regressor @ solution) ** 2))
+        fitted = regressor @ np.linalg.lstsq(regressor, values, rcond=None)[0]
+        cost = float(np.sum((values - fitted) ** 2))
         if cost < best_cost:
             best_cost, best_rotation = cost, rotation
     return best_cost, best_rotation

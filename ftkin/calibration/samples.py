@@ -186,22 +186,27 @@ class Samples:
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
         if rotations is None:
             rotations = arm.rotation_sensor_to_base(configurations)
-        urdf = str(arm.urdf_path) if arm.urdf_path is not None else None
+        urdf = None if arm.urdf_path is None else str(arm.urdf_path)
         return cls(wrenches, rotations, pose_ids, configurations, urdf, arm.sensor_frame, times)
 
     @classmethod
     def from_quaternions(cls, quaternions_wxyz, wrenches, pose_ids=None, times=None) -> Samples:
         """From ``(N, 4)`` unit quaternions ``[qw, qx, qy, qz]`` of the sensor in the base frame."""
-        rotations = quaternion_to_matrix(quaternions_wxyz).reshape(-1, 3, 3)
-        return cls(wrenches, rotations, pose_ids, times=times)
+        return cls(
+            wrenches,
+            quaternion_to_matrix(quaternions_wxyz).reshape(-1, 3, 3),
+            pose_ids,
+            times=times,
+        )
 
     @classmethod
     def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None, times=None) -> Samples:
         """From the paper's commanded ``(N, 3)`` Euler angles ``[α, β, γ]`` [deg], ``R = Rz Ry
         Rx``.
         """
-        rotations = euler_zyx_deg_to_matrix(angles_deg)
-        return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids, times=times)
+        return cls(
+            wrenches, euler_zyx_deg_to_matrix(angles_deg).reshape(-1, 3, 3), pose_ids, times=times
+        )
 
     # -------------------------------------------------------------- grouping
     def pose_averages(self) -> PoseAverages:
