@@ -81,8 +81,8 @@ class DynamicProblem:
     @property
     def names(self) -> tuple[str, ...]:
         """Names of ``x = [bias, tilt, θ_free]``."""
-        free = tuple(THETA_NAMES[i] for i in self.free)
-        return COMPONENT_NAMES[3:9] + ("base_tilt[u]", "base_tilt[v]") + free
+        bias_and_tilt = COMPONENT_NAMES[3:9] + ("base_tilt[u]", "base_tilt[v]")
+        return bias_and_tilt + tuple(THETA_NAMES[i] for i in self.free)
 
     def theta(self, theta_free: np.ndarray) -> np.ndarray:
         """The full θ (10,) from its free entries."""

@@ -49,15 +49,15 @@ def check_time_span(times: np.ndarray) -> None:
     if span <= LONG_TIME_SPAN:
         return
     smallest, largest = float(np.min(np.abs(times))), float(np.max(np.abs(times)))
-    units = [unit for unit in _UNITS if 1e9 <= smallest / unit[1] and largest / unit[1] < 1e10]
-    units = units or sorted(
-        (unit for unit in _UNITS if span / unit[1] <= LONG_TIME_SPAN),
+    epoch = [(name, f) for name, f in _UNITS if 1e9 <= smallest / f and largest / f < 1e10]
+    near = sorted(
+        ((name, f) for name, f in _UNITS if span / f <= LONG_TIME_SPAN),
         key=lambda unit: abs(np.log10(span / unit[1] / 600.0)),
     )
     message = (
         f"the reading times span {span:.4g} s ({span / 86400.0:.4g} days): t must be in seconds"
     )
-    for name, factor in units[:1]:
+    for name, factor in (epoch or near)[:1]:  # the likely unit, if any
         message += f"; they look like {name} (divide by {factor:g}: {span / factor:.4g} s)"
     if span > LONGEST_TIME_SPAN:
         raise InvalidSamples(message)
