@@ -42,7 +42,7 @@ def check_time_span(times: np.ndarray) -> None:
     """Refuse reading times spanning more than a year, warn beyond a week: ``t`` is in seconds, not
     ms, µs or ns.
 
-    The hint names the unit in which every |time| is an epoch stamp (seconds since 1970 in
+    The hint names the unit in which every ``|t|`` is an epoch stamp (seconds since 1970 in
     2001–2286), else the unit bringing the span nearest ten minutes (in decades) within a week.
     """
     span = float(np.ptp(times))
