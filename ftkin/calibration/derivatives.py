@@ -177,4 +177,5 @@ class CausalDifferentiator:
         self._buffer.append(q)
         if len(self._buffer) < self.window:
             return None
-        return tuple(self._weights @ np.asarray(self._buffer))
+        estimate = self._weights @ np.asarray(self._buffer)
+        return estimate[0], estimate[1], estimate[2]

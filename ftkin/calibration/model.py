@@ -249,10 +249,9 @@ class FloatModel:
 
     def set(self, gravity_in_base, center_of_mass, bias) -> None:
         """Use ``a`` (3,) [N], ``P`` (3,) [m] and the bias ``[F0, M0]`` (6,) [N, N·m]."""
-        self._gravity, self._com, self._bias = (
-            tuple(np.asarray(values, dtype=float).tolist())
-            for values in (gravity_in_base, center_of_mass, bias)
-        )
+        self._gravity = tuple(np.asarray(gravity_in_base, dtype=float).tolist())
+        self._com = tuple(np.asarray(center_of_mass, dtype=float).tolist())
+        self._bias = tuple(np.asarray(bias, dtype=float).tolist())
 
     def contact(self, rotation_rows, raw) -> tuple[float, ...]:
         """``R_BS.tolist()`` and six raw floats [N, N·m] → the six contact floats."""
