@@ -30,8 +30,7 @@ from ..validation import as_vector
 INERTIAL_PARAMETER_NAMES = ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
 """Names of the ten entries of θ (inertia about the frame origin)."""
 
-_TRIANGLE = ((0, 0, 1, 0, 1, 2), (0, 1, 1, 2, 2, 2))
-"""Row and column indices of ``[xx, xy, yy, xz, yz, zz]`` in a 3×3 matrix."""
+_TRIANGLE = ((0, 0, 1, 0, 1, 2), (0, 1, 1, 2, 2, 2))  # rows, columns of [xx, xy, yy, xz, yz, zz]
 
 
 def inertia_matrix(values6) -> np.ndarray:
@@ -114,11 +113,10 @@ def log_cholesky_from_parameters(theta) -> np.ndarray:
             f"its eigenvalues are {np.linalg.eigvalsh(pseudo).tolist()}"
         ) from None
     upper = exchange @ lower @ exchange
-    scale = upper[3, 3]
-    u = upper / scale
+    u = upper / upper[3, 3]
     return np.array(
         [
-            np.log(scale),
+            np.log(upper[3, 3]),
             np.log(u[0, 0]),
             np.log(u[1, 1]),
             np.log(u[2, 2]),
