@@ -55,12 +55,6 @@ MIN_POSES_FOR_FLIP = 6
 fits).
 """
 
-_EXPECTED = {
-    "floor": np.array([0.0, 0.0, -1.0]),
-    "ceiling": np.array([0.0, 0.0, 1.0]),
-    "wall": None,
-}
-
 
 def check_sensor_sign(sensor_sign) -> int:
     """``sensor_sign`` as ``+1`` or ``-1``, else :class:`InvalidInput`."""
@@ -82,8 +76,7 @@ def reading_signs(sensor_sign: int = 1, flip_axis: str | None = None) -> np.ndar
     """``(6,)`` factors ``±1`` that turn a raw reading into ftkin's convention (``signs · raw``)."""
     signs = np.full(6, float(check_sensor_sign(sensor_sign)))
     if check_flip_axis(flip_axis) is not None:
-        axis = "xyz".index(flip_axis)
-        signs[[axis, axis + 3]] *= -1.0
+        signs["xyz".index(flip_axis) :: 3] *= -1.0  # its force and torque channels
     return signs
 
 
@@ -105,7 +98,11 @@ def expected_gravity_direction(
         if norm == 0.0:
             raise InvalidInput("expected_gravity must be a non-zero direction in the base frame")
         return direction / norm
-    return _EXPECTED[base_mount]
+    return (
+        None
+        if base_mount == "wall"
+        else np.array([0.0, 0.0, -1.0 if base_mount == "floor" else 1.0])
+    )
 
 
 @dataclass(frozen=True)
@@ -185,28 +182,26 @@ def detect_sign_and_handedness(
         UnobservableParameters: the poses cannot determine the tool weight at all.
     """
     poses = samples.pose_averages() if isinstance(samples, Samples) else samples
-    check_sensor_sign(sensor_sign)
-    check_flip_axis(flip_axis)
     check_mount_mode(estimate_mount)
     expected = expected_gravity_direction(base_mount, expected_gravity)
-    costs = {}
-    alternatives = FLIP_AXES if len(poses) >= MIN_POSES_FOR_FLIP else (flip_axis,)
-    for alternative in alternatives:
-        forces = poses.wrenches[:, :3] * reading_signs(sensor_sign, alternative)[:3]
-        costs[alternative], _ = force_step_cost(poses.rotations, forces, estimate_mount)
+    # reading_signs checks sensor_sign and flip_axis before any result is formed
+    costs = {
+        alternative: force_step_cost(
+            poses.rotations,
+            poses.wrenches[:, :3] * reading_signs(sensor_sign, alternative)[:3],
+            estimate_mount,
+        )[0]
+        for alternative in (FLIP_AXES if len(poses) >= MIN_POSES_FOR_FLIP else (flip_axis,))
+    }
     best = min(costs, key=costs.get)
     corrected = replace(poses, wrenches=poses.wrenches * reading_signs(sensor_sign, flip_axis))
-    if estimate_mount == "none":
-        gravity = fit_linear(corrected, g).gravity_in_base
-    else:
-        gravity = mount_start(corrected, g)[1].gravity_in_base
-    angle = np.nan
+    fit = fit_linear(corrected, g) if estimate_mount == "none" else mount_start(corrected, g)[1]
+    gravity, angle = fit.gravity_in_base, np.nan
     if expected is not None and np.linalg.norm(gravity) > 0.0:
         cosine = float(gravity @ expected / np.linalg.norm(gravity))
         angle = float(np.rad2deg(np.arccos(np.clip(cosine, -1.0, 1.0))))
-    equivalent = ()
-    if estimate_mount != "none" and best in ("x", "y"):
-        equivalent = ("y",) if best == "x" else ("x",)
+    # with a yaw estimated, a reversed x axis reads as a reversed y axis turned 180° about z
+    equivalent = {"x": ("y",), "y": ("x",)}.get(best, ()) if estimate_mount != "none" else ()
     return ConventionCheck(costs, flip_axis, best, angle, gravity, equivalent, estimate_mount)
 
 
@@ -215,7 +210,6 @@ def check_conventions(
 ) -> None:
     """Raise :class:`~ftkin.exceptions.SuspectConvention` for a suspected reversed axis or sign."""
     if check.flip_suspected:
-        rms = {key: float(np.sqrt(value)) for key, value in check.flip_costs.items()}
         found = (
             f"the sensor's {check.best_flip} axis reversed"
             if check.best_flip
@@ -228,12 +222,11 @@ def check_conventions(
                 + " or ".join(check.equivalent_flips)
                 + " axis)"
             )
-        keyword = f"flip_axis={check.best_flip!r}"
         raise SuspectConvention(
-            f"the data fit with {found}: {flag} ({keyword}); force residual "
-            f"{rms[check.best_flip]:.3g} N against "
-            f"{rms[check.assumed_flip]:.3g} N as assumed (root sum of squares over the poses). A "
-            "mirrored axis "
+            f"the data fit with {found}: {flag} (flip_axis={check.best_flip!r}); force residual "
+            f"{np.sqrt(check.flip_costs[check.best_flip]):.3g} N against "
+            f"{np.sqrt(check.flip_costs[check.assumed_flip]):.3g} N as assumed (root sum of "
+            "squares over the poses). A mirrored axis "
             "(left-handed sensor frame) fits no rotation of the model; recalibrate with that "
             "setting",
             explanations=[
@@ -245,14 +238,14 @@ def check_conventions(
             flip_axis=check.best_flip,
         )
     if check.sign_suspected:
-        weight = ", ".join(f"{value:+.3g}" for value in check.gravity_in_base)
         other = "ceiling" if base_mount == "floor" else "floor"
         sign_fix = f"--sensor-sign {-sensor_sign}"
         if check.estimate_mount != "none" and check.assumed_flip is None:
             # −I = diag(1, 1, −1) · Rz(π): with the yaw estimated, a reversed z axis reads the same
             sign_fix += " (or, the same readings with the mount turned 180° about z, --flip-axis z)"
         raise SuspectConvention(
-            f"the fitted tool weight gravity_in_base = [{weight}] N points "
+            "the fitted tool weight gravity_in_base = "
+            f"[{', '.join(f'{value:+.3g}' for value in check.gravity_in_base)}] N points "
             f"{check.gravity_angle_deg:.0f}° away from "
             "the expected gravity direction (base -z for a floor mount, +z for a ceiling mount). "
             "Either the sensor "
@@ -279,10 +272,10 @@ def as_real_sensor(samples: Samples, calibration) -> Samples:
     sensor's ``R_BS · R_Mᵀ`` (``calibration``: a
     :class:`~ftkin.calibration.result.CalibrationResult`).
     """
-    signs = calibration.reading_signs
-    rotations = samples.rotations
-    if samples.joint_positions is not None and calibration.has_mount:
-        rotations = rotations @ calibration.mount_rotation.T
-    if np.all(signs == 1.0) and rotations is samples.rotations:
+    mounted = samples.joint_positions is not None and calibration.has_mount
+    if not mounted and np.all(calibration.reading_signs == 1.0):
         return samples
-    return replace(samples, wrenches=samples.wrenches * signs, rotations=rotations)
+    rotations = samples.rotations @ calibration.mount_rotation.T if mounted else samples.rotations
+    return replace(
+        samples, wrenches=samples.wrenches * calibration.reading_signs, rotations=rotations
+    )

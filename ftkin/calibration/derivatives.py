@@ -37,13 +37,13 @@ def window_samples(
     """Odd window length [samples] covering about ``window_seconds`` [s], larger than
     ``polyorder``.
     """
-    count = int(
+    count = max(
         round(
             as_positive(window_seconds, "window_seconds")
             / as_positive(sample_period, "sample_period")
-        )
+        ),
+        polyorder + 2,
     )
-    count = max(count, polyorder + 2)
     return count if count % 2 == 1 else count + 1
 
 
@@ -106,10 +106,10 @@ def joint_derivatives(
     q, _ = as_batch(joint_positions, np.shape(joint_positions)[-1], "joint positions q")
     window = window_samples(period, polyorder=polyorder) if window is None else int(window)
     _check_window(window, polyorder, len(q))
-    smooth = savgol_filter(q, window, polyorder, deriv=0, axis=0, mode="interp")
-    velocity = savgol_filter(q, window, polyorder, deriv=1, delta=period, axis=0, mode="interp")
-    acceleration = savgol_filter(q, window, polyorder, deriv=2, delta=period, axis=0, mode="interp")
-    return smooth, velocity, acceleration
+    return tuple(
+        savgol_filter(q, window, polyorder, deriv=k, delta=period, axis=0, mode="interp")
+        for k in range(3)
+    )
 
 
 def _check_window(window: int, polyorder: int, count: int | None = None) -> None:

@@ -37,6 +37,7 @@ import numpy as np
 
 from ..exceptions import UnobservableParameters
 from ..kinematics.rotations import wrenches_base_to_sensor
+from .conventions import reading_signs
 from .linear import fit_linear
 from .model import STANDARD_GRAVITY, SensorModel
 from .observability import MIN_POSES
@@ -134,62 +135,50 @@ class ConventionReport:
                 lines.append(
                     f"  {fit.reading.name:<46}{'-':>12}  {fit.failure or fit.reading.failure}"
                 )
-                continue
-            up = "up" if fit.model.gravity_in_base[2] > 0 else "down"
-            lines.append(
-                "  "
-                f"{fit.reading.name:<46}{fit.chi_square / best:>12.3g}"
-                f"{fit.model.tool_weight:>10.4g}"
-                f"{np.linalg.norm(fit.model.center_of_mass):>10.4g}{up:>11}"
-            )
+            else:
+                lines.append(
+                    "  "
+                    f"{fit.reading.name:<46}{fit.chi_square / best:>12.3g}"
+                    f"{fit.model.tool_weight:>10.4g}{np.linalg.norm(fit.model.center_of_mass):>10.4g}"
+                    f"{'up' if fit.model.gravity_in_base[2] > 0 else 'down':>11}"
+                )
         return "\n".join(lines)
 
 
 def wrench_readings(given: Samples | PoseAverages) -> list[Reading]:
     """Alternatives that change only the wrench: base frame, reaction, N·mm, one axis reversed."""
     poses = given.pose_averages() if isinstance(given, Samples) else given
-    rotations, wrenches = poses.rotations, poses.wrenches
-
-    def make(name, fix, new_wrenches, scale=None):
-        return Reading(
-            name,
-            fix,
-            replace(poses, wrenches=new_wrenches),
-            np.ones(6) if scale is None else np.asarray(scale, float),
-        )
-
+    wrenches = poses.wrenches
     out = [
-        make(
+        Reading(
             "the wrench in the base frame",
             "give the wrench in the sensor frame (rotate it by R_BS^T)",
-            wrenches_base_to_sensor(rotations, wrenches),
+            replace(poses, wrenches=wrenches_base_to_sensor(poses.rotations, wrenches)),
         ),
-        make(
+        Reading(
             "the readings negated (the reaction)",
             "calibrate with --sensor-sign -1 (the sensor reports the reaction, not the "
             "load), or with --base-mount ceiling if the robot hangs from a ceiling",
-            -wrenches,
+            replace(poses, wrenches=-wrenches),
         ),
-        make(
+        Reading(
             "torques in N·mm",
             "give the torques in N·m (divide mx, my, mz by 1000)",
-            wrenches * [1, 1, 1, 1e-3, 1e-3, 1e-3],
-            [1, 1, 1, 1e3, 1e3, 1e3],
+            replace(poses, wrenches=wrenches * [1, 1, 1, 1e-3, 1e-3, 1e-3]),
+            np.array([1, 1, 1, 1e3, 1e3, 1e3], dtype=float),
         ),
     ]
-    for k, axis in enumerate("xyz"):
+    for axis in "xyz":
         others = [a for a in "xyz" if a != axis]
-        handed = np.ones(6)
-        handed[k] = -1.0
-        handed[[3 + i for i in range(3) if i != k]] = -1.0
         out.append(
-            make(
+            Reading(
                 f"the sensor's {axis} axis reversed",
                 f"calibrate with --flip-axis {axis} (flip_axis={axis!r}: negates f{axis} and "
                 f"m{axis}; a true mirror image negates f{axis}, m{others[0]} and m{others[1]} "
                 "instead: static data cannot tell "
                 "the two apart, they differ in the sign of the centre of mass)",
-                wrenches * handed,
+                # a mirror image: the axis reversed (its force and torque), every torque negated
+                replace(poses, wrenches=wrenches * reading_signs(1, axis) * [1, 1, 1, -1, -1, -1]),
             )
         )
     return out
@@ -217,8 +206,7 @@ def _fit(reading: Reading, g: float = STANDARD_GRAVITY) -> ReadingFit:
     rss = np.sum(residuals**2, axis=0)
     spread = np.sum(((measured - measured.mean(axis=0)) * reading.unit_scale) ** 2, axis=0)
     explained = min(
-        1.0 - rss[:3].sum() / max(spread[:3].sum(), 1e-300),
-        1.0 - rss[3:].sum() / max(spread[3:].sum(), 1e-300),
+        1.0 - rss[part].sum() / max(spread[part].sum(), 1e-300) for part in (slice(3), slice(3, 6))
     )
     return ReadingFit(reading, model, rss, explained=float(explained))
 
@@ -245,19 +233,12 @@ def diagnose_readings(readings: list[Reading]) -> ConventionReport:
     # the best reading by a scale-free measure sets the per-channel noise of all
     best = min(valid, key=lambda fit: float(np.sum(np.log(fit.rss / channel_dof + floor))))
     variance = best.rss / channel_dof + floor
-    fits = [
-        fit
-        if fit.rss is None
-        else ReadingFit(
-            fit.reading,
-            fit.model,
-            fit.rss,
-            float(np.sum(fit.rss / variance)),
-            explained=fit.explained,
+    return _verdict(
+        tuple(
+            fit if fit.rss is None else replace(fit, chi_square=float(np.sum(fit.rss / variance)))
+            for fit in fits
         )
-        for fit in fits
-    ]
-    return _verdict(tuple(fits))
+    )
 
 
 def _verdict(fits: tuple[ReadingFit, ...]) -> ConventionReport:
@@ -271,17 +252,16 @@ def _verdict(fits: tuple[ReadingFit, ...]) -> ConventionReport:
         best = min(plausible, key=lambda fit: fit.chi_square)
         ratio = given.chi_square / max(best.chi_square, 1e-300)
         if ratio >= SUSPECT_RATIO:
-            verdict = (
+            return ConventionReport(
+                fits,
                 "mistake"
                 if ratio >= MISTAKE_RATIO and best.explained >= EXPLAINED[1]
-                else "suspect"
-            )
-            reason = (
+                else "suspect",
+                best,
                 "the data as given cannot be fitted"
                 if given.model is None
-                else f"{ratio:.3g} times smaller chi-square than as given"
+                else f"{ratio:.3g} times smaller chi-square than as given",
             )
-            return ConventionReport(fits, verdict, best, reason)
     if given.model is None:
         return ConventionReport(
             fits, "undetermined", None, f"the data as given cannot be fitted: {given.failure}"
@@ -294,22 +274,20 @@ def _plausibility(fits, given: ReadingFit, alternatives) -> ConventionReport:
     distance = float(np.linalg.norm(given.model.center_of_mass))
     millimetres = by_name.get("torques in N·mm")
     if millimetres is not None and distance >= FAR_COM[0] and given.explained >= EXPLAINED[0]:
-        verdict = (
-            "mistake" if distance >= FAR_COM[1] and given.explained >= EXPLAINED[1] else "suspect"
-        )
-        reason = (
+        return ConventionReport(
+            fits,
+            "mistake" if distance >= FAR_COM[1] and given.explained >= EXPLAINED[1] else "suspect",
+            millimetres,
             f"the centre of mass would be {distance:.3g} m from the sensor, {distance:.3g} mm in "
-            "N·mm"
+            "N·mm",
         )
-        return ConventionReport(fits, verdict, millimetres, reason)
     base = by_name.get("the wrench in the base frame")
     if (
         base is not None
         and given.model.tool_weight < 0.05 * base.model.tool_weight
         and base.explained >= EXPLAINED[1]
     ):
-        ratio = given.chi_square / max(base.chi_square, 1e-300)
-        if ratio >= 0.5:
+        if given.chi_square / max(base.chi_square, 1e-300) >= 0.5:
             reason = (
                 f"as given the tool weighs {given.model.tool_weight:.3g} N, in the sensor frame "
                 f"{base.model.tool_weight:.3g} N"

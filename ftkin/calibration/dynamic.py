@@ -16,7 +16,7 @@ never invented.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -29,10 +29,9 @@ from .dynamic_fit import (
     STATIC_INDICES,
     DynamicProblem,
     check_observability,
-    fit_consistent,
     fit_linear,
-    fit_unconstrained,
-    theta_from_phi,
+    fit_nonlinear,
+    theta_space,
 )
 from .estimate import CalibrationResult
 from .information import SensorNoise, noise_floor
@@ -43,6 +42,7 @@ from .log_cholesky import (
     is_physically_consistent,
     log_cholesky_from_parameters,
     nearest_consistent,
+    parameters_from_log_cholesky,
 )
 from .model import STANDARD_GRAVITY
 from .regressor import MotionSamples
@@ -100,54 +100,31 @@ class DynamicCalibrationResult(CalibrationResult):
         return "\n".join(lines)
 
 
-def _estimate_noise(problem: DynamicProblem, x: np.ndarray, dof: int) -> np.ndarray:
+def _with_noise_estimate(problem: DynamicProblem, x: np.ndarray) -> DynamicProblem:
+    """``problem`` weighted by the noise per channel [N, N·m] of its residuals at ``x`` (θ)."""
     residuals = problem.wrenches - problem.predict(x)
-    count = len(residuals)
-    std = np.sqrt(np.sum(residuals**2, axis=0) / max(count - dof / 6.0, 1.0))
-    return np.maximum(
-        std, noise_floor(problem.wrenches)
-    )  # the static fits' floor: exact data stays finite
+    std = np.sqrt(np.sum(residuals**2, axis=0) / max(len(residuals) - len(x) / 6.0, 1.0))
+    # the static fits' floor: exact data stays finite
+    return replace(problem, channel_std=np.maximum(std, noise_floor(problem.wrenches)))
 
 
-def _with_std(problem: DynamicProblem, std: np.ndarray) -> DynamicProblem:
-    return DynamicProblem(
-        problem.wrenches,
-        problem.rotations,
-        problem.inertial_regressor,
-        std,
-        problem.g,
-        problem.free,
-    )
-
-
-def _outputs(problem: DynamicProblem, x: np.ndarray, phi_space: bool) -> np.ndarray:
+def _outputs(problem: DynamicProblem, x: np.ndarray, phi: bool) -> np.ndarray:
     """``[a (3), F0, M0, P, θ (10), I_com entries (6)]`` (28,) at ``x``."""
-    theta = theta_from_phi(x[8:]) if phi_space else problem.theta(x[8:])
-    mass = theta[0]
-    com = theta[1:4] / mass
+    theta = parameters_from_log_cholesky(x[8:]) if phi else problem.theta(x[8:])
+    mass, com, about_com = body_from_parameters(theta)
     gravity = gravity_in_base_from_tilt(mass * problem.g, x[6], x[7])
-    about_com = inertia_matrix(theta[4:10]) - mass * (
-        float(com @ com) * np.eye(3) - np.outer(com, com)
-    )
     return np.concatenate([gravity, x[:6], com, theta, inertia_entries(about_com)])
 
 
-def _covariance(problem: DynamicProblem, x: np.ndarray, phi_space: bool) -> np.ndarray:
+def _covariance(problem: DynamicProblem, x: np.ndarray, phi: bool) -> np.ndarray:
     """Covariance of :func:`_outputs` by the delta method from the Gauss–Newton covariance of
     ``x``.
     """
-    jac = problem.whitened_jacobian(
-        np.concatenate([x[:8], theta_from_phi(x[8:])]) if phi_space else x
-    )
-    if phi_space:
-        from .log_cholesky import log_cholesky_jacobian
-
-        jac[:, 8:] = jac[:, 8:] @ log_cholesky_jacobian(x[8:])
+    jac = problem.whitened_jacobian(x, phi)
     information = jac.T @ jac
     scale = np.sqrt(np.diag(information))
-    scale = np.where(
-        scale > 0.0, scale, 1.0
-    )  # a parameter without information: named below, not a NaN
+    # a parameter without information: named below, not a NaN
+    scale = np.where(scale > 0.0, scale, 1.0)
     values, vectors = np.linalg.eigh(information / np.outer(scale, scale))
     if values[0] <= 1e-14 * values[-1]:
         raise UnobservableParameters(
@@ -157,15 +134,14 @@ def _covariance(problem: DynamicProblem, x: np.ndarray, phi_space: bool) -> np.n
             "or the motion does not excite these parameters)",
         )
     cov_x = ((vectors / values) @ vectors.T) / np.outer(scale, scale)
-    gradient = np.empty((28, len(x)))
-    for i in range(len(x)):
-        step = 1e-6 * max(1.0, abs(x[i]))
-        up, down = x.copy(), x.copy()
-        up[i] += step
-        down[i] -= step
-        gradient[:, i] = (_outputs(problem, up, phi_space) - _outputs(problem, down, phi_space)) / (
-            2 * step
-        )
+    steps = np.diag(1e-6 * np.maximum(1.0, np.abs(x)))  # one central difference per column
+    gradient = np.stack(
+        [
+            (_outputs(problem, x + step, phi) - _outputs(problem, x - step, phi)) / (2 * step[i])
+            for i, step in enumerate(steps)
+        ],
+        axis=1,
+    )
     return gradient @ cov_x @ gradient.T
 
 
@@ -173,8 +149,8 @@ def _refuse_non_positive_mass(motion: MotionSamples, mass: float, g: float) -> N
     """Name the likely convention behind a non-positive mass estimate, else refuse it [kg]."""
     # a negative mass is most often a convention: readings negated (the reaction) or a base
     # mounted upside down
-    static = Samples(motion.wrenches, motion.rotations).pose_averages()
     try:
+        static = Samples(motion.wrenches, motion.rotations).pose_averages()
         check_conventions(detect_sign_and_handedness(static, g=g))
     except SuspectConvention as error:
         raise SuspectConvention(
@@ -227,36 +203,34 @@ def calibrate_dynamic(
     if noise is not None and not isinstance(noise, SensorNoise):
         raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
     g = as_positive(g, "g")
-    free = ALL_INDICES if estimate_inertia else STATIC_INDICES
-    initial_std = (
-        noise.channel_std if noise is not None else np.array([1.0, 1.0, 1.0, 0.1, 0.1, 0.1])
-    )
     problem = DynamicProblem(
-        motion.wrenches, motion.rotations, motion.regressor(), initial_std, g, free
+        motion.wrenches,
+        motion.rotations,
+        motion.regressor(),
+        np.array([1.0, 1.0, 1.0, 0.1, 0.1, 0.1]) if noise is None else noise.channel_std,
+        g,
+        ALL_INDICES if estimate_inertia else STATIC_INDICES,
     )
     check_observability(problem)
     x = fit_linear(problem)
     if noise is None:
-        problem = _with_std(problem, _estimate_noise(problem, x, len(x)))
+        problem = _with_noise_estimate(problem, x)
         x = fit_linear(problem)
-    x = fit_unconstrained(problem, x)
+    x = fit_nonlinear(problem, x)
     theta_unconstrained = problem.theta(x[8:])
     if theta_unconstrained[0] <= 0.0:
         _refuse_non_positive_mass(motion, theta_unconstrained[0], g)
     consistent = is_physically_consistent(theta_unconstrained) if estimate_inertia else None
-    phi_space = estimate_inertia
     if estimate_inertia:
         start = theta_unconstrained if consistent else nearest_consistent(theta_unconstrained)
-        x = fit_consistent(problem, np.concatenate([x[:8], log_cholesky_from_parameters(start)]))
+        x = fit_nonlinear(
+            problem, np.concatenate([x[:8], log_cholesky_from_parameters(start)]), True
+        )
+    x_theta = theta_space(x) if estimate_inertia else x
     if noise is None:
-        x_theta = np.concatenate([x[:8], theta_from_phi(x[8:])]) if phi_space else x
-        problem = _with_std(problem, _estimate_noise(problem, x_theta, len(x)))
-    values = _outputs(problem, x, phi_space)
-    covariance = _covariance(problem, x, phi_space)
-    theta = values[12:22]
-    about_com = body_from_parameters(theta)[2]
-    residuals = problem.wrenches - problem.predict(np.concatenate([x[:8], theta[list(free)]]))
-    errors = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+        problem = _with_noise_estimate(problem, x_theta)
+    values = _outputs(problem, x, estimate_inertia)
+    covariance = _covariance(problem, x, estimate_inertia)
     return DynamicCalibrationResult(
         force_offset=values[3:6],
         torque_offset=values[6:9],
@@ -268,11 +242,17 @@ def calibrate_dynamic(
         urdf=motion.urdf,
         sensor_frame=motion.sensor_frame,
         covariance=covariance[:12, :12],
-        inertia_about_com_in_sensor=about_com if estimate_inertia else None,
-        inertia_std_errors=inertia_matrix(errors[22:28]) if estimate_inertia else None,
-        inertial_parameters=theta if estimate_inertia else None,
+        inertia_about_com_in_sensor=inertia_matrix(values[22:28]) if estimate_inertia else None,
+        inertia_std_errors=(
+            inertia_matrix(np.sqrt(np.clip(np.diag(covariance)[22:28], 0.0, None)))
+            if estimate_inertia
+            else None
+        ),
+        inertial_parameters=values[12:22] if estimate_inertia else None,
         inertial_covariance=covariance[12:22, 12:22] if estimate_inertia else None,
-        motion_residual_rms=np.sqrt(np.mean(residuals**2, axis=0)),
+        motion_residual_rms=np.sqrt(
+            np.mean((problem.wrenches - problem.predict(x_theta)) ** 2, axis=0)
+        ),
         channel_std=problem.channel_std,
         unconstrained_parameters=theta_unconstrained if estimate_inertia else None,
         unconstrained_consistent=consistent,

@@ -30,13 +30,9 @@ from .log_cholesky import (
     log_cholesky_jacobian,
     parameters_from_log_cholesky,
 )
-from .model import gravity_in_sensor
+from .model import COMPONENT_NAMES, gravity_in_sensor
 from .regressor import gravity_regressor
 
-BIAS_NAMES = tuple(
-    f"{block}[{axis}]" for block in ("force_offset", "torque_offset") for axis in "xyz"
-)
-TILT_NAMES = ("base_tilt[u]", "base_tilt[v]")
 THETA_NAMES = ("mass", "first_moment[x]", "first_moment[y]", "first_moment[z]") + tuple(
     f"inertia_about_sensor[{name[1:].lower()}]" for name in INERTIAL_PARAMETER_NAMES[4:]
 )
@@ -55,10 +51,11 @@ def upward_gravity(
     ``V``.
     """
     cu, su, cv, sv = np.cos(tilt_u), np.sin(tilt_u), np.cos(tilt_v), np.sin(tilt_v)
-    gamma = -gravity_in_base_from_tilt(g, tilt_u, tilt_v)
-    d_u = -g * np.array([-su * sv, -cu, su * cv])
-    d_v = -g * np.array([cu * cv, 0.0, cu * sv])
-    return gamma, d_u, d_v
+    return (
+        -gravity_in_base_from_tilt(g, tilt_u, tilt_v),
+        -g * np.array([-su * sv, -cu, su * cv]),
+        -g * np.array([cu * cv, 0.0, cu * sv]),
+    )
 
 
 @dataclass(frozen=True)
@@ -84,7 +81,8 @@ class DynamicProblem:
     @property
     def names(self) -> tuple[str, ...]:
         """Names of ``x = [bias, tilt, θ_free]``."""
-        return BIAS_NAMES + TILT_NAMES + tuple(THETA_NAMES[i] for i in self.free)
+        bias_and_tilt = COMPONENT_NAMES[3:9] + ("base_tilt[u]", "base_tilt[v]")
+        return bias_and_tilt + tuple(THETA_NAMES[i] for i in self.free)
 
     def theta(self, theta_free: np.ndarray) -> np.ndarray:
         """The full θ (10,) from its free entries."""
@@ -94,10 +92,9 @@ class DynamicProblem:
 
     def predict(self, x: np.ndarray) -> np.ndarray:
         """``(N, 6)`` predicted raw readings at ``x`` (θ-space): ``bias − (Y + Y_g) θ``."""
-        theta = self.theta(x[8:])
-        gamma, _, _ = upward_gravity(self.g, x[6], x[7])
+        gamma = upward_gravity(self.g, x[6], x[7])[0]
         weight = gravity_regressor(gravity_in_sensor(self.rotations, gamma))
-        return x[:6] - (self.inertial_regressor + weight) @ theta
+        return x[:6] - (self.inertial_regressor + weight) @ self.theta(x[8:])
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
         """``(N, 6, len(x))`` derivative of :meth:`predict` with respect to ``x`` (θ-space)."""
@@ -109,17 +106,29 @@ class DynamicProblem:
             out[:, :, column] = (
                 -gravity_regressor(gravity_in_sensor(self.rotations, direction)) @ theta
             )
-        full = self.inertial_regressor + gravity_regressor(gravity_in_sensor(self.rotations, gamma))
-        out[:, :, 8:] = -full[:, :, list(self.free)]
+        weight = gravity_regressor(gravity_in_sensor(self.rotations, gamma))
+        out[:, :, 8:] = -(self.inertial_regressor + weight)[:, :, list(self.free)]
         return out
 
-    def whitened_residuals(self, x: np.ndarray) -> np.ndarray:
-        """``(6N,)`` ``(measured − predicted) / σ``."""
-        return ((self.wrenches - self.predict(x)) / self.channel_std).ravel()
+    def whitened_residuals(self, x: np.ndarray, phi: bool = False) -> np.ndarray:
+        """``(6N,)`` ``(measured − predicted) / σ`` at ``x`` (θ-space, or φ-space with ``phi``)."""
+        return (
+            (self.wrenches - self.predict(theta_space(x) if phi else x)) / self.channel_std
+        ).ravel()
 
-    def whitened_jacobian(self, x: np.ndarray) -> np.ndarray:
-        """``(6N, len(x))`` derivative of :meth:`whitened_residuals`."""
-        return (-self.jacobian(x) / self.channel_std[None, :, None]).reshape(-1, len(x))
+    def whitened_jacobian(self, x: np.ndarray, phi: bool = False) -> np.ndarray:
+        """``(6N, len(x))`` derivative of :meth:`whitened_residuals` (θ-space, or φ-space)."""
+        jac = (-self.jacobian(theta_space(x) if phi else x) / self.channel_std[:, None]).reshape(
+            -1, len(x)
+        )
+        if phi:
+            jac[:, 8:] = jac[:, 8:] @ log_cholesky_jacobian(x[8:])
+        return jac
+
+
+def theta_space(x_phi: np.ndarray) -> np.ndarray:
+    """``[bias, U, V, θ]`` of the φ-space ``x = [bias, U, V, φ]`` (all ten θ free)."""
+    return np.concatenate([x_phi[:8], parameters_from_log_cholesky(x_phi[8:])])
 
 
 def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
@@ -130,10 +139,10 @@ def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
             free (its columns of the regressor vanish), or the normalized
             information at zero tilt is singular along some parameters.
     """
-    count = len(problem.wrenches)
     inertia = [i for i in problem.free if i >= 4]
     if inertia:
-        rms = np.sqrt(np.sum(problem.inertial_regressor[:, :, inertia] ** 2, axis=(0, 1)) / count)
+        columns = problem.inertial_regressor[:, :, inertia]
+        rms = np.sqrt(np.sum(columns**2, axis=(0, 1)) / len(problem.wrenches))
         if np.all(rms < MIN_INERTIAL_EXCITATION):
             raise UnobservableParameters(
                 ["inertia_about_com_in_sensor"] + [THETA_NAMES[i] for i in inertia],
@@ -153,13 +162,11 @@ def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
             "the recording carries no information about them",
         )
     normalized = jac / scale
-    eigenvalues, eigenvectors = np.linalg.eigh(
-        normalized.T @ normalized
-    )  # the normal matrix: cheap for tall regressors
+    # the normal matrix: cheap for tall regressors
+    eigenvalues, eigenvectors = np.linalg.eigh(normalized.T @ normalized)
     if eigenvalues[0] <= rcond * eigenvalues[-1]:
-        weakest = eigenvectors[:, 0]
         raise UnobservableParameters(
-            [names[i] for i in np.flatnonzero(np.abs(weakest) > 0.3)],
+            [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)],
             "the regressor is singular along a combination of them (too few distinct orientations "
             "or motions)",
             singular_values=np.sqrt(np.clip(eigenvalues[::-1], 0.0, None)),
@@ -169,61 +176,29 @@ def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
 def fit_linear(problem: DynamicProblem) -> np.ndarray:
     """Stage 1: weighted linear least squares at zero tilt; returns ``x`` (θ-space, tilt zero)."""
     x0 = np.zeros(8 + len(problem.free))
-    jac = problem.whitened_jacobian(x0)
     columns = [i for i in range(len(x0)) if i not in (6, 7)]
     target = (problem.wrenches / problem.channel_std).ravel()
     # At fixed tilt the prediction is linear in [bias, θ]: residual = target + J x.
-    x0[columns] = np.linalg.lstsq(jac[:, columns], -target, rcond=None)[0]
+    x0[columns] = np.linalg.lstsq(problem.whitened_jacobian(x0)[:, columns], -target, rcond=None)[0]
     return x0
 
 
-def fit_unconstrained(problem: DynamicProblem, x0: np.ndarray) -> np.ndarray:
-    """Stage 2: nonlinear weighted least squares over ``[bias, U, V, θ_free]``."""
+def fit_nonlinear(problem: DynamicProblem, x0: np.ndarray, phi: bool = False) -> np.ndarray:
+    """Stage 2 (``phi`` False) or 3: nonlinear weighted least squares from ``x0``.
+
+    Stage 2 runs over ``[bias, U, V, θ_free]``; stage 3 is the maximum likelihood over
+    ``[bias, U, V, φ]`` (all ten θ free) and returns the φ-space ``x``.
+    """
     from scipy.optimize import least_squares  # scipy loads where it is used
 
-    solution = least_squares(
+    return least_squares(
         problem.whitened_residuals,
         x0,
         jac=problem.whitened_jacobian,
+        args=(phi,),
         method="lm",
         xtol=1e-14,
         ftol=1e-14,
         gtol=1e-14,
-    )
-    return solution.x
-
-
-def theta_from_phi(phi: np.ndarray) -> np.ndarray:
-    """θ (10,) of log-Cholesky φ."""
-    return parameters_from_log_cholesky(phi)
-
-
-def fit_consistent(problem: DynamicProblem, x0_phi: np.ndarray) -> np.ndarray:
-    """Stage 3: maximum likelihood over ``[bias, U, V, φ]`` (all ten θ free); returns the φ-space
-    ``x``.
-    """
-
-    def to_theta_space(x):
-        return np.concatenate([x[:8], theta_from_phi(x[8:])])
-
-    def residuals(x):
-        return problem.whitened_residuals(to_theta_space(x))
-
-    def jacobian(x):
-        jac = problem.whitened_jacobian(to_theta_space(x))
-        jac[:, 8:] = jac[:, 8:] @ log_cholesky_jacobian(x[8:])
-        return jac
-
-    from scipy.optimize import least_squares
-
-    solution = least_squares(
-        residuals,
-        x0_phi,
-        jac=jacobian,
-        method="lm",
-        xtol=1e-14,
-        ftol=1e-14,
-        gtol=1e-14,
-        max_nfev=2000,
-    )
-    return solution.x
+        max_nfev=2000 if phi else None,
+    ).x

@@ -30,7 +30,7 @@ from ..validation import as_vector
 INERTIAL_PARAMETER_NAMES = ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
 """Names of the ten entries of θ (inertia about the frame origin)."""
 
-_TRIANGLE = ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))
+_TRIANGLE = ((0, 0, 1, 0, 1, 2), (0, 1, 1, 2, 2, 2))  # rows, columns of [xx, xy, yy, xz, yz, zz]
 
 
 def inertia_matrix(values6) -> np.ndarray:
@@ -41,17 +41,13 @@ def inertia_matrix(values6) -> np.ndarray:
 
 def inertia_entries(matrix) -> np.ndarray:
     """Inverse of :func:`inertia_matrix`: ``[xx, xy, yy, xz, yz, zz]`` of a 3×3 matrix."""
-    matrix = np.asarray(matrix, dtype=float)
-    return np.array([matrix[i, j] for i, j in _TRIANGLE])
+    return np.asarray(matrix, dtype=float)[_TRIANGLE]
 
 
 def parameters_from_body(mass: float, center_of_mass, inertia_about_com) -> np.ndarray:
     """θ from mass [kg], COM [m] and the inertia about the COM (3×3) [kg·m²], all in frame S."""
-    inertia = pin.Inertia(
-        float(mass),
-        as_vector(center_of_mass, 3, "center_of_mass"),
-        np.asarray(inertia_about_com, dtype=float),
-    )
+    com = as_vector(center_of_mass, 3, "center_of_mass")
+    inertia = pin.Inertia(float(mass), com, np.asarray(inertia_about_com, dtype=float))
     return np.asarray(inertia.toDynamicParameters(), dtype=float)
 
 
@@ -66,10 +62,12 @@ def body_from_parameters(theta) -> tuple[float, np.ndarray, np.ndarray]:
     if mass <= 0.0:
         raise InvalidInput(f"the mass in the inertial parameters must be positive, got {mass!r} kg")
     com = theta[1:4] / mass
-    about_origin = inertia_matrix(theta[4:10])
     # Parallel-axis theorem: I_origin = I_com + m (|c|² 1 − c cᵀ).
-    about_com = about_origin - mass * (float(com @ com) * np.eye(3) - np.outer(com, com))
-    return mass, com, about_com
+    return (
+        mass,
+        com,
+        inertia_matrix(theta[4:10]) - mass * (com @ com * np.eye(3) - np.outer(com, com)),
+    )
 
 
 def pseudo_inertia(theta) -> np.ndarray:
@@ -115,11 +113,10 @@ def log_cholesky_from_parameters(theta) -> np.ndarray:
             f"its eigenvalues are {np.linalg.eigvalsh(pseudo).tolist()}"
         ) from None
     upper = exchange @ lower @ exchange
-    scale = upper[3, 3]
-    u = upper / scale
+    u = upper / upper[3, 3]
     return np.array(
         [
-            np.log(scale),
+            np.log(upper[3, 3]),
             np.log(u[0, 0]),
             np.log(u[1, 1]),
             np.log(u[2, 2]),
@@ -139,10 +136,8 @@ def nearest_consistent(theta, floor: float = 1e-9) -> np.ndarray:
 
     Used to start the constrained fit when the unconstrained one is inconsistent.
     """
-    pseudo = pseudo_inertia(theta)
-    values, vectors = np.linalg.eigh(pseudo)
+    values, vectors = np.linalg.eigh(pseudo_inertia(theta))
     scale = max(float(np.abs(values).max()), 1e-12)
     clipped = (vectors * np.maximum(values, floor * scale)) @ vectors.T
     sigma, h, mass = clipped[:3, :3], clipped[:3, 3], clipped[3, 3]
-    about_origin = np.trace(sigma) * np.eye(3) - sigma
-    return np.concatenate([[mass], h, inertia_entries(about_origin)])
+    return np.concatenate([[mass], h, inertia_entries(np.trace(sigma) * np.eye(3) - sigma)])

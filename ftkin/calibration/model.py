@@ -108,7 +108,7 @@ class SensorModel:
         g: float = STANDARD_GRAVITY,
     ) -> SensorModel:
         """Build from a tool mass [kg], COM [m, sensor frame], biases and base tilt (U, V) [rad]."""
-        weight = as_positive(tool_mass, "tool_mass") * as_positive(g, "g")
+        weight = as_positive(tool_mass, "tool_mass") * as_positive(g, "g")  # [N]
         gravity = gravity_in_base_from_tilt(weight, float(base_tilt[0]), float(base_tilt[1]))
         return cls(force_offset, torque_offset, gravity, center_of_mass, g)
 
@@ -141,8 +141,7 @@ class SensorModel:
     @property
     def base_tilt_deg(self) -> tuple[float, float]:
         """Base tilt ``(U, V)`` [deg]."""
-        tilt_u, tilt_v = self.base_tilt
-        return float(np.rad2deg(tilt_u)), float(np.rad2deg(tilt_v))
+        return tuple(float(np.rad2deg(angle)) for angle in self.base_tilt)
 
     @property
     def bias(self) -> np.ndarray:
@@ -205,9 +204,7 @@ def tool_gravity(
 
 def predict(rotations: np.ndarray, theta: np.ndarray) -> np.ndarray:
     """``[F0 + Gs, M0 + P × Gs]`` ``(N, 6)`` [N, N·m]: the reading without contact at ``θ``."""
-    gravity, force_offset, torque_offset, com = theta[0:3], theta[3:6], theta[6:9], theta[9:12]
-    weight = gravity_in_sensor(rotations, gravity)  # Gs = R_BSᵀ a
-    return np.hstack([force_offset + weight, torque_offset + cross_rows(com, weight)])
+    return theta[3:9] + tool_gravity(rotations, theta[0:3], theta[9:12])  # [F0, M0] + [Gs, P × Gs]
 
 
 def parameter_jacobian(

@@ -100,13 +100,12 @@ def force_step_cost(
     rotations ``R_i R_Mᵀ``).
     """
     values = forces.reshape(-1)
-    grid = YAW_START_GRID if mode != "none" else np.zeros(1)
     best_cost, best_rotation = np.inf, np.eye(3)
-    for yaw in grid:
+    for yaw in YAW_START_GRID if mode != "none" else np.zeros(1):
         rotation = mount_rotation(np.eye(3), "yaw", [yaw])
         regressor = force_regressor(rotations @ rotation.T)
-        solution, *_ = np.linalg.lstsq(regressor, values, rcond=None)
-        cost = float(np.sum((values - regressor @ solution) ** 2))
+        fitted = regressor @ np.linalg.lstsq(regressor, values, rcond=None)[0]
+        cost = float(np.sum((values - fitted) ** 2))
         if cost < best_cost:
             best_cost, best_rotation = cost, rotation
     return best_cost, best_rotation
@@ -182,25 +181,6 @@ def mount_jacobian(
     return np.concatenate([jac, np.concatenate([d_gravity, skew(com) @ d_gravity], axis=1)], axis=2)
 
 
-def check_information_observable(information: np.ndarray, mode: str, rcond: float = 1e-10) -> None:
-    """Refuse a singular ``(12 + k)`` information matrix, naming the weak parameters (and the poses
-    a mount needs).
-    """
-    names = COMPONENT_NAMES + MOUNT_NAMES[mode]
-    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
-    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
-    if eigenvalues[0] > rcond * eigenvalues[-1]:
-        return
-    involved = [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)]
-    mount_names = [name for name in involved if name.startswith("mount")]
-    reason = (
-        POSES_NEEDED[mode]
-        if mount_names
-        else "the information matrix is singular along a combination of them"
-    )
-    raise UnobservableParameters(involved, reason, singular_values=eigenvalues[::-1])
-
-
 def split_information(information: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Split a ``(12 + k)`` information matrix into θ's marginal information and the mount
     covariance.
@@ -208,20 +188,32 @@ def split_information(information: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Returns the Schur complement ``I_θθ − I_θm I_mm⁻¹ I_mθ`` (12, 12), whose
     inverse is θ's covariance with the mount estimated, and the ``(k, k)``
     covariance of the mount increments [rad²] (the mount block of the inverse).
+
+    Raises:
+        UnobservableParameters: the information matrix is singular (relative to 1e-10), naming
+            the weak parameters (and the poses a mount needs).
     """
-    check_information_observable(information, "yaw" if information.shape[0] == 13 else "full")
-    theta, mount = information[:12, :12], information[12:, 12:]
-    cross = information[:12, 12:]
+    mode = "yaw" if information.shape[0] == 13 else "full"
+    names = COMPONENT_NAMES + MOUNT_NAMES[mode]
+    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
+    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
+    if eigenvalues[0] <= 1e-10 * eigenvalues[-1]:
+        involved = [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)]
+        raise UnobservableParameters(
+            involved,
+            POSES_NEEDED[mode]
+            if any(name.startswith("mount") for name in involved)
+            else "the information matrix is singular along a combination of them",
+            singular_values=eigenvalues[::-1],
+        )
+    theta, mount, cross = information[:12, :12], information[12:, 12:], information[:12, 12:]
     marginal = theta - cross @ np.linalg.solve(mount, cross.T)
-    marginal = 0.5 * (marginal + marginal.T)
     mount_marginal = mount - cross.T @ np.linalg.solve(theta, cross)
-    return marginal, np.linalg.inv(0.5 * (mount_marginal + mount_marginal.T))
+    return 0.5 * (marginal + marginal.T), np.linalg.inv(0.5 * (mount_marginal + mount_marginal.T))
 
 
 def rotation_to_rpy(rotation) -> np.ndarray:
     """URDF roll-pitch-yaw [rad] of a rotation ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
     r = np.asarray(rotation, dtype=float)
     pitch = np.arctan2(-r[2, 0], np.hypot(r[0, 0], r[1, 0]))
-    roll = np.arctan2(r[2, 1], r[2, 2])
-    yaw = np.arctan2(r[1, 0], r[0, 0])
-    return np.array([roll, pitch, yaw])
+    return np.array([np.arctan2(r[2, 1], r[2, 2]), pitch, np.arctan2(r[1, 0], r[0, 0])])

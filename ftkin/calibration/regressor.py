@@ -48,9 +48,8 @@ def body_regressor(velocity, acceleration) -> np.ndarray:
     """
     velocity, _ = as_batch(velocity, 6, "velocity")
     acceleration, _ = as_batch(acceleration, 6, "acceleration")
-    linear_velocity, omega = velocity[:, :3], velocity[:, 3:]
-    linear_acceleration, omega_dot = acceleration[:, :3], acceleration[:, 3:]
-    alpha = linear_acceleration + cross_rows(omega, linear_velocity)
+    omega, omega_dot = velocity[:, 3:], acceleration[:, 3:]
+    alpha = acceleration[:, :3] + cross_rows(omega, velocity[:, :3])  # a_lin + ω × v_lin
     omega_skew = skew(omega)
     out = np.zeros((len(velocity), 6, 10))
     out[:, :3, 0] = alpha
@@ -94,24 +93,20 @@ class MotionSamples:
     sensor_frame: str | None = None
 
     def __post_init__(self):
-        wrenches, _ = as_batch(self.wrenches, 6, "wrenches")
-        rotations, _ = as_rotation_batch(self.rotations)
-        velocities, _ = as_batch(self.velocities, 6, "velocities")
-        accelerations, _ = as_batch(self.accelerations, 6, "accelerations")
-        count = len(wrenches)
-        if not (len(rotations) == len(velocities) == len(accelerations) == count):
+        arrays = {
+            "wrenches": as_batch(self.wrenches, 6, "wrenches")[0],
+            "rotations": as_rotation_batch(self.rotations)[0],
+            "velocities": as_batch(self.velocities, 6, "velocities")[0],
+            "accelerations": as_batch(self.accelerations, 6, "accelerations")[0],
+        }
+        count, rotations, velocities, accelerations = map(len, arrays.values())
+        if not (rotations == velocities == accelerations == count):
             raise InvalidInput(
                 "motion samples need one rotation, velocity and acceleration per wrench: got "
-                f"{count} wrenches, "
-                f"{len(rotations)} rotations, {len(velocities)} velocities, {len(accelerations)} "
-                "accelerations"
+                f"{count} wrenches, {rotations} rotations, {velocities} velocities, "
+                f"{accelerations} accelerations"
             )
-        for name, value in (
-            ("wrenches", wrenches),
-            ("rotations", rotations),
-            ("velocities", velocities),
-            ("accelerations", accelerations),
-        ):
+        for name, value in arrays.items():
             value = np.array(value)
             value.setflags(write=False)
             object.__setattr__(self, name, value)
@@ -166,13 +161,9 @@ def sensor_motion(arm, q: np.ndarray, dq: np.ndarray, ddq: np.ndarray):
     """``R_BS`` ``(N, 3, 3)``, LOCAL velocity and acceleration ``(N, 6)`` of the sensor frame for
     validated arrays.
     """
-    model, data, frame = arm.model, arm.model.createData(), arm.sensor_frame_id
-    count = len(q)
-    rotations = np.empty((count, 3, 3))
-    velocities = np.empty((count, 6))
-    accelerations = np.empty((count, 6))
-    local = pin.ReferenceFrame.LOCAL
-    for i in range(count):
+    model, data, frame, local = arm.model, arm.model.createData(), arm.sensor_frame_id, pin.LOCAL
+    rotations, (velocities, accelerations) = np.empty((len(q), 3, 3)), np.empty((2, len(q), 6))
+    for i in range(len(q)):
         pin.forwardKinematics(model, data, q[i], dq[i], ddq[i])
         rotations[i] = pin.updateFramePlacement(model, data, frame).rotation
         velocities[i] = pin.getFrameVelocity(model, data, frame, local).vector

@@ -38,36 +38,27 @@ LONG_TIME_SPAN = 7 * 86400.0
 _UNITS = (("milliseconds", 1e3), ("microseconds", 1e6), ("nanoseconds", 1e9))
 
 
-def _likely_unit(span: float, smallest: float, largest: float) -> tuple[str | None, float]:
-    """The unit that makes reading times plausible: the one in which every |time| is an epoch stamp
-    (seconds since
-    1970 in 2001–2286), else the unit bringing the span nearest ten minutes (in decades) within a
-    week.
-    """
-    for name, factor in _UNITS:
-        if 1e9 <= smallest / factor and largest / factor < 1e10:
-            return name, factor
-    candidates = [
-        (abs(np.log10(span / factor / 600.0)), name, factor)
-        for name, factor in _UNITS
-        if span / factor <= LONG_TIME_SPAN
-    ]
-    return (min(candidates)[1:]) if candidates else (None, 1.0)
-
-
 def check_time_span(times: np.ndarray) -> None:
     """Refuse reading times spanning more than a year, warn beyond a week: ``t`` is in seconds, not
     ms, µs or ns.
+
+    The hint names the unit in which every ``|t|`` is an epoch stamp (seconds since 1970 in
+    2001–2286), else the unit bringing the span nearest ten minutes (in decades) within a week.
     """
-    span = float(np.max(times) - np.min(times)) if len(times) else 0.0
+    span = float(np.ptp(times))
     if span <= LONG_TIME_SPAN:
         return
-    name, factor = _likely_unit(span, float(np.min(np.abs(times))), float(np.max(np.abs(times))))
-    hint = f"; they look like {name} (divide by {factor:g}: {span / factor:.4g} s)" if name else ""
-    message = (
-        f"the reading times span {span:.4g} s ({span / 86400.0:.4g} days): t must be in "
-        f"seconds{hint}"
+    smallest, largest = float(np.min(np.abs(times))), float(np.max(np.abs(times)))
+    epoch = [(name, f) for name, f in _UNITS if 1e9 <= smallest / f and largest / f < 1e10]
+    near = sorted(
+        ((name, f) for name, f in _UNITS if span / f <= LONG_TIME_SPAN),
+        key=lambda unit: abs(np.log10(span / unit[1] / 600.0)),
     )
+    message = (
+        f"the reading times span {span:.4g} s ({span / 86400.0:.4g} days): t must be in seconds"
+    )
+    for name, factor in (epoch or near)[:1]:  # the likely unit, if any
+        message += f"; they look like {name} (divide by {factor:g}: {span / factor:.4g} s)"
     if span > LONGEST_TIME_SPAN:
         raise InvalidSamples(message)
     logger.warning(message)
@@ -141,20 +132,18 @@ class Samples:
             )
         if len(wrenches) == 0:
             raise InvalidSamples("no samples")
-        pose_ids = self.pose_ids
-        if pose_ids is None:
-            pose_ids = np.arange(len(wrenches))
         try:
-            pose_ids = as_integers(pose_ids, "pose ids")
+            given = np.arange(len(wrenches)) if self.pose_ids is None else self.pose_ids
+            pose_ids = as_integers(given, "pose ids")
         except InvalidInput as error:
             raise InvalidSamples(str(error)) from None
         if pose_ids.shape != (len(wrenches),):
             raise InvalidSamples(
                 f"pose_ids must have shape ({len(wrenches)},), got {pose_ids.shape}"
             )
-        times = self.times
-        if times is not None:
-            times = as_float_array(times, "times [s]").copy()
+        arrays = {"wrenches": wrenches, "rotations": rotations, "pose_ids": pose_ids}
+        if self.times is not None:
+            times = as_float_array(self.times, "times [s]")
             if times.shape != (len(wrenches),):
                 raise InvalidSamples(
                     f"times must have shape ({len(wrenches)},) (one per reading) [s], got "
@@ -165,23 +154,14 @@ class Samples:
                     f"times must be finite [s]; reading {int(np.argmin(np.isfinite(times)))} is not"
                 )
             check_time_span(times)
-            times.setflags(write=False)
-            object.__setattr__(self, "times", times)
-        # Frozen copies: freezing the caller's own arrays (or sharing them) would change them behind
-        # their back.
-        wrenches, rotations, pose_ids = (
-            array if array.base is None and array is not given else array.copy()
-            for array, given in (
-                (wrenches, self.wrenches),
-                (rotations, self.rotations),
-                (pose_ids, self.pose_ids),
-            )
-        )
-        for array in (wrenches, rotations, pose_ids):
+            arrays["times"] = times
+        for name, array in arrays.items():
+            # Frozen copies: freezing the caller's own arrays (or sharing them) would change them
+            # behind their back.
+            if array.base is not None or array is self.__dict__[name]:
+                array = array.copy()
             array.setflags(write=False)
-        object.__setattr__(self, "wrenches", wrenches)
-        object.__setattr__(self, "rotations", rotations)
-        object.__setattr__(self, "pose_ids", pose_ids)
+            object.__setattr__(self, name, array)
 
     def __len__(self) -> int:
         return len(self.wrenches)
@@ -206,22 +186,27 @@ class Samples:
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
         if rotations is None:
             rotations = arm.rotation_sensor_to_base(configurations)
-        urdf = str(arm.urdf_path) if arm.urdf_path is not None else None
+        urdf = None if arm.urdf_path is None else str(arm.urdf_path)
         return cls(wrenches, rotations, pose_ids, configurations, urdf, arm.sensor_frame, times)
 
     @classmethod
     def from_quaternions(cls, quaternions_wxyz, wrenches, pose_ids=None, times=None) -> Samples:
         """From ``(N, 4)`` unit quaternions ``[qw, qx, qy, qz]`` of the sensor in the base frame."""
-        rotations = quaternion_to_matrix(quaternions_wxyz)
-        return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids, times=times)
+        return cls(
+            wrenches,
+            quaternion_to_matrix(quaternions_wxyz).reshape(-1, 3, 3),
+            pose_ids,
+            times=times,
+        )
 
     @classmethod
     def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None, times=None) -> Samples:
         """From the paper's commanded ``(N, 3)`` Euler angles ``[α, β, γ]`` [deg], ``R = Rz Ry
         Rx``.
         """
-        rotations = euler_zyx_deg_to_matrix(angles_deg)
-        return cls(wrenches, rotations.reshape(-1, 3, 3), pose_ids, times=times)
+        return cls(
+            wrenches, euler_zyx_deg_to_matrix(angles_deg).reshape(-1, 3, 3), pose_ids, times=times
+        )
 
     # -------------------------------------------------------------- grouping
     def pose_averages(self) -> PoseAverages:
@@ -234,22 +219,18 @@ class Samples:
             self.pose_ids, return_index=True, return_inverse=True, return_counts=True
         )
         order = np.argsort(first)  # keep order of first appearance
-        rank = np.empty_like(order)
-        rank[order] = np.arange(len(order))
-        group = rank[inverse]
-        counts = counts[order]
-        sums = np.zeros((len(unique), 6))
-        np.add.at(sums, group, self.wrenches)
-        means = sums / counts[:, None]
-        squares = np.zeros((len(unique), 6))
-        np.add.at(squares, group, (self.wrenches - means[group]) ** 2)
+        group, counts = np.argsort(order)[inverse], counts[order]
+
+        def total(values: np.ndarray) -> np.ndarray:  # the sum of values over each pose
+            out = np.zeros((len(unique),) + values.shape[1:])
+            np.add.at(out, group, values)
+            return out
+
+        means = total(self.wrenches) / counts[:, None]
         with np.errstate(invalid="ignore", divide="ignore"):
-            spread = np.sqrt(squares / (counts[:, None] - 1))
-        rotation_sums = np.zeros((len(unique), 3, 3))
-        np.add.at(rotation_sums, group, self.rotations)
-        u, _, vt = np.linalg.svd(rotation_sums)
-        det = np.linalg.det(u @ vt)
-        u[:, :, 2] *= det[:, None]
+            spread = np.sqrt(total((self.wrenches - means[group]) ** 2) / (counts[:, None] - 1))
+        u, _, vt = np.linalg.svd(total(self.rotations))
+        u[:, :, 2] *= np.linalg.det(u @ vt)[:, None]
         mean_rotations = u @ vt
         cosines = (np.einsum("nij,nij->n", mean_rotations[group], self.rotations) - 1.0) / 2.0
         deviation = np.arccos(np.clip(cosines, -1.0, 1.0))
@@ -261,11 +242,7 @@ class Samples:
                 f"{np.rad2deg(MAX_POSE_SPREAD):.0f}°): a pose id must "
                 "group readings of one static pose; check the pose column"
             )
-        pose_times = None
-        if self.times is not None:
-            time_sums = np.zeros(len(unique))
-            np.add.at(time_sums, group, self.times)
-            pose_times = time_sums / counts
+        pose_times = None if self.times is None else total(self.times) / counts
         return PoseAverages(unique[order], mean_rotations, means, counts, spread, pose_times)
 
 
