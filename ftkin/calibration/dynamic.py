@@ -167,6 +167,19 @@ def _refuse_non_positive_mass(motion: MotionSamples, mass: float, g: float) -> N
     )
 
 
+def _checked_motion(motion, noise) -> MotionSamples:
+    """``motion`` as :class:`MotionSamples` (static :class:`Samples` at rest), ``noise`` checked."""
+    if isinstance(motion, Samples):
+        motion = MotionSamples.from_static(motion)
+    if not isinstance(motion, MotionSamples):
+        raise InvalidInput(
+            f"motion must be an ftkin MotionSamples or Samples, got {type(motion).__name__}"
+        )
+    if noise is not None and not isinstance(noise, SensorNoise):
+        raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
+    return motion
+
+
 def calibrate_dynamic(
     motion: MotionSamples | Samples,
     *,
@@ -194,14 +207,7 @@ def calibrate_dynamic(
             data with ``estimate_inertia=True`` names the inertia).
         InvalidInput: bad arguments, or a non-positive mass estimate.
     """
-    if isinstance(motion, Samples):
-        motion = MotionSamples.from_static(motion)
-    if not isinstance(motion, MotionSamples):
-        raise InvalidInput(
-            f"motion must be an ftkin MotionSamples or Samples, got {type(motion).__name__}"
-        )
-    if noise is not None and not isinstance(noise, SensorNoise):
-        raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
+    motion = _checked_motion(motion, noise)
     g = as_positive(g, "g")
     problem = DynamicProblem(
         motion.wrenches,
