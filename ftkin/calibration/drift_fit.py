@@ -39,7 +39,7 @@ import numpy as np
 
 from ..exceptions import UnobservableParameters
 from .drift import BiasDrift, DriftModel, auto_candidates, parse_drift, trend_columns
-from .information import SensorNoise
+from .information import SensorNoise, invert_information
 from .model import COMPONENT_NAMES, SensorModel, parameter_jacobian, predict
 from .random_walk import log_likelihood, smooth, walk_gains, whiten
 from .samples import PoseAverages
@@ -71,6 +71,11 @@ NOISE_WALK_RATIO = 10.0
 estimated noise cannot be told from the walk."""
 
 _GROUPS = (slice(0, 3), slice(3, 6))
+
+_UNTOLD = (
+    "the drift model cannot be told apart from them with these poses and times (record the poses "
+    "in a mixed order, or choose a simpler drift model)"
+)
 
 
 @dataclass(frozen=True)
@@ -126,10 +131,11 @@ class DriftFit:
     Attributes:
         model: ``θ`` with the bias at the end of the recording.
         problem: Whitened residuals and hat blocks (:class:`WhitenedFit`).
-        channel_std: ``(6,)`` per-reading noise [N, N·m].
+        noise: Per-reading noise used [N, N·m].
         noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
         noise_dof: Degrees of freedom of the noise estimate.
         information: ``(12, 12)`` information of ``θ`` with the drift parameters marginalized.
+        covariance: ``(12, 12)`` covariance of ``θ`` (the inverse of :attr:`information`).
         parameter_count: Fitted parameters (``θ``, coefficients, rates, estimated noise levels).
         log_likelihood: Gaussian log-likelihood of the pose means at the fit.
         drift: The bias trajectory.
@@ -138,10 +144,11 @@ class DriftFit:
 
     model: SensorModel
     problem: WhitenedFit
-    channel_std: np.ndarray
+    noise: SensorNoise
     noise_source: str
     noise_dof: float
     information: np.ndarray
+    covariance: np.ndarray
     parameter_count: int
     log_likelihood: float
     drift: BiasDrift
@@ -149,41 +156,10 @@ class DriftFit:
     loss: str = "linear"
 
     @property
-    def noise(self) -> SensorNoise:
-        """Per-reading noise used [N, N·m]."""
-        return SensorNoise(self.channel_std[:3], self.channel_std[3:])
-
-    @property
-    def covariance(self) -> np.ndarray:
-        """``(12, 12)`` covariance of ``θ``."""
-        return np.linalg.inv(self.information)
-
-    @property
     def bic(self) -> float:
         """Bayesian information criterion ``−2 log L + k log(6P)``."""
         size = self.problem.residuals.size
         return -2.0 * self.log_likelihood + self.parameter_count * np.log(size)
-
-
-def invert_information(information: np.ndarray, names: list[str]) -> np.ndarray:
-    """Inverse of an information matrix, or :class:`UnobservableParameters` when it is singular."""
-    scale = np.sqrt(np.diag(information))
-    if np.any(scale == 0):
-        missing = [names[i] for i in np.flatnonzero(scale == 0)]
-        raise UnobservableParameters(missing, "the poses carry no information about them")
-    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
-    if eigenvalues[0] <= 1e-12 * eigenvalues[-1]:
-        raise UnobservableParameters(
-            [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)],
-            "the drift model cannot be told apart from them with these poses and times (record the "
-            "poses in a mixed order, or choose a simpler drift model)",
-            singular_values=eigenvalues[::-1],
-        )
-    return (eigenvectors / eigenvalues) @ eigenvectors.T / np.outer(scale, scale)
-
-
-def _gaussian_log_likelihood(residuals: np.ndarray, variance: np.ndarray) -> float:
-    return float(-0.5 * np.sum(residuals**2 / variance + np.log(2.0 * np.pi * variance)))
 
 
 def _pooled_std(squares: np.ndarray, dof: np.ndarray, floor: np.ndarray) -> np.ndarray:
@@ -194,14 +170,16 @@ def _pooled_std(squares: np.ndarray, dof: np.ndarray, floor: np.ndarray) -> np.n
     return np.maximum(np.repeat(std, 3), floor)
 
 
-def constant_log_likelihood(poses: PoseAverages, start: DriftStart) -> float:
-    """Log-likelihood of the constant-bias fit (at the ML noise when the noise is estimated)."""
-    residuals = poses.wrenches - predict(poses.rotations, start.theta)
-    counts = np.asarray(poses.counts, dtype=float)[:, None]
+def _log_likelihood(residuals: np.ndarray, counts: np.ndarray, start: DriftStart) -> float:
+    """Gaussian log-likelihood of pose-mean ``residuals`` ``(P, 6)`` read ``counts`` ``(P,)``
+    times, at the start's noise or, when the noise is estimated, at its ML value.
+    """
+    counts = counts[:, None]
     std = start.channel_std
     if start.estimated:
         std = _pooled_std(np.sum(residuals**2 * counts, 0), np.full(6, len(counts)), start.floor)
-    return _gaussian_log_likelihood(residuals, std**2 / counts)
+    variance = std**2 / counts
+    return float(-0.5 * np.sum(residuals**2 / variance + np.log(2.0 * np.pi * variance)))
 
 
 class SortedPoses:
@@ -213,8 +191,7 @@ class SortedPoses:
         self.rotations = poses.rotations[self.order]
         self.wrenches = poses.wrenches[self.order]
         self.counts = np.asarray(poses.counts, dtype=float)[self.order]
-        span = float(self.times[-1] - self.times[0])
-        self.scale = span if span > 0 else 1.0
+        self.scale = float(self.times[-1] - self.times[0]) or 1.0
         self.basis = model.basis((self.times - self.times[-1]) / self.scale)
         self.trend = trend_columns(self.basis)
         self.names = list(COMPONENT_NAMES) + [
@@ -222,9 +199,7 @@ class SortedPoses:
         ]
 
     def unsort(self, array: np.ndarray) -> np.ndarray:
-        out = np.empty_like(array)
-        out[self.order] = array
-        return out
+        return array[np.argsort(self.order)]
 
     def raw_residuals(self, phi: np.ndarray) -> np.ndarray:
         """``(P, 6)`` readings minus ``θ``'s prediction minus the trend [N, N·m]."""
@@ -317,21 +292,23 @@ def _collapse(data: SortedPoses, std, rate, start: DriftStart) -> str | None:
 
 
 def _noise_without_walk(data: SortedPoses, phi, start: DriftStart):
-    """Gauss–Newton with a leverage-corrected noise re-estimated between passes (if estimated)."""
+    """Gauss–Newton with a leverage-corrected noise re-estimated between passes (if estimated);
+    the rates (zero), noise and ``φ``, as :func:`_search_walk` returns them.
+    """
     std = np.asarray(start.channel_std, dtype=float)
     for _ in range(NOISE_PASSES if start.estimated else 1):
-        fit = gauss_newton(data, phi, std, np.zeros(6), FINAL_ITERATIONS)
-        phi, jacobian = fit[2], fit[4]
+        _, _, phi, _, jacobian, _ = gauss_newton(data, phi, std, np.zeros(6), FINAL_ITERATIONS)
         if not start.estimated:
             break
-        covariance = invert_information(np.einsum("pki,pkj->ij", jacobian, jacobian), data.names)
+        information = np.einsum("pki,pkj->ij", jacobian, jacobian)
+        covariance = invert_information(information, data.names, _UNTOLD)
         leverage = np.einsum("pki,ij,pkj->pk", jacobian, covariance, jacobian)
         squares = np.sum(data.raw_residuals(phi) ** 2 * data.counts[:, None], axis=0)
         new = _pooled_std(squares, np.sum(1.0 - leverage, axis=0), start.floor)
         converged, std = np.allclose(new, std, rtol=1e-3), new
         if converged:
             break
-    return std, phi
+    return np.zeros(6), std, phi
 
 
 def fit_drift_model(
@@ -340,20 +317,14 @@ def fit_drift_model(
     """Fit ``θ`` and the drift ``model`` from the constant-bias ``start`` (see the module)."""
     data = SortedPoses(poses, model)
     phi = np.concatenate([start.theta, np.zeros(6 * model.columns)])
-    if model.walk:
-        rate, std, phi = _search_walk(data, phi, start)
-    else:
-        (std, phi), rate = _noise_without_walk(data, phi, start), np.zeros(6)
+    rate, std, phi = (_search_walk if model.walk else _noise_without_walk)(data, phi, start)
     _, log_l, phi, white, jacobian, gains = gauss_newton(data, phi, std, rate, FINAL_ITERATIONS)
     flat = jacobian.reshape(-1, len(phi))
-    covariance = invert_information(flat.T @ flat, data.names)
+    covariance = invert_information(flat.T @ flat, data.names, _UNTOLD)
     hat = jacobian @ covariance @ np.transpose(jacobian, (0, 2, 1))
-    leverage = np.diagonal(hat, axis1=1, axis2=2)
     residuals = data.raw_residuals(phi)
     if start.estimated and not model.walk:  # the likelihood at the ML noise, for the BIC
-        squares = np.sum(residuals**2 * data.counts[:, None], axis=0)
-        ml_std = _pooled_std(squares, np.full(6, len(data.times)), start.floor)
-        log_l = _gaussian_log_likelihood(residuals, ml_std**2 / data.counts[:, None])
+        log_l = _log_likelihood(residuals, data.counts, start)
     walk, variance = smooth(gains, data.times, residuals, rate)
     rows = np.column_stack([np.ones(len(data.times)), data.basis])
     trend_variance = np.column_stack(
@@ -375,14 +346,15 @@ def fit_drift_model(
         coefficients=coefficients if model.columns else None,
         time_scale=data.scale,
     )
-    dof = min(float(np.sum(1.0 - leverage[:, g])) for g in _GROUPS)
+    dof = min(float(np.sum(1.0 - np.einsum("pkk->pk", hat)[:, g])) for g in _GROUPS)
     return DriftFit(
         SensorModel.from_vector(phi[:12]),
         WhitenedFit(data.unsort(white), data.unsort(hat)),
-        std,
+        SensorNoise(std[:3], std[3:]),
         start.noise_source,
         dof if start.estimated else start.noise_dof,
         np.linalg.inv(covariance[:12, :12]),
+        covariance[:12, :12],
         len(phi) + 2 * model.walk + 2 * start.estimated,
         log_l,
         drift,
@@ -392,17 +364,15 @@ def fit_drift_model(
 
 def _fit_candidates(models, poses: PoseAverages, start: DriftStart, selected_by: str):
     """Fits and BIC of the candidate ``models`` that can be fitted, and why the others cannot."""
-    auto = selected_by == "auto"
-    observations = 6 * len(poses)
+    auto, observations = selected_by == "auto", 6 * len(poses)
     criteria, fits, notes = {}, {}, []
     for model in models:
-        if model.name == "none":
-            count = 12 + 2 * start.estimated
-            criteria["none"] = -2.0 * constant_log_likelihood(poses, start) + count * np.log(
-                observations
-            )
-            continue
         count = 12 + 6 * model.columns + 2 * model.walk + 2 * start.estimated
+        if model.name == "none":
+            residuals = poses.wrenches - predict(poses.rotations, start.theta)
+            log_l = _log_likelihood(residuals, np.asarray(poses.counts, dtype=float), start)
+            criteria["none"] = -2.0 * log_l + count * np.log(observations)
+            continue
         if auto and (count > observations - 6 or (model.walk and len(poses) > MAX_AUTO_WALK_POSES)):
             continue  # the walk's filter costs a Python pass per pose and evaluation
         try:
