@@ -59,9 +59,6 @@ RESIDUAL_NOISE_GROUPS = (_FORCE, _TORQUE)
 forces and torques. (Per-channel levels from 12 poses are too noisy as weights:
 they cost a quarter of the efficiency in ``benchmarks/bench_estimator.py``.)"""
 
-NOISE_SOURCES = ("given", "spread", "residuals")
-"""Where the noise levels of a fit came from."""
-
 
 @dataclass(frozen=True)
 class WeightedProblem:
@@ -193,12 +190,10 @@ class MlFit:
 
 def _robust_weights(whitened: np.ndarray, loss: str) -> np.ndarray:
     """IRLS weights ``ρ'(z)`` of scipy's losses at ``z = (r / scale)²``."""
+    if loss == "linear":
+        return np.ones_like(whitened)
     z = (whitened / ROBUST_LOSS_SCALE) ** 2
-    if loss == "soft_l1":
-        return 1.0 / np.sqrt(1.0 + z)
-    if loss == "huber":
-        return np.where(z <= 1.0, 1.0, 1.0 / np.sqrt(np.maximum(z, 1.0)))
-    return np.ones_like(whitened)
+    return 1.0 / np.sqrt(1.0 + z if loss == "soft_l1" else np.maximum(z, 1.0))  # else huber
 
 
 def noise_from_spread(poses: PoseAverages) -> tuple[np.ndarray, float] | None:
@@ -211,13 +206,11 @@ def noise_from_spread(poses: PoseAverages) -> tuple[np.ndarray, float] | None:
     dof = float(np.sum(poses.counts[repeated] - 1))
     if dof < MIN_SPREAD_DOF:
         return None
-    variance = (
+    std = np.sqrt(
         np.sum((poses.counts[repeated] - 1)[:, None] * poses.spread[repeated] ** 2, axis=0) / dof
     )
     scale = np.maximum(np.abs(poses.wrenches).max(axis=0), 1e-300)
-    if not np.all(np.isfinite(variance)) or np.any(np.sqrt(variance) <= 1e-12 * scale):
-        return None
-    return np.sqrt(variance), dof
+    return (std, dof) if np.all(np.isfinite(std) & (std > 1e-12 * scale)) else None
 
 
 def noise_from_residuals(
@@ -232,36 +225,18 @@ def noise_from_residuals(
     lowest value (default :func:`~ftkin.calibration.information.noise_floor`).
     Returns also the smaller group's degrees of freedom.
     """
-    residuals = problem.residuals(theta)
     leverage = np.clip(np.diagonal(problem.hat_blocks(theta), axis1=1, axis2=2), 0.0, 1.0 - 1e-9)
-    scaled = residuals * np.sqrt(problem.counts)[:, None]
-    std = np.empty(6)
-    dofs = []
+    scaled = problem.residuals(theta) * np.sqrt(problem.counts)[:, None]
     floor = noise_floor(problem.wrenches) if floor is None else np.asarray(floor, dtype=float)
-    for group in RESIDUAL_NOISE_GROUPS:
-        dof = float(np.sum(1.0 - leverage[:, group]))
+    std, dofs = np.empty(6), [float(np.sum(1.0 - leverage[:, g])) for g in RESIDUAL_NOISE_GROUPS]
+    for group, dof in zip(RESIDUAL_NOISE_GROUPS, dofs):
         if robust:
             studentized = np.abs(scaled[:, group]) / np.sqrt(1.0 - leverage[:, group])
             value = 1.4826 * float(np.median(studentized))
         else:
             value = float(np.sqrt(np.sum(scaled[:, group] ** 2) / max(dof, 1e-12)))
         std[group] = max(value, float(floor[group][0]))
-        dofs.append(dof)
     return std, min(dofs)
-
-
-def _information(
-    problem: WeightedProblem, theta: np.ndarray, loss: str
-) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """Robust weights ``(P, 6)``, θ's Fisher information ``(12, 12)`` (marginal with a mount) and
-    the mount covariance ``(k, k)`` [rad²] (None without a mount) at the solution.
-    """
-    robust_weights = _robust_weights(problem.whitened_residuals(theta).reshape(-1, 6), loss)
-    jac = problem.whitened_jacobian(theta) * np.sqrt(robust_weights).reshape(-1, 1)
-    information = jac.T @ jac
-    if problem.mode == "none":
-        return robust_weights, information, None
-    return robust_weights, *split_information(information)
 
 
 def _solve(problem: WeightedProblem, start: np.ndarray, loss: str) -> tuple[np.ndarray, int]:
@@ -301,8 +276,10 @@ def _noise(poses: PoseAverages, problem, theta0, noise, loss: str, floor):
         return (*spread, "spread")
     # rough levels (no leverage correction) to weight the channels for the leverages
     rms = np.sqrt(np.mean(problem.residuals(theta0) ** 2 * problem.counts[:, None], axis=0))
-    rough = np.repeat([rms[_FORCE].mean(), rms[_TORQUE].mean()], 3)
-    rough = np.maximum(rough, 1e-12 * np.maximum(1.0, np.abs(poses.wrenches).max(axis=0)))
+    rough = np.maximum(
+        np.repeat([rms[_FORCE].mean(), rms[_TORQUE].mean()], 3),
+        1e-12 * np.maximum(1.0, np.abs(poses.wrenches).max(axis=0)),
+    )
     problem = replace(problem, channel_std=rough)
     return (*noise_from_residuals(problem, theta0, loss != "linear", floor), "residuals")
 
@@ -333,11 +310,11 @@ def fit_ml(
     """
     if loss not in LOSSES:
         raise InvalidInput(f"unknown loss {loss!r}; expected one of {', '.join(LOSSES)}")
-    counts = np.asarray(poses.counts, dtype=float)
     if check_mount_mode(estimate_mount) == "none":
         mount0, start = np.eye(3), fit_linear(poses, g)
     else:
         mount0, start = mount_start(poses, g)
+    counts = np.asarray(poses.counts, dtype=float)
     problem = WeightedProblem(
         poses.rotations, poses.wrenches, counts, np.ones(6), mount0, estimate_mount
     )
@@ -356,7 +333,12 @@ def fit_ml(
         theta, more = _solve(problem, theta, loss)
         evaluations += more
     problem, theta = problem.recentred(theta)
-    robust_weights, information, mount_covariance = _information(problem, theta, loss)
+    # θ's information at the solution, robust weights included (marginal with a mount)
+    robust_weights = _robust_weights(problem.whitened_residuals(theta).reshape(-1, 6), loss)
+    jac = problem.whitened_jacobian(theta) * np.sqrt(robust_weights).reshape(-1, 1)
+    information, mount_covariance = jac.T @ jac, None
+    if estimate_mount != "none":
+        information, mount_covariance = split_information(information)
     return MlFit(
         model=SensorModel.from_vector(theta, g),
         start=start,
