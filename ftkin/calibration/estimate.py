@@ -147,7 +147,11 @@ class CalibrationOptions:
                 "is already in them (absorbed)"
             )
         auto, timed = self.drift == "auto", samples.times is not None
-        if self.drift == "none" or (auto and not self._auto_fits_drift(samples)):
+        plain = self.method == "ml" and self.loss == "linear" and not self.drop_outliers
+        auto_fits = (
+            plain and timed and np.ptp(samples.times) > 0.0 and self.estimate_mount == "none"
+        )
+        if self.drift == "none" or (auto and not auto_fits):  # auto looks for a drift only then
             return ()
         if not timed:
             raise InvalidInput(
@@ -167,12 +171,6 @@ class CalibrationOptions:
             logger.warning("%s; drift='auto' keeps a constant bias", error)  # not asked for
             return ()
         return drift_candidates(self.drift)
-
-    def _auto_fits_drift(self, samples: Samples) -> bool:
-        """``auto`` looks for a drift: times that differ, the plain ``ml`` fit, no mount."""
-        plain = self.method == "ml" and self.loss == "linear" and not self.drop_outliers
-        timed = samples.times is not None and np.ptp(samples.times) > 0.0
-        return plain and timed and self.estimate_mount == "none"
 
     def noise_floor(self, wrenches) -> np.ndarray:
         """``(6,)`` lowest noise an estimate may take [N, N·m]: the numeric floor, or the
@@ -212,10 +210,8 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
     options = replace(options or CalibrationOptions(), **keywords)
     drift_models = options.check(samples)
     raw_poses = samples.pose_averages()
-    poses = replace(
-        raw_poses,
-        wrenches=raw_poses.wrenches * reading_signs(options.sensor_sign, options.flip_axis),
-    )
+    signs = reading_signs(options.sensor_sign, options.flip_axis)
+    poses = replace(raw_poses, wrenches=raw_poses.wrenches * signs)
     check = detect_sign_and_handedness(
         raw_poses,
         sensor_sign=options.sensor_sign,
@@ -229,10 +225,8 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
     if options.method == "linear":
         static = _Static(fit_linear(poses, options.g), None, None, np.eye(3), None, None, poses)
     else:
-        static = _fit_static(poses, options, log=not drift_models)
-    if drift_models:
-        static = _fit_drift(static, drift_models, options)
-    elif samples.times is not None:
+        static = _fit_static(poses, options, drift_models)
+    if samples.times is not None and static.drift is None:
         static = replace(static, drift=_constant_trajectory(static, {}))
     if static.drift is not None:
         span = np.array([np.min(samples.times), np.max(samples.times)])
@@ -256,24 +250,22 @@ class _Static:
     drift: BiasDrift | None = None
 
 
-def _noise_free(poses: PoseAverages) -> bool:
-    """True when the raw readings are noise-free: repeated readings per pose, all identical."""
-    repeated = poses.counts > 1
-    scale = np.maximum(np.abs(poses.wrenches).max(axis=0), 1.0)
-    return bool(np.any(repeated) and np.all(poses.spread[repeated] <= 1e-12 * scale))
-
-
-def _fit_static(poses: PoseAverages, options: CalibrationOptions, log: bool) -> _Static:
-    """The ``ml`` fit with a constant bias (and any mount), refitted without outliers if asked."""
+def _fit_static(poses: PoseAverages, options: CalibrationOptions, drift_models) -> _Static:
+    """The ``ml`` fit with a constant bias (and any mount), refitted without outliers if asked,
+    then with the best of the ``drift_models`` (:func:`_fit_drift`) if any.
+    """
     floor = options.noise_floor(poses.wrenches)
+    # noise-free raw readings: repeated readings per pose, all identical
+    repeated, scale = poses.counts > 1, np.maximum(np.abs(poses.wrenches).max(axis=0), 1.0)
+    noise_free = bool(np.any(repeated) and np.all(poses.spread[repeated] <= 1e-12 * scale))
     fit = fit_ml(poses, options.g, options.noise, options.loss, options.estimate_mount, floor)
-    noise_free = _noise_free(poses)
     diagnostics, covariance = diagnose(
-        fit, poses.pose_ids, log=log, wrenches=poses.wrenches, noise_free=noise_free
+        fit, poses.pose_ids, log=not drift_models, wrenches=poses.wrenches, noise_free=noise_free
     )
     if options.drop_outliers and diagnostics.outlier_pose_ids:
         dropped = diagnostics.outlier_pose_ids
-        poses = _subset(poses, ~np.isin(poses.pose_ids, dropped))
+        keep = ~np.isin(poses.pose_ids, dropped)
+        poses = replace(poses, **{k: v[keep] for k, v in vars(poses).items() if v is not None})
         fit = fit_ml(poses, options.g, options.noise, options.loss, options.estimate_mount, floor)
         diagnostics, covariance = diagnose(
             fit, poses.pose_ids, dropped, wrenches=poses.wrenches, noise_free=noise_free
@@ -281,45 +273,28 @@ def _fit_static(poses: PoseAverages, options: CalibrationOptions, log: bool) -> 
     mount_covariance = fit.mount_covariance
     if mount_covariance is not None:  # the same goodness-of-fit scaling as θ
         mount_covariance = mount_covariance * diagnostics.covariance_scale
-        diagnostics = _with_mount_warning(diagnostics, options.estimate_mount, mount_covariance)
-    return _Static(
+        sigma = np.rad2deg(np.sqrt(np.clip(np.diag(mount_covariance), 0.0, None)))
+        weak = [
+            f"{name} ± {value:.2g}°"
+            for name, value in zip(MOUNT_NAMES[options.estimate_mount], sigma)
+            if value > MOUNT_STD_WARNING_DEG
+        ]
+        if weak:
+            message = (
+                f"the mount is poorly determined ({', '.join(weak)}): "
+                f"{POSES_NEEDED[options.estimate_mount]}"
+            )
+            logger.warning(message)
+            diagnostics = replace(diagnostics, warnings=diagnostics.warnings + (message,))
+    static = _Static(
         fit.model, fit, diagnostics, fit.mount_rotation, mount_covariance, covariance, poses
     )
+    return _fit_drift(static, drift_models, floor, noise_free, options) if drift_models else static
 
 
-def _with_mount_warning(
-    diagnostics: FitDiagnostics, mode: str, covariance: np.ndarray
-) -> FitDiagnostics:
-    """Add a warning for mount angles with a standard error above :data:`MOUNT_STD_WARNING_DEG`."""
-    sigma = np.rad2deg(np.sqrt(np.clip(np.diag(covariance), 0.0, None)))
-    weak = [
-        f"{name} ± {value:.2g}°"
-        for name, value in zip(MOUNT_NAMES[mode], sigma)
-        if value > MOUNT_STD_WARNING_DEG
-    ]
-    if not weak:
-        return diagnostics
-    message = f"the mount is poorly determined ({', '.join(weak)}): {POSES_NEEDED[mode]}"
-    logger.warning(message)
-    return replace(diagnostics, warnings=diagnostics.warnings + (message,))
-
-
-def _subset(poses: PoseAverages, keep: np.ndarray) -> PoseAverages:
-    times = poses.times[keep] if poses.times is not None else None
-    return PoseAverages(
-        poses.pose_ids[keep],
-        poses.rotations[keep],
-        poses.wrenches[keep],
-        poses.counts[keep],
-        poses.spread[keep],
-        times,
-    )
-
-
-def _fit_drift(static: _Static, models: tuple, options: CalibrationOptions) -> _Static:
+def _fit_drift(static: _Static, models: tuple, floor, noise_free: bool, options) -> _Static:
     """The constant-bias fit ``static`` with the best of the drift ``models`` (or kept)."""
     poses, fit = static.poses, static.fit
-    floor = options.noise_floor(poses.wrenches)
     start = DriftStart(
         fit.model.to_vector(),
         np.asarray(fit.problem.channel_std),
@@ -338,11 +313,16 @@ def _fit_drift(static: _Static, models: tuple, options: CalibrationOptions) -> _
             poses.pose_ids,
             parameter_count=drift_fit.parameter_count,
             wrenches=poses.wrenches,
-            noise_free=_noise_free(poses),
+            noise_free=noise_free,
         )
         model = SensorModel.from_vector(drift_fit.model.to_vector(), options.g)
-        static = replace(static, model=model, diagnostics=diagnostics, covariance=covariance)
-        static = replace(static, drift=drift_fit.drift)
+        static = replace(
+            static,
+            model=model,
+            diagnostics=diagnostics,
+            covariance=covariance,
+            drift=drift_fit.drift,
+        )
     warnings = static.diagnostics.warnings + notes
     return replace(static, diagnostics=replace(static.diagnostics, warnings=warnings))
 
@@ -365,11 +345,9 @@ def _constant_trajectory(static: _Static, criteria: dict) -> BiasDrift:
 def _result(samples: Samples, options: CalibrationOptions, static: _Static) -> CalibrationResult:
     model, trajectory = static.model, static.drift
     poses, rotations = static.poses, static.poses.rotations @ static.mount.T
-    if trajectory is None or trajectory.model == "none":
-        residuals = poses.wrenches - model.predict(rotations)
-    else:
-        gravity = model.tool_gravity_wrench(rotations)
-        residuals = poses.wrenches - gravity - trajectory.bias_at(poses.times)
+    constant = trajectory is None or trajectory.model == "none"
+    bias = model.bias if constant else trajectory.bias_at(poses.times)
+    residuals = poses.wrenches - model.tool_gravity_wrench(rotations) - bias
     return CalibrationResult(
         force_offset=model.force_offset,
         torque_offset=model.torque_offset,
