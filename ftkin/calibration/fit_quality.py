@@ -65,49 +65,39 @@ def _f_sf(ratio, dfn, dfd):
     ratio, dfn, dfd = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (ratio, dfn, dfd)))
     large = ~np.isfinite(dfd) | (dfd > 1e7)
     with np.errstate(invalid="ignore"):
-        finite_dfd = np.where(large, 1.0, dfd)
-        out = np.where(
-            large, special.chdtrc(dfn, ratio * dfn), special.fdtrc(dfn, finite_dfd, ratio)
-        )
-    return out
+        chi_square = special.chdtrc(dfn, ratio * dfn)
+        return np.where(large, chi_square, special.fdtrc(dfn, np.where(large, 1.0, dfd), ratio))
 
 
 def _block_scales(theta: np.ndarray) -> np.ndarray:
     """``(12,)`` scale each parameter's standard error is judged against."""
     weight = float(np.linalg.norm(theta[0:3]))
     com = max(float(np.linalg.norm(theta[9:12])), MIN_COM_SCALE)
-    scales = [
-        weight,
-        max(float(np.linalg.norm(theta[3:6])), weight),
-        max(float(np.linalg.norm(theta[6:9])), weight * com),
-        com,
-    ]
-    return np.repeat(np.maximum(scales, 1e-300), 3)
+    force, torque = (float(np.linalg.norm(theta[part])) for part in (slice(3, 6), slice(6, 9)))
+    return np.repeat(
+        np.maximum([weight, max(force, weight), max(torque, weight * com), com], 1e-300), 3
+    )
 
 
-def _pose_statistics(whitened, hat, fit_ok, source, noise_dof, parameter_count=12):
-    """Per-pose studentized statistics: normalized residual [σ], p-value and channel leverages.
+def _pose_statistics(whitened, hat, fit_ok, source, noise_dof, dof):
+    """Per-pose studentized statistics: normalized residual [σ] and p-value.
 
-    ``hat`` holds the ``(P, 6, 6)`` diagonal blocks of the hat matrix.
+    ``hat`` holds the ``(P, 6, 6)`` diagonal blocks of the hat matrix, ``dof`` the fit's degrees
+    of freedom.
     """
-    count = len(whitened)
     eigenvalues, eigenvectors = np.linalg.eigh(np.eye(6) - hat)
     kept = eigenvalues > 1e-8
     projected = np.einsum("pi,pij->pj", whitened, eigenvectors)
     z = np.sum(np.where(kept, projected**2 / np.where(kept, eigenvalues, 1.0), 0.0), axis=1)
     rank = np.maximum(np.sum(kept, axis=1).astype(float), 1.0)
-    total, dof = float(np.sum(whitened**2)), 6 * count - parameter_count
-    leave_out_dof = dof - rank
-    if source == "residuals" or not fit_ok:
+    scale, denominator_dof = 1.0, np.full(len(z), noise_dof)
+    if source == "residuals" or not fit_ok:  # against the scatter of the other poses
+        denominator_dof = dof - rank
         with np.errstate(invalid="ignore", divide="ignore"):
-            scale = (total - z) / leave_out_dof
+            scale = (float(np.sum(whitened**2)) - z) / denominator_dof
         if source != "residuals":
             scale = np.maximum(scale, 1.0)
-        scale = np.where(leave_out_dof > 0, np.maximum(scale, 1e-300), np.nan)
-        denominator_dof = leave_out_dof
-    else:
-        scale = np.ones(count)
-        denominator_dof = np.full(count, noise_dof)
+        scale = np.where(denominator_dof > 0, np.maximum(scale, 1e-300), np.nan)
     normalized = np.sqrt(z / rank / scale)
     valid = np.isfinite(normalized) & (denominator_dof > 0)
     p_values = np.where(
@@ -115,8 +105,7 @@ def _pose_statistics(whitened, hat, fit_ok, source, noise_dof, parameter_count=1
         _f_sf(np.where(valid, normalized, 0.0) ** 2, rank, np.where(valid, denominator_dof, 1.0)),
         np.nan,
     )
-    leverage = np.diagonal(hat, axis1=1, axis2=2)
-    return normalized, p_values, leverage
+    return normalized, p_values
 
 
 def diagnose(
@@ -145,40 +134,35 @@ def diagnose(
 
     Warnings are also sent to the ``ftkin.calibration.fit_quality`` logger.
     """
-    theta, problem = fit.model.to_vector(), fit.problem
-    whitened = problem.whitened_residuals(theta).reshape(-1, 6)
-    count = len(whitened)
-    if parameter_count is None:  # 12 for θ, plus the mount angles when a mount is estimated
-        parameter_count = problem.parameter_count
-    chi_square, dof, p_value = _fit_test(fit, whitened, parameter_count)
+    theta, problem, source = fit.model.to_vector(), fit.problem, fit.noise_source
+    whitened, hat = problem.whitened_residuals(theta).reshape(-1, 6), problem.hat_blocks(theta)
+    dof = whitened.size - (parameter_count or problem.parameter_count)
+    chi_square = float(np.sum(whitened**2))
+    # the fit test does not apply to noise from the residuals or without degrees of freedom
+    tested = source != "residuals" and dof > 0
+    p_value = float(_f_sf(chi_square / dof, dof, fit.noise_dof)) if tested else np.nan
     fit_ok = not (p_value < FIT_ALPHA)
-    normalized, pose_p, leverage = _pose_statistics(
-        whitened,
-        problem.hat_blocks(theta),
-        fit_ok,
-        fit.noise_source,
-        fit.noise_dof,
-        parameter_count,
-    )
+    normalized, pose_p = _pose_statistics(whitened, hat, fit_ok, source, fit.noise_dof, dof)
     with np.errstate(invalid="ignore", divide="ignore"):
-        channel_chi_square = np.sum(whitened**2, axis=0) / np.sum(1.0 - leverage, axis=0)
+        channel_chi_square = np.sum(whitened**2, 0) / np.sum(1 - np.einsum("pkk->pk", hat), 0)
     scale = chi_square / dof if (not fit_ok and chi_square > dof) else 1.0
     covariance = fit.covariance * scale
-    condition, weakest = _weakest_direction(fit.information)
+    # condition number and weakest direction (largest entry positive), unit-diagonal information
+    diagonal = np.sqrt(np.diag(fit.information))
+    eigenvalues, eigenvectors = np.linalg.eigh(fit.information / np.outer(diagonal, diagonal))
+    weakest = eigenvectors[:, 0] * np.sign(eigenvectors[np.argmax(np.abs(eigenvectors[:, 0])), 0])
     pose_ids = np.asarray(pose_ids)
     exact = noise_free or (
         wrenches is not None
-        and fit.noise_source == "residuals"
+        and source == "residuals"
         and at_noise_floor(fit.noise.channel_std, wrenches)
     )
-    outliers = (
-        () if exact else tuple(int(i) for i in pose_ids[pose_p < OUTLIER_ALPHA / max(count, 1)])
-    )
+    outliers = () if exact else pose_ids[pose_p < OUTLIER_ALPHA / max(len(whitened), 1)]
     scales = _block_scales(theta)
     diagnostics = FitDiagnostics(
         loss=fit.loss,
         noise=fit.noise,
-        noise_source=fit.noise_source,
+        noise_source=source,
         noise_dof=fit.noise_dof,
         chi_square=chi_square,
         dof=dof,
@@ -188,9 +172,9 @@ def diagnose(
         pose_ids=pose_ids,
         pose_normalized_residuals=normalized,
         pose_p_values=pose_p,
-        outlier_pose_ids=outliers,
+        outlier_pose_ids=tuple(int(i) for i in outliers),
         dropped_pose_ids=tuple(int(i) for i in dropped_pose_ids),
-        condition_number=condition,
+        condition_number=float(eigenvalues[-1] / eigenvalues[0]),
         weakest_direction=weakest,
         relative_std_errors=np.sqrt(np.clip(np.diag(covariance), 0.0, None)) / scales,
         warnings=(),
@@ -199,27 +183,6 @@ def diagnose(
     if log:
         log_warnings(diagnostics)
     return diagnostics, covariance
-
-
-def _fit_test(fit, whitened, parameter_count: int) -> tuple[float, int, float]:
-    """``(χ², degrees of freedom, p-value)`` of the fit; NaN p-value when the test does not apply
-    (noise from the residuals, or no degrees of freedom).
-    """
-    dof = whitened.size - parameter_count
-    chi_square = float(np.sum(whitened**2))
-    if fit.noise_source == "residuals" or dof <= 0:
-        return chi_square, dof, np.nan
-    return chi_square, dof, float(_f_sf(chi_square / dof, dof, fit.noise_dof))
-
-
-def _weakest_direction(information) -> tuple[float, np.ndarray]:
-    """Condition number and weakest direction (sign: largest entry positive) of the information
-    normalized to unit diagonal.
-    """
-    diagonal = np.sqrt(np.diag(information))
-    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(diagonal, diagonal))
-    weakest = eigenvectors[:, 0] * np.sign(eigenvectors[np.argmax(np.abs(eigenvectors[:, 0])), 0])
-    return float(eigenvalues[-1] / eigenvalues[0]), weakest
 
 
 def _warnings(
