@@ -102,9 +102,10 @@ class DriftModel:
         from .random_walk import walk_gains, whiten
 
         times = np.asarray(times, dtype=float)
-        span = max(float(times[-1] - times[0]), 1e-300)
-        trend = trend_columns(self.basis((times - times[-1]) / span))
-        trend = np.broadcast_to(trend, jacobians.shape[:-1] + trend.shape[-1:])
+        tau = (times - times[-1]) / max(float(times[-1] - times[0]), 1e-300)
+        trend = np.broadcast_to(
+            trend_columns(self.basis(tau)), jacobians.shape[:-1] + (6 * self.columns,)
+        )
         rate = np.zeros(6) if rate is None or not self.walk else np.asarray(rate, dtype=float)
         white = whiten(
             walk_gains(times, noise_variance, rate), np.concatenate([jacobians, trend], -1)
@@ -112,9 +113,8 @@ class DriftModel:
         full = np.einsum("...pki,...pkj->...ij", white, white)
         if not self.columns:
             return full
-        nuisance = full[..., 12:, 12:]
         return full[..., :12, :12] - full[..., :12, 12:] @ np.linalg.solve(
-            nuisance, full[..., 12:, :12]
+            full[..., 12:, 12:], full[..., 12:, :12]
         )
 
     def to_document(self, drift: BiasDrift) -> dict:
@@ -220,23 +220,24 @@ def parse_drift(spec) -> DriftModel:
                 f"unknown drift model {spec!r}; expected one of {', '.join(drift_choices())}"
             )
         parts.append(DRIFT_MODELS[name].make(argument if colon else None))
-    names = [part.name.partition(":")[0] for part in parts]
     if len(parts) == 1:
         return parts[0]
+    names = [part.name.partition(":")[0] for part in parts]
     if "none" in names or len(set(names)) < len(names) or sum(p.walk for p in parts) > 1:
         raise InvalidInput(f"drift {spec!r}: a sum of distinct models with at most one walk")
-    name = "+".join(part.name for part in parts)  # canonical: poly:02 is poly:2
-    columns = sum(part.columns for part in parts)
-    return DriftSum(name, columns, any(part.walk for part in parts), tuple(parts))
+    return DriftSum(
+        "+".join(part.name for part in parts),  # canonical: poly:02 is poly:2
+        sum(part.columns for part in parts),
+        any(part.walk for part in parts),
+        tuple(parts),
+    )
 
 
 def drift_candidates(spec) -> tuple[DriftModel, ...]:
     """The models a ``drift=`` value asks to fit: all :func:`auto_candidates` for ``"auto"``,
     else the one it names.
     """
-    if spec == "auto":
-        return tuple(parse_drift(name) for name in auto_candidates())
-    return (parse_drift(spec),)
+    return tuple(map(parse_drift, auto_candidates() if spec == "auto" else (spec,)))
 
 
 def _check_array(value, name: str, shape: tuple, positive: bool = False) -> np.ndarray | None:
@@ -295,12 +296,11 @@ class BiasDrift:
         times = as_float_array(self.times, "times").reshape(-1)
         if len(times) == 0 or np.any(np.diff(times) < 0) or not np.all(np.isfinite(times)):
             raise InvalidInput("drift times must be finite, ascending and not empty [s]")
-        count = len(times)
         rows = None if self.coefficients is None else kind.columns  # the shape check names others
         for name, shape, positive in (
-            ("times", (count,), False),
-            ("bias", (count, 6), False),
-            ("bias_std", (count, 6), False),
+            ("times", times.shape, False),
+            ("bias", (len(times), 6), False),
+            ("bias_std", (len(times), 6), False),
             ("rate", (2,), True),
             ("coefficients", (rows, 6), False),
             ("recorded_span", (2,), False),
@@ -331,10 +331,9 @@ class BiasDrift:
         """``(N,)`` True where ``times`` [s] fall inside the recording (:attr:`recorded_span`, else
         the pose times).
         """
-        span = self.recorded_span
-        first, last = span if span is not None else (self.times[0], self.times[-1])
+        span = self.recorded_span if self.recorded_span is not None else self.times[[0, -1]]
         times = as_float_array(times, "times").reshape(-1)
-        return (times >= first) & (times <= last)
+        return (times >= span[0]) & (times <= span[1])
 
     @property
     def end_bias(self) -> np.ndarray:
