@@ -88,25 +88,6 @@ class CalibrationOptions:
     resolution: object = None
 
     def __post_init__(self):
-        for name, value, allowed in (
-            ("calibration method", self.method, METHODS),
-            ("loss", self.loss, LOSSES),
-        ):
-            if value not in allowed:
-                raise InvalidInput(
-                    f"unknown {name} {value!r}; expected one of {', '.join(allowed)}"
-                )
-        if self.noise is not None and not isinstance(self.noise, SensorNoise):
-            raise InvalidInput(
-                f"noise must be an ftkin.SensorNoise, got {type(self.noise).__name__}"
-            )
-        ml_only = self.noise is not None or self.loss != "linear" or self.drop_outliers
-        if self.method == "linear" and (ml_only or self.resolution is not None):
-            raise InvalidInput(
-                "noise, resolution, loss and drop_outliers apply to method='ml' only"
-            )
-        if check_mount_mode(self.estimate_mount) != "none" and self.method != "ml":
-            raise InvalidInput("estimate_mount applies to method='ml' only")
         object.__setattr__(self, "g", as_positive(self.g, "g"))
         if self.resolution is not None:
             resolution = as_float_array(self.resolution, "resolution").reshape(-1)
@@ -117,18 +98,39 @@ class CalibrationOptions:
                 )
             object.__setattr__(self, "resolution", resolution)
         drift_candidates(self.drift)  # an unknown model or a bad argument is refused here
-        if self.drift in ("auto", "none"):
-            return
-        if self.method != "ml" or ml_only:
-            raise InvalidInput(
-                f"drift={self.drift!r} needs method='ml' with loss='linear' and no drop_outliers"
-            )
-        if self.estimate_mount != "none":
-            raise InvalidInput(
+        ml_only = self.noise is not None or self.loss != "linear" or self.drop_outliers
+        drifting, mount = self.drift not in ("auto", "none"), check_mount_mode(self.estimate_mount)
+        for refused, message in (
+            (
+                self.method not in METHODS,
+                f"unknown calibration method {self.method!r}; expected one of {', '.join(METHODS)}",
+            ),
+            (
+                self.loss not in LOSSES,
+                f"unknown loss {self.loss!r}; expected one of {', '.join(LOSSES)}",
+            ),
+            (
+                self.noise is not None and not isinstance(self.noise, SensorNoise),
+                f"noise must be an ftkin.SensorNoise, got {type(self.noise).__name__}",
+            ),
+            (
+                self.method == "linear" and (ml_only or self.resolution is not None),
+                "noise, resolution, loss and drop_outliers apply to method='ml' only",
+            ),
+            (mount != "none" and self.method != "ml", "estimate_mount applies to method='ml' only"),
+            (
+                drifting and (self.method != "ml" or ml_only),
+                f"drift={self.drift!r} needs method='ml' with loss='linear' and no drop_outliers",
+            ),
+            (
+                drifting and mount != "none",
                 f"drift={self.drift!r} and estimate_mount={self.estimate_mount!r} cannot be fitted "
                 "together yet: estimate the mount from a short recording (drift='none'), then the "
-                "drift"
-            )
+                "drift",
+            ),
+        ):
+            if refused:
+                raise InvalidInput(message)
 
     def check(self, samples: Samples) -> tuple:
         """Check the options against ``samples``; the drift models to fit (empty: a constant bias).
@@ -140,29 +142,35 @@ class CalibrationOptions:
         """
         if not isinstance(samples, Samples):
             raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
-        if self.estimate_mount != "none" and samples.joint_positions is None:
-            raise InvalidInput(
+        auto, timed = self.drift == "auto", samples.times is not None
+        spread = timed and np.ptp(samples.times) > 0.0
+        plain = self.method == "ml" and self.loss == "linear" and not self.drop_outliers
+        # auto looks for a drift only with the plain ml fit, no mount and times that differ
+        fits_drift = self.drift != "none" and (
+            not auto or (plain and spread and self.estimate_mount == "none")
+        )
+        for refused, message in (
+            (
+                self.estimate_mount != "none" and samples.joint_positions is None,
                 "estimate_mount needs samples from joint angles (Samples.from_joint_positions): "
                 "rotations given directly are taken as the real sensor orientation, so any mount "
-                "is already in them (absorbed)"
-            )
-        auto, timed = self.drift == "auto", samples.times is not None
-        plain = self.method == "ml" and self.loss == "linear" and not self.drop_outliers
-        auto_fits = (
-            plain and timed and np.ptp(samples.times) > 0.0 and self.estimate_mount == "none"
-        )
-        if self.drift == "none" or (auto and not auto_fits):  # auto looks for a drift only then
-            return ()
-        if not timed:
-            raise InvalidInput(
+                "is already in them (absorbed)",
+            ),
+            (
+                fits_drift and not timed,
                 f"drift={self.drift!r} needs the time of each reading (Samples.times, a 't' column "
-                "in the CSV)"
-            )
-        if np.ptp(samples.times) <= 0.0:
-            raise InvalidInput(
+                "in the CSV)",
+            ),
+            (
+                fits_drift and timed and not spread,
                 f"drift={self.drift!r}: all readings have the same time; a drift needs readings "
-                "spread over time"
-            )
+                "spread over time",
+            ),
+        ):
+            if refused:
+                raise InvalidInput(message)
+        if not fits_drift:
+            return ()
         try:
             check_one_visit_per_pose(samples)
         except InvalidSamples as error:
