@@ -287,16 +287,25 @@ class BiasDrift:
     kind: DriftModel = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        kind = parse_drift(self.model)
-        object.__setattr__(self, "kind", kind)
-        if self.selected_by not in ("auto", "given"):
-            raise InvalidInput(f"selected_by must be 'auto' or 'given', got {self.selected_by!r}")
-        if not (np.isfinite(self.time_scale) and self.time_scale > 0):
-            raise InvalidInput(f"time_scale must be a finite time > 0 [s], got {self.time_scale!r}")
+        object.__setattr__(self, "kind", parse_drift(self.model))
         times = as_float_array(self.times, "times").reshape(-1)
-        if len(times) == 0 or np.any(np.diff(times) < 0) or not np.all(np.isfinite(times)):
-            raise InvalidInput("drift times must be finite, ascending and not empty [s]")
-        rows = None if self.coefficients is None else kind.columns  # the shape check names others
+        for refused, message in (
+            (
+                self.selected_by not in ("auto", "given"),
+                f"selected_by must be 'auto' or 'given', got {self.selected_by!r}",
+            ),
+            (
+                not (np.isfinite(self.time_scale) and self.time_scale > 0),
+                f"time_scale must be a finite time > 0 [s], got {self.time_scale!r}",
+            ),
+            (
+                len(times) == 0 or np.any(np.diff(times) < 0) or not np.all(np.isfinite(times)),
+                "drift times must be finite, ascending and not empty [s]",
+            ),
+        ):
+            if refused:
+                raise InvalidInput(message)
+        rows = None if self.coefficients is None else self.kind.columns  # the check names others
         for name, shape, positive in (
             ("times", times.shape, False),
             ("bias", (len(times), 6), False),
@@ -306,14 +315,21 @@ class BiasDrift:
             ("recorded_span", (2,), False),
         ):
             object.__setattr__(self, name, _check_array(getattr(self, name), name, shape, positive))
-        if self.recorded_span is not None and self.recorded_span[0] > self.recorded_span[1]:
-            raise InvalidInput(f"recorded_span must be [first, last] [s], got {self.recorded_span}")
-        if (self.rate is not None) != kind.walk or (rows or 0) != kind.columns:
-            raise InvalidInput(
+        span, kind = self.recorded_span, self.kind
+        for refused, message in (
+            (
+                span is not None and span[0] > span[1],
+                f"recorded_span must be [first, last] [s], got {span}",
+            ),
+            (
+                (self.rate is not None) != kind.walk or (rows or 0) != kind.columns,
                 f"drift {self.model!r} has {kind.columns} coefficient rows and "
                 f"{'a' if kind.walk else 'no'} rate, got {rows or 0} and "
-                f"{'a' if self.rate is not None else 'no'} rate"
-            )
+                f"{'a' if self.rate is not None else 'no'} rate",
+            ),
+        ):
+            if refused:
+                raise InvalidInput(message)
 
     @property
     def start_time(self) -> float:

@@ -106,31 +106,14 @@ class DriftStart:
 
 
 @dataclass(frozen=True)
-class WhitenedFit:
-    """Whitened residuals and hat blocks of a drift fit, in pose order (what the diagnostics
-    read).
-    """
-
-    residuals: np.ndarray
-    hat: np.ndarray
-
-    def whitened_residuals(self, theta=None) -> np.ndarray:
-        """``(6P,)`` whitened residuals (``theta`` ignored: they are those of the fit)."""
-        return self.residuals.reshape(-1)
-
-    def hat_blocks(self, theta=None) -> np.ndarray:
-        """``(P, 6, 6)`` per-pose blocks of the hat matrix."""
-        return self.hat
-
-
-@dataclass(frozen=True)
 class DriftFit:
     """A drift model's fit, shaped like :class:`~ftkin.calibration.ml.MlFit` for
     :func:`~ftkin.calibration.fit_quality.diagnose`.
 
     Attributes:
         model: ``θ`` with the bias at the end of the recording.
-        problem: Whitened residuals and hat blocks (:class:`WhitenedFit`).
+        whitened: ``(P, 6)`` whitened residuals, in pose order.
+        hat: ``(P, 6, 6)`` per-pose blocks of the hat matrix, in pose order.
         noise: Per-reading noise used [N, N·m].
         noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
         noise_dof: Degrees of freedom of the noise estimate.
@@ -143,7 +126,8 @@ class DriftFit:
     """
 
     model: SensorModel
-    problem: WhitenedFit
+    whitened: np.ndarray
+    hat: np.ndarray
     noise: SensorNoise
     noise_source: str
     noise_dof: float
@@ -158,8 +142,7 @@ class DriftFit:
     @property
     def bic(self) -> float:
         """Bayesian information criterion ``−2 log L + k log(6P)``."""
-        size = self.problem.residuals.size
-        return -2.0 * self.log_likelihood + self.parameter_count * np.log(size)
+        return -2.0 * self.log_likelihood + self.parameter_count * np.log(self.whitened.size)
 
 
 def _pooled_std(squares: np.ndarray, dof: np.ndarray, floor: np.ndarray) -> np.ndarray:
@@ -349,7 +332,8 @@ def fit_drift_model(
     dof = min(float(np.sum(1.0 - np.einsum("pkk->pk", hat)[:, g])) for g in _GROUPS)
     return DriftFit(
         SensorModel.from_vector(phi[:12]),
-        WhitenedFit(data.unsort(white), data.unsort(hat)),
+        data.unsort(white),
+        data.unsort(hat),
         SensorNoise(std[:3], std[3:]),
         start.noise_source,
         dof if start.estimated else start.noise_dof,

@@ -134,9 +134,8 @@ def diagnose(
 
     Warnings are also sent to the ``ftkin.calibration.fit_quality`` logger.
     """
-    theta, problem, source = fit.model.to_vector(), fit.problem, fit.noise_source
-    whitened, hat = problem.whitened_residuals(theta).reshape(-1, 6), problem.hat_blocks(theta)
-    dof = whitened.size - (parameter_count or problem.parameter_count)
+    theta, source, whitened, hat = fit.model.to_vector(), fit.noise_source, fit.whitened, fit.hat
+    dof = whitened.size - (parameter_count or fit.problem.parameter_count)
     chi_square = float(np.sum(whitened**2))
     # the fit test does not apply to noise from the residuals or without degrees of freedom
     tested = source != "residuals" and dof > 0

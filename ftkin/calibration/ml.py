@@ -148,6 +148,7 @@ class MlFit:
         model: The estimated parameters.
         start: The two-step linear estimate the fit started from.
         problem: The whitened problem at the final noise levels (see :attr:`noise`).
+        noise: Per-reading noise used [N, N·m] (the problem's channel levels).
         noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
         noise_dof: Degrees of freedom of the noise estimate (``inf`` if given).
         loss: Loss function used.
@@ -155,6 +156,9 @@ class MlFit:
         information: ``(12, 12)`` Fisher information of ``θ`` (robust weights
             included; with a mount, the marginal information, mount estimated).
         iterations: Function evaluations the solver used.
+        whitened: ``(P, 6)`` whitened residuals at the fit.
+        hat: ``(P, 6, 6)`` per-pose blocks of the hat matrix at the fit
+            (:meth:`WeightedProblem.hat_blocks`).
         mount_rotation: ``R_M`` ``(3, 3)``, URDF sensor frame → real sensor frame
             (identity unless estimated; :mod:`ftkin.calibration.mount`).
         mount_mode: ``"none"``, ``"yaw"`` or ``"full"``.
@@ -165,20 +169,18 @@ class MlFit:
     model: SensorModel
     start: SensorModel
     problem: WeightedProblem
+    noise: SensorNoise
     noise_source: str
     noise_dof: float
     loss: str
     robust_weights: np.ndarray
     information: np.ndarray
     iterations: int
+    whitened: np.ndarray
+    hat: np.ndarray
     mount_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
     mount_mode: str = "none"
     mount_covariance: np.ndarray | None = None
-
-    @property
-    def noise(self) -> SensorNoise:
-        """Per-reading noise used [N, N·m] (the problem's channel levels)."""
-        return SensorNoise(self.problem.channel_std[_FORCE], self.problem.channel_std[_TORQUE])
 
     @property
     def covariance(self) -> np.ndarray:
@@ -334,7 +336,8 @@ def fit_ml(
         evaluations += more
     problem, theta = problem.recentred(theta)
     # θ's information at the solution, robust weights included (marginal with a mount)
-    robust_weights = _robust_weights(problem.whitened_residuals(theta).reshape(-1, 6), loss)
+    whitened = problem.whitened_residuals(theta).reshape(-1, 6)
+    robust_weights = _robust_weights(whitened, loss)
     jac = problem.whitened_jacobian(theta) * np.sqrt(robust_weights).reshape(-1, 1)
     information, mount_covariance = jac.T @ jac, None
     if estimate_mount != "none":
@@ -343,12 +346,15 @@ def fit_ml(
         model=SensorModel.from_vector(theta, g),
         start=start,
         problem=problem,
+        noise=SensorNoise(problem.channel_std[_FORCE], problem.channel_std[_TORQUE]),
         noise_source=source,
         noise_dof=float(dof),
         loss=loss,
         robust_weights=robust_weights,
         information=information,
         iterations=evaluations,
+        whitened=whitened,
+        hat=problem.hat_blocks(theta),
         mount_rotation=problem.mount_base,
         mount_mode=estimate_mount,
         mount_covariance=mount_covariance,
