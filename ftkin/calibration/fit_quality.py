@@ -190,63 +190,67 @@ def _warnings(
     """The warnings the diagnostics call for, one sentence each (``exact``: noise at its floor;
     ``noise_free``: the repeated raw readings are identical).
     """
-    d, messages = diagnostics, []
-    if exact and not noise_free:
-        messages.append(
+    d = diagnostics
+    relative, sigma = d.relative_std_errors, d.relative_std_errors * scales
+    weakest = ", ".join(
+        f"{weight:+.2f} {label}" for label, weight in main_components(d.weakest_direction)
+    )
+    worst = ", ".join(
+        f"{i} ({d.pose_normalized_residuals[d.pose_ids == i][0]:.1f}σ, "
+        f"p = {d.pose_p_values[d.pose_ids == i][0]:.1e})"
+        for i in d.outlier_pose_ids
+    )
+    blocks = [(name, slice(3 * k, 3 * k + 3)) for k, name in enumerate(PARAMETER_NAMES)]
+    rules = [
+        (
+            exact and not noise_free,
             "the residuals are at rounding level (noise estimated at its floor, "
             f"{NOISE_FLOOR_RELATIVE:g} of the largest reading): the standard errors, the fit test "
             "and the outlier test rest on that floor; record several readings per pose (a pose "
-            "column) or give the noise level (noise=, --noise-force/--noise-torque)"
-        )
-    elif exact:
-        messages.append(
+            "column) or give the noise level (noise=, --noise-force/--noise-torque)",
+        ),
+        (
+            exact and noise_free,
             "the repeated readings of each pose are identical and the readings fit the model to "
             f"rounding (noise estimated at its floor, {NOISE_FLOOR_RELATIVE:g} of the largest "
             "reading): noise-free data, e.g. a simulation without sensor noise? The estimates are "
             "exact, but the standard errors, the fit test and the outlier test mean nothing; add "
             "sensor noise to simulated readings or give the noise level (noise=, "
-            "--noise-force/--noise-torque)"
-        )
-    if d.p_value < FIT_ALPHA:
-        messages.append(
+            "--noise-force/--noise-torque)",
+        ),
+        (
+            d.p_value < FIT_ALPHA,
             f"the readings do not fit the model within their noise (chi-square "
             f"{d.chi_square:.1f} for {d.dof} degrees of freedom, p = {d.p_value:.1e}): sensor "
             "crosstalk, a contact or cable at some poses, or noise underestimated; standard "
-            f"errors scaled by {np.sqrt(d.covariance_scale):.2f}"
-        )
-    if d.outlier_pose_ids:
-        worst = ", ".join(
-            f"{i} ({d.pose_normalized_residuals[d.pose_ids == i][0]:.1f}σ, "
-            f"p = {d.pose_p_values[d.pose_ids == i][0]:.1e})"
-            for i in d.outlier_pose_ids
-        )
-        messages.append(
+            f"errors scaled by {np.sqrt(d.covariance_scale):.2f}",
+        ),
+        (
+            bool(d.outlier_pose_ids),
             f"outlier pose(s), far outside the noise: {worst} (RMS normalized residual over the "
-            f"six channels; threshold p < {OUTLIER_ALPHA / len(d.pose_ids):.1e}); check them or "
-            "refit without them (drop_outliers=True, --drop-outliers)"
-        )
-    relative, sigma = d.relative_std_errors, d.relative_std_errors * scales
-    weakest = ", ".join(
-        f"{weight:+.2f} {label}" for label, weight in main_components(d.weakest_direction)
-    )
-    for block, name in enumerate(PARAMETER_NAMES):
-        part = slice(3 * block, 3 * block + 3)
-        if np.any(relative[part] > RELATIVE_STD_ERROR_WARNING):
-            messages.append(
+            f"six channels; threshold p < {d.outlier_threshold:.1e}); check them or "
+            "refit without them (drop_outliers=True, --drop-outliers)",
+        ),
+        *(
+            (
+                np.any(relative[part] > RELATIVE_STD_ERROR_WARNING),
                 f"{name} is poorly determined: standard errors "
                 f"[{', '.join(f'{s:.3g}' for s in sigma[part])}] "
                 f"{_UNITS[name]} are up to {100 * relative[part].max():.0f} % of its scale "
-                f"{scales[3 * block]:.3g} {_UNITS[name]}; add poses that turn gravity into other "
+                f"{scales[part.start]:.3g} {_UNITS[name]}; add poses that turn gravity into other "
                 f"sensor directions (condition number {d.condition_number:.3g}, weakest "
-                f"direction {weakest})"
+                f"direction {weakest})",
             )
-    if d.noise_source == "residuals" and d.noise_dof < MIN_NOISE_DOF:
-        messages.append(
+            for name, part in blocks
+        ),
+        (
+            d.noise_source == "residuals" and d.noise_dof < MIN_NOISE_DOF,
             f"the noise levels come from the residuals with only {d.noise_dof:.1f} degrees of "
             "freedom, so the standard errors are rough; record several readings per pose (pose "
-            "column), add poses, or give the noise"
-        )
-    return tuple(messages)
+            "column), add poses, or give the noise",
+        ),
+    ]
+    return tuple(message for warned, message in rules if warned)
 
 
 def log_warnings(diagnostics: FitDiagnostics) -> None:
