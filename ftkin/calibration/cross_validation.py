@@ -100,36 +100,9 @@ def _quiet_fits():
 
 
 def _subset(samples: Samples, mask: np.ndarray) -> Samples:
-    def part(array):
-        return None if array is None else array[mask]
-
-    return replace(
-        samples,
-        wrenches=samples.wrenches[mask],
-        rotations=samples.rotations[mask],
-        pose_ids=samples.pose_ids[mask],
-        joint_positions=part(samples.joint_positions),
-        times=part(samples.times),
-    )
-
-
-def _folds(samples: Samples, folds, seed: int) -> tuple[np.ndarray, int]:
-    """Fold ``(N,)`` of each reading (its pose's, at random) and the number of poses."""
-    if (
-        isinstance(folds, bool)
-        or not isinstance(folds, (int, np.integer))
-        or not MIN_FOLDS <= folds <= MAX_FOLDS
-    ):
-        raise InvalidInput(
-            f"folds must be an integer from {MIN_FOLDS} to {MAX_FOLDS}, got {folds!r}"
-        )
-    pose_ids, reading_pose = np.unique(samples.pose_ids, return_inverse=True)
-    if len(pose_ids) < folds:
-        raise InvalidInput(
-            f"{len(pose_ids)} poses cannot be split into {folds} folds; use fewer folds"
-        )
-    pose_fold = np.random.default_rng(seed).permutation(len(pose_ids)) % folds
-    return pose_fold[reading_pose], len(pose_ids)
+    per_reading = ("wrenches", "rotations", "pose_ids", "joint_positions", "times")
+    values = {name: getattr(samples, name) for name in per_reading}
+    return replace(samples, **{k: v[mask] for k, v in values.items() if v is not None})
 
 
 def _held_out_squares(result, test: Samples) -> np.ndarray:
@@ -166,14 +139,31 @@ def cross_validate(
     """
     from .estimate import calibrate  # estimate imports the whole estimator; keep this module light
 
-    if "drift" in keywords:
-        raise InvalidInput("give the drift settings to compare as drifts=(...), not drift=")
     drifts = tuple(drifts)
-    if not drifts or len(set(drifts)) != len(drifts) or not all(isinstance(d, str) for d in drifts):
-        raise InvalidInput(
-            f"drifts must be distinct drift settings (e.g. ('none', 'auto')), got {drifts!r}"
-        )
-    reading_fold, pose_count = _folds(samples, folds, seed)
+    pose_ids, reading_pose = np.unique(samples.pose_ids, return_inverse=True)
+    integer = isinstance(folds, (int, np.integer)) and not isinstance(folds, bool)
+    valid_folds = integer and MIN_FOLDS <= folds <= MAX_FOLDS
+    for refused, message in (
+        ("drift" in keywords, "give the drift settings to compare as drifts=(...), not drift="),
+        (
+            not drifts
+            or len(set(drifts)) != len(drifts)
+            or not all(isinstance(d, str) for d in drifts),
+            f"drifts must be distinct drift settings (e.g. ('none', 'auto')), got {drifts!r}",
+        ),
+        (
+            not valid_folds,
+            f"folds must be an integer from {MIN_FOLDS} to {MAX_FOLDS}, got {folds!r}",
+        ),
+        (
+            valid_folds and len(pose_ids) < folds,
+            f"{len(pose_ids)} poses cannot be split into {folds} folds; use fewer folds",
+        ),
+    ):
+        if refused:
+            raise InvalidInput(message)
+    # each reading's fold is its pose's, at random
+    reading_fold = (np.random.default_rng(seed).permutation(len(pose_ids)) % folds)[reading_pose]
     squares = {drift: [] for drift in drifts}
     models = {drift: [] for drift in drifts}
     for k in range(folds):
@@ -192,7 +182,7 @@ def cross_validate(
     rms = {d: np.sqrt(np.mean(np.concatenate(v), axis=0)) for d, v in squares.items()}
     return CrossValidation(
         folds,
-        pose_count,
+        len(pose_ids),
         {d: float(v[0]) for d, v in rms.items()},
         {d: float(v[1]) for d, v in rms.items()},
         {d: tuple(m) for d, m in models.items()},
