@@ -230,9 +230,11 @@ def _search_walk(data: SortedPoses, phi, start: DriftStart):
     from scipy.optimize import minimize  # scipy loads where it is used (import ftkin stays light)
 
     std0 = np.asarray(start.channel_std, dtype=float)
-    per_pose = std0 / np.sqrt(np.median(data.counts))
     spacing = max(float(np.median(np.diff(data.times))) if len(data.times) > 1 else 1.0, 1e-9)
-    reference = np.log([per_pose[g].mean() / np.sqrt(spacing) for g in _GROUPS])
+    # the noise of a pose mean over √(pose spacing)
+    reference = np.log(
+        [std0[g].mean() / np.sqrt(np.median(data.counts) * spacing) for g in _GROUPS]
+    )
     noise_part = np.log([std0[g].mean() for g in _GROUPS]) if start.estimated else []
     best = {"phi": phi, "value": np.inf}
 
@@ -250,8 +252,12 @@ def _search_walk(data: SortedPoses, phi, start: DriftStart):
 
     grid = [objective(np.concatenate([reference + np.log(f), noise_part])) for f in RATE_GRID]
     x0 = np.concatenate([reference + np.log(RATE_GRID[int(np.argmin(grid))]), noise_part])
-    options = {"xatol": 0.05, "fatol": 0.01, "maxfev": 40 * len(x0)}
-    solution = minimize(objective, x0, method="Nelder-Mead", options=options)
+    solution = minimize(
+        objective,
+        x0,
+        method="Nelder-Mead",
+        options={"xatol": 0.05, "fatol": 0.01, "maxfev": 40 * len(x0)},
+    )
     return (*unpack(solution.x), best["phi"])
 
 
@@ -382,8 +388,8 @@ def select_drift(models, poses: PoseAverages, start: DriftStart):
     selected_by = "auto" if len(models) > 1 else "given"
     fits, criteria, notes = _fit_candidates(models, poses, start, selected_by)
     if not criteria:  # the one given model collapsed: the models without a walk
-        fallback = [m for m in map(parse_drift, auto_candidates()) if not m.walk]
         selected_by = "auto"
+        fallback = [m for m in map(parse_drift, auto_candidates()) if not m.walk]
         fits, criteria, more = _fit_candidates(fallback, poses, start, selected_by)
         notes += more
     choice = min(criteria, key=criteria.get)

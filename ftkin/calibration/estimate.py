@@ -231,25 +231,23 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
     )
     check_conventions(check, options.sensor_sign, options.base_mount)
     if options.method == "linear":
-        static = _Static(fit_linear(poses, options.g), None, None, np.eye(3), None, None, poses)
+        static = _Static(fit_linear(poses, options.g), None, np.eye(3), None, None, poses)
     else:
         static = _fit_static(poses, options, drift_models)
-    if samples.times is not None and static.drift is None:
-        static = replace(static, drift=_constant_trajectory(static, {}))
-    if static.drift is not None:
+    if samples.times is not None:  # the bias trajectory (constant without a drift model)
+        drift = static.drift or _constant_trajectory(static, {})
         span = np.array([np.min(samples.times), np.max(samples.times)])
-        static = replace(static, drift=replace(static.drift, recorded_span=span))
+        static = replace(static, drift=replace(drift, recorded_span=span))
     return _result(samples, options, static)
 
 
 @dataclass(frozen=True)
 class _Static:
-    """A fit: model, ML fit (None for ``linear``), its diagnostics and covariance, mount, the
-    poses fitted (after any dropped outliers) and the bias trajectory.
+    """A fit: model, its diagnostics (None for ``linear``) and covariance, mount, the poses fitted
+    (after any dropped outliers) and the bias trajectory.
     """
 
     model: SensorModel
-    fit: object
     diagnostics: FitDiagnostics | None
     mount: np.ndarray
     mount_covariance: np.ndarray | None
@@ -295,14 +293,18 @@ def _fit_static(poses: PoseAverages, options: CalibrationOptions, drift_models) 
             logger.warning(message)
             diagnostics = replace(diagnostics, warnings=diagnostics.warnings + (message,))
     static = _Static(
-        fit.model, fit, diagnostics, fit.mount_rotation, mount_covariance, covariance, poses
+        fit.model, diagnostics, fit.mount_rotation, mount_covariance, covariance, poses
     )
-    return _fit_drift(static, drift_models, floor, noise_free, options) if drift_models else static
+    if not drift_models:
+        return static
+    return _fit_drift(static, fit, drift_models, floor, noise_free, options)
 
 
-def _fit_drift(static: _Static, models: tuple, floor, noise_free: bool, options) -> _Static:
-    """The constant-bias fit ``static`` with the best of the drift ``models`` (or kept)."""
-    poses, fit = static.poses, static.fit
+def _fit_drift(static: _Static, fit, models: tuple, floor, noise_free: bool, options) -> _Static:
+    """The constant-bias fit ``static`` (by ``fit``) with the best of the drift ``models`` (or
+    kept).
+    """
+    poses = static.poses
     start = DriftStart(
         fit.model.to_vector(),
         np.asarray(fit.problem.channel_std),
@@ -323,10 +325,9 @@ def _fit_drift(static: _Static, models: tuple, floor, noise_free: bool, options)
             wrenches=poses.wrenches,
             noise_free=noise_free,
         )
-        model = SensorModel.from_vector(drift_fit.model.to_vector(), options.g)
         static = replace(
             static,
-            model=model,
+            model=SensorModel.from_vector(drift_fit.model.to_vector(), options.g),
             diagnostics=diagnostics,
             covariance=covariance,
             drift=drift_fit.drift,
