@@ -40,6 +40,7 @@ import numpy as np
 from ..exceptions import UnobservableParameters
 from .drift import BiasDrift, DriftModel, auto_candidates, parse_drift, trend_columns
 from .information import SensorNoise, invert_information
+from .ml import pooled_noise
 from .model import COMPONENT_NAMES, SensorModel, parameter_jacobian, predict
 from .random_walk import log_likelihood, smooth, walk_gains, whiten
 from .samples import PoseAverages
@@ -145,14 +146,6 @@ class DriftFit:
         return -2.0 * self.log_likelihood + self.parameter_count * np.log(self.whitened.size)
 
 
-def _pooled_std(squares: np.ndarray, dof: np.ndarray, floor: np.ndarray) -> np.ndarray:
-    """``(6,)`` noise per group (forces, torques) from ``Σ n e²`` and degrees of freedom per
-    channel, at least ``floor``.
-    """
-    std = [np.sqrt(np.sum(squares[g]) / max(np.sum(dof[g]), 1e-12)) for g in _GROUPS]
-    return np.maximum(np.repeat(std, 3), floor)
-
-
 def _log_likelihood(residuals: np.ndarray, counts: np.ndarray, start: DriftStart) -> float:
     """Gaussian log-likelihood of pose-mean ``residuals`` ``(P, 6)`` read ``counts`` ``(P,)``
     times, at the start's noise or, when the noise is estimated, at its ML value.
@@ -160,7 +153,7 @@ def _log_likelihood(residuals: np.ndarray, counts: np.ndarray, start: DriftStart
     counts = counts[:, None]
     std = start.channel_std
     if start.estimated:
-        std = _pooled_std(np.sum(residuals**2 * counts, 0), np.full(6, len(counts)), start.floor)
+        std = pooled_noise(np.sum(residuals**2 * counts, 0), np.full(6, len(counts)), start.floor)
     variance = std**2 / counts
     return float(-0.5 * np.sum(residuals**2 / variance + np.log(2.0 * np.pi * variance)))
 
@@ -293,7 +286,7 @@ def _noise_without_walk(data: SortedPoses, phi, start: DriftStart):
         covariance = invert_information(information, data.names, _UNTOLD)
         leverage = np.einsum("pki,ij,pkj->pk", jacobian, covariance, jacobian)
         squares = np.sum(data.raw_residuals(phi) ** 2 * data.counts[:, None], axis=0)
-        new = _pooled_std(squares, np.sum(1.0 - leverage, axis=0), start.floor)
+        new = pooled_noise(squares, np.sum(1.0 - leverage, axis=0), start.floor)
         converged, std = np.allclose(new, std, rtol=1e-3), new
         if converged:
             break

@@ -230,15 +230,23 @@ def noise_from_residuals(
     leverage = np.clip(np.diagonal(problem.hat_blocks(theta), axis1=1, axis2=2), 0.0, 1.0 - 1e-9)
     scaled = problem.residuals(theta) * np.sqrt(problem.counts)[:, None]
     floor = noise_floor(problem.wrenches) if floor is None else np.asarray(floor, dtype=float)
-    std, dofs = np.empty(6), [float(np.sum(1.0 - leverage[:, g])) for g in RESIDUAL_NOISE_GROUPS]
-    for group, dof in zip(RESIDUAL_NOISE_GROUPS, dofs):
-        if robust:
-            studentized = np.abs(scaled[:, group]) / np.sqrt(1.0 - leverage[:, group])
-            value = 1.4826 * float(np.median(studentized))
-        else:
-            value = float(np.sqrt(np.sum(scaled[:, group] ** 2) / max(dof, 1e-12)))
-        std[group] = max(value, float(floor[group][0]))
-    return std, min(dofs)
+    dof = 1.0 - leverage
+    if robust:
+        studentized = np.abs(scaled) / np.sqrt(dof)
+        median = [1.4826 * np.median(studentized[:, g]) for g in RESIDUAL_NOISE_GROUPS]
+        std = np.maximum(np.repeat(median, 3), floor)
+    else:
+        std = pooled_noise(np.sum(scaled**2, axis=0), np.sum(dof, axis=0), floor)
+    return std, min(float(np.sum(dof[:, g])) for g in RESIDUAL_NOISE_GROUPS)
+
+
+def pooled_noise(squares: np.ndarray, dof: np.ndarray, floor: np.ndarray) -> np.ndarray:
+    """``(6,)`` noise ``σ_g = √(Σ n e² / Σ dof)`` per group of :data:`RESIDUAL_NOISE_GROUPS`,
+    from ``Σ n e²`` and the degrees of freedom per channel ``(6,)``, at least ``floor`` ``(6,)``
+    [N, N·m].
+    """
+    std = [np.sqrt(np.sum(squares[g]) / max(np.sum(dof[g]), 1e-12)) for g in RESIDUAL_NOISE_GROUPS]
+    return np.maximum(np.repeat(std, 3), floor)
 
 
 def _solve(problem: WeightedProblem, start: np.ndarray, loss: str) -> tuple[np.ndarray, int]:
