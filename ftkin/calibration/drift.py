@@ -87,9 +87,12 @@ class DriftModel:
         """
         if self.walk:
             return np.column_stack([np.interp(times, drift.times, b) for b in drift.bias.T])
-        tau = (times - drift.end_time) / drift.time_scale
-        trend = self.basis(tau) @ drift.coefficients if self.columns else 0.0
-        return drift.end_bias + trend
+        if not self.columns:
+            return drift.end_bias
+        return (
+            drift.end_bias
+            + self.basis((times - drift.end_time) / drift.time_scale) @ drift.coefficients
+        )
 
     def information(self, jacobians, times, noise_variance, rate=None) -> np.ndarray:
         """Fisher information ``(..., 12, 12)`` of ``θ`` with the drift marginalized, for poses
@@ -245,10 +248,9 @@ def _check_array(value, name: str, shape: tuple, positive: bool = False) -> np.n
         return None
     value = as_float_array(value, name).copy()  # frozen below: never the caller's array
     if value.shape != shape or not np.all(np.isfinite(value)) or (positive and np.any(value < 0)):
-        rule = "≥ 0 " if positive else ""
         raise InvalidInput(
-            f"drift {name} must be finite {rule}with shape {shape}, got {value.shape}"
-            + (f" {value.tolist()}" if value.size < 8 else "")
+            f"drift {name} must be finite {'≥ 0 ' if positive else ''}with shape {shape}, got "
+            f"{value.shape}" + (f" {value.tolist()}" if value.size < 8 else "")
         )
     value.setflags(write=False)
     return value

@@ -179,8 +179,9 @@ class SortedPoses:
 
     def raw_residuals(self, phi: np.ndarray) -> np.ndarray:
         """``(P, 6)`` readings minus ``θ``'s prediction minus the trend [N, N·m]."""
-        trend = self.basis @ phi[12:].reshape(-1, 6)
-        return self.wrenches - predict(self.rotations, phi[:12]) - trend
+        return (
+            self.wrenches - predict(self.rotations, phi[:12]) - self.basis @ phi[12:].reshape(-1, 6)
+        )
 
 
 def gauss_newton(data: SortedPoses, phi, std, rate, iterations: int):
@@ -195,8 +196,9 @@ def gauss_newton(data: SortedPoses, phi, std, rate, iterations: int):
 
     def whitened(phi):
         jacobian = parameter_jacobian(data.rotations, phi[0:3], phi[9:12])
-        columns = [data.raw_residuals(phi)[:, :, None], jacobian, data.trend]
-        white = whiten(gains, np.concatenate(columns, axis=2))
+        white = whiten(
+            gains, np.concatenate([data.raw_residuals(phi)[:, :, None], jacobian, data.trend], 2)
+        )
         return white[:, :, 0], white[:, :, 1:]
 
     for _ in range(iterations):
@@ -282,8 +284,8 @@ def _noise_without_walk(data: SortedPoses, phi, start: DriftStart):
         _, _, phi, _, jacobian, _ = gauss_newton(data, phi, std, np.zeros(6), FINAL_ITERATIONS)
         if not start.estimated:
             break
-        information = np.einsum("pki,pkj->ij", jacobian, jacobian)
-        covariance = invert_information(information, data.names, _UNTOLD)
+        flat = jacobian.reshape(-1, len(phi))
+        covariance = invert_information(flat.T @ flat, data.names, _UNTOLD)
         leverage = np.einsum("pki,ij,pkj->pk", jacobian, covariance, jacobian)
         squares = np.sum(data.raw_residuals(phi) ** 2 * data.counts[:, None], axis=0)
         new = pooled_noise(squares, np.sum(1.0 - leverage, axis=0), start.floor)
@@ -318,16 +320,6 @@ def fit_drift_model(
         ]
     )
     coefficients = phi[12:].reshape(-1, 6)
-    drift = BiasDrift(
-        model.name,
-        selected_by,
-        data.times,
-        phi[3:9] + data.basis @ coefficients + walk,
-        np.sqrt(np.clip(variance + trend_variance, 0.0, None)),
-        rate=rate[[0, 3]] if model.walk else None,
-        coefficients=coefficients if model.columns else None,
-        time_scale=data.scale,
-    )
     dof = min(float(np.sum(1.0 - np.einsum("pkk->pk", hat)[:, g])) for g in _GROUPS)
     return DriftFit(
         SensorModel.from_vector(phi[:12]),
@@ -340,8 +332,17 @@ def fit_drift_model(
         covariance[:12, :12],
         len(phi) + 2 * model.walk + 2 * start.estimated,
         log_l,
-        drift,
-        _collapse(data, std, rate, start) if model.walk else None,
+        drift=BiasDrift(
+            model.name,
+            selected_by,
+            data.times,
+            phi[3:9] + data.basis @ coefficients + walk,
+            np.sqrt(np.clip(variance + trend_variance, 0.0, None)),
+            rate=rate[[0, 3]] if model.walk else None,
+            coefficients=coefficients if model.columns else None,
+            time_scale=data.scale,
+        ),
+        collapse=_collapse(data, std, rate, start) if model.walk else None,
     )
 
 

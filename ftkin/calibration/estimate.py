@@ -220,16 +220,19 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
     raw_poses = samples.pose_averages()
     signs = reading_signs(options.sensor_sign, options.flip_axis)
     poses = replace(raw_poses, wrenches=raw_poses.wrenches * signs)
-    check = detect_sign_and_handedness(
-        raw_poses,
-        sensor_sign=options.sensor_sign,
-        flip_axis=options.flip_axis,
-        estimate_mount=options.estimate_mount,
-        base_mount=options.base_mount,
-        expected_gravity=options.expected_gravity,
-        g=options.g,
+    check_conventions(
+        detect_sign_and_handedness(
+            raw_poses,
+            sensor_sign=options.sensor_sign,
+            flip_axis=options.flip_axis,
+            estimate_mount=options.estimate_mount,
+            base_mount=options.base_mount,
+            expected_gravity=options.expected_gravity,
+            g=options.g,
+        ),
+        options.sensor_sign,
+        options.base_mount,
     )
-    check_conventions(check, options.sensor_sign, options.base_mount)
     if options.method == "linear":
         static = _Static(fit_linear(poses, options.g), None, np.eye(3), None, None, poses)
     else:
@@ -332,15 +335,15 @@ def _fit_drift(static: _Static, fit, models: tuple, floor, noise_free: bool, opt
             covariance=covariance,
             drift=drift_fit.drift,
         )
-    warnings = static.diagnostics.warnings + notes
-    return replace(static, diagnostics=replace(static.diagnostics, warnings=warnings))
+    diagnostics = static.diagnostics
+    return replace(static, diagnostics=replace(diagnostics, warnings=diagnostics.warnings + notes))
 
 
 def _constant_trajectory(static: _Static, criteria: dict) -> BiasDrift:
     """The constant bias as a :class:`BiasDrift` (``"none"``), for samples that had times."""
     times = np.sort(static.poses.times)
     covariance = static.covariance
-    std = np.sqrt(np.diag(covariance)[3:9]) if covariance is not None else np.zeros(6)
+    std = np.zeros(6) if covariance is None else np.sqrt(np.diag(covariance)[3:9])
     return BiasDrift(
         "none",
         "auto" if criteria else "given",
@@ -356,7 +359,6 @@ def _result(samples: Samples, options: CalibrationOptions, static: _Static) -> C
     poses, rotations = static.poses, static.poses.rotations @ static.mount.T
     constant = trajectory is None or trajectory.model == "none"
     bias = model.bias if constant else trajectory.bias_at(poses.times)
-    residuals = poses.wrenches - model.tool_gravity_wrench(rotations) - bias
     return CalibrationResult(
         force_offset=model.force_offset,
         torque_offset=model.torque_offset,
@@ -366,7 +368,7 @@ def _result(samples: Samples, options: CalibrationOptions, static: _Static) -> C
         method=options.method,
         pose_ids=poses.pose_ids,
         pose_wrenches=poses.wrenches,
-        residuals=residuals,
+        residuals=poses.wrenches - model.tool_gravity_wrench(rotations) - bias,
         sample_count=int(np.sum(poses.counts)),
         urdf=samples.urdf,
         sensor_frame=samples.sensor_frame,

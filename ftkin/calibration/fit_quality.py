@@ -100,12 +100,11 @@ def _pose_statistics(whitened, hat, fit_ok, source, noise_dof, dof):
         scale = np.where(denominator_dof > 0, np.maximum(scale, 1e-300), np.nan)
     normalized = np.sqrt(z / rank / scale)
     valid = np.isfinite(normalized) & (denominator_dof > 0)
-    p_values = np.where(
+    return normalized, np.where(
         valid,
         _f_sf(np.where(valid, normalized, 0.0) ** 2, rank, np.where(valid, denominator_dof, 1.0)),
         np.nan,
     )
-    return normalized, p_values
 
 
 def diagnose(

@@ -160,8 +160,10 @@ def invert_information(
     """
     scale = np.sqrt(np.diag(information))
     if np.any(scale == 0):
-        missing = [names[i] for i in np.flatnonzero(scale == 0)]
-        raise UnobservableParameters(missing, "the poses carry no information about them")
+        raise UnobservableParameters(
+            [names[i] for i in np.flatnonzero(scale == 0)],
+            "the poses carry no information about them",
+        )
     eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
     if eigenvalues[0] <= rcond * eigenvalues[-1]:
         raise UnobservableParameters(

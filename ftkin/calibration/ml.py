@@ -190,14 +190,6 @@ class MlFit:
         return covariance_from_information(self.information)
 
 
-def _robust_weights(whitened: np.ndarray, loss: str) -> np.ndarray:
-    """IRLS weights ``ρ'(z)`` of scipy's losses at ``z = (r / scale)²``."""
-    if loss == "linear":
-        return np.ones_like(whitened)
-    z = (whitened / ROBUST_LOSS_SCALE) ** 2
-    return 1.0 / np.sqrt(1.0 + z if loss == "soft_l1" else np.maximum(z, 1.0))  # else huber
-
-
 def noise_from_spread(poses: PoseAverages) -> tuple[np.ndarray, float] | None:
     """Pooled per-channel spread of repeated readings ``(6,)`` [N, N·m] and its dof, or None.
 
@@ -345,7 +337,11 @@ def fit_ml(
     problem, theta = problem.recentred(theta)
     # θ's information at the solution, robust weights included (marginal with a mount)
     whitened = problem.whitened_residuals(theta).reshape(-1, 6)
-    robust_weights = _robust_weights(whitened, loss)
+    # IRLS weights ρ'(z) of scipy's losses at z = (r / scale)²: soft_l1, huber, or ones (linear)
+    z = (whitened / ROBUST_LOSS_SCALE) ** 2
+    robust_weights = 1.0 / np.sqrt(1.0 + z if loss == "soft_l1" else np.maximum(z, 1.0))
+    if loss == "linear":
+        robust_weights = np.ones_like(whitened)
     jac = problem.whitened_jacobian(theta) * np.sqrt(robust_weights).reshape(-1, 1)
     information, mount_covariance = jac.T @ jac, None
     if estimate_mount != "none":

@@ -89,9 +89,8 @@ def check_gravity_directions(rotations: np.ndarray, gravity_in_base: np.ndarray)
             ["center_of_mass"],
             "the estimated tool weight is zero, so its centre of mass has no effect",
         )
-    directions = np.transpose(rotations, (0, 2, 1)) @ (gravity_in_base / weight)
     _check_rank(
-        torque_regressor(directions),
+        torque_regressor(np.transpose(rotations, (0, 2, 1)) @ (gravity_in_base / weight)),
         TORQUE_STEP_NAMES,
         "gravity is seen along one sensor direction only (poses differ only by rotation about "
         "the gravity axis); use at least three poses with "
