@@ -40,7 +40,7 @@ import numpy as np
 from ..exceptions import UnobservableParameters
 from .drift import BiasDrift, DriftModel, auto_candidates, parse_drift, trend_columns
 from .information import SensorNoise, invert_information
-from .ml import pooled_noise
+from .ml import WhitenedFit, pooled_noise
 from .model import COMPONENT_NAMES, SensorModel, parameter_jacobian, predict
 from .random_walk import log_likelihood, smooth, walk_gains, whiten
 from .samples import PoseAverages
@@ -107,18 +107,11 @@ class DriftStart:
 
 
 @dataclass(frozen=True)
-class DriftFit:
-    """A drift model's fit, shaped like :class:`~ftkin.calibration.ml.MlFit` for
-    :func:`~ftkin.calibration.fit_quality.diagnose`.
+class DriftFit(WhitenedFit):
+    """A drift model's fit (with the attributes of :class:`~ftkin.calibration.ml.WhitenedFit`,
+    ``θ`` with the bias at the end of the recording, the drift parameters marginalized).
 
     Attributes:
-        model: ``θ`` with the bias at the end of the recording.
-        whitened: ``(P, 6)`` whitened residuals, in pose order.
-        hat: ``(P, 6, 6)`` per-pose blocks of the hat matrix, in pose order.
-        noise: Per-reading noise used [N, N·m].
-        noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
-        noise_dof: Degrees of freedom of the noise estimate.
-        information: ``(12, 12)`` information of ``θ`` with the drift parameters marginalized.
         covariance: ``(12, 12)`` covariance of ``θ`` (the inverse of :attr:`information`).
         parameter_count: Fitted parameters (``θ``, coefficients, rates, estimated noise levels).
         log_likelihood: Gaussian log-likelihood of the pose means at the fit.
@@ -126,19 +119,11 @@ class DriftFit:
         collapse: Why the noise cannot be told from the walk, or None (a sound fit).
     """
 
-    model: SensorModel
-    whitened: np.ndarray
-    hat: np.ndarray
-    noise: SensorNoise
-    noise_source: str
-    noise_dof: float
-    information: np.ndarray
     covariance: np.ndarray
     parameter_count: int
     log_likelihood: float
     drift: BiasDrift
     collapse: str | None = None
-    loss: str = "linear"
 
     @property
     def bic(self) -> float:
@@ -322,16 +307,17 @@ def fit_drift_model(
     coefficients = phi[12:].reshape(-1, 6)
     dof = min(float(np.sum(1.0 - np.einsum("pkk->pk", hat)[:, g])) for g in _GROUPS)
     return DriftFit(
-        SensorModel.from_vector(phi[:12]),
-        data.unsort(white),
-        data.unsort(hat),
-        SensorNoise(std[:3], std[3:]),
-        start.noise_source,
-        dof if start.estimated else start.noise_dof,
-        np.linalg.inv(covariance[:12, :12]),
-        covariance[:12, :12],
-        len(phi) + 2 * model.walk + 2 * start.estimated,
-        log_l,
+        model=SensorModel.from_vector(phi[:12]),
+        noise=SensorNoise(std[:3], std[3:]),
+        noise_source=start.noise_source,
+        noise_dof=dof if start.estimated else start.noise_dof,
+        information=np.linalg.inv(covariance[:12, :12]),
+        whitened=data.unsort(white),
+        hat=data.unsort(hat),
+        loss="linear",
+        covariance=covariance[:12, :12],
+        parameter_count=len(phi) + 2 * model.walk + 2 * start.estimated,
+        log_likelihood=log_l,
         drift=BiasDrift(
             model.name,
             selected_by,

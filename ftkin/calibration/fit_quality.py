@@ -116,8 +116,8 @@ def diagnose(
     wrenches=None,
     noise_free: bool = False,
 ) -> tuple[FitDiagnostics, np.ndarray]:
-    """Assess an :class:`~ftkin.calibration.ml.MlFit`; returns its diagnostics and the (scaled)
-    covariance.
+    """Assess a fit (:class:`~ftkin.calibration.ml.WhitenedFit`: the ML or a drift model's);
+    returns its diagnostics and the (scaled) covariance.
 
     ``parameter_count``: parameters fitted (default: the problem's, 12 for ``θ``
     plus any mount angles; more with a drift

@@ -141,24 +141,43 @@ class WeightedProblem:
 
 
 @dataclass(frozen=True)
-class MlFit:
-    """What :func:`fit_ml` found.
+class WhitenedFit:
+    """A fit as :func:`~ftkin.calibration.fit_quality.diagnose` assesses it: :class:`MlFit`, or
+    :class:`~ftkin.calibration.drift_fit.DriftFit` for a drift model.
 
     Attributes:
-        model: The estimated parameters.
-        start: The two-step linear estimate the fit started from.
-        problem: The whitened problem at the final noise levels (see :attr:`noise`).
-        noise: Per-reading noise used [N, N·m] (the problem's channel levels).
+        model: The estimated parameters ``θ``.
+        noise: Per-reading noise used [N, N·m].
         noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
         noise_dof: Degrees of freedom of the noise estimate (``inf`` if given).
-        loss: Loss function used.
-        robust_weights: ``(P, 6)`` final weights of the robust loss (ones for ``"linear"``).
-        information: ``(12, 12)`` Fisher information of ``θ`` (robust weights
-            included; with a mount, the marginal information, mount estimated).
-        iterations: Function evaluations the solver used.
-        whitened: ``(P, 6)`` whitened residuals at the fit.
-        hat: ``(P, 6, 6)`` per-pose blocks of the hat matrix at the fit
+        information: ``(12, 12)`` Fisher information of ``θ`` (other parameters marginalized).
+        whitened: ``(P, 6)`` whitened residuals at the fit, in pose order.
+        hat: ``(P, 6, 6)`` per-pose blocks of the hat matrix at the fit, in pose order
             (:meth:`WeightedProblem.hat_blocks`).
+        loss: Loss function used.
+    """
+
+    model: SensorModel
+    noise: SensorNoise
+    noise_source: str
+    noise_dof: float
+    information: np.ndarray
+    whitened: np.ndarray
+    hat: np.ndarray
+    loss: str
+
+
+@dataclass(frozen=True)
+class MlFit(WhitenedFit):
+    """What :func:`fit_ml` found (with the attributes of :class:`WhitenedFit`).
+
+    Attributes:
+        start: The two-step linear estimate the fit started from.
+        problem: The whitened problem at the final noise levels (see :attr:`noise`).
+        robust_weights: ``(P, 6)`` final weights of the robust loss (ones for ``"linear"``);
+            the :attr:`information` includes them (with a mount, it is the marginal
+            information of ``θ``, mount estimated).
+        iterations: Function evaluations the solver used.
         mount_rotation: ``R_M`` ``(3, 3)``, URDF sensor frame → real sensor frame
             (identity unless estimated; :mod:`ftkin.calibration.mount`).
         mount_mode: ``"none"``, ``"yaw"`` or ``"full"``.
@@ -166,18 +185,10 @@ class MlFit:
             the real sensor's axes (``k`` = 1 for yaw, 3 for full), else None.
     """
 
-    model: SensorModel
     start: SensorModel
     problem: WeightedProblem
-    noise: SensorNoise
-    noise_source: str
-    noise_dof: float
-    loss: str
     robust_weights: np.ndarray
-    information: np.ndarray
     iterations: int
-    whitened: np.ndarray
-    hat: np.ndarray
     mount_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
     mount_mode: str = "none"
     mount_covariance: np.ndarray | None = None
