@@ -52,15 +52,14 @@ class CrossValidation:
 
     def report(self) -> str:
         """A table: one row per drift setting, and the ratio to the first."""
-        settings = list(self.force_rms)
-        first = settings[0]
+        first = next(iter(self.force_rms))
         lines = [
             f"{self.folds}-fold cross-validation over {self.pose_count} poses (seed {self.seed}): "
             "compensated wrench at held-out poses (the truth is zero)",
             f"  {'drift':<22}{'force RMS [N]':>15}{'torque RMS [N·m]':>18}{f'÷ {first}':>10}  "
             "models of the folds",
         ]
-        for setting in settings:
+        for setting in self.force_rms:
             ratio = self.force_rms[setting] / max(self.force_rms[first], 1e-300)
             models = ", ".join(
                 f"{m} ×{self.models[setting].count(m)}"
