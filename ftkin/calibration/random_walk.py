@@ -58,14 +58,13 @@ def walk_gains(times: np.ndarray, noise_variance: np.ndarray, rate: np.ndarray) 
         zeros = np.zeros((count, 6))
         return WalkGains(np.asarray(noise_variance, dtype=float), zeros, zeros, zeros)
     growth = np.vstack([np.outer(np.diff(times), rate**2), np.zeros((1, 6))])  # from pose i+1 to i
-    predicted, filtered = np.empty((count, 6)), np.empty((count, 6))
-    variance = np.zeros(6)
+    predicted, variance = np.empty((count, 6)), np.zeros(6)
     for i in range(count - 1, -1, -1):
         variance = variance + growth[i]
         predicted[i] = variance
-        variance = variance * noise_variance[i] / (variance + noise_variance[i])
-        filtered[i] = variance
+        variance = variance * noise_variance[i] / (variance + noise_variance[i])  # the update
     innovation = predicted + noise_variance
+    filtered = predicted * noise_variance / innovation  # the variances after each update
     return WalkGains(innovation, predicted / innovation, predicted, filtered)
 
 
