@@ -144,8 +144,8 @@ class CalibrationOptions:
             raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
         auto, timed = self.drift == "auto", samples.times is not None
         spread = timed and np.ptp(samples.times) > 0.0
-        plain = self.method == "ml" and self.loss == "linear" and not self.drop_outliers
         # auto looks for a drift only with the plain ml fit, no mount and times that differ
+        plain = self.method == "ml" and self.loss == "linear" and not self.drop_outliers
         fits_drift = self.drift != "none" and (
             not auto or (plain and spread and self.estimate_mount == "none")
         )
@@ -184,10 +184,10 @@ class CalibrationOptions:
         """``(6,)`` lowest noise an estimate may take [N, N·m]: the numeric floor, or the
         resolution's quantization noise.
         """
-        floor = noise_floor(wrenches)
-        if self.resolution is None:
-            return floor
-        return np.maximum(floor, np.repeat(self.resolution, 3) / np.sqrt(12.0))
+        quantization = (
+            0.0 if self.resolution is None else np.repeat(self.resolution, 3) / np.sqrt(12.0)
+        )
+        return np.maximum(noise_floor(wrenches), quantization)
 
 
 def calibrate(samples: Samples, options: CalibrationOptions | None = None, **keywords):
