@@ -50,6 +50,21 @@ MIN_NOISE_DOF = 8
 called rough.
 """
 
+_ROUNDING_WARNING = (
+    "the residuals are at rounding level (noise estimated at its floor, "
+    f"{NOISE_FLOOR_RELATIVE:g} of the largest reading): the standard errors, the fit test "
+    "and the outlier test rest on that floor; record several readings per pose (a pose "
+    "column) or give the noise level (noise=, --noise-force/--noise-torque)"
+)
+_NOISE_FREE_WARNING = (
+    "the repeated readings of each pose are identical and the readings fit the model to "
+    f"rounding (noise estimated at its floor, {NOISE_FLOOR_RELATIVE:g} of the largest "
+    "reading): noise-free data, e.g. a simulation without sensor noise? The estimates are "
+    "exact, but the standard errors, the fit test and the outlier test mean nothing; add "
+    "sensor noise to simulated readings or give the noise level (noise=, "
+    "--noise-force/--noise-torque)"
+)
+
 _UNITS = {
     "gravity_in_base": "N",
     "force_offset": "N",
@@ -201,22 +216,7 @@ def _warnings(
     )
     blocks = [(name, slice(3 * k, 3 * k + 3)) for k, name in enumerate(PARAMETER_NAMES)]
     rules = [
-        (
-            exact and not noise_free,
-            "the residuals are at rounding level (noise estimated at its floor, "
-            f"{NOISE_FLOOR_RELATIVE:g} of the largest reading): the standard errors, the fit test "
-            "and the outlier test rest on that floor; record several readings per pose (a pose "
-            "column) or give the noise level (noise=, --noise-force/--noise-torque)",
-        ),
-        (
-            exact and noise_free,
-            "the repeated readings of each pose are identical and the readings fit the model to "
-            f"rounding (noise estimated at its floor, {NOISE_FLOOR_RELATIVE:g} of the largest "
-            "reading): noise-free data, e.g. a simulation without sensor noise? The estimates are "
-            "exact, but the standard errors, the fit test and the outlier test mean nothing; add "
-            "sensor noise to simulated readings or give the noise level (noise=, "
-            "--noise-force/--noise-torque)",
-        ),
+        (exact, _NOISE_FREE_WARNING if noise_free else _ROUNDING_WARNING),
         (
             d.p_value < FIT_ALPHA,
             f"the readings do not fit the model within their noise (chi-square "
