@@ -272,12 +272,15 @@ def _fit_static(poses: PoseAverages, options: CalibrationOptions, drift_models) 
         fit, poses.pose_ids, log=not drift_models, wrenches=poses.wrenches, noise_free=noise_free
     )
     if options.drop_outliers and diagnostics.outlier_pose_ids:
-        dropped = diagnostics.outlier_pose_ids
-        keep = ~np.isin(poses.pose_ids, dropped)
+        keep = ~np.isin(poses.pose_ids, diagnostics.outlier_pose_ids)
         poses = replace(poses, **{k: v[keep] for k, v in vars(poses).items() if v is not None})
         fit = fit_ml(poses, options.g, options.noise, options.loss, options.estimate_mount, floor)
-        diagnostics, covariance = diagnose(
-            fit, poses.pose_ids, dropped, wrenches=poses.wrenches, noise_free=noise_free
+        diagnostics, covariance = diagnose(  # the outliers dropped, said in the diagnostics
+            fit,
+            poses.pose_ids,
+            diagnostics.outlier_pose_ids,
+            wrenches=poses.wrenches,
+            noise_free=noise_free,
         )
     mount_covariance = fit.mount_covariance
     if mount_covariance is not None:  # the same goodness-of-fit scaling as θ
