@@ -387,13 +387,20 @@ class BiasDrift:
         return text
 
 
-def _constant(argument: str | None) -> DriftModel:
-    if argument is not None:
-        raise InvalidInput(f"drift 'none' takes no argument, got 'none:{argument}'")
-    return DriftModel()
+def without_argument(model: DriftModel) -> Callable[[str | None], DriftModel]:
+    """The factory of a model that takes no argument (``"none"``, ``"random-walk"``)."""
+
+    def make(argument: str | None) -> DriftModel:
+        if argument is not None:
+            raise InvalidInput(
+                f"drift '{model.name}' takes no argument, got '{model.name}:{argument}'"
+            )
+        return model
+
+    return make
 
 
-register_drift_model("none", _constant)
+register_drift_model("none", without_argument(DriftModel()))
 
 # the built-in models register themselves when their module loads
 from . import drift_poly, random_walk  # noqa: E402, F401

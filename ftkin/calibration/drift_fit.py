@@ -188,8 +188,7 @@ def gauss_newton(data: SortedPoses, phi, std, rate, iterations: int):
 
     for _ in range(iterations):
         residuals, jacobian = whitened(phi)
-        flat = jacobian.reshape(-1, len(phi))
-        step = np.linalg.lstsq(flat, residuals.reshape(-1), rcond=None)[0]
+        step = np.linalg.lstsq(jacobian.reshape(-1, len(phi)), residuals.reshape(-1), rcond=None)[0]
         phi, change = phi + step, jacobian @ step
         if np.sum(change**2) < 1e-12 * (1.0 + np.sum(residuals**2)):
             break

@@ -28,8 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import InvalidInput
-from .drift import DriftModel, register_drift_model
+from .drift import DriftModel, register_drift_model, without_argument
 
 
 @dataclass(frozen=True)
@@ -118,15 +117,9 @@ def smooth(
     return mean, np.clip(variance, 0.0, None)
 
 
-def _random_walk(argument: str | None) -> DriftModel:
-    if argument is not None:
-        raise InvalidInput(f"drift 'random-walk' takes no argument, got 'random-walk:{argument}'")
-    return DriftModel("random-walk", walk=True)
-
-
 register_drift_model(
     "random-walk",
-    _random_walk,
+    without_argument(DriftModel("random-walk", walk=True)),
     auto=("random-walk", "random-walk+poly:1", "random-walk+poly:2"),
     walk=True,
 )
