@@ -140,8 +140,11 @@ def cross_validate(
 
     drifts = tuple(drifts)
     pose_ids, reading_pose = np.unique(samples.pose_ids, return_inverse=True)
-    integer = isinstance(folds, (int, np.integer)) and not isinstance(folds, bool)
-    valid_folds = integer and MIN_FOLDS <= folds <= MAX_FOLDS
+    valid_folds = (
+        isinstance(folds, (int, np.integer))
+        and not isinstance(folds, bool)
+        and MIN_FOLDS <= folds <= MAX_FOLDS
+    )
     for refused, message in (
         ("drift" in keywords, "give the drift settings to compare as drifts=(...), not drift="),
         (

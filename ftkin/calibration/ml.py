@@ -327,9 +327,13 @@ def fit_ml(
         mount0, start = np.eye(3), fit_linear(poses, g)
     else:
         mount0, start = mount_start(poses, g)
-    counts = np.asarray(poses.counts, dtype=float)
     problem = WeightedProblem(
-        poses.rotations, poses.wrenches, counts, np.ones(6), mount0, estimate_mount
+        poses.rotations,
+        poses.wrenches,
+        np.asarray(poses.counts, dtype=float),
+        np.ones(6),
+        mount0,
+        estimate_mount,
     )
     theta0 = np.concatenate([start.to_vector(), np.zeros(problem.parameter_count - 12)])
     channel_std, dof, source = _noise(poses, problem, theta0, noise, loss, floor)
