@@ -148,6 +148,7 @@ class SortedPoses:
 
     def __init__(self, poses: PoseAverages, model: DriftModel):
         self.order = np.argsort(poses.times, kind="stable")
+        self.back = np.argsort(self.order)  # sorted → given pose order
         self.times = np.asarray(poses.times)[self.order]
         self.rotations = poses.rotations[self.order]
         self.wrenches = poses.wrenches[self.order]
@@ -158,9 +159,6 @@ class SortedPoses:
         self.names = list(COMPONENT_NAMES) + [
             f"drift c{k + 1}[{c}]" for k in range(model.columns) for c in range(6)
         ]
-
-    def unsort(self, array: np.ndarray) -> np.ndarray:
-        return array[np.argsort(self.order)]
 
     def raw_residuals(self, phi: np.ndarray) -> np.ndarray:
         """``(P, 6)`` readings minus ``θ``'s prediction minus the trend [N, N·m]."""
@@ -311,8 +309,8 @@ def fit_drift_model(
         noise_source=start.noise_source,
         noise_dof=dof if start.estimated else start.noise_dof,
         information=np.linalg.inv(covariance[:12, :12]),
-        whitened=data.unsort(white),
-        hat=data.unsort(hat),
+        whitened=white[data.back],
+        hat=hat[data.back],
         loss="linear",
         covariance=covariance[:12, :12],
         parameter_count=len(phi) + 2 * model.walk + 2 * start.estimated,
@@ -338,8 +336,11 @@ def _fit_candidates(models, poses: PoseAverages, start: DriftStart, selected_by:
     for model in models:
         count = 12 + 6 * model.columns + 2 * model.walk + 2 * start.estimated
         if model.name == "none":
-            residuals = poses.wrenches - predict(poses.rotations, start.theta)
-            log_l = _log_likelihood(residuals, np.asarray(poses.counts, dtype=float), start)
+            log_l = _log_likelihood(
+                poses.wrenches - predict(poses.rotations, start.theta),
+                np.asarray(poses.counts, dtype=float),
+                start,
+            )
             criteria["none"] = -2.0 * log_l + count * np.log(observations)
             continue
         if auto and (count > observations - 6 or (model.walk and len(poses) > MAX_AUTO_WALK_POSES)):

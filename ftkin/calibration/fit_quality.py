@@ -29,7 +29,6 @@ from .diagnostics import (
     OUTLIER_ALPHA,
     RELATIVE_STD_ERROR_WARNING,
     FitDiagnostics,
-    main_components,
 )
 from .information import NOISE_FLOOR_RELATIVE, at_noise_floor
 from .model import PARAMETER_NAMES
@@ -206,9 +205,7 @@ def _warnings(
     """
     d = diagnostics
     relative, sigma = d.relative_std_errors, d.relative_std_errors * scales
-    weakest = ", ".join(
-        f"{weight:+.2f} {label}" for label, weight in main_components(d.weakest_direction)
-    )
+    weakest = ", ".join(f"{weight:+.2f} {label}" for label, weight in d.weakest_components)
     worst = ", ".join(
         f"{i} ({d.pose_normalized_residuals[d.pose_ids == i][0]:.1f}σ, "
         f"p = {d.pose_p_values[d.pose_ids == i][0]:.1e})"
