@@ -40,7 +40,7 @@ import numpy as np
 from ..exceptions import UnobservableParameters
 from .drift import BiasDrift, DriftModel, auto_candidates, parse_drift, trend_columns
 from .information import SensorNoise, invert_information
-from .ml import WhitenedFit, pooled_noise
+from .ml import RESIDUAL_NOISE_GROUPS, WhitenedFit, pooled_noise
 from .model import COMPONENT_NAMES, SensorModel, parameter_jacobian, predict
 from .random_walk import log_likelihood, smooth, walk_gains, whiten
 from .samples import PoseAverages
@@ -71,7 +71,6 @@ NOISE_WALK_RATIO = 10.0
 """Walk between consecutive poses [multiples of the noise of a pose mean] beyond which an
 estimated noise cannot be told from the walk."""
 
-_GROUPS = (slice(0, 3), slice(3, 6))
 
 _UNTOLD = (
     "the drift model cannot be told apart from them with these poses and times (record the poses "
@@ -210,9 +209,9 @@ def _search_walk(data: SortedPoses, phi, start: DriftStart):
     spacing = max(float(np.median(np.diff(data.times))) if len(data.times) > 1 else 1.0, 1e-9)
     # the noise of a pose mean over √(pose spacing)
     reference = np.log(
-        [std0[g].mean() / np.sqrt(np.median(data.counts) * spacing) for g in _GROUPS]
+        [std0[g].mean() / np.sqrt(np.median(data.counts) * spacing) for g in RESIDUAL_NOISE_GROUPS]
     )
-    noise_part = np.log([std0[g].mean() for g in _GROUPS]) if start.estimated else []
+    noise_part = np.log([std0[g].mean() for g in RESIDUAL_NOISE_GROUPS]) if start.estimated else []
     best = {"phi": phi, "value": np.inf}
 
     def unpack(x):
@@ -244,7 +243,7 @@ def _collapse(data: SortedPoses, std, rate, start: DriftStart) -> str | None:
         return None
     per_pose = std / np.sqrt(np.median(data.counts))
     step = rate * np.sqrt(max(float(np.median(np.diff(data.times))), 0.0))
-    for g, name, unit in zip(_GROUPS, ("force", "torque"), ("N", "N·m")):
+    for g, name, unit in zip(RESIDUAL_NOISE_GROUPS, ("force", "torque"), ("N", "N·m")):
         if (
             np.all(std[g] <= start.floor[g] * (1.0 + 1e-3))
             or step[g][0] > NOISE_WALK_RATIO * per_pose[g][0]
@@ -302,7 +301,7 @@ def fit_drift_model(
         ]
     )
     coefficients = phi[12:].reshape(-1, 6)
-    dof = min(float(np.sum(1.0 - np.einsum("pkk->pk", hat)[:, g])) for g in _GROUPS)
+    dof = min(float(np.sum(1.0 - np.einsum("pkk->pk", hat)[:, g])) for g in RESIDUAL_NOISE_GROUPS)
     return DriftFit(
         model=SensorModel.from_vector(phi[:12]),
         noise=SensorNoise(std[:3], std[3:]),
