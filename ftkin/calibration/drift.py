@@ -318,20 +318,14 @@ class BiasDrift:
         ):
             object.__setattr__(self, name, _check_array(getattr(self, name), name, shape, positive))
         span, kind = self.recorded_span, self.kind
-        for refused, message in (
-            (
-                span is not None and span[0] > span[1],
-                f"recorded_span must be [first, last] [s], got {span}",
-            ),
-            (
-                (self.rate is not None) != kind.walk or (rows or 0) != kind.columns,
+        if span is not None and span[0] > span[1]:
+            raise InvalidInput(f"recorded_span must be [first, last] [s], got {span}")
+        if (self.rate is not None) != kind.walk or (rows or 0) != kind.columns:
+            raise InvalidInput(
                 f"drift {self.model!r} has {kind.columns} coefficient rows and "
                 f"{'a' if kind.walk else 'no'} rate, got {rows or 0} and "
-                f"{'a' if self.rate is not None else 'no'} rate",
-            ),
-        ):
-            if refused:
-                raise InvalidInput(message)
+                f"{'a' if self.rate is not None else 'no'} rate"
+            )
 
     @property
     def start_time(self) -> float:

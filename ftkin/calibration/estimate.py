@@ -218,8 +218,10 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
     options = replace(options or CalibrationOptions(), **keywords)
     drift_models = options.check(samples)
     raw_poses = samples.pose_averages()
-    signs = reading_signs(options.sensor_sign, options.flip_axis)
-    poses = replace(raw_poses, wrenches=raw_poses.wrenches * signs)
+    poses = replace(
+        raw_poses,
+        wrenches=raw_poses.wrenches * reading_signs(options.sensor_sign, options.flip_axis),
+    )
     check_conventions(
         detect_sign_and_handedness(
             raw_poses,

@@ -115,24 +115,16 @@ def fisher_information(
             or readings per pose not positive or of the wrong shape.
     """
     rotations, _ = as_rotation_batch(rotation_sensor_to_base)
+    if not isinstance(noise, SensorNoise):
+        raise InvalidInput(f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}")
     counts = as_float_array(readings_per_pose, "readings_per_pose")
-    for refused, message in (
-        (
-            not isinstance(noise, SensorNoise),
-            f"noise must be an ftkin.SensorNoise, got {type(noise).__name__}",
-        ),
-        (
-            counts.ndim > 1 or counts.size not in (1, len(rotations)),
+    if counts.ndim > 1 or counts.size not in (1, len(rotations)):
+        raise InvalidInput(
             f"readings_per_pose must be a scalar or have shape ({len(rotations)},), got "
-            f"{counts.shape}",
-        ),
-        (
-            not np.all(np.isfinite(counts) & (counts > 0)),
-            f"readings_per_pose must be finite and positive, got {counts}",
-        ),
-    ):
-        if refused:
-            raise InvalidInput(message)
+            f"{counts.shape}"
+        )
+    if not np.all(np.isfinite(counts) & (counts > 0)):
+        raise InvalidInput(f"readings_per_pose must be finite and positive, got {counts}")
     jac = mount_jacobian(
         rotations, model.gravity_in_base, model.center_of_mass, estimate_mount, mount_rotation
     )
