@@ -235,7 +235,7 @@ def noise_from_residuals(
     floor = noise_floor(problem.wrenches) if floor is None else np.asarray(floor, dtype=float)
     dof = 1.0 - leverage
     if robust:
-        studentized = np.abs(scaled) / np.sqrt(dof)
+        studentized = np.abs(scaled) / np.sqrt(dof)  # a median that ignores outlying poses
         median = [1.4826 * np.median(studentized[:, g]) for g in RESIDUAL_NOISE_GROUPS]
         std = np.maximum(np.repeat(median, 3), floor)
     else:

@@ -51,9 +51,8 @@ def _check_rank(regressor: np.ndarray, names: tuple[str, ...], reason: str) -> N
     relative = singular_values / singular_values[0]
     if relative[-1] < MIN_RELATIVE_SINGULAR_VALUE:
         weakest = np.abs(vt[-1]) / np.abs(vt[-1]).max()
-        involved = sorted({names[i] for i in np.flatnonzero(weakest > 0.3)})
         raise UnobservableParameters(
-            involved,
+            sorted({names[i] for i in np.flatnonzero(weakest > 0.3)}),
             f"{reason} (smallest relative singular value {relative[-1]:.1e}, "
             f"need at least {MIN_RELATIVE_SINGULAR_VALUE:.0e})",
             singular_values=relative,
