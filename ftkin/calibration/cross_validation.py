@@ -52,15 +52,14 @@ class CrossValidation:
 
     def report(self) -> str:
         """A table: one row per drift setting, and the ratio to the first."""
-        settings = list(self.force_rms)
-        first = settings[0]
+        first = next(iter(self.force_rms))
         lines = [
             f"{self.folds}-fold cross-validation over {self.pose_count} poses (seed {self.seed}): "
             "compensated wrench at held-out poses (the truth is zero)",
             f"  {'drift':<22}{'force RMS [N]':>15}{'torque RMS [N·m]':>18}{f'÷ {first}':>10}  "
             "models of the folds",
         ]
-        for setting in settings:
+        for setting in self.force_rms:
             ratio = self.force_rms[setting] / max(self.force_rms[first], 1e-300)
             models = ", ".join(
                 f"{m} ×{self.models[setting].count(m)}"
@@ -100,36 +99,9 @@ def _quiet_fits():
 
 
 def _subset(samples: Samples, mask: np.ndarray) -> Samples:
-    def part(array):
-        return None if array is None else array[mask]
-
-    return replace(
-        samples,
-        wrenches=samples.wrenches[mask],
-        rotations=samples.rotations[mask],
-        pose_ids=samples.pose_ids[mask],
-        joint_positions=part(samples.joint_positions),
-        times=part(samples.times),
-    )
-
-
-def _folds(samples: Samples, folds, seed: int) -> tuple[np.ndarray, int]:
-    """Fold ``(N,)`` of each reading (its pose's, at random) and the number of poses."""
-    if (
-        isinstance(folds, bool)
-        or not isinstance(folds, (int, np.integer))
-        or not MIN_FOLDS <= folds <= MAX_FOLDS
-    ):
-        raise InvalidInput(
-            f"folds must be an integer from {MIN_FOLDS} to {MAX_FOLDS}, got {folds!r}"
-        )
-    pose_ids, reading_pose = np.unique(samples.pose_ids, return_inverse=True)
-    if len(pose_ids) < folds:
-        raise InvalidInput(
-            f"{len(pose_ids)} poses cannot be split into {folds} folds; use fewer folds"
-        )
-    pose_fold = np.random.default_rng(seed).permutation(len(pose_ids)) % folds
-    return pose_fold[reading_pose], len(pose_ids)
+    per_reading = ("wrenches", "rotations", "pose_ids", "joint_positions", "times")
+    values = {name: getattr(samples, name) for name in per_reading}
+    return replace(samples, **{k: v[mask] for k, v in values.items() if v is not None})
 
 
 def _held_out_squares(result, test: Samples) -> np.ndarray:
@@ -166,14 +138,34 @@ def cross_validate(
     """
     from .estimate import calibrate  # estimate imports the whole estimator; keep this module light
 
-    if "drift" in keywords:
-        raise InvalidInput("give the drift settings to compare as drifts=(...), not drift=")
     drifts = tuple(drifts)
-    if not drifts or len(set(drifts)) != len(drifts) or not all(isinstance(d, str) for d in drifts):
-        raise InvalidInput(
-            f"drifts must be distinct drift settings (e.g. ('none', 'auto')), got {drifts!r}"
-        )
-    reading_fold, pose_count = _folds(samples, folds, seed)
+    pose_ids, reading_pose = np.unique(samples.pose_ids, return_inverse=True)
+    valid_folds = (
+        isinstance(folds, (int, np.integer))
+        and not isinstance(folds, bool)
+        and MIN_FOLDS <= folds <= MAX_FOLDS
+    )
+    for refused, message in (
+        ("drift" in keywords, "give the drift settings to compare as drifts=(...), not drift="),
+        (
+            not drifts
+            or len(set(drifts)) != len(drifts)
+            or not all(isinstance(d, str) for d in drifts),
+            f"drifts must be distinct drift settings (e.g. ('none', 'auto')), got {drifts!r}",
+        ),
+        (
+            not valid_folds,
+            f"folds must be an integer from {MIN_FOLDS} to {MAX_FOLDS}, got {folds!r}",
+        ),
+        (
+            valid_folds and len(pose_ids) < folds,
+            f"{len(pose_ids)} poses cannot be split into {folds} folds; use fewer folds",
+        ),
+    ):
+        if refused:
+            raise InvalidInput(message)
+    # each reading's fold is its pose's, at random
+    reading_fold = (np.random.default_rng(seed).permutation(len(pose_ids)) % folds)[reading_pose]
     squares = {drift: [] for drift in drifts}
     models = {drift: [] for drift in drifts}
     for k in range(folds):
@@ -192,7 +184,7 @@ def cross_validate(
     rms = {d: np.sqrt(np.mean(np.concatenate(v), axis=0)) for d, v in squares.items()}
     return CrossValidation(
         folds,
-        pose_count,
+        len(pose_ids),
         {d: float(v[0]) for d, v in rms.items()},
         {d: float(v[1]) for d, v in rms.items()},
         {d: tuple(m) for d, m in models.items()},

@@ -156,8 +156,11 @@ def main_components(direction: np.ndarray) -> list[tuple[str, float]]:
     """Entries of a unit direction in θ above 0.3 in magnitude, ``(name, weight)``, largest
     first.
     """
-    order = np.argsort(-np.abs(direction))
-    return [(COMPONENT_NAMES[i], float(direction[i])) for i in order if abs(direction[i]) > 0.3]
+    return [
+        (COMPONENT_NAMES[i], float(direction[i]))
+        for i in np.argsort(-np.abs(direction))
+        if abs(direction[i]) > 0.3
+    ]
 
 
 def _json_float(value) -> float | None:

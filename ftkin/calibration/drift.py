@@ -87,9 +87,12 @@ class DriftModel:
         """
         if self.walk:
             return np.column_stack([np.interp(times, drift.times, b) for b in drift.bias.T])
-        tau = (times - drift.end_time) / drift.time_scale
-        trend = self.basis(tau) @ drift.coefficients if self.columns else 0.0
-        return drift.end_bias + trend
+        if not self.columns:
+            return drift.end_bias
+        return (
+            drift.end_bias
+            + self.basis((times - drift.end_time) / drift.time_scale) @ drift.coefficients
+        )
 
     def information(self, jacobians, times, noise_variance, rate=None) -> np.ndarray:
         """Fisher information ``(..., 12, 12)`` of ``θ`` with the drift marginalized, for poses
@@ -102,9 +105,10 @@ class DriftModel:
         from .random_walk import walk_gains, whiten
 
         times = np.asarray(times, dtype=float)
-        span = max(float(times[-1] - times[0]), 1e-300)
-        trend = trend_columns(self.basis((times - times[-1]) / span))
-        trend = np.broadcast_to(trend, jacobians.shape[:-1] + trend.shape[-1:])
+        tau = (times - times[-1]) / max(float(times[-1] - times[0]), 1e-300)
+        trend = np.broadcast_to(
+            trend_columns(self.basis(tau)), jacobians.shape[:-1] + (6 * self.columns,)
+        )
         rate = np.zeros(6) if rate is None or not self.walk else np.asarray(rate, dtype=float)
         white = whiten(
             walk_gains(times, noise_variance, rate), np.concatenate([jacobians, trend], -1)
@@ -112,9 +116,8 @@ class DriftModel:
         full = np.einsum("...pki,...pkj->...ij", white, white)
         if not self.columns:
             return full
-        nuisance = full[..., 12:, 12:]
         return full[..., :12, :12] - full[..., :12, 12:] @ np.linalg.solve(
-            nuisance, full[..., 12:, :12]
+            full[..., 12:, 12:], full[..., 12:, :12]
         )
 
     def to_document(self, drift: BiasDrift) -> dict:
@@ -220,23 +223,24 @@ def parse_drift(spec) -> DriftModel:
                 f"unknown drift model {spec!r}; expected one of {', '.join(drift_choices())}"
             )
         parts.append(DRIFT_MODELS[name].make(argument if colon else None))
-    names = [part.name.partition(":")[0] for part in parts]
     if len(parts) == 1:
         return parts[0]
+    names = [part.name.partition(":")[0] for part in parts]
     if "none" in names or len(set(names)) < len(names) or sum(p.walk for p in parts) > 1:
         raise InvalidInput(f"drift {spec!r}: a sum of distinct models with at most one walk")
-    name = "+".join(part.name for part in parts)  # canonical: poly:02 is poly:2
-    columns = sum(part.columns for part in parts)
-    return DriftSum(name, columns, any(part.walk for part in parts), tuple(parts))
+    return DriftSum(
+        "+".join(part.name for part in parts),  # canonical: poly:02 is poly:2
+        sum(part.columns for part in parts),
+        any(part.walk for part in parts),
+        tuple(parts),
+    )
 
 
 def drift_candidates(spec) -> tuple[DriftModel, ...]:
     """The models a ``drift=`` value asks to fit: all :func:`auto_candidates` for ``"auto"``,
     else the one it names.
     """
-    if spec == "auto":
-        return tuple(parse_drift(name) for name in auto_candidates())
-    return (parse_drift(spec),)
+    return tuple(map(parse_drift, auto_candidates() if spec == "auto" else (spec,)))
 
 
 def _check_array(value, name: str, shape: tuple, positive: bool = False) -> np.ndarray | None:
@@ -244,10 +248,9 @@ def _check_array(value, name: str, shape: tuple, positive: bool = False) -> np.n
         return None
     value = as_float_array(value, name).copy()  # frozen below: never the caller's array
     if value.shape != shape or not np.all(np.isfinite(value)) or (positive and np.any(value < 0)):
-        rule = "≥ 0 " if positive else ""
         raise InvalidInput(
-            f"drift {name} must be finite {rule}with shape {shape}, got {value.shape}"
-            + (f" {value.tolist()}" if value.size < 8 else "")
+            f"drift {name} must be finite {'≥ 0 ' if positive else ''}with shape {shape}, got "
+            f"{value.shape}" + (f" {value.tolist()}" if value.size < 8 else "")
         )
     value.setflags(write=False)
     return value
@@ -286,28 +289,37 @@ class BiasDrift:
     kind: DriftModel = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        kind = parse_drift(self.model)
-        object.__setattr__(self, "kind", kind)
-        if self.selected_by not in ("auto", "given"):
-            raise InvalidInput(f"selected_by must be 'auto' or 'given', got {self.selected_by!r}")
-        if not (np.isfinite(self.time_scale) and self.time_scale > 0):
-            raise InvalidInput(f"time_scale must be a finite time > 0 [s], got {self.time_scale!r}")
+        object.__setattr__(self, "kind", parse_drift(self.model))
         times = as_float_array(self.times, "times").reshape(-1)
-        if len(times) == 0 or np.any(np.diff(times) < 0) or not np.all(np.isfinite(times)):
-            raise InvalidInput("drift times must be finite, ascending and not empty [s]")
-        count = len(times)
-        rows = None if self.coefficients is None else kind.columns  # the shape check names others
+        for refused, message in (
+            (
+                self.selected_by not in ("auto", "given"),
+                f"selected_by must be 'auto' or 'given', got {self.selected_by!r}",
+            ),
+            (
+                not (np.isfinite(self.time_scale) and self.time_scale > 0),
+                f"time_scale must be a finite time > 0 [s], got {self.time_scale!r}",
+            ),
+            (
+                len(times) == 0 or np.any(np.diff(times) < 0) or not np.all(np.isfinite(times)),
+                "drift times must be finite, ascending and not empty [s]",
+            ),
+        ):
+            if refused:
+                raise InvalidInput(message)
+        rows = None if self.coefficients is None else self.kind.columns  # the check names others
         for name, shape, positive in (
-            ("times", (count,), False),
-            ("bias", (count, 6), False),
-            ("bias_std", (count, 6), False),
+            ("times", times.shape, False),
+            ("bias", (len(times), 6), False),
+            ("bias_std", (len(times), 6), False),
             ("rate", (2,), True),
             ("coefficients", (rows, 6), False),
             ("recorded_span", (2,), False),
         ):
             object.__setattr__(self, name, _check_array(getattr(self, name), name, shape, positive))
-        if self.recorded_span is not None and self.recorded_span[0] > self.recorded_span[1]:
-            raise InvalidInput(f"recorded_span must be [first, last] [s], got {self.recorded_span}")
+        span, kind = self.recorded_span, self.kind
+        if span is not None and span[0] > span[1]:
+            raise InvalidInput(f"recorded_span must be [first, last] [s], got {span}")
         if (self.rate is not None) != kind.walk or (rows or 0) != kind.columns:
             raise InvalidInput(
                 f"drift {self.model!r} has {kind.columns} coefficient rows and "
@@ -331,10 +343,9 @@ class BiasDrift:
         """``(N,)`` True where ``times`` [s] fall inside the recording (:attr:`recorded_span`, else
         the pose times).
         """
-        span = self.recorded_span
-        first, last = span if span is not None else (self.times[0], self.times[-1])
+        span = self.recorded_span if self.recorded_span is not None else self.times[[0, -1]]
         times = as_float_array(times, "times").reshape(-1)
-        return (times >= first) & (times <= last)
+        return (times >= span[0]) & (times <= span[1])
 
     @property
     def end_bias(self) -> np.ndarray:
@@ -370,13 +381,20 @@ class BiasDrift:
         return text
 
 
-def _constant(argument: str | None) -> DriftModel:
-    if argument is not None:
-        raise InvalidInput(f"drift 'none' takes no argument, got 'none:{argument}'")
-    return DriftModel()
+def without_argument(model: DriftModel) -> Callable[[str | None], DriftModel]:
+    """The factory of a model that takes no argument (``"none"``, ``"random-walk"``)."""
+
+    def make(argument: str | None) -> DriftModel:
+        if argument is not None:
+            raise InvalidInput(
+                f"drift '{model.name}' takes no argument, got '{model.name}:{argument}'"
+            )
+        return model
+
+    return make
 
 
-register_drift_model("none", _constant)
+register_drift_model("none", without_argument(DriftModel()))
 
 # the built-in models register themselves when their module loads
 from . import drift_poly, random_walk  # noqa: E402, F401

@@ -39,7 +39,8 @@ import numpy as np
 
 from ..exceptions import UnobservableParameters
 from .drift import BiasDrift, DriftModel, auto_candidates, parse_drift, trend_columns
-from .information import SensorNoise
+from .information import SensorNoise, invert_information
+from .ml import RESIDUAL_NOISE_GROUPS, WhitenedFit, pooled_noise
 from .model import COMPONENT_NAMES, SensorModel, parameter_jacobian, predict
 from .random_walk import log_likelihood, smooth, walk_gains, whiten
 from .samples import PoseAverages
@@ -70,7 +71,11 @@ NOISE_WALK_RATIO = 10.0
 """Walk between consecutive poses [multiples of the noise of a pose mean] beyond which an
 estimated noise cannot be told from the walk."""
 
-_GROUPS = (slice(0, 3), slice(3, 6))
+
+_UNTOLD = (
+    "the drift model cannot be told apart from them with these poses and times (record the poses "
+    "in a mixed order, or choose a simpler drift model)"
+)
 
 
 @dataclass(frozen=True)
@@ -101,107 +106,40 @@ class DriftStart:
 
 
 @dataclass(frozen=True)
-class WhitenedFit:
-    """Whitened residuals and hat blocks of a drift fit, in pose order (what the diagnostics
-    read).
-    """
-
-    residuals: np.ndarray
-    hat: np.ndarray
-
-    def whitened_residuals(self, theta=None) -> np.ndarray:
-        """``(6P,)`` whitened residuals (``theta`` ignored: they are those of the fit)."""
-        return self.residuals.reshape(-1)
-
-    def hat_blocks(self, theta=None) -> np.ndarray:
-        """``(P, 6, 6)`` per-pose blocks of the hat matrix."""
-        return self.hat
-
-
-@dataclass(frozen=True)
-class DriftFit:
-    """A drift model's fit, shaped like :class:`~ftkin.calibration.ml.MlFit` for
-    :func:`~ftkin.calibration.fit_quality.diagnose`.
+class DriftFit(WhitenedFit):
+    """A drift model's fit (with the attributes of :class:`~ftkin.calibration.ml.WhitenedFit`,
+    ``θ`` with the bias at the end of the recording, the drift parameters marginalized).
 
     Attributes:
-        model: ``θ`` with the bias at the end of the recording.
-        problem: Whitened residuals and hat blocks (:class:`WhitenedFit`).
-        channel_std: ``(6,)`` per-reading noise [N, N·m].
-        noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
-        noise_dof: Degrees of freedom of the noise estimate.
-        information: ``(12, 12)`` information of ``θ`` with the drift parameters marginalized.
+        covariance: ``(12, 12)`` covariance of ``θ`` (the inverse of :attr:`information`).
         parameter_count: Fitted parameters (``θ``, coefficients, rates, estimated noise levels).
         log_likelihood: Gaussian log-likelihood of the pose means at the fit.
         drift: The bias trajectory.
         collapse: Why the noise cannot be told from the walk, or None (a sound fit).
     """
 
-    model: SensorModel
-    problem: WhitenedFit
-    channel_std: np.ndarray
-    noise_source: str
-    noise_dof: float
-    information: np.ndarray
+    covariance: np.ndarray
     parameter_count: int
     log_likelihood: float
     drift: BiasDrift
     collapse: str | None = None
-    loss: str = "linear"
-
-    @property
-    def noise(self) -> SensorNoise:
-        """Per-reading noise used [N, N·m]."""
-        return SensorNoise(self.channel_std[:3], self.channel_std[3:])
-
-    @property
-    def covariance(self) -> np.ndarray:
-        """``(12, 12)`` covariance of ``θ``."""
-        return np.linalg.inv(self.information)
 
     @property
     def bic(self) -> float:
         """Bayesian information criterion ``−2 log L + k log(6P)``."""
-        size = self.problem.residuals.size
-        return -2.0 * self.log_likelihood + self.parameter_count * np.log(size)
+        return -2.0 * self.log_likelihood + self.parameter_count * np.log(self.whitened.size)
 
 
-def invert_information(information: np.ndarray, names: list[str]) -> np.ndarray:
-    """Inverse of an information matrix, or :class:`UnobservableParameters` when it is singular."""
-    scale = np.sqrt(np.diag(information))
-    if np.any(scale == 0):
-        missing = [names[i] for i in np.flatnonzero(scale == 0)]
-        raise UnobservableParameters(missing, "the poses carry no information about them")
-    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
-    if eigenvalues[0] <= 1e-12 * eigenvalues[-1]:
-        raise UnobservableParameters(
-            [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)],
-            "the drift model cannot be told apart from them with these poses and times (record the "
-            "poses in a mixed order, or choose a simpler drift model)",
-            singular_values=eigenvalues[::-1],
-        )
-    return (eigenvectors / eigenvalues) @ eigenvectors.T / np.outer(scale, scale)
-
-
-def _gaussian_log_likelihood(residuals: np.ndarray, variance: np.ndarray) -> float:
-    return float(-0.5 * np.sum(residuals**2 / variance + np.log(2.0 * np.pi * variance)))
-
-
-def _pooled_std(squares: np.ndarray, dof: np.ndarray, floor: np.ndarray) -> np.ndarray:
-    """``(6,)`` noise per group (forces, torques) from ``Σ n e²`` and degrees of freedom per
-    channel, at least ``floor``.
+def _log_likelihood(residuals: np.ndarray, counts: np.ndarray, start: DriftStart) -> float:
+    """Gaussian log-likelihood of pose-mean ``residuals`` ``(P, 6)`` read ``counts`` ``(P,)``
+    times, at the start's noise or, when the noise is estimated, at its ML value.
     """
-    std = [np.sqrt(np.sum(squares[g]) / max(np.sum(dof[g]), 1e-12)) for g in _GROUPS]
-    return np.maximum(np.repeat(std, 3), floor)
-
-
-def constant_log_likelihood(poses: PoseAverages, start: DriftStart) -> float:
-    """Log-likelihood of the constant-bias fit (at the ML noise when the noise is estimated)."""
-    residuals = poses.wrenches - predict(poses.rotations, start.theta)
-    counts = np.asarray(poses.counts, dtype=float)[:, None]
+    counts = counts[:, None]
     std = start.channel_std
     if start.estimated:
-        std = _pooled_std(np.sum(residuals**2 * counts, 0), np.full(6, len(counts)), start.floor)
-    return _gaussian_log_likelihood(residuals, std**2 / counts)
+        std = pooled_noise(np.sum(residuals**2 * counts, 0), np.full(6, len(counts)), start.floor)
+    variance = std**2 / counts
+    return float(-0.5 * np.sum(residuals**2 / variance + np.log(2.0 * np.pi * variance)))
 
 
 class SortedPoses:
@@ -209,27 +147,23 @@ class SortedPoses:
 
     def __init__(self, poses: PoseAverages, model: DriftModel):
         self.order = np.argsort(poses.times, kind="stable")
+        self.back = np.argsort(self.order)  # sorted → given pose order
         self.times = np.asarray(poses.times)[self.order]
         self.rotations = poses.rotations[self.order]
         self.wrenches = poses.wrenches[self.order]
         self.counts = np.asarray(poses.counts, dtype=float)[self.order]
-        span = float(self.times[-1] - self.times[0])
-        self.scale = span if span > 0 else 1.0
+        self.scale = float(self.times[-1] - self.times[0]) or 1.0
         self.basis = model.basis((self.times - self.times[-1]) / self.scale)
         self.trend = trend_columns(self.basis)
         self.names = list(COMPONENT_NAMES) + [
             f"drift c{k + 1}[{c}]" for k in range(model.columns) for c in range(6)
         ]
 
-    def unsort(self, array: np.ndarray) -> np.ndarray:
-        out = np.empty_like(array)
-        out[self.order] = array
-        return out
-
     def raw_residuals(self, phi: np.ndarray) -> np.ndarray:
         """``(P, 6)`` readings minus ``θ``'s prediction minus the trend [N, N·m]."""
-        trend = self.basis @ phi[12:].reshape(-1, 6)
-        return self.wrenches - predict(self.rotations, phi[:12]) - trend
+        return (
+            self.wrenches - predict(self.rotations, phi[:12]) - self.basis @ phi[12:].reshape(-1, 6)
+        )
 
 
 def gauss_newton(data: SortedPoses, phi, std, rate, iterations: int):
@@ -244,14 +178,14 @@ def gauss_newton(data: SortedPoses, phi, std, rate, iterations: int):
 
     def whitened(phi):
         jacobian = parameter_jacobian(data.rotations, phi[0:3], phi[9:12])
-        columns = [data.raw_residuals(phi)[:, :, None], jacobian, data.trend]
-        white = whiten(gains, np.concatenate(columns, axis=2))
+        white = whiten(
+            gains, np.concatenate([data.raw_residuals(phi)[:, :, None], jacobian, data.trend], 2)
+        )
         return white[:, :, 0], white[:, :, 1:]
 
     for _ in range(iterations):
         residuals, jacobian = whitened(phi)
-        flat = jacobian.reshape(-1, len(phi))
-        step = np.linalg.lstsq(flat, residuals.reshape(-1), rcond=None)[0]
+        step = np.linalg.lstsq(jacobian.reshape(-1, len(phi)), residuals.reshape(-1), rcond=None)[0]
         phi, change = phi + step, jacobian @ step
         if np.sum(change**2) < 1e-12 * (1.0 + np.sum(residuals**2)):
             break
@@ -272,10 +206,12 @@ def _search_walk(data: SortedPoses, phi, start: DriftStart):
     from scipy.optimize import minimize  # scipy loads where it is used (import ftkin stays light)
 
     std0 = np.asarray(start.channel_std, dtype=float)
-    per_pose = std0 / np.sqrt(np.median(data.counts))
     spacing = max(float(np.median(np.diff(data.times))) if len(data.times) > 1 else 1.0, 1e-9)
-    reference = np.log([per_pose[g].mean() / np.sqrt(spacing) for g in _GROUPS])
-    noise_part = np.log([std0[g].mean() for g in _GROUPS]) if start.estimated else []
+    # the noise of a pose mean over √(pose spacing)
+    reference = np.log(
+        [std0[g].mean() / np.sqrt(np.median(data.counts) * spacing) for g in RESIDUAL_NOISE_GROUPS]
+    )
+    noise_part = np.log([std0[g].mean() for g in RESIDUAL_NOISE_GROUPS]) if start.estimated else []
     best = {"phi": phi, "value": np.inf}
 
     def unpack(x):
@@ -292,8 +228,12 @@ def _search_walk(data: SortedPoses, phi, start: DriftStart):
 
     grid = [objective(np.concatenate([reference + np.log(f), noise_part])) for f in RATE_GRID]
     x0 = np.concatenate([reference + np.log(RATE_GRID[int(np.argmin(grid))]), noise_part])
-    options = {"xatol": 0.05, "fatol": 0.01, "maxfev": 40 * len(x0)}
-    solution = minimize(objective, x0, method="Nelder-Mead", options=options)
+    solution = minimize(
+        objective,
+        x0,
+        method="Nelder-Mead",
+        options={"xatol": 0.05, "fatol": 0.01, "maxfev": 40 * len(x0)},
+    )
     return (*unpack(solution.x), best["phi"])
 
 
@@ -303,7 +243,7 @@ def _collapse(data: SortedPoses, std, rate, start: DriftStart) -> str | None:
         return None
     per_pose = std / np.sqrt(np.median(data.counts))
     step = rate * np.sqrt(max(float(np.median(np.diff(data.times))), 0.0))
-    for g, name, unit in zip(_GROUPS, ("force", "torque"), ("N", "N·m")):
+    for g, name, unit in zip(RESIDUAL_NOISE_GROUPS, ("force", "torque"), ("N", "N·m")):
         if (
             np.all(std[g] <= start.floor[g] * (1.0 + 1e-3))
             or step[g][0] > NOISE_WALK_RATIO * per_pose[g][0]
@@ -317,21 +257,23 @@ def _collapse(data: SortedPoses, std, rate, start: DriftStart) -> str | None:
 
 
 def _noise_without_walk(data: SortedPoses, phi, start: DriftStart):
-    """Gauss–Newton with a leverage-corrected noise re-estimated between passes (if estimated)."""
+    """Gauss–Newton with a leverage-corrected noise re-estimated between passes (if estimated);
+    the rates (zero), noise and ``φ``, as :func:`_search_walk` returns them.
+    """
     std = np.asarray(start.channel_std, dtype=float)
     for _ in range(NOISE_PASSES if start.estimated else 1):
-        fit = gauss_newton(data, phi, std, np.zeros(6), FINAL_ITERATIONS)
-        phi, jacobian = fit[2], fit[4]
+        _, _, phi, _, jacobian, _ = gauss_newton(data, phi, std, np.zeros(6), FINAL_ITERATIONS)
         if not start.estimated:
             break
-        covariance = invert_information(np.einsum("pki,pkj->ij", jacobian, jacobian), data.names)
+        flat = jacobian.reshape(-1, len(phi))
+        covariance = invert_information(flat.T @ flat, data.names, _UNTOLD)
         leverage = np.einsum("pki,ij,pkj->pk", jacobian, covariance, jacobian)
         squares = np.sum(data.raw_residuals(phi) ** 2 * data.counts[:, None], axis=0)
-        new = _pooled_std(squares, np.sum(1.0 - leverage, axis=0), start.floor)
+        new = pooled_noise(squares, np.sum(1.0 - leverage, axis=0), start.floor)
         converged, std = np.allclose(new, std, rtol=1e-3), new
         if converged:
             break
-    return std, phi
+    return np.zeros(6), std, phi
 
 
 def fit_drift_model(
@@ -340,20 +282,14 @@ def fit_drift_model(
     """Fit ``θ`` and the drift ``model`` from the constant-bias ``start`` (see the module)."""
     data = SortedPoses(poses, model)
     phi = np.concatenate([start.theta, np.zeros(6 * model.columns)])
-    if model.walk:
-        rate, std, phi = _search_walk(data, phi, start)
-    else:
-        (std, phi), rate = _noise_without_walk(data, phi, start), np.zeros(6)
+    rate, std, phi = (_search_walk if model.walk else _noise_without_walk)(data, phi, start)
     _, log_l, phi, white, jacobian, gains = gauss_newton(data, phi, std, rate, FINAL_ITERATIONS)
     flat = jacobian.reshape(-1, len(phi))
-    covariance = invert_information(flat.T @ flat, data.names)
+    covariance = invert_information(flat.T @ flat, data.names, _UNTOLD)
     hat = jacobian @ covariance @ np.transpose(jacobian, (0, 2, 1))
-    leverage = np.diagonal(hat, axis1=1, axis2=2)
     residuals = data.raw_residuals(phi)
     if start.estimated and not model.walk:  # the likelihood at the ML noise, for the BIC
-        squares = np.sum(residuals**2 * data.counts[:, None], axis=0)
-        ml_std = _pooled_std(squares, np.full(6, len(data.times)), start.floor)
-        log_l = _gaussian_log_likelihood(residuals, ml_std**2 / data.counts[:, None])
+        log_l = _log_likelihood(residuals, data.counts, start)
     walk, variance = smooth(gains, data.times, residuals, rate)
     rows = np.column_stack([np.ones(len(data.times)), data.basis])
     trend_variance = np.column_stack(
@@ -365,44 +301,47 @@ def fit_drift_model(
         ]
     )
     coefficients = phi[12:].reshape(-1, 6)
-    drift = BiasDrift(
-        model.name,
-        selected_by,
-        data.times,
-        phi[3:9] + data.basis @ coefficients + walk,
-        np.sqrt(np.clip(variance + trend_variance, 0.0, None)),
-        rate=rate[[0, 3]] if model.walk else None,
-        coefficients=coefficients if model.columns else None,
-        time_scale=data.scale,
-    )
-    dof = min(float(np.sum(1.0 - leverage[:, g])) for g in _GROUPS)
+    dof = min(float(np.sum(1.0 - np.einsum("pkk->pk", hat)[:, g])) for g in RESIDUAL_NOISE_GROUPS)
     return DriftFit(
-        SensorModel.from_vector(phi[:12]),
-        WhitenedFit(data.unsort(white), data.unsort(hat)),
-        std,
-        start.noise_source,
-        dof if start.estimated else start.noise_dof,
-        np.linalg.inv(covariance[:12, :12]),
-        len(phi) + 2 * model.walk + 2 * start.estimated,
-        log_l,
-        drift,
-        _collapse(data, std, rate, start) if model.walk else None,
+        model=SensorModel.from_vector(phi[:12]),
+        noise=SensorNoise(std[:3], std[3:]),
+        noise_source=start.noise_source,
+        noise_dof=dof if start.estimated else start.noise_dof,
+        information=np.linalg.inv(covariance[:12, :12]),
+        whitened=white[data.back],
+        hat=hat[data.back],
+        loss="linear",
+        covariance=covariance[:12, :12],
+        parameter_count=len(phi) + 2 * model.walk + 2 * start.estimated,
+        log_likelihood=log_l,
+        drift=BiasDrift(
+            model.name,
+            selected_by,
+            data.times,
+            phi[3:9] + data.basis @ coefficients + walk,
+            np.sqrt(np.clip(variance + trend_variance, 0.0, None)),
+            rate=rate[[0, 3]] if model.walk else None,
+            coefficients=coefficients if model.columns else None,
+            time_scale=data.scale,
+        ),
+        collapse=_collapse(data, std, rate, start) if model.walk else None,
     )
 
 
 def _fit_candidates(models, poses: PoseAverages, start: DriftStart, selected_by: str):
     """Fits and BIC of the candidate ``models`` that can be fitted, and why the others cannot."""
-    auto = selected_by == "auto"
-    observations = 6 * len(poses)
+    auto, observations = selected_by == "auto", 6 * len(poses)
     criteria, fits, notes = {}, {}, []
     for model in models:
-        if model.name == "none":
-            count = 12 + 2 * start.estimated
-            criteria["none"] = -2.0 * constant_log_likelihood(poses, start) + count * np.log(
-                observations
-            )
-            continue
         count = 12 + 6 * model.columns + 2 * model.walk + 2 * start.estimated
+        if model.name == "none":
+            log_l = _log_likelihood(
+                poses.wrenches - predict(poses.rotations, start.theta),
+                np.asarray(poses.counts, dtype=float),
+                start,
+            )
+            criteria["none"] = -2.0 * log_l + count * np.log(observations)
+            continue
         if auto and (count > observations - 6 or (model.walk and len(poses) > MAX_AUTO_WALK_POSES)):
             continue  # the walk's filter costs a Python pass per pose and evaluation
         try:
@@ -428,8 +367,8 @@ def select_drift(models, poses: PoseAverages, start: DriftStart):
     selected_by = "auto" if len(models) > 1 else "given"
     fits, criteria, notes = _fit_candidates(models, poses, start, selected_by)
     if not criteria:  # the one given model collapsed: the models without a walk
-        fallback = [m for m in map(parse_drift, auto_candidates()) if not m.walk]
         selected_by = "auto"
+        fallback = [m for m in map(parse_drift, auto_candidates()) if not m.walk]
         fits, criteria, more = _fit_candidates(fallback, poses, start, selected_by)
         notes += more
     choice = min(criteria, key=criteria.get)

@@ -88,25 +88,6 @@ class CalibrationOptions:
     resolution: object = None
 
     def __post_init__(self):
-        for name, value, allowed in (
-            ("calibration method", self.method, METHODS),
-            ("loss", self.loss, LOSSES),
-        ):
-            if value not in allowed:
-                raise InvalidInput(
-                    f"unknown {name} {value!r}; expected one of {', '.join(allowed)}"
-                )
-        if self.noise is not None and not isinstance(self.noise, SensorNoise):
-            raise InvalidInput(
-                f"noise must be an ftkin.SensorNoise, got {type(self.noise).__name__}"
-            )
-        ml_only = self.noise is not None or self.loss != "linear" or self.drop_outliers
-        if self.method == "linear" and (ml_only or self.resolution is not None):
-            raise InvalidInput(
-                "noise, resolution, loss and drop_outliers apply to method='ml' only"
-            )
-        if check_mount_mode(self.estimate_mount) != "none" and self.method != "ml":
-            raise InvalidInput("estimate_mount applies to method='ml' only")
         object.__setattr__(self, "g", as_positive(self.g, "g"))
         if self.resolution is not None:
             resolution = as_float_array(self.resolution, "resolution").reshape(-1)
@@ -117,18 +98,39 @@ class CalibrationOptions:
                 )
             object.__setattr__(self, "resolution", resolution)
         drift_candidates(self.drift)  # an unknown model or a bad argument is refused here
-        if self.drift in ("auto", "none"):
-            return
-        if self.method != "ml" or ml_only:
-            raise InvalidInput(
-                f"drift={self.drift!r} needs method='ml' with loss='linear' and no drop_outliers"
-            )
-        if self.estimate_mount != "none":
-            raise InvalidInput(
+        ml_only = self.noise is not None or self.loss != "linear" or self.drop_outliers
+        drifting, mount = self.drift not in ("auto", "none"), check_mount_mode(self.estimate_mount)
+        for refused, message in (
+            (
+                self.method not in METHODS,
+                f"unknown calibration method {self.method!r}; expected one of {', '.join(METHODS)}",
+            ),
+            (
+                self.loss not in LOSSES,
+                f"unknown loss {self.loss!r}; expected one of {', '.join(LOSSES)}",
+            ),
+            (
+                self.noise is not None and not isinstance(self.noise, SensorNoise),
+                f"noise must be an ftkin.SensorNoise, got {type(self.noise).__name__}",
+            ),
+            (
+                self.method == "linear" and (ml_only or self.resolution is not None),
+                "noise, resolution, loss and drop_outliers apply to method='ml' only",
+            ),
+            (mount != "none" and self.method != "ml", "estimate_mount applies to method='ml' only"),
+            (
+                drifting and (self.method != "ml" or ml_only),
+                f"drift={self.drift!r} needs method='ml' with loss='linear' and no drop_outliers",
+            ),
+            (
+                drifting and mount != "none",
                 f"drift={self.drift!r} and estimate_mount={self.estimate_mount!r} cannot be fitted "
                 "together yet: estimate the mount from a short recording (drift='none'), then the "
-                "drift"
-            )
+                "drift",
+            ),
+        ):
+            if refused:
+                raise InvalidInput(message)
 
     def check(self, samples: Samples) -> tuple:
         """Check the options against ``samples``; the drift models to fit (empty: a constant bias).
@@ -140,25 +142,35 @@ class CalibrationOptions:
         """
         if not isinstance(samples, Samples):
             raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
-        if self.estimate_mount != "none" and samples.joint_positions is None:
-            raise InvalidInput(
+        auto, timed = self.drift == "auto", samples.times is not None
+        spread = timed and np.ptp(samples.times) > 0.0
+        # auto looks for a drift only with the plain ml fit, no mount and times that differ
+        plain = self.method == "ml" and self.loss == "linear" and not self.drop_outliers
+        fits_drift = self.drift != "none" and (
+            not auto or (plain and spread and self.estimate_mount == "none")
+        )
+        for refused, message in (
+            (
+                self.estimate_mount != "none" and samples.joint_positions is None,
                 "estimate_mount needs samples from joint angles (Samples.from_joint_positions): "
                 "rotations given directly are taken as the real sensor orientation, so any mount "
-                "is already in them (absorbed)"
-            )
-        auto, timed = self.drift == "auto", samples.times is not None
-        if self.drift == "none" or (auto and not self._auto_fits_drift(samples)):
-            return ()
-        if not timed:
-            raise InvalidInput(
+                "is already in them (absorbed)",
+            ),
+            (
+                fits_drift and not timed,
                 f"drift={self.drift!r} needs the time of each reading (Samples.times, a 't' column "
-                "in the CSV)"
-            )
-        if np.ptp(samples.times) <= 0.0:
-            raise InvalidInput(
+                "in the CSV)",
+            ),
+            (
+                fits_drift and timed and not spread,
                 f"drift={self.drift!r}: all readings have the same time; a drift needs readings "
-                "spread over time"
-            )
+                "spread over time",
+            ),
+        ):
+            if refused:
+                raise InvalidInput(message)
+        if not fits_drift:
+            return ()
         try:
             check_one_visit_per_pose(samples)
         except InvalidSamples as error:
@@ -168,20 +180,14 @@ class CalibrationOptions:
             return ()
         return drift_candidates(self.drift)
 
-    def _auto_fits_drift(self, samples: Samples) -> bool:
-        """``auto`` looks for a drift: times that differ, the plain ``ml`` fit, no mount."""
-        plain = self.method == "ml" and self.loss == "linear" and not self.drop_outliers
-        timed = samples.times is not None and np.ptp(samples.times) > 0.0
-        return plain and timed and self.estimate_mount == "none"
-
     def noise_floor(self, wrenches) -> np.ndarray:
         """``(6,)`` lowest noise an estimate may take [N, N·m]: the numeric floor, or the
         resolution's quantization noise.
         """
-        floor = noise_floor(wrenches)
-        if self.resolution is None:
-            return floor
-        return np.maximum(floor, np.repeat(self.resolution, 3) / np.sqrt(12.0))
+        quantization = (
+            0.0 if self.resolution is None else np.repeat(self.resolution, 3) / np.sqrt(12.0)
+        )
+        return np.maximum(noise_floor(wrenches), quantization)
 
 
 def calibrate(samples: Samples, options: CalibrationOptions | None = None, **keywords):
@@ -216,38 +222,37 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
         raw_poses,
         wrenches=raw_poses.wrenches * reading_signs(options.sensor_sign, options.flip_axis),
     )
-    check = detect_sign_and_handedness(
-        raw_poses,
-        sensor_sign=options.sensor_sign,
-        flip_axis=options.flip_axis,
-        estimate_mount=options.estimate_mount,
-        base_mount=options.base_mount,
-        expected_gravity=options.expected_gravity,
-        g=options.g,
+    check_conventions(
+        detect_sign_and_handedness(
+            raw_poses,
+            sensor_sign=options.sensor_sign,
+            flip_axis=options.flip_axis,
+            estimate_mount=options.estimate_mount,
+            base_mount=options.base_mount,
+            expected_gravity=options.expected_gravity,
+            g=options.g,
+        ),
+        options.sensor_sign,
+        options.base_mount,
     )
-    check_conventions(check, options.sensor_sign, options.base_mount)
     if options.method == "linear":
-        static = _Static(fit_linear(poses, options.g), None, None, np.eye(3), None, None, poses)
+        static = _Static(fit_linear(poses, options.g), None, np.eye(3), None, None, poses)
     else:
-        static = _fit_static(poses, options, log=not drift_models)
-    if drift_models:
-        static = _fit_drift(static, drift_models, options)
-    elif samples.times is not None:
-        static = replace(static, drift=_constant_trajectory(static, {}))
-    if static.drift is not None:
+        static = _fit_static(poses, options, drift_models)
+    if samples.times is not None:  # the bias trajectory (constant without a drift model)
+        drift = static.drift or _constant_trajectory(static, {})
         span = np.array([np.min(samples.times), np.max(samples.times)])
-        static = replace(static, drift=replace(static.drift, recorded_span=span))
+        static = replace(static, drift=replace(drift, recorded_span=span))
     return _result(samples, options, static)
 
 
 @dataclass(frozen=True)
 class _Static:
-    """A fit: model, ML fit (None for ``linear``), its diagnostics and covariance, mount, the
-    poses fitted (after any dropped outliers) and the bias trajectory.
+    """A fit: model, its diagnostics (None for ``linear``) and covariance, mount, the poses fitted
+    (after any dropped outliers) and the bias trajectory.
     """
 
     model: SensorModel
-    fit: object
     diagnostics: FitDiagnostics | None
     mount: np.ndarray
     mount_covariance: np.ndarray | None
@@ -256,70 +261,58 @@ class _Static:
     drift: BiasDrift | None = None
 
 
-def _noise_free(poses: PoseAverages) -> bool:
-    """True when the raw readings are noise-free: repeated readings per pose, all identical."""
-    repeated = poses.counts > 1
-    scale = np.maximum(np.abs(poses.wrenches).max(axis=0), 1.0)
-    return bool(np.any(repeated) and np.all(poses.spread[repeated] <= 1e-12 * scale))
-
-
-def _fit_static(poses: PoseAverages, options: CalibrationOptions, log: bool) -> _Static:
-    """The ``ml`` fit with a constant bias (and any mount), refitted without outliers if asked."""
+def _fit_static(poses: PoseAverages, options: CalibrationOptions, drift_models) -> _Static:
+    """The ``ml`` fit with a constant bias (and any mount), refitted without outliers if asked,
+    then with the best of the ``drift_models`` (:func:`_fit_drift`) if any.
+    """
     floor = options.noise_floor(poses.wrenches)
+    # noise-free raw readings: repeated readings per pose, all identical
+    repeated, scale = poses.counts > 1, np.maximum(np.abs(poses.wrenches).max(axis=0), 1.0)
+    noise_free = bool(np.any(repeated) and np.all(poses.spread[repeated] <= 1e-12 * scale))
     fit = fit_ml(poses, options.g, options.noise, options.loss, options.estimate_mount, floor)
-    noise_free = _noise_free(poses)
     diagnostics, covariance = diagnose(
-        fit, poses.pose_ids, log=log, wrenches=poses.wrenches, noise_free=noise_free
+        fit, poses.pose_ids, log=not drift_models, wrenches=poses.wrenches, noise_free=noise_free
     )
     if options.drop_outliers and diagnostics.outlier_pose_ids:
-        dropped = diagnostics.outlier_pose_ids
-        poses = _subset(poses, ~np.isin(poses.pose_ids, dropped))
+        keep = ~np.isin(poses.pose_ids, diagnostics.outlier_pose_ids)
+        poses = replace(poses, **{k: v[keep] for k, v in vars(poses).items() if v is not None})
         fit = fit_ml(poses, options.g, options.noise, options.loss, options.estimate_mount, floor)
-        diagnostics, covariance = diagnose(
-            fit, poses.pose_ids, dropped, wrenches=poses.wrenches, noise_free=noise_free
+        diagnostics, covariance = diagnose(  # the outliers dropped, said in the diagnostics
+            fit,
+            poses.pose_ids,
+            diagnostics.outlier_pose_ids,
+            wrenches=poses.wrenches,
+            noise_free=noise_free,
         )
     mount_covariance = fit.mount_covariance
     if mount_covariance is not None:  # the same goodness-of-fit scaling as θ
         mount_covariance = mount_covariance * diagnostics.covariance_scale
-        diagnostics = _with_mount_warning(diagnostics, options.estimate_mount, mount_covariance)
-    return _Static(
-        fit.model, fit, diagnostics, fit.mount_rotation, mount_covariance, covariance, poses
+        sigma = np.rad2deg(np.sqrt(np.clip(np.diag(mount_covariance), 0.0, None)))
+        weak = [
+            f"{name} ± {value:.2g}°"
+            for name, value in zip(MOUNT_NAMES[options.estimate_mount], sigma)
+            if value > MOUNT_STD_WARNING_DEG
+        ]
+        if weak:
+            message = (
+                f"the mount is poorly determined ({', '.join(weak)}): "
+                f"{POSES_NEEDED[options.estimate_mount]}"
+            )
+            logger.warning(message)
+            diagnostics = replace(diagnostics, warnings=diagnostics.warnings + (message,))
+    static = _Static(
+        fit.model, diagnostics, fit.mount_rotation, mount_covariance, covariance, poses
     )
+    if not drift_models:
+        return static
+    return _fit_drift(static, fit, drift_models, floor, noise_free, options)
 
 
-def _with_mount_warning(
-    diagnostics: FitDiagnostics, mode: str, covariance: np.ndarray
-) -> FitDiagnostics:
-    """Add a warning for mount angles with a standard error above :data:`MOUNT_STD_WARNING_DEG`."""
-    sigma = np.rad2deg(np.sqrt(np.clip(np.diag(covariance), 0.0, None)))
-    weak = [
-        f"{name} ± {value:.2g}°"
-        for name, value in zip(MOUNT_NAMES[mode], sigma)
-        if value > MOUNT_STD_WARNING_DEG
-    ]
-    if not weak:
-        return diagnostics
-    message = f"the mount is poorly determined ({', '.join(weak)}): {POSES_NEEDED[mode]}"
-    logger.warning(message)
-    return replace(diagnostics, warnings=diagnostics.warnings + (message,))
-
-
-def _subset(poses: PoseAverages, keep: np.ndarray) -> PoseAverages:
-    times = poses.times[keep] if poses.times is not None else None
-    return PoseAverages(
-        poses.pose_ids[keep],
-        poses.rotations[keep],
-        poses.wrenches[keep],
-        poses.counts[keep],
-        poses.spread[keep],
-        times,
-    )
-
-
-def _fit_drift(static: _Static, models: tuple, options: CalibrationOptions) -> _Static:
-    """The constant-bias fit ``static`` with the best of the drift ``models`` (or kept)."""
-    poses, fit = static.poses, static.fit
-    floor = options.noise_floor(poses.wrenches)
+def _fit_drift(static: _Static, fit, models: tuple, floor, noise_free: bool, options) -> _Static:
+    """The constant-bias fit ``static`` (by ``fit``) with the best of the drift ``models`` (or
+    kept).
+    """
+    poses = static.poses
     start = DriftStart(
         fit.model.to_vector(),
         np.asarray(fit.problem.channel_std),
@@ -338,20 +331,24 @@ def _fit_drift(static: _Static, models: tuple, options: CalibrationOptions) -> _
             poses.pose_ids,
             parameter_count=drift_fit.parameter_count,
             wrenches=poses.wrenches,
-            noise_free=_noise_free(poses),
+            noise_free=noise_free,
         )
-        model = SensorModel.from_vector(drift_fit.model.to_vector(), options.g)
-        static = replace(static, model=model, diagnostics=diagnostics, covariance=covariance)
-        static = replace(static, drift=drift_fit.drift)
-    warnings = static.diagnostics.warnings + notes
-    return replace(static, diagnostics=replace(static.diagnostics, warnings=warnings))
+        static = replace(
+            static,
+            model=SensorModel.from_vector(drift_fit.model.to_vector(), options.g),
+            diagnostics=diagnostics,
+            covariance=covariance,
+            drift=drift_fit.drift,
+        )
+    diagnostics = static.diagnostics
+    return replace(static, diagnostics=replace(diagnostics, warnings=diagnostics.warnings + notes))
 
 
 def _constant_trajectory(static: _Static, criteria: dict) -> BiasDrift:
     """The constant bias as a :class:`BiasDrift` (``"none"``), for samples that had times."""
     times = np.sort(static.poses.times)
     covariance = static.covariance
-    std = np.sqrt(np.diag(covariance)[3:9]) if covariance is not None else np.zeros(6)
+    std = np.zeros(6) if covariance is None else np.sqrt(np.diag(covariance)[3:9])
     return BiasDrift(
         "none",
         "auto" if criteria else "given",
@@ -365,11 +362,8 @@ def _constant_trajectory(static: _Static, criteria: dict) -> BiasDrift:
 def _result(samples: Samples, options: CalibrationOptions, static: _Static) -> CalibrationResult:
     model, trajectory = static.model, static.drift
     poses, rotations = static.poses, static.poses.rotations @ static.mount.T
-    if trajectory is None or trajectory.model == "none":
-        residuals = poses.wrenches - model.predict(rotations)
-    else:
-        gravity = model.tool_gravity_wrench(rotations)
-        residuals = poses.wrenches - gravity - trajectory.bias_at(poses.times)
+    constant = trajectory is None or trajectory.model == "none"
+    bias = model.bias if constant else trajectory.bias_at(poses.times)
     return CalibrationResult(
         force_offset=model.force_offset,
         torque_offset=model.torque_offset,
@@ -379,7 +373,7 @@ def _result(samples: Samples, options: CalibrationOptions, static: _Static) -> C
         method=options.method,
         pose_ids=poses.pose_ids,
         pose_wrenches=poses.wrenches,
-        residuals=residuals,
+        residuals=poses.wrenches - model.tool_gravity_wrench(rotations) - bias,
         sample_count=int(np.sum(poses.counts)),
         urdf=samples.urdf,
         sensor_frame=samples.sensor_frame,

@@ -29,7 +29,6 @@ from .diagnostics import (
     OUTLIER_ALPHA,
     RELATIVE_STD_ERROR_WARNING,
     FitDiagnostics,
-    main_components,
 )
 from .information import NOISE_FLOOR_RELATIVE, at_noise_floor
 from .model import PARAMETER_NAMES
@@ -50,6 +49,21 @@ MIN_NOISE_DOF = 8
 called rough.
 """
 
+_ROUNDING_WARNING = (
+    "the residuals are at rounding level (noise estimated at its floor, "
+    f"{NOISE_FLOOR_RELATIVE:g} of the largest reading): the standard errors, the fit test "
+    "and the outlier test rest on that floor; record several readings per pose (a pose "
+    "column) or give the noise level (noise=, --noise-force/--noise-torque)"
+)
+_NOISE_FREE_WARNING = (
+    "the repeated readings of each pose are identical and the readings fit the model to "
+    f"rounding (noise estimated at its floor, {NOISE_FLOOR_RELATIVE:g} of the largest "
+    "reading): noise-free data, e.g. a simulation without sensor noise? The estimates are "
+    "exact, but the standard errors, the fit test and the outlier test mean nothing; add "
+    "sensor noise to simulated readings or give the noise level (noise=, "
+    "--noise-force/--noise-torque)"
+)
+
 _UNITS = {
     "gravity_in_base": "N",
     "force_offset": "N",
@@ -65,58 +79,46 @@ def _f_sf(ratio, dfn, dfd):
     ratio, dfn, dfd = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (ratio, dfn, dfd)))
     large = ~np.isfinite(dfd) | (dfd > 1e7)
     with np.errstate(invalid="ignore"):
-        finite_dfd = np.where(large, 1.0, dfd)
-        out = np.where(
-            large, special.chdtrc(dfn, ratio * dfn), special.fdtrc(dfn, finite_dfd, ratio)
-        )
-    return out
+        chi_square = special.chdtrc(dfn, ratio * dfn)
+        return np.where(large, chi_square, special.fdtrc(dfn, np.where(large, 1.0, dfd), ratio))
 
 
 def _block_scales(theta: np.ndarray) -> np.ndarray:
     """``(12,)`` scale each parameter's standard error is judged against."""
     weight = float(np.linalg.norm(theta[0:3]))
     com = max(float(np.linalg.norm(theta[9:12])), MIN_COM_SCALE)
-    scales = [
-        weight,
-        max(float(np.linalg.norm(theta[3:6])), weight),
-        max(float(np.linalg.norm(theta[6:9])), weight * com),
-        com,
-    ]
-    return np.repeat(np.maximum(scales, 1e-300), 3)
+    force, torque = (float(np.linalg.norm(theta[part])) for part in (slice(3, 6), slice(6, 9)))
+    return np.repeat(
+        np.maximum([weight, max(force, weight), max(torque, weight * com), com], 1e-300), 3
+    )
 
 
-def _pose_statistics(whitened, hat, fit_ok, source, noise_dof, parameter_count=12):
-    """Per-pose studentized statistics: normalized residual [σ], p-value and channel leverages.
+def _pose_statistics(whitened, hat, fit_ok, source, noise_dof, dof):
+    """Per-pose studentized statistics: normalized residual [σ] and p-value.
 
-    ``hat`` holds the ``(P, 6, 6)`` diagonal blocks of the hat matrix.
+    ``hat`` holds the ``(P, 6, 6)`` diagonal blocks of the hat matrix, ``dof`` the fit's degrees
+    of freedom.
     """
-    count = len(whitened)
     eigenvalues, eigenvectors = np.linalg.eigh(np.eye(6) - hat)
     kept = eigenvalues > 1e-8
     projected = np.einsum("pi,pij->pj", whitened, eigenvectors)
     z = np.sum(np.where(kept, projected**2 / np.where(kept, eigenvalues, 1.0), 0.0), axis=1)
     rank = np.maximum(np.sum(kept, axis=1).astype(float), 1.0)
-    total, dof = float(np.sum(whitened**2)), 6 * count - parameter_count
-    leave_out_dof = dof - rank
-    if source == "residuals" or not fit_ok:
+    scale, denominator_dof = 1.0, np.full(len(z), noise_dof)
+    if source == "residuals" or not fit_ok:  # against the scatter of the other poses
+        denominator_dof = dof - rank
         with np.errstate(invalid="ignore", divide="ignore"):
-            scale = (total - z) / leave_out_dof
+            scale = (float(np.sum(whitened**2)) - z) / denominator_dof
         if source != "residuals":
             scale = np.maximum(scale, 1.0)
-        scale = np.where(leave_out_dof > 0, np.maximum(scale, 1e-300), np.nan)
-        denominator_dof = leave_out_dof
-    else:
-        scale = np.ones(count)
-        denominator_dof = np.full(count, noise_dof)
+        scale = np.where(denominator_dof > 0, np.maximum(scale, 1e-300), np.nan)
     normalized = np.sqrt(z / rank / scale)
     valid = np.isfinite(normalized) & (denominator_dof > 0)
-    p_values = np.where(
+    return normalized, np.where(
         valid,
         _f_sf(np.where(valid, normalized, 0.0) ** 2, rank, np.where(valid, denominator_dof, 1.0)),
         np.nan,
     )
-    leverage = np.diagonal(hat, axis1=1, axis2=2)
-    return normalized, p_values, leverage
 
 
 def diagnose(
@@ -128,8 +130,8 @@ def diagnose(
     wrenches=None,
     noise_free: bool = False,
 ) -> tuple[FitDiagnostics, np.ndarray]:
-    """Assess an :class:`~ftkin.calibration.ml.MlFit`; returns its diagnostics and the (scaled)
-    covariance.
+    """Assess a fit (:class:`~ftkin.calibration.ml.WhitenedFit`: the ML or a drift model's);
+    returns its diagnostics and the (scaled) covariance.
 
     ``parameter_count``: parameters fitted (default: the problem's, 12 for ``θ``
     plus any mount angles; more with a drift
@@ -145,40 +147,34 @@ def diagnose(
 
     Warnings are also sent to the ``ftkin.calibration.fit_quality`` logger.
     """
-    theta, problem = fit.model.to_vector(), fit.problem
-    whitened = problem.whitened_residuals(theta).reshape(-1, 6)
-    count = len(whitened)
-    if parameter_count is None:  # 12 for θ, plus the mount angles when a mount is estimated
-        parameter_count = problem.parameter_count
-    chi_square, dof, p_value = _fit_test(fit, whitened, parameter_count)
+    theta, source, whitened, hat = fit.model.to_vector(), fit.noise_source, fit.whitened, fit.hat
+    dof = whitened.size - (parameter_count or fit.problem.parameter_count)
+    chi_square = float(np.sum(whitened**2))
+    # the fit test does not apply to noise from the residuals or without degrees of freedom
+    tested = source != "residuals" and dof > 0
+    p_value = float(_f_sf(chi_square / dof, dof, fit.noise_dof)) if tested else np.nan
     fit_ok = not (p_value < FIT_ALPHA)
-    normalized, pose_p, leverage = _pose_statistics(
-        whitened,
-        problem.hat_blocks(theta),
-        fit_ok,
-        fit.noise_source,
-        fit.noise_dof,
-        parameter_count,
-    )
+    normalized, pose_p = _pose_statistics(whitened, hat, fit_ok, source, fit.noise_dof, dof)
     with np.errstate(invalid="ignore", divide="ignore"):
-        channel_chi_square = np.sum(whitened**2, axis=0) / np.sum(1.0 - leverage, axis=0)
+        channel_chi_square = np.sum(whitened**2, 0) / np.sum(1 - np.einsum("pkk->pk", hat), 0)
     scale = chi_square / dof if (not fit_ok and chi_square > dof) else 1.0
     covariance = fit.covariance * scale
-    condition, weakest = _weakest_direction(fit.information)
+    # condition number and weakest direction (largest entry positive), unit-diagonal information
+    diagonal = np.sqrt(np.diag(fit.information))
+    eigenvalues, eigenvectors = np.linalg.eigh(fit.information / np.outer(diagonal, diagonal))
+    weakest = eigenvectors[:, 0] * np.sign(eigenvectors[np.argmax(np.abs(eigenvectors[:, 0])), 0])
     pose_ids = np.asarray(pose_ids)
     exact = noise_free or (
         wrenches is not None
-        and fit.noise_source == "residuals"
+        and source == "residuals"
         and at_noise_floor(fit.noise.channel_std, wrenches)
     )
-    outliers = (
-        () if exact else tuple(int(i) for i in pose_ids[pose_p < OUTLIER_ALPHA / max(count, 1)])
-    )
+    outliers = () if exact else pose_ids[pose_p < OUTLIER_ALPHA / max(len(whitened), 1)]
     scales = _block_scales(theta)
     diagnostics = FitDiagnostics(
         loss=fit.loss,
         noise=fit.noise,
-        noise_source=fit.noise_source,
+        noise_source=source,
         noise_dof=fit.noise_dof,
         chi_square=chi_square,
         dof=dof,
@@ -188,9 +184,9 @@ def diagnose(
         pose_ids=pose_ids,
         pose_normalized_residuals=normalized,
         pose_p_values=pose_p,
-        outlier_pose_ids=outliers,
+        outlier_pose_ids=tuple(int(i) for i in outliers),
         dropped_pose_ids=tuple(int(i) for i in dropped_pose_ids),
-        condition_number=condition,
+        condition_number=float(eigenvalues[-1] / eigenvalues[0]),
         weakest_direction=weakest,
         relative_std_errors=np.sqrt(np.clip(np.diag(covariance), 0.0, None)) / scales,
         warnings=(),
@@ -201,90 +197,56 @@ def diagnose(
     return diagnostics, covariance
 
 
-def _fit_test(fit, whitened, parameter_count: int) -> tuple[float, int, float]:
-    """``(χ², degrees of freedom, p-value)`` of the fit; NaN p-value when the test does not apply
-    (noise from the residuals, or no degrees of freedom).
-    """
-    dof = whitened.size - parameter_count
-    chi_square = float(np.sum(whitened**2))
-    if fit.noise_source == "residuals" or dof <= 0:
-        return chi_square, dof, np.nan
-    return chi_square, dof, float(_f_sf(chi_square / dof, dof, fit.noise_dof))
-
-
-def _weakest_direction(information) -> tuple[float, np.ndarray]:
-    """Condition number and weakest direction (sign: largest entry positive) of the information
-    normalized to unit diagonal.
-    """
-    diagonal = np.sqrt(np.diag(information))
-    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(diagonal, diagonal))
-    weakest = eigenvectors[:, 0] * np.sign(eigenvectors[np.argmax(np.abs(eigenvectors[:, 0])), 0])
-    return float(eigenvalues[-1] / eigenvalues[0]), weakest
-
-
 def _warnings(
     diagnostics: FitDiagnostics, exact: bool, noise_free: bool, scales: np.ndarray
 ) -> tuple[str, ...]:
     """The warnings the diagnostics call for, one sentence each (``exact``: noise at its floor;
     ``noise_free``: the repeated raw readings are identical).
     """
-    d, messages = diagnostics, []
-    if exact and not noise_free:
-        messages.append(
-            "the residuals are at rounding level (noise estimated at its floor, "
-            f"{NOISE_FLOOR_RELATIVE:g} of the largest reading): the standard errors, the fit test "
-            "and the outlier test rest on that floor; record several readings per pose (a pose "
-            "column) or give the noise level (noise=, --noise-force/--noise-torque)"
-        )
-    elif exact:
-        messages.append(
-            "the repeated readings of each pose are identical and the readings fit the model to "
-            f"rounding (noise estimated at its floor, {NOISE_FLOOR_RELATIVE:g} of the largest "
-            "reading): noise-free data, e.g. a simulation without sensor noise? The estimates are "
-            "exact, but the standard errors, the fit test and the outlier test mean nothing; add "
-            "sensor noise to simulated readings or give the noise level (noise=, "
-            "--noise-force/--noise-torque)"
-        )
-    if d.p_value < FIT_ALPHA:
-        messages.append(
+    d = diagnostics
+    relative, sigma = d.relative_std_errors, d.relative_std_errors * scales
+    weakest = ", ".join(f"{weight:+.2f} {label}" for label, weight in d.weakest_components)
+    worst = ", ".join(
+        f"{i} ({d.pose_normalized_residuals[d.pose_ids == i][0]:.1f}σ, "
+        f"p = {d.pose_p_values[d.pose_ids == i][0]:.1e})"
+        for i in d.outlier_pose_ids
+    )
+    blocks = [(name, slice(3 * k, 3 * k + 3)) for k, name in enumerate(PARAMETER_NAMES)]
+    rules = [
+        (exact, _NOISE_FREE_WARNING if noise_free else _ROUNDING_WARNING),
+        (
+            d.p_value < FIT_ALPHA,
             f"the readings do not fit the model within their noise (chi-square "
             f"{d.chi_square:.1f} for {d.dof} degrees of freedom, p = {d.p_value:.1e}): sensor "
             "crosstalk, a contact or cable at some poses, or noise underestimated; standard "
-            f"errors scaled by {np.sqrt(d.covariance_scale):.2f}"
-        )
-    if d.outlier_pose_ids:
-        worst = ", ".join(
-            f"{i} ({d.pose_normalized_residuals[d.pose_ids == i][0]:.1f}σ, "
-            f"p = {d.pose_p_values[d.pose_ids == i][0]:.1e})"
-            for i in d.outlier_pose_ids
-        )
-        messages.append(
+            f"errors scaled by {np.sqrt(d.covariance_scale):.2f}",
+        ),
+        (
+            bool(d.outlier_pose_ids),
             f"outlier pose(s), far outside the noise: {worst} (RMS normalized residual over the "
-            f"six channels; threshold p < {OUTLIER_ALPHA / len(d.pose_ids):.1e}); check them or "
-            "refit without them (drop_outliers=True, --drop-outliers)"
-        )
-    relative, sigma = d.relative_std_errors, d.relative_std_errors * scales
-    weakest = ", ".join(
-        f"{weight:+.2f} {label}" for label, weight in main_components(d.weakest_direction)
-    )
-    for block, name in enumerate(PARAMETER_NAMES):
-        part = slice(3 * block, 3 * block + 3)
-        if np.any(relative[part] > RELATIVE_STD_ERROR_WARNING):
-            messages.append(
+            f"six channels; threshold p < {d.outlier_threshold:.1e}); check them or "
+            "refit without them (drop_outliers=True, --drop-outliers)",
+        ),
+        *(
+            (
+                np.any(relative[part] > RELATIVE_STD_ERROR_WARNING),
                 f"{name} is poorly determined: standard errors "
                 f"[{', '.join(f'{s:.3g}' for s in sigma[part])}] "
                 f"{_UNITS[name]} are up to {100 * relative[part].max():.0f} % of its scale "
-                f"{scales[3 * block]:.3g} {_UNITS[name]}; add poses that turn gravity into other "
+                f"{scales[part.start]:.3g} {_UNITS[name]}; add poses that turn gravity into other "
                 f"sensor directions (condition number {d.condition_number:.3g}, weakest "
-                f"direction {weakest})"
+                f"direction {weakest})",
             )
-    if d.noise_source == "residuals" and d.noise_dof < MIN_NOISE_DOF:
-        messages.append(
+            for name, part in blocks
+        ),
+        (
+            d.noise_source == "residuals" and d.noise_dof < MIN_NOISE_DOF,
             f"the noise levels come from the residuals with only {d.noise_dof:.1f} degrees of "
             "freedom, so the standard errors are rough; record several readings per pose (pose "
-            "column), add poses, or give the noise"
-        )
-    return tuple(messages)
+            "column), add poses, or give the noise",
+        ),
+    ]
+    return tuple(message for warned, message in rules if warned)
 
 
 def log_warnings(diagnostics: FitDiagnostics) -> None:

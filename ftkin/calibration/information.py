@@ -39,10 +39,7 @@ def noise_floor(wrenches) -> np.ndarray:
     torques pooled.
     """
     magnitude = np.abs(np.asarray(wrenches, dtype=float))
-    groups = [
-        max(1.0, float(np.max(magnitude[:, part], initial=0.0)))
-        for part in (slice(0, 3), slice(3, 6))
-    ]
+    groups = [np.max(magnitude[:, part], initial=1.0) for part in (slice(0, 3), slice(3, 6))]
     return NOISE_FLOOR_RELATIVE * np.repeat(groups, 3)
 
 
@@ -131,12 +128,8 @@ def fisher_information(
     jac = mount_jacobian(
         rotations, model.gravity_in_base, model.center_of_mass, estimate_mount, mount_rotation
     )
-    weighted = (
-        jac
-        / noise.channel_std[None, :, None]
-        * np.sqrt(np.broadcast_to(counts, (len(rotations),)))[:, None, None]
-    )
-    stacked = weighted.reshape(-1, jac.shape[2])
+    weights = np.sqrt(np.broadcast_to(counts, (len(rotations),)))[:, None] / noise.channel_std
+    stacked = (jac * weights[:, :, None]).reshape(-1, jac.shape[2])
     return stacked.T @ stacked
 
 
@@ -151,27 +144,38 @@ def _as_parameter_matrix(value, name: str) -> np.ndarray:
     return matrix
 
 
+def invert_information(
+    information: np.ndarray, names, reason: str, rcond: float = 1e-12
+) -> np.ndarray:
+    """Inverse of an information matrix over the parameters ``names``, or
+    :class:`UnobservableParameters` naming those it cannot determine (``reason`` says why).
+    """
+    scale = np.sqrt(np.diag(information))
+    if np.any(scale == 0):
+        raise UnobservableParameters(
+            [names[i] for i in np.flatnonzero(scale == 0)],
+            "the poses carry no information about them",
+        )
+    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
+    if eigenvalues[0] <= rcond * eigenvalues[-1]:
+        raise UnobservableParameters(
+            [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)],
+            reason,
+            singular_values=eigenvalues[::-1],
+        )
+    return (eigenvectors / eigenvalues) @ eigenvectors.T / np.outer(scale, scale)
+
+
 def covariance_from_information(information: np.ndarray, rcond: float = 1e-12) -> np.ndarray:
     """Invert a ``(12, 12)`` information matrix; raise :class:`UnobservableParameters` if
     singular.
     """
-    information = _as_parameter_matrix(information, "information")
-    scale = np.sqrt(np.diag(information))
-    if np.any(scale == 0):
-        names = [COMPONENT_NAMES[i] for i in np.flatnonzero(scale == 0)]
-        raise UnobservableParameters(names, "the poses carry no information about them")
-    normalized = information / np.outer(scale, scale)
-    eigenvalues, eigenvectors = np.linalg.eigh(normalized)
-    if eigenvalues[0] <= rcond * eigenvalues[-1]:
-        weakest = eigenvectors[:, 0]
-        names = [COMPONENT_NAMES[i] for i in np.flatnonzero(np.abs(weakest) > 0.3)]
-        raise UnobservableParameters(
-            names,
-            "the information matrix is singular along a combination of them",
-            singular_values=eigenvalues[::-1],
-        )
-    inverse = (eigenvectors / eigenvalues) @ eigenvectors.T
-    return inverse / np.outer(scale, scale)
+    return invert_information(
+        _as_parameter_matrix(information, "information"),
+        COMPONENT_NAMES,
+        "the information matrix is singular along a combination of them",
+        rcond,
+    )
 
 
 def derived_gradients(gravity_in_base) -> dict[str, np.ndarray]:
@@ -179,22 +183,18 @@ def derived_gradients(gravity_in_base) -> dict[str, np.ndarray]:
 
     Keys: ``tool_weight`` (``G = |a|``), ``base_tilt_u``, ``base_tilt_v``.
     """
-    ax, ay, az = np.asarray(gravity_in_base, dtype=float)
-    weight = np.sqrt(ax * ax + ay * ay + az * az)
-    grad_weight = np.zeros(12)
-    grad_weight[0:3] = np.array([ax, ay, az]) / weight
+    a = np.asarray(gravity_in_base, dtype=float)
+    ax, ay, az = a
+    weight = np.linalg.norm(a)
+    gradients = np.zeros((3, 12))
+    gradients[0, :3] = a / weight
     # U = asin(-ay / G)
     ratio = -ay / weight
-    d_ratio = np.array([ay * ax, ay * ay, ay * az]) / weight**3
-    d_ratio[1] -= 1.0 / weight
-    grad_u = np.zeros(12)
-    grad_u[0:3] = d_ratio / np.sqrt(max(1.0 - ratio * ratio, 1e-300))
+    d_ratio = ay * a / weight**3 - np.array([0.0, 1.0 / weight, 0.0])
+    gradients[1, :3] = d_ratio / np.sqrt(max(1.0 - ratio * ratio, 1e-300))
     # V = atan2(ax, -az)
-    horizontal = ax * ax + az * az
-    grad_v = np.zeros(12)
-    grad_v[0] = -az / horizontal
-    grad_v[2] = ax / horizontal
-    return {"tool_weight": grad_weight, "base_tilt_u": grad_u, "base_tilt_v": grad_v}
+    gradients[2, :3] = np.array([-az, 0.0, ax]) / (ax * ax + az * az)
+    return dict(zip(("tool_weight", "base_tilt_u", "base_tilt_v"), gradients))
 
 
 EXTENDED_NAMES = COMPONENT_NAMES + ("tool_weight", "base_tilt[u]", "base_tilt[v]")
@@ -218,10 +218,7 @@ def extended_standard_errors(model: SensorModel, covariance) -> np.ndarray:
         InvalidInput: ``covariance`` is not a finite ``(12, 12)`` matrix.
     """
     covariance = _as_parameter_matrix(covariance, "covariance")
-    grads = derived_gradients(model.gravity_in_base)
-    jacobian = np.vstack(
-        [np.eye(12), grads["tool_weight"], grads["base_tilt_u"], grads["base_tilt_v"]]
-    )
+    jacobian = np.vstack([np.eye(12), *derived_gradients(model.gravity_in_base).values()])
     return np.sqrt(np.clip(np.einsum("ij,jk,ik->i", jacobian, covariance, jacobian), 0.0, None))
 
 

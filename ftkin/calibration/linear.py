@@ -38,5 +38,5 @@ def fit_linear(poses: PoseAverages, g: float = STANDARD_GRAVITY) -> SensorModel:
     check_gravity_directions(poses.rotations, gravity_in_base)
     step2, *_ = np.linalg.lstsq(torque_regressor(forces), torques.reshape(-1), rcond=None)
     center_of_mass, auxiliary = step2[:3], step2[3:]
-    torque_offset = auxiliary - cross_rows(force_offset, center_of_mass)
+    torque_offset = auxiliary - cross_rows(force_offset, center_of_mass)  # M0 = b − F0 × P
     return SensorModel(force_offset, torque_offset, gravity_in_base, center_of_mass, g)

@@ -59,9 +59,6 @@ RESIDUAL_NOISE_GROUPS = (_FORCE, _TORQUE)
 forces and torques. (Per-channel levels from 12 poses are too noisy as weights:
 they cost a quarter of the efficiency in ``benchmarks/bench_estimator.py``.)"""
 
-NOISE_SOURCES = ("given", "spread", "residuals")
-"""Where the noise levels of a fit came from."""
-
 
 @dataclass(frozen=True)
 class WeightedProblem:
@@ -144,19 +141,42 @@ class WeightedProblem:
 
 
 @dataclass(frozen=True)
-class MlFit:
-    """What :func:`fit_ml` found.
+class WhitenedFit:
+    """A fit as :func:`~ftkin.calibration.fit_quality.diagnose` assesses it: :class:`MlFit`, or
+    :class:`~ftkin.calibration.drift_fit.DriftFit` for a drift model.
 
     Attributes:
-        model: The estimated parameters.
-        start: The two-step linear estimate the fit started from.
-        problem: The whitened problem at the final noise levels (see :attr:`noise`).
+        model: The estimated parameters ``θ``.
+        noise: Per-reading noise used [N, N·m].
         noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
         noise_dof: Degrees of freedom of the noise estimate (``inf`` if given).
+        information: ``(12, 12)`` Fisher information of ``θ`` (other parameters marginalized).
+        whitened: ``(P, 6)`` whitened residuals at the fit, in pose order.
+        hat: ``(P, 6, 6)`` per-pose blocks of the hat matrix at the fit, in pose order
+            (:meth:`WeightedProblem.hat_blocks`).
         loss: Loss function used.
-        robust_weights: ``(P, 6)`` final weights of the robust loss (ones for ``"linear"``).
-        information: ``(12, 12)`` Fisher information of ``θ`` (robust weights
-            included; with a mount, the marginal information, mount estimated).
+    """
+
+    model: SensorModel
+    noise: SensorNoise
+    noise_source: str
+    noise_dof: float
+    information: np.ndarray
+    whitened: np.ndarray
+    hat: np.ndarray
+    loss: str
+
+
+@dataclass(frozen=True)
+class MlFit(WhitenedFit):
+    """What :func:`fit_ml` found (with the attributes of :class:`WhitenedFit`).
+
+    Attributes:
+        start: The two-step linear estimate the fit started from.
+        problem: The whitened problem at the final noise levels (see :attr:`noise`).
+        robust_weights: ``(P, 6)`` final weights of the robust loss (ones for ``"linear"``);
+            the :attr:`information` includes them (with a mount, it is the marginal
+            information of ``θ``, mount estimated).
         iterations: Function evaluations the solver used.
         mount_rotation: ``R_M`` ``(3, 3)``, URDF sensor frame → real sensor frame
             (identity unless estimated; :mod:`ftkin.calibration.mount`).
@@ -165,23 +185,13 @@ class MlFit:
             the real sensor's axes (``k`` = 1 for yaw, 3 for full), else None.
     """
 
-    model: SensorModel
     start: SensorModel
     problem: WeightedProblem
-    noise_source: str
-    noise_dof: float
-    loss: str
     robust_weights: np.ndarray
-    information: np.ndarray
     iterations: int
     mount_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
     mount_mode: str = "none"
     mount_covariance: np.ndarray | None = None
-
-    @property
-    def noise(self) -> SensorNoise:
-        """Per-reading noise used [N, N·m] (the problem's channel levels)."""
-        return SensorNoise(self.problem.channel_std[_FORCE], self.problem.channel_std[_TORQUE])
 
     @property
     def covariance(self) -> np.ndarray:
@@ -189,16 +199,6 @@ class MlFit:
         scaling).
         """
         return covariance_from_information(self.information)
-
-
-def _robust_weights(whitened: np.ndarray, loss: str) -> np.ndarray:
-    """IRLS weights ``ρ'(z)`` of scipy's losses at ``z = (r / scale)²``."""
-    z = (whitened / ROBUST_LOSS_SCALE) ** 2
-    if loss == "soft_l1":
-        return 1.0 / np.sqrt(1.0 + z)
-    if loss == "huber":
-        return np.where(z <= 1.0, 1.0, 1.0 / np.sqrt(np.maximum(z, 1.0)))
-    return np.ones_like(whitened)
 
 
 def noise_from_spread(poses: PoseAverages) -> tuple[np.ndarray, float] | None:
@@ -211,13 +211,11 @@ def noise_from_spread(poses: PoseAverages) -> tuple[np.ndarray, float] | None:
     dof = float(np.sum(poses.counts[repeated] - 1))
     if dof < MIN_SPREAD_DOF:
         return None
-    variance = (
+    std = np.sqrt(
         np.sum((poses.counts[repeated] - 1)[:, None] * poses.spread[repeated] ** 2, axis=0) / dof
     )
     scale = np.maximum(np.abs(poses.wrenches).max(axis=0), 1e-300)
-    if not np.all(np.isfinite(variance)) or np.any(np.sqrt(variance) <= 1e-12 * scale):
-        return None
-    return np.sqrt(variance), dof
+    return (std, dof) if np.all(np.isfinite(std) & (std > 1e-12 * scale)) else None
 
 
 def noise_from_residuals(
@@ -232,36 +230,26 @@ def noise_from_residuals(
     lowest value (default :func:`~ftkin.calibration.information.noise_floor`).
     Returns also the smaller group's degrees of freedom.
     """
-    residuals = problem.residuals(theta)
     leverage = np.clip(np.diagonal(problem.hat_blocks(theta), axis1=1, axis2=2), 0.0, 1.0 - 1e-9)
-    scaled = residuals * np.sqrt(problem.counts)[:, None]
-    std = np.empty(6)
-    dofs = []
+    scaled = problem.residuals(theta) * np.sqrt(problem.counts)[:, None]
     floor = noise_floor(problem.wrenches) if floor is None else np.asarray(floor, dtype=float)
-    for group in RESIDUAL_NOISE_GROUPS:
-        dof = float(np.sum(1.0 - leverage[:, group]))
-        if robust:
-            studentized = np.abs(scaled[:, group]) / np.sqrt(1.0 - leverage[:, group])
-            value = 1.4826 * float(np.median(studentized))
-        else:
-            value = float(np.sqrt(np.sum(scaled[:, group] ** 2) / max(dof, 1e-12)))
-        std[group] = max(value, float(floor[group][0]))
-        dofs.append(dof)
-    return std, min(dofs)
+    dof = 1.0 - leverage
+    if robust:
+        studentized = np.abs(scaled) / np.sqrt(dof)  # a median that ignores outlying poses
+        median = [1.4826 * np.median(studentized[:, g]) for g in RESIDUAL_NOISE_GROUPS]
+        std = np.maximum(np.repeat(median, 3), floor)
+    else:
+        std = pooled_noise(np.sum(scaled**2, axis=0), np.sum(dof, axis=0), floor)
+    return std, min(float(np.sum(dof[:, g])) for g in RESIDUAL_NOISE_GROUPS)
 
 
-def _information(
-    problem: WeightedProblem, theta: np.ndarray, loss: str
-) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """Robust weights ``(P, 6)``, θ's Fisher information ``(12, 12)`` (marginal with a mount) and
-    the mount covariance ``(k, k)`` [rad²] (None without a mount) at the solution.
+def pooled_noise(squares: np.ndarray, dof: np.ndarray, floor: np.ndarray) -> np.ndarray:
+    """``(6,)`` noise ``σ_g = √(Σ n e² / Σ dof)`` per group of :data:`RESIDUAL_NOISE_GROUPS`,
+    from ``Σ n e²`` and the degrees of freedom per channel ``(6,)``, at least ``floor`` ``(6,)``
+    [N, N·m].
     """
-    robust_weights = _robust_weights(problem.whitened_residuals(theta).reshape(-1, 6), loss)
-    jac = problem.whitened_jacobian(theta) * np.sqrt(robust_weights).reshape(-1, 1)
-    information = jac.T @ jac
-    if problem.mode == "none":
-        return robust_weights, information, None
-    return robust_weights, *split_information(information)
+    std = [np.sqrt(np.sum(squares[g]) / max(np.sum(dof[g]), 1e-12)) for g in RESIDUAL_NOISE_GROUPS]
+    return np.maximum(np.repeat(std, 3), floor)
 
 
 def _solve(problem: WeightedProblem, start: np.ndarray, loss: str) -> tuple[np.ndarray, int]:
@@ -301,8 +289,10 @@ def _noise(poses: PoseAverages, problem, theta0, noise, loss: str, floor):
         return (*spread, "spread")
     # rough levels (no leverage correction) to weight the channels for the leverages
     rms = np.sqrt(np.mean(problem.residuals(theta0) ** 2 * problem.counts[:, None], axis=0))
-    rough = np.repeat([rms[_FORCE].mean(), rms[_TORQUE].mean()], 3)
-    rough = np.maximum(rough, 1e-12 * np.maximum(1.0, np.abs(poses.wrenches).max(axis=0)))
+    rough = np.maximum(
+        np.repeat([rms[_FORCE].mean(), rms[_TORQUE].mean()], 3),
+        1e-12 * np.maximum(1.0, np.abs(poses.wrenches).max(axis=0)),
+    )
     problem = replace(problem, channel_std=rough)
     return (*noise_from_residuals(problem, theta0, loss != "linear", floor), "residuals")
 
@@ -333,13 +323,17 @@ def fit_ml(
     """
     if loss not in LOSSES:
         raise InvalidInput(f"unknown loss {loss!r}; expected one of {', '.join(LOSSES)}")
-    counts = np.asarray(poses.counts, dtype=float)
     if check_mount_mode(estimate_mount) == "none":
         mount0, start = np.eye(3), fit_linear(poses, g)
     else:
         mount0, start = mount_start(poses, g)
     problem = WeightedProblem(
-        poses.rotations, poses.wrenches, counts, np.ones(6), mount0, estimate_mount
+        poses.rotations,
+        poses.wrenches,
+        np.asarray(poses.counts, dtype=float),
+        np.ones(6),
+        mount0,
+        estimate_mount,
     )
     theta0 = np.concatenate([start.to_vector(), np.zeros(problem.parameter_count - 12)])
     channel_std, dof, source = _noise(poses, problem, theta0, noise, loss, floor)
@@ -356,17 +350,30 @@ def fit_ml(
         theta, more = _solve(problem, theta, loss)
         evaluations += more
     problem, theta = problem.recentred(theta)
-    robust_weights, information, mount_covariance = _information(problem, theta, loss)
+    # θ's information at the solution, robust weights included (marginal with a mount)
+    whitened = problem.whitened_residuals(theta).reshape(-1, 6)
+    # IRLS weights ρ'(z) of scipy's losses at z = (r / scale)²: soft_l1, huber, or ones (linear)
+    z = (whitened / ROBUST_LOSS_SCALE) ** 2
+    robust_weights = 1.0 / np.sqrt(1.0 + z if loss == "soft_l1" else np.maximum(z, 1.0))
+    if loss == "linear":
+        robust_weights = np.ones_like(whitened)
+    jac = problem.whitened_jacobian(theta) * np.sqrt(robust_weights).reshape(-1, 1)
+    information, mount_covariance = jac.T @ jac, None
+    if estimate_mount != "none":
+        information, mount_covariance = split_information(information)
     return MlFit(
         model=SensorModel.from_vector(theta, g),
         start=start,
         problem=problem,
+        noise=SensorNoise(problem.channel_std[_FORCE], problem.channel_std[_TORQUE]),
         noise_source=source,
         noise_dof=float(dof),
         loss=loss,
         robust_weights=robust_weights,
         information=information,
         iterations=evaluations,
+        whitened=whitened,
+        hat=problem.hat_blocks(theta),
         mount_rotation=problem.mount_base,
         mount_mode=estimate_mount,
         mount_covariance=mount_covariance,

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..exceptions import UnobservableParameters
+from .model import skew
 
 MIN_POSES = 3
 """Fewest distinct static poses a calibration accepts."""
@@ -24,36 +25,23 @@ MIN_RELATIVE_SINGULAR_VALUE = 1e-3
 """Smallest accepted singular value of a normalized regressor, relative to the
 largest (about the smallest angle, in radians, by which the poses must differ)."""
 
-FORCE_STEP_NAMES = (
-    "gravity_in_base",
-    "gravity_in_base",
-    "gravity_in_base",
-    "force_offset",
-    "force_offset",
-    "force_offset",
-)
+FORCE_STEP_NAMES = ("gravity_in_base",) * 3 + ("force_offset",) * 3
 TORQUE_STEP_NAMES = ("center_of_mass",) * 3 + ("torque_offset",) * 3
+
+
+def _beside_identity(blocks: np.ndarray) -> np.ndarray:
+    """``[B_i  I]`` stacked, ``(3N, 6)``, from blocks ``(N, 3, 3)``."""
+    return np.concatenate([blocks, np.broadcast_to(np.eye(3), blocks.shape)], axis=2).reshape(-1, 6)
 
 
 def force_regressor(rotations: np.ndarray) -> np.ndarray:
     """Step-1 regressor ``[R_iᵀ  I]`` stacked, ``(3N, 6)``, for ``[a; F0]``."""
-    count = len(rotations)
-    regressor = np.empty((count, 3, 6))
-    regressor[:, :, :3] = np.transpose(rotations, (0, 2, 1))
-    regressor[:, :, 3:] = np.eye(3)
-    return regressor.reshape(3 * count, 6)
+    return _beside_identity(np.transpose(rotations, (0, 2, 1)))
 
 
 def torque_regressor(forces: np.ndarray) -> np.ndarray:
     """Step-2 regressor ``[-[F_i]×  I]`` stacked, ``(3N, 6)``, for ``[P; b]``."""
-    count = len(forces)
-    fx, fy, fz = forces.T
-    regressor = np.zeros((count, 3, 6))
-    regressor[:, 0, 1], regressor[:, 0, 2] = fz, -fy
-    regressor[:, 1, 0], regressor[:, 1, 2] = -fz, fx
-    regressor[:, 2, 0], regressor[:, 2, 1] = fy, -fx
-    regressor[:, :, 3:] = np.eye(3)
-    return regressor.reshape(3 * count, 6)
+    return _beside_identity(-skew(forces))
 
 
 def _check_rank(regressor: np.ndarray, names: tuple[str, ...], reason: str) -> None:
@@ -63,9 +51,8 @@ def _check_rank(regressor: np.ndarray, names: tuple[str, ...], reason: str) -> N
     relative = singular_values / singular_values[0]
     if relative[-1] < MIN_RELATIVE_SINGULAR_VALUE:
         weakest = np.abs(vt[-1]) / np.abs(vt[-1]).max()
-        involved = sorted({names[i] for i in np.flatnonzero(weakest > 0.3)})
         raise UnobservableParameters(
-            involved,
+            sorted({names[i] for i in np.flatnonzero(weakest > 0.3)}),
             f"{reason} (smallest relative singular value {relative[-1]:.1e}, "
             f"need at least {MIN_RELATIVE_SINGULAR_VALUE:.0e})",
             singular_values=relative,
@@ -101,9 +88,8 @@ def check_gravity_directions(rotations: np.ndarray, gravity_in_base: np.ndarray)
             ["center_of_mass"],
             "the estimated tool weight is zero, so its centre of mass has no effect",
         )
-    directions = np.transpose(rotations, (0, 2, 1)) @ (gravity_in_base / weight)
     _check_rank(
-        torque_regressor(directions),
+        torque_regressor(np.transpose(rotations, (0, 2, 1)) @ (gravity_in_base / weight)),
         TORQUE_STEP_NAMES,
         "gravity is seen along one sensor direction only (poses differ only by rotation about "
         "the gravity axis); use at least three poses with "

@@ -28,8 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import InvalidInput
-from .drift import DriftModel, register_drift_model
+from .drift import DriftModel, register_drift_model, without_argument
 
 
 @dataclass(frozen=True)
@@ -57,17 +56,14 @@ def walk_gains(times: np.ndarray, noise_variance: np.ndarray, rate: np.ndarray) 
     if not np.any(rate):  # no walk: plain weighting by the noise
         zeros = np.zeros((count, 6))
         return WalkGains(np.asarray(noise_variance, dtype=float), zeros, zeros, zeros)
-    steps = np.diff(times)
-    predicted, filtered = np.empty((count, 6)), np.empty((count, 6))
-    rate_squared = rate**2
-    variance = np.zeros(6)
+    growth = np.vstack([np.outer(np.diff(times), rate**2), np.zeros((1, 6))])  # from pose i+1 to i
+    predicted, variance = np.empty((count, 6)), np.zeros(6)
     for i in range(count - 1, -1, -1):
-        if i < count - 1:
-            variance = variance + rate_squared * steps[i]
+        variance = variance + growth[i]
         predicted[i] = variance
-        variance = variance * noise_variance[i] / (variance + noise_variance[i])
-        filtered[i] = variance
+        variance = variance * noise_variance[i] / (variance + noise_variance[i])  # the update
     innovation = predicted + noise_variance
+    filtered = predicted * noise_variance / innovation  # the variances after each update
     return WalkGains(innovation, predicted / innovation, predicted, filtered)
 
 
@@ -77,14 +73,13 @@ def whiten(gains: WalkGains, columns: np.ndarray) -> np.ndarray:
 
     Leading axes are independent sets of columns (e.g. candidate pose orders), whitened together.
     """
-    count = columns.shape[-3]
     if not np.any(gains.gain):  # no walk: the innovations are the columns
         return columns / np.sqrt(gains.innovation_variance)[:, :, None]
     out = np.empty_like(columns)
     state = np.zeros(columns.shape[:-3] + columns.shape[-2:])
     gain = gains.gain[:, :, None]
     scale = 1.0 / np.sqrt(gains.innovation_variance)[:, :, None]
-    for i in range(count - 1, -1, -1):
+    for i in range(columns.shape[-3] - 1, -1, -1):
         innovation = columns[..., i, :, :] - state
         out[..., i, :, :] = innovation * scale[i]
         state = state + gain[i] * innovation
@@ -105,15 +100,12 @@ def smooth(
     """RTS-smoothed walk ``w(t_i)`` ``(P, 6)`` and its variance, from ``residuals = y − f(θ)`` ``(P,
     6)``.
     """
-    count = len(times)
-    filtered = np.empty((count, 6))
-    state = np.zeros(6)
-    for i in range(count - 1, -1, -1):
-        state = state + gains.gain[i] * (residuals[i] - state)
-        filtered[i] = state
+    # the filtered walk: the filter's state after pose i is y_i − (1 − K_i) ν_i
+    innovations = whiten(gains, residuals[:, :, None])[:, :, 0] * np.sqrt(gains.innovation_variance)
+    filtered = residuals - (1.0 - gains.gain) * innovations
     mean, variance = filtered.copy(), gains.filtered_variance.copy()
     steps = np.diff(times)
-    for i in range(1, count):
+    for i in range(1, len(times)):
         # the filter moved from pose i to pose i-1; smooth pose i from pose i-1
         predicted_variance = gains.filtered_variance[i] + rate**2 * steps[i - 1]
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -125,15 +117,9 @@ def smooth(
     return mean, np.clip(variance, 0.0, None)
 
 
-def _random_walk(argument: str | None) -> DriftModel:
-    if argument is not None:
-        raise InvalidInput(f"drift 'random-walk' takes no argument, got 'random-walk:{argument}'")
-    return DriftModel("random-walk", walk=True)
-
-
 register_drift_model(
     "random-walk",
-    _random_walk,
+    without_argument(DriftModel("random-walk", walk=True)),
     auto=("random-walk", "random-walk+poly:1", "random-walk+poly:2"),
     walk=True,
 )
