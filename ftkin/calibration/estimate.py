@@ -275,7 +275,7 @@ def _fit_static(poses: PoseAverages, options: CalibrationOptions, drift_models) 
     )
     if options.drop_outliers and diagnostics.outlier_pose_ids:
         keep = ~np.isin(poses.pose_ids, diagnostics.outlier_pose_ids)
-        poses = replace(poses, **{k: v[keep] for k, v in vars(poses).items() if v is not None})
+        poses = poses.subset(keep)
         fit = fit_ml(poses, options.g, options.noise, options.loss, options.estimate_mount, floor)
         diagnostics, covariance = diagnose(  # the outliers dropped, said in the diagnostics
             fit,

@@ -13,7 +13,7 @@ paper's commanded Euler angles.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -92,6 +92,11 @@ class PoseAverages:
 
     def __len__(self) -> int:
         return len(self.pose_ids)
+
+    def subset(self, keep: np.ndarray) -> PoseAverages:
+        """The poses ``keep`` selects (a boolean mask or indices), every per-pose field alike."""
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        return replace(self, **{k: v[keep] for k, v in values.items() if v is not None})
 
 
 @dataclass(frozen=True)
