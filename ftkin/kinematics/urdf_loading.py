@@ -266,7 +266,7 @@ def joints_beyond_frame(model: pin.Model, frame: str) -> dict[str, float]:
 
 
 def lock_joints(model: pin.Model, locked_joints: Mapping[str, float]):
-    """The model with ``{joint name: value [rad or m]}`` fixed: ``(full, reduced, locked ids,
+    """The model with ``{joint name: value [rad or m]}`` fixed: ``(reduced, full, locked ids,
     reference q)``.
 
     Raises:
@@ -284,4 +284,4 @@ def lock_joints(model: pin.Model, locked_joints: Mapping[str, float]):
         reference[model.joints[joint_id].idx_q] = float(value)
         ids.append(joint_id)
     reduced = pin.buildReducedModel(model, ids, reference)
-    return model, reduced, ids, reference
+    return reduced, model, ids, reference
