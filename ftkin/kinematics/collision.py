@@ -47,11 +47,11 @@ class SelfCollision:
         self.data = arm.model.createData()
         self.geometry_model = pin.GeometryModel(arm.geometry("collision"))
         self.geometry_model.addAllCollisionPairs()
-        reference = (
-            default_reference_configuration(arm)
-            if reference_configuration is None
-            else arm.check_configuration(reference_configuration)
-        )
+        if reference_configuration is None:  # zero where the limits allow it, else their middle
+            lower, upper = arm.lower_limits, arm.upper_limits
+            reference = np.where((lower <= 0.0) & (upper >= 0.0), 0.0, 0.5 * (lower + upper))
+        else:
+            reference = arm.check_configuration(reference_configuration)
         self.reference_configuration = reference
         self.removed = self._remove_pairs(reference)
         self.geometry_data = pin.GeometryData(self.geometry_model)
@@ -108,10 +108,3 @@ class SelfCollision:
                 self.model, self.data, self.geometry_model, self.geometry_data, q, True
             )
         )
-
-
-def default_reference_configuration(arm) -> np.ndarray:
-    """Zero where the limits allow it, else the middle of the limits [rad]."""
-    lower, upper = arm.lower_limits, arm.upper_limits
-    middle = 0.5 * (lower + upper)
-    return np.where((lower <= 0.0) & (upper >= 0.0), 0.0, middle)
