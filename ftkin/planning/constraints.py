@@ -122,9 +122,7 @@ class FeasibilityChecker:
     """
 
     def __init__(self, arm, constraints: PoseConstraints):
-        self.arm = arm
-        self.constraints = constraints
-        self.data = arm.model.createData()
+        self.arm, self.constraints, self.data = arm, constraints, arm.model.createData()
         lower, upper = arm.lower_limits + constraints.margin, arm.upper_limits - constraints.margin
         for name, low, high in constraints.joint_ranges:
             if name not in arm.joint_names:
@@ -141,12 +139,9 @@ class FeasibilityChecker:
                 f"{constraints.margin:g} rad margin and the given joint ranges"
             )
         self.lower, self.upper = lower, upper
-        self.axis_frame_id = (
-            arm.tool_frame_id if arm.tool_frame_id is not None else arm.sensor_frame_id
-        )
-        self.height_frame_ids = [arm.sensor_frame_id] + (
-            [arm.tool_frame_id] if arm.tool_frame_id is not None else []
-        )
+        tool = [] if arm.tool_frame_id is None else [arm.tool_frame_id]
+        self.axis_frame_id = (tool or [arm.sensor_frame_id])[0]
+        self.height_frame_ids = [arm.sensor_frame_id, *tool]
         self.collision = SelfCollision(arm) if constraints.self_collision else None
         self.rejected = {"floor": 0, "tilt": 0, "self-collision": 0}
 
@@ -196,15 +191,10 @@ class FeasibilityChecker:
 
     def tool_to_sensor_rotation(self) -> np.ndarray:
         """Fixed rotation from the tilt-axis frame to the sensor frame, ``R_TS`` ``(3, 3)``."""
-        q = np.clip(np.zeros(self.arm.nq), self.lower, self.upper)
-        pin.forwardKinematics(self.arm.model, self.data, q)
-        tool = pin.updateFramePlacement(
-            self.arm.model, self.data, self.axis_frame_id
-        ).rotation.copy()
-        sensor = pin.updateFramePlacement(
-            self.arm.model, self.data, self.arm.sensor_frame_id
-        ).rotation
-        return tool.T @ sensor
+        model, data = self.arm.model, self.data
+        pin.forwardKinematics(model, data, np.clip(np.zeros(self.arm.nq), self.lower, self.upper))
+        tool = pin.updateFramePlacement(model, data, self.axis_frame_id).rotation.copy()
+        return tool.T @ pin.updateFramePlacement(model, data, self.arm.sensor_frame_id).rotation
 
 
 def check_tilt_observability(checker, factors) -> None:
@@ -216,15 +206,14 @@ def check_tilt_observability(checker, factors) -> None:
     constraints = checker.constraints
     if constraints.max_tilt is None:
         return
-    tool_to_sensor = checker.tool_to_sensor_rotation()
     grid = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
     # Tool orientations R_BT = Rz(α) Ry(β) Rx(π) Rz(ψ): tool z tilted by β from straight down.
     tilted = euler_zyx_to_matrix(
         [[alpha, beta, np.pi] for alpha in grid for beta in (0.0, constraints.max_tilt)]
     )
     spins = euler_zyx_to_matrix([[psi, 0.0, 0.0] for psi in grid])
-    rotations = np.einsum("aij,bjk,kl->abil", tilted, spins, tool_to_sensor).reshape(-1, 3, 3)
-    check_information(factors(rotations), constraints)
+    rotations = np.einsum("aij,bjk,kl->abil", tilted, spins, checker.tool_to_sensor_rotation())
+    check_information(factors(rotations.reshape(-1, 3, 3)), constraints)
 
 
 def check_information(factors, constraints, rcond: float = 1e-10):

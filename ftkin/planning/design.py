@@ -48,10 +48,13 @@ def information_factors(
     return jac / np.asarray(channel_std, float)[None, :, None] * np.sqrt(readings_per_pose)
 
 
-def log_det(information: np.ndarray) -> float:
-    """``log det`` of a symmetric positive (semi)definite matrix; ``-inf`` when singular."""
+def log_det(information: np.ndarray):
+    """``log det`` of a symmetric positive (semi)definite matrix; ``-inf`` when singular.
+
+    A stack ``(..., n, n)`` gives an array of them; one matrix, a float.
+    """
     sign, value = np.linalg.slogdet(information)
-    return float(value) if sign > 0 else -np.inf
+    return np.where(sign > 0, value, -np.inf)[()]
 
 
 def _gains(entries: np.ndarray, information: np.ndarray) -> np.ndarray:

@@ -55,11 +55,7 @@ def expected_tool(
     """The tool a plan is made for: weight [N] hanging straight down the base z axis, COM [m, sensor
     frame].
     """
-    weight = (
-        PAPER_TOOL_WEIGHT
-        if tool_weight is None
-        else as_in_range(tool_weight, "tool_weight", 1e-6, 1e6, "N")
-    )
+    weight = PAPER_TOOL_WEIGHT if tool_weight is None else tool_weight
     com = as_vector(
         PAPER_CENTER_OF_MASS if center_of_mass is None else center_of_mass, 3, "center_of_mass"
     )
@@ -67,7 +63,7 @@ def expected_tool(
         raise InvalidInput(
             f"center_of_mass must lie within 10 m of the sensor, got {com.tolist()} m"
         )
-    return SensorModel.from_tool(weight / g, com, g=g)
+    return SensorModel.from_tool(as_in_range(weight, "tool_weight", 1e-6, 1e6, "N") / g, com, g=g)
 
 
 @dataclass(frozen=True)
@@ -131,8 +127,7 @@ class PoseEvaluation:
 
     def report(self) -> str:
         """Table of predicted standard errors (and, for biases, the ratio to the bound)."""
-        std = self.vector_std.reshape(4, 3)
-        bound = self.bias_bound.reshape(2, 3)
+        std, bound = self.vector_std.reshape(4, 3), self.bias_bound.reshape(2, 3)
         lines = [
             f"predicted standard errors for {self.pose_count} poses × {self.readings_per_pose} "
             "reading(s), "
@@ -162,11 +157,12 @@ class PoseEvaluation:
                     limit = bound[block - 1, axis]
                     row += f"{limit:>14.3e}{std[block, axis] / limit:>8.3f}"
                 lines.append(row)
-        errors = self.standard_errors
-        lines.append(f"{'weight G':<10}{errors['tool_weight']:>14.3e}  N")
-        tilt_deg = np.rad2deg(errors["base_tilt"])
-        lines.append(f"{'tilt U, V':<10}{tilt_deg[0]:>14.3e}, {tilt_deg[1]:.3e} deg")
-        lines.extend(f"{name:<10}{value:>14.3e}  deg" for name, value in self.mount_std_deg.items())
+        tilt_deg = np.rad2deg(self.standard_errors["base_tilt"])
+        lines += [
+            f"{'weight G':<10}{self.standard_errors['tool_weight']:>14.3e}  N",
+            f"{'tilt U, V':<10}{tilt_deg[0]:>14.3e}, {tilt_deg[1]:.3e} deg",
+            *(f"{name:<10}{value:>14.3e}  deg" for name, value in self.mount_std_deg.items()),
+        ]
         return "\n".join(lines)
 
 
@@ -182,11 +178,11 @@ def _pose_times(value, count: int) -> np.ndarray:
 
 def whole_number(value, name: str, minimum: int = 0) -> int:
     """``value`` as an int (no bools, no fractions), at least ``minimum``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        if isinstance(value, bool) or not isinstance(value, (float, np.floating)):
-            raise InvalidInput(f"{name} must be an integer (a whole number), got {value!r}")
-        if not float(value).is_integer():
-            raise InvalidInput(f"{name} must be an integer (a whole number), got {value!r}")
+    whole = isinstance(value, (int, np.integer)) or (
+        isinstance(value, (float, np.floating)) and float(value).is_integer()
+    )
+    if isinstance(value, bool) or not whole:
+        raise InvalidInput(f"{name} must be an integer (a whole number), got {value!r}")
     if value < minimum:
         raise InvalidInput(f"{name} must be at least {minimum}, got {value}")
     return int(value)
@@ -270,7 +266,7 @@ def evaluate_poses(
     rotations, _ = as_rotation_batch(rotation_sensor_to_base)
     check_pose_count(len(rotations))
     model, noise, readings = expected.model, expected.noise, expected.readings_per_pose
-    drift_rate, times = expected.drift_rate, None
+    drift_rate, times, mount_covariance = expected.drift_rate, None, None
     if drift_rate is not None:
         times = (
             np.arange(len(rotations)) * expected.pose_interval
@@ -283,7 +279,6 @@ def evaluate_poses(
         information = walk_information(model.parameter_jacobian(rotations), gains)
     else:
         information = fisher_information(model, rotations, noise, readings, expected.estimate_mount)
-    mount_covariance = None
     if expected.estimate_mount != "none":
         information, mount_covariance = split_information(information)
     covariance = covariance_from_information(information)

@@ -28,9 +28,7 @@ REVOLUTE_KINDS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRev
 def revolute_mask(model) -> np.ndarray:
     """``(nq,)`` True for the coordinates of revolute joints (one coordinate each)."""
     mask = np.zeros(model.nq, dtype=bool)
-    for joint in list(model.joints)[1:]:
-        if joint.shortname() in REVOLUTE_KINDS:
-            mask[joint.idx_q] = True
+    mask[[joint.idx_q for joint in model.joints if joint.shortname() in REVOLUTE_KINDS]] = True
     return mask
 
 
@@ -57,20 +55,15 @@ def joint_distances(joint_positions: np.ndarray) -> np.ndarray:
 
 def path_length(distances: np.ndarray, order) -> float:
     """Total travel along ``order`` (open path) [rad]."""
-    order = np.asarray(order)
     return float(np.sum(distances[order[:-1], order[1:]]))
 
 
 def _nearest_neighbour(distances: np.ndarray, start: int) -> list[int]:
-    count = len(distances)
-    order = [start]
-    visited = np.zeros(count, dtype=bool)
+    order, visited = [start], np.zeros(len(distances), dtype=bool)
     visited[start] = True
-    for _ in range(count - 1):
-        row = np.where(visited, np.inf, distances[order[-1]])
-        nxt = int(np.argmin(row))
-        order.append(nxt)
-        visited[nxt] = True
+    for _ in range(len(distances) - 1):
+        order.append(int(np.argmin(np.where(visited, np.inf, distances[order[-1]]))))
+        visited[order[-1]] = True
     return order
 
 
