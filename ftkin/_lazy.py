@@ -5,8 +5,6 @@ A package lists ``{name: relative module}`` and gets the module-level
 name is first used, so ``import ftkin`` (and the CLI's start) stay light.
 """
 
-from __future__ import annotations
-
 import importlib
 
 

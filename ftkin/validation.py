@@ -4,8 +4,6 @@ Library functions call these once at their entry, so the numerical code behind
 them can assume clean ``float64`` arrays of the right shape.
 """
 
-from __future__ import annotations
-
 import dataclasses
 import re
 

@@ -5,8 +5,6 @@
 the URDF's root (Pinocchio's world frame).
 """
 
-from __future__ import annotations
-
 import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -162,7 +160,7 @@ class Arm:
         sensor_mount: SensorMount | None = None,
         package_dirs: Sequence[str] = (),
         locked_joints: Mapping[str, float] | None = None,
-    ) -> Arm:
+    ) -> "Arm":
         """Load any URDF.
 
         Args:
@@ -203,7 +201,7 @@ class Arm:
         return arm
 
     @classmethod
-    def default(cls, tool_frame: str | None = "tool") -> Arm:
+    def default(cls, tool_frame: str | None = "tool") -> "Arm":
         """The bundled six-axis arm, sensor frame ``ft_sensor``, tool frame ``tool``."""
         return cls.from_urdf(bundled_urdf_path(), "ft_sensor", tool_frame)
 

@@ -13,8 +13,6 @@ and ``Rz(θ)`` mixes two columns. A prismatic joint does not rotate. The result
 is checked against Pinocchio on a few configurations when the chain is built.
 """
 
-from __future__ import annotations
-
 import numpy as np
 import pinocchio as pin
 
@@ -44,7 +42,7 @@ class RotationChain:
     @classmethod
     def from_model(
         cls, model: pin.Model, frame_id: int, tolerance: float = 1e-12
-    ) -> RotationChain | None:
+    ) -> "RotationChain | None":
         """The chain from the root to frame ``frame_id``, or None if a joint on it is neither
         revolute nor prismatic.
 

@@ -17,8 +17,6 @@ do (MoveIt's setup assistant, Pinocchio's SRDF ``disable_collisions``):
 The geometry model is a copy, so the arm's cached model stays untouched.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np

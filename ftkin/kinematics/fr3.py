@@ -7,8 +7,6 @@ mounted between flange and hand) sits. The fingers are locked (:meth:`Arm.from_u
 joints between the base and the sensor), the tool frame is the hand's ``fr3_hand_tcp``.
 """
 
-from __future__ import annotations
-
 from pathlib import Path
 
 from .arm import Arm, bundled_urdf_path

@@ -9,8 +9,6 @@ forward kinematics, Jacobians and the control loop see the real sensor with
 no added work.
 """
 
-from __future__ import annotations
-
 import copy
 
 import numpy as np

@@ -10,8 +10,6 @@ joint). ``compensate``, ``view`` and ``report`` rebuild the arm from it
 (:meth:`KinematicsRecord.mismatches`).
 """
 
-from __future__ import annotations
-
 import hashlib
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -75,7 +73,7 @@ class KinematicsRecord:
     tool_frame: str | None = None
 
     @classmethod
-    def from_arm(cls, arm) -> KinematicsRecord:
+    def from_arm(cls, arm) -> "KinematicsRecord":
         """The record of an :class:`~ftkin.kinematics.arm.Arm` (its robot name and mount when it has
         them).
         """
@@ -110,7 +108,7 @@ class KinematicsRecord:
         }
 
     @classmethod
-    def from_dict(cls, data: dict) -> KinematicsRecord:
+    def from_dict(cls, data: dict) -> "KinematicsRecord":
         """Inverse of :meth:`to_dict`; raises :class:`InvalidInput` on malformed data."""
         if not isinstance(data, dict) or not isinstance(data.get("sensor_frame"), str):
             raise InvalidInput("expected an object with a sensor_frame name")

@@ -14,8 +14,6 @@ distribution's file list (``share/example-robot-data/package.xml``), and the
 against.
 """
 
-from __future__ import annotations
-
 import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field

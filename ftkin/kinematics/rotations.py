@@ -8,8 +8,6 @@ Also the base tilt of METHOD.md §2: the world-to-base rotation
 ``a = [G cosU sinV, -G sinU, -G cosU cosV]``.
 """
 
-from __future__ import annotations
-
 import numpy as np
 
 from ..exceptions import InvalidInput

@@ -6,8 +6,6 @@ stream and adds the reasons of an XML parse and of yourdfpy's validation, so
 the :class:`~ftkin.exceptions.UrdfError` a user sees names the problem.
 """
 
-from __future__ import annotations
-
 import contextlib
 import io
 import logging

@@ -16,8 +16,6 @@ any optimization, constraint sets under which no pose set could determine
 every parameter, naming the parameters.
 """
 
-from __future__ import annotations
-
 from collections.abc import Mapping
 from dataclasses import dataclass
 

@@ -15,8 +15,6 @@ it minimizes the volume of the joint confidence ellipsoid. Adding candidate
 evaluated for the whole pool at once.
 """
 
-from __future__ import annotations
-
 import numpy as np
 
 from ..calibration.mount import mount_jacobian

@@ -32,8 +32,6 @@ and a greedy start beyond it is not used. Without a drift rate,
 :func:`ftkin.plan_poses` orders for short travel instead.
 """
 
-from __future__ import annotations
-
 import numpy as np
 
 from ..calibration.random_walk import walk_gains, whiten

@@ -8,8 +8,6 @@ than ``σ/√(N r)`` per channel (``N`` poses, ``r`` readings per pose); the
 report shows how close a set comes.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass, field
 
 import numpy as np

@@ -20,8 +20,6 @@ violations cost a penalty during the search, and the returned plan is
 checked on a fine grid.
 """
 
-from __future__ import annotations
-
 import dataclasses
 from dataclasses import dataclass, field
 

@@ -13,8 +13,6 @@ turns toward zero where its limits allow (same pose, same collision state):
 arms with ±2π joints otherwise plan poses a full turn apart.
 """
 
-from __future__ import annotations
-
 import numpy as np
 
 MAX_STARTS = 32

@@ -19,8 +19,6 @@ and ``N`` poses no design beats ``σ/√N`` for each bias channel; a good design
 reaches it, and lowers the other parameters' errors with it.
 """
 
-from __future__ import annotations
-
 import functools
 from dataclasses import dataclass, field
 
@@ -168,7 +166,7 @@ class PlanSpec:
             object.__setattr__(self, name, value)
 
     @classmethod
-    def from_options(cls, n: int, **options) -> PlanSpec:
+    def from_options(cls, n: int, **options) -> "PlanSpec":
         """A spec from flat keywords: the fields of :class:`PoseConstraints` (``margin``,
         ``floor_height``, ``max_tilt``, ``joint_ranges``, ``self_collision``), of
         :class:`~ftkin.planning.evaluation.ExpectedCalibration` (``tool_weight``, ``noise``,
