@@ -172,8 +172,18 @@ def as_rotation_batch(
         array = array[np.newaxis]
     if array.ndim != 3 or array.shape[1:] != (3, 3):
         raise InvalidInput(f"{name} must have shape (3, 3) or (N, 3, 3), got {np.shape(value)}")
-    if not _all_rotations(array, atol):
-        _raise_not_rotation(array, name, atol)
+    if not _all_rotations(array, atol):  # the detailed error names the first bad matrix
+        check_finite(array, name)
+        gram_error = np.abs(np.einsum("nji,njk->nik", array, array) - np.eye(3)).max(axis=(1, 2))
+        det = np.linalg.det(array)
+        bad = np.flatnonzero((gram_error > atol) | (det < 0.0))
+        if bad.size:  # none: a matrix on the tolerance's edge, rounded the other way: accepted
+            i = int(bad[0])
+            raise InvalidInput(
+                f"{name}[{i}] is not a rotation matrix (|R^T R - I| = {gram_error[i]:.2e}, det = "
+                f"{det[i]:.4f}); "
+                "expected an orthonormal matrix with determinant +1"
+            )
     return array, single
 
 
@@ -192,15 +202,12 @@ def _all_rotations(array: np.ndarray, atol: float) -> bool:
     for start in range(0, len(array), _BLOCK):
         block = array[start : start + _BLOCK]
         c0, c1, c2 = block[:, :, 0], block[:, :, 1], block[:, :, 2]
-        low, high = 1.0 - atol, 1.0 + atol
-        ok = True
-        for a, b in ((c0, c0), (c1, c1), (c2, c2)):
-            norm = _column_dot(a, b)
-            ok = ok and bool(((low <= norm) & (norm <= high)).all())
-        for a, b in ((c0, c1), (c0, c2), (c1, c2)):
-            product = _column_dot(a, b)
-            ok = ok and bool((np.abs(product, out=product) <= atol).all())
-        if not ok:
+        norms = [np.einsum("nj,nj->n", a, a) for a in (c0, c1, c2)]
+        products = [np.einsum("nj,nj->n", a, b) for a, b in ((c0, c1), (c0, c2), (c1, c2))]
+        if not (
+            all(((1.0 - atol <= norm) & (norm <= 1.0 + atol)).all() for norm in norms)
+            and all((np.abs(product, out=product) <= atol).all() for product in products)
+        ):
             return False
         det = (
             (c0[:, 1] * c1[:, 2] - c0[:, 2] * c1[:, 1]) * c2[:, 0]
@@ -210,31 +217,6 @@ def _all_rotations(array: np.ndarray, atol: float) -> bool:
         if not (det > 0.0).all():
             return False
     return True
-
-
-def _column_dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise dot products of two ``(N, 3)`` arrays."""
-    return np.einsum("nj,nj->n", a, b)
-
-
-def _raise_not_rotation(array: np.ndarray, name: str, atol: float) -> None:
-    """The detailed error for a batch :func:`_all_rotations` rejected (names the first bad matrix).
-
-    Returns without raising only for a matrix exactly on the tolerance's edge
-    that the two computations round differently.
-    """
-    check_finite(array, name)
-    gram_error = np.abs(np.einsum("nji,njk->nik", array, array) - np.eye(3)).max(axis=(1, 2))
-    det = np.linalg.det(array)
-    bad = np.flatnonzero((gram_error > atol) | (det < 0.0))
-    if not bad.size:  # a matrix on the tolerance's edge, rounded the other way: accept it
-        return
-    i = int(bad[0])
-    raise InvalidInput(
-        f"{name}[{i}] is not a rotation matrix (|R^T R - I| = {gram_error[i]:.2e}, det = "
-        f"{det[i]:.4f}); "
-        "expected an orthonormal matrix with determinant +1"
-    )
 
 
 def as_positive(value, name: str) -> float:
