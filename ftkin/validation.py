@@ -233,17 +233,12 @@ def as_in_range(value, name: str, low: float, high: float, unit: str = "") -> fl
     Bounds keep physically absurd inputs (a 1e308 N tool, a 1e-300 N noise)
     out of the numerics, where they would overflow instead of meaning anything.
     """
-    number = as_positive(value, name) if low > 0 else _finite(value, name)
+    number = as_positive(value, name) if low > 0 else as_real(value, name)
+    if not np.isfinite(number):
+        raise InvalidInput(f"{name} must be finite, got {value!r}")
     if not low <= number <= high:
         suffix = f" {unit}" if unit else ""
         raise InvalidInput(f"{name} must be between {low:g} and {high:g}{suffix}, got {number:g}")
-    return number
-
-
-def _finite(value, name: str) -> float:
-    number = as_real(value, name)
-    if not np.isfinite(number):
-        raise InvalidInput(f"{name} must be finite, got {value!r}")
     return number
 
 

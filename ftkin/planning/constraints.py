@@ -160,14 +160,12 @@ class FeasibilityChecker:
         """
         model, data, limits = self.arm.model, self.data, self.constraints
         pin.forwardKinematics(model, data, q)
-        if limits.floor_height is not None:
-            for frame_id in self.height_frame_ids:
-                if (
-                    pin.updateFramePlacement(model, data, frame_id).translation[2]
-                    < limits.floor_height
-                ):
-                    self.rejected["floor"] += 1
-                    return None
+        if limits.floor_height is not None and any(
+            pin.updateFramePlacement(model, data, frame_id).translation[2] < limits.floor_height
+            for frame_id in self.height_frame_ids
+        ):
+            self.rejected["floor"] += 1
+            return None
         if limits.max_tilt is not None:
             axis_z = pin.updateFramePlacement(model, data, self.axis_frame_id).rotation[2, 2]
             if np.arccos(np.clip(-axis_z, -1.0, 1.0)) > limits.max_tilt:

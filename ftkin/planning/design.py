@@ -138,21 +138,18 @@ def d_optimal_selection(
         Indices of the chosen candidates ``(count,)`` and the criterion
         ``log det`` of their (unregularized) information.
     """
-    size = factors.shape[2]
     scale = 1.0 / np.sqrt(
         np.maximum(np.mean(np.sum(factors**2, axis=1), axis=0), np.finfo(float).tiny)
     )
     factors = factors * scale  # log det changes by the constant 2 Σ log scale: same choices
     contributions = np.transpose(factors, (0, 2, 1)) @ factors
     entries = np.ascontiguousarray(np.transpose(factors, (1, 2, 0)))
-    ridge = REGULARIZATION * np.eye(size)
+    ridge = REGULARIZATION * np.eye(factors.shape[2])
     chosen: list[int] = []
     information = ridge.copy()
     available = np.ones(len(factors), dtype=bool)
     for _ in range(count):
-        gains = _gains(entries, information)
-        gains[~available] = -np.inf
-        best = int(np.argmax(gains))
+        best = int(np.argmax(np.where(available, _gains(entries, information), -np.inf)))
         chosen.append(best)
         available[best] = False
         information = information + contributions[best]
@@ -161,8 +158,7 @@ def d_optimal_selection(
         for slot in range(count):
             current = log_det(information)
             without = information - contributions[chosen[slot]]
-            gains = _gains(entries, without)
-            gains[~available] = -np.inf
+            gains = np.where(available, _gains(entries, without), -np.inf)
             best = int(np.argmax(gains))
             if log_det(without) + gains[best] > current + 1e-9:
                 available[chosen[slot]] = True

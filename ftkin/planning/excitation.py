@@ -65,15 +65,14 @@ class FourierTrajectory:
         """``q`` [rad], ``dq`` [rad/s], ``ddq`` [rad/s²], each ``(N, nq)``, at ``(N,)`` times
         [s].
         """
-        times = np.asarray(times, dtype=float)
-        omega = 2.0 * np.pi / self.period
-        k = np.arange(1, self.cosine.shape[1] + 1)
-        phase = omega * np.outer(times, k)
+        k_omega = 2.0 * np.pi / self.period * np.arange(1, self.cosine.shape[1] + 1)  # [rad/s]
+        phase = np.outer(np.asarray(times, dtype=float), k_omega)
         cos, sin = np.cos(phase), np.sin(phase)
-        q = self.offsets + (sin / (k * omega)) @ self.cosine.T - (cos / (k * omega)) @ self.sine.T
-        dq = cos @ self.cosine.T + sin @ self.sine.T
-        ddq = (-sin * k * omega) @ self.cosine.T + (cos * k * omega) @ self.sine.T
-        return q, dq, ddq
+        return (
+            self.offsets + (sin / k_omega) @ self.cosine.T - (cos / k_omega) @ self.sine.T,
+            cos @ self.cosine.T + sin @ self.sine.T,
+            (-sin * k_omega) @ self.cosine.T + (cos * k_omega) @ self.sine.T,
+        )
 
 
 @dataclass(frozen=True)
@@ -104,16 +103,14 @@ class ExcitationPlan:
         """Header and ``(N, 1 + 3 nq)`` rows: ``t``, joint positions, then ``<joint>_vel`` and
         ``<joint>_acc``.
         """
-        header = [
+        return [
             "t",
             *self.joint_names,
             *(f"{n}_vel" for n in self.joint_names),
             *(f"{n}_acc" for n in self.joint_names),
-        ]
-        rows = np.column_stack(
+        ], np.column_stack(
             [self.times, self.joint_positions, self.joint_velocities, self.joint_accelerations]
         )
-        return header, rows
 
 
 def _information(arm, q, dq, ddq, noise: SensorNoise) -> np.ndarray:
@@ -122,9 +119,7 @@ def _information(arm, q, dq, ddq, noise: SensorNoise) -> np.ndarray:
     problem = DynamicProblem(
         np.zeros((len(q), 6)), rotations, regressor, noise.channel_std, STANDARD_GRAVITY
     )
-    x = np.zeros(18)
-    x[8] = 1.0
-    jac = problem.whitened_jacobian(x)
+    jac = problem.whitened_jacobian(np.eye(18)[8])  # x: zero but x[8] = 1
     jac = np.delete(jac, [6, 7], axis=1)  # tilt: needs the (unknown) mass; the rest is linear
     return jac.T @ jac
 
@@ -209,7 +204,6 @@ class _Design:
     def __init__(self, arm, spec: ExcitationSpec):
         self.arm, self.spec, self.nq = arm, spec, arm.nq
         self.checker = checker = FeasibilityChecker(arm, spec.constraints)
-        self.period, self.harmonics = spec.period, spec.harmonics
         self.velocity_limits = spec.velocity_fraction * arm.velocity_limits
         self.acceleration_limits = _per_joint(
             spec.acceleration_limit, arm.nq, "acceleration_limit", "rad/s²"
@@ -225,16 +219,16 @@ class _Design:
 
     @property
     def size(self) -> int:
-        return self.nq * (2 * self.harmonics - 2) + self.nq
+        return self.nq * (2 * self.spec.harmonics - 2) + self.nq
 
     def trajectory(self, x: np.ndarray) -> FourierTrajectory:
-        nq, free = self.nq, self.harmonics - 1
+        nq, free = self.nq, self.spec.harmonics - 1
         a = x[: nq * free].reshape(nq, free)
         b = x[nq * free : 2 * nq * free].reshape(nq, free)
-        k = np.arange(1, self.harmonics + 1)
+        k = np.arange(1, self.spec.harmonics + 1)
         cosine = np.column_stack([a, -a.sum(axis=1)])  # Σ a_k = 0: dq(0) = 0
         sine = np.column_stack([b, -(b * k[:-1]).sum(axis=1) / k[-1]])  # Σ k b_k = 0: ddq(0) = 0
-        unscaled = FourierTrajectory(self.period, np.zeros(nq), cosine, sine)
+        unscaled = FourierTrajectory(self.spec.period, np.zeros(nq), cosine, sine)
         q, dq, ddq = unscaled.evaluate(self.grid)
         span = np.maximum(q.max(axis=0) - q.min(axis=0), 1e-12)
         scale = (
@@ -255,12 +249,11 @@ class _Design:
             self.checker.upper - high,
         )
         return FourierTrajectory(
-            self.period, offsets, cosine * scale[:, None], sine * scale[:, None]
+            self.spec.period, offsets, cosine * scale[:, None], sine * scale[:, None]
         )
 
     def violations(self, trajectory: FourierTrajectory, times) -> int:
-        q, _, _ = trajectory.evaluate(times)
-        return sum(self.checker.check(row) is None for row in q)
+        return sum(self.checker.check(row) is None for row in trajectory.evaluate(times)[0])
 
     def log_det(self, trajectory: FourierTrajectory) -> tuple[float, float]:
         """``log det`` and condition number of the trajectory's information on the grid."""
@@ -268,11 +261,11 @@ class _Design:
 
     def cost(self, x: np.ndarray) -> float:
         """What the search minimises: −log det, plus a penalty per grid point off the limits."""
-        trajectory = self.trajectory(x)
+        trajectory, constraints = self.trajectory(x), self.spec.constraints
         value, _ = self.log_det(trajectory)
-        constraints = self.spec.constraints
-        checked = constraints.self_collision or constraints.floor_height is not None
-        penalty = _PENALTY * self.violations(trajectory, self.check_grid) if checked else 0.0
+        penalty = 0.0
+        if constraints.self_collision or constraints.floor_height is not None:
+            penalty = _PENALTY * self.violations(trajectory, self.check_grid)
         return (-value if np.isfinite(value) else 1e6) + penalty
 
 
