@@ -128,19 +128,16 @@ class Arm:
                 f"this model has joints of kinds {kinds} (e.g. continuous): lock them or give them "
                 "limits"
             )
-        self.model = model
-        self.data = model.createData()
-        self.sensor_frame = sensor_frame
+        self.model, self.data, self.sensor_frame = model, model.createData(), sensor_frame
         try:
             self.sensor_frame_id = self.frame_id(sensor_frame)
         except FrameNotFound as error:
             raise FrameNotFound(error.name, error.available, sensor_frame_hint(model)) from None
         self.tool_frame = tool_frame
         self.tool_frame_id = self.frame_id(tool_frame) if tool_frame is not None else None
-        self.urdf_path = urdf_path
-        self.package_dirs = list(package_dirs)
-        self._full_model = full_model
-        self._locked_joint_ids = list(locked_joint_ids)
+        self.urdf_path, self.package_dirs = urdf_path, list(package_dirs)
+        # what geometry() needs to reduce the URDF's geometry like the model (locked joints)
+        self._full_model, self._locked_joint_ids = full_model, list(locked_joint_ids)
         self._reference_configuration = reference_configuration
         self.joint_names = [model.names[i] for i in range(1, model.njoints)]
         self.sensor_mount: SensorMount | None = None  # set by from_urdf when it added the frame
@@ -317,9 +314,12 @@ class Arm:
                 f"reference must be one of {sorted(_REFERENCE_FRAMES)}, got {reference!r}"
             )
         frame_id = self._resolve_frame(frame)
-        q = self.check_configuration(q)
         return pin.computeFrameJacobian(
-            self.model, self.data, q, frame_id, _REFERENCE_FRAMES[reference]
+            self.model,
+            self.data,
+            self.check_configuration(q),
+            frame_id,
+            _REFERENCE_FRAMES[reference],
         )
 
     def random_configurations(

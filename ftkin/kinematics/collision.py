@@ -64,36 +64,26 @@ class SelfCollision:
         ]
 
     def _remove_pairs(self, reference: np.ndarray) -> list[RemovedPair]:
-        objects = self.geometry_model.geometryObjects
-        parents = self.model.parents
+        objects, parents = self.geometry_model.geometryObjects, self.model.parents
+        data = pin.GeometryData(self.geometry_model)
+        pin.computeCollisions(self.model, self.data, self.geometry_model, data, reference, False)
         # Copy the index pairs first: removing while iterating skips pairs.
-        pairs = [(p.first, p.second) for p in self.geometry_model.collisionPairs]
+        pairs = [
+            (pair.first, pair.second, result.isCollision())
+            for pair, result in zip(self.geometry_model.collisionPairs, data.collisionResults)
+        ]
         removed = []
-        for first, second in pairs:
+        for first, second, touching in pairs:
             joint_a, joint_b = objects[first].parentJoint, objects[second].parentJoint
             if joint_a == joint_b:
                 reason = "same rigid body"
             elif parents[joint_a] == joint_b or parents[joint_b] == joint_a:
                 reason = "adjacent links"
+            elif touching:
+                reason = "in contact at the reference configuration"
             else:
                 continue
             removed.append(RemovedPair(objects[first].name, objects[second].name, reason))
-            self.geometry_model.removeCollisionPair(pin.CollisionPair(first, second))
-        data = pin.GeometryData(self.geometry_model)
-        pin.computeCollisions(self.model, self.data, self.geometry_model, data, reference, False)
-        touching = [
-            (pair.first, pair.second)
-            for pair, result in zip(self.geometry_model.collisionPairs, data.collisionResults)
-            if result.isCollision()
-        ]
-        for first, second in touching:
-            removed.append(
-                RemovedPair(
-                    objects[first].name,
-                    objects[second].name,
-                    "in contact at the reference configuration",
-                )
-            )
             self.geometry_model.removeCollisionPair(pin.CollisionPair(first, second))
         return removed
 

@@ -38,6 +38,7 @@ from ..calibration.random_walk import walk_gains, whiten
 from ..exceptions import InvalidInput
 from ..validation import as_float_array, as_in_range
 from .design import log_det
+from .order import nearest_neighbour
 
 SWAPS_PER_ROUND = 64
 """Random pair swaps tried together in one round."""
@@ -112,18 +113,6 @@ def walk_information(jacobians: np.ndarray, gains) -> np.ndarray:
     return np.einsum("...pki,...pkj->...ij", whitened, whitened)
 
 
-def _turning_order(gravity_in_sensor: np.ndarray, start: int) -> np.ndarray:
-    """Greedy order from ``start``: each next pose has gravity most opposite to the last one's."""
-    left = np.ones(len(gravity_in_sensor), dtype=bool)
-    order = [start]
-    left[start] = False
-    for _ in range(len(gravity_in_sensor) - 1):
-        cosines = np.where(left, gravity_in_sensor @ gravity_in_sensor[order[-1]], np.inf)
-        order.append(int(np.argmin(cosines)))
-        left[order[-1]] = False
-    return np.array(order)
-
-
 def drift_robust_order(
     model,
     rotations,
@@ -168,8 +157,10 @@ def drift_robust_order(
     gravity = np.einsum("nji,j->ni", rotations, model.gravity_in_base)
     gravity /= np.linalg.norm(gravity, axis=1, keepdims=True)
     starts = [np.arange(count) if initial_order is None else np.asarray(initial_order)]
+    # Greedy orders where each next pose has gravity most opposite to the last one's.
+    cosines = gravity @ gravity.T
     starts += [
-        _turning_order(gravity, start) for start in (starts[0][0], int(np.argmax(gravity[:, 2])))
+        nearest_neighbour(cosines, start) for start in (starts[0][0], int(np.argmax(gravity[:, 2])))
     ]
 
     def admissible(orders: np.ndarray) -> np.ndarray:

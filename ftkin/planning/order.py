@@ -37,8 +37,7 @@ def unwind_revolute(joint_positions, lower, upper, mask) -> np.ndarray:
     q = np.array(joint_positions, dtype=float)
     turns = np.round(q / (2.0 * np.pi))
     for _ in range(int(np.max(np.abs(turns), initial=0))):
-        step = np.sign(turns) * 2.0 * np.pi
-        shifted = q - step
+        shifted = q - np.sign(turns) * 2.0 * np.pi
         ok = mask & (turns != 0) & (shifted >= lower) & (shifted <= upper)
         q = np.where(ok, shifted, q)
         turns = np.where(ok, turns - np.sign(turns), 0.0 * turns)
@@ -56,7 +55,8 @@ def path_length(distances: np.ndarray, order) -> float:
     return float(np.sum(distances[order[:-1], order[1:]]))
 
 
-def _nearest_neighbour(distances: np.ndarray, start: int) -> list[int]:
+def nearest_neighbour(distances: np.ndarray, start: int) -> list[int]:
+    """Greedy open path from ``start``: next, always the unvisited pose nearest the last one."""
     order, visited = [start], np.zeros(len(distances), dtype=bool)
     visited[start] = True
     for _ in range(len(distances) - 1):
@@ -127,7 +127,7 @@ def short_travel_order(joint_positions) -> np.ndarray:
     for start in sorted(
         set(np.linspace(0, count - 1, min(count, MAX_STARTS)).round().astype(int).tolist())
     ):
-        order = _two_opt(distances, _nearest_neighbour(distances, start))
+        order = _two_opt(distances, nearest_neighbour(distances, start))
         length = path_length(distances, order)
         if length < best_length - 1e-12:
             best, best_length = order, length
