@@ -90,8 +90,10 @@ class UrdfError(FtkinError):
     """
 
     def __init__(self, path: str, reasons: Sequence[str]):
-        message = f"cannot load URDF {path}: " + "; ".join(reasons)
-        super().__init__(message, path=path, reasons=list(reasons))
+        reasons = list(reasons)
+        super().__init__(
+            f"cannot load URDF {path}: " + "; ".join(reasons), path=path, reasons=reasons
+        )
 
 
 class UnobservableParameters(FtkinError):

@@ -66,8 +66,7 @@ class RotationChain:
                 basis = _basis_with_z(axis)
                 steps.append((joint.idx_q, carry @ basis))
                 carry = basis.T
-        tail = carry @ model.frames[frame_id].placement.rotation
-        chain = cls(steps, np.eye(3), tail)
+        chain = cls(steps, np.eye(3), carry @ model.frames[frame_id].placement.rotation)
         if not chain._agrees_with_pinocchio(model, frame_id, tolerance):
             return None
         return chain
@@ -130,10 +129,9 @@ class RotationChain:
         return (current.reshape(-1, 3) @ self._tail).reshape(count, 3, 3)
 
     def _agrees_with_pinocchio(self, model: pin.Model, frame_id: int, tolerance: float) -> bool:
-        rng = np.random.default_rng(0)
         lower = np.clip(model.lowerPositionLimit, -np.pi, np.pi)  # unbounded joints: one turn
         upper = np.maximum(np.clip(model.upperPositionLimit, -np.pi, np.pi), lower)
-        configurations = rng.uniform(lower, upper, size=(4, model.nq))
+        configurations = np.random.default_rng(0).uniform(lower, upper, size=(4, model.nq))
         data = model.createData()
         expected = []
         for configuration in configurations:

@@ -186,8 +186,7 @@ class KinematicsRecord:
                 f"sensor frame {arm.sensor_frame!r}, calibrated with {self.sensor_frame!r}"
             )
         if self.urdf_sha256 is not None and arm.urdf_path is not None:
-            digest = file_sha256(arm.urdf_path)
-            if digest != self.urdf_sha256:
+            if file_sha256(arm.urdf_path) != self.urdf_sha256:
                 problems.append(
                     f"URDF {arm.urdf_path} is not the one calibrated with ({self.urdf}; SHA-256 "
                     "differs)"

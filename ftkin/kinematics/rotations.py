@@ -54,10 +54,14 @@ def matrix_to_euler_zyx(rotation) -> np.ndarray:
     """
     r, single = as_rotation_batch(rotation, "rotation")
     r = r[0] if single else r
-    alpha = np.arctan2(r[..., 1, 0], r[..., 0, 0])
-    beta = np.arcsin(np.clip(-r[..., 2, 0], -1.0, 1.0))
-    gamma = np.arctan2(r[..., 2, 1], r[..., 2, 2])
-    return np.stack([alpha, beta, gamma], axis=-1)
+    return np.stack(
+        [
+            np.arctan2(r[..., 1, 0], r[..., 0, 0]),  # α
+            np.arcsin(np.clip(-r[..., 2, 0], -1.0, 1.0)),  # β
+            np.arctan2(r[..., 2, 1], r[..., 2, 2]),  # γ
+        ],
+        axis=-1,
+    )
 
 
 def quaternion_to_matrix(quaternion_wxyz, atol: float = 1e-3) -> np.ndarray:

@@ -256,5 +256,4 @@ def lock_joints(model: pin.Model, locked_joints: Mapping[str, float]):
         joint_id = model.getJointId(name)
         reference[model.joints[joint_id].idx_q] = float(value)
         ids.append(joint_id)
-    reduced = pin.buildReducedModel(model, ids, reference)
-    return reduced, model, ids, reference
+    return pin.buildReducedModel(model, ids, reference), model, ids, reference

@@ -42,8 +42,8 @@ def information_factors(
     ``k`` is 0, or the number of mount angles when ``estimate_mount`` is ``"yaw"`` (1) or ``"full"``
     (3).
     """
-    jac = mount_jacobian(rotations, gravity_in_base, center_of_mass, estimate_mount)
-    return jac / np.asarray(channel_std, float)[None, :, None] * np.sqrt(readings_per_pose)
+    jacobian = mount_jacobian(rotations, gravity_in_base, center_of_mass, estimate_mount)
+    return jacobian / np.asarray(channel_std, float)[None, :, None] * np.sqrt(readings_per_pose)
 
 
 def log_det(information: np.ndarray):
@@ -156,11 +156,10 @@ def d_optimal_selection(
     for _ in range(max_passes):
         swapped = False
         for slot in range(count):
-            current = log_det(information)
             without = information - contributions[chosen[slot]]
             gains = np.where(available, _gains(entries, without), -np.inf)
             best = int(np.argmax(gains))
-            if log_det(without) + gains[best] > current + 1e-9:
+            if log_det(without) + gains[best] > log_det(information) + 1e-9:
                 available[chosen[slot]] = True
                 available[best] = False
                 chosen[slot] = best

@@ -152,8 +152,10 @@ def drift_robust_order(
     if max_length is not None and distances is None:
         raise InvalidInput("max_length needs the distances between the poses")
     jacobians = model.parameter_jacobian(rotations)
-    variance = np.tile(np.asarray(noise_std, dtype=float) ** 2 / readings_per_pose, (count, 1))
-    gains = walk_gains(np.arange(count) * pose_interval, variance, np.asarray(rate, dtype=float))
+    variance = np.asarray(noise_std, dtype=float) ** 2 / readings_per_pose
+    gains = walk_gains(
+        np.arange(count) * pose_interval, np.tile(variance, (count, 1)), np.asarray(rate, float)
+    )
     gravity = np.einsum("nji,j->ni", rotations, model.gravity_in_base)
     gravity /= np.linalg.norm(gravity, axis=1, keepdims=True)
     starts = [np.arange(count) if initial_order is None else np.asarray(initial_order)]
@@ -181,8 +183,7 @@ def drift_robust_order(
         pairs = np.sort(rng.integers(0, count, size=(SWAPS_PER_ROUND, 2)), axis=1)
         pairs = pairs[pairs[:, 0] != pairs[:, 1]]
         candidates = np.tile(order, (len(pairs), 1))
-        rows = np.arange(len(pairs))[:, None]
-        candidates[rows, pairs] = order[pairs[:, ::-1]]
+        candidates[np.arange(len(pairs))[:, None], pairs] = order[pairs[:, ::-1]]
         values = np.where(
             admissible(candidates),
             log_det(walk_information(jacobians[candidates], gains)),

@@ -105,8 +105,8 @@ class PoseEvaluation:
         """Predicted standard errors [deg] of the mount angles by name (empty without a mount)."""
         if self.mount_covariance is None:
             return {}
-        sigma = np.rad2deg(np.sqrt(np.diag(self.mount_covariance)))
-        return dict(zip(MOUNT_NAMES[self.mount_mode], (float(value) for value in sigma)))
+        sigma = np.rad2deg(np.sqrt(np.diag(self.mount_covariance)))  # [deg]
+        return dict(zip(MOUNT_NAMES[self.mount_mode], sigma.tolist()))
 
     @property
     def pose_count(self) -> int:

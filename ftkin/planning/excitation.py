@@ -115,9 +115,12 @@ class ExcitationPlan:
 
 def _information(arm, q, dq, ddq, noise: SensorNoise) -> np.ndarray:
     rotations, velocities, accelerations = sensor_motion(arm, q, dq, ddq)
-    regressor = body_regressor(velocities, accelerations)
     problem = DynamicProblem(
-        np.zeros((len(q), 6)), rotations, regressor, noise.channel_std, STANDARD_GRAVITY
+        np.zeros((len(q), 6)),
+        rotations,
+        body_regressor(velocities, accelerations),
+        noise.channel_std,
+        STANDARD_GRAVITY,
     )
     jac = problem.whitened_jacobian(np.eye(18)[8])  # x: zero but x[8] = 1
     jac = np.delete(jac, [6, 7], axis=1)  # tilt: needs the (unknown) mass; the rest is linear

@@ -46,8 +46,7 @@ def unwind_revolute(joint_positions, lower, upper, mask) -> np.ndarray:
 
 def joint_distances(joint_positions: np.ndarray) -> np.ndarray:
     """Pairwise joint-space distances ``(N, N)`` [rad] of ``(N, nq)`` configurations."""
-    difference = joint_positions[:, None, :] - joint_positions[None, :, :]
-    return np.sqrt(np.sum(difference**2, axis=-1))
+    return np.linalg.norm(joint_positions[:, None, :] - joint_positions[None, :, :], axis=-1)
 
 
 def path_length(distances: np.ndarray, order) -> float:

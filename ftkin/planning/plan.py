@@ -174,8 +174,9 @@ class PlanSpec:
         """
         parts: dict[type, dict] = {PoseConstraints: {}, ExpectedCalibration: {}, cls: {}}
         for name, value in options.items():
-            owner = next((part for part in parts if name in part.__dataclass_fields__), cls)
-            parts[owner][name] = value
+            parts[next((part for part in parts if name in part.__dataclass_fields__), cls)][
+                name
+            ] = value
         return from_fields(
             cls,
             {
