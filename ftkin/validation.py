@@ -327,6 +327,12 @@ def as_ros_name(value, kind: str, name: str) -> str:
     return value
 
 
+def set_checked(instance, **values) -> None:
+    """Store checked values in the fields of a frozen dataclass (from its ``__post_init__``)."""
+    for name, value in values.items():
+        object.__setattr__(instance, name, value)
+
+
 def from_fields(cls, options: dict, what: str):
     """``cls(**options)``, an unknown keyword named with the known ones (:class:`InvalidInput`)."""
     known = [item.name for item in dataclasses.fields(cls) if item.init]

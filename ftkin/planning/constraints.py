@@ -27,7 +27,7 @@ from ..calibration.mount import MOUNT_NAMES
 from ..exceptions import InvalidInput, UnobservableParameters
 from ..kinematics.collision import SelfCollision
 from ..kinematics.rotations import euler_zyx_to_matrix
-from ..validation import as_in_range
+from ..validation import as_in_range, set_checked
 
 _MOUNT_MODE_BY_SIZE = {12: "none", 13: "yaw", 15: "full"}
 
@@ -56,14 +56,13 @@ class PoseConstraints:
     self_collision: bool = True
 
     def __post_init__(self):
-        values = {
-            "margin": as_in_range(self.margin, "margin", 0.0, 2.0 * np.pi, "rad"),
-            "floor_height": _optional(self.floor_height, "floor_height", 100.0, "m"),
-            "max_tilt": _optional(self.max_tilt, "max_tilt", np.pi, "rad", low=0.0),
-            "joint_ranges": _joint_ranges(self.joint_ranges),
-        }
-        for name, value in values.items():
-            object.__setattr__(self, name, value)
+        set_checked(
+            self,
+            margin=as_in_range(self.margin, "margin", 0.0, 2.0 * np.pi, "rad"),
+            floor_height=_optional(self.floor_height, "floor_height", 100.0, "m"),
+            max_tilt=_optional(self.max_tilt, "max_tilt", np.pi, "rad", low=0.0),
+            joint_ranges=_joint_ranges(self.joint_ranges),
+        )
 
     def describe(self) -> str:
         """One line naming every active constraint (for reports and errors)."""

@@ -29,6 +29,7 @@ from ..validation import (
     as_rotation_batch,
     as_vector,
     from_fields,
+    set_checked,
 )
 from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_options, walk_information
 
@@ -225,15 +226,14 @@ class ExpectedCalibration:
         drift_rate, interval = check_drift_options(
             self.drift_rate, self.pose_interval, self.estimate_mount
         )
-        values = {
-            "model": expected_tool(self.tool_weight, self.center_of_mass),
-            "noise": self.noise if self.noise is not None else SensorNoise.paper(),
-            "readings_per_pose": whole_number(self.readings_per_pose, "readings_per_pose", 1),
-            "drift_rate": drift_rate,
-            "pose_interval": interval,
-        }
-        for name, value in values.items():
-            object.__setattr__(self, name, value)
+        set_checked(
+            self,
+            model=expected_tool(self.tool_weight, self.center_of_mass),
+            noise=self.noise if self.noise is not None else SensorNoise.paper(),
+            readings_per_pose=whole_number(self.readings_per_pose, "readings_per_pose", 1),
+            drift_rate=drift_rate,
+            pose_interval=interval,
+        )
 
 
 def evaluate_poses(

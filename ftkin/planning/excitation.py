@@ -30,7 +30,7 @@ from ..calibration.information import SensorNoise
 from ..calibration.model import STANDARD_GRAVITY
 from ..calibration.regressor import body_regressor, sensor_motion
 from ..exceptions import InvalidInput
-from ..validation import as_positive, from_fields
+from ..validation import as_positive, from_fields, set_checked
 from .constraints import FeasibilityChecker, PoseConstraints
 
 DEFAULT_ACCELERATION_LIMIT = 10.0
@@ -181,16 +181,15 @@ class ExcitationSpec:
         if self.harmonics < 2:
             raise InvalidInput(f"harmonics must be at least 2, got {self.harmonics}")
         constraints = self.constraints if self.constraints is not None else PoseConstraints()
-        values = {
-            "duration": duration,
-            "rate": as_positive(self.rate, "rate"),
-            "period": duration if self.period is None else as_positive(self.period, "period"),
-            "velocity_fraction": as_positive(self.velocity_fraction, "velocity_fraction"),
-            "constraints": dataclasses.replace(constraints, max_tilt=None),
-            "noise": self.noise if self.noise is not None else SensorNoise.paper(),
-        }
-        for name, value in values.items():
-            object.__setattr__(self, name, value)
+        set_checked(
+            self,
+            duration=duration,
+            rate=as_positive(self.rate, "rate"),
+            period=duration if self.period is None else as_positive(self.period, "period"),
+            velocity_fraction=as_positive(self.velocity_fraction, "velocity_fraction"),
+            constraints=dataclasses.replace(constraints, max_tilt=None),
+            noise=self.noise if self.noise is not None else SensorNoise.paper(),
+        )
 
 
 def _per_joint(value, nq: int, name: str, unit: str) -> np.ndarray:

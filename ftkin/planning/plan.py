@@ -27,7 +27,7 @@ import numpy as np
 from ..calibration.observability import check_pose_count
 from ..exceptions import InvalidInput
 from ..progress import Progress
-from ..validation import from_fields
+from ..validation import from_fields, set_checked
 from .constraints import (
     FeasibilityChecker,
     PoseConstraints,
@@ -155,15 +155,14 @@ class PlanSpec:
             raise InvalidInput(f"constraints must be PoseConstraints, got {self.constraints!r}")
         if not isinstance(self.expected, ExpectedCalibration):
             raise InvalidInput(f"expected must be ExpectedCalibration, got {self.expected!r}")
-        values = {
-            "n": n,
-            "seed": whole_number(self.seed, "seed"),
-            "candidates": max(whole_number(self.candidates, "candidates", 1), n),
-            "max_samples": whole_number(self.max_samples, "max_samples", 1),
-            "max_travel_ratio": check_travel_ratio(self.max_travel_ratio, self.expected.drift_rate),
-        }
-        for name, value in values.items():
-            object.__setattr__(self, name, value)
+        set_checked(
+            self,
+            n=n,
+            seed=whole_number(self.seed, "seed"),
+            candidates=max(whole_number(self.candidates, "candidates", 1), n),
+            max_samples=whole_number(self.max_samples, "max_samples", 1),
+            max_travel_ratio=check_travel_ratio(self.max_travel_ratio, self.expected.drift_rate),
+        )
 
     @classmethod
     def from_options(cls, n: int, **options) -> "PlanSpec":
