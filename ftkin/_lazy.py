@@ -15,8 +15,7 @@ def lazy_exports(package: str, exports: dict[str, str], namespace: dict):
         module = exports.get(name)
         if module is None:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
-        value = getattr(importlib.import_module(module, package), name)
-        namespace[name] = value
+        value = namespace[name] = getattr(importlib.import_module(module, package), name)
         return value
 
     def __dir__() -> list[str]:

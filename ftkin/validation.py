@@ -99,8 +99,7 @@ def as_integers(value, name: str, limit: int = MAX_ID) -> np.ndarray:
 def check_finite(array: np.ndarray, name: str) -> None:
     """Raise :class:`InvalidInput` naming the first non-finite entry."""
     if not np.all(np.isfinite(array)):
-        bad = np.argwhere(~np.isfinite(array))[0]
-        index = tuple(int(i) for i in bad)
+        index = tuple(int(i) for i in np.argwhere(~np.isfinite(array))[0])
         raise InvalidInput(
             f"{name} must be finite, found {float(array[index])} at index "
             f"{index if len(index) > 1 else index[0]}"

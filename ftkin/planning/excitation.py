@@ -218,10 +218,7 @@ class _Design:
         self.amplitude = _per_joint(spec.amplitude, arm.nq, "amplitude", "rad")
         self.grid = np.linspace(0.0, spec.period, 120, endpoint=False)
         self.check_grid = np.linspace(0.0, spec.period, 60, endpoint=False)
-
-    @property
-    def size(self) -> int:
-        return self.nq * (2 * self.spec.harmonics - 2) + self.nq
+        self.size = arm.nq * (2 * spec.harmonics - 2) + arm.nq  # free coefficients and offsets
 
     def trajectory(self, x: np.ndarray) -> FourierTrajectory:
         nq, free = self.nq, self.spec.harmonics - 1
