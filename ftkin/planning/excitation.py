@@ -328,13 +328,11 @@ def plan_excitation(arm, spec: ExcitationSpec | float, **options) -> ExcitationP
             "widen them or try more candidates"
         )
     times = np.arange(int(round(spec.duration * spec.rate))) / spec.rate
-    log_det, condition = design.log_det(trajectory)
     return ExcitationPlan(
         trajectory,
         list(arm.joint_names),
         times,
         *trajectory.evaluate(times),
-        log_det,
-        condition,
+        *design.log_det(trajectory),  # log det, condition number
         spec.optimize,
     )
