@@ -50,12 +50,8 @@ class RotationChain:
         differ from Pinocchio's by more than ``tolerance`` on a few seeded
         random configurations.
         """
-        path, joint_id = [], model.frames[frame_id].parentJoint
-        while joint_id > 0:
-            path.append(joint_id)
-            joint_id = model.parents[joint_id]
         steps, carry = [], np.eye(3)
-        for joint_id in reversed(path):
+        for joint_id in list(model.supports[model.frames[frame_id].parentJoint])[1:]:  # root first
             joint = model.joints[joint_id]
             kind = _joint_kind(joint)
             if kind is None:
@@ -67,9 +63,7 @@ class RotationChain:
                 steps.append((joint.idx_q, carry @ basis))
                 carry = basis.T
         chain = cls(steps, np.eye(3), carry @ model.frames[frame_id].placement.rotation)
-        if not chain._agrees_with_pinocchio(model, frame_id, tolerance):
-            return None
-        return chain
+        return chain if chain._agrees_with_pinocchio(model, frame_id, tolerance) else None
 
     def rotations(self, configurations: np.ndarray) -> np.ndarray:
         """``R_BS`` ``(N, 3, 3)`` for validated ``(N, nq)`` float joint positions [rad, m]."""

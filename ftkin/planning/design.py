@@ -76,8 +76,7 @@ def _gains(entries: np.ndarray, information: np.ndarray) -> np.ndarray:
     if value is None:
         lower = np.tril_indices(rows, -1)
         inner[lower[1], lower[0]] = inner[lower]  # the upper triangle, for LU
-        sign, value = np.linalg.slogdet(np.transpose(inner, (2, 0, 1)))
-        return np.where(sign > 0, value, -np.inf)
+        return log_det(np.transpose(inner, (2, 0, 1)))
     return value
 
 
