@@ -201,8 +201,8 @@ def _all_rotations(array: np.ndarray, atol: float) -> bool:
     for start in range(0, len(array), _BLOCK):
         block = array[start : start + _BLOCK]
         c0, c1, c2 = block[:, :, 0], block[:, :, 1], block[:, :, 2]
-        norms = [np.einsum("nj,nj->n", a, a) for a in (c0, c1, c2)]
-        products = [np.einsum("nj,nj->n", a, b) for a, b in ((c0, c1), (c0, c2), (c1, c2))]
+        norms = (np.einsum("nj,nj->n", a, a) for a in (c0, c1, c2))  # computed as checked
+        products = (np.einsum("nj,nj->n", a, b) for a, b in ((c0, c1), (c0, c2), (c1, c2)))
         if not (
             all(((1.0 - atol <= norm) & (norm <= 1.0 + atol)).all() for norm in norms)
             and all((np.abs(product, out=product) <= atol).all() for product in products)
