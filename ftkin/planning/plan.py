@@ -20,7 +20,7 @@ reaches it, and lowers the other parameters' errors with it.
 """
 
 import functools
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -173,9 +173,8 @@ class PlanSpec:
         """
         parts: dict[type, dict] = {PoseConstraints: {}, ExpectedCalibration: {}, cls: {}}
         for name, value in options.items():
-            parts[next((part for part in parts if name in part.__dataclass_fields__), cls)][
-                name
-            ] = value
+            owner = next((p for p in parts if name in {f.name for f in fields(p) if f.init}), cls)
+            parts[owner][name] = value
         return from_fields(
             cls,
             {
