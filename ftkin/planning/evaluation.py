@@ -54,7 +54,11 @@ def expected_tool(
     """The tool a plan is made for: weight [N] hanging straight down the base z axis, COM [m, sensor
     frame].
     """
-    weight = PAPER_TOOL_WEIGHT if tool_weight is None else tool_weight
+    weight = (
+        PAPER_TOOL_WEIGHT
+        if tool_weight is None
+        else as_in_range(tool_weight, "tool_weight", 1e-6, 1e6, "N")
+    )
     com = as_vector(
         PAPER_CENTER_OF_MASS if center_of_mass is None else center_of_mass, 3, "center_of_mass"
     )
@@ -62,7 +66,7 @@ def expected_tool(
         raise InvalidInput(
             f"center_of_mass must lie within 10 m of the sensor, got {com.tolist()} m"
         )
-    return SensorModel.from_tool(as_in_range(weight, "tool_weight", 1e-6, 1e6, "N") / g, com, g=g)
+    return SensorModel.from_tool(weight / g, com, g=g)
 
 
 @dataclass(frozen=True)
