@@ -146,8 +146,7 @@ def as_batch(value, width: int, name: str) -> tuple[np.ndarray, bool]:
     """
     array = as_float_array(value, name)
     single = array.ndim == 1
-    if single:
-        array = array[np.newaxis, :]
+    array = array[np.newaxis, :] if single else array
     if array.ndim != 2 or array.shape[1] != width:
         raise InvalidInput(
             f"{name} must have shape ({width},) or (N, {width}), got {np.shape(value)}"
@@ -167,8 +166,7 @@ def as_rotation_batch(
     """
     array = as_float_array(value, name)
     single = array.ndim == 2
-    if single:
-        array = array[np.newaxis]
+    array = array[np.newaxis] if single else array
     if array.ndim != 3 or array.shape[1:] != (3, 3):
         raise InvalidInput(f"{name} must have shape (3, 3) or (N, 3, 3), got {np.shape(value)}")
     if not _all_rotations(array, atol):  # the detailed error names the first bad matrix

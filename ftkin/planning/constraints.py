@@ -80,9 +80,11 @@ class PoseConstraints:
 
 def _optional(value, name: str, bound: float, unit: str, low: float | None = None):
     """None, or a finite float within ``[low, bound]`` (``low`` default ``-bound``)."""
-    if value is None:
-        return None
-    return as_in_range(value, name, -bound if low is None else low, bound, unit)
+    return (
+        None
+        if value is None
+        else as_in_range(value, name, -bound if low is None else low, bound, unit)
+    )
 
 
 def _joint_ranges(value) -> tuple[tuple[str, float, float], ...]:

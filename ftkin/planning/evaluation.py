@@ -275,10 +275,10 @@ def evaluate_poses(
             if pose_times is None
             else _pose_times(pose_times, len(rotations))
         )
-        gains = walk_gains(
-            times, np.tile(noise.channel_std**2 / readings, (len(rotations), 1)), drift_rate
+        variance = np.tile(noise.channel_std**2 / readings, (len(rotations), 1))
+        information = walk_information(
+            model.parameter_jacobian(rotations), walk_gains(times, variance, drift_rate)
         )
-        information = walk_information(model.parameter_jacobian(rotations), gains)
     else:
         information = fisher_information(model, rotations, noise, readings, expected.estimate_mount)
     if expected.estimate_mount != "none":

@@ -180,14 +180,15 @@ class ExcitationSpec:
         duration = as_positive(self.duration, "duration")
         if self.harmonics < 2:
             raise InvalidInput(f"harmonics must be at least 2, got {self.harmonics}")
-        constraints = self.constraints if self.constraints is not None else PoseConstraints()
         set_checked(
             self,
             duration=duration,
             rate=as_positive(self.rate, "rate"),
             period=duration if self.period is None else as_positive(self.period, "period"),
             velocity_fraction=as_positive(self.velocity_fraction, "velocity_fraction"),
-            constraints=dataclasses.replace(constraints, max_tilt=None),
+            constraints=dataclasses.replace(
+                PoseConstraints() if self.constraints is None else self.constraints, max_tilt=None
+            ),
             noise=self.noise if self.noise is not None else SensorNoise.paper(),
         )
 
