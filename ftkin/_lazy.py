@@ -5,8 +5,6 @@ A package lists ``{name: relative module}`` and gets the module-level
 name is first used, so ``import ftkin`` (and the CLI's start) stay light.
 """
 
-from __future__ import annotations
-
 import importlib
 
 
@@ -17,8 +15,7 @@ def lazy_exports(package: str, exports: dict[str, str], namespace: dict):
         module = exports.get(name)
         if module is None:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
-        value = getattr(importlib.import_module(module, package), name)
-        namespace[name] = value
+        value = namespace[name] = getattr(importlib.import_module(module, package), name)
         return value
 
     def __dir__() -> list[str]:

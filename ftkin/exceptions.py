@@ -9,13 +9,18 @@ Errors from numpy, Pinocchio or the file system are wrapped at ftkin's
 boundary; they should never reach a user as a bare traceback.
 """
 
-from __future__ import annotations
-
 from collections.abc import Sequence
 
 
 class FtkinError(Exception):
-    """Base class of every error ftkin raises on purpose."""
+    """Base class of every error ftkin raises on purpose.
+
+    Keywords after the message become the attributes a subclass documents (its data).
+    """
+
+    def __init__(self, *args, **data):
+        super().__init__(*args)
+        self.__dict__.update(data)
 
 
 class InvalidInput(FtkinError, ValueError):
@@ -30,16 +35,10 @@ class InvalidSamples(InvalidInput):
         line: 1-based line number in the file when known, else None.
     """
 
-    def __init__(self, message: str, source: str | None = None, line: int | None = None):
-        where = ""
-        if source is not None:
-            where = f"{source}"
-            if line is not None:
-                where += f", line {line}"
-            where += ": "
-        super().__init__(where + message)
-        self.source = source
-        self.line = line
+    def __init__(self, message: str, source: str | None = None, line: int | None = None, **data):
+        where = "" if line is None else f", line {line}"
+        where = "" if source is None else f"{source}{where}: "
+        super().__init__(where + message, source=source, line=line, **data)
 
 
 class ConventionMistake(InvalidSamples):
@@ -52,9 +51,7 @@ class ConventionMistake(InvalidSamples):
     """
 
     def __init__(self, message: str, source: str | None = None, reading: str = "", fix: str = ""):
-        super().__init__(message, source)
-        self.reading = reading
-        self.fix = fix
+        super().__init__(message, source, reading=reading, fix=fix)
 
 
 class FrameNotFound(FtkinError, KeyError):
@@ -67,10 +64,7 @@ class FrameNotFound(FtkinError, KeyError):
     """
 
     def __init__(self, name: str, available: Sequence[str], hint: str = ""):
-        self.name = name
-        self.available = list(available)
-        self.hint = hint
-        super().__init__(name)
+        super().__init__(name, name=name, available=list(available), hint=hint)
 
     def __str__(self) -> str:
         import difflib
@@ -96,9 +90,10 @@ class UrdfError(FtkinError):
     """
 
     def __init__(self, path: str, reasons: Sequence[str]):
-        self.path = path
-        self.reasons = list(reasons)
-        super().__init__(f"cannot load URDF {path}: " + "; ".join(self.reasons))
+        reasons = list(reasons)
+        super().__init__(
+            f"cannot load URDF {path}: " + "; ".join(reasons), path=path, reasons=reasons
+        )
 
 
 class UnobservableParameters(FtkinError):
@@ -111,10 +106,12 @@ class UnobservableParameters(FtkinError):
     """
 
     def __init__(self, names: Sequence[str], reason: str, singular_values=None):
-        self.names = list(names)
-        self.reason = reason
-        self.singular_values = singular_values
-        super().__init__("the poses cannot determine " + ", ".join(self.names) + f": {reason}")
+        super().__init__(
+            "the poses cannot determine " + ", ".join(names) + f": {reason}",
+            names=list(names),
+            reason=reason,
+            singular_values=singular_values,
+        )
 
 
 class CalibrationFileError(FtkinError):
@@ -126,21 +123,19 @@ class CalibrationFileError(FtkinError):
     """
 
     def __init__(self, path: str, message: str, key: str | None = None):
-        self.path = path
-        self.key = key
         where = f"{path}" + (f", key {key!r}" if key is not None else "")
-        super().__init__(f"{where}: {message}")
+        super().__init__(f"{where}: {message}", path=path, key=key)
 
 
 class MissingDependency(FtkinError, ImportError):
     """An optional dependency is not installed; the message says which extra."""
 
     def __init__(self, package: str, extra: str, purpose: str):
-        self.package = package
-        self.extra = extra
         super().__init__(
             f"{purpose} needs the optional package {package!r}; "
-            f"install it with: pip install 'ftkin[{extra}]'"
+            f"install it with: pip install 'ftkin[{extra}]'",
+            package=package,
+            extra=extra,
         )
 
 
@@ -167,11 +162,13 @@ class SuspectConvention(FtkinError):
         sensor_sign: int | None = None,
         flip_axis: str | None = None,
     ):
-        self.explanations = list(explanations)
-        self.fixes = list(fixes)
-        self.sensor_sign = sensor_sign
-        self.flip_axis = flip_axis
-        super().__init__(message)
+        super().__init__(
+            message,
+            explanations=list(explanations),
+            fixes=list(fixes),
+            sensor_sign=sensor_sign,
+            flip_axis=flip_axis,
+        )
 
 
 class RobotError(FtkinError):
@@ -183,9 +180,8 @@ class RobotError(FtkinError):
     """
 
     def __init__(self, message: str, host: str | None = None, driver_message: str = ""):
-        self.host = host
-        self.driver_message = driver_message
-        super().__init__(message + (f" ({driver_message})" if driver_message else ""))
+        message += f" ({driver_message})" if driver_message else ""
+        super().__init__(message, host=host, driver_message=driver_message)
 
 
 class RobotConnectionLost(RobotError):
@@ -204,8 +200,7 @@ class SensorError(FtkinError):
     """
 
     def __init__(self, kind: str, message: str):
-        self.kind = kind
-        super().__init__(message)
+        super().__init__(message, kind=kind)
 
 
 class NonPhysicalPayload(InvalidInput):
@@ -216,8 +211,7 @@ class NonPhysicalPayload(InvalidInput):
     """
 
     def __init__(self, message: str, setting: str = ""):
-        self.setting = setting
-        super().__init__(message)
+        super().__init__(message, setting=setting)
 
 
 class SessionInterrupted(FtkinError):
@@ -231,12 +225,12 @@ class SessionInterrupted(FtkinError):
     """
 
     def __init__(self, reason: str, poses_recorded: int, poses_total: int, samples_path):
-        self.reason = reason
-        self.poses_recorded = poses_recorded
-        self.poses_total = poses_total
-        self.samples_path = samples_path
         super().__init__(
             f"session stopped after {poses_recorded} of {poses_total} poses: {reason}; the "
             f"samples recorded so far are in {samples_path}: run again with resume=True "
-            "(--resume) to finish"
+            "(--resume) to finish",
+            reason=reason,
+            poses_recorded=poses_recorded,
+            poses_total=poses_total,
+            samples_path=samples_path,
         )

@@ -4,8 +4,6 @@ Used for anything that can take more than a second (planning, bag reading).
 Draws on stderr only when it is a TTY, so logs and pipes stay clean.
 """
 
-from __future__ import annotations
-
 import sys
 
 
@@ -31,7 +29,7 @@ class Progress:
         self.count = 0
         self._bar = None
 
-    def __enter__(self) -> Progress:
+    def __enter__(self) -> "Progress":
         if self.enabled:
             from tqdm import tqdm
 

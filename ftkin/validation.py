@@ -4,8 +4,6 @@ Library functions call these once at their entry, so the numerical code behind
 them can assume clean ``float64`` arrays of the right shape.
 """
 
-from __future__ import annotations
-
 import dataclasses
 import re
 
@@ -101,8 +99,7 @@ def as_integers(value, name: str, limit: int = MAX_ID) -> np.ndarray:
 def check_finite(array: np.ndarray, name: str) -> None:
     """Raise :class:`InvalidInput` naming the first non-finite entry."""
     if not np.all(np.isfinite(array)):
-        bad = np.argwhere(~np.isfinite(array))[0]
-        index = tuple(int(i) for i in bad)
+        index = tuple(int(i) for i in np.argwhere(~np.isfinite(array))[0])
         raise InvalidInput(
             f"{name} must be finite, found {float(array[index])} at index "
             f"{index if len(index) > 1 else index[0]}"
@@ -149,8 +146,7 @@ def as_batch(value, width: int, name: str) -> tuple[np.ndarray, bool]:
     """
     array = as_float_array(value, name)
     single = array.ndim == 1
-    if single:
-        array = array[np.newaxis, :]
+    array = array[np.newaxis, :] if single else array
     if array.ndim != 2 or array.shape[1] != width:
         raise InvalidInput(
             f"{name} must have shape ({width},) or (N, {width}), got {np.shape(value)}"
@@ -170,12 +166,21 @@ def as_rotation_batch(
     """
     array = as_float_array(value, name)
     single = array.ndim == 2
-    if single:
-        array = array[np.newaxis]
+    array = array[np.newaxis] if single else array
     if array.ndim != 3 or array.shape[1:] != (3, 3):
         raise InvalidInput(f"{name} must have shape (3, 3) or (N, 3, 3), got {np.shape(value)}")
-    if not _all_rotations(array, atol):
-        _raise_not_rotation(array, name, atol)
+    if not _all_rotations(array, atol):  # the detailed error names the first bad matrix
+        check_finite(array, name)
+        gram_error = np.abs(np.einsum("nji,njk->nik", array, array) - np.eye(3)).max(axis=(1, 2))
+        det = np.linalg.det(array)
+        bad = np.flatnonzero((gram_error > atol) | (det < 0.0))
+        if bad.size:  # none: a matrix on the tolerance's edge, rounded the other way: accepted
+            i = int(bad[0])
+            raise InvalidInput(
+                f"{name}[{i}] is not a rotation matrix (|R^T R - I| = {gram_error[i]:.2e}, det = "
+                f"{det[i]:.4f}); "
+                "expected an orthonormal matrix with determinant +1"
+            )
     return array, single
 
 
@@ -194,15 +199,12 @@ def _all_rotations(array: np.ndarray, atol: float) -> bool:
     for start in range(0, len(array), _BLOCK):
         block = array[start : start + _BLOCK]
         c0, c1, c2 = block[:, :, 0], block[:, :, 1], block[:, :, 2]
-        low, high = 1.0 - atol, 1.0 + atol
-        ok = True
-        for a, b in ((c0, c0), (c1, c1), (c2, c2)):
-            norm = _column_dot(a, b)
-            ok = ok and bool(((low <= norm) & (norm <= high)).all())
-        for a, b in ((c0, c1), (c0, c2), (c1, c2)):
-            product = _column_dot(a, b)
-            ok = ok and bool((np.abs(product, out=product) <= atol).all())
-        if not ok:
+        norms = (np.einsum("nj,nj->n", a, a) for a in (c0, c1, c2))  # computed as checked
+        products = (np.einsum("nj,nj->n", a, b) for a, b in ((c0, c1), (c0, c2), (c1, c2)))
+        if not (
+            all(((1.0 - atol <= norm) & (norm <= 1.0 + atol)).all() for norm in norms)
+            and all((np.abs(product, out=product) <= atol).all() for product in products)
+        ):
             return False
         det = (
             (c0[:, 1] * c1[:, 2] - c0[:, 2] * c1[:, 1]) * c2[:, 0]
@@ -212,31 +214,6 @@ def _all_rotations(array: np.ndarray, atol: float) -> bool:
         if not (det > 0.0).all():
             return False
     return True
-
-
-def _column_dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise dot products of two ``(N, 3)`` arrays."""
-    return np.einsum("nj,nj->n", a, b)
-
-
-def _raise_not_rotation(array: np.ndarray, name: str, atol: float) -> None:
-    """The detailed error for a batch :func:`_all_rotations` rejected (names the first bad matrix).
-
-    Returns without raising only for a matrix exactly on the tolerance's edge
-    that the two computations round differently.
-    """
-    check_finite(array, name)
-    gram_error = np.abs(np.einsum("nji,njk->nik", array, array) - np.eye(3)).max(axis=(1, 2))
-    det = np.linalg.det(array)
-    bad = np.flatnonzero((gram_error > atol) | (det < 0.0))
-    if not bad.size:  # a matrix on the tolerance's edge, rounded the other way: accept it
-        return
-    i = int(bad[0])
-    raise InvalidInput(
-        f"{name}[{i}] is not a rotation matrix (|R^T R - I| = {gram_error[i]:.2e}, det = "
-        f"{det[i]:.4f}); "
-        "expected an orthonormal matrix with determinant +1"
-    )
 
 
 def as_positive(value, name: str) -> float:
@@ -253,17 +230,12 @@ def as_in_range(value, name: str, low: float, high: float, unit: str = "") -> fl
     Bounds keep physically absurd inputs (a 1e308 N tool, a 1e-300 N noise)
     out of the numerics, where they would overflow instead of meaning anything.
     """
-    number = as_positive(value, name) if low > 0 else _finite(value, name)
+    number = as_positive(value, name) if low > 0 else as_real(value, name)
+    if not np.isfinite(number):
+        raise InvalidInput(f"{name} must be finite, got {value!r}")
     if not low <= number <= high:
         suffix = f" {unit}" if unit else ""
         raise InvalidInput(f"{name} must be between {low:g} and {high:g}{suffix}, got {number:g}")
-    return number
-
-
-def _finite(value, name: str) -> float:
-    number = as_real(value, name)
-    if not np.isfinite(number):
-        raise InvalidInput(f"{name} must be finite, got {value!r}")
     return number
 
 
@@ -350,6 +322,12 @@ def as_ros_name(value, kind: str, name: str) -> str:
             f"{name} {value!r} is not a valid ROS {kind} name: expected {rule}, no '__'"
         )
     return value
+
+
+def set_checked(instance, **values) -> None:
+    """Store checked values in the fields of a frozen dataclass (from its ``__post_init__``)."""
+    for name, value in values.items():
+        object.__setattr__(instance, name, value)
 
 
 def from_fields(cls, options: dict, what: str):

@@ -5,10 +5,9 @@
 the URDF's root (Pinocchio's world frame).
 """
 
-from __future__ import annotations
-
 import logging
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +16,6 @@ import pinocchio as pin
 from ..exceptions import FrameNotFound, InvalidInput, UrdfError
 from ..validation import as_batch, as_vector
 from .chain import RotationChain
-from .sensor_frame import SensorMount, add_sensor_frame
 from .urdf_loading import (
     build_geometry,
     build_model,
@@ -29,14 +27,55 @@ from .urdf_loading import (
 logger = logging.getLogger(__name__)
 
 BUNDLED_URDF_NAME = "ftkin_c4.urdf"
-_BATCH_MINIMUM = (
-    16  # batches from this size use numpy kinematics (below it Pinocchio per row is as fast)
-)
+_BATCH_MINIMUM = 16  # batches from this size use numpy kinematics (below: Pinocchio per row)
 _REFERENCE_FRAMES = {
     "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
     "local": pin.ReferenceFrame.LOCAL,
     "world": pin.ReferenceFrame.WORLD,
 }
+
+
+@dataclass(frozen=True)
+class SensorMount:
+    """Where to add a sensor frame when the URDF has none.
+
+    Attributes:
+        parent_frame: Existing frame (link) the sensor is bolted to, e.g. ``tool0``.
+        translation: Sensor origin in the parent frame [m].
+        rpy: Sensor orientation in the parent frame, roll-pitch-yaw [rad]
+            (``R = Rz(yaw) Ry(pitch) Rx(roll)``, the URDF convention).
+    """
+
+    parent_frame: str
+    translation: Sequence[float] = (0.0, 0.0, 0.0)
+    rpy: Sequence[float] = (0.0, 0.0, 0.0)
+
+    def placement(self) -> pin.SE3:
+        """Sensor placement relative to the parent frame."""
+        translation = as_vector(self.translation, 3, "sensor mount translation")
+        rpy = as_vector(self.rpy, 3, "sensor mount rpy")
+        return pin.SE3(pin.rpy.rpyToMatrix(*rpy), translation)
+
+
+def add_sensor_frame(model: pin.Model, name: str, mount: SensorMount) -> None:
+    """Add frame ``name`` at ``mount`` (relative to its parent frame) to ``model``, in place.
+
+    Raises:
+        InvalidInput: ``name`` exists already.
+        FrameNotFound: the parent frame is not in the model.
+    """
+    if model.existFrame(name):
+        raise InvalidInput(
+            f"frame {name!r} already exists in the model; choose another sensor frame name"
+        )
+    if not model.existFrame(mount.parent_frame):
+        raise FrameNotFound(mount.parent_frame, [frame.name for frame in model.frames])
+    parent_id = model.getFrameId(mount.parent_frame)
+    parent = model.frames[parent_id]
+    placement = parent.placement * mount.placement()
+    model.addFrame(
+        pin.Frame(name, parent.parentJoint, parent_id, placement, pin.FrameType.OP_FRAME), False
+    )
 
 
 def bundled_urdf_path(relative: str = BUNDLED_URDF_NAME) -> Path:
@@ -83,36 +122,25 @@ class Arm:
         reference_configuration: np.ndarray | None = None,
     ):
         if model.nq != model.nv:
-            kinds = sorted(
-                {
-                    model.joints[i].shortname()
-                    for i in range(1, model.njoints)
-                    if model.joints[i].nq != model.joints[i].nv
-                }
-            )
+            kinds = sorted({joint.shortname() for joint in model.joints if joint.nq != joint.nv})
             raise InvalidInput(
                 "ftkin needs one coordinate per joint (revolute or prismatic); "
                 f"this model has joints of kinds {kinds} (e.g. continuous): lock them or give them "
                 "limits"
             )
-        self.model = model
-        self.data = model.createData()
-        self.sensor_frame = sensor_frame
+        self.model, self.data, self.sensor_frame = model, model.createData(), sensor_frame
         try:
             self.sensor_frame_id = self.frame_id(sensor_frame)
         except FrameNotFound as error:
             raise FrameNotFound(error.name, error.available, sensor_frame_hint(model)) from None
         self.tool_frame = tool_frame
         self.tool_frame_id = self.frame_id(tool_frame) if tool_frame is not None else None
-        self.urdf_path = urdf_path
-        self.package_dirs = list(package_dirs)
-        self._full_model = full_model
-        self._locked_joint_ids = list(locked_joint_ids)
+        self.urdf_path, self.package_dirs = urdf_path, list(package_dirs)
+        # what geometry() needs to reduce the URDF's geometry like the model (locked joints)
+        self._full_model, self._locked_joint_ids = full_model, list(locked_joint_ids)
         self._reference_configuration = reference_configuration
         self.joint_names = [model.names[i] for i in range(1, model.njoints)]
-        self.sensor_mount: SensorMount | None = (
-            None  # set by from_urdf when the sensor frame was added
-        )
+        self.sensor_mount: SensorMount | None = None  # set by from_urdf when it added the frame
         self.robot_name: str | None = None  # set by load_robot
         self.mount_rotation: np.ndarray | None = None  # R_M, set by mounting.mounted_arm
         self._geometry: dict[str, pin.GeometryModel] = {}
@@ -129,7 +157,7 @@ class Arm:
         sensor_mount: SensorMount | None = None,
         package_dirs: Sequence[str] = (),
         locked_joints: Mapping[str, float] | None = None,
-    ) -> Arm:
+    ) -> "Arm":
         """Load any URDF.
 
         Args:
@@ -153,7 +181,6 @@ class Arm:
         model = build_model(path)
         if sensor_mount is not None:
             add_sensor_frame(model, sensor_frame, sensor_mount)
-        full_model, locked_ids, reference = None, [], None
         if locked_joints is None:
             locked_joints = joints_beyond_frame(model, sensor_frame)
             if locked_joints:
@@ -165,23 +192,13 @@ class Arm:
                     sensor_frame,
                     ", ".join(f"{name} at {value:g}" for name, value in locked_joints.items()),
                 )
-        if locked_joints:
-            full_model, model, locked_ids, reference = lock_joints(model, locked_joints)
-        arm = cls(
-            model,
-            sensor_frame,
-            tool_frame,
-            path.resolve(),
-            package_dirs,
-            full_model,
-            locked_ids,
-            reference,
-        )
+        locked = lock_joints(model, locked_joints) if locked_joints else (model,)
+        arm = cls(locked[0], sensor_frame, tool_frame, path.resolve(), package_dirs, *locked[1:])
         arm.sensor_mount = sensor_mount
         return arm
 
     @classmethod
-    def default(cls, tool_frame: str | None = "tool") -> Arm:
+    def default(cls, tool_frame: str | None = "tool") -> "Arm":
         """The bundled six-axis arm, sensor frame ``ft_sensor``, tool frame ``tool``."""
         return cls.from_urdf(bundled_urdf_path(), "ft_sensor", tool_frame)
 
@@ -249,12 +266,10 @@ class Arm:
 
     def rotations_unchecked(self, configurations: np.ndarray) -> np.ndarray:
         """``R_BS`` ``(N, 3, 3)`` for validated ``(N, nq)`` float joint positions."""
-        chain = self._sensor_chain(len(configurations))
-        if chain is not None:
-            return chain.rotations(configurations)
-        return np.array([self.sensor_rotation_unchecked(q).copy() for q in configurations]).reshape(
-            -1, 3, 3
-        )
+        if len(configurations) >= _BATCH_MINIMUM and self._sensor_chain() is not None:
+            return self._chain.rotations(configurations)
+        rotations = [self.sensor_rotation_unchecked(q).copy() for q in configurations]
+        return np.array(rotations).reshape(-1, 3, 3)
 
     def vectors_in_sensor_unchecked(
         self, configurations: np.ndarray, vector_in_base: np.ndarray
@@ -262,17 +277,14 @@ class Arm:
         """``R_BS(q)ᵀ v`` ``(N, 3)``: a base-frame vector in the sensor frame, for validated ``(N,
         nq)`` angles.
         """
-        chain = self._sensor_chain(len(configurations))
-        if chain is not None:
-            return chain.transposed_times(configurations, vector_in_base)
+        if len(configurations) >= _BATCH_MINIMUM and self._sensor_chain() is not None:
+            return self._chain.transposed_times(configurations, vector_in_base)
         return np.einsum("nji,j->ni", self.rotations_unchecked(configurations), vector_in_base)
 
-    def _sensor_chain(self, count: int) -> RotationChain | None:
-        if (
-            count >= _BATCH_MINIMUM and self._chain is False
-        ):  # built on first use; None: not a revolute/prismatic chain
+    def _sensor_chain(self) -> RotationChain | None:
+        if self._chain is False:  # built on first use; None: not a revolute/prismatic chain
             self._chain = RotationChain.from_model(self.model, self.sensor_frame_id)
-        return self._chain if count >= _BATCH_MINIMUM else None
+        return self._chain
 
     def frame_placement(self, q, frame: str = "sensor") -> tuple[np.ndarray, np.ndarray]:
         """Rotation ``(3, 3)`` (frame to base) and position ``(3,)`` [m] of a frame in the base
@@ -302,17 +314,19 @@ class Arm:
                 f"reference must be one of {sorted(_REFERENCE_FRAMES)}, got {reference!r}"
             )
         frame_id = self._resolve_frame(frame)
-        q = self.check_configuration(q)
         return pin.computeFrameJacobian(
-            self.model, self.data, q, frame_id, _REFERENCE_FRAMES[reference]
+            self.model,
+            self.data,
+            self.check_configuration(q),
+            frame_id,
+            _REFERENCE_FRAMES[reference],
         )
 
     def random_configurations(
         self, count: int, rng: np.random.Generator, margin: float = 0.0
     ) -> np.ndarray:
         """Uniform random configurations within the joint limits shrunk by ``margin`` [rad]."""
-        lower, upper = self.lower_limits + margin, self.upper_limits - margin
-        return rng.uniform(lower, upper, size=(count, self.nq))
+        return rng.uniform(self.lower_limits + margin, self.upper_limits - margin, (count, self.nq))
 
     # -------------------------------------------------------------- geometry
     def geometry(self, kind: str = "collision") -> pin.GeometryModel:
@@ -326,14 +340,13 @@ class Arm:
         if kind not in self._geometry:
             if self.urdf_path is None:
                 raise InvalidInput("this Arm was not loaded from a URDF file: no geometry")
-            base_model = self._full_model if self._full_model is not None else self.model
-            geometry = build_geometry(base_model, self.urdf_path, kind, self.package_dirs)
-            if self._full_model is not None:
+            full = self._full_model
+            geometry = build_geometry(
+                self.model if full is None else full, self.urdf_path, kind, self.package_dirs
+            )
+            if full is not None:
                 _, geometry = pin.buildReducedModel(
-                    self._full_model,
-                    geometry,
-                    self._locked_joint_ids,
-                    self._reference_configuration,
+                    full, geometry, self._locked_joint_ids, self._reference_configuration
                 )
             self._geometry[kind] = geometry
         return self._geometry[kind]

@@ -13,8 +13,6 @@ and ``Rz(θ)`` mixes two columns. A prismatic joint does not rotate. The result
 is checked against Pinocchio on a few configurations when the chain is built.
 """
 
-from __future__ import annotations
-
 import numpy as np
 import pinocchio as pin
 
@@ -44,7 +42,7 @@ class RotationChain:
     @classmethod
     def from_model(
         cls, model: pin.Model, frame_id: int, tolerance: float = 1e-12
-    ) -> RotationChain | None:
+    ) -> "RotationChain | None":
         """The chain from the root to frame ``frame_id``, or None if a joint on it is neither
         revolute nor prismatic.
 
@@ -52,12 +50,8 @@ class RotationChain:
         differ from Pinocchio's by more than ``tolerance`` on a few seeded
         random configurations.
         """
-        path, joint_id = [], model.frames[frame_id].parentJoint
-        while joint_id > 0:
-            path.append(joint_id)
-            joint_id = model.parents[joint_id]
         steps, carry = [], np.eye(3)
-        for joint_id in reversed(path):
+        for joint_id in list(model.supports[model.frames[frame_id].parentJoint])[1:]:  # root first
             joint = model.joints[joint_id]
             kind = _joint_kind(joint)
             if kind is None:
@@ -68,11 +62,8 @@ class RotationChain:
                 basis = _basis_with_z(axis)
                 steps.append((joint.idx_q, carry @ basis))
                 carry = basis.T
-        tail = carry @ model.frames[frame_id].placement.rotation
-        chain = cls(steps, np.eye(3), tail)
-        if not chain._agrees_with_pinocchio(model, frame_id, tolerance):
-            return None
-        return chain
+        chain = cls(steps, np.eye(3), carry @ model.frames[frame_id].placement.rotation)
+        return chain if chain._agrees_with_pinocchio(model, frame_id, tolerance) else None
 
     def rotations(self, configurations: np.ndarray) -> np.ndarray:
         """``R_BS`` ``(N, 3, 3)`` for validated ``(N, nq)`` float joint positions [rad, m]."""
@@ -132,10 +123,9 @@ class RotationChain:
         return (current.reshape(-1, 3) @ self._tail).reshape(count, 3, 3)
 
     def _agrees_with_pinocchio(self, model: pin.Model, frame_id: int, tolerance: float) -> bool:
-        rng = np.random.default_rng(0)
         lower = np.clip(model.lowerPositionLimit, -np.pi, np.pi)  # unbounded joints: one turn
         upper = np.maximum(np.clip(model.upperPositionLimit, -np.pi, np.pi), lower)
-        configurations = rng.uniform(lower, upper, size=(4, model.nq))
+        configurations = np.random.default_rng(0).uniform(lower, upper, size=(4, model.nq))
         data = model.createData()
         expected = []
         for configuration in configurations:

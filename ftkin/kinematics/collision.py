@@ -17,8 +17,6 @@ do (MoveIt's setup assistant, Pinocchio's SRDF ``disable_collisions``):
 The geometry model is a copy, so the arm's cached model stays untouched.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,11 +45,11 @@ class SelfCollision:
         self.data = arm.model.createData()
         self.geometry_model = pin.GeometryModel(arm.geometry("collision"))
         self.geometry_model.addAllCollisionPairs()
-        reference = (
-            default_reference_configuration(arm)
-            if reference_configuration is None
-            else arm.check_configuration(reference_configuration)
-        )
+        if reference_configuration is None:  # zero where the limits allow it, else their middle
+            lower, upper = arm.lower_limits, arm.upper_limits
+            reference = np.where((lower <= 0.0) & (upper >= 0.0), 0.0, 0.5 * (lower + upper))
+        else:
+            reference = arm.check_configuration(reference_configuration)
         self.reference_configuration = reference
         self.removed = self._remove_pairs(reference)
         self.geometry_data = pin.GeometryData(self.geometry_model)
@@ -66,36 +64,26 @@ class SelfCollision:
         ]
 
     def _remove_pairs(self, reference: np.ndarray) -> list[RemovedPair]:
-        objects = self.geometry_model.geometryObjects
-        parents = self.model.parents
+        objects, parents = self.geometry_model.geometryObjects, self.model.parents
+        data = pin.GeometryData(self.geometry_model)
+        pin.computeCollisions(self.model, self.data, self.geometry_model, data, reference, False)
         # Copy the index pairs first: removing while iterating skips pairs.
-        pairs = [(p.first, p.second) for p in self.geometry_model.collisionPairs]
+        pairs = [
+            (pair.first, pair.second, result.isCollision())
+            for pair, result in zip(self.geometry_model.collisionPairs, data.collisionResults)
+        ]
         removed = []
-        for first, second in pairs:
+        for first, second, touching in pairs:
             joint_a, joint_b = objects[first].parentJoint, objects[second].parentJoint
             if joint_a == joint_b:
                 reason = "same rigid body"
             elif parents[joint_a] == joint_b or parents[joint_b] == joint_a:
                 reason = "adjacent links"
+            elif touching:
+                reason = "in contact at the reference configuration"
             else:
                 continue
             removed.append(RemovedPair(objects[first].name, objects[second].name, reason))
-            self.geometry_model.removeCollisionPair(pin.CollisionPair(first, second))
-        data = pin.GeometryData(self.geometry_model)
-        pin.computeCollisions(self.model, self.data, self.geometry_model, data, reference, False)
-        touching = [
-            (pair.first, pair.second)
-            for pair, result in zip(self.geometry_model.collisionPairs, data.collisionResults)
-            if result.isCollision()
-        ]
-        for first, second in touching:
-            removed.append(
-                RemovedPair(
-                    objects[first].name,
-                    objects[second].name,
-                    "in contact at the reference configuration",
-                )
-            )
             self.geometry_model.removeCollisionPair(pin.CollisionPair(first, second))
         return removed
 
@@ -108,10 +96,3 @@ class SelfCollision:
                 self.model, self.data, self.geometry_model, self.geometry_data, q, True
             )
         )
-
-
-def default_reference_configuration(arm) -> np.ndarray:
-    """Zero where the limits allow it, else the middle of the limits [rad]."""
-    lower, upper = arm.lower_limits, arm.upper_limits
-    middle = 0.5 * (lower + upper)
-    return np.where((lower <= 0.0) & (upper >= 0.0), 0.0, middle)

@@ -7,22 +7,18 @@ mounted between flange and hand) sits. The fingers are locked (:meth:`Arm.from_u
 joints between the base and the sensor), the tool frame is the hand's ``fr3_hand_tcp``.
 """
 
-from __future__ import annotations
-
 from pathlib import Path
 
 from .arm import Arm, bundled_urdf_path
 
-FR3_URDF_NAME = "fr3.urdf"
 FR3_SENSOR_FRAME = "fr3_hand"
 """The sensor frame of the bundled FR3: the hand frame."""
 FR3_TOOL_FRAME = "fr3_hand_tcp"
-FR3_FLANGE_FRAME = "fr3_link8"
 
 
 def fr3_urdf_path() -> Path:
     """Path of the bundled FR3 URDF (installed package first, then the source checkout)."""
-    return bundled_urdf_path(f"fr3/{FR3_URDF_NAME}")
+    return bundled_urdf_path("fr3/fr3.urdf")
 
 
 def fr3_arm(tool_frame: str | None = FR3_TOOL_FRAME) -> Arm:

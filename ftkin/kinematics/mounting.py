@@ -9,8 +9,6 @@ forward kinematics, Jacobians and the control loop see the real sensor with
 no added work.
 """
 
-from __future__ import annotations
-
 import copy
 
 import numpy as np
@@ -44,9 +42,8 @@ def mounted_arm(arm: Arm, mount_rotation) -> Arm:
         raise InvalidInput(
             f"mount_rotation must be a (3, 3) rotation matrix, got {rotation.tolist()}"
         )
-    current = arm.mount_rotation
-    if current is not None:
-        if np.allclose(current, rotation, atol=1e-12):
+    if arm.mount_rotation is not None:
+        if np.allclose(arm.mount_rotation, rotation, atol=1e-12):
             return arm
         raise InvalidInput(
             "this Arm already carries another sensor mount; start from the arm its URDF describes"
@@ -58,8 +55,8 @@ def mounted_arm(arm: Arm, mount_rotation) -> Arm:
     frame = model.frames[arm.sensor_frame_id]
     frame.placement = frame.placement * pin.SE3(rotation.T.copy(), np.zeros(3))
     model.frames[arm.sensor_frame_id] = frame
-    mounted.model = model
-    mounted.data = model.createData()
+    mounted.model, mounted.data = model, model.createData()
     mounted._geometry = dict(arm._geometry)
+    mounted._chain = False  # the arm's batch chain ends at the URDF sensor frame: rebuilt
     mounted.mount_rotation = rotation.copy()
     return mounted

@@ -10,10 +10,8 @@ joint). ``compensate``, ``view`` and ``report`` rebuild the arm from it
 (:meth:`KinematicsRecord.mismatches`).
 """
 
-from __future__ import annotations
-
 import hashlib
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
@@ -38,10 +36,9 @@ def sensor_placement(arm) -> tuple[str, list[float]]:
     [m, rad].
     """
     frame = arm.model.frames[arm.sensor_frame_id]
-    placement = frame.placement
-    rpy = pin.rpy.matrixToRpy(placement.rotation)
+    rpy = pin.rpy.matrixToRpy(frame.placement.rotation)
     return arm.model.names[frame.parentJoint], [
-        *map(float, placement.translation),
+        *map(float, frame.placement.translation),
         *map(float, rpy),
     ]
 
@@ -76,22 +73,21 @@ class KinematicsRecord:
     tool_frame: str | None = None
 
     @classmethod
-    def from_arm(cls, arm) -> KinematicsRecord:
+    def from_arm(cls, arm) -> "KinematicsRecord":
         """The record of an :class:`~ftkin.kinematics.arm.Arm` (its robot name and mount when it has
         them).
         """
         mount = arm.sensor_mount
         joint, placement = sensor_placement(arm)
-        offset = None
-        if mount is not None:
-            offset = tuple(float(v) for v in (*mount.translation, *mount.rpy))
         return cls(
             sensor_frame=arm.sensor_frame,
             robot=arm.robot_name,
             urdf=str(arm.urdf_path) if arm.urdf_path is not None else None,
             urdf_sha256=file_sha256(arm.urdf_path) if arm.urdf_path is not None else None,
             sensor_parent=mount.parent_frame if mount is not None else None,
-            sensor_offset=offset,
+            sensor_offset=None
+            if mount is None
+            else tuple(float(v) for v in (*mount.translation, *mount.rpy)),
             parent_joint=joint,
             placement=tuple(placement),
             tool_frame=arm.tool_frame,
@@ -112,28 +108,24 @@ class KinematicsRecord:
         }
 
     @classmethod
-    def from_dict(cls, data: dict) -> KinematicsRecord:
+    def from_dict(cls, data: dict) -> "KinematicsRecord":
         """Inverse of :meth:`to_dict`; raises :class:`InvalidInput` on malformed data."""
         if not isinstance(data, dict) or not isinstance(data.get("sensor_frame"), str):
             raise InvalidInput("expected an object with a sensor_frame name")
-        strings = {}
-        for key in ("robot", "urdf", "urdf_sha256", "sensor_parent", "parent_joint", "tool_frame"):
-            value = data.get(key)
-            if value is not None and not isinstance(value, str):
-                raise InvalidInput(f"{key} must be a string or null, got {value!r}")
-            strings[key] = value
-        numbers = {}
-        for key in ("sensor_offset", "placement"):
-            value = data.get(key)
-            if value is not None:
+        values = {f.name: data.get(f.name) for f in fields(cls) if f.name != "sensor_frame"}
+        for key, value in values.items():
+            if value is None:
+                continue
+            if key in ("sensor_offset", "placement"):
                 if not isinstance(value, list) or len(value) != 6:
                     raise InvalidInput(
                         f"{key} must be 6 numbers [x, y, z, roll, pitch, yaw] or null, got "
                         f"{value!r}"
                     )
-                value = tuple(as_vector(value, 6, key).tolist())
-            numbers[key] = value
-        return cls(sensor_frame=data["sensor_frame"], **strings, **numbers)
+                values[key] = tuple(as_vector(value, 6, key).tolist())
+            elif not isinstance(value, str):
+                raise InvalidInput(f"{key} must be a string or null, got {value!r}")
+        return cls(sensor_frame=data["sensor_frame"], **values)
 
     def describe(self) -> str:
         """How the sensor frame was obtained, as CLI options."""
@@ -157,24 +149,21 @@ class KinematicsRecord:
         from .arm import Arm, SensorMount
         from .robots import load_robot
 
+        offset = self.sensor_offset or (0.0,) * 6  # a robot's mount needs its recorded offset
+        mount = None
+        if self.sensor_parent is not None and (
+            self.robot is None or self.sensor_offset is not None
+        ):
+            mount = SensorMount(self.sensor_parent, offset[:3], offset[3:])
         if self.robot is not None:
-            mount = None
-            if self.sensor_offset is not None and self.sensor_parent is not None:
-                mount = SensorMount(
-                    self.sensor_parent, self.sensor_offset[:3], self.sensor_offset[3:]
-                )
             arm = load_robot(self.robot, mount, self.tool_frame)
             arm.package_dirs += list(package_dirs)
+        elif self.urdf is None or not Path(self.urdf).is_file():
+            raise InvalidInput(
+                f"the calibration's URDF {self.urdf} is not there any more: give --urdf (and "
+                "the mount options)"
+            )
         else:
-            if self.urdf is None or not Path(self.urdf).is_file():
-                raise InvalidInput(
-                    f"the calibration's URDF {self.urdf} is not there any more: give --urdf (and "
-                    "the mount options)"
-                )
-            mount = None
-            if self.sensor_parent is not None:
-                offset = self.sensor_offset or (0.0,) * 6
-                mount = SensorMount(self.sensor_parent, offset[:3], offset[3:])
             arm = Arm.from_urdf(
                 self.urdf,
                 self.sensor_frame,
@@ -197,8 +186,7 @@ class KinematicsRecord:
                 f"sensor frame {arm.sensor_frame!r}, calibrated with {self.sensor_frame!r}"
             )
         if self.urdf_sha256 is not None and arm.urdf_path is not None:
-            digest = file_sha256(arm.urdf_path)
-            if digest != self.urdf_sha256:
+            if file_sha256(arm.urdf_path) != self.urdf_sha256:
                 problems.append(
                     f"URDF {arm.urdf_path} is not the one calibrated with ({self.urdf}; SHA-256 "
                     "differs)"

@@ -14,8 +14,6 @@ distribution's file list (``share/example-robot-data/package.xml``), and the
 against.
 """
 
-from __future__ import annotations
-
 import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -32,7 +30,6 @@ BUNDLED_FLANGE_FRAME = "flange"
 """The bundled arm's flange frame (z out of the flange face)."""
 SENSOR_FRAME = "ft_sensor"
 _DISTRIBUTION = "example-robot-data"
-_PACKAGE_XML = "share/example-robot-data/package.xml"
 
 
 @dataclass(frozen=True)
@@ -105,7 +102,7 @@ def example_robot_data_share() -> Path:
     except importlib.metadata.PackageNotFoundError:
         raise MissingDependency(_DISTRIBUTION, "robots", "loading a robot by name") from None
     for entry in distribution.files or ():
-        if str(entry).replace("\\", "/").endswith(_PACKAGE_XML):
+        if str(entry).replace("\\", "/").endswith("share/example-robot-data/package.xml"):
             package_xml = Path(distribution.locate_file(entry))
             if package_xml.is_file():
                 return package_xml.parent.parent

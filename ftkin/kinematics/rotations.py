@@ -8,27 +8,10 @@ Also the base tilt of METHOD.md §2: the world-to-base rotation
 ``a = [G cosU sinV, -G sinU, -G cosU cosV]``.
 """
 
-from __future__ import annotations
-
 import numpy as np
 
 from ..exceptions import InvalidInput
 from ..validation import as_batch, as_rotation_batch
-
-
-def _stack_rotation(c1, s1, c2, s2, c3, s3) -> np.ndarray:
-    """``Rz(1) Ry(2) Rx(3)`` from cosines and sines, vectorized."""
-    out = np.empty(c1.shape + (3, 3))
-    out[..., 0, 0] = c1 * c2
-    out[..., 0, 1] = c1 * s2 * s3 - s1 * c3
-    out[..., 0, 2] = c1 * s2 * c3 + s1 * s3
-    out[..., 1, 0] = s1 * c2
-    out[..., 1, 1] = s1 * s2 * s3 + c1 * c3
-    out[..., 1, 2] = s1 * s2 * c3 - c1 * s3
-    out[..., 2, 0] = -s2
-    out[..., 2, 1] = c2 * s3
-    out[..., 2, 2] = c2 * c3
-    return out
 
 
 def euler_zyx_to_matrix(angles_rad) -> np.ndarray:
@@ -41,8 +24,15 @@ def euler_zyx_to_matrix(angles_rad) -> np.ndarray:
         ``(3, 3)`` or ``(N, 3, 3)`` rotation matrices.
     """
     angles, single = as_batch(angles_rad, 3, "euler angles [alpha, beta, gamma]")
-    c, s = np.cos(angles), np.sin(angles)
-    out = _stack_rotation(c[:, 0], s[:, 0], c[:, 1], s[:, 1], c[:, 2], s[:, 2])
+    (c1, c2, c3), (s1, s2, s3) = np.cos(angles).T, np.sin(angles).T
+    out = np.stack(
+        [
+            *(c1 * c2, c1 * s2 * s3 - s1 * c3, c1 * s2 * c3 + s1 * s3),
+            *(s1 * c2, s1 * s2 * s3 + c1 * c3, s1 * s2 * c3 - c1 * s3),
+            *(-s2, c2 * s3, c2 * c3),
+        ],
+        axis=-1,
+    ).reshape(-1, 3, 3)
     return out[0] if single else out
 
 
@@ -53,8 +43,7 @@ def euler_zyx_deg_to_matrix(angles_deg) -> np.ndarray:
     (intrinsic Z-Y-X, ``Rz(α) Ry(β) Rx(γ)``), in degrees as its Table 1 gives.
     """
     angles, single = as_batch(angles_deg, 3, "euler angles [alpha, beta, gamma] (deg)")
-    out = euler_zyx_to_matrix(np.deg2rad(angles))
-    return out[0] if single else out
+    return euler_zyx_to_matrix(np.deg2rad(angles[0] if single else angles))
 
 
 def matrix_to_euler_zyx(rotation) -> np.ndarray:
@@ -65,10 +54,14 @@ def matrix_to_euler_zyx(rotation) -> np.ndarray:
     """
     r, single = as_rotation_batch(rotation, "rotation")
     r = r[0] if single else r
-    alpha = np.arctan2(r[..., 1, 0], r[..., 0, 0])
-    beta = np.arcsin(np.clip(-r[..., 2, 0], -1.0, 1.0))
-    gamma = np.arctan2(r[..., 2, 1], r[..., 2, 2])
-    return np.stack([alpha, beta, gamma], axis=-1)
+    return np.stack(
+        [
+            np.arctan2(r[..., 1, 0], r[..., 0, 0]),  # α
+            np.arcsin(np.clip(-r[..., 2, 0], -1.0, 1.0)),  # β
+            np.arctan2(r[..., 2, 1], r[..., 2, 2]),  # γ
+        ],
+        axis=-1,
+    )
 
 
 def quaternion_to_matrix(quaternion_wxyz, atol: float = 1e-3) -> np.ndarray:
@@ -90,16 +83,14 @@ def quaternion_to_matrix(quaternion_wxyz, atol: float = 1e-3) -> np.ndarray:
             f"quaternion [qw, qx, qy, qz] #{i} has norm {norms[i]:.6f}; expected a unit quaternion"
         )
     w, x, y, z = (quats / norms[:, None]).T
-    out = np.empty((len(quats), 3, 3))
-    out[:, 0, 0] = 1 - 2 * (y * y + z * z)
-    out[:, 0, 1] = 2 * (x * y - z * w)
-    out[:, 0, 2] = 2 * (x * z + y * w)
-    out[:, 1, 0] = 2 * (x * y + z * w)
-    out[:, 1, 1] = 1 - 2 * (x * x + z * z)
-    out[:, 1, 2] = 2 * (y * z - x * w)
-    out[:, 2, 0] = 2 * (x * z - y * w)
-    out[:, 2, 1] = 2 * (y * z + x * w)
-    out[:, 2, 2] = 1 - 2 * (x * x + y * y)
+    out = np.stack(
+        [
+            *(1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)),
+            *(2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)),
+            *(2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)),
+        ],
+        axis=-1,
+    ).reshape(-1, 3, 3)
     return out[0] if single else out
 
 
@@ -109,29 +100,11 @@ def matrix_to_quaternion(rotation) -> np.ndarray:
     Raises:
         InvalidInput: not a ``(3, 3)`` / ``(N, 3, 3)`` finite rotation matrix.
     """
+    from scipy.spatial.transform import Rotation  # at the file edge only: not with ftkin
+
     r, single = as_rotation_batch(rotation, "rotation")
-    out = np.empty((len(r), 4))
-    for i, m in enumerate(r):  # conversion at the file edge only, not a hot path
-        trace = np.trace(m)
-        if trace > 0:
-            s = 2.0 * np.sqrt(1.0 + trace)
-            q = [
-                0.25 * s,
-                (m[2, 1] - m[1, 2]) / s,
-                (m[0, 2] - m[2, 0]) / s,
-                (m[1, 0] - m[0, 1]) / s,
-            ]
-        else:
-            k = int(np.argmax(np.diag(m)))
-            i1, i2 = (k + 1) % 3, (k + 2) % 3
-            s = 2.0 * np.sqrt(1.0 + m[k, k] - m[i1, i1] - m[i2, i2])
-            q = np.empty(4)
-            q[0] = (m[i2, i1] - m[i1, i2]) / s
-            q[1 + k] = 0.25 * s
-            q[1 + i1] = (m[i1, k] + m[k, i1]) / s
-            q[1 + i2] = (m[i2, k] + m[k, i2]) / s
-        q = np.asarray(q)
-        out[i] = q if q[0] >= 0 else -q
+    out = Rotation.from_matrix(r).as_quat(scalar_first=True)
+    out[out[:, 0] < 0] *= -1.0
     return out[0] if single else out
 
 
@@ -155,9 +128,7 @@ def tilt_from_gravity_in_base(gravity_in_base) -> tuple[float, float]:
     weight = float(np.linalg.norm(a))
     if weight == 0.0:
         raise InvalidInput("gravity_in_base is zero: the tilt of the base is undefined")
-    tilt_u = float(np.arcsin(np.clip(-a[1] / weight, -1.0, 1.0)))
-    tilt_v = float(np.arctan2(a[0], -a[2]))
-    return tilt_u, tilt_v
+    return float(np.arcsin(np.clip(-a[1] / weight, -1.0, 1.0))), float(np.arctan2(a[0], -a[2]))
 
 
 def wrenches_base_to_sensor(rotations: np.ndarray, wrenches: np.ndarray) -> np.ndarray:

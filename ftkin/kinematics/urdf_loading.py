@@ -6,8 +6,6 @@ stream and adds the reasons of an XML parse and of yourdfpy's validation, so
 the :class:`~ftkin.exceptions.UrdfError` a user sees names the problem.
 """
 
-from __future__ import annotations
-
 import contextlib
 import io
 import logging
@@ -16,6 +14,7 @@ import re
 from collections.abc import Mapping
 from pathlib import Path
 
+import numpy as np
 import pinocchio as pin
 
 from ..exceptions import InvalidInput, UrdfError
@@ -119,22 +118,17 @@ def yourdfpy_reasons(text: str, check_meshes: bool = False) -> list[str]:
     handler = logging.StreamHandler(messages)
     yourdfpy_logger = logging.getLogger("yourdfpy")
     yourdfpy_logger.addHandler(handler)
-    reasons = []
     try:
         robot = yourdfpy.URDF.load(
             io.BytesIO(text.encode()), build_scene_graph=False, load_meshes=False
         )
-        valid = robot.validate()
-        if check_meshes and not robot.validate_filenames():
-            valid = False
+        if all([robot.validate(), robot.validate_filenames() if check_meshes else True]):
+            return []
     except Exception as error:  # yourdfpy raises many types on bad input
-        reasons.append(f"yourdfpy: {error}")
-        valid = True
+        return [f"yourdfpy: {error}"]
     finally:
         yourdfpy_logger.removeHandler(handler)
-    if not valid:
-        reasons.extend(line.strip() for line in messages.getvalue().splitlines() if line.strip())
-    return reasons
+    return [line.strip() for line in messages.getvalue().splitlines() if line.strip()]
 
 
 _XML_COMMENT = re.compile(r"<!--.*?-->", re.DOTALL)
@@ -189,17 +183,11 @@ def build_model(path: Path) -> pin.Model:
         raise UrdfError(str(path), reasons)
     with captured_c_stderr() as stderr:
         try:
-            model = pin.buildModelFromUrdf(str(path))
-            error = None
+            return pin.buildModelFromUrdf(str(path))
         except (RuntimeError, ValueError) as caught:
-            model, error = None, caught
-    if error is None:
-        return model
-    reasons = [f"Pinocchio: {line}" for line in _parser_lines(stderr)]
-    reasons += yourdfpy_reasons(text)
-    if not reasons:
-        reasons = [f"Pinocchio: {error}"]
-    raise UrdfError(str(path), reasons) from None
+            error = caught
+    reasons = [f"Pinocchio: {line}" for line in _parser_lines(stderr)] + yourdfpy_reasons(text)
+    raise UrdfError(str(path), reasons or [f"Pinocchio: {error}"]) from None
 
 
 def build_geometry(
@@ -211,32 +199,21 @@ def build_geometry(
     ]
     with captured_c_stderr() as stderr:
         try:
-            geometry = pin.buildGeomFromUrdf(
-                model, str(path), geometry_type, package_dirs=package_dirs
-            )
-            error = None
+            return pin.buildGeomFromUrdf(model, str(path), geometry_type, package_dirs=package_dirs)
         except (RuntimeError, ValueError, OSError) as caught:
-            geometry, error = None, caught
-    if error is None:
-        return geometry
-    reasons = [f"Pinocchio: {error}"]
-    reasons += _parser_lines(stderr)
+            error = caught
+    reasons = [f"Pinocchio: {error}", *_parser_lines(stderr)]
     reasons += yourdfpy_reasons(read_urdf_text(path), check_meshes=True)
     raise UrdfError(str(path), reasons) from None
 
 
-def last_link(model: pin.Model) -> str:
-    """The link at the end of the chain: the last body frame on the last joint (e.g. ``tool0``,
-    ``wrist_3_link``).
-    """
-    last_joint = model.njoints - 1
-    bodies = [frame.name for frame in model.frames if frame.parentJoint == last_joint]
-    return bodies[-1] if bodies else model.frames[len(model.frames) - 1].name
-
-
 def sensor_frame_hint(model: pin.Model) -> str:
-    """How to add a sensor frame the URDF lacks, naming its last link."""
-    last = last_link(model)
+    """How to add a sensor frame the URDF lacks, naming its last link.
+
+    The last link: the last body frame on the last joint (e.g. ``tool0``, ``wrist_3_link``).
+    """
+    bodies = [frame.name for frame in model.frames if frame.parentJoint == model.njoints - 1]
+    last = bodies[-1] if bodies else model.frames[len(model.frames) - 1].name
     return (
         "if the URDF has no sensor frame, add it at the link the sensor is bolted to, e.g. "
         f"--sensor-parent {last} "
@@ -253,20 +230,16 @@ def joints_beyond_frame(model: pin.Model, frame: str) -> dict[str, float]:
     if not model.existFrame(frame):
         return {}
     support = set(model.supports[model.frames[model.getFrameId(frame)].parentJoint])
-    neutral = pin.neutral(model)
-    lower, upper = model.lowerPositionLimit, model.upperPositionLimit
-    beyond = {}
-    for joint_id in range(1, model.njoints):
-        joint = model.joints[joint_id]
-        if joint_id in support or joint.nq != 1:
-            continue
-        index = joint.idx_q
-        beyond[model.names[joint_id]] = float(min(max(neutral[index], lower[index]), upper[index]))
-    return beyond
+    neutral = np.clip(pin.neutral(model), model.lowerPositionLimit, model.upperPositionLimit)
+    return {
+        model.names[joint_id]: float(neutral[joint.idx_q])
+        for joint_id, joint in enumerate(model.joints)
+        if joint_id > 0 and joint_id not in support and joint.nq == 1
+    }
 
 
 def lock_joints(model: pin.Model, locked_joints: Mapping[str, float]):
-    """The model with ``{joint name: value [rad or m]}`` fixed: ``(full, reduced, locked ids,
+    """The model with ``{joint name: value [rad or m]}`` fixed: ``(reduced, full, locked ids,
     reference q)``.
 
     Raises:
@@ -283,5 +256,4 @@ def lock_joints(model: pin.Model, locked_joints: Mapping[str, float]):
         joint_id = model.getJointId(name)
         reference[model.joints[joint_id].idx_q] = float(value)
         ids.append(joint_id)
-    reduced = pin.buildReducedModel(model, ids, reference)
-    return model, reduced, ids, reference
+    return pin.buildReducedModel(model, ids, reference), model, ids, reference

@@ -16,8 +16,6 @@ any optimization, constraint sets under which no pose set could determine
 every parameter, naming the parameters.
 """
 
-from __future__ import annotations
-
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -29,7 +27,7 @@ from ..calibration.mount import MOUNT_NAMES
 from ..exceptions import InvalidInput, UnobservableParameters
 from ..kinematics.collision import SelfCollision
 from ..kinematics.rotations import euler_zyx_to_matrix
-from ..validation import as_in_range
+from ..validation import as_in_range, set_checked
 
 _MOUNT_MODE_BY_SIZE = {12: "none", 13: "yaw", 15: "full"}
 
@@ -58,14 +56,13 @@ class PoseConstraints:
     self_collision: bool = True
 
     def __post_init__(self):
-        values = {
-            "margin": as_in_range(self.margin, "margin", 0.0, 2.0 * np.pi, "rad"),
-            "floor_height": _optional(self.floor_height, "floor_height", 100.0, "m"),
-            "max_tilt": _optional(self.max_tilt, "max_tilt", np.pi, "rad", low=0.0),
-            "joint_ranges": _joint_ranges(self.joint_ranges),
-        }
-        for name, value in values.items():
-            object.__setattr__(self, name, value)
+        set_checked(
+            self,
+            margin=as_in_range(self.margin, "margin", 0.0, 2.0 * np.pi, "rad"),
+            floor_height=_optional(self.floor_height, "floor_height", 100.0, "m"),
+            max_tilt=_optional(self.max_tilt, "max_tilt", np.pi, "rad", low=0.0),
+            joint_ranges=_joint_ranges(self.joint_ranges),
+        )
 
     def describe(self) -> str:
         """One line naming every active constraint (for reports and errors)."""
@@ -83,9 +80,11 @@ class PoseConstraints:
 
 def _optional(value, name: str, bound: float, unit: str, low: float | None = None):
     """None, or a finite float within ``[low, bound]`` (``low`` default ``-bound``)."""
-    if value is None:
-        return None
-    return as_in_range(value, name, -bound if low is None else low, bound, unit)
+    return (
+        None
+        if value is None
+        else as_in_range(value, name, -bound if low is None else low, bound, unit)
+    )
 
 
 def _joint_ranges(value) -> tuple[tuple[str, float, float], ...]:
@@ -122,9 +121,7 @@ class FeasibilityChecker:
     """
 
     def __init__(self, arm, constraints: PoseConstraints):
-        self.arm = arm
-        self.constraints = constraints
-        self.data = arm.model.createData()
+        self.arm, self.constraints, self.data = arm, constraints, arm.model.createData()
         lower, upper = arm.lower_limits + constraints.margin, arm.upper_limits - constraints.margin
         for name, low, high in constraints.joint_ranges:
             if name not in arm.joint_names:
@@ -141,12 +138,9 @@ class FeasibilityChecker:
                 f"{constraints.margin:g} rad margin and the given joint ranges"
             )
         self.lower, self.upper = lower, upper
-        self.axis_frame_id = (
-            arm.tool_frame_id if arm.tool_frame_id is not None else arm.sensor_frame_id
-        )
-        self.height_frame_ids = [arm.sensor_frame_id] + (
-            [arm.tool_frame_id] if arm.tool_frame_id is not None else []
-        )
+        tool = [] if arm.tool_frame_id is None else [arm.tool_frame_id]
+        self.axis_frame_id = (tool or [arm.sensor_frame_id])[0]
+        self.height_frame_ids = [arm.sensor_frame_id, *tool]
         self.collision = SelfCollision(arm) if constraints.self_collision else None
         self.rejected = {"floor": 0, "tilt": 0, "self-collision": 0}
 
@@ -167,14 +161,12 @@ class FeasibilityChecker:
         """
         model, data, limits = self.arm.model, self.data, self.constraints
         pin.forwardKinematics(model, data, q)
-        if limits.floor_height is not None:
-            for frame_id in self.height_frame_ids:
-                if (
-                    pin.updateFramePlacement(model, data, frame_id).translation[2]
-                    < limits.floor_height
-                ):
-                    self.rejected["floor"] += 1
-                    return None
+        if limits.floor_height is not None and any(
+            pin.updateFramePlacement(model, data, frame_id).translation[2] < limits.floor_height
+            for frame_id in self.height_frame_ids
+        ):
+            self.rejected["floor"] += 1
+            return None
         if limits.max_tilt is not None:
             axis_z = pin.updateFramePlacement(model, data, self.axis_frame_id).rotation[2, 2]
             if np.arccos(np.clip(-axis_z, -1.0, 1.0)) > limits.max_tilt:
@@ -196,15 +188,10 @@ class FeasibilityChecker:
 
     def tool_to_sensor_rotation(self) -> np.ndarray:
         """Fixed rotation from the tilt-axis frame to the sensor frame, ``R_TS`` ``(3, 3)``."""
-        q = np.clip(np.zeros(self.arm.nq), self.lower, self.upper)
-        pin.forwardKinematics(self.arm.model, self.data, q)
-        tool = pin.updateFramePlacement(
-            self.arm.model, self.data, self.axis_frame_id
-        ).rotation.copy()
-        sensor = pin.updateFramePlacement(
-            self.arm.model, self.data, self.arm.sensor_frame_id
-        ).rotation
-        return tool.T @ sensor
+        model, data = self.arm.model, self.data
+        pin.forwardKinematics(model, data, np.clip(np.zeros(self.arm.nq), self.lower, self.upper))
+        tool = pin.updateFramePlacement(model, data, self.axis_frame_id).rotation.copy()
+        return tool.T @ pin.updateFramePlacement(model, data, self.arm.sensor_frame_id).rotation
 
 
 def check_tilt_observability(checker, factors) -> None:
@@ -216,15 +203,14 @@ def check_tilt_observability(checker, factors) -> None:
     constraints = checker.constraints
     if constraints.max_tilt is None:
         return
-    tool_to_sensor = checker.tool_to_sensor_rotation()
     grid = np.linspace(0.0, 2.0 * np.pi, 8, endpoint=False)
     # Tool orientations R_BT = Rz(α) Ry(β) Rx(π) Rz(ψ): tool z tilted by β from straight down.
     tilted = euler_zyx_to_matrix(
         [[alpha, beta, np.pi] for alpha in grid for beta in (0.0, constraints.max_tilt)]
     )
     spins = euler_zyx_to_matrix([[psi, 0.0, 0.0] for psi in grid])
-    rotations = np.einsum("aij,bjk,kl->abil", tilted, spins, tool_to_sensor).reshape(-1, 3, 3)
-    check_information(factors(rotations), constraints)
+    rotations = np.einsum("aij,bjk,kl->abil", tilted, spins, checker.tool_to_sensor_rotation())
+    check_information(factors(rotations.reshape(-1, 3, 3)), constraints)
 
 
 def check_information(factors, constraints, rcond: float = 1e-10):

@@ -15,8 +15,6 @@ it minimizes the volume of the joint confidence ellipsoid. Adding candidate
 evaluated for the whole pool at once.
 """
 
-from __future__ import annotations
-
 import numpy as np
 
 from ..calibration.mount import mount_jacobian
@@ -44,14 +42,17 @@ def information_factors(
     ``k`` is 0, or the number of mount angles when ``estimate_mount`` is ``"yaw"`` (1) or ``"full"``
     (3).
     """
-    jac = mount_jacobian(rotations, gravity_in_base, center_of_mass, estimate_mount)
-    return jac / np.asarray(channel_std, float)[None, :, None] * np.sqrt(readings_per_pose)
+    jacobian = mount_jacobian(rotations, gravity_in_base, center_of_mass, estimate_mount)
+    return jacobian / np.asarray(channel_std, float)[None, :, None] * np.sqrt(readings_per_pose)
 
 
-def log_det(information: np.ndarray) -> float:
-    """``log det`` of a symmetric positive (semi)definite matrix; ``-inf`` when singular."""
+def log_det(information: np.ndarray):
+    """``log det`` of a symmetric positive (semi)definite matrix; ``-inf`` when singular.
+
+    A stack ``(..., n, n)`` gives an array of them; one matrix, a float.
+    """
     sign, value = np.linalg.slogdet(information)
-    return float(value) if sign > 0 else -np.inf
+    return np.where(sign > 0, value, -np.inf)[()]
 
 
 def _gains(entries: np.ndarray, information: np.ndarray) -> np.ndarray:
@@ -75,8 +76,7 @@ def _gains(entries: np.ndarray, information: np.ndarray) -> np.ndarray:
     if value is None:
         lower = np.tril_indices(rows, -1)
         inner[lower[1], lower[0]] = inner[lower]  # the upper triangle, for LU
-        sign, value = np.linalg.slogdet(np.transpose(inner, (2, 0, 1)))
-        return np.where(sign > 0, value, -np.inf)
+        return log_det(np.transpose(inner, (2, 0, 1)))
     return value
 
 
@@ -137,33 +137,28 @@ def d_optimal_selection(
         Indices of the chosen candidates ``(count,)`` and the criterion
         ``log det`` of their (unregularized) information.
     """
-    size = factors.shape[2]
     scale = 1.0 / np.sqrt(
         np.maximum(np.mean(np.sum(factors**2, axis=1), axis=0), np.finfo(float).tiny)
     )
     factors = factors * scale  # log det changes by the constant 2 Σ log scale: same choices
     contributions = np.transpose(factors, (0, 2, 1)) @ factors
     entries = np.ascontiguousarray(np.transpose(factors, (1, 2, 0)))
-    ridge = REGULARIZATION * np.eye(size)
+    ridge = REGULARIZATION * np.eye(factors.shape[2])
     chosen: list[int] = []
     information = ridge.copy()
     available = np.ones(len(factors), dtype=bool)
     for _ in range(count):
-        gains = _gains(entries, information)
-        gains[~available] = -np.inf
-        best = int(np.argmax(gains))
+        best = int(np.argmax(np.where(available, _gains(entries, information), -np.inf)))
         chosen.append(best)
         available[best] = False
         information = information + contributions[best]
     for _ in range(max_passes):
         swapped = False
         for slot in range(count):
-            current = log_det(information)
             without = information - contributions[chosen[slot]]
-            gains = _gains(entries, without)
-            gains[~available] = -np.inf
+            gains = np.where(available, _gains(entries, without), -np.inf)
             best = int(np.argmax(gains))
-            if log_det(without) + gains[best] > current + 1e-9:
+            if log_det(without) + gains[best] > log_det(information) + 1e-9:
                 available[chosen[slot]] = True
                 available[best] = False
                 chosen[slot] = best

@@ -32,13 +32,13 @@ and a greedy start beyond it is not used. Without a drift rate,
 :func:`ftkin.plan_poses` orders for short travel instead.
 """
 
-from __future__ import annotations
-
 import numpy as np
 
 from ..calibration.random_walk import walk_gains, whiten
 from ..exceptions import InvalidInput
 from ..validation import as_float_array, as_in_range
+from .design import log_det
+from .order import nearest_neighbour
 
 SWAPS_PER_ROUND = 64
 """Random pair swaps tried together in one round."""
@@ -52,11 +52,23 @@ readings.
 """
 
 
-def check_drift_rate(value) -> np.ndarray:
-    """``(6,)`` per-channel walk rate from ``[force N/√s, torque N·m/√s]``, each finite, ≥ 0 and one
-    > 0.
+def check_drift_options(
+    drift_rate, pose_interval, estimate_mount: str
+) -> tuple[np.ndarray | None, float]:
+    """``(rate (6,) or None, pose_interval [s])`` checked; a drift with a mount estimate is
+    refused.
+
+    The rate, ``[force N/√s, torque N·m/√s]``, is given per channel: each finite, ≥ 0 and one > 0;
+    the time between poses, between 1 ms and a day.
     """
-    rate = as_float_array(value, "drift_rate")
+    if drift_rate is None:
+        return None, pose_interval
+    if estimate_mount != "none":
+        raise InvalidInput(
+            "a drifting bias and an estimated mount cannot be planned together "
+            "(a drift-aware calibration keeps the mount fixed): drop drift_rate or estimate_mount"
+        )
+    rate = as_float_array(drift_rate, "drift_rate")
     if rate.shape != (2,):
         raise InvalidInput(
             f"drift_rate must be [force N/√s, torque N·m/√s] (two numbers), got shape {rate.shape}"
@@ -71,12 +83,7 @@ def check_drift_rate(value) -> np.ndarray:
             f"drift_rate must be two finite rates between 0 and 100 [N/√s, N·m/√s], not both 0, "
             f"got {rate.tolist()}"
         )
-    return np.repeat(rate, 3)
-
-
-def check_pose_interval(value) -> float:
-    """Time between poses [s], between 1 ms and a day."""
-    return as_in_range(value, "pose_interval", 1e-3, 86400.0, "s")
+    return np.repeat(rate, 3), as_in_range(pose_interval, "pose_interval", 1e-3, 86400.0, "s")
 
 
 def check_travel_ratio(value, drift_rate) -> float | None:
@@ -94,22 +101,6 @@ def check_travel_ratio(value, drift_rate) -> float | None:
     )
 
 
-def check_drift_options(
-    drift_rate, pose_interval, estimate_mount: str
-) -> tuple[np.ndarray | None, float]:
-    """``(rate (6,) or None, pose_interval [s])`` checked; a drift with a mount estimate is
-    refused.
-    """
-    if drift_rate is None:
-        return None, pose_interval
-    if estimate_mount != "none":
-        raise InvalidInput(
-            "a drifting bias and an estimated mount cannot be planned together "
-            "(a drift-aware calibration keeps the mount fixed): drop drift_rate or estimate_mount"
-        )
-    return check_drift_rate(drift_rate), check_pose_interval(pose_interval)
-
-
 def walk_information(jacobians: np.ndarray, gains) -> np.ndarray:
     """Fisher information ``(..., 12, 12)`` of ``θ`` from per-pose ``jacobians`` ``(..., P, 6, 12)``
     in visiting order.
@@ -120,23 +111,6 @@ def walk_information(jacobians: np.ndarray, gains) -> np.ndarray:
     """
     whitened = whiten(gains, jacobians)
     return np.einsum("...pki,...pkj->...ij", whitened, whitened)
-
-
-def _log_det(information: np.ndarray) -> np.ndarray:
-    sign, value = np.linalg.slogdet(information)
-    return np.where(sign > 0, value, -np.inf)
-
-
-def _turning_order(gravity_in_sensor: np.ndarray, start: int) -> np.ndarray:
-    """Greedy order from ``start``: each next pose has gravity most opposite to the last one's."""
-    left = np.ones(len(gravity_in_sensor), dtype=bool)
-    order = [start]
-    left[start] = False
-    for _ in range(len(gravity_in_sensor) - 1):
-        cosines = np.where(left, gravity_in_sensor @ gravity_in_sensor[order[-1]], np.inf)
-        order.append(int(np.argmin(cosines)))
-        left[order[-1]] = False
-    return np.array(order)
 
 
 def drift_robust_order(
@@ -178,15 +152,17 @@ def drift_robust_order(
     if max_length is not None and distances is None:
         raise InvalidInput("max_length needs the distances between the poses")
     jacobians = model.parameter_jacobian(rotations)
-    variance = np.tile(np.asarray(noise_std, dtype=float) ** 2 / readings_per_pose, (count, 1))
+    variance = np.asarray(noise_std, dtype=float) ** 2 / readings_per_pose
     gains = walk_gains(
-        np.arange(count) * float(pose_interval), variance, np.asarray(rate, dtype=float)
+        np.arange(count) * pose_interval, np.tile(variance, (count, 1)), np.asarray(rate, float)
     )
     gravity = np.einsum("nji,j->ni", rotations, model.gravity_in_base)
     gravity /= np.linalg.norm(gravity, axis=1, keepdims=True)
     starts = [np.arange(count) if initial_order is None else np.asarray(initial_order)]
+    # Greedy orders where each next pose has gravity most opposite to the last one's.
+    cosines = gravity @ gravity.T
     starts += [
-        _turning_order(gravity, start) for start in (starts[0][0], int(np.argmax(gravity[:, 2])))
+        nearest_neighbour(cosines, start) for start in (starts[0][0], int(np.argmax(gravity[:, 2])))
     ]
 
     def admissible(orders: np.ndarray) -> np.ndarray:
@@ -196,11 +172,9 @@ def drift_robust_order(
 
     starts = np.array(starts)
     values = np.where(
-        admissible(starts), _log_det(walk_information(jacobians[starts], gains)), -np.inf
+        admissible(starts), log_det(walk_information(jacobians[starts], gains)), -np.inf
     )
-    values[0] = _log_det(walk_information(jacobians[starts[:1]], gains))[
-        0
-    ]  # the given order always counts
+    values[0] = log_det(walk_information(jacobians[starts[0]], gains))  # the given order counts
     order, best = starts[int(np.argmax(values))].copy(), float(np.max(values))
     if count < 2:
         return order, best
@@ -209,14 +183,10 @@ def drift_robust_order(
         pairs = np.sort(rng.integers(0, count, size=(SWAPS_PER_ROUND, 2)), axis=1)
         pairs = pairs[pairs[:, 0] != pairs[:, 1]]
         candidates = np.tile(order, (len(pairs), 1))
-        rows = np.arange(len(pairs))
-        candidates[rows, pairs[:, 0]], candidates[rows, pairs[:, 1]] = (
-            order[pairs[:, 1]],
-            order[pairs[:, 0]],
-        )
+        candidates[np.arange(len(pairs))[:, None], pairs] = order[pairs[:, ::-1]]
         values = np.where(
             admissible(candidates),
-            _log_det(walk_information(jacobians[candidates], gains)),
+            log_det(walk_information(jacobians[candidates], gains)),
             -np.inf,
         )
         winner = int(np.argmax(values)) if len(values) else 0

@@ -8,8 +8,6 @@ than ``σ/√(N r)`` per channel (``N`` poses, ``r`` readings per pose); the
 report shows how close a set comes.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -31,6 +29,7 @@ from ..validation import (
     as_rotation_batch,
     as_vector,
     from_fields,
+    set_checked,
 )
 from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_options, walk_information
 
@@ -111,8 +110,8 @@ class PoseEvaluation:
         """Predicted standard errors [deg] of the mount angles by name (empty without a mount)."""
         if self.mount_covariance is None:
             return {}
-        sigma = np.rad2deg(np.sqrt(np.diag(self.mount_covariance)))
-        return dict(zip(MOUNT_NAMES[self.mount_mode], (float(value) for value in sigma)))
+        sigma = np.rad2deg(np.sqrt(np.diag(self.mount_covariance)))  # [deg]
+        return dict(zip(MOUNT_NAMES[self.mount_mode], sigma.tolist()))
 
     @property
     def pose_count(self) -> int:
@@ -131,8 +130,7 @@ class PoseEvaluation:
 
     def report(self) -> str:
         """Table of predicted standard errors (and, for biases, the ratio to the bound)."""
-        std = self.vector_std.reshape(4, 3)
-        bound = self.bias_bound.reshape(2, 3)
+        std, bound = self.vector_std.reshape(4, 3), self.bias_bound.reshape(2, 3)
         lines = [
             f"predicted standard errors for {self.pose_count} poses × {self.readings_per_pose} "
             "reading(s), "
@@ -162,11 +160,12 @@ class PoseEvaluation:
                     limit = bound[block - 1, axis]
                     row += f"{limit:>14.3e}{std[block, axis] / limit:>8.3f}"
                 lines.append(row)
-        errors = self.standard_errors
-        lines.append(f"{'weight G':<10}{errors['tool_weight']:>14.3e}  N")
-        tilt_deg = np.rad2deg(errors["base_tilt"])
-        lines.append(f"{'tilt U, V':<10}{tilt_deg[0]:>14.3e}, {tilt_deg[1]:.3e} deg")
-        lines.extend(f"{name:<10}{value:>14.3e}  deg" for name, value in self.mount_std_deg.items())
+        tilt_deg = np.rad2deg(self.standard_errors["base_tilt"])
+        lines += [
+            f"{'weight G':<10}{self.standard_errors['tool_weight']:>14.3e}  N",
+            f"{'tilt U, V':<10}{tilt_deg[0]:>14.3e}, {tilt_deg[1]:.3e} deg",
+            *(f"{name:<10}{value:>14.3e}  deg" for name, value in self.mount_std_deg.items()),
+        ]
         return "\n".join(lines)
 
 
@@ -182,11 +181,11 @@ def _pose_times(value, count: int) -> np.ndarray:
 
 def whole_number(value, name: str, minimum: int = 0) -> int:
     """``value`` as an int (no bools, no fractions), at least ``minimum``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        if isinstance(value, bool) or not isinstance(value, (float, np.floating)):
-            raise InvalidInput(f"{name} must be an integer (a whole number), got {value!r}")
-        if not float(value).is_integer():
-            raise InvalidInput(f"{name} must be an integer (a whole number), got {value!r}")
+    whole = isinstance(value, (int, np.integer)) or (
+        isinstance(value, (float, np.floating)) and float(value).is_integer()
+    )
+    if isinstance(value, bool) or not whole:
+        raise InvalidInput(f"{name} must be an integer (a whole number), got {value!r}")
     if value < minimum:
         raise InvalidInput(f"{name} must be at least {minimum}, got {value}")
     return int(value)
@@ -231,15 +230,14 @@ class ExpectedCalibration:
         drift_rate, interval = check_drift_options(
             self.drift_rate, self.pose_interval, self.estimate_mount
         )
-        values = {
-            "model": expected_tool(self.tool_weight, self.center_of_mass),
-            "noise": self.noise if self.noise is not None else SensorNoise.paper(),
-            "readings_per_pose": whole_number(self.readings_per_pose, "readings_per_pose", 1),
-            "drift_rate": drift_rate,
-            "pose_interval": interval,
-        }
-        for name, value in values.items():
-            object.__setattr__(self, name, value)
+        set_checked(
+            self,
+            model=expected_tool(self.tool_weight, self.center_of_mass),
+            noise=self.noise if self.noise is not None else SensorNoise.paper(),
+            readings_per_pose=whole_number(self.readings_per_pose, "readings_per_pose", 1),
+            drift_rate=drift_rate,
+            pose_interval=interval,
+        )
 
 
 def evaluate_poses(
@@ -270,20 +268,19 @@ def evaluate_poses(
     rotations, _ = as_rotation_batch(rotation_sensor_to_base)
     check_pose_count(len(rotations))
     model, noise, readings = expected.model, expected.noise, expected.readings_per_pose
-    drift_rate, times = expected.drift_rate, None
+    drift_rate, times, mount_covariance = expected.drift_rate, None, None
     if drift_rate is not None:
         times = (
             np.arange(len(rotations)) * expected.pose_interval
             if pose_times is None
             else _pose_times(pose_times, len(rotations))
         )
-        gains = walk_gains(
-            times, np.tile(noise.channel_std**2 / readings, (len(rotations), 1)), drift_rate
+        variance = np.tile(noise.channel_std**2 / readings, (len(rotations), 1))
+        information = walk_information(
+            model.parameter_jacobian(rotations), walk_gains(times, variance, drift_rate)
         )
-        information = walk_information(model.parameter_jacobian(rotations), gains)
     else:
         information = fisher_information(model, rotations, noise, readings, expected.estimate_mount)
-    mount_covariance = None
     if expected.estimate_mount != "none":
         information, mount_covariance = split_information(information)
     covariance = covariance_from_information(information)

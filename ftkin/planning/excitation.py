@@ -20,8 +20,6 @@ violations cost a penalty during the search, and the returned plan is
 checked on a fine grid.
 """
 
-from __future__ import annotations
-
 import dataclasses
 from dataclasses import dataclass, field
 
@@ -32,7 +30,7 @@ from ..calibration.information import SensorNoise
 from ..calibration.model import STANDARD_GRAVITY
 from ..calibration.regressor import body_regressor, sensor_motion
 from ..exceptions import InvalidInput
-from ..validation import as_positive, from_fields
+from ..validation import as_positive, from_fields, set_checked
 from .constraints import FeasibilityChecker, PoseConstraints
 
 DEFAULT_ACCELERATION_LIMIT = 10.0
@@ -67,15 +65,14 @@ class FourierTrajectory:
         """``q`` [rad], ``dq`` [rad/s], ``ddq`` [rad/s²], each ``(N, nq)``, at ``(N,)`` times
         [s].
         """
-        times = np.asarray(times, dtype=float)
-        omega = 2.0 * np.pi / self.period
-        k = np.arange(1, self.cosine.shape[1] + 1)
-        phase = omega * np.outer(times, k)
+        k_omega = 2.0 * np.pi / self.period * np.arange(1, self.cosine.shape[1] + 1)  # [rad/s]
+        phase = np.outer(np.asarray(times, dtype=float), k_omega)
         cos, sin = np.cos(phase), np.sin(phase)
-        q = self.offsets + (sin / (k * omega)) @ self.cosine.T - (cos / (k * omega)) @ self.sine.T
-        dq = cos @ self.cosine.T + sin @ self.sine.T
-        ddq = (-sin * k * omega) @ self.cosine.T + (cos * k * omega) @ self.sine.T
-        return q, dq, ddq
+        return (
+            self.offsets + (sin / k_omega) @ self.cosine.T - (cos / k_omega) @ self.sine.T,
+            cos @ self.cosine.T + sin @ self.sine.T,
+            (-sin * k_omega) @ self.cosine.T + (cos * k_omega) @ self.sine.T,
+        )
 
 
 @dataclass(frozen=True)
@@ -106,27 +103,26 @@ class ExcitationPlan:
         """Header and ``(N, 1 + 3 nq)`` rows: ``t``, joint positions, then ``<joint>_vel`` and
         ``<joint>_acc``.
         """
-        header = [
+        return [
             "t",
             *self.joint_names,
             *(f"{n}_vel" for n in self.joint_names),
             *(f"{n}_acc" for n in self.joint_names),
-        ]
-        rows = np.column_stack(
+        ], np.column_stack(
             [self.times, self.joint_positions, self.joint_velocities, self.joint_accelerations]
         )
-        return header, rows
 
 
 def _information(arm, q, dq, ddq, noise: SensorNoise) -> np.ndarray:
     rotations, velocities, accelerations = sensor_motion(arm, q, dq, ddq)
-    regressor = body_regressor(velocities, accelerations)
     problem = DynamicProblem(
-        np.zeros((len(q), 6)), rotations, regressor, noise.channel_std, STANDARD_GRAVITY
+        np.zeros((len(q), 6)),
+        rotations,
+        body_regressor(velocities, accelerations),
+        noise.channel_std,
+        STANDARD_GRAVITY,
     )
-    x = np.zeros(18)
-    x[8] = 1.0
-    jac = problem.whitened_jacobian(x)
+    jac = problem.whitened_jacobian(np.eye(18)[8])  # x: zero but x[8] = 1
     jac = np.delete(jac, [6, 7], axis=1)  # tilt: needs the (unknown) mass; the rest is linear
     return jac.T @ jac
 
@@ -184,17 +180,17 @@ class ExcitationSpec:
         duration = as_positive(self.duration, "duration")
         if self.harmonics < 2:
             raise InvalidInput(f"harmonics must be at least 2, got {self.harmonics}")
-        constraints = self.constraints if self.constraints is not None else PoseConstraints()
-        values = {
-            "duration": duration,
-            "rate": as_positive(self.rate, "rate"),
-            "period": duration if self.period is None else as_positive(self.period, "period"),
-            "velocity_fraction": as_positive(self.velocity_fraction, "velocity_fraction"),
-            "constraints": dataclasses.replace(constraints, max_tilt=None),
-            "noise": self.noise if self.noise is not None else SensorNoise.paper(),
-        }
-        for name, value in values.items():
-            object.__setattr__(self, name, value)
+        set_checked(
+            self,
+            duration=duration,
+            rate=as_positive(self.rate, "rate"),
+            period=duration if self.period is None else as_positive(self.period, "period"),
+            velocity_fraction=as_positive(self.velocity_fraction, "velocity_fraction"),
+            constraints=dataclasses.replace(
+                PoseConstraints() if self.constraints is None else self.constraints, max_tilt=None
+            ),
+            noise=self.noise if self.noise is not None else SensorNoise.paper(),
+        )
 
 
 def _per_joint(value, nq: int, name: str, unit: str) -> np.ndarray:
@@ -211,7 +207,6 @@ class _Design:
     def __init__(self, arm, spec: ExcitationSpec):
         self.arm, self.spec, self.nq = arm, spec, arm.nq
         self.checker = checker = FeasibilityChecker(arm, spec.constraints)
-        self.period, self.harmonics = spec.period, spec.harmonics
         self.velocity_limits = spec.velocity_fraction * arm.velocity_limits
         self.acceleration_limits = _per_joint(
             spec.acceleration_limit, arm.nq, "acceleration_limit", "rad/s²"
@@ -224,19 +219,16 @@ class _Design:
         self.amplitude = _per_joint(spec.amplitude, arm.nq, "amplitude", "rad")
         self.grid = np.linspace(0.0, spec.period, 120, endpoint=False)
         self.check_grid = np.linspace(0.0, spec.period, 60, endpoint=False)
-
-    @property
-    def size(self) -> int:
-        return self.nq * (2 * self.harmonics - 2) + self.nq
+        self.size = arm.nq * (2 * spec.harmonics - 2) + arm.nq  # free coefficients and offsets
 
     def trajectory(self, x: np.ndarray) -> FourierTrajectory:
-        nq, free = self.nq, self.harmonics - 1
+        nq, free = self.nq, self.spec.harmonics - 1
         a = x[: nq * free].reshape(nq, free)
         b = x[nq * free : 2 * nq * free].reshape(nq, free)
-        k = np.arange(1, self.harmonics + 1)
+        k = np.arange(1, self.spec.harmonics + 1)
         cosine = np.column_stack([a, -a.sum(axis=1)])  # Σ a_k = 0: dq(0) = 0
         sine = np.column_stack([b, -(b * k[:-1]).sum(axis=1) / k[-1]])  # Σ k b_k = 0: ddq(0) = 0
-        unscaled = FourierTrajectory(self.period, np.zeros(nq), cosine, sine)
+        unscaled = FourierTrajectory(self.spec.period, np.zeros(nq), cosine, sine)
         q, dq, ddq = unscaled.evaluate(self.grid)
         span = np.maximum(q.max(axis=0) - q.min(axis=0), 1e-12)
         scale = (
@@ -257,12 +249,11 @@ class _Design:
             self.checker.upper - high,
         )
         return FourierTrajectory(
-            self.period, offsets, cosine * scale[:, None], sine * scale[:, None]
+            self.spec.period, offsets, cosine * scale[:, None], sine * scale[:, None]
         )
 
     def violations(self, trajectory: FourierTrajectory, times) -> int:
-        q, _, _ = trajectory.evaluate(times)
-        return sum(self.checker.check(row) is None for row in q)
+        return sum(self.checker.check(row) is None for row in trajectory.evaluate(times)[0])
 
     def log_det(self, trajectory: FourierTrajectory) -> tuple[float, float]:
         """``log det`` and condition number of the trajectory's information on the grid."""
@@ -270,11 +261,11 @@ class _Design:
 
     def cost(self, x: np.ndarray) -> float:
         """What the search minimises: −log det, plus a penalty per grid point off the limits."""
-        trajectory = self.trajectory(x)
+        trajectory, constraints = self.trajectory(x), self.spec.constraints
         value, _ = self.log_det(trajectory)
-        constraints = self.spec.constraints
-        checked = constraints.self_collision or constraints.floor_height is not None
-        penalty = _PENALTY * self.violations(trajectory, self.check_grid) if checked else 0.0
+        penalty = 0.0
+        if constraints.self_collision or constraints.floor_height is not None:
+            penalty = _PENALTY * self.violations(trajectory, self.check_grid)
         return (-value if np.isfinite(value) else 1e6) + penalty
 
 
@@ -338,13 +329,11 @@ def plan_excitation(arm, spec: ExcitationSpec | float, **options) -> ExcitationP
             "widen them or try more candidates"
         )
     times = np.arange(int(round(spec.duration * spec.rate))) / spec.rate
-    log_det, condition = design.log_det(trajectory)
     return ExcitationPlan(
         trajectory,
         list(arm.joint_names),
         times,
         *trajectory.evaluate(times),
-        log_det,
-        condition,
+        *design.log_det(trajectory),  # log det, condition number
         spec.optimize,
     )

@@ -13,8 +13,6 @@ turns toward zero where its limits allow (same pose, same collision state):
 arms with ±2π joints otherwise plan poses a full turn apart.
 """
 
-from __future__ import annotations
-
 import numpy as np
 
 MAX_STARTS = 32
@@ -28,9 +26,7 @@ REVOLUTE_KINDS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRev
 def revolute_mask(model) -> np.ndarray:
     """``(nq,)`` True for the coordinates of revolute joints (one coordinate each)."""
     mask = np.zeros(model.nq, dtype=bool)
-    for joint in list(model.joints)[1:]:
-        if joint.shortname() in REVOLUTE_KINDS:
-            mask[joint.idx_q] = True
+    mask[[joint.idx_q for joint in model.joints if joint.shortname() in REVOLUTE_KINDS]] = True
     return mask
 
 
@@ -41,8 +37,7 @@ def unwind_revolute(joint_positions, lower, upper, mask) -> np.ndarray:
     q = np.array(joint_positions, dtype=float)
     turns = np.round(q / (2.0 * np.pi))
     for _ in range(int(np.max(np.abs(turns), initial=0))):
-        step = np.sign(turns) * 2.0 * np.pi
-        shifted = q - step
+        shifted = q - np.sign(turns) * 2.0 * np.pi
         ok = mask & (turns != 0) & (shifted >= lower) & (shifted <= upper)
         q = np.where(ok, shifted, q)
         turns = np.where(ok, turns - np.sign(turns), 0.0 * turns)
@@ -51,26 +46,21 @@ def unwind_revolute(joint_positions, lower, upper, mask) -> np.ndarray:
 
 def joint_distances(joint_positions: np.ndarray) -> np.ndarray:
     """Pairwise joint-space distances ``(N, N)`` [rad] of ``(N, nq)`` configurations."""
-    difference = joint_positions[:, None, :] - joint_positions[None, :, :]
-    return np.sqrt(np.sum(difference**2, axis=-1))
+    return np.linalg.norm(joint_positions[:, None, :] - joint_positions[None, :, :], axis=-1)
 
 
 def path_length(distances: np.ndarray, order) -> float:
     """Total travel along ``order`` (open path) [rad]."""
-    order = np.asarray(order)
     return float(np.sum(distances[order[:-1], order[1:]]))
 
 
-def _nearest_neighbour(distances: np.ndarray, start: int) -> list[int]:
-    count = len(distances)
-    order = [start]
-    visited = np.zeros(count, dtype=bool)
+def nearest_neighbour(distances: np.ndarray, start: int) -> list[int]:
+    """Greedy open path from ``start``: next, always the unvisited pose nearest the last one."""
+    order, visited = [start], np.zeros(len(distances), dtype=bool)
     visited[start] = True
-    for _ in range(count - 1):
-        row = np.where(visited, np.inf, distances[order[-1]])
-        nxt = int(np.argmin(row))
-        order.append(nxt)
-        visited[nxt] = True
+    for _ in range(len(distances) - 1):
+        order.append(int(np.argmin(np.where(visited, np.inf, distances[order[-1]]))))
+        visited[order[-1]] = True
     return order
 
 
@@ -136,7 +126,7 @@ def short_travel_order(joint_positions) -> np.ndarray:
     for start in sorted(
         set(np.linspace(0, count - 1, min(count, MAX_STARTS)).round().astype(int).tolist())
     ):
-        order = _two_opt(distances, _nearest_neighbour(distances, start))
+        order = _two_opt(distances, nearest_neighbour(distances, start))
         length = path_length(distances, order)
         if length < best_length - 1e-12:
             best, best_length = order, length

@@ -19,8 +19,7 @@ and ``N`` poses no design beats ``σ/√N`` for each bias channel; a good design
 reaches it, and lowers the other parameters' errors with it.
 """
 
-from __future__ import annotations
-
+import functools
 from dataclasses import dataclass, field, fields
 
 import numpy as np
@@ -28,7 +27,7 @@ import numpy as np
 from ..calibration.observability import check_pose_count
 from ..exceptions import InvalidInput
 from ..progress import Progress
-from ..validation import from_fields
+from ..validation import from_fields, set_checked
 from .constraints import (
     FeasibilityChecker,
     PoseConstraints,
@@ -115,13 +114,13 @@ class PosePlan:
         """Human-readable summary: constraints and predicted standard errors."""
         lines = [
             f"{self.pose_count} poses (seed {self.seed}); {self.candidate_count} feasible "
-            "candidates "
-            f"from {self.sampled_count} sampled",
+            f"candidates from {self.sampled_count} sampled",
             f"constraints: {self.constraints.describe()}",
             f"criterion: {self.criterion} = {self.criterion_value:.3f}",
             f"joint travel along the visiting order: {self.joint_travel:.1f} rad",
+            self.evaluation.report(),
         ]
-        return "\n".join(lines) + "\n" + self.evaluation.report()
+        return "\n".join(lines)
 
 
 @dataclass(frozen=True, eq=False)
@@ -156,18 +155,17 @@ class PlanSpec:
             raise InvalidInput(f"constraints must be PoseConstraints, got {self.constraints!r}")
         if not isinstance(self.expected, ExpectedCalibration):
             raise InvalidInput(f"expected must be ExpectedCalibration, got {self.expected!r}")
-        values = {
-            "n": n,
-            "seed": whole_number(self.seed, "seed"),
-            "candidates": max(whole_number(self.candidates, "candidates", 1), n),
-            "max_samples": whole_number(self.max_samples, "max_samples", 1),
-            "max_travel_ratio": check_travel_ratio(self.max_travel_ratio, self.expected.drift_rate),
-        }
-        for name, value in values.items():
-            object.__setattr__(self, name, value)
+        set_checked(
+            self,
+            n=n,
+            seed=whole_number(self.seed, "seed"),
+            candidates=max(whole_number(self.candidates, "candidates", 1), n),
+            max_samples=whole_number(self.max_samples, "max_samples", 1),
+            max_travel_ratio=check_travel_ratio(self.max_travel_ratio, self.expected.drift_rate),
+        )
 
     @classmethod
-    def from_options(cls, n: int, **options) -> PlanSpec:
+    def from_options(cls, n: int, **options) -> "PlanSpec":
         """A spec from flat keywords: the fields of :class:`PoseConstraints` (``margin``,
         ``floor_height``, ``max_tilt``, ``joint_ranges``, ``self_collision``), of
         :class:`~ftkin.planning.evaluation.ExpectedCalibration` (``tool_weight``, ``noise``,
@@ -175,16 +173,22 @@ class PlanSpec:
         """
         parts: dict[type, dict] = {PoseConstraints: {}, ExpectedCalibration: {}, cls: {}}
         for name, value in options.items():
-            owner = next((part for part in parts if name in _field_names(part)), cls)
+            owner = next((p for p in parts if name in {f.name for f in fields(p) if f.init}), cls)
             parts[owner][name] = value
-        constraints = from_fields(PoseConstraints, parts[PoseConstraints], "PoseConstraints")
-        expected = from_fields(ExpectedCalibration, parts[ExpectedCalibration], "plan_poses")
-        own = {"n": n, "constraints": constraints, "expected": expected, **parts[cls]}
-        return from_fields(cls, own, "plan_poses")
-
-
-def _field_names(cls) -> set[str]:
-    return {item.name for item in fields(cls) if item.init}
+        return from_fields(
+            cls,
+            {
+                "n": n,
+                "constraints": from_fields(
+                    PoseConstraints, parts[PoseConstraints], "PoseConstraints"
+                ),
+                "expected": from_fields(
+                    ExpectedCalibration, parts[ExpectedCalibration], "plan_poses"
+                ),
+                **parts[cls],
+            },
+            "plan_poses",
+        )
 
 
 def plan_poses(arm, spec: PlanSpec | int, *, progress: bool | None = None, **options) -> PosePlan:
@@ -219,16 +223,14 @@ def plan_poses(arm, spec: PlanSpec | int, *, progress: bool | None = None, **opt
     expected = spec.expected
     checker = FeasibilityChecker(arm, spec.constraints)
     rng = np.random.default_rng(spec.seed)
-
-    def factors(rotations):
-        return information_factors(
-            rotations,
-            expected.model.gravity_in_base,
-            expected.model.center_of_mass,
-            expected.noise.channel_std,
-            expected.readings_per_pose,
-            expected.estimate_mount,
-        )
+    factors = functools.partial(
+        information_factors,
+        gravity_in_base=expected.model.gravity_in_base,
+        center_of_mass=expected.model.center_of_mass,
+        channel_std=expected.noise.channel_std,
+        readings_per_pose=expected.readings_per_pose,
+        estimate_mount=expected.estimate_mount,
+    )
 
     check_tilt_observability(checker, factors)
     pool_q, pool_rotations, sampled = _candidate_pool(
@@ -237,24 +239,21 @@ def plan_poses(arm, spec: PlanSpec | int, *, progress: bool | None = None, **opt
     pool_factors = factors(pool_rotations)
     check_information(pool_factors, spec.constraints)
     chosen, _ = d_optimal_selection(pool_factors, spec.n)
-    q, rotations = pool_q[chosen].copy(), pool_rotations[chosen].copy()
-    q, rotations = _refine(checker, q, rotations, factors, rng, progress)
+    q, rotations = _refine(checker, pool_q[chosen], pool_rotations[chosen], factors, rng, progress)
     q = unwind_revolute(q, checker.lower, checker.upper, revolute_mask(arm.model))
     order = _visiting_order(q, rotations, spec, rng)
     q, rotations = q[order], rotations[order]
     evaluation = evaluate_poses(rotations, expected)
     drifting = expected.drift_rate is not None
-    information = (
-        evaluation.information
-        if drifting
-        else np.einsum("nki,nkj->ij", *(2 * (factors(rotations),)))
-    )
+    factor = factors(rotations)
     return PosePlan(
         joint_positions=q,
         joint_names=tuple(arm.joint_names),
         evaluation=evaluation,
         criterion=DRIFT_CRITERION if drifting else CRITERION,
-        criterion_value=log_det(information),
+        criterion_value=log_det(
+            evaluation.information if drifting else np.einsum("nki,nkj->ij", factor, factor)
+        ),
         seed=spec.seed,
         constraints=spec.constraints,
         candidate_count=len(pool_q),
@@ -264,12 +263,10 @@ def plan_poses(arm, spec: PlanSpec | int, *, progress: bool | None = None, **opt
 
 def _visiting_order(q, rotations, spec: PlanSpec, rng) -> np.ndarray:
     """Short joint travel; with a drift rate, the drift-robust order (within the travel bound)."""
-    order = short_travel_order(q)
-    expected = spec.expected
+    order, expected = short_travel_order(q), spec.expected
     if expected.drift_rate is None:
         return order
-    distances = joint_distances(q)
-    ratio = spec.max_travel_ratio
+    distances, ratio = joint_distances(q), spec.max_travel_ratio
     order, _ = drift_robust_order(
         expected.model,
         rotations,
@@ -289,8 +286,7 @@ def _candidate_pool(checker, rng, wanted, max_samples, n, progress):
     kept_q, kept_rotations, sampled = [], [], 0
     with Progress(wanted, "sampling poses", enabled=progress) as bar:
         while len(kept_q) < wanted and sampled < max_samples:
-            batch = checker.sample(min(SAMPLE_BATCH, max_samples - sampled), rng)
-            for q in batch:
+            for q in checker.sample(min(SAMPLE_BATCH, max_samples - sampled), rng):
                 sampled += 1
                 rotation = checker.check(q)
                 if rotation is not None:
@@ -335,8 +331,7 @@ def _refine(checker, q, rotations, factors, rng, progress):
                     continue
                 factor = factors(np.array([rotation for _, rotation in feasible]))
                 candidates = np.transpose(factor, (0, 2, 1)) @ factor
-                sign, values = np.linalg.slogdet(without + candidates)
-                values = np.where(sign > 0, values, -np.inf)
+                values = log_det(without + candidates)
                 for best in np.argsort(-values, kind="stable"):
                     if not values[best] > current:
                         break

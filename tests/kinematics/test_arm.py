@@ -108,6 +108,19 @@ def test_batch_equals_singles(arm, rng):
         )
 
 
+def test_mounted_batch_equals_singles_after_the_chain_was_built(arm, rng):
+    # regression: mounted_arm copied the arm's batch chain, built for the URDF sensor frame
+    from ftkin import mounted_arm
+
+    q = arm.random_configurations(20, rng)
+    arm.rotation_sensor_to_base(q)  # builds the arm's batch chain
+    mount = Rotation.from_euler("zyx", [0.1, 0.2, 0.3]).as_matrix()
+    mounted = mounted_arm(arm, mount)
+    singles = np.array([mounted.rotation_sensor_to_base(row) for row in q])
+    np.testing.assert_allclose(mounted.rotation_sensor_to_base(q), singles, atol=1e-12)
+    np.testing.assert_allclose(singles, arm.rotation_sensor_to_base(q) @ mount.T, atol=1e-12)
+
+
 def test_random_configurations_respect_limits_and_margin(arm, rng):
     configurations = arm.random_configurations(500, rng, margin=0.2)
     assert configurations.shape == (500, arm.nq)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ftkin.planning.order import _nearest_neighbour, _two_opt, joint_distances
+from ftkin.planning.order import _two_opt, joint_distances, nearest_neighbour
 
 
 def _plain_two_opt(distances, order):
@@ -27,7 +27,7 @@ def test_two_opt_matches_the_double_loop(rng):
     for count in (3, 5, 12, 25, 40):
         distances = joint_distances(rng.uniform(-3.0, 3.0, size=(count, 6)))
         for start in range(0, count, max(1, count // 5)):
-            tour = _nearest_neighbour(distances, start)
+            tour = nearest_neighbour(distances, start)
             assert _two_opt(distances, tour) == _plain_two_opt(distances, tour)
         shuffled = list(rng.permutation(count))
         assert _two_opt(distances, shuffled) == _plain_two_opt(distances, shuffled)
