@@ -9,18 +9,13 @@ Errors from numpy, Pinocchio or the file system are wrapped at ftkin's
 boundary; they should never reach a user as a bare traceback.
 """
 
+from __future__ import annotations
+
 from collections.abc import Sequence
 
 
 class FtkinError(Exception):
-    """Base class of every error ftkin raises on purpose.
-
-    Keywords after the message become the attributes a subclass documents (its data).
-    """
-
-    def __init__(self, *args, **data):
-        super().__init__(*args)
-        self.__dict__.update(data)
+    """Base class of every error ftkin raises on purpose."""
 
 
 class InvalidInput(FtkinError, ValueError):
@@ -35,10 +30,16 @@ class InvalidSamples(InvalidInput):
         line: 1-based line number in the file when known, else None.
     """
 
-    def __init__(self, message: str, source: str | None = None, line: int | None = None, **data):
-        where = "" if line is None else f", line {line}"
-        where = "" if source is None else f"{source}{where}: "
-        super().__init__(where + message, source=source, line=line, **data)
+    def __init__(self, message: str, source: str | None = None, line: int | None = None):
+        where = ""
+        if source is not None:
+            where = f"{source}"
+            if line is not None:
+                where += f", line {line}"
+            where += ": "
+        super().__init__(where + message)
+        self.source = source
+        self.line = line
 
 
 class ConventionMistake(InvalidSamples):
@@ -51,7 +52,9 @@ class ConventionMistake(InvalidSamples):
     """
 
     def __init__(self, message: str, source: str | None = None, reading: str = "", fix: str = ""):
-        super().__init__(message, source, reading=reading, fix=fix)
+        super().__init__(message, source)
+        self.reading = reading
+        self.fix = fix
 
 
 class FrameNotFound(FtkinError, KeyError):
@@ -64,7 +67,10 @@ class FrameNotFound(FtkinError, KeyError):
     """
 
     def __init__(self, name: str, available: Sequence[str], hint: str = ""):
-        super().__init__(name, name=name, available=list(available), hint=hint)
+        self.name = name
+        self.available = list(available)
+        self.hint = hint
+        super().__init__(name)
 
     def __str__(self) -> str:
         import difflib
@@ -90,10 +96,9 @@ class UrdfError(FtkinError):
     """
 
     def __init__(self, path: str, reasons: Sequence[str]):
-        reasons = list(reasons)
-        super().__init__(
-            f"cannot load URDF {path}: " + "; ".join(reasons), path=path, reasons=reasons
-        )
+        self.path = path
+        self.reasons = list(reasons)
+        super().__init__(f"cannot load URDF {path}: " + "; ".join(self.reasons))
 
 
 class UnobservableParameters(FtkinError):
@@ -106,12 +111,10 @@ class UnobservableParameters(FtkinError):
     """
 
     def __init__(self, names: Sequence[str], reason: str, singular_values=None):
-        super().__init__(
-            "the poses cannot determine " + ", ".join(names) + f": {reason}",
-            names=list(names),
-            reason=reason,
-            singular_values=singular_values,
-        )
+        self.names = list(names)
+        self.reason = reason
+        self.singular_values = singular_values
+        super().__init__("the poses cannot determine " + ", ".join(self.names) + f": {reason}")
 
 
 class CalibrationFileError(FtkinError):
@@ -123,19 +126,21 @@ class CalibrationFileError(FtkinError):
     """
 
     def __init__(self, path: str, message: str, key: str | None = None):
+        self.path = path
+        self.key = key
         where = f"{path}" + (f", key {key!r}" if key is not None else "")
-        super().__init__(f"{where}: {message}", path=path, key=key)
+        super().__init__(f"{where}: {message}")
 
 
 class MissingDependency(FtkinError, ImportError):
     """An optional dependency is not installed; the message says which extra."""
 
     def __init__(self, package: str, extra: str, purpose: str):
+        self.package = package
+        self.extra = extra
         super().__init__(
             f"{purpose} needs the optional package {package!r}; "
-            f"install it with: pip install 'ftkin[{extra}]'",
-            package=package,
-            extra=extra,
+            f"install it with: pip install 'ftkin[{extra}]'"
         )
 
 
@@ -162,13 +167,11 @@ class SuspectConvention(FtkinError):
         sensor_sign: int | None = None,
         flip_axis: str | None = None,
     ):
-        super().__init__(
-            message,
-            explanations=list(explanations),
-            fixes=list(fixes),
-            sensor_sign=sensor_sign,
-            flip_axis=flip_axis,
-        )
+        self.explanations = list(explanations)
+        self.fixes = list(fixes)
+        self.sensor_sign = sensor_sign
+        self.flip_axis = flip_axis
+        super().__init__(message)
 
 
 class RobotError(FtkinError):
@@ -180,8 +183,9 @@ class RobotError(FtkinError):
     """
 
     def __init__(self, message: str, host: str | None = None, driver_message: str = ""):
-        message += f" ({driver_message})" if driver_message else ""
-        super().__init__(message, host=host, driver_message=driver_message)
+        self.host = host
+        self.driver_message = driver_message
+        super().__init__(message + (f" ({driver_message})" if driver_message else ""))
 
 
 class RobotConnectionLost(RobotError):
@@ -200,7 +204,8 @@ class SensorError(FtkinError):
     """
 
     def __init__(self, kind: str, message: str):
-        super().__init__(message, kind=kind)
+        self.kind = kind
+        super().__init__(message)
 
 
 class NonPhysicalPayload(InvalidInput):
@@ -211,7 +216,8 @@ class NonPhysicalPayload(InvalidInput):
     """
 
     def __init__(self, message: str, setting: str = ""):
-        super().__init__(message, setting=setting)
+        self.setting = setting
+        super().__init__(message)
 
 
 class SessionInterrupted(FtkinError):
@@ -225,12 +231,12 @@ class SessionInterrupted(FtkinError):
     """
 
     def __init__(self, reason: str, poses_recorded: int, poses_total: int, samples_path):
+        self.reason = reason
+        self.poses_recorded = poses_recorded
+        self.poses_total = poses_total
+        self.samples_path = samples_path
         super().__init__(
             f"session stopped after {poses_recorded} of {poses_total} poses: {reason}; the "
             f"samples recorded so far are in {samples_path}: run again with resume=True "
-            "(--resume) to finish",
-            reason=reason,
-            poses_recorded=poses_recorded,
-            poses_total=poses_total,
-            samples_path=samples_path,
+            "(--resume) to finish"
         )
