@@ -17,9 +17,13 @@ from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
 from ..kinematics.record import KinematicsRecord
 from .arg_types import bounded_int, gravity, positive_float
-from .common import add_samples_arguments, arm_from_args, load_samples_from_args
+from .common import (
+    add_derivative_arguments,
+    add_samples_arguments,
+    arm_from_args,
+    load_samples_from_args,
+)
 from .doctor import refuse_convention_mistakes
-from .motion import add_derivative_arguments, calibrate_motion
 
 DESCRIPTION = (
     "Calibrate from a samples CSV: wrench columns fx,fy,fz,mx,my,mz [N, N·m] and the orientation "
@@ -210,10 +214,24 @@ def _run_dynamic(args, noise) -> int:
             f"{', '.join(given)} apply to static calibration, not (yet) to --dynamic; calibrate "
             "the mount and sign from static poses first"
         )
+    from ..calibration.dynamic import calibrate_dynamic
+    from ..io.bags import is_bag_path
+    from ..io.motion_recording import load_motion_bag, load_motion_csv
     from ..kinematics.arm import Arm
 
     arm = arm_from_args(args) or Arm.default()
-    result = calibrate_motion(args, arm, noise)  # the file records its arm, as a static one does
+    if is_bag_path(args.samples):
+        recording = load_motion_bag(
+            args.samples, arm, args.joint_topic, args.wrench_topic, args.wrench_frame
+        )
+    else:
+        recording = load_motion_csv(args.samples, arm)
+    result = calibrate_dynamic(
+        recording.motion_samples(arm, args.sg_window),
+        estimate_inertia=not args.no_inertia,
+        g=args.g,
+        noise=noise,
+    )  # the file records its arm, as a static one does
     return _report(replace(result, kinematics=KinematicsRecord.from_arm(arm)), args)
 
 

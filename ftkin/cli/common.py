@@ -16,7 +16,7 @@ from ..kinematics.robots import (
     load_robot,
     sensor_mount_from_offset,
 )
-from .arg_types import non_negative_float, number_list, positive_float
+from .arg_types import bounded_int, non_negative_float, number_list, positive_float
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -181,6 +181,18 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
         default=defaults.speed_window,
         metavar="S",
         help="time span of the joint-speed finite difference [s] (default: %(default)s)",
+    )
+
+
+def add_derivative_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--sg-window``: the Savitzky–Golay window of the zero-phase derivatives."""
+    parser.add_argument(
+        "--sg-window",
+        type=bounded_int(3, 100_001, "samples"),
+        default=None,
+        metavar="SAMPLES",
+        help="odd Savitzky–Golay window for joint velocities and accelerations (default: about 51 "
+        "ms)",
     )
 
 

@@ -1,4 +1,6 @@
-"""``ftkin plan --n 12 -o poses.csv``: plan calibration poses for an arm."""
+"""``ftkin plan --n 12 -o poses.csv``: plan calibration poses for an arm (``--excitation``: a
+trajectory for ``calibrate --dynamic``).
+"""
 
 from __future__ import annotations
 
@@ -17,10 +19,15 @@ from ..kinematics.arm import Arm
 from ..planning.constraints import DEFAULT_MARGIN, PoseConstraints
 from ..planning.drift_order import DEFAULT_POSE_INTERVAL
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT, ExpectedCalibration
+from ..planning.excitation import (
+    DEFAULT_ACCELERATION_LIMIT,
+    DEFAULT_AMPLITUDE,
+    DEFAULT_VELOCITY_FRACTION,
+    plan_excitation,
+)
 from ..planning.plan import PlanSpec, plan_poses
 from .arg_types import bounded_int, non_negative_float, positive_float, seed, whole_number
 from .common import add_arm_arguments, arm_from_args
-from .motion import add_excitation_arguments, run_excitation
 
 FORMATS = ("csv", "yaml", "json")
 
@@ -377,3 +384,103 @@ def write_plan(plan, path: str, fmt: str) -> None:
         atomic_write_text(path, json.dumps(plan_document(plan), indent=2) + "\n")
     else:
         atomic_write_text(path, yaml_text(plan_document(plan)))
+
+
+def add_excitation_arguments(parser: argparse.ArgumentParser) -> None:
+    """``plan --excitation`` options."""
+    group = parser.add_argument_group(
+        "excitation trajectory (--excitation: for ftkin calibrate --dynamic)"
+    )
+    group.add_argument(
+        "--excitation",
+        action="store_true",
+        help="plan a periodic Fourier-series excitation trajectory instead of poses",
+    )
+    for flag, default, metavar, help_text in (
+        ("--duration", 30.0, "S", "recording length [s] (default: %(default)s)"),
+        ("--rate", 1000.0, "HZ", "sample rate of the CSV [Hz] (default: %(default)s)"),
+        ("--period", None, "S", "period of the series [s] (default: the duration)"),
+    ):
+        group.add_argument(
+            flag, type=positive_float, default=default, metavar=metavar, help=help_text
+        )
+    group.add_argument(
+        "--harmonics",
+        type=bounded_int(1, 50, "harmonics"),
+        default=5,
+        metavar="K",
+        help="harmonics per joint (default: %(default)s)",
+    )
+    for flag, default, metavar, help_text in (
+        (
+            "--velocity-fraction",
+            DEFAULT_VELOCITY_FRACTION,
+            "F",
+            "fraction of the URDF velocity limits (default: %(default)s)",
+        ),
+        (
+            "--acceleration-limit",
+            DEFAULT_ACCELERATION_LIMIT,
+            "RAD_S2",
+            "joint acceleration limit [rad/s²] (default: %(default)s)",
+        ),
+        (
+            "--amplitude",
+            DEFAULT_AMPLITUDE,
+            "RAD",
+            "largest excursion of a joint from the zero configuration [rad] (default: %(default)s)",
+        ),
+    ):
+        group.add_argument(
+            flag, type=positive_float, default=default, metavar=metavar, help=help_text
+        )
+    group.add_argument(
+        "--iterations",
+        type=bounded_int(0, 100_000, "evaluations"),
+        default=150,
+        metavar="N",
+        help="local search evaluations (default: %(default)s)",
+    )
+
+
+def run_excitation(args, arm: Arm) -> int:
+    """``ftkin plan --excitation``: plan, print a summary, write the CSV."""
+    floor = None if args.no_floor else args.floor_height
+    constraints = PoseConstraints(
+        args.margin, floor, None, tuple(args.joint_range), not args.no_self_collision
+    )
+    plan = plan_excitation(
+        arm,
+        args.duration,
+        rate=args.rate,
+        period=args.period,
+        harmonics=args.harmonics,
+        velocity_fraction=args.velocity_fraction,
+        acceleration_limit=args.acceleration_limit,
+        amplitude=args.amplitude,
+        constraints=constraints,
+        noise=SensorNoise(args.noise_force, args.noise_torque),
+        max_iterations=args.iterations,
+        seed=args.seed,
+    )
+    print(
+        f"excitation: {len(plan.times)} samples at {args.rate:g} Hz over {args.duration:g} s, "
+        f"period {plan.trajectory.period:g} s, "
+        f"{plan.trajectory.cosine.shape[1]} harmonics; {constraints.describe()}"
+    )
+    print(
+        f"  information: log det {plan.log_det:.2f}, condition number {plan.condition_number:.3g}"
+    )
+    print(
+        "  peak joint speed [rad/s]: "
+        + ", ".join(f"{v:.2f}" for v in np.abs(plan.joint_velocities).max(axis=0))
+    )
+    print(
+        "  peak joint acceleration [rad/s²]: "
+        + ", ".join(f"{v:.2f}" for v in np.abs(plan.joint_accelerations).max(axis=0))
+    )
+    if args.output:
+        header, rows = plan.table()
+        write_csv(args.output, header, [[*map(float, row)] for row in rows])
+        print(f"wrote {args.output}")
+    return 0
