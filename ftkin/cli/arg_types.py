@@ -1,5 +1,5 @@
-"""argparse value types: numbers with their range and unit in the message, and the number-list
-options.
+"""argparse value types: numbers with their range and unit in the message, the number-list
+options, and :func:`add_options` (a parser's options as a table of :func:`option` rows).
 
 Each converter raises :class:`argparse.ArgumentTypeError`, which the CLI reports as
 ``ftkin <command>: error: argument --x: ...`` (exit 2), never a traceback.
@@ -10,6 +10,17 @@ from __future__ import annotations
 import argparse
 
 from ..calibration.model import GRAVITY_RANGE
+
+
+def option(*flags: str, **keywords) -> tuple:
+    """One row of :func:`add_options`: the arguments of ``add_argument``."""
+    return flags, keywords
+
+
+def add_options(parser, *options: tuple) -> None:
+    """Add each :func:`option` row to ``parser`` (or an argument group)."""
+    for flags, keywords in options:
+        parser.add_argument(*flags, **keywords)
 
 
 def _number(text: str, accept, expected: str) -> float:

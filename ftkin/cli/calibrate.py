@@ -16,7 +16,7 @@ from ..calibration.mount import MOUNT_MODES
 from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
 from ..kinematics.record import KinematicsRecord
-from .arg_types import bounded_int, gravity, positive_float
+from .arg_types import add_options, bounded_int, gravity, option, positive_float
 from .common import (
     add_derivative_arguments,
     add_samples_arguments,
@@ -49,22 +49,23 @@ def register(subparsers) -> None:
         help="estimate sensor bias, tool weight, centre of mass and base tilt",
         description=DESCRIPTION,
     )
-    parser.add_argument("samples", metavar="SAMPLES.csv")
-    parser.add_argument(
-        "-o", "--output", metavar="CALIB.json", help="write the calibration file here"
-    )
-    parser.add_argument(
-        "--method",
-        choices=METHODS,
-        default=METHODS[0],
-        help="ml: joint maximum-likelihood fit with standard errors; linear: the paper's two-step "
-        "least squares (default: %(default)s)",
-    )
-    parser.add_argument(
-        "--g",
-        type=gravity,
-        default=STANDARD_GRAVITY,
-        help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)",
+    add_options(
+        parser,
+        option("samples", metavar="SAMPLES.csv"),
+        option("-o", "--output", metavar="CALIB.json", help="write the calibration file here"),
+        option(
+            "--method",
+            choices=METHODS,
+            default=METHODS[0],
+            help="ml: joint maximum-likelihood fit with standard errors; linear: the paper's "
+            "two-step least squares (default: %(default)s)",
+        ),
+        option(
+            "--g",
+            type=gravity,
+            default=STANDARD_GRAVITY,
+            help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)",
+        ),
     )
     _add_ml_arguments(parser.add_argument_group("ml estimator"))
     _add_convention_arguments(
@@ -73,13 +74,18 @@ def register(subparsers) -> None:
     dynamic = parser.add_argument_group(
         "dynamic calibration (a moving recording: columns t, joints, fx..mz, or a bag)"
     )
-    dynamic.add_argument(
-        "--dynamic",
-        action="store_true",
-        help="identify mass, centre of mass, inertia, bias and tilt from a moving recording",
-    )
-    dynamic.add_argument(
-        "--no-inertia", action="store_true", help="with --dynamic: fit the static parameters only"
+    add_options(
+        dynamic,
+        option(
+            "--dynamic",
+            action="store_true",
+            help="identify mass, centre of mass, inertia, bias and tilt from a moving recording",
+        ),
+        option(
+            "--no-inertia",
+            action="store_true",
+            help="with --dynamic: fit the static parameters only",
+        ),
     )
     add_derivative_arguments(dynamic)
     parser.add_argument(
@@ -92,88 +98,100 @@ def register(subparsers) -> None:
 
 
 def _add_ml_arguments(ml) -> None:
-    ml.add_argument(
-        "--noise-force",
-        type=positive_float,
-        metavar="N",
-        help="noise std of one force reading [N] (with --noise-torque; default: estimated from the "
-        "spread of repeated readings per pose, else from the residuals)",
-    )
-    ml.add_argument(
-        "--noise-torque", type=positive_float, metavar="N·m", help="noise std of one torque reading"
-    )
-    ml.add_argument(
-        "--resolution",
-        type=positive_float,
-        nargs=2,
-        metavar=("N", "N·m"),
-        help="resolution (quantization step) of one force and one torque reading: an estimated "
-        "noise is at least resolution/√12, so a drift model cannot take all of it",
-    )
-    ml.add_argument(
-        "--loss",
-        choices=LOSSES,
-        default="linear",
-        help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
-    )
-    ml.add_argument(
-        "--drop-outliers", action="store_true", help="refit without the poses flagged as outliers"
-    )
-    ml.add_argument(
-        "--drift",
-        type=drift_spec,
-        default="auto",
-        metavar="MODEL",
-        help=f"bias drift over time, with a 't' column: {'|'.join(drift_choices())} (poly:N a "
-        "polynomial of degree N; random-walk estimates the rate; auto picks by BIC and says which; "
-        "default: %(default)s)",
-    )
-    ml.add_argument(
-        "--cross-validate",
-        type=bounded_int(2, 50, "folds"),
-        metavar="K",
-        default=None,
-        help="also print the K-fold cross-validated compensation error at held-out poses, with "
-        "drift none beside the --drift model (does modelling a drift pay on this sensor?)",
-    )
-    ml.add_argument(
-        "--estimate-mount",
-        choices=MOUNT_MODES[1:],
-        metavar="yaw|full",
-        help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or full "
-        "(any rotation); needs joint-angle samples (default: the URDF's sensor frame is right)",
+    add_options(
+        ml,
+        option(
+            "--noise-force",
+            type=positive_float,
+            metavar="N",
+            help="noise std of one force reading [N] (with --noise-torque; default: estimated from "
+            "the spread of repeated readings per pose, else from the residuals)",
+        ),
+        option(
+            "--noise-torque",
+            type=positive_float,
+            metavar="N·m",
+            help="noise std of one torque reading",
+        ),
+        option(
+            "--resolution",
+            type=positive_float,
+            nargs=2,
+            metavar=("N", "N·m"),
+            help="resolution (quantization step) of one force and one torque reading: an estimated "
+            "noise is at least resolution/√12, so a drift model cannot take all of it",
+        ),
+        option(
+            "--loss",
+            choices=LOSSES,
+            default="linear",
+            help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
+        ),
+        option(
+            "--drop-outliers",
+            action="store_true",
+            help="refit without the poses flagged as outliers",
+        ),
+        option(
+            "--drift",
+            type=drift_spec,
+            default="auto",
+            metavar="MODEL",
+            help=f"bias drift over time, with a 't' column: {'|'.join(drift_choices())} (poly:N a "
+            "polynomial of degree N; random-walk estimates the rate; auto picks by BIC and says "
+            "which; default: %(default)s)",
+        ),
+        option(
+            "--cross-validate",
+            type=bounded_int(2, 50, "folds"),
+            metavar="K",
+            default=None,
+            help="also print the K-fold cross-validated compensation error at held-out poses, with "
+            "drift none beside the --drift model (does modelling a drift pay on this sensor?)",
+        ),
+        option(
+            "--estimate-mount",
+            choices=MOUNT_MODES[1:],
+            metavar="yaw|full",
+            help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or "
+            "full (any rotation); needs joint-angle samples (default: the URDF's sensor frame is "
+            "right)",
+        ),
     )
 
 
 def _add_convention_arguments(conventions) -> None:
-    conventions.add_argument(
-        "--sensor-sign",
-        type=int,
-        choices=(1, -1),
-        default=1,
-        help="-1: the sensor reports the reaction, negate every reading (default: %(default)s, the "
-        "load on the sensor)",
-    )
-    conventions.add_argument(
-        "--flip-axis",
-        choices=("x", "y", "z"),
-        help="negate this axis's force and torque channels in every reading (a mirrored, "
-        "left-handed sensor axis)",
-    )
-    conventions.add_argument(
-        "--base-mount",
-        choices=BASE_MOUNTS,
-        default="floor",
-        help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall (no "
-        "check); a fitted weight more than 90° off the expected direction is refused as a suspect "
-        "sign (default: %(default)s)",
-    )
-    conventions.add_argument(
-        "--expected-gravity",
-        type=float,
-        nargs=3,
-        metavar=("GX", "GY", "GZ"),
-        help="expected gravity direction in the base frame (overrides --base-mount)",
+    add_options(
+        conventions,
+        option(
+            "--sensor-sign",
+            type=int,
+            choices=(1, -1),
+            default=1,
+            help="-1: the sensor reports the reaction, negate every reading (default: %(default)s, "
+            "the load on the sensor)",
+        ),
+        option(
+            "--flip-axis",
+            choices=("x", "y", "z"),
+            help="negate this axis's force and torque channels in every reading (a mirrored, "
+            "left-handed sensor axis)",
+        ),
+        option(
+            "--base-mount",
+            choices=BASE_MOUNTS,
+            default="floor",
+            help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall "
+            "(no check); a fitted weight more than 90° off the expected direction is refused as a "
+            "suspect sign (default: %(default)s)",
+        ),
+        option(
+            "--expected-gravity",
+            type=float,
+            nargs=3,
+            metavar=("GX", "GY", "GZ"),
+            help="expected gravity direction in the base frame (overrides --base-mount)",
+        ),
     )
 
 

@@ -16,7 +16,14 @@ from ..kinematics.robots import (
     load_robot,
     sensor_mount_from_offset,
 )
-from .arg_types import bounded_int, non_negative_float, number_list, positive_float
+from .arg_types import (
+    add_options,
+    bounded_int,
+    non_negative_float,
+    number_list,
+    option,
+    positive_float,
+)
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -24,43 +31,46 @@ logger = logging.getLogger("ftkin.cli")
 def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
     """``--urdf``, ``--sensor-frame``, ``--tool-frame`` (default: the bundled arm)."""
     group = parser.add_argument_group("robot model (for joint-angle columns)")
-    group.add_argument(
-        "--robot",
-        metavar="NAME",
-        help=f"robot by name: {', '.join(ROBOTS)} (default: {DEFAULT_ROBOT}, the bundled arm)",
-    )
-    group.add_argument(
-        "--urdf", metavar="PATH", help="URDF of the arm (default: the bundled six-axis arm)"
-    )
-    group.add_argument(
-        "--sensor-frame",
-        default="ft_sensor",
-        metavar="NAME",
-        help="sensor frame name (default: ft_sensor)",
-    )
-    group.add_argument(
-        "--tool-frame", default=None, metavar="NAME", help="tool / control-point frame name"
-    )
-    group.add_argument(
-        "--sensor-offset",
-        type=number_list,
-        metavar="X Y Z [R P Y]",
-        help="with --robot: sensor origin in the flange frame, X Y Z [m] and optionally ROLL PITCH "
-        "YAW [rad] "
-        "(with --urdf and --sensor-parent: the same, relative to that frame)",
-    )
-    group.add_argument(
-        "--sensor-parent",
-        metavar="FRAME",
-        help="with --urdf: add the sensor frame at this existing frame (for URDFs without one)",
-    )
-    group.add_argument(
-        "--package-dir",
-        action="append",
-        default=[],
-        metavar="DIR",
-        help="folder that package:// mesh URIs resolve against (collision checks, 3D view; "
-        "repeatable)",
+    add_options(
+        group,
+        option(
+            "--robot",
+            metavar="NAME",
+            help=f"robot by name: {', '.join(ROBOTS)} (default: {DEFAULT_ROBOT}, the bundled arm)",
+        ),
+        option(
+            "--urdf", metavar="PATH", help="URDF of the arm (default: the bundled six-axis arm)"
+        ),
+        option(
+            "--sensor-frame",
+            default="ft_sensor",
+            metavar="NAME",
+            help="sensor frame name (default: ft_sensor)",
+        ),
+        option(
+            "--tool-frame", default=None, metavar="NAME", help="tool / control-point frame name"
+        ),
+        option(
+            "--sensor-offset",
+            type=number_list,
+            metavar="X Y Z [R P Y]",
+            help="with --robot: sensor origin in the flange frame, X Y Z [m] and optionally ROLL "
+            "PITCH YAW [rad] "
+            "(with --urdf and --sensor-parent: the same, relative to that frame)",
+        ),
+        option(
+            "--sensor-parent",
+            metavar="FRAME",
+            help="with --urdf: add the sensor frame at this existing frame (for URDFs without one)",
+        ),
+        option(
+            "--package-dir",
+            action="append",
+            default=[],
+            metavar="DIR",
+            help="folder that package:// mesh URIs resolve against (collision checks, 3D view; "
+            "repeatable)",
+        ),
     )
 
 
@@ -71,11 +81,11 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     ``--sensor-frame`` or ``--tool-frame`` that the model lacks is a
     :class:`~ftkin.exceptions.FrameNotFound` listing its frames.
     """
-    for option in ("urdf", "robot", "sensor_frame", "tool_frame", "sensor_parent"):
-        value = getattr(args, option, None)
+    for name in ("urdf", "robot", "sensor_frame", "tool_frame", "sensor_parent"):
+        value = getattr(args, name, None)
         if value is not None and not str(value).strip():
             raise InvalidInput(
-                f"--{option.replace('_', '-')} is empty; give a name or leave the option out"
+                f"--{name.replace('_', '-')} is empty; give a name or leave the option out"
             )
     if getattr(args, "urdf", None) and getattr(args, "robot", None):
         raise InvalidInput("give either --urdf or --robot, not both")
@@ -132,55 +142,58 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
         "ROS 2 bags (a rosbag2 folder, .mcap or .db3 instead of a CSV; needs ftkin[bags]) and "
         "continuous recordings (a CSV with a time column and no pose column)"
     )
-    group.add_argument(
-        "--all-rows", action="store_true", help="every reading its own pose: no still segments"
-    )
-    group.add_argument(
-        "--joint-topic",
-        metavar="TOPIC",
-        help="sensor_msgs/JointState topic (default: the only one)",
-    )
-    group.add_argument(
-        "--wrench-topic",
-        metavar="TOPIC",
-        help="geometry_msgs/WrenchStamped topic (default: the only one)",
-    )
-    group.add_argument(
-        "--wrench-frame",
-        choices=("sensor", "base"),
-        default="sensor",
-        help="frame the bag's wrenches are expressed in; base: rotate them into the sensor frame "
-        "(a UR TCP force) "
-        "(default: %(default)s)",
-    )
-    group.add_argument(
-        "--speed-threshold",
-        type=positive_float,
-        default=defaults.speed_threshold,
-        metavar="RAD_S",
-        help="static when every joint (every R_BS entry of a CSV without joint columns) is "
-        "slower than this [rad/s] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--min-static-duration",
-        type=positive_float,
-        default=defaults.min_duration,
-        metavar="S",
-        help="shortest usable static segment after settling [s] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--settle-time",
-        type=non_negative_float,
-        default=defaults.settle_time,
-        metavar="S",
-        help="time skipped at the start of each static segment [s] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--speed-window",
-        type=positive_float,
-        default=defaults.speed_window,
-        metavar="S",
-        help="time span of the joint-speed finite difference [s] (default: %(default)s)",
+    add_options(
+        group,
+        option(
+            "--all-rows", action="store_true", help="every reading its own pose: no still segments"
+        ),
+        option(
+            "--joint-topic",
+            metavar="TOPIC",
+            help="sensor_msgs/JointState topic (default: the only one)",
+        ),
+        option(
+            "--wrench-topic",
+            metavar="TOPIC",
+            help="geometry_msgs/WrenchStamped topic (default: the only one)",
+        ),
+        option(
+            "--wrench-frame",
+            choices=("sensor", "base"),
+            default="sensor",
+            help="frame the bag's wrenches are expressed in; base: rotate them into the sensor "
+            "frame (a UR TCP force) "
+            "(default: %(default)s)",
+        ),
+        option(
+            "--speed-threshold",
+            type=positive_float,
+            default=defaults.speed_threshold,
+            metavar="RAD_S",
+            help="static when every joint (every R_BS entry of a CSV without joint columns) is "
+            "slower than this [rad/s] (default: %(default)s)",
+        ),
+        option(
+            "--min-static-duration",
+            type=positive_float,
+            default=defaults.min_duration,
+            metavar="S",
+            help="shortest usable static segment after settling [s] (default: %(default)s)",
+        ),
+        option(
+            "--settle-time",
+            type=non_negative_float,
+            default=defaults.settle_time,
+            metavar="S",
+            help="time skipped at the start of each static segment [s] (default: %(default)s)",
+        ),
+        option(
+            "--speed-window",
+            type=positive_float,
+            default=defaults.speed_window,
+            metavar="S",
+            help="time span of the joint-speed finite difference [s] (default: %(default)s)",
+        ),
     )
 
 

@@ -13,6 +13,7 @@ from ..io.bags import is_bag_path
 from ..io.calibration_file import load_calibration
 from ..io.csv_table import read_table, write_csv
 from ..kinematics.arm import Arm
+from .arg_types import add_options, option
 from .common import (
     add_derivative_arguments,
     add_samples_arguments,
@@ -40,9 +41,12 @@ def register(subparsers) -> None:
         "too (joint "
         "derivatives from the log, zero-phase).",
     )
-    parser.add_argument("calibration", metavar="CALIB.json")
-    parser.add_argument("log", metavar="LOG.csv")
-    parser.add_argument("-o", "--output", metavar="OUT.csv", required=True)
+    add_options(
+        parser,
+        option("calibration", metavar="CALIB.json"),
+        option("log", metavar="LOG.csv"),
+        option("-o", "--output", metavar="OUT.csv", required=True),
+    )
     add_derivative_arguments(parser)
     parser.add_argument(
         "--allow-other-arm",

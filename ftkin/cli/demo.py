@@ -18,7 +18,7 @@ from ..control.compensation import Compensator
 from ..io.calibration_file import save_calibration
 from ..kinematics.arm import Arm
 from ..sim.sensor import SimulatedSensor, paper_like_truth
-from .arg_types import bounded_int, non_negative_float, seed
+from .arg_types import add_options, bounded_int, non_negative_float, option, seed
 
 
 def register(subparsers) -> None:
@@ -26,31 +26,32 @@ def register(subparsers) -> None:
         "demo",
         help="simulated sensor on the bundled arm: calibrate, compare with the truth, compensate",
     )
-    parser.add_argument(
-        "--poses",
-        type=bounded_int(3, 1000, "poses"),
-        default=12,
-        help="number of static poses, 3 to 1000 (default: %(default)s)",
-    )
-    parser.add_argument(
-        "--readings",
-        type=bounded_int(1, 100_000, "readings per pose"),
-        default=500,
-        help="readings averaged per pose, 1 to 100,000 (default: %(default)s, as the paper)",
-    )
-    parser.add_argument("--seed", type=seed, default=0, help="random seed (default: %(default)s)")
-    parser.add_argument("--method", choices=METHODS, default=METHODS[0])
-    parser.add_argument(
-        "-o", "--output", metavar="CALIB.json", help="also write the calibration file"
-    )
-    parser.add_argument(
-        "--sim-seconds",
-        type=non_negative_float,
-        default=2.0,
-        metavar="S",
-        help="simulated seconds of the closed-loop MuJoCo segment (needs the 'sim' extra; 0 skips "
-        "it; "
-        "default: %(default)s)",
+    add_options(
+        parser,
+        option(
+            "--poses",
+            type=bounded_int(3, 1000, "poses"),
+            default=12,
+            help="number of static poses, 3 to 1000 (default: %(default)s)",
+        ),
+        option(
+            "--readings",
+            type=bounded_int(1, 100_000, "readings per pose"),
+            default=500,
+            help="readings averaged per pose, 1 to 100,000 (default: %(default)s, as the paper)",
+        ),
+        option("--seed", type=seed, default=0, help="random seed (default: %(default)s)"),
+        option("--method", choices=METHODS, default=METHODS[0]),
+        option("-o", "--output", metavar="CALIB.json", help="also write the calibration file"),
+        option(
+            "--sim-seconds",
+            type=non_negative_float,
+            default=2.0,
+            metavar="S",
+            help="simulated seconds of the closed-loop MuJoCo segment (needs the 'sim' extra; 0 "
+            "skips it; "
+            "default: %(default)s)",
+        ),
     )
     parser.set_defaults(func=run)
 

@@ -8,6 +8,7 @@ from ..io.atomic import atomic_write_text
 from ..io.calibration_file import load_calibration
 from ..io.export import EXPORT_FORMATS, export_request
 from ..kinematics.arm import Arm
+from .arg_types import add_options, option
 from .common import add_arm_arguments, arm_for_calibration, arm_from_args
 
 
@@ -22,23 +23,30 @@ def register(subparsers) -> None:
         "ROS's rules. Payloads: the centre of mass in the flange frame, through the mount and the "
         "URDF.",
     )
-    parser.add_argument("calibration", metavar="CALIB.json")
-    parser.add_argument(
-        "--format", required=True, choices=tuple(EXPORT_FORMATS), dest="fmt", help="target format"
+    add_options(
+        parser,
+        option("calibration", metavar="CALIB.json"),
+        option(
+            "--format",
+            required=True,
+            choices=tuple(EXPORT_FORMATS),
+            dest="fmt",
+            help="target format",
+        ),
+        option("-o", "--output", required=True, metavar="OUT.yaml"),
     )
-    parser.add_argument("-o", "--output", required=True, metavar="OUT.yaml")
     takers: dict[str, list] = {}
     for fmt in EXPORT_FORMATS.values():
-        for option in fmt.options:
-            takers.setdefault(option.name, [option]).append(fmt.name)
+        for spec in fmt.options:
+            takers.setdefault(spec.name, [spec]).append(fmt.name)
     group = parser.add_argument_group("format options (each format takes its own)")
-    for option, *names in takers.values():
+    for spec, *names in takers.values():
         group.add_argument(
-            option.flag,
-            dest=option.name,
+            spec.flag,
+            dest=spec.name,
             default=None,
-            help=f"{option.help} [{', '.join(names)}]",
-            **option.argparse,
+            help=f"{spec.help} [{', '.join(names)}]",
+            **spec.argparse,
         )
     parser.add_argument(
         "--allow-other-arm",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..io.csv_table import write_csv
+from .arg_types import add_options, option
 from .common import add_samples_arguments, load_samples_from_args
 
 
@@ -19,10 +20,12 @@ def register(subparsers) -> None:
         "are written with a pose column. The CSV is a valid input of 'ftkin calibrate'. With "
         "--all, every reading (no pose column) is written.",
     )
-    parser.add_argument("recording", metavar="RECORDING")
-    parser.add_argument("-o", "--output", metavar="SAMPLES.csv", required=True)
-    parser.add_argument(  # the older name of the samples option --all-rows: one setting
-        "--all", dest="all_rows", action="store_true", help="the same as --all-rows"
+    add_options(
+        parser,
+        option("recording", metavar="RECORDING"),
+        option("-o", "--output", metavar="SAMPLES.csv", required=True),
+        # the older name of the samples option --all-rows: one setting
+        option("--all", dest="all_rows", action="store_true", help="the same as --all-rows"),
     )
     add_samples_arguments(parser)
     parser.set_defaults(func=run)

@@ -26,7 +26,15 @@ from ..planning.excitation import (
     plan_excitation,
 )
 from ..planning.plan import PlanSpec, plan_poses
-from .arg_types import bounded_int, non_negative_float, positive_float, seed, whole_number
+from .arg_types import (
+    add_options,
+    bounded_int,
+    non_negative_float,
+    option,
+    positive_float,
+    seed,
+    whole_number,
+)
 from .common import add_arm_arguments, arm_from_args
 
 FORMATS = ("csv", "yaml", "json")
@@ -41,71 +49,80 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _add_tool_arguments(group) -> None:
-    group.add_argument(
-        "--tool-weight",
-        type=positive_float,
-        default=PAPER_TOOL_WEIGHT,
-        metavar="N",
-        help="tool weight [N] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--com",
-        type=float,
-        nargs=3,
-        default=list(PAPER_CENTER_OF_MASS),
-        metavar=("X", "Y", "Z"),
-        help="tool centre of mass in the sensor frame [m] (default: 0 0 0.047)",
+    add_options(
+        group,
+        option(
+            "--tool-weight",
+            type=positive_float,
+            default=PAPER_TOOL_WEIGHT,
+            metavar="N",
+            help="tool weight [N] (default: %(default)s)",
+        ),
+        option(
+            "--com",
+            type=float,
+            nargs=3,
+            default=list(PAPER_CENTER_OF_MASS),
+            metavar=("X", "Y", "Z"),
+            help="tool centre of mass in the sensor frame [m] (default: 0 0 0.047)",
+        ),
     )
     noise = SensorNoise.paper()
-    group.add_argument(
-        "--noise-force",
-        type=positive_float,
-        default=float(noise.force_std[0]),
-        metavar="N",
-        help="force noise per reading [N] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--noise-torque",
-        type=positive_float,
-        default=float(noise.torque_std[0]),
-        metavar="NM",
-        help="torque noise per reading [N·m] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--readings-per-pose",
-        type=bounded_int(1, 10**9, "readings per pose"),
-        default=1,
-        metavar="K",
-        help="independent readings averaged at each pose (default: %(default)s)",
+    add_options(
+        group,
+        option(
+            "--noise-force",
+            type=positive_float,
+            default=float(noise.force_std[0]),
+            metavar="N",
+            help="force noise per reading [N] (default: %(default)s)",
+        ),
+        option(
+            "--noise-torque",
+            type=positive_float,
+            default=float(noise.torque_std[0]),
+            metavar="NM",
+            help="torque noise per reading [N·m] (default: %(default)s)",
+        ),
+        option(
+            "--readings-per-pose",
+            type=bounded_int(1, 10**9, "readings per pose"),
+            default=1,
+            metavar="K",
+            help="independent readings averaged at each pose (default: %(default)s)",
+        ),
     )
 
 
 def _add_estimation_arguments(group) -> None:
-    group.add_argument(
-        "--estimate-mount",
-        choices=("yaw", "full"),
-        default=None,
-        metavar="yaw|full",
-        help="the calibration will also estimate the sensor's mount on the flange: plan and "
-        "predict for it",
-    )
-    group.add_argument(
-        "--drift-rate",
-        type=float,
-        nargs=2,
-        default=None,
-        metavar=("N/√s", "NM/√s"),
-        help="the bias drifts as a random walk of these rates (force, torque; e.g. a past "
-        "calibration's drift rate): visit the poses in the order the drift spoils least (longer "
-        "joint travel) and predict errors with the drift",
-    )
-    group.add_argument(
-        "--pose-interval",
-        type=positive_float,
-        default=None,
-        metavar="S",
-        help="time from one pose to the next [s], with --drift-rate (default: "
-        f"{DEFAULT_POSE_INTERVAL:g})",
+    add_options(
+        group,
+        option(
+            "--estimate-mount",
+            choices=("yaw", "full"),
+            default=None,
+            metavar="yaw|full",
+            help="the calibration will also estimate the sensor's mount on the flange: plan and "
+            "predict for it",
+        ),
+        option(
+            "--drift-rate",
+            type=float,
+            nargs=2,
+            default=None,
+            metavar=("N/√s", "NM/√s"),
+            help="the bias drifts as a random walk of these rates (force, torque; e.g. a past "
+            "calibration's drift rate): visit the poses in the order the drift spoils least "
+            "(longer joint travel) and predict errors with the drift",
+        ),
+        option(
+            "--pose-interval",
+            type=positive_float,
+            default=None,
+            metavar="S",
+            help="time from one pose to the next [s], with --drift-rate (default: "
+            f"{DEFAULT_POSE_INTERVAL:g})",
+        ),
     )
 
 
@@ -193,34 +210,40 @@ def register(subparsers) -> None:
         "for short joint travel; print the predicted standard error of every calibration "
         "parameter.",
     )
-    parser.add_argument(
-        "-n",
-        "--n",
-        type=pose_count,
-        default=None,
-        help=f"number of poses (3 to {MAX_PLAN_POSES}; required without --excitation)",
-    )
-    parser.add_argument("-o", "--output", metavar="POSES.csv", help="write the poses here")
-    parser.add_argument(
-        "--format",
-        choices=FORMATS,
-        default=None,
-        help="output format (default: from the file name, else csv)",
+    add_options(
+        parser,
+        option(
+            "-n",
+            "--n",
+            type=pose_count,
+            default=None,
+            help=f"number of poses (3 to {MAX_PLAN_POSES}; required without --excitation)",
+        ),
+        option("-o", "--output", metavar="POSES.csv", help="write the poses here"),
+        option(
+            "--format",
+            choices=FORMATS,
+            default=None,
+            help="output format (default: from the file name, else csv)",
+        ),
     )
     _add_constraint_arguments(parser.add_argument_group("constraints"))
-    parser.add_argument(
-        "--seed",
-        type=seed,
-        default=0,
-        help="random seed; the same seed gives the same plan (default: 0)",
-    )
-    parser.add_argument(
-        "--max-travel-ratio",
-        type=positive_float,
-        default=None,
-        metavar="R",
-        help="with --drift-rate: keep the joint travel within R (≥ 1) times the short-travel "
-        "order's (default: unbounded, about 2x)",
+    add_options(
+        parser,
+        option(
+            "--seed",
+            type=seed,
+            default=0,
+            help="random seed; the same seed gives the same plan (default: 0)",
+        ),
+        option(
+            "--max-travel-ratio",
+            type=positive_float,
+            default=None,
+            metavar="R",
+            help="with --drift-rate: keep the joint travel within R (≥ 1) times the short-travel "
+            "order's (default: unbounded, about 2x)",
+        ),
     )
     add_expectation_arguments(parser)
     add_excitation_arguments(parser)
@@ -229,43 +252,44 @@ def register(subparsers) -> None:
 
 
 def _add_constraint_arguments(group) -> None:
-    group.add_argument(
-        "--margin",
-        type=non_negative_float,
-        default=DEFAULT_MARGIN,
-        metavar="RAD",
-        help="distance kept from the joint limits [rad] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--floor-height",
-        type=_floor,
-        default=DEFAULT_FLOOR_HEIGHT,
-        metavar="M",
-        help="sensor and tool origins stay above this height in the base frame [m] (default: "
-        "%(default)s, a floor at base z = 0 with a 5 cm margin)",
-    )
-    group.add_argument(
-        "--no-floor",
-        action="store_true",
-        help="no floor constraint (an arm mounted on a wall or ceiling)",
-    )
-    group.add_argument(
-        "--max-tilt-deg",
-        type=non_negative_float,
-        default=None,
-        metavar="DEG",
-        help="largest angle of the tool axis from pointing straight down [deg]",
-    )
-    group.add_argument(
-        "--joint-range",
-        type=joint_range,
-        action="append",
-        default=[],
-        metavar="NAME:LO:HI",
-        help="extra range for one joint [rad]; repeat for several joints",
-    )
-    group.add_argument(
-        "--no-self-collision", action="store_true", help="do not check self-collision"
+    add_options(
+        group,
+        option(
+            "--margin",
+            type=non_negative_float,
+            default=DEFAULT_MARGIN,
+            metavar="RAD",
+            help="distance kept from the joint limits [rad] (default: %(default)s)",
+        ),
+        option(
+            "--floor-height",
+            type=_floor,
+            default=DEFAULT_FLOOR_HEIGHT,
+            metavar="M",
+            help="sensor and tool origins stay above this height in the base frame [m] (default: "
+            "%(default)s, a floor at base z = 0 with a 5 cm margin)",
+        ),
+        option(
+            "--no-floor",
+            action="store_true",
+            help="no floor constraint (an arm mounted on a wall or ceiling)",
+        ),
+        option(
+            "--max-tilt-deg",
+            type=non_negative_float,
+            default=None,
+            metavar="DEG",
+            help="largest angle of the tool axis from pointing straight down [deg]",
+        ),
+        option(
+            "--joint-range",
+            type=joint_range,
+            action="append",
+            default=[],
+            metavar="NAME:LO:HI",
+            help="extra range for one joint [rad]; repeat for several joints",
+        ),
+        option("--no-self-collision", action="store_true", help="do not check self-collision"),
     )
 
 

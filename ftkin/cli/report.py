@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from ..io.calibration_file import load_calibration
 from ..viz.report import save_report
+from .arg_types import add_options, option
 from .common import (
     add_samples_arguments,
     arm_for_calibration,
@@ -26,10 +27,13 @@ def register(subparsers) -> None:
         "in the "
         "calibration file is used).",
     )
-    parser.add_argument("calibration", metavar="CALIB.json")
-    parser.add_argument("samples", metavar="SAMPLES")
-    parser.add_argument("-o", "--output", required=True, metavar="report.png")
-    parser.add_argument("--title", help="figure title")
+    add_options(
+        parser,
+        option("calibration", metavar="CALIB.json"),
+        option("samples", metavar="SAMPLES"),
+        option("-o", "--output", required=True, metavar="report.png"),
+        option("--title", help="figure title"),
+    )
     add_samples_arguments(parser)
     parser.set_defaults(func=run)
 

@@ -18,6 +18,7 @@ from ..control.compensation import Compensator
 from ..exceptions import InvalidInput
 from ..io.calibration_file import load_calibration, save_calibration
 from ..kinematics.arm import Arm
+from .arg_types import add_options, option
 from .common import add_arm_arguments, arm_for_calibration
 
 
@@ -34,28 +35,31 @@ def register(subparsers) -> None:
         "CALIB.json in place "
         "(atomically) unless -o is given.",
     )
-    parser.add_argument("calibration", metavar="CALIB.json")
-    parser.add_argument(
-        "--q",
-        type=float,
-        nargs="+",
-        required=True,
-        metavar="Q",
-        help="joint angles of the pose [rad]",
-    )
-    parser.add_argument(
-        "--wrench",
-        type=float,
-        nargs=6,
-        required=True,
-        metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
-        help="raw reading at that pose [N, N·m], sensor frame (average a few hundred readings)",
-    )
-    parser.add_argument(
-        "-o",
-        "--output",
-        metavar="OUT.json",
-        help="write the re-zeroed calibration here instead of in place",
+    add_options(
+        parser,
+        option("calibration", metavar="CALIB.json"),
+        option(
+            "--q",
+            type=float,
+            nargs="+",
+            required=True,
+            metavar="Q",
+            help="joint angles of the pose [rad]",
+        ),
+        option(
+            "--wrench",
+            type=float,
+            nargs=6,
+            required=True,
+            metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
+            help="raw reading at that pose [N, N·m], sensor frame (average a few hundred readings)",
+        ),
+        option(
+            "-o",
+            "--output",
+            metavar="OUT.json",
+            help="write the re-zeroed calibration here instead of in place",
+        ),
     )
     add_arm_arguments(parser)
     parser.set_defaults(func=run)

@@ -38,7 +38,15 @@ from ..exceptions import InvalidInput
 from ..io.csv_table import write_csv
 from ..sim.placement import MODES, PlacementRun, PlacementScenario, simulate_placement
 from ..sim.surfaces import SURFACES, surface_by_name
-from .arg_types import bounded_int, non_negative_float, number_list, positive_float, seed
+from .arg_types import (
+    add_options,
+    bounded_int,
+    non_negative_float,
+    number_list,
+    option,
+    positive_float,
+    seed,
+)
 from .common import add_arm_arguments, arm_from_args
 
 _DEFAULT = PlacementScenario()
@@ -66,102 +74,106 @@ def register(subparsers) -> None:
 
 def _add_scenario_arguments(placement) -> None:
     """The experiment: surface, controller, gains, object, timing."""
-    placement.add_argument("--surface", choices=sorted(SURFACES), default="sponge")
-    placement.add_argument(
-        "--mode",
-        choices=(*MODES, "all"),
-        default="admittance",
-        help="controller; 'all' runs the three and plots them together (default: %(default)s)",
-    )
-    placement.add_argument(
-        "--k1",
-        type=non_negative_float,
-        default=_DEFAULT.k1 * 1e3,
-        metavar="MM_PER_N",
-        help="position gain k13 [mm/N] (default: %(default)g)",
-    )
-    placement.add_argument(
-        "--k2",
-        type=non_negative_float,
-        default=_DEFAULT.k2 * 1e3,
-        metavar="MM_PER_S_N",
-        help="velocity gain k23 [mm/(s·N)] (default: %(default)g; the paper swept around 0.1)",
-    )
-    placement.add_argument(
-        "--weight",
-        type=positive_float,
-        default=_DEFAULT.object_weight,
-        help="object weight [N] (default: %(default)g)",
-    )
-    placement.add_argument(
-        "--gap",
-        type=non_negative_float,
-        default=_DEFAULT.start_gap * 1e3,
-        help="object bottom above the surface at the start [mm] (default: %(default)g)",
-    )
-    placement.add_argument(
-        "--duration",
-        type=positive_float,
-        default=_DEFAULT.duration,
-        help="simulated time [s] (default: %(default)g)",
-    )
-    placement.add_argument(
-        "--dt",
-        type=positive_float,
-        default=_DEFAULT.dt,
-        help="control period [s] (default: %(default)g)",
-    )
-    placement.add_argument(
-        "--seed",
-        type=seed,
-        default=0,
-        help="random seed of the sensor noise (default: %(default)s)",
+    add_options(
+        placement,
+        option("--surface", choices=sorted(SURFACES), default="sponge"),
+        option(
+            "--mode",
+            choices=(*MODES, "all"),
+            default="admittance",
+            help="controller; 'all' runs the three and plots them together (default: %(default)s)",
+        ),
+        option(
+            "--k1",
+            type=non_negative_float,
+            default=_DEFAULT.k1 * 1e3,
+            metavar="MM_PER_N",
+            help="position gain k13 [mm/N] (default: %(default)g)",
+        ),
+        option(
+            "--k2",
+            type=non_negative_float,
+            default=_DEFAULT.k2 * 1e3,
+            metavar="MM_PER_S_N",
+            help="velocity gain k23 [mm/(s·N)] (default: %(default)g; the paper swept around 0.1)",
+        ),
+        option(
+            "--weight",
+            type=positive_float,
+            default=_DEFAULT.object_weight,
+            help="object weight [N] (default: %(default)g)",
+        ),
+        option(
+            "--gap",
+            type=non_negative_float,
+            default=_DEFAULT.start_gap * 1e3,
+            help="object bottom above the surface at the start [mm] (default: %(default)g)",
+        ),
+        option(
+            "--duration",
+            type=positive_float,
+            default=_DEFAULT.duration,
+            help="simulated time [s] (default: %(default)g)",
+        ),
+        option(
+            "--dt",
+            type=positive_float,
+            default=_DEFAULT.dt,
+            help="control period [s] (default: %(default)g)",
+        ),
+        option(
+            "--seed",
+            type=seed,
+            default=0,
+            help="random seed of the sensor noise (default: %(default)s)",
+        ),
     )
 
 
 def _add_run_arguments(placement) -> None:
     """How it runs (engine, sensor timing, sweep) and what it writes."""
-    placement.add_argument(
-        "--engine",
-        choices=ENGINES,
-        default=default_engine(),
-        help="mujoco (physics engine, extra 'sim') or simple (kinematic arm, spring-damper "
-        "formula); "
-        "default: mujoco when installed (here: %(default)s)",
-    )
-    placement.add_argument(
-        "--sample-rate",
-        type=positive_float,
-        metavar="HZ",
-        help="MuJoCo engine: sensor sample rate [Hz] (default: one sample per control tick)",
-    )
-    placement.add_argument(
-        "--delay-ticks",
-        type=bounded_int(0, 10_000, "ticks"),
-        default=1,
-        metavar="N",
-        help="MuJoCo engine: sensor delay in control ticks (default: %(default)s)",
-    )
-    placement.add_argument(
-        "--sweep", choices=("k1", "k2"), help="repeat the run over --values of this gain"
-    )
-    placement.add_argument(
-        "--values",
-        type=_value_list,
-        metavar="V1,V2,...",
-        help="gain values for --sweep, in the paper's mm units (e.g. 0.05,0.1,0.2)",
-    )
-    placement.add_argument("-o", "--output", metavar="RUN.csv", help="write the time series")
-    placement.add_argument(
-        "--plot",
-        metavar="RUN.png",
-        help="write displacement, velocity and force plots (needs matplotlib)",
-    )
-    placement.add_argument(
-        "--view",
-        action="store_true",
-        help="watch the run live in meshcat (arm, contact wrench, commanded twist), paced to real "
-        "time",
+    add_options(
+        placement,
+        option(
+            "--engine",
+            choices=ENGINES,
+            default=default_engine(),
+            help="mujoco (physics engine, extra 'sim') or simple (kinematic arm, spring-damper "
+            "formula); "
+            "default: mujoco when installed (here: %(default)s)",
+        ),
+        option(
+            "--sample-rate",
+            type=positive_float,
+            metavar="HZ",
+            help="MuJoCo engine: sensor sample rate [Hz] (default: one sample per control tick)",
+        ),
+        option(
+            "--delay-ticks",
+            type=bounded_int(0, 10_000, "ticks"),
+            default=1,
+            metavar="N",
+            help="MuJoCo engine: sensor delay in control ticks (default: %(default)s)",
+        ),
+        option("--sweep", choices=("k1", "k2"), help="repeat the run over --values of this gain"),
+        option(
+            "--values",
+            type=_value_list,
+            metavar="V1,V2,...",
+            help="gain values for --sweep, in the paper's mm units (e.g. 0.05,0.1,0.2)",
+        ),
+        option("-o", "--output", metavar="RUN.csv", help="write the time series"),
+        option(
+            "--plot",
+            metavar="RUN.png",
+            help="write displacement, velocity and force plots (needs matplotlib)",
+        ),
+        option(
+            "--view",
+            action="store_true",
+            help="watch the run live in meshcat (arm, contact wrench, commanded twist), paced to "
+            "real time",
+        ),
     )
 
 
@@ -337,16 +349,19 @@ def add_input_parsers(experiments) -> None:
         _add_sensor_arguments(parser)
         add_arm_arguments(parser)
         if kind in ("samples", "bag"):
-            parser.add_argument(
-                "--poses",
-                metavar="POSES.csv",
-                help="joint configurations (ftkin plan -o POSES.csv; default: --n random ones)",
-            )
-            parser.add_argument(
-                "--n",
-                type=bounded_int(3, 1000, "poses"),
-                default=12,
-                help="random poses without --poses (default: %(default)s)",
+            add_options(
+                parser,
+                option(
+                    "--poses",
+                    metavar="POSES.csv",
+                    help="joint configurations (ftkin plan -o POSES.csv; default: --n random ones)",
+                ),
+                option(
+                    "--n",
+                    type=bounded_int(3, 1000, "poses"),
+                    default=12,
+                    help="random poses without --poses (default: %(default)s)",
+                ),
             )
         if kind == "samples":
             parser.add_argument(
@@ -376,36 +391,39 @@ def add_input_parsers(experiments) -> None:
 
 def _add_sensor_arguments(parser) -> None:
     group = parser.add_argument_group("the simulated sensor and tool")
-    group.add_argument("--seed", type=seed, default=0, help="random seed (default: %(default)s)")
-    group.add_argument("--tool-mass", type=positive_float, metavar="KG", help="tool mass [kg]")
-    group.add_argument(
-        "--com", type=number_list, metavar="X Y Z", help="tool centre of mass, sensor frame [m]"
-    )
-    group.add_argument(
-        "--noise-scale",
-        type=positive_float,
-        default=1.0,
-        metavar="K",
-        help="noise = K × the paper's 0.02 N, 0.002 N·m per reading (default: %(default)g)",
-    )
-    group.add_argument(
-        "--drift",
-        action="store_true",
-        help="a drifting bias (warm-up and random walk, SensorDrift.typical()); samples get a t "
-        "column",
-    )
-    group.add_argument(
-        "--mount-rpy-deg",
-        type=number_list,
-        metavar="R P Y",
-        help="the sensor turned on the flange: R_M = Rz(Y) Ry(P) Rx(R) [deg]",
-    )
-    group.add_argument(
-        "--sensor-sign",
-        type=int,
-        choices=(1, -1),
-        default=1,
-        help="-1: the sensor reports the reaction (default: %(default)s)",
+    add_options(
+        group,
+        option("--seed", type=seed, default=0, help="random seed (default: %(default)s)"),
+        option("--tool-mass", type=positive_float, metavar="KG", help="tool mass [kg]"),
+        option(
+            "--com", type=number_list, metavar="X Y Z", help="tool centre of mass, sensor frame [m]"
+        ),
+        option(
+            "--noise-scale",
+            type=positive_float,
+            default=1.0,
+            metavar="K",
+            help="noise = K × the paper's 0.02 N, 0.002 N·m per reading (default: %(default)g)",
+        ),
+        option(
+            "--drift",
+            action="store_true",
+            help="a drifting bias (warm-up and random walk, SensorDrift.typical()); samples get a "
+            "t column",
+        ),
+        option(
+            "--mount-rpy-deg",
+            type=number_list,
+            metavar="R P Y",
+            help="the sensor turned on the flange: R_M = Rz(Y) Ry(P) Rx(R) [deg]",
+        ),
+        option(
+            "--sensor-sign",
+            type=int,
+            choices=(1, -1),
+            default=1,
+            help="-1: the sensor reports the reaction (default: %(default)s)",
+        ),
     )
 
 

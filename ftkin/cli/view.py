@@ -17,7 +17,7 @@ from ..exceptions import InvalidInput
 from ..io.calibration_file import load_calibration
 from ..kinematics.arm import Arm
 from ..kinematics.mounting import mounted_arm
-from .arg_types import bounded_int, positive_float
+from .arg_types import add_options, bounded_int, option, positive_float
 from .common import (
     add_samples_arguments,
     arm_for_calibration,
@@ -42,17 +42,20 @@ def register(subparsers) -> None:
         "magenta lies on cyan. "
         "Starts a meshcat server and prints its URL (Ctrl-C stops it), or writes --html / --png.",
     )
-    parser.add_argument("calibration", metavar="CALIB.json")
-    parser.add_argument(
-        "samples",
-        metavar="SAMPLES.csv",
-        nargs="?",
-        help="the calibration samples (poses to step through)",
-    )
-    parser.add_argument(
-        "--replay",
-        metavar="LOG.csv",
-        help="play a recorded run instead: joint columns, fx..mz, optional t [s]",
+    add_options(
+        parser,
+        option("calibration", metavar="CALIB.json"),
+        option(
+            "samples",
+            metavar="SAMPLES.csv",
+            nargs="?",
+            help="the calibration samples (poses to step through)",
+        ),
+        option(
+            "--replay",
+            metavar="LOG.csv",
+            help="play a recorded run instead: joint columns, fx..mz, optional t [s]",
+        ),
     )
     _add_output_arguments(parser)
     _add_drawing_arguments(parser)
@@ -61,58 +64,64 @@ def register(subparsers) -> None:
 
 
 def _add_output_arguments(parser) -> None:
-    parser.add_argument(
-        "--html",
-        metavar="OUT.html",
-        help="write a self-contained page (animated unless --pose is given)",
-    )
-    parser.add_argument(
-        "--png",
-        metavar="OUT.png",
-        help="write a screenshot with headless Chromium: the --pose (1024×768), else a contact "
-        f"sheet of every pose (at most {SHEET_CELLS} evenly spaced rows of a replay; outlier "
-        "poses outlined in red)",
-    )
-    parser.add_argument(
-        "--pose",
-        type=int,
-        metavar="K",
-        help="only this pose: pose id of SAMPLES.csv, or row index of the replay log",
-    )
-    parser.add_argument(
-        "--no-wait",
-        action="store_true",
-        help="do not keep the live viewer running (scripts, tests)",
+    add_options(
+        parser,
+        option(
+            "--html",
+            metavar="OUT.html",
+            help="write a self-contained page (animated unless --pose is given)",
+        ),
+        option(
+            "--png",
+            metavar="OUT.png",
+            help="write a screenshot with headless Chromium: the --pose (1024×768), else a contact "
+            f"sheet of every pose (at most {SHEET_CELLS} evenly spaced rows of a replay; outlier "
+            "poses outlined in red)",
+        ),
+        option(
+            "--pose",
+            type=int,
+            metavar="K",
+            help="only this pose: pose id of SAMPLES.csv, or row index of the replay log",
+        ),
+        option(
+            "--no-wait",
+            action="store_true",
+            help="do not keep the live viewer running (scripts, tests)",
+        ),
     )
 
 
 def _add_drawing_arguments(parser) -> None:
-    parser.add_argument(
-        "--scale",
-        type=positive_float,
-        metavar="M_PER_N",
-        help="arrow length per newton [m/N] (default: tool weight drawn 25 cm long)",
-    )
-    parser.add_argument(
-        "--tilt-exaggeration",
-        type=positive_float,
-        default=1.0,
-        metavar="K",
-        help="draw the base tilt K times larger",
-    )
-    parser.add_argument(
-        "--hold",
-        type=positive_float,
-        default=1.0,
-        metavar="S",
-        help="seconds per calibration pose in the animation",
-    )
-    parser.add_argument(
-        "--max-frames",
-        type=bounded_int(1, 1_000_000, "frames"),
-        default=1500,
-        metavar="N",
-        help="replay: keep at most N rows (evenly spaced)",
+    add_options(
+        parser,
+        option(
+            "--scale",
+            type=positive_float,
+            metavar="M_PER_N",
+            help="arrow length per newton [m/N] (default: tool weight drawn 25 cm long)",
+        ),
+        option(
+            "--tilt-exaggeration",
+            type=positive_float,
+            default=1.0,
+            metavar="K",
+            help="draw the base tilt K times larger",
+        ),
+        option(
+            "--hold",
+            type=positive_float,
+            default=1.0,
+            metavar="S",
+            help="seconds per calibration pose in the animation",
+        ),
+        option(
+            "--max-frames",
+            type=bounded_int(1, 1_000_000, "frames"),
+            default=1500,
+            metavar="N",
+            help="replay: keep at most N rows (evenly spaced)",
+        ),
     )
 
 
