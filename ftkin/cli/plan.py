@@ -42,15 +42,8 @@ FORMATS = ("csv", "yaml", "json")
 
 def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
     """Expected tool, sensor noise and estimation the predicted standard errors are for."""
-    _add_tool_arguments(
-        parser.add_argument_group("expected tool and sensor noise (defaults: the paper's)")
-    )
-    _add_estimation_arguments(parser.add_argument_group("what the calibration will estimate"))
-
-
-def _add_tool_arguments(group) -> None:
     add_options(
-        group,
+        parser.add_argument_group("expected tool and sensor noise (defaults: the paper's)"),
         option(
             "--tool-weight",
             type=positive_float,
@@ -66,21 +59,17 @@ def _add_tool_arguments(group) -> None:
             metavar=("X", "Y", "Z"),
             help="tool centre of mass in the sensor frame [m] (default: 0 0 0.047)",
         ),
-    )
-    noise = SensorNoise.paper()
-    add_options(
-        group,
         option(
             "--noise-force",
             type=positive_float,
-            default=float(noise.force_std[0]),
+            default=float(SensorNoise.paper().force_std[0]),
             metavar="N",
             help="force noise per reading [N] (default: %(default)s)",
         ),
         option(
             "--noise-torque",
             type=positive_float,
-            default=float(noise.torque_std[0]),
+            default=float(SensorNoise.paper().torque_std[0]),
             metavar="NM",
             help="torque noise per reading [N·m] (default: %(default)s)",
         ),
@@ -92,11 +81,8 @@ def _add_tool_arguments(group) -> None:
             help="independent readings averaged at each pose (default: %(default)s)",
         ),
     )
-
-
-def _add_estimation_arguments(group) -> None:
     add_options(
-        group,
+        parser.add_argument_group("what the calibration will estimate"),
         option(
             "--estimate-mount",
             choices=("yaw", "full"),
@@ -227,33 +213,8 @@ def register(subparsers) -> None:
             help="output format (default: from the file name, else csv)",
         ),
     )
-    _add_constraint_arguments(parser.add_argument_group("constraints"))
     add_options(
-        parser,
-        option(
-            "--seed",
-            type=seed,
-            default=0,
-            help="random seed; the same seed gives the same plan (default: 0)",
-        ),
-        option(
-            "--max-travel-ratio",
-            type=positive_float,
-            default=None,
-            metavar="R",
-            help="with --drift-rate: keep the joint travel within R (≥ 1) times the short-travel "
-            "order's (default: unbounded, about 2x)",
-        ),
-    )
-    add_expectation_arguments(parser)
-    add_excitation_arguments(parser)
-    add_arm_arguments(parser)
-    parser.set_defaults(func=run)
-
-
-def _add_constraint_arguments(group) -> None:
-    add_options(
-        group,
+        parser.add_argument_group("constraints"),
         option(
             "--margin",
             type=non_negative_float,
@@ -291,6 +252,93 @@ def _add_constraint_arguments(group) -> None:
         ),
         option("--no-self-collision", action="store_true", help="do not check self-collision"),
     )
+    add_options(
+        parser,
+        option(
+            "--seed",
+            type=seed,
+            default=0,
+            help="random seed; the same seed gives the same plan (default: 0)",
+        ),
+        option(
+            "--max-travel-ratio",
+            type=positive_float,
+            default=None,
+            metavar="R",
+            help="with --drift-rate: keep the joint travel within R (≥ 1) times the short-travel "
+            "order's (default: unbounded, about 2x)",
+        ),
+    )
+    add_expectation_arguments(parser)
+    add_options(
+        parser.add_argument_group(
+            "excitation trajectory (--excitation: for ftkin calibrate --dynamic)"
+        ),
+        option(
+            "--excitation",
+            action="store_true",
+            help="plan a periodic Fourier-series excitation trajectory instead of poses",
+        ),
+        option(
+            "--duration",
+            type=positive_float,
+            default=30.0,
+            metavar="S",
+            help="recording length [s] (default: %(default)s)",
+        ),
+        option(
+            "--rate",
+            type=positive_float,
+            default=1000.0,
+            metavar="HZ",
+            help="sample rate of the CSV [Hz] (default: %(default)s)",
+        ),
+        option(
+            "--period",
+            type=positive_float,
+            default=None,
+            metavar="S",
+            help="period of the series [s] (default: the duration)",
+        ),
+        option(
+            "--harmonics",
+            type=bounded_int(1, 50, "harmonics"),
+            default=5,
+            metavar="K",
+            help="harmonics per joint (default: %(default)s)",
+        ),
+        option(
+            "--velocity-fraction",
+            type=positive_float,
+            default=DEFAULT_VELOCITY_FRACTION,
+            metavar="F",
+            help="fraction of the URDF velocity limits (default: %(default)s)",
+        ),
+        option(
+            "--acceleration-limit",
+            type=positive_float,
+            default=DEFAULT_ACCELERATION_LIMIT,
+            metavar="RAD_S2",
+            help="joint acceleration limit [rad/s²] (default: %(default)s)",
+        ),
+        option(
+            "--amplitude",
+            type=positive_float,
+            default=DEFAULT_AMPLITUDE,
+            metavar="RAD",
+            help="largest excursion of a joint from the zero configuration [rad] (default: "
+            "%(default)s)",
+        ),
+        option(
+            "--iterations",
+            type=bounded_int(0, 100_000, "evaluations"),
+            default=150,
+            metavar="N",
+            help="local search evaluations (default: %(default)s)",
+        ),
+    )
+    add_arm_arguments(parser)
+    parser.set_defaults(func=run)
 
 
 def constraints_from_args(args) -> PoseConstraints:
@@ -333,7 +381,7 @@ def run(args) -> int:
                 "--drift-rate, "
                 "--pose-interval and --max-travel-ratio do not apply"
             )
-        return run_excitation(args, load_arm(args))
+        return _run_excitation(args, load_arm(args))
     if args.n is None:
         raise InvalidInput("give --n N (the number of poses), or --excitation for a trajectory")
     spec = PlanSpec(
@@ -378,7 +426,6 @@ def _pose_lines(plan) -> str:
 
 def plan_document(plan) -> dict:
     """The plan as plain data (YAML/JSON output)."""
-    errors = {key: np.atleast_1d(value).tolist() for key, value in plan.standard_errors.items()}
     return {
         "joint_names": list(plan.joint_names),
         "joint_positions_rad": plan.joint_positions.tolist(),
@@ -386,7 +433,9 @@ def plan_document(plan) -> dict:
         "constraints": plan.constraints.describe(),
         "criterion": plan.criterion,
         "criterion_value": plan.criterion_value,
-        "predicted_standard_errors": errors,
+        "predicted_standard_errors": {
+            key: np.atleast_1d(value).tolist() for key, value in plan.standard_errors.items()
+        },
         "joint_travel_rad": plan.joint_travel,
         **(
             {}
@@ -410,69 +459,9 @@ def write_plan(plan, path: str, fmt: str) -> None:
         atomic_write_text(path, yaml_text(plan_document(plan)))
 
 
-def add_excitation_arguments(parser: argparse.ArgumentParser) -> None:
-    """``plan --excitation`` options."""
-    group = parser.add_argument_group(
-        "excitation trajectory (--excitation: for ftkin calibrate --dynamic)"
-    )
-    group.add_argument(
-        "--excitation",
-        action="store_true",
-        help="plan a periodic Fourier-series excitation trajectory instead of poses",
-    )
-    for flag, default, metavar, help_text in (
-        ("--duration", 30.0, "S", "recording length [s] (default: %(default)s)"),
-        ("--rate", 1000.0, "HZ", "sample rate of the CSV [Hz] (default: %(default)s)"),
-        ("--period", None, "S", "period of the series [s] (default: the duration)"),
-    ):
-        group.add_argument(
-            flag, type=positive_float, default=default, metavar=metavar, help=help_text
-        )
-    group.add_argument(
-        "--harmonics",
-        type=bounded_int(1, 50, "harmonics"),
-        default=5,
-        metavar="K",
-        help="harmonics per joint (default: %(default)s)",
-    )
-    for flag, default, metavar, help_text in (
-        (
-            "--velocity-fraction",
-            DEFAULT_VELOCITY_FRACTION,
-            "F",
-            "fraction of the URDF velocity limits (default: %(default)s)",
-        ),
-        (
-            "--acceleration-limit",
-            DEFAULT_ACCELERATION_LIMIT,
-            "RAD_S2",
-            "joint acceleration limit [rad/s²] (default: %(default)s)",
-        ),
-        (
-            "--amplitude",
-            DEFAULT_AMPLITUDE,
-            "RAD",
-            "largest excursion of a joint from the zero configuration [rad] (default: %(default)s)",
-        ),
-    ):
-        group.add_argument(
-            flag, type=positive_float, default=default, metavar=metavar, help=help_text
-        )
-    group.add_argument(
-        "--iterations",
-        type=bounded_int(0, 100_000, "evaluations"),
-        default=150,
-        metavar="N",
-        help="local search evaluations (default: %(default)s)",
-    )
-
-
-def run_excitation(args, arm: Arm) -> int:
+def _run_excitation(args, arm: Arm) -> int:
     """``ftkin plan --excitation``: plan, print a summary, write the CSV."""
-    floor = None if args.no_floor else args.floor_height
-    constraints = PoseConstraints(
-        args.margin, floor, None, tuple(args.joint_range), not args.no_self_collision
-    )
+    constraints = constraints_from_args(args)
     plan = plan_excitation(
         arm,
         args.duration,
