@@ -35,7 +35,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..exceptions import InvalidInput
-from ..io.csv_table import write_csv
+from ..io.csv_table import read_table, write_csv
 from ..sim.placement import MODES, PlacementRun, PlacementScenario, simulate_placement
 from ..sim.surfaces import SURFACES, surface_by_name
 from .arg_types import (
@@ -66,16 +66,9 @@ def register(subparsers) -> None:
         "control with "
         "compensation, or admittance control on raw readings (docs/method.md §6).",
     )
-    _add_scenario_arguments(placement)
-    _add_run_arguments(placement)
-    placement.set_defaults(func=run)
-    add_input_parsers(experiments)
-
-
-def _add_scenario_arguments(placement) -> None:
-    """The experiment: surface, controller, gains, object, timing."""
     add_options(
         placement,
+        # the experiment: surface, controller, gains, object, timing
         option("--surface", choices=sorted(SURFACES), default="sponge"),
         option(
             "--mode",
@@ -127,17 +120,11 @@ def _add_scenario_arguments(placement) -> None:
             default=0,
             help="random seed of the sensor noise (default: %(default)s)",
         ),
-    )
-
-
-def _add_run_arguments(placement) -> None:
-    """How it runs (engine, sensor timing, sweep) and what it writes."""
-    add_options(
-        placement,
+        # how it runs (engine, sensor timing, sweep) and what it writes
         option(
             "--engine",
-            choices=ENGINES,
-            default=default_engine(),
+            choices=("mujoco", "simple"),
+            default="mujoco" if importlib.util.find_spec("mujoco") is not None else "simple",
             help="mujoco (physics engine, extra 'sim') or simple (kinematic arm, spring-damper "
             "formula); "
             "default: mujoco when installed (here: %(default)s)",
@@ -175,32 +162,22 @@ def _add_run_arguments(placement) -> None:
             "real time",
         ),
     )
-
-
-ENGINES = ("mujoco", "simple")
-"""Simulation engines of ``ftkin simulate placement``."""
-
-
-def default_engine() -> str:
-    """``"mujoco"`` when the ``mujoco`` package is importable, else ``"simple"``."""
-    return "mujoco" if importlib.util.find_spec("mujoco") is not None else "simple"
+    placement.set_defaults(func=run)
+    # the example inputs, each from the simulated sensor and tool
+    for kind, text in KINDS.items():
+        parser = experiments.add_parser(kind, help=text, description=f"Write {text}.")
+        add_options(parser.add_argument_group("the simulated sensor and tool"), *SENSOR_OPTIONS)
+        add_arm_arguments(parser)
+        add_options(
+            parser,
+            *INPUT_OPTIONS[kind],
+            option("-o", "--output", required=True, metavar="FILE", help="file to write"),
+        )
+        parser.set_defaults(func=run_input, kind=kind)
 
 
 def _value_list(text: str) -> list[float]:
     return [non_negative_float(part) for part in text.split(",") if part.strip()]
-
-
-def _summary(run: PlacementRun) -> str:
-    settle = run.settle_time
-    placed = (
-        f"placed at t = {settle:.3f} s"
-        if np.isfinite(settle)
-        else "not placed (|F'z| >= 0.05 N or still moving at the end)"
-    )
-    return (
-        f"peak contact force {run.peak_contact_force:.3f} N, final F'z {run.final_force:+.3f} N, "
-        f"final penetration {run.penetration[-1] * 1e3:.3f} mm; {placed}"
-    )
 
 
 def _simulate(scenario: PlacementScenario, args):
@@ -246,8 +223,13 @@ def _run_viewed(scenario: PlacementScenario) -> PlacementRun:
     return result
 
 
-def _scenario(args) -> PlacementScenario:
-    return PlacementScenario(
+def _scenarios(args) -> tuple[list[PlacementScenario], list]:
+    """The runs the options ask for and their labels (gain values or mode indices)."""
+    if args.view and (args.sweep or args.mode in ("position", "all")):
+        raise InvalidInput(
+            "--view draws one run of an admittance controller: drop --sweep, use --mode admittance"
+        )
+    scenario = PlacementScenario(
         surface=surface_by_name(args.surface),
         mode=MODES[0] if args.mode == "all" else args.mode,
         k1=args.k1 * 1e-3,
@@ -258,14 +240,6 @@ def _scenario(args) -> PlacementScenario:
         dt=args.dt,
         seed=args.seed,
     )
-
-
-def _scenarios(args, scenario: PlacementScenario) -> tuple[list[PlacementScenario], list]:
-    """The runs the options ask for and their labels (gain values or mode indices)."""
-    if args.view and (args.sweep or args.mode in ("position", "all")):
-        raise InvalidInput(
-            "--view draws one run of an admittance controller: drop --sweep, use --mode admittance"
-        )
     if args.sweep:
         if not args.values:
             raise InvalidInput("--sweep needs --values, e.g. --values 0.05,0.1,0.2 (mm units)")
@@ -285,7 +259,7 @@ def _write(args, results, labels) -> None:
     """The time series (``-o``) and the plots (``--plot``) of the runs."""
     runs = [result[0] for result in results]
     if args.output:
-        header = results[0][1]
+        header, rows = results[0][1], results[0][2].tolist()
         if len(results) > 1:
             header = ["gain" if args.sweep else "mode"] + header
             rows = [
@@ -293,8 +267,6 @@ def _write(args, results, labels) -> None:
                 for label, result in zip(labels, results)
                 for row in result[2].tolist()
             ]
-        else:
-            rows = results[0][2].tolist()
         write_csv(args.output, header, rows)
         print(f"wrote {args.output}")
     if args.plot:
@@ -309,7 +281,7 @@ def _write(args, results, labels) -> None:
 
 
 def run(args) -> int:
-    scenarios, labels = _scenarios(args, _scenario(args))
+    scenarios, labels = _scenarios(args)
     if args.view:  # the live view draws the simple engine's run, paced to the wall clock
         if args.engine != "simple":
             print("--view: running the simple engine (the live view follows its ticks)")
@@ -325,7 +297,16 @@ def run(args) -> int:
             if args.sweep
             else ""
         )
-        print(f"{args.surface}, {one.scenario.mode} ({args.engine}): {prefix}{_summary(one)}")
+        placed = (
+            f"placed at t = {one.settle_time:.3f} s"
+            if np.isfinite(one.settle_time)
+            else "not placed (|F'z| >= 0.05 N or still moving at the end)"
+        )
+        print(
+            f"{args.surface}, {one.scenario.mode} ({args.engine}): {prefix}peak contact force "
+            f"{one.peak_contact_force:.3f} N, final F'z {one.final_force:+.3f} N, final "
+            f"penetration {one.penetration[-1] * 1e3:.3f} mm; {placed}"
+        )
     _write(args, results, labels)
     return 0
 
@@ -342,89 +323,91 @@ KINDS = {
 """The example inputs ``ftkin simulate`` writes, and what each is for."""
 
 
-def add_input_parsers(experiments) -> None:
-    """Register ``samples``, ``log``, ``recording`` and ``bag`` under ``ftkin simulate``."""
-    for kind, text in KINDS.items():
-        parser = experiments.add_parser(kind, help=text, description=f"Write {text}.")
-        _add_sensor_arguments(parser)
-        add_arm_arguments(parser)
-        if kind in ("samples", "bag"):
-            add_options(
-                parser,
-                option(
-                    "--poses",
-                    metavar="POSES.csv",
-                    help="joint configurations (ftkin plan -o POSES.csv; default: --n random ones)",
-                ),
-                option(
-                    "--n",
-                    type=bounded_int(3, 1000, "poses"),
-                    default=12,
-                    help="random poses without --poses (default: %(default)s)",
-                ),
-            )
-        if kind == "samples":
-            parser.add_argument(
-                "--readings",
-                type=bounded_int(1, 100_000, "readings per pose"),
-                default=10,
-                help="readings per pose, 1 ms apart (default: %(default)s)",
-            )
-        if kind in ("log", "recording"):
-            parser.add_argument(
-                "--duration",
-                type=positive_float,
-                default=5.0 if kind == "log" else 10.0,
-                metavar="S",
-                help="length [s] (default: %(default)s)",
-            )
-        if kind == "recording":
-            parser.add_argument(
-                "--trajectory",
-                metavar="TRAJ.csv",
-                help="excitation to follow (ftkin plan --excitation -o TRAJ.csv; default: one "
-                "planned for --duration)",
-            )
-        parser.add_argument("-o", "--output", required=True, metavar="FILE", help="file to write")
-        parser.set_defaults(func=run_input, kind=kind)
-
-
-def _add_sensor_arguments(parser) -> None:
-    group = parser.add_argument_group("the simulated sensor and tool")
-    add_options(
-        group,
-        option("--seed", type=seed, default=0, help="random seed (default: %(default)s)"),
-        option("--tool-mass", type=positive_float, metavar="KG", help="tool mass [kg]"),
+_POSES = (
+    option(
+        "--poses",
+        metavar="POSES.csv",
+        help="joint configurations (ftkin plan -o POSES.csv; default: --n random ones)",
+    ),
+    option(
+        "--n",
+        type=bounded_int(3, 1000, "poses"),
+        default=12,
+        help="random poses without --poses (default: %(default)s)",
+    ),
+)
+INPUT_OPTIONS = {
+    "samples": (
+        *_POSES,
         option(
-            "--com", type=number_list, metavar="X Y Z", help="tool centre of mass, sensor frame [m]"
+            "--readings",
+            type=bounded_int(1, 100_000, "readings per pose"),
+            default=10,
+            help="readings per pose, 1 ms apart (default: %(default)s)",
         ),
+    ),
+    "log": (
         option(
-            "--noise-scale",
+            "--duration",
             type=positive_float,
-            default=1.0,
-            metavar="K",
-            help="noise = K × the paper's 0.02 N, 0.002 N·m per reading (default: %(default)g)",
+            default=5.0,
+            metavar="S",
+            help="length [s] (default: %(default)s)",
+        ),
+    ),
+    "recording": (
+        option(
+            "--duration",
+            type=positive_float,
+            default=10.0,
+            metavar="S",
+            help="length [s] (default: %(default)s)",
         ),
         option(
-            "--drift",
-            action="store_true",
-            help="a drifting bias (warm-up and random walk, SensorDrift.typical()); samples get a "
-            "t column",
+            "--trajectory",
+            metavar="TRAJ.csv",
+            help="excitation to follow (ftkin plan --excitation -o TRAJ.csv; default: one "
+            "planned for --duration)",
         ),
-        option(
-            "--mount-rpy-deg",
-            type=number_list,
-            metavar="R P Y",
-            help="the sensor turned on the flange: R_M = Rz(Y) Ry(P) Rx(R) [deg]",
-        ),
-        option(
-            "--sensor-sign",
-            type=int,
-            choices=(1, -1),
-            default=1,
-            help="-1: the sensor reports the reaction (default: %(default)s)",
-        ),
-    )
+    ),
+    "bag": _POSES,
+}
+"""The options of each example input of ``ftkin simulate``, besides the sensor's and the arm's."""
+
+SENSOR_OPTIONS = (
+    option("--seed", type=seed, default=0, help="random seed (default: %(default)s)"),
+    option("--tool-mass", type=positive_float, metavar="KG", help="tool mass [kg]"),
+    option(
+        "--com", type=number_list, metavar="X Y Z", help="tool centre of mass, sensor frame [m]"
+    ),
+    option(
+        "--noise-scale",
+        type=positive_float,
+        default=1.0,
+        metavar="K",
+        help="noise = K × the paper's 0.02 N, 0.002 N·m per reading (default: %(default)g)",
+    ),
+    option(
+        "--drift",
+        action="store_true",
+        help="a drifting bias (warm-up and random walk, SensorDrift.typical()); samples get a "
+        "t column",
+    ),
+    option(
+        "--mount-rpy-deg",
+        type=number_list,
+        metavar="R P Y",
+        help="the sensor turned on the flange: R_M = Rz(Y) Ry(P) Rx(R) [deg]",
+    ),
+    option(
+        "--sensor-sign",
+        type=int,
+        choices=(1, -1),
+        default=1,
+        help="-1: the sensor reports the reaction (default: %(default)s)",
+    ),
+)
+"""The simulated sensor and tool of every example input."""
 
 
 def _inputs(args):
@@ -458,15 +441,6 @@ def _inputs(args):
     return SimulatedInputs(truth, noise, drift, mount, float(args.sensor_sign))
 
 
-def _configurations(args, arm, rng) -> np.ndarray:
-    if args.poses is None:
-        return arm.random_configurations(args.n, rng, margin=0.3)
-    from ..io.csv_table import read_table
-    from ..sim.inputs import configurations_from_table
-
-    return configurations_from_table(read_table(args.poses), arm)
-
-
 def _trajectory(args, arm):
     """``(t, q, dq, ddq)`` of ``--trajectory`` or of an excitation planned for ``--duration``."""
     if args.trajectory is None:
@@ -474,8 +448,6 @@ def _trajectory(args, arm):
 
         plan = plan_excitation(arm, args.duration, rate=1000.0, seed=args.seed)
         return plan.times, plan.joint_positions, plan.joint_velocities, plan.joint_accelerations
-    from ..io.csv_table import read_table
-
     table = read_table(args.trajectory)
     names = list(arm.joint_names)
     wanted = ["t", *names, *(f"{n}_vel" for n in names), *(f"{n}_acc" for n in names)]
@@ -495,16 +467,6 @@ def _trajectory(args, arm):
     )
 
 
-def _print_truth(inputs) -> None:
-    truth = inputs.truth
-    numbers = lambda v: ", ".join(f"{x:+.4f}" for x in v)  # noqa: E731
-    print(
-        f"truth: tool {truth.tool_mass:.4f} kg, COM [{numbers(truth.center_of_mass)}] m, "
-        f"F0 [{numbers(truth.force_offset)}] N, M0 [{numbers(truth.torque_offset)}] N·m, "
-        f"tilt U, V {truth.base_tilt_deg[0]:+.3f}°, {truth.base_tilt_deg[1]:+.3f}°"
-    )
-
-
 def run_input(args) -> int:
     """``ftkin simulate samples|log|recording|bag``: write the example input, print the truth."""
     from ..kinematics.arm import Arm
@@ -513,14 +475,24 @@ def run_input(args) -> int:
     arm = arm_from_args(args) or Arm.default()
     rng = np.random.default_rng(args.seed)
     inputs = _inputs(args)
-    _print_truth(inputs)
+    truth = inputs.truth
+    numbers = lambda v: ", ".join(f"{x:+.4f}" for x in v)  # noqa: E731
+    print(
+        f"truth: tool {truth.tool_mass:.4f} kg, COM [{numbers(truth.center_of_mass)}] m, "
+        f"F0 [{numbers(truth.force_offset)}] N, M0 [{numbers(truth.torque_offset)}] N·m, "
+        f"tilt U, V {truth.base_tilt_deg[0]:+.3f}°, {truth.base_tilt_deg[1]:+.3f}°"
+    )
+    if args.kind in ("samples", "bag"):
+        configurations = (
+            arm.random_configurations(args.n, rng, margin=0.3)
+            if args.poses is None
+            else sim_inputs.configurations_from_table(read_table(args.poses), arm)
+        )
     if args.kind == "bag":
-        configurations = _configurations(args, arm, rng)
         sim_inputs.write_bag(args.output, inputs, arm, configurations, rng)
         print(f"wrote {args.output}: a ROS 2 bag of {len(configurations)} poses held 2 s each")
         return 0
     if args.kind == "samples":
-        configurations = _configurations(args, arm, rng)
         header, rows = sim_inputs.samples_table(inputs, arm, configurations, rng, args.readings)
         what = f"{len(configurations)} poses × {args.readings} readings"
     elif args.kind == "log":
@@ -529,9 +501,7 @@ def run_input(args) -> int:
     else:
         from ..sim.mujoco.tool_inertia import ToolInertia
 
-        tool = ToolInertia(
-            inputs.truth.tool_mass, inputs.truth.center_of_mass, np.diag([2e-3, 2e-3, 1e-3])
-        )
+        tool = ToolInertia(truth.tool_mass, truth.center_of_mass, np.diag([2e-3, 2e-3, 1e-3]))
         times, q, dq, ddq = _trajectory(args, arm)
         try:
             header, rows = sim_inputs.recording_table(inputs, arm, times, q, dq, ddq, rng, tool)
