@@ -56,16 +56,6 @@ def register(subparsers) -> None:
             metavar="LOG.csv",
             help="play a recorded run instead: joint columns, fx..mz, optional t [s]",
         ),
-    )
-    _add_output_arguments(parser)
-    _add_drawing_arguments(parser)
-    add_samples_arguments(parser)
-    parser.set_defaults(func=run)
-
-
-def _add_output_arguments(parser) -> None:
-    add_options(
-        parser,
         option(
             "--html",
             metavar="OUT.html",
@@ -89,12 +79,6 @@ def _add_output_arguments(parser) -> None:
             action="store_true",
             help="do not keep the live viewer running (scripts, tests)",
         ),
-    )
-
-
-def _add_drawing_arguments(parser) -> None:
-    add_options(
-        parser,
         option(
             "--scale",
             type=positive_float,
@@ -123,6 +107,8 @@ def _add_drawing_arguments(parser) -> None:
             help="replay: keep at most N rows (evenly spaced)",
         ),
     )
+    add_samples_arguments(parser)
+    parser.set_defaults(func=run)
 
 
 @dataclass(frozen=True)
@@ -139,14 +125,16 @@ class Frames:
 def _calibration_poses(loaded) -> Frames:
     samples = loaded.samples
     averages = samples.pose_averages()
-    configurations = None
-    if samples.joint_positions is not None:
-        configurations = np.array(
+    configurations = (
+        None
+        if samples.joint_positions is None
+        else np.array(
             [
                 samples.joint_positions[samples.pose_ids == pid].mean(axis=0)
                 for pid in averages.pose_ids
             ]
         )
+    )
     labels = [f"pose {int(pid)}" for pid in averages.pose_ids]
     return Frames(labels, averages.wrenches, configurations, averages.rotations, None)
 
@@ -166,22 +154,21 @@ def _with_bias_at_times(frames: Frames, calibration, times: np.ndarray) -> Frame
 
 
 def _replay_rows(loaded, max_frames: int) -> Frames:
-    samples, table = loaded.samples, loaded.table
-    times = samples.times
+    samples, times = loaded.samples, loaded.samples.times
     if times is not None and np.any(np.diff(times) < 0):
         raise InvalidInput(
-            f"{table.source}: the time column must not decrease (seconds since the start)"
+            f"{loaded.table.source}: the time column must not decrease (seconds since the start)"
         )
-    rows = np.arange(len(samples))
-    if len(rows) > max_frames:
-        rows = np.unique(np.linspace(0, len(samples) - 1, max_frames).round().astype(int))
-    if times is None:
-        times = rows / 30.0  # no clock: 30 rows per second
-    else:
-        times = times[rows]
+    rows = _evenly(len(samples), max_frames)
+    times = rows / 30.0 if times is None else times[rows]  # no clock: 30 rows per second
     configurations = samples.joint_positions[rows] if samples.joint_positions is not None else None
     labels = [f"row {int(r)}" for r in rows]
     return Frames(labels, samples.wrenches[rows], configurations, samples.rotations[rows], times)
+
+
+def _evenly(count: int, most: int) -> np.ndarray:
+    """Indices of at most ``most`` of ``count`` rows, evenly spaced (all of them if they fit)."""
+    return np.unique(np.linspace(0, count - 1, min(count, most)).round().astype(int))
 
 
 def _pick(frames: Frames, pose: int, replay: bool) -> int:
@@ -197,12 +184,6 @@ def _where(frames: Frames, rows=slice(None)) -> dict:
     if frames.configurations is not None:
         return {"configurations": frames.configurations[rows]}
     return {"rotations": frames.rotations[rows]}
-
-
-def _show(viewer, frames: Frames, k: int):
-    if frames.configurations is not None:
-        return viewer.show_pose(frames.configurations[k], frames.raw_wrenches[k])
-    return viewer.show_rotation(frames.rotations[k], frames.raw_wrenches[k])
 
 
 def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
@@ -232,9 +213,7 @@ def _print_table(labels: list[str], vectors) -> None:
 def _contact_sheet(viewer, frames: Frames, calibration, path: str, title: str) -> None:
     from ..viz.contact_sheet import save_contact_sheet, sheet_cells
 
-    rows = np.arange(len(frames.labels))
-    if len(rows) > SHEET_CELLS:
-        rows = np.unique(np.linspace(0, len(rows) - 1, SHEET_CELLS).round().astype(int))
+    rows = _evenly(len(frames.labels), SHEET_CELLS)
     diagnostics = calibration.diagnostics
     flagged = {
         f"pose {int(pid)}"
@@ -242,8 +221,9 @@ def _contact_sheet(viewer, frames: Frames, calibration, path: str, title: str) -
     }
     labels = [frames.labels[k] for k in rows]
     outliers = [i for i, label in enumerate(labels) if label in flagged]
-    where = _where(frames, rows)
-    cells = sheet_cells(viewer, labels, frames.raw_wrenches[rows], outliers=outliers, **where)
+    cells = sheet_cells(
+        viewer, labels, frames.raw_wrenches[rows], outliers=outliers, **_where(frames, rows)
+    )
     save_contact_sheet(cells, path, title=title)
     print(
         f"wrote {path} (contact sheet of {len(cells)} poses, {len(outliers)} outliers outlined in "
@@ -305,7 +285,12 @@ def run(args: argparse.Namespace) -> int:
     with CalibrationViewer(
         calibration, arm, scale=args.scale, tilt_exaggeration=args.tilt_exaggeration
     ) as viewer:
-        shown = _show(viewer, frames, chosen if chosen is not None else 0)
+        k = chosen if chosen is not None else 0
+        shown = (
+            viewer.show_rotation(frames.rotations[k], frames.raw_wrenches[k])
+            if frames.configurations is None
+            else viewer.show_pose(frames.configurations[k], frames.raw_wrenches[k])
+        )
         print(
             f"scale: 1 N = {100 * viewer.scale:.3g} cm; magenta = measured force − bias, cyan = "
             "predicted tool gravity, yellow = contact force, green = tool COM, purple = base "
