@@ -18,14 +18,14 @@ from ..io.calibration_file import save_calibration
 from ..kinematics.record import KinematicsRecord
 from .arg_types import add_options, bounded_int, gravity, option, positive_float
 from .common import (
-    add_derivative_arguments,
+    SG_WINDOW,
     add_samples_arguments,
     arm_from_args,
     load_samples_from_args,
 )
 from .doctor import refuse_convention_mistakes
 
-DESCRIPTION = (
+_DESCRIPTION = (
     "Calibrate from a samples CSV: wrench columns fx,fy,fz,mx,my,mz [N, N·m] and the orientation "
     "as joint columns (URDF names or q1..qn, rad), alpha,beta,gamma (deg, R = Rz Ry Rx) or "
     "qw,qx,qy,qz; optional integer 'pose' column groups repeated readings (their spread then "
@@ -47,7 +47,7 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "calibrate",
         help="estimate sensor bias, tool weight, centre of mass and base tilt",
-        description=DESCRIPTION,
+        description=_DESCRIPTION,
     )
     add_options(
         parser,
@@ -67,39 +67,8 @@ def register(subparsers) -> None:
             help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)",
         ),
     )
-    _add_ml_arguments(parser.add_argument_group("ml estimator"))
-    _add_convention_arguments(
-        parser.add_argument_group("sensor and robot conventions (stored in the calibration file)")
-    )
-    dynamic = parser.add_argument_group(
-        "dynamic calibration (a moving recording: columns t, joints, fx..mz, or a bag)"
-    )
     add_options(
-        dynamic,
-        option(
-            "--dynamic",
-            action="store_true",
-            help="identify mass, centre of mass, inertia, bias and tilt from a moving recording",
-        ),
-        option(
-            "--no-inertia",
-            action="store_true",
-            help="with --dynamic: fit the static parameters only",
-        ),
-    )
-    add_derivative_arguments(dynamic)
-    parser.add_argument(
-        "--no-convention-check",
-        action="store_true",
-        help="do not refit under the common convention mistakes (see 'ftkin doctor')",
-    )
-    add_samples_arguments(parser)
-    parser.set_defaults(func=run)
-
-
-def _add_ml_arguments(ml) -> None:
-    add_options(
-        ml,
+        parser.add_argument_group("ml estimator"),
         option(
             "--noise-force",
             type=positive_float,
@@ -158,11 +127,8 @@ def _add_ml_arguments(ml) -> None:
             "right)",
         ),
     )
-
-
-def _add_convention_arguments(conventions) -> None:
     add_options(
-        conventions,
+        parser.add_argument_group("sensor and robot conventions (stored in the calibration file)"),
         option(
             "--sensor-sign",
             type=int,
@@ -193,6 +159,29 @@ def _add_convention_arguments(conventions) -> None:
             help="expected gravity direction in the base frame (overrides --base-mount)",
         ),
     )
+    add_options(
+        parser.add_argument_group(
+            "dynamic calibration (a moving recording: columns t, joints, fx..mz, or a bag)"
+        ),
+        option(
+            "--dynamic",
+            action="store_true",
+            help="identify mass, centre of mass, inertia, bias and tilt from a moving recording",
+        ),
+        option(
+            "--no-inertia",
+            action="store_true",
+            help="with --dynamic: fit the static parameters only",
+        ),
+        SG_WINDOW,
+    )
+    parser.add_argument(
+        "--no-convention-check",
+        action="store_true",
+        help="do not refit under the common convention mistakes (see 'ftkin doctor')",
+    )
+    add_samples_arguments(parser)
+    parser.set_defaults(func=run)
 
 
 def _noise(args) -> SensorNoise | None:

@@ -15,7 +15,8 @@ from ..io.csv_table import read_table, write_csv
 from ..kinematics.arm import Arm
 from .arg_types import add_options, option
 from .common import (
-    add_derivative_arguments,
+    ALLOW_OTHER_ARM,
+    SG_WINDOW,
     add_samples_arguments,
     arm_for_calibration,
     load_samples_from_args,
@@ -46,13 +47,8 @@ def register(subparsers) -> None:
         option("calibration", metavar="CALIB.json"),
         option("log", metavar="LOG.csv"),
         option("-o", "--output", metavar="OUT.csv", required=True),
-    )
-    add_derivative_arguments(parser)
-    parser.add_argument(
-        "--allow-other-arm",
-        action="store_true",
-        help="accept robot options that differ from the arm recorded in the calibration "
-        "(deliberate reuse)",
+        SG_WINDOW,
+        ALLOW_OTHER_ARM,
     )
     add_samples_arguments(parser)
     parser.set_defaults(func=run)

@@ -9,7 +9,7 @@ from ..io.calibration_file import load_calibration
 from ..io.export import EXPORT_FORMATS, export_request
 from ..kinematics.arm import Arm
 from .arg_types import add_options, option
-from .common import add_arm_arguments, arm_for_calibration, arm_from_args
+from .common import ALLOW_OTHER_ARM, add_arm_arguments, arm_for_calibration, arm_from_args
 
 
 def register(subparsers) -> None:
@@ -39,21 +39,20 @@ def register(subparsers) -> None:
     for fmt in EXPORT_FORMATS.values():
         for spec in fmt.options:
             takers.setdefault(spec.name, [spec]).append(fmt.name)
-    group = parser.add_argument_group("format options (each format takes its own)")
-    for spec, *names in takers.values():
-        group.add_argument(
-            spec.flag,
-            dest=spec.name,
-            default=None,
-            help=f"{spec.help} [{', '.join(names)}]",
-            **spec.argparse,
-        )
-    parser.add_argument(
-        "--allow-other-arm",
-        action="store_true",
-        help="accept robot options that differ from the arm recorded in the calibration "
-        "(deliberate reuse)",
+    add_options(
+        parser.add_argument_group("format options (each format takes its own)"),
+        *(
+            option(
+                spec.flag,
+                dest=spec.name,
+                default=None,
+                help=f"{spec.help} [{', '.join(names)}]",
+                **spec.argparse,
+            )
+            for spec, *names in takers.values()
+        ),
     )
+    add_options(parser, ALLOW_OTHER_ARM)
     add_arm_arguments(parser)
     parser.set_defaults(func=run, export_options=tuple(takers))
 
