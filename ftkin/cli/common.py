@@ -87,46 +87,50 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
             raise InvalidInput(
                 f"--{name.replace('_', '-')} is empty; give a name or leave the option out"
             )
-    if getattr(args, "urdf", None) and getattr(args, "robot", None):
-        raise InvalidInput("give either --urdf or --robot, not both")
+    urdf, robot = getattr(args, "urdf", None), getattr(args, "robot", None)
     offset = getattr(args, "sensor_offset", None)
     parent = getattr(args, "sensor_parent", None)
     sensor_frame = getattr(args, "sensor_frame", "ft_sensor")
     tool_frame = getattr(args, "tool_frame", None)
     package_dirs = list(getattr(args, "package_dir", None) or [])
-    if offset is not None and len(offset) not in (3, 6):
-        raise InvalidInput(
+    for refused, message in (  # in this order: the first that applies is reported
+        (urdf and robot, "give either --urdf or --robot, not both"),
+        (
+            offset is not None and len(offset) not in (3, 6),
             "--sensor-offset takes 3 numbers (X Y Z [m]) or 6 (and ROLL PITCH YAW [rad]), got "
-            f"{len(offset)}"
-        )
-    if getattr(args, "urdf", None):
-        mount = None
-        if parent is not None:
-            mount = sensor_mount_from_offset(parent, offset)
-        elif offset is not None:
-            raise InvalidInput(
-                "--sensor-offset with --urdf needs --sensor-parent FRAME (the frame the sensor is "
-                "bolted to)"
-            )
-        return Arm.from_urdf(
-            args.urdf, sensor_frame, tool_frame, sensor_mount=mount, package_dirs=package_dirs
-        )
-    if parent is not None:
-        raise InvalidInput(
+            f"{len(offset or ())}",
+        ),
+        (
+            urdf and parent is None and offset is not None,
+            "--sensor-offset with --urdf needs --sensor-parent FRAME (the frame the sensor is "
+            "bolted to)",
+        ),
+        (
+            not urdf and parent is not None,
             "--sensor-parent is for --urdf; with --robot the sensor is mounted at the robot's "
-            "flange"
+            "flange",
+        ),
+        (
+            robot and sensor_frame != "ft_sensor",  # (--robot with --urdf is refused first)
+            "--sensor-frame is for --urdf; --robot names its sensor frame ft_sensor (move it "
+            "with --sensor-offset)",
+        ),
+        (
+            offset is not None and not (urdf or robot),
+            "--sensor-offset needs --robot NAME (or --urdf with --sensor-parent)",
+        ),
+    ):
+        if refused:
+            raise InvalidInput(message)
+    if urdf:
+        mount = None if parent is None else sensor_mount_from_offset(parent, offset)
+        return Arm.from_urdf(
+            urdf, sensor_frame, tool_frame, sensor_mount=mount, package_dirs=package_dirs
         )
-    if getattr(args, "robot", None):
-        if sensor_frame != "ft_sensor":
-            raise InvalidInput(
-                "--sensor-frame is for --urdf; --robot names its sensor frame ft_sensor (move it "
-                "with --sensor-offset)"
-            )
-        arm = load_robot(args.robot, offset, tool_frame)
+    if robot:
+        arm = load_robot(robot, offset, tool_frame)
         arm.package_dirs += package_dirs
         return arm
-    if offset is not None:
-        raise InvalidInput("--sensor-offset needs --robot NAME (or --urdf with --sensor-parent)")
     if sensor_frame != "ft_sensor" or tool_frame is not None:
         return Arm.from_urdf(bundled_urdf_path(), sensor_frame, tool_frame or "tool")
     return None
@@ -138,12 +142,11 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
     from ..io.static_segments import SegmentParameters
 
     defaults = SegmentParameters()
-    group = parser.add_argument_group(
-        "ROS 2 bags (a rosbag2 folder, .mcap or .db3 instead of a CSV; needs ftkin[bags]) and "
-        "continuous recordings (a CSV with a time column and no pose column)"
-    )
     add_options(
-        group,
+        parser.add_argument_group(
+            "ROS 2 bags (a rosbag2 folder, .mcap or .db3 instead of a CSV; needs ftkin[bags]) and "
+            "continuous recordings (a CSV with a time column and no pose column)"
+        ),
         option(
             "--all-rows", action="store_true", help="every reading its own pose: no still segments"
         ),
@@ -226,16 +229,13 @@ def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:
     their URDF and sensor frame. Returns None when nothing is named or
     recorded (the bundled arm is then used on demand).
     """
-    arm = arm_from_args(args)
-    if arm is not None:
+    if (arm := arm_from_args(args)) is not None:
         return arm
-    record = calibration.kinematics
-    if (
-        record is not None
-    ):  # the calibration says how its sensor frame was obtained: no options to repeat
-        return record.build_arm(list(getattr(args, "package_dir", None) or []))
+    if calibration.kinematics is not None:
+        # the calibration says how its sensor frame was obtained: no options to repeat
+        return calibration.kinematics.build_arm(list(getattr(args, "package_dir", None) or []))
     if not calibration.urdf:
-        return arm
+        return None
     recorded = Path(calibration.urdf)
     if not recorded.is_file() or recorded.resolve() == bundled_urdf_path().resolve():
         return None
@@ -293,15 +293,13 @@ def load_samples_from_args(
     from ..io.bags import bag_samples, is_bag_path
     from ..io.static_segments import SegmentParameters
 
-    if arm is None:
-        arm = arm_from_args(args)
-    static_only = static_only and not getattr(args, "all_rows", False)
-    defaults = SegmentParameters()
-    parameters = SegmentParameters(
-        speed_threshold=getattr(args, "speed_threshold", defaults.speed_threshold),
-        min_duration=getattr(args, "min_static_duration", defaults.min_duration),
-        settle_time=getattr(args, "settle_time", defaults.settle_time),
-        speed_window=getattr(args, "speed_window", defaults.speed_window),
+    arm = arm_from_args(args) if arm is None else arm
+    static_only = static_only and not args.all_rows
+    parameters = SegmentParameters(  # the options of add_samples_arguments
+        speed_threshold=args.speed_threshold,
+        min_duration=args.min_static_duration,
+        settle_time=args.settle_time,
+        speed_window=args.speed_window,
     )
     if not is_bag_path(path):
         loaded = load_samples(path, arm, parameters if static_only else None)
@@ -309,11 +307,11 @@ def load_samples_from_args(
         loaded = bag_samples(
             path,
             arm,
-            joint_topic=getattr(args, "joint_topic", None),
-            wrench_topic=getattr(args, "wrench_topic", None),
+            joint_topic=args.joint_topic,
+            wrench_topic=args.wrench_topic,
             parameters=parameters,
             static_only=static_only,
-            wrench_frame=getattr(args, "wrench_frame", "sensor"),
+            wrench_frame=args.wrench_frame,
         )
     if loaded.search is not None:  # the segments the fit will use
         print(f"{path}: {loaded.search.describe()}")

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import logging
-
 import numpy as np
 
 from ..calibration.model import WRENCH_CHANNELS
@@ -20,10 +18,9 @@ from .common import (
     add_samples_arguments,
     arm_for_calibration,
     load_samples_from_args,
+    logger,
     warn_if_kinematics_differ,
 )
-
-logger = logging.getLogger("ftkin.cli")
 
 
 def register(subparsers) -> None:

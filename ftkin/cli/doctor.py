@@ -2,14 +2,10 @@
 
 from __future__ import annotations
 
-import logging
-
 from ..exceptions import ConventionMistake
 from ..io.csv_table import read_table
 from ..io.table_readings import diagnose_table
-from .common import add_arm_arguments, arm_from_args
-
-logger = logging.getLogger("ftkin.cli")
+from .common import add_arm_arguments, arm_from_args, logger
 
 
 def register(subparsers) -> None:
