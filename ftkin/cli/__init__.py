@@ -110,16 +110,41 @@ def main(argv=None) -> int:
         return 0
     stdout = sys.stdout
     sys.stdout = _QuietPipe(stdout)
-    once: dict[
-        logging.Handler, _OnceFilter
-    ] = {}  # one filter per handler: each handler sees each record once
+    once: dict[logging.Handler, _OnceFilter] = {}  # one per handler: each sees each record once
     fit_log = logging.getLogger("ftkin.calibration.fit_quality")
     fit_log_disabled = fit_log.disabled
-    fit_log.disabled = (
-        True  # every command that fits prints the summary, which lists these warnings
-    )
+    # every command that fits prints the summary, which lists these warnings
+    fit_log.disabled = True
     try:
-        return _run(argv, once)
+        from .arg_types import join_number_lists
+
+        arguments = join_number_lists(arguments)
+        parser = build_parser(arguments)
+        try:
+            args = parser.parse_args(arguments)
+        except SystemExit as exit_:  # usage errors and --help: an exit code, as every other outcome
+            return exit_.code if isinstance(exit_.code, int) else 2
+        logging.basicConfig(
+            level=logging.INFO if args.verbose else logging.WARNING, format="ftkin: %(message)s"
+        )
+        for handler in logging.getLogger().handlers:
+            once[handler] = _OnceFilter()
+            handler.addFilter(once[handler])
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return 2
+        check_outputs(args)
+        code = int(args.func(args) or 0)
+        sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
+        return code
+    except FtkinError as error:
+        _say(f"ftkin: error: {error}")
+        return 2
+    except KeyboardInterrupt:
+        _say("ftkin: interrupted")
+        return 130
+    except Exception as error:  # the guard: no traceback ever reaches a user
+        return _unexpected(error)
     finally:
         sys.stdout = stdout
         fit_log.disabled = fit_log_disabled
@@ -170,39 +195,6 @@ class _QuietPipe:
 
     def __getattr__(self, name):
         return getattr(self._stream, name)
-
-
-def _run(argv, once: dict) -> int:
-    try:
-        from .arg_types import join_number_lists
-
-        arguments = join_number_lists(list(sys.argv[1:] if argv is None else argv))
-        parser = build_parser(arguments)
-        try:
-            args = parser.parse_args(arguments)
-        except SystemExit as exit_:  # usage errors and --help: an exit code, as every other outcome
-            return exit_.code if isinstance(exit_.code, int) else 2
-        logging.basicConfig(
-            level=logging.INFO if args.verbose else logging.WARNING, format="ftkin: %(message)s"
-        )
-        for handler in logging.getLogger().handlers:
-            once[handler] = _OnceFilter()
-            handler.addFilter(once[handler])
-        if not getattr(args, "func", None):
-            parser.print_help()
-            return 2
-        check_outputs(args)
-        code = int(args.func(args) or 0)
-        sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
-        return code
-    except FtkinError as error:
-        _say(f"ftkin: error: {error}")
-        return 2
-    except KeyboardInterrupt:
-        _say("ftkin: interrupted")
-        return 130
-    except Exception as error:  # the guard: no traceback ever reaches a user
-        return _unexpected(error)
 
 
 def _say(text: str) -> None:

@@ -15,6 +15,7 @@ from ..calibration.model import STANDARD_GRAVITY
 from ..calibration.mount import MOUNT_MODES
 from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
+from ..kinematics.arm import Arm, bundled_urdf_path
 from ..kinematics.record import KinematicsRecord
 from .arg_types import add_options, bounded_int, gravity, option, positive_float
 from .common import (
@@ -189,18 +190,7 @@ def _noise(args) -> SensorNoise | None:
         raise InvalidInput(
             "give both --noise-force [N] and --noise-torque [N·m], or neither (then estimated)"
         )
-    if args.noise_force is None:
-        return None
-    return SensorNoise(args.noise_force, args.noise_torque)
-
-
-def _bundled_if_used(loaded):
-    """The bundled arm when the samples' joint columns were read with it (no arm option given)."""
-    from ..kinematics.arm import Arm, bundled_urdf_path
-
-    if loaded.samples.urdf and Path(loaded.samples.urdf).resolve() == bundled_urdf_path().resolve():
-        return Arm.default()
-    return None
+    return None if args.noise_force is None else SensorNoise(args.noise_force, args.noise_torque)
 
 
 def _run_dynamic(args, noise) -> int:
@@ -224,7 +214,6 @@ def _run_dynamic(args, noise) -> int:
     from ..calibration.dynamic import calibrate_dynamic
     from ..io.bags import is_bag_path
     from ..io.motion_recording import load_motion_bag, load_motion_csv
-    from ..kinematics.arm import Arm
 
     arm = arm_from_args(args) or Arm.default()
     if is_bag_path(args.samples):
@@ -288,17 +277,20 @@ def run(args) -> int:
         # the conventions itself.
         refuse_convention_mistakes(loaded, arm)
     result = calibrate(loaded.samples, options)
-    samples_arm = loaded.samples.urdf and (arm or _bundled_if_used(loaded))
-    if samples_arm:
-        result = replace(result, kinematics=KinematicsRecord.from_arm(samples_arm))
+    urdf = loaded.samples.urdf
+    if urdf and (arm or Path(urdf).resolve() == bundled_urdf_path().resolve()):
+        # the arm the joint columns were read with (the bundled one when no option named one)
+        result = replace(result, kinematics=KinematicsRecord.from_arm(arm or Arm.default()))
     validation = None
     if args.cross_validate:  # before anything is written: a failure leaves no file behind
         from ..calibration.cross_validation import cross_validate
 
         timed = loaded.samples.times is not None and args.drift != "none"
-        drifts = ("none", args.drift) if timed else ("none",)
         validation = cross_validate(
-            loaded.samples, drifts, folds=args.cross_validate, options=options
+            loaded.samples,
+            ("none", args.drift) if timed else ("none",),
+            folds=args.cross_validate,
+            options=options,
         )
     status = _report(result, args)
     if validation is not None:

@@ -71,9 +71,11 @@ def run(args) -> int:
     arm = Arm.default()
     truth = paper_like_truth()
     sensor = SimulatedSensor(truth, SensorNoise.paper())
-    configurations = arm.random_configurations(args.poses, rng, margin=0.3)
     samples = sensor.samples_at_configurations(
-        arm, configurations, rng, readings_per_pose=args.readings
+        arm,
+        arm.random_configurations(args.poses, rng, margin=0.3),
+        rng,
+        readings_per_pose=args.readings,
     )
     print(
         f"Bundled arm {arm.urdf_path.name}, sensor frame {arm.sensor_frame}; {args.poses} random "
@@ -97,13 +99,12 @@ def run(args) -> int:
     tilt_error = np.rad2deg(errors["base_tilt"]) if "base_tilt" in errors else None
     print(_row("base_tilt_deg", "deg", truth.base_tilt_deg, result.base_tilt_deg, 3, tilt_error))
 
-    compensator = Compensator(result, arm)
     contact = np.array(
         [1.5, -0.8, -4.0, 0.05, 0.02, -0.01]
     )  # N, N·m: the environment pushing on the tool
     q_check = arm.random_configurations(1, rng, margin=0.3)[0]
     raw = sensor.read(arm.rotation_sensor_to_base(q_check), rng, contact)[0]
-    recovered = compensator.compensate(q_check, raw)
+    recovered = Compensator(result, arm).compensate(q_check, raw)
     print("\nCompensation at a new pose with a known contact wrench [N, N·m]:")
     for label, values in (("injected", contact), ("recovered", recovered), ("raw", raw)):
         print(f"  {label:<10}" + " ".join(f"{v:+.4f}" for v in values))
@@ -129,10 +130,9 @@ def _closed_loop(arm: Arm, calibration, seconds: float, seed: int) -> None:
     run, _ = simulate_placement_mujoco(
         scenario, arm, controller=admittance_controller(scenario, arm, calibration)
     )
-    settle = run.settle_time
     placed = (
-        f"placed at t = {settle:.2f} s"
-        if np.isfinite(settle)
+        f"placed at t = {run.settle_time:.2f} s"
+        if np.isfinite(run.settle_time)
         else "not placed yet (run longer: --sim-seconds)"
     )
     print(

@@ -65,14 +65,19 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def _check_pose(arm, q) -> None:
-    """Refuse angles beyond 2π (degrees) and a pose outside the arm's joint limits: the bias would
-    be set at a pose
-    the arm was not in."""
-    if not np.all(np.isfinite(q)):
-        raise InvalidInput(f"--q must be finite numbers [rad], got {q.tolist()}")
-    lower, upper = np.asarray(arm.lower_limits, float), np.asarray(arm.upper_limits, float)
-    for name, value, low, high in zip(arm.joint_names, q, lower, upper):
+def run(args) -> int:
+    calibration = load_calibration(args.calibration)
+    arm = arm_for_calibration(args, calibration) or Arm.default()
+    if len(args.q) != arm.nq:
+        raise InvalidInput(
+            f"--q takes the arm's {arm.nq} joint angles [rad] ({', '.join(arm.joint_names)}), got "
+            f"{len(args.q)}"
+        )
+    # angles beyond 2π (degrees) and a pose outside the joint limits are refused: the bias would
+    # be set at a pose the arm was not in
+    if not np.all(np.isfinite(args.q)):
+        raise InvalidInput(f"--q must be finite numbers [rad], got {list(args.q)}")
+    for name, value, low, high in zip(arm.joint_names, args.q, arm.lower_limits, arm.upper_limits):
         if abs(value) > 2.0 * np.pi + 0.01:
             raise InvalidInput(
                 f"--q: {name} = {value:g} is beyond ±2π: joint angles are in radians (this looks "
@@ -82,28 +87,19 @@ def _check_pose(arm, q) -> None:
             raise InvalidInput(
                 f"--q: {name} = {value:g} rad is outside its limits [{low:g}, {high:g}] rad"
             )
-
-
-def run(args) -> int:
-    calibration = load_calibration(args.calibration)
-    arm = arm_for_calibration(args, calibration) or Arm.default()
-    if len(args.q) != arm.nq:
-        raise InvalidInput(
-            f"--q takes the arm's {arm.nq} joint angles [rad] ({', '.join(arm.joint_names)}), got "
-            f"{len(args.q)}"
-        )
-    _check_pose(arm, np.array(args.q))
-    compensator = Compensator(calibration, arm)
     previous = calibration.bias
-    bias = compensator.rezero(np.array(args.q), np.array(args.wrench))
-    record = {
-        "q": args.q,
-        "wrench": args.wrench,
-        "previous_bias": previous,
-        "time": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-    }
+    bias = Compensator(calibration, arm).rezero(np.array(args.q), np.array(args.wrench))
     output = args.output or args.calibration
-    save_calibration(calibration.with_bias(bias), output, rezero=record)
+    save_calibration(
+        calibration.with_bias(bias),
+        output,
+        rezero={
+            "q": args.q,
+            "wrench": args.wrench,
+            "previous_bias": previous,
+            "time": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        },
+    )
     change = bias - previous
     print(
         f"bias F0 = [{', '.join(f'{v:+.4f}' for v in bias[:3])}] N, M0 = "
