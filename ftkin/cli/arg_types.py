@@ -1,5 +1,5 @@
 """argparse value types: numbers with their range and unit in the message, the number-list
-options, and :func:`add_options` (a parser's options as a table of :func:`option` rows).
+options, and the subcommands' parsers as tables of :func:`option` rows (:func:`add_command`).
 
 Each converter raises :class:`argparse.ArgumentTypeError`, which the CLI reports as
 ``ftkin <command>: error: argument --x: ...`` (exit 2), never a traceback.
@@ -21,6 +21,21 @@ def add_options(parser, *options: tuple) -> None:
     """Add each :func:`option` row to ``parser`` (or an argument group)."""
     for flags, keywords in options:
         parser.add_argument(*flags, **keywords)
+
+
+def add_command(subparsers, name: str, *, run, options=(), groups=(), **keywords):
+    """Add the subcommand ``name`` that calls ``run(args) -> int``; ``keywords`` (help,
+    description) go to ``add_parser``. Its :func:`option` rows come first, then each shared group
+    ``add(parser)`` of ``groups`` (e.g. :func:`~ftkin.cli.common.add_arm_arguments`).
+
+    Returns the parser, for a command that adds argument groups of its own.
+    """
+    parser = subparsers.add_parser(name, **keywords)
+    add_options(parser, *options)
+    for add in groups:
+        add(parser)
+    parser.set_defaults(func=run)
+    return parser
 
 
 def _number(text: str, accept, expected: str) -> float:

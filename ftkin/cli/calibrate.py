@@ -17,7 +17,7 @@ from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
 from ..kinematics.arm import Arm, bundled_urdf_path
 from ..kinematics.record import KinematicsRecord
-from .arg_types import add_options, bounded_int, gravity, option, positive_float
+from .arg_types import add_command, add_options, bounded_int, gravity, option, positive_float
 from .common import (
     SG_WINDOW,
     add_samples_arguments,
@@ -45,28 +45,29 @@ def drift_spec(text: str) -> str:
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    parser = add_command(
+        subparsers,
         "calibrate",
         help="estimate sensor bias, tool weight, centre of mass and base tilt",
         description=_DESCRIPTION,
-    )
-    add_options(
-        parser,
-        option("samples", metavar="SAMPLES.csv"),
-        option("-o", "--output", metavar="CALIB.json", help="write the calibration file here"),
-        option(
-            "--method",
-            choices=METHODS,
-            default=METHODS[0],
-            help="ml: joint maximum-likelihood fit with standard errors; linear: the paper's "
-            "two-step least squares (default: %(default)s)",
+        options=(
+            option("samples", metavar="SAMPLES.csv"),
+            option("-o", "--output", metavar="CALIB.json", help="write the calibration file here"),
+            option(
+                "--method",
+                choices=METHODS,
+                default=METHODS[0],
+                help="ml: joint maximum-likelihood fit with standard errors; linear: the paper's "
+                "two-step least squares (default: %(default)s)",
+            ),
+            option(
+                "--g",
+                type=gravity,
+                default=STANDARD_GRAVITY,
+                help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)",
+            ),
         ),
-        option(
-            "--g",
-            type=gravity,
-            default=STANDARD_GRAVITY,
-            help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)",
-        ),
+        run=run,
     )
     add_options(
         parser.add_argument_group("ml estimator"),
@@ -182,7 +183,6 @@ def register(subparsers) -> None:
         help="do not refit under the common convention mistakes (see 'ftkin doctor')",
     )
     add_samples_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 def _noise(args) -> SensorNoise | None:

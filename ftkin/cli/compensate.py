@@ -11,7 +11,7 @@ from ..io.bags import is_bag_path
 from ..io.calibration_file import load_calibration
 from ..io.csv_table import read_table, write_csv
 from ..kinematics.arm import Arm
-from .arg_types import add_options, option
+from .arg_types import add_command, option
 from .common import (
     ALLOW_OTHER_ARM,
     SG_WINDOW,
@@ -24,7 +24,8 @@ from .common import (
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "compensate",
         help="remove bias and tool gravity from a log of raw readings",
         description="Write the contact wrench (fx..mz, sensor frame, N and N·m) of every row of "
@@ -38,17 +39,16 @@ def register(subparsers) -> None:
         "and the log has a time column t and joint columns, the tool's inertial wrench is removed "
         "too (joint "
         "derivatives from the log, zero-phase).",
+        options=(
+            option("calibration", metavar="CALIB.json"),
+            option("log", metavar="LOG.csv"),
+            option("-o", "--output", metavar="OUT.csv", required=True),
+            SG_WINDOW,
+            ALLOW_OTHER_ARM,
+        ),
+        groups=(add_samples_arguments,),
+        run=run,
     )
-    add_options(
-        parser,
-        option("calibration", metavar="CALIB.json"),
-        option("log", metavar="LOG.csv"),
-        option("-o", "--output", metavar="OUT.csv", required=True),
-        SG_WINDOW,
-        ALLOW_OTHER_ARM,
-    )
-    add_samples_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 def run(args) -> int:

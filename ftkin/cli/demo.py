@@ -18,42 +18,42 @@ from ..control.compensation import Compensator
 from ..io.calibration_file import save_calibration
 from ..kinematics.arm import Arm
 from ..sim.sensor import SimulatedSensor, paper_like_truth
-from .arg_types import add_options, bounded_int, non_negative_float, option, seed
+from .arg_types import add_command, bounded_int, non_negative_float, option, seed
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "demo",
         help="simulated sensor on the bundled arm: calibrate, compare with the truth, compensate",
+        options=(
+            option(
+                "--poses",
+                type=bounded_int(3, 1000, "poses"),
+                default=12,
+                help="number of static poses, 3 to 1000 (default: %(default)s)",
+            ),
+            option(
+                "--readings",
+                type=bounded_int(1, 100_000, "readings per pose"),
+                default=500,
+                help="readings averaged per pose, 1 to 100,000 (default: %(default)s, as the "
+                "paper)",
+            ),
+            option("--seed", type=seed, default=0, help="random seed (default: %(default)s)"),
+            option("--method", choices=METHODS, default=METHODS[0]),
+            option("-o", "--output", metavar="CALIB.json", help="also write the calibration file"),
+            option(
+                "--sim-seconds",
+                type=non_negative_float,
+                default=2.0,
+                metavar="S",
+                help="simulated seconds of the closed-loop MuJoCo segment (needs the 'sim' extra; "
+                "0 skips it; default: %(default)s)",
+            ),
+        ),
+        run=run,
     )
-    add_options(
-        parser,
-        option(
-            "--poses",
-            type=bounded_int(3, 1000, "poses"),
-            default=12,
-            help="number of static poses, 3 to 1000 (default: %(default)s)",
-        ),
-        option(
-            "--readings",
-            type=bounded_int(1, 100_000, "readings per pose"),
-            default=500,
-            help="readings averaged per pose, 1 to 100,000 (default: %(default)s, as the paper)",
-        ),
-        option("--seed", type=seed, default=0, help="random seed (default: %(default)s)"),
-        option("--method", choices=METHODS, default=METHODS[0]),
-        option("-o", "--output", metavar="CALIB.json", help="also write the calibration file"),
-        option(
-            "--sim-seconds",
-            type=non_negative_float,
-            default=2.0,
-            metavar="S",
-            help="simulated seconds of the closed-loop MuJoCo segment (needs the 'sim' extra; 0 "
-            "skips it; "
-            "default: %(default)s)",
-        ),
-    )
-    parser.set_defaults(func=run)
 
 
 def _row(name: str, unit: str, truth, estimate, decimals: int, std_error=None) -> str:

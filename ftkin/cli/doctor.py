@@ -5,11 +5,13 @@ from __future__ import annotations
 from ..exceptions import ConventionMistake
 from ..io.csv_table import read_table
 from ..io.table_readings import diagnose_table
+from .arg_types import add_command, option
 from .common import add_arm_arguments, arm_from_args, logger
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "doctor",
         help="check a samples CSV for convention mistakes (radians for degrees, quaternion order, "
         "frame, units, signs)",
@@ -20,10 +22,10 @@ def register(subparsers) -> None:
         "joint angles in degrees, torques in N·mm; print the fit of each and name the reading that "
         "explains the data. "
         "Exit code 0 when the data fit as given (or only a suspicion), 1 when a mistake is named.",
+        options=(option("samples", metavar="SAMPLES.csv"),),
+        groups=(add_arm_arguments,),
+        run=run,
     )
-    parser.add_argument("samples", metavar="SAMPLES.csv")
-    add_arm_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 def run(args) -> int:

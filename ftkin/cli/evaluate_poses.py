@@ -7,12 +7,14 @@ import numpy as np
 from ..io.samples_csv import orientations_from_table, pose_ids_from_table, read_table
 from ..io.time_columns import times_from_table
 from ..planning.evaluation import evaluate_poses
+from .arg_types import add_command, option
 from .common import add_arm_arguments, arm_from_args
 from .plan import add_expectation_arguments, expectation_from_args
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "evaluate-poses",
         help="predict the calibration's standard errors for a pose set",
         description="Read poses (joint columns by URDF name or q1..qn [rad], alpha,beta,gamma "
@@ -20,11 +22,13 @@ def register(subparsers) -> None:
         "R = Rz Ry Rx] or qw,qx,qy,qz; wrench columns not needed) and print the predicted standard "
         "error of every calibration parameter. Rows sharing a 'pose' id count as one pose (the "
         "first row).",
+        options=(option("poses", metavar="POSES.csv"),),
+        groups=(
+            add_expectation_arguments,
+            add_arm_arguments,
+        ),
+        run=run,
     )
-    parser.add_argument("poses", metavar="POSES.csv")
-    add_expectation_arguments(parser)
-    add_arm_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 def run(args) -> int:

@@ -8,13 +8,14 @@ from ..io.atomic import atomic_write_text
 from ..io.calibration_file import load_calibration
 from ..io.export import EXPORT_FORMATS, export_request
 from ..kinematics.arm import Arm
-from .arg_types import add_options, option
+from .arg_types import add_command, add_options, option
 from .common import ALLOW_OTHER_ARM, add_arm_arguments, arm_for_calibration, arm_from_args
 
 
 def register(subparsers) -> None:
     formats = "; ".join(f"'{name}': {fmt.summary}" for name, fmt in EXPORT_FORMATS.items())
-    parser = subparsers.add_parser(
+    parser = add_command(
+        subparsers,
         "export",
         help="write a calibration as ROS controller parameters or as the robot's payload (Franka, "
         "UR)",
@@ -22,18 +23,18 @@ def register(subparsers) -> None:
         "printed and written as comments; names written (nodes, frames) are checked against "
         "ROS's rules. Payloads: the centre of mass in the flange frame, through the mount and the "
         "URDF.",
-    )
-    add_options(
-        parser,
-        option("calibration", metavar="CALIB.json"),
-        option(
-            "--format",
-            required=True,
-            choices=tuple(EXPORT_FORMATS),
-            dest="fmt",
-            help="target format",
+        options=(
+            option("calibration", metavar="CALIB.json"),
+            option(
+                "--format",
+                required=True,
+                choices=tuple(EXPORT_FORMATS),
+                dest="fmt",
+                help="target format",
+            ),
+            option("-o", "--output", required=True, metavar="OUT.yaml"),
         ),
-        option("-o", "--output", required=True, metavar="OUT.yaml"),
+        run=run,
     )
     takers: dict[str, list] = {}
     for fmt in EXPORT_FORMATS.values():
@@ -54,7 +55,7 @@ def register(subparsers) -> None:
     )
     add_options(parser, ALLOW_OTHER_ARM)
     add_arm_arguments(parser)
-    parser.set_defaults(func=run, export_options=tuple(takers))
+    parser.set_defaults(export_options=tuple(takers))
 
 
 def run(args) -> int:

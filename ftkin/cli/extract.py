@@ -5,12 +5,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..io.csv_table import write_csv
-from .arg_types import add_options, option
+from .arg_types import add_command, option
 from .common import add_samples_arguments, load_samples_from_args
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "extract",
         help="write the samples extracted from a ROS 2 bag (or a samples CSV) as a CSV",
         description="Read a ROS 2 bag (rosbag2 folder, .mcap or .db3), align joint states to the "
@@ -19,16 +20,15 @@ def register(subparsers) -> None:
         "recording in a CSV (a time column, no pose column) gets the same search; its still rows "
         "are written with a pose column. The CSV is a valid input of 'ftkin calibrate'. With "
         "--all, every reading (no pose column) is written.",
+        options=(
+            option("recording", metavar="RECORDING"),
+            option("-o", "--output", metavar="SAMPLES.csv", required=True),
+            # the older name of the samples option --all-rows: one setting
+            option("--all", dest="all_rows", action="store_true", help="the same as --all-rows"),
+        ),
+        groups=(add_samples_arguments,),
+        run=run,
     )
-    add_options(
-        parser,
-        option("recording", metavar="RECORDING"),
-        option("-o", "--output", metavar="SAMPLES.csv", required=True),
-        # the older name of the samples option --all-rows: one setting
-        option("--all", dest="all_rows", action="store_true", help="the same as --all-rows"),
-    )
-    add_samples_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 def run(args) -> int:

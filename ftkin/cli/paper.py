@@ -5,34 +5,37 @@ from __future__ import annotations
 from ..calibration.estimate import METHODS
 from ..io.atomic import atomic_write_bytes
 from ..sim.paper import comparison_table, paper_calibration, paper_csv_path
-from .arg_types import add_options, option
+from .arg_types import add_command, option
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser("paper", help="reproduce the paper's calibration (Tables 1-3)")
-    add_options(
-        parser,
-        option(
-            "--method",
-            choices=METHODS,
-            default="linear",
-            help="estimator compared with the printed values (default: linear, the paper's)",
+    add_command(
+        subparsers,
+        "paper",
+        help="reproduce the paper's calibration (Tables 1-3)",
+        options=(
+            option(
+                "--method",
+                choices=METHODS,
+                default="linear",
+                help="estimator compared with the printed values (default: linear, the paper's)",
+            ),
+            option(
+                "--no-ml",
+                dest="show_ml",
+                action="store_false",
+                help="do not also print the ml fit with standard errors after the linear one",
+            ),
+            option(
+                "-o",
+                "--output",
+                metavar="SAMPLES.csv",
+                help="also write the paper's 9 poses (Tables 1-2) as a samples CSV, for ftkin "
+                "calibrate",
+            ),
         ),
-        option(
-            "--no-ml",
-            dest="show_ml",
-            action="store_false",
-            help="do not also print the ml fit with standard errors after the linear one",
-        ),
-        option(
-            "-o",
-            "--output",
-            metavar="SAMPLES.csv",
-            help="also write the paper's 9 poses (Tables 1-2) as a samples CSV, for ftkin "
-            "calibrate",
-        ),
+        run=run,
     )
-    parser.set_defaults(func=run)
 
 
 def run(args) -> int:

@@ -27,6 +27,7 @@ from ..planning.excitation import (
 )
 from ..planning.plan import PlanSpec, plan_poses
 from .arg_types import (
+    add_command,
     add_options,
     bounded_int,
     non_negative_float,
@@ -188,30 +189,31 @@ def joint_range(text: str) -> tuple[str, float, float]:
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    parser = add_command(
+        subparsers,
         "plan",
         help="plan calibration poses (joint configurations) for the most accurate calibration",
         description="Choose N joint configurations (D-optimal: largest log det of the Fisher "
         "information) within joint limits, free of self-collision and above the floor, ordered "
         "for short joint travel; print the predicted standard error of every calibration "
         "parameter.",
-    )
-    add_options(
-        parser,
-        option(
-            "-n",
-            "--n",
-            type=pose_count,
-            default=None,
-            help=f"number of poses (3 to {MAX_PLAN_POSES}; required without --excitation)",
+        options=(
+            option(
+                "-n",
+                "--n",
+                type=pose_count,
+                default=None,
+                help=f"number of poses (3 to {MAX_PLAN_POSES}; required without --excitation)",
+            ),
+            option("-o", "--output", metavar="POSES.csv", help="write the poses here"),
+            option(
+                "--format",
+                choices=FORMATS,
+                default=None,
+                help="output format (default: from the file name, else csv)",
+            ),
         ),
-        option("-o", "--output", metavar="POSES.csv", help="write the poses here"),
-        option(
-            "--format",
-            choices=FORMATS,
-            default=None,
-            help="output format (default: from the file name, else csv)",
-        ),
+        run=run,
     )
     add_options(
         parser.add_argument_group("constraints"),
@@ -338,7 +340,6 @@ def register(subparsers) -> None:
         ),
     )
     add_arm_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 def constraints_from_args(args) -> PoseConstraints:

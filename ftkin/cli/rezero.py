@@ -18,12 +18,13 @@ from ..control.compensation import Compensator
 from ..exceptions import InvalidInput
 from ..io.calibration_file import load_calibration, save_calibration
 from ..kinematics.arm import Arm
-from .arg_types import add_options, option
+from .arg_types import add_command, option
 from .common import add_arm_arguments, arm_for_calibration
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "rezero",
         help="re-zero the sensor bias from one contact-free reading at a known pose (tool weight "
         "kept)",
@@ -34,35 +35,35 @@ def register(subparsers) -> None:
         "weight at this pose). The tool must be free of contact and the arm still. Updates "
         "CALIB.json in place "
         "(atomically) unless -o is given.",
+        options=(
+            option("calibration", metavar="CALIB.json"),
+            option(
+                "--q",
+                type=float,
+                nargs="+",
+                required=True,
+                metavar="Q",
+                help="joint angles of the pose [rad]",
+            ),
+            option(
+                "--wrench",
+                type=float,
+                nargs=6,
+                required=True,
+                metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
+                help="raw reading at that pose [N, N·m], sensor frame (average a few hundred "
+                "readings)",
+            ),
+            option(
+                "-o",
+                "--output",
+                metavar="OUT.json",
+                help="write the re-zeroed calibration here instead of in place",
+            ),
+        ),
+        groups=(add_arm_arguments,),
+        run=run,
     )
-    add_options(
-        parser,
-        option("calibration", metavar="CALIB.json"),
-        option(
-            "--q",
-            type=float,
-            nargs="+",
-            required=True,
-            metavar="Q",
-            help="joint angles of the pose [rad]",
-        ),
-        option(
-            "--wrench",
-            type=float,
-            nargs=6,
-            required=True,
-            metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
-            help="raw reading at that pose [N, N·m], sensor frame (average a few hundred readings)",
-        ),
-        option(
-            "-o",
-            "--output",
-            metavar="OUT.json",
-            help="write the re-zeroed calibration here instead of in place",
-        ),
-    )
-    add_arm_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 def run(args) -> int:
