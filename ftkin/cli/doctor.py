@@ -36,10 +36,8 @@ def run(args) -> int:
         "noise of the best):"
     )
     print(report.table())
-    if report.verdict in ("ok", "undetermined"):
-        print(f"verdict: {report.verdict}: {report.reason}")
-        return 0
-    print(f"verdict: {report.verdict}: {report.message}")
+    detail = report.reason if report.verdict in ("ok", "undetermined") else report.message
+    print(f"verdict: {report.verdict}: {detail}")
     return 1 if report.verdict == "mistake" else 0
 
 

@@ -60,17 +60,18 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
-    arm = arm_from_args(args)
-    if arm is None and EXPORT_FORMATS[args.fmt].needs_arm:
-        arm = arm_for_calibration(args, calibration) or Arm.default()
-    options = {name: getattr(args, name) for name in args.export_options}
+    arm = (  # the options' arm, else (for a format that needs one) the calibration's
+        arm_for_calibration(args, calibration) or Arm.default()
+        if EXPORT_FORMATS[args.fmt].needs_arm
+        else arm_from_args(args)
+    )
     chosen, request = export_request(
         calibration,
         args.fmt,
         arm,
         path=args.output,
         allow_other_arm=args.allow_other_arm,
-        **options,
+        **{name: getattr(args, name) for name in args.export_options},
     )
     atomic_write_text(request.path, chosen.text(request))
     print(f"wrote {args.fmt} to {args.output}{chosen.summary_line(request)}")

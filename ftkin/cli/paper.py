@@ -41,13 +41,11 @@ def register(subparsers) -> None:
 def run(args) -> int:
     result = paper_calibration(args.method)
     print(result.summary())
-    print()
-    print(comparison_table(result))
+    print(f"\n{comparison_table(result)}")
     if args.method == "linear" and args.show_ml:
-        print()
         print(
-            "The same data through the maximum-likelihood fit (ftkin's default), value ± standard "
-            "error:"
+            "\nThe same data through the maximum-likelihood fit (ftkin's default), value ± "
+            "standard error:"
         )
         print(paper_calibration("ml").summary())
     if args.output:

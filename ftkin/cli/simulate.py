@@ -439,8 +439,7 @@ def _inputs(args):
     if args.mount_rpy_deg is not None:
         if len(args.mount_rpy_deg) != 3:
             raise InvalidInput(f"--mount-rpy-deg takes R P Y [deg], got {args.mount_rpy_deg}")
-        roll, pitch, yaw = np.deg2rad(args.mount_rpy_deg)
-        mount = euler_zyx_to_matrix([yaw, pitch, roll])
+        mount = euler_zyx_to_matrix(np.deg2rad(args.mount_rpy_deg)[::-1])  # yaw, pitch, roll
     paper = SensorNoise.paper()
     noise = SensorNoise(paper.force_std * args.noise_scale, paper.torque_std * args.noise_scale)
     drift = SensorDrift.typical() if args.drift else None
@@ -464,13 +463,7 @@ def _trajectory(args, arm):
             f"{', '.join(missing)}"
         )
     values = table.floats(wanted)
-    nq = len(names)
-    return (
-        values[:, 0],
-        values[:, 1 : 1 + nq],
-        values[:, 1 + nq : 1 + 2 * nq],
-        values[:, 1 + 2 * nq :],
-    )
+    return (values[:, 0], *np.split(values[:, 1:], 3, axis=1))
 
 
 def run_input(args) -> int:
