@@ -5,9 +5,8 @@ adds its parser and sets ``func(args) -> int``. Errors of ftkin's own type are
 printed as one line (``ftkin: error: ...``) with exit code 2.
 """
 
-from __future__ import annotations
-
 import argparse
+import contextlib
 import importlib
 import logging
 import os
@@ -175,17 +174,15 @@ class _QuietPipe:
         self.closed_pipe = False
 
     def _call(self, method, *args):
-        if self.closed_pipe:
-            return len(args[0]) if args else None
-        try:
-            return getattr(self._stream, method)(*args)
-        except BrokenPipeError:
-            self.closed_pipe = True
-            try:  # the interpreter's final flush must not fail again
-                os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())
-            except (OSError, ValueError, AttributeError):
-                pass
-            return len(args[0]) if args else None
+        if not self.closed_pipe:
+            try:
+                return getattr(self._stream, method)(*args)
+            except BrokenPipeError:
+                self.closed_pipe = True
+                # the interpreter's final flush must not fail again
+                with contextlib.suppress(OSError, ValueError, AttributeError):
+                    os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())
+        return len(args[0]) if args else None
 
     def write(self, text):
         return self._call("write", text)
@@ -199,10 +196,8 @@ class _QuietPipe:
 
 def _say(text: str) -> None:
     """One line on stderr; a closed stderr is not an error of its own."""
-    try:
+    with contextlib.suppress(OSError, ValueError):
         print(text, file=sys.stderr)
-    except (OSError, ValueError):
-        pass
 
 
 def _unexpected(error: Exception) -> int:

@@ -5,8 +5,6 @@ Each converter raises :class:`argparse.ArgumentTypeError`, which the CLI reports
 ``ftkin <command>: error: argument --x: ...`` (exit 2), never a traceback.
 """
 
-from __future__ import annotations
-
 import argparse
 
 from ..calibration.model import GRAVITY_RANGE

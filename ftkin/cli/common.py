@@ -1,7 +1,5 @@
 """Arguments and helpers several subcommands share."""
 
-from __future__ import annotations
-
 import argparse
 import logging
 from pathlib import Path

@@ -1,7 +1,5 @@
 """``ftkin compensate CALIB.json LOG.csv -o OUT.csv``, with the inertial term for a moving log."""
 
-from __future__ import annotations
-
 import numpy as np
 
 from ..calibration.model import WRENCH_CHANNELS

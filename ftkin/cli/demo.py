@@ -6,8 +6,6 @@ control compensated with the calibration just estimated (``--sim-seconds 0``
 skips it).
 """
 
-from __future__ import annotations
-
 import importlib.util
 
 import numpy as np

@@ -1,7 +1,5 @@
 """``ftkin doctor SAMPLES.csv [robot options]``: which convention the data fit, on demand."""
 
-from __future__ import annotations
-
 from ..exceptions import ConventionMistake
 from ..io.csv_table import read_table
 from ..io.table_readings import diagnose_table

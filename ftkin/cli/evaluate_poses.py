@@ -1,7 +1,5 @@
 """``ftkin evaluate-poses POSES.csv``: predicted standard errors of any pose set."""
 
-from __future__ import annotations
-
 import numpy as np
 
 from ..io.samples_csv import orientations_from_table, pose_ids_from_table, read_table

@@ -2,8 +2,6 @@
 payloads; the formats and their options come from the registry (:mod:`ftkin.io.export`).
 """
 
-from __future__ import annotations
-
 from ..io.atomic import atomic_write_text
 from ..io.calibration_file import load_calibration
 from ..io.export import EXPORT_FORMATS, export_request

@@ -1,7 +1,5 @@
 """``ftkin extract RECORDING -o SAMPLES.csv``: the samples a bag yields, as a CSV to inspect."""
 
-from __future__ import annotations
-
 import numpy as np
 
 from ..io.csv_table import write_csv

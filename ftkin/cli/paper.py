@@ -1,7 +1,5 @@
 """``ftkin paper``: the paper's data through ftkin, beside the printed values."""
 
-from __future__ import annotations
-
 from ..calibration.estimate import METHODS
 from ..io.atomic import atomic_write_bytes
 from ..sim.paper import comparison_table, paper_calibration, paper_csv_path

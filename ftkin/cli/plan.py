@@ -2,8 +2,6 @@
 trajectory for ``calibrate --dynamic``).
 """
 
-from __future__ import annotations
-
 import argparse
 import json
 

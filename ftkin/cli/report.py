@@ -1,7 +1,5 @@
 """``ftkin report CALIB.json SAMPLES -o report.png``: measured vs predicted per pose, residuals."""
 
-from __future__ import annotations
-
 from ..io.calibration_file import load_calibration
 from ..viz.report import save_report
 from .arg_types import add_command, option

@@ -8,8 +8,6 @@ file itself is updated, atomically: re-zeroing it is this command's purpose
 leaves CALIB.json untouched.
 """
 
-from __future__ import annotations
-
 import datetime
 
 import numpy as np

@@ -27,16 +27,23 @@ flange or a reversed sign. The truth is printed, so what ``ftkin calibrate``
 finds can be compared with it.
 """
 
-from __future__ import annotations
-
 import importlib.util
+import time
 from dataclasses import replace
 
 import numpy as np
 
 from ..exceptions import InvalidInput
 from ..io.csv_table import read_table, write_csv
-from ..sim.placement import MODES, PlacementRun, PlacementScenario, simulate_placement
+from ..kinematics.arm import Arm
+from ..sim import inputs as sim_inputs
+from ..sim.placement import (
+    MODES,
+    PlacementRun,
+    PlacementScenario,
+    admittance_controller,
+    simulate_placement,
+)
 from ..sim.surfaces import SURFACES, surface_by_name
 from .arg_types import (
     add_command,
@@ -196,18 +203,14 @@ def _simulate(scenario: PlacementScenario, args):
     run_, full = simulate_placement_mujoco(
         scenario, sample_rate=args.sample_rate, delay_ticks=args.delay_ticks
     )
-    for time, event in full.events:
+    for at, event in full.events:
         if event:
-            print(f"  t = {time:.3f} s: {event}")
+            print(f"  t = {at:.3f} s: {event}")
     return run_, list(full.columns), full.table
 
 
 def _run_viewed(scenario: PlacementScenario) -> PlacementRun:
     """One run drawn by a LiveView, each tick published and paced to the wall clock."""
-    import time
-
-    from ..kinematics.arm import Arm
-    from ..sim.placement import admittance_controller
     from ..viz.live import LiveView
 
     arm = Arm.default()
@@ -420,7 +423,6 @@ def _inputs(args):
     from ..calibration.information import SensorNoise
     from ..calibration.model import SensorModel
     from ..kinematics.rotations import euler_zyx_to_matrix
-    from ..sim.inputs import SimulatedInputs
     from ..sim.sensor import paper_like_truth
     from ..sim.sensor_drift import SensorDrift
 
@@ -443,7 +445,7 @@ def _inputs(args):
     paper = SensorNoise.paper()
     noise = SensorNoise(paper.force_std * args.noise_scale, paper.torque_std * args.noise_scale)
     drift = SensorDrift.typical() if args.drift else None
-    return SimulatedInputs(truth, noise, drift, mount, float(args.sensor_sign))
+    return sim_inputs.SimulatedInputs(truth, noise, drift, mount, float(args.sensor_sign))
 
 
 def _trajectory(args, arm):
@@ -468,9 +470,6 @@ def _trajectory(args, arm):
 
 def run_input(args) -> int:
     """``ftkin simulate samples|log|recording|bag``: write the example input, print the truth."""
-    from ..kinematics.arm import Arm
-    from ..sim import inputs as sim_inputs
-
     arm = arm_from_args(args) or Arm.default()
     rng = np.random.default_rng(args.seed)
     inputs = _inputs(args)

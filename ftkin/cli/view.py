@@ -2,8 +2,6 @@
 calibration in 3D.
 """
 
-from __future__ import annotations
-
 import argparse
 import dataclasses
 import math
