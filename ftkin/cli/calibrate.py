@@ -24,14 +24,6 @@ from .common import (
 )
 from .doctor import refuse_convention_mistakes
 
-_DESCRIPTION = (
-    "Calibrate from a samples CSV: wrench columns fx,fy,fz,mx,my,mz [N, N·m] and the orientation "
-    "as joint columns (URDF names or q1..qn, rad), alpha,beta,gamma (deg, R = Rz Ry Rx) or "
-    "qw,qx,qy,qz; optional integer 'pose' column groups repeated readings (their spread then "
-    "gives the noise levels of the ml fit); optional 't' column [s] (bags: the stamps) lets the "
-    "bias drift with time (--drift)."
-)
-
 
 def drift_spec(text: str) -> str:
     """argparse type: a drift spec the registry knows (``auto``, ``none``, ``poly:2``, ...)."""
@@ -47,7 +39,11 @@ def register(subparsers) -> None:
         subparsers,
         "calibrate",
         help="estimate sensor bias, tool weight, centre of mass and base tilt",
-        description=_DESCRIPTION,
+        description="Calibrate from a samples CSV: wrench columns fx,fy,fz,mx,my,mz [N, N·m] and "
+        "the orientation as joint columns (URDF names or q1..qn, rad), alpha,beta,gamma (deg, "
+        "R = Rz Ry Rx) or qw,qx,qy,qz; optional integer 'pose' column groups repeated readings "
+        "(their spread then gives the noise levels of the ml fit); optional 't' column [s] (bags: "
+        "the stamps) lets the bias drift with time (--drift).",
         options=(
             option("samples", metavar="SAMPLES.csv"),
             option("-o", "--output", metavar="CALIB.json", help="write the calibration file here"),

@@ -198,14 +198,15 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+# Option rows (arg_types.option) shared by several commands: --allow-other-arm for the commands
+# that apply a calibration with the arm it records, --sg-window for the zero-phase derivatives of a
+# moving recording.
 ALLOW_OTHER_ARM = option(
     "--allow-other-arm",
     action="store_true",
     help="accept robot options that differ from the arm recorded in the calibration "
     "(deliberate reuse)",
 )
-"""``--allow-other-arm`` (an :func:`~ftkin.cli.arg_types.option` row), for the commands that apply
-a calibration with the arm it records."""
 
 SG_WINDOW = option(
     "--sg-window",
@@ -214,8 +215,6 @@ SG_WINDOW = option(
     metavar="SAMPLES",
     help="odd Savitzky–Golay window for joint velocities and accelerations (default: about 51 ms)",
 )
-"""``--sg-window`` (an :func:`~ftkin.cli.arg_types.option` row): the Savitzky–Golay window of the
-zero-phase derivatives of a moving recording."""
 
 
 def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:

@@ -56,8 +56,7 @@ def run(args) -> int:
         calibration, arm, allow_other_arm=args.allow_other_arm
     )  # checks arm against the record
     if calibration.has_inertia:
-        done = _compensate_motion(args, calibration, arm or Arm.default())
-        if done is not None:
+        if (done := _compensate_motion(args, calibration, arm or Arm.default())) is not None:
             return done
     elif args.sg_window is not None:
         raise InvalidInput(
@@ -103,8 +102,9 @@ def _compensate_motion(args, calibration, arm: Arm) -> int | None:
             args.log, arm, args.joint_topic, args.wrench_topic, args.wrench_frame
         )
         header = ["t", *arm.joint_names, *WRENCH_CHANNELS]
-        rows = np.column_stack([recording.times, recording.joint_positions, recording.wrenches])
-        rows = [[*map(float, row)] for row in rows]
+        rows = np.column_stack(
+            [recording.times, recording.joint_positions, recording.wrenches]
+        ).tolist()
     else:
         table = read_table(args.log)
         if not is_motion_table(table, arm):

@@ -393,11 +393,14 @@ def run(args) -> int:
     try:
         plan = plan_poses(load_arm(args), spec)
     except UrdfError as error:  # only the collision geometry is loaded here: meshes not found
-        hint = (
-            "give --package-dir DIR (the folder holding the package:// packages) or "
-            "--no-self-collision"
-        )
-        raise UrdfError(error.path, [*error.reasons, hint]) from None
+        raise UrdfError(
+            error.path,
+            [
+                *error.reasons,
+                "give --package-dir DIR (the folder holding the package:// packages) or "
+                "--no-self-collision",
+            ],
+        ) from None
     print(plan.report())
     print(_pose_lines(plan))
     if args.output:

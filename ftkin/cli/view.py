@@ -137,20 +137,6 @@ def _calibration_poses(loaded) -> Frames:
     return Frames(labels, averages.wrenches, configurations, averages.rotations, None)
 
 
-def _with_bias_at_times(frames: Frames, calibration, times: np.ndarray) -> Frames:
-    """For a drift-aware calibration, shift each frame's reading by ``bias(t) − bias(end)``
-    (``times`` [s], one per frame).
-
-    The viewer subtracts the calibration's bias (the one at the end of its
-    recording); with this shift it effectively subtracts the bias at the
-    reading's time, as ``ftkin compensate`` does (held outside the recording).
-    """
-    if calibration.drift is None:
-        return frames
-    shift = calibration.bias_at(times) - calibration.bias
-    return dataclasses.replace(frames, raw_wrenches=frames.raw_wrenches - shift)
-
-
 def _replay_rows(loaded, max_frames: int) -> Frames:
     samples, times = loaded.samples, loaded.samples.times
     if times is not None and np.any(np.diff(times) < 0):
@@ -159,9 +145,13 @@ def _replay_rows(loaded, max_frames: int) -> Frames:
         )
     rows = _evenly(len(samples), max_frames)
     times = rows / 30.0 if times is None else times[rows]  # no clock: 30 rows per second
-    configurations = samples.joint_positions[rows] if samples.joint_positions is not None else None
-    labels = [f"row {int(r)}" for r in rows]
-    return Frames(labels, samples.wrenches[rows], configurations, samples.rotations[rows], times)
+    return Frames(
+        [f"row {int(r)}" for r in rows],
+        samples.wrenches[rows],
+        None if samples.joint_positions is None else samples.joint_positions[rows],
+        samples.rotations[rows],
+        times,
+    )
 
 
 def _evenly(count: int, most: int) -> np.ndarray:
@@ -238,9 +228,15 @@ def _load_frames(args, calibration, source: str):
     # sensor frame
     loaded = dataclasses.replace(loaded, samples=as_real_sensor(loaded.samples, calibration))
     frames = _replay_rows(loaded, args.max_frames) if args.replay else _calibration_poses(loaded)
-    if loaded.samples.times is not None:  # the rows' own times, or each pose's mean time
+    if loaded.samples.times is not None and calibration.drift is not None:
+        # A drift-aware calibration: each frame's reading shifted by bias(t) − bias(end) at its
+        # time [s] (the row's own, or the pose's mean time). The viewer subtracts the
+        # calibration's bias (the one at the end of its recording); with this shift it
+        # effectively subtracts the bias at the reading's time, as ``ftkin compensate`` does
+        # (held outside the recording).
         times = frames.times if args.replay else loaded.samples.pose_averages().times
-        frames = _with_bias_at_times(frames, calibration, times)
+        shift = calibration.bias_at(times) - calibration.bias
+        frames = dataclasses.replace(frames, raw_wrenches=frames.raw_wrenches - shift)
     if frames.configurations is None:
         return frames, None  # orientations without joint angles: no arm to draw
     return frames, mounted_arm(arm, calibration.mount_rotation)
