@@ -48,25 +48,23 @@ def check_outputs(args: argparse.Namespace) -> None:
     """
     from ..io.atomic import check_output_path
 
-    inputs = []
-    for name in INPUT_OPTIONS:
-        value = getattr(args, name, None)
-        if isinstance(value, str) and not value.strip():
+    inputs = {
+        name: getattr(args, name)
+        for name in INPUT_OPTIONS
+        if isinstance(getattr(args, name, None), str)
+    }
+    for name, value in inputs.items():
+        if not value.strip():
             raise InvalidInput(f"the {name} file name is empty; expected a path to read")
-        if isinstance(value, str):
-            inputs.append(value)
     seen: dict[str, str] = {}
     for name, flag in OUTPUT_OPTIONS.items():
-        value = getattr(args, name, None)
-        if value is None or not isinstance(value, str):
-            continue
-        check_output_path(value, inputs, flag)
-        key = os.path.realpath(value)
-        if key in seen:
-            raise InvalidInput(
-                f"{seen[key]} and {flag} both name {value}; give each output its own file"
-            )
-        seen[key] = flag
+        if isinstance(value := getattr(args, name, None), str):
+            check_output_path(value, list(inputs.values()), flag)
+            if (key := os.path.realpath(value)) in seen:
+                raise InvalidInput(
+                    f"{seen[key]} and {flag} both name {value}; give each output its own file"
+                )
+            seen[key] = flag
 
 
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:

@@ -64,18 +64,14 @@ def join_number_lists(argv: list[str]) -> list[str]:
     A list option takes the numbers that follow it (at most 6) and no more, so
     it never swallows the positional file after it; negative numbers work.
     """
-    out, k = [], 0
-    while k < len(argv):
-        token = argv[k]
-        if token in NUMBER_LIST_OPTIONS:
-            values = []
-            while k + 1 < len(argv) and len(values) < 6 and _is_number(argv[k + 1]):
-                values.append(argv[k + 1])
-                k += 1
-            out.append(f"{token}={','.join(values)}" if values else token)
+    out, listed, values = [], None, []  # the list option being read and its numbers so far
+    for token in argv:
+        if listed and len(values) < 6 and _is_number(token):
+            values.append(token)
+            out[-1] = f"{listed}={','.join(values)}"
         else:
+            listed, values = (token if token in NUMBER_LIST_OPTIONS else None), []
             out.append(token)
-        k += 1
     return out
 
 
