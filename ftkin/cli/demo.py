@@ -135,13 +135,8 @@ def _closed_loop(arm: Arm, calibration, seconds: float, seed: int) -> None:
     )
     print(
         f"\nClosed loop in MuJoCo ({seconds:g} s at 1 kHz): admittance with this calibration "
-        "lowers a "
-        f"{scenario.object_weight:.2f} N object onto the book:"
-    )
-    print(
+        f"lowers a {scenario.object_weight:.2f} N object onto the book:\n"
         f"  peak contact force {run.peak_contact_force:.2f} N, final F'z {run.final_force:+.3f} N, "
-        f"{placed}"
-    )
-    print(
+        f"{placed}\n"
         "  (ftkin simulate placement --mode all --plot run.png compares it with position control)"
     )

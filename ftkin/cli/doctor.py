@@ -31,9 +31,10 @@ def run(args) -> int:
     report = diagnose_table(table, arm_from_args(args))
     print(
         f"{args.samples}: {len(table.rows)} readings; linear fit under each reading (chi² with the "
-        "noise of the best):"
+        "noise of the best):",
+        report.table(),
+        sep="\n",
     )
-    print(report.table())
     detail = report.reason if report.verdict in ("ok", "undetermined") else report.message
     print(f"verdict: {report.verdict}: {detail}")
     return 1 if report.verdict == "mistake" else 0
@@ -47,12 +48,11 @@ def refuse_convention_mistakes(loaded, arm) -> None:
         return
     report = diagnose_table(loaded.table, arm)
     if report.verdict == "mistake":
-        reading = report.culprit.reading
         raise ConventionMistake(
             report.message + " (run 'ftkin doctor' for the fit of every reading)",
             loaded.table.source,
-            reading.name,
-            reading.fix,
+            report.culprit.reading.name,
+            report.culprit.reading.fix,
         )
     if report.verdict == "suspect":
         logger.warning("%s: %s", loaded.table.source, report.message)

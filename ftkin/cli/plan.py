@@ -401,8 +401,7 @@ def run(args) -> int:
                 "--no-self-collision",
             ],
         ) from None
-    print(plan.report())
-    print(_pose_lines(plan))
+    print(plan.report(), _pose_lines(plan), sep="\n")
     if args.output:
         fmt = args.format or _format_from_name(args.output)
         write_plan(plan, args.output, fmt)
@@ -478,21 +477,17 @@ def _run_excitation(args, arm: Arm) -> int:
         max_iterations=args.iterations,
         seed=args.seed,
     )
+    peak_speed, peak_acceleration = (
+        ", ".join(f"{v:.2f}" for v in np.abs(values).max(axis=0))
+        for values in (plan.joint_velocities, plan.joint_accelerations)
+    )
     print(
         f"excitation: {len(plan.times)} samples at {args.rate:g} Hz over {args.duration:g} s, "
         f"period {plan.trajectory.period:g} s, "
-        f"{plan.trajectory.cosine.shape[1]} harmonics; {constraints.describe()}"
-    )
-    print(
-        f"  information: log det {plan.log_det:.2f}, condition number {plan.condition_number:.3g}"
-    )
-    print(
-        "  peak joint speed [rad/s]: "
-        + ", ".join(f"{v:.2f}" for v in np.abs(plan.joint_velocities).max(axis=0))
-    )
-    print(
-        "  peak joint acceleration [rad/s²]: "
-        + ", ".join(f"{v:.2f}" for v in np.abs(plan.joint_accelerations).max(axis=0))
+        f"{plan.trajectory.cosine.shape[1]} harmonics; {constraints.describe()}\n"
+        f"  information: log det {plan.log_det:.2f}, condition number {plan.condition_number:.3g}\n"
+        f"  peak joint speed [rad/s]: {peak_speed}\n"
+        f"  peak joint acceleration [rad/s²]: {peak_acceleration}"
     )
     if args.output:
         header, rows = plan.table()
