@@ -107,7 +107,7 @@ def main(argv=None) -> int:
         return 0
     stdout = sys.stdout
     sys.stdout = _QuietPipe(stdout)
-    once: dict[logging.Handler, _OnceFilter] = {}  # one per handler: each sees each record once
+    once = {}  # a filter per handler: each handler sees each record once
     fit_log = logging.getLogger("ftkin.calibration.fit_quality")
     fit_log_disabled = fit_log.disabled
     # every command that fits prints the summary, which lists these warnings
@@ -125,7 +125,7 @@ def main(argv=None) -> int:
             level=logging.INFO if args.verbose else logging.WARNING, format="ftkin: %(message)s"
         )
         for handler in logging.getLogger().handlers:
-            once[handler] = _OnceFilter()
+            once[handler] = _once_filter()
             handler.addFilter(once[handler])
         if not getattr(args, "func", None):
             parser.print_help()
@@ -149,19 +149,17 @@ def main(argv=None) -> int:
             handler.removeFilter(once_filter)
 
 
-class _OnceFilter(logging.Filter):
-    """Let each warning text through once per command."""
+def _once_filter():
+    """A logging filter that lets each warning text through once per command."""
+    seen: set[str] = set()
 
-    def __init__(self):
-        super().__init__()
-        self.seen: set[str] = set()
-
-    def filter(self, record: logging.LogRecord) -> bool:
+    def let_through(record: logging.LogRecord) -> bool:
         text = record.getMessage()
-        if text in self.seen:
-            return False
-        self.seen.add(text)
-        return True
+        fresh = text not in seen
+        seen.add(text)
+        return fresh
+
+    return let_through
 
 
 class _QuietPipe:
@@ -221,7 +219,3 @@ def _unexpected(error: Exception) -> int:
 def entry_point() -> None:
     """Console-script entry (``[project.scripts] ftkin``)."""
     sys.exit(main())
-
-
-if __name__ == "__main__":  # pragma: no cover
-    entry_point()

@@ -195,8 +195,8 @@ def _value_list(text: str) -> list[float]:
 
 def _simulate(scenario: PlacementScenario, args):
     """``(PlacementRun, header, rows)`` of one run on the chosen engine."""
-    if args.engine == "simple":
-        run_ = simulate_placement(scenario)
+    if args.engine == "simple":  # with --view, drawn live
+        run_ = _run_viewed(scenario) if args.view else simulate_placement(scenario)
         return run_, list(PlacementRun.COLUMNS), run_.rows()
     from ..sim.mujoco.mujoco_placement import simulate_placement_mujoco
 
@@ -214,8 +214,7 @@ def _run_viewed(scenario: PlacementScenario) -> PlacementRun:
     from ..viz.live import LiveView
 
     arm = Arm.default()
-    frame = admittance_controller(scenario, arm, None).frame
-    with LiveView(arm, control_frame=frame) as view:
+    with LiveView(arm, control_frame=admittance_controller(scenario, arm, None).frame) as view:
         print(f"live view: {view.url}")
         start, ticks = time.perf_counter(), [0]
 
@@ -291,14 +290,11 @@ def _write(args, results, labels) -> None:
 
 def run(args) -> int:
     scenarios, labels = _scenarios(args)
-    if args.view:  # the live view draws the simple engine's run, paced to the wall clock
-        if args.engine != "simple":
-            print("--view: running the simple engine (the live view follows its ticks)")
-            args.engine = "simple"  # the labels below say what ran
-        viewed = _run_viewed(scenarios[0])
-        results = [(viewed, list(PlacementRun.COLUMNS), viewed.rows())]
-    else:
-        results = [_simulate(one, args) for one in scenarios]
+    # the live view draws the simple engine's run (one scenario), paced to the wall clock
+    if args.view and args.engine != "simple":
+        print("--view: running the simple engine (the live view follows its ticks)")
+        args.engine = "simple"  # the labels below say what ran
+    results = [_simulate(one, args) for one in scenarios]
     for one, _, _ in results:
         prefix = (
             f"{'k13' if args.sweep == 'k1' else 'k23'} = "
