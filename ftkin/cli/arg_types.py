@@ -36,6 +36,17 @@ def add_command(subparsers, name: str, *, run, options=(), groups=(), **keywords
     return parser
 
 
+def refuse(error: type[Exception], *checks: tuple) -> None:
+    """Raise ``error(message)`` for the first ``(refused, message)`` of ``checks`` that is refused.
+
+    Every check is evaluated up front: each condition and message must be safe to compute
+    whatever the input (the order says which is reported when several apply).
+    """
+    for refused, message in checks:
+        if refused:
+            raise error(message)
+
+
 def _number(text: str, accept, expected: str) -> float:
     try:
         value = float(text)
@@ -108,10 +119,11 @@ def bounded_int(low: int, high: int, what: str):
 def seed(text: str) -> int:
     """argparse type: a random seed, 0 to 2**63 - 1."""
     value = whole_number(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"the seed must be at least 0, got {text}")
-    if value >= 2**63:
-        raise argparse.ArgumentTypeError(f"the seed must be below 2**63, got {text}")
+    refuse(
+        argparse.ArgumentTypeError,
+        (value < 0, f"the seed must be at least 0, got {text}"),
+        (value >= 2**63, f"the seed must be below 2**63, got {text}"),
+    )
     return value
 
 

@@ -15,7 +15,15 @@ from ..exceptions import InvalidInput
 from ..io.calibration_file import save_calibration
 from ..kinematics.arm import Arm, bundled_urdf_path
 from ..kinematics.record import KinematicsRecord
-from .arg_types import add_command, add_options, bounded_int, gravity, option, positive_float
+from .arg_types import (
+    add_command,
+    add_options,
+    bounded_int,
+    gravity,
+    option,
+    positive_float,
+    refuse,
+)
 from .common import (
     SG_WINDOW,
     add_samples_arguments,
@@ -227,14 +235,19 @@ def _run_dynamic(args, noise) -> int:
 
 def _options(args, noise) -> CalibrationOptions:
     """The calibration options of the command line (their combinations checked there)."""
-    if args.no_inertia or args.sg_window is not None:
-        raise InvalidInput("--no-inertia and --sg-window apply to --dynamic only")
     ml_only = noise is not None or args.loss != "linear" or args.drop_outliers or args.resolution
-    if args.method == "linear" and (ml_only or args.estimate_mount):
-        raise InvalidInput(
+    refuse(
+        InvalidInput,
+        (
+            args.no_inertia or args.sg_window is not None,
+            "--no-inertia and --sg-window apply to --dynamic only",
+        ),
+        (
+            args.method == "linear" and (ml_only or args.estimate_mount),
             "--noise-force/--noise-torque, --resolution, --loss, --drop-outliers and "
-            "--estimate-mount apply to --method ml only"
-        )
+            "--estimate-mount apply to --method ml only",
+        ),
+    )
     return CalibrationOptions(
         method=args.method,
         g=args.g,

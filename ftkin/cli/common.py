@@ -21,6 +21,7 @@ from .arg_types import (
     number_list,
     option,
     positive_float,
+    refuse,
 )
 
 logger = logging.getLogger("ftkin.cli")
@@ -91,7 +92,8 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     sensor_frame = getattr(args, "sensor_frame", "ft_sensor")
     tool_frame = getattr(args, "tool_frame", None)
     package_dirs = list(getattr(args, "package_dir", None) or [])
-    for refused, message in (  # in this order: the first that applies is reported
+    refuse(
+        InvalidInput,
         (urdf and robot, "give either --urdf or --robot, not both"),
         (
             offset is not None and len(offset) not in (3, 6),
@@ -117,9 +119,7 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
             offset is not None and not (urdf or robot),
             "--sensor-offset needs --robot NAME (or --urdf with --sensor-parent)",
         ),
-    ):
-        if refused:
-            raise InvalidInput(message)
+    )
     if urdf:
         mount = None if parent is None else sensor_mount_from_offset(parent, offset)
         return Arm.from_urdf(

@@ -31,6 +31,7 @@ from .arg_types import (
     non_negative_float,
     option,
     positive_float,
+    refuse,
     seed,
     whole_number,
 )
@@ -141,16 +142,16 @@ MAX_PLAN_POSES = 500
 def pose_count(text: str) -> int:
     """argparse type: number of poses to plan, 3 to :data:`MAX_PLAN_POSES`."""
     value = whole_number(text, "poses")
-    if value < 3:
-        raise argparse.ArgumentTypeError(
-            f"at least 3 poses are needed to determine the calibration, got {text}"
-        )
-    if value > MAX_PLAN_POSES:
-        raise argparse.ArgumentTypeError(
+    refuse(
+        argparse.ArgumentTypeError,
+        (value < 3, f"at least 3 poses are needed to determine the calibration, got {text}"),
+        (
+            value > MAX_PLAN_POSES,
             f"plan between 3 and {MAX_PLAN_POSES} poses, got {text}: beyond a few dozen poses the "
-            "standard errors "
-            "only fall as 1/√n (average readings with --readings-per-pose instead)"
-        )
+            "standard errors only fall as 1/√n (average readings with --readings-per-pose "
+            "instead)",
+        ),
+    )
     return value
 
 
@@ -175,14 +176,18 @@ def joint_range(text: str) -> tuple[str, float, float]:
         raise argparse.ArgumentTypeError(
             f"expected NAME:LO:HI with LO, HI in radians, got {text!r}"
         ) from None
-    if not (np.isfinite(low) and np.isfinite(high)):
-        raise argparse.ArgumentTypeError(f"expected finite LO and HI [rad], got {text!r}")
-    if max(abs(low), abs(high)) > 2.0 * np.pi:
-        raise argparse.ArgumentTypeError(
-            f"{text!r}: LO and HI are beyond 2π: ranges are in radians (these look like degrees)"
-        )
-    if low > high:
-        raise argparse.ArgumentTypeError(f"{text!r}: LO must not exceed HI")
+    refuse(
+        argparse.ArgumentTypeError,
+        (
+            not (np.isfinite(low) and np.isfinite(high)),
+            f"expected finite LO and HI [rad], got {text!r}",
+        ),
+        (
+            max(abs(low), abs(high)) > 2.0 * np.pi,
+            f"{text!r}: LO and HI are beyond 2π: ranges are in radians (these look like degrees)",
+        ),
+        (low > high, f"{text!r}: LO must not exceed HI"),
+    )
     return parts[0], low, high
 
 

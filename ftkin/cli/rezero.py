@@ -16,7 +16,7 @@ from ..control.compensation import Compensator
 from ..exceptions import InvalidInput
 from ..io.calibration_file import load_calibration, save_calibration
 from ..kinematics.arm import Arm
-from .arg_types import add_command, option
+from .arg_types import add_command, option, refuse
 from .common import add_arm_arguments, arm_for_calibration
 
 
@@ -77,15 +77,18 @@ def run(args) -> int:
     if not np.all(np.isfinite(args.q)):
         raise InvalidInput(f"--q must be finite numbers [rad], got {list(args.q)}")
     for name, value, low, high in zip(arm.joint_names, args.q, arm.lower_limits, arm.upper_limits):
-        if abs(value) > 2.0 * np.pi + 0.01:
-            raise InvalidInput(
+        refuse(
+            InvalidInput,
+            (
+                abs(value) > 2.0 * np.pi + 0.01,
                 f"--q: {name} = {value:g} is beyond ±2π: joint angles are in radians (this looks "
-                "like degrees)"
-            )
-        if not low - 1e-6 <= value <= high + 1e-6:
-            raise InvalidInput(
-                f"--q: {name} = {value:g} rad is outside its limits [{low:g}, {high:g}] rad"
-            )
+                "like degrees)",
+            ),
+            (
+                not low - 1e-6 <= value <= high + 1e-6,
+                f"--q: {name} = {value:g} rad is outside its limits [{low:g}, {high:g}] rad",
+            ),
+        )
     previous = calibration.bias
     bias = Compensator(calibration, arm).rezero(np.array(args.q), np.array(args.wrench))
     output = args.output or args.calibration
