@@ -53,6 +53,7 @@ from .arg_types import (
     number_list,
     option,
     positive_float,
+    refuse,
     seed,
 )
 from .common import add_arm_arguments, arm_from_args
@@ -248,17 +249,21 @@ def _scenarios(args) -> tuple[list[PlacementScenario], list]:
         dt=args.dt,
         seed=args.seed,
     )
+    refuse(
+        InvalidInput,
+        (
+            args.sweep and not args.values,
+            "--sweep needs --values, e.g. --values 0.05,0.1,0.2 (mm units)",
+        ),
+        (
+            args.sweep and args.mode in ("position", "all"),
+            "--sweep varies admittance gains; use --mode admittance or admittance-uncompensated",
+        ),
+        (args.values and not args.sweep, "--values needs --sweep k1 or --sweep k2"),
+    )
     if args.sweep:
-        if not args.values:
-            raise InvalidInput("--sweep needs --values, e.g. --values 0.05,0.1,0.2 (mm units)")
-        if args.mode in ("position", "all"):
-            raise InvalidInput(
-                "--sweep varies admittance gains; use --mode admittance or admittance-uncompensated"
-            )
         scenarios = [replace(scenario, **{args.sweep: value * 1e-3}) for value in args.values]
         return scenarios, list(args.values)
-    if args.values:
-        raise InvalidInput("--values needs --sweep k1 or --sweep k2")
     modes = MODES if args.mode == "all" else (args.mode,)
     return [replace(scenario, mode=mode) for mode in modes], list(range(len(modes)))
 
