@@ -47,15 +47,20 @@ def check_outputs(args: argparse.Namespace) -> None:
     against every input of the command; two outputs naming one file are refused too.
     """
     from ..io.atomic import check_output_path
+    from .arg_types import refuse
 
     inputs = {
         name: getattr(args, name)
         for name in INPUT_OPTIONS
         if isinstance(getattr(args, name, None), str)
     }
-    for name, value in inputs.items():
-        if not value.strip():
-            raise InvalidInput(f"the {name} file name is empty; expected a path to read")
+    refuse(
+        InvalidInput,
+        *(
+            (not value.strip(), f"the {name} file name is empty; expected a path to read")
+            for name, value in inputs.items()
+        ),
+    )
     seen: dict[str, str] = {}
     for name, flag in OUTPUT_OPTIONS.items():
         if isinstance(value := getattr(args, name, None), str):

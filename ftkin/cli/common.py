@@ -80,12 +80,6 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     ``--sensor-frame`` or ``--tool-frame`` that the model lacks is a
     :class:`~ftkin.exceptions.FrameNotFound` listing its frames.
     """
-    for name in ("urdf", "robot", "sensor_frame", "tool_frame", "sensor_parent"):
-        value = getattr(args, name, None)
-        if value is not None and not str(value).strip():
-            raise InvalidInput(
-                f"--{name.replace('_', '-')} is empty; give a name or leave the option out"
-            )
     urdf, robot = getattr(args, "urdf", None), getattr(args, "robot", None)
     offset = getattr(args, "sensor_offset", None)
     parent = getattr(args, "sensor_parent", None)
@@ -94,6 +88,13 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     package_dirs = list(getattr(args, "package_dir", None) or [])
     refuse(
         InvalidInput,
+        *(
+            (
+                getattr(args, name, None) is not None and not str(getattr(args, name)).strip(),
+                f"--{name.replace('_', '-')} is empty; give a name or leave the option out",
+            )
+            for name in ("urdf", "robot", "sensor_frame", "tool_frame", "sensor_parent")
+        ),
         (urdf and robot, "give either --urdf or --robot, not both"),
         (
             offset is not None and len(offset) not in (3, 6),

@@ -366,28 +366,33 @@ def load_arm(args) -> Arm:
 
 
 def run(args) -> int:
-    if args.format is not None and not args.output:
-        raise InvalidInput(
+    refuse(
+        InvalidInput,
+        (
+            args.format is not None and not args.output,
             f"--format {args.format} needs -o/--output FILE (the plan is printed as a table "
-            "otherwise)"
-        )
+            "otherwise)",
+        ),
+        (
+            args.excitation
+            and (
+                args.n is not None
+                or args.max_tilt_deg is not None
+                or args.format not in (None, "csv")
+                or args.drift_rate is not None
+                or args.pose_interval is not None
+                or args.max_travel_ratio is not None
+            ),
+            "--excitation plans a trajectory: --n, --max-tilt-deg, --format yaml/json, "
+            "--drift-rate, --pose-interval and --max-travel-ratio do not apply",
+        ),
+        (
+            not args.excitation and args.n is None,
+            "give --n N (the number of poses), or --excitation for a trajectory",
+        ),
+    )
     if args.excitation:
-        if (
-            args.n is not None
-            or args.max_tilt_deg is not None
-            or args.format not in (None, "csv")
-            or args.drift_rate is not None
-            or args.pose_interval is not None
-            or args.max_travel_ratio is not None
-        ):
-            raise InvalidInput(
-                "--excitation plans a trajectory: --n, --max-tilt-deg, --format yaml/json, "
-                "--drift-rate, "
-                "--pose-interval and --max-travel-ratio do not apply"
-            )
         return _run_excitation(args, load_arm(args))
-    if args.n is None:
-        raise InvalidInput("give --n N (the number of poses), or --excitation for a trajectory")
     spec = PlanSpec(
         args.n,
         constraints=constraints_from_args(args),

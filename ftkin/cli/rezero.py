@@ -67,15 +67,17 @@ def register(subparsers) -> None:
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
     arm = arm_for_calibration(args, calibration) or Arm.default()
-    if len(args.q) != arm.nq:
-        raise InvalidInput(
-            f"--q takes the arm's {arm.nq} joint angles [rad] ({', '.join(arm.joint_names)}), got "
-            f"{len(args.q)}"
-        )
     # angles beyond 2π (degrees) and a pose outside the joint limits are refused: the bias would
     # be set at a pose the arm was not in
-    if not np.all(np.isfinite(args.q)):
-        raise InvalidInput(f"--q must be finite numbers [rad], got {list(args.q)}")
+    refuse(
+        InvalidInput,
+        (
+            len(args.q) != arm.nq,
+            f"--q takes the arm's {arm.nq} joint angles [rad] ({', '.join(arm.joint_names)}), "
+            f"got {len(args.q)}",
+        ),
+        (not np.all(np.isfinite(args.q)), f"--q must be finite numbers [rad], got {list(args.q)}"),
+    )
     for name, value, low, high in zip(arm.joint_names, args.q, arm.lower_limits, arm.upper_limits):
         refuse(
             InvalidInput,

@@ -427,10 +427,19 @@ def _inputs(args):
     from ..sim.sensor import paper_like_truth
     from ..sim.sensor_drift import SensorDrift
 
+    refuse(
+        InvalidInput,
+        (
+            args.com is not None and len(args.com) != 3,
+            f"--com takes X Y Z [m], got {len(args.com or ())} numbers",
+        ),
+        (
+            args.mount_rpy_deg is not None and len(args.mount_rpy_deg) != 3,
+            f"--mount-rpy-deg takes R P Y [deg], got {args.mount_rpy_deg}",
+        ),
+    )
     truth = paper_like_truth()
     if args.tool_mass is not None or args.com is not None:
-        if args.com is not None and len(args.com) != 3:
-            raise InvalidInput(f"--com takes X Y Z [m], got {len(args.com)} numbers")
         truth = SensorModel.from_tool(
             tool_mass=args.tool_mass if args.tool_mass is not None else truth.tool_mass,
             center_of_mass=args.com if args.com is not None else truth.center_of_mass,
@@ -438,11 +447,11 @@ def _inputs(args):
             torque_offset=truth.torque_offset,
             base_tilt=truth.base_tilt,
         )
-    mount = np.eye(3)
-    if args.mount_rpy_deg is not None:
-        if len(args.mount_rpy_deg) != 3:
-            raise InvalidInput(f"--mount-rpy-deg takes R P Y [deg], got {args.mount_rpy_deg}")
-        mount = euler_zyx_to_matrix(np.deg2rad(args.mount_rpy_deg)[::-1])  # yaw, pitch, roll
+    mount = (  # R_M = Rz(Y) Ry(P) Rx(R)
+        np.eye(3)
+        if args.mount_rpy_deg is None
+        else euler_zyx_to_matrix(np.deg2rad(args.mount_rpy_deg)[::-1])
+    )
     paper = SensorNoise.paper()
     noise = SensorNoise(paper.force_std * args.noise_scale, paper.torque_std * args.noise_scale)
     drift = SensorDrift.typical() if args.drift else None
