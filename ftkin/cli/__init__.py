@@ -110,13 +110,11 @@ def main(argv=None) -> int:
 
         print(f"ftkin {__version__}")
         return 0
-    stdout = sys.stdout
-    sys.stdout = _QuietPipe(stdout)
+    stdout, sys.stdout = sys.stdout, _QuietPipe(sys.stdout)
     once = {}  # a filter per handler: each handler sees each record once
     fit_log = logging.getLogger("ftkin.calibration.fit_quality")
-    fit_log_disabled = fit_log.disabled
     # every command that fits prints the summary, which lists these warnings
-    fit_log.disabled = True
+    fit_log_disabled, fit_log.disabled = fit_log.disabled, True
     try:
         from .arg_types import join_number_lists
 

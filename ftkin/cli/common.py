@@ -261,11 +261,13 @@ def warn_if_kinematics_differ(loaded, calibration) -> None:
     calibration's.
     """
     samples = loaded.samples
-    if samples.urdf is None or calibration.urdf is None:
-        return
     if (
-        Path(samples.urdf).name != Path(calibration.urdf).name
-        or samples.sensor_frame != calibration.sensor_frame
+        samples.urdf is not None
+        and calibration.urdf is not None
+        and (
+            Path(samples.urdf).name != Path(calibration.urdf).name
+            or samples.sensor_frame != calibration.sensor_frame
+        )
     ):
         logger.warning(
             "the calibration was made with %s (sensor frame %s) but these samples were read with "

@@ -37,7 +37,8 @@ from .arg_types import (
 )
 from .common import add_arm_arguments, arm_from_args
 
-FORMATS = ("csv", "yaml", "json")
+FORMATS = {"csv": (), "yaml": (".yaml", ".yml"), "json": (".json",)}
+"""Output formats of ``plan -o`` and the file name endings that choose them (default: csv)."""
 
 
 def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
@@ -211,7 +212,7 @@ def register(subparsers) -> None:
             option("-o", "--output", metavar="POSES.csv", help="write the poses here"),
             option(
                 "--format",
-                choices=FORMATS,
+                choices=tuple(FORMATS),
                 default=None,
                 help="output format (default: from the file name, else csv)",
             ),
@@ -413,17 +414,13 @@ def run(args) -> int:
         ) from None
     print(plan.report(), _pose_lines(plan), sep="\n")
     if args.output:
-        fmt = args.format or _format_from_name(args.output)
+        fmt = args.format or next(
+            (fmt for fmt, endings in FORMATS.items() if args.output.lower().endswith(endings)),
+            "csv",
+        )
         write_plan(plan, args.output, fmt)
         print(f"wrote {args.output} ({fmt})")
     return 0
-
-
-def _format_from_name(path: str) -> str:
-    lowered = path.lower()
-    if lowered.endswith((".yaml", ".yml")):
-        return "yaml"
-    return "json" if lowered.endswith(".json") else "csv"
 
 
 def _pose_lines(plan) -> str:
@@ -462,8 +459,11 @@ def plan_document(plan) -> dict:
 def write_plan(plan, path: str, fmt: str) -> None:
     """Write the poses as CSV (``pose`` plus one column per joint [rad]), YAML or JSON."""
     if fmt == "csv":
-        rows = [[i, *map(float, q)] for i, q in enumerate(plan.joint_positions)]
-        write_csv(path, [POSE_COLUMN, *plan.joint_names], rows)
+        write_csv(
+            path,
+            [POSE_COLUMN, *plan.joint_names],
+            [[i, *map(float, q)] for i, q in enumerate(plan.joint_positions)],
+        )
     elif fmt == "json":
         atomic_write_text(path, json.dumps(plan_document(plan), indent=2) + "\n")
     else:
