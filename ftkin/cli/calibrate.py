@@ -4,16 +4,21 @@ import argparse
 from dataclasses import replace
 from pathlib import Path
 
+from .. import (
+    METHODS,
+    MOUNT_MODES,
+    STANDARD_GRAVITY,
+    Arm,
+    CalibrationOptions,
+    InvalidInput,
+    SensorNoise,
+    bundled_urdf_path,
+    calibrate,
+    save_calibration,
+)
 from ..calibration.conventions import BASE_MOUNTS
 from ..calibration.drift import drift_candidates, drift_choices
-from ..calibration.estimate import METHODS, CalibrationOptions, calibrate
-from ..calibration.information import SensorNoise
 from ..calibration.ml import LOSSES
-from ..calibration.model import STANDARD_GRAVITY
-from ..calibration.mount import MOUNT_MODES
-from ..exceptions import InvalidInput
-from ..io.calibration_file import save_calibration
-from ..kinematics.arm import Arm, bundled_urdf_path
 from ..kinematics.record import KinematicsRecord
 from .arg_types import (
     add_command,

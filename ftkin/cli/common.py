@@ -4,9 +4,7 @@ import argparse
 import logging
 from pathlib import Path
 
-from ..exceptions import FrameNotFound, InvalidInput
-from ..io.samples_csv import load_samples
-from ..kinematics.arm import Arm, bundled_urdf_path
+from .. import Arm, FrameNotFound, InvalidInput, bundled_urdf_path, load_samples
 from ..kinematics.robots import (
     DEFAULT_ROBOT,
     ROBOT_SPECS,

@@ -2,13 +2,10 @@
 
 import numpy as np
 
+from .. import Arm, Compensator, InvalidInput, load_calibration
 from ..calibration.model import WRENCH_CHANNELS
-from ..control.compensation import Compensator
-from ..exceptions import InvalidInput
 from ..io.bags import is_bag_path
-from ..io.calibration_file import load_calibration
 from ..io.csv_table import read_table, write_csv
-from ..kinematics.arm import Arm
 from .arg_types import add_command, option
 from .common import (
     ALLOW_OTHER_ARM,

@@ -10,11 +10,7 @@ import importlib.util
 
 import numpy as np
 
-from ..calibration.estimate import METHODS, calibrate
-from ..calibration.information import SensorNoise
-from ..control.compensation import Compensator
-from ..io.calibration_file import save_calibration
-from ..kinematics.arm import Arm
+from .. import METHODS, Arm, Compensator, SensorNoise, calibrate, save_calibration
 from ..sim.sensor import SimulatedSensor, paper_like_truth
 from .arg_types import add_command, bounded_int, non_negative_float, option, seed
 

@@ -2,10 +2,9 @@
 payloads; the formats and their options come from the registry (:mod:`ftkin.io.export`).
 """
 
+from .. import Arm, load_calibration
 from ..io.atomic import atomic_write_text
-from ..io.calibration_file import load_calibration
 from ..io.export import EXPORT_FORMATS, export_request
-from ..kinematics.arm import Arm
 from .arg_types import add_command, add_options, option
 from .common import ALLOW_OTHER_ARM, add_arm_arguments, arm_for_calibration, arm_from_args
 

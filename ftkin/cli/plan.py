@@ -7,13 +7,11 @@ import json
 
 import numpy as np
 
-from ..calibration.information import SensorNoise
-from ..exceptions import InvalidInput, UrdfError
+from .. import Arm, InvalidInput, PlanSpec, SensorNoise, UrdfError, plan_poses
 from ..io.atomic import atomic_write_text
 from ..io.csv_table import write_csv
 from ..io.samples_csv import POSE_COLUMN
 from ..io.yaml_text import yaml_text
-from ..kinematics.arm import Arm
 from ..planning.constraints import DEFAULT_MARGIN, PoseConstraints
 from ..planning.drift_order import DEFAULT_POSE_INTERVAL
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT, ExpectedCalibration
@@ -23,7 +21,6 @@ from ..planning.excitation import (
     DEFAULT_VELOCITY_FRACTION,
     plan_excitation,
 )
-from ..planning.plan import PlanSpec, plan_poses
 from .arg_types import (
     add_command,
     add_options,

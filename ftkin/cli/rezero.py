@@ -12,10 +12,7 @@ import datetime
 
 import numpy as np
 
-from ..control.compensation import Compensator
-from ..exceptions import InvalidInput
-from ..io.calibration_file import load_calibration, save_calibration
-from ..kinematics.arm import Arm
+from .. import Arm, Compensator, InvalidInput, load_calibration, save_calibration
 from .arg_types import add_command, option, refuse
 from .common import add_arm_arguments, arm_for_calibration
 

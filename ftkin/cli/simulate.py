@@ -33,9 +33,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..exceptions import InvalidInput
+from .. import Arm, InvalidInput
 from ..io.csv_table import read_table, write_csv
-from ..kinematics.arm import Arm
 from ..sim import inputs as sim_inputs
 from ..sim.placement import (
     MODES,

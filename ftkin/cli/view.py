@@ -10,11 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import Arm, InvalidInput, load_calibration, mounted_arm
 from ..calibration.conventions import as_real_sensor
-from ..exceptions import InvalidInput
-from ..io.calibration_file import load_calibration
-from ..kinematics.arm import Arm
-from ..kinematics.mounting import mounted_arm
 from .arg_types import add_command, bounded_int, option, positive_float
 from .common import (
     add_samples_arguments,
