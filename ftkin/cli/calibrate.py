@@ -218,9 +218,8 @@ def _run_dynamic(args, noise) -> int:
             f"{', '.join(given)} apply to static calibration, not (yet) to --dynamic; calibrate "
             "the mount and sign from static poses first"
         )
-    from ..calibration.dynamic import calibrate_dynamic
+    from .. import calibrate_dynamic, load_motion_bag, load_motion_csv
     from ..io.bags import is_bag_path
-    from ..io.motion_recording import load_motion_bag, load_motion_csv
 
     arm = arm_from_args(args) or Arm.default()
     if is_bag_path(args.samples):
@@ -276,17 +275,17 @@ def run(args) -> int:
     options = _options(args, noise)
     arm = arm_from_args(args)
     loaded = load_samples_from_args(args.samples, args, arm=arm)
-    stated = (
-        args.sensor_sign != 1
+    # The doctor refits the readings as given, on a floor-mounted base with the URDF's sensor
+    # frame; with a stated sign, axis, base mount or an estimated mount calibrate() checks the
+    # conventions itself.
+    if not (
+        args.no_convention_check
+        or args.sensor_sign != 1
         or args.flip_axis
         or args.base_mount != "floor"
         or args.expected_gravity
         or args.estimate_mount
-    )
-    if not (args.no_convention_check or stated):
-        # The doctor refits the readings as given, on a floor-mounted base with the URDF's sensor
-        # frame; with a stated sign, axis, base mount or an estimated mount calibrate() checks
-        # the conventions itself.
+    ):
         refuse_convention_mistakes(loaded, arm)
     result = calibrate(loaded.samples, options)
     urdf = loaded.samples.urdf

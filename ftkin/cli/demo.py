@@ -54,10 +54,8 @@ def _row(name: str, unit: str, truth, estimate, decimals: int, std_error=None) -
     truth, estimate = np.atleast_1d(truth), np.atleast_1d(estimate)
     fmt = lambda v: "[" + ", ".join(f"{x:+.{decimals}f}" for x in v) + "]"  # noqa: E731
     error = np.abs(estimate - truth)
-    text = f"  {name:<16}{fmt(truth):<36}{fmt(estimate):<36}{error.max():.1e} {unit:<5}"
-    if std_error is not None:
-        text += f"{np.max(error / np.atleast_1d(std_error)):.1f}"
-    return text
+    ratio = "" if std_error is None else f"{np.max(error / np.atleast_1d(std_error)):.1f}"
+    return f"  {name:<16}{fmt(truth):<36}{fmt(estimate):<36}{error.max():.1e} {unit:<5}{ratio}"
 
 
 def run(args) -> int:

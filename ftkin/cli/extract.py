@@ -32,10 +32,13 @@ def register(subparsers) -> None:
 def run(args) -> int:
     loaded = load_samples_from_args(args.recording, args)
     write_csv(args.output, loaded.table.header, loaded.table.rows)
-    poses = len(np.unique(loaded.samples.pose_ids))
     print(
         f"wrote {len(loaded.table.rows)} readings"
-        + (f" in {poses} static poses" if loaded.search is not None else "")
+        + (
+            f" in {len(np.unique(loaded.samples.pose_ids))} static poses"
+            if loaded.search is not None
+            else ""
+        )
         + f" to {args.output}"
     )
     recording = loaded.recording

@@ -409,7 +409,16 @@ def run(args) -> int:
                 "--no-self-collision",
             ],
         ) from None
-    print(plan.report(), _pose_lines(plan), sep="\n")
+    print(
+        plan.report(),
+        "joint positions [rad], in visiting order:",
+        f"{POSE_COLUMN:>4} " + " ".join(f"{name[:12]:>12}" for name in plan.joint_names),
+        *(
+            f"{i:>4} " + " ".join(f"{value:>12.4f}" for value in q)
+            for i, q in enumerate(plan.joint_positions)
+        ),
+        sep="\n",
+    )
     if args.output:
         fmt = args.format or next(
             (fmt for fmt, endings in FORMATS.items() if args.output.lower().endswith(endings)),
@@ -418,15 +427,6 @@ def run(args) -> int:
         write_plan(plan, args.output, fmt)
         print(f"wrote {args.output} ({fmt})")
     return 0
-
-
-def _pose_lines(plan) -> str:
-    header = f"{POSE_COLUMN:>4} " + " ".join(f"{name[:12]:>12}" for name in plan.joint_names)
-    rows = [
-        f"{i:>4} " + " ".join(f"{value:>12.4f}" for value in q)
-        for i, q in enumerate(plan.joint_positions)
-    ]
-    return "joint positions [rad], in visiting order:\n" + "\n".join([header, *rows])
 
 
 def plan_document(plan) -> dict:

@@ -420,11 +420,9 @@ SENSOR_OPTIONS = (
 
 
 def _inputs(args):
-    from ..calibration.information import SensorNoise
-    from ..calibration.model import SensorModel
+    from .. import SensorDrift, SensorModel, SensorNoise
     from ..kinematics.rotations import euler_zyx_to_matrix
     from ..sim.sensor import paper_like_truth
-    from ..sim.sensor_drift import SensorDrift
 
     refuse(
         InvalidInput,

@@ -130,8 +130,13 @@ def _calibration_poses(loaded) -> Frames:
             ]
         )
     )
-    labels = [f"pose {int(pid)}" for pid in averages.pose_ids]
-    return Frames(labels, averages.wrenches, configurations, averages.rotations, None)
+    return Frames(
+        [f"pose {int(pid)}" for pid in averages.pose_ids],
+        averages.wrenches,
+        configurations,
+        averages.rotations,
+        None,
+    )
 
 
 def _replay_rows(loaded, max_frames: int) -> Frames:
@@ -172,8 +177,7 @@ def _where(frames: Frames, rows=slice(None)) -> dict:
 
 
 def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
-    na, nb = np.linalg.norm(a), np.linalg.norm(b)
-    if na == 0 or nb == 0:
+    if np.linalg.norm(a) == 0 or np.linalg.norm(b) == 0:
         return math.nan
     return math.degrees(math.atan2(np.linalg.norm(np.cross(a, b)), float(a @ b)))
 
