@@ -212,8 +212,7 @@ def _run_dynamic(args, noise) -> int:
         "--resolution": args.resolution,
         "--cross-validate": args.cross_validate,
     }
-    given = [flag for flag, used in static_only.items() if used]
-    if given:
+    if given := [flag for flag, used in static_only.items() if used]:
         raise InvalidInput(
             f"{', '.join(given)} apply to static calibration, not (yet) to --dynamic; calibrate "
             "the mount and sign from static poses first"

@@ -171,14 +171,14 @@ def _pick(frames: Frames, pose: int, replay: bool) -> int:
 
 def _where(frames: Frames, rows=slice(None)) -> dict:
     """The frames' placement for the viewer: joint angles when known, else sensor orientations."""
-    if frames.configurations is not None:
-        return {"configurations": frames.configurations[rows]}
-    return {"rotations": frames.rotations[rows]}
+    if frames.configurations is None:
+        return {"rotations": frames.rotations[rows]}
+    return {"configurations": frames.configurations[rows]}
 
 
 def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
     if np.linalg.norm(a) == 0 or np.linalg.norm(b) == 0:
-        return math.nan
+        return math.nan  # no direction to compare
     return math.degrees(math.atan2(np.linalg.norm(np.cross(a, b)), float(a @ b)))
 
 
