@@ -47,6 +47,101 @@ def drift_spec(text: str) -> str:
     return text
 
 
+# The ml estimator's options.
+_ML_OPTIONS = (
+    option(
+        "--noise-force",
+        type=positive_float,
+        metavar="N",
+        help="noise std of one force reading [N] (with --noise-torque; default: estimated from "
+        "the spread of repeated readings per pose, else from the residuals)",
+    ),
+    option(
+        "--noise-torque",
+        type=positive_float,
+        metavar="N·m",
+        help="noise std of one torque reading",
+    ),
+    option(
+        "--resolution",
+        type=positive_float,
+        nargs=2,
+        metavar=("N", "N·m"),
+        help="resolution (quantization step) of one force and one torque reading: an estimated "
+        "noise is at least resolution/√12, so a drift model cannot take all of it",
+    ),
+    option(
+        "--loss",
+        choices=LOSSES,
+        default="linear",
+        help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
+    ),
+    option(
+        "--drop-outliers",
+        action="store_true",
+        help="refit without the poses flagged as outliers",
+    ),
+    option(
+        "--drift",
+        type=drift_spec,
+        default="auto",
+        metavar="MODEL",
+        help=f"bias drift over time, with a 't' column: {'|'.join(drift_choices())} (poly:N a "
+        "polynomial of degree N; random-walk estimates the rate; auto picks by BIC and says "
+        "which; default: %(default)s)",
+    ),
+    option(
+        "--cross-validate",
+        type=bounded_int(2, 50, "folds"),
+        metavar="K",
+        default=None,
+        help="also print the K-fold cross-validated compensation error at held-out poses, with "
+        "drift none beside the --drift model (does modelling a drift pay on this sensor?)",
+    ),
+    option(
+        "--estimate-mount",
+        choices=MOUNT_MODES[1:],
+        metavar="yaw|full",
+        help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or "
+        "full (any rotation); needs joint-angle samples (default: the URDF's sensor frame is "
+        "right)",
+    ),
+)
+
+# Sensor and robot conventions, stored in the calibration file.
+_CONVENTION_OPTIONS = (
+    option(
+        "--sensor-sign",
+        type=int,
+        choices=(1, -1),
+        default=1,
+        help="-1: the sensor reports the reaction, negate every reading (default: %(default)s, "
+        "the load on the sensor)",
+    ),
+    option(
+        "--flip-axis",
+        choices=("x", "y", "z"),
+        help="negate this axis's force and torque channels in every reading (a mirrored, "
+        "left-handed sensor axis)",
+    ),
+    option(
+        "--base-mount",
+        choices=BASE_MOUNTS,
+        default="floor",
+        help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall "
+        "(no check); a fitted weight more than 90° off the expected direction is refused as a "
+        "suspect sign (default: %(default)s)",
+    ),
+    option(
+        "--expected-gravity",
+        type=float,
+        nargs=3,
+        metavar=("GX", "GY", "GZ"),
+        help="expected gravity direction in the base frame (overrides --base-mount)",
+    ),
+)
+
+
 def register(subparsers) -> None:
     parser = add_command(
         subparsers,
@@ -78,95 +173,11 @@ def register(subparsers) -> None:
     )
     add_options(
         parser.add_argument_group("ml estimator"),
-        option(
-            "--noise-force",
-            type=positive_float,
-            metavar="N",
-            help="noise std of one force reading [N] (with --noise-torque; default: estimated from "
-            "the spread of repeated readings per pose, else from the residuals)",
-        ),
-        option(
-            "--noise-torque",
-            type=positive_float,
-            metavar="N·m",
-            help="noise std of one torque reading",
-        ),
-        option(
-            "--resolution",
-            type=positive_float,
-            nargs=2,
-            metavar=("N", "N·m"),
-            help="resolution (quantization step) of one force and one torque reading: an estimated "
-            "noise is at least resolution/√12, so a drift model cannot take all of it",
-        ),
-        option(
-            "--loss",
-            choices=LOSSES,
-            default="linear",
-            help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
-        ),
-        option(
-            "--drop-outliers",
-            action="store_true",
-            help="refit without the poses flagged as outliers",
-        ),
-        option(
-            "--drift",
-            type=drift_spec,
-            default="auto",
-            metavar="MODEL",
-            help=f"bias drift over time, with a 't' column: {'|'.join(drift_choices())} (poly:N a "
-            "polynomial of degree N; random-walk estimates the rate; auto picks by BIC and says "
-            "which; default: %(default)s)",
-        ),
-        option(
-            "--cross-validate",
-            type=bounded_int(2, 50, "folds"),
-            metavar="K",
-            default=None,
-            help="also print the K-fold cross-validated compensation error at held-out poses, with "
-            "drift none beside the --drift model (does modelling a drift pay on this sensor?)",
-        ),
-        option(
-            "--estimate-mount",
-            choices=MOUNT_MODES[1:],
-            metavar="yaw|full",
-            help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or "
-            "full (any rotation); needs joint-angle samples (default: the URDF's sensor frame is "
-            "right)",
-        ),
+        *_ML_OPTIONS,
     )
     add_options(
         parser.add_argument_group("sensor and robot conventions (stored in the calibration file)"),
-        option(
-            "--sensor-sign",
-            type=int,
-            choices=(1, -1),
-            default=1,
-            help="-1: the sensor reports the reaction, negate every reading (default: %(default)s, "
-            "the load on the sensor)",
-        ),
-        option(
-            "--flip-axis",
-            choices=("x", "y", "z"),
-            help="negate this axis's force and torque channels in every reading (a mirrored, "
-            "left-handed sensor axis)",
-        ),
-        option(
-            "--base-mount",
-            choices=BASE_MOUNTS,
-            default="floor",
-            help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall "
-            "(no check); a fitted weight more than 90° off the expected direction is refused as a "
-            "suspect sign (default: %(default)s)",
-        ),
-        option(
-            "--expected-gravity",
-            type=float,
-            nargs=3,
-            metavar=("GX", "GY", "GZ"),
-            help="expected gravity direction in the base frame (overrides --base-mount)",
-        ),
+        *_CONVENTION_OPTIONS,
     )
     add_options(
         parser.add_argument_group(

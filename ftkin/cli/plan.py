@@ -38,46 +38,52 @@ FORMATS = {"csv": (), "yaml": (".yaml", ".yml"), "json": (".json",)}
 """Output formats of ``plan -o`` and the file name endings that choose them (default: csv)."""
 
 
+# The expected tool and sensor noise (defaults: the paper's).
+_TOOL_OPTIONS = (
+    option(
+        "--tool-weight",
+        type=positive_float,
+        default=PAPER_TOOL_WEIGHT,
+        metavar="N",
+        help="tool weight [N] (default: %(default)s)",
+    ),
+    option(
+        "--com",
+        type=float,
+        nargs=3,
+        default=list(PAPER_CENTER_OF_MASS),
+        metavar=("X", "Y", "Z"),
+        help="tool centre of mass in the sensor frame [m] (default: 0 0 0.047)",
+    ),
+    option(
+        "--noise-force",
+        type=positive_float,
+        default=float(SensorNoise.paper().force_std[0]),
+        metavar="N",
+        help="force noise per reading [N] (default: %(default)s)",
+    ),
+    option(
+        "--noise-torque",
+        type=positive_float,
+        default=float(SensorNoise.paper().torque_std[0]),
+        metavar="NM",
+        help="torque noise per reading [N·m] (default: %(default)s)",
+    ),
+    option(
+        "--readings-per-pose",
+        type=bounded_int(1, 10**9, "readings per pose"),
+        default=1,
+        metavar="K",
+        help="independent readings averaged at each pose (default: %(default)s)",
+    ),
+)
+
+
 def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
     """Expected tool, sensor noise and estimation the predicted standard errors are for."""
     add_options(
         parser.add_argument_group("expected tool and sensor noise (defaults: the paper's)"),
-        option(
-            "--tool-weight",
-            type=positive_float,
-            default=PAPER_TOOL_WEIGHT,
-            metavar="N",
-            help="tool weight [N] (default: %(default)s)",
-        ),
-        option(
-            "--com",
-            type=float,
-            nargs=3,
-            default=list(PAPER_CENTER_OF_MASS),
-            metavar=("X", "Y", "Z"),
-            help="tool centre of mass in the sensor frame [m] (default: 0 0 0.047)",
-        ),
-        option(
-            "--noise-force",
-            type=positive_float,
-            default=float(SensorNoise.paper().force_std[0]),
-            metavar="N",
-            help="force noise per reading [N] (default: %(default)s)",
-        ),
-        option(
-            "--noise-torque",
-            type=positive_float,
-            default=float(SensorNoise.paper().torque_std[0]),
-            metavar="NM",
-            help="torque noise per reading [N·m] (default: %(default)s)",
-        ),
-        option(
-            "--readings-per-pose",
-            type=bounded_int(1, 10**9, "readings per pose"),
-            default=1,
-            metavar="K",
-            help="independent readings averaged at each pose (default: %(default)s)",
-        ),
+        *_TOOL_OPTIONS,
     )
     add_options(
         parser.add_argument_group("what the calibration will estimate"),
@@ -189,6 +195,113 @@ def joint_range(text: str) -> tuple[str, float, float]:
     return parts[0], low, high
 
 
+# The pose constraints (constraints_from_args).
+_CONSTRAINT_OPTIONS = (
+    option(
+        "--margin",
+        type=non_negative_float,
+        default=DEFAULT_MARGIN,
+        metavar="RAD",
+        help="distance kept from the joint limits [rad] (default: %(default)s)",
+    ),
+    option(
+        "--floor-height",
+        type=_floor,
+        default=DEFAULT_FLOOR_HEIGHT,
+        metavar="M",
+        help="sensor and tool origins stay above this height in the base frame [m] (default: "
+        "%(default)s, a floor at base z = 0 with a 5 cm margin)",
+    ),
+    option(
+        "--no-floor",
+        action="store_true",
+        help="no floor constraint (an arm mounted on a wall or ceiling)",
+    ),
+    option(
+        "--max-tilt-deg",
+        type=non_negative_float,
+        default=None,
+        metavar="DEG",
+        help="largest angle of the tool axis from pointing straight down [deg]",
+    ),
+    option(
+        "--joint-range",
+        type=joint_range,
+        action="append",
+        default=[],
+        metavar="NAME:LO:HI",
+        help="extra range for one joint [rad]; repeat for several joints",
+    ),
+    option("--no-self-collision", action="store_true", help="do not check self-collision"),
+)
+
+# plan --excitation: the trajectory for ftkin calibrate --dynamic.
+_EXCITATION_OPTIONS = (
+    option(
+        "--excitation",
+        action="store_true",
+        help="plan a periodic Fourier-series excitation trajectory instead of poses",
+    ),
+    option(
+        "--duration",
+        type=positive_float,
+        default=30.0,
+        metavar="S",
+        help="recording length [s] (default: %(default)s)",
+    ),
+    option(
+        "--rate",
+        type=positive_float,
+        default=1000.0,
+        metavar="HZ",
+        help="sample rate of the CSV [Hz] (default: %(default)s)",
+    ),
+    option(
+        "--period",
+        type=positive_float,
+        default=None,
+        metavar="S",
+        help="period of the series [s] (default: the duration)",
+    ),
+    option(
+        "--harmonics",
+        type=bounded_int(1, 50, "harmonics"),
+        default=5,
+        metavar="K",
+        help="harmonics per joint (default: %(default)s)",
+    ),
+    option(
+        "--velocity-fraction",
+        type=positive_float,
+        default=DEFAULT_VELOCITY_FRACTION,
+        metavar="F",
+        help="fraction of the URDF velocity limits (default: %(default)s)",
+    ),
+    option(
+        "--acceleration-limit",
+        type=positive_float,
+        default=DEFAULT_ACCELERATION_LIMIT,
+        metavar="RAD_S2",
+        help="joint acceleration limit [rad/s²] (default: %(default)s)",
+    ),
+    option(
+        "--amplitude",
+        type=positive_float,
+        default=DEFAULT_AMPLITUDE,
+        metavar="RAD",
+        help="largest excursion of a joint from the zero configuration [rad] (default: "
+        "%(default)s)",
+    ),
+    option(
+        "--iterations",
+        type=bounded_int(0, 100_000, "evaluations"),
+        default=150,
+        metavar="N",
+        help="local search evaluations (default: %(default)s)",
+    ),
+)
+
+
 def register(subparsers) -> None:
     parser = add_command(
         subparsers,
@@ -218,42 +331,7 @@ def register(subparsers) -> None:
     )
     add_options(
         parser.add_argument_group("constraints"),
-        option(
-            "--margin",
-            type=non_negative_float,
-            default=DEFAULT_MARGIN,
-            metavar="RAD",
-            help="distance kept from the joint limits [rad] (default: %(default)s)",
-        ),
-        option(
-            "--floor-height",
-            type=_floor,
-            default=DEFAULT_FLOOR_HEIGHT,
-            metavar="M",
-            help="sensor and tool origins stay above this height in the base frame [m] (default: "
-            "%(default)s, a floor at base z = 0 with a 5 cm margin)",
-        ),
-        option(
-            "--no-floor",
-            action="store_true",
-            help="no floor constraint (an arm mounted on a wall or ceiling)",
-        ),
-        option(
-            "--max-tilt-deg",
-            type=non_negative_float,
-            default=None,
-            metavar="DEG",
-            help="largest angle of the tool axis from pointing straight down [deg]",
-        ),
-        option(
-            "--joint-range",
-            type=joint_range,
-            action="append",
-            default=[],
-            metavar="NAME:LO:HI",
-            help="extra range for one joint [rad]; repeat for several joints",
-        ),
-        option("--no-self-collision", action="store_true", help="do not check self-collision"),
+        *_CONSTRAINT_OPTIONS,
     )
     add_options(
         parser,
@@ -277,68 +355,7 @@ def register(subparsers) -> None:
         parser.add_argument_group(
             "excitation trajectory (--excitation: for ftkin calibrate --dynamic)"
         ),
-        option(
-            "--excitation",
-            action="store_true",
-            help="plan a periodic Fourier-series excitation trajectory instead of poses",
-        ),
-        option(
-            "--duration",
-            type=positive_float,
-            default=30.0,
-            metavar="S",
-            help="recording length [s] (default: %(default)s)",
-        ),
-        option(
-            "--rate",
-            type=positive_float,
-            default=1000.0,
-            metavar="HZ",
-            help="sample rate of the CSV [Hz] (default: %(default)s)",
-        ),
-        option(
-            "--period",
-            type=positive_float,
-            default=None,
-            metavar="S",
-            help="period of the series [s] (default: the duration)",
-        ),
-        option(
-            "--harmonics",
-            type=bounded_int(1, 50, "harmonics"),
-            default=5,
-            metavar="K",
-            help="harmonics per joint (default: %(default)s)",
-        ),
-        option(
-            "--velocity-fraction",
-            type=positive_float,
-            default=DEFAULT_VELOCITY_FRACTION,
-            metavar="F",
-            help="fraction of the URDF velocity limits (default: %(default)s)",
-        ),
-        option(
-            "--acceleration-limit",
-            type=positive_float,
-            default=DEFAULT_ACCELERATION_LIMIT,
-            metavar="RAD_S2",
-            help="joint acceleration limit [rad/s²] (default: %(default)s)",
-        ),
-        option(
-            "--amplitude",
-            type=positive_float,
-            default=DEFAULT_AMPLITUDE,
-            metavar="RAD",
-            help="largest excursion of a joint from the zero configuration [rad] (default: "
-            "%(default)s)",
-        ),
-        option(
-            "--iterations",
-            type=bounded_int(0, 100_000, "evaluations"),
-            default=150,
-            metavar="N",
-            help="local search evaluations (default: %(default)s)",
-        ),
+        *_EXCITATION_OPTIONS,
     )
     add_arm_arguments(parser)
 
@@ -409,16 +426,7 @@ def run(args) -> int:
                 "--no-self-collision",
             ],
         ) from None
-    print(
-        plan.report(),
-        "joint positions [rad], in visiting order:",
-        f"{POSE_COLUMN:>4} " + " ".join(f"{name[:12]:>12}" for name in plan.joint_names),
-        *(
-            f"{i:>4} " + " ".join(f"{value:>12.4f}" for value in q)
-            for i, q in enumerate(plan.joint_positions)
-        ),
-        sep="\n",
-    )
+    print(plan.report(), _pose_lines(plan), sep="\n")
     if args.output:
         fmt = args.format or next(
             (fmt for fmt, endings in FORMATS.items() if args.output.lower().endswith(endings)),
@@ -427,6 +435,15 @@ def run(args) -> int:
         write_plan(plan, args.output, fmt)
         print(f"wrote {args.output} ({fmt})")
     return 0
+
+
+def _pose_lines(plan) -> str:
+    header = f"{POSE_COLUMN:>4} " + " ".join(f"{name[:12]:>12}" for name in plan.joint_names)
+    rows = [
+        f"{i:>4} " + " ".join(f"{value:>12.4f}" for value in q)
+        for i, q in enumerate(plan.joint_positions)
+    ]
+    return "joint positions [rad], in visiting order:\n" + "\n".join([header, *rows])
 
 
 def plan_document(plan) -> dict:

@@ -60,6 +60,107 @@ from .common import add_arm_arguments, arm_from_args
 _DEFAULT = PlacementScenario()
 
 
+def _value_list(text: str) -> list[float]:
+    return [non_negative_float(part) for part in text.split(",") if part.strip()]
+
+
+# simulate placement: the experiment (surface, controller, gains, object, timing), how it runs
+# (engine, sensor timing, sweep) and what it writes.
+_PLACEMENT_OPTIONS = (
+    option("--surface", choices=sorted(SURFACES), default="sponge"),
+    option(
+        "--mode",
+        choices=(*MODES, "all"),
+        default="admittance",
+        help="controller; 'all' runs the three and plots them together (default: %(default)s)",
+    ),
+    option(
+        "--k1",
+        type=non_negative_float,
+        default=_DEFAULT.k1 * 1e3,
+        metavar="MM_PER_N",
+        help="position gain k13 [mm/N] (default: %(default)g)",
+    ),
+    option(
+        "--k2",
+        type=non_negative_float,
+        default=_DEFAULT.k2 * 1e3,
+        metavar="MM_PER_S_N",
+        help="velocity gain k23 [mm/(s·N)] (default: %(default)g; the paper swept around 0.1)",
+    ),
+    option(
+        "--weight",
+        type=positive_float,
+        default=_DEFAULT.object_weight,
+        help="object weight [N] (default: %(default)g)",
+    ),
+    option(
+        "--gap",
+        type=non_negative_float,
+        default=_DEFAULT.start_gap * 1e3,
+        help="object bottom above the surface at the start [mm] (default: %(default)g)",
+    ),
+    option(
+        "--duration",
+        type=positive_float,
+        default=_DEFAULT.duration,
+        help="simulated time [s] (default: %(default)g)",
+    ),
+    option(
+        "--dt",
+        type=positive_float,
+        default=_DEFAULT.dt,
+        help="control period [s] (default: %(default)g)",
+    ),
+    option(
+        "--seed",
+        type=seed,
+        default=0,
+        help="random seed of the sensor noise (default: %(default)s)",
+    ),
+    option(
+        "--engine",
+        choices=("mujoco", "simple"),
+        default="mujoco" if importlib.util.find_spec("mujoco") is not None else "simple",
+        help="mujoco (physics engine, extra 'sim') or simple (kinematic arm, spring-damper "
+        "formula); "
+        "default: mujoco when installed (here: %(default)s)",
+    ),
+    option(
+        "--sample-rate",
+        type=positive_float,
+        metavar="HZ",
+        help="MuJoCo engine: sensor sample rate [Hz] (default: one sample per control tick)",
+    ),
+    option(
+        "--delay-ticks",
+        type=bounded_int(0, 10_000, "ticks"),
+        default=1,
+        metavar="N",
+        help="MuJoCo engine: sensor delay in control ticks (default: %(default)s)",
+    ),
+    option("--sweep", choices=("k1", "k2"), help="repeat the run over --values of this gain"),
+    option(
+        "--values",
+        type=_value_list,
+        metavar="V1,V2,...",
+        help="gain values for --sweep, in the paper's mm units (e.g. 0.05,0.1,0.2)",
+    ),
+    option("-o", "--output", metavar="RUN.csv", help="write the time series"),
+    option(
+        "--plot",
+        metavar="RUN.png",
+        help="write displacement, velocity and force plots (needs matplotlib)",
+    ),
+    option(
+        "--view",
+        action="store_true",
+        help="watch the run live in meshcat (arm, contact wrench, commanded twist), paced "
+        "to real time",
+    ),
+)
+
+
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "simulate",
@@ -74,106 +175,7 @@ def register(subparsers) -> None:
         description="Lower a grasped object onto a surface with position control, admittance "
         "control with "
         "compensation, or admittance control on raw readings (docs/method.md §6).",
-        options=(
-            # the experiment: surface, controller, gains, object, timing
-            option("--surface", choices=sorted(SURFACES), default="sponge"),
-            option(
-                "--mode",
-                choices=(*MODES, "all"),
-                default="admittance",
-                help="controller; 'all' runs the three and plots them together (default: "
-                "%(default)s)",
-            ),
-            option(
-                "--k1",
-                type=non_negative_float,
-                default=_DEFAULT.k1 * 1e3,
-                metavar="MM_PER_N",
-                help="position gain k13 [mm/N] (default: %(default)g)",
-            ),
-            option(
-                "--k2",
-                type=non_negative_float,
-                default=_DEFAULT.k2 * 1e3,
-                metavar="MM_PER_S_N",
-                help="velocity gain k23 [mm/(s·N)] (default: %(default)g; the paper swept around "
-                "0.1)",
-            ),
-            option(
-                "--weight",
-                type=positive_float,
-                default=_DEFAULT.object_weight,
-                help="object weight [N] (default: %(default)g)",
-            ),
-            option(
-                "--gap",
-                type=non_negative_float,
-                default=_DEFAULT.start_gap * 1e3,
-                help="object bottom above the surface at the start [mm] (default: %(default)g)",
-            ),
-            option(
-                "--duration",
-                type=positive_float,
-                default=_DEFAULT.duration,
-                help="simulated time [s] (default: %(default)g)",
-            ),
-            option(
-                "--dt",
-                type=positive_float,
-                default=_DEFAULT.dt,
-                help="control period [s] (default: %(default)g)",
-            ),
-            option(
-                "--seed",
-                type=seed,
-                default=0,
-                help="random seed of the sensor noise (default: %(default)s)",
-            ),
-            # how it runs (engine, sensor timing, sweep) and what it writes
-            option(
-                "--engine",
-                choices=("mujoco", "simple"),
-                default="mujoco" if importlib.util.find_spec("mujoco") is not None else "simple",
-                help="mujoco (physics engine, extra 'sim') or simple (kinematic arm, spring-damper "
-                "formula); "
-                "default: mujoco when installed (here: %(default)s)",
-            ),
-            option(
-                "--sample-rate",
-                type=positive_float,
-                metavar="HZ",
-                help="MuJoCo engine: sensor sample rate [Hz] (default: one sample per control "
-                "tick)",
-            ),
-            option(
-                "--delay-ticks",
-                type=bounded_int(0, 10_000, "ticks"),
-                default=1,
-                metavar="N",
-                help="MuJoCo engine: sensor delay in control ticks (default: %(default)s)",
-            ),
-            option(
-                "--sweep", choices=("k1", "k2"), help="repeat the run over --values of this gain"
-            ),
-            option(
-                "--values",
-                type=_value_list,
-                metavar="V1,V2,...",
-                help="gain values for --sweep, in the paper's mm units (e.g. 0.05,0.1,0.2)",
-            ),
-            option("-o", "--output", metavar="RUN.csv", help="write the time series"),
-            option(
-                "--plot",
-                metavar="RUN.png",
-                help="write displacement, velocity and force plots (needs matplotlib)",
-            ),
-            option(
-                "--view",
-                action="store_true",
-                help="watch the run live in meshcat (arm, contact wrench, commanded twist), paced "
-                "to real time",
-            ),
-        ),
+        options=_PLACEMENT_OPTIONS,
         run=run,
     )
     # the example inputs, each from the simulated sensor and tool
@@ -187,10 +189,6 @@ def register(subparsers) -> None:
             option("-o", "--output", required=True, metavar="FILE", help="file to write"),
         )
         parser.set_defaults(func=run_input, kind=kind)
-
-
-def _value_list(text: str) -> list[float]:
-    return [non_negative_float(part) for part in text.split(",") if part.strip()]
 
 
 def _simulate(scenario: PlacementScenario, args):

@@ -24,6 +24,73 @@ SHEET_CELLS = 25
 """Most cells of a contact sheet (more poses or log rows are subsampled evenly)."""
 
 
+# The calibration, what to show and how, and where to write it.
+_OPTIONS = (
+    option("calibration", metavar="CALIB.json"),
+    option(
+        "samples",
+        metavar="SAMPLES.csv",
+        nargs="?",
+        help="the calibration samples (poses to step through)",
+    ),
+    option(
+        "--replay",
+        metavar="LOG.csv",
+        help="play a recorded run instead: joint columns, fx..mz, optional t [s]",
+    ),
+    option(
+        "--html",
+        metavar="OUT.html",
+        help="write a self-contained page (animated unless --pose is given)",
+    ),
+    option(
+        "--png",
+        metavar="OUT.png",
+        help="write a screenshot with headless Chromium: the --pose (1024×768), else a "
+        f"contact sheet of every pose (at most {SHEET_CELLS} evenly spaced rows of a "
+        "replay; outlier poses outlined in red)",
+    ),
+    option(
+        "--pose",
+        type=int,
+        metavar="K",
+        help="only this pose: pose id of SAMPLES.csv, or row index of the replay log",
+    ),
+    option(
+        "--no-wait",
+        action="store_true",
+        help="do not keep the live viewer running (scripts, tests)",
+    ),
+    option(
+        "--scale",
+        type=positive_float,
+        metavar="M_PER_N",
+        help="arrow length per newton [m/N] (default: tool weight drawn 25 cm long)",
+    ),
+    option(
+        "--tilt-exaggeration",
+        type=positive_float,
+        default=1.0,
+        metavar="K",
+        help="draw the base tilt K times larger",
+    ),
+    option(
+        "--hold",
+        type=positive_float,
+        default=1.0,
+        metavar="S",
+        help="seconds per calibration pose in the animation",
+    ),
+    option(
+        "--max-frames",
+        type=bounded_int(1, 1_000_000, "frames"),
+        default=1500,
+        metavar="N",
+        help="replay: keep at most N rows (evenly spaced)",
+    ),
+)
+
+
 def register(subparsers) -> None:
     add_command(
         subparsers,
@@ -37,70 +104,7 @@ def register(subparsers) -> None:
         "(green) and the estimated gravity direction of the base (purple). At a good calibration "
         "magenta lies on cyan. "
         "Starts a meshcat server and prints its URL (Ctrl-C stops it), or writes --html / --png.",
-        options=(
-            option("calibration", metavar="CALIB.json"),
-            option(
-                "samples",
-                metavar="SAMPLES.csv",
-                nargs="?",
-                help="the calibration samples (poses to step through)",
-            ),
-            option(
-                "--replay",
-                metavar="LOG.csv",
-                help="play a recorded run instead: joint columns, fx..mz, optional t [s]",
-            ),
-            option(
-                "--html",
-                metavar="OUT.html",
-                help="write a self-contained page (animated unless --pose is given)",
-            ),
-            option(
-                "--png",
-                metavar="OUT.png",
-                help="write a screenshot with headless Chromium: the --pose (1024×768), else a "
-                f"contact sheet of every pose (at most {SHEET_CELLS} evenly spaced rows of a "
-                "replay; outlier poses outlined in red)",
-            ),
-            option(
-                "--pose",
-                type=int,
-                metavar="K",
-                help="only this pose: pose id of SAMPLES.csv, or row index of the replay log",
-            ),
-            option(
-                "--no-wait",
-                action="store_true",
-                help="do not keep the live viewer running (scripts, tests)",
-            ),
-            option(
-                "--scale",
-                type=positive_float,
-                metavar="M_PER_N",
-                help="arrow length per newton [m/N] (default: tool weight drawn 25 cm long)",
-            ),
-            option(
-                "--tilt-exaggeration",
-                type=positive_float,
-                default=1.0,
-                metavar="K",
-                help="draw the base tilt K times larger",
-            ),
-            option(
-                "--hold",
-                type=positive_float,
-                default=1.0,
-                metavar="S",
-                help="seconds per calibration pose in the animation",
-            ),
-            option(
-                "--max-frames",
-                type=bounded_int(1, 1_000_000, "frames"),
-                default=1500,
-                metavar="N",
-                help="replay: keep at most N rows (evenly spaced)",
-            ),
-        ),
+        options=_OPTIONS,
         groups=(add_samples_arguments,),
         run=run,
     )
