@@ -5,9 +5,8 @@ adds its parser and sets ``func(args) -> int``. Errors of ftkin's own type are
 printed as one line (``ftkin: error: ...``) with exit code 2.
 """
 
-from __future__ import annotations
-
 import argparse
+import contextlib
 import importlib
 import logging
 import os
@@ -48,26 +47,29 @@ def check_outputs(args: argparse.Namespace) -> None:
     against every input of the command; two outputs naming one file are refused too.
     """
     from ..io.atomic import check_output_path
+    from .arg_types import refuse
 
-    inputs = []
-    for name in INPUT_OPTIONS:
-        value = getattr(args, name, None)
-        if isinstance(value, str) and not value.strip():
-            raise InvalidInput(f"the {name} file name is empty; expected a path to read")
-        if isinstance(value, str):
-            inputs.append(value)
+    inputs = {
+        name: getattr(args, name)
+        for name in INPUT_OPTIONS
+        if isinstance(getattr(args, name, None), str)
+    }
+    refuse(
+        InvalidInput,
+        *(
+            (not value.strip(), f"the {name} file name is empty; expected a path to read")
+            for name, value in inputs.items()
+        ),
+    )
     seen: dict[str, str] = {}
     for name, flag in OUTPUT_OPTIONS.items():
-        value = getattr(args, name, None)
-        if value is None or not isinstance(value, str):
-            continue
-        check_output_path(value, inputs, flag)
-        key = os.path.realpath(value)
-        if key in seen:
-            raise InvalidInput(
-                f"{seen[key]} and {flag} both name {value}; give each output its own file"
-            )
-        seen[key] = flag
+        if isinstance(value := getattr(args, name, None), str):
+            check_output_path(value, list(inputs.values()), flag)
+            if (key := os.path.realpath(value)) in seen:
+                raise InvalidInput(
+                    f"{seen[key]} and {flag} both name {value}; give each output its own file"
+                )
+            seen[key] = flag
 
 
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
@@ -108,75 +110,15 @@ def main(argv=None) -> int:
 
         print(f"ftkin {__version__}")
         return 0
-    stdout = sys.stdout
-    sys.stdout = _QuietPipe(stdout)
-    once: dict[
-        logging.Handler, _OnceFilter
-    ] = {}  # one filter per handler: each handler sees each record once
+    stdout, sys.stdout = sys.stdout, _QuietPipe(sys.stdout)
+    once = {}  # a filter per handler: each handler sees each record once
     fit_log = logging.getLogger("ftkin.calibration.fit_quality")
-    fit_log_disabled = fit_log.disabled
-    fit_log.disabled = (
-        True  # every command that fits prints the summary, which lists these warnings
-    )
-    try:
-        return _run(argv, once)
-    finally:
-        sys.stdout = stdout
-        fit_log.disabled = fit_log_disabled
-        for handler, once_filter in once.items():
-            handler.removeFilter(once_filter)
-
-
-class _OnceFilter(logging.Filter):
-    """Let each warning text through once per command."""
-
-    def __init__(self):
-        super().__init__()
-        self.seen: set[str] = set()
-
-    def filter(self, record: logging.LogRecord) -> bool:
-        text = record.getMessage()
-        if text in self.seen:
-            return False
-        self.seen.add(text)
-        return True
-
-
-class _QuietPipe:
-    """stdout that stops writing, without an error, once its reader has closed the pipe."""
-
-    def __init__(self, stream):
-        self._stream = stream
-        self.closed_pipe = False
-
-    def _call(self, method, *args):
-        if self.closed_pipe:
-            return len(args[0]) if args else None
-        try:
-            return getattr(self._stream, method)(*args)
-        except BrokenPipeError:
-            self.closed_pipe = True
-            try:  # the interpreter's final flush must not fail again
-                os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())
-            except (OSError, ValueError, AttributeError):
-                pass
-            return len(args[0]) if args else None
-
-    def write(self, text):
-        return self._call("write", text)
-
-    def flush(self):
-        return self._call("flush")
-
-    def __getattr__(self, name):
-        return getattr(self._stream, name)
-
-
-def _run(argv, once: dict) -> int:
+    # every command that fits prints the summary, which lists these warnings
+    fit_log_disabled, fit_log.disabled = fit_log.disabled, True
     try:
         from .arg_types import join_number_lists
 
-        arguments = join_number_lists(list(sys.argv[1:] if argv is None else argv))
+        arguments = join_number_lists(arguments)
         parser = build_parser(arguments)
         try:
             args = parser.parse_args(arguments)
@@ -186,7 +128,7 @@ def _run(argv, once: dict) -> int:
             level=logging.INFO if args.verbose else logging.WARNING, format="ftkin: %(message)s"
         )
         for handler in logging.getLogger().handlers:
-            once[handler] = _OnceFilter()
+            once[handler] = _once_filter()
             handler.addFilter(once[handler])
         if not getattr(args, "func", None):
             parser.print_help()
@@ -203,14 +145,58 @@ def _run(argv, once: dict) -> int:
         return 130
     except Exception as error:  # the guard: no traceback ever reaches a user
         return _unexpected(error)
+    finally:
+        sys.stdout = stdout
+        fit_log.disabled = fit_log_disabled
+        for handler, once_filter in once.items():
+            handler.removeFilter(once_filter)
+
+
+def _once_filter():
+    """A logging filter that lets each warning text through once per command."""
+    seen: set[str] = set()
+
+    def let_through(record: logging.LogRecord) -> bool:
+        text = record.getMessage()
+        fresh = text not in seen
+        seen.add(text)
+        return fresh
+
+    return let_through
+
+
+class _QuietPipe:
+    """stdout that stops writing, without an error, once its reader has closed the pipe."""
+
+    def __init__(self, stream):
+        self._stream = stream
+        self.closed_pipe = False
+
+    def _call(self, method, *args):
+        if not self.closed_pipe:
+            try:
+                return getattr(self._stream, method)(*args)
+            except BrokenPipeError:
+                self.closed_pipe = True
+                # the interpreter's final flush must not fail again
+                with contextlib.suppress(OSError, ValueError, AttributeError):
+                    os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())
+        return len(args[0]) if args else None
+
+    def write(self, text):
+        return self._call("write", text)
+
+    def flush(self):
+        return self._call("flush")
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
 
 
 def _say(text: str) -> None:
     """One line on stderr; a closed stderr is not an error of its own."""
-    try:
+    with contextlib.suppress(OSError, ValueError):
         print(text, file=sys.stderr)
-    except (OSError, ValueError):
-        pass
 
 
 def _unexpected(error: Exception) -> int:
@@ -236,7 +222,3 @@ def _unexpected(error: Exception) -> int:
 def entry_point() -> None:
     """Console-script entry (``[project.scripts] ftkin``)."""
     sys.exit(main())
-
-
-if __name__ == "__main__":  # pragma: no cover
-    entry_point()

@@ -1,15 +1,50 @@
-"""argparse value types: numbers with their range and unit in the message, and the number-list
-options.
+"""argparse value types: numbers with their range and unit in the message, the number-list
+options, and the subcommands' parsers as tables of :func:`option` rows (:func:`add_command`).
 
 Each converter raises :class:`argparse.ArgumentTypeError`, which the CLI reports as
 ``ftkin <command>: error: argument --x: ...`` (exit 2), never a traceback.
 """
 
-from __future__ import annotations
-
 import argparse
 
 from ..calibration.model import GRAVITY_RANGE
+
+
+def option(*flags: str, **keywords) -> tuple:
+    """One row of :func:`add_options`: the arguments of ``add_argument``."""
+    return flags, keywords
+
+
+def add_options(parser, *options: tuple) -> None:
+    """Add each :func:`option` row to ``parser`` (or an argument group)."""
+    for flags, keywords in options:
+        parser.add_argument(*flags, **keywords)
+
+
+def add_command(subparsers, name: str, *, run, options=(), groups=(), **keywords):
+    """Add the subcommand ``name`` that calls ``run(args) -> int``; ``keywords`` (help,
+    description) go to ``add_parser``. Its :func:`option` rows come first, then each shared group
+    ``add(parser)`` of ``groups`` (e.g. :func:`~ftkin.cli.common.add_arm_arguments`).
+
+    Returns the parser, for a command that adds argument groups of its own.
+    """
+    parser = subparsers.add_parser(name, **keywords)
+    add_options(parser, *options)
+    for add in groups:
+        add(parser)
+    parser.set_defaults(func=run)
+    return parser
+
+
+def refuse(error: type[Exception], *checks: tuple) -> None:
+    """Raise ``error(message)`` for the first ``(refused, message)`` of ``checks`` that is refused.
+
+    Every check is evaluated up front: each condition and message must be safe to compute
+    whatever the input (the order says which is reported when several apply).
+    """
+    for refused, message in checks:
+        if refused:
+            raise error(message)
 
 
 def _number(text: str, accept, expected: str) -> float:
@@ -40,18 +75,14 @@ def join_number_lists(argv: list[str]) -> list[str]:
     A list option takes the numbers that follow it (at most 6) and no more, so
     it never swallows the positional file after it; negative numbers work.
     """
-    out, k = [], 0
-    while k < len(argv):
-        token = argv[k]
-        if token in NUMBER_LIST_OPTIONS:
-            values = []
-            while k + 1 < len(argv) and len(values) < 6 and _is_number(argv[k + 1]):
-                values.append(argv[k + 1])
-                k += 1
-            out.append(f"{token}={','.join(values)}" if values else token)
+    out, listed, values = [], None, []  # the list option being read and its numbers so far
+    for token in argv:
+        if listed and len(values) < 6 and _is_number(token):
+            values.append(token)
+            out[-1] = f"{listed}={','.join(values)}"
         else:
+            listed, values = (token if token in NUMBER_LIST_OPTIONS else None), []
             out.append(token)
-        k += 1
     return out
 
 
@@ -88,10 +119,11 @@ def bounded_int(low: int, high: int, what: str):
 def seed(text: str) -> int:
     """argparse type: a random seed, 0 to 2**63 - 1."""
     value = whole_number(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"the seed must be at least 0, got {text}")
-    if value >= 2**63:
-        raise argparse.ArgumentTypeError(f"the seed must be below 2**63, got {text}")
+    refuse(
+        argparse.ArgumentTypeError,
+        (value < 0, f"the seed must be at least 0, got {text}"),
+        (value >= 2**63, f"the seed must be below 2**63, got {text}"),
+    )
     return value
 
 

@@ -1,33 +1,41 @@
 """``ftkin calibrate SAMPLES.csv [-o CALIB.json]`` (``--dynamic`` for a moving recording)."""
 
-from __future__ import annotations
-
 import argparse
 from dataclasses import replace
 from pathlib import Path
 
+from .. import (
+    METHODS,
+    MOUNT_MODES,
+    STANDARD_GRAVITY,
+    Arm,
+    CalibrationOptions,
+    InvalidInput,
+    SensorNoise,
+    bundled_urdf_path,
+    calibrate,
+    save_calibration,
+)
 from ..calibration.conventions import BASE_MOUNTS
 from ..calibration.drift import drift_candidates, drift_choices
-from ..calibration.estimate import METHODS, CalibrationOptions, calibrate
-from ..calibration.information import SensorNoise
 from ..calibration.ml import LOSSES
-from ..calibration.model import STANDARD_GRAVITY
-from ..calibration.mount import MOUNT_MODES
-from ..exceptions import InvalidInput
-from ..io.calibration_file import save_calibration
 from ..kinematics.record import KinematicsRecord
-from .arg_types import bounded_int, gravity, positive_float
-from .common import add_samples_arguments, arm_from_args, load_samples_from_args
-from .doctor import refuse_convention_mistakes
-from .motion import add_derivative_arguments, calibrate_motion
-
-DESCRIPTION = (
-    "Calibrate from a samples CSV: wrench columns fx,fy,fz,mx,my,mz [N, N·m] and the orientation "
-    "as joint columns (URDF names or q1..qn, rad), alpha,beta,gamma (deg, R = Rz Ry Rx) or "
-    "qw,qx,qy,qz; optional integer 'pose' column groups repeated readings (their spread then "
-    "gives the noise levels of the ml fit); optional 't' column [s] (bags: the stamps) lets the "
-    "bias drift with time (--drift)."
+from .arg_types import (
+    add_command,
+    add_options,
+    bounded_int,
+    gravity,
+    option,
+    positive_float,
+    refuse,
 )
+from .common import (
+    SG_WINDOW,
+    add_samples_arguments,
+    arm_from_args,
+    load_samples_from_args,
+)
+from .doctor import refuse_convention_mistakes
 
 
 def drift_spec(text: str) -> str:
@@ -39,138 +47,160 @@ def drift_spec(text: str) -> str:
     return text
 
 
-def register(subparsers) -> None:
-    parser = subparsers.add_parser(
-        "calibrate",
-        help="estimate sensor bias, tool weight, centre of mass and base tilt",
-        description=DESCRIPTION,
-    )
-    parser.add_argument("samples", metavar="SAMPLES.csv")
-    parser.add_argument(
-        "-o", "--output", metavar="CALIB.json", help="write the calibration file here"
-    )
-    parser.add_argument(
-        "--method",
-        choices=METHODS,
-        default=METHODS[0],
-        help="ml: joint maximum-likelihood fit with standard errors; linear: the paper's two-step "
-        "least squares (default: %(default)s)",
-    )
-    parser.add_argument(
-        "--g",
-        type=gravity,
-        default=STANDARD_GRAVITY,
-        help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)",
-    )
-    _add_ml_arguments(parser.add_argument_group("ml estimator"))
-    _add_convention_arguments(
-        parser.add_argument_group("sensor and robot conventions (stored in the calibration file)")
-    )
-    dynamic = parser.add_argument_group(
-        "dynamic calibration (a moving recording: columns t, joints, fx..mz, or a bag)"
-    )
-    dynamic.add_argument(
-        "--dynamic",
-        action="store_true",
-        help="identify mass, centre of mass, inertia, bias and tilt from a moving recording",
-    )
-    dynamic.add_argument(
-        "--no-inertia", action="store_true", help="with --dynamic: fit the static parameters only"
-    )
-    add_derivative_arguments(dynamic)
-    parser.add_argument(
-        "--no-convention-check",
-        action="store_true",
-        help="do not refit under the common convention mistakes (see 'ftkin doctor')",
-    )
-    add_samples_arguments(parser)
-    parser.set_defaults(func=run)
-
-
-def _add_ml_arguments(ml) -> None:
-    ml.add_argument(
+# The ml estimator's options.
+_ML_OPTIONS = (
+    option(
         "--noise-force",
         type=positive_float,
         metavar="N",
-        help="noise std of one force reading [N] (with --noise-torque; default: estimated from the "
-        "spread of repeated readings per pose, else from the residuals)",
-    )
-    ml.add_argument(
-        "--noise-torque", type=positive_float, metavar="N·m", help="noise std of one torque reading"
-    )
-    ml.add_argument(
+        help="noise std of one force reading [N] (with --noise-torque; default: estimated from "
+        "the spread of repeated readings per pose, else from the residuals)",
+    ),
+    option(
+        "--noise-torque",
+        type=positive_float,
+        metavar="N·m",
+        help="noise std of one torque reading",
+    ),
+    option(
         "--resolution",
         type=positive_float,
         nargs=2,
         metavar=("N", "N·m"),
         help="resolution (quantization step) of one force and one torque reading: an estimated "
         "noise is at least resolution/√12, so a drift model cannot take all of it",
-    )
-    ml.add_argument(
+    ),
+    option(
         "--loss",
         choices=LOSSES,
         default="linear",
         help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
-    )
-    ml.add_argument(
-        "--drop-outliers", action="store_true", help="refit without the poses flagged as outliers"
-    )
-    ml.add_argument(
+    ),
+    option(
+        "--drop-outliers",
+        action="store_true",
+        help="refit without the poses flagged as outliers",
+    ),
+    option(
         "--drift",
         type=drift_spec,
         default="auto",
         metavar="MODEL",
         help=f"bias drift over time, with a 't' column: {'|'.join(drift_choices())} (poly:N a "
-        "polynomial of degree N; random-walk estimates the rate; auto picks by BIC and says which; "
-        "default: %(default)s)",
-    )
-    ml.add_argument(
+        "polynomial of degree N; random-walk estimates the rate; auto picks by BIC and says "
+        "which; default: %(default)s)",
+    ),
+    option(
         "--cross-validate",
         type=bounded_int(2, 50, "folds"),
         metavar="K",
         default=None,
         help="also print the K-fold cross-validated compensation error at held-out poses, with "
         "drift none beside the --drift model (does modelling a drift pay on this sensor?)",
-    )
-    ml.add_argument(
+    ),
+    option(
         "--estimate-mount",
         choices=MOUNT_MODES[1:],
         metavar="yaw|full",
-        help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or full "
-        "(any rotation); needs joint-angle samples (default: the URDF's sensor frame is right)",
-    )
+        help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or "
+        "full (any rotation); needs joint-angle samples (default: the URDF's sensor frame is "
+        "right)",
+    ),
+)
 
-
-def _add_convention_arguments(conventions) -> None:
-    conventions.add_argument(
+# Sensor and robot conventions, stored in the calibration file.
+_CONVENTION_OPTIONS = (
+    option(
         "--sensor-sign",
         type=int,
         choices=(1, -1),
         default=1,
-        help="-1: the sensor reports the reaction, negate every reading (default: %(default)s, the "
-        "load on the sensor)",
-    )
-    conventions.add_argument(
+        help="-1: the sensor reports the reaction, negate every reading (default: %(default)s, "
+        "the load on the sensor)",
+    ),
+    option(
         "--flip-axis",
         choices=("x", "y", "z"),
         help="negate this axis's force and torque channels in every reading (a mirrored, "
         "left-handed sensor axis)",
-    )
-    conventions.add_argument(
+    ),
+    option(
         "--base-mount",
         choices=BASE_MOUNTS,
         default="floor",
-        help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall (no "
-        "check); a fitted weight more than 90° off the expected direction is refused as a suspect "
-        "sign (default: %(default)s)",
-    )
-    conventions.add_argument(
+        help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall "
+        "(no check); a fitted weight more than 90° off the expected direction is refused as a "
+        "suspect sign (default: %(default)s)",
+    ),
+    option(
         "--expected-gravity",
         type=float,
         nargs=3,
         metavar=("GX", "GY", "GZ"),
         help="expected gravity direction in the base frame (overrides --base-mount)",
+    ),
+)
+
+
+def register(subparsers) -> None:
+    parser = add_command(
+        subparsers,
+        "calibrate",
+        help="estimate sensor bias, tool weight, centre of mass and base tilt",
+        description="Calibrate from a samples CSV: wrench columns fx,fy,fz,mx,my,mz [N, N·m] and "
+        "the orientation as joint columns (URDF names or q1..qn, rad), alpha,beta,gamma (deg, "
+        "R = Rz Ry Rx) or qw,qx,qy,qz; optional integer 'pose' column groups repeated readings "
+        "(their spread then gives the noise levels of the ml fit); optional 't' column [s] (bags: "
+        "the stamps) lets the bias drift with time (--drift).",
+        options=(
+            option("samples", metavar="SAMPLES.csv"),
+            option("-o", "--output", metavar="CALIB.json", help="write the calibration file here"),
+            option(
+                "--method",
+                choices=METHODS,
+                default=METHODS[0],
+                help="ml: joint maximum-likelihood fit with standard errors; linear: the paper's "
+                "two-step least squares (default: %(default)s)",
+            ),
+            option(
+                "--g",
+                type=gravity,
+                default=STANDARD_GRAVITY,
+                help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)",
+            ),
+        ),
+        run=run,
     )
+    add_options(
+        parser.add_argument_group("ml estimator"),
+        *_ML_OPTIONS,
+    )
+    add_options(
+        parser.add_argument_group("sensor and robot conventions (stored in the calibration file)"),
+        *_CONVENTION_OPTIONS,
+    )
+    add_options(
+        parser.add_argument_group(
+            "dynamic calibration (a moving recording: columns t, joints, fx..mz, or a bag)"
+        ),
+        option(
+            "--dynamic",
+            action="store_true",
+            help="identify mass, centre of mass, inertia, bias and tilt from a moving recording",
+        ),
+        option(
+            "--no-inertia",
+            action="store_true",
+            help="with --dynamic: fit the static parameters only",
+        ),
+        SG_WINDOW,
+    )
+    parser.add_argument(
+        "--no-convention-check",
+        action="store_true",
+        help="do not refit under the common convention mistakes (see 'ftkin doctor')",
+    )
+    add_samples_arguments(parser)
 
 
 def _noise(args) -> SensorNoise | None:
@@ -178,18 +208,7 @@ def _noise(args) -> SensorNoise | None:
         raise InvalidInput(
             "give both --noise-force [N] and --noise-torque [N·m], or neither (then estimated)"
         )
-    if args.noise_force is None:
-        return None
-    return SensorNoise(args.noise_force, args.noise_torque)
-
-
-def _bundled_if_used(loaded):
-    """The bundled arm when the samples' joint columns were read with it (no arm option given)."""
-    from ..kinematics.arm import Arm, bundled_urdf_path
-
-    if loaded.samples.urdf and Path(loaded.samples.urdf).resolve() == bundled_urdf_path().resolve():
-        return Arm.default()
-    return None
+    return None if args.noise_force is None else SensorNoise(args.noise_force, args.noise_torque)
 
 
 def _run_dynamic(args, noise) -> int:
@@ -204,29 +223,45 @@ def _run_dynamic(args, noise) -> int:
         "--resolution": args.resolution,
         "--cross-validate": args.cross_validate,
     }
-    given = [flag for flag, used in static_only.items() if used]
-    if given:
+    if given := [flag for flag, used in static_only.items() if used]:
         raise InvalidInput(
             f"{', '.join(given)} apply to static calibration, not (yet) to --dynamic; calibrate "
             "the mount and sign from static poses first"
         )
-    from ..kinematics.arm import Arm
+    from .. import calibrate_dynamic, load_motion_bag, load_motion_csv
+    from ..io.bags import is_bag_path
 
     arm = arm_from_args(args) or Arm.default()
-    result = calibrate_motion(args, arm, noise)  # the file records its arm, as a static one does
+    if is_bag_path(args.samples):
+        recording = load_motion_bag(
+            args.samples, arm, args.joint_topic, args.wrench_topic, args.wrench_frame
+        )
+    else:
+        recording = load_motion_csv(args.samples, arm)
+    result = calibrate_dynamic(
+        recording.motion_samples(arm, args.sg_window),
+        estimate_inertia=not args.no_inertia,
+        g=args.g,
+        noise=noise,
+    )  # the file records its arm, as a static one does
     return _report(replace(result, kinematics=KinematicsRecord.from_arm(arm)), args)
 
 
 def _options(args, noise) -> CalibrationOptions:
     """The calibration options of the command line (their combinations checked there)."""
-    if args.no_inertia or args.sg_window is not None:
-        raise InvalidInput("--no-inertia and --sg-window apply to --dynamic only")
     ml_only = noise is not None or args.loss != "linear" or args.drop_outliers or args.resolution
-    if args.method == "linear" and (ml_only or args.estimate_mount):
-        raise InvalidInput(
+    refuse(
+        InvalidInput,
+        (
+            args.no_inertia or args.sg_window is not None,
+            "--no-inertia and --sg-window apply to --dynamic only",
+        ),
+        (
+            args.method == "linear" and (ml_only or args.estimate_mount),
             "--noise-force/--noise-torque, --resolution, --loss, --drop-outliers and "
-            "--estimate-mount apply to --method ml only"
-        )
+            "--estimate-mount apply to --method ml only",
+        ),
+    )
     return CalibrationOptions(
         method=args.method,
         g=args.g,
@@ -250,35 +285,38 @@ def run(args) -> int:
     options = _options(args, noise)
     arm = arm_from_args(args)
     loaded = load_samples_from_args(args.samples, args, arm=arm)
-    stated = (
-        args.sensor_sign != 1
+    # The doctor refits the readings as given, on a floor-mounted base with the URDF's sensor
+    # frame; with a stated sign, axis, base mount or an estimated mount calibrate() checks the
+    # conventions itself.
+    if not (
+        args.no_convention_check
+        or args.sensor_sign != 1
         or args.flip_axis
         or args.base_mount != "floor"
         or args.expected_gravity
         or args.estimate_mount
-    )
-    if not (args.no_convention_check or stated):
-        # The doctor refits the readings as given, on a floor-mounted base with the URDF's sensor
-        # frame; with a stated sign, axis, base mount or an estimated mount calibrate() checks
-        # the conventions itself.
+    ):
         refuse_convention_mistakes(loaded, arm)
     result = calibrate(loaded.samples, options)
-    samples_arm = loaded.samples.urdf and (arm or _bundled_if_used(loaded))
-    if samples_arm:
-        result = replace(result, kinematics=KinematicsRecord.from_arm(samples_arm))
+    urdf = loaded.samples.urdf
+    if urdf and (arm or Path(urdf).resolve() == bundled_urdf_path().resolve()):
+        # the arm the joint columns were read with (the bundled one when no option named one)
+        result = replace(result, kinematics=KinematicsRecord.from_arm(arm or Arm.default()))
     validation = None
     if args.cross_validate:  # before anything is written: a failure leaves no file behind
         from ..calibration.cross_validation import cross_validate
 
         timed = loaded.samples.times is not None and args.drift != "none"
-        drifts = ("none", args.drift) if timed else ("none",)
         validation = cross_validate(
-            loaded.samples, drifts, folds=args.cross_validate, options=options
+            loaded.samples,
+            ("none", args.drift) if timed else ("none",),
+            folds=args.cross_validate,
+            options=options,
         )
-    status = _report(result, args)
+    _report(result, args)
     if validation is not None:
         print(validation.report())
-    return status
+    return 0
 
 
 def _report(result, args) -> int:

@@ -1,14 +1,10 @@
 """Arguments and helpers several subcommands share."""
 
-from __future__ import annotations
-
 import argparse
 import logging
 from pathlib import Path
 
-from ..exceptions import FrameNotFound, InvalidInput
-from ..io.samples_csv import load_samples
-from ..kinematics.arm import Arm, bundled_urdf_path
+from .. import Arm, FrameNotFound, InvalidInput, bundled_urdf_path, load_samples
 from ..kinematics.robots import (
     DEFAULT_ROBOT,
     ROBOT_SPECS,
@@ -16,7 +12,15 @@ from ..kinematics.robots import (
     load_robot,
     sensor_mount_from_offset,
 )
-from .arg_types import non_negative_float, number_list, positive_float
+from .arg_types import (
+    add_options,
+    bounded_int,
+    non_negative_float,
+    number_list,
+    option,
+    positive_float,
+    refuse,
+)
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -24,43 +28,46 @@ logger = logging.getLogger("ftkin.cli")
 def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
     """``--urdf``, ``--sensor-frame``, ``--tool-frame`` (default: the bundled arm)."""
     group = parser.add_argument_group("robot model (for joint-angle columns)")
-    group.add_argument(
-        "--robot",
-        metavar="NAME",
-        help=f"robot by name: {', '.join(ROBOTS)} (default: {DEFAULT_ROBOT}, the bundled arm)",
-    )
-    group.add_argument(
-        "--urdf", metavar="PATH", help="URDF of the arm (default: the bundled six-axis arm)"
-    )
-    group.add_argument(
-        "--sensor-frame",
-        default="ft_sensor",
-        metavar="NAME",
-        help="sensor frame name (default: ft_sensor)",
-    )
-    group.add_argument(
-        "--tool-frame", default=None, metavar="NAME", help="tool / control-point frame name"
-    )
-    group.add_argument(
-        "--sensor-offset",
-        type=number_list,
-        metavar="X Y Z [R P Y]",
-        help="with --robot: sensor origin in the flange frame, X Y Z [m] and optionally ROLL PITCH "
-        "YAW [rad] "
-        "(with --urdf and --sensor-parent: the same, relative to that frame)",
-    )
-    group.add_argument(
-        "--sensor-parent",
-        metavar="FRAME",
-        help="with --urdf: add the sensor frame at this existing frame (for URDFs without one)",
-    )
-    group.add_argument(
-        "--package-dir",
-        action="append",
-        default=[],
-        metavar="DIR",
-        help="folder that package:// mesh URIs resolve against (collision checks, 3D view; "
-        "repeatable)",
+    add_options(
+        group,
+        option(
+            "--robot",
+            metavar="NAME",
+            help=f"robot by name: {', '.join(ROBOTS)} (default: {DEFAULT_ROBOT}, the bundled arm)",
+        ),
+        option(
+            "--urdf", metavar="PATH", help="URDF of the arm (default: the bundled six-axis arm)"
+        ),
+        option(
+            "--sensor-frame",
+            default="ft_sensor",
+            metavar="NAME",
+            help="sensor frame name (default: ft_sensor)",
+        ),
+        option(
+            "--tool-frame", default=None, metavar="NAME", help="tool / control-point frame name"
+        ),
+        option(
+            "--sensor-offset",
+            type=number_list,
+            metavar="X Y Z [R P Y]",
+            help="with --robot: sensor origin in the flange frame, X Y Z [m] and optionally ROLL "
+            "PITCH YAW [rad] "
+            "(with --urdf and --sensor-parent: the same, relative to that frame)",
+        ),
+        option(
+            "--sensor-parent",
+            metavar="FRAME",
+            help="with --urdf: add the sensor frame at this existing frame (for URDFs without one)",
+        ),
+        option(
+            "--package-dir",
+            action="append",
+            default=[],
+            metavar="DIR",
+            help="folder that package:// mesh URIs resolve against (collision checks, 3D view; "
+            "repeatable)",
+        ),
     )
 
 
@@ -71,52 +78,56 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     ``--sensor-frame`` or ``--tool-frame`` that the model lacks is a
     :class:`~ftkin.exceptions.FrameNotFound` listing its frames.
     """
-    for option in ("urdf", "robot", "sensor_frame", "tool_frame", "sensor_parent"):
-        value = getattr(args, option, None)
-        if value is not None and not str(value).strip():
-            raise InvalidInput(
-                f"--{option.replace('_', '-')} is empty; give a name or leave the option out"
-            )
-    if getattr(args, "urdf", None) and getattr(args, "robot", None):
-        raise InvalidInput("give either --urdf or --robot, not both")
+    urdf, robot = getattr(args, "urdf", None), getattr(args, "robot", None)
     offset = getattr(args, "sensor_offset", None)
     parent = getattr(args, "sensor_parent", None)
     sensor_frame = getattr(args, "sensor_frame", "ft_sensor")
     tool_frame = getattr(args, "tool_frame", None)
     package_dirs = list(getattr(args, "package_dir", None) or [])
-    if offset is not None and len(offset) not in (3, 6):
-        raise InvalidInput(
+    refuse(
+        InvalidInput,
+        *(
+            (
+                getattr(args, name, None) is not None and not str(getattr(args, name)).strip(),
+                f"--{name.replace('_', '-')} is empty; give a name or leave the option out",
+            )
+            for name in ("urdf", "robot", "sensor_frame", "tool_frame", "sensor_parent")
+        ),
+        (urdf and robot, "give either --urdf or --robot, not both"),
+        (
+            offset is not None and len(offset) not in (3, 6),
             "--sensor-offset takes 3 numbers (X Y Z [m]) or 6 (and ROLL PITCH YAW [rad]), got "
-            f"{len(offset)}"
-        )
-    if getattr(args, "urdf", None):
-        mount = None
-        if parent is not None:
-            mount = sensor_mount_from_offset(parent, offset)
-        elif offset is not None:
-            raise InvalidInput(
-                "--sensor-offset with --urdf needs --sensor-parent FRAME (the frame the sensor is "
-                "bolted to)"
-            )
-        return Arm.from_urdf(
-            args.urdf, sensor_frame, tool_frame, sensor_mount=mount, package_dirs=package_dirs
-        )
-    if parent is not None:
-        raise InvalidInput(
+            f"{len(offset or ())}",
+        ),
+        (
+            urdf and parent is None and offset is not None,
+            "--sensor-offset with --urdf needs --sensor-parent FRAME (the frame the sensor is "
+            "bolted to)",
+        ),
+        (
+            not urdf and parent is not None,
             "--sensor-parent is for --urdf; with --robot the sensor is mounted at the robot's "
-            "flange"
+            "flange",
+        ),
+        (
+            robot and sensor_frame != "ft_sensor",  # (--robot with --urdf is refused first)
+            "--sensor-frame is for --urdf; --robot names its sensor frame ft_sensor (move it "
+            "with --sensor-offset)",
+        ),
+        (
+            offset is not None and not (urdf or robot),
+            "--sensor-offset needs --robot NAME (or --urdf with --sensor-parent)",
+        ),
+    )
+    if urdf:
+        mount = None if parent is None else sensor_mount_from_offset(parent, offset)
+        return Arm.from_urdf(
+            urdf, sensor_frame, tool_frame, sensor_mount=mount, package_dirs=package_dirs
         )
-    if getattr(args, "robot", None):
-        if sensor_frame != "ft_sensor":
-            raise InvalidInput(
-                "--sensor-frame is for --urdf; --robot names its sensor frame ft_sensor (move it "
-                "with --sensor-offset)"
-            )
-        arm = load_robot(args.robot, offset, tool_frame)
+    if robot:
+        arm = load_robot(robot, offset, tool_frame)
         arm.package_dirs += package_dirs
         return arm
-    if offset is not None:
-        raise InvalidInput("--sensor-offset needs --robot NAME (or --urdf with --sensor-parent)")
     if sensor_frame != "ft_sensor" or tool_frame is not None:
         return Arm.from_urdf(bundled_urdf_path(), sensor_frame, tool_frame or "tool")
     return None
@@ -128,60 +139,81 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
     from ..io.static_segments import SegmentParameters
 
     defaults = SegmentParameters()
-    group = parser.add_argument_group(
-        "ROS 2 bags (a rosbag2 folder, .mcap or .db3 instead of a CSV; needs ftkin[bags]) and "
-        "continuous recordings (a CSV with a time column and no pose column)"
+    add_options(
+        parser.add_argument_group(
+            "ROS 2 bags (a rosbag2 folder, .mcap or .db3 instead of a CSV; needs ftkin[bags]) and "
+            "continuous recordings (a CSV with a time column and no pose column)"
+        ),
+        option(
+            "--all-rows", action="store_true", help="every reading its own pose: no still segments"
+        ),
+        option(
+            "--joint-topic",
+            metavar="TOPIC",
+            help="sensor_msgs/JointState topic (default: the only one)",
+        ),
+        option(
+            "--wrench-topic",
+            metavar="TOPIC",
+            help="geometry_msgs/WrenchStamped topic (default: the only one)",
+        ),
+        option(
+            "--wrench-frame",
+            choices=("sensor", "base"),
+            default="sensor",
+            help="frame the bag's wrenches are expressed in; base: rotate them into the sensor "
+            "frame (a UR TCP force) "
+            "(default: %(default)s)",
+        ),
+        option(
+            "--speed-threshold",
+            type=positive_float,
+            default=defaults.speed_threshold,
+            metavar="RAD_S",
+            help="static when every joint (every R_BS entry of a CSV without joint columns) is "
+            "slower than this [rad/s] (default: %(default)s)",
+        ),
+        option(
+            "--min-static-duration",
+            type=positive_float,
+            default=defaults.min_duration,
+            metavar="S",
+            help="shortest usable static segment after settling [s] (default: %(default)s)",
+        ),
+        option(
+            "--settle-time",
+            type=non_negative_float,
+            default=defaults.settle_time,
+            metavar="S",
+            help="time skipped at the start of each static segment [s] (default: %(default)s)",
+        ),
+        option(
+            "--speed-window",
+            type=positive_float,
+            default=defaults.speed_window,
+            metavar="S",
+            help="time span of the joint-speed finite difference [s] (default: %(default)s)",
+        ),
     )
-    group.add_argument(
-        "--all-rows", action="store_true", help="every reading its own pose: no still segments"
-    )
-    group.add_argument(
-        "--joint-topic",
-        metavar="TOPIC",
-        help="sensor_msgs/JointState topic (default: the only one)",
-    )
-    group.add_argument(
-        "--wrench-topic",
-        metavar="TOPIC",
-        help="geometry_msgs/WrenchStamped topic (default: the only one)",
-    )
-    group.add_argument(
-        "--wrench-frame",
-        choices=("sensor", "base"),
-        default="sensor",
-        help="frame the bag's wrenches are expressed in; base: rotate them into the sensor frame "
-        "(a UR TCP force) "
-        "(default: %(default)s)",
-    )
-    group.add_argument(
-        "--speed-threshold",
-        type=positive_float,
-        default=defaults.speed_threshold,
-        metavar="RAD_S",
-        help="static when every joint (every R_BS entry of a CSV without joint columns) is "
-        "slower than this [rad/s] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--min-static-duration",
-        type=positive_float,
-        default=defaults.min_duration,
-        metavar="S",
-        help="shortest usable static segment after settling [s] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--settle-time",
-        type=non_negative_float,
-        default=defaults.settle_time,
-        metavar="S",
-        help="time skipped at the start of each static segment [s] (default: %(default)s)",
-    )
-    group.add_argument(
-        "--speed-window",
-        type=positive_float,
-        default=defaults.speed_window,
-        metavar="S",
-        help="time span of the joint-speed finite difference [s] (default: %(default)s)",
-    )
+
+
+# Option rows (arg_types.option) shared by several commands: --allow-other-arm for the commands
+# that apply a calibration with the arm it records, --sg-window for the zero-phase derivatives of a
+# moving recording.
+ALLOW_OTHER_ARM = option(
+    "--allow-other-arm",
+    action="store_true",
+    help="accept robot options that differ from the arm recorded in the calibration "
+    "(deliberate reuse)",
+)
+
+SG_WINDOW = option(
+    "--sg-window",
+    type=bounded_int(3, 100_001, "samples"),
+    default=None,
+    metavar="SAMPLES",
+    help="odd Savitzky–Golay window for joint velocities and accelerations (default: about 51 ms)",
+)
 
 
 def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:
@@ -193,16 +225,13 @@ def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:
     their URDF and sensor frame. Returns None when nothing is named or
     recorded (the bundled arm is then used on demand).
     """
-    arm = arm_from_args(args)
-    if arm is not None:
+    if (arm := arm_from_args(args)) is not None:
         return arm
-    record = calibration.kinematics
-    if (
-        record is not None
-    ):  # the calibration says how its sensor frame was obtained: no options to repeat
-        return record.build_arm(list(getattr(args, "package_dir", None) or []))
+    if calibration.kinematics is not None:
+        # the calibration says how its sensor frame was obtained: no options to repeat
+        return calibration.kinematics.build_arm(list(getattr(args, "package_dir", None) or []))
     if not calibration.urdf:
-        return arm
+        return None
     recorded = Path(calibration.urdf)
     if not recorded.is_file() or recorded.resolve() == bundled_urdf_path().resolve():
         return None
@@ -230,11 +259,13 @@ def warn_if_kinematics_differ(loaded, calibration) -> None:
     calibration's.
     """
     samples = loaded.samples
-    if samples.urdf is None or calibration.urdf is None:
-        return
     if (
-        Path(samples.urdf).name != Path(calibration.urdf).name
-        or samples.sensor_frame != calibration.sensor_frame
+        samples.urdf is not None
+        and calibration.urdf is not None
+        and (
+            Path(samples.urdf).name != Path(calibration.urdf).name
+            or samples.sensor_frame != calibration.sensor_frame
+        )
     ):
         logger.warning(
             "the calibration was made with %s (sensor frame %s) but these samples were read with "
@@ -260,15 +291,13 @@ def load_samples_from_args(
     from ..io.bags import bag_samples, is_bag_path
     from ..io.static_segments import SegmentParameters
 
-    if arm is None:
-        arm = arm_from_args(args)
-    static_only = static_only and not getattr(args, "all_rows", False)
-    defaults = SegmentParameters()
-    parameters = SegmentParameters(
-        speed_threshold=getattr(args, "speed_threshold", defaults.speed_threshold),
-        min_duration=getattr(args, "min_static_duration", defaults.min_duration),
-        settle_time=getattr(args, "settle_time", defaults.settle_time),
-        speed_window=getattr(args, "speed_window", defaults.speed_window),
+    arm = arm_from_args(args) if arm is None else arm
+    static_only = static_only and not args.all_rows
+    parameters = SegmentParameters(  # the options of add_samples_arguments
+        speed_threshold=args.speed_threshold,
+        min_duration=args.min_static_duration,
+        settle_time=args.settle_time,
+        speed_window=args.speed_window,
     )
     if not is_bag_path(path):
         loaded = load_samples(path, arm, parameters if static_only else None)
@@ -276,11 +305,11 @@ def load_samples_from_args(
         loaded = bag_samples(
             path,
             arm,
-            joint_topic=getattr(args, "joint_topic", None),
-            wrench_topic=getattr(args, "wrench_topic", None),
+            joint_topic=args.joint_topic,
+            wrench_topic=args.wrench_topic,
             parameters=parameters,
             static_only=static_only,
-            wrench_frame=getattr(args, "wrench_frame", "sensor"),
+            wrench_frame=args.wrench_frame,
         )
     if loaded.search is not None:  # the segments the fit will use
         print(f"{path}: {loaded.search.describe()}")

@@ -1,25 +1,26 @@
-"""``ftkin compensate CALIB.json LOG.csv -o OUT.csv``."""
-
-from __future__ import annotations
+"""``ftkin compensate CALIB.json LOG.csv -o OUT.csv``, with the inertial term for a moving log."""
 
 import numpy as np
 
+from .. import Arm, Compensator, InvalidInput, load_calibration
 from ..calibration.model import WRENCH_CHANNELS
-from ..control.compensation import Compensator
-from ..exceptions import InvalidInput
-from ..io.calibration_file import load_calibration
-from ..io.csv_table import write_csv
+from ..io.bags import is_bag_path
+from ..io.csv_table import read_table, write_csv
+from .arg_types import add_command, option
 from .common import (
+    ALLOW_OTHER_ARM,
+    SG_WINDOW,
     add_samples_arguments,
     arm_for_calibration,
     load_samples_from_args,
+    logger,
     warn_if_kinematics_differ,
 )
-from .motion import add_derivative_arguments, compensate_motion
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "compensate",
         help="remove bias and tool gravity from a log of raw readings",
         description="Write the contact wrench (fx..mz, sensor frame, N and N·m) of every row of "
@@ -33,19 +34,16 @@ def register(subparsers) -> None:
         "and the log has a time column t and joint columns, the tool's inertial wrench is removed "
         "too (joint "
         "derivatives from the log, zero-phase).",
+        options=(
+            option("calibration", metavar="CALIB.json"),
+            option("log", metavar="LOG.csv"),
+            option("-o", "--output", metavar="OUT.csv", required=True),
+            SG_WINDOW,
+            ALLOW_OTHER_ARM,
+        ),
+        groups=(add_samples_arguments,),
+        run=run,
     )
-    parser.add_argument("calibration", metavar="CALIB.json")
-    parser.add_argument("log", metavar="LOG.csv")
-    parser.add_argument("-o", "--output", metavar="OUT.csv", required=True)
-    add_derivative_arguments(parser)
-    parser.add_argument(
-        "--allow-other-arm",
-        action="store_true",
-        help="accept robot options that differ from the arm recorded in the calibration "
-        "(deliberate reuse)",
-    )
-    add_samples_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 def run(args) -> int:
@@ -55,8 +53,7 @@ def run(args) -> int:
         calibration, arm, allow_other_arm=args.allow_other_arm
     )  # checks arm against the record
     if calibration.has_inertia:
-        done = compensate_motion(args, calibration, arm)
-        if done is not None:
+        if (done := _compensate_motion(args, calibration, arm or Arm.default())) is not None:
             return done
     elif args.sg_window is not None:
         raise InvalidInput(
@@ -65,19 +62,10 @@ def run(args) -> int:
     loaded = load_samples_from_args(args.log, args, static_only=False, arm=arm)
     warn_if_kinematics_differ(loaded, calibration)
     contact = compensator.compensate_samples(loaded.samples)
-    table = loaded.table
-    wrench_columns = [table.column_index(name) for name in WRENCH_CHANNELS]
-    rows = []
-    for row, wrench in zip(table.rows, contact):
-        out = list(row)
-        for column, value in zip(wrench_columns, wrench):
-            out[column] = float(value)
-        rows.append(out)
-    write_csv(args.output, table.header, rows)
-    weights = Compensator.payload_weight(contact)
+    rows = _write_contact(args.output, loaded.table.header, loaded.table.rows, contact)
     print(
-        f"wrote {len(rows)} compensated rows to {args.output} (median contact force |F'| "
-        f"{np.median(weights):.4f} N)"
+        f"wrote {rows} compensated rows to {args.output} (median contact force |F'| "
+        f"{np.median(Compensator.payload_weight(contact)):.4f} N)"
     )
     drift = calibration.drift
     if loaded.samples.times is not None and drift is not None and drift.model != "none":
@@ -85,6 +73,53 @@ def run(args) -> int:
         print(
             f"bias drift {drift.model}: {inside} rows inside the calibration recording used the "
             "bias at their time, "
-            f"{len(rows) - inside} the last bias"
+            f"{rows - inside} the last bias"
         )
+    return 0
+
+
+def _write_contact(path: str, header: list[str], rows, contact: np.ndarray) -> int:
+    """Write ``rows`` with their fx..mz cells replaced by ``contact`` [N, N·m]; returns how many."""
+    columns = [header.index(name) for name in WRENCH_CHANNELS]
+    out = [list(row) for row in rows]
+    for row, wrench in zip(out, contact):
+        for column, value in zip(columns, wrench):
+            row[column] = float(value)
+    write_csv(path, header, out)
+    return len(out)
+
+
+def _compensate_motion(args, calibration, arm: Arm) -> int | None:
+    """Compensation with the inertial term, or None when the log is not a moving recording."""
+    from ..control.dynamic_compensation import DynamicCompensator
+    from ..io.motion_recording import is_motion_table, load_motion_bag, motion_from_table
+
+    if is_bag_path(args.log):
+        recording = load_motion_bag(
+            args.log, arm, args.joint_topic, args.wrench_topic, args.wrench_frame
+        )
+        header = ["t", *arm.joint_names, *WRENCH_CHANNELS]
+        rows = np.column_stack(
+            [recording.times, recording.joint_positions, recording.wrenches]
+        ).tolist()
+    else:
+        table = read_table(args.log)
+        if not is_motion_table(table, arm):
+            logger.warning(
+                "%s has no 't' and joint columns: static compensation only (no inertial term)",
+                args.log,
+            )
+            return None
+        recording = motion_from_table(table, arm)
+        header, rows = table.header, table.rows
+    contact = DynamicCompensator(
+        calibration, arm, allow_other_arm=args.allow_other_arm
+    ).compensate_motion(recording.motion_samples(arm, args.sg_window))
+    count = _write_contact(args.output, header, rows, contact)
+    print(
+        f"wrote {count} compensated rows to {args.output} with the inertial term (zero-phase "
+        "Savitzky–Golay "
+        "derivatives); median contact force |F'| "
+        f"{np.median(np.linalg.norm(contact[:, :3], axis=1)):.4f} N"
+    )
     return 0

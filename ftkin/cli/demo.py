@@ -6,63 +6,56 @@ control compensated with the calibration just estimated (``--sim-seconds 0``
 skips it).
 """
 
-from __future__ import annotations
-
 import importlib.util
 
 import numpy as np
 
-from ..calibration.estimate import METHODS, calibrate
-from ..calibration.information import SensorNoise
-from ..control.compensation import Compensator
-from ..io.calibration_file import save_calibration
-from ..kinematics.arm import Arm
+from .. import METHODS, Arm, Compensator, SensorNoise, calibrate, save_calibration
 from ..sim.sensor import SimulatedSensor, paper_like_truth
-from .arg_types import bounded_int, non_negative_float, seed
+from .arg_types import add_command, bounded_int, non_negative_float, option, seed
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "demo",
         help="simulated sensor on the bundled arm: calibrate, compare with the truth, compensate",
+        options=(
+            option(
+                "--poses",
+                type=bounded_int(3, 1000, "poses"),
+                default=12,
+                help="number of static poses, 3 to 1000 (default: %(default)s)",
+            ),
+            option(
+                "--readings",
+                type=bounded_int(1, 100_000, "readings per pose"),
+                default=500,
+                help="readings averaged per pose, 1 to 100,000 (default: %(default)s, as the "
+                "paper)",
+            ),
+            option("--seed", type=seed, default=0, help="random seed (default: %(default)s)"),
+            option("--method", choices=METHODS, default=METHODS[0]),
+            option("-o", "--output", metavar="CALIB.json", help="also write the calibration file"),
+            option(
+                "--sim-seconds",
+                type=non_negative_float,
+                default=2.0,
+                metavar="S",
+                help="simulated seconds of the closed-loop MuJoCo segment (needs the 'sim' extra; "
+                "0 skips it; default: %(default)s)",
+            ),
+        ),
+        run=run,
     )
-    parser.add_argument(
-        "--poses",
-        type=bounded_int(3, 1000, "poses"),
-        default=12,
-        help="number of static poses, 3 to 1000 (default: %(default)s)",
-    )
-    parser.add_argument(
-        "--readings",
-        type=bounded_int(1, 100_000, "readings per pose"),
-        default=500,
-        help="readings averaged per pose, 1 to 100,000 (default: %(default)s, as the paper)",
-    )
-    parser.add_argument("--seed", type=seed, default=0, help="random seed (default: %(default)s)")
-    parser.add_argument("--method", choices=METHODS, default=METHODS[0])
-    parser.add_argument(
-        "-o", "--output", metavar="CALIB.json", help="also write the calibration file"
-    )
-    parser.add_argument(
-        "--sim-seconds",
-        type=non_negative_float,
-        default=2.0,
-        metavar="S",
-        help="simulated seconds of the closed-loop MuJoCo segment (needs the 'sim' extra; 0 skips "
-        "it; "
-        "default: %(default)s)",
-    )
-    parser.set_defaults(func=run)
 
 
 def _row(name: str, unit: str, truth, estimate, decimals: int, std_error=None) -> str:
     truth, estimate = np.atleast_1d(truth), np.atleast_1d(estimate)
     fmt = lambda v: "[" + ", ".join(f"{x:+.{decimals}f}" for x in v) + "]"  # noqa: E731
     error = np.abs(estimate - truth)
-    text = f"  {name:<16}{fmt(truth):<36}{fmt(estimate):<36}{error.max():.1e} {unit:<5}"
-    if std_error is not None:
-        text += f"{np.max(error / np.atleast_1d(std_error)):.1f}"
-    return text
+    ratio = "" if std_error is None else f"{np.max(error / np.atleast_1d(std_error)):.1f}"
+    return f"  {name:<16}{fmt(truth):<36}{fmt(estimate):<36}{error.max():.1e} {unit:<5}{ratio}"
 
 
 def run(args) -> int:
@@ -70,9 +63,11 @@ def run(args) -> int:
     arm = Arm.default()
     truth = paper_like_truth()
     sensor = SimulatedSensor(truth, SensorNoise.paper())
-    configurations = arm.random_configurations(args.poses, rng, margin=0.3)
     samples = sensor.samples_at_configurations(
-        arm, configurations, rng, readings_per_pose=args.readings
+        arm,
+        arm.random_configurations(args.poses, rng, margin=0.3),
+        rng,
+        readings_per_pose=args.readings,
     )
     print(
         f"Bundled arm {arm.urdf_path.name}, sensor frame {arm.sensor_frame}; {args.poses} random "
@@ -96,13 +91,12 @@ def run(args) -> int:
     tilt_error = np.rad2deg(errors["base_tilt"]) if "base_tilt" in errors else None
     print(_row("base_tilt_deg", "deg", truth.base_tilt_deg, result.base_tilt_deg, 3, tilt_error))
 
-    compensator = Compensator(result, arm)
     contact = np.array(
         [1.5, -0.8, -4.0, 0.05, 0.02, -0.01]
     )  # N, N·m: the environment pushing on the tool
     q_check = arm.random_configurations(1, rng, margin=0.3)[0]
     raw = sensor.read(arm.rotation_sensor_to_base(q_check), rng, contact)[0]
-    recovered = compensator.compensate(q_check, raw)
+    recovered = Compensator(result, arm).compensate(q_check, raw)
     print("\nCompensation at a new pose with a known contact wrench [N, N·m]:")
     for label, values in (("injected", contact), ("recovered", recovered), ("raw", raw)):
         print(f"  {label:<10}" + " ".join(f"{v:+.4f}" for v in values))
@@ -128,21 +122,15 @@ def _closed_loop(arm: Arm, calibration, seconds: float, seed: int) -> None:
     run, _ = simulate_placement_mujoco(
         scenario, arm, controller=admittance_controller(scenario, arm, calibration)
     )
-    settle = run.settle_time
     placed = (
-        f"placed at t = {settle:.2f} s"
-        if np.isfinite(settle)
+        f"placed at t = {run.settle_time:.2f} s"
+        if np.isfinite(run.settle_time)
         else "not placed yet (run longer: --sim-seconds)"
     )
     print(
         f"\nClosed loop in MuJoCo ({seconds:g} s at 1 kHz): admittance with this calibration "
-        "lowers a "
-        f"{scenario.object_weight:.2f} N object onto the book:"
-    )
-    print(
+        f"lowers a {scenario.object_weight:.2f} N object onto the book:\n"
         f"  peak contact force {run.peak_contact_force:.2f} N, final F'z {run.final_force:+.3f} N, "
-        f"{placed}"
-    )
-    print(
+        f"{placed}\n"
         "  (ftkin simulate placement --mode all --plot run.png compares it with position control)"
     )

@@ -1,19 +1,15 @@
 """``ftkin doctor SAMPLES.csv [robot options]``: which convention the data fit, on demand."""
 
-from __future__ import annotations
-
-import logging
-
 from ..exceptions import ConventionMistake
 from ..io.csv_table import read_table
 from ..io.table_readings import diagnose_table
-from .common import add_arm_arguments, arm_from_args
-
-logger = logging.getLogger("ftkin.cli")
+from .arg_types import add_command, option
+from .common import add_arm_arguments, arm_from_args, logger
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "doctor",
         help="check a samples CSV for convention mistakes (radians for degrees, quaternion order, "
         "frame, units, signs)",
@@ -24,10 +20,10 @@ def register(subparsers) -> None:
         "joint angles in degrees, torques in N·mm; print the fit of each and name the reading that "
         "explains the data. "
         "Exit code 0 when the data fit as given (or only a suspicion), 1 when a mistake is named.",
+        options=(option("samples", metavar="SAMPLES.csv"),),
+        groups=(add_arm_arguments,),
+        run=run,
     )
-    parser.add_argument("samples", metavar="SAMPLES.csv")
-    add_arm_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 def run(args) -> int:
@@ -35,13 +31,12 @@ def run(args) -> int:
     report = diagnose_table(table, arm_from_args(args))
     print(
         f"{args.samples}: {len(table.rows)} readings; linear fit under each reading (chi² with the "
-        "noise of the best):"
+        "noise of the best):",
+        report.table(),
+        sep="\n",
     )
-    print(report.table())
-    if report.verdict in ("ok", "undetermined"):
-        print(f"verdict: {report.verdict}: {report.reason}")
-        return 0
-    print(f"verdict: {report.verdict}: {report.message}")
+    detail = report.reason if report.verdict in ("ok", "undetermined") else report.message
+    print(f"verdict: {report.verdict}: {detail}")
     return 1 if report.verdict == "mistake" else 0
 
 
@@ -53,12 +48,11 @@ def refuse_convention_mistakes(loaded, arm) -> None:
         return
     report = diagnose_table(loaded.table, arm)
     if report.verdict == "mistake":
-        reading = report.culprit.reading
         raise ConventionMistake(
             report.message + " (run 'ftkin doctor' for the fit of every reading)",
             loaded.table.source,
-            reading.name,
-            reading.fix,
+            report.culprit.reading.name,
+            report.culprit.reading.fix,
         )
     if report.verdict == "suspect":
         logger.warning("%s: %s", loaded.table.source, report.message)

@@ -2,18 +2,17 @@
 payloads; the formats and their options come from the registry (:mod:`ftkin.io.export`).
 """
 
-from __future__ import annotations
-
+from .. import Arm, load_calibration
 from ..io.atomic import atomic_write_text
-from ..io.calibration_file import load_calibration
 from ..io.export import EXPORT_FORMATS, export_request
-from ..kinematics.arm import Arm
-from .common import add_arm_arguments, arm_for_calibration, arm_from_args
+from .arg_types import add_command, add_options, option
+from .common import ALLOW_OTHER_ARM, add_arm_arguments, arm_for_calibration, arm_from_args
 
 
 def register(subparsers) -> None:
     formats = "; ".join(f"'{name}': {fmt.summary}" for name, fmt in EXPORT_FORMATS.items())
-    parser = subparsers.add_parser(
+    parser = add_command(
+        subparsers,
         "export",
         help="write a calibration as ROS controller parameters or as the robot's payload (Franka, "
         "UR)",
@@ -21,48 +20,55 @@ def register(subparsers) -> None:
         "printed and written as comments; names written (nodes, frames) are checked against "
         "ROS's rules. Payloads: the centre of mass in the flange frame, through the mount and the "
         "URDF.",
+        options=(
+            option("calibration", metavar="CALIB.json"),
+            option(
+                "--format",
+                required=True,
+                choices=tuple(EXPORT_FORMATS),
+                dest="fmt",
+                help="target format",
+            ),
+            option("-o", "--output", required=True, metavar="OUT.yaml"),
+        ),
+        run=run,
     )
-    parser.add_argument("calibration", metavar="CALIB.json")
-    parser.add_argument(
-        "--format", required=True, choices=tuple(EXPORT_FORMATS), dest="fmt", help="target format"
-    )
-    parser.add_argument("-o", "--output", required=True, metavar="OUT.yaml")
     takers: dict[str, list] = {}
     for fmt in EXPORT_FORMATS.values():
-        for option in fmt.options:
-            takers.setdefault(option.name, [option]).append(fmt.name)
-    group = parser.add_argument_group("format options (each format takes its own)")
-    for option, *names in takers.values():
-        group.add_argument(
-            option.flag,
-            dest=option.name,
-            default=None,
-            help=f"{option.help} [{', '.join(names)}]",
-            **option.argparse,
-        )
-    parser.add_argument(
-        "--allow-other-arm",
-        action="store_true",
-        help="accept robot options that differ from the arm recorded in the calibration "
-        "(deliberate reuse)",
+        for spec in fmt.options:
+            takers.setdefault(spec.name, [spec]).append(fmt.name)
+    add_options(
+        parser.add_argument_group("format options (each format takes its own)"),
+        *(
+            option(
+                spec.flag,
+                dest=spec.name,
+                default=None,
+                help=f"{spec.help} [{', '.join(names)}]",
+                **spec.argparse,
+            )
+            for spec, *names in takers.values()
+        ),
     )
+    add_options(parser, ALLOW_OTHER_ARM)
     add_arm_arguments(parser)
-    parser.set_defaults(func=run, export_options=tuple(takers))
+    parser.set_defaults(export_options=tuple(takers))
 
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
-    arm = arm_from_args(args)
-    if arm is None and EXPORT_FORMATS[args.fmt].needs_arm:
-        arm = arm_for_calibration(args, calibration) or Arm.default()
-    options = {name: getattr(args, name) for name in args.export_options}
+    arm = (  # the options' arm, else (for a format that needs one) the calibration's
+        arm_for_calibration(args, calibration) or Arm.default()
+        if EXPORT_FORMATS[args.fmt].needs_arm
+        else arm_from_args(args)
+    )
     chosen, request = export_request(
         calibration,
         args.fmt,
         arm,
         path=args.output,
         allow_other_arm=args.allow_other_arm,
-        **options,
+        **{name: getattr(args, name) for name in args.export_options},
     )
     atomic_write_text(request.path, chosen.text(request))
     print(f"wrote {args.fmt} to {args.output}{chosen.summary_line(request)}")

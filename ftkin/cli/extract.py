@@ -1,15 +1,15 @@
 """``ftkin extract RECORDING -o SAMPLES.csv``: the samples a bag yields, as a CSV to inspect."""
 
-from __future__ import annotations
-
 import numpy as np
 
 from ..io.csv_table import write_csv
+from .arg_types import add_command, option
 from .common import add_samples_arguments, load_samples_from_args
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "extract",
         help="write the samples extracted from a ROS 2 bag (or a samples CSV) as a CSV",
         description="Read a ROS 2 bag (rosbag2 folder, .mcap or .db3), align joint states to the "
@@ -18,24 +18,27 @@ def register(subparsers) -> None:
         "recording in a CSV (a time column, no pose column) gets the same search; its still rows "
         "are written with a pose column. The CSV is a valid input of 'ftkin calibrate'. With "
         "--all, every reading (no pose column) is written.",
+        options=(
+            option("recording", metavar="RECORDING"),
+            option("-o", "--output", metavar="SAMPLES.csv", required=True),
+            # the older name of the samples option --all-rows: one setting
+            option("--all", dest="all_rows", action="store_true", help="the same as --all-rows"),
+        ),
+        groups=(add_samples_arguments,),
+        run=run,
     )
-    parser.add_argument("recording", metavar="RECORDING")
-    parser.add_argument("-o", "--output", metavar="SAMPLES.csv", required=True)
-    parser.add_argument(  # the older name of the samples option --all-rows: one setting
-        "--all", dest="all_rows", action="store_true", help="the same as --all-rows"
-    )
-    add_samples_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     loaded = load_samples_from_args(args.recording, args)
     write_csv(args.output, loaded.table.header, loaded.table.rows)
-    search = loaded.search
-    poses = len(np.unique(loaded.samples.pose_ids))
     print(
         f"wrote {len(loaded.table.rows)} readings"
-        + (f" in {poses} static poses" if search is not None else "")
+        + (
+            f" in {len(np.unique(loaded.samples.pose_ids))} static poses"
+            if loaded.search is not None
+            else ""
+        )
         + f" to {args.output}"
     )
     recording = loaded.recording

@@ -1,45 +1,49 @@
 """``ftkin paper``: the paper's data through ftkin, beside the printed values."""
 
-from __future__ import annotations
-
 from ..calibration.estimate import METHODS
 from ..io.atomic import atomic_write_bytes
 from ..sim.paper import comparison_table, paper_calibration, paper_csv_path
+from .arg_types import add_command, option
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser("paper", help="reproduce the paper's calibration (Tables 1-3)")
-    parser.add_argument(
-        "--method",
-        choices=METHODS,
-        default="linear",
-        help="estimator compared with the printed values (default: linear, the paper's)",
+    add_command(
+        subparsers,
+        "paper",
+        help="reproduce the paper's calibration (Tables 1-3)",
+        options=(
+            option(
+                "--method",
+                choices=METHODS,
+                default="linear",
+                help="estimator compared with the printed values (default: linear, the paper's)",
+            ),
+            option(
+                "--no-ml",
+                dest="show_ml",
+                action="store_false",
+                help="do not also print the ml fit with standard errors after the linear one",
+            ),
+            option(
+                "-o",
+                "--output",
+                metavar="SAMPLES.csv",
+                help="also write the paper's 9 poses (Tables 1-2) as a samples CSV, for ftkin "
+                "calibrate",
+            ),
+        ),
+        run=run,
     )
-    parser.add_argument(
-        "--no-ml",
-        dest="show_ml",
-        action="store_false",
-        help="do not also print the ml fit with standard errors after the linear one",
-    )
-    parser.add_argument(
-        "-o",
-        "--output",
-        metavar="SAMPLES.csv",
-        help="also write the paper's 9 poses (Tables 1-2) as a samples CSV, for ftkin calibrate",
-    )
-    parser.set_defaults(func=run)
 
 
 def run(args) -> int:
     result = paper_calibration(args.method)
     print(result.summary())
-    print()
-    print(comparison_table(result))
+    print(f"\n{comparison_table(result)}")
     if args.method == "linear" and args.show_ml:
-        print()
         print(
-            "The same data through the maximum-likelihood fit (ftkin's default), value ± standard "
-            "error:"
+            "\nThe same data through the maximum-likelihood fit (ftkin's default), value ± "
+            "standard error:"
         )
         print(paper_calibration("ml").summary())
     if args.output:

@@ -1,104 +1,118 @@
-"""``ftkin plan --n 12 -o poses.csv``: plan calibration poses for an arm."""
-
-from __future__ import annotations
+"""``ftkin plan --n 12 -o poses.csv``: plan calibration poses for an arm (``--excitation``: a
+trajectory for ``calibrate --dynamic``).
+"""
 
 import argparse
 import json
 
 import numpy as np
 
-from ..calibration.information import SensorNoise
-from ..exceptions import InvalidInput, UrdfError
+from .. import Arm, InvalidInput, PlanSpec, SensorNoise, UrdfError, plan_poses
 from ..io.atomic import atomic_write_text
 from ..io.csv_table import write_csv
 from ..io.samples_csv import POSE_COLUMN
 from ..io.yaml_text import yaml_text
-from ..kinematics.arm import Arm
 from ..planning.constraints import DEFAULT_MARGIN, PoseConstraints
 from ..planning.drift_order import DEFAULT_POSE_INTERVAL
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT, ExpectedCalibration
-from ..planning.plan import PlanSpec, plan_poses
-from .arg_types import bounded_int, non_negative_float, positive_float, seed, whole_number
+from ..planning.excitation import (
+    DEFAULT_ACCELERATION_LIMIT,
+    DEFAULT_AMPLITUDE,
+    DEFAULT_VELOCITY_FRACTION,
+    plan_excitation,
+)
+from .arg_types import (
+    add_command,
+    add_options,
+    bounded_int,
+    non_negative_float,
+    option,
+    positive_float,
+    refuse,
+    seed,
+    whole_number,
+)
 from .common import add_arm_arguments, arm_from_args
-from .motion import add_excitation_arguments, run_excitation
 
-FORMATS = ("csv", "yaml", "json")
-
-
-def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
-    """Expected tool, sensor noise and estimation the predicted standard errors are for."""
-    _add_tool_arguments(
-        parser.add_argument_group("expected tool and sensor noise (defaults: the paper's)")
-    )
-    _add_estimation_arguments(parser.add_argument_group("what the calibration will estimate"))
+FORMATS = {"csv": (), "yaml": (".yaml", ".yml"), "json": (".json",)}
+"""Output formats of ``plan -o`` and the file name endings that choose them (default: csv)."""
 
 
-def _add_tool_arguments(group) -> None:
-    group.add_argument(
+# The expected tool and sensor noise (defaults: the paper's).
+_TOOL_OPTIONS = (
+    option(
         "--tool-weight",
         type=positive_float,
         default=PAPER_TOOL_WEIGHT,
         metavar="N",
         help="tool weight [N] (default: %(default)s)",
-    )
-    group.add_argument(
+    ),
+    option(
         "--com",
         type=float,
         nargs=3,
         default=list(PAPER_CENTER_OF_MASS),
         metavar=("X", "Y", "Z"),
         help="tool centre of mass in the sensor frame [m] (default: 0 0 0.047)",
-    )
-    noise = SensorNoise.paper()
-    group.add_argument(
+    ),
+    option(
         "--noise-force",
         type=positive_float,
-        default=float(noise.force_std[0]),
+        default=float(SensorNoise.paper().force_std[0]),
         metavar="N",
         help="force noise per reading [N] (default: %(default)s)",
-    )
-    group.add_argument(
+    ),
+    option(
         "--noise-torque",
         type=positive_float,
-        default=float(noise.torque_std[0]),
+        default=float(SensorNoise.paper().torque_std[0]),
         metavar="NM",
         help="torque noise per reading [N·m] (default: %(default)s)",
-    )
-    group.add_argument(
+    ),
+    option(
         "--readings-per-pose",
         type=bounded_int(1, 10**9, "readings per pose"),
         default=1,
         metavar="K",
         help="independent readings averaged at each pose (default: %(default)s)",
-    )
+    ),
+)
 
 
-def _add_estimation_arguments(group) -> None:
-    group.add_argument(
-        "--estimate-mount",
-        choices=("yaw", "full"),
-        default=None,
-        metavar="yaw|full",
-        help="the calibration will also estimate the sensor's mount on the flange: plan and "
-        "predict for it",
+def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
+    """Expected tool, sensor noise and estimation the predicted standard errors are for."""
+    add_options(
+        parser.add_argument_group("expected tool and sensor noise (defaults: the paper's)"),
+        *_TOOL_OPTIONS,
     )
-    group.add_argument(
-        "--drift-rate",
-        type=float,
-        nargs=2,
-        default=None,
-        metavar=("N/√s", "NM/√s"),
-        help="the bias drifts as a random walk of these rates (force, torque; e.g. a past "
-        "calibration's drift rate): visit the poses in the order the drift spoils least (longer "
-        "joint travel) and predict errors with the drift",
-    )
-    group.add_argument(
-        "--pose-interval",
-        type=positive_float,
-        default=None,
-        metavar="S",
-        help="time from one pose to the next [s], with --drift-rate (default: "
-        f"{DEFAULT_POSE_INTERVAL:g})",
+    add_options(
+        parser.add_argument_group("what the calibration will estimate"),
+        option(
+            "--estimate-mount",
+            choices=("yaw", "full"),
+            default=None,
+            metavar="yaw|full",
+            help="the calibration will also estimate the sensor's mount on the flange: plan and "
+            "predict for it",
+        ),
+        option(
+            "--drift-rate",
+            type=float,
+            nargs=2,
+            default=None,
+            metavar=("N/√s", "NM/√s"),
+            help="the bias drifts as a random walk of these rates (force, torque; e.g. a past "
+            "calibration's drift rate): visit the poses in the order the drift spoils least "
+            "(longer joint travel) and predict errors with the drift",
+        ),
+        option(
+            "--pose-interval",
+            type=positive_float,
+            default=None,
+            metavar="S",
+            help="time from one pose to the next [s], with --drift-rate (default: "
+            f"{DEFAULT_POSE_INTERVAL:g})",
+        ),
     )
 
 
@@ -132,16 +146,16 @@ MAX_PLAN_POSES = 500
 def pose_count(text: str) -> int:
     """argparse type: number of poses to plan, 3 to :data:`MAX_PLAN_POSES`."""
     value = whole_number(text, "poses")
-    if value < 3:
-        raise argparse.ArgumentTypeError(
-            f"at least 3 poses are needed to determine the calibration, got {text}"
-        )
-    if value > MAX_PLAN_POSES:
-        raise argparse.ArgumentTypeError(
+    refuse(
+        argparse.ArgumentTypeError,
+        (value < 3, f"at least 3 poses are needed to determine the calibration, got {text}"),
+        (
+            value > MAX_PLAN_POSES,
             f"plan between 3 and {MAX_PLAN_POSES} poses, got {text}: beyond a few dozen poses the "
-            "standard errors "
-            "only fall as 1/√n (average readings with --readings-per-pose instead)"
-        )
+            "standard errors only fall as 1/√n (average readings with --readings-per-pose "
+            "instead)",
+        ),
+    )
     return value
 
 
@@ -166,100 +180,184 @@ def joint_range(text: str) -> tuple[str, float, float]:
         raise argparse.ArgumentTypeError(
             f"expected NAME:LO:HI with LO, HI in radians, got {text!r}"
         ) from None
-    if not (np.isfinite(low) and np.isfinite(high)):
-        raise argparse.ArgumentTypeError(f"expected finite LO and HI [rad], got {text!r}")
-    if max(abs(low), abs(high)) > 2.0 * np.pi:
-        raise argparse.ArgumentTypeError(
-            f"{text!r}: LO and HI are beyond 2π: ranges are in radians (these look like degrees)"
-        )
-    if low > high:
-        raise argparse.ArgumentTypeError(f"{text!r}: LO must not exceed HI")
+    refuse(
+        argparse.ArgumentTypeError,
+        (
+            not (np.isfinite(low) and np.isfinite(high)),
+            f"expected finite LO and HI [rad], got {text!r}",
+        ),
+        (
+            max(abs(low), abs(high)) > 2.0 * np.pi,
+            f"{text!r}: LO and HI are beyond 2π: ranges are in radians (these look like degrees)",
+        ),
+        (low > high, f"{text!r}: LO must not exceed HI"),
+    )
     return parts[0], low, high
 
 
-def register(subparsers) -> None:
-    parser = subparsers.add_parser(
-        "plan",
-        help="plan calibration poses (joint configurations) for the most accurate calibration",
-        description="Choose N joint configurations (D-optimal: largest log det of the Fisher "
-        "information) within joint limits, free of self-collision and above the floor, ordered "
-        "for short joint travel; print the predicted standard error of every calibration "
-        "parameter.",
-    )
-    parser.add_argument(
-        "-n",
-        "--n",
-        type=pose_count,
-        default=None,
-        help=f"number of poses (3 to {MAX_PLAN_POSES}; required without --excitation)",
-    )
-    parser.add_argument("-o", "--output", metavar="POSES.csv", help="write the poses here")
-    parser.add_argument(
-        "--format",
-        choices=FORMATS,
-        default=None,
-        help="output format (default: from the file name, else csv)",
-    )
-    _add_constraint_arguments(parser.add_argument_group("constraints"))
-    parser.add_argument(
-        "--seed",
-        type=seed,
-        default=0,
-        help="random seed; the same seed gives the same plan (default: 0)",
-    )
-    parser.add_argument(
-        "--max-travel-ratio",
-        type=positive_float,
-        default=None,
-        metavar="R",
-        help="with --drift-rate: keep the joint travel within R (≥ 1) times the short-travel "
-        "order's (default: unbounded, about 2x)",
-    )
-    add_expectation_arguments(parser)
-    add_excitation_arguments(parser)
-    add_arm_arguments(parser)
-    parser.set_defaults(func=run)
-
-
-def _add_constraint_arguments(group) -> None:
-    group.add_argument(
+# The pose constraints (constraints_from_args).
+_CONSTRAINT_OPTIONS = (
+    option(
         "--margin",
         type=non_negative_float,
         default=DEFAULT_MARGIN,
         metavar="RAD",
         help="distance kept from the joint limits [rad] (default: %(default)s)",
-    )
-    group.add_argument(
+    ),
+    option(
         "--floor-height",
         type=_floor,
         default=DEFAULT_FLOOR_HEIGHT,
         metavar="M",
         help="sensor and tool origins stay above this height in the base frame [m] (default: "
         "%(default)s, a floor at base z = 0 with a 5 cm margin)",
-    )
-    group.add_argument(
+    ),
+    option(
         "--no-floor",
         action="store_true",
         help="no floor constraint (an arm mounted on a wall or ceiling)",
-    )
-    group.add_argument(
+    ),
+    option(
         "--max-tilt-deg",
         type=non_negative_float,
         default=None,
         metavar="DEG",
         help="largest angle of the tool axis from pointing straight down [deg]",
-    )
-    group.add_argument(
+    ),
+    option(
         "--joint-range",
         type=joint_range,
         action="append",
         default=[],
         metavar="NAME:LO:HI",
         help="extra range for one joint [rad]; repeat for several joints",
+    ),
+    option("--no-self-collision", action="store_true", help="do not check self-collision"),
+)
+
+# plan --excitation: the trajectory for ftkin calibrate --dynamic.
+_EXCITATION_OPTIONS = (
+    option(
+        "--excitation",
+        action="store_true",
+        help="plan a periodic Fourier-series excitation trajectory instead of poses",
+    ),
+    option(
+        "--duration",
+        type=positive_float,
+        default=30.0,
+        metavar="S",
+        help="recording length [s] (default: %(default)s)",
+    ),
+    option(
+        "--rate",
+        type=positive_float,
+        default=1000.0,
+        metavar="HZ",
+        help="sample rate of the CSV [Hz] (default: %(default)s)",
+    ),
+    option(
+        "--period",
+        type=positive_float,
+        default=None,
+        metavar="S",
+        help="period of the series [s] (default: the duration)",
+    ),
+    option(
+        "--harmonics",
+        type=bounded_int(1, 50, "harmonics"),
+        default=5,
+        metavar="K",
+        help="harmonics per joint (default: %(default)s)",
+    ),
+    option(
+        "--velocity-fraction",
+        type=positive_float,
+        default=DEFAULT_VELOCITY_FRACTION,
+        metavar="F",
+        help="fraction of the URDF velocity limits (default: %(default)s)",
+    ),
+    option(
+        "--acceleration-limit",
+        type=positive_float,
+        default=DEFAULT_ACCELERATION_LIMIT,
+        metavar="RAD_S2",
+        help="joint acceleration limit [rad/s²] (default: %(default)s)",
+    ),
+    option(
+        "--amplitude",
+        type=positive_float,
+        default=DEFAULT_AMPLITUDE,
+        metavar="RAD",
+        help="largest excursion of a joint from the zero configuration [rad] (default: "
+        "%(default)s)",
+    ),
+    option(
+        "--iterations",
+        type=bounded_int(0, 100_000, "evaluations"),
+        default=150,
+        metavar="N",
+        help="local search evaluations (default: %(default)s)",
+    ),
+)
+
+
+def register(subparsers) -> None:
+    parser = add_command(
+        subparsers,
+        "plan",
+        help="plan calibration poses (joint configurations) for the most accurate calibration",
+        description="Choose N joint configurations (D-optimal: largest log det of the Fisher "
+        "information) within joint limits, free of self-collision and above the floor, ordered "
+        "for short joint travel; print the predicted standard error of every calibration "
+        "parameter.",
+        options=(
+            option(
+                "-n",
+                "--n",
+                type=pose_count,
+                default=None,
+                help=f"number of poses (3 to {MAX_PLAN_POSES}; required without --excitation)",
+            ),
+            option("-o", "--output", metavar="POSES.csv", help="write the poses here"),
+            option(
+                "--format",
+                choices=tuple(FORMATS),
+                default=None,
+                help="output format (default: from the file name, else csv)",
+            ),
+        ),
+        run=run,
     )
-    group.add_argument(
-        "--no-self-collision", action="store_true", help="do not check self-collision"
+    add_options(
+        parser.add_argument_group("constraints"),
+        *_CONSTRAINT_OPTIONS,
     )
+    add_options(
+        parser,
+        option(
+            "--seed",
+            type=seed,
+            default=0,
+            help="random seed; the same seed gives the same plan (default: 0)",
+        ),
+        option(
+            "--max-travel-ratio",
+            type=positive_float,
+            default=None,
+            metavar="R",
+            help="with --drift-rate: keep the joint travel within R (≥ 1) times the short-travel "
+            "order's (default: unbounded, about 2x)",
+        ),
+    )
+    add_expectation_arguments(parser)
+    add_options(
+        parser.add_argument_group(
+            "excitation trajectory (--excitation: for ftkin calibrate --dynamic)"
+        ),
+        *_EXCITATION_OPTIONS,
+    )
+    add_arm_arguments(parser)
 
 
 def constraints_from_args(args) -> PoseConstraints:
@@ -283,28 +381,33 @@ def load_arm(args) -> Arm:
 
 
 def run(args) -> int:
-    if args.format is not None and not args.output:
-        raise InvalidInput(
+    refuse(
+        InvalidInput,
+        (
+            args.format is not None and not args.output,
             f"--format {args.format} needs -o/--output FILE (the plan is printed as a table "
-            "otherwise)"
-        )
+            "otherwise)",
+        ),
+        (
+            args.excitation
+            and (
+                args.n is not None
+                or args.max_tilt_deg is not None
+                or args.format not in (None, "csv")
+                or args.drift_rate is not None
+                or args.pose_interval is not None
+                or args.max_travel_ratio is not None
+            ),
+            "--excitation plans a trajectory: --n, --max-tilt-deg, --format yaml/json, "
+            "--drift-rate, --pose-interval and --max-travel-ratio do not apply",
+        ),
+        (
+            not args.excitation and args.n is None,
+            "give --n N (the number of poses), or --excitation for a trajectory",
+        ),
+    )
     if args.excitation:
-        if (
-            args.n is not None
-            or args.max_tilt_deg is not None
-            or args.format not in (None, "csv")
-            or args.drift_rate is not None
-            or args.pose_interval is not None
-            or args.max_travel_ratio is not None
-        ):
-            raise InvalidInput(
-                "--excitation plans a trajectory: --n, --max-tilt-deg, --format yaml/json, "
-                "--drift-rate, "
-                "--pose-interval and --max-travel-ratio do not apply"
-            )
-        return run_excitation(args, load_arm(args))
-    if args.n is None:
-        raise InvalidInput("give --n N (the number of poses), or --excitation for a trajectory")
+        return _run_excitation(args, load_arm(args))
     spec = PlanSpec(
         args.n,
         constraints=constraints_from_args(args),
@@ -315,25 +418,23 @@ def run(args) -> int:
     try:
         plan = plan_poses(load_arm(args), spec)
     except UrdfError as error:  # only the collision geometry is loaded here: meshes not found
-        hint = (
-            "give --package-dir DIR (the folder holding the package:// packages) or "
-            "--no-self-collision"
-        )
-        raise UrdfError(error.path, [*error.reasons, hint]) from None
-    print(plan.report())
-    print(_pose_lines(plan))
+        raise UrdfError(
+            error.path,
+            [
+                *error.reasons,
+                "give --package-dir DIR (the folder holding the package:// packages) or "
+                "--no-self-collision",
+            ],
+        ) from None
+    print(plan.report(), _pose_lines(plan), sep="\n")
     if args.output:
-        fmt = args.format or _format_from_name(args.output)
+        fmt = args.format or next(
+            (fmt for fmt, endings in FORMATS.items() if args.output.lower().endswith(endings)),
+            "csv",
+        )
         write_plan(plan, args.output, fmt)
         print(f"wrote {args.output} ({fmt})")
     return 0
-
-
-def _format_from_name(path: str) -> str:
-    lowered = path.lower()
-    if lowered.endswith((".yaml", ".yml")):
-        return "yaml"
-    return "json" if lowered.endswith(".json") else "csv"
 
 
 def _pose_lines(plan) -> str:
@@ -347,7 +448,6 @@ def _pose_lines(plan) -> str:
 
 def plan_document(plan) -> dict:
     """The plan as plain data (YAML/JSON output)."""
-    errors = {key: np.atleast_1d(value).tolist() for key, value in plan.standard_errors.items()}
     return {
         "joint_names": list(plan.joint_names),
         "joint_positions_rad": plan.joint_positions.tolist(),
@@ -355,7 +455,9 @@ def plan_document(plan) -> dict:
         "constraints": plan.constraints.describe(),
         "criterion": plan.criterion,
         "criterion_value": plan.criterion_value,
-        "predicted_standard_errors": errors,
+        "predicted_standard_errors": {
+            key: np.atleast_1d(value).tolist() for key, value in plan.standard_errors.items()
+        },
         "joint_travel_rad": plan.joint_travel,
         **(
             {}
@@ -371,9 +473,48 @@ def plan_document(plan) -> dict:
 def write_plan(plan, path: str, fmt: str) -> None:
     """Write the poses as CSV (``pose`` plus one column per joint [rad]), YAML or JSON."""
     if fmt == "csv":
-        rows = [[i, *map(float, q)] for i, q in enumerate(plan.joint_positions)]
-        write_csv(path, [POSE_COLUMN, *plan.joint_names], rows)
+        write_csv(
+            path,
+            [POSE_COLUMN, *plan.joint_names],
+            [[i, *map(float, q)] for i, q in enumerate(plan.joint_positions)],
+        )
     elif fmt == "json":
         atomic_write_text(path, json.dumps(plan_document(plan), indent=2) + "\n")
     else:
         atomic_write_text(path, yaml_text(plan_document(plan)))
+
+
+def _run_excitation(args, arm: Arm) -> int:
+    """``ftkin plan --excitation``: plan, print a summary, write the CSV."""
+    constraints = constraints_from_args(args)
+    plan = plan_excitation(
+        arm,
+        args.duration,
+        rate=args.rate,
+        period=args.period,
+        harmonics=args.harmonics,
+        velocity_fraction=args.velocity_fraction,
+        acceleration_limit=args.acceleration_limit,
+        amplitude=args.amplitude,
+        constraints=constraints,
+        noise=SensorNoise(args.noise_force, args.noise_torque),
+        max_iterations=args.iterations,
+        seed=args.seed,
+    )
+    peak_speed, peak_acceleration = (
+        ", ".join(f"{v:.2f}" for v in np.abs(values).max(axis=0))
+        for values in (plan.joint_velocities, plan.joint_accelerations)
+    )
+    print(
+        f"excitation: {len(plan.times)} samples at {args.rate:g} Hz over {args.duration:g} s, "
+        f"period {plan.trajectory.period:g} s, "
+        f"{plan.trajectory.cosine.shape[1]} harmonics; {constraints.describe()}\n"
+        f"  information: log det {plan.log_det:.2f}, condition number {plan.condition_number:.3g}\n"
+        f"  peak joint speed [rad/s]: {peak_speed}\n"
+        f"  peak joint acceleration [rad/s²]: {peak_acceleration}"
+    )
+    if args.output:
+        header, rows = plan.table()
+        write_csv(args.output, header, [[*map(float, row)] for row in rows])
+        print(f"wrote {args.output}")
+    return 0

@@ -1,9 +1,8 @@
 """``ftkin report CALIB.json SAMPLES -o report.png``: measured vs predicted per pose, residuals."""
 
-from __future__ import annotations
-
 from ..io.calibration_file import load_calibration
 from ..viz.report import save_report
+from .arg_types import add_command, option
 from .common import (
     add_samples_arguments,
     arm_for_calibration,
@@ -13,7 +12,8 @@ from .common import (
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "report",
         help="plot measured vs predicted wrench per pose and the residuals (needs ftkin[plots])",
         description="Draw a one-page report (PNG, PDF or SVG): per channel fx..mz the per-pose "
@@ -25,13 +25,15 @@ def register(subparsers) -> None:
         "a ROS 2 bag (same options as 'ftkin calibrate'; without --robot/--urdf the URDF recorded "
         "in the "
         "calibration file is used).",
+        options=(
+            option("calibration", metavar="CALIB.json"),
+            option("samples", metavar="SAMPLES"),
+            option("-o", "--output", required=True, metavar="report.png"),
+            option("--title", help="figure title"),
+        ),
+        groups=(add_samples_arguments,),
+        run=run,
     )
-    parser.add_argument("calibration", metavar="CALIB.json")
-    parser.add_argument("samples", metavar="SAMPLES")
-    parser.add_argument("-o", "--output", required=True, metavar="report.png")
-    parser.add_argument("--title", help="figure title")
-    add_samples_arguments(parser)
-    parser.set_defaults(func=run)
 
 
 def run(args) -> int:

@@ -8,21 +8,18 @@ file itself is updated, atomically: re-zeroing it is this command's purpose
 leaves CALIB.json untouched.
 """
 
-from __future__ import annotations
-
 import datetime
 
 import numpy as np
 
-from ..control.compensation import Compensator
-from ..exceptions import InvalidInput
-from ..io.calibration_file import load_calibration, save_calibration
-from ..kinematics.arm import Arm
+from .. import Arm, Compensator, InvalidInput, load_calibration, save_calibration
+from .arg_types import add_command, option, refuse
 from .common import add_arm_arguments, arm_for_calibration
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "rezero",
         help="re-zero the sensor bias from one contact-free reading at a known pose (tool weight "
         "kept)",
@@ -33,73 +30,77 @@ def register(subparsers) -> None:
         "weight at this pose). The tool must be free of contact and the arm still. Updates "
         "CALIB.json in place "
         "(atomically) unless -o is given.",
+        options=(
+            option("calibration", metavar="CALIB.json"),
+            option(
+                "--q",
+                type=float,
+                nargs="+",
+                required=True,
+                metavar="Q",
+                help="joint angles of the pose [rad]",
+            ),
+            option(
+                "--wrench",
+                type=float,
+                nargs=6,
+                required=True,
+                metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
+                help="raw reading at that pose [N, N·m], sensor frame (average a few hundred "
+                "readings)",
+            ),
+            option(
+                "-o",
+                "--output",
+                metavar="OUT.json",
+                help="write the re-zeroed calibration here instead of in place",
+            ),
+        ),
+        groups=(add_arm_arguments,),
+        run=run,
     )
-    parser.add_argument("calibration", metavar="CALIB.json")
-    parser.add_argument(
-        "--q",
-        type=float,
-        nargs="+",
-        required=True,
-        metavar="Q",
-        help="joint angles of the pose [rad]",
-    )
-    parser.add_argument(
-        "--wrench",
-        type=float,
-        nargs=6,
-        required=True,
-        metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
-        help="raw reading at that pose [N, N·m], sensor frame (average a few hundred readings)",
-    )
-    parser.add_argument(
-        "-o",
-        "--output",
-        metavar="OUT.json",
-        help="write the re-zeroed calibration here instead of in place",
-    )
-    add_arm_arguments(parser)
-    parser.set_defaults(func=run)
-
-
-def _check_pose(arm, q) -> None:
-    """Refuse angles beyond 2π (degrees) and a pose outside the arm's joint limits: the bias would
-    be set at a pose
-    the arm was not in."""
-    if not np.all(np.isfinite(q)):
-        raise InvalidInput(f"--q must be finite numbers [rad], got {q.tolist()}")
-    lower, upper = np.asarray(arm.lower_limits, float), np.asarray(arm.upper_limits, float)
-    for name, value, low, high in zip(arm.joint_names, q, lower, upper):
-        if abs(value) > 2.0 * np.pi + 0.01:
-            raise InvalidInput(
-                f"--q: {name} = {value:g} is beyond ±2π: joint angles are in radians (this looks "
-                "like degrees)"
-            )
-        if not low - 1e-6 <= value <= high + 1e-6:
-            raise InvalidInput(
-                f"--q: {name} = {value:g} rad is outside its limits [{low:g}, {high:g}] rad"
-            )
 
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
     arm = arm_for_calibration(args, calibration) or Arm.default()
-    if len(args.q) != arm.nq:
-        raise InvalidInput(
-            f"--q takes the arm's {arm.nq} joint angles [rad] ({', '.join(arm.joint_names)}), got "
-            f"{len(args.q)}"
+    # angles beyond 2π (degrees) and a pose outside the joint limits are refused: the bias would
+    # be set at a pose the arm was not in
+    refuse(
+        InvalidInput,
+        (
+            len(args.q) != arm.nq,
+            f"--q takes the arm's {arm.nq} joint angles [rad] ({', '.join(arm.joint_names)}), "
+            f"got {len(args.q)}",
+        ),
+        (not np.all(np.isfinite(args.q)), f"--q must be finite numbers [rad], got {list(args.q)}"),
+    )
+    for name, value, low, high in zip(arm.joint_names, args.q, arm.lower_limits, arm.upper_limits):
+        refuse(
+            InvalidInput,
+            (
+                abs(value) > 2.0 * np.pi + 0.01,
+                f"--q: {name} = {value:g} is beyond ±2π: joint angles are in radians (this looks "
+                "like degrees)",
+            ),
+            (
+                not low - 1e-6 <= value <= high + 1e-6,
+                f"--q: {name} = {value:g} rad is outside its limits [{low:g}, {high:g}] rad",
+            ),
         )
-    _check_pose(arm, np.array(args.q))
-    compensator = Compensator(calibration, arm)
     previous = calibration.bias
-    bias = compensator.rezero(np.array(args.q), np.array(args.wrench))
-    record = {
-        "q": args.q,
-        "wrench": args.wrench,
-        "previous_bias": previous,
-        "time": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-    }
+    bias = Compensator(calibration, arm).rezero(np.array(args.q), np.array(args.wrench))
     output = args.output or args.calibration
-    save_calibration(calibration.with_bias(bias), output, rezero=record)
+    save_calibration(
+        calibration.with_bias(bias),
+        output,
+        rezero={
+            "q": args.q,
+            "wrench": args.wrench,
+            "previous_bias": previous,
+            "time": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        },
+    )
     change = bias - previous
     print(
         f"bias F0 = [{', '.join(f'{v:+.4f}' for v in bias[:3])}] N, M0 = "

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import InvalidInput
-from .arg_types import bounded_int, positive_float, seed
+from .arg_types import add_options, bounded_int, option, positive_float, seed
 
 GUIDING_HOME = (0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785)
 """The demo's hand-guiding start pose [rad] (the hand above the table, pointing down)."""
@@ -44,36 +44,46 @@ def register(subparsers) -> None:
 
 def _robot_options(parser, sensor: bool = True) -> None:
     group = parser.add_argument_group("robot and sensor")
-    group.add_argument("--franka", required=True, metavar="HOST", help="the robot's FCI address")
-    group.add_argument(
-        "--no-realtime",
-        action="store_true",
-        help="do not require a real-time kernel (franky RealtimeConfig.Ignore: simulators)",
-    )
-    group.add_argument(
-        "--speed",
-        type=positive_float,
-        default=0.3,
-        help="fraction of the joint velocity/acceleration limits for moves (default: %(default)s)",
+    add_options(
+        group,
+        option("--franka", required=True, metavar="HOST", help="the robot's FCI address"),
+        option(
+            "--no-realtime",
+            action="store_true",
+            help="do not require a real-time kernel (franky RealtimeConfig.Ignore: simulators)",
+        ),
+        option(
+            "--speed",
+            type=positive_float,
+            default=0.3,
+            help="fraction of the joint velocity/acceleration limits for moves (default: "
+            "%(default)s)",
+        ),
     )
     if sensor:
-        group.add_argument(
-            "--sensor",
-            required=True,
-            metavar="MODULE:FACTORY",
-            help="importable factory returning an object with read() -> (t, wrench)",
-        )
-        group.add_argument(
-            "--sensor-option",
-            action="append",
-            default=[],
-            metavar="KEY=VALUE",
-            help="keyword argument (a string) for the sensor factory; repeatable",
+        add_options(
+            group,
+            option(
+                "--sensor",
+                required=True,
+                metavar="MODULE:FACTORY",
+                help="importable factory returning an object with read() -> (t, wrench)",
+            ),
+            option(
+                "--sensor-option",
+                action="append",
+                default=[],
+                metavar="KEY=VALUE",
+                help="keyword argument (a string) for the sensor factory; repeatable",
+            ),
         )
     arm = parser.add_argument_group("robot model (default: the bundled FR3, sensor at fr3_hand)")
-    arm.add_argument("--urdf", metavar="PATH", help="URDF of the arm")
-    arm.add_argument("--sensor-frame", metavar="NAME", help="sensor frame (with --urdf)")
-    arm.add_argument("--tool-frame", metavar="NAME", help="tool frame (with --urdf)")
+    add_options(
+        arm,
+        option("--urdf", metavar="PATH", help="URDF of the arm"),
+        option("--sensor-frame", metavar="NAME", help="sensor frame (with --urdf)"),
+        option("--tool-frame", metavar="NAME", help="tool frame (with --urdf)"),
+    )
 
 
 def _calibrate_parser(commands) -> None:
@@ -81,38 +91,41 @@ def _calibrate_parser(commands) -> None:
         "calibrate", help="plan, visit, record, calibrate, save, verify (the session)"
     )
     _robot_options(parser)
-    parser.add_argument("-o", "--output", required=True, metavar="CALIB.json")
-    parser.add_argument(
-        "--samples",
-        metavar="SAMPLES.csv",
-        help="samples file written as the session goes (default: CALIB.samples.csv)",
-    )
-    parser.add_argument(
-        "--resume", action="store_true", help="continue the samples file of a stopped session"
-    )
-    parser.add_argument("--poses", type=bounded_int(3, 200, "poses"), default=12)
-    parser.add_argument("--readings", type=bounded_int(1, 100_000, "readings"), default=50)
-    parser.add_argument(
-        "--verify",
-        type=bounded_int(0, 50, "verification poses"),
-        default=3,
-        help="extra poses to check the calibration at (default: %(default)s)",
-    )
-    parser.add_argument("--seed", type=seed, default=0)
-    parser.add_argument(
-        "--floor",
-        type=float,
-        default=0.1,
-        metavar="Z",
-        help="sensor and tool stay above this height in the base frame [m] (default: 0.1)",
-    )
-    parser.add_argument(
-        "--joint-range",
-        nargs=3,
-        action="append",
-        default=[],
-        metavar=("JOINT", "LOW", "HIGH"),
-        help="restrict a joint to [LOW, HIGH] rad; repeatable",
+    add_options(
+        parser,
+        option("-o", "--output", required=True, metavar="CALIB.json"),
+        option(
+            "--samples",
+            metavar="SAMPLES.csv",
+            help="samples file written as the session goes (default: CALIB.samples.csv)",
+        ),
+        option(
+            "--resume", action="store_true", help="continue the samples file of a stopped session"
+        ),
+        option("--poses", type=bounded_int(3, 200, "poses"), default=12),
+        option("--readings", type=bounded_int(1, 100_000, "readings"), default=50),
+        option(
+            "--verify",
+            type=bounded_int(0, 50, "verification poses"),
+            default=3,
+            help="extra poses to check the calibration at (default: %(default)s)",
+        ),
+        option("--seed", type=seed, default=0),
+        option(
+            "--floor",
+            type=float,
+            default=0.1,
+            metavar="Z",
+            help="sensor and tool stay above this height in the base frame [m] (default: 0.1)",
+        ),
+        option(
+            "--joint-range",
+            nargs=3,
+            action="append",
+            default=[],
+            metavar=("JOINT", "LOW", "HIGH"),
+            help="restrict a joint to [LOW, HIGH] rad; repeatable",
+        ),
     )
     parser.set_defaults(func=run_calibrate)
 
@@ -129,20 +142,23 @@ def _payload_parser(commands) -> None:
 
 def _payload_options(parser) -> None:
     group = parser.add_argument_group("payload hand-off (flange frame)")
-    group.add_argument(
-        "--end-effector",
-        type=float,
-        nargs=4,
-        metavar=("MASS", "CX", "CY", "CZ"),
-        help="the end effector the controller models [kg, m] (default: what the robot reports)",
-    )
-    group.add_argument(
-        "--sensor-body",
-        type=float,
-        nargs=4,
-        metavar=("MASS", "CX", "CY", "CZ"),
-        help="the sensor's own mass and centre of mass above its measuring plane [kg, m] "
-        "(datasheet; default: none)",
+    add_options(
+        group,
+        option(
+            "--end-effector",
+            type=float,
+            nargs=4,
+            metavar=("MASS", "CX", "CY", "CZ"),
+            help="the end effector the controller models [kg, m] (default: what the robot reports)",
+        ),
+        option(
+            "--sensor-body",
+            type=float,
+            nargs=4,
+            metavar=("MASS", "CX", "CY", "CZ"),
+            help="the sensor's own mass and centre of mass above its measuring plane [kg, m] "
+            "(datasheet; default: none)",
+        ),
     )
 
 
@@ -150,11 +166,12 @@ def _guide_parser(commands) -> None:
     parser = commands.add_parser("guide", help="hand-guide the arm until Ctrl-C")
     parser.add_argument("calibration", metavar="CALIB.json")
     _robot_options(parser)
-    parser.add_argument("--duration", type=positive_float, metavar="S", help="stop after S s")
-    parser.add_argument("--rate", type=positive_float, default=250.0, help="loop rate [Hz]")
-    parser.add_argument("--rotation", action="store_true", help="let the hand turn the tool")
-    parser.add_argument(
-        "--gain", type=positive_float, help="translation gain [m/(s·N)] (default: 0.0035)"
+    add_options(
+        parser,
+        option("--duration", type=positive_float, metavar="S", help="stop after S s"),
+        option("--rate", type=positive_float, default=250.0, help="loop rate [Hz]"),
+        option("--rotation", action="store_true", help="let the hand turn the tool"),
+        option("--gain", type=positive_float, help="translation gain [m/(s·N)] (default: 0.0035)"),
     )
     parser.set_defaults(func=run_guide)
 
@@ -163,11 +180,14 @@ def _demo_parser(commands) -> None:
     parser = commands.add_parser(
         "demo", help="franky-sim: session, payload hand-off, hand-guiding with a push"
     )
-    parser.add_argument("--poses", type=bounded_int(3, 50, "poses"), default=12)
-    parser.add_argument("--speed", type=positive_float, default=0.8)
-    parser.add_argument("--push", type=float, default=15.0, metavar="N", help="push force [N]")
-    parser.add_argument(
-        "-o", "--output", metavar="CALIB.json", help="keep the calibration (and its samples)"
+    add_options(
+        parser,
+        option("--poses", type=bounded_int(3, 50, "poses"), default=12),
+        option("--speed", type=positive_float, default=0.8),
+        option("--push", type=float, default=15.0, metavar="N", help="push force [N]"),
+        option(
+            "-o", "--output", metavar="CALIB.json", help="keep the calibration (and its samples)"
+        ),
     )
     parser.set_defaults(func=run_demo)
 

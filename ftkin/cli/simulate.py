@@ -1,9 +1,7 @@
-"""``ftkin simulate placement``: the paper's placement experiment on the bundled arm.
+"""``ftkin simulate placement|samples|log|recording|bag``: the paper's placement experiment on the
+bundled arm, and example inputs from the simulated sensor.
 
-(``ftkin simulate samples|log|recording|bag``, example inputs, are in
-:mod:`ftkin.cli.simulate_inputs`.)
-
-Gains are given as in the paper, k13 [mm/N] and k23 [mm/(s·N)], and converted
+Placement gains are given as in the paper, k13 [mm/N] and k23 [mm/(s·N)], and converted
 to SI. The CSV has one row per control tick: ``t`` [s], ``displacement`` (tool
 z from the start) [m], ``velocity`` [m/s], ``force`` (true compensated F'z,
 sensor z pointing down) [N], ``measured_force`` (what the controller saw) [N],
@@ -19,23 +17,148 @@ the joint states ``q1..`` [rad], ``dq1..`` [rad/s], the commands ``cmd1..``
 [rad/s], the ideal load on the sensor ``ideal_fx..ideal_mz`` [N, N·m] and
 ``held`` (1 when the controller held the arm). ``--engine simple`` keeps the
 kinematic arm and the spring-damper formula (:mod:`ftkin.sim.placement`).
+
+``samples``, ``log``, ``recording`` and ``bag`` each write a file the matching
+command reads, from known parameters (:mod:`ftkin.sim.inputs`): the paper-like
+tool and bias (:func:`~ftkin.sim.sensor.paper_like_truth`) unless
+``--tool-mass``/``--com`` say otherwise, the paper's noise times
+``--noise-scale``, and optionally a drifting bias, a mount rotation on the
+flange or a reversed sign. The truth is printed, so what ``ftkin calibrate``
+finds can be compared with it.
 """
 
-from __future__ import annotations
-
 import importlib.util
+import time
 from dataclasses import replace
 
 import numpy as np
 
-from ..exceptions import InvalidInput
-from ..io.csv_table import write_csv
-from ..sim.placement import MODES, PlacementRun, PlacementScenario, simulate_placement
+from .. import Arm, InvalidInput
+from ..io.csv_table import read_table, write_csv
+from ..sim import inputs as sim_inputs
+from ..sim.placement import (
+    MODES,
+    PlacementRun,
+    PlacementScenario,
+    admittance_controller,
+    simulate_placement,
+)
 from ..sim.surfaces import SURFACES, surface_by_name
-from .arg_types import bounded_int, non_negative_float, positive_float, seed
-from .simulate_inputs import add_input_parsers
+from .arg_types import (
+    add_command,
+    add_options,
+    bounded_int,
+    non_negative_float,
+    number_list,
+    option,
+    positive_float,
+    refuse,
+    seed,
+)
+from .common import add_arm_arguments, arm_from_args
 
 _DEFAULT = PlacementScenario()
+
+
+def _value_list(text: str) -> list[float]:
+    return [non_negative_float(part) for part in text.split(",") if part.strip()]
+
+
+# simulate placement: the experiment (surface, controller, gains, object, timing), how it runs
+# (engine, sensor timing, sweep) and what it writes.
+_PLACEMENT_OPTIONS = (
+    option("--surface", choices=sorted(SURFACES), default="sponge"),
+    option(
+        "--mode",
+        choices=(*MODES, "all"),
+        default="admittance",
+        help="controller; 'all' runs the three and plots them together (default: %(default)s)",
+    ),
+    option(
+        "--k1",
+        type=non_negative_float,
+        default=_DEFAULT.k1 * 1e3,
+        metavar="MM_PER_N",
+        help="position gain k13 [mm/N] (default: %(default)g)",
+    ),
+    option(
+        "--k2",
+        type=non_negative_float,
+        default=_DEFAULT.k2 * 1e3,
+        metavar="MM_PER_S_N",
+        help="velocity gain k23 [mm/(s·N)] (default: %(default)g; the paper swept around 0.1)",
+    ),
+    option(
+        "--weight",
+        type=positive_float,
+        default=_DEFAULT.object_weight,
+        help="object weight [N] (default: %(default)g)",
+    ),
+    option(
+        "--gap",
+        type=non_negative_float,
+        default=_DEFAULT.start_gap * 1e3,
+        help="object bottom above the surface at the start [mm] (default: %(default)g)",
+    ),
+    option(
+        "--duration",
+        type=positive_float,
+        default=_DEFAULT.duration,
+        help="simulated time [s] (default: %(default)g)",
+    ),
+    option(
+        "--dt",
+        type=positive_float,
+        default=_DEFAULT.dt,
+        help="control period [s] (default: %(default)g)",
+    ),
+    option(
+        "--seed",
+        type=seed,
+        default=0,
+        help="random seed of the sensor noise (default: %(default)s)",
+    ),
+    option(
+        "--engine",
+        choices=("mujoco", "simple"),
+        default="mujoco" if importlib.util.find_spec("mujoco") is not None else "simple",
+        help="mujoco (physics engine, extra 'sim') or simple (kinematic arm, spring-damper "
+        "formula); "
+        "default: mujoco when installed (here: %(default)s)",
+    ),
+    option(
+        "--sample-rate",
+        type=positive_float,
+        metavar="HZ",
+        help="MuJoCo engine: sensor sample rate [Hz] (default: one sample per control tick)",
+    ),
+    option(
+        "--delay-ticks",
+        type=bounded_int(0, 10_000, "ticks"),
+        default=1,
+        metavar="N",
+        help="MuJoCo engine: sensor delay in control ticks (default: %(default)s)",
+    ),
+    option("--sweep", choices=("k1", "k2"), help="repeat the run over --values of this gain"),
+    option(
+        "--values",
+        type=_value_list,
+        metavar="V1,V2,...",
+        help="gain values for --sweep, in the paper's mm units (e.g. 0.05,0.1,0.2)",
+    ),
+    option("-o", "--output", metavar="RUN.csv", help="write the time series"),
+    option(
+        "--plot",
+        metavar="RUN.png",
+        help="write displacement, velocity and force plots (needs matplotlib)",
+    ),
+    option(
+        "--view",
+        action="store_true",
+        help="watch the run live in meshcat (arm, contact wrench, commanded twist), paced "
+        "to real time",
+    ),
+)
 
 
 def register(subparsers) -> None:
@@ -45,173 +168,51 @@ def register(subparsers) -> None:
         "log, recording, bag)",
     )
     experiments = parser.add_subparsers(dest="experiment", metavar="EXPERIMENT", required=True)
-    placement = experiments.add_parser(
+    add_command(
+        experiments,
         "placement",
         help="lower a grasped object onto a sponge or a book: position vs admittance control",
         description="Lower a grasped object onto a surface with position control, admittance "
         "control with "
         "compensation, or admittance control on raw readings (docs/method.md §6).",
+        options=_PLACEMENT_OPTIONS,
+        run=run,
     )
-    _add_scenario_arguments(placement)
-    _add_run_arguments(placement)
-    placement.set_defaults(func=run)
-    add_input_parsers(experiments)
-
-
-def _add_scenario_arguments(placement) -> None:
-    """The experiment: surface, controller, gains, object, timing."""
-    placement.add_argument("--surface", choices=sorted(SURFACES), default="sponge")
-    placement.add_argument(
-        "--mode",
-        choices=(*MODES, "all"),
-        default="admittance",
-        help="controller; 'all' runs the three and plots them together (default: %(default)s)",
-    )
-    placement.add_argument(
-        "--k1",
-        type=non_negative_float,
-        default=_DEFAULT.k1 * 1e3,
-        metavar="MM_PER_N",
-        help="position gain k13 [mm/N] (default: %(default)g)",
-    )
-    placement.add_argument(
-        "--k2",
-        type=non_negative_float,
-        default=_DEFAULT.k2 * 1e3,
-        metavar="MM_PER_S_N",
-        help="velocity gain k23 [mm/(s·N)] (default: %(default)g; the paper swept around 0.1)",
-    )
-    placement.add_argument(
-        "--weight",
-        type=positive_float,
-        default=_DEFAULT.object_weight,
-        help="object weight [N] (default: %(default)g)",
-    )
-    placement.add_argument(
-        "--gap",
-        type=non_negative_float,
-        default=_DEFAULT.start_gap * 1e3,
-        help="object bottom above the surface at the start [mm] (default: %(default)g)",
-    )
-    placement.add_argument(
-        "--duration",
-        type=positive_float,
-        default=_DEFAULT.duration,
-        help="simulated time [s] (default: %(default)g)",
-    )
-    placement.add_argument(
-        "--dt",
-        type=positive_float,
-        default=_DEFAULT.dt,
-        help="control period [s] (default: %(default)g)",
-    )
-    placement.add_argument(
-        "--seed",
-        type=seed,
-        default=0,
-        help="random seed of the sensor noise (default: %(default)s)",
-    )
-
-
-def _add_run_arguments(placement) -> None:
-    """How it runs (engine, sensor timing, sweep) and what it writes."""
-    placement.add_argument(
-        "--engine",
-        choices=ENGINES,
-        default=default_engine(),
-        help="mujoco (physics engine, extra 'sim') or simple (kinematic arm, spring-damper "
-        "formula); "
-        "default: mujoco when installed (here: %(default)s)",
-    )
-    placement.add_argument(
-        "--sample-rate",
-        type=positive_float,
-        metavar="HZ",
-        help="MuJoCo engine: sensor sample rate [Hz] (default: one sample per control tick)",
-    )
-    placement.add_argument(
-        "--delay-ticks",
-        type=bounded_int(0, 10_000, "ticks"),
-        default=1,
-        metavar="N",
-        help="MuJoCo engine: sensor delay in control ticks (default: %(default)s)",
-    )
-    placement.add_argument(
-        "--sweep", choices=("k1", "k2"), help="repeat the run over --values of this gain"
-    )
-    placement.add_argument(
-        "--values",
-        type=_value_list,
-        metavar="V1,V2,...",
-        help="gain values for --sweep, in the paper's mm units (e.g. 0.05,0.1,0.2)",
-    )
-    placement.add_argument("-o", "--output", metavar="RUN.csv", help="write the time series")
-    placement.add_argument(
-        "--plot",
-        metavar="RUN.png",
-        help="write displacement, velocity and force plots (needs matplotlib)",
-    )
-    placement.add_argument(
-        "--view",
-        action="store_true",
-        help="watch the run live in meshcat (arm, contact wrench, commanded twist), paced to real "
-        "time",
-    )
-
-
-ENGINES = ("mujoco", "simple")
-"""Simulation engines of ``ftkin simulate placement``."""
-
-
-def default_engine() -> str:
-    """``"mujoco"`` when the ``mujoco`` package is importable, else ``"simple"``."""
-    return "mujoco" if importlib.util.find_spec("mujoco") is not None else "simple"
-
-
-def _value_list(text: str) -> list[float]:
-    return [non_negative_float(part) for part in text.split(",") if part.strip()]
-
-
-def _summary(run: PlacementRun) -> str:
-    settle = run.settle_time
-    placed = (
-        f"placed at t = {settle:.3f} s"
-        if np.isfinite(settle)
-        else "not placed (|F'z| >= 0.05 N or still moving at the end)"
-    )
-    return (
-        f"peak contact force {run.peak_contact_force:.3f} N, final F'z {run.final_force:+.3f} N, "
-        f"final penetration {run.penetration[-1] * 1e3:.3f} mm; {placed}"
-    )
+    # the example inputs, each from the simulated sensor and tool
+    for kind, text in KINDS.items():
+        parser = experiments.add_parser(kind, help=text, description=f"Write {text}.")
+        add_options(parser.add_argument_group("the simulated sensor and tool"), *SENSOR_OPTIONS)
+        add_arm_arguments(parser)
+        add_options(
+            parser,
+            *INPUT_OPTIONS[kind],
+            option("-o", "--output", required=True, metavar="FILE", help="file to write"),
+        )
+        parser.set_defaults(func=run_input, kind=kind)
 
 
 def _simulate(scenario: PlacementScenario, args):
     """``(PlacementRun, header, rows)`` of one run on the chosen engine."""
-    if args.engine == "simple":
-        run_ = simulate_placement(scenario)
+    if args.engine == "simple":  # with --view, drawn live
+        run_ = _run_viewed(scenario) if args.view else simulate_placement(scenario)
         return run_, list(PlacementRun.COLUMNS), run_.rows()
     from ..sim.mujoco.mujoco_placement import simulate_placement_mujoco
 
     run_, full = simulate_placement_mujoco(
         scenario, sample_rate=args.sample_rate, delay_ticks=args.delay_ticks
     )
-    for time, event in full.events:
+    for at, event in full.events:
         if event:
-            print(f"  t = {time:.3f} s: {event}")
+            print(f"  t = {at:.3f} s: {event}")
     return run_, list(full.columns), full.table
 
 
 def _run_viewed(scenario: PlacementScenario) -> PlacementRun:
     """One run drawn by a LiveView, each tick published and paced to the wall clock."""
-    import time
-
-    from ..kinematics.arm import Arm
-    from ..sim.placement import admittance_controller
     from ..viz.live import LiveView
 
     arm = Arm.default()
-    frame = admittance_controller(scenario, arm, None).frame
-    with LiveView(arm, control_frame=frame) as view:
+    with LiveView(arm, control_frame=admittance_controller(scenario, arm, None).frame) as view:
         print(f"live view: {view.url}")
         start, ticks = time.perf_counter(), [0]
 
@@ -228,8 +229,13 @@ def _run_viewed(scenario: PlacementScenario) -> PlacementRun:
     return result
 
 
-def _scenario(args) -> PlacementScenario:
-    return PlacementScenario(
+def _scenarios(args) -> tuple[list[PlacementScenario], list]:
+    """The runs the options ask for and their labels (gain values or mode indices)."""
+    if args.view and (args.sweep or args.mode in ("position", "all")):
+        raise InvalidInput(
+            "--view draws one run of an admittance controller: drop --sweep, use --mode admittance"
+        )
+    scenario = PlacementScenario(
         surface=surface_by_name(args.surface),
         mode=MODES[0] if args.mode == "all" else args.mode,
         k1=args.k1 * 1e-3,
@@ -240,25 +246,21 @@ def _scenario(args) -> PlacementScenario:
         dt=args.dt,
         seed=args.seed,
     )
-
-
-def _scenarios(args, scenario: PlacementScenario) -> tuple[list[PlacementScenario], list]:
-    """The runs the options ask for and their labels (gain values or mode indices)."""
-    if args.view and (args.sweep or args.mode in ("position", "all")):
-        raise InvalidInput(
-            "--view draws one run of an admittance controller: drop --sweep, use --mode admittance"
-        )
+    refuse(
+        InvalidInput,
+        (
+            args.sweep and not args.values,
+            "--sweep needs --values, e.g. --values 0.05,0.1,0.2 (mm units)",
+        ),
+        (
+            args.sweep and args.mode in ("position", "all"),
+            "--sweep varies admittance gains; use --mode admittance or admittance-uncompensated",
+        ),
+        (args.values and not args.sweep, "--values needs --sweep k1 or --sweep k2"),
+    )
     if args.sweep:
-        if not args.values:
-            raise InvalidInput("--sweep needs --values, e.g. --values 0.05,0.1,0.2 (mm units)")
-        if args.mode in ("position", "all"):
-            raise InvalidInput(
-                "--sweep varies admittance gains; use --mode admittance or admittance-uncompensated"
-            )
         scenarios = [replace(scenario, **{args.sweep: value * 1e-3}) for value in args.values]
         return scenarios, list(args.values)
-    if args.values:
-        raise InvalidInput("--values needs --sweep k1 or --sweep k2")
     modes = MODES if args.mode == "all" else (args.mode,)
     return [replace(scenario, mode=mode) for mode in modes], list(range(len(modes)))
 
@@ -267,7 +269,7 @@ def _write(args, results, labels) -> None:
     """The time series (``-o``) and the plots (``--plot``) of the runs."""
     runs = [result[0] for result in results]
     if args.output:
-        header = results[0][1]
+        header, rows = results[0][1], results[0][2].tolist()
         if len(results) > 1:
             header = ["gain" if args.sweep else "mode"] + header
             rows = [
@@ -275,8 +277,6 @@ def _write(args, results, labels) -> None:
                 for label, result in zip(labels, results)
                 for row in result[2].tolist()
             ]
-        else:
-            rows = results[0][2].tolist()
         write_csv(args.output, header, rows)
         print(f"wrote {args.output}")
     if args.plot:
@@ -291,15 +291,12 @@ def _write(args, results, labels) -> None:
 
 
 def run(args) -> int:
-    scenarios, labels = _scenarios(args, _scenario(args))
-    if args.view:  # the live view draws the simple engine's run, paced to the wall clock
-        if args.engine != "simple":
-            print("--view: running the simple engine (the live view follows its ticks)")
-            args.engine = "simple"  # the labels below say what ran
-        viewed = _run_viewed(scenarios[0])
-        results = [(viewed, list(PlacementRun.COLUMNS), viewed.rows())]
-    else:
-        results = [_simulate(one, args) for one in scenarios]
+    scenarios, labels = _scenarios(args)
+    # the live view draws the simple engine's run (one scenario), paced to the wall clock
+    if args.view and args.engine != "simple":
+        print("--view: running the simple engine (the live view follows its ticks)")
+        args.engine = "simple"  # the labels below say what ran
+    results = [_simulate(one, args) for one in scenarios]
     for one, _, _ in results:
         prefix = (
             f"{'k13' if args.sweep == 'k1' else 'k23'} = "
@@ -307,6 +304,216 @@ def run(args) -> int:
             if args.sweep
             else ""
         )
-        print(f"{args.surface}, {one.scenario.mode} ({args.engine}): {prefix}{_summary(one)}")
+        placed = (
+            f"placed at t = {one.settle_time:.3f} s"
+            if np.isfinite(one.settle_time)
+            else "not placed (|F'z| >= 0.05 N or still moving at the end)"
+        )
+        print(
+            f"{args.surface}, {one.scenario.mode} ({args.engine}): {prefix}peak contact force "
+            f"{one.peak_contact_force:.3f} N, final F'z {one.final_force:+.3f} N, final "
+            f"penetration {one.penetration[-1] * 1e3:.3f} mm; {placed}"
+        )
     _write(args, results, labels)
+    return 0
+
+
+KINDS = {
+    "samples": "a samples CSV at static poses (for ftkin calibrate)",
+    "log": "a log of a slow move with a known 2 N push on the tool (for ftkin compensate)",
+    "recording": "a moving recording along an excitation, MuJoCo inverse dynamics (for "
+    "ftkin calibrate --dynamic; extra 'sim'; a URDF with a 'gripper' link on the sensor, such as "
+    "the bundled arm's)",
+    "bag": "a ROS 2 bag (MCAP) of a session holding each pose (for ftkin calibrate BAG and "
+    "ftkin extract; extra 'bags')",
+}
+"""The example inputs ``ftkin simulate`` writes, and what each is for."""
+
+
+_POSES = (
+    option(
+        "--poses",
+        metavar="POSES.csv",
+        help="joint configurations (ftkin plan -o POSES.csv; default: --n random ones)",
+    ),
+    option(
+        "--n",
+        type=bounded_int(3, 1000, "poses"),
+        default=12,
+        help="random poses without --poses (default: %(default)s)",
+    ),
+)
+INPUT_OPTIONS = {
+    "samples": (
+        *_POSES,
+        option(
+            "--readings",
+            type=bounded_int(1, 100_000, "readings per pose"),
+            default=10,
+            help="readings per pose, 1 ms apart (default: %(default)s)",
+        ),
+    ),
+    "log": (
+        option(
+            "--duration",
+            type=positive_float,
+            default=5.0,
+            metavar="S",
+            help="length [s] (default: %(default)s)",
+        ),
+    ),
+    "recording": (
+        option(
+            "--duration",
+            type=positive_float,
+            default=10.0,
+            metavar="S",
+            help="length [s] (default: %(default)s)",
+        ),
+        option(
+            "--trajectory",
+            metavar="TRAJ.csv",
+            help="excitation to follow (ftkin plan --excitation -o TRAJ.csv; default: one "
+            "planned for --duration)",
+        ),
+    ),
+    "bag": _POSES,
+}
+"""The options of each example input of ``ftkin simulate``, besides the sensor's and the arm's."""
+
+SENSOR_OPTIONS = (
+    option("--seed", type=seed, default=0, help="random seed (default: %(default)s)"),
+    option("--tool-mass", type=positive_float, metavar="KG", help="tool mass [kg]"),
+    option(
+        "--com", type=number_list, metavar="X Y Z", help="tool centre of mass, sensor frame [m]"
+    ),
+    option(
+        "--noise-scale",
+        type=positive_float,
+        default=1.0,
+        metavar="K",
+        help="noise = K × the paper's 0.02 N, 0.002 N·m per reading (default: %(default)g)",
+    ),
+    option(
+        "--drift",
+        action="store_true",
+        help="a drifting bias (warm-up and random walk, SensorDrift.typical()); samples get a "
+        "t column",
+    ),
+    option(
+        "--mount-rpy-deg",
+        type=number_list,
+        metavar="R P Y",
+        help="the sensor turned on the flange: R_M = Rz(Y) Ry(P) Rx(R) [deg]",
+    ),
+    option(
+        "--sensor-sign",
+        type=int,
+        choices=(1, -1),
+        default=1,
+        help="-1: the sensor reports the reaction (default: %(default)s)",
+    ),
+)
+"""The simulated sensor and tool of every example input."""
+
+
+def _inputs(args):
+    from .. import SensorDrift, SensorModel, SensorNoise
+    from ..kinematics.rotations import euler_zyx_to_matrix
+    from ..sim.sensor import paper_like_truth
+
+    refuse(
+        InvalidInput,
+        (
+            args.com is not None and len(args.com) != 3,
+            f"--com takes X Y Z [m], got {len(args.com or ())} numbers",
+        ),
+        (
+            args.mount_rpy_deg is not None and len(args.mount_rpy_deg) != 3,
+            f"--mount-rpy-deg takes R P Y [deg], got {args.mount_rpy_deg}",
+        ),
+    )
+    truth = paper_like_truth()
+    if args.tool_mass is not None or args.com is not None:
+        truth = SensorModel.from_tool(
+            tool_mass=args.tool_mass if args.tool_mass is not None else truth.tool_mass,
+            center_of_mass=args.com if args.com is not None else truth.center_of_mass,
+            force_offset=truth.force_offset,
+            torque_offset=truth.torque_offset,
+            base_tilt=truth.base_tilt,
+        )
+    mount = (  # R_M = Rz(Y) Ry(P) Rx(R)
+        np.eye(3)
+        if args.mount_rpy_deg is None
+        else euler_zyx_to_matrix(np.deg2rad(args.mount_rpy_deg)[::-1])
+    )
+    paper = SensorNoise.paper()
+    noise = SensorNoise(paper.force_std * args.noise_scale, paper.torque_std * args.noise_scale)
+    drift = SensorDrift.typical() if args.drift else None
+    return sim_inputs.SimulatedInputs(truth, noise, drift, mount, float(args.sensor_sign))
+
+
+def _trajectory(args, arm):
+    """``(t, q, dq, ddq)`` of ``--trajectory`` or of an excitation planned for ``--duration``."""
+    if args.trajectory is None:
+        from ..planning.excitation import plan_excitation
+
+        plan = plan_excitation(arm, args.duration, rate=1000.0, seed=args.seed)
+        return plan.times, plan.joint_positions, plan.joint_velocities, plan.joint_accelerations
+    table = read_table(args.trajectory)
+    names = list(arm.joint_names)
+    wanted = ["t", *names, *(f"{n}_vel" for n in names), *(f"{n}_acc" for n in names)]
+    missing = [name for name in wanted if name not in table.header]
+    if missing:
+        raise InvalidInput(
+            f"{args.trajectory}: expected the columns of ftkin plan --excitation, missing "
+            f"{', '.join(missing)}"
+        )
+    values = table.floats(wanted)
+    return (values[:, 0], *np.split(values[:, 1:], 3, axis=1))
+
+
+def run_input(args) -> int:
+    """``ftkin simulate samples|log|recording|bag``: write the example input, print the truth."""
+    arm = arm_from_args(args) or Arm.default()
+    rng = np.random.default_rng(args.seed)
+    inputs = _inputs(args)
+    truth = inputs.truth
+    numbers = lambda v: ", ".join(f"{x:+.4f}" for x in v)  # noqa: E731
+    print(
+        f"truth: tool {truth.tool_mass:.4f} kg, COM [{numbers(truth.center_of_mass)}] m, "
+        f"F0 [{numbers(truth.force_offset)}] N, M0 [{numbers(truth.torque_offset)}] N·m, "
+        f"tilt U, V {truth.base_tilt_deg[0]:+.3f}°, {truth.base_tilt_deg[1]:+.3f}°"
+    )
+    if args.kind in ("samples", "bag"):
+        configurations = (
+            arm.random_configurations(args.n, rng, margin=0.3)
+            if args.poses is None
+            else sim_inputs.configurations_from_table(read_table(args.poses), arm)
+        )
+    if args.kind == "bag":
+        sim_inputs.write_bag(args.output, inputs, arm, configurations, rng)
+        print(f"wrote {args.output}: a ROS 2 bag of {len(configurations)} poses held 2 s each")
+        return 0
+    if args.kind == "samples":
+        header, rows = sim_inputs.samples_table(inputs, arm, configurations, rng, args.readings)
+        what = f"{len(configurations)} poses × {args.readings} readings"
+    elif args.kind == "log":
+        header, rows = sim_inputs.log_table(inputs, arm, rng, args.duration)
+        what = f"{len(rows)} rows, a push {sim_inputs.PUSH.tolist()} (true_fx..true_mz)"
+    else:
+        from ..sim.mujoco.tool_inertia import ToolInertia
+
+        tool = ToolInertia(truth.tool_mass, truth.center_of_mass, np.diag([2e-3, 2e-3, 1e-3]))
+        times, q, dq, ddq = _trajectory(args, arm)
+        try:
+            header, rows = sim_inputs.recording_table(inputs, arm, times, q, dq, ddq, rng, tool)
+        except InvalidInput as error:
+            raise InvalidInput(
+                f"ftkin simulate recording needs a URDF whose link 'gripper' is bolted to the "
+                f"sensor (the bundled arm): {error}"
+            ) from None
+        what = f"{len(rows)} rows over {times[-1]:.1f} s, tool inertia diag(2e-3, 2e-3, 1e-3) kg·m²"
+    write_csv(args.output, header, rows)
+    print(f"wrote {args.output}: {what}")
     return 0

@@ -2,8 +2,6 @@
 calibration in 3D.
 """
 
-from __future__ import annotations
-
 import argparse
 import dataclasses
 import math
@@ -12,12 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import Arm, InvalidInput, load_calibration, mounted_arm
 from ..calibration.conventions import as_real_sensor
-from ..exceptions import InvalidInput
-from ..io.calibration_file import load_calibration
-from ..kinematics.arm import Arm
-from ..kinematics.mounting import mounted_arm
-from .arg_types import bounded_int, positive_float
+from .arg_types import add_command, bounded_int, option, positive_float
 from .common import (
     add_samples_arguments,
     arm_for_calibration,
@@ -29,8 +24,76 @@ SHEET_CELLS = 25
 """Most cells of a contact sheet (more poses or log rows are subsampled evenly)."""
 
 
+# The calibration, what to show and how, and where to write it.
+_OPTIONS = (
+    option("calibration", metavar="CALIB.json"),
+    option(
+        "samples",
+        metavar="SAMPLES.csv",
+        nargs="?",
+        help="the calibration samples (poses to step through)",
+    ),
+    option(
+        "--replay",
+        metavar="LOG.csv",
+        help="play a recorded run instead: joint columns, fx..mz, optional t [s]",
+    ),
+    option(
+        "--html",
+        metavar="OUT.html",
+        help="write a self-contained page (animated unless --pose is given)",
+    ),
+    option(
+        "--png",
+        metavar="OUT.png",
+        help="write a screenshot with headless Chromium: the --pose (1024×768), else a "
+        f"contact sheet of every pose (at most {SHEET_CELLS} evenly spaced rows of a "
+        "replay; outlier poses outlined in red)",
+    ),
+    option(
+        "--pose",
+        type=int,
+        metavar="K",
+        help="only this pose: pose id of SAMPLES.csv, or row index of the replay log",
+    ),
+    option(
+        "--no-wait",
+        action="store_true",
+        help="do not keep the live viewer running (scripts, tests)",
+    ),
+    option(
+        "--scale",
+        type=positive_float,
+        metavar="M_PER_N",
+        help="arrow length per newton [m/N] (default: tool weight drawn 25 cm long)",
+    ),
+    option(
+        "--tilt-exaggeration",
+        type=positive_float,
+        default=1.0,
+        metavar="K",
+        help="draw the base tilt K times larger",
+    ),
+    option(
+        "--hold",
+        type=positive_float,
+        default=1.0,
+        metavar="S",
+        help="seconds per calibration pose in the animation",
+    ),
+    option(
+        "--max-frames",
+        type=bounded_int(1, 1_000_000, "frames"),
+        default=1500,
+        metavar="N",
+        help="replay: keep at most N rows (evenly spaced)",
+    ),
+)
+
+
 def register(subparsers) -> None:
-    parser = subparsers.add_parser(
+    add_command(
+        subparsers,
         "view",
         help="3D view (meshcat) of the arm, sensor frame and "
         "force vectors at the calibration poses",
@@ -41,78 +104,9 @@ def register(subparsers) -> None:
         "(green) and the estimated gravity direction of the base (purple). At a good calibration "
         "magenta lies on cyan. "
         "Starts a meshcat server and prints its URL (Ctrl-C stops it), or writes --html / --png.",
-    )
-    parser.add_argument("calibration", metavar="CALIB.json")
-    parser.add_argument(
-        "samples",
-        metavar="SAMPLES.csv",
-        nargs="?",
-        help="the calibration samples (poses to step through)",
-    )
-    parser.add_argument(
-        "--replay",
-        metavar="LOG.csv",
-        help="play a recorded run instead: joint columns, fx..mz, optional t [s]",
-    )
-    _add_output_arguments(parser)
-    _add_drawing_arguments(parser)
-    add_samples_arguments(parser)
-    parser.set_defaults(func=run)
-
-
-def _add_output_arguments(parser) -> None:
-    parser.add_argument(
-        "--html",
-        metavar="OUT.html",
-        help="write a self-contained page (animated unless --pose is given)",
-    )
-    parser.add_argument(
-        "--png",
-        metavar="OUT.png",
-        help="write a screenshot with headless Chromium: the --pose (1024×768), else a contact "
-        f"sheet of every pose (at most {SHEET_CELLS} evenly spaced rows of a replay; outlier "
-        "poses outlined in red)",
-    )
-    parser.add_argument(
-        "--pose",
-        type=int,
-        metavar="K",
-        help="only this pose: pose id of SAMPLES.csv, or row index of the replay log",
-    )
-    parser.add_argument(
-        "--no-wait",
-        action="store_true",
-        help="do not keep the live viewer running (scripts, tests)",
-    )
-
-
-def _add_drawing_arguments(parser) -> None:
-    parser.add_argument(
-        "--scale",
-        type=positive_float,
-        metavar="M_PER_N",
-        help="arrow length per newton [m/N] (default: tool weight drawn 25 cm long)",
-    )
-    parser.add_argument(
-        "--tilt-exaggeration",
-        type=positive_float,
-        default=1.0,
-        metavar="K",
-        help="draw the base tilt K times larger",
-    )
-    parser.add_argument(
-        "--hold",
-        type=positive_float,
-        default=1.0,
-        metavar="S",
-        help="seconds per calibration pose in the animation",
-    )
-    parser.add_argument(
-        "--max-frames",
-        type=bounded_int(1, 1_000_000, "frames"),
-        default=1500,
-        metavar="N",
-        help="replay: keep at most N rows (evenly spaced)",
+        options=_OPTIONS,
+        groups=(add_samples_arguments,),
+        run=run,
     )
 
 
@@ -130,49 +124,45 @@ class Frames:
 def _calibration_poses(loaded) -> Frames:
     samples = loaded.samples
     averages = samples.pose_averages()
-    configurations = None
-    if samples.joint_positions is not None:
-        configurations = np.array(
+    configurations = (
+        None
+        if samples.joint_positions is None
+        else np.array(
             [
                 samples.joint_positions[samples.pose_ids == pid].mean(axis=0)
                 for pid in averages.pose_ids
             ]
         )
-    labels = [f"pose {int(pid)}" for pid in averages.pose_ids]
-    return Frames(labels, averages.wrenches, configurations, averages.rotations, None)
-
-
-def _with_bias_at_times(frames: Frames, calibration, times: np.ndarray) -> Frames:
-    """For a drift-aware calibration, shift each frame's reading by ``bias(t) − bias(end)``
-    (``times`` [s], one per frame).
-
-    The viewer subtracts the calibration's bias (the one at the end of its
-    recording); with this shift it effectively subtracts the bias at the
-    reading's time, as ``ftkin compensate`` does (held outside the recording).
-    """
-    if calibration.drift is None:
-        return frames
-    shift = calibration.bias_at(times) - calibration.bias
-    return dataclasses.replace(frames, raw_wrenches=frames.raw_wrenches - shift)
+    )
+    return Frames(
+        [f"pose {int(pid)}" for pid in averages.pose_ids],
+        averages.wrenches,
+        configurations,
+        averages.rotations,
+        None,
+    )
 
 
 def _replay_rows(loaded, max_frames: int) -> Frames:
-    samples, table = loaded.samples, loaded.table
-    times = samples.times
+    samples, times = loaded.samples, loaded.samples.times
     if times is not None and np.any(np.diff(times) < 0):
         raise InvalidInput(
-            f"{table.source}: the time column must not decrease (seconds since the start)"
+            f"{loaded.table.source}: the time column must not decrease (seconds since the start)"
         )
-    rows = np.arange(len(samples))
-    if len(rows) > max_frames:
-        rows = np.unique(np.linspace(0, len(samples) - 1, max_frames).round().astype(int))
-    if times is None:
-        times = rows / 30.0  # no clock: 30 rows per second
-    else:
-        times = times[rows]
-    configurations = samples.joint_positions[rows] if samples.joint_positions is not None else None
-    labels = [f"row {int(r)}" for r in rows]
-    return Frames(labels, samples.wrenches[rows], configurations, samples.rotations[rows], times)
+    rows = _evenly(len(samples), max_frames)
+    times = rows / 30.0 if times is None else times[rows]  # no clock: 30 rows per second
+    return Frames(
+        [f"row {int(r)}" for r in rows],
+        samples.wrenches[rows],
+        None if samples.joint_positions is None else samples.joint_positions[rows],
+        samples.rotations[rows],
+        times,
+    )
+
+
+def _evenly(count: int, most: int) -> np.ndarray:
+    """Indices of at most ``most`` of ``count`` rows, evenly spaced (all of them if they fit)."""
+    return np.unique(np.linspace(0, count - 1, min(count, most)).round().astype(int))
 
 
 def _pick(frames: Frames, pose: int, replay: bool) -> int:
@@ -185,21 +175,14 @@ def _pick(frames: Frames, pose: int, replay: bool) -> int:
 
 def _where(frames: Frames, rows=slice(None)) -> dict:
     """The frames' placement for the viewer: joint angles when known, else sensor orientations."""
-    if frames.configurations is not None:
-        return {"configurations": frames.configurations[rows]}
-    return {"rotations": frames.rotations[rows]}
-
-
-def _show(viewer, frames: Frames, k: int):
-    if frames.configurations is not None:
-        return viewer.show_pose(frames.configurations[k], frames.raw_wrenches[k])
-    return viewer.show_rotation(frames.rotations[k], frames.raw_wrenches[k])
+    if frames.configurations is None:
+        return {"rotations": frames.rotations[rows]}
+    return {"configurations": frames.configurations[rows]}
 
 
 def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
-    na, nb = np.linalg.norm(a), np.linalg.norm(b)
-    if na == 0 or nb == 0:
-        return math.nan
+    if np.linalg.norm(a) == 0 or np.linalg.norm(b) == 0:
+        return math.nan  # no direction to compare
     return math.degrees(math.atan2(np.linalg.norm(np.cross(a, b)), float(a @ b)))
 
 
@@ -223,9 +206,7 @@ def _print_table(labels: list[str], vectors) -> None:
 def _contact_sheet(viewer, frames: Frames, calibration, path: str, title: str) -> None:
     from ..viz.contact_sheet import save_contact_sheet, sheet_cells
 
-    rows = np.arange(len(frames.labels))
-    if len(rows) > SHEET_CELLS:
-        rows = np.unique(np.linspace(0, len(rows) - 1, SHEET_CELLS).round().astype(int))
+    rows = _evenly(len(frames.labels), SHEET_CELLS)
     diagnostics = calibration.diagnostics
     flagged = {
         f"pose {int(pid)}"
@@ -233,8 +214,9 @@ def _contact_sheet(viewer, frames: Frames, calibration, path: str, title: str) -
     }
     labels = [frames.labels[k] for k in rows]
     outliers = [i for i, label in enumerate(labels) if label in flagged]
-    where = _where(frames, rows)
-    cells = sheet_cells(viewer, labels, frames.raw_wrenches[rows], outliers=outliers, **where)
+    cells = sheet_cells(
+        viewer, labels, frames.raw_wrenches[rows], outliers=outliers, **_where(frames, rows)
+    )
     save_contact_sheet(cells, path, title=title)
     print(
         f"wrote {path} (contact sheet of {len(cells)} poses, {len(outliers)} outliers outlined in "
@@ -251,9 +233,15 @@ def _load_frames(args, calibration, source: str):
     # sensor frame
     loaded = dataclasses.replace(loaded, samples=as_real_sensor(loaded.samples, calibration))
     frames = _replay_rows(loaded, args.max_frames) if args.replay else _calibration_poses(loaded)
-    if loaded.samples.times is not None:  # the rows' own times, or each pose's mean time
+    if loaded.samples.times is not None and calibration.drift is not None:
+        # A drift-aware calibration: each frame's reading shifted by bias(t) − bias(end) at its
+        # time [s] (the row's own, or the pose's mean time). The viewer subtracts the
+        # calibration's bias (the one at the end of its recording); with this shift it
+        # effectively subtracts the bias at the reading's time, as ``ftkin compensate`` does
+        # (held outside the recording).
         times = frames.times if args.replay else loaded.samples.pose_averages().times
-        frames = _with_bias_at_times(frames, calibration, times)
+        shift = calibration.bias_at(times) - calibration.bias
+        frames = dataclasses.replace(frames, raw_wrenches=frames.raw_wrenches - shift)
     if frames.configurations is None:
         return frames, None  # orientations without joint angles: no arm to draw
     return frames, mounted_arm(arm, calibration.mount_rotation)
@@ -296,7 +284,12 @@ def run(args: argparse.Namespace) -> int:
     with CalibrationViewer(
         calibration, arm, scale=args.scale, tilt_exaggeration=args.tilt_exaggeration
     ) as viewer:
-        shown = _show(viewer, frames, chosen if chosen is not None else 0)
+        k = chosen if chosen is not None else 0
+        shown = (
+            viewer.show_rotation(frames.rotations[k], frames.raw_wrenches[k])
+            if frames.configurations is None
+            else viewer.show_pose(frames.configurations[k], frames.raw_wrenches[k])
+        )
         print(
             f"scale: 1 N = {100 * viewer.scale:.3g} cm; magenta = measured force − bias, cyan = "
             "predicted tool gravity, yellow = contact force, green = tool COM, purple = base "
