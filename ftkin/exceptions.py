@@ -9,8 +9,6 @@ Errors from numpy, Pinocchio or the file system are wrapped at ftkin's
 boundary; they should never reach a user as a bare traceback.
 """
 
-from __future__ import annotations
-
 from collections.abc import Sequence
 
 

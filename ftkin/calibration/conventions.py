@@ -21,8 +21,6 @@ gravity direction; :func:`check_conventions` raises
 :class:`~ftkin.exceptions.SuspectConvention` naming the cause and the fix.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass, replace
 
 import numpy as np

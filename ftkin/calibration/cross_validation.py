@@ -15,8 +15,6 @@ Reading signs and a mount are applied as the calibration says
 with the same options.
 """
 
-from __future__ import annotations
-
 import logging
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace

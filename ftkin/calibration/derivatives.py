@@ -13,8 +13,6 @@ Evaluating at the newest sample instead would remove the delay at the price of
 much larger noise (the fit's edge), which is why ftkin does not.
 """
 
-from __future__ import annotations
-
 from collections import deque
 
 import numpy as np

@@ -5,8 +5,6 @@ noise used, the chi-square test, per-pose normalized residuals and outliers,
 observability and the warnings. The thresholds it is judged by live here.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np
@@ -121,7 +119,7 @@ class FitDiagnostics:
         }
 
     @classmethod
-    def from_dict(cls, data: dict) -> FitDiagnostics:
+    def from_dict(cls, data: dict) -> "FitDiagnostics":
         """Inverse of :meth:`to_dict`; raises KeyError/TypeError/ValueError on malformed input."""
 
         def number(key):

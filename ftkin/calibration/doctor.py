@@ -29,8 +29,6 @@ builds them from a samples table); :func:`wrench_readings` adds the
 alternatives that only change the wrench.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass, field, replace
 
 import numpy as np

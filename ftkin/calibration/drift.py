@@ -27,8 +27,6 @@ bias at the end of the recording ``T``: the one to use when compensating
 afterwards. :class:`BiasDrift` carries the whole trajectory.
 """
 
-from __future__ import annotations
-
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -79,7 +77,7 @@ class DriftModel:
 
         return fit_drift_model(self, poses, start, selected_by)
 
-    def bias_at(self, drift: BiasDrift, times: np.ndarray) -> np.ndarray:
+    def bias_at(self, drift: "BiasDrift", times: np.ndarray) -> np.ndarray:
         """``(N, 6)`` bias [N, N·m] at ``times`` ``(N,)`` [s] inside the pose times.
 
         With a walk, the smoothed bias linear between pose times (the exact
@@ -120,7 +118,7 @@ class DriftModel:
             full[..., 12:, 12:], full[..., 12:, :12]
         )
 
-    def to_document(self, drift: BiasDrift) -> dict:
+    def to_document(self, drift: "BiasDrift") -> dict:
         """This model's entries of the calibration file's ``drift`` object."""
         return {"rate": drift.rate, "coefficients": drift.coefficients}
 

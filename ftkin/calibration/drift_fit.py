@@ -30,8 +30,6 @@ parameters including the estimated noise levels and rates, ``P`` poses): a
 drift must pay for itself, so on a constant bias ``none`` wins.
 """
 
-from __future__ import annotations
-
 import logging
 from dataclasses import dataclass, replace
 

@@ -6,8 +6,6 @@ inverse of the full information, so every standard error includes what the
 drift costs (:mod:`ftkin.calibration.drift_fit`).
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np

@@ -14,8 +14,6 @@ centre of mass only). Static data with ``estimate_inertia=True`` raise
 never invented.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass, replace
 
 import numpy as np

@@ -17,8 +17,6 @@ Residuals are whitened per channel by the noise ``σ_c``. Three stages:
    (:mod:`ftkin.calibration.log_cholesky`); stage 2 when only ``[m, m·c]`` is free.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np

@@ -5,8 +5,6 @@ From readings at several static poses, estimate the sensor bias (``F0``,
 base tilt ``U``, ``V``) and the tool's centre of mass ``P`` in the sensor frame.
 """
 
-from __future__ import annotations
-
 import logging
 from dataclasses import dataclass, fields, replace
 

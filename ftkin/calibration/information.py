@@ -7,8 +7,6 @@ Cramér–Rao bound in the benchmarks. Parameters are ``θ = [a, F0, M0, P]``
 tilt ``U``, ``V``) get their variance by the delta method.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np
@@ -83,7 +81,7 @@ class SensorNoise:
         return np.concatenate([self.force_std, self.torque_std])
 
     @classmethod
-    def paper(cls) -> SensorNoise:
+    def paper(cls) -> "SensorNoise":
         """Noise of the paper's Leptrino sensor class: 0.02 N and 0.002 N·m per reading."""
         return cls(0.02, 0.002)
 

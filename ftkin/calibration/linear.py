@@ -7,8 +7,6 @@ regressors, then recovers ``M0 = b - F0 × P``. It reproduces the paper's
 printed numbers exactly; :mod:`ftkin.calibration.ml` improves on it.
 """
 
-from __future__ import annotations
-
 import numpy as np
 
 from .model import STANDARD_GRAVITY, SensorModel, cross_rows

@@ -19,8 +19,6 @@ consistent θ and every consistent θ has one φ, so an unconstrained optimiser
 over φ searches exactly the physically consistent bodies.
 """
 
-from __future__ import annotations
-
 import numpy as np
 import pinocchio as pin
 

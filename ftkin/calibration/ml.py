@@ -17,8 +17,6 @@ residuals of the fit (force and torque channels pooled, corrected for the
 degrees of freedom the parameters take).
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -135,7 +133,7 @@ class WeightedProblem:
             blocks @ np.linalg.pinv(jac.T @ jac, hermitian=True) @ np.transpose(blocks, (0, 2, 1))
         )
 
-    def recentred(self, x: np.ndarray) -> tuple[WeightedProblem, np.ndarray]:
+    def recentred(self, x: np.ndarray) -> "tuple[WeightedProblem, np.ndarray]":
         """The same problem with ``R_M0`` moved to ``x``'s mount, and ``θ`` (12,)."""
         return replace(self, mount_base=self.mount(x)), np.asarray(x[:12], dtype=float)
 

@@ -17,8 +17,6 @@ Python floats, the control tick) and :func:`contact_batch` (blocked columns, log
 check both against :func:`predict` to 1e-12.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np
@@ -106,7 +104,7 @@ class SensorModel:
         torque_offset=(0.0, 0.0, 0.0),
         base_tilt=(0.0, 0.0),
         g: float = STANDARD_GRAVITY,
-    ) -> SensorModel:
+    ) -> "SensorModel":
         """Build from a tool mass [kg], COM [m, sensor frame], biases and base tilt (U, V) [rad]."""
         weight = as_positive(tool_mass, "tool_mass") * as_positive(g, "g")  # [N]
         gravity = gravity_in_base_from_tilt(weight, float(base_tilt[0]), float(base_tilt[1]))
@@ -155,7 +153,7 @@ class SensorModel:
         )
 
     @classmethod
-    def from_vector(cls, theta, g: float = STANDARD_GRAVITY) -> SensorModel:
+    def from_vector(cls, theta, g: float = STANDARD_GRAVITY) -> "SensorModel":
         """Inverse of :meth:`to_vector`."""
         theta = as_vector(theta, 12, "theta")
         return cls(theta[3:6], theta[6:9], theta[0:3], theta[9:12], g)

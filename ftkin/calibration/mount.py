@@ -22,8 +22,6 @@ pose (tool straight down or up): turning the sensor about z then changes no
 reading. :func:`check_mount_observable` refuses such pose sets by name.
 """
 
-from __future__ import annotations
-
 from dataclasses import replace
 
 import numpy as np

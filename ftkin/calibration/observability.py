@@ -11,8 +11,6 @@ poses leave a direction of the parameters undetermined, and the error names the
 parameters that direction involves.
 """
 
-from __future__ import annotations
-
 import numpy as np
 
 from ..exceptions import UnobservableParameters

@@ -22,8 +22,6 @@ The model registers as ``"random-walk"``; ``"random-walk+poly:N"`` is a walk
 around a polynomial trend (a warm-up that a walk alone would take for a fast one).
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np

@@ -13,8 +13,6 @@ the sensor (ftkin's raw reading, without contact) is the bias minus that
 wrench: ``raw = bias − Y(v, a + g_S) θ``.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np
@@ -120,7 +118,7 @@ class MotionSamples:
         return len(self.wrenches)
 
     @classmethod
-    def from_static(cls, samples: Samples) -> MotionSamples:
+    def from_static(cls, samples: Samples) -> "MotionSamples":
         """Static readings as a motion at rest (velocity and acceleration zero)."""
         zeros = np.zeros((len(samples), 6))
         return cls(
@@ -136,7 +134,7 @@ class MotionSamples:
     @classmethod
     def from_joint_trajectory(
         cls, arm, joint_positions, joint_velocities, joint_accelerations, wrenches, times=None
-    ) -> MotionSamples:
+    ) -> "MotionSamples":
         """Forward kinematics (Pinocchio) of ``q, dq, ddq`` ``(N, nq)`` [rad, rad/s, rad/s²] at the
         arm's sensor frame.
         """

@@ -7,8 +7,6 @@ reading signs, and the bias trajectory of a drifting sensor; and its readable su
 (what the CLI prints).
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -154,7 +152,7 @@ class CalibrationResult(SensorModel):
         return reading_signs(self.sensor_sign, self.flip_axis)
 
     @classmethod
-    def from_model(cls, model: SensorModel) -> CalibrationResult:
+    def from_model(cls, model: SensorModel) -> "CalibrationResult":
         """``model`` itself if it is a calibration, else a calibration of its bare parameters."""
         if isinstance(model, CalibrationResult):
             return model
@@ -228,7 +226,7 @@ class CalibrationResult(SensorModel):
         times = np.asarray(times, dtype=float)
         return self.bias.copy() if times.ndim == 0 else np.tile(self.bias, (times.size, 1))
 
-    def with_bias(self, bias) -> CalibrationResult:
+    def with_bias(self, bias) -> "CalibrationResult":
         """A copy with the sensor bias ``[F0, M0]`` [N, N·m] replaced (after a re-zero); the rest is
         kept.
         """

@@ -10,8 +10,6 @@ through an :class:`~ftkin.kinematics.arm.Arm`, rotation matrices, quaternions, o
 paper's commanded Euler angles.
 """
 
-from __future__ import annotations
-
 import logging
 from dataclasses import dataclass, fields, replace
 
@@ -93,7 +91,7 @@ class PoseAverages:
     def __len__(self) -> int:
         return len(self.pose_ids)
 
-    def subset(self, keep: np.ndarray) -> PoseAverages:
+    def subset(self, keep: np.ndarray) -> "PoseAverages":
         """The poses ``keep`` selects (a boolean mask or indices), every per-pose field alike."""
         values = {f.name: getattr(self, f.name) for f in fields(self)}
         return replace(self, **{k: v[keep] for k, v in values.items() if v is not None})
@@ -175,14 +173,14 @@ class Samples:
     @classmethod
     def from_rotations(
         cls, rotation_sensor_to_base, wrenches, pose_ids=None, times=None
-    ) -> Samples:
+    ) -> "Samples":
         """From ``(N, 3, 3)`` sensor orientations ``R_BS`` (and optional times ``(N,)`` [s])."""
         return cls(wrenches, rotation_sensor_to_base, pose_ids, times=times)
 
     @classmethod
     def from_joint_positions(
         cls, arm, joint_positions, wrenches, pose_ids=None, rotations=None, times=None
-    ) -> Samples:
+    ) -> "Samples":
         """From ``(N, nq)`` joint angles [rad] through the arm's forward kinematics.
 
         ``rotations``: their ``R_BS`` ``(N, 3, 3)`` when the caller computed them
@@ -195,7 +193,7 @@ class Samples:
         return cls(wrenches, rotations, pose_ids, configurations, urdf, arm.sensor_frame, times)
 
     @classmethod
-    def from_quaternions(cls, quaternions_wxyz, wrenches, pose_ids=None, times=None) -> Samples:
+    def from_quaternions(cls, quaternions_wxyz, wrenches, pose_ids=None, times=None) -> "Samples":
         """From ``(N, 4)`` unit quaternions ``[qw, qx, qy, qz]`` of the sensor in the base frame."""
         return cls(
             wrenches,
@@ -205,7 +203,7 @@ class Samples:
         )
 
     @classmethod
-    def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None, times=None) -> Samples:
+    def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None, times=None) -> "Samples":
         """From the paper's commanded ``(N, 3)`` Euler angles ``[α, β, γ]`` [deg], ``R = Rz Ry
         Rx``.
         """

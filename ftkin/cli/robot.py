@@ -9,8 +9,6 @@
 * ``demo``: all of it on franky-sim with a simulated sensor and a push.
 """
 
-from __future__ import annotations
-
 import time
 from pathlib import Path
 

@@ -31,8 +31,6 @@ point) in which ``ΔF`` and ``ΔV`` are expressed;
 rotations and the lever arm.
 """
 
-from __future__ import annotations
-
 import math
 
 import numpy as np

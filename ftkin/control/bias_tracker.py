@@ -32,8 +32,6 @@ exact for a random walk: the bias now is predicted by the filtered bias at
 the last used tick, its variance grown by ``q²`` times the time since.
 """
 
-from __future__ import annotations
-
 import math
 from collections import deque
 
@@ -101,7 +99,7 @@ class BiasTracker:
         self.reset(np.zeros(6))
 
     @classmethod
-    def from_calibration(cls, calibration, rate=None, noise=None, **options) -> BiasTracker:
+    def from_calibration(cls, calibration, rate=None, noise=None, **options) -> "BiasTracker":
         """A tracker whose rate and noise come from a calibration unless given.
 
         The rate is the calibration's random-walk rate (``drift.rate``), the

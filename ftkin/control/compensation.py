@@ -19,8 +19,6 @@ The bias is an attribute the caller can move without slowing the control path
 drifting calibration).
 """
 
-from __future__ import annotations
-
 import math
 from operator import mul
 

@@ -9,8 +9,6 @@ out on purpose). :func:`control_frame_for` builds one from an
 arm's sensor and tool frames.
 """
 
-from __future__ import annotations
-
 import numpy as np
 import pinocchio as pin
 

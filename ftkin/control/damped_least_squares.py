@@ -4,8 +4,6 @@ One LAPACK ``dposv`` call factors ``J Jᵀ`` and solves, and its Cholesky factor
 gives the manipulability for free (no SVD on the control path).
 """
 
-from __future__ import annotations
-
 import math
 
 import numpy as np

@@ -17,8 +17,6 @@ translational inertial force of its mass and centre of mass (a point-mass
 tool); only the rotational inertia about the COM is then missing.
 """
 
-from __future__ import annotations
-
 import math
 from collections import deque
 

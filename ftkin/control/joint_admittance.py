@@ -35,8 +35,6 @@ non-numeric inputs raise :class:`~ftkin.exceptions.InvalidInput`. Each tick leav
 :class:`StepStatus` in ``last_status``.
 """
 
-from __future__ import annotations
-
 import math
 from dataclasses import dataclass
 

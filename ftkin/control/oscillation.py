@@ -25,8 +25,6 @@ after a jolt (a handful of reversals) is not. Cost: a
 dozen float operations per tick, no array.
 """
 
-from __future__ import annotations
-
 import math
 from dataclasses import dataclass
 

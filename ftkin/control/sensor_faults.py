@@ -22,8 +22,6 @@ keeps the bad sample out of its filter. Wrong shapes are programming errors,
 not sensor faults, and stay :class:`~ftkin.exceptions.InvalidInput`.
 """
 
-from __future__ import annotations
-
 import math
 from dataclasses import dataclass
 from enum import StrEnum

@@ -28,8 +28,6 @@ MuJoCo simulation (:mod:`ftkin.sim.mujoco`, servos of 60 Hz) shows where it
 bites: a K1 of about 0.5 mm/N oscillates in free air with the paper's 0.55 kg payload.
 """
 
-from __future__ import annotations
-
 import math
 
 import numpy as np

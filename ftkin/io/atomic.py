@@ -16,8 +16,6 @@ written through to its target, atomically in the target's folder, so the link
 survives.
 """
 
-from __future__ import annotations
-
 import contextlib
 import os
 import stat

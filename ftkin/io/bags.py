@@ -20,8 +20,6 @@ the sensor frame; the messages' ``frame_id`` is checked against the sensor
 frame, and a base-frame wrench is converted on request (:mod:`ftkin.io.wrench_frames`).
 """
 
-from __future__ import annotations
-
 import logging
 from dataclasses import dataclass
 from pathlib import Path

@@ -51,8 +51,6 @@ entry's common keys are read here; each drift model reads its own
 registry, so a registered model round-trips unchanged.
 """
 
-from __future__ import annotations
-
 import datetime
 import json
 import math

@@ -6,8 +6,6 @@ column; :func:`write_csv` writes floats in shortest round-trip form through an
 atomic write.
 """
 
-from __future__ import annotations
-
 import csv
 import io
 import logging

@@ -13,8 +13,6 @@ sensor offset recorded at calibration but missing from the arm is named, since t
 centre of mass would be off by that offset.
 """
 
-from __future__ import annotations
-
 from pathlib import Path
 
 import numpy as np

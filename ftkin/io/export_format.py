@@ -9,8 +9,6 @@ own :class:`ExportOption` s (``--frame-id``, ``--flange-frame``, ...) and three 
 :mod:`ftkin.io.export` holds the registry and the entry points.
 """
 
-from __future__ import annotations
-
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field

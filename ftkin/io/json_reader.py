@@ -7,8 +7,6 @@ what arrived (``true`` is not 1, ``"1.5"`` is not a number); a format version
 outside the supported range is refused with the versions this ftkin reads.
 """
 
-from __future__ import annotations
-
 import sys
 from dataclasses import dataclass
 

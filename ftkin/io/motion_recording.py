@@ -22,8 +22,6 @@ resample it), a bag is resampled linearly whenever its steps vary by more than
 and runs the kinematics: :class:`~ftkin.calibration.regressor.MotionSamples` out.
 """
 
-from __future__ import annotations
-
 import logging
 from dataclasses import dataclass
 

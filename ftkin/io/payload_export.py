@@ -35,8 +35,6 @@ A static calibration does not determine the inertia: it is written when given
 (``inertia=``, CLI ``--inertia``), else as zeros (a point mass) with a note.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np

@@ -17,8 +17,6 @@ A static calibration does not see rotational inertia: when the measured inertia 
 the difference ``Y_measured − Y_end_effector`` is sent as a point mass at its centre of mass.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -62,12 +60,12 @@ class RigidBody:
         object.__setattr__(self, "inertia", inertia)
 
     @classmethod
-    def point(cls, mass: float, center_of_mass) -> RigidBody:
+    def point(cls, mass: float, center_of_mass) -> "RigidBody":
         """A point mass [kg] at ``center_of_mass`` [m, flange frame]."""
         return cls(mass, center_of_mass, np.zeros((3, 3)))
 
     @classmethod
-    def from_franka(cls, mass: float, com, inertia_column_major) -> RigidBody:
+    def from_franka(cls, mass: float, com, inertia_column_major) -> "RigidBody":
         """From libfranka's ``m``, ``F_x_C`` (3,) and ``I`` (9,) column-major (``m_ee``, ...)."""
         inertia = np.asarray(inertia_column_major, dtype=float).reshape(-1)
         if inertia.shape != (9,):

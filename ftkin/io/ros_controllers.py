@@ -29,8 +29,6 @@ or force bias, the base tilt, the mount, a reversed sign) is listed by
 name written (node, frames) is checked against ROS's rules first.
 """
 
-from __future__ import annotations
-
 import math
 import xml.etree.ElementTree as ET
 from typing import ClassVar

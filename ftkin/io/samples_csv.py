@@ -29,8 +29,6 @@ whole) every row is kept. A recording in motion with no usable still segment is
 refused.
 """
 
-from __future__ import annotations
-
 import logging
 import re
 from collections import Counter
@@ -304,7 +302,7 @@ class LoadedSamples:
     orientation: str
     orientation_columns: list[str]
     search: SegmentSearch | None = None
-    recording: BagRecording | None = None
+    recording: "BagRecording | None" = None
 
 
 MAX_GAP = 20.0

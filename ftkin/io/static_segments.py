@@ -16,8 +16,6 @@ recording of orientations); the bag reader and the samples CSV share it:
    ``min_duration`` [s].
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np

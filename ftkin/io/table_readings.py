@@ -7,8 +7,6 @@ reversed), the orientation columns are read the way people get them wrong:
 columns holding degrees.
 """
 
-from __future__ import annotations
-
 import numpy as np
 
 from ..calibration.doctor import ConventionReport, Reading, diagnose_readings, wrench_readings

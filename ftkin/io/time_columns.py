@@ -11,8 +11,6 @@ numeric candidates are an error. Used by
 the samples CSV, the motion recordings, bag extraction and the viewer.
 """
 
-from __future__ import annotations
-
 import logging
 
 import numpy as np

@@ -10,8 +10,6 @@ same point, the sensor origin), and otherwise names a mismatch as the likely
 problem.
 """
 
-from __future__ import annotations
-
 import logging
 
 import numpy as np

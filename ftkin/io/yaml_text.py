@@ -9,8 +9,6 @@ header lines (each line of a comment is prefixed, so a comment cannot inject
 YAML either). Non-finite numbers are refused: YAML readers disagree about them.
 """
 
-from __future__ import annotations
-
 import math
 
 import numpy as np

@@ -20,8 +20,6 @@ rotation ``R_M`` (URDF sensor frame → real sensor frame, ``R_BS = R_BS_urdf R_
 and an optional reversed sign (the sensor reports the reaction).
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass, field
 from pathlib import Path
 

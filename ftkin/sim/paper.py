@@ -5,8 +5,6 @@ Table 2 (mean readings of 500 per pose); ``PAPER_RESULTS`` holds the values the
 paper printed, with the digits it printed them to.
 """
 
-from __future__ import annotations
-
 from importlib import resources
 
 import numpy as np

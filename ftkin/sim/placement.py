@@ -33,8 +33,6 @@ Scenarios (``mode``):
 :func:`sweep` repeats a scenario over values of ``k1`` (k13) or ``k2`` (k23).
 """
 
-from __future__ import annotations
-
 import math
 from dataclasses import dataclass, field, replace
 from numbers import Real

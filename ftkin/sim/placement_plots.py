@@ -9,8 +9,6 @@ matplotlib is optional (extra ``plots``); it is imported here, lazily, with
 the non-interactive Agg backend.
 """
 
-from __future__ import annotations
-
 import io
 from collections.abc import Sequence
 from pathlib import Path

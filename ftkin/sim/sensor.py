@@ -6,8 +6,6 @@ orientation from joint angles through an :class:`~ftkin.kinematics.arm.Arm` or g
 Hardware stays behind this interface: every test and the demo run without a robot.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np

@@ -11,8 +11,6 @@ Three parts, added to the bias at power-on (``t = 0``) [N, N·m, sensor frame]:
   interpolated linearly (held outside).
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,7 +60,7 @@ class SensorDrift:
                 raise InvalidInput("temperature_times must be ascending, one per temperature")
 
     @classmethod
-    def typical(cls) -> SensorDrift:
+    def typical(cls) -> "SensorDrift":
         """The benchmark's drift: warm-up ±0.5 N / ±0.01 N·m per channel with τ = 5 min, random walk
         0.002 N/√s, 4e-5 N·m/√s.
         """

@@ -9,8 +9,6 @@ the book is only tens of kN/m. :func:`held_object_wrench` is what the
 sensor feels of a held object pressed on a surface.
 """
 
-from __future__ import annotations
-
 import math
 from dataclasses import dataclass, replace
 from numbers import Real
@@ -54,7 +52,7 @@ class Surface:
             return 0.0
         return max(0.0, self.stiffness * penetration + self.damping * penetration_rate)
 
-    def at_height(self, height: float) -> Surface:
+    def at_height(self, height: float) -> "Surface":
         """The same surface with its top at ``height`` [m]."""
         return replace(self, height=float(height))
 

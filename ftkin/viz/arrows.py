@@ -16,8 +16,6 @@ position/quaternion and scale separately (meshcat's animation frames record
 no scale in ``set_transform``).
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np

@@ -10,8 +10,6 @@ Chromium is a system program, not a Python package: on Debian/Ubuntu
 Chrome/Chromium executable.
 """
 
-from __future__ import annotations
-
 import os
 import shutil
 import signal

@@ -9,8 +9,6 @@ the measured force (minus bias) and the predicted tool gravity; outlier poses
 get a red frame.
 """
 
-from __future__ import annotations
-
 import math
 import tempfile
 from collections.abc import Sequence

@@ -23,8 +23,6 @@ never hide an arrow (a segment between two points above a plane stays above
 it).
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np

@@ -6,8 +6,6 @@ that they appear on screen exactly as given and nothing else in the scene
 them; the browser test finds each arrow by its colour.
 """
 
-from __future__ import annotations
-
 import html
 import re
 from dataclasses import dataclass

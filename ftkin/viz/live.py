@@ -20,8 +20,6 @@ The sampler thread takes the GIL for a few microseconds per frame (not per
 tick); see ``benchmarks/bench_liveview.py`` for the cost per tick.
 """
 
-from __future__ import annotations
-
 import atexit
 import os
 import pickle
@@ -119,7 +117,7 @@ class LiveView:
         self._sampler.start()
 
     @classmethod
-    def for_controller(cls, controller, **kwargs) -> LiveView:
+    def for_controller(cls, controller, **kwargs) -> "LiveView":
         """A view of a :class:`~ftkin.control.joint_admittance.JointAdmittance` (its arm and control
         frame).
         """
@@ -135,7 +133,7 @@ class LiveView:
         """
         self._latest = (q, wrench, twist)
 
-    def wrap(self, controller) -> PublishingController:
+    def wrap(self, controller) -> "PublishingController":
         """``controller`` whose ``step`` also publishes its ``last_status``."""
         return PublishingController(controller, self)
 
@@ -191,7 +189,7 @@ class LiveView:
         self._block.close()
         self._block.unlink()
 
-    def __enter__(self) -> LiveView:
+    def __enter__(self) -> "LiveView":
         return self
 
     def __exit__(self, *exc_info) -> None:

@@ -10,8 +10,6 @@ and torque at the sensor and the commanded linear and angular velocity at the
 control point, and counts the frames it drew.
 """
 
-from __future__ import annotations
-
 import os
 import pickle
 import sys

@@ -11,8 +11,6 @@ a row of panels per series follows. Drawn with the non-interactive Agg backend
 (no display needed).
 """
 
-from __future__ import annotations
-
 import io
 from pathlib import Path
 

@@ -16,8 +16,6 @@ two panels (forces [N], torques [N·m]) against time [s]. An added series
 [N, N·m], sensor frame.
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np

@@ -5,8 +5,6 @@ subprocess. Its ``close()`` is broken in meshcat 0.3.2, so ftkin stops the
 server process itself: kill, then wait (no zombie), and closes its ZMQ socket.
 """
 
-from __future__ import annotations
-
 import contextlib
 import io
 import logging

@@ -29,8 +29,6 @@ camera is placed through ``/Cameras/default/rotated/<object>`` (three.js axes:
 a translucent floor plate is drawn under the arm instead.
 """
 
-from __future__ import annotations
-
 import atexit
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -249,7 +247,7 @@ class CalibrationViewer:
         if self._owns_server:
             stop_server(self.visualizer)
 
-    def __enter__(self) -> CalibrationViewer:
+    def __enter__(self) -> "CalibrationViewer":
         return self
 
     def __exit__(self, *exc_info) -> None:

@@ -25,8 +25,6 @@ its negative: :meth:`ArmSimulation.ideal_wrench_in_sensor` returns ``-sensordata
 readings, the tool's truth).
 """
 
-from __future__ import annotations
-
 import math
 from dataclasses import dataclass
 
@@ -135,7 +133,7 @@ def build_arm_model(
     g: float = STANDARD_GRAVITY,
     timestep: float = 5e-4,
     servo_bandwidth: float = 60.0,
-) -> ArmSimulation:
+) -> "ArmSimulation":
     """Build the MuJoCo scene of ``arm`` (default: the bundled arm with its ``tool`` frame).
 
     Args:
@@ -329,7 +327,7 @@ def _add_servos(mujoco, spec, arm: Arm) -> None:
         joint.armature = 0.05
 
 
-def _tune_servos(sim: ArmSimulation, omega: float) -> None:
+def _tune_servos(sim: "ArmSimulation", omega: float) -> None:
     """Critically damped position servos: ``kp = ω² M_ii``, ``kv = 2 ω M_ii`` with the joint-space
     inertia at ``q0``.
     """

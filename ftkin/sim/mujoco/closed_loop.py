@@ -15,8 +15,6 @@ Typical rates: 125 Hz (a UR's classic interface), 500 Hz (a typical driver),
 CSV's columns plus joint states and the ideal wrench.
 """
 
-from __future__ import annotations
-
 import math
 from dataclasses import dataclass
 

@@ -16,8 +16,6 @@ bias of :func:`~ftkin.sim.sensor.paper_like_truth`, gravity tilted by its base t
 (so the plots, CSV and settle criteria are shared) and the full :class:`ClosedLoopRun`.
 """
 
-from __future__ import annotations
-
 import numpy as np
 import pinocchio as pin
 

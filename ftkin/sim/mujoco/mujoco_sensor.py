@@ -13,8 +13,6 @@ The tool's weight is *not* added: MuJoCo's physics already puts it in the
 ideal wrench (with the inertial forces of the motion).
 """
 
-from __future__ import annotations
-
 import math
 from collections import deque
 
@@ -70,7 +68,7 @@ class MujocoSensor:
         self.reset()
 
     @classmethod
-    def from_simulated(cls, sensor: SimulatedSensor, **options) -> MujocoSensor:
+    def from_simulated(cls, sensor: SimulatedSensor, **options) -> "MujocoSensor":
         """The bias and noise of a :class:`SimulatedSensor` (its tool gravity is left to the
         physics).
         """

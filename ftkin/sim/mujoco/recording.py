@@ -14,8 +14,6 @@ This is deliberately small: the full MuJoCo model of the arm with its scene and
 the closed loop is :func:`~ftkin.sim.mujoco.arm_model.build_arm_model`; this module only records.
 """
 
-from __future__ import annotations
-
 import numpy as np
 
 from ...calibration.model import STANDARD_GRAVITY

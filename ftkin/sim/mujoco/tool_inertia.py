@@ -4,8 +4,6 @@ Shared by the MuJoCo scene (:class:`~ftkin.sim.mujoco.arm_model.ArmSimulation`)
 and the inverse-dynamics recorder (:class:`~ftkin.sim.mujoco.recording.MujocoRecorder`).
 """
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np
