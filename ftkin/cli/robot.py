@@ -106,7 +106,8 @@ def _calibrate_parser(commands) -> None:
             "--verify",
             type=bounded_int(0, 50, "verification poses"),
             default=3,
-            help="extra poses to check the calibration at (default: %(default)s)",
+            help="extra poses to check the calibration at (default: %(default)s); a fault there "
+            "stops the arm and exits 1, the calibration saved",
         ),
         option("--seed", type=seed, default=0),
         option(
@@ -234,12 +235,7 @@ def _print_load(label: str, mass: float, com) -> None:
 
 # ------------------------------------------------------------------------------------ commands
 def run_calibrate(args) -> int:
-    from ..robot.session import (
-        calibrate_on_robot,
-        default_samples_path,
-        verification_poses,
-        verify_on_robot,
-    )
+    from ..robot.session import calibrate_on_robot, default_samples_path, verify_session
 
     arm = _arm(args)
     plan_options = {"floor_height": args.floor}
@@ -269,9 +265,13 @@ def run_calibrate(args) -> int:
     )
     print(result.summary())
     print(f"wrote {args.output} (samples in {samples})")
-    if args.verify:
-        poses = verification_poses(arm, args.verify, seed=args.seed + 1, plan_options=plan_options)
-        print(verify_on_robot(robot, sensor, arm, result, poses).report())
+    if args.verify:  # the session's verification, printed here (the library logs it)
+        verification = verify_session(
+            robot, sensor, arm, result, args.verify, seed=args.seed, plan_options=plan_options
+        )
+        if verification is None:  # stopped: said in a warning; the calibration stands
+            return 1
+        print(verification.report())
     return 0
 
 

@@ -30,6 +30,7 @@ _EXPORTS = {
     "load_sensor_factory": ".sensor_factory",
     "run_admittance": ".loop",
     "verify_on_robot": ".session",
+    "verify_session": ".session",
     "wait_still": ".stillness",
 }
 

@@ -208,14 +208,44 @@ def calibrate_on_robot(
         save_calibration(result, output)
         logger.info("saved the calibration to %s", output)
     if verify_poses:
-        extra = verification_poses(arm, verify_poses, seed=seed + 1, plan_options=plan_options)
-        try:  # the calibration is done (and saved): a failure here stops the arm, not the result
-            verification = verify_on_robot(robot, sensor, arm, result, extra, stillness=stillness)
-        except (FtkinError, KeyboardInterrupt) as error:
-            logger.warning("verification stopped (the arm is stopped): %s", error or "Ctrl-C")
-        else:
+        verification = verify_session(
+            robot,
+            sensor,
+            arm,
+            result,
+            verify_poses,
+            seed=seed,
+            plan_options=plan_options,
+            stillness=stillness,
+        )
+        if verification is not None:
             logger.info("%s", verification.report())
     return result
+
+
+def verify_session(
+    robot,
+    sensor,
+    arm,
+    calibration,
+    count: int,
+    *,
+    seed: int = 0,
+    plan_options: Mapping | None = None,
+    stillness: Stillness | None = None,
+) -> Verification | None:
+    """The verification step of a session: :func:`verify_on_robot` at ``count`` new poses
+    (:func:`verification_poses` with seed ``seed + 1``, the session's ``plan_options``).
+
+    The calibration is done (and saved) by then: a fault or Ctrl-C here stops the arm, is logged
+    as a warning and returns None; it does not undo the calibration.
+    """
+    poses = verification_poses(arm, count, seed=seed + 1, plan_options=plan_options)
+    try:
+        return verify_on_robot(robot, sensor, arm, calibration, poses, stillness=stillness)
+    except (FtkinError, KeyboardInterrupt) as error:
+        logger.warning("verification stopped (the arm is stopped): %s", error or "Ctrl-C")
+        return None
 
 
 def _poses_to_visit(log: SamplesLog, poses: np.ndarray) -> list[int]:

@@ -162,3 +162,26 @@ def test_franka_robot_checks_its_arguments_and_names_a_missing_robot():
     pytest.importorskip("franky", reason="franky-control is not installed (extra 'franka')")
     with pytest.raises(RobotConnectionLost, match=f"cannot connect to the robot at {NOWHERE}"):
         FrankaRobot(NOWHERE, realtime=False)
+
+
+def test_a_fault_during_verification_stops_the_arm_and_keeps_the_calibration(caplog):
+    from ftkin.calibration.model import SensorModel
+    from ftkin.calibration.result import CalibrationResult
+    from ftkin.exceptions import RobotError
+    from ftkin.robot.session import verify_session
+    from tests.robot.fakes import FakeRobot, FakeSensor
+
+    class FailingRobot(FakeRobot):
+        def move_to(self, q, while_moving=None):
+            raise RobotError("reflex: joint 4 torque limit")
+
+    model = SensorModel.from_tool(1.96, [0.0, 0.0, 0.07], [0, 0, 0], [0, 0, 0])
+    result = CalibrationResult(
+        model.force_offset, model.torque_offset, model.gravity_in_base, model.center_of_mass
+    )
+    robot = FailingRobot()
+    with caplog.at_level(logging.WARNING, logger="ftkin.robot.session"):
+        verification = verify_session(robot, FakeSensor(noise=0.0), fr3_arm(), result, 2)
+    assert verification is None
+    assert len(robot.stops) == 1  # the arm is stopped once
+    assert "verification stopped (the arm is stopped): reflex: joint 4 torque limit" in caplog.text
