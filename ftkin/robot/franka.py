@@ -163,6 +163,18 @@ class FrankaRobot:
             return RobotConnectionLost(f"{doing}: the connection is lost", self.host, text)
         return RobotError(f"{doing}: the robot refused", self.host, text)
 
+    def _failed(self, error: BaseException, doing: str) -> RobotError:
+        """``error`` of franky as an ftkin error, after recovering the robot when it can be.
+
+        A lost connection is not recovered: there is nothing to recover, and asking (reading
+        ``has_errors``) blocks for libfranka's 1 s network timeout before it fails, which delayed
+        the stop of a session by that second.
+        """
+        wrapped = self._wrap(error, doing)
+        if not isinstance(wrapped, RobotConnectionLost):
+            self._recover()
+        return wrapped
+
     def _recover(self) -> None:
         try:
             if self._robot.has_errors:
@@ -235,8 +247,7 @@ class FrankaRobot:
             doing = f"moving to {target.round(3).tolist()}"
             raise RobotError(doing, self.host, str(error)) from None
         except Exception as error:
-            self._recover()
-            raise self._wrap(error, f"moving to {np.round(target, 3).tolist()}") from None
+            raise self._failed(error, f"moving to {np.round(target, 3).tolist()}") from None
 
     def command_velocity(self, dq) -> None:
         """Command joint velocities ``(7,)`` [rad/s] without waiting; held for ``watchdog``.
@@ -251,8 +262,7 @@ class FrankaRobot:
                 asynchronous=True,
             )
         except Exception as error:
-            self._recover()
-            raise self._wrap(error, "commanding joint velocities") from None
+            raise self._failed(error, "commanding joint velocities") from None
 
     def stop(self) -> None:
         """Stop the running motion (a no-op when none runs); never raises.
@@ -346,8 +356,7 @@ class FrankaRobot:
         try:
             self._robot.set_load(body.mass, body.center_of_mass.tolist(), body.franka_inertia())
         except Exception as error:
-            self._recover()
-            raise self._wrap(error, f"setting the load ({body.mass:.4g} kg)") from None
+            raise self._failed(error, f"setting the load ({body.mass:.4g} kg)") from None
         deadline = time.monotonic() + 1.0  # the next states report it
         while abs(self.payload()[0] - body.mass) > 1e-6 * max(1.0, body.mass):
             if time.monotonic() > deadline:

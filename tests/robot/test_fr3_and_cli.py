@@ -185,3 +185,51 @@ def test_a_fault_during_verification_stops_the_arm_and_keeps_the_calibration(cap
     assert verification is None
     assert len(robot.stops) == 1  # the arm is stopped once
     assert "verification stopped (the arm is stopped): reflex: joint 4 torque limit" in caplog.text
+
+
+class _LostConnectionFranky:
+    """Stands in for franky: a motion whose start fails with libfranka's lost-connection text."""
+
+    class NetworkException(Exception):
+        pass
+
+    JointMotion = JointState = staticmethod(lambda *args, **kwargs: None)
+
+
+class _DeadRobot:
+    def __init__(self, message):
+        self.message, self.asked_for_errors, self.recovered = message, 0, 0
+
+    def move(self, motion, asynchronous=True):
+        raise RuntimeError(self.message)
+
+    @property
+    def has_errors(self):  # libfranka blocks here for its 1 s network timeout when the link is gone
+        self.asked_for_errors += 1
+        return True
+
+    def recover_from_errors(self):
+        self.recovered += 1
+
+
+def _offline_franka(robot):
+    from ftkin.robot.franka import FrankaRobot
+
+    franka = FrankaRobot.__new__(FrankaRobot)  # no connection: the motion path alone
+    franka.host, franka.nq, franka._franky, franka._robot = "sim", 7, _LostConnectionFranky, robot
+    franka.move_timeout, franka.poll_period = 5.0, 0.005
+    return franka
+
+
+def test_a_lost_connection_is_raised_at_once_and_not_recovered():
+    from ftkin.exceptions import RobotConnectionLost, RobotError
+
+    dead = _DeadRobot("libfranka: TCP connection got interrupted.")
+    with pytest.raises(RobotConnectionLost, match="connection is lost"):
+        _offline_franka(dead).move_to(np.zeros(7))
+    assert dead.asked_for_errors == 0  # asking would block for libfranka's network timeout
+    refused = _DeadRobot("libfranka: Move command rejected: joint limits")
+    with pytest.raises(RobotError, match="the robot refused") as error:
+        _offline_franka(refused).move_to(np.zeros(7))
+    assert not isinstance(error.value, RobotConnectionLost)
+    assert refused.asked_for_errors == 1 and refused.recovered == 1  # a refusal is recovered
