@@ -9,7 +9,7 @@ the machine hits every row alike):
 * ``step, view drawing``: the same, publishing only every 33rd tick (30 Hz at
   1 kHz), so the view process draws as it does in use: on a busy 2-core
   machine its CPU use slows the loop, which is not a cost of the tick;
-* ``step + publish``: every tick ``view.publish(q, contact_wrench, twist)``;
+* ``step + publish``: every tick ``view.publish(q, *controller.last_wrench_and_twist)``;
 * ``wrapped step``: ``view.wrap(controller).step`` (publishes itself);
 * ``publish alone`` and ``empty call`` (a Python method call that does
   nothing: the floor of any hook on the tick).
@@ -74,14 +74,12 @@ def main() -> None:
             for i, raw in enumerate(raws):
                 controller.step(q, raw, dt)
                 if i % 33 == 0:
-                    status = controller.last_status
-                    view.publish(q, status.contact_wrench, status.twist)
+                    view.publish(q, *controller.last_wrench_and_twist)
 
         def step_publish() -> None:
             for raw in raws:
                 controller.step(q, raw, dt)
-                status = controller.last_status
-                view.publish(q, status.contact_wrench, status.twist)
+                view.publish(q, *controller.last_wrench_and_twist)
 
         def step_wrapped() -> None:
             for raw in raws:
@@ -132,8 +130,7 @@ def main() -> None:
             start = clock()
             controller.step(q, raw, dt)
             if i % 2:
-                status = controller.last_status
-                view.publish(q, status.contact_wrench, status.twist)
+                view.publish(q, *controller.last_wrench_and_twist)
             alternating[i] = clock() - start
         tick_alone = float(np.median(alternating[0::2])) * 1e6
         tick_publish = float(np.median(alternating[1::2])) * 1e6

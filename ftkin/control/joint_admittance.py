@@ -216,6 +216,21 @@ class JointAdmittance:
             self._status_parts = None
         return self._status
 
+    @property
+    def last_wrench_and_twist(self) -> tuple | None:
+        """``(contact_wrench, twist)`` of the last tick without building its :class:`StepStatus`.
+
+        The contact wrench in the sensor frame [N, N·m] and the twist at the control point in
+        control-frame axes [m/s, rad/s], each a sequence of 6 floats (the values
+        :attr:`last_status` turns into arrays); None before the first tick after a reset. What a
+        live view publishes every tick (:class:`~ftkin.viz.live.PublishingController`): about a
+        microsecond cheaper than :attr:`last_status`.
+        """
+        if self._status_parts is not None:
+            return self._status_parts[1], self._status_parts[2]
+        status = self._status
+        return None if status is None else (status.contact_wrench, status.twist)
+
     def step(
         self,
         q,

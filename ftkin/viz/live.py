@@ -134,7 +134,7 @@ class LiveView:
         self._latest = (q, wrench, twist)
 
     def wrap(self, controller) -> "PublishingController":
-        """``controller`` whose ``step`` also publishes its ``last_status``."""
+        """``controller`` whose ``step`` also publishes its ``last_wrench_and_twist``."""
         return PublishingController(controller, self)
 
     # -------------------------------------------------------------- sampling
@@ -210,9 +210,9 @@ class PublishingController:
     def step(self, q, raw_wrench, dt: float) -> np.ndarray:
         """``controller.step(q, raw_wrench, dt)``, then publish its status."""
         dq = self._step(q, raw_wrench, dt)
-        status = self.controller.last_status
-        if status is not None:
-            self.view._latest = (q, status.contact_wrench, status.twist)
+        latest = self.controller.last_wrench_and_twist
+        if latest is not None:
+            self.view._latest = (q, *latest)
         return dq
 
     def __getattr__(self, name):

@@ -185,6 +185,22 @@ def test_status_is_built_on_request_with_the_ticks_numbers(arm):
     assert controller.last_status is None
 
 
+def test_last_wrench_and_twist_are_the_status_values_without_building_it(arm):
+    truth = paper_like_truth()
+    controller = JointAdmittance(arm, Admittance(k2=1e-3, frame="tool"), Compensator(truth, arm))
+    q = np.array([0.1, 0.2, -0.6, 0.3, -1.0, 0.2])
+    raw = truth.predict(arm.rotation_sensor_to_base(q)) + [0.0, 0.0, 2.0, 0.0, 0.0, 0.0]
+    assert controller.last_wrench_and_twist is None
+    for reading in (raw, raw, np.full(6, np.nan)):  # moving ticks, then a held (fault) tick
+        controller.step(q, reading, 1e-3)
+        wrench, twist = controller.last_wrench_and_twist
+        status = controller.last_status  # built after: the parts were read without it
+        np.testing.assert_allclose(wrench, status.contact_wrench, rtol=1e-15, equal_nan=True)
+        np.testing.assert_allclose(twist, status.twist, rtol=1e-15)
+    assert status.held and np.all(np.isnan(wrench))
+    np.testing.assert_allclose(controller.last_wrench_and_twist[0][2], np.nan, equal_nan=True)
+
+
 def test_compensation_paths_agree(arm, rng):
     truth = paper_like_truth()
     compensator = Compensator(truth, arm)
