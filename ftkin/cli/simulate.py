@@ -473,16 +473,20 @@ def _trajectory(args, arm):
     return (values[:, 0], *np.split(values[:, 1:], 3, axis=1))
 
 
+def _signed(values) -> str:
+    """``+0.1234, -0.5000, ...``: the truth's vectors as the command prints them."""
+    return ", ".join(f"{x:+.4f}" for x in values)
+
+
 def run_input(args) -> int:
     """``ftkin simulate samples|log|recording|bag``: write the example input, print the truth."""
     arm = arm_from_args(args) or Arm.default()
     rng = np.random.default_rng(args.seed)
     inputs = _inputs(args)
     truth = inputs.truth
-    numbers = lambda v: ", ".join(f"{x:+.4f}" for x in v)  # noqa: E731
     print(
-        f"truth: tool {truth.tool_mass:.4f} kg, COM [{numbers(truth.center_of_mass)}] m, "
-        f"F0 [{numbers(truth.force_offset)}] N, M0 [{numbers(truth.torque_offset)}] N·m, "
+        f"truth: tool {truth.tool_mass:.4f} kg, COM [{_signed(truth.center_of_mass)}] m, "
+        f"F0 [{_signed(truth.force_offset)}] N, M0 [{_signed(truth.torque_offset)}] N·m, "
         f"tilt U, V {truth.base_tilt_deg[0]:+.3f}°, {truth.base_tilt_deg[1]:+.3f}°"
     )
     if args.kind in ("samples", "bag"):
