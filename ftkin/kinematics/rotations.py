@@ -103,7 +103,7 @@ def matrix_to_quaternion(rotation) -> np.ndarray:
     from scipy.spatial.transform import Rotation  # at the file edge only: not with ftkin
 
     r, single = as_rotation_batch(rotation, "rotation")
-    out = Rotation.from_matrix(r).as_quat(scalar_first=True)
+    out = Rotation.from_matrix(r).as_quat()[:, [3, 0, 1, 2]]  # scipy >= 1.10: x, y, z, w
     out[out[:, 0] < 0] *= -1.0
     return out[0] if single else out
 

@@ -26,7 +26,8 @@ REVOLUTE_KINDS = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRev
 def revolute_mask(model) -> np.ndarray:
     """``(nq,)`` True for the coordinates of revolute joints (one coordinate each)."""
     mask = np.zeros(model.nq, dtype=bool)
-    mask[[joint.idx_q for joint in model.joints if joint.shortname() in REVOLUTE_KINDS]] = True
+    # joints[0], the universe, reports JointModelRX with idx_q -1 (the last coordinate)
+    mask[[j.idx_q for j in list(model.joints)[1:] if j.shortname() in REVOLUTE_KINDS]] = True
     return mask
 
 

@@ -182,3 +182,16 @@ def test_bad_matrices_are_refused_by_the_inverse_conversions(convert, value, pat
     # regression: these returned NaN or garbage, or raised IndexError
     with pytest.raises(ftkin.InvalidInput, match=pattern):
         convert(value)
+
+
+def test_matrix_to_quaternion_on_the_oldest_supported_scipy(monkeypatch):
+    # pyproject allows scipy >= 1.10; as_quat(scalar_first=...) arrived in 1.14
+    real = Rotation.as_quat
+
+    def as_quat_of_scipy_1_10(self, canonical=False):
+        return real(self, canonical)
+
+    monkeypatch.setattr(Rotation, "as_quat", as_quat_of_scipy_1_10)
+    np.testing.assert_allclose(
+        matrix_to_quaternion(_rz(0.3)), [np.cos(0.15), 0, 0, np.sin(0.15)], atol=1e-15
+    )

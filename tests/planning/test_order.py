@@ -31,3 +31,20 @@ def test_two_opt_matches_the_double_loop(rng):
             assert _two_opt(distances, tour) == _plain_two_opt(distances, tour)
         shuffled = list(rng.permutation(count))
         assert _two_opt(distances, shuffled) == _plain_two_opt(distances, shuffled)
+
+
+def test_revolute_mask_leaves_a_last_prismatic_joint_alone():
+    # Pinocchio's universe joint (joints[0]) reports JointModelRX with idx_q -1: counting it
+    # marked the last coordinate revolute, and unwinding moved a prismatic joint by 2π m.
+    import numpy as np
+    import pinocchio as pin
+
+    from ftkin.planning.order import revolute_mask, unwind_revolute
+
+    model = pin.Model()
+    joint = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "spin")
+    model.addJoint(joint, pin.JointModelPZ(), pin.SE3.Identity(), "slide")
+    mask = revolute_mask(model)
+    assert mask.tolist() == [True, False]
+    q = unwind_revolute([0.5, 4.0], [-7.0, -10.0], [7.0, 10.0], mask)
+    np.testing.assert_allclose(q, [0.5, 4.0], rtol=1e-12)
