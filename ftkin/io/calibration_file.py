@@ -339,10 +339,8 @@ def _with_inertia(reader, result: CalibrationResult, inertia: np.ndarray) -> Cal
         inertia, inertia.T, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(inertia).max()))
     ):
         reader.fail("the inertia must be a symmetric 3×3 matrix [kg·m²]", "inertia")
-    errors = reader.optional_object("std_errors") or {}
-    inertia_errors = reader.array(
-        "std_errors.inertia", (3, 3), required=False, source=errors.get("inertia")
-    )
+    errors = NestedReader(reader.path, reader.optional_object("std_errors") or {}, "std_errors")
+    inertia_errors = errors.array("inertia", (3, 3), required=False)
     theta = parameters_from_body(result.tool_mass, result.center_of_mass, inertia)
     if not is_physically_consistent(theta, tolerance=-1e-12):
         reader.fail(

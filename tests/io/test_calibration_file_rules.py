@@ -148,3 +148,17 @@ def test_booleans_in_diagnostics_are_not_numbers(document, tmp_path):
         "diagnostics.chi_square",
         "expected a number, got true",
     )
+
+
+def test_a_dotted_top_level_key_is_not_the_inertia_std_errors(document):
+    # std_errors.inertia lives inside std_errors; a top-level key spelled so is not read
+    from ftkin.io.calibration_file import calibration_from_dict
+
+    changed = json.loads(json.dumps(document))
+    changed["inertia"] = [[1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0], [0.0, 0.0, 1e-3]]
+    changed["std_errors.inertia"] = [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0]]
+    result = calibration_from_dict(changed)
+    assert result.inertia_std_errors is None
+    changed["std_errors"]["inertia"] = np.full((3, 3), 1e-5).tolist()
+    result = calibration_from_dict(changed)
+    np.testing.assert_allclose(result.inertia_std_errors, 1e-5, rtol=1e-12)
