@@ -280,16 +280,20 @@ def read_bag(
     )
 
 
-def _table(source: str, columns: dict[str, np.ndarray]) -> Table:
-    """A :class:`Table` of text cells (integers as integers, floats round-tripping exactly)."""
+def _table(source: str, columns: list[tuple[str, np.ndarray]]) -> Table:
+    """A :class:`Table` of text cells (integers as integers, floats round-tripping exactly).
+
+    ``columns`` is a list, not a dict: a joint named like another column (``t``, ``fx``) must
+    show as a duplicate header, which the readers refuse, not replace that column silently.
+    """
     cells = [
         [str(int(v)) for v in column]
         if np.issubdtype(column.dtype, np.integer)
         else [format_float(v) for v in column]
-        for column in columns.values()
+        for _, column in columns
     ]
     rows = [list(row) for row in zip(*cells)]
-    return Table(source, list(columns), rows, list(range(1, len(rows) + 1)))
+    return Table(source, [name for name, _ in columns], rows, list(range(1, len(rows) + 1)))
 
 
 def bag_samples(
@@ -364,12 +368,12 @@ def bag_samples(
         len(times),
         f", {search.describe()}" if search is not None else "",
     )
-    columns = {
-        TIME_COLUMN: times,
-        **({} if pose_ids is None else {POSE_COLUMN: pose_ids}),
-        **dict(zip(recording.joint_names, positions.T)),
-        **dict(zip(WRENCH_CHANNELS, wrenches.T)),
-    }
+    columns = [
+        (TIME_COLUMN, times),
+        *([] if pose_ids is None else [(POSE_COLUMN, pose_ids)]),
+        *zip(recording.joint_names, positions.T),
+        *zip(WRENCH_CHANNELS, wrenches.T),
+    ]
     table = _table(recording.source, columns)
     samples = Samples.from_joint_positions(arm, positions, wrenches, pose_ids, times=times)
     return BagSamples(

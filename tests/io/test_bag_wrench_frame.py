@@ -116,3 +116,14 @@ def test_cli_wrench_frame_option(base_frame_bag, tmp_path, capsys):
     calib = tmp_path / "calib.json"
     assert main(["calibrate", str(base_frame_bag), "--wrench-frame", "base", "-o", str(calib)]) == 0
     assert load_calibration(calib).pose_count == 7
+
+
+def test_a_joint_named_like_another_column_is_kept_as_a_duplicate_header():
+    """A URDF joint called ``t`` must not replace the time column of an extracted table."""
+    import numpy as np
+
+    from ftkin.io.bags import _table
+
+    table = _table("bag", [("t", np.array([0.0, 0.5])), ("t", np.array([1.25, -2.0]))])
+    assert table.header == ["t", "t"]
+    np.testing.assert_allclose(np.array(table.rows, dtype=float), [[0.0, 1.25], [0.5, -2.0]])
