@@ -136,32 +136,27 @@ def cross_validate(
     """
     from .estimate import calibrate  # estimate imports the whole estimator; keep this module light
 
+    # refused in this order: each check reads only what the ones before it accepted
+    if "drift" in keywords:
+        raise InvalidInput("give the drift settings to compare as drifts=(...), not drift=")
     drifts = tuple(drifts)
-    pose_ids, reading_pose = np.unique(samples.pose_ids, return_inverse=True)
-    valid_folds = (
-        isinstance(folds, (int, np.integer))
-        and not isinstance(folds, bool)
-        and MIN_FOLDS <= folds <= MAX_FOLDS
-    )
-    for refused, message in (
-        ("drift" in keywords, "give the drift settings to compare as drifts=(...), not drift="),
-        (
-            not drifts
-            or len(set(drifts)) != len(drifts)
-            or not all(isinstance(d, str) for d in drifts),
-            f"drifts must be distinct drift settings (e.g. ('none', 'auto')), got {drifts!r}",
-        ),
-        (
-            not valid_folds,
-            f"folds must be an integer from {MIN_FOLDS} to {MAX_FOLDS}, got {folds!r}",
-        ),
-        (
-            valid_folds and len(pose_ids) < folds,
-            f"{len(pose_ids)} poses cannot be split into {folds} folds; use fewer folds",
-        ),
+    if not drifts or len(set(drifts)) != len(drifts) or not all(isinstance(d, str) for d in drifts):
+        raise InvalidInput(
+            f"drifts must be distinct drift settings (e.g. ('none', 'auto')), got {drifts!r}"
+        )
+    if (
+        isinstance(folds, bool)
+        or not isinstance(folds, int | np.integer)
+        or not MIN_FOLDS <= folds <= MAX_FOLDS
     ):
-        if refused:
-            raise InvalidInput(message)
+        raise InvalidInput(
+            f"folds must be an integer from {MIN_FOLDS} to {MAX_FOLDS}, got {folds!r}"
+        )
+    pose_ids, reading_pose = np.unique(samples.pose_ids, return_inverse=True)
+    if len(pose_ids) < folds:
+        raise InvalidInput(
+            f"{len(pose_ids)} poses cannot be split into {folds} folds; use fewer folds"
+        )
     # each reading's fold is its pose's, at random
     reading_fold = (np.random.default_rng(seed).permutation(len(pose_ids)) % folds)[reading_pose]
     squares = {drift: [] for drift in drifts}

@@ -29,6 +29,7 @@ afterwards. :class:`BiasDrift` carries the whole trajectory.
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from numbers import Real
 
 import numpy as np
 
@@ -295,7 +296,7 @@ class BiasDrift:
                 f"selected_by must be 'auto' or 'given', got {self.selected_by!r}",
             ),
             (
-                not (np.isfinite(self.time_scale) and self.time_scale > 0),
+                not (isinstance(self.time_scale, Real) and 0 < self.time_scale < np.inf),
                 f"time_scale must be a finite time > 0 [s], got {self.time_scale!r}",
             ),
             (

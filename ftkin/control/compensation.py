@@ -20,7 +20,6 @@ drifting calibration).
 """
 
 import math
-from operator import mul
 
 import numpy as np
 
@@ -115,8 +114,13 @@ class Compensator:
             tracker.reset(self._bias, tracker.std)
 
     def _signed_contact_floats(self, rotation_rows, raw) -> tuple[float, ...]:
-        """:meth:`FloatModel.contact` of the readings times the stored signs."""
-        return self._floats.contact(rotation_rows, list(map(mul, raw, self._sign_floats)))
+        """:meth:`FloatModel.contact` of the readings times the stored signs (unpacked: faster than
+        a map over the six, and a reading of another length raises instead of being cut).
+        """
+        (s0, s1, s2, s3, s4, s5), (w0, w1, w2, w3, w4, w5) = self._sign_floats, raw
+        return self._floats.contact(
+            rotation_rows, (w0 * s0, w1 * s1, w2 * s2, w3 * s3, w4 * s4, w5 * s5)
+        )
 
     def __repr__(self) -> str:
         path = None if self.arm is None else self.arm.urdf_path

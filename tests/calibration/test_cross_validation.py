@@ -96,3 +96,22 @@ def test_cli_prints_the_table_and_refuses_it_with_dynamic(drifting, tmp_path, ca
     assert "3-fold cross-validation over 24 poses" in out and "poly:2 ×3" in out
     assert main(["calibrate", str(path), "--dynamic", "--cross-validate", "3"]) == 2
     assert "--cross-validate apply to static calibration" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("positional", "keywords", "match"),
+    [
+        ((None,), {"drift": "none"}, "drifts="),
+        ((None, None), {"drift": "none"}, "drifts="),
+        ((None, [["none"]]), {"drift": "none"}, "drifts="),
+        ((None, ("none", "none")), {}, "distinct"),
+        ((None, ("none",), 1), {}, "folds must be an integer"),
+    ],
+)
+def test_bad_arguments_are_refused_before_the_samples_are_read(positional, keywords, match):
+    """Regression: the refusals ran as one table evaluated up front, so the samples' pose ids and
+    the drift settings were read first: a wrong call crashed (AttributeError, TypeError) instead
+    of naming the argument that e83cc10 refused first.
+    """
+    with pytest.raises(InvalidInput, match=match):
+        cross_validate(*positional, **keywords)

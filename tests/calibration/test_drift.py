@@ -247,3 +247,17 @@ def test_sensor_drift_parts(rng):
     # the current constructor still works, and without drift the readings are the old ones
     sensor = SimulatedSensor(SensorModel.from_tool(1.0, [0, 0, 0.05]), NOISE)
     assert sensor.drift is None
+
+
+@pytest.mark.parametrize("time_scale", ["60", None, [1.0, 2.0], 1j, float("nan")])
+@pytest.mark.parametrize("selected_by", ["given", "me"])
+def test_a_bias_drift_refuses_each_bad_field_with_invalid_input(selected_by, time_scale):
+    """Regression: a bad time_scale crashed the table of refusals with a TypeError or ValueError
+    even when an earlier row (selected_by) refused first.
+    """
+    from ftkin.calibration.drift import BiasDrift
+
+    good = dict(model="none", times=[0.0, 1.0], bias=np.zeros((2, 6)), bias_std=np.ones((2, 6)))
+    match = "selected_by" if selected_by == "me" else "time_scale must be a finite time > 0"
+    with pytest.raises(InvalidInput, match=match):
+        BiasDrift(selected_by=selected_by, time_scale=time_scale, **good)

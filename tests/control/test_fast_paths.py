@@ -356,3 +356,25 @@ def test_compensate_rotation_takes_a_batch_of_one_like_one_sample():
         rtol=1e-12,
         atol=1e-12,
     )
+
+
+@pytest.mark.parametrize("length", [5, 7])
+def test_signed_float_kernel_refuses_a_reading_of_another_length(length):
+    """Regression: the kernel of a calibration with reading signs zipped the reading with the six
+    signs, so seven values were cut to six without a word (and the zip was slower than unpacking).
+    """
+    from dataclasses import replace
+
+    from ftkin import CalibrationResult
+
+    truth = CalibrationResult.from_model(paper_like_truth())
+    signed = Compensator(replace(truth, sensor_sign=-1, flip_axis="y"))
+    rows, raw = np.eye(3).tolist(), np.arange(6.0)
+    np.testing.assert_allclose(
+        signed.contact_floats(rows, raw.tolist()),
+        Compensator(truth).contact_floats(rows, (raw * signed.calibration.reading_signs).tolist()),
+        rtol=1e-12,
+        atol=1e-12,
+    )
+    with pytest.raises(ValueError):
+        signed.contact_floats(rows, np.arange(float(length)).tolist())
