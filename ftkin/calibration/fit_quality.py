@@ -111,7 +111,10 @@ def _pose_statistics(whitened, hat, fit_ok, source, noise_dof, dof):
             scale = (float(np.sum(whitened**2)) - z) / denominator_dof
         if source != "residuals":
             scale = np.maximum(scale, 1.0)
-        scale = np.where(denominator_dof > 0, np.maximum(scale, 1e-300), np.nan)
+        # No scatter left to judge a pose by: no degrees of freedom beyond it, or a robust fit
+        # whose deletion residual (a least-squares formula) takes the whole chi-square: not judged
+        # (NaN), where a floor at 1e-300 made it a 1e150σ outlier.
+        scale = np.where((denominator_dof > 0) & (scale > 0), scale, np.nan)
     normalized = np.sqrt(z / rank / scale)
     valid = np.isfinite(normalized) & (denominator_dof > 0)
     return normalized, np.where(
@@ -212,6 +215,7 @@ def _warnings(
         for i in d.outlier_pose_ids
     )
     blocks = [(name, slice(3 * k, 3 * k + 3)) for k, name in enumerate(PARAMETER_NAMES)]
+    unjudged = [int(i) for i in d.pose_ids[np.isnan(d.pose_p_values)]]
     rules = [
         (exact, _NOISE_FREE_WARNING if noise_free else _ROUNDING_WARNING),
         (
@@ -238,6 +242,13 @@ def _warnings(
                 f"direction {weakest})",
             )
             for name, part in blocks
+        ),
+        (
+            not exact and bool(unjudged),
+            f"pose(s) {', '.join(map(str, unjudged))} not tested for outliers: the other poses "
+            "leave no residual scatter to judge them by (too few poses or readings for the "
+            "parameters, or a robust loss that put the misfit on them); add poses, record "
+            "several readings per pose, or give the noise",
         ),
         (
             d.noise_source == "residuals" and d.noise_dof < MIN_NOISE_DOF,

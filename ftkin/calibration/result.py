@@ -385,12 +385,13 @@ def _diagnostics_lines(diagnostics) -> list[str]:
             for name, value in zip(WRENCH_CHANNELS, diagnostics.channel_chi_square)
         ),
     ]
+    finite = np.isfinite(diagnostics.pose_normalized_residuals)
     worst = (
-        int(np.nanargmax(diagnostics.pose_normalized_residuals))
-        if len(diagnostics.pose_ids)
+        int(np.nanargmax(np.where(finite, diagnostics.pose_normalized_residuals, np.nan)))
+        if finite.any()
         else None
     )
-    if worst is not None and np.isfinite(diagnostics.pose_normalized_residuals[worst]):
+    if worst is not None:
         lines.append(
             f"  largest pose residual: pose {diagnostics.pose_ids[worst]} "
             f"{diagnostics.pose_normalized_residuals[worst]:.2f}σ (p = "

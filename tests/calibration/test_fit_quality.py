@@ -171,3 +171,24 @@ def test_diagnostics_survive_a_dict_round_trip_with_missing_values(tool, rotatio
     assert any(
         "standard errors are rough" in message for message in diagnostics.warnings
     )  # 3 poses: few dof
+
+
+def test_robust_fit_on_four_poses_judges_no_pose_it_cannot(arm, tool, caplog):
+    """A Huber fit on 4 poses of one reading named a pose an outlier at 1e150σ: the deletion
+    residual (a least-squares formula) exceeded the whole chi-square of the robust fit, the scatter
+    left for the other poses came out negative and was floored at 1e-300.
+    """
+    rotations = arm.rotation_sensor_to_base(
+        arm.random_configurations(12, np.random.default_rng(7), margin=0.3)[:4]
+    )
+    samples = SimulatedSensor(tool, NOISE).samples(rotations, np.random.default_rng(0))
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        result = calibrate(samples, loss="huber")
+    diagnostics = result.diagnostics
+    assert diagnostics.outlier_pose_ids == ()
+    assert np.all(
+        np.isnan(diagnostics.pose_normalized_residuals)
+        | (diagnostics.pose_normalized_residuals < 10)
+    )
+    assert np.isnan(diagnostics.pose_p_values[1]) and "pose(s) 1 not tested" in caplog.text
+    assert "largest pose residual" in result.summary()
