@@ -96,6 +96,45 @@ def as_integers(value, name: str, limit: int = MAX_ID) -> np.ndarray:
     return numbers.astype(np.int64)
 
 
+def as_wrenches(value, name: str) -> tuple[np.ndarray, bool]:
+    """:func:`as_batch` of ``(N, 6)`` wrenches [N, N·m], none beyond ±:data:`MAX_WRENCH`."""
+    wrenches, single = as_batch(value, 6, name)
+    check_wrench_magnitude(wrenches, name)
+    return wrenches, single
+
+
+def as_wrench(value, name: str) -> np.ndarray:
+    """One wrench ``(6,)`` [N, N·m], finite and within ±:data:`MAX_WRENCH`."""
+    wrench = as_vector(value, 6, name)
+    check_wrench_magnitude(wrench[np.newaxis], name)
+    return wrench
+
+
+def whole_number(value, name: str, minimum: int = 0, maximum: int = MAX_ID) -> int:
+    """``value`` as an int (no bools, no fractions, no text) in ``[minimum, maximum]``."""
+    whole = isinstance(value, (int, np.integer)) or (
+        isinstance(value, (float, np.floating)) and float(value).is_integer()
+    )
+    if isinstance(value, (bool, np.bool_)) or not whole:
+        raise InvalidInput(f"{name} must be an integer (a whole number), got {value!r}")
+    if not minimum <= value <= maximum:
+        bound = f"at least {minimum}" if value < minimum else f"at most {maximum}"
+        raise InvalidInput(f"{name} must be {bound}, got {value}")
+    return int(value)
+
+
+def as_names(value, name: str) -> list[str]:
+    """A list of names from any sequence of strings (a list, a tuple, a numpy array)."""
+    names = value.tolist() if isinstance(value, np.ndarray) else value
+    try:
+        names = None if isinstance(names, (str, bytes)) else list(names)
+    except TypeError:  # not a sequence
+        names = None
+    if names is None or not all(isinstance(n, str) for n in names):
+        raise InvalidInput(f"{name} must be a sequence of strings (names), got {_short(value)}")
+    return names
+
+
 def check_finite(array: np.ndarray, name: str) -> None:
     """Raise :class:`InvalidInput` naming the first non-finite entry."""
     if not np.all(np.isfinite(array)):
@@ -171,9 +210,11 @@ def as_rotation_batch(
         raise InvalidInput(f"{name} must have shape (3, 3) or (N, 3, 3), got {np.shape(value)}")
     if not _all_rotations(array, atol):  # the detailed error names the first bad matrix
         check_finite(array, name)
-        gram_error = np.abs(np.einsum("nji,njk->nik", array, array) - np.eye(3)).max(axis=(1, 2))
-        det = np.linalg.det(array)
-        bad = np.flatnonzero((gram_error > atol) | (det < 0.0))
+        with np.errstate(all="ignore"):  # a huge matrix overflows: refused below, no warning
+            gram_error = np.abs(np.einsum("nji,njk->nik", array, array) - np.eye(3)).max((1, 2))
+            det = np.linalg.det(array)
+        # compared so that NaN fails: a huge "rotation" overflows to inf − inf
+        bad = np.flatnonzero(~(gram_error <= atol) | ~(det >= 0.0))
         if bad.size:  # none: a matrix on the tolerance's edge, rounded the other way: accepted
             i = int(bad[0])
             raise InvalidInput(

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..exceptions import InvalidInput, UnobservableParameters
+from ..validation import whole_number
 from .conventions import as_real_sensor
 from .samples import Samples
 
@@ -139,11 +140,12 @@ def cross_validate(
     # refused in this order: each check reads only what the ones before it accepted
     if "drift" in keywords:
         raise InvalidInput("give the drift settings to compare as drifts=(...), not drift=")
-    drifts = tuple(drifts)
-    if not drifts or len(set(drifts)) != len(drifts) or not all(isinstance(d, str) for d in drifts):
+    names = tuple(drifts) if isinstance(drifts, list | tuple) else ()
+    if not names or not all(isinstance(d, str) for d in names) or len(set(names)) != len(names):
         raise InvalidInput(
             f"drifts must be distinct drift settings (e.g. ('none', 'auto')), got {drifts!r}"
         )
+    drifts = names
     if (
         isinstance(folds, bool)
         or not isinstance(folds, int | np.integer)
@@ -152,13 +154,16 @@ def cross_validate(
         raise InvalidInput(
             f"folds must be an integer from {MIN_FOLDS} to {MAX_FOLDS}, got {folds!r}"
         )
+    if not isinstance(samples, Samples):
+        raise InvalidInput(f"samples must be an ftkin.Samples, got {type(samples).__name__}")
+    rng = np.random.default_rng(whole_number(seed, "seed"))
     pose_ids, reading_pose = np.unique(samples.pose_ids, return_inverse=True)
     if len(pose_ids) < folds:
         raise InvalidInput(
             f"{len(pose_ids)} poses cannot be split into {folds} folds; use fewer folds"
         )
     # each reading's fold is its pose's, at random
-    reading_fold = (np.random.default_rng(seed).permutation(len(pose_ids)) % folds)[reading_pose]
+    reading_fold = (rng.permutation(len(pose_ids)) % folds)[reading_pose]
     squares = {drift: [] for drift in drifts}
     models = {drift: [] for drift in drifts}
     for k in range(folds):

@@ -19,7 +19,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import InvalidInput
-from ..validation import as_batch, as_rotation_batch
+from ..validation import as_batch, as_rotation_batch, as_wrenches
 from .model import cross_rows, skew
 from .samples import Samples
 
@@ -92,7 +92,7 @@ class MotionSamples:
 
     def __post_init__(self):
         arrays = {
-            "wrenches": as_batch(self.wrenches, 6, "wrenches")[0],
+            "wrenches": as_wrenches(self.wrenches, "wrenches")[0],
             "rotations": as_rotation_batch(self.rotations)[0],
             "velocities": as_batch(self.velocities, 6, "velocities")[0],
             "accelerations": as_batch(self.accelerations, 6, "accelerations")[0],

@@ -31,10 +31,14 @@ from ..kinematics.arm import Arm
 from ..kinematics.mounting import mounted_arm
 from ..validation import (
     FLOAT64,
+    MAX_WRENCH,
     as_batch,
     as_float_array,
     as_rotation_batch,
     as_vector,
+    as_wrench,
+    as_wrenches,
+    check_finite,
     is_rotation_rows,
     rotation_rows,
 )
@@ -178,10 +182,10 @@ class Compensator:
                 f"expected q of shape {self._q_shape} and raw_wrench of shape (6,), "
                 f"got {q.shape} and {np.shape(raw_wrench)}"
             )
-        if not (math.isfinite(sum(raw)) and math.isfinite(sum(q.tolist()))) and not (
-            np.isfinite(q).all() and all(map(math.isfinite, raw))
-        ):
-            raise InvalidInput(f"q and raw_wrench must be finite, got q={q} raw_wrench={raw}")
+        if not (math.hypot(*raw) <= MAX_WRENCH and math.isfinite(sum(q.tolist()))):
+            # NaN, inf or a huge entry (the norm is cheap; the checks name the entry)
+            check_finite(q, "q")
+            as_wrenches(raw, "raw_wrench")
         return np.array(self.contact_floats(arm.sensor_rotation_unchecked(q).tolist(), raw))
 
     def compensate_rotation(self, rotation_sensor_to_base, raw_wrench) -> np.ndarray:
@@ -202,14 +206,14 @@ class Compensator:
             else:  # the same check after a conversion (real numbers only: no booleans or text)
                 rows = rotation_rows(rotation)  # None if not one rotation
                 values, valid = as_float_array(raw, "raw_wrench").tolist(), rows is not None
-            if valid and len(values) == 6 and math.isfinite(sum(values)):
+            if valid and len(values) == 6 and math.hypot(*values) <= MAX_WRENCH:  # NaN fails
                 return np.array(self.contact_floats(rows, values))
         except (InvalidInput, TypeError, ValueError):
             pass
-        # Something is wrong, a batch of one, or a huge reading that overflowed the sum: the array
-        # checks accept it or name what is wrong.
+        # Something is wrong, a batch of one, or six entries within ±MAX_WRENCH whose norm is not:
+        # the array checks accept it or name what is wrong.
         rotations, _ = as_rotation_batch(rotation_sensor_to_base)
-        batch, _ = as_batch(raw_wrench, 6, "raw_wrench")
+        batch, _ = as_wrenches(raw_wrench, "raw_wrench")
         if len(rotations) != 1 or len(batch) != 1:
             raise InvalidInput(
                 "compensate_rotation takes one (3, 3) rotation and one (6,) wrench; use "
@@ -237,7 +241,7 @@ class Compensator:
 
     def set_bias(self, bias) -> None:
         """Use ``bias`` ``(6,)`` [N, N·m] from now on (the tracker, if any, restarts from it)."""
-        bias = as_vector(bias, 6, "bias [F0, M0]")
+        bias = as_wrench(bias, "bias [F0, M0]")
         self._apply_bias(bias)
         if self.tracker is not None:
             self.tracker.reset(bias)
@@ -257,9 +261,7 @@ class Compensator:
 
     def rezero_rotation(self, rotation_sensor_to_base, raw_wrench) -> np.ndarray:
         """:meth:`rezero` from ``R_BS`` ``(3, 3)``; returns the new bias ``(6,)``."""
-        return self._zero_at(
-            rotation_sensor_to_base, as_vector(raw_wrench, 6, "raw_wrench"), "rezero"
-        )
+        return self._zero_at(rotation_sensor_to_base, as_wrench(raw_wrench, "raw_wrench"), "rezero")
 
     def rezero(self, q, raw_wrench) -> np.ndarray:
         """Re-zero at joint angles ``q`` [rad]: the contact wrench of ``raw_wrench`` becomes zero.
@@ -337,7 +339,7 @@ class Compensator:
         ``times``: ``(N,)`` reading times [s]; the bias is then :meth:`bias_at` those times.
         """
         rotations, _ = as_rotation_batch(rotation_sensor_to_base)
-        raw, _ = as_batch(raw_wrenches, 6, "raw_wrenches")
+        raw, _ = as_wrenches(raw_wrenches, "raw_wrenches")
         if len(rotations) != len(raw):
             raise InvalidInput(
                 f"{len(rotations)} rotations but {len(raw)} wrenches; expected one each"
@@ -371,7 +373,7 @@ class Compensator:
         """
         arm = self._require_arm()
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
-        raw, _ = as_batch(raw_wrenches, 6, "raw_wrenches")
+        raw, _ = as_wrenches(raw_wrenches, "raw_wrenches")
         if len(configurations) != len(raw):
             raise InvalidInput(
                 f"{len(configurations)} rotations but {len(raw)} wrenches (one rotation per joint "

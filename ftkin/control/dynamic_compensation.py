@@ -28,7 +28,7 @@ from ..calibration.model import SensorModel
 from ..calibration.regressor import MotionSamples
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
-from ..validation import FLOAT64, as_vector
+from ..validation import FLOAT64, MAX_WRENCH, as_vector, as_wrench, as_wrenches, check_finite
 from .compensation import Compensator
 
 
@@ -101,15 +101,15 @@ class DynamicCompensator:
                 f"{q.shape}, {dq.shape}, {ddq.shape}, {raw.shape}"
             )
         values = raw.tolist()
-        # One test for the common case: the sum is finite only if every input is (or they overflow:
-        # the test below passes).
-        if not math.isfinite(
-            sum(q.tolist()) + sum(dq.tolist()) + sum(ddq.tolist()) + sum(values)
-        ) and not all(np.isfinite(value).all() for value in (q, dq, ddq, raw)):
-            raise InvalidInput(
-                f"q, dq, ddq and raw_wrench must be finite, got q={q} dq={dq} ddq={ddq} "
-                f"raw_wrench={raw}"
-            )
+        # One test for the common case: the sum is finite only if every input is, and the reading's
+        # norm bounds its entries; else the checks name the entry (an overflowing sum passes them).
+        if not (
+            math.isfinite(sum(q.tolist()) + sum(dq.tolist()) + sum(ddq.tolist()))
+            and math.hypot(*values) <= MAX_WRENCH
+        ):
+            for value, name in ((q, "q"), (dq, "dq"), (ddq, "ddq")):
+                check_finite(value, name)
+            as_wrenches(raw, "raw_wrench")
         return self._moving_floats(q, dq, ddq, values)
 
     def contact_rates_floats(self, q: np.ndarray, raw: list, dq, ddq) -> tuple[float, ...]:
@@ -177,7 +177,7 @@ class DynamicCompensator:
         """
         if self._stream is None:
             raise InvalidInput("call start_stream(sample_period) before compensate_stream")
-        raw = as_vector(raw_wrench, 6, "raw_wrench")
+        raw = as_wrench(raw_wrench, "raw_wrench")
         estimate = self._stream.update(
             q
         )  # validates q first: a refused sample enters neither buffer

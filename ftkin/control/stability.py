@@ -185,14 +185,11 @@ def max_stable_k1(
         and real(servo_bandwidth)
         and servo_bandwidth > 0
     )
-    felt = (
-        stiffness + damping + (mass if servo_bandwidth is not None else 0.0) if real(mass) else 0.0
-    )
     if not (
         all(real(v) and v > 0 for v in (dt, cutoff, upper))
         and all(real(v) and v >= 0 for v in (stiffness, damping, k2, mass))
         and servo_ok
-        and felt > 0
+        and stiffness + damping + (mass if servo_bandwidth is not None else 0.0) > 0  # felt
         and isinstance(delay_ticks, int)
         and not isinstance(delay_ticks, bool)
         and 0 <= delay_ticks <= MAX_DELAY_TICKS

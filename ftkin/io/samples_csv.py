@@ -41,7 +41,7 @@ from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.samples import Samples
 from ..exceptions import InvalidSamples
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
-from ..validation import MAX_ID, MAX_WRENCH
+from ..validation import MAX_ID, MAX_WRENCH, as_names
 from .csv_table import Table, missing_columns, read_table, rename_columns
 from .static_segments import SegmentParameters, SegmentSearch, find_static_segments, segment_index
 from .time_columns import times_from_table
@@ -88,6 +88,7 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
     Raises:
         InvalidSamples: none found, several mixed, or an incomplete set.
     """
+    joint_names = None if joint_names is None else as_names(joint_names, "joint_names")
     header = table.header
     angles = {
         kind: [name for name in names if name in header]

@@ -11,7 +11,7 @@ Also the base tilt of METHOD.md §2: the world-to-base rotation
 import numpy as np
 
 from ..exceptions import InvalidInput
-from ..validation import as_batch, as_rotation_batch
+from ..validation import as_batch, as_real, as_rotation_batch, as_vector
 
 
 def euler_zyx_to_matrix(angles_rad) -> np.ndarray:
@@ -114,6 +114,9 @@ def gravity_in_base_from_tilt(weight: float, tilt_u: float, tilt_v: float) -> np
     ``a = [G cosU sinV, -G sinU, -G cosU cosV]`` (METHOD.md §3), i.e.
     ``R_WB^T [0, 0, -G]`` with ``R_WB = Rx(U) Ry(V)``.
     """
+    weight, tilt_u, tilt_v = (
+        as_real(value, name) for value, name in zip((weight, tilt_u, tilt_v), ("weight", "U", "V"))
+    )
     cu, su, cv, sv = np.cos(tilt_u), np.sin(tilt_u), np.cos(tilt_v), np.sin(tilt_v)
     return weight * np.array([cu * sv, -su, -cu * cv])
 
@@ -124,7 +127,7 @@ def tilt_from_gravity_in_base(gravity_in_base) -> tuple[float, float]:
     ``U = asin(-ay / G)``, ``V = atan2(ax, -az)`` (the paper's
     ``atan(-ax / az)`` for an upright base, and also right for an inverted one).
     """
-    a = np.asarray(gravity_in_base, dtype=float)
+    a = as_vector(gravity_in_base, 3, "gravity_in_base")
     weight = float(np.linalg.norm(a))
     if weight == 0.0:
         raise InvalidInput("gravity_in_base is zero: the tilt of the base is undefined")

@@ -27,7 +27,7 @@ from ..calibration.mount import MOUNT_NAMES
 from ..exceptions import InvalidInput, UnobservableParameters
 from ..kinematics.collision import SelfCollision
 from ..kinematics.rotations import euler_zyx_to_matrix
-from ..validation import as_in_range, set_checked
+from ..validation import as_in_range, as_real, set_checked
 
 _MOUNT_MODE_BY_SIZE = {12: "none", 13: "yaw", 15: "full"}
 
@@ -63,6 +63,8 @@ class PoseConstraints:
             max_tilt=_optional(self.max_tilt, "max_tilt", np.pi, "rad", low=0.0),
             joint_ranges=_joint_ranges(self.joint_ranges),
         )
+        if not isinstance(self.self_collision, bool | np.bool_):
+            raise InvalidInput(f"self_collision must be True or False, got {self.self_collision!r}")
 
     def describe(self) -> str:
         """One line naming every active constraint (for reports and errors)."""
@@ -89,20 +91,28 @@ def _optional(value, name: str, bound: float, unit: str, low: float | None = Non
 
 def _joint_ranges(value) -> tuple[tuple[str, float, float], ...]:
     """``((name, lower, upper), ...)`` [rad] from such entries or ``{name: (lower, upper)}``."""
-    entries = (
-        [(name, *bounds) for name, bounds in value.items()]
-        if isinstance(value, Mapping)
-        else list(value or ())
-    )
+    try:
+        entries = (
+            [(name, *bounds) for name, bounds in value.items()]
+            if isinstance(value, Mapping)
+            else list(() if value is None else value)
+        )
+    except TypeError:
+        raise InvalidInput(
+            "joint_ranges must be ((name, lower, upper), ...) or {name: (lower, upper)} [rad], "
+            f"got {value!r}"
+        ) from None
     cleaned = []
     for entry in entries:
         try:
             name, lower, upper = entry
-            name, lower, upper = str(name), float(lower), float(upper)
         except (TypeError, ValueError):
+            name = None
+        if not isinstance(name, str):
             raise InvalidInput(
-                f"a joint range must be (name, lower, upper) [rad], got {entry!r}"
-            ) from None
+                f"a joint range must be (joint name, lower, upper) [rad], got {entry!r}"
+            )
+        lower, upper = (as_real(bound, f"the joint range of {name!r}") for bound in (lower, upper))
         if not (np.isfinite(lower) and np.isfinite(upper) and lower < upper):
             raise InvalidInput(
                 f"joint range for {name!r} must be finite with lower < upper [rad], got "

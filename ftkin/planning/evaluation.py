@@ -30,6 +30,7 @@ from ..validation import (
     as_vector,
     from_fields,
     set_checked,
+    whole_number,
 )
 from .drift_order import DEFAULT_POSE_INTERVAL, check_drift_options, walk_information
 
@@ -177,18 +178,6 @@ def _pose_times(value, count: int) -> np.ndarray:
             f"visiting order), got shape {times.shape}"
         )
     return times
-
-
-def whole_number(value, name: str, minimum: int = 0) -> int:
-    """``value`` as an int (no bools, no fractions), at least ``minimum``."""
-    whole = isinstance(value, (int, np.integer)) or (
-        isinstance(value, (float, np.floating)) and float(value).is_integer()
-    )
-    if isinstance(value, bool) or not whole:
-        raise InvalidInput(f"{name} must be an integer (a whole number), got {value!r}")
-    if value < minimum:
-        raise InvalidInput(f"{name} must be at least {minimum}, got {value}")
-    return int(value)
 
 
 @dataclass(frozen=True, eq=False)

@@ -30,7 +30,7 @@ from ..calibration.information import SensorNoise
 from ..calibration.model import STANDARD_GRAVITY
 from ..calibration.regressor import body_regressor, sensor_motion
 from ..exceptions import InvalidInput
-from ..validation import as_positive, from_fields, set_checked
+from ..validation import as_float_array, as_positive, from_fields, set_checked, whole_number
 from .constraints import FeasibilityChecker, PoseConstraints
 
 DEFAULT_ACCELERATION_LIMIT = 10.0
@@ -41,6 +41,9 @@ DEFAULT_AMPLITUDE = 0.8
 
 DEFAULT_VELOCITY_FRACTION = 0.5
 """Default fraction of the URDF velocity limits used."""
+
+MAX_HARMONICS = 100
+"""Most harmonics an :class:`ExcitationSpec` takes (each adds ``2·nq`` coefficients to optimise)."""
 
 _PENALTY = 1e3
 
@@ -145,7 +148,7 @@ class ExcitationSpec:
         duration: Length of the recording [s].
         rate: Sample rate of the written trajectory [Hz].
         period: Period of the Fourier series [s] (None: ``duration``).
-        harmonics: Number of harmonics ``K`` (≥ 2).
+        harmonics: Number of harmonics ``K`` (2 to :data:`MAX_HARMONICS`).
         velocity_fraction: Fraction of the URDF joint velocity limits allowed.
         acceleration_limit: Joint acceleration limit [rad/s²], scalar or ``(nq,)``.
         center: Configuration the motion swings about [rad] (None: the zero
@@ -178,11 +181,23 @@ class ExcitationSpec:
 
     def __post_init__(self):
         duration = as_positive(self.duration, "duration")
-        if self.harmonics < 2:
-            raise InvalidInput(f"harmonics must be at least 2, got {self.harmonics}")
+        if not (
+            isinstance(self.constraints, PoseConstraints | None)
+            and isinstance(self.noise, SensorNoise | None)
+            and isinstance(self.optimize, bool)
+        ):
+            raise InvalidInput(
+                "constraints must be a PoseConstraints or None, noise a SensorNoise or None and "
+                f"optimize True or False; got {self.constraints!r}, {self.noise!r}, "
+                f"{self.optimize!r}"
+            )
         set_checked(
             self,
             duration=duration,
+            harmonics=whole_number(self.harmonics, "harmonics", 2, MAX_HARMONICS),
+            candidates=whole_number(self.candidates, "candidates", 1),
+            max_iterations=whole_number(self.max_iterations, "max_iterations"),
+            seed=whole_number(self.seed, "seed"),
             rate=as_positive(self.rate, "rate"),
             period=duration if self.period is None else as_positive(self.period, "period"),
             velocity_fraction=as_positive(self.velocity_fraction, "velocity_fraction"),
@@ -195,10 +210,10 @@ class ExcitationSpec:
 
 def _per_joint(value, nq: int, name: str, unit: str) -> np.ndarray:
     """A positive scalar or ``(nq,)`` as ``(nq,)``."""
-    array = np.broadcast_to(np.asarray(value, dtype=float), (nq,)).copy()
-    if not np.all(np.isfinite(array) & (array > 0)):
-        raise InvalidInput(f"{name} must be positive [{unit}], got {value!r}")
-    return array
+    array = as_float_array(value, name)
+    if array.shape not in ((), (1,), (nq,)) or not np.all(np.isfinite(array) & (array > 0)):
+        raise InvalidInput(f"{name} must be positive [{unit}], a scalar or ({nq},), got {value!r}")
+    return np.broadcast_to(array, (nq,)).copy()
 
 
 class _Design:

@@ -27,7 +27,7 @@ import numpy as np
 from ..calibration.observability import check_pose_count
 from ..exceptions import InvalidInput
 from ..progress import Progress
-from ..validation import from_fields, set_checked
+from ..validation import from_fields, set_checked, whole_number
 from .constraints import (
     FeasibilityChecker,
     PoseConstraints,
@@ -40,7 +40,6 @@ from .evaluation import (
     ExpectedCalibration,
     PoseEvaluation,
     evaluate_poses,
-    whole_number,
 )
 from .order import joint_distances, path_length, revolute_mask, short_travel_order, unwind_revolute
 
