@@ -36,7 +36,16 @@ COMMAND_MODULES = (
 OUTPUT_OPTIONS = {"output": "-o/--output", "html": "--html", "png": "--png", "plot": "--plot"}
 """Namespace attributes that name files a subcommand writes, and their flags."""
 
-INPUT_OPTIONS = ("calibration", "samples", "log", "recording", "poses", "replay", "urdf")
+INPUT_OPTIONS = (
+    "calibration",
+    "samples",
+    "log",
+    "recording",
+    "poses",
+    "replay",
+    "trajectory",
+    "urdf",
+)
 """Namespace attributes that name files a subcommand reads."""
 
 

@@ -139,6 +139,16 @@ def gravity(text: str) -> float:
     return value
 
 
+def finite_float(text: str) -> float:
+    """argparse type: a finite number (``nan`` and ``inf`` are refused)."""
+    return _number(text, lambda value: value == value, "a finite number")
+
+
+def floor_height(text: str) -> float:
+    """argparse type: a floor height within ±100 m [m, base z]."""
+    return _number(text, lambda value: abs(value) <= 100.0, "a finite height within ±100 m")
+
+
 def positive_float(text: str) -> float:
     """argparse type: a finite positive number."""
     return _number(text, lambda value: value > 0, "a finite positive number")

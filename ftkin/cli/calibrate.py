@@ -24,6 +24,7 @@ from .arg_types import (
     add_command,
     add_options,
     bounded_int,
+    finite_float,
     gravity,
     option,
     positive_float,
@@ -134,7 +135,7 @@ _CONVENTION_OPTIONS = (
     ),
     option(
         "--expected-gravity",
-        type=float,
+        type=finite_float,
         nargs=3,
         metavar=("GX", "GY", "GZ"),
         help="expected gravity direction in the base frame (overrides --base-mount)",

@@ -25,6 +25,8 @@ from .arg_types import (
     add_command,
     add_options,
     bounded_int,
+    finite_float,
+    floor_height,
     non_negative_float,
     option,
     positive_float,
@@ -49,7 +51,7 @@ _TOOL_OPTIONS = (
     ),
     option(
         "--com",
-        type=float,
+        type=finite_float,
         nargs=3,
         default=list(PAPER_CENTER_OF_MASS),
         metavar=("X", "Y", "Z"),
@@ -97,7 +99,7 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
         ),
         option(
             "--drift-rate",
-            type=float,
+            type=finite_float,
             nargs=2,
             default=None,
             metavar=("N/√s", "NM/√s"),
@@ -159,16 +161,6 @@ def pose_count(text: str) -> int:
     return value
 
 
-def _floor(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a height in metres, got {text!r}") from None
-    if not np.isfinite(value) or abs(value) > 100.0:
-        raise argparse.ArgumentTypeError(f"expected a finite height within ±100 m, got {text!r}")
-    return value
-
-
 def joint_range(text: str) -> tuple[str, float, float]:
     """argparse type: ``NAME:LO:HI`` [rad]."""
     parts = text.rsplit(":", 2)
@@ -206,7 +198,7 @@ _CONSTRAINT_OPTIONS = (
     ),
     option(
         "--floor-height",
-        type=_floor,
+        type=floor_height,
         default=DEFAULT_FLOOR_HEIGHT,
         metavar="M",
         help="sensor and tool origins stay above this height in the base frame [m] (default: "

@@ -13,7 +13,7 @@ import datetime
 import numpy as np
 
 from .. import Arm, Compensator, InvalidInput, load_calibration, save_calibration
-from .arg_types import add_command, option, refuse
+from .arg_types import add_command, finite_float, option, refuse
 from .common import add_arm_arguments, arm_for_calibration
 
 
@@ -34,7 +34,7 @@ def register(subparsers) -> None:
             option("calibration", metavar="CALIB.json"),
             option(
                 "--q",
-                type=float,
+                type=finite_float,
                 nargs="+",
                 required=True,
                 metavar="Q",
@@ -42,7 +42,7 @@ def register(subparsers) -> None:
             ),
             option(
                 "--wrench",
-                type=float,
+                type=finite_float,
                 nargs=6,
                 required=True,
                 metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import InvalidInput
-from .arg_types import add_options, bounded_int, option, positive_float, seed
+from .arg_types import add_options, bounded_int, finite_float, option, positive_float, seed
 
 GUIDING_HOME = (0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785)
 """The demo's hand-guiding start pose [rad] (the hand above the table, pointing down)."""
@@ -112,7 +112,7 @@ def _calibrate_parser(commands) -> None:
         option("--seed", type=seed, default=0),
         option(
             "--floor",
-            type=float,
+            type=finite_float,
             default=0.1,
             metavar="Z",
             help="sensor and tool stay above this height in the base frame [m] (default: 0.1)",
@@ -145,14 +145,14 @@ def _payload_options(parser) -> None:
         group,
         option(
             "--end-effector",
-            type=float,
+            type=finite_float,
             nargs=4,
             metavar=("MASS", "CX", "CY", "CZ"),
             help="the end effector the controller models [kg, m] (default: what the robot reports)",
         ),
         option(
             "--sensor-body",
-            type=float,
+            type=finite_float,
             nargs=4,
             metavar=("MASS", "CX", "CY", "CZ"),
             help="the sensor's own mass and centre of mass above its measuring plane [kg, m] "
@@ -183,7 +183,7 @@ def _demo_parser(commands) -> None:
         parser,
         option("--poses", type=bounded_int(3, 50, "poses"), default=12),
         option("--speed", type=positive_float, default=0.8),
-        option("--push", type=float, default=15.0, metavar="N", help="push force [N]"),
+        option("--push", type=finite_float, default=15.0, metavar="N", help="push force [N]"),
         option(
             "-o", "--output", metavar="CALIB.json", help="keep the calibration (and its samples)"
         ),

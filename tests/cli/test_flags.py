@@ -141,3 +141,30 @@ def test_sizes_and_seeds_are_bounded(argv, pattern, capsys):
 )
 def test_empty_names_are_refused(argv, pattern, capsys):
     _usage_error(argv, capsys, pattern)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["robot", "demo", "--push", "nan"],
+        [
+            "robot",
+            "calibrate",
+            "--franka",
+            "h",
+            "--sensor",
+            "m:f",
+            "-o",
+            "c.json",
+            "--floor",
+            "nan",
+        ],
+        ["robot", "payload", "c.json", "--franka", "h", "--end-effector", "1", "0", "0", "inf"],
+        ["calibrate", "s.csv", "--expected-gravity", "0", "0", "nan"],
+        ["plan", "-n", "3", "--drift-rate", "nan", "1e-4"],
+        ["rezero", "c.json", "s.csv", "--q", "nan", "0", "0", "0", "0", "0"],
+    ],
+)
+def test_no_float_flag_takes_nan_or_inf(argv, capsys):
+    """Every float flag is finite at the edge (``type=float`` let ``nan`` through)."""
+    _usage_error(argv, capsys, "expected a finite")

@@ -60,6 +60,7 @@ def test_output_naming_an_input_is_refused_for_every_command(files, tmp_path, ca
         (["report", calibration, samples, "-o", samples], samples),
         (["view", calibration, samples, "--html", calibration], calibration),
         (["view", calibration, "--replay", samples, "--png", samples], samples),
+        (["simulate", "recording", "--trajectory", samples, "-o", samples], samples),
     ]
     for argv, victim in cases:
         _refused(argv, capsys, [victim, samples, calibration], "refusing to overwrite an input")
@@ -132,3 +133,28 @@ def test_library_writer_shares_the_check(tmp_path):
         check_output_path(tmp_path / "new.csv", [data, tmp_path / "missing.csv"])
         == tmp_path / "new.csv"
     )
+
+
+def test_every_option_that_names_a_file_to_read_is_protected():
+    """An option or argument whose value is a file the command reads is an input of
+    ``check_outputs`` (``--trajectory`` of ``simulate recording`` was missing).
+    """
+    import argparse
+    import re
+
+    from ftkin.cli import INPUT_OPTIONS, OUTPUT_OPTIONS, build_parser
+
+    reads = re.compile(r"\.(csv|json)$|^(RECORDING|PATH|TRAJ)")  # not --sg-window SAMPLES
+    missing = []
+
+    def walk(parser, path):
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, sub in action.choices.items():
+                    walk(sub, [*path, name])
+            elif isinstance(action.metavar, str) and reads.search(action.metavar):
+                if action.dest not in (*INPUT_OPTIONS, *OUTPUT_OPTIONS):
+                    missing.append(f"{' '.join(path)} {action.dest}")
+
+    walk(build_parser(), [])
+    assert not missing, missing
