@@ -97,9 +97,15 @@ def as_integers(value, name: str, limit: int = MAX_ID) -> np.ndarray:
 
 
 def as_wrenches(value, name: str) -> tuple[np.ndarray, bool]:
-    """:func:`as_batch` of ``(N, 6)`` wrenches [N, N·m], none beyond ±:data:`MAX_WRENCH`."""
-    wrenches, single = as_batch(value, 6, name)
-    check_wrench_magnitude(wrenches, name)
+    """:func:`as_batch` of ``(N, 6)`` wrenches [N, N·m], none beyond ±:data:`MAX_WRENCH`.
+
+    One pass for a valid batch (its largest and smallest entry; NaN fails both comparisons),
+    the naming checks only when it fails: this guards the validated batch compensation.
+    """
+    wrenches, single = _rows(value, 6, name)
+    if wrenches.size and not (wrenches.max() <= MAX_WRENCH and wrenches.min() >= -MAX_WRENCH):
+        check_finite(wrenches, name)
+        check_wrench_magnitude(wrenches, name)
     return wrenches, single
 
 
@@ -183,6 +189,13 @@ def as_batch(value, width: int, name: str) -> tuple[np.ndarray, bool]:
     Returns:
         The ``(N, width)`` array and whether the input was a single row.
     """
+    array, single = _rows(value, width, name)
+    check_finite(array, name)
+    return array, single
+
+
+def _rows(value, width: int, name: str) -> tuple[np.ndarray, bool]:
+    """``value`` as a float ``(N, width)`` array (a ``(width,)`` row accepted), unchecked values."""
     array = as_float_array(value, name)
     single = array.ndim == 1
     array = array[np.newaxis, :] if single else array
@@ -190,7 +203,6 @@ def as_batch(value, width: int, name: str) -> tuple[np.ndarray, bool]:
         raise InvalidInput(
             f"{name} must have shape ({width},) or (N, {width}), got {np.shape(value)}"
         )
-    check_finite(array, name)
     return array, single
 
 
