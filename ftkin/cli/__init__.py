@@ -48,6 +48,9 @@ INPUT_OPTIONS = (
 )
 """Namespace attributes that name files a subcommand reads."""
 
+OUTPUT_SUFFIXES = {"html": (".html", ".htm"), "png": (".png",), "plot": (".png",)}
+"""File name endings of the outputs whose format is fixed (``-o`` takes a command's own)."""
+
 
 def check_outputs(args: argparse.Namespace) -> None:
     """Refuse, before anything is read or written, outputs that would destroy a file.
@@ -74,6 +77,9 @@ def check_outputs(args: argparse.Namespace) -> None:
     for name, flag in OUTPUT_OPTIONS.items():
         if isinstance(value := getattr(args, name, None), str):
             check_output_path(value, list(inputs.values()), flag)
+            suffixes = OUTPUT_SUFFIXES.get(name, ())
+            if suffixes and not value.lower().endswith(suffixes):
+                raise InvalidInput(f"{flag} writes {' or '.join(suffixes)}, got {value!r}")
             if (key := os.path.realpath(value)) in seen:
                 raise InvalidInput(
                     f"{seen[key]} and {flag} both name {value}; give each output its own file"

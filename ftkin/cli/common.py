@@ -93,6 +93,10 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
             )
             for name in ("urdf", "robot", "sensor_frame", "tool_frame", "sensor_parent")
         ),
+        *(
+            (not str(folder).strip(), "--package-dir is empty; give a folder or leave it out")
+            for folder in package_dirs
+        ),
         (urdf and robot, "give either --urdf or --robot, not both"),
         (
             offset is not None and len(offset) not in (3, 6),

@@ -137,6 +137,7 @@ def test_sizes_and_seeds_are_bounded(argv, pattern, capsys):
         (["calibrate", "s.csv", "--robot", " "], "--robot is empty"),
         (["plan", "-n", "3", "--sensor-frame", ""], "--sensor-frame is empty"),
         (["compensate", "", "s.csv", "-o", "x.csv"], "the calibration file name is empty"),
+        (["calibrate", "s.csv", "--package-dir", " "], "--package-dir is empty"),
     ],
 )
 def test_empty_names_are_refused(argv, pattern, capsys):
@@ -168,3 +169,18 @@ def test_empty_names_are_refused(argv, pattern, capsys):
 def test_no_float_flag_takes_nan_or_inf(argv, capsys):
     """Every float flag is finite at the edge (``type=float`` let ``nan`` through)."""
     _usage_error(argv, capsys, "expected a finite")
+
+
+@pytest.mark.parametrize(
+    "argv, pattern",
+    [
+        (["simulate", "placement", "--plot", "run.txt"], "--plot writes .png, got 'run.txt'"),
+        (["view", "c.json", "--png", "v.jpg"], "--png writes .png, got 'v.jpg'"),
+        (["view", "c.json", "--html", "v.png"], "--html writes .html or .htm, got 'v.png'"),
+    ],
+)
+def test_fixed_format_outputs_need_their_ending(argv, pattern, tmp_path, capsys, monkeypatch):
+    """A PNG is not written under another name (``--plot run.txt`` wrote PNG bytes)."""
+    monkeypatch.chdir(tmp_path)
+    _usage_error(argv, capsys, pattern)
+    assert not list(tmp_path.iterdir())  # refused before anything is written

@@ -97,8 +97,8 @@ def test_empty_output_name_is_refused(files, capsys):
 
 def test_two_outputs_naming_one_file_are_refused(files, tmp_path, capsys):
     samples, calibration = files
-    out = tmp_path / "same"
-    _refused(["view", calibration, samples, "--html", out, "--png", out], capsys, [], "both name")
+    out = tmp_path / "same.png"
+    _refused(["simulate", "placement", "-o", out, "--plot", out], capsys, [], "both name")
     assert not out.exists()
 
 
