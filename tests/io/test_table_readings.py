@@ -9,17 +9,21 @@ convention) must all come out "ok" (the benchmark bench_conventions.py runs
 
 from __future__ import annotations
 
+import functools
+import importlib.util
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 import ftkin
-from ftkin import SensorModel
 from ftkin.cli import main
 from ftkin.io.csv_table import Table, write_csv
 from ftkin.io.table_readings import diagnose_table
 from ftkin.kinematics.rotations import matrix_to_euler_zyx, matrix_to_quaternion
 
 WRENCH = ["fx", "fy", "fz", "mx", "my", "mz"]
+BENCH_CONVENTIONS = Path(__file__).parents[2] / "benchmarks" / "bench_conventions.py"
 NOISE = np.array([0.02, 0.02, 0.02, 0.002, 0.002, 0.002])  # N, N·m per reading
 
 
@@ -120,37 +124,20 @@ def test_the_fitted_alternative_recovers_the_truth(arm):
 
 
 def _clean_table(rng, arms):
-    """A clean data set drawn at random: arm, tool, bias, tilt, poses, noise, repeats,
-    convention.
+    """A clean data set drawn at random (arm, tool, bias, tilt, poses, noise, repeats,
+    convention) by ``benchmarks/bench_conventions.py``'s own ``draw`` and ``as_table``: the test
+    checks the benchmark's no-false-alarm claim on the sets the benchmark draws.
     """
-    arm = arms[rng.choice(list(arms))]
-    truth = SensorModel.from_tool(
-        tool_mass=rng.uniform(0.05, 5.0),
-        center_of_mass=rng.uniform(-0.15, 0.15, 3),
-        force_offset=rng.normal(scale=2.0, size=3),
-        torque_offset=rng.normal(scale=0.1, size=3),
-        base_tilt=rng.normal(scale=np.deg2rad(0.5), size=2),
-    )
-    count, repeats = int(rng.integers(4, 21)), int(rng.integers(1, 4))
-    q = np.repeat(arm.random_configurations(count, rng, margin=0.2), repeats, axis=0)
-    rotations = arm.rotation_sensor_to_base(q)
-    noise = NOISE * 10 ** rng.uniform(-1, 1.3)
-    wrenches = truth.predict(rotations) + rng.normal(scale=noise, size=(len(q), 6))
-    pose = np.repeat(np.arange(count), repeats)[:, None]
-    kind = rng.choice(["joints", "euler", "quaternion"])
-    if kind == "joints":
-        return arm, _table(
-            ["pose", *[f"q{i + 1}" for i in range(arm.nq)], *WRENCH], np.hstack([pose, q, wrenches])
-        )
-    if kind == "euler":
-        angles = np.rad2deg(matrix_to_euler_zyx(rotations))
-        return None, _table(
-            ["pose", "alpha", "beta", "gamma", *WRENCH], np.hstack([pose, angles, wrenches])
-        )
-    return None, _table(
-        ["pose", "qw", "qx", "qy", "qz", *WRENCH],
-        np.hstack([pose, matrix_to_quaternion(rotations), wrenches]),
-    )
+    bench = _bench_conventions()
+    return bench.as_table(*bench.draw(rng, arms))
+
+
+@functools.cache
+def _bench_conventions():
+    spec = importlib.util.spec_from_file_location("bench_conventions", BENCH_CONVENTIONS)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    return bench
 
 
 def test_no_false_alarm_on_clean_sets(arms):
