@@ -258,6 +258,23 @@ def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:
         ) from None
 
 
+def arm_of_calibration(args: argparse.Namespace, calibration, purpose: str) -> Arm:
+    """The arm of :func:`arm_for_calibration`, or the bundled arm when the calibration was made
+    on it; a calibration that records no arm (made from orientation columns) and no robot option
+    is refused: joint angles or a flange of another arm would give a wrong result in silence.
+    """
+    arm = arm_for_calibration(args, calibration)
+    if arm is not None:
+        return arm
+    if calibration.urdf and Path(calibration.urdf).resolve() == bundled_urdf_path().resolve():
+        return Arm.default()
+    raise InvalidInput(
+        f"{purpose} needs the arm, and this calibration records none (it was made from "
+        "orientations, not joint angles): name it with --robot NAME or --urdf PATH "
+        "(--sensor-frame, --sensor-parent, --sensor-offset as the sensor is mounted)"
+    )
+
+
 def warn_if_kinematics_differ(loaded, calibration) -> None:
     """Log a warning when samples were read with another URDF or sensor frame than the
     calibration's.
@@ -315,6 +332,8 @@ def load_samples_from_args(
             static_only=static_only,
             wrench_frame=args.wrench_frame,
         )
-    if loaded.search is not None:  # the segments the fit will use
+    if loaded.layout is not None:  # how the table was read: poses, or a recording's segments
+        print(f"{path}: {loaded.layout.describe()}")
+    elif loaded.search is not None:  # a bag's still segments
         print(f"{path}: {loaded.search.describe()}")
     return loaded

@@ -2,11 +2,11 @@
 payloads; the formats and their options come from the registry (:mod:`ftkin.io.export`).
 """
 
-from .. import Arm, load_calibration
+from .. import load_calibration
 from ..io.atomic import atomic_write_text
 from ..io.export import EXPORT_FORMATS, export_request
 from .arg_types import add_command, add_options, option
-from .common import ALLOW_OTHER_ARM, add_arm_arguments, arm_for_calibration, arm_from_args
+from .common import ALLOW_OTHER_ARM, add_arm_arguments, arm_from_args, arm_of_calibration
 
 
 def register(subparsers) -> None:
@@ -58,7 +58,7 @@ def register(subparsers) -> None:
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
     arm = (  # the options' arm, else (for a format that needs one) the calibration's
-        arm_for_calibration(args, calibration) or Arm.default()
+        arm_of_calibration(args, calibration, f"--format {args.fmt}")
         if EXPORT_FORMATS[args.fmt].needs_arm
         else arm_from_args(args)
     )

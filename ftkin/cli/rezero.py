@@ -12,9 +12,9 @@ import datetime
 
 import numpy as np
 
-from .. import Arm, Compensator, InvalidInput, load_calibration, save_calibration
+from .. import Compensator, InvalidInput, load_calibration, save_calibration
 from .arg_types import add_command, finite_float, option, refuse
-from .common import add_arm_arguments, arm_for_calibration
+from .common import add_arm_arguments, arm_of_calibration
 
 
 def register(subparsers) -> None:
@@ -63,7 +63,7 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
-    arm = arm_for_calibration(args, calibration) or Arm.default()
+    arm = arm_of_calibration(args, calibration, "rezero --q")
     # angles beyond 2π (degrees) and a pose outside the joint limits are refused: the bias would
     # be set at a pose the arm was not in
     refuse(

@@ -33,6 +33,7 @@ from ..progress import Progress
 from .csv_table import Table, format_float
 from .samples_csv import POSE_COLUMN, LoadedSamples
 from .static_segments import SegmentParameters, find_static_segments, segment_index
+from .table_layout import RECORDING, TableLayout
 from .time_columns import TIME_COLUMN
 from .wrench_frames import wrenches_in_sensor_frame
 
@@ -376,6 +377,16 @@ def bag_samples(
     ]
     table = _table(recording.source, columns)
     samples = Samples.from_joint_positions(arm, positions, wrenches, pose_ids, times=times)
+    layout = None
+    if search is not None:
+        layout = TableLayout(
+            RECORDING,
+            f"the joint states of a bag ({len(recording.joint_times)} messages)",
+            len(recording.joint_times),
+            len(search.segments),
+            None,
+            search,
+        )
     return BagSamples(
-        samples, table, "joints", list(recording.joint_names), search, recording=recording
+        samples, table, "joints", list(recording.joint_names), layout, recording=recording
     )

@@ -8,10 +8,13 @@ through the mount and the URDF:
     P_F = R_FS · R_Mᵀ · P + t_FS
 
 with ``(R_FS, t_FS)`` the URDF placement of the sensor frame in the flange
-frame and ``R_M`` the estimated mount (identity if none). The flange frame is,
-unless named, the robot table's (:func:`ftkin.kinematics.robots.flange_frame_name`:
-``tool0`` for UR, ``panda_link8`` for Franka, the bundled arm's ``flange``), else
-the frame the sensor frame hangs from. The mass is the tool's ``G / g``: everything below
+frame and ``R_M`` the estimated mount (identity if none). The flange frame is the frame the
+robot's controller takes the payload in, never guessed
+(:func:`ftkin.kinematics.robots.flange_frame_name`): the robot table's for a robot loaded by
+name (``fr3_link8`` for the FR3, ``panda_link8`` for the Panda, ``tool0`` for a UR, the bundled
+arm's ``flange``); for an arm from a URDF, the one frame that follows the format's controller
+rule (``<prefix>_link8`` for ``franka-load``, ``tool0`` for ``ur-payload``); else it must be
+named (``flange_frame=``, ``--flange-frame``). The mass is the tool's ``G / g``: everything below
 the sensor's measuring plane (the sensor's sensitive end included; the
 sensor's own body above that plane is not seen by it and belongs to the robot
 or must be added by hand).
@@ -52,8 +55,9 @@ FRANKA_SET_LOAD_SERVICE = "/service_server/set_load"
 FLANGE_FRAME = ExportOption(
     "flange_frame",
     "--flange-frame",
-    "flange frame of the URDF (default: the robot table's flange, e.g. tool0 or panda_link8; for "
-    "a URDF the table's flange frame it has, else the sensor frame's parent)",
+    "the frame the robot's controller takes the payload in (default: the robot table's, e.g. "
+    "fr3_link8, tool0; for a URDF the one frame named as the format's controller names it: "
+    "<prefix>_link8 for franka-load, tool0 for ur-payload)",
     {"metavar": "NAME"},
 )
 INERTIA = ExportOption(
@@ -112,21 +116,27 @@ def sensor_in_flange(arm, flange_frame: str) -> pin.SE3:
     return flange.placement.inverse() * sensor.placement
 
 
-def payload_in_flange(calibration, arm, flange_frame: str | None = None, inertia=None) -> Payload:
+def payload_in_flange(
+    calibration, arm, flange_frame: str | None = None, inertia=None, controller: str | None = None
+) -> Payload:
     """The calibrated tool as a payload in the flange frame (see the module docstring).
 
     Args:
         calibration: A calibration (its mount, if any, is applied).
         arm: The arm **as its URDF describes it** (the sensor frame not mounted).
         flange_frame: Flange frame name (default:
-            :func:`~ftkin.kinematics.robots.flange_frame_name`).
+            :func:`~ftkin.kinematics.robots.flange_frame_name` of ``arm`` and ``controller``).
         inertia: ``(3, 3)`` inertia about the centre of mass in flange axes
             [kg·m²], or ``(6,)`` ``[ixx, iyy, izz, ixy, ixz, iyz]``; None: the
             calibration's own (a dynamic calibration's
             ``inertia_about_com_in_sensor``, turned into flange axes), else unknown.
+        controller: The controller family the payload is for (``"franka"``, ``"ur"``: a key of
+            :data:`~ftkin.kinematics.robots.CONTROLLERS`): its rule finds the flange of a URDF
+            arm, and a named robot of another family is refused.
 
     Raises:
-        InvalidInput: no tool weight, a bad inertia, or a flange frame not fixed to the sensor.
+        InvalidInput: no tool weight, a bad inertia, a flange frame not fixed to the sensor, or
+            a flange frame that is not known (name it).
         FrameNotFound: ``flange_frame`` is not in the model.
     """
     if arm.mount_rotation is not None:
@@ -137,7 +147,7 @@ def payload_in_flange(calibration, arm, flange_frame: str | None = None, inertia
     mass = float(calibration.tool_mass)
     if not mass > 0.0:
         raise InvalidInput("the calibration has no tool weight: there is no payload to export")
-    flange_frame = flange_frame or flange_frame_name(arm)
+    flange_frame = flange_frame or flange_frame_name(arm, controller)
     placement = sensor_in_flange(arm, flange_frame)
     sensor_to_flange = placement.rotation @ calibration.mount_rotation.T
     com = sensor_to_flange @ np.asarray(calibration.center_of_mass, dtype=float)
@@ -202,6 +212,8 @@ class PayloadFormat(ExportFormat):
     needs_arm = True
     options = (FLANGE_FRAME,)
     header_lines: tuple[str, ...] = ()
+    controller: str | None = None
+    """The controller family the format is for (its flange rule)."""
 
     def payload(self, request: ExportRequest) -> Payload:
         """The request's calibration as a payload in the flange frame."""
@@ -210,6 +222,7 @@ class PayloadFormat(ExportFormat):
             request.arm,
             request.option("flange_frame"),
             request.option("inertia"),
+            self.controller,
         )
 
     def header(self, request: ExportRequest) -> list[str]:
@@ -230,6 +243,7 @@ class PayloadFormat(ExportFormat):
 
 class FrankaLoadExport(PayloadFormat):
     name = "franka-load"
+    controller = "franka"
     options = (FLANGE_FRAME, INERTIA, END_EFFECTOR, SENSOR_BODY)
     summary = "franka_msgs/srv/SetLoad request: mass, center_of_mass, load_inertia"
     header_lines = (
@@ -277,6 +291,7 @@ def urscript_line(payload: Payload) -> str:
 
 class UrPayloadExport(PayloadFormat):
     name = "ur-payload"
+    controller = "ur"
     summary = (
         "ur_msgs/srv/SetPayload request for the ROS 2 UR driver, URScript set_payload as a "
         "comment; OUT.script: the URScript line only"

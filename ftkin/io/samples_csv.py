@@ -43,7 +43,8 @@ from ..exceptions import InvalidSamples
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from ..validation import MAX_ID, MAX_WRENCH, as_names
 from .csv_table import Table, missing_columns, read_table, rename_columns
-from .static_segments import SegmentParameters, SegmentSearch, find_static_segments, segment_index
+from .static_segments import SegmentParameters, SegmentSearch, segment_index
+from .table_layout import POSE_COLUMN_LAYOUT, RECORDING, TableLayout, table_layout
 from .time_columns import times_from_table
 
 if TYPE_CHECKING:  # the bag reader imports this module
@@ -293,72 +294,47 @@ def check_wrench_magnitude(table: Table, wrenches: np.ndarray) -> None:
 class LoadedSamples:
     """Samples read from a CSV, with the table they came from.
 
-    ``search`` holds the still segments found in a continuous recording (each
-    one pose of ``samples``; ``table`` then has their rows and a ``pose`` column).
-    ``recording`` is what a bag held (:class:`~ftkin.io.bags.BagSamples`), None for a CSV.
+    ``layout`` says how a timed table was read (:class:`~ftkin.io.table_layout.TableLayout`:
+    its pose column, one reading per pose, readings grouped by pose, or a continuous recording
+    whose still segments are the poses; ``table`` then has a ``pose`` column), None when the
+    table has no times or every row was kept as read. ``search`` holds the still segments of a
+    continuous recording. ``recording`` is what a bag held (:class:`~ftkin.io.bags.BagSamples`),
+    None for a CSV.
     """
 
     samples: Samples
     table: Table
     orientation: str
     orientation_columns: list[str]
-    search: SegmentSearch | None = None
+    layout: "TableLayout | None" = None
     recording: "BagRecording | None" = None
 
-
-MAX_GAP = 20.0
-"""Longest time step of a continuous recording, in median steps: a table with longer gaps was
-logged only while the arm stood still (stop and go), and each of its rows stays a pose."""
-
-
-def uniformly_sampled(times: np.ndarray) -> bool:
-    """Whether reading times are those of a recorder: 80 % of the steps within half the median
-    step of it, none longer than :data:`MAX_GAP` median steps."""
-    steps = np.diff(times)
-    median = np.median(steps)
-    return bool(
-        steps.max() <= MAX_GAP * median and np.mean(np.abs(steps - median) <= 0.5 * median) >= 0.8
-    )
+    @property
+    def search(self) -> SegmentSearch | None:
+        """The still segments of a continuous recording, else None."""
+        return None if self.layout is None else self.layout.search
 
 
-def smooth_motion(signal: np.ndarray) -> bool:
-    """Whether consecutive rows change alike (a sampled motion, not independent poses): the
-    median second difference of the orientation signal under half the median first difference
-    (independent poses give about √2 times it)."""
-    steps = np.diff(signal, axis=0)
-    first = np.median(np.linalg.norm(steps, axis=1))
-    return bool(first > 0 and np.median(np.linalg.norm(np.diff(steps, axis=0), axis=1)) < first / 2)
-
-
-def still_part(table: Table, orientations: TableOrientations, times, parameters):
-    """The still segments of a continuous recording: ``(table, orientations, times, search)`` of
-    the rows inside a segment, the table with a ``pose`` column (the segment number).
-
-    The inputs as they are (search None) when the table is not a recording: its times are not a
-    recorder's (:func:`uniformly_sampled`), or no two consecutive rows hold still and the rows are
-    not a smooth motion either (:func:`smooth_motion`): one reading per pose, each row its own
-    pose.
+def read_layout(table: Table, orientations: TableOrientations, times, parameters):
+    """How a timed table without a pose column was recorded (:mod:`ftkin.io.table_layout`), and
+    the rows to use: ``(table, orientations, times, layout)``, the table with a ``pose`` column
+    (a continuous recording keeps only its still segments' rows).
 
     Raises:
-        InvalidSamples: the arm moves and no still segment is long enough.
+        InvalidSamples: a motion with no static pose, or no usable still segment.
     """
-    if len(times) < 3 or np.any(np.diff(times) <= 0) or not uniformly_sampled(times):
-        return table, orientations, times, None
     positions = orientations.joint_positions
     signal = orientations.rotations.reshape(-1, 9) if positions is None else positions
     quantity = "orientation speed" if positions is None else "joint speed"
-    search = find_static_segments(times, signal, parameters, quantity)
-    if not (np.any(search.still[1:] & search.still[:-1]) or smooth_motion(signal)):
-        return table, orientations, times, None
-    if not search.segments:
-        raise InvalidSamples(
-            f"a continuous recording ({times[-1] - times[0]:.3g} s) with no usable still segment: "
-            f"{search.motion()}; {search.describe()}; lower --min-static-duration/--settle-time "
-            "or raise --speed-threshold, fit every row as a pose with --all-rows, or use the "
-            "motion with 'calibrate --dynamic'",
-            table.source,
-        )
-    index = segment_index(times, search.segments)
+    if len(times) < 2 or np.any(np.diff(times) < 0):
+        return table, orientations, times, None  # the drift fit refuses unsorted times
+    layout = table_layout(times, signal, parameters, quantity, table.source)
+    if layout.kind != RECORDING:
+        rows = [[*row, str(int(pose))] for row, pose in zip(table.rows, layout.pose_ids)]
+        table = replace(table, header=[*table.header, POSE_COLUMN], rows=rows)
+        logger.info("%s: %s", table.source, layout.describe())
+        return table, orientations, times, layout
+    index = segment_index(times, layout.search.segments)
     keep = np.flatnonzero(index >= 0)
     rows = [[*table.rows[i], str(int(index[i]))] for i in keep]
     lines = [table.lines[i] for i in keep]
@@ -368,8 +344,8 @@ def still_part(table: Table, orientations: TableOrientations, times, parameters)
         rotations=orientations.rotations[keep],
         joint_positions=None if positions is None else positions[keep],
     )
-    logger.info("%s: continuous recording, %s", table.source, search.describe())
-    return table, orientations, times[keep], search
+    logger.info("%s: %s", table.source, layout.describe())
+    return table, orientations, times[keep], layout
 
 
 def samples_from_table(
@@ -386,9 +362,9 @@ def samples_from_table(
     missing_columns(table, WRENCH_CHANNELS, "wrench")
     orientations = orientations_from_table(table, arm)
     times = times_from_table(table)
-    search = None
+    layout = None
     if segments is not None and times is not None and POSE_COLUMN not in table.header:
-        table, orientations, times, search = still_part(table, orientations, times, segments)
+        table, orientations, times, layout = read_layout(table, orientations, times, segments)
     wrenches = table.floats(WRENCH_CHANNELS)
     check_wrench_magnitude(table, wrenches)
     pose_ids = pose_ids_from_table(table)
@@ -403,7 +379,10 @@ def samples_from_table(
             orientations.rotations,
             times,
         )
-    return LoadedSamples(samples, table, orientations.kind, orientations.columns, search)
+    if layout is None and times is not None and POSE_COLUMN in table.header:
+        poses = len(np.unique(pose_ids))
+        layout = TableLayout(POSE_COLUMN_LAYOUT, "its pose column", len(pose_ids), poses)
+    return LoadedSamples(samples, table, orientations.kind, orientations.columns, layout)
 
 
 def load_samples(path, arm=None, segments: SegmentParameters | None = None) -> LoadedSamples:

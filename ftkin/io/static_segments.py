@@ -34,15 +34,19 @@ class SegmentParameters:
         settle_time: Time skipped at the start of each still stretch [s]
             (vibrations and controller settling after a move).
         speed_window: Time span of the finite difference for the speed [s].
+        pose_tolerance: Largest change between two consecutive rows of a timed table at one
+            pose [rad or m, or of an ``R_BS`` entry], whatever the time between them (see
+            :mod:`ftkin.io.table_layout`).
     """
 
     speed_threshold: float = 0.01
     min_duration: float = 1.0
     settle_time: float = 0.5
     speed_window: float = 0.1
+    pose_tolerance: float = 2e-3
 
     def __post_init__(self):
-        for name in ("speed_threshold", "min_duration", "speed_window"):
+        for name in ("speed_threshold", "min_duration", "speed_window", "pose_tolerance"):
             object.__setattr__(self, name, as_positive(getattr(self, name), name))
         settle = as_in_range(self.settle_time, "settle_time", 0.0, 1e6, "s")
         object.__setattr__(self, "settle_time", settle)
@@ -76,6 +80,7 @@ class SegmentSearch:
         parameters: The parameters used.
         speeds: ``(N,)`` speed at each sample [rad/s or m/s, or 1/s for ``R_BS`` entries].
         quantity: What the speed is of (``"joint speed"``, ``"orientation speed"``).
+        times: ``(N,)`` the sample times [s] searched, or None.
     """
 
     segments: list[StaticSegment]
@@ -83,6 +88,7 @@ class SegmentSearch:
     parameters: SegmentParameters
     speeds: np.ndarray | None = None
     quantity: str = "joint speed"
+    times: np.ndarray | None = None
 
     @property
     def unit(self) -> str:
@@ -165,7 +171,7 @@ def find_static_segments(
         usable_start = start_time + parameters.settle_time
         if end_time - usable_start >= parameters.min_duration:
             segments.append(StaticSegment(float(usable_start), float(end_time)))
-    return SegmentSearch(segments, stretches, parameters, speed, quantity)
+    return SegmentSearch(segments, stretches, parameters, speed, quantity, times)
 
 
 def segment_index(times, segments: list[StaticSegment]) -> np.ndarray:

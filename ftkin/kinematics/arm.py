@@ -6,6 +6,7 @@ the URDF's root (Pinocchio's world frame).
 """
 
 import logging
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -92,6 +93,29 @@ def bundled_urdf_path(relative: str = BUNDLED_URDF_NAME) -> Path:
         if candidate.is_file():
             return candidate
     raise UrdfError(relative, ["the bundled URDF is missing from this installation"])
+
+
+def refuse_fixed_sensor_frame(model: pin.Model, sensor_frame: str) -> None:
+    """Raise :class:`InvalidInput` when no joint moves ``sensor_frame`` (it is fixed to the base
+    link): its orientation never changes, so no calibration or compensation can use it.
+    """
+    if model.frames[model.getFrameId(sensor_frame)].parentJoint == 0:
+        turning = [  # the last joint that is not prismatic (a gripper's fingers are)
+            i
+            for i, joint in enumerate(model.joints)
+            if i > 0 and not re.match(r"JointModel(P[XYZ]|PrismaticUnaligned)", joint.shortname())
+        ]
+        last = turning[-1] if turning else model.njoints - 1
+        moving = [
+            frame.name
+            for frame in model.frames
+            if frame.parentJoint == last and frame.type == pin.FrameType.BODY
+        ]
+        raise InvalidInput(
+            f"the sensor frame {sensor_frame!r} is fixed to the base link: no joint moves it. "
+            "Name a frame on the link the sensor is bolted to"
+            + (f" (frames of the last link: {', '.join(moving[:6])})" if moving else "")
+        )
 
 
 class Arm:
@@ -181,6 +205,8 @@ class Arm:
         model = build_model(path)
         if sensor_mount is not None:
             add_sensor_frame(model, sensor_frame, sensor_mount)
+        if model.existFrame(sensor_frame):
+            refuse_fixed_sensor_frame(model, sensor_frame)
         if locked_joints is None:
             locked_joints = joints_beyond_frame(model, sensor_frame)
             if locked_joints:
@@ -199,8 +225,11 @@ class Arm:
 
     @classmethod
     def default(cls, tool_frame: str | None = "tool") -> "Arm":
-        """The bundled six-axis arm, sensor frame ``ft_sensor``, tool frame ``tool``."""
-        return cls.from_urdf(bundled_urdf_path(), "ft_sensor", tool_frame)
+        """The bundled six-axis arm (the robot ``ftkin_c4``), sensor frame ``ft_sensor``, tool
+        frame ``tool``."""
+        arm = cls.from_urdf(bundled_urdf_path(), "ft_sensor", tool_frame)
+        arm.robot_name = "ftkin_c4"
+        return arm
 
     # ------------------------------------------------------------ properties
     @property

@@ -190,21 +190,100 @@ def build_model(path: Path) -> pin.Model:
     raise UrdfError(str(path), reasons or [f"Pinocchio: {error}"]) from None
 
 
+_MESH_ELEMENT = re.compile(r"(<mesh\b[^>]*?\bfilename\s*=\s*)([\"'])(.*?)\2", re.DOTALL)
+_PACKAGE_URI = re.compile(r"^package://([^/]+)/(.*)$")
+
+
+def _package_name(folder: Path) -> str | None:
+    """The ``<name>`` of ``folder/package.xml`` (a ROS package), or None."""
+    manifest = folder / "package.xml"
+    if not manifest.is_file():
+        return None
+    match = re.search(r"<name>\s*([^<\s]+)\s*</name>", manifest.read_text(errors="replace"))
+    return match.group(1) if match else None
+
+
+def mesh_candidates(uri: str, urdf_path: Path, package_dirs) -> list[Path]:
+    """Where a mesh URI of the URDF at ``urdf_path`` may be, in the order they are tried.
+
+    * an absolute path, or ``file://`` + absolute path: itself;
+    * a relative path: relative to the URDF's own folder (how ROS tools and MuJoCo read it);
+    * ``package://NAME/REST``: ``DIR/NAME/REST`` for each of ``package_dirs``, then a package
+      beside or above the URDF: a folder on the URDF's path named ``NAME`` or holding a
+      ``package.xml`` whose ``<name>`` is ``NAME`` (``ANCESTOR/REST``), or a folder ``NAME``
+      inside one of the URDF's ancestors (``ANCESTOR/NAME/REST``).
+    """
+    text = uri.strip()
+    if text.startswith("file://"):
+        text = text[len("file://") :]
+    package = _PACKAGE_URI.match(text)
+    if package is None:
+        given = Path(text)
+        return [given] if given.is_absolute() else [urdf_path.parent / given]
+    name, rest = package.groups()
+    candidates = [Path(folder) / name / rest for folder in package_dirs]
+    for ancestor in urdf_path.resolve().parents:
+        if ancestor.name == name or _package_name(ancestor) == name:
+            candidates.append(ancestor / rest)
+        candidates.append(ancestor / name / rest)
+    return candidates
+
+
+def resolve_mesh_paths(text: str, urdf_path: Path, package_dirs=()) -> tuple[str, list[str]]:
+    """The URDF text with every mesh filename made an absolute path that exists, and the
+    URIs that resolve nowhere (see :func:`mesh_candidates`; each named once).
+    """
+    missing: list[str] = []
+
+    def replace(match: re.Match) -> str:
+        uri = match.group(3)
+        found = next(
+            (path for path in mesh_candidates(uri, urdf_path, package_dirs) if path.is_file()),
+            None,
+        )
+        if found is None:
+            if uri not in missing:
+                missing.append(uri)
+            return match.group(0)
+        quote = match.group(2)
+        return f"{match.group(1)}{quote}{found.resolve().as_posix()}{quote}"
+
+    return _MESH_ELEMENT.sub(replace, text), missing
+
+
 def build_geometry(
     model: pin.Model, path: Path, kind: str, package_dirs: list[str]
 ) -> pin.GeometryModel:
-    """Collision or visual geometry of a URDF; missing meshes raise :class:`UrdfError`."""
+    """Collision or visual geometry of a URDF (meshes resolved by :func:`resolve_mesh_paths`).
+
+    Raises:
+        UrdfError: a mesh that resolves nowhere (named once, with where it was looked for and
+            the fix), or Pinocchio refuses the geometry.
+    """
     geometry_type = {"collision": pin.GeometryType.COLLISION, "visual": pin.GeometryType.VISUAL}[
         kind
     ]
+    text, missing = resolve_mesh_paths(read_urdf_text(path), path, package_dirs)
+    if missing:
+        more = f" and {len(missing) - 3} more" if len(missing) > 3 else ""
+        shown = ", ".join(missing[:3]) + more
+        raise UrdfError(
+            str(path),
+            [
+                f"{len(missing)} {kind} mesh(es) not found: {shown} (looked beside the URDF, in "
+                "its parent folders for the package, and in the package folders given); give "
+                "--package-dir DIR (Python: package_dirs=[DIR]), the folder that holds the "
+                "package, or copy the meshes beside the URDF"
+            ],
+        )
     with captured_c_stderr() as stderr:
         try:
-            return pin.buildGeomFromUrdf(model, str(path), geometry_type, package_dirs=package_dirs)
+            return pin.buildGeomFromUrdfString(
+                model, text, geometry_type, package_dirs=list(package_dirs)
+            )
         except (RuntimeError, ValueError, OSError) as caught:
             error = caught
-    reasons = [f"Pinocchio: {error}", *_parser_lines(stderr)]
-    reasons += yourdfpy_reasons(read_urdf_text(path), check_meshes=True)
-    raise UrdfError(str(path), reasons) from None
+    raise UrdfError(str(path), [f"Pinocchio: {error}", *_parser_lines(stderr)]) from None
 
 
 def sensor_frame_hint(model: pin.Model) -> str:

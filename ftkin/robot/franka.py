@@ -101,6 +101,9 @@ class FrankaRobot:
     """
 
     nq = 7
+    controller = "franka"
+    """The controller family: libfranka takes the load in the flange ``<prefix>_link8``
+    (:data:`ftkin.kinematics.robots.CONTROLLERS`)."""
 
     def __init__(
         self,
@@ -343,7 +346,7 @@ class FrankaRobot:
                 + "; ".join(problems)
                 + ". Pass the calibration's arm, or allow_other_arm=True if that is deliberate"
             )
-        measured = payload_in_flange(calibration, arm, None, inertia)
+        measured = payload_in_flange(calibration, arm, None, inertia, self.controller)
         if end_effector is None:
             end_effector = self.end_effector()
         sensor_body = RigidBody.point(sensor_mass, sensor_com)  # refuses a negative mass

@@ -31,7 +31,7 @@ import tempfile
 import threading
 import time
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -99,6 +99,11 @@ class SimTruth:
         g: Gravity [m/s²].
         sensor_mass: The sensor body's mass [kg].
         sensor_com_flange: Its centre of mass in the flange frame [m].
+        bodies_in_flange: ``{MuJoCo body name: (mass [kg], centre of mass (3,) [m])}`` of every
+            body from the sensor body down (sensor, hand, fingers, tool), the centre of mass in
+            the flange frame ``fr3_link8`` as MuJoCo places it at the start pose: origin at the
+            flange face (the sensor body's origin), axes of ``fr3_link7`` (the flange is that
+            link's frame moved along its z). An independent truth for the payload hand-off.
     """
 
     mass: float
@@ -107,6 +112,7 @@ class SimTruth:
     g: float
     sensor_mass: float
     sensor_com_flange: np.ndarray
+    bodies_in_flange: dict = field(default_factory=dict)
 
 
 def hand_end_effector() -> tuple[float, tuple, tuple]:
@@ -260,6 +266,10 @@ class FrankaSim:
             SIM_GRAVITY,
             float(self.spec.mass),
             np.asarray(self.spec.center_of_mass, dtype=float),
+            {
+                name: (float(values[0]), np.asarray(values[1:], dtype=float))
+                for name, values in answer["bodies"].items()
+            },
         )
         deadline = time.monotonic() + self.start_timeout
         while self._shared[_TIME] == 0.0 and time.monotonic() < deadline:
@@ -364,13 +374,17 @@ def main(argv=None) -> int:
         server = SimulationServer(sim)
         server.init()
         mass, com = _bind(sim, shared)
+        bodies = _bodies_in_flange(sim)
     except Exception as error:  # reported to the parent, which raises ftkin's error
         print(json.dumps({"error": f"{type(error).__name__}: {error}"}), flush=True)
         return 1
     try:
         server.run_async(realtime=config["realtime"])
         print(
-            json.dumps({"hostname": robot.hostname, "mass": mass, "com": com.tolist()}), flush=True
+            json.dumps(
+                {"hostname": robot.hostname, "mass": mass, "com": com.tolist(), "bodies": bodies}
+            ),
+            flush=True,
         )
         sys.stdin.read()  # until the parent closes it (or dies)
     finally:
@@ -431,6 +445,29 @@ def _edit_scene(sim, tool: SimTool | None, spec: SimSensorSpec) -> None:
     sensors = ET.SubElement(sim.scene, "sensor")
     ET.SubElement(sensors, "force", name="robot0_ft_force", site=SENSOR_SITE)
     ET.SubElement(sensors, "torque", name="robot0_ft_torque", site=SENSOR_SITE)
+
+
+def _bodies_in_flange(sim) -> dict[str, list]:
+    """``{body: [mass, cx, cy, cz]}`` below the flange, centre of mass in the flange frame (see
+    :attr:`SimTruth.bodies_in_flange`), from MuJoCo's own body data.
+    """
+    import mujoco
+
+    model, data = sim.model, sim.data
+    sensor = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, SENSOR_BODY)
+    link7 = int(model.body_parentid[sensor])
+    axes, origin = data.xmat[link7].reshape(3, 3), data.xpos[sensor]
+    below = [sensor]
+    for body in range(model.nbody):  # parents come before children in MuJoCo's body order
+        if int(model.body_parentid[body]) in below and body not in below:
+            below.append(body)
+    return {
+        mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body): [
+            float(model.body_mass[body]),
+            *(axes.T @ (data.xipos[body] - origin)).tolist(),
+        ]
+        for body in below
+    }
 
 
 def _bind(sim, shared: np.ndarray) -> tuple[float, np.ndarray]:

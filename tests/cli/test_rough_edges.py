@@ -57,7 +57,7 @@ def test_frame_names_are_suggested(tmp_path):
 
 
 def test_readable_reprs(arm, truth):
-    assert repr(arm) == "Arm(ftkin_c4.urdf: 6 joints, sensor frame 'ft_sensor', tool frame 'tool')"
+    assert repr(arm) == "Arm(ftkin_c4: 6 joints, sensor frame 'ft_sensor', tool frame 'tool')"
     text = repr(truth)
     assert (
         text.startswith("SensorModel(tool_weight=3.15")

@@ -118,8 +118,13 @@ def test_export_refuses_another_arm_like_compensate(panda_calibration, tmp_path,
     assert "not the one the calibration was made with (--robot panda --sensor-offset" in error
     assert "robot 'ur5', calibrated with 'panda'" in error and "--allow-other-arm" in error
     assert not out.exists()
-    assert main([*command, "--robot", "ur5", "--allow-other-arm"]) == 0
-    capsys.readouterr()
+    # a deliberate reuse on a UR: its own controller's format, in its flange tool0
+    ur = ["export", str(path), "--format", "ur-payload", "-o", str(out), "--robot", "ur5"]
+    assert main([*ur, "--allow-other-arm"]) == 0
+    assert "flange frame 'tool0'" in capsys.readouterr().out
+    # a Franka payload for a UR arm is refused, naming --flange-frame
+    assert main([*command, "--robot", "ur5", "--allow-other-arm"]) == 2
+    assert "--flange-frame" in capsys.readouterr().err
     # the ROS formats check the arm too when one is named
     ros = ["export", str(path), "--format", "ft-calib", "-o", str(tmp_path / "f.yaml")]
     assert main([*ros, "--robot", "ur5"]) == 2
@@ -154,6 +159,46 @@ def test_flange_frames_come_from_the_robot_table(name, tool):
     payload = payload_in_flange(tool, arm)
     assert payload.flange_frame == ROBOT_SPECS[name].flange_frame
     np.testing.assert_allclose(payload.center_of_mass, tool.center_of_mass, atol=1e-12)
+
+
+def test_a_urdf_arms_flange_is_the_controllers_rule_or_refused(tool):
+    """Never guessed: an arm from a URDF gets its flange from the payload's controller rule
+    (Franka: <prefix>_link8, UR: tool0); without a controller, or with no such frame, it is
+    refused naming --flange-frame."""
+    from ftkin import Arm
+    from ftkin.kinematics.fr3 import fr3_urdf_path
+
+    fr3 = Arm.from_urdf(fr3_urdf_path(), "fr3_hand")  # not loaded by name
+    assert flange_frame_name(fr3, "franka") == "fr3_link8"
+    with pytest.raises(InvalidInput, match="--flange-frame"):
+        flange_frame_name(fr3)
+    with pytest.raises(InvalidInput, match="no such frame.*--flange-frame"):
+        flange_frame_name(fr3, "ur")
+    with pytest.raises(InvalidInput, match="--flange-frame"):
+        payload_in_flange(tool, Arm.from_urdf(fr3_urdf_path(), "fr3_hand"))
+    # the hand frame is the flange turned by −45° about z: the centre of mass turns with it
+    payload = payload_in_flange(tool, fr3, controller="franka")
+    c, s = np.cos(-np.pi / 4), np.sin(-np.pi / 4)
+    hand_to_flange = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    np.testing.assert_allclose(
+        payload.center_of_mass, hand_to_flange @ tool.center_of_mass, atol=1e-12
+    )
+
+
+def test_export_without_a_recorded_arm_is_refused(tmp_path, capsys, tool):
+    """A calibration made from orientations records no arm: a payload needs one named."""
+    from ftkin.calibration.result import CalibrationResult
+
+    result = CalibrationResult(
+        tool.force_offset, tool.torque_offset, tool.gravity_in_base, tool.center_of_mass
+    )
+    path = save_calibration(result, tmp_path / "no-arm.json")
+    out = tmp_path / "load.yaml"
+    command = ["export", str(path), "--format", "franka-load", "-o", str(out)]
+    assert main(command) == 2
+    assert "records none" in capsys.readouterr().err and not out.exists()
+    assert main([*command, "--robot", "fr3"]) == 0
+    assert "'fr3_link8'" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(

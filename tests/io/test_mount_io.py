@@ -110,7 +110,9 @@ def _com_in_flange_by_kinematics(arm, calibration, flange):
 def test_franka_load_parsed_back_matches_hand_computation(mounted, arm, tmp_path):
     result, _ = mounted
     inertia = [0.01, 0.02, 0.03, 0.001, 0.0, -0.002]
-    path = export_payload(result, arm, tmp_path / "load.yaml", "franka-load", inertia=inertia)
+    path = export_payload(
+        result, arm, tmp_path / "load.yaml", "franka-load", flange_frame="flange", inertia=inertia
+    )
     request = yaml.safe_load(path.read_text())
     assert set(request) == {"mass", "center_of_mass", "load_inertia"}
     assert request["mass"] == pytest.approx(
@@ -157,14 +159,15 @@ def test_ur_payload_on_ur5_parsed_back(tool, tmp_path):
 def test_cli_exports_payloads(mounted, tmp_path, capsys):
     result, _ = mounted
     calib = save_calibration(result, tmp_path / "calib.json")
-    assert (
-        main(["export", str(calib), "--format", "franka-load", "-o", str(tmp_path / "f.yaml")]) == 0
-    )
+    franka = ["export", str(calib), "--format", "franka-load", "-o", str(tmp_path / "f.yaml")]
+    # the bundled arm is no Franka: its flange is named, never assumed
+    assert main(franka) == 2
+    assert "--flange-frame" in capsys.readouterr().err
+    assert main([*franka, "--flange-frame", "flange"]) == 0
     assert "flange frame 'flange'" in capsys.readouterr().out
     assert "load_inertia" in yaml.safe_load((tmp_path / "f.yaml").read_text())
-    assert (
-        main(["export", str(calib), "--format", "ur-payload", "-o", str(tmp_path / "u.yaml")]) == 0
-    )
+    ur = ["export", str(calib), "--format", "ur-payload", "-o", str(tmp_path / "u.yaml")]
+    assert main([*ur, "--flange-frame", "flange"]) == 0
 
 
 def test_base_frame_wrenches_are_converted(arm, caplog):
@@ -217,7 +220,9 @@ def test_franka_load_takes_a_dynamic_calibrations_inertia_into_flange_axes(mount
     fields["inertia_about_com_in_sensor"] = inertia_in_sensor
     dynamic = DynamicCalibrationResult(**fields)
     request = yaml.safe_load(
-        export_payload(dynamic, arm, tmp_path / "load.yaml", "franka-load").read_text()
+        export_payload(
+            dynamic, arm, tmp_path / "load.yaml", "franka-load", flange_frame="flange"
+        ).read_text()
     )
     q = arm.random_configurations(1, np.random.default_rng(3))[0]
     rotation_flange, _ = arm.frame_placement(q, "flange")

@@ -80,8 +80,9 @@ def test_ur5_sensor_offset_composes_with_tool0(rng):
 def test_every_registered_robot_loads():
     for name in ROBOTS:
         arm = load_robot(name)
-        assert arm.sensor_frame == "ft_sensor"
+        assert arm.sensor_frame == ("fr3_hand" if name == "fr3" else "ft_sensor")
         assert arm.model.nq == arm.model.nv >= 6
+        assert arm.robot_name == name
 
 
 def test_meshes_resolve_through_share_folder():

@@ -130,6 +130,54 @@ def test_payload_round_trip(sim, robot, arm, session):
     np.testing.assert_allclose(mass, truth.mass - end_effector.mass + truth.sensor_mass, rtol=0.01)
 
 
+def load_from_simulated_bodies(truth, end_effector) -> tuple[float, np.ndarray]:
+    """What the controller must hold, from MuJoCo's own bodies in the flange ``fr3_link8``:
+    everything from the sensor body down (sensor body, hand, fingers, tool) minus the end
+    effector the robot reports as configured (libfranka m_ee, F_x_Cee). Nothing of ftkin's
+    calibration, URDF or payload code is used.
+    """
+    masses = np.array([mass for mass, _ in truth.bodies_in_flange.values()])
+    moments = np.array([mass * com for mass, com in truth.bodies_in_flange.values()])
+    mass = masses.sum() - end_effector.mass
+    return mass, (moments.sum(axis=0) - end_effector.mass * end_effector.center_of_mass) / mass
+
+
+def test_the_load_sent_is_in_the_flange_frame_of_the_simulated_bodies(sim, robot, session):
+    """The FR3 load (mass, centre of mass) in fr3_link8 within 1 mm of MuJoCo's bodies: the
+    hand frame (turned −45° about z) taken as the flange put it about 11 mm off."""
+    result, _ = session
+    end_effector = robot.end_effector()
+    robot.set_payload(
+        result, sensor_mass=sim.truth.sensor_mass, sensor_com=sim.truth.sensor_com_flange
+    )
+    mass, com, _ = robot.payload()
+    expected_mass, expected_com = load_from_simulated_bodies(sim.truth, end_effector)
+    np.testing.assert_allclose(mass, expected_mass, rtol=0.01)
+    assert np.linalg.norm(com - expected_com) < 1e-3, (com, expected_com)
+
+
+def test_export_franka_load_is_in_the_flange_frame_of_the_simulated_bodies(
+    sim, robot, session, tmp_path
+):
+    import yaml
+
+    from ftkin.cli import main
+
+    _, folder = session
+    end_effector = robot.end_effector()
+    out = tmp_path / "load.yaml"
+    numbers = lambda mass, com: [str(value) for value in (mass, *com)]  # noqa: E731
+    argv = ["export", str(folder / "calib.json"), "--format", "franka-load", "-o", str(out)]
+    argv += ["--end-effector", *numbers(end_effector.mass, end_effector.center_of_mass)]
+    argv += ["--sensor-body", *numbers(sim.truth.sensor_mass, sim.truth.sensor_com_flange)]
+    assert main(argv) == 0
+    written = yaml.safe_load(out.read_text())
+    expected_mass, expected_com = load_from_simulated_bodies(sim.truth, end_effector)
+    np.testing.assert_allclose(written["mass"], expected_mass, rtol=0.01)
+    com = np.array(written["center_of_mass"])
+    assert np.linalg.norm(com - expected_com) < 1e-3, (com, expected_com)
+
+
 def test_cli_payload_sends_and_reads_back(session, capsys):
     from ftkin.cli import main
 
