@@ -34,6 +34,7 @@ from .common import (
     SG_WINDOW,
     add_samples_arguments,
     arm_from_args,
+    column_spelling_from_args,
     load_samples_from_args,
 )
 from .doctor import refuse_convention_mistakes
@@ -238,7 +239,7 @@ def _run_dynamic(args, noise) -> int:
             args.samples, arm, args.joint_topic, args.wrench_topic, args.wrench_frame
         )
     else:
-        recording = load_motion_csv(args.samples, arm)
+        recording = load_motion_csv(args.samples, arm, column_spelling_from_args(args))
     result = calibrate_dynamic(
         recording.motion_samples(arm, args.sg_window),
         estimate_inertia=not args.no_inertia,

@@ -21,6 +21,7 @@ from .arg_types import (
     positive_float,
     refuse,
 )
+from .declared import add_declared, declared_values
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -137,9 +138,30 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     return None
 
 
+def add_column_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--column NAME=COLUMN`` and ``--time-unit``: how a file spells ftkin's columns
+    (:class:`~ftkin.io.column_spelling.ColumnSpelling`)."""
+    from ..io.column_spelling import ColumnSpelling
+
+    add_declared(
+        parser,
+        ColumnSpelling,
+        group="columns in other spellings (Fx..Tz, force.x and units in the header such as "
+        "'Fx (lbf)' are read without options)",
+    )
+
+
+def column_spelling_from_args(args: argparse.Namespace):
+    """The :class:`~ftkin.io.column_spelling.ColumnSpelling` of :func:`add_column_arguments`."""
+    from ..io.column_spelling import ColumnSpelling
+
+    return ColumnSpelling(**declared_values(ColumnSpelling, args))
+
+
 def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments about how a samples file or a ROS 2 bag is read."""
     add_arm_arguments(parser)
+    add_column_arguments(parser)
     from ..io.static_segments import SegmentParameters
 
     defaults = SegmentParameters()
@@ -321,7 +343,8 @@ def load_samples_from_args(
         speed_window=args.speed_window,
     )
     if not is_bag_path(path):
-        loaded = load_samples(path, arm, parameters if static_only else None)
+        spelling = column_spelling_from_args(args)
+        loaded = load_samples(path, arm, parameters if static_only else None, spelling)
     else:
         loaded = bag_samples(
             path,

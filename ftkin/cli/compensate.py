@@ -5,6 +5,7 @@ import numpy as np
 from .. import Arm, Compensator, InvalidInput, load_calibration
 from ..calibration.model import WRENCH_CHANNELS
 from ..io.bags import is_bag_path
+from ..io.column_spelling import spelled_table
 from ..io.csv_table import read_table, write_csv
 from .arg_types import add_command, option
 from .common import (
@@ -12,6 +13,7 @@ from .common import (
     SG_WINDOW,
     add_samples_arguments,
     arm_for_calibration,
+    column_spelling_from_args,
     load_samples_from_args,
     logger,
     warn_if_kinematics_differ,
@@ -103,7 +105,7 @@ def _compensate_motion(args, calibration, arm: Arm) -> int | None:
             [recording.times, recording.joint_positions, recording.wrenches]
         ).tolist()
     else:
-        table = read_table(args.log)
+        table = spelled_table(read_table(args.log), column_spelling_from_args(args))
         if not is_motion_table(table, arm):
             logger.warning(
                 "%s has no 't' and joint columns: static compensation only (no inertial term)",

@@ -1,10 +1,17 @@
 """``ftkin doctor SAMPLES.csv [robot options]``: which convention the data fit, on demand."""
 
 from ..exceptions import ConventionMistake
+from ..io.column_spelling import spelled_table
 from ..io.csv_table import read_table
 from ..io.table_readings import diagnose_table
 from .arg_types import add_command, option
-from .common import add_arm_arguments, arm_from_args, logger
+from .common import (
+    add_arm_arguments,
+    add_column_arguments,
+    arm_from_args,
+    column_spelling_from_args,
+    logger,
+)
 
 
 def register(subparsers) -> None:
@@ -21,13 +28,13 @@ def register(subparsers) -> None:
         "explains the data. "
         "Exit code 0 when the data fit as given (or only a suspicion), 1 when a mistake is named.",
         options=(option("samples", metavar="SAMPLES.csv"),),
-        groups=(add_arm_arguments,),
+        groups=(add_arm_arguments, add_column_arguments),
         run=run,
     )
 
 
 def run(args) -> int:
-    table = read_table(args.samples)
+    table = spelled_table(read_table(args.samples), column_spelling_from_args(args))
     report = diagnose_table(table, arm_from_args(args))
     print(
         f"{args.samples}: {len(table.rows)} readings; linear fit under each reading (chi² with the "

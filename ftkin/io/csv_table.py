@@ -191,16 +191,25 @@ def missing_columns(table: Table, wanted, what: str) -> None:
     if not missing:
         return
     lowered = {column.lower(): column for column in reversed(table.header)}  # the first one
-    hints = []
+    hints, flags = [], []
     for name in missing:
         close = lowered.get(name.lower())
+        if close is None:  # a column spelled as the name with a suffix: Fz_N, fz (N)
+            close = next(
+                (c for c in table.header if c.lower().startswith(name.lower()) and c != name), None
+            )
         if close is None and len(table.header) <= 1000:
             import difflib  # only for an error message
 
             close = next(iter(difflib.get_close_matches(name, table.header, n=1)), None)
         if close is not None:
             hints.append(f"rename column {close!r} to {name!r}")
-    hint = (" (did you mean: " + "; ".join(hints) + "?)") if hints else ""
+            flags.append(f"--column {name}={close}")
+    hint = (
+        (" (did you mean: " + "; ".join(hints) + "?); or read it as it is with " + " ".join(flags))
+        if hints
+        else ""
+    )
     shown = table.header if len(table.header) <= 30 else [*table.header[:30], "..."]
     raise InvalidSamples(
         f"missing {what} column(s) {missing}{hint}; the header has {shown}",

@@ -31,8 +31,9 @@ from ..calibration.derivatives import DEFAULT_POLYORDER, joint_derivatives
 from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.regressor import MotionSamples
 from ..exceptions import InvalidInput, InvalidSamples
-from .csv_table import Table, missing_columns, read_table, rename_columns
-from .samples_csv import check_radians, check_wrench_magnitude, detect_orientation, wrench_aliases
+from .column_spelling import ColumnSpelling, spelled_table
+from .csv_table import Table, missing_columns, read_table
+from .samples_csv import check_radians, check_wrench_magnitude, detect_orientation
 from .time_columns import TIME_COLUMN, times_from_table
 
 logger = logging.getLogger(__name__)
@@ -95,7 +96,7 @@ def is_motion_table(table: Table, arm) -> bool:
         return False
 
 
-def motion_from_table(table: Table, arm) -> MotionRecording:
+def motion_from_table(table: Table, arm, spelling: ColumnSpelling | None = None) -> MotionRecording:
     """A :class:`MotionRecording` from a parsed motion CSV.
 
     Raises:
@@ -103,7 +104,7 @@ def motion_from_table(table: Table, arm) -> MotionRecording:
             degrees, fewer than 3 rows, or times not increasing (with file and line).
     """
     # ROS names (force.x, ...) as for static samples
-    table = rename_columns(table, wrench_aliases(table.header))
+    table = spelled_table(table, spelling)
     times = times_from_table(table)
     if times is None:
         missing_columns(table, (TIME_COLUMN,), "time")
@@ -203,9 +204,9 @@ def given_derivatives(table: Table, columns: list[str], times: np.ndarray, joint
     return velocities, accelerations
 
 
-def load_motion_csv(path, arm) -> MotionRecording:
-    """Read a motion CSV (see the module docstring)."""
-    return motion_from_table(read_table(path), arm)
+def load_motion_csv(path, arm, spelling: ColumnSpelling | None = None) -> MotionRecording:
+    """Read a motion CSV (see the module docstring; ``spelling``: other names and units)."""
+    return motion_from_table(read_table(path), arm, spelling)
 
 
 def uniform(times: np.ndarray, *arrays: np.ndarray) -> tuple[np.ndarray, ...]:

@@ -7,7 +7,13 @@ in exactly one convention:
 * joint columns: the URDF's joint names, or ``q1..qn`` in joint order [rad];
 * ``alpha,beta,gamma``: the paper's commanded Euler angles [deg],
   ``R_BS = Rz(α) Ry(β) Rx(γ)``;
-* ``qw,qx,qy,qz``: unit quaternion of the sensor frame in the base frame.
+* ``qw,qx,qy,qz``: unit quaternion of the sensor frame in the base frame;
+* ``r11,r12,...,r33``: the nine entries of ``R_BS``, row-major (``r12`` is row 1, column 2),
+  orthonormal within 1e-3 (then re-orthonormalized).
+
+Columns in other spellings (``Fx..Tz``, ``force.x``, units in the header such as ``Fx (lbf)``,
+``--column NAME=COLUMN``, ``--time-unit``) are read through
+:mod:`ftkin.io.column_spelling` first.
 
 An optional integer ``pose`` column groups repeated readings of one pose; an
 optional ``t`` column gives each reading's time [s] (a drifting bias is then
@@ -31,7 +37,6 @@ refused.
 
 import logging
 import re
-from collections import Counter
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -40,9 +45,14 @@ import numpy as np
 from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.samples import Samples
 from ..exceptions import InvalidSamples
-from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
+from ..kinematics.rotations import (
+    euler_zyx_deg_to_matrix,
+    matrix_entries_to_matrix,
+    quaternion_to_matrix,
+)
 from ..validation import MAX_ID, MAX_WRENCH, as_names
-from .csv_table import Table, missing_columns, read_table, rename_columns
+from .column_spelling import ColumnSpelling, spelled_table
+from .csv_table import Table, missing_columns, read_table
 from .static_segments import SegmentParameters, SegmentSearch, segment_index
 from .table_layout import POSE_COLUMN_LAYOUT, RECORDING, TableLayout, table_layout
 from .time_columns import times_from_table
@@ -54,33 +64,18 @@ logger = logging.getLogger(__name__)
 
 EULER_COLUMNS = ("alpha", "beta", "gamma")
 QUATERNION_COLUMNS = ("qw", "qx", "qy", "qz")
+MATRIX_COLUMNS = tuple(f"r{row}{column}" for row in (1, 2, 3) for column in (1, 2, 3))
+"""``r11, r12, ..., r33``: the entries of ``R_BS``, row-major (``r12``: row 1, column 2)."""
 POSE_COLUMN = "pose"
 _GENERIC_JOINT = re.compile(r"^q(\d+)$")
 _DEGREES_THRESHOLD = 2.0 * np.pi + 0.01
-_ROS_WRENCH = re.compile(r"^(?:(?:.*[./_])?(force|torque)[._]|t)([xyz])$", re.IGNORECASE)
 _ANGLE_COLUMNS = {
     "euler": (EULER_COLUMNS, "Euler angle"),
     "quaternion": (QUATERNION_COLUMNS, "quaternion"),
+    "matrix": (MATRIX_COLUMNS, "rotation matrix"),
 }
 MAX_POSE_ID = MAX_ID
 """Largest pose id magnitude: every integer up to it is exact in a float64 cell."""
-
-
-def wrench_aliases(header) -> dict[str, str]:
-    """``{column: ftkin name}`` for ROS-style wrench columns when ftkin's names are absent.
-
-    Accepted: ``force.x``/``torque.x`` (also ``force_x``, ``wrench.force.x``,
-    ``field.wrench.torque.z``, any prefix ending in ``.``, ``_`` or ``/``) and
-    ``tx,ty,tz`` for the torques.
-    """
-    matches = {name: _ROS_WRENCH.match(name) for name in header}
-    aliases = {
-        name: ("f" if (match[1] or "").lower() == "force" else "m") + match[2].lower()
-        for name, match in matches.items()
-        if match
-    }
-    counts = Counter(aliases.values())
-    return {old: new for old, new in aliases.items() if new not in header and counts[new] == 1}
 
 
 def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
@@ -151,7 +146,7 @@ def _no_orientation(table: Table, joint_names) -> None:
     )
     raise InvalidSamples(
         f"no orientation columns: expected {joints} [rad], or alpha,beta,gamma [deg], or "
-        f"qw,qx,qy,qz{hint}; the header has {table.header}",
+        f"qw,qx,qy,qz, or r11..r33 (R_BS row-major){hint}; the header has {table.header}",
         table.source,
         table.header_line,
     )
@@ -234,12 +229,17 @@ def orientations_from_table(table: Table, arm=None) -> TableOrientations:
     """
     from ..kinematics.arm import Arm
 
-    if arm is None and not any(name in table.header for name in EULER_COLUMNS + QUATERNION_COLUMNS):
+    angles = EULER_COLUMNS + QUATERNION_COLUMNS + MATRIX_COLUMNS
+    if arm is None and not any(name in table.header for name in angles):
         arm = Arm.default()
     # with Euler or quaternion columns (no arm), any joint column is refused as mixed in
     kind, columns = detect_orientation(table, arm.joint_names if arm is not None else None)
     values = table.floats(columns)
-    convert = {"euler": euler_zyx_deg_to_matrix, "quaternion": quaternion_to_matrix}.get(kind)
+    convert = {
+        "euler": euler_zyx_deg_to_matrix,
+        "quaternion": quaternion_to_matrix,
+        "matrix": matrix_entries_to_matrix,
+    }.get(kind)
     try:
         if convert is not None:
             return TableOrientations(convert(values).reshape(-1, 3, 3), kind, columns)
@@ -349,16 +349,20 @@ def read_layout(table: Table, orientations: TableOrientations, times, parameters
 
 
 def samples_from_table(
-    table: Table, arm=None, segments: SegmentParameters | None = None
+    table: Table,
+    arm=None,
+    segments: SegmentParameters | None = None,
+    spelling: ColumnSpelling | None = None,
 ) -> LoadedSamples:
     """Build :class:`Samples` from a table; ``arm`` is needed for joint columns.
 
     When the table has joint columns and ``arm`` is None, the bundled arm is used.
-    ROS-style wrench names (``force.x``, ``torque.x``, ``tx``) are read as ftkin's.
+    The table's columns are read through ``spelling`` first (:func:`~ftkin.io.column_spelling.
+    spelled_table`: other names, units in the header, the time unit).
     ``segments``: how still segments of a continuous recording are found (see
     the module docstring); None (the default) keeps every row.
     """
-    table = rename_columns(table, wrench_aliases(table.header))
+    table = spelled_table(table, spelling)
     missing_columns(table, WRENCH_CHANNELS, "wrench")
     orientations = orientations_from_table(table, arm)
     times = times_from_table(table)
@@ -385,6 +389,12 @@ def samples_from_table(
     return LoadedSamples(samples, table, orientations.kind, orientations.columns, layout)
 
 
-def load_samples(path, arm=None, segments: SegmentParameters | None = None) -> LoadedSamples:
-    """Read a samples CSV (see the module docstring for its columns and ``segments``)."""
-    return samples_from_table(read_table(path), arm, segments)
+def load_samples(
+    path,
+    arm=None,
+    segments: SegmentParameters | None = None,
+    spelling: ColumnSpelling | None = None,
+) -> LoadedSamples:
+    """Read a samples CSV (see the module docstring for its columns and ``segments``;
+    ``spelling``: :class:`~ftkin.io.column_spelling.ColumnSpelling`, other names and units)."""
+    return samples_from_table(read_table(path), arm, segments, spelling)

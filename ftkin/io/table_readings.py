@@ -13,16 +13,21 @@ from ..calibration.doctor import ConventionReport, Reading, diagnose_readings, w
 from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.samples import Samples
 from ..exceptions import FtkinError
-from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
-from .csv_table import Table, missing_columns, rename_columns
+from ..kinematics.rotations import (
+    euler_zyx_deg_to_matrix,
+    matrix_entries_to_matrix,
+    quaternion_to_matrix,
+)
+from .column_spelling import spelled_table
+from .csv_table import Table, missing_columns
 from .samples_csv import (
     EULER_COLUMNS,
+    MATRIX_COLUMNS,
     QUATERNION_COLUMNS,
     check_wrench_magnitude,
     detect_orientation,
     orientations_from_table,
     pose_ids_from_table,
-    wrench_aliases,
 )
 
 
@@ -45,12 +50,13 @@ def table_readings(table: Table, arm=None) -> list[Reading]:
     """
     from ..kinematics.arm import Arm
 
-    table = rename_columns(table, wrench_aliases(table.header))
+    table = spelled_table(table)
     missing_columns(table, WRENCH_CHANNELS, "wrench")
     wrenches = table.floats(WRENCH_CHANNELS)
     check_wrench_magnitude(table, wrenches)
     pose_ids = pose_ids_from_table(table)
-    has_angles = any(name in table.header for name in EULER_COLUMNS + QUATERNION_COLUMNS)
+    angles = EULER_COLUMNS + QUATERNION_COLUMNS + MATRIX_COLUMNS
+    has_angles = any(name in table.header for name in angles)
     if arm is None and not has_angles:
         arm = Arm.default()
     kind, columns = detect_orientation(table, arm.joint_names if arm is not None else None)
@@ -66,6 +72,11 @@ def table_readings(table: Table, arm=None) -> list[Reading]:
             "the quaternion as x,y,z,w",
             "name the columns qx,qy,qz,qw (the order they hold)",
             lambda: quaternion_to_matrix(values[:, [3, 0, 1, 2]]),
+        ),
+        "matrix": (
+            "the matrix transposed (R_SB, or the entries column-major)",
+            "write R_BS row-major: r12 is row 1, column 2 (swap rIJ and rJI)",
+            lambda: np.transpose(matrix_entries_to_matrix(values), (0, 2, 1)),
         ),
         "joints": (
             "joint angles in degrees",

@@ -3,11 +3,11 @@
 Without ``t``, one column named ``time``, ``time_s``, ``t_s``, ``timestamp``,
 ``stamp`` or ``%time`` is read as seconds, and ``t_ms``/``time_ms``,
 ``t_us``/``time_us``, ``t_ns``/``time_ns`` are converted (a unit is applied
-only where the column's name says it). An alias whose cells are not numbers (ISO dates, say) is not
-a time here: it
-is left alone with a warning, and so is one spanning more than a year (ROS
-stamps in nanoseconds): only a column named ``t`` is refused for that. Two
-numeric candidates are an error. Used by
+only where the column's name says it; ``--time-unit``, :class:`~ftkin.io.column_spelling.
+ColumnSpelling`, gives the unit of any of them). An alias whose cells are not numbers (ISO dates,
+say) is not a time here: it is left alone with a warning. A time column whose values are plainly
+not seconds (beyond :data:`NOT_SECONDS`: epoch milliseconds, microseconds or nanoseconds) is
+refused, naming ``--time-unit``. Two numeric candidates are an error. Used by
 the samples CSV, the motion recordings, bag extraction and the viewer.
 """
 
@@ -60,13 +60,43 @@ def _numeric(table: Table, name: str) -> bool:
     return True
 
 
+NOT_SECONDS = 1e11
+"""A time [s] beyond this (the year 5138 in seconds since 1970) is plainly not seconds: epoch
+milliseconds are about 1.7e12, microseconds 1.7e15, nanoseconds 1.7e18."""
+
+
+def refuse_times_not_seconds(table: Table, column: str, times: np.ndarray) -> None:
+    """Refuse a time column whose values are plainly not seconds, naming ``--time-unit``."""
+    largest = float(np.max(np.abs(times), initial=0.0))
+    if largest <= NOT_SECONDS:
+        return
+    row = int(np.argmax(np.abs(times)))
+    guess = next(
+        (
+            unit
+            for unit, scale in (("ns", 1e18), ("us", 1e15), ("ms", 1e12))
+            if largest >= scale / 10
+        ),
+        "ms",
+    )
+    raise InvalidSamples(
+        f"column {column!r} holds {times[row]:.6g}: not seconds (as seconds since 1970 that "
+        f"is {largest / 3.156e7:.3g} years); give its unit with --time-unit {guess} (Python: "
+        f"ColumnSpelling(time_unit={guess!r})), e.g. for {guess} since the epoch",
+        table.source,
+        table.lines[row],
+    )
+
+
 def times_from_table(table: Table) -> np.ndarray | None:
     """The ``t`` column ``(N,)`` [s] (or its one numeric alias, converted), or None when the table
     has none.
     """
     if TIME_COLUMN in table.header:
         # ftkin's own column: a span beyond a year is refused by Samples, naming the likely unit
-        return table.floats([TIME_COLUMN])[:, 0]
+        times = table.floats([TIME_COLUMN])[:, 0]
+        refuse_times_not_seconds(table, TIME_COLUMN, times)
+        return times
     found = [
         name for name in table.header if name.lower() in TIME_ALIASES and _numeric(table, name)
     ]
@@ -78,6 +108,8 @@ def times_from_table(table: Table) -> np.ndarray | None:
         )
     name, factor = found[0], TIME_ALIASES[found[0].lower()]
     times = table.floats([name])[:, 0] * factor
+    if factor == 1.0:
+        refuse_times_not_seconds(table, name, times)
     span = float(np.ptp(times))
     if span > LONGEST_TIME_SPAN:
         logger.warning(

@@ -94,6 +94,41 @@ def quaternion_to_matrix(quaternion_wxyz, atol: float = 1e-3) -> np.ndarray:
     return out[0] if single else out
 
 
+def matrix_entries_to_matrix(entries_row_major, atol: float = 1e-3) -> np.ndarray:
+    """Nine entries ``r11, r12, r13, r21, ..., r33`` of ``R_BS`` (row-major: ``r12`` is row 1,
+    column 2) to ``(N, 3, 3)`` rotation matrices, re-orthonormalized (nearest rotation, by SVD).
+
+    Args:
+        entries_row_major: ``(9,)`` or ``(N, 9)``.
+        atol: Largest allowed deviation of ``RᵀR`` from the identity (entries printed with a few
+            digits pass; a scaled, sheared or mistyped matrix does not).
+
+    Raises:
+        InvalidInput: a matrix that is not a rotation (not orthonormal within ``atol``, or a
+            reflection with determinant −1), naming its index.
+    """
+    entries, single = as_batch(entries_row_major, 9, "rotation matrix entries r11..r33")
+    matrices = entries.reshape(-1, 3, 3)
+    gram = np.einsum("nki,nkj->nij", matrices, matrices) - np.eye(3)
+    error = np.abs(gram).max(axis=(1, 2))
+    determinant = np.linalg.det(matrices)
+    bad = np.flatnonzero((error > atol) | (determinant <= 0))
+    if bad.size:
+        i = int(bad[0])
+        what = (
+            f"determinant {determinant[i]:.4f} (a reflection: an axis reversed)"
+            if determinant[i] <= 0
+            else f"RᵀR off the identity by {error[i]:.3g}"
+        )
+        raise InvalidInput(
+            f"rotation matrix r11..r33 #{i} is not a rotation: {what}; expected the row-major "
+            "entries of R_BS (orthonormal, determinant +1)"
+        )
+    u, _, vt = np.linalg.svd(matrices)
+    out = u @ vt
+    return out[0] if single else out
+
+
 def matrix_to_quaternion(rotation) -> np.ndarray:
     """Rotation matrices to unit quaternions ``[w, x, y, z]`` with ``w >= 0``.
 

@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 import ftkin
-from ftkin.io.csv_table import read_table, sniff_delimiter
-from ftkin.io.samples_csv import load_samples, wrench_aliases
+from ftkin.io.column_spelling import spelled_table
+from ftkin.io.csv_table import Table, read_table, sniff_delimiter
+from ftkin.io.samples_csv import load_samples
 from ftkin.kinematics.rotations import matrix_to_euler_zyx
 
 WRENCH = ["fx", "fy", "fz", "mx", "my", "mz"]
@@ -99,10 +100,20 @@ def test_ros_style_wrench_names_are_accepted(data, tmp_path, names):
         _text([f"q{i + 1}" for i in range(6)] + names, np.hstack([q, wrenches])),
     )
     np.testing.assert_allclose(load_samples(path).samples.wrenches, wrenches, rtol=1e-15)
-    assert wrench_aliases(["fx", "mx", "tx"]) == {}  # ftkin's own names win; nothing renamed
+    own = Table("t.csv", ["fx", "mx", "tx"], [["1", "2", "3"]], [2], 1)
+    assert spelled_table(own).header == ["fx", "mx", "tx"]  # ftkin's own names win
 
 
-@pytest.mark.parametrize("wrong, right", [("Fx", "fx"), ("FX", "fx"), ("f_x", "fx"), ("Mz", "mz")])
+@pytest.mark.parametrize("other, right", [("Fx", "fx"), ("FX", "fx"), ("Mz", "mz"), ("Tz", "mz")])
+def test_the_vendors_spellings_are_read(data, tmp_path, other, right):
+    """ATI's and Bota's own names (Fx..Tz), in any case, are ftkin's wrench columns."""
+    q, _, wrenches = data
+    header = [f"q{i + 1}" for i in range(6)] + [other if n == right else n for n in WRENCH]
+    path = _write(tmp_path / "case.csv", _text(header, np.hstack([q, wrenches])))
+    np.testing.assert_allclose(load_samples(path).samples.wrenches, wrenches, rtol=1e-15)
+
+
+@pytest.mark.parametrize("wrong, right", [("f_x", "fx"), ("Fx_N", "fx")])
 def test_did_you_mean_maps_the_users_name_to_ftkins(data, tmp_path, wrong, right):
     q, _, wrenches = data
     header = [f"q{i + 1}" for i in range(6)] + [wrong if n == right else n for n in WRENCH]

@@ -87,6 +87,7 @@ def test_partial_or_lone_derivatives(arm, tmp_path, caplog):
 
 
 def test_nanosecond_stamps_and_ros_wrench_names_in_a_moving_recording(arm, tmp_path, caplog):
+    from ftkin.io.column_spelling import ColumnSpelling
     from ftkin.io.csv_table import read_table
     from ftkin.io.motion_recording import is_motion_table
 
@@ -101,8 +102,10 @@ def test_nanosecond_stamps_and_ros_wrench_names_in_a_moving_recording(arm, tmp_p
     )
     with caplog.at_level(logging.WARNING, logger="ftkin"):
         assert not is_motion_table(read_table(path), arm)  # a static log then, not a crash
-        with pytest.raises(InvalidSamples, match="missing time column"):
+        with pytest.raises(InvalidSamples, match="not seconds.*--time-unit ns"):
             load_motion_csv(path, arm)
+    spelled = load_motion_csv(path, arm, ColumnSpelling(time_unit="ns"))
+    np.testing.assert_allclose(spelled.times - spelled.times[0], t - t[0], rtol=0, atol=1e-6)
     path = tmp_path / "ros.csv"
     write_csv(path, ["t", *arm.joint_names, *ros], np.column_stack([t, q, wrench]).tolist())
     np.testing.assert_allclose(load_motion_csv(path, arm).wrenches, wrench)

@@ -146,11 +146,11 @@ def test_missing_file(tmp_path):
 
 def test_misspelled_wrench_column_suggests(tmp_path):
     # regression: a case-only difference was not suggested (difflib ratio too low for 2 letters)
-    text = HEADER.replace("fz", "Fz") + "\n" + ROW + "\n"
+    text = HEADER.replace("fz", "Fz_N") + "\n" + ROW + "\n"
     _assert_error(
         tmp_path,
         text,
-        r"missing wrench column\(s\) \['fz'\] \(did you mean: rename column 'Fz' to 'fz'\?\)",
+        r"missing wrench column\(s\) \['fz'\] \(did you mean: rename column 'Fz_N' to 'fz'\?\)",
         line=1,
     )
 
@@ -300,11 +300,11 @@ def test_non_unit_quaternion(tmp_path):
 
 def test_missing_column_points_at_the_header_line(tmp_path):
     # regression: the line was the one before the first data row, a comment here
-    text = "# c1\n" + HEADER.replace("my", "My") + "\n# c2\n# c3\n" + ROW + "\n"
+    text = "# c1\n" + HEADER.replace("my", "Myy") + "\n# c2\n# c3\n" + ROW + "\n"
     _assert_error(
         tmp_path,
         text,
-        r"missing wrench column\(s\) \['my'\] \(did you mean: rename column 'My' to 'my'",
+        r"missing wrench column\(s\) \['my'\] \(did you mean: rename column 'Myy' to 'my'",
         line=2,
     )
 

@@ -67,16 +67,19 @@ def test_a_textual_timestamp_column_is_left_alone(tmp_path, caplog):
     assert "column 'timestamp' is not numbers of seconds" in caplog.text
 
 
-def test_an_alias_in_nanoseconds_is_left_alone_but_t_is_refused(tmp_path, caplog):
-    import logging
+def test_times_that_are_plainly_not_seconds_are_refused_naming_time_unit(tmp_path):
+    """Nanoseconds since the epoch in an alias or in t: refused, naming --time-unit ns; with it,
+    seconds since the epoch (the stamps' own spacing, 30 s, kept exactly)."""
+    from ftkin.io.column_spelling import ColumnSpelling
 
     rows = "0,0,0,1,2,-9,0.1,0.2,0\n90,0,0,1.5,2,-3,0,0.3,0\n0,90,0,-8,2,1,0.2,0,0.1\n"
     stamps = ["1764410400000000000", "1764410430000000000", "1764410460000000000"]
     text = "".join(f"{s},{r}\n" for s, r in zip(stamps, rows.splitlines()))
-    (tmp_path / "stamp.csv").write_text("stamp,alpha,beta,gamma,fx,fy,fz,mx,my,mz\n" + text)
-    with caplog.at_level(logging.WARNING, logger="ftkin"):
-        assert load_samples(tmp_path / "stamp.csv").samples.times is None
-    assert "not read as the time (nanoseconds?" in caplog.text
-    (tmp_path / "t.csv").write_text("t,alpha,beta,gamma,fx,fy,fz,mx,my,mz\n" + text)
-    with pytest.raises(InvalidSamples, match="nanoseconds"):
-        load_samples(tmp_path / "t.csv")
+    for name in ("stamp", "t"):
+        path = tmp_path / f"{name}.csv"
+        path.write_text(f"{name},alpha,beta,gamma,fx,fy,fz,mx,my,mz\n" + text)
+        with pytest.raises(InvalidSamples, match=r"line 4: .*not seconds.*--time-unit ns"):
+            load_samples(path)
+        times = load_samples(path, spelling=ColumnSpelling(time_unit="ns")).samples.times
+        np.testing.assert_allclose(np.diff(times), [30.0, 30.0], rtol=0, atol=1e-6)
+        np.testing.assert_allclose(times[0], 1764410400.0, rtol=1e-15)

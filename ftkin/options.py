@@ -1,0 +1,80 @@
+"""Options declared once: a dataclass field with its unit, default, help, check and CLI spelling.
+
+An options type of the library (``SegmentParameters``, ``ColumnSpelling``, ``CalibrationOptions``,
+``PoseConstraints``, ...) declares each field with :func:`option`. The library reads the field
+(its default, its check in the type's ``__post_init__``); the command line builds its flags from
+the same declaration (:func:`ftkin.cli.declared.add_declared`), so that every command that takes
+an option spells it, defaults it and explains it identically, and ``--help`` cannot drift from
+the library.
+"""
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+METADATA_KEY = "ftkin.option"
+
+
+@dataclass(frozen=True)
+class Declaration:
+    """How one option reads and what it means.
+
+    Attributes:
+        help: One sentence: what the option does (no default: it is added from the field).
+        unit: The unit of its value (``"m"``, ``"rad/s"``, ``"s"``; empty for none).
+        flag: The command-line flag (default: ``--`` and the field name with dashes).
+        metavar: The value's name in ``--help`` (a tuple for several values).
+        parse: CLI text to value (an argparse ``type``); it raises
+            :class:`argparse.ArgumentTypeError` with the expected range.
+        choices: The allowed values, if a closed set.
+        nargs: Number of values (argparse ``nargs``).
+        action: An argparse action (``"store_true"``, ``"append"``).
+        cli_default: The CLI's default when it differs from the field's (e.g. a list for
+            ``"append"``); None: the field's.
+    """
+
+    help: str
+    unit: str = ""
+    flag: str | None = None
+    metavar: str | tuple | None = None
+    parse: Callable[[str], Any] | None = None
+    choices: tuple | None = None
+    nargs: int | str | None = None
+    action: str | None = None
+    cli_default: Any = None
+
+    def flag_for(self, name: str) -> str:
+        """The flag of the field ``name``."""
+        return self.flag or "--" + name.replace("_", "-")
+
+
+def option(default=dataclasses.MISSING, help: str = "", **declaration) -> Any:
+    """A dataclass field declared as an option (see :class:`Declaration` for the keywords).
+
+    ``default`` may be a callable returned by ``dataclasses.field(default_factory=...)`` style:
+    pass ``default_factory=`` among the keywords instead.
+    """
+    factory = declaration.pop("default_factory", dataclasses.MISSING)
+    metadata = {METADATA_KEY: Declaration(help, **declaration)}
+    if factory is not dataclasses.MISSING:
+        return dataclasses.field(default_factory=factory, metadata=metadata)
+    return dataclasses.field(default=default, metadata=metadata)
+
+
+def declared_options(cls) -> list[tuple[dataclasses.Field, Declaration]]:
+    """The declared fields of an options dataclass, in order."""
+    return [
+        (field, field.metadata[METADATA_KEY])
+        for field in dataclasses.fields(cls)
+        if METADATA_KEY in field.metadata
+    ]
+
+
+def field_default(field: dataclasses.Field):
+    """The default value of a dataclass field (a factory called)."""
+    if field.default is not dataclasses.MISSING:
+        return field.default
+    if field.default_factory is not dataclasses.MISSING:
+        return field.default_factory()
+    return None
