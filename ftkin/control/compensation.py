@@ -20,6 +20,7 @@ drifting calibration).
 """
 
 import math
+from operator import le
 
 import numpy as np
 
@@ -43,6 +44,29 @@ from ..validation import (
     rotation_rows,
 )
 from .bias_tracker import BiasTracker
+
+JOINT_LIMIT_MARGIN = 0.05
+"""How far past its URDF limit a joint angle is still taken as measured [rad or m] (encoder
+overshoot at a hard stop); beyond it, ``q`` is refused (degrees, a wrong joint order)."""
+
+
+def refuse_outside_limits(arm: Arm, q: np.ndarray) -> None:
+    """Raise :class:`InvalidInput` naming the first joint of ``q`` outside the arm's limits."""
+    lows, highs = arm.lower_limits - JOINT_LIMIT_MARGIN, arm.upper_limits + JOINT_LIMIT_MARGIN
+    outside = np.flatnonzero((q < lows) | (q > highs))
+    if not outside.size:
+        return
+    i = int(outside[0])
+    degrees = np.all(np.abs(np.deg2rad(q)) <= np.maximum(np.abs(lows), np.abs(highs)))
+    hint = (
+        "; these look like degrees: joint angles are in radians (np.radians(q))"
+        if degrees
+        else "; is q in the arm's joint order (" + ", ".join(arm.joint_names) + ")?"
+    )
+    raise InvalidInput(
+        f"q: {arm.joint_names[i]} = {q[i]:.6g} is outside its limits "
+        f"[{arm.lower_limits[i]:.4g}, {arm.upper_limits[i]:.4g}] rad{hint}"
+    )
 
 
 class Compensator:
@@ -113,6 +137,9 @@ class Compensator:
             self._floats.contact if self._reading_signs is None else self._signed_contact_floats
         )
         self._q_shape = (self.arm.nq,) if self.arm is not None else None
+        if self.arm is not None:  # the joint limits widened by a margin, as floats (one pass)
+            self._lowest = (self.arm.lower_limits - JOINT_LIMIT_MARGIN).tolist()
+            self._highest = (self.arm.upper_limits + JOINT_LIMIT_MARGIN).tolist()
         self.tracker = tracker
         if tracker is not None:
             tracker.reset(self._bias, tracker.std)
@@ -161,6 +188,11 @@ class Compensator:
 
         This is the control-loop path: one forward-kinematics call and a few
         float operations, no allocation of large arrays.
+
+        Raises:
+            InvalidInput: ``q`` or the reading of the wrong shape or not finite, or ``q`` outside
+                the arm's joint limits by more than :data:`JOINT_LIMIT_MARGIN` (degrees given
+                for radians: the message says so).
         """
         arm = self._require_arm()
         try:
@@ -182,10 +214,13 @@ class Compensator:
                 f"expected q of shape {self._q_shape} and raw_wrench of shape (6,), "
                 f"got {q.shape} and {np.shape(raw_wrench)}"
             )
-        if not (math.hypot(*raw) <= MAX_WRENCH and math.isfinite(sum(q.tolist()))):
+        positions = q.tolist()
+        if not (math.hypot(*raw) <= MAX_WRENCH and math.isfinite(sum(positions))):
             # NaN, inf or a huge entry (the norm is cheap; the checks name the entry)
             check_finite(q, "q")
             as_wrenches(raw, "raw_wrench")
+        if not (all(map(le, self._lowest, positions)) and all(map(le, positions, self._highest))):
+            refuse_outside_limits(arm, q)
         return np.array(self.contact_floats(arm.sensor_rotation_unchecked(q).tolist(), raw))
 
     def compensate_rotation(self, rotation_sensor_to_base, raw_wrench) -> np.ndarray:
@@ -273,6 +308,7 @@ class Compensator:
         """
         arm = self._require_arm()
         q = as_vector(q, arm.nq, "q")
+        refuse_outside_limits(arm, q)
         return self.rezero_rotation(arm.sensor_rotation_unchecked(q), raw_wrench)
 
     def driver_zeroed_at_rotation(self, rotation_sensor_to_base) -> np.ndarray:
@@ -289,6 +325,7 @@ class Compensator:
         """
         arm = self._require_arm()
         q0 = as_vector(q0, arm.nq, "q0")
+        refuse_outside_limits(arm, q0)
         return self.driver_zeroed_at_rotation(arm.sensor_rotation_unchecked(q0))
 
     def bias_at(self, times) -> np.ndarray:
@@ -374,6 +411,9 @@ class Compensator:
         arm = self._require_arm()
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
         raw, _ = as_wrenches(raw_wrenches, "raw_wrenches")
+        outside = (configurations < self._lowest) | (configurations > self._highest)
+        if outside.any():
+            refuse_outside_limits(arm, configurations[np.flatnonzero(outside.any(axis=1))[0]])
         if len(configurations) != len(raw):
             raise InvalidInput(
                 f"{len(configurations)} rotations but {len(raw)} wrenches (one rotation per joint "

@@ -88,6 +88,15 @@ class StepStatus:
         return self.safety_stop or self.fault is not SensorFault.NONE
 
 
+def _real_or_nan(value) -> np.ndarray:
+    """``value`` as a float64 array; complex numbers (a state estimator gone wrong) become NaN,
+    a fault the tick holds on, instead of numpy's cast to the real part with a warning."""
+    array = np.asarray(value)
+    if array.dtype.kind == "c":
+        return np.full(array.shape, math.nan)
+    return np.asarray(array, dtype=np.float64)
+
+
 class JointAdmittance:
     """Admittance control output as joint velocities.
 
@@ -323,7 +332,7 @@ class JointAdmittance:
             if not (
                 type(q) is type(raw_wrench) is np.ndarray and q.dtype is raw_wrench.dtype is FLOAT64
             ):
-                q, raw_wrench = np.asarray(q, dtype=np.float64), np.asarray(raw_wrench, np.float64)
+                q, raw_wrench = _real_or_nan(q), _real_or_nan(raw_wrench)
             dt = float(dt)
         except (TypeError, ValueError) as error:
             raise InvalidInput(f"q, raw_wrench and dt must be numeric: {error}") from None

@@ -41,3 +41,34 @@ def test_joint_velocities_need_a_dynamic_compensator(arm):
     with pytest.raises(InvalidInput, match="go together"):
         controller.step(q, raw, 1e-3, joint_velocities=np.zeros(arm.nq))
     assert controller.step(q, raw, 1e-3).shape == (arm.nq,)
+
+
+def test_compensate_refuses_degrees_for_radians(arm):
+    """Joint angles in degrees used to give a wrong wrench without a word."""
+    compensator = Compensator(paper_like_truth(), arm)
+    q = np.array([0.0, 0.0, -0.5236, 0.0, -1.0472, 0.0])  # [rad], within the limits
+    raw = paper_like_truth().predict(arm.rotation_sensor_to_base(q[None]))[0]
+    np.testing.assert_allclose(compensator.compensate(q, raw), np.zeros(6), atol=1e-12)
+    with pytest.raises(InvalidInput, match=r"joint3 = -30[.0-9]* is outside its limits.*degrees"):
+        compensator.compensate(np.degrees(q), raw)
+    with pytest.raises(InvalidInput, match="degrees"):
+        compensator.compensate_joint_positions(np.degrees(q)[None], raw[None])
+    with pytest.raises(InvalidInput, match="degrees"):
+        compensator.rezero(np.degrees(q), raw)
+    # a joint a hair past its limit (encoder overshoot at a hard stop) is still a measurement
+    edge = q.copy()
+    edge[2] = arm.lower_limits[2] - 0.01
+    assert np.all(np.isfinite(compensator.compensate(edge, raw)))
+
+
+def test_a_complex_q_is_a_held_fault_not_a_cast(arm):
+    import warnings
+
+    controller = JointAdmittance(arm, Admittance(k2=1e-3), Compensator(paper_like_truth(), arm))
+    q = arm.random_configurations(1, np.random.default_rng(0), margin=0.5)[0]
+    raw = paper_like_truth().predict(arm.rotation_sensor_to_base(q[None]))[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # numpy's ComplexWarning would be an error here
+        dq = controller.step(q + 1e-3j, raw, 1e-3)
+    np.testing.assert_array_equal(dq, np.zeros(arm.nq))
+    assert controller.last_status.fault == "not_finite"

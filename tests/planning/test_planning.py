@@ -341,16 +341,23 @@ def test_cli_plan_refusals(capsys):
     assert "unknown joint 'joint9'; joints: joint1" in capsys.readouterr().err
 
 
-def test_cli_package_dir_resolves_meshes(capsys):
+def test_cli_package_dir_resolves_meshes(capsys, tmp_path):
     from ftkin.cli.plan import load_arm
     from ftkin.kinematics.robots import example_robot_data_share
 
     share = example_robot_data_share()
     urdf = share / "example-robot-data" / "robots" / "ur_description" / "urdf" / "ur5_robot.urdf"
-    assert main(["plan", "--n", "3", "--urdf", str(urdf), "--sensor-frame", "tool0"]) == 2
-    assert "give --package-dir DIR" in capsys.readouterr().err
+    # the package (example-robot-data) sits above the URDF: found without --package-dir
+    assert main(["plan", "--n", "3", "--urdf", str(urdf), "--sensor-frame", "tool0"]) == 0
+    capsys.readouterr()
+    # a copy elsewhere: its package:// meshes are found only through --package-dir
+    copy = tmp_path / "ur5_robot.urdf"
+    copy.write_text(urdf.read_text())
+    assert main(["plan", "--n", "3", "--urdf", str(copy), "--sensor-frame", "tool0"]) == 2
+    error = capsys.readouterr().err
+    assert "give --package-dir DIR" in error and error.count("package://") <= 3  # named once
     args = argparse.Namespace(
-        urdf=str(urdf), sensor_frame="tool0", tool_frame=None, package_dir=[str(share)]
+        urdf=str(copy), sensor_frame="tool0", tool_frame=None, package_dir=[str(share)]
     )
     arm = load_arm(args)
     assert arm.package_dirs == [str(share)]
