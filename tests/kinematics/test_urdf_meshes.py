@@ -15,7 +15,7 @@ import pytest
 from ftkin import Arm, plan_poses
 from ftkin.calibration.information import SensorNoise
 from ftkin.cli import main
-from ftkin.exceptions import InvalidInput, UrdfError
+from ftkin.exceptions import InvalidInput
 from ftkin.kinematics.fr3 import fr3_urdf_path
 from ftkin.kinematics.urdf_loading import mesh_candidates, resolve_mesh_paths
 from ftkin.sim.sensor import paper_like_truth
