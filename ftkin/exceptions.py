@@ -235,6 +235,6 @@ class SessionInterrupted(FtkinError):
         self.samples_path = samples_path
         super().__init__(
             f"session stopped after {poses_recorded} of {poses_total} poses: {reason}; the "
-            f"samples recorded so far are in {samples_path}: run again with resume=True "
-            "(--resume) to finish"
+            f"samples recorded so far are in {samples_path}: calibrate_on_robot(..., "
+            "resume=True) finishes the session"
         )

@@ -78,3 +78,47 @@ def field_default(field: dataclasses.Field):
     if field.default_factory is not dataclasses.MISSING:
         return field.default_factory()
     return None
+
+
+def number(low: float | None = None, high: float | None = None, *, above: bool = False):
+    """A CLI parser of one finite number within ``[low, high]`` (``above``: ``> low``); its
+    message names the range. For :attr:`Declaration.parse`."""
+    import argparse
+    import math
+
+    if low is None and high is None:
+        expected = "a finite number"
+    elif high is None:
+        expected = f"a finite number {'>' if above else '≥'} {low:g}"
+    else:
+        expected = f"a number in {'(' if above else '['}{low:g}, {high:g}]"
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
+        inside = math.isfinite(value) and (low is None or (value > low if above else value >= low))
+        if not inside or (high is not None and value > high):
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+        return value
+
+    return parse
+
+
+def integer(low: int, high: int):
+    """A CLI parser of one whole number in ``[low, high]``. For :attr:`Declaration.parse`."""
+    import argparse
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(
+                f"expected a whole number in [{low}, {high}], got {text!r}"
+            )
+        return value
+
+    return parse

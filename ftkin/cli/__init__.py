@@ -10,6 +10,7 @@ import contextlib
 import importlib
 import logging
 import os
+import shlex
 import sys
 
 from ..exceptions import FtkinError, InvalidInput
@@ -148,6 +149,7 @@ def main(argv=None) -> int:
         if not getattr(args, "func", None):
             parser.print_help()
             return 2
+        args.command_line = shlex.join(["ftkin", *(sys.argv[1:] if argv is None else argv)])
         check_outputs(args)
         code = int(args.func(args) or 0)
         sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit

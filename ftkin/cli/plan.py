@@ -12,7 +12,6 @@ from ..io.atomic import atomic_write_text
 from ..io.csv_table import write_csv
 from ..io.samples_csv import POSE_COLUMN
 from ..io.yaml_text import yaml_text
-from ..planning.constraints import DEFAULT_MARGIN, PoseConstraints
 from ..planning.drift_order import DEFAULT_POSE_INTERVAL
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT, ExpectedCalibration
 from ..planning.excitation import (
@@ -26,8 +25,6 @@ from .arg_types import (
     add_options,
     bounded_int,
     finite_float,
-    floor_height,
-    non_negative_float,
     option,
     positive_float,
     refuse,
@@ -35,6 +32,7 @@ from .arg_types import (
     whole_number,
 )
 from .common import add_arm_arguments, arm_from_args
+from .pose_options import add_constraint_arguments, add_readings_argument, constraints_from_args
 
 FORMATS = {"csv": (), "yaml": (".yaml", ".yml"), "json": (".json",)}
 """Output formats of ``plan -o`` and the file name endings that choose them (default: csv)."""
@@ -71,22 +69,14 @@ _TOOL_OPTIONS = (
         metavar="NM",
         help="torque noise per reading [N·m] (default: %(default)s)",
     ),
-    option(
-        "--readings-per-pose",
-        type=bounded_int(1, 10**9, "readings per pose"),
-        default=1,
-        metavar="K",
-        help="independent readings averaged at each pose (default: %(default)s)",
-    ),
 )
 
 
 def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
     """Expected tool, sensor noise and estimation the predicted standard errors are for."""
-    add_options(
-        parser.add_argument_group("expected tool and sensor noise (defaults: the paper's)"),
-        *_TOOL_OPTIONS,
-    )
+    group = parser.add_argument_group("expected tool and sensor noise (defaults: the paper's)")
+    add_options(group, *_TOOL_OPTIONS)
+    add_readings_argument(group)
     add_options(
         parser.add_argument_group("what the calibration will estimate"),
         option(
@@ -138,9 +128,6 @@ def expectation_from_args(args) -> ExpectedCalibration:
     )
 
 
-DEFAULT_FLOOR_HEIGHT = 0.05
-"""Default floor for plans [m, base z]: the base plane plus a 5 cm margin."""
-
 MAX_PLAN_POSES = 500
 """Largest ``plan --n``: beyond a few dozen poses the standard errors only fall as 1/√n."""
 
@@ -160,72 +147,6 @@ def pose_count(text: str) -> int:
     )
     return value
 
-
-def joint_range(text: str) -> tuple[str, float, float]:
-    """argparse type: ``NAME:LO:HI`` [rad]."""
-    parts = text.rsplit(":", 2)
-    try:
-        if len(parts) != 3 or not parts[0]:
-            raise ValueError
-        low, high = float(parts[1]), float(parts[2])
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected NAME:LO:HI with LO, HI in radians, got {text!r}"
-        ) from None
-    refuse(
-        argparse.ArgumentTypeError,
-        (
-            not (np.isfinite(low) and np.isfinite(high)),
-            f"expected finite LO and HI [rad], got {text!r}",
-        ),
-        (
-            max(abs(low), abs(high)) > 2.0 * np.pi,
-            f"{text!r}: LO and HI are beyond 2π: ranges are in radians (these look like degrees)",
-        ),
-        (low > high, f"{text!r}: LO must not exceed HI"),
-    )
-    return parts[0], low, high
-
-
-# The pose constraints (constraints_from_args).
-_CONSTRAINT_OPTIONS = (
-    option(
-        "--margin",
-        type=non_negative_float,
-        default=DEFAULT_MARGIN,
-        metavar="RAD",
-        help="distance kept from the joint limits [rad] (default: %(default)s)",
-    ),
-    option(
-        "--floor-height",
-        type=floor_height,
-        default=DEFAULT_FLOOR_HEIGHT,
-        metavar="M",
-        help="sensor and tool origins stay above this height in the base frame [m] (default: "
-        "%(default)s, a floor at base z = 0 with a 5 cm margin)",
-    ),
-    option(
-        "--no-floor",
-        action="store_true",
-        help="no floor constraint (an arm mounted on a wall or ceiling)",
-    ),
-    option(
-        "--max-tilt-deg",
-        type=non_negative_float,
-        default=None,
-        metavar="DEG",
-        help="largest angle of the tool axis from pointing straight down [deg]",
-    ),
-    option(
-        "--joint-range",
-        type=joint_range,
-        action="append",
-        default=[],
-        metavar="NAME:LO:HI",
-        help="extra range for one joint [rad]; repeat for several joints",
-    ),
-    option("--no-self-collision", action="store_true", help="do not check self-collision"),
-)
 
 # plan --excitation: the trajectory for ftkin calibrate --dynamic.
 _EXCITATION_OPTIONS = (
@@ -321,10 +242,7 @@ def register(subparsers) -> None:
         ),
         run=run,
     )
-    add_options(
-        parser.add_argument_group("constraints"),
-        *_CONSTRAINT_OPTIONS,
-    )
+    add_constraint_arguments(parser)
     add_options(
         parser,
         option(
@@ -350,21 +268,6 @@ def register(subparsers) -> None:
         *_EXCITATION_OPTIONS,
     )
     add_arm_arguments(parser)
-
-
-def constraints_from_args(args) -> PoseConstraints:
-    """The pose constraints named on the command line."""
-    if args.max_tilt_deg is not None and args.max_tilt_deg > 180.0:
-        raise InvalidInput(
-            f"--max-tilt-deg must be between 0 and 180 [deg], got {args.max_tilt_deg:g}"
-        )
-    return PoseConstraints(
-        margin=args.margin,
-        floor_height=None if args.no_floor else args.floor_height,
-        max_tilt=None if args.max_tilt_deg is None else float(np.deg2rad(args.max_tilt_deg)),
-        joint_ranges=args.joint_range,
-        self_collision=not args.no_self_collision,
-    )
 
 
 def load_arm(args) -> Arm:

@@ -1,50 +1,75 @@
-"""``ftkin robot calibrate|payload|guide|demo``: ftkin on a robot (a Franka through franky).
+"""``ftkin robot calibrate|payload|guide|sim|demo``: ftkin on a robot (a Franka through franky).
 
-* ``calibrate --franka HOST --sensor MODULE:FACTORY -o CALIB.json``: the calibration session
-  (:func:`~ftkin.robot.session.calibrate_on_robot`), then the compensated force at a few other
-  poses; ``--resume`` finishes an interrupted session;
+* ``calibrate --franka HOST --sensor SENSOR -o CALIB.json``: the calibration session
+  (:func:`~ftkin.robot.session.calibrate_on_robot`) at planned poses (``--n``) or a plan file
+  (``--poses FILE``), then the compensated force at a few other poses; ``--dry-run`` plans and
+  prints without moving; ``--resume`` finishes an interrupted session;
 * ``payload CALIB.json --franka HOST``: the load below the sensor, minus the configured end
   effector, plus the sensor body, sent with ``set_load`` and read back;
-* ``guide CALIB.json --franka HOST --sensor MODULE:FACTORY``: hand-guiding until Ctrl-C;
+* ``guide CALIB.json --franka HOST --sensor SENSOR``: hand-guiding until Ctrl-C;
+* ``sim``: franky-sim's FR3 with its sensor served on a loopback address until Ctrl-C, with the
+  ``--franka`` and ``--sensor`` options to use from another terminal;
 * ``demo``: all of it on franky-sim with a simulated sensor and a push.
+
+Ctrl-C anywhere stops the arm, prints one line (and, for a session, how to finish it) and exits
+130.
 """
 
+import logging
+import shlex
 import time
 from pathlib import Path
 
 import numpy as np
 
-from ..exceptions import InvalidInput
-from .arg_types import add_options, bounded_int, finite_float, option, positive_float, seed
+from ..calibration.model import STANDARD_GRAVITY
+from ..exceptions import InvalidInput, SessionInterrupted
+from ..robot.stillness import Stillness
+from .arg_types import add_options, bounded_int, finite_float, gravity, option, positive_float, seed
+from .declared import add_declared, declared_values
+from .pose_options import add_constraint_arguments, add_readings_argument, constraints_from_args
+
+logger = logging.getLogger("ftkin.cli")
 
 GUIDING_HOME = (0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785)
 """The demo's hand-guiding start pose [rad] (the hand above the table, pointing down)."""
-SIM_TIMEOUT = 0.5
-"""The demo's stale-sensor and robot-state limits [s] (0.1 s on a real robot): a busy machine
-pauses franky-sim's physics for longer than that."""
+SIM_TIMEOUT = 1.0
+"""The stale-sensor and robot-state limits [s] for franky-sim (0.1 s on a real robot): a loaded
+machine pauses the simulated physics for longer than 0.1 s (0.73 s was seen at load 2)."""
+DEFAULT_STATE_TIMEOUT = 0.1
+"""The robot's clock not advancing this long is a lost connection [s] (a real FR3 at 1 kHz)."""
+SIM_ARM_OPTIONS = "--no-realtime --state-timeout 1 --stale-after 1"
+"""What a command pointed at ``ftkin robot sim`` adds for the simulator."""
 
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "robot",
         help="on the robot (Franka via franky): calibration session, payload, hand-guiding",
-        description="Drive a Franka FR3/Panda through franky-control (pip install "
-        "'ftkin[franka]'): run the calibration session, give the payload to the controller, "
-        "hand-guide the arm. 'demo' runs everything on franky-sim.",
+        description="Drive a Franka FR3/Panda through franky-control (the franka extra: pip "
+        "install -e '.[franka]' from the checkout): run the calibration session, give the "
+        "payload to the controller, hand-guide the arm. 'sim' serves a simulated FR3 to try "
+        "them on; 'demo' runs everything on franky-sim.",
     )
     commands = parser.add_subparsers(dest="robot_command", metavar="ACTION")
     _calibrate_parser(commands)
     _payload_parser(commands)
     _guide_parser(commands)
+    _sim_parser(commands)
     _demo_parser(commands)
     parser.set_defaults(func=lambda args: (parser.print_help(), 2)[1])
 
 
-def _robot_options(parser, sensor: bool = True) -> None:
+def _robot_options(parser, sensor: bool = True, required: bool = True) -> None:
     group = parser.add_argument_group("robot and sensor")
     add_options(
         group,
-        option("--franka", required=True, metavar="HOST", help="the robot's FCI address"),
+        option(
+            "--franka",
+            required=required,
+            metavar="HOST",
+            help="the robot's FCI address (ftkin robot sim prints its own)",
+        ),
         option(
             "--no-realtime",
             action="store_true",
@@ -57,15 +82,24 @@ def _robot_options(parser, sensor: bool = True) -> None:
             help="fraction of the joint velocity/acceleration limits for moves (default: "
             "%(default)s)",
         ),
+        option(
+            "--state-timeout",
+            type=positive_float,
+            default=DEFAULT_STATE_TIMEOUT,
+            metavar="S",
+            help="the robot's clock not advancing this long is a lost connection [s] (default: "
+            "%(default)s; 1 for a simulator on a loaded machine)",
+        ),
     )
     if sensor:
         add_options(
             group,
             option(
                 "--sensor",
-                required=True,
-                metavar="MODULE:FACTORY",
-                help="importable factory returning an object with read() -> (t, wrench)",
+                required=required,
+                metavar="SENSOR",
+                help="MODULE:FACTORY, an importable factory returning an object with read() -> "
+                "(t, wrench) (ftkin robot sim prints its simulated sensor's)",
             ),
             option(
                 "--sensor-option",
@@ -84,11 +118,20 @@ def _robot_options(parser, sensor: bool = True) -> None:
     )
 
 
+def _stillness_options(parser) -> None:
+    add_declared(
+        parser,
+        Stillness,
+        skip=("poll_period",),
+        group="when a pose is still (a loaded simulator needs a larger --stale-after)",
+    )
+
+
 def _calibrate_parser(commands) -> None:
     parser = commands.add_parser(
         "calibrate", help="plan, visit, record, calibrate, save, verify (the session)"
     )
-    _robot_options(parser)
+    _robot_options(parser, required=False)
     add_options(
         parser,
         option("-o", "--output", required=True, metavar="CALIB.json"),
@@ -100,8 +143,25 @@ def _calibrate_parser(commands) -> None:
         option(
             "--resume", action="store_true", help="continue the samples file of a stopped session"
         ),
-        option("--poses", type=bounded_int(3, 200, "poses"), default=12),
-        option("--readings", type=bounded_int(1, 100_000, "readings"), default=50),
+        option(
+            "--poses",
+            metavar="POSES.csv",
+            help="visit these poses (ftkin plan -o POSES.csv) instead of planning; checked "
+            "against the constraints before the arm moves",
+        ),
+        option(
+            "--n",
+            type=bounded_int(3, 200, "poses"),
+            default=12,
+            metavar="N",
+            help="poses to plan without --poses (default: %(default)s)",
+        ),
+        option(
+            "--dry-run",
+            action="store_true",
+            help="plan (or read) the poses, print them with their predicted standard errors and "
+            "write them to CALIB.poses.csv; connect to nothing, move nothing",
+        ),
         option(
             "--verify",
             type=bounded_int(0, 50, "verification poses"),
@@ -109,23 +169,17 @@ def _calibrate_parser(commands) -> None:
             help="extra poses to check the calibration at (default: %(default)s); a fault there "
             "stops the arm and exits 1, the calibration saved",
         ),
-        option("--seed", type=seed, default=0),
+        option("--seed", type=seed, default=0, help="seed of the planner (default: %(default)s)"),
         option(
-            "--floor",
-            type=finite_float,
-            default=0.1,
-            metavar="Z",
-            help="sensor and tool stay above this height in the base frame [m] (default: 0.1)",
-        ),
-        option(
-            "--joint-range",
-            nargs=3,
-            action="append",
-            default=[],
-            metavar=("JOINT", "LOW", "HIGH"),
-            help="restrict a joint to [LOW, HIGH] rad; repeatable",
+            "--g",
+            type=gravity,
+            default=STANDARD_GRAVITY,
+            help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s; franky-sim: 9.81)",
         ),
     )
+    add_readings_argument(parser)
+    add_constraint_arguments(parser)
+    _stillness_options(parser)
     parser.set_defaults(func=run_calibrate)
 
 
@@ -140,7 +194,7 @@ def _payload_parser(commands) -> None:
 
 
 def _payload_options(parser) -> None:
-    group = parser.add_argument_group("payload hand-off (flange frame)")
+    group = parser.add_argument_group("payload hand-off (flange frame fr3_link8)")
     add_options(
         group,
         option(
@@ -172,7 +226,30 @@ def _guide_parser(commands) -> None:
         option("--rotation", action="store_true", help="let the hand turn the tool"),
         option("--gain", type=positive_float, help="translation gain [m/(s·N)] (default: 0.0035)"),
     )
+    add_declared(parser, Stillness, only=("stale_after",))
     parser.set_defaults(func=run_guide)
+
+
+def _sim_parser(commands) -> None:
+    parser = commands.add_parser(
+        "sim",
+        help="serve franky-sim's FR3 with a wrist sensor on a loopback address until Ctrl-C",
+        description="Serve a simulated FR3 (franky-sim: the libfranka protocol on a loopback "
+        "address) with a wrist sensor and a tool, and print the --franka and --sensor options "
+        "that point 'ftkin robot calibrate', 'payload' and 'guide' at it from another terminal.",
+    )
+    add_options(
+        parser,
+        option(
+            "--tool-mass",
+            type=positive_float,
+            default=1.2,
+            metavar="KG",
+            help="the simulated tool under the hand [kg] (default: %(default)s)",
+        ),
+        option("--seed", type=seed, default=0, help="seed of the sensor noise"),
+    )
+    parser.set_defaults(func=run_sim)
 
 
 def _demo_parser(commands) -> None:
@@ -181,7 +258,13 @@ def _demo_parser(commands) -> None:
     )
     add_options(
         parser,
-        option("--poses", type=bounded_int(3, 50, "poses"), default=12),
+        option(
+            "--n",
+            type=bounded_int(3, 50, "poses"),
+            default=12,
+            metavar="N",
+            help="poses to plan (default: %(default)s)",
+        ),
         option("--speed", type=positive_float, default=0.8),
         option("--push", type=finite_float, default=15.0, metavar="N", help="push force [N]"),
         option(
@@ -208,7 +291,12 @@ def _arm(args):
 def _robot(args):
     from ..robot.franka import FrankaRobot
 
-    return FrankaRobot(args.franka, realtime=not args.no_realtime, speed=args.speed)
+    return FrankaRobot(
+        args.franka,
+        realtime=not args.no_realtime,
+        speed=args.speed,
+        state_timeout=args.state_timeout,
+    )
 
 
 def _sensor(args):
@@ -230,48 +318,131 @@ def _body(values):
 
 
 def _print_load(label: str, mass: float, com) -> None:
-    print(f"{label}: {mass:.4f} kg at [{', '.join(f'{v:+.4f}' for v in com)}] m (flange frame)")
+    print(
+        f"{label}: {mass:.4f} kg at [{', '.join(f'{v:+.4f}' for v in com)}] m (flange frame "
+        "fr3_link8)"
+    )
+
+
+def _plan_options(args) -> dict:
+    constraints = constraints_from_args(args)
+    return {
+        "margin": constraints.margin,
+        "floor_height": constraints.floor_height,
+        "max_tilt": constraints.max_tilt,
+        "joint_ranges": constraints.joint_ranges,
+        "self_collision": constraints.self_collision,
+    }
+
+
+def _resume_advice(args, error: SessionInterrupted) -> str:
+    """The command that finishes an interrupted session: this one with --resume."""
+    words = [word for word in shlex.split(getattr(args, "command_line", "")) if word]
+    if not words:
+        words = ["ftkin", "robot", "calibrate", "..."]
+    if "--resume" not in words:
+        words.append("--resume")
+    return (
+        f"{error.poses_recorded} of {error.poses_total} poses are in {error.samples_path}; "
+        f"finish the session with: {shlex.join(words)}"
+    )
 
 
 # ------------------------------------------------------------------------------------ commands
 def run_calibrate(args) -> int:
-    from ..robot.session import calibrate_on_robot, default_samples_path, verify_session
+    from ..robot.session import (
+        calibrate_on_robot,
+        check_given_poses,
+        default_samples_path,
+        session_poses,
+        verify_session,
+    )
 
     arm = _arm(args)
-    plan_options = {"floor_height": args.floor}
-    if args.joint_range:
-        ranges = {}
-        for name, low, high in args.joint_range:
-            try:
-                ranges[name] = (float(low), float(high))
-            except ValueError:
-                raise InvalidInput(f"--joint-range {name} needs two numbers [rad]") from None
-        plan_options["joint_ranges"] = ranges
+    plan_options = _plan_options(args)
+    stillness = Stillness(**declared_values(Stillness, args))
+    if args.poses is not None:
+        from ..io.csv_table import read_table
+        from ..io.samples_csv import configurations_from_table
+
+        poses = check_given_poses(
+            arm, configurations_from_table(read_table(args.poses), arm), plan_options
+        )
+    else:
+        poses = session_poses(
+            arm,
+            args.n,
+            seed=args.seed,
+            readings_per_pose=args.readings_per_pose,
+            plan_options=plan_options,
+        )
+    if args.dry_run:
+        return _dry_run(args, arm, poses)
+    if not args.franka or not args.sensor:
+        raise InvalidInput("give --franka HOST and --sensor SENSOR (or --dry-run to only plan)")
     samples = args.samples or str(default_samples_path(args.output))
     sensor = _sensor(args)
     robot = _robot(args)
-    result = calibrate_on_robot(
-        robot,
-        sensor,
-        arm,
-        n_poses=args.poses,
-        readings_per_pose=args.readings,
-        samples_path=samples,
-        resume=args.resume,
-        output=args.output,
-        verify_poses=0,
-        seed=args.seed,
-        plan_options=plan_options,
-    )
+    try:
+        result = calibrate_on_robot(
+            robot,
+            sensor,
+            arm,
+            poses=poses,
+            readings_per_pose=args.readings_per_pose,
+            samples_path=samples,
+            resume=args.resume,
+            output=args.output,
+            verify_poses=0,
+            seed=args.seed,
+            plan_options=plan_options,
+            stillness=stillness,
+            g=args.g,
+        )
+    except SessionInterrupted as error:
+        return _interrupted(args, error)
     print(result.summary())
     print(f"wrote {args.output} (samples in {samples})")
     if args.verify:  # the session's verification, printed here (the library logs it)
         verification = verify_session(
-            robot, sensor, arm, result, args.verify, seed=args.seed, plan_options=plan_options
+            robot,
+            sensor,
+            arm,
+            result,
+            args.verify,
+            seed=args.seed,
+            plan_options=plan_options,
+            stillness=stillness,
         )
         if verification is None:  # stopped: said in a warning; the calibration stands
             return 1
         print(verification.report())
+    return 0
+
+
+def _interrupted(args, error: SessionInterrupted) -> int:
+    """Ctrl-C: exit 130 and say how to finish; any other stop: the error (exit 2)."""
+    if error.reason.startswith("interrupted"):
+        print(f"ftkin: interrupted: the arm is stopped; {_resume_advice(args, error)}")
+        return 130
+    raise InvalidInput(f"{error.reason}; the arm is stopped; {_resume_advice(args, error)}")
+
+
+def _dry_run(args, arm, poses: np.ndarray) -> int:
+    from ..io.csv_table import write_csv
+    from ..planning.evaluation import ExpectedCalibration, evaluate_poses
+    from ..robot.session import DEFAULT_TOOL_WEIGHT, default_samples_path
+
+    expected = ExpectedCalibration(
+        tool_weight=DEFAULT_TOOL_WEIGHT, readings_per_pose=args.readings_per_pose
+    )
+    print(f"dry run: {len(poses)} poses for {arm!r}; nothing moves")
+    print(evaluate_poses(arm.rotation_sensor_to_base(poses), expected).report())
+    for index, q in enumerate(poses):
+        print(f"  pose {index:>3}  " + " ".join(f"{value:+.4f}" for value in q))
+    path = Path(default_samples_path(args.output)).with_name(Path(args.output).stem + ".poses.csv")
+    write_csv(path, ["pose", *arm.joint_names], [[i, *q] for i, q in enumerate(poses.tolist())])
+    print(f"wrote {path} (ftkin robot calibrate --poses {path} visits them)")
     return 0
 
 
@@ -306,10 +477,61 @@ def run_guide(args) -> int:
     )
     sensor = _sensor(args)
     robot = _robot(args)
+    mass, _, _ = robot.payload()
+    if not mass > 0.0:
+        logger.warning(
+            "the robot reports no payload: its gravity model misses the tool, and the arm will "
+            "creep; send it first with: ftkin robot payload %s --franka %s",
+            args.calibration,
+            args.franka,
+        )
     print("hand-guiding: push the tool; Ctrl-C to stop")
-    stats = run_admittance(robot, sensor, controller, duration=args.duration, rate_hz=args.rate)
+    stats = run_admittance(
+        robot,
+        sensor,
+        controller,
+        duration=args.duration,
+        rate_hz=args.rate,
+        stale_after=args.stale_after,
+    )
     print(stats.report())
-    return 0 if stats.stop_reason in ("duration", "interrupt") else 1
+    if stats.stop_reason == "interrupt":
+        return 130
+    return 0 if stats.stop_reason == "duration" else 1
+
+
+def run_sim(args) -> int:
+    from ..robot.franka_sim import FrankaSim, SimTool
+
+    tool = SimTool(mass=args.tool_mass)
+    print(
+        "starting franky-sim (FR3, wrist sensor between flange and hand, "
+        f"a {args.tool_mass:g} kg tool)"
+    )
+    with FrankaSim(tool) as sim:
+        truth = sim.truth
+        com = ", ".join(f"{v:+.4f}" for v in truth.center_of_mass)
+        print(
+            f"serving the simulated FR3 at {sim.hostname} until Ctrl-C; below the sensor: "
+            f"{truth.mass:.4f} kg, centre of mass [{com}] m (fr3_hand), g = {truth.g} m/s²"
+        )
+        robot = f"--franka {sim.hostname} {SIM_ARM_OPTIONS}"
+        body = " ".join(f"{v:g}" for v in (truth.sensor_mass, *truth.sensor_com_flange))
+        print("from another terminal:")
+        print(f"  ftkin robot calibrate {robot} {sim.sensor_spec()} --g {truth.g} -o calib.json")
+        print(
+            f"  ftkin robot payload calib.json --franka {sim.hostname} --no-realtime "
+            f"--state-timeout 1 --sensor-body {body}"
+        )
+        print(f"  ftkin robot guide calib.json {robot} {sim.sensor_spec()}", flush=True)
+        try:
+            while sim.alive:
+                time.sleep(0.2)
+        except KeyboardInterrupt:
+            print("stopping the simulation")
+            return 130
+    print("ftkin: error: the simulation stopped", flush=True)
+    return 1
 
 
 def run_demo(args) -> int:
@@ -320,7 +542,6 @@ def run_demo(args) -> int:
     from ..robot.franka import FrankaRobot
     from ..robot.franka_sim import FrankaSim
     from ..robot.session import calibrate_on_robot, default_samples_path
-    from ..robot.stillness import Stillness
 
     arm = fr3_arm()
     with tempfile.TemporaryDirectory(prefix="ftkin-robot-demo-") as folder:
@@ -335,19 +556,30 @@ def run_demo(args) -> int:
                 state_timeout=SIM_TIMEOUT,
             )
             started = time.monotonic()
-            result = calibrate_on_robot(
-                robot,
-                sim.sensor,
-                arm,
-                n_poses=args.poses,
-                samples_path=samples,
-                output=output,
-                g=sim.truth.g,
-                plan_options={"joint_ranges": {"fr3_joint1": (-0.8, 0.8)}},
-                stillness=Stillness(stale_after=SIM_TIMEOUT),
-            )
+            try:
+                result = calibrate_on_robot(
+                    robot,
+                    sim.sensor,
+                    arm,
+                    n_poses=args.n,
+                    samples_path=samples,
+                    output=output,
+                    g=sim.truth.g,
+                    plan_options={"joint_ranges": {"fr3_joint1": (-0.8, 0.8)}},
+                    stillness=Stillness(stale_after=SIM_TIMEOUT),
+                )
+            except SessionInterrupted as error:
+                if not error.reason.startswith("interrupted"):
+                    raise
+                kept = (
+                    f"the samples are in {samples} (ftkin calibrate {samples} --robot fr3)"
+                    if args.output
+                    else "the demo kept nothing (give -o CALIB.json to keep its samples)"
+                )
+                print(f"ftkin: interrupted: the arm is stopped; {kept}")
+                return 130
             truth = sim.truth
-            print(f"session: {args.poses} poses in {time.monotonic() - started:.1f} s")
+            print(f"session: {args.n} poses in {time.monotonic() - started:.1f} s")
             print(f"  mass {result.tool_mass:.4f} kg (truth {truth.mass:.4f})")
             com_error = np.linalg.norm(result.center_of_mass - truth.center_of_mass) * 1e3
             bias_error = np.abs(result.force_offset - truth.bias[:3]).max()

@@ -35,6 +35,7 @@ import numpy as np
 
 from .. import Arm, InvalidInput
 from ..io.csv_table import read_table, write_csv
+from ..io.samples_csv import configurations_from_table
 from ..sim import inputs as sim_inputs
 from ..sim.placement import (
     MODES,
@@ -493,7 +494,7 @@ def run_input(args) -> int:
         configurations = (
             arm.random_configurations(args.n, rng, margin=0.3)
             if args.poses is None
-            else sim_inputs.configurations_from_table(read_table(args.poses), arm)
+            else configurations_from_table(read_table(args.poses), arm)
         )
     if args.kind == "bag":
         sim_inputs.write_bag(args.output, inputs, arm, configurations, rng)

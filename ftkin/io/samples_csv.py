@@ -252,6 +252,27 @@ def orientations_from_table(table: Table, arm=None) -> TableOrientations:
         raise InvalidSamples(str(error), table.source) from None
 
 
+def configurations_from_table(table, arm) -> np.ndarray:
+    """Joint angles ``(P, nq)`` [rad] of a poses table (``ftkin plan`` output), one per pose.
+
+    Rows sharing a ``pose`` id are one pose (its first row is taken).
+    """
+    table = spelled_table(table)
+    kind, columns = detect_orientation(table, arm.joint_names)
+    if kind != "joints" or len(columns) != arm.nq:
+        raise InvalidSamples(
+            f"expected {arm.nq} joint columns ({', '.join(arm.joint_names)} or "
+            f"q1..q{arm.nq}) [rad], found {kind} columns {columns}",
+            table.source,
+        )
+    values = table.floats(columns)
+    check_radians(table, columns, values)
+    if "pose" not in table.header:
+        return values
+    _, first = np.unique(table.floats(["pose"])[:, 0], return_index=True)
+    return values[np.sort(first)]
+
+
 def pose_ids_from_table(table: Table) -> np.ndarray | None:
     """The integer ``pose`` column ``(N,)``, or None when the table has none."""
     if POSE_COLUMN not in table.header:

@@ -33,6 +33,9 @@ _MOUNT_MODE_BY_SIZE = {12: "none", 13: "yaw", 15: "full"}
 
 DEFAULT_MARGIN = 0.05
 """Default distance kept from every joint limit [rad] (about 3°)."""
+DEFAULT_FLOOR_HEIGHT = 0.1
+"""Default floor of planned poses and of a robot session [m, base z]: the base plane plus a
+10 cm margin (a tool's length below the sensor is not in the model)."""
 
 
 @dataclass(frozen=True)

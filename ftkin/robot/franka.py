@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import logging
 import os
+import signal
+import threading
 import time
 from contextlib import contextmanager, suppress
 
@@ -75,6 +77,37 @@ def calling_thread_scheduling_kept():
         with suppress(OSError):
             if os.sched_getscheduler(0) != policy:
                 os.sched_setscheduler(0, policy, param)
+
+
+class watching_interrupts:
+    """Note a Ctrl-C (SIGINT) that reaches the process inside the block, then raise it as usual.
+
+    franky catches the KeyboardInterrupt raised inside ``join_motion`` and reports a preempted
+    motion (``ControlException``); :attr:`fired` tells the two apart. Off the main thread (where
+    Python delivers no signal) it does nothing.
+    """
+
+    def __init__(self):
+        self.fired = False
+        self._previous = None
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.getsignal(signal.SIGINT)
+            signal.signal(signal.SIGINT, self._handler)
+        return self
+
+    def _handler(self, signum, frame):
+        self.fired = True
+        if callable(self._previous):
+            self._previous(signum, frame)
+        elif self._previous != signal.SIG_IGN:
+            raise KeyboardInterrupt
+
+    def __exit__(self, *exc):
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+        return False
 
 
 class FrankaRobot:
@@ -231,6 +264,18 @@ class FrankaRobot:
         """
         target = as_vector(q, self.nq, "target joint positions q [rad]")
         franky = self._franky
+        with watching_interrupts() as interrupt:
+            try:
+                self._move_to(franky, target, while_moving)
+            except KeyboardInterrupt:
+                raise
+            except Exception:  # franky turns Ctrl-C during a motion into a preempted motion
+                if interrupt.fired:
+                    self.stop()
+                    raise KeyboardInterrupt from None
+                raise
+
+    def _move_to(self, franky, target: np.ndarray, while_moving) -> None:
         try:
             self._robot.move(franky.JointMotion(franky.JointState(target)), asynchronous=True)
             deadline = time.monotonic() + self.move_timeout

@@ -253,6 +253,7 @@ class FrankaSim:
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             text=True,
+            start_new_session=True,  # Ctrl-C reaches this process, which closes the child
         )
         answer = self._answer()
         if "error" in answer:
@@ -312,6 +313,22 @@ class FrankaSim:
             self._process.kill()
 
     @property
+    def state_path(self) -> str:
+        """The file the simulation shares its sensor sample through (for :func:`attach_sensor`
+        from another process, while this one runs)."""
+        return self._file.name
+
+    def sensor_spec(self) -> str:
+        """``--sensor`` and ``--sensor-option`` of this simulation's sensor, for a command run in
+        another terminal (:func:`attach_sensor`)."""
+        bias = ",".join(f"{value:g}" for value in self.spec.bias)
+        noise = ",".join(f"{value:g}" for value in self.spec.noise_std)
+        return (
+            f"--sensor {__name__}:attach_sensor --sensor-option state={self.state_path} "
+            f"--sensor-option bias={bias} --sensor-option noise={noise}"
+        )
+
+    @property
     def alive(self) -> bool:
         """True while the simulation process runs."""
         return self._process is not None and self._process.poll() is None
@@ -338,6 +355,40 @@ class FrankaSim:
         return _snapshot(self._shared)[_HAND : _HAND + 3].copy()
 
 
+def attach_sensor(state: str, bias: str = "0,0,0,0,0,0", noise: str = "0,0", seed: str = "0"):
+    """The sensor of a :class:`FrankaSim` running in another process (``ftkin robot sim``), as a
+    sensor factory: ``--sensor ftkin.robot.franka_sim:attach_sensor --sensor-option state=PATH``.
+
+    Args:
+        state: :attr:`FrankaSim.state_path` of the running simulation.
+        bias: Six comma-separated numbers [N, N·m] added to every reading.
+        noise: ``force,torque`` standard deviations of the white noise [N, N·m].
+        seed: Seed of the noise.
+
+    Raises:
+        InvalidInput: no such state file, or options that are not numbers.
+    """
+    try:
+        bias_values = tuple(float(value) for value in bias.split(","))
+        noise_values = tuple(float(value) for value in noise.split(","))
+        seed_value = int(seed)
+    except ValueError:
+        raise InvalidInput(
+            f"bias takes 6 numbers, noise 2 and seed an integer, got {bias!r}, {noise!r}, {seed!r}"
+        ) from None
+    if len(bias_values) != 6 or len(noise_values) != 2:
+        raise InvalidInput(f"bias takes 6 numbers and noise 2, got {bias!r} and {noise!r}")
+    try:
+        with open(state, "r+b") as stream:
+            mapped = mmap.mmap(stream.fileno(), 8 * _SLOTS)
+    except (OSError, ValueError) as error:
+        raise InvalidInput(
+            f"no running simulation shares {state!r} ({error}); start one with 'ftkin robot sim'"
+        ) from None
+    spec = SimSensorSpec(bias=bias_values, noise_std=noise_values, seed=seed_value)
+    return SimulatedWrenchSensor(np.frombuffer(mapped, dtype=np.float64), spec)
+
+
 def vars_of(spec) -> dict:
     """A frozen spec's fields as a plain dict (for the child process)."""
     return {name: getattr(spec, name) for name in spec.__dataclass_fields__}
@@ -351,7 +402,9 @@ def main(argv=None) -> int:
     an error) and serves until its stdin closes.
     """
     import logging as logging_
+    import signal
 
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent stops it (its stdin closes)
     logging_.getLogger("franky_sim").setLevel(logging_.WARNING)
     config = json.loads((sys.argv[1:] if argv is None else argv)[0])
     with open(config["shared"], "r+b") as stream:

@@ -34,7 +34,7 @@ from ..exceptions import FtkinError, InvalidInput, SessionInterrupted
 from ..io.calibration_file import save_calibration
 from ..io.samples_csv import load_samples
 from ..kinematics.record import KinematicsRecord
-from ..planning.constraints import FeasibilityChecker, PoseConstraints
+from ..planning.constraints import DEFAULT_FLOOR_HEIGHT, FeasibilityChecker, PoseConstraints
 from ..planning.plan import plan_poses
 from ..progress import Progress
 from .samples_log import SamplesLog
@@ -87,18 +87,79 @@ def session_poses(
     plan_options: Mapping | None = None,
 ) -> np.ndarray:
     """The planned poses ``(n, nq)`` [rad] of a session, in visiting order (deterministic)."""
-    options = {"floor_height": 0.1, "tool_weight": DEFAULT_TOOL_WEIGHT, **(plan_options or {})}
+    options = {
+        "floor_height": DEFAULT_FLOOR_HEIGHT,
+        "tool_weight": DEFAULT_TOOL_WEIGHT,
+        **(plan_options or {}),
+    }
     plan = plan_poses(
         arm, n_poses, seed=seed, readings_per_pose=readings_per_pose, progress=False, **options
     )
     return plan.joint_positions
 
 
+def check_given_poses(arm, poses, plan_options: Mapping | None = None) -> np.ndarray:
+    """Poses given to a session (a plan file), checked before the arm moves to any: ``(n >= 3,
+    nq)`` finite joint positions [rad] within the joint limits, each meeting the session's
+    constraints (floor, tilt, joint ranges, no self-collision).
+
+    Raises:
+        InvalidInput: the first pose that fails, and why (degrees, another arm, the floor, ...).
+    """
+    try:
+        poses = np.asarray(poses, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInput(f"poses must be joint positions [rad], got {poses!r}") from None
+    if poses.ndim != 2 or poses.shape[1] != arm.nq or len(poses) < 3:
+        raise InvalidInput(
+            f"poses must be (n >= 3, {arm.nq}) joint positions [rad] of "
+            f"{', '.join(arm.joint_names)}, got shape {poses.shape}"
+        )
+    if not np.all(np.isfinite(poses)):
+        raise InvalidInput("poses must be finite joint positions [rad]")
+    low, high = arm.lower_limits, arm.upper_limits
+    for index, q in enumerate(poses):
+        outside = np.flatnonzero((q < low) | (q > high))
+        if outside.size:
+            j = int(outside[0])
+            degrees = " (degrees? poses are in radians)" if abs(q[j]) > 2 * np.pi else ""
+            raise InvalidInput(
+                f"pose {index}: {arm.joint_names[j]} = {q[j]:.6g} is outside its limits "
+                f"[{low[j]:.4g}, {high[j]:.4g}] rad{degrees}: the arm will not move there"
+            )
+    options = {"floor_height": DEFAULT_FLOOR_HEIGHT, **(plan_options or {})}
+    keys = {"floor_height", "max_tilt", "joint_ranges", "self_collision"}
+    constraints = PoseConstraints(
+        margin=0.0,
+        **{key: value for key, value in options.items() if key in keys and value is not None},
+    )
+    checker = FeasibilityChecker(arm, constraints)
+    for index, q in enumerate(poses):
+        for name, lower, upper in constraints.joint_ranges:
+            value = q[arm.joint_names.index(name)]
+            if not lower <= value <= upper:
+                raise InvalidInput(
+                    f"pose {index}: {name} = {value:.6g} is outside --joint-range "
+                    f"{name}:{lower:g}:{upper:g} [rad]"
+                )
+        before = dict(checker.rejected)
+        if checker.check(q) is None:
+            reasons = [
+                name for name, count in checker.rejected.items() if count > before.get(name, 0)
+            ]
+            raise InvalidInput(
+                f"pose {index} does not meet the session's constraints ({constraints.describe()}): "
+                f"rejected by {', '.join(reasons) or 'a joint range'}; plan the poses for this arm "
+                "with the same constraints (ftkin plan) or loosen them"
+            )
+    return poses
+
+
 def verification_poses(
     arm, count: int, *, seed: int = 1, plan_options: Mapping | None = None
 ) -> np.ndarray:
     """``count`` random configurations ``(count, nq)`` [rad] that meet the planner's constraints."""
-    options = {"floor_height": 0.1, **(plan_options or {})}
+    options = {"floor_height": DEFAULT_FLOOR_HEIGHT, **(plan_options or {})}
     keys = {"margin", "floor_height", "max_tilt", "joint_ranges", "self_collision"}
     constraints = PoseConstraints(
         **{key: value for key, value in options.items() if key in keys and value is not None}
@@ -173,11 +234,8 @@ def calibrate_on_robot(
         poses = session_poses(
             arm, n_poses, seed=seed, readings_per_pose=readings_per_pose, plan_options=plan_options
         )
-    poses = np.asarray(poses, dtype=float)
-    if poses.ndim != 2 or poses.shape[1] != arm.nq or len(poses) < 3:
-        raise InvalidInput(
-            f"poses must be (n >= 3, {arm.nq}) joint positions [rad], got shape {poses.shape}"
-        )
+    else:
+        poses = check_given_poses(arm, poses, plan_options)
     log = SamplesLog(
         samples_path,
         arm.joint_names,
@@ -237,14 +295,15 @@ def verify_session(
     """The verification step of a session: :func:`verify_on_robot` at ``count`` new poses
     (:func:`verification_poses` with seed ``seed + 1``, the session's ``plan_options``).
 
-    The calibration is done (and saved) by then: a fault or Ctrl-C here stops the arm, is logged
-    as a warning and returns None; it does not undo the calibration.
+    The calibration is done (and saved) by then: a fault here stops the arm, is logged as a
+    warning and returns None; it does not undo the calibration. Ctrl-C stops the arm and is
+    raised again (the caller ends as an interrupted command does).
     """
     poses = verification_poses(arm, count, seed=seed + 1, plan_options=plan_options)
     try:
         return verify_on_robot(robot, sensor, arm, calibration, poses, stillness=stillness)
-    except (FtkinError, KeyboardInterrupt) as error:
-        logger.warning("verification stopped (the arm is stopped): %s", error or "Ctrl-C")
+    except FtkinError as error:
+        logger.warning("verification stopped (the arm is stopped): %s", error)
         return None
 
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import InvalidInput, RobotError, SensorError
+from ..options import integer, number, option
 
 logger = logging.getLogger(__name__)
 
@@ -44,13 +45,62 @@ class Stillness:
         poll_period: Sleep between polls of the robot and the sensor [s].
     """
 
-    joint_speed: float = 0.005
-    settle_time: float = 0.2
-    window: int = 30
-    force_std: float = 0.15
-    torque_std: float = 0.01
-    timeout: float = 15.0
-    stale_after: float = 0.1
+    joint_speed: float = option(
+        0.005,
+        "a pose is recorded when every joint is slower than this",
+        unit="rad/s",
+        flag="--still-joint-speed",
+        parse=number(0.0, above=True),
+        metavar="RAD_S",
+    )
+    settle_time: float = option(
+        0.2,
+        "and has been for this long",
+        unit="s",
+        flag="--still-settle-time",
+        parse=number(0.0, above=True),
+        metavar="S",
+    )
+    window: int = option(
+        30,
+        "readings in the stationarity test of each pose",
+        flag="--still-window",
+        parse=integer(4, 100_000),
+        metavar="N",
+    )
+    force_std: float = option(
+        0.15,
+        "largest spread (and half-window trend) of a force channel of a stationary reading",
+        unit="N",
+        flag="--still-force-std",
+        parse=number(0.0, above=True),
+        metavar="N",
+    )
+    torque_std: float = option(
+        0.01,
+        "the same for a torque channel",
+        unit="N·m",
+        flag="--still-torque-std",
+        parse=number(0.0, above=True),
+        metavar="NM",
+    )
+    timeout: float = option(
+        15.0,
+        "give up on a pose that does not come still within this",
+        unit="s",
+        flag="--pose-timeout",
+        parse=number(0.0, above=True),
+        metavar="S",
+    )
+    stale_after: float = option(
+        0.1,
+        "a sensor whose stamp has not advanced for this long is a fault (raise it for a loaded "
+        "simulator)",
+        unit="s",
+        flag="--stale-after",
+        parse=number(0.0, above=True),
+        metavar="S",
+    )
     poll_period: float = 0.001
 
     def __post_init__(self):

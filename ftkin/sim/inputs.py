@@ -28,7 +28,6 @@ import numpy as np
 from ..calibration.information import SensorNoise
 from ..calibration.model import WRENCH_CHANNELS, SensorModel
 from ..exceptions import InvalidInput, MissingDependency
-from ..io.samples_csv import detect_orientation
 from ..validation import as_batch, as_rotation_batch
 from .sensor import SimulatedSensor, paper_like_truth, recording_times
 from .sensor_drift import SensorDrift
@@ -83,23 +82,6 @@ class SimulatedInputs:
         """
         rotations = self.rotations(arm, configurations)  # the arm checks the joint angles
         return self.sign * self.sensor.read(rotations, rng, contact, times)
-
-
-def configurations_from_table(table, arm) -> np.ndarray:
-    """Joint angles ``(P, nq)`` [rad] of a poses table (``ftkin plan`` output), one per pose.
-
-    Rows sharing a ``pose`` id are one pose (its first row is taken).
-    """
-    kind, columns = detect_orientation(table, arm.joint_names)
-    if kind != "joints" or len(columns) != arm.nq:
-        raise InvalidInput(
-            f"{table.source}: expected {arm.nq} joint columns ({', '.join(arm.joint_names)} or "
-            f"q1..q{arm.nq}) [rad], found {kind} columns {columns}"
-        )
-    if "pose" not in table.header:
-        return table.floats(columns)
-    _, first = np.unique(table.floats(["pose"])[:, 0], return_index=True)
-    return table.floats(columns)[np.sort(first)]
 
 
 def samples_table(

@@ -30,11 +30,11 @@ def _heights(arm, q):
 def test_default_plan_keeps_sensor_and_tool_above_the_floor(robot, tmp_path, capsys):
     out = tmp_path / "plan.csv"
     assert main(["plan", "-n", "6", "--robot", robot, "--no-self-collision", "-o", str(out)]) == 0
-    assert "sensor and tool above 0.05 m (base z)" in capsys.readouterr().out
+    assert "sensor and tool above 0.1 m (base z)" in capsys.readouterr().out
     table = read_table(out)
     arm = ftkin.load_robot(robot)
     q = table.floats(table.header[1:])
-    assert _heights(arm, q).min() >= 0.05 - 1e-9
+    assert _heights(arm, q).min() >= 0.1 - 1e-9
 
 
 def test_no_floor_is_explicit(capsys):

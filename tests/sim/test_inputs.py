@@ -16,8 +16,8 @@ from ftkin.calibration.estimate import calibrate
 from ftkin.cli import main
 from ftkin.io.calibration_file import load_calibration
 from ftkin.io.csv_table import read_table
-from ftkin.io.samples_csv import load_samples
-from ftkin.sim.inputs import PUSH, SimulatedInputs, configurations_from_table, samples_table
+from ftkin.io.samples_csv import configurations_from_table, load_samples
+from ftkin.sim.inputs import PUSH, SimulatedInputs, samples_table
 from ftkin.sim.sensor import paper_like_truth
 
 
