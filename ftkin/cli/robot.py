@@ -15,6 +15,7 @@ Ctrl-C anywhere stops the arm, prints one line (and, for a session, how to finis
 130.
 """
 
+import argparse
 import logging
 import shlex
 import time
@@ -27,7 +28,12 @@ from ..exceptions import InvalidInput, SessionInterrupted
 from ..robot.stillness import Stillness
 from .arg_types import add_options, bounded_int, finite_float, gravity, option, positive_float, seed
 from .declared import add_declared, declared_values
-from .pose_options import add_constraint_arguments, add_readings_argument, constraints_from_args
+from .pose_options import (
+    DeprecatedFlag,
+    add_constraint_arguments,
+    add_readings_argument,
+    constraints_from_args,
+)
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -265,6 +271,14 @@ def _demo_parser(commands) -> None:
             metavar="N",
             help="poses to plan (default: %(default)s)",
         ),
+        option(
+            "--poses",
+            dest="n",
+            type=bounded_int(3, 50, "poses"),
+            action=DeprecatedFlag,
+            replacement="--n",
+            help=argparse.SUPPRESS,
+        ),
         option("--speed", type=positive_float, default=0.8),
         option("--push", type=finite_float, default=15.0, metavar="N", help="push force [N]"),
         option(
@@ -361,6 +375,12 @@ def run_calibrate(args) -> int:
     arm = _arm(args)
     plan_options = _plan_options(args)
     stillness = Stillness(**declared_values(Stillness, args))
+    if args.poses is not None and args.poses.isdigit() and not Path(args.poses).exists():
+        logger.warning(
+            "--poses N (a count) is deprecated: --poses names a poses file now; use --n %s",
+            args.poses,
+        )
+        args.n, args.poses = int(args.poses), None
     if args.poses is not None:
         from ..io.csv_table import read_table
         from ..io.samples_csv import configurations_from_table

@@ -299,7 +299,9 @@ def test_cli_plan_then_evaluate(tmp_path, capsys):
 
 def test_cli_formats_and_orientation_columns(tmp_path, capsys, arm):
     path = tmp_path / "poses.json"
-    assert main(["plan", "--n", "4", "-o", str(path), "--seed", "1"]) == 0
+    assert (
+        main(["plan", "--n", "4", "-o", str(path), "--seed", "1", "--readings-per-pose", "1"]) == 0
+    )
     document = json.loads(path.read_text())
     q = np.array(document["joint_positions_rad"])
     rotations = arm.rotation_sensor_to_base(q)
@@ -313,7 +315,7 @@ def test_cli_formats_and_orientation_columns(tmp_path, capsys, arm):
         + "\n"
     )
     capsys.readouterr()
-    assert main(["evaluate-poses", str(csv_path)]) == 0
+    assert main(["evaluate-poses", str(csv_path), "--readings-per-pose", "1"]) == 0
     assert f"{expected[0]:>14.3e}" in capsys.readouterr().out
     assert main(["plan", "--n", "2"]) == 2
     assert "at least 3" in capsys.readouterr().err
