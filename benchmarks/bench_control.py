@@ -8,7 +8,7 @@ Rows (median time per call; ratio = ftkin / floor, the median of the per-repeat 
   Jacobian, compensation, velocity admittance, damped least squares with
   ``numpy.linalg.solve``;
 * ``Compensator.compensate(q, raw)`` vs tight Pinocchio + numpy;
-* ``compensate_rotation`` (validated) vs ``compensate_rotation_unchecked``;
+* ``compensate_rotation`` (validated) vs ``compensate_unchecked``;
 * the dynamic compensation tick ``DynamicCompensator.compensate_moving(q, dq, ddq, raw)``
   (validated; a tool with a full inertia) vs the static tick ``Compensator.compensate(q, raw)``;
 * a held step (NaN sample), for information.
@@ -125,7 +125,7 @@ def main(repeats: int = 41) -> None:
         return np.dot(np.linalg.solve(np.dot(jacobian, jacobian.T) + damping, twist), jacobian)
 
     def unchecked():
-        return compensator.compensate_rotation_unchecked(rotation, raw)
+        return compensator.compensate_unchecked(rotation, raw)
 
     def step():
         return controller.step(q, next(rows_step), 1e-3)
@@ -151,7 +151,7 @@ def main(repeats: int = 41) -> None:
     )
     print_row(
         "compensate_rotation (validated)",
-        "compensate_rotation_unchecked",
+        "compensate_unchecked",
         *paired(unchecked, lambda: compensator.compensate_rotation(rotation, raw), repeats),
         2.0,
     )

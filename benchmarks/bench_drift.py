@@ -3,7 +3,7 @@
 Simulated on the bundled arm: a 15 N tool with its centre of mass a few cm off
 the sensor axis, base tilted by a fraction of a degree, per-reading noise
 0.03 N / 0.0015 N·m. The sensor is powered on at ``t = 0`` and drifts
-(:meth:`ftkin.SensorDrift.typical`): a warm-up of ±0.5 N / ±0.01 N·m per
+(:meth:`ftkin.sim.SensorDrift.typical`): a warm-up of ±0.5 N / ±0.01 N·m per
 channel with a 5-minute time constant plus a random walk of 0.002 N/√s
 (4e-5 N·m/√s).
 
@@ -19,7 +19,8 @@ channel with a 5-minute time constant plus a random walk of 0.002 N/√s
    ratio; which model auto took; auto's mean reported standard error over its
    RMS error (honest standard errors are ≈ 1). RMS errors over 40 trials are
    themselves uncertain by about ±7 % (100 trials).
-2. **5-fold cross-validation** (for each order; :func:`ftkin.cross_validate`, ``ftkin calibrate
+2. **5-fold cross-validation** (for each order;
+   :func:`ftkin.calibration.cross_validate`, ``ftkin calibrate
    --cross-validate 5``). Poses split in 5 folds; each fold's pose means
    compensated with a calibration on the other four (auto: its bias at the
    pose's time); RMS of the compensated force [N] (truth: no contact).
@@ -29,7 +30,7 @@ channel with a 5-minute time constant plus a random walk of 0.002 N/√s
    100 Hz: moves between poses (up to 0.5 rad/s), contact episodes (2–15 N,
    ramped in 0.3 s, 5–20 s long) and free still moments (2–8 s). The bias used by a
    :class:`ftkin.Compensator` with a fixed bias (the calibration's last) and
-   with a :class:`ftkin.BiasTracker` (contact detected, or declared by the
+   with a :class:`ftkin.control.BiasTracker` (contact detected, or declared by the
    controller): RMS over the session of the compensated force error [N]
    without the sensor's white noise (compensated minus true contact force:
    bias error plus the calibration's tool-gravity error at each pose), and the
@@ -66,22 +67,14 @@ import time
 
 import numpy as np
 
-from ftkin import (
-    Arm,
-    BiasTracker,
-    Compensator,
-    SensorDrift,
-    SensorModel,
-    SensorNoise,
-    SimulatedSensor,
-    calibrate,
-    cross_validate,
-    fisher_information,
-)
+from ftkin import Arm, Compensator, SensorModel, SensorNoise, SimulatedSensor, calibrate
+from ftkin.calibration import cross_validate, fisher_information
 from ftkin.calibration.information import covariance_from_information, extended_standard_errors
 from ftkin.calibration.random_walk import walk_gains, whiten
+from ftkin.control import BiasTracker
 from ftkin.planning.drift_order import drift_robust_order
 from ftkin.planning.evaluation import expected_tool
+from ftkin.sim import SensorDrift
 from ftkin.sim.sensor import recording_times
 
 POSES, READINGS, DURATION = 40, 10, 1200.0  # calibration: poses, readings per pose, length [s]
@@ -221,8 +214,9 @@ def control_session(arm, configurations, rng):
                 compensator.compensate(q[i], raw[i])
                 continue
             before = tracker.update_count
-            compensator.compensate_tracked(
-                q[i], raw[i], dt, free=None if flags is None else bool(flags[i])
+            contact = compensator.compensate(q[i], raw[i])
+            compensator.observe_bias(
+                contact, dt, q=q[i], free=None if flags is None else bool(flags[i])
             )
             if tracker.update_count != before:
                 first, last = (

@@ -32,15 +32,8 @@ import time
 
 import numpy as np
 
-from ftkin import (
-    Arm,
-    Samples,
-    SensorModel,
-    SensorNoise,
-    SimulatedSensor,
-    calibrate,
-    fisher_information,
-)
+from ftkin import Arm, Samples, SensorModel, SensorNoise, SimulatedSensor, calibrate
+from ftkin.calibration import fisher_information
 from ftkin.calibration.information import (
     covariance_from_information,
     extended_parameters,

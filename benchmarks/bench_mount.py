@@ -38,7 +38,8 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ftkin import Arm, SensorModel, SensorNoise, fisher_information, load_robot, plan_poses
+from ftkin import Arm, SensorModel, SensorNoise, load_robot, plan_poses
+from ftkin.calibration import fisher_information
 from ftkin.calibration.ml import fit_ml
 from ftkin.calibration.samples import PoseAverages
 

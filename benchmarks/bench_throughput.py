@@ -4,7 +4,7 @@ Rows (medians over repeats; floor and ftkin alternate so a load change hits both
 
 * public ``compensate_batch`` (validated rotations) vs the numpy einsum floor
   (same arithmetic, no checks): target >= 0.5x the floor's samples/s;
-* compensating a log from joint angles (``compensate_joint_positions``, batched
+* compensating a log from joint angles (``compensate_batch``, batched
   numpy FK) for the bundled arm and the UR5: target >= 5 M samples/s; the
   floor column is the old path (Pinocchio FK per row + einsum), for reference;
 * ``import ftkin`` and ``import ftkin`` + every public name vs
@@ -127,7 +127,7 @@ def paired_run(floor_code: str, code: str, repeats: int):
 
 
 def joint_log_row(name: str, robot: Arm, truth, raws: np.ndarray, rng, repeats: int) -> None:
-    """``compensate_joint_positions`` samples/s beside the old path (Pinocchio FK per row +
+    """``compensate_batch`` samples/s beside the old path (Pinocchio FK per row +
     einsum).
     """
     count, per_row = len(raws), 5000
@@ -140,13 +140,13 @@ def joint_log_row(name: str, robot: Arm, truth, raws: np.ndarray, rng, repeats: 
         for i in range(per_row):
             pin.forwardKinematics(model, data, joint_q[i])
             out[i] = pin.updateFramePlacement(model, data, frame).rotation
-        return compensator.compensate_batch_unchecked(out, raws[:per_row])
+        return compensator._batch_unchecked(out, raws[:per_row])
 
     pinocchio_rate = per_row / min(_cpu(pinocchio_rows) for _ in range(3))
     rate = float(
         np.median(
             [
-                count / _cpu(lambda: compensator.compensate_joint_positions(joint_q, raws))
+                count / _cpu(lambda: compensator.compensate_batch(joint_q, raws))
                 for _ in range(repeats)
             ]
         )
@@ -196,7 +196,7 @@ def main(quick: bool = False) -> None:
     )
     floor, value, ratio = paired_rate(
         einsum_floor,
-        lambda: compensator.compensate_batch_unchecked(rotations, raws),
+        lambda: compensator._batch_unchecked(rotations, raws),
         count,
         repeats,
     )

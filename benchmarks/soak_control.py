@@ -112,7 +112,7 @@ class PlacementCycles:
         )
         self.penetration_before, self.normal = penetration, normal
         contact = held_object_wrench(rotation, origin, tool, HEIGHT, WEIGHT, normal)
-        return contact - self.unloaded.compensate_rotation_unchecked(rotation, self._zero) + noise
+        return contact - self.unloaded.compensate_unchecked(rotation, self._zero) + noise
 
     def advance(self, dq: np.ndarray) -> None:
         """Integrate ``dq`` and run the cycle's phase logic."""

@@ -60,7 +60,33 @@ NAMES_BEFORE_THE_LAYOUT = (
 
 
 def test_names_of_the_flat_layout_still_import_from_ftkin():
-    assert [name for name in NAMES_BEFORE_THE_LAYOUT if name not in ftkin.__all__] == []
+    """Every name ftkin ever exported still resolves: at the top level, or (moved to its stage)
+    with a FutureWarning that names the stage, for one release."""
+    import warnings
+
+    for name in NAMES_BEFORE_THE_LAYOUT + list(ftkin._MOVED):
+        if name in ftkin.__all__:
+            continue
+        with pytest.warns(FutureWarning, match=r"import it from ftkin\.\w+"):
+            value = getattr(ftkin, name)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            home = importlib.import_module("ftkin" + ftkin._MOVED[name])
+            assert getattr(home, name) is value, name
+
+
+def test_the_top_level_is_the_main_path_in_the_users_order():
+    """At most 40 names, grouped as a user meets them, each on the API page docs/api.md."""
+    assert len(ftkin.__all__) <= 40
+    assert list(ftkin._EXPORTS) == [name for group in ftkin._GROUPS.values() for name in group]
+    assert sorted(ftkin._EXPORTS) == ftkin.__all__  # derived, not written twice
+    assert not set(ftkin._MOVED) & set(ftkin.__all__)
+    page = (Path(__file__).resolve().parents[1] / "docs" / "api.md").read_text()
+    listed = set(re.findall(r"^\| `(?:ftkin\.)?(\w+)`", page, re.M))
+    assert sorted(set(ftkin.__all__) - listed) == []  # every exported name on the page
+    assert sorted(listed - set(ftkin.__all__)) == []  # and nothing else as a top-level row
+    headings = re.findall(r"^## (.+)$", page, re.M)
+    assert headings[: len(ftkin._GROUPS)] == list(ftkin._GROUPS)
 
 
 @pytest.mark.parametrize("stage", STAGES)

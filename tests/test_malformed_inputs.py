@@ -5,19 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftkin import (
-    Compensator,
-    ExcitationSpec,
-    InvalidInput,
-    PoseConstraints,
-    SensorNoise,
-    SimulatedSensor,
-    cross_validate,
-    max_stable_k1,
-)
+from ftkin import Compensator, InvalidInput, PoseConstraints, SensorNoise, SimulatedSensor
+from ftkin.calibration import cross_validate
+from ftkin.control import max_stable_k1
 from ftkin.io.csv_table import Table
 from ftkin.io.samples_csv import detect_orientation
 from ftkin.kinematics.rotations import gravity_in_base_from_tilt, tilt_from_gravity_in_base
+from ftkin.planning import ExcitationSpec
 from ftkin.sim.sensor import paper_like_truth
 
 
@@ -38,7 +32,7 @@ def test_a_huge_matrix_is_not_a_rotation(compensator, rotation):
     for call in (
         lambda: compensator.compensate_rotation(rotation, np.zeros(6)),
         lambda: compensator.compensate_batch(rotation[None], np.zeros((1, 6))),
-        lambda: compensator.rezero_rotation(rotation, np.zeros(6)),
+        lambda: compensator.rezero(rotation, np.zeros(6)),
     ):
         with pytest.raises(InvalidInput, match="not a rotation matrix"):
             call()
@@ -55,8 +49,8 @@ def test_absurd_readings_are_refused_on_every_compensation_path(compensator, arm
         lambda: compensator.compensate_rotation(rotation, raw),
         lambda: compensator.compensate_rotation(rotation, np.asarray(raw, dtype=float)),
         lambda: compensator.compensate_batch(rotation, raw),
-        lambda: compensator.compensate_joint_positions(q, raw),
-        lambda: compensator.rezero_rotation(rotation, raw),
+        lambda: compensator.compensate_batch(q, raw),
+        lambda: compensator.rezero(rotation, raw),
         lambda: compensator.set_bias(raw),
     )
     for call in calls:
@@ -70,7 +64,7 @@ def test_large_plausible_readings_still_compensate(compensator, arm):
     raw = np.full(6, 9e5)
     np.testing.assert_allclose(
         compensator.compensate_rotation(rotation, raw),
-        compensator.compensate_rotation_unchecked(rotation, raw),
+        compensator.compensate_unchecked(rotation, raw),
         rtol=1e-12,
     )
     np.testing.assert_allclose(

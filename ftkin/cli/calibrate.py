@@ -4,21 +4,12 @@ import argparse
 from dataclasses import replace
 from pathlib import Path
 
-from .. import (
-    METHODS,
-    MOUNT_MODES,
-    STANDARD_GRAVITY,
-    Arm,
-    CalibrationOptions,
-    InvalidInput,
-    SensorNoise,
-    bundled_urdf_path,
-    calibrate,
-    save_calibration,
-)
+from .. import Arm, CalibrationOptions, InvalidInput, SensorNoise, calibrate, save_calibration
+from ..calibration import METHODS, MOUNT_MODES, STANDARD_GRAVITY
 from ..calibration.conventions import BASE_MOUNTS
 from ..calibration.drift import drift_candidates, drift_choices
 from ..calibration.ml import LOSSES
+from ..kinematics import bundled_urdf_path
 from ..kinematics.record import KinematicsRecord
 from .arg_types import (
     add_command,
@@ -230,7 +221,8 @@ def _run_dynamic(args, noise) -> int:
             f"{', '.join(given)} apply to static calibration, not (yet) to --dynamic; calibrate "
             "the mount and sign from static poses first"
         )
-    from .. import calibrate_dynamic, load_motion_bag, load_motion_csv
+    from .. import calibrate_dynamic
+    from ..io import load_motion_bag, load_motion_csv
     from ..io.bags import is_bag_path
 
     arm = arm_from_args(args) or Arm.default()

@@ -4,7 +4,8 @@ import argparse
 import logging
 from pathlib import Path
 
-from .. import Arm, FrameNotFound, InvalidInput, bundled_urdf_path, load_samples
+from .. import Arm, FrameNotFound, InvalidInput, load_samples
+from ..kinematics import bundled_urdf_path
 from ..kinematics.robots import (
     DEFAULT_ROBOT,
     ROBOT_SPECS,

@@ -10,7 +10,8 @@ import importlib.util
 
 import numpy as np
 
-from .. import METHODS, Arm, Compensator, SensorNoise, calibrate, save_calibration
+from .. import Arm, Compensator, SensorNoise, calibrate, save_calibration
+from ..calibration import METHODS
 from ..sim.sensor import SimulatedSensor, paper_like_truth
 from .arg_types import add_command, bounded_int, non_negative_float, option, seed
 

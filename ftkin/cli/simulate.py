@@ -419,8 +419,9 @@ SENSOR_OPTIONS = (
 
 
 def _inputs(args):
-    from .. import SensorDrift, SensorModel, SensorNoise
+    from .. import SensorModel, SensorNoise
     from ..kinematics.rotations import euler_zyx_to_matrix
+    from ..sim import SensorDrift
     from ..sim.sensor import paper_like_truth
 
     refuse(

@@ -10,8 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import Arm, InvalidInput, load_calibration, mounted_arm
+from .. import Arm, InvalidInput, load_calibration
 from ..calibration.conventions import as_real_sensor
+from ..kinematics import mounted_arm
 from .arg_types import add_command, bounded_int, option, positive_float
 from .common import (
     add_samples_arguments,

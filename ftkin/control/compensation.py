@@ -19,7 +19,9 @@ The bias is an attribute the caller can move without slowing the control path
 drifting calibration).
 """
 
+import functools
 import math
+import warnings
 from operator import le
 
 import numpy as np
@@ -153,6 +155,17 @@ class Compensator:
             rotation_rows, (w0 * s0, w1 * s1, w2 * s2, w3 * s3, w4 * s4, w5 * s5)
         )
 
+    def __getattr__(self, name: str):
+        """The names this class had before it kept one method per input kind: each works for one
+        release, with a ``FutureWarning`` naming its replacement (:data:`DEPRECATED_METHODS`)."""
+        if name not in DEPRECATED_METHODS:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        replacement, forward = DEPRECATED_METHODS[name]
+        warnings.warn(
+            f"Compensator.{name} is deprecated: use {replacement}", FutureWarning, stacklevel=2
+        )
+        return functools.partial(forward, self)
+
     def __repr__(self) -> str:
         path = None if self.arm is None else self.arm.urdf_path
         arm = (
@@ -256,11 +269,13 @@ class Compensator:
             )
         return np.array(self.contact_floats(rotations[0].tolist(), batch[0].tolist()))
 
-    def compensate_rotation_unchecked(self, rotation: np.ndarray, raw: np.ndarray) -> np.ndarray:
-        """:meth:`compensate_rotation` without validation: ``R_BS`` ``(3, 3)`` and ``raw`` ``(6,)``
-        float arrays.
+    def compensate_unchecked(self, rotation: np.ndarray, raw: np.ndarray) -> np.ndarray:
+        """The fast path: :meth:`compensate_rotation` without validation, for a control loop
+        whose inputs are checked already: ``R_BS`` ``(3, 3)`` and ``raw`` ``(6,)`` float64
+        arrays (a wrong shape or a NaN is not caught). Returns a new ``(6,)`` array.
 
-        For control loops that validated their inputs already; returns a new array.
+        The joint-angle loop's fast path is :class:`~ftkin.control.JointAdmittance`'s tick,
+        which runs the same float kernel (:attr:`contact_floats`) on its own FK.
         """
         return np.array(self.contact_floats(rotation.tolist(), raw.tolist()))
 
@@ -294,39 +309,45 @@ class Compensator:
         self.set_bias(bias)
         return bias
 
-    def rezero_rotation(self, rotation_sensor_to_base, raw_wrench) -> np.ndarray:
-        """:meth:`rezero` from ``R_BS`` ``(3, 3)``; returns the new bias ``(6,)``."""
-        return self._zero_at(rotation_sensor_to_base, as_wrench(raw_wrench, "raw_wrench"), "rezero")
-
-    def rezero(self, q, raw_wrench) -> np.ndarray:
-        """Re-zero at joint angles ``q`` [rad]: the contact wrench of ``raw_wrench`` becomes zero.
-
-        The new bias is the reading minus the predicted tool gravity at ``q``
-        (not the whole reading, which would subtract the tool's weight at
-        this pose and make it appear at every other). The tool must be free
-        of contact and the arm still. Returns the new bias ``(6,)`` [N, N·m].
-        """
+    def _rotation_of(self, orientation, what: str) -> np.ndarray:
+        """``R_BS`` ``(3, 3)`` of joint angles ``(nq,)`` [rad] (checked against the limits) or of
+        a rotation ``(3, 3)`` (checked to be one)."""
+        shape = np.shape(orientation)
+        if shape == (3, 3):
+            rotations, _ = as_rotation_batch(orientation)
+            return rotations[0]
         arm = self._require_arm()
-        q = as_vector(q, arm.nq, "q")
+        q = as_vector(orientation, arm.nq, f"{what}: joint angles q")
         refuse_outside_limits(arm, q)
-        return self.rezero_rotation(arm.sensor_rotation_unchecked(q), raw_wrench)
+        return arm.sensor_rotation_unchecked(q).copy()
 
-    def driver_zeroed_at_rotation(self, rotation_sensor_to_base) -> np.ndarray:
-        """:meth:`driver_zeroed_at` from ``R_BS`` ``(3, 3)``; returns the new bias ``(6,)``."""
-        return self._zero_at(rotation_sensor_to_base, np.zeros(6), "driver_zeroed_at")
+    def rezero(self, orientation, raw_wrench) -> np.ndarray:
+        """Re-zero: the contact wrench of ``raw_wrench`` at this pose becomes zero.
 
-    def driver_zeroed_at(self, q0) -> np.ndarray:
-        """The sensor driver was zeroed (tool on, no contact) at joint angles ``q0`` [rad].
+        Args:
+            orientation: The pose, as compensation takes it: joint angles ``(nq,)`` [rad], or
+                ``R_BS`` ``(3, 3)``.
+            raw_wrench: The reading there ``(6,)`` [N, N·m] (average a few hundred).
 
-        Its readings are then ``raw − raw(q0)``: the true bias and the tool
-        gravity at ``q0`` are gone. The bias to subtract from them is minus the
-        tool gravity wrench at ``q0`` (``−[Gs(q0), P × Gs(q0)]``), after which
-        the contact wrenches are right at every pose. Returns that bias ``(6,)``.
+        The new bias is the reading minus the predicted tool gravity at the pose (not the whole
+        reading, which would subtract the tool's weight at this pose and make it appear at every
+        other). The tool must be free of contact and the arm still. Returns the new bias ``(6,)``
+        [N, N·m].
         """
-        arm = self._require_arm()
-        q0 = as_vector(q0, arm.nq, "q0")
-        refuse_outside_limits(arm, q0)
-        return self.driver_zeroed_at_rotation(arm.sensor_rotation_unchecked(q0))
+        rotation = self._rotation_of(orientation, "rezero")
+        return self._zero_at(rotation, as_wrench(raw_wrench, "raw_wrench"), "rezero")
+
+    def driver_zeroed_at(self, orientation) -> np.ndarray:
+        """The sensor driver was zeroed (tool on, no contact) at this pose: joint angles
+        ``(nq,)`` [rad] or ``R_BS`` ``(3, 3)``.
+
+        Its readings are then ``raw − raw(pose)``: the true bias and the tool gravity at the
+        pose are gone. The bias to subtract from them is minus the tool gravity wrench there
+        (``−[Gs, P × Gs]``), after which the contact wrenches are right at every pose. Returns
+        that bias ``(6,)``.
+        """
+        rotation = self._rotation_of(orientation, "driver_zeroed_at")
+        return self._zero_at(rotation, np.zeros(6), "driver_zeroed_at")
 
     def bias_at(self, times) -> np.ndarray:
         """Bias ``(N, 6)`` [N, N·m] for readings at ``times`` ``(N,)`` [s].
@@ -345,16 +366,6 @@ class Compensator:
             out[inside] = drift.bias_at(times[inside])
         return out
 
-    def compensate_tracked(
-        self, q, raw_wrench, dt: float, *, free: bool | None = None
-    ) -> np.ndarray:
-        """:meth:`compensate`, then feed the tracker (if any) with the result; see
-        :meth:`observe_bias`.
-        """
-        contact = self.compensate(q, raw_wrench)
-        self.observe_bias(contact, dt, q=q, free=free)
-        return contact
-
     def observe_bias(
         self, contact_wrench, dt: float, *, q=None, free: bool | None = None, fault: bool = False
     ) -> bool:
@@ -369,30 +380,45 @@ class Compensator:
         return moved
 
     # ----------------------------------------------------------------- batch
-    def compensate_batch(self, rotation_sensor_to_base, raw_wrenches, times=None) -> np.ndarray:
-        """Contact wrenches ``(N, 6)`` from ``(N, 3, 3)`` ``R_BS`` and ``(N, 6)`` raw readings
-        (vectorized).
+    def compensate_batch(self, orientations, raw_wrenches, times=None) -> np.ndarray:
+        """Contact wrenches ``(N, 6)`` of ``N`` raw readings ``(N, 6)`` (vectorized).
 
-        ``times``: ``(N,)`` reading times [s]; the bias is then :meth:`bias_at` those times.
+        Args:
+            orientations: ``R_BS`` ``(N, 3, 3)`` (the real sensor's; one ``(3, 3)`` is a batch
+                of one), or joint angles ``(N, nq)`` [rad] (through the arm, its mount applied;
+                checked against the joint limits).
+            raw_wrenches: ``(N, 6)`` [N, N·m], sensor frame.
+            times: ``(N,)`` reading times [s]; the bias is then :meth:`bias_at` those times.
         """
-        rotations, _ = as_rotation_batch(rotation_sensor_to_base)
         raw, _ = as_wrenches(raw_wrenches, "raw_wrenches")
-        if len(rotations) != len(raw):
-            raise InvalidInput(
-                f"{len(rotations)} rotations but {len(raw)} wrenches; expected one each"
-            )
+        shape = np.shape(orientations)
+        one_rotation = shape == (3, 3) and (self.arm is None or self.arm.nq != 3)
+        if len(shape) == 3 or one_rotation:  # (3, 3) of a 3-joint arm: three joint-angle rows
+            rotations, _ = as_rotation_batch(orientations)
+            gravity = None
+        else:
+            arm = self._require_arm()
+            configurations, _ = as_batch(orientations, arm.nq, "joint angles q")
+            outside = (configurations < self._lowest) | (configurations > self._highest)
+            if outside.any():
+                refuse_outside_limits(arm, configurations[np.flatnonzero(outside.any(axis=1))[0]])
+            rotations = None
+            gravity = arm.vectors_in_sensor_unchecked(configurations, self._gravity_in_base)
+        count = len(rotations) if rotations is not None else len(gravity)
+        if count != len(raw):
+            raise InvalidInput(f"{count} orientations but {len(raw)} wrenches; expected one each")
         bias = None if times is None else self.bias_at(times)
         if bias is not None and len(bias) != len(raw):
             raise InvalidInput(f"{len(bias)} times but {len(raw)} wrenches; expected one each")
-        return self.compensate_batch_unchecked(rotations, raw, bias)
+        if gravity is None:
+            gravity = gravity_in_sensor(rotations, self._gravity_in_base)
+        return self._contact_batch(raw, gravity, bias)
 
-    def compensate_batch_unchecked(
+    def _batch_unchecked(
         self, rotations: np.ndarray, raw: np.ndarray, bias: np.ndarray | None = None
     ) -> np.ndarray:
-        """:meth:`compensate_batch` without validation, for callers that validated already.
-
-        ``bias``: ``(N, 6)`` per-reading bias [N, N·m] (default: the current one).
-        """
+        """:meth:`compensate_batch` of validated ``R_BS`` ``(N, 3, 3)``; ``bias``: ``(N, 6)``
+        per-reading bias [N, N·m] (default: the current one)."""
         return self._contact_batch(raw, gravity_in_sensor(rotations, self._gravity_in_base), bias)
 
     def _contact_batch(
@@ -402,26 +428,6 @@ class Compensator:
         raw = raw if self._reading_signs is None else raw * self._reading_signs
         return contact_batch(
             raw, gravity_in_sensor, self._com, self._bias if bias is None else bias
-        )
-
-    def compensate_joint_positions(self, joint_positions, raw_wrenches) -> np.ndarray:
-        """Contact wrenches ``(N, 6)`` from ``(N, nq)`` joint angles [rad] and ``(N, 6)`` raw
-        readings.
-        """
-        arm = self._require_arm()
-        configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
-        raw, _ = as_wrenches(raw_wrenches, "raw_wrenches")
-        outside = (configurations < self._lowest) | (configurations > self._highest)
-        if outside.any():
-            refuse_outside_limits(arm, configurations[np.flatnonzero(outside.any(axis=1))[0]])
-        if len(configurations) != len(raw):
-            raise InvalidInput(
-                f"{len(configurations)} rotations but {len(raw)} wrenches (one rotation per joint "
-                "configuration); "
-                "expected one each"
-            )
-        return self._contact_batch(
-            raw, arm.vectors_in_sensor_unchecked(configurations, self._gravity_in_base)
         )
 
     def compensate_samples(self, samples: Samples) -> np.ndarray:
@@ -434,7 +440,7 @@ class Compensator:
         rotations = samples.rotations
         if samples.joint_positions is not None and self.calibration.has_mount:
             rotations = rotations @ self.calibration.mount_rotation.T
-        return self.compensate_batch_unchecked(
+        return self._batch_unchecked(
             rotations,
             samples.wrenches,
             None if samples.times is None else self.bias_at(samples.times),
@@ -448,3 +454,38 @@ class Compensator:
         wrench, single = as_batch(contact_wrench, 6, "contact_wrench")
         norms = np.linalg.norm(wrench[:, :3], axis=1)
         return float(norms[0]) if single else norms
+
+
+def _tracked(compensator: Compensator, q, raw_wrench, dt: float, *, free=None) -> np.ndarray:
+    contact = compensator.compensate(q, raw_wrench)
+    compensator.observe_bias(contact, dt, q=q, free=free)
+    return contact
+
+
+DEPRECATED_METHODS = {
+    "compensate_rotation_unchecked": (
+        "compensate_unchecked(R_BS, raw)",
+        lambda self, rotation, raw: self.compensate_unchecked(rotation, raw),
+    ),
+    "compensate_joint_positions": (
+        "compensate_batch(joint_positions, raw_wrenches)",
+        lambda self, q, raw: self.compensate_batch(q, raw),
+    ),
+    "compensate_batch_unchecked": (
+        "compensate_batch(rotations, raw_wrenches)",
+        lambda self, rotations, raw, bias=None: self._batch_unchecked(rotations, raw, bias),
+    ),
+    "compensate_tracked": (
+        "compensate(q, raw), then observe_bias(contact, dt, q=q)",
+        lambda self, q, raw, dt, *, free=None: _tracked(self, q, raw, dt, free=free),
+    ),
+    "rezero_rotation": (
+        "rezero(R_BS, raw): rezero takes joint angles or a rotation",
+        lambda self, rotation, raw: self.rezero(rotation, raw),
+    ),
+    "driver_zeroed_at_rotation": (
+        "driver_zeroed_at(R_BS): it takes joint angles or a rotation",
+        lambda self, rotation: self.driver_zeroed_at(rotation),
+    ),
+}
+"""Removed method → (its replacement, the forwarding function), deprecated for one release."""

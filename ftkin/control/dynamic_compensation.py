@@ -194,7 +194,7 @@ class DynamicCompensator:
         (vectorized).
         """
         return (
-            self.static.compensate_batch_unchecked(motion.rotations, motion.wrenches)
+            self.static._batch_unchecked(motion.rotations, motion.wrenches)
             + motion.regressor() @ self.inertial_parameters
         )
 

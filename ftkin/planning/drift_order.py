@@ -6,7 +6,7 @@ tool depends on *when* each pose is visited, not only on which poses there are.
 The tool's weight shows as the difference between readings with gravity in
 opposite directions in the sensor frame; when those poses are minutes apart,
 the bias has moved in between and the difference carries the drift too. On a
-sensor drifting like :meth:`ftkin.SensorDrift.typical`, 40 random poses in a
+sensor drifting like :meth:`ftkin.sim.SensorDrift.typical`, 40 random poses in a
 random order over 20 minutes lose about 40 % in the mass's standard error to
 the drift (the bound with the walk integrated out, over the drift-free one);
 visited in the order below, about 15–20 %.

@@ -368,7 +368,7 @@ def verify_on_robot(
         for q in poses:
             robot.move_to(q, while_moving=checked.read)
             taken = record_still(robot, checked, readings, stillness)
-            contact = compensator.compensate_joint_positions(taken.joint_positions, taken.wrenches)
+            contact = compensator.compensate_batch(taken.joint_positions, taken.wrenches)
             wrenches.append(contact.mean(axis=0))
     except BaseException:
         robot.stop()

@@ -268,7 +268,7 @@ def simulate_placement(
         normal = surface.normal_force(penetration, (penetration - penetration_before) / scenario.dt)
         penetration_before = penetration
         contact = held_object_wrench(rotation, sensor_origin, tool_point, height, weight, normal)
-        raw = contact - unloaded.compensate_rotation_unchecked(rotation, zero) + noise[i]
+        raw = contact - unloaded.compensate_unchecked(rotation, zero) + noise[i]
         if controller is None:
             speed = max(-scenario.lowering_speed, (z_target - tool_point[2]) / scenario.dt)
             dq = damped_least_squares(jacobian_tool, np.array([0.0, 0.0, speed, 0.0, 0.0, 0.0]))[0]

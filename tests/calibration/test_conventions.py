@@ -5,16 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftkin import (
-    Samples,
-    SensorModel,
-    SensorNoise,
-    SuspectConvention,
-    calibrate,
-    detect_sign_and_handedness,
-)
+from ftkin import Samples, SensorModel, SensorNoise, calibrate
+from ftkin.calibration import detect_sign_and_handedness
 from ftkin.calibration.conventions import reading_signs
 from ftkin.calibration.mount import exp_so3
+from ftkin.exceptions import SuspectConvention
 
 NOISE = SensorNoise(0.02, 0.002)
 

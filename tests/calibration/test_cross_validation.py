@@ -9,10 +9,12 @@ import logging
 import numpy as np
 import pytest
 
-from ftkin import SensorDrift, SensorNoise, SimulatedSensor, calibrate, cross_validate
+from ftkin import SensorNoise, SimulatedSensor, calibrate
+from ftkin.calibration import cross_validate
 from ftkin.cli import main
 from ftkin.exceptions import InvalidInput
 from ftkin.io.csv_table import write_csv
+from ftkin.sim import SensorDrift
 from ftkin.sim.sensor import paper_like_truth, recording_times
 
 

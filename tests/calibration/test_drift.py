@@ -11,23 +11,15 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from ftkin import (
-    InvalidInput,
-    Samples,
-    SensorDrift,
-    SensorModel,
-    SensorNoise,
-    SimulatedSensor,
-    calibrate,
-    fisher_information,
-    recording_times,
-)
+from ftkin import InvalidInput, Samples, SensorModel, SensorNoise, SimulatedSensor, calibrate
+from ftkin.calibration import fisher_information
 from ftkin.calibration.information import (
     covariance_from_information,
     extended_parameters,
     extended_standard_errors,
 )
 from ftkin.calibration.random_walk import log_likelihood, smooth, walk_gains, whiten
+from ftkin.sim import SensorDrift, recording_times
 
 NOISE = SensorNoise(0.03, 0.0015)
 DATA = Path(__file__).parents[1] / "io" / "data"

@@ -13,13 +13,13 @@ from ftkin import (
     CalibrationOptions,
     InvalidInput,
     Samples,
-    SensorDrift,
     SensorModel,
     SensorNoise,
     SimulatedSensor,
     calibrate,
 )
 from ftkin.calibration.drift import parse_drift
+from ftkin.sim import SensorDrift
 from ftkin.sim.sensor import recording_times
 
 NOISE = SensorNoise(0.03, 0.0015)  # per reading [N], [N·m]

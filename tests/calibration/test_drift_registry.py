@@ -15,19 +15,18 @@ import pytest
 
 from ftkin import (
     Compensator,
-    DriftModel,
     InvalidInput,
-    SensorDrift,
     SensorNoise,
     SimulatedSensor,
     calibrate,
     load_calibration,
-    register_drift_model,
     save_calibration,
 )
+from ftkin.calibration import DriftModel, register_drift_model
 from ftkin.calibration.drift import DRIFT_MODELS, auto_candidates, drift_choices, parse_drift
 from ftkin.cli import main
 from ftkin.io.csv_table import write_csv
+from ftkin.sim import SensorDrift
 from ftkin.sim.sensor import recording_times
 
 SPAN, POSES, READINGS = 1200.0, 30, 3  # recording [s], poses, readings per pose

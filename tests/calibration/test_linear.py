@@ -87,7 +87,7 @@ def test_paper_euler_orientations_round_trip(truth):
         ]
     )
     samples = Samples.from_euler_zyx_deg(
-        angles, truth.predict(ftkin.euler_zyx_deg_to_matrix(angles))
+        angles, truth.predict(ftkin.kinematics.euler_zyx_deg_to_matrix(angles))
     )
     result = calibrate(samples, method="linear")
     np.testing.assert_allclose(result.to_vector(), truth.to_vector(), atol=1e-9)
@@ -116,7 +116,9 @@ def test_many_readings_of_two_poses_still_refused(arm, rng, truth):
 
 
 def test_identical_orientations_refused(truth):
-    rotations = np.repeat(ftkin.euler_zyx_deg_to_matrix([[90.0, 0.0, -180.0]]), 5, axis=0)
+    rotations = np.repeat(
+        ftkin.kinematics.euler_zyx_deg_to_matrix([[90.0, 0.0, -180.0]]), 5, axis=0
+    )
     samples = Samples.from_rotations(rotations, truth.predict(rotations))
     with pytest.raises(ftkin.UnobservableParameters, match="orientations are all alike") as info:
         calibrate(samples, method="linear")
@@ -125,7 +127,7 @@ def test_identical_orientations_refused(truth):
 
 
 def test_orientations_differing_only_about_vertical_refused(truth):
-    base = ftkin.euler_zyx_deg_to_matrix([10.0, 25.0, -150.0])
+    base = ftkin.kinematics.euler_zyx_deg_to_matrix([10.0, 25.0, -150.0])
     rotations = np.array(
         [_rotation_about([0, 0, 1], angle) @ base for angle in np.linspace(0, 5, 8)]
     )
@@ -138,7 +140,7 @@ def test_orientations_differing_only_about_vertical_refused(truth):
 def test_gravity_along_one_sensor_direction_refused(truth):
     # R_i = R0 · Rot(R0ᵀ ĝ, θ_i): gravity in the sensor frame R_iᵀ ĝ is the same in every pose
     gravity_direction = truth.gravity_in_base / truth.tool_weight
-    base = ftkin.euler_zyx_deg_to_matrix([30.0, -40.0, 120.0])
+    base = ftkin.kinematics.euler_zyx_deg_to_matrix([30.0, -40.0, 120.0])
     rotations = np.array(
         [
             base @ _rotation_about(base.T @ gravity_direction, angle)
@@ -158,7 +160,7 @@ def test_two_gravity_directions_refused_naming_center_of_mass(truth):
     gravity_direction = truth.gravity_in_base / truth.tool_weight
     rotations = []
     for angles in ([0.0, 0.0, 180.0], [0.0, 60.0, 180.0]):
-        family_base = ftkin.euler_zyx_deg_to_matrix(angles)
+        family_base = ftkin.kinematics.euler_zyx_deg_to_matrix(angles)
         for angle in (0.0, 1.5, 3.0):
             rotations.append(_rotation_about(gravity_direction, angle) @ family_base)
     rotations = np.array(rotations)
@@ -174,7 +176,7 @@ def test_two_gravity_directions_refused_naming_center_of_mass(truth):
 
 
 def test_three_gravity_directions_accepted(truth):
-    rotations = ftkin.euler_zyx_deg_to_matrix(
+    rotations = ftkin.kinematics.euler_zyx_deg_to_matrix(
         [[0.0, 0.0, 180.0], [0.0, 60.0, 180.0], [0.0, 0.0, 120.0]]
     )
     result = calibrate(Samples.from_rotations(rotations, truth.predict(rotations)), method="linear")
@@ -210,7 +212,7 @@ def test_g_override_changes_only_tool_mass(arm, rng, truth):
     )
     standard = calibrate(samples, method="linear")
     paper_g = calibrate(samples, method="linear", g=9.8)
-    assert standard.g == ftkin.STANDARD_GRAVITY and paper_g.g == 9.8
+    assert standard.g == ftkin.calibration.STANDARD_GRAVITY and paper_g.g == 9.8
     for name in ("force_offset", "torque_offset", "gravity_in_base", "center_of_mass", "residuals"):
         np.testing.assert_allclose(
             getattr(standard, name), getattr(paper_g, name), rtol=1e-12, atol=1e-15
@@ -276,7 +278,7 @@ def test_calibrate_needs_samples():
     ],
 )
 def test_bad_samples_are_refused(build, pattern):
-    rotations = ftkin.euler_zyx_deg_to_matrix([[0, 0, 180], [0, 60, 180], [0, 0, 120]])
+    rotations = ftkin.kinematics.euler_zyx_deg_to_matrix([[0, 0, 180], [0, 60, 180], [0, 0, 120]])
     with pytest.raises(ftkin.InvalidInput, match=pattern):
         build(rotations)
 

@@ -20,10 +20,10 @@ from ftkin import (
     SensorNoise,
     SimulatedSensor,
     calibrate,
-    fisher_information,
     load_calibration,
     save_calibration,
 )
+from ftkin.calibration import fisher_information
 from ftkin.calibration.information import (
     EXTENDED_NAMES,
     covariance_from_information,

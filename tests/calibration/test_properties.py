@@ -121,7 +121,11 @@ def pose_sets(draw):
 
 
 @SETTINGS
-@given(model=sensor_models(), poses=pose_sets(), method=st.sampled_from(list(ftkin.METHODS)))
+@given(
+    model=sensor_models(),
+    poses=pose_sets(),
+    method=st.sampled_from(list(ftkin.calibration.METHODS)),
+)
 def test_calibration_is_finite_or_an_ftkin_error(model, poses, method):
     try:  # readings beyond ±1e6 N are refused when the samples are made
         samples = ftkin.Samples.from_rotations(poses, model.predict(poses).reshape(-1, 6))
@@ -144,7 +148,7 @@ def _spread_poses(rng, count=8):
 
 
 @SETTINGS
-@given(seed=st.integers(0, 2**32 - 1), method=st.sampled_from(list(ftkin.METHODS)))
+@given(seed=st.integers(0, 2**32 - 1), method=st.sampled_from(list(ftkin.calibration.METHODS)))
 def test_calibrate_save_load_compensate_gives_the_same_numbers(seed, method, tmp_path_factory):
     rng = np.random.default_rng(seed)
     quats = rng.standard_normal((8, 4))

@@ -101,8 +101,9 @@ def test_constructors_never_freeze_the_callers_arrays():
 
 
 def test_auto_on_a_long_stream_of_single_readings_compares_polynomials_only(arm):
-    from ftkin import SensorDrift, SensorNoise, SimulatedSensor, calibrate
+    from ftkin import SensorNoise, SimulatedSensor, calibrate
     from ftkin.calibration.drift_fit import MAX_AUTO_WALK_POSES
+    from ftkin.sim import SensorDrift
     from ftkin.sim.sensor import paper_like_truth
 
     rng = np.random.default_rng(3)

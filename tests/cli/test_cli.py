@@ -159,7 +159,7 @@ def test_missing_urdf(tmp_path, capsys, calibration_csv):
 
 
 def test_unknown_sensor_frame(calibration_csv, capsys):
-    from ftkin import bundled_urdf_path
+    from ftkin.kinematics import bundled_urdf_path
 
     _assert_cli_error(
         [

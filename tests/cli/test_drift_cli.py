@@ -7,9 +7,10 @@ import json
 import numpy as np
 import pytest
 
-from ftkin import Arm, SensorDrift, SensorNoise, SimulatedSensor, load_calibration
+from ftkin import Arm, SensorNoise, SimulatedSensor, load_calibration
 from ftkin.cli import main
 from ftkin.io.csv_table import write_csv
+from ftkin.sim import SensorDrift
 from ftkin.sim.sensor import paper_like_truth, recording_times
 
 

@@ -6,10 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ftkin import Arm, SensorNoise, SimulatedSensor, bundled_urdf_path
+from ftkin import Arm, SensorNoise, SimulatedSensor
 from ftkin.calibration.model import WRENCH_CHANNELS
 from ftkin.cli import main
 from ftkin.io.csv_table import read_table, write_csv
+from ftkin.kinematics import bundled_urdf_path
 from ftkin.sim.sensor import paper_like_truth
 
 

@@ -44,7 +44,7 @@ def test_no_floor_is_explicit(capsys):
 
 def test_frame_names_are_suggested(tmp_path):
     with pytest.raises(ftkin.FrameNotFound, match="did you mean 'ft_sensor'") as info:
-        ftkin.Arm.from_urdf(ftkin.bundled_urdf_path(), "FT_sensor")
+        ftkin.Arm.from_urdf(ftkin.kinematics.bundled_urdf_path(), "FT_sensor")
     assert "--sensor-parent" not in str(info.value)  # a near miss: no advice to add a frame
     from ftkin.kinematics.robots import ROBOT_SPECS, example_robot_data_share
 
@@ -68,8 +68,8 @@ def test_readable_reprs(arm, truth):
         compensator.startswith("Compensator(tool 3.155 N")
         and "arm ft_sensor of ftkin_c4.urdf" in compensator
     )
-    assert str(ftkin.StepStatus.__dataclass_fields__["fault"].default) == "none"
-    assert f"{ftkin.SensorFault.NONE}" == "none"
+    assert str(ftkin.control.StepStatus.__dataclass_fields__["fault"].default) == "none"
+    assert f"{ftkin.control.SensorFault.NONE}" == "none"
 
 
 def test_each_warning_is_printed_once(arm, truth, tmp_path, capsys):

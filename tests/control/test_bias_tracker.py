@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftkin import Admittance, BiasTracker, Compensator, InvalidInput, JointAdmittance, SensorModel
+from ftkin import Admittance, Compensator, InvalidInput, JointAdmittance, SensorModel
+from ftkin.control import BiasTracker
 
 SIGMA = np.array([0.03] * 3 + [0.0015] * 3)
 DT = 0.01

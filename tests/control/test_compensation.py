@@ -35,7 +35,7 @@ def test_known_contact_is_recovered_on_every_entry_point(arm, truth, poses):
         [compensator.compensate_rotation(r, w) for r, w in zip(rotations, raw)]
     )
     batch_rotation = compensator.compensate_batch(rotations, raw)
-    batch_q = compensator.compensate_joint_positions(configurations, raw)
+    batch_q = compensator.compensate_batch(configurations, raw)
     for recovered in (from_q, from_rotation, batch_rotation, batch_q):
         assert recovered.shape == (25, 6)
         np.testing.assert_allclose(recovered, contact, atol=1e-12)
@@ -64,7 +64,7 @@ def test_compensating_a_no_contact_reading_gives_zero(arm, truth, poses):
     configurations, rotations, _ = poses
     compensator = Compensator(truth, arm)
     np.testing.assert_allclose(
-        compensator.compensate_joint_positions(configurations, truth.predict(rotations)),
+        compensator.compensate_batch(configurations, truth.predict(rotations)),
         0.0,
         atol=1e-12,
     )
@@ -151,7 +151,7 @@ def test_joint_angle_entry_points_need_an_arm(truth):
     with pytest.raises(ftkin.InvalidInput, match="no Arm: pass arm="):
         compensator.compensate(TOOL_DOWN, np.zeros(6))
     with pytest.raises(ftkin.InvalidInput, match="no Arm"):
-        compensator.compensate_joint_positions(TOOL_DOWN[None], np.zeros((1, 6)))
+        compensator.compensate_batch(TOOL_DOWN[None], np.zeros((1, 6)))
 
 
 def test_rotation_entry_points_refuse_bad_input(compensator):
@@ -162,7 +162,7 @@ def test_rotation_entry_points_refuse_bad_input(compensator):
         compensator.compensate_rotation(2 * rotation, np.zeros(6))
     with pytest.raises(ftkin.InvalidInput, match="raw_wrench.*finite"):
         compensator.compensate_rotation(rotation, [np.nan] * 6)
-    with pytest.raises(ftkin.InvalidInput, match="3 rotations but 2 wrenches"):
+    with pytest.raises(ftkin.InvalidInput, match="3 orientations but 2 wrenches"):
         compensator.compensate_batch(np.stack([rotation] * 3), np.zeros((2, 6)))
     with pytest.raises(
         ftkin.InvalidInput, match=r"raw_wrenches must have shape \(6,\) or \(N, 6\)"
@@ -174,11 +174,11 @@ def test_rotation_entry_points_refuse_bad_input(compensator):
 
 def test_joint_positions_batch_refuses_bad_input(compensator):
     with pytest.raises(ftkin.InvalidInput, match=r"shape \(6,\) or \(N, 6\)"):
-        compensator.compensate_joint_positions(np.zeros((2, 5)), np.zeros((2, 6)))
+        compensator.compensate_batch(np.zeros((2, 5)), np.zeros((2, 6)))
     with pytest.raises(ftkin.InvalidInput, match="finite"):
-        compensator.compensate_joint_positions(np.full((2, 6), np.nan), np.zeros((2, 6)))
-    with pytest.raises(ftkin.InvalidInput, match="2 rotations but 3 wrenches"):
-        compensator.compensate_joint_positions(np.zeros((2, 6)), np.zeros((3, 6)))
+        compensator.compensate_batch(np.full((2, 6), np.nan), np.zeros((2, 6)))
+    with pytest.raises(ftkin.InvalidInput, match="2 orientations but 3 wrenches"):
+        compensator.compensate_batch(np.zeros((2, 6)), np.zeros((3, 6)))
 
 
 def test_calibration_must_be_a_sensor_model(arm):
@@ -213,3 +213,43 @@ def test_one_sample_compensation_refuses_text_and_booleans(truth, rotation, raw)
 
     with pytest.raises(InvalidInput, match="numeric"):
         Compensator(truth).compensate_rotation(rotation, raw)
+
+
+def test_one_method_per_input_kind_and_the_old_names_forward_with_a_warning(arm, truth):
+    """At most four public per-sample compensate* methods; the removed ones work for one release
+    with a FutureWarning naming the replacement, and give the replacement's numbers."""
+    import inspect
+
+    public = [
+        name
+        for name, _ in inspect.getmembers(Compensator, inspect.isfunction)
+        if name.startswith("compensate") and not name.startswith("_")
+    ]
+    per_sample = [name for name in public if name not in ("compensate_batch", "compensate_samples")]
+    assert sorted(per_sample) == ["compensate", "compensate_rotation", "compensate_unchecked"]
+    compensator = Compensator(truth, arm)
+    rng = np.random.default_rng(8)
+    q = arm.random_configurations(5, rng, margin=0.3)
+    rotations = arm.rotation_sensor_to_base(q)
+    raw = truth.predict(rotations) + rng.normal(scale=0.1, size=(5, 6))
+    cases = [
+        ("compensate_joint_positions", (q, raw), compensator.compensate_batch(q, raw)),
+        (
+            "compensate_batch_unchecked",
+            (rotations, raw),
+            compensator.compensate_batch(rotations, raw),
+        ),
+        (
+            "compensate_rotation_unchecked",
+            (rotations[0], raw[0]),
+            compensator.compensate_rotation(rotations[0], raw[0]),
+        ),
+    ]
+    for name, args, expected in cases:
+        with pytest.warns(FutureWarning, match=f"Compensator.{name} is deprecated: use"):
+            np.testing.assert_allclose(getattr(compensator, name)(*args), expected, atol=1e-12)
+    with pytest.warns(FutureWarning, match="rezero"):
+        old = compensator.rezero_rotation(rotations[1], raw[1])
+    np.testing.assert_allclose(old, compensator.rezero(q[1], raw[1]), atol=1e-12)
+    with pytest.raises(AttributeError):
+        compensator.compensate_nothing  # noqa: B018

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 from scipy.linalg import lapack
 
-from ftkin import Admittance, Arm, Compensator, InvalidInput, JointAdmittance, SensorFault
+from ftkin import Admittance, Arm, Compensator, InvalidInput, JointAdmittance
+from ftkin.control import SensorFault
 from ftkin.control.sensor_faults import FaultMonitor
 from ftkin.sim.sensor import paper_like_truth
 from ftkin.validation import as_rotation_batch, rotation_rows
@@ -219,16 +220,14 @@ def test_compensation_paths_agree(arm, rng):
         )
         np.testing.assert_allclose(
             compensator.compensate_rotation(rotations[i], raw[i]),
-            compensator.compensate_rotation_unchecked(rotations[i], raw[i]),
+            compensator.compensate_unchecked(rotations[i], raw[i]),
             rtol=1e-12,
             atol=1e-12,
         )
     np.testing.assert_allclose(
         compensator.compensate_batch(rotations, raw), expected, rtol=0, atol=1e-12
     )
-    np.testing.assert_allclose(
-        compensator.compensate_joint_positions(q, raw), expected, rtol=0, atol=1e-12
-    )
+    np.testing.assert_allclose(compensator.compensate_batch(q, raw), expected, rtol=0, atol=1e-12)
 
 
 def test_closed_form_rotation_checks_accept_and_refuse_like_the_gram_matrix(rng):
@@ -271,7 +270,7 @@ def test_compensate_rotation_fast_path_agrees_with_the_array_checks_at_the_toler
                 assert str(fast.value) == str(error)
             else:
                 accepted += 1
-                expected = compensator.compensate_rotation_unchecked(candidate, raw)
+                expected = compensator.compensate_unchecked(candidate, raw)
                 np.testing.assert_allclose(
                     compensator.compensate_rotation(candidate, raw),
                     expected,
@@ -343,7 +342,7 @@ def test_compensate_rotation_takes_a_batch_of_one_like_one_sample():
         np.eye(3)[[1, 2, 0]],
         np.arange(6.0),
     )
-    expected = compensator.compensate_rotation_unchecked(rotation, raw)
+    expected = compensator.compensate_unchecked(rotation, raw)
     np.testing.assert_allclose(
         compensator.compensate_rotation(rotation[np.newaxis], raw), expected, rtol=1e-12, atol=1e-12
     )

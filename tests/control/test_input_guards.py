@@ -52,7 +52,7 @@ def test_compensate_refuses_degrees_for_radians(arm):
     with pytest.raises(InvalidInput, match=r"joint3 = -30[.0-9]* is outside its limits.*degrees"):
         compensator.compensate(np.degrees(q), raw)
     with pytest.raises(InvalidInput, match="degrees"):
-        compensator.compensate_joint_positions(np.degrees(q)[None], raw[None])
+        compensator.compensate_batch(np.degrees(q)[None], raw[None])
     with pytest.raises(InvalidInput, match="degrees"):
         compensator.rezero(np.degrees(q), raw)
     # a joint a hair past its limit (encoder overshoot at a hard stop) is still a measurement

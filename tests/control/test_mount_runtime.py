@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftkin import Admittance, CalibrationResult, Compensator, JointAdmittance, Samples, mounted_arm
+from ftkin import Admittance, CalibrationResult, Compensator, JointAdmittance, Samples
 from ftkin.calibration.conventions import reading_signs
 from ftkin.calibration.mount import exp_so3
+from ftkin.kinematics import mounted_arm
 
 MOUNT = exp_so3([0.04, -0.02, np.deg2rad(-50.0)])
 
@@ -43,7 +44,7 @@ def test_compensator_recovers_the_contact(arm, tool, mounted_truth):
     compensator = Compensator(mounted_truth, arm)
     for k in range(len(q)):
         np.testing.assert_allclose(compensator.compensate(q[k], raw[k]), contact[k], atol=1e-12)
-    np.testing.assert_allclose(compensator.compensate_joint_positions(q, raw), contact, atol=1e-12)
+    np.testing.assert_allclose(compensator.compensate_batch(q, raw), contact, atol=1e-12)
     np.testing.assert_allclose(
         compensator.compensate_samples(Samples.from_joint_positions(arm, q, raw)),
         contact,
@@ -57,7 +58,7 @@ def test_compensator_recovers_the_contact(arm, tool, mounted_truth):
 def test_plain_calibration_keeps_the_fast_path(arm, tool):
     compensator = Compensator(tool, arm)
     assert compensator.arm is arm
-    assert "compensate_rotation_unchecked" not in vars(compensator)
+    assert "compensate_unchecked" not in vars(compensator)
 
 
 def test_joint_admittance_uses_the_real_sensor_frame(arm, tool, mounted_truth):

@@ -7,14 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftkin import (
-    Compensator,
-    InvalidInput,
-    SensorNoise,
-    SimulatedSensor,
-    calibrate,
-    recording_times,
-)
+from ftkin import Compensator, InvalidInput, SensorNoise, SimulatedSensor, calibrate
+from ftkin.sim import recording_times
 
 NOISE = SensorNoise(0.02, 0.001)
 
@@ -53,12 +47,12 @@ def test_rezero_at_a_tilted_pose_still_compensates_the_tool_weight(arm, truth, p
     # weight in
     rotations = arm.rotation_sensor_to_base(poses)
     raw = drifted.read(np.repeat(rotations, 100, axis=0), rng).reshape(20, 100, 6).mean(axis=1)
-    contact = compensator.compensate_joint_positions(poses, raw)
+    contact = compensator.compensate_batch(poses, raw)
     assert np.all(np.abs(contact) < 5 * NOISE.channel_std * np.sqrt(1 / 100 + 1 / 200))
     naive = Compensator(truth, arm)
     naive.set_bias(readings.mean(axis=0))  # "bias = the whole reading", what a driver zero does
     assert (
-        np.max(np.linalg.norm(naive.compensate_joint_positions(poses, raw)[:, :3], axis=1))
+        np.max(np.linalg.norm(naive.compensate_batch(poses, raw)[:, :3], axis=1))
         > 0.5 * truth.tool_weight
     )
 
@@ -79,7 +73,7 @@ def test_driver_zeroed_readings_are_compensated_within_the_noise(arm, truth, pos
     contact = np.array([compensator.compensate(q, w) for q, w in zip(poses, zeroed)])
     assert np.all(np.abs(contact) < 5 * NOISE.channel_std)
     # without the call, the tool weight at q0 is missing everywhere
-    assert np.max(np.abs(Compensator(truth, arm).compensate_joint_positions(poses, zeroed))) > 1.0
+    assert np.max(np.abs(Compensator(truth, arm).compensate_batch(poses, zeroed))) > 1.0
     with pytest.raises(InvalidInput):
         compensator.driver_zeroed_at([0.0, 1.0])
 

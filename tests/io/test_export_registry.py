@@ -10,9 +10,10 @@ import json
 import numpy as np
 import pytest
 
-from ftkin import Samples, SensorNoise, calibrate, load_robot, payload_in_flange, save_calibration
+from ftkin import Samples, SensorNoise, calibrate, load_robot, save_calibration
 from ftkin.cli import main
 from ftkin.exceptions import InvalidInput
+from ftkin.io import payload_in_flange
 from ftkin.io.export import EXPORT_FORMATS, export_text, register_export_format
 from ftkin.io.export_format import ExportFormat, ExportOption, ExportRequest
 from ftkin.kinematics.record import KinematicsRecord

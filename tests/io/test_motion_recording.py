@@ -5,13 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftkin import (
-    InvalidSamples,
-    calibrate_dynamic,
-    load_motion_bag,
-    load_motion_csv,
-    plan_excitation,
-)
+from ftkin import InvalidSamples, calibrate_dynamic, plan_excitation
+from ftkin.io import load_motion_bag, load_motion_csv
 from ftkin.io.csv_table import write_csv
 
 mujoco_recording = pytest.importorskip("ftkin.sim.mujoco.recording")

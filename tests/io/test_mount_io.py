@@ -15,15 +15,14 @@ from ftkin import (
     Samples,
     SensorNoise,
     calibrate,
-    export_payload,
     load_calibration,
     load_robot,
-    payload_in_flange,
     save_calibration,
 )
 from ftkin.calibration.conventions import reading_signs
 from ftkin.calibration.mount import exp_so3
 from ftkin.cli import main
+from ftkin.io import export_payload, payload_in_flange
 from ftkin.io.wrench_frames import wrenches_in_sensor_frame
 
 yaml = pytest.importorskip("yaml")

@@ -110,7 +110,9 @@ def test_comments_blank_lines_and_extra_columns(tmp_path):
     assert loaded.table.lines == [5, 7]
     assert loaded.table.header[-1] == "time" and loaded.table.rows[1][-1] == "0.6"
     np.testing.assert_allclose(
-        loaded.samples.rotations[1], ftkin.euler_zyx_deg_to_matrix([0, 10, 20]), atol=1e-15
+        loaded.samples.rotations[1],
+        ftkin.kinematics.euler_zyx_deg_to_matrix([0, 10, 20]),
+        atol=1e-15,
     )
 
 
@@ -318,5 +320,7 @@ def test_excel_byte_order_mark_and_crlf(tmp_path):
     loaded = load_samples(path)
     assert loaded.table.header[0] == "alpha"
     np.testing.assert_allclose(
-        loaded.samples.rotations[1], ftkin.euler_zyx_deg_to_matrix([0, 30, 180]), atol=1e-15
+        loaded.samples.rotations[1],
+        ftkin.kinematics.euler_zyx_deg_to_matrix([0, 30, 180]),
+        atol=1e-15,
     )

@@ -232,4 +232,4 @@ def test_a_table_without_wrench_columns_is_refused_by_name(tmp_path):
     path = tmp_path / "no_fx.csv"
     path.write_text("alpha,beta,gamma,fy,fz,mx,my,mz\n0,0,0,2,3,0.1,0.2,0.3\n")
     with pytest.raises(ftkin.InvalidSamples, match=r"missing wrench column\(s\) \['fx'\]"):
-        ftkin.diagnose_samples(path)
+        ftkin.io.diagnose_samples(path)

@@ -10,7 +10,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import ftkin
-from ftkin import Arm, SensorMount, bundled_urdf_path
+from ftkin import Arm, SensorMount
+from ftkin.kinematics import bundled_urdf_path
 
 TOOL_DOWN = np.array([0.0, 0.0, -0.5236, 0.0, -1.0472, 0.0])
 
@@ -110,7 +111,7 @@ def test_batch_equals_singles(arm, rng):
 
 def test_mounted_batch_equals_singles_after_the_chain_was_built(arm, rng):
     # regression: mounted_arm copied the arm's batch chain, built for the URDF sensor frame
-    from ftkin import mounted_arm
+    from ftkin.kinematics import mounted_arm
 
     q = arm.random_configurations(20, rng)
     arm.rotation_sensor_to_base(q)  # builds the arm's batch chain

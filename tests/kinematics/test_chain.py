@@ -100,9 +100,7 @@ def test_log_compensation_from_joint_angles_equals_row_by_row(arm, rng):
         size=(500, 6)
     )
     rows = np.array([compensator.compensate(x, w) for x, w in zip(q, raw)])
-    np.testing.assert_allclose(
-        compensator.compensate_joint_positions(q, raw), rows, rtol=0, atol=1e-12
-    )
+    np.testing.assert_allclose(compensator.compensate_batch(q, raw), rows, rtol=0, atol=1e-12)
 
 
 def test_cos_sin_table_equals_numpy_to_a_few_ulp(rng):

@@ -49,7 +49,7 @@ def test_excitation_refuses_bad_arguments(arm):
 
 
 def test_excitation_spec_and_the_keyword_shortcut_agree(arm):
-    from ftkin import ExcitationSpec
+    from ftkin.planning import ExcitationSpec
 
     spec = ExcitationSpec(4.0, rate=50.0, harmonics=3, optimize=False, seed=2)
     from_spec = plan_excitation(arm, spec)

@@ -91,7 +91,8 @@ def test_cli_report(calibrated, arm, tmp_path, capsys):
 
 
 def test_a_drift_aware_report_predicts_with_the_bias_at_each_pose_time(arm):
-    from ftkin import SensorDrift, SensorNoise, SimulatedSensor
+    from ftkin import SensorNoise, SimulatedSensor
+    from ftkin.sim import SensorDrift
     from ftkin.sim.sensor import paper_like_truth, recording_times
     from ftkin.viz.report import SUMMARY_WIDTH, _wrapped
 
