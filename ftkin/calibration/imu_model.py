@@ -150,16 +150,20 @@ class ImuFloatModel:
             tuple(static_matrix.reshape(-1).tolist()),
             tuple(static_offset.tolist()),
         )
-        xx, xy, yy, xz, yz, zz = theta[4:10].tolist()
+        inertia = np.array([[theta[4], theta[5], theta[7]], [theta[5], theta[6], theta[8]]])
+        inertia = np.vstack([inertia, [theta[7], theta[8], theta[9]]])
         position = np.zeros(3) if imu_position is None else np.asarray(imu_position, dtype=float)
+        # The lever arm folded in: α × r and ω × (ω × r) enter the force with h − m r, and the
+        # torque as h × (α × r) = ((h·r) 1 − r hᵀ) α and h × (ω (ω·r) − r |ω|²).
+        lever_inertia = inertia - float(first @ position) * np.eye(3) + np.outer(position, first)
         self._moving = (
-            tuple(gain.reshape(-1).tolist()),
-            tuple(offset.tolist()),
             tuple(rotation.reshape(-1).tolist()),
+            tuple((first - mass * position).tolist()),
+            tuple(lever_inertia.reshape(-1).tolist()),
+            tuple(theta[[4, 5, 6, 7, 8, 9]].tolist()),
+            tuple(first.tolist()),
             tuple(position.tolist()),
-            (mass, *first.tolist()),
-            (xx, xy, yy, xz, yz, zz),
-            tuple(np.asarray(bias_wrench, dtype=float).tolist()),
+            tuple(np.cross(first, position).tolist()),
         )
 
     def contact(self, raw, accel) -> tuple[float, ...]:
@@ -189,35 +193,58 @@ class ImuFloatModel:
         """:meth:`contact` with the gyro's ``w`` [rad/s] and its rate ``ẇ`` [rad/s²] (IMU frame):
         the lever arm and the tool's rotational inertia included.
         """
-        gain, offset, rotation, position, first, inertia, bias = self._moving
-        k00, k01, k02, k10, k11, k12, k20, k21, k22 = gain
+        rotation, (dx, dy, dz), lever_inertia, inertia, (hx, hy, hz), (rx, ry, rz), hr = self._moving
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation
-        ax, ay, az = accel
         gx, gy, gz = gyro
-        dx, dy, dz = gyro_rate
         wx = r00 * gx + r01 * gy + r02 * gz  # ω = R_SI w
         wy = r10 * gx + r11 * gy + r12 * gz
         wz = r20 * gx + r21 * gy + r22 * gz
-        bx = r00 * dx + r01 * dy + r02 * dz  # α = R_SI ẇ
-        by = r10 * dx + r11 * dy + r12 * dz
-        bz = r20 * dx + r21 * dy + r22 * dz
-        rx, ry, rz = position
-        ux, uy, uz = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx  # ω × r
-        fx = k00 * ax + k01 * ay + k02 * az - offset[0] - (by * rz - bz * ry) - (wy * uz - wz * uy)
-        fy = k10 * ax + k11 * ay + k12 * az - offset[1] - (bz * rx - bx * rz) - (wz * ux - wx * uz)
-        fz = k20 * ax + k21 * ay + k22 * az - offset[2] - (bx * ry - by * rx) - (wx * uy - wy * ux)
-        m, hx, hy, hz = first
-        vx, vy, vz = wy * hz - wz * hy, wz * hx - wx * hz, wx * hy - wy * hx  # ω × h
+        gx, gy, gz = gyro_rate
+        bx = r00 * gx + r01 * gy + r02 * gz  # α = R_SI ẇ
+        by = r10 * gx + r11 * gy + r12 * gz
+        bz = r20 * gx + r21 * gy + r22 * gz
+        (a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15, a16, a17), (
+            k0,
+            k1,
+            k2,
+            k3,
+            k4,
+            k5,
+        ) = self._static
+        w0, w1, w2, w3, w4, w5 = raw
+        x, y, z = accel
+        c0 = w0 - k0 + a0 * x + a1 * y + a2 * z  # gravity and the linear acceleration
+        c1 = w1 - k1 + a3 * x + a4 * y + a5 * z
+        c2 = w2 - k2 + a6 * x + a7 * y + a8 * z
+        c3 = w3 - k3 + a9 * x + a10 * y + a11 * z
+        c4 = w4 - k4 + a12 * x + a13 * y + a14 * z
+        c5 = w5 - k5 + a15 * x + a16 * y + a17 * z
+        ux, uy, uz = wy * dz - wz * dy, wz * dx - wx * dz, wx * dy - wy * dx  # ω × d, d = h − m r
+        l00, l01, l02, l10, l11, l12, l20, l21, l22 = lever_inertia
         xx, xy, yy, xz, yz, zz = inertia
         jx = xx * wx + xy * wy + xz * wz  # I ω
         jy = xy * wx + yy * wy + yz * wz
         jz = xz * wx + yz * wy + zz * wz
-        w0, w1, w2, w3, w4, w5 = raw
+        along = wx * rx + wy * ry + wz * rz  # ω·r
+        spin = wx * wx + wy * wy + wz * wz  # |ω|²
+        sx, sy, sz = hr
         return (
-            w0 - bias[0] + m * fx + (by * hz - bz * hy) + (wy * vz - wz * vy),
-            w1 - bias[1] + m * fy + (bz * hx - bx * hz) + (wz * vx - wx * vz),
-            w2 - bias[2] + m * fz + (bx * hy - by * hx) + (wx * vy - wy * vx),
-            w3 - bias[3] + (hy * fz - hz * fy) + (xx * bx + xy * by + xz * bz) + (wy * jz - wz * jy),
-            w4 - bias[4] + (hz * fx - hx * fz) + (xy * bx + yy * by + yz * bz) + (wz * jx - wx * jz),
-            w5 - bias[5] + (hx * fy - hy * fx) + (xz * bx + yz * by + zz * bz) + (wx * jy - wy * jx),
+            c0 + (by * dz - bz * dy) + (wy * uz - wz * uy),  # + α × d + ω × (ω × d)
+            c1 + (bz * dx - bx * dz) + (wz * ux - wx * uz),
+            c2 + (bx * dy - by * dx) + (wx * uy - wy * ux),
+            c3  # + I' α + ω × (I ω) − (h × ω)(ω·r) + (h × r)|ω|²
+            + (l00 * bx + l01 * by + l02 * bz)
+            + (wy * jz - wz * jy)
+            - (hy * wz - hz * wy) * along
+            + sx * spin,
+            c4
+            + (l10 * bx + l11 * by + l12 * bz)
+            + (wz * jx - wx * jz)
+            - (hz * wx - hx * wz) * along
+            + sy * spin,
+            c5
+            + (l20 * bx + l21 * by + l22 * bz)
+            + (wx * jy - wy * jx)
+            - (hx * wy - hy * wx) * along
+            + sz * spin,
         )
