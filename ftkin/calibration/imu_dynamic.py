@@ -53,7 +53,9 @@ from .model import WRENCH_CHANNELS, cross_rows, skew
 from .mount import exp_so3, right_jacobian_so3
 from .observability import MIN_RELATIVE_SINGULAR_VALUE
 
-BIAS_NAMES = tuple(f"{'force' if c[0] == 'f' else 'torque'}_offset[{c[1]}]" for c in WRENCH_CHANNELS)
+BIAS_NAMES = tuple(
+    f"{'force' if c[0] == 'f' else 'torque'}_offset[{c[1]}]" for c in WRENCH_CHANNELS
+)
 
 
 @dataclass(frozen=True)
@@ -298,9 +300,7 @@ def calibrate_imu_dynamic(
             "angular velocity (wx, wy, wz)"
         )
     if prior is not None and not isinstance(prior, ImuCalibrationResult):
-        raise InvalidInput(
-            f"prior must be a calibration from the IMU, got {type(prior).__name__}"
-        )
+        raise InvalidInput(f"prior must be a calibration from the IMU, got {type(prior).__name__}")
     if accel_bias is None and prior is None:
         raise UnobservableParameters(
             ["accel_bias", "force_offset", "torque_offset"],
@@ -310,8 +310,10 @@ def calibrate_imu_dynamic(
             "absorbed",
         )
     bias = as_vector(accel_bias if accel_bias is not None else prior.accel_bias, 3, "accel_bias")
-    scale_given = accel_scale if accel_scale is not None else (
-        prior.accel_scale if prior is not None else np.zeros(3)
+    scale_given = (
+        accel_scale
+        if accel_scale is not None
+        else (prior.accel_scale if prior is not None else np.zeros(3))
     )
     scale = as_vector(scale_given, 3, "accel_scale")
     order = np.argsort(samples.times, kind="stable")
@@ -323,8 +325,14 @@ def calibrate_imu_dynamic(
         smooth[:, 0:3],
         rate[:, 0:3],
     )
-    position_given = imu_position if imu_position is not None else (
-        prior.imu_position if prior is not None and prior.imu_position_source == "given" else None
+    position_given = (
+        imu_position
+        if imu_position is not None
+        else (
+            prior.imu_position
+            if prior is not None and prior.imu_position_source == "given"
+            else None
+        )
     )
     if imu_rotation is not None:
         rotation0 = np.asarray(imu_rotation, dtype=float)
@@ -354,7 +362,9 @@ def calibrate_imu_dynamic(
         )
     unconstrained = x[6:16].copy()
     start_theta = (
-        unconstrained if is_physically_consistent(unconstrained) else nearest_consistent(unconstrained)
+        unconstrained
+        if is_physically_consistent(unconstrained)
+        else nearest_consistent(unconstrained)
     )
     x_phi = np.concatenate([x[:6], log_cholesky_from_parameters(start_theta), x[16:]])
     x = theta_space(_least_squares(problem, x_phi, True))
@@ -393,7 +403,12 @@ def _result(samples, problem: ImuDynamicProblem, x, bias, scale, position_estima
     transform[9:12, 7:10] = np.eye(3)
     theta_cov = transform @ body_covariance @ transform.T
     # the reported parameters: [F0, M0, m, c] and the IMU's, rotation about the sensor axes
-    names = BIAS_NAMES + ("tool_mass", "center_of_mass[x]", "center_of_mass[y]", "center_of_mass[z]")
+    names = BIAS_NAMES + (
+        "tool_mass",
+        "center_of_mass[x]",
+        "center_of_mass[y]",
+        "center_of_mass[z]",
+    )
     rest = slice(16, len(x))
     rows = np.zeros((10 + len(x) - 16, len(x)))
     rows[:10] = gradient[:10]

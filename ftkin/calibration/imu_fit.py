@@ -401,7 +401,7 @@ def kabsch_start(units: np.ndarray, forces: np.ndarray, g: float):
 
 
 def given_rotation_start(units: np.ndarray, forces: np.ndarray, g: float, rotation: np.ndarray):
-    """``m`` [kg] and ``F0`` [N] at a given ``R_SI``: linear least squares of ``F = F0 − m g R u``."""
+    """``m`` [kg] and ``F0`` [N] at a given ``R_SI``: least squares of ``F = F0 − m g R u``."""
     directions = g * units @ rotation.T
     design = np.concatenate(
         [np.broadcast_to(np.eye(3), (len(units), 3, 3)), -directions[:, :, None]], axis=2
@@ -686,6 +686,12 @@ def calibrate_imu(samples: ImuSamples, options=None, **keywords) -> ImuCalibrati
     if not isinstance(samples, ImuSamples):
         raise InvalidInput(
             f"samples must be ftkin ImuSamples (Samples.from_imu), got {type(samples).__name__}"
+        )
+    given_g = keywords.pop("g", getattr(options, "g", samples.g))
+    if not np.isclose(float(given_g), samples.g, rtol=1e-12):
+        raise InvalidInput(
+            f"g = {given_g} m/s² differs from the samples' {samples.g:g} m/s²: give it once, to "
+            "Samples.from_imu(..., g=...)"
         )
     options = ImuCalibrationOptions.from_keywords(options, **keywords)
     poses = samples.pose_averages()

@@ -170,13 +170,16 @@ class ImuFloatModel:
         """Six raw floats [N, N·m] and three accelerometer floats [m/s², IMU frame] → the six
         contact floats, the tool at rest (``raw − c + A a``).
         """
-        (a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15, a16, a17), (
-            c0,
-            c1,
-            c2,
-            c3,
-            c4,
-            c5,
+        (
+            (a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15, a16, a17),
+            (
+                c0,
+                c1,
+                c2,
+                c3,
+                c4,
+                c5,
+            ),
         ) = self._static
         w0, w1, w2, w3, w4, w5 = raw
         x, y, z = accel
@@ -193,7 +196,9 @@ class ImuFloatModel:
         """:meth:`contact` with the gyro's ``w`` [rad/s] and its rate ``ẇ`` [rad/s²] (IMU frame):
         the lever arm and the tool's rotational inertia included.
         """
-        rotation, (dx, dy, dz), lever_inertia, inertia, (hx, hy, hz), (rx, ry, rz), hr = self._moving
+        rotation, (dx, dy, dz), lever_inertia, inertia, (hx, hy, hz), (rx, ry, rz), hr = (
+            self._moving
+        )
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation
         gx, gy, gz = gyro
         wx = r00 * gx + r01 * gy + r02 * gz  # ω = R_SI w
@@ -203,13 +208,16 @@ class ImuFloatModel:
         bx = r00 * gx + r01 * gy + r02 * gz  # α = R_SI ẇ
         by = r10 * gx + r11 * gy + r12 * gz
         bz = r20 * gx + r21 * gy + r22 * gz
-        (a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15, a16, a17), (
-            k0,
-            k1,
-            k2,
-            k3,
-            k4,
-            k5,
+        (
+            (a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15, a16, a17),
+            (
+                k0,
+                k1,
+                k2,
+                k3,
+                k4,
+                k5,
+            ),
         ) = self._static
         w0, w1, w2, w3, w4, w5 = raw
         x, y, z = accel

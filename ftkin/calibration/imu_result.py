@@ -72,9 +72,10 @@ class ImuCalibrationResult(CalibrationResult):
     def __post_init__(self):
         super().__post_init__()
         rotation = _frozen(self.imu_rotation, (3, 3), "imu_rotation")
-        if not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) or np.linalg.det(
-            rotation
-        ) <= 0.0:
+        if (
+            not np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6)
+            or np.linalg.det(rotation) <= 0.0
+        ):
             raise InvalidInput(
                 "imu_rotation must be a rotation matrix (orthonormal, det = +1), got "
                 f"{rotation.tolist()}"
@@ -149,10 +150,108 @@ class ImuCalibrationResult(CalibrationResult):
         axes = ("x", "y", "z")
         mass_error = errors.get("tool_mass")
         lines = [
-            f"ftkin calibration from the IMU: method {self.method}, {self.pose_count} poses, "
-            f"{self.sample_count} readings",
-            f"  force_offset    F0 = {vector(self.force_offset, [f'force_offset[{a}]' for a in axes])} "
-            "N (sensor frame)",
+            f"ftkin calibration from the IMU: method {self.method}, "
+            + (
+                f"{self.pose_count} poses, {self.sample_count} readings"
+                if self.pose_count
+                else f"moving recording of {self.sample_count} readings"
+            ),
+            "  force_offset    F0 = "
+            f"{vector(self.force_offset, [f'force_offset[{a}]' for a in axes])} N (sensor frame)",
+            "  torque_offset   M0 = "
+            f"{vector(self.torque_offset, [f'torque_offset[{a}]' for a in axes], 5)} N·m",
+            f"  tool_mass       m  = {self.tool_mass:.4f}"
+            + (f" ± {mass_error:.4f}" if mass_error is not None else "")
+            + f" kg (g = {self.g:g} m/s²)",
+            "  center_of_mass  c  = "
+            f"{vector(self.center_of_mass, [f'center_of_mass[{a}]' for a in axes], 5)} m",
+            "  imu_rotation    R_SI rpy = "
+            f"{vector(np.deg2rad(self.imu_rotation_rpy_deg), IMU_ROTATION_NAMES, 3, 180 / np.pi)}°"
+            " (± about the sensor axes)",
+            "  accel_bias      b  = "
+            f"{vector(self.accel_bias, [f'accel_bias[{a}]' for a in axes])} m/s² (IMU frame)",
+        ]
+        if any(self.scale_estimated):
+            lines.append(
+                "  accel_scale     s  = "
+                + "["
+                + ", ".join(
+                    f"{100 * v:+.3f}%" if estimated else "fixed 0"
+                    for v, estimated in zip(self.accel_scale, self.scale_estimated)
+                )
+                + "]"
+            )
+        if self.imu_position is not None:
+            lines.append(
+                "  imu_position    r  = "
+                f"{vector(self.imu_position, [f'imu_position[{a}]' for a in axes], 4)} m "
+                f"({self.imu_position_source})"
+            )
+        if self.has_inertia:
+            inertia = self.inertia_about_com_in_sensor
+            moments = ", ".join(f"{m:.6f}" for m in np.linalg.eigvalsh(inertia))
+            lines.append(f"  inertia about the COM: principal moments {moments} kg·m²")
+        noise = (
+            f"noise per reading: accelerometer {np.round(self.accel_std, 5).tolist()} m/s²; "
+            if np.all(np.isfinite(self.accel_std))
+            else ""
+        )
+        lines.append(f"  {noise}chi-square {self.chi_square:.1f} for {self.dof} dof")
+        if self.motion_residual_rms is not None:
+            residual = _frozen(self.motion_residual_rms, (6,), "motion_residual_rms")
+            object.__setattr__(self, "motion_residual_rms", residual)
+        object.__setattr__(self, "imu_warnings", tuple(str(w) for w in self.imu_warnings))
+
+    @property
+    def imu_rotation_rpy_deg(self) -> np.ndarray:
+        """``(3,)`` roll, pitch, yaw [deg] of ``R_SI`` (``R = Rz(yaw) Ry(pitch) Rx(roll)``)."""
+        return np.rad2deg(rotation_to_rpy(self.imu_rotation))
+
+    @property
+    def parameter_std_errors(self) -> dict[str, float]:
+        """Standard error of each estimated parameter by name (rotations in rad)."""
+        if self.parameter_covariance is None:
+            return {}
+        sigma = np.sqrt(np.clip(np.diag(self.parameter_covariance), 0.0, None))
+        return dict(zip(self.parameter_names, sigma.tolist()))
+
+    def std_error_of(self, names) -> np.ndarray:
+        """``(k,)`` standard errors of ``names`` (NaN for a parameter not estimated)."""
+        errors = self.parameter_std_errors
+        return np.array([errors.get(name, np.nan) for name in names])
+
+    @property
+    def imu_rotation_std_deg(self) -> np.ndarray:
+        """``(3,)`` standard errors [deg] of ``R_SI`` about the sensor's axes (NaN if given)."""
+        return np.rad2deg(self.std_error_of(IMU_ROTATION_NAMES))
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """The IMU fit's warnings."""
+        return self.imu_warnings
+
+    def summary(self) -> str:
+        """Readable summary with units (± standard error): what the CLI prints."""
+        errors = self.parameter_std_errors
+
+        def vector(values, names, digits=4, scale=1.0):
+            text = "[" + ", ".join(f"{v * scale:+.{digits}f}" for v in values) + "]"
+            sigma = [errors.get(name) for name in names]
+            if all(s is not None for s in sigma):
+                text += " ± [" + ", ".join(f"{s * scale:.{digits}f}" for s in sigma) + "]"
+            return text
+
+        axes = ("x", "y", "z")
+        mass_error = errors.get("tool_mass")
+        lines = [
+            f"ftkin calibration from the IMU: method {self.method}, "
+            + (
+                f"{self.pose_count} poses, {self.sample_count} readings"
+                if self.pose_count
+                else f"moving recording of {self.sample_count} readings"
+            ),
+            "  force_offset    F0 = "
+            f"{vector(self.force_offset, [f'force_offset[{a}]' for a in axes])} N (sensor frame)",
             "  torque_offset   M0 = "
             f"{vector(self.torque_offset, [f'torque_offset[{a}]' for a in axes], 5)} N·m",
             f"  tool_mass       m  = {self.tool_mass:.4f}"

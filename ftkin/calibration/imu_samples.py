@@ -52,7 +52,10 @@ def check_specific_force_unit(
         return
     given = ACCEL_UNITS.get(str(unit).strip().lower(), str(unit))
     if abs(median - 1.0) <= UNIT_TOLERANCE and given != "g":
-        hint = "that is about 1: the accelerometer is logged in g; pass accel_unit='g' (--accel-unit g)"
+        hint = (
+            "that is about 1: the accelerometer is logged in g; pass accel_unit='g' "
+            "(--accel-unit g)"
+        )
     elif abs(median / g**2 - 1.0) <= UNIT_TOLERANCE and given == "g":
         hint = "about g²: the values were in m/s² already; drop accel_unit='g'"
     elif median < 0.3 * g:
