@@ -16,8 +16,8 @@ pose set that leaves a direction open, naming the parameters.
 
 The fit (:func:`fit_imu_static`) is the joint maximum likelihood of all nine channels
 (accelerometer, force, torque) over ``x = [F0, M0, m, c, δ, b, s, e_1..e_P]`` (``R_SI = R0
-Exp(δ)``, ``e_i`` the directions' tangent increments), started from a closed form: a sphere
-(or axis-aligned ellipsoid) fit of the accelerometer gives ``b`` (and ``s``), the Kabsch
+Exp(δ)``, ``e_i`` the directions' tangent increments), started from a closed form: a sphere fit of
+the accelerometer gives ``b`` (and an isotropic ``s``), the Kabsch
 rotation of the centred forces against the corrected directions gives ``R_SI`` and ``m``, and
 linear least squares of the torques gives ``M0`` and ``c``. Standard errors come from the
 Gauss–Newton covariance, as in the ``ml`` fit.
@@ -342,27 +342,19 @@ class ImuStaticProblem:
 
 
 def sphere_fit(accel: np.ndarray, g: float, with_scale: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Bias ``b`` [m/s²] and scale ``s`` [-] of an accelerometer from static means ``(P, 3)``.
+    """Start for the accelerometer's bias ``b`` [m/s²] and scale ``s`` [-] from static means
+    ``(P, 3)``: linear least squares of the sphere ``|a − b|² = ρ²`` (``2 a·b + k = |a|²``).
 
-    Linear least squares of the sphere ``|a − b|² = g²`` (``s = 0``), or of the axis-aligned
-    ellipsoid ``Σ_k (a_k − b_k)² / (1 + s_k)² = g²``. A degenerate fit (too few or coplanar
-    directions, or an ellipsoid with a negative axis) falls back to the sphere, then to zero.
+    ``s`` is the isotropic ``ρ / g − 1`` with ``with_scale`` (the joint fit then tells the axes
+    apart), else zero. Too few or coplanar directions (rank below four) give zero.
     """
-    if with_scale and len(accel) >= 7:
-        design = np.concatenate([accel**2, accel, np.ones((len(accel), 1))], axis=1)
-        solution, _, rank, _ = np.linalg.lstsq(design, np.ones(len(accel)), rcond=None)
-        quadratic, linear, constant = solution[:3], solution[3:6], solution[6]
-        if rank == 7 and np.all(quadratic > 0):
-            bias = -linear / (2.0 * quadratic)
-            factor = (np.sum(quadratic * bias**2) - constant + 1.0) / g**2
-            weights = quadratic / factor
-            if factor > 0 and np.all(weights > 0):
-                return bias, 1.0 / np.sqrt(weights) - 1.0
     if len(accel) >= 4:
         design = np.concatenate([2.0 * accel, np.ones((len(accel), 1))], axis=1)
         solution, _, rank, _ = np.linalg.lstsq(design, np.sum(accel**2, axis=1), rcond=None)
-        if rank == 4:
-            return solution[:3], np.zeros(3)
+        radius_squared = solution[3] + solution[:3] @ solution[:3]
+        if rank == 4 and radius_squared > 0.0:
+            isotropic = np.sqrt(radius_squared) / g - 1.0 if with_scale else 0.0
+            return solution[:3], np.full(3, isotropic)
     return np.zeros(3), np.zeros(3)
 
 
@@ -452,16 +444,22 @@ def start(poses: ImuPoseAverages, g: float, options: ImuCalibrationOptions, scal
 
 def weakest_direction(problem: ImuStaticProblem, x: np.ndarray) -> tuple[float, list[str]]:
     """Smallest relative singular value of the column-normalised whitened Jacobian, and the global
-    parameters its direction involves (entries above 0.3 of the largest)."""
+    parameters its open directions involve: entries above 0.3 of the largest in any direction
+    below :data:`~ftkin.calibration.observability.MIN_RELATIVE_SINGULAR_VALUE` (else the weakest).
+    """
     jac = problem.whitened_jacobian(x)
     scale = np.linalg.norm(jac, axis=0)
     scale[scale == 0.0] = 1.0
     _, singular, vt = np.linalg.svd(jac / scale, full_matrices=False)
-    weakest = np.abs(vt[-1, : problem.global_count])
-    relative = singular[-1] / singular[0]
-    if weakest.max() == 0.0:
-        return relative, []
-    return relative, [problem.names[i] for i in np.flatnonzero(weakest > 0.3 * weakest.max())]
+    relative = singular / singular[0]
+    open_rows = np.flatnonzero(relative < MIN_RELATIVE_SINGULAR_VALUE)
+    involved = []
+    for row in open_rows if len(open_rows) else [len(relative) - 1]:
+        weakest = np.abs(vt[row, : problem.global_count])
+        if weakest.max() > 0.0:
+            picked = np.flatnonzero(weakest > 0.3 * weakest.max())
+            involved += [problem.names[i] for i in picked if problem.names[i] not in involved]
+    return float(relative[-1]), involved
 
 
 def check_observable(problem: ImuStaticProblem, x: np.ndarray) -> None:
@@ -482,6 +480,22 @@ def check_observable(problem: ImuStaticProblem, x: np.ndarray) -> None:
 
 
 # ---------------------------------------------------------------------------- fit
+
+
+def _drop_open_scale(problem, x, options: ImuCalibrationOptions, notes: list) -> bool:
+    """With ``estimate_scale="auto"``: True (and a note naming them) when the weakest direction
+    at ``x`` is degenerate and involves scale components, which are then left out."""
+    if options.estimate_scale != "auto" or not problem.scale_free:
+        return False
+    relative, involved = weakest_direction(problem, x)
+    scale_names = [name for name in involved if name.startswith("accel_scale")]
+    if relative >= MIN_RELATIVE_SINGULAR_VALUE or not scale_names:
+        return False
+    notes.append(
+        f"{', '.join(scale_names)} not determined by these poses: taken as 0 (gravity never seen "
+        "along both signs of that axis)"
+    )
+    return True
 
 
 def _solve(problem: ImuStaticProblem, x0: np.ndarray) -> np.ndarray:
@@ -588,7 +602,7 @@ def fit_imu_static(
     def from_residuals(problem, x):  # the given groups stay as given
         return np.where(fixed, noise, _noise_from_residuals(problem, x, _floor(poses, g)))
 
-    while True:
+    while True:  # at the start, then at the solution: a scale the poses leave open is dropped
         x0, rotation0, units = start(poses, g, options, scale_free)
         problem = ImuStaticProblem(
             poses.specific_force,
@@ -604,28 +618,25 @@ def fit_imu_static(
         x0 = np.concatenate([x0, np.zeros(2 * len(poses))])
         if source == "residuals":  # rough weights before the check: unit noise mixes units
             problem = replace(problem, noise=from_residuals(problem, x0))
-        relative, involved = weakest_direction(problem, x0)
-        scale_names = [name for name in involved if name.startswith("accel_scale")]
-        if relative < MIN_RELATIVE_SINGULAR_VALUE and options.estimate_scale == "auto":
-            if scale_names:
-                dropped = [ACCEL_SCALE_NAMES.index(name) for name in scale_names]
-                scale_free = tuple(k for k in scale_free if k not in dropped)
-                notes.append(
-                    f"{', '.join(scale_names)} not determined by these poses: taken as 0 (gravity "
-                    "never seen along both signs of that axis)"
-                )
-                continue
+        if _drop_open_scale(problem, x0, options, notes):
+            scale_free = tuple(k for k in scale_free if ACCEL_SCALE_NAMES[k] not in notes[-1])
+            continue
         check_observable(problem, x0)
+        x = _solve(problem, x0)
+        for _ in range(NOISE_PASSES if source == "residuals" else 0):
+            estimate = from_residuals(problem, x)
+            settled = np.allclose(estimate, problem.noise, rtol=1e-2, atol=0.0)
+            problem = replace(problem, noise=estimate)
+            if settled:
+                break
+            x = _solve(problem, x)
+        problem, x = problem.recentred(x)
+        # the start's directions can hide a degeneracy that holds at the measured ones
+        if _drop_open_scale(problem, x, options, notes):
+            scale_free = tuple(k for k in scale_free if ACCEL_SCALE_NAMES[k] not in notes[-1])
+            continue
+        check_observable(problem, x)
         break
-    x = _solve(problem, x0)
-    for _ in range(NOISE_PASSES if source == "residuals" else 0):
-        estimate = from_residuals(problem, x)
-        settled = np.allclose(estimate, problem.noise, rtol=1e-2, atol=0.0)
-        problem = replace(problem, noise=estimate)
-        if settled:
-            break
-        x = _solve(problem, x)
-    problem, x = problem.recentred(x)
     jac = problem.whitened_jacobian(x)
     information = jac.T @ jac
     scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
