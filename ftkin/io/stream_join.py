@@ -265,14 +265,16 @@ def join_streams(
             sources[name] = stream.name
     start = max(s.times[0] for s in streams)
     end = min(s.times[-1] for s in streams)
-    if not start < end:
-        raise InvalidSamples(
-            "the streams do not overlap in time ("
-            + "; ".join(_span(s) for s in streams)
-            + "): are they from one run, on one clock and in one time unit?"
-        )
     keep = (base.times >= start) & (base.times <= end)
     at = base.times[keep]
+    if not start < end or len(at) < 2:
+        raise InvalidSamples(
+            "the streams do not overlap in time"
+            + (f" (in fewer than two rows of {base.name})" if start < end else "")
+            + ": "
+            + "; ".join(_span(s) for s in streams)
+            + ": are they from one run, on one clock and in one time unit?"
+        )
     notes = []
     if not keep.all():
         before, after = int(np.sum(base.times < start)), int(np.sum(base.times > end))

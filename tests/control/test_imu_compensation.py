@@ -18,7 +18,8 @@ IMU_ROTATION = Rotation.from_euler("xyz", [95.0, 89.0, -175.0], degrees=True).as
 IMU_POSITION = np.array([0.021, -0.012, 0.027])
 
 
-def calibration(theta, bias=np.zeros(6), accel_bias=np.zeros(3), scale=np.zeros(3)):
+def calibration(theta, bias=None, accel_bias=(0.0, 0.0, 0.0), scale=(0.0, 0.0, 0.0)):
+    bias = np.zeros(6) if bias is None else bias
     mass, com, inertia = body_from_parameters(theta)
     return ImuCalibrationResult(
         force_offset=bias[:3],
