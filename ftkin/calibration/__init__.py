@@ -25,7 +25,7 @@ _EXPORTS = {
     "DriftModel": ".drift",
     "DynamicCalibrationResult": ".dynamic",
     "FitDiagnostics": ".diagnostics",
-    "ImuCalibrationOptions": ".imu_fit",
+    "ImuCalibrationOptions": ".imu_options",
     "ImuCalibrationResult": ".imu_result",
     "ImuSamples": ".imu_samples",
     "METHODS": ".estimate",

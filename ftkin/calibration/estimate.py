@@ -197,7 +197,7 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
             readings sharing a pose id are averaged first. IMU samples
             (:meth:`Samples.from_imu`) are fitted by
             :func:`~ftkin.calibration.imu_fit.calibrate_imu` (options:
-            :class:`~ftkin.calibration.imu_fit.ImuCalibrationOptions`).
+            :class:`~ftkin.calibration.imu_options.ImuCalibrationOptions`).
         options: A :class:`CalibrationOptions` (default: all defaults).
         **keywords: Its fields, given directly (``method="linear"``, ``drift="poly:2"``, ...);
             they replace those of ``options``.

@@ -29,7 +29,6 @@ from ..exceptions import InvalidInput, UnobservableParameters
 from ..validation import as_vector
 from .derivatives import DEFAULT_POLYORDER, joint_derivatives
 from .dynamic_fit import THETA_NAMES
-from .imu_fit import kabsch_start
 from .imu_model import (
     IMU_POSITION_NAMES,
     IMU_ROTATION_NAMES,
@@ -38,6 +37,7 @@ from .imu_model import (
 )
 from .imu_result import ImuCalibrationResult
 from .imu_samples import ImuSamples
+from .imu_start import kabsch_start
 from .information import SensorNoise, noise_floor
 from .log_cholesky import (
     body_from_parameters,

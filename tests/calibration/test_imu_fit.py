@@ -9,13 +9,11 @@ from scipy.spatial.transform import Rotation
 
 import ftkin
 from ftkin import Samples
-from ftkin.calibration.imu_fit import (
-    ImuCalibrationOptions,
-    ImuStaticProblem,
-    calibrate_imu,
-    sphere_fit,
-)
+from ftkin.calibration.imu_fit import calibrate_imu
+from ftkin.calibration.imu_options import ImuCalibrationOptions
+from ftkin.calibration.imu_problem import ImuStaticProblem
 from ftkin.calibration.imu_samples import ImuSamples
+from ftkin.calibration.imu_start import sphere_fit
 from ftkin.exceptions import InvalidInput, InvalidSamples, SuspectConvention, UnobservableParameters
 
 G = 9.80665
