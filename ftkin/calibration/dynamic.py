@@ -32,6 +32,7 @@ from .dynamic_fit import (
     theta_space,
 )
 from .estimate import CalibrationResult
+from .imu_samples import ImuSamples
 from .information import SensorNoise, noise_floor
 from .log_cholesky import (
     body_from_parameters,
@@ -184,6 +185,7 @@ def calibrate_dynamic(
     estimate_inertia: bool = True,
     g: float = STANDARD_GRAVITY,
     noise: SensorNoise | None = None,
+    **imu,
 ) -> DynamicCalibrationResult:
     """Identify bias, base tilt, mass, centre of mass and (optionally) inertia from readings along a
     motion.
@@ -196,6 +198,8 @@ def calibrate_dynamic(
             static calibration as the special case.
         g: Magnitude of gravity [m/s²] (known; its direction is estimated).
         noise: Per-reading noise [N, N·m]; None estimates it per channel from the residuals.
+        **imu: For IMU samples (:meth:`Samples.from_imu`, no joints): the options of
+            :func:`~ftkin.calibration.imu_dynamic.calibrate_imu_dynamic` (``prior``, ...).
 
     Returns:
         A frozen :class:`DynamicCalibrationResult`.
@@ -205,6 +209,17 @@ def calibrate_dynamic(
             data with ``estimate_inertia=True`` names the inertia).
         InvalidInput: bad arguments, or a non-positive mass estimate.
     """
+    if isinstance(motion, ImuSamples):  # no joints: the IMU's own fit
+        from .imu_dynamic import calibrate_imu_dynamic
+
+        if not estimate_inertia or as_positive(g, "g") != motion.g:
+            raise InvalidInput(
+                "a dynamic calibration from the IMU always estimates the inertia, with the g of "
+                f"its samples ({motion.g:g} m/s²: Samples.from_imu(..., g=...))"
+            )
+        return calibrate_imu_dynamic(motion, noise=noise, **imu)
+    if imu:
+        raise InvalidInput(f"unknown calibrate_dynamic option(s) {', '.join(sorted(imu))}")
     motion = _checked_motion(motion, noise)
     g = as_positive(g, "g")
     problem = DynamicProblem(

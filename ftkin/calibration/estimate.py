@@ -17,6 +17,7 @@ from .diagnostics import FitDiagnostics
 from .drift import BiasDrift, drift_candidates
 from .drift_fit import DriftStart, select_drift
 from .fit_quality import diagnose, log_warnings
+from .imu_samples import ImuSamples
 from .information import SensorNoise, noise_floor
 from .linear import fit_linear
 from .ml import LOSSES, fit_ml
@@ -193,7 +194,10 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
 
     Args:
         samples: Raw readings with sensor orientations (see :class:`Samples`);
-            readings sharing a pose id are averaged first.
+            readings sharing a pose id are averaged first. IMU samples
+            (:meth:`Samples.from_imu`) are fitted by
+            :func:`~ftkin.calibration.imu_fit.calibrate_imu` (options:
+            :class:`~ftkin.calibration.imu_options.ImuCalibrationOptions`).
         options: A :class:`CalibrationOptions` (default: all defaults).
         **keywords: Its fields, given directly (``method="linear"``, ``drift="poly:2"``, ...);
             they replace those of ``options``.
@@ -210,6 +214,10 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
         SuspectConvention: the data fit with an axis reversed, or the tool
             weight points more than 90° from the expected gravity direction.
     """
+    if isinstance(samples, ImuSamples):  # no orientation: the IMU's own fit
+        from .imu_fit import calibrate_imu
+
+        return calibrate_imu(samples, options, **keywords)
     unknown = set(keywords) - {f.name for f in fields(CalibrationOptions)}
     if unknown:
         raise InvalidInput(f"unknown calibrate option(s) {', '.join(sorted(unknown))}")

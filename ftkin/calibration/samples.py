@@ -203,6 +203,20 @@ class Samples:
         )
 
     @classmethod
+    def from_imu(cls, specific_force, wrenches, pose_ids=None, **imu):
+        """From the sensor's own IMU instead of an orientation: ``(N, 3)`` specific force
+        ``[ax, ay, az]`` [m/s², IMU frame; ``+g`` upward at rest] and ``(N, 6)`` raw wrenches.
+
+        ``imu``: ``accel_unit`` (``"m/s^2"`` or ``"g"``), ``angular_velocity`` ``(N, 3)``
+        [rad/s, IMU frame], ``times`` ``(N,)`` [s], ``g`` [m/s²]. Returns
+        :class:`~ftkin.calibration.imu_samples.ImuSamples` (:func:`ftkin.calibrate` fits the IMU
+        model: :mod:`ftkin.calibration.imu_fit`).
+        """
+        from .imu_samples import ImuSamples  # the IMU's own samples type
+
+        return ImuSamples.from_arrays(specific_force, wrenches, pose_ids, **imu)
+
+    @classmethod
     def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None, times=None) -> "Samples":
         """From the paper's commanded ``(N, 3)`` Euler angles ``[α, β, γ]`` [deg], ``R = Rz Ry
         Rx``.

@@ -12,7 +12,8 @@ per-pose normalized residuals, outliers, condition number, warnings; see
 :class:`~ftkin.calibration.diagnostics.FitDiagnostics`), ``created`` (UTC, ISO 8601),
 ``ftkin_version``; a dynamic calibration adds ``inertia`` (3×3 about the
 centre of mass, sensor axes [kg·m²]) and ``std_errors.inertia`` and loads as a
-:class:`~ftkin.calibration.dynamic.DynamicCalibrationResult`; ``kinematics``
+:class:`~ftkin.calibration.dynamic.DynamicCalibrationResult`; ``imu`` (a
+calibration from the sensor's IMU: :mod:`ftkin.io.imu_calibration_file`); ``kinematics``
 (how the sensor frame was obtained: robot or URDF path, its SHA-256, sensor
 parent and offset, see :class:`~ftkin.kinematics.record.KinematicsRecord`;
 absent when unknown). Files without ``covariance``/``diagnostics`` (written by
@@ -69,6 +70,7 @@ from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from ..kinematics.record import KinematicsRecord
 from ..validation import MAX_WRENCH
 from .atomic import atomic_write_text
+from .imu_calibration_file import imu_document, imu_result
 from .json_reader import JsonReader, NestedReader, short_repr
 
 FORMAT_NAME = "ftkin-calibration"
@@ -177,6 +179,7 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         **({"diagnostics": result.diagnostics.to_dict()} if result.diagnostics is not None else {}),
         "drift": _drift_document(result.drift),
         **({"kinematics": result.kinematics.to_dict()} if result.kinematics is not None else {}),
+        **imu_document(result),  # a calibration from the IMU: R_SI, accelerometer bias, ...
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "ftkin_version": __version__,
     }
@@ -402,7 +405,8 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
         )
     _check_consistent(reader, document, result)
     _check_plausible(reader, result)
-    return result if inertia is None else _with_inertia(reader, result, inertia)
+    result = result if inertia is None else _with_inertia(reader, result, inertia)
+    return imu_result(reader, result) if "imu" in document else result
 
 
 def _check_consistent(reader, document: dict, result) -> None:

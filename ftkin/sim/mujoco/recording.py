@@ -66,6 +66,7 @@ class MujocoRecorder:
             body.fullinertia = tool.inertia_about_com[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]]
         body.add_site(name="ftkin_sensor_site", pos=[0.0, 0.0, 0.0])
         add_wrench_sensor(mujoco, spec, "ftkin_sensor_site")
+        self._add_sensors(mujoco, spec, body)  # a subclass's own sensors (the IMU's)
         self.model = spec.compile()
         self.model.opt.gravity[:] = gravity_in_base_from_tilt(
             as_positive(g, "g"), float(base_tilt[0]), float(base_tilt[1])
@@ -83,6 +84,10 @@ class MujocoRecorder:
         self._dof = np.array([self.model.joint(name).dofadr[0] for name in self.joint_names])
         self._site = self.model.site("ftkin_sensor_site").id
         self._body = self.model.body(sensor_body).id
+
+    def _add_sensors(self, mujoco, spec, body) -> None:
+        """Add sensors to ``body`` of ``spec`` before it compiles (none here; see
+        :mod:`ftkin.sim.mujoco.imu_recording`)."""
 
     @property
     def nq(self) -> int:

@@ -1,0 +1,447 @@
+"""Dynamic identification from the sensor's IMU: mass, COM, inertia, ``R_SI`` and the IMU's
+position from a moving recording with wrench, specific force and angular velocity, no joints.
+
+The gyro's ``w`` and the accelerometer's ``a`` are smoothed and ``w`` differentiated by the
+zero-phase Savitzky–Golay filter of the joint-based dynamic path
+(:func:`~ftkin.calibration.derivatives.joint_derivatives`), then moved to the sensor frame
+(:mod:`ftkin.calibration.imu_model`)::
+
+    ω = R_SI w,  α = R_SI ẇ,  f_S = R_SI (a − b) ⊘ (1 + s) − α × r − ω × (ω × r)
+    raw = [F0, M0] − Y([0, ω], [f_S, α]) θ
+
+and the parameters ``x = [F0, M0, θ (10), δ, r]`` (``R_SI = R0 Exp(δ)``; ``δ`` and ``r`` only
+when not given) are fitted as in :mod:`ftkin.calibration.dynamic_fit`: linear least squares at
+the start rotation and position, the unconstrained nonlinear fit, then the maximum likelihood
+over physically consistent bodies (log-Cholesky coordinates).
+
+The accelerometer's bias and scale come from a static IMU calibration (``prior``) or are given:
+a moving recording cannot separate them, since ``F0`` absorbs ``m R_SI b`` and ``M0`` absorbs
+``m c × R_SI b`` at every sample; without them the fit refuses to report ``F0`` and ``M0``.
+``accel_bias=(0, 0, 0)`` is the explicit choice of absorbed offsets (they then compensate this
+IMU exactly, but are not the sensor's own).
+"""
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..exceptions import InvalidInput, UnobservableParameters
+from ..validation import as_vector
+from .derivatives import DEFAULT_POLYORDER, joint_derivatives
+from .dynamic_fit import THETA_NAMES
+from .imu_model import (
+    IMU_POSITION_NAMES,
+    IMU_ROTATION_NAMES,
+    corrected_specific_force,
+    imu_regressor,
+)
+from .imu_result import ImuCalibrationResult
+from .imu_samples import ImuSamples
+from .imu_start import kabsch_start
+from .information import SensorNoise, noise_floor
+from .log_cholesky import (
+    body_from_parameters,
+    inertia_entries,
+    inertia_matrix,
+    is_physically_consistent,
+    log_cholesky_from_parameters,
+    log_cholesky_jacobian,
+    nearest_consistent,
+    parameters_from_log_cholesky,
+)
+from .model import WRENCH_CHANNELS, cross_rows, skew
+from .mount import exp_so3, right_jacobian_so3
+from .observability import MIN_RELATIVE_SINGULAR_VALUE
+
+BIAS_NAMES = tuple(
+    f"{'force' if c[0] == 'f' else 'torque'}_offset[{c[1]}]" for c in WRENCH_CHANNELS
+)
+
+
+@dataclass(frozen=True)
+class ImuMotion:
+    """A moving recording in the sensor frame's terms, before ``R_SI`` and ``r`` are applied.
+
+    Attributes:
+        wrenches: ``(N, 6)`` raw readings [N, N·m].
+        corrected: ``(N, 3)`` smoothed ``(a − b) ⊘ (1 + s)`` [m/s², IMU frame].
+        gyro: ``(N, 3)`` smoothed ``w`` [rad/s, IMU frame].
+        gyro_rate: ``(N, 3)`` its derivative ``ẇ`` [rad/s², IMU frame].
+    """
+
+    wrenches: np.ndarray
+    corrected: np.ndarray
+    gyro: np.ndarray
+    gyro_rate: np.ndarray
+
+
+@dataclass(frozen=True)
+class ImuDynamicProblem:
+    """Whitened least squares of the dynamic IMU identification (inspectable on its own).
+
+    ``x = [F0, M0, θ (10), δ (if rotation_free), r (if position_free)]``; with ``phi`` the ten
+    θ entries are log-Cholesky coordinates φ instead.
+
+    Attributes:
+        motion: The signals.
+        channel_std: ``(6,)`` noise per reading [N, N·m].
+        rotation0: ``R0`` ``(3, 3)``.
+        position0: ``r`` ``(3,)`` [m] when given (or the value ``r`` is not estimated at).
+        rotation_free, position_free: Whether ``δ`` and ``r`` are estimated.
+    """
+
+    motion: ImuMotion
+    channel_std: np.ndarray
+    rotation0: np.ndarray
+    position0: np.ndarray
+    rotation_free: bool = True
+    position_free: bool = True
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return (
+            BIAS_NAMES
+            + THETA_NAMES
+            + (IMU_ROTATION_NAMES if self.rotation_free else ())
+            + (IMU_POSITION_NAMES if self.position_free else ())
+        )
+
+    def unpack(self, x: np.ndarray, phi: bool = False):
+        """``(bias (6), θ (10), δ (3), r (3))`` of ``x``."""
+        theta = parameters_from_log_cholesky(x[6:16]) if phi else x[6:16]
+        i, delta, position = 16, np.zeros(3), self.position0
+        if self.rotation_free:
+            delta, i = x[i : i + 3], i + 3
+        if self.position_free:
+            position = x[i : i + 3]
+        return x[0:6], theta, delta, position
+
+    def signals(self, delta: np.ndarray, position: np.ndarray):
+        """``(R, ω, α, f_S)``: the rotation and the sensor-frame signals at ``δ``, ``r``."""
+        rotation = self.rotation0 @ exp_so3(delta)
+        motion = self.motion
+        omega, alpha = motion.gyro @ rotation.T, motion.gyro_rate @ rotation.T
+        lever = np.broadcast_to(position, omega.shape)
+        force = (
+            motion.corrected @ rotation.T
+            - cross_rows(alpha, lever)
+            - cross_rows(omega, cross_rows(omega, lever))
+        )
+        return rotation, omega, alpha, force
+
+    def predict(self, x: np.ndarray, phi: bool = False) -> np.ndarray:
+        """``(N, 6)`` predicted raw readings."""
+        bias, theta, delta, position = self.unpack(x, phi)
+        _, omega, alpha, force = self.signals(delta, position)
+        return bias - imu_regressor(force, omega, alpha) @ theta
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """``(N, 6, len(x))`` derivative of :meth:`predict` (θ-space)."""
+        bias, theta, delta, position = self.unpack(x)
+        rotation, omega, alpha, force = self.signals(delta, position)
+        regressor = imu_regressor(force, omega, alpha)
+        count = len(force)
+        out = np.zeros((count, 6, len(x)))
+        out[:, :, 0:6] = np.eye(6)
+        out[:, :, 6:16] = -regressor
+        mass, first = theta[0], theta[1:4]
+        first_skew, omega_skew, lever_skew = skew(first), skew(omega), skew(position)
+        # ∂W/∂f_S: the wrench on the tool moves with the specific force as [m I; [h]×]
+        d_wrench_force = np.concatenate([mass * np.eye(3), first_skew])
+        i = 16
+        if self.rotation_free:
+            jr = right_jacobian_so3(delta)
+            motion = self.motion
+            d_corrected = -rotation @ skew(motion.corrected) @ jr  # ∂(R ã)/∂δ (N, 3, 3)
+            d_omega = -rotation @ skew(motion.gyro) @ jr
+            d_alpha = -rotation @ skew(motion.gyro_rate) @ jr
+            d_force = (
+                d_corrected
+                + lever_skew @ d_alpha
+                + (skew(cross_rows(omega, np.broadcast_to(position, omega.shape))) @ d_omega)
+                + omega_skew @ lever_skew @ d_omega
+            )
+            inertia = inertia_matrix(theta[4:10])
+            d_top = (
+                mass * d_force
+                - first_skew @ d_alpha
+                - skew(cross_rows(omega, np.broadcast_to(first, omega.shape))) @ d_omega
+                - omega_skew @ first_skew @ d_omega
+            )
+            d_bottom = (
+                first_skew @ d_force
+                + inertia @ d_alpha
+                - skew(omega @ inertia.T) @ d_omega
+                + omega_skew @ inertia @ d_omega
+            )
+            out[:, :, i : i + 3] = -np.concatenate([d_top, d_bottom], axis=1)
+            i += 3
+        if self.position_free:
+            d_force_position = -(skew(alpha) + omega_skew @ omega_skew)  # ∂f_S/∂r
+            out[:, :, i : i + 3] = -d_wrench_force @ d_force_position
+        return out
+
+    def whitened_residuals(self, x: np.ndarray, phi: bool = False) -> np.ndarray:
+        return ((self.motion.wrenches - self.predict(x, phi)) / self.channel_std).ravel()
+
+    def whitened_jacobian(self, x: np.ndarray, phi: bool = False) -> np.ndarray:
+        x_theta = theta_space(x) if phi else x
+        jac = (-self.jacobian(x_theta) / self.channel_std[:, None]).reshape(-1, len(x))
+        if phi:
+            jac[:, 6:16] = jac[:, 6:16] @ log_cholesky_jacobian(x[6:16])
+        return jac
+
+
+def theta_space(x_phi: np.ndarray) -> np.ndarray:
+    """``x`` with its log-Cholesky block turned back into θ."""
+    out = np.array(x_phi, dtype=float)
+    out[6:16] = parameters_from_log_cholesky(x_phi[6:16])
+    return out
+
+
+def _lstsq_start(problem: ImuDynamicProblem) -> np.ndarray:
+    """Linear least squares of ``[bias, θ]`` at ``R0`` and ``r0`` (the model is linear there)."""
+    x = np.zeros(len(problem.names))
+    if problem.position_free:
+        x[-3:] = problem.position0
+    jac = problem.whitened_jacobian(x)[:, :16]
+    target = (problem.motion.wrenches / problem.channel_std).ravel()
+    x[:16] = np.linalg.lstsq(-jac, -target, rcond=None)[0]
+    return x
+
+
+def _least_squares(problem: ImuDynamicProblem, x0: np.ndarray, phi: bool) -> np.ndarray:
+    from scipy.optimize import least_squares  # scipy loads where it is used
+
+    return least_squares(
+        problem.whitened_residuals,
+        x0,
+        jac=problem.whitened_jacobian,
+        args=(phi,),
+        method="lm",
+        x_scale="jac",
+        xtol=1e-12,
+        ftol=1e-12,
+        gtol=1e-12,
+        max_nfev=500,
+    ).x
+
+
+def check_observable(problem: ImuDynamicProblem, x: np.ndarray) -> None:
+    """Refuse a recording that cannot determine the parameters (static data and the inertia, a
+    motion too slow for the IMU's position), naming them.
+    """
+    if np.sqrt(np.mean(np.sum(problem.motion.gyro_rate**2, axis=1))) < 1e-3:
+        raise UnobservableParameters(
+            ["inertia_about_com_in_sensor", "imu_position"],
+            "the recording does not turn the sensor (angular acceleration ~0): record a moving "
+            "excitation (ftkin plan --excitation), or calibrate from static poses",
+        )
+    jac = problem.whitened_jacobian(x)
+    scale = np.linalg.norm(jac, axis=0)
+    scale[scale == 0.0] = 1.0
+    _, singular, vt = np.linalg.svd(jac / scale, full_matrices=False)
+    relative = singular[-1] / singular[0]
+    if relative < MIN_RELATIVE_SINGULAR_VALUE:
+        weakest = np.abs(vt[-1])
+        raise UnobservableParameters(
+            [problem.names[i] for i in np.flatnonzero(weakest > 0.3 * weakest.max())],
+            f"the motion does not excite them apart (smallest relative singular value "
+            f"{relative:.1e}): a richer excitation turns the sensor about every axis",
+        )
+
+
+def _noise(problem: ImuDynamicProblem, x: np.ndarray) -> np.ndarray:
+    residuals = problem.motion.wrenches - problem.predict(x)
+    std = np.sqrt(np.sum(residuals**2, axis=0) / max(len(residuals) - len(x) / 6.0, 1.0))
+    return np.maximum(std, noise_floor(problem.motion.wrenches))
+
+
+def _outputs(x: np.ndarray) -> np.ndarray:
+    """``[F0, M0, m, c, I_com entries (6)]`` (16,) of θ-space ``x``."""
+    mass, com, about_com = body_from_parameters(x[6:16])
+    return np.concatenate([x[0:6], [mass], com, inertia_entries(about_com)])
+
+
+def calibrate_imu_dynamic(
+    samples: ImuSamples,
+    prior: ImuCalibrationResult | None = None,
+    *,
+    accel_bias=None,
+    accel_scale=None,
+    imu_rotation=None,
+    imu_position=None,
+    noise: SensorNoise | None = None,
+    window: int | None = None,
+    polyorder: int = DEFAULT_POLYORDER,
+) -> ImuCalibrationResult:
+    """Identify bias, mass, COM, inertia, ``R_SI`` and the IMU's position from a moving recording.
+
+    Args:
+        samples: :class:`ImuSamples` with ``times`` (uniform) and ``angular_velocity``.
+        prior: A static IMU calibration of the same IMU: its accelerometer bias and scale are
+            used, its ``R_SI`` starts the fit (and its ``imu_position``, when given, is kept).
+        accel_bias, accel_scale: ``(3,)`` [m/s², -]: the accelerometer's (override ``prior``'s).
+        imu_rotation: ``R_SI`` ``(3, 3)`` when known: held fixed.
+        imu_position: ``r`` ``(3,)`` [m, sensor frame] when known: held fixed (else estimated).
+        noise: Per-reading wrench noise; None estimates it per channel from the residuals.
+        window, polyorder: The Savitzky–Golay filter (default window about 51 ms).
+
+    Raises:
+        UnobservableParameters: no accelerometer bias (``F0``, ``M0`` named), a recording that
+            does not turn the sensor, or a motion that leaves parameters open.
+        InvalidInput: no times or gyro, non-uniform times, a non-positive mass.
+    """
+    if not isinstance(samples, ImuSamples):
+        raise InvalidInput(f"samples must be ftkin ImuSamples, got {type(samples).__name__}")
+    if samples.times is None or samples.angular_velocity is None:
+        raise InvalidInput(
+            "a dynamic calibration from the IMU needs the time of each reading (t) and the gyro's "
+            "angular velocity (wx, wy, wz)"
+        )
+    if prior is not None and not isinstance(prior, ImuCalibrationResult):
+        raise InvalidInput(f"prior must be a calibration from the IMU, got {type(prior).__name__}")
+    if accel_bias is None and prior is None:
+        raise UnobservableParameters(
+            ["accel_bias", "force_offset", "torque_offset"],
+            "a moving recording cannot separate the accelerometer's bias from the sensor's "
+            "offsets (F0 absorbs m·R_SI·b): pass prior= a static IMU calibration (12 poses) or "
+            "accel_bias= (a datasheet's); accel_bias=(0, 0, 0) reports offsets with the bias "
+            "absorbed",
+        )
+    bias = as_vector(accel_bias if accel_bias is not None else prior.accel_bias, 3, "accel_bias")
+    scale_given = (
+        accel_scale
+        if accel_scale is not None
+        else (prior.accel_scale if prior is not None else np.zeros(3))
+    )
+    scale = as_vector(scale_given, 3, "accel_scale")
+    order = np.argsort(samples.times, kind="stable")
+    signals = np.concatenate([samples.angular_velocity, samples.specific_force], axis=1)[order]
+    smooth, rate, _ = joint_derivatives(samples.times[order], signals, window, polyorder)
+    motion = ImuMotion(
+        samples.wrenches[order],
+        corrected_specific_force(smooth[:, 3:6], bias, scale),
+        smooth[:, 0:3],
+        rate[:, 0:3],
+    )
+    position_given = (
+        imu_position
+        if imu_position is not None
+        else (
+            prior.imu_position
+            if prior is not None and prior.imu_position_source == "given"
+            else None
+        )
+    )
+    if imu_rotation is not None:
+        rotation0 = np.asarray(imu_rotation, dtype=float)
+    elif prior is not None:
+        rotation0 = np.array(prior.imu_rotation)
+    else:  # Kabsch of the forces against the corrected specific force (motion terms are small)
+        norm = float(np.linalg.norm(motion.corrected, axis=1).mean())
+        rotation0 = kabsch_start(motion.corrected / norm, motion.wrenches[:, :3], norm)[0]
+    problem = ImuDynamicProblem(
+        motion,
+        np.array([1.0, 1.0, 1.0, 0.1, 0.1, 0.1]) if noise is None else noise.channel_std,
+        rotation0,
+        np.zeros(3) if position_given is None else as_vector(position_given, 3, "imu_position"),
+        imu_rotation is None,
+        position_given is None,
+    )
+    x = _lstsq_start(problem)
+    check_observable(problem, x)
+    if noise is None:
+        problem = replace(problem, channel_std=_noise(problem, x))
+        x = _lstsq_start(problem)
+    x = _least_squares(problem, x, False)
+    if not x[6] > 0.0:
+        raise InvalidInput(
+            f"the estimated tool mass is {x[6]:.4g} kg (not positive): is there a tool on the "
+            "sensor, and is the accelerometer the specific force (+g upward at rest)?"
+        )
+    unconstrained = x[6:16].copy()
+    start_theta = (
+        unconstrained
+        if is_physically_consistent(unconstrained)
+        else nearest_consistent(unconstrained)
+    )
+    x_phi = np.concatenate([x[:6], log_cholesky_from_parameters(start_theta), x[16:]])
+    x = theta_space(_least_squares(problem, x_phi, True))
+    if noise is None:
+        problem = replace(problem, channel_std=_noise(problem, x))
+    return _result(samples, problem, x, bias, scale, position_given is None)
+
+
+def _result(samples, problem: ImuDynamicProblem, x, bias, scale, position_estimated):
+    jac = problem.whitened_jacobian(x)
+    information = jac.T @ jac
+    norm = np.sqrt(np.maximum(np.diag(information), 1e-300))
+    values, vectors = np.linalg.eigh(information / np.outer(norm, norm))
+    if values[0] <= 1e-14 * values[-1]:
+        weakest = np.abs(vectors[:, 0])
+        raise UnobservableParameters(
+            [problem.names[i] for i in np.flatnonzero(weakest > 0.3 * weakest.max())],
+            "the information at the solution is singular",
+        )
+    covariance = ((vectors / values) @ vectors.T) / np.outer(norm, norm)
+    _, theta, delta, position = problem.unpack(x)
+    rotation = problem.rotation0 @ exp_so3(delta)
+    steps = 1e-7 * np.maximum(1.0, np.abs(x[:16]))
+    gradient = np.zeros((16, len(x)))
+    for i in range(16):
+        step = np.zeros(len(x))
+        step[i] = steps[i]
+        gradient[:, i] = (_outputs(x + step) - _outputs(x - step)) / (2.0 * steps[i])
+    outputs = _outputs(x)
+    body_covariance = gradient @ covariance @ gradient.T
+    mass, com, g = outputs[6], outputs[7:10], samples.g
+    theta_cov = np.zeros((12, 12))  # [a, F0, M0, P] with a = [0, 0, −m g]
+    transform = np.zeros((12, 16))
+    transform[2, 6] = -g
+    transform[3:9, 0:6] = np.eye(6)
+    transform[9:12, 7:10] = np.eye(3)
+    theta_cov = transform @ body_covariance @ transform.T
+    # the reported parameters: [F0, M0, m, c] and the IMU's, rotation about the sensor axes
+    names = BIAS_NAMES + (
+        "tool_mass",
+        "center_of_mass[x]",
+        "center_of_mass[y]",
+        "center_of_mass[z]",
+    )
+    rest = slice(16, len(x))
+    rows = np.zeros((10 + len(x) - 16, len(x)))
+    rows[:10] = gradient[:10]
+    rows[10:, rest] = np.eye(len(x) - 16)
+    if problem.rotation_free:
+        rows[10:13, 16:19] = rotation @ right_jacobian_so3(delta)  # δ → sensor-axes increment
+    parameter_covariance = rows @ covariance @ rows.T
+    names += problem.names[16:]
+    inertia_sigma = np.sqrt(np.clip(np.diag(body_covariance)[10:16], 0.0, None))
+    residual = problem.motion.wrenches - problem.predict(x)
+    whitened = residual / problem.channel_std
+    return ImuCalibrationResult(
+        force_offset=outputs[0:3],
+        torque_offset=outputs[3:6],
+        gravity_in_base=np.array([0.0, 0.0, -mass * g]),
+        center_of_mass=com,
+        g=g,
+        method="imu-dynamic",
+        sample_count=len(samples),
+        covariance=theta_cov,
+        inertia_about_com_in_sensor=inertia_matrix(outputs[10:16]),
+        inertia_std_errors=inertia_matrix(inertia_sigma),
+        inertial_parameters=theta,
+        inertial_covariance=covariance[6:16, 6:16],
+        imu_rotation=rotation,
+        accel_bias=bias,
+        accel_scale=scale,
+        scale_estimated=(False, False, False),
+        imu_position=position,
+        imu_position_source="estimated" if position_estimated else "given",
+        parameter_names=names,
+        parameter_covariance=parameter_covariance,
+        chi_square=float(np.sum(whitened**2)),
+        dof=int(residual.size - len(x)),
+        motion_residual_rms=np.sqrt(np.mean(residual**2, axis=0)),
+    )

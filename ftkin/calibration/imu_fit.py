@@ -1,0 +1,324 @@
+"""Static calibration from the sensor's IMU: ``F0``, ``M0``, mass, COM, ``R_SI``, accelerometer
+bias and scale, from readings at static poses with no orientation at all.
+
+Per pose ``i`` (readings averaged), with ``u_i`` the unit direction of the specific force in the
+IMU frame (two nuisance parameters per pose; :mod:`ftkin.calibration.imu_model`)::
+
+    a_i = (1 + s) ∘ g u_i + b                 the accelerometer: |(a_i − b) ⊘ (1 + s)| = g
+    F_i = F0 − m g R_SI u_i
+    M_i = M0 − m c × (g R_SI u_i)
+
+Why the sphere: the wrench alone sees ``F0 − m R_SI (a − b)``, in which ``F0`` absorbs
+``m R_SI b`` (and ``M0`` absorbs ``m c × R_SI b``). Only the accelerometer's own constraint, a
+norm of ``g`` at every static pose, separates the bias from the sensor's offsets; the poses must
+turn gravity into every direction of the IMU for it to do so. :func:`check_observable` refuses a
+pose set that leaves a direction open, naming the parameters
+(:mod:`ftkin.calibration.imu_problem`).
+
+The fit (:func:`fit_imu_static`) is the joint maximum likelihood of all nine channels
+(accelerometer, force, torque) over ``x = [F0, M0, m, c, δ, b, s, e_1..e_P]`` (``R_SI = R0
+Exp(δ)``, ``e_i`` the directions' tangent increments), started from a closed form: a sphere fit of
+the accelerometer gives ``b`` (and an isotropic ``s``), the Kabsch
+rotation of the centred forces against the corrected directions gives ``R_SI`` and ``m``, and
+linear least squares of the torques gives ``M0`` and ``c``. Standard errors come from the
+Gauss–Newton covariance, as in the ``ml`` fit.
+"""
+
+import logging
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..exceptions import InvalidInput, UnobservableParameters
+from .imu_model import (
+    ACCEL_SCALE_NAMES,
+    corrected_specific_force,
+    point_mass_parameters,
+    predict_imu,
+)
+from .imu_options import ImuCalibrationOptions
+from .imu_problem import POSES_NEEDED, ImuStaticProblem, check_observable, weakest_direction
+from .imu_result import ImuCalibrationResult
+from .imu_samples import ImuPoseAverages, ImuSamples
+from .imu_start import start
+from .information import noise_floor
+from .observability import MIN_RELATIVE_SINGULAR_VALUE
+
+logger = logging.getLogger(__name__)
+
+MIN_IMU_POSES = 4
+"""Fewest static poses: the sphere ``|a − b| = g`` needs four directions not in one plane."""
+
+MIN_SCALE_POSES = 8
+"""Fewest poses for ``estimate_scale="auto"`` to try the scale (six more parameters)."""
+
+NOISE_PASSES = 3
+"""Re-estimations of residual-based noise (each followed by a refit)."""
+
+
+def _drop_open_scale(problem, x, options: ImuCalibrationOptions, notes: list) -> bool:
+    """With ``estimate_scale="auto"``: True (and a note naming them) when the weakest direction
+    at ``x`` is degenerate and involves scale components, which are then left out."""
+    if options.estimate_scale != "auto" or not problem.scale_free:
+        return False
+    relative, involved = weakest_direction(problem, x)
+    scale_names = [name for name in involved if name.startswith("accel_scale")]
+    if relative >= MIN_RELATIVE_SINGULAR_VALUE or not scale_names:
+        return False
+    notes.append(
+        f"{', '.join(scale_names)} not determined by these poses: taken as 0 (gravity never seen "
+        "along both signs of that axis)"
+    )
+    return True
+
+
+def _solve(problem: ImuStaticProblem, x0: np.ndarray) -> np.ndarray:
+    from scipy.optimize import least_squares  # scipy.optimize loads where it is used
+
+    return least_squares(
+        problem.whitened_residuals,
+        x0,
+        jac=lambda x: -problem.whitened_jacobian(x),
+        method="lm",
+        x_scale="jac",
+        xtol=1e-12,
+        ftol=1e-12,
+        gtol=1e-12,
+    ).x
+
+
+def _noise_from_spread(poses: ImuPoseAverages) -> np.ndarray | None:
+    """``(9,)`` pooled spread of repeated readings, or None with fewer than 5 degrees of freedom."""
+    repeated = poses.counts > 1
+    dof = float(np.sum(poses.counts[repeated] - 1))
+    if dof < 5:
+        return None
+    spread = np.concatenate([poses.accel_spread, poses.wrench_spread], axis=1)[repeated]
+    std = np.sqrt(np.sum((poses.counts[repeated] - 1)[:, None] * spread**2, axis=0) / dof)
+    return std if np.all(std > 0.0) else None
+
+
+_GROUPS = (slice(0, 3), slice(3, 6), slice(6, 9))
+
+
+def _noise_from_residuals(problem: ImuStaticProblem, x: np.ndarray, floor: np.ndarray):
+    """``(9,)`` per-reading noise, accelerometer, force and torque each pooled, corrected by the
+    leverages."""
+    jac = problem.whitened_jacobian(x)
+    hat = np.einsum("ij,ji->i", jac, np.linalg.pinv(jac.T @ jac, hermitian=True) @ jac.T)
+    dof = np.clip(1.0 - hat, 1e-9, 1.0).reshape(-1, 9)
+    squares = problem.residuals(x) ** 2 * problem.counts[:, None]
+    std = [np.sqrt(np.sum(squares[:, part]) / np.sum(dof[:, part])) for part in _GROUPS]
+    return np.maximum(np.repeat(std, 3), floor)
+
+
+def _floor(poses: ImuPoseAverages, g: float) -> np.ndarray:
+    return np.concatenate([np.full(3, 1e-7 * g), noise_floor(poses.wrenches)])
+
+
+@dataclass(frozen=True)
+class ImuStaticFit:
+    """What :func:`fit_imu_static` found.
+
+    Attributes:
+        problem: The final problem (recentred: ``x`` has ``δ = 0``, ``e = 0``).
+        x: The parameters at the solution.
+        covariance: ``(n, n)`` covariance of the global parameters (directions marginalised).
+        noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
+        notes: What the fit decided on its own (a scale left out).
+    """
+
+    problem: ImuStaticProblem
+    x: np.ndarray
+    covariance: np.ndarray
+    noise_source: str
+    notes: tuple[str, ...]
+
+    @property
+    def parameters(self) -> dict:
+        return self.problem.unpack(self.x)
+
+
+def fit_imu_static(
+    poses: ImuPoseAverages, g: float, options: ImuCalibrationOptions | None = None
+) -> ImuStaticFit:
+    """The joint maximum-likelihood fit of the static IMU calibration (module docstring).
+
+    Raises:
+        UnobservableParameters: fewer than :data:`MIN_IMU_POSES` poses, or poses that leave a
+            parameter open (named).
+        SuspectConvention: the data fit a mirrored accelerometer or wrench.
+    """
+    options = options or ImuCalibrationOptions()
+    if len(poses) < MIN_IMU_POSES:
+        raise UnobservableParameters(
+            ["force_offset", "torque_offset", "tool_mass", "center_of_mass", "accel_bias"],
+            f"{len(poses)} static pose(s); the IMU calibration needs at least {MIN_IMU_POSES} "
+            f"(12 recommended): {POSES_NEEDED}",
+        )
+    notes = []
+    scale_free = (0, 1, 2) if options.estimate_scale != "no" else ()
+    if options.estimate_scale == "auto" and len(poses) < MIN_SCALE_POSES:
+        scale_free = ()
+        notes.append(
+            f"accelerometer scale not estimated ({len(poses)} poses, fewer than "
+            f"{MIN_SCALE_POSES}): taken as exact"
+        )
+    fixed = np.repeat([options.accel_noise is not None, options.wrench_noise is not None], [3, 6])
+    spread = None if fixed.all() else _noise_from_spread(poses)
+    noise = np.ones(9) if spread is None else spread
+    if options.accel_noise is not None:
+        noise[0:3] = options.accel_noise
+    if options.wrench_noise is not None:
+        noise[3:9] = options.wrench_noise.channel_std
+    source = "given" if fixed.all() else ("spread" if spread is not None else "residuals")
+
+    def from_residuals(problem, x):  # the given groups stay as given
+        return np.where(fixed, noise, _noise_from_residuals(problem, x, _floor(poses, g)))
+
+    while True:  # at the start, then at the solution: a scale the poses leave open is dropped
+        x0, rotation0, units = start(poses, g, options, scale_free)
+        problem = ImuStaticProblem(
+            poses.specific_force,
+            poses.wrenches,
+            np.asarray(poses.counts, dtype=float),
+            noise,
+            g,
+            rotation0,
+            units,
+            options.imu_rotation is None,
+            scale_free,
+        )
+        x0 = np.concatenate([x0, np.zeros(2 * len(poses))])
+        if source == "residuals":  # rough weights before the check: unit noise mixes units
+            problem = replace(problem, noise=from_residuals(problem, x0))
+        if _drop_open_scale(problem, x0, options, notes):
+            scale_free = tuple(k for k in scale_free if ACCEL_SCALE_NAMES[k] not in notes[-1])
+            continue
+        check_observable(problem, x0)
+        x = _solve(problem, x0)
+        for _ in range(NOISE_PASSES if source == "residuals" else 0):
+            estimate = from_residuals(problem, x)
+            settled = np.allclose(estimate, problem.noise, rtol=1e-2, atol=0.0)
+            problem = replace(problem, noise=estimate)
+            if settled:
+                break
+            x = _solve(problem, x)
+        problem, x = problem.recentred(x)
+        # the start's directions can hide a degeneracy that holds at the measured ones
+        if _drop_open_scale(problem, x, options, notes):
+            scale_free = tuple(k for k in scale_free if ACCEL_SCALE_NAMES[k] not in notes[-1])
+            continue
+        check_observable(problem, x)
+        break
+    jac = problem.whitened_jacobian(x)
+    information = jac.T @ jac
+    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
+    values, vectors = np.linalg.eigh(information / np.outer(scale, scale))
+    if values[0] <= 1e-12 * values[-1]:
+        weakest = np.abs(vectors[: problem.global_count, 0])
+        raise UnobservableParameters(
+            [problem.names[i] for i in np.flatnonzero(weakest > 0.3 * weakest.max())],
+            f"the information at the solution is singular: {POSES_NEEDED}",
+        )
+    covariance = ((vectors / values) @ vectors.T) / np.outer(scale, scale)
+    count = problem.global_count
+    return ImuStaticFit(problem, x, covariance[:count, :count], source, tuple(notes))
+
+
+def _covariance_in_sensor_axes(fit: ImuStaticFit) -> np.ndarray:
+    """The global covariance with the rotation increment turned into the sensor's axes
+    (``R Exp(δ) = Exp(R δ) R``)."""
+    covariance, problem = fit.covariance.copy(), fit.problem
+    if problem.rotation_free:
+        transform = np.eye(len(covariance))
+        transform[10:13, 10:13] = problem.rotation0
+        covariance = transform @ covariance @ transform.T
+    return covariance
+
+
+def theta_covariance(covariance: np.ndarray, g: float) -> np.ndarray:
+    """``(12, 12)`` covariance over ``[a, F0, M0, P]`` with ``a = [0, 0, −m g]`` from the global
+    covariance (its first ten rows ``[F0, M0, m, c]``)."""
+    transform = np.zeros((12, len(covariance)))
+    transform[2, 6] = -g  # a_z = −m g
+    transform[3:9, 0:6] = np.eye(6)
+    transform[9:12, 7:10] = np.eye(3)
+    return transform @ covariance @ transform.T
+
+
+def calibrate_imu(samples: ImuSamples, options=None, **keywords) -> ImuCalibrationResult:
+    """Calibrate from static poses with the sensor's own IMU: no arm, no orientation.
+
+    Args:
+        samples: :class:`~ftkin.calibration.imu_samples.ImuSamples`
+            (:meth:`ftkin.Samples.from_imu`); readings sharing a pose id are averaged first.
+        options: An :class:`ImuCalibrationOptions` (default: all defaults).
+        **keywords: Its fields, given directly.
+
+    Returns:
+        A frozen :class:`~ftkin.calibration.imu_result.ImuCalibrationResult`.
+
+    Raises:
+        UnobservableParameters: the poses leave a parameter open (fewer than four, or gravity
+            not seen along every IMU direction: the accelerometer bias and ``F0`` are then named).
+        SuspectConvention: a mirrored accelerometer or wrench, or a non-positive mass.
+        InvalidInput: an unknown option.
+    """
+    if not isinstance(samples, ImuSamples):
+        raise InvalidInput(
+            f"samples must be ftkin ImuSamples (Samples.from_imu), got {type(samples).__name__}"
+        )
+    given_g = keywords.pop("g", getattr(options, "g", samples.g))
+    if not np.isclose(float(given_g), samples.g, rtol=1e-12):
+        raise InvalidInput(
+            f"g = {given_g} m/s² differs from the samples' {samples.g:g} m/s²: give it once, to "
+            "Samples.from_imu(..., g=...)"
+        )
+    options = ImuCalibrationOptions.from_keywords(options, **keywords)
+    poses = samples.pose_averages()
+    g = samples.g
+    fit = fit_imu_static(poses, g, options)
+    p = fit.parameters
+    rotation = fit.problem.rotation0
+    bias_wrench = np.concatenate([p["F0"], p["M0"]])
+    measured = specific_force_at_rest(poses.specific_force, rotation, p["b"], p["s"])
+    residuals = poses.wrenches - predict_imu(
+        bias_wrench, point_mass_parameters(p["m"], p["c"]), measured
+    )
+    covariance = _covariance_in_sensor_axes(fit)
+    chi_square = float(np.sum(fit.problem.whitened_residuals(fit.x) ** 2))
+    dof = 9 * len(poses) - fit.problem.parameter_count
+    warnings = list(fit.notes)
+    for note in warnings:
+        logger.warning("%s", note)
+    return ImuCalibrationResult(
+        force_offset=p["F0"],
+        torque_offset=p["M0"],
+        gravity_in_base=np.array([0.0, 0.0, -p["m"] * g]),
+        center_of_mass=p["c"],
+        g=g,
+        method="imu",
+        pose_ids=poses.pose_ids,
+        pose_wrenches=poses.wrenches,
+        residuals=residuals,
+        sample_count=int(np.sum(poses.counts)),
+        covariance=theta_covariance(covariance, g),
+        imu_rotation=rotation,
+        accel_bias=p["b"],
+        accel_scale=p["s"],
+        scale_estimated=tuple(k in fit.problem.scale_free for k in range(3)),
+        imu_position=options.imu_position,
+        imu_position_source=None if options.imu_position is None else "given",
+        parameter_names=fit.problem.names,
+        parameter_covariance=covariance,
+        accel_std=fit.problem.noise[0:3],
+        chi_square=chi_square,
+        dof=int(dof),
+        imu_warnings=tuple(warnings),
+    )
+
+
+def specific_force_at_rest(accel: np.ndarray, rotation, bias, scale) -> np.ndarray:
+    """``f_S = R_SI (a − b) ⊘ (1 + s)`` ``(N, 3)`` [m/s²] (no lever arm: at rest)."""
+    return corrected_specific_force(accel, bias, scale) @ np.asarray(rotation).T
