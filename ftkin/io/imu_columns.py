@@ -15,13 +15,10 @@ import numpy as np
 from ..calibration.imu_samples import ImuSamples, accel_unit_factor, check_specific_force_unit
 from ..calibration.model import STANDARD_GRAVITY, WRENCH_CHANNELS
 from ..exceptions import InvalidInput, InvalidSamples
-from .csv_table import read_table, rename_columns
-from .samples_csv import wrench_aliases
+from .column_spelling import ColumnSpelling, spelled_table
+from .csv_table import read_table
 from .stream_join import ACCEL_COLUMNS, GYRO_COLUMNS, JoinedStreams, Stream, join_streams
 from .time_columns import TIME_ALIASES, TIME_COLUMN, times_from_table
-
-TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
-"""Units of the ``t`` column (``time_unit``) and their factor to seconds."""
 
 
 def _numeric(table, name: str) -> bool:
@@ -35,7 +32,7 @@ def _numeric(table, name: str) -> bool:
 def read_stream(
     path,
     *,
-    time_unit: str = "s",
+    time_unit: str | None = None,
     accel_unit: str = "m/s^2",
     g: float = STANDARD_GRAVITY,
     allow_no_time: bool = False,
@@ -44,24 +41,18 @@ def read_stream(
     accelerometer converted to m/s² and checked (its median norm must be about ``g``).
 
     ``allow_no_time``: a table without a time column is read in row order (a single table of
-    static poses), its stream's times the row numbers.
+    static poses), its stream's times the row numbers. Columns in other spellings and units in
+    the header are read through :func:`~ftkin.io.column_spelling.spelled_table` (``time_unit``
+    is its :attr:`~ftkin.io.column_spelling.ColumnSpelling.time_unit`).
 
     Raises:
         InvalidSamples: no time column, a cell that is not a number, stamps that do not
             increase (with the line), an accelerometer in another unit than ``accel_unit``.
         InvalidInput: an unknown ``time_unit`` or ``accel_unit``.
     """
-    if time_unit not in TIME_UNITS:
-        raise InvalidInput(
-            f"unknown time unit {time_unit!r}; expected one of {', '.join(TIME_UNITS)}"
-        )
     factor = accel_unit_factor(accel_unit, g)
-    table = read_table(path)
-    table = rename_columns(table, wrench_aliases(table.header))
-    if TIME_COLUMN in table.header:
-        times = table.floats([TIME_COLUMN])[:, 0] * TIME_UNITS[time_unit]
-    else:
-        times = times_from_table(table)
+    table = spelled_table(read_table(path), ColumnSpelling(time_unit=time_unit))
+    times = times_from_table(table)
     if times is None:
         if not allow_no_time:
             raise InvalidSamples(
@@ -102,7 +93,7 @@ def imu_samples_from_joined(joined: JoinedStreams, g: float = STANDARD_GRAVITY) 
 
 def load_imu_samples(
     *paths,
-    time_unit: str = "s",
+    time_unit: str | None = None,
     accel_unit: str = "m/s^2",
     g: float = STANDARD_GRAVITY,
     max_gap: float | None = None,

@@ -153,7 +153,7 @@ def test_files_in_any_order_units_and_roles(tmp_path):
     )
     with pytest.raises(InvalidSamples, match="do not overlap"):  # one file in s, one in µs
         load_imu_samples(seconds, wrench, time_unit="us", accel_unit="g")
-    with pytest.raises(InvalidInput, match="time unit"):
+    with pytest.raises(InvalidInput, match="time_unit must be one of"):
         load_imu_samples(imu, wrench, time_unit="min")
 
 
