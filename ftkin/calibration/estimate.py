@@ -114,9 +114,13 @@ class CalibrationOptions:
             ),
             (
                 self.method == "linear" and (ml_only or self.resolution is not None),
-                "noise, resolution, loss and drop_outliers apply to method='ml' only",
+                "noise, resolution, loss and drop_outliers (--noise-force/--noise-torque, "
+                "--resolution, --loss, --drop-outliers) apply to method='ml' (--method ml) only",
             ),
-            (mount != "none" and self.method != "ml", "estimate_mount applies to method='ml' only"),
+            (
+                mount != "none" and self.method != "ml",
+                "estimate_mount (--estimate-mount) applies to method='ml' (--method ml) only",
+            ),
             (
                 drifting and (self.method != "ml" or ml_only),
                 f"drift={self.drift!r} needs method='ml' with loss='linear' and no drop_outliers",

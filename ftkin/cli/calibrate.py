@@ -5,7 +5,6 @@ from dataclasses import replace
 from pathlib import Path
 
 from .. import Arm, CalibrationOptions, InvalidInput, SensorNoise, calibrate, save_calibration
-from ..calibration import METHODS, MOUNT_MODES, STANDARD_GRAVITY
 from ..calibration.conventions import BASE_MOUNTS
 from ..calibration.drift import drift_candidates, drift_choices
 from ..calibration.ml import LOSSES
@@ -16,7 +15,6 @@ from .arg_types import (
     add_options,
     bounded_int,
     finite_float,
-    gravity,
     option,
     positive_float,
     refuse,
@@ -29,6 +27,15 @@ from .common import (
     load_samples_from_args,
 )
 from .doctor import refuse_convention_mistakes
+from .shared_options import (
+    ESTIMATE_MOUNT,
+    GRAVITY,
+    METHOD,
+    NOISE_FORCE,
+    NOISE_TORQUE,
+    SENSOR_SIGN,
+    resolved,
+)
 
 
 def drift_spec(text: str) -> str:
@@ -42,19 +49,8 @@ def drift_spec(text: str) -> str:
 
 # The ml estimator's options.
 _ML_OPTIONS = (
-    option(
-        "--noise-force",
-        type=positive_float,
-        metavar="N",
-        help="noise std of one force reading [N] (with --noise-torque; default: estimated from "
-        "the spread of repeated readings per pose, else from the residuals)",
-    ),
-    option(
-        "--noise-torque",
-        type=positive_float,
-        metavar="N·m",
-        help="noise std of one torque reading",
-    ),
+    NOISE_FORCE,
+    NOISE_TORQUE,
     option(
         "--resolution",
         type=positive_float,
@@ -91,26 +87,12 @@ _ML_OPTIONS = (
         help="also print the K-fold cross-validated compensation error at held-out poses, with "
         "drift none beside the --drift model (does modelling a drift pay on this sensor?)",
     ),
-    option(
-        "--estimate-mount",
-        choices=MOUNT_MODES[1:],
-        metavar="yaw|full",
-        help="also estimate how the sensor is turned on the flange: yaw (about its z axis) or "
-        "full (any rotation); needs joint-angle samples (default: the URDF's sensor frame is "
-        "right)",
-    ),
+    ESTIMATE_MOUNT,
 )
 
 # Sensor and robot conventions, stored in the calibration file.
 _CONVENTION_OPTIONS = (
-    option(
-        "--sensor-sign",
-        type=int,
-        choices=(1, -1),
-        default=1,
-        help="-1: the sensor reports the reaction, negate every reading (default: %(default)s, "
-        "the load on the sensor)",
-    ),
+    SENSOR_SIGN,
     option(
         "--flip-axis",
         choices=("x", "y", "z"),
@@ -148,19 +130,8 @@ def register(subparsers) -> None:
         options=(
             option("samples", metavar="SAMPLES.csv"),
             option("-o", "--output", metavar="CALIB.json", help="write the calibration file here"),
-            option(
-                "--method",
-                choices=METHODS,
-                default=METHODS[0],
-                help="ml: joint maximum-likelihood fit with standard errors; linear: the paper's "
-                "two-step least squares (default: %(default)s)",
-            ),
-            option(
-                "--g",
-                type=gravity,
-                default=STANDARD_GRAVITY,
-                help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s)",
-            ),
+            METHOD,
+            GRAVITY,
         ),
         run=run,
     )
@@ -206,7 +177,7 @@ def _noise(args) -> SensorNoise | None:
 
 def _run_dynamic(args, noise) -> int:
     static_only = {
-        "--method": args.method != METHODS[0],
+        "--method": args.method not in (None, "ml"),
         "--loss": args.loss != "linear",
         "--drop-outliers": args.drop_outliers,
         "--estimate-mount": args.estimate_mount,
@@ -243,21 +214,15 @@ def _run_dynamic(args, noise) -> int:
 
 def _options(args, noise) -> CalibrationOptions:
     """The calibration options of the command line (their combinations checked there)."""
-    ml_only = noise is not None or args.loss != "linear" or args.drop_outliers or args.resolution
     refuse(
         InvalidInput,
         (
             args.no_inertia or args.sg_window is not None,
             "--no-inertia and --sg-window apply to --dynamic only",
         ),
-        (
-            args.method == "linear" and (ml_only or args.estimate_mount),
-            "--noise-force/--noise-torque, --resolution, --loss, --drop-outliers and "
-            "--estimate-mount apply to --method ml only",
-        ),
-    )
+    )  # the combinations of the fit's options are CalibrationOptions' to check, once
     return CalibrationOptions(
-        method=args.method,
+        method=resolved(args.method, "ml"),
         g=args.g,
         noise=noise,
         loss=args.loss,

@@ -38,13 +38,16 @@ def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
             help=f"robot by name: {', '.join(ROBOTS)} (default: {DEFAULT_ROBOT}, the bundled arm)",
         ),
         option(
-            "--urdf", metavar="PATH", help="URDF of the arm (default: the bundled six-axis arm)"
+            "--urdf",
+            metavar="PATH",
+            help="URDF of the arm (default: the bundled six-axis arm; ftkin robot: the bundled "
+            "FR3)",
         ),
         option(
             "--sensor-frame",
-            default="ft_sensor",
+            default=None,
             metavar="NAME",
-            help="sensor frame name (default: ft_sensor)",
+            help="sensor frame name (default: ft_sensor; the bundled FR3's: fr3_hand)",
         ),
         option(
             "--tool-frame", default=None, metavar="NAME", help="tool / control-point frame name"
@@ -83,7 +86,7 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     urdf, robot = getattr(args, "urdf", None), getattr(args, "robot", None)
     offset = getattr(args, "sensor_offset", None)
     parent = getattr(args, "sensor_parent", None)
-    sensor_frame = getattr(args, "sensor_frame", "ft_sensor")
+    sensor_frame = getattr(args, "sensor_frame", None)
     tool_frame = getattr(args, "tool_frame", None)
     package_dirs = list(getattr(args, "package_dir", None) or [])
     refuse(
@@ -116,7 +119,7 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
             "flange",
         ),
         (
-            robot and sensor_frame != "ft_sensor",  # (--robot with --urdf is refused first)
+            robot and sensor_frame not in (None, "ft_sensor"),  # (--robot and --urdf: refused)
             "--sensor-frame is for --urdf; --robot names its sensor frame ft_sensor (move it "
             "with --sensor-offset)",
         ),
@@ -128,14 +131,18 @@ def arm_from_args(args: argparse.Namespace) -> Arm | None:
     if urdf:
         mount = None if parent is None else sensor_mount_from_offset(parent, offset)
         return Arm.from_urdf(
-            urdf, sensor_frame, tool_frame, sensor_mount=mount, package_dirs=package_dirs
+            urdf,
+            sensor_frame or "ft_sensor",
+            tool_frame,
+            sensor_mount=mount,
+            package_dirs=package_dirs,
         )
     if robot:
         arm = load_robot(robot, offset, tool_frame)
         arm.package_dirs += package_dirs
         return arm
-    if sensor_frame != "ft_sensor" or tool_frame is not None:
-        return Arm.from_urdf(bundled_urdf_path(), sensor_frame, tool_frame or "tool")
+    if sensor_frame not in (None, "ft_sensor") or tool_frame is not None:
+        return Arm.from_urdf(bundled_urdf_path(), sensor_frame or "ft_sensor", tool_frame or "tool")
     return None
 
 

@@ -11,9 +11,10 @@ import importlib.util
 import numpy as np
 
 from .. import Arm, Compensator, SensorNoise, calibrate, save_calibration
-from ..calibration import METHODS
 from ..sim.sensor import SimulatedSensor, paper_like_truth
-from .arg_types import add_command, bounded_int, non_negative_float, option, seed
+from .arg_types import add_command, non_negative_float, option
+from .pose_options import add_readings_argument
+from .shared_options import DEFAULT_POSES, METHOD, POSES, SEED, deprecated, resolved
 
 
 def register(subparsers) -> None:
@@ -22,21 +23,10 @@ def register(subparsers) -> None:
         "demo",
         help="simulated sensor on the bundled arm: calibrate, compare with the truth, compensate",
         options=(
-            option(
-                "--poses",
-                type=bounded_int(3, 1000, "poses"),
-                default=12,
-                help="number of static poses, 3 to 1000 (default: %(default)s)",
-            ),
-            option(
-                "--readings",
-                type=bounded_int(1, 100_000, "readings per pose"),
-                default=500,
-                help="readings averaged per pose, 1 to 100,000 (default: %(default)s, as the "
-                "paper)",
-            ),
-            option("--seed", type=seed, default=0, help="random seed (default: %(default)s)"),
-            option("--method", choices=METHODS, default=METHODS[0]),
+            POSES,
+            deprecated("--poses", "n", "--n", type=POSES[1]["type"]),
+            SEED,
+            METHOD,
             option("-o", "--output", metavar="CALIB.json", help="also write the calibration file"),
             option(
                 "--sim-seconds",
@@ -47,6 +37,7 @@ def register(subparsers) -> None:
                 "0 skips it; default: %(default)s)",
             ),
         ),
+        groups=(add_readings_argument,),
         run=run,
     )
 
@@ -61,21 +52,22 @@ def _row(name: str, unit: str, truth, estimate, decimals: int, std_error=None) -
 
 def run(args) -> int:
     rng = np.random.default_rng(args.seed)
+    args.n = resolved(args.n, DEFAULT_POSES)
     arm = Arm.default()
     truth = paper_like_truth()
     sensor = SimulatedSensor(truth, SensorNoise.paper())
     samples = sensor.samples_at_configurations(
         arm,
-        arm.random_configurations(args.poses, rng, margin=0.3),
+        arm.random_configurations(args.n, rng, margin=0.3),
         rng,
-        readings_per_pose=args.readings,
+        readings_per_pose=args.readings_per_pose,
     )
     print(
-        f"Bundled arm {arm.urdf_path.name}, sensor frame {arm.sensor_frame}; {args.poses} random "
-        "poses, "
-        f"{args.readings} readings each, noise 0.02 N / 0.002 N·m per reading (seed {args.seed})."
+        f"Bundled arm {arm.urdf_path.name}, sensor frame {arm.sensor_frame}; {args.n} random "
+        f"poses, {args.readings_per_pose} readings each, noise 0.02 N / 0.002 N·m per reading "
+        f"(seed {args.seed})."
     )
-    result = calibrate(samples, method=args.method)
+    result = calibrate(samples, method=resolved(args.method, "ml"))
     print(result.summary())
     errors = result.std_errors or {}
     print(

@@ -37,16 +37,11 @@ def register(subparsers) -> None:
     for fmt in EXPORT_FORMATS.values():
         for spec in fmt.options:
             takers.setdefault(spec.name, [spec]).append(fmt.name)
+    takes = "; ".join(f"{spec.flag}: {', '.join(names)}" for spec, *names in takers.values())
     add_options(
-        parser.add_argument_group("format options (each format takes its own)"),
+        parser.add_argument_group(f"format options (each format takes its own: {takes})"),
         *(
-            option(
-                spec.flag,
-                dest=spec.name,
-                default=None,
-                help=f"{spec.help} [{', '.join(names)}]",
-                **spec.argparse,
-            )
+            option(spec.flag, dest=spec.name, default=None, help=spec.help, **spec.argparse)
             for spec, *names in takers.values()
         ),
     )

@@ -5,6 +5,7 @@ import numpy as np
 from ..io.csv_table import write_csv
 from .arg_types import add_command, option
 from .common import add_samples_arguments, load_samples_from_args
+from .shared_options import deprecated
 
 
 def register(subparsers) -> None:
@@ -22,7 +23,7 @@ def register(subparsers) -> None:
             option("recording", metavar="RECORDING"),
             option("-o", "--output", metavar="SAMPLES.csv", required=True),
             # the older name of the samples option --all-rows: one setting
-            option("--all", dest="all_rows", action="store_true", help="the same as --all-rows"),
+            deprecated("--all", "all_rows", "--all-rows", nargs=0, const=True, default=False),
         ),
         groups=(add_samples_arguments,),
         run=run,

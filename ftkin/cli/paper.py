@@ -1,9 +1,9 @@
 """``ftkin paper``: the paper's data through ftkin, beside the printed values."""
 
-from ..calibration.estimate import METHODS
 from ..io.atomic import atomic_write_bytes
 from ..sim.paper import comparison_table, paper_calibration, paper_csv_path
 from .arg_types import add_command, option
+from .shared_options import METHOD, resolved
 
 
 def register(subparsers) -> None:
@@ -12,12 +12,7 @@ def register(subparsers) -> None:
         "paper",
         help="reproduce the paper's calibration (Tables 1-3)",
         options=(
-            option(
-                "--method",
-                choices=METHODS,
-                default="linear",
-                help="estimator compared with the printed values (default: linear, the paper's)",
-            ),
+            METHOD,
             option(
                 "--no-ml",
                 dest="show_ml",
@@ -37,6 +32,7 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
+    args.method = resolved(args.method, "linear")  # the paper's own estimator
     result = paper_calibration(args.method)
     print(result.summary())
     print(f"\n{comparison_table(result)}")

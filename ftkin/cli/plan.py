@@ -28,11 +28,19 @@ from .arg_types import (
     option,
     positive_float,
     refuse,
-    seed,
-    whole_number,
 )
 from .common import add_arm_arguments, arm_from_args
 from .pose_options import add_constraint_arguments, add_readings_argument, constraints_from_args
+from .shared_options import (
+    CENTER_OF_MASS,
+    DURATION,
+    ESTIMATE_MOUNT,
+    NOISE_FORCE,
+    NOISE_TORQUE,
+    POSES,
+    SEED,
+    resolved,
+)
 
 FORMATS = {"csv": (), "yaml": (".yaml", ".yml"), "json": (".json",)}
 """Output formats of ``plan -o`` and the file name endings that choose them (default: csv)."""
@@ -47,28 +55,9 @@ _TOOL_OPTIONS = (
         metavar="N",
         help="tool weight [N] (default: %(default)s)",
     ),
-    option(
-        "--com",
-        type=finite_float,
-        nargs=3,
-        default=list(PAPER_CENTER_OF_MASS),
-        metavar=("X", "Y", "Z"),
-        help="tool centre of mass in the sensor frame [m] (default: 0 0 0.047)",
-    ),
-    option(
-        "--noise-force",
-        type=positive_float,
-        default=float(SensorNoise.paper().force_std[0]),
-        metavar="N",
-        help="force noise per reading [N] (default: %(default)s)",
-    ),
-    option(
-        "--noise-torque",
-        type=positive_float,
-        default=float(SensorNoise.paper().torque_std[0]),
-        metavar="NM",
-        help="torque noise per reading [N·m] (default: %(default)s)",
-    ),
+    CENTER_OF_MASS,
+    NOISE_FORCE,
+    NOISE_TORQUE,
 )
 
 
@@ -79,14 +68,7 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
     add_readings_argument(group)
     add_options(
         parser.add_argument_group("what the calibration will estimate"),
-        option(
-            "--estimate-mount",
-            choices=("yaw", "full"),
-            default=None,
-            metavar="yaw|full",
-            help="the calibration will also estimate the sensor's mount on the flange: plan and "
-            "predict for it",
-        ),
+        ESTIMATE_MOUNT,
         option(
             "--drift-rate",
             type=finite_float,
@@ -108,6 +90,15 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def expected_noise(args) -> SensorNoise:
+    """The noise a prediction assumes: ``--noise-force``/``--noise-torque``, else the paper's."""
+    paper = SensorNoise.paper()
+    return SensorNoise(
+        resolved(args.noise_force, float(paper.force_std[0])),
+        resolved(args.noise_torque, float(paper.torque_std[0])),
+    )
+
+
 def expectation_from_args(args) -> ExpectedCalibration:
     """The calibration :func:`ftkin.planning.plan_poses` and
     :func:`ftkin.planning.evaluation.evaluate_poses` predict for.
@@ -117,35 +108,17 @@ def expectation_from_args(args) -> ExpectedCalibration:
             "--pose-interval applies with --drift-rate (the time between poses matters only to a "
             "drift)"
         )
+    if args.com is not None and len(args.com) != 3:
+        raise InvalidInput(f"--com takes X Y Z [m], got {len(args.com)} numbers")
     return ExpectedCalibration(
         tool_weight=args.tool_weight,
-        center_of_mass=args.com,
-        noise=SensorNoise(args.noise_force, args.noise_torque),
+        center_of_mass=resolved(args.com, PAPER_CENTER_OF_MASS),
+        noise=expected_noise(args),
         readings_per_pose=args.readings_per_pose,
         estimate_mount=args.estimate_mount or "none",
         drift_rate=args.drift_rate,
         pose_interval=DEFAULT_POSE_INTERVAL if args.pose_interval is None else args.pose_interval,
     )
-
-
-MAX_PLAN_POSES = 500
-"""Largest ``plan --n``: beyond a few dozen poses the standard errors only fall as 1/√n."""
-
-
-def pose_count(text: str) -> int:
-    """argparse type: number of poses to plan, 3 to :data:`MAX_PLAN_POSES`."""
-    value = whole_number(text, "poses")
-    refuse(
-        argparse.ArgumentTypeError,
-        (value < 3, f"at least 3 poses are needed to determine the calibration, got {text}"),
-        (
-            value > MAX_PLAN_POSES,
-            f"plan between 3 and {MAX_PLAN_POSES} poses, got {text}: beyond a few dozen poses the "
-            "standard errors only fall as 1/√n (average readings with --readings-per-pose "
-            "instead)",
-        ),
-    )
-    return value
 
 
 # plan --excitation: the trajectory for ftkin calibrate --dynamic.
@@ -155,13 +128,7 @@ _EXCITATION_OPTIONS = (
         action="store_true",
         help="plan a periodic Fourier-series excitation trajectory instead of poses",
     ),
-    option(
-        "--duration",
-        type=positive_float,
-        default=30.0,
-        metavar="S",
-        help="recording length [s] (default: %(default)s)",
-    ),
+    DURATION,
     option(
         "--rate",
         type=positive_float,
@@ -225,13 +192,7 @@ def register(subparsers) -> None:
         "for short joint travel; print the predicted standard error of every calibration "
         "parameter.",
         options=(
-            option(
-                "-n",
-                "--n",
-                type=pose_count,
-                default=None,
-                help=f"number of poses (3 to {MAX_PLAN_POSES}; required without --excitation)",
-            ),
+            option("-n", *POSES[0], **POSES[1]),  # -n: the short spelling plan has always had
             option("-o", "--output", metavar="POSES.csv", help="write the poses here"),
             option(
                 "--format",
@@ -245,12 +206,7 @@ def register(subparsers) -> None:
     add_constraint_arguments(parser)
     add_options(
         parser,
-        option(
-            "--seed",
-            type=seed,
-            default=0,
-            help="random seed; the same seed gives the same plan (default: 0)",
-        ),
+        SEED,
         option(
             "--max-travel-ratio",
             type=positive_float,
@@ -375,9 +331,10 @@ def write_plan(plan, path: str, fmt: str) -> None:
 def _run_excitation(args, arm: Arm) -> int:
     """``ftkin plan --excitation``: plan, print a summary, write the CSV."""
     constraints = constraints_from_args(args)
+    duration = resolved(args.duration, 30.0)
     plan = plan_excitation(
         arm,
-        args.duration,
+        duration,
         rate=args.rate,
         period=args.period,
         harmonics=args.harmonics,
@@ -385,7 +342,7 @@ def _run_excitation(args, arm: Arm) -> int:
         acceleration_limit=args.acceleration_limit,
         amplitude=args.amplitude,
         constraints=constraints,
-        noise=SensorNoise(args.noise_force, args.noise_torque),
+        noise=expected_noise(args),
         max_iterations=args.iterations,
         seed=args.seed,
     )
@@ -394,7 +351,7 @@ def _run_excitation(args, arm: Arm) -> int:
         for values in (plan.joint_velocities, plan.joint_accelerations)
     )
     print(
-        f"excitation: {len(plan.times)} samples at {args.rate:g} Hz over {args.duration:g} s, "
+        f"excitation: {len(plan.times)} samples at {args.rate:g} Hz over {duration:g} s, "
         f"period {plan.trajectory.period:g} s, "
         f"{plan.trajectory.cosine.shape[1]} harmonics; {constraints.describe()}\n"
         f"  information: log det {plan.log_det:.2f}, condition number {plan.condition_number:.3g}\n"

@@ -119,7 +119,7 @@ class DeprecatedFlag(argparse.Action):
         logger.warning(
             "%s is deprecated and will be removed: use %s", option_string, self.replacement
         )
-        setattr(namespace, self.dest, values)
+        setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
 
 
 def add_constraint_arguments(parser) -> None:
@@ -127,10 +127,9 @@ def add_constraint_arguments(parser) -> None:
     add_options(parser.add_argument_group("pose constraints"), *CONSTRAINT_OPTIONS)
 
 
-def add_readings_argument(parser) -> None:
-    """``--readings-per-pose`` (and ``--readings``, its deprecated spelling)."""
-    add_options(parser, READINGS_PER_POSE)
-    parser.add_argument(
+def deprecated_readings() -> tuple:
+    """``--readings``, the old spelling of ``--readings-per-pose`` (one release)."""
+    return option(
         "--readings",
         dest="readings_per_pose",
         type=READINGS_PER_POSE[1]["type"],
@@ -138,6 +137,11 @@ def add_readings_argument(parser) -> None:
         replacement="--readings-per-pose",
         help=argparse.SUPPRESS,
     )
+
+
+def add_readings_argument(parser) -> None:
+    """``--readings-per-pose`` (and ``--readings``, its deprecated spelling)."""
+    add_options(parser, READINGS_PER_POSE, deprecated_readings())
 
 
 def constraints_from_args(args) -> PoseConstraints:

@@ -15,7 +15,6 @@ Ctrl-C anywhere stops the arm, prints one line (and, for a session, how to finis
 130.
 """
 
-import argparse
 import logging
 import shlex
 import time
@@ -23,16 +22,25 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.model import STANDARD_GRAVITY
 from ..exceptions import InvalidInput, SessionInterrupted
 from ..robot.stillness import Stillness
-from .arg_types import add_options, bounded_int, finite_float, gravity, option, positive_float, seed
+from .arg_types import add_options, bounded_int, finite_float, option, positive_float
+from .common import add_arm_arguments, arm_from_args
 from .declared import add_declared, declared_values
-from .pose_options import (
-    DeprecatedFlag,
-    add_constraint_arguments,
-    add_readings_argument,
-    constraints_from_args,
+from .pose_options import add_constraint_arguments, add_readings_argument, constraints_from_args
+from .shared_options import (
+    DEFAULT_POSES,
+    DURATION,
+    END_EFFECTOR_OPTION,
+    GRAVITY,
+    POSES,
+    POSES_FILE,
+    SEED,
+    SENSOR_BODY_OPTION,
+    SPEED,
+    TOOL_MASS,
+    deprecated,
+    resolved,
 )
 
 logger = logging.getLogger("ftkin.cli")
@@ -81,13 +89,7 @@ def _robot_options(parser, sensor: bool = True, required: bool = True) -> None:
             action="store_true",
             help="do not require a real-time kernel (franky RealtimeConfig.Ignore: simulators)",
         ),
-        option(
-            "--speed",
-            type=positive_float,
-            default=0.3,
-            help="fraction of the joint velocity/acceleration limits for moves (default: "
-            "%(default)s)",
-        ),
+        SPEED,
         option(
             "--state-timeout",
             type=positive_float,
@@ -115,13 +117,7 @@ def _robot_options(parser, sensor: bool = True, required: bool = True) -> None:
                 help="keyword argument (a string) for the sensor factory; repeatable",
             ),
         )
-    arm = parser.add_argument_group("robot model (default: the bundled FR3, sensor at fr3_hand)")
-    add_options(
-        arm,
-        option("--urdf", metavar="PATH", help="URDF of the arm"),
-        option("--sensor-frame", metavar="NAME", help="sensor frame (with --urdf)"),
-        option("--tool-frame", metavar="NAME", help="tool frame (with --urdf)"),
-    )
+    add_arm_arguments(parser)
 
 
 def _stillness_options(parser) -> None:
@@ -149,19 +145,8 @@ def _calibrate_parser(commands) -> None:
         option(
             "--resume", action="store_true", help="continue the samples file of a stopped session"
         ),
-        option(
-            "--poses",
-            metavar="POSES.csv",
-            help="visit these poses (ftkin plan -o POSES.csv) instead of planning; checked "
-            "against the constraints before the arm moves",
-        ),
-        option(
-            "--n",
-            type=bounded_int(3, 200, "poses"),
-            default=12,
-            metavar="N",
-            help="poses to plan without --poses (default: %(default)s)",
-        ),
+        POSES_FILE,
+        POSES,
         option(
             "--dry-run",
             action="store_true",
@@ -175,13 +160,8 @@ def _calibrate_parser(commands) -> None:
             help="extra poses to check the calibration at (default: %(default)s); a fault there "
             "stops the arm and exits 1, the calibration saved",
         ),
-        option("--seed", type=seed, default=0, help="seed of the planner (default: %(default)s)"),
-        option(
-            "--g",
-            type=gravity,
-            default=STANDARD_GRAVITY,
-            help="gravity for the mass, 1 to 30 [m/s²] (default: %(default)s; franky-sim: 9.81)",
-        ),
+        SEED,
+        GRAVITY,
     )
     add_readings_argument(parser)
     add_constraint_arguments(parser)
@@ -201,24 +181,7 @@ def _payload_parser(commands) -> None:
 
 def _payload_options(parser) -> None:
     group = parser.add_argument_group("payload hand-off (flange frame fr3_link8)")
-    add_options(
-        group,
-        option(
-            "--end-effector",
-            type=finite_float,
-            nargs=4,
-            metavar=("MASS", "CX", "CY", "CZ"),
-            help="the end effector the controller models [kg, m] (default: what the robot reports)",
-        ),
-        option(
-            "--sensor-body",
-            type=finite_float,
-            nargs=4,
-            metavar=("MASS", "CX", "CY", "CZ"),
-            help="the sensor's own mass and centre of mass above its measuring plane [kg, m] "
-            "(datasheet; default: none)",
-        ),
-    )
+    add_options(group, END_EFFECTOR_OPTION, SENSOR_BODY_OPTION)
 
 
 def _guide_parser(commands) -> None:
@@ -227,8 +190,15 @@ def _guide_parser(commands) -> None:
     _robot_options(parser)
     add_options(
         parser,
-        option("--duration", type=positive_float, metavar="S", help="stop after S s"),
-        option("--rate", type=positive_float, default=250.0, help="loop rate [Hz]"),
+        DURATION,
+        option(
+            "--loop-rate",
+            type=positive_float,
+            default=250.0,
+            metavar="HZ",
+            help="control loop rate [Hz] (default: %(default)s)",
+        ),
+        deprecated("--rate", "loop_rate", "--loop-rate", type=positive_float),
         option("--rotation", action="store_true", help="let the hand turn the tool"),
         option("--gain", type=positive_float, help="translation gain [m/(s·N)] (default: 0.0035)"),
     )
@@ -246,14 +216,8 @@ def _sim_parser(commands) -> None:
     )
     add_options(
         parser,
-        option(
-            "--tool-mass",
-            type=positive_float,
-            default=1.2,
-            metavar="KG",
-            help="the simulated tool under the hand [kg] (default: %(default)s)",
-        ),
-        option("--seed", type=seed, default=0, help="seed of the sensor noise"),
+        TOOL_MASS,
+        SEED,
     )
     parser.set_defaults(func=run_sim)
 
@@ -264,22 +228,9 @@ def _demo_parser(commands) -> None:
     )
     add_options(
         parser,
-        option(
-            "--n",
-            type=bounded_int(3, 50, "poses"),
-            default=12,
-            metavar="N",
-            help="poses to plan (default: %(default)s)",
-        ),
-        option(
-            "--poses",
-            dest="n",
-            type=bounded_int(3, 50, "poses"),
-            action=DeprecatedFlag,
-            replacement="--n",
-            help=argparse.SUPPRESS,
-        ),
-        option("--speed", type=positive_float, default=0.8),
+        POSES,
+        deprecated("--poses", "n", "--n", type=POSES[1]["type"]),
+        SPEED,
         option("--push", type=finite_float, default=15.0, metavar="N", help="push force [N]"),
         option(
             "-o", "--output", metavar="CALIB.json", help="keep the calibration (and its samples)"
@@ -290,16 +241,18 @@ def _demo_parser(commands) -> None:
 
 # ------------------------------------------------------------------------------------ helpers
 def _arm(args):
-    from ..kinematics.arm import Arm
-    from ..kinematics.fr3 import fr3_arm
+    """The arm the options name (``--robot``, ``--urdf``, ...), else the bundled FR3 (its tool
+    frame ``--tool-frame``, its sensor frame ``fr3_hand``)."""
+    from ..kinematics.fr3 import FR3_SENSOR_FRAME, FR3_TOOL_FRAME, fr3_arm
 
-    if args.urdf is None:
-        if args.sensor_frame or args.tool_frame:
-            raise InvalidInput("--sensor-frame and --tool-frame go with --urdf")
-        return fr3_arm()
-    if not args.sensor_frame:
-        raise InvalidInput("--urdf needs --sensor-frame")
-    return Arm.from_urdf(args.urdf, args.sensor_frame, args.tool_frame)
+    if args.urdf is None and args.robot is None:
+        if args.sensor_frame not in (None, FR3_SENSOR_FRAME) or args.sensor_offset is not None:
+            raise InvalidInput(
+                "the bundled FR3's sensor frame is fr3_hand: --sensor-frame and --sensor-offset "
+                "go with --urdf (or --robot for a robot without a sensor frame)"
+            )
+        return fr3_arm(args.tool_frame or FR3_TOOL_FRAME)
+    return arm_from_args(args)
 
 
 def _robot(args):
@@ -308,7 +261,7 @@ def _robot(args):
     return FrankaRobot(
         args.franka,
         realtime=not args.no_realtime,
-        speed=args.speed,
+        speed=resolved(args.speed, 0.3),
         state_timeout=args.state_timeout,
     )
 
@@ -391,7 +344,7 @@ def run_calibrate(args) -> int:
     else:
         poses = session_poses(
             arm,
-            args.n,
+            resolved(args.n, DEFAULT_POSES),
             seed=args.seed,
             readings_per_pose=args.readings_per_pose,
             plan_options=plan_options,
@@ -511,7 +464,7 @@ def run_guide(args) -> int:
         sensor,
         controller,
         duration=args.duration,
-        rate_hz=args.rate,
+        rate_hz=args.loop_rate,
         stale_after=args.stale_after,
     )
     print(stats.report())
@@ -572,7 +525,7 @@ def run_demo(args) -> int:
             robot = FrankaRobot(
                 sim.hostname,
                 realtime=False,
-                speed=args.speed,
+                speed=resolved(args.speed, 0.8),
                 state_timeout=SIM_TIMEOUT,
             )
             started = time.monotonic()
@@ -581,7 +534,7 @@ def run_demo(args) -> int:
                     robot,
                     sim.sensor,
                     arm,
-                    n_poses=args.n,
+                    n_poses=resolved(args.n, DEFAULT_POSES),
                     samples_path=samples,
                     output=output,
                     g=sim.truth.g,
@@ -599,7 +552,8 @@ def run_demo(args) -> int:
                 print(f"ftkin: interrupted: the arm is stopped; {kept}")
                 return 130
             truth = sim.truth
-            print(f"session: {args.n} poses in {time.monotonic() - started:.1f} s")
+            seconds = time.monotonic() - started
+            print(f"session: {resolved(args.n, DEFAULT_POSES)} poses in {seconds:.1f} s")
             print(f"  mass {result.tool_mass:.4f} kg (truth {truth.mass:.4f})")
             com_error = np.linalg.norm(result.center_of_mass - truth.center_of_mass) * 1e3
             bias_error = np.abs(result.force_offset - truth.bias[:3]).max()

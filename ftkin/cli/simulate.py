@@ -54,9 +54,21 @@ from .arg_types import (
     option,
     positive_float,
     refuse,
-    seed,
 )
 from .common import add_arm_arguments, arm_from_args
+from .pose_options import READINGS_PER_POSE, deprecated_readings
+from .shared_options import (
+    CENTER_OF_MASS,
+    DEFAULT_POSES,
+    DURATION,
+    POSES,
+    POSES_FILE,
+    SEED,
+    SENSOR_SIGN,
+    TOOL_MASS,
+    deprecated,
+    resolved,
+)
 
 _DEFAULT = PlacementScenario()
 
@@ -101,24 +113,14 @@ _PLACEMENT_OPTIONS = (
         default=_DEFAULT.start_gap * 1e3,
         help="object bottom above the surface at the start [mm] (default: %(default)g)",
     ),
-    option(
-        "--duration",
-        type=positive_float,
-        default=_DEFAULT.duration,
-        help="simulated time [s] (default: %(default)g)",
-    ),
+    DURATION,
     option(
         "--dt",
         type=positive_float,
         default=_DEFAULT.dt,
         help="control period [s] (default: %(default)g)",
     ),
-    option(
-        "--seed",
-        type=seed,
-        default=0,
-        help="random seed of the sensor noise (default: %(default)s)",
-    ),
+    SEED,
     option(
         "--engine",
         choices=("mujoco", "simple"),
@@ -243,7 +245,7 @@ def _scenarios(args) -> tuple[list[PlacementScenario], list]:
         k2=args.k2 * 1e-3,
         object_weight=args.weight,
         start_gap=args.gap * 1e-3,
-        duration=args.duration,
+        duration=resolved(args.duration, _DEFAULT.duration),
         dt=args.dt,
         seed=args.seed,
     )
@@ -331,46 +333,12 @@ KINDS = {
 """The example inputs ``ftkin simulate`` writes, and what each is for."""
 
 
-_POSES = (
-    option(
-        "--poses",
-        metavar="POSES.csv",
-        help="joint configurations (ftkin plan -o POSES.csv; default: --n random ones)",
-    ),
-    option(
-        "--n",
-        type=bounded_int(3, 1000, "poses"),
-        default=12,
-        help="random poses without --poses (default: %(default)s)",
-    ),
-)
+_POSES = (POSES_FILE, POSES)
 INPUT_OPTIONS = {
-    "samples": (
-        *_POSES,
-        option(
-            "--readings",
-            type=bounded_int(1, 100_000, "readings per pose"),
-            default=10,
-            help="readings per pose, 1 ms apart (default: %(default)s)",
-        ),
-    ),
-    "log": (
-        option(
-            "--duration",
-            type=positive_float,
-            default=5.0,
-            metavar="S",
-            help="length [s] (default: %(default)s)",
-        ),
-    ),
+    "samples": (*_POSES, READINGS_PER_POSE, deprecated_readings()),
+    "log": (DURATION,),
     "recording": (
-        option(
-            "--duration",
-            type=positive_float,
-            default=10.0,
-            metavar="S",
-            help="length [s] (default: %(default)s)",
-        ),
+        DURATION,
         option(
             "--trajectory",
             metavar="TRAJ.csv",
@@ -383,11 +351,9 @@ INPUT_OPTIONS = {
 """The options of each example input of ``ftkin simulate``, besides the sensor's and the arm's."""
 
 SENSOR_OPTIONS = (
-    option("--seed", type=seed, default=0, help="random seed (default: %(default)s)"),
-    option("--tool-mass", type=positive_float, metavar="KG", help="tool mass [kg]"),
-    option(
-        "--com", type=number_list, metavar="X Y Z", help="tool centre of mass, sensor frame [m]"
-    ),
+    SEED,
+    TOOL_MASS,
+    CENTER_OF_MASS,
     option(
         "--noise-scale",
         type=positive_float,
@@ -396,24 +362,20 @@ SENSOR_OPTIONS = (
         help="noise = K × the paper's 0.02 N, 0.002 N·m per reading (default: %(default)g)",
     ),
     option(
-        "--drift",
+        "--with-drift",
+        dest="with_drift",
         action="store_true",
         help="a drifting bias (warm-up and random walk, SensorDrift.typical()); samples get a "
         "t column",
     ),
+    deprecated("--drift", "with_drift", "--with-drift", nargs=0, const=True, default=False),
     option(
         "--mount-rpy-deg",
         type=number_list,
         metavar="R P Y",
         help="the sensor turned on the flange: R_M = Rz(Y) Ry(P) Rx(R) [deg]",
     ),
-    option(
-        "--sensor-sign",
-        type=int,
-        choices=(1, -1),
-        default=1,
-        help="-1: the sensor reports the reaction (default: %(default)s)",
-    ),
+    SENSOR_SIGN,
 )
 """The simulated sensor and tool of every example input."""
 
@@ -451,7 +413,7 @@ def _inputs(args):
     )
     paper = SensorNoise.paper()
     noise = SensorNoise(paper.force_std * args.noise_scale, paper.torque_std * args.noise_scale)
-    drift = SensorDrift.typical() if args.drift else None
+    drift = SensorDrift.typical() if args.with_drift else None
     return sim_inputs.SimulatedInputs(truth, noise, drift, mount, float(args.sensor_sign))
 
 
@@ -460,7 +422,7 @@ def _trajectory(args, arm):
     if args.trajectory is None:
         from ..planning.excitation import plan_excitation
 
-        plan = plan_excitation(arm, args.duration, rate=1000.0, seed=args.seed)
+        plan = plan_excitation(arm, resolved(args.duration, 10.0), rate=1000.0, seed=args.seed)
         return plan.times, plan.joint_positions, plan.joint_velocities, plan.joint_accelerations
     table = read_table(args.trajectory)
     names = list(arm.joint_names)
@@ -493,7 +455,7 @@ def run_input(args) -> int:
     )
     if args.kind in ("samples", "bag"):
         configurations = (
-            arm.random_configurations(args.n, rng, margin=0.3)
+            arm.random_configurations(resolved(args.n, DEFAULT_POSES), rng, margin=0.3)
             if args.poses is None
             else configurations_from_table(read_table(args.poses), arm)
         )
@@ -502,10 +464,11 @@ def run_input(args) -> int:
         print(f"wrote {args.output}: a ROS 2 bag of {len(configurations)} poses held 2 s each")
         return 0
     if args.kind == "samples":
-        header, rows = sim_inputs.samples_table(inputs, arm, configurations, rng, args.readings)
-        what = f"{len(configurations)} poses × {args.readings} readings"
+        readings = args.readings_per_pose
+        header, rows = sim_inputs.samples_table(inputs, arm, configurations, rng, readings)
+        what = f"{len(configurations)} poses × {readings} readings"
     elif args.kind == "log":
-        header, rows = sim_inputs.log_table(inputs, arm, rng, args.duration)
+        header, rows = sim_inputs.log_table(inputs, arm, rng, resolved(args.duration, 5.0))
         what = f"{len(rows)} rows, a push {sim_inputs.PUSH.tolist()} (true_fx..true_mz)"
     else:
         from ..sim.mujoco.tool_inertia import ToolInertia

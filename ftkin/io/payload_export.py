@@ -46,6 +46,7 @@ import pinocchio as pin
 from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from ..kinematics.robots import flange_frame_name
+from ..options import number
 from ..validation import as_float_array
 from .export_format import ExportFormat, ExportOption, ExportRequest
 
@@ -65,7 +66,7 @@ INERTIA = ExportOption(
     "--inertia",
     "tool inertia about its centre of mass in flange axes [kg·m²] (default: a dynamic "
     "calibration's, else unknown, written as zero)",
-    {"type": float, "nargs": 6, "metavar": ("IXX", "IYY", "IZZ", "IXY", "IXZ", "IYZ")},
+    {"type": number(), "nargs": 6, "metavar": ("IXX", "IYY", "IZZ", "IXY", "IXZ", "IYZ")},
 )
 
 END_EFFECTOR = ExportOption(
@@ -73,13 +74,13 @@ END_EFFECTOR = ExportOption(
     "--end-effector",
     "subtract the end effector the controller already models (libfranka m_ee, F_x_Cee) "
     "[kg, m, flange frame]",
-    {"type": float, "nargs": 4, "metavar": ("MASS", "CX", "CY", "CZ")},
+    {"type": number(), "nargs": 4, "metavar": ("MASS", "CX", "CY", "CZ")},
 )
 SENSOR_BODY = ExportOption(
     "sensor_body",
     "--sensor-body",
     "add the sensor's own body above its measuring plane (datasheet) [kg, m, flange frame]",
-    {"type": float, "nargs": 4, "metavar": ("MASS", "CX", "CY", "CZ")},
+    {"type": number(), "nargs": 4, "metavar": ("MASS", "CX", "CY", "CZ")},
 )
 
 

@@ -91,14 +91,20 @@ def test_a_resolution_is_the_noise_floor(arm, tool, poses40):
 @pytest.mark.parametrize(
     ("options", "match"),
     [
-        ({"method": "linear", "resolution": (0.01, 0.001)}, "apply to method='ml' only"),
+        (
+            {"method": "linear", "resolution": (0.01, 0.001)},
+            r"apply to method='ml' \(--method ml\) only",
+        ),
         ({"resolution": (0.01,)}, "resolution must be"),
         ({"resolution": (0.01, -1.0)}, "resolution must be"),
         ({"drift": "poly:2", "loss": "huber"}, "needs method='ml' with loss='linear'"),
         ({"drift": "random-walk", "estimate_mount": "yaw"}, "cannot be fitted together"),
         ({"drift": "wobble"}, "unknown drift model 'wobble'"),
         ({"g": -9.8}, "g"),
-        ({"method": "linear", "estimate_mount": "yaw"}, "estimate_mount applies"),
+        (
+            {"method": "linear", "estimate_mount": "yaw"},
+            r"estimate_mount \(--estimate-mount\) applies",
+        ),
     ],
 )
 def test_options_are_checked_in_one_place(options, match):

@@ -266,7 +266,7 @@ def test_given_noise_scales_the_covariance_but_not_the_estimate(tool, rotations,
         ({"method": "bayes"}, "unknown calibration method 'bayes'; expected one of ml, linear"),
         ({"loss": "cauchy"}, "unknown loss 'cauchy'; expected one of linear, soft_l1, huber"),
         ({"noise": (0.03, 0.0015)}, "noise must be an ftkin.SensorNoise, got tuple"),
-        ({"method": "linear", "drop_outliers": True}, "apply to method='ml' only"),
+        ({"method": "linear", "drop_outliers": True}, r"apply to method='ml' \(--method ml\) only"),
     ],
 )
 def test_bad_options_are_refused(tool, rotations, kwargs, message):
@@ -357,7 +357,7 @@ def test_cli_calibrate_ml_prints_errors_and_diagnostics(arm, tool, tmp_path, cap
     "extra, message",
     [
         (["--noise-force", "0.03"], "give both --noise-force"),
-        (["--method", "linear", "--drop-outliers"], "apply to --method ml only"),
+        (["--method", "linear", "--drop-outliers"], "(--method ml) only"),
     ],
 )
 def test_cli_calibrate_refuses_inconsistent_options(arm, tool, tmp_path, capsys, extra, message):

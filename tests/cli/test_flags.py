@@ -23,8 +23,8 @@ def _usage_error(argv, capsys, pattern):
 @pytest.mark.parametrize(
     "n, pattern",
     [
-        ("501", "plan between 3 and 500 poses"),
-        ("10" * 20, "plan between 3 and 500"),
+        ("501", "expected 3 to 500 poses"),
+        ("10" * 20, "expected 3 to 500 poses"),
         ("2", "at least 3 poses"),
         ("1e3", "whole number of poses"),
     ],
@@ -115,8 +115,8 @@ def test_xacro_is_named(tmp_path, capsys):
 @pytest.mark.parametrize(
     "argv, pattern",
     [
-        (["demo", "--poses", "-1"], "expected 3 to 1,000 poses"),
-        (["demo", "--poses", "100000000000000"], "expected 3 to 1,000 poses"),
+        (["demo", "--n", "-1"], "at least 3 poses"),
+        (["demo", "--n", "100000000000000"], "expected 3 to 500 poses"),
         (["demo", "--readings", "0"], "readings per pose"),
         (["demo", "--seed", "-5"], "the seed must be at least 0"),
         (["plan", "-n", "3", "--seed", str(2**64)], "the seed must be below 2**63"),
@@ -184,3 +184,100 @@ def test_fixed_format_outputs_need_their_ending(argv, pattern, tmp_path, capsys,
     monkeypatch.chdir(tmp_path)
     _usage_error(argv, capsys, pattern)
     assert not list(tmp_path.iterdir())  # refused before anything is written
+
+
+def _parsers():
+    """Every parser of the ftkin command, with its command path."""
+    import argparse
+
+    from ftkin.cli import build_parser
+
+    def walk(parser, path):
+        yield path, parser
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, sub in action.choices.items():
+                    yield from walk(sub, (*path, name))
+
+    yield from walk(build_parser([]), ())
+
+
+EACH_COMMAND_ITS_OWN = {
+    "-o": "each command writes its own kind of file (the help names it)",
+    "--output": "each command writes its own kind of file (the help names it)",
+    "--format": "each command's own output formats (plan: csv/yaml/json; export: the registry)",
+}
+
+
+DISTINCT_CONCEPTS = {
+    "settle_time": "--settle-time skips the start of a recording's still stretches "
+    "(SegmentParameters); --still-settle-time is how long a live arm must be still (Stillness)",
+}
+
+
+def test_every_option_several_commands_take_is_one_definition():
+    """A flag means one thing: the same help, default, choices, number of values and type in
+    every command that takes it; and one option (its dest) has one long spelling."""
+    import argparse
+    from collections import defaultdict
+
+    uses, spellings = defaultdict(dict), defaultdict(set)
+    for path, parser in _parsers():
+        for action in parser._actions:
+            if not action.option_strings or action.help == argparse.SUPPRESS:
+                continue
+            if action.dest == "help":
+                continue
+            key = (
+                action.help,
+                repr(action.default),
+                repr(action.choices),
+                repr(action.nargs),
+                getattr(action.type, "__qualname__", repr(action.type)),
+                repr(action.metavar),
+            )
+            long_flags = tuple(flag for flag in action.option_strings if flag.startswith("--"))
+            spellings[action.dest].add(long_flags)
+            for flag in action.option_strings:
+                uses[flag][" ".join(path)] = key
+    differing = {
+        flag: commands
+        for flag, commands in uses.items()
+        if flag not in EACH_COMMAND_ITS_OWN and len(set(commands.values())) > 1
+    }
+    assert differing == {}, "\n".join(
+        f"{flag}: "
+        + "; ".join(f"{command}: {key[0]!r} default {key[1]}" for command, key in c.items())
+        for flag, c in differing.items()
+    )
+    two_spellings = {
+        dest: s for dest, s in spellings.items() if len(s) > 1 and dest not in DISTINCT_CONCEPTS
+    }
+    assert two_spellings == {}
+
+
+def test_old_spellings_warn_naming_the_new_one(tmp_path, caplog):
+    import logging
+
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        assert (
+            main(
+                [
+                    "simulate",
+                    "samples",
+                    "--readings",
+                    "3",
+                    "--n",
+                    "4",
+                    "-o",
+                    str(tmp_path / "s.csv"),
+                ]
+            )
+            == 0
+        )
+        assert (
+            main(["simulate", "samples", "--drift", "--n", "4", "-o", str(tmp_path / "d.csv")]) == 0
+        )
+    assert "--readings is deprecated" in caplog.text and "use --readings-per-pose" in caplog.text
+    assert "--drift is deprecated" in caplog.text and "use --with-drift" in caplog.text
+    assert "t," in (tmp_path / "d.csv").read_text() or ",t" in (tmp_path / "d.csv").read_text()

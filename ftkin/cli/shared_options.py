@@ -1,0 +1,181 @@
+"""The options several commands take: one definition each, so that every command spells,
+defaults and explains them identically (``tests/cli/test_flags.py`` walks the parsers).
+
+Where commands need different values for an option, the definition's default is None and its
+help names each command's value (``--duration``: 30 s for an excitation, 5 s for a placement);
+the command resolves None with :func:`resolved`. The pose constraints and readings per pose are
+in :mod:`ftkin.cli.pose_options`; options of a library type come from its declarations
+(:mod:`ftkin.cli.declared`).
+"""
+
+import argparse
+import logging
+
+from ..calibration.estimate import METHODS
+from ..calibration.model import STANDARD_GRAVITY
+from ..io.payload_export import END_EFFECTOR, SENSOR_BODY
+from ..planning.evaluation import PAPER_CENTER_OF_MASS
+from .arg_types import (
+    gravity,
+    number_list,
+    option,
+    positive_float,
+    refuse,
+    seed,
+    whole_number,
+)
+
+logger = logging.getLogger("ftkin.cli")
+
+DEFAULT_POSES = 12
+"""Poses when ``--n`` is not given (``plan`` asks for it: it has ``--excitation`` besides)."""
+MAX_POSES = 500
+"""Largest ``--n``: beyond a few dozen poses the standard errors only fall as 1/√n."""
+
+
+def pose_count(text: str) -> int:
+    """argparse type: a number of poses, 3 to :data:`MAX_POSES`."""
+    value = whole_number(text, "poses")
+    refuse(
+        argparse.ArgumentTypeError,
+        (value < 3, f"at least 3 poses are needed to determine the calibration, got {text}"),
+        (
+            value > MAX_POSES,
+            f"expected 3 to {MAX_POSES} poses, got {text}: beyond a few dozen poses the standard "
+            "errors only fall as 1/√n (average readings with --readings-per-pose instead)",
+        ),
+    )
+    return value
+
+
+POSES = option(
+    "--n",
+    type=pose_count,
+    default=None,
+    metavar="N",
+    help=f"number of poses, 3 to {MAX_POSES} (default: {DEFAULT_POSES}; plan: required without "
+    "--excitation)",
+)
+POSES_FILE = option(
+    "--poses",
+    metavar="POSES.csv",
+    help="a poses file (ftkin plan -o POSES.csv): simulate writes readings at these poses, robot "
+    "calibrate visits them, checked against the constraints before the arm moves (default: "
+    "--n random or planned poses)",
+)
+SEED = option(
+    "--seed",
+    type=seed,
+    default=0,
+    help="seed of the random draws (poses, the planner's search, simulated noise): the same seed "
+    "gives the same result (default: %(default)s)",
+)
+GRAVITY = option(
+    "--g",
+    type=gravity,
+    default=STANDARD_GRAVITY,
+    help="gravity for the tool mass, 1 to 30 [m/s²] (default: %(default)s; the paper used 9.8, "
+    "franky-sim and MuJoCo's scenes 9.81)",
+)
+METHOD = option(
+    "--method",
+    choices=METHODS,
+    default=None,
+    help="estimator: ml (joint maximum likelihood, with standard errors) or linear (the paper's "
+    "two-step least squares) (default: ml; ftkin paper: linear, the paper's)",
+)
+NOISE_FORCE = option(
+    "--noise-force",
+    type=positive_float,
+    default=None,
+    metavar="N",
+    help="noise (standard deviation) of one force reading [N], with --noise-torque (default: "
+    "calibrate estimates it from the readings; plan and evaluate-poses assume the paper's 0.02 N)",
+)
+NOISE_TORQUE = option(
+    "--noise-torque",
+    type=positive_float,
+    default=None,
+    metavar="NM",
+    help="noise of one torque reading [N·m], with --noise-force (default: calibrate estimates "
+    "it; plan and evaluate-poses assume the paper's 0.002 N·m)",
+)
+CENTER_OF_MASS = option(
+    "--com",
+    type=number_list,
+    default=None,
+    metavar="X Y Z",
+    help="tool centre of mass in the sensor frame [m] (default: the paper's tool, "
+    + " ".join(f"{v:g}" for v in PAPER_CENTER_OF_MASS)
+    + ")",
+)
+TOOL_MASS = option(
+    "--tool-mass",
+    type=positive_float,
+    default=None,
+    metavar="KG",
+    help="mass of the simulated tool [kg] (default: the paper's 0.3217 kg; robot sim: 1.2 kg)",
+)
+ESTIMATE_MOUNT = option(
+    "--estimate-mount",
+    choices=("yaw", "full"),
+    default=None,
+    metavar="yaw|full",
+    help="the sensor's rotation on the flange is estimated too: yaw (about its z axis) or full "
+    "(any rotation); calibrate needs joint-angle samples, plan and evaluate-poses plan and "
+    "predict for it",
+)
+SENSOR_SIGN = option(
+    "--sensor-sign",
+    type=int,
+    choices=(1, -1),
+    default=1,
+    help="-1: the sensor reports the reaction, not the load on it (calibrate negates every "
+    "reading, simulate writes such readings) (default: %(default)s)",
+)
+DURATION = option(
+    "--duration",
+    type=positive_float,
+    default=None,
+    metavar="S",
+    help="length [s] (default: plan --excitation 30; simulate placement and log 5, recording 10; "
+    "robot guide: until Ctrl-C)",
+)
+SPEED = option(
+    "--speed",
+    type=positive_float,
+    default=None,
+    help="fraction of the joint velocity and acceleration limits for moves (default: 0.3; "
+    "robot demo: 0.8)",
+)
+
+
+def payload_body_option(spec) -> tuple:
+    """``--end-effector`` or ``--sensor-body`` as the payload export declares it
+    (:data:`~ftkin.io.payload_export.END_EFFECTOR`, :data:`~ftkin.io.payload_export.SENSOR_BODY`):
+    ``ftkin export`` and ``ftkin robot payload`` take the same option."""
+    return option(spec.flag, dest=spec.name, default=None, help=spec.help, **spec.argparse)
+
+
+END_EFFECTOR_OPTION = payload_body_option(END_EFFECTOR)
+SENSOR_BODY_OPTION = payload_body_option(SENSOR_BODY)
+
+
+def resolved(value, default):
+    """``value``, or the command's ``default`` when the option was not given (None)."""
+    return default if value is None else value
+
+
+def deprecated(old: str, dest: str, replacement: str, **keywords) -> tuple:
+    """An old spelling kept for one release: hidden from ``--help``, it warns naming
+    ``replacement`` and sets ``dest``."""
+    from .pose_options import DeprecatedFlag
+
+    return option(
+        old,
+        dest=dest,
+        action=DeprecatedFlag,
+        replacement=replacement,
+        help=argparse.SUPPRESS,
+        **keywords,
+    )
