@@ -9,6 +9,7 @@
 * ``demo``: all of it on franky-sim with a simulated sensor and a push.
 """
 
+import atexit
 import time
 from pathlib import Path
 
@@ -64,15 +65,19 @@ def _robot_options(parser, sensor: bool = True) -> None:
             option(
                 "--sensor",
                 required=True,
-                metavar="MODULE:FACTORY",
-                help="importable factory returning an object with read() -> (t, wrench)",
+                metavar="NAME|MODULE:FACTORY",
+                help="a built-in sensor (ati: ATI Net F/T, bota: Bota Systems; see "
+                "docs/ati-netft.md and docs/bota.md), or an importable factory returning an "
+                "object with read() -> (t, wrench)",
             ),
             option(
                 "--sensor-option",
                 action="append",
                 default=[],
                 metavar="KEY=VALUE",
-                help="keyword argument (a string) for the sensor factory; repeatable",
+                help="an option of the built-in sensor (e.g. host=192.168.1.1, config=bota.json; "
+                "an unknown one is refused naming the known ones), or a keyword argument (a "
+                "string) for the factory; repeatable",
             ),
         )
     arm = parser.add_argument_group("robot model (default: the bundled FR3, sensor at fr3_hand)")
@@ -212,7 +217,7 @@ def _robot(args):
 
 
 def _sensor(args):
-    from ..robot.sensor_factory import load_sensor_factory
+    from ..sensors.registry import open_sensor
 
     options = {}
     for item in args.sensor_option:
@@ -220,7 +225,10 @@ def _sensor(args):
         if not equals or not key.isidentifier():
             raise InvalidInput(f"--sensor-option takes KEY=VALUE, got {item!r}")
         options[key] = value
-    return load_sensor_factory(args.sensor, **options)
+    sensor = open_sensor(args.sensor, options)
+    if callable(getattr(sensor, "close", None)):  # a built-in adapter: release its client (a Bota
+        atexit.register(sensor.close)  # is deactivated and shut down) when the command ends
+    return sensor
 
 
 def _body(values):
