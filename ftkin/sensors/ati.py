@@ -97,8 +97,9 @@ class AtiNetFT(StreamingSensor):
     Raises:
         InvalidInput: an argument of the wrong type or range.
         MissingDependency: pynetft is not installed (``pip install 'ftkin[ati]'``).
-        SensorError: ``"connect"`` (no sample within ``connect_timeout``), or the fault the
-            first records showed.
+        SensorError: ``"connect"``: no sample within ``connect_timeout``, or the first
+            records showed a fault (nothing listening, a unit pynetft does not know, a status
+            word: the message says which).
     """
 
     def __init__(

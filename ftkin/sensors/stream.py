@@ -17,7 +17,8 @@ The kinds (``SensorError.kind``) an adapter raises:
 * ``"units"``: the sensor reports in a unit ftkin does not convert;
 * ``"configuration"``: the sensor's configuration cannot be used;
 * ``"driver"``: the vendor's client raised or stopped;
-* ``"connect"``: no first sample within ``connect_timeout`` [s] (raised by the constructor);
+* ``"connect"``: the constructor got no first sample within ``connect_timeout`` [s], or the
+  first records showed a fault (the message says which);
 * ``"closed"``: ``read()`` after :meth:`~StreamingSensor.close`.
 """
 
@@ -87,8 +88,9 @@ class StreamingSensor:
         sample = self._latest
         if (
             self._fault is not None
+            or self._closed
             or sample is None
-            or time.monotonic() - sample.t > (self.silence_after)
+            or time.monotonic() - sample.t > self.silence_after
         ):
             self._fail()
         return sample.t, sample.wrench
@@ -99,8 +101,9 @@ class StreamingSensor:
         sample = self._latest
         if (
             self._fault is not None
+            or self._closed
             or sample is None
-            or time.monotonic() - sample.t > (self.silence_after)
+            or time.monotonic() - sample.t > self.silence_after
         ):
             self._fail()
         return sample
@@ -154,8 +157,8 @@ class StreamingSensor:
         """Start the reading thread and wait for the first sample.
 
         Raises:
-            SensorError: ``"connect"`` when no sample came within ``connect_timeout`` (the
-                adapter is closed), or the fault the first records showed.
+            SensorError: ``"connect"`` when no sample came within ``connect_timeout`` or the
+                first records showed a fault (the message says which; the adapter is closed).
         """
         self._thread = threading.Thread(
             target=self._run, name=f"ftkin {type(self).__name__}", daemon=True
@@ -167,7 +170,7 @@ class StreamingSensor:
         fault = self._fault
         self.close()
         if fault is not None:
-            raise SensorError(fault.kind, f"{fault} (while connecting)")
+            raise SensorError("connect", f"cannot open {self.description}: {fault}")
         raise SensorError(
             "connect",
             f"no sample from {self.description} within {self.connect_timeout:g} s: "
