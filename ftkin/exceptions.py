@@ -200,7 +200,7 @@ class SensorError(FtkinError):
     Attributes:
         kind: What failed. The robot stage's checks raise ``"read_failed"``, ``"not_finite"`` and
             ``"stale"``; the adapters of :mod:`ftkin.sensors` raise their own (``"status"``,
-            ``"stall"``, ``"silence"``, ``"driver"``, ``"units"``, ``"configuration"``,
+            ``"stall"``, ``"silence"``, ``"lag"``, ``"driver"``, ``"units"``, ``"configuration"``,
             ``"connect"``, ``"closed"``: :mod:`ftkin.sensors.stream` says what each means), and
             a control loop stops with it as its reason.
     """

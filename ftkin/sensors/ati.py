@@ -14,7 +14,9 @@ leaves to its caller are done here:
   record (``deliver_samples_with_error_status=True``) and reports its status word.
 * **Stall.** An ft_sequence that stops advancing while records keep coming is the fault
   ``"stall"``, after ``silence_after``: pynetft holds back the records that repeat the last
-  acquisition, and its ``health().ft_stall_count`` tells a stall from silence.
+  acquisition, and its ``health().ft_stall_count`` tells a stall from silence. Records that
+  reach pynetft but not this adapter's thread in time (a thread of the process that never
+  sleeps holds the GIL the reading thread needs for every record) are ``"lag"``.
 
 **Recovery policy.** pynetft runs with ``RecoveryPolicy.FAIL_STOP``: the first fault stops its
 client, which raises :class:`pynetft.SensorFaultError` (its fault code becomes the ftkin kind),
@@ -150,6 +152,12 @@ class AtiNetFT(StreamingSensor):
             raise SensorError("connect", f"cannot open {self.description}: {error}") from None
         self._start()
 
+    @property
+    def client(self):
+        """pynetft's :class:`pynetft.Client` under this adapter (to inspect; starting, stopping
+        or biasing it behind the adapter's back breaks the adapter's guarantees)."""
+        return self._client
+
     def health(self):
         """pynetft's :class:`pynetft.Health` snapshot (counters, state, the box's calibration)."""
         return self._client.health()
@@ -198,12 +206,20 @@ class AtiNetFT(StreamingSensor):
 
     def _diagnose_silence(self, age: float) -> SensorError:
         health = self._client.health()
-        record_age = health.last_record_age
-        if health.ft_stall_count or (record_age is not None and record_age < self.silence_after):
+        if health.ft_stall_count:
             return SensorError(
                 "stall",
                 f"{self.description} is stalled: records keep coming but its ft_sequence has not "
                 f"advanced for {age:.3f} s (limit {self.silence_after:g} s)",
+            )
+        record_age = health.last_record_age
+        if record_age is not None and record_age < self.silence_after:
+            return SensorError(
+                "lag",
+                f"{self.description} streams, but the adapter's thread fell behind: its newest "
+                f"sample is {age:.3f} s old (limit {self.silence_after:g} s). Another thread of "
+                "this process holds the CPU (Python's GIL) without pause: a control loop should "
+                "sleep between its ticks",
             )
         return super()._diagnose_silence(age)
 

@@ -1,10 +1,12 @@
 """A Bota Systems sensor through bota_driver (extra ``bota``): wrench, IMU and temperature.
 
 :class:`BotaSensor` runs the vendor's driver through its whole lifecycle: ``configure()`` and
-``activate()`` when opened, then a thread that takes every frame with ``read_frame_blocking()``
-and keeps the newest (:class:`~ftkin.sensors.stream.StreamingSensor`), and ``deactivate()`` and
-``shutdown()`` when it ends, on :meth:`~StreamingSensor.close` or on a fault. Every call into the
-driver after opening is made by that thread. bota_driver has no per-frame callback.
+``activate()`` when opened, ``read_frame_blocking()`` for every frame, and ``deactivate()`` and
+``shutdown()`` at the end, on :meth:`~StreamingSensor.close` or on a fault. The driver runs in a
+process of its own (:mod:`ftkin.sensors.bota_process`): its blocking read holds Python's GIL
+while it waits, which would stall a control loop in the same process for up to a frame period.
+The adapter's thread takes the frames from that process and keeps the newest
+(:class:`~ftkin.sensors.stream.StreamingSensor`). bota_driver has no per-frame callback.
 
 A frame carries ``force`` [N] and ``torque`` [N·m] (the sensor frame; Bota reports the load on
 the sensor, ftkin's ``sensor_sign=+1``), ``acceleration`` [m/s²] and ``angular_rate`` [rad/s]
@@ -25,20 +27,18 @@ also when ``runtime_verbosity`` is off).
 
 from __future__ import annotations
 
-import logging
 import math
 import os
-import time
+import re
 from pathlib import Path
 
 import numpy as np
 
 from ..exceptions import InvalidInput, MissingDependency, SensorError
+from .bota_process import DEFAULT_DRIVER, ERROR, FLAGS, READY, DriverProcess, dump_config
 from .registry import SensorEntry, SensorOption
 from .sample import SensorSample
-from .stream import StreamingSensor
-
-logger = logging.getLogger(__name__)
+from .stream import JOIN_TIMEOUT, StreamingSensor
 
 FAULT_FLAGS = ("invalid", "overrange", "raw")
 """``DataStatus`` flags that make a frame a fault."""
@@ -54,12 +54,6 @@ def _bota_driver():
     return bota_driver
 
 
-def _read_only(values) -> np.ndarray:
-    array = np.array(values, dtype=float)
-    array.flags.writeable = False
-    return array
-
-
 class BotaSensor(StreamingSensor):
     """A Bota Systems sensor: ``read() -> (t [s], wrench (6,) [N, N·m])``, ``read_sample()``
     with the IMU and the temperature.
@@ -69,112 +63,123 @@ class BotaSensor(StreamingSensor):
             ``bota_driver.BotaDriverConfig``.
         silence_after: No new frame for this long is a fault [s] (``"silence"``, or
             ``"stall"`` when frames keep coming with a frozen timestamp).
-        connect_timeout: Wait this long for the first frame after ``activate()`` [s].
+        connect_timeout: Wait this long for the driver to start and send its first frame [s].
+        driver: The driver class as ``MODULE:CLASS``, importable in the driver's process
+            (default: the vendor's; a subclass can wrap it, as the tests do to inject faults).
 
     Attributes:
         timestep: The driver's expected frame period [s] (``get_expected_timestep_us()``).
         throttled: Frames the sensor flagged as throttled.
 
     Raises:
-        InvalidInput: ``config`` is neither an existing file nor a ``BotaDriverConfig``.
+        InvalidInput: ``config`` is neither an existing file nor a ``BotaDriverConfig``, or
+            ``driver`` is not ``MODULE:CLASS``.
         MissingDependency: bota_driver is not installed (``pip install 'ftkin[bota]'``).
         SensorError: ``"connect"``: the driver refused the configuration, ``configure()`` or
             ``activate()`` failed (its log says why), or no frame came in time.
     """
 
-    def __init__(self, config, *, silence_after: float = 0.05, connect_timeout: float = 5.0):
+    def __init__(
+        self,
+        config,
+        *,
+        silence_after: float = 0.05,
+        connect_timeout: float = 5.0,
+        driver: str = DEFAULT_DRIVER,
+    ):
         bota_driver = _bota_driver()
         if isinstance(config, (str, os.PathLike)):
             path = Path(config)
             if not path.is_file():
                 raise InvalidInput(f"the Bota configuration file {str(path)!r} does not exist")
-            source, description = str(path), f"the Bota sensor of {path.name}"
+            source, description = str(path.resolve()), f"the Bota sensor of {path.name}"
         elif isinstance(config, bota_driver.BotaDriverConfig):
-            source = config
-            description = (
-                f"the Bota sensor {config.product_name or '?'} ({config.serial_number or '?'})"
-            )
+            source = dump_config(config)
+            product, serial = config.product_name or "?", config.serial_number or "?"
+            description = f"the Bota sensor {product} ({serial})"
         else:
             raise InvalidInput(
                 "config must be the path of a bota_driver JSON configuration or a "
                 f"bota_driver.BotaDriverConfig, got {type(config).__name__}"
             )
+        if not isinstance(driver, str) or not re.fullmatch(r"[A-Za-z_][\w.]*:[A-Za-z_]\w*", driver):
+            raise InvalidInput(
+                f"driver must be MODULE:CLASS (e.g. {DEFAULT_DRIVER}), got {driver!r}"
+            )
         super().__init__(description, silence_after, connect_timeout)
         self.throttled = 0
         self.timestep = math.nan
-        try:
-            self._driver = bota_driver.BotaDriver(source)
-        except Exception as error:  # the driver refuses a configuration with any exception
-            raise SensorError(
-                "connect", f"bota_driver refuses the configuration of {description}: {error}"
-            ) from None
-        for step in ("configure", "activate"):
-            if not self._call(step):
-                self._release()
-                raise SensorError(
-                    "connect",
-                    f"{description}: bota_driver's {step}() failed (its log above says why)",
-                )
-        self.timestep = self._driver.get_expected_timestep_us() * 1e-6
+        self._process = DriverProcess(source, driver)
         self._start()
 
-    def _call(self, step: str) -> bool:
-        try:
-            return bool(getattr(self._driver, step)())
-        except Exception as error:  # a driver call may raise anything
-            logger.warning("%s: bota_driver's %s() raised %s", self.description, step, error)
-            return False
-
-    def _release(self) -> None:
-        """Deactivate (when active) and shut the driver down; never raises."""
-        state = str(self._driver.get_driver_state())
-        if state.endswith("ACTIVE") and not state.endswith("INACTIVE"):
-            self._call("deactivate")
-        self._call("shutdown")
+    def _connect_hint(self) -> str:
+        return "the driver's log above says what it did"
 
     def _stream(self) -> None:
-        try:
-            self._take_frames()
-        finally:
-            self._release()
+        message = self._process.next()
+        if message is not None and message[0] == ERROR:
+            raise SensorError(*message[1])
+        if message is None or message[0] != READY:
+            raise SensorError("connect", f"{self.description}: the driver's process ended")
+        self.timestep = message[1] * 1e-6
+        self._take_frames()
 
     def _take_frames(self) -> None:
-        driver, description = self._driver, self.description
-        last_stamp = None
-        while not self._closed:
-            frame = driver.read_frame_blocking()
-            now = time.monotonic()
+        description, last_stamp = self.description, None
+        while True:
+            message = self._process.next()
+            if message is None:
+                if self._closed:
+                    return
+                code = self._process.wait(JOIN_TIMEOUT)
+                raise SensorError(
+                    "driver", f"{description}: the driver's process ended (exit code {code})"
+                )
+            tag, fields = message
+            if tag == ERROR:
+                kind, text = fields
+                raise SensorError(kind, f"{description}: {text}")
             if self._closed:
-                return
-            status = frame.status
-            flags = [flag for flag in FAULT_FLAGS if getattr(status, flag)]
-            if flags:
-                raise SensorError("status", f"{description} flags its frame {', '.join(flags)}")
-            if frame.timestamp == last_stamp:
-                self._repeat(now)
+                continue  # drain until the child has released the driver
+            stamp, timestamp, flags = fields[:3]
+            raised = [name for bit, name in enumerate(FLAGS) if flags >> bit & 1]
+            faults = [name for name in raised if name in FAULT_FLAGS]
+            if faults:
+                raise SensorError("status", f"{description} flags its frame {', '.join(faults)}")
+            if timestamp == last_stamp:
+                self._repeat(stamp)
                 continue
-            last_stamp = frame.timestamp
-            if status.throttled:
+            last_stamp = timestamp
+            if "throttled" in raised:
                 self.throttled += 1
-            wrench = _read_only([*frame.force, *frame.torque])
-            specific_force = _read_only(frame.acceleration)
-            angular_velocity = _read_only(frame.angular_rate)
-            temperature = float(frame.temperature)
-            total = wrench.sum() + specific_force.sum() + angular_velocity.sum() + temperature
-            if not math.isfinite(total):
+            values = np.array(fields[3:])
+            if not math.isfinite(values.sum()):
                 raise SensorError(
                     "not_finite",
-                    f"{description} sent a value that is not finite: wrench {wrench.tolist()}, "
-                    f"acceleration {specific_force.tolist()}, angular rate "
-                    f"{angular_velocity.tolist()}, temperature {temperature}",
+                    f"{description} sent a value that is not finite: {values.tolist()} (wrench, "
+                    "acceleration, angular rate, temperature)",
                 )
+            wrench, specific_force, angular_velocity = values[:6], values[6:9], values[9:12]
+            for array in (wrench, specific_force, angular_velocity):
+                array.flags.writeable = False
             self._deliver(
-                SensorSample.trusted(now, wrench, specific_force, angular_velocity, temperature)
+                SensorSample.trusted(
+                    stamp, wrench, specific_force, angular_velocity, float(values[12])
+                )
             )
 
     def _stop_stream(self) -> None:
-        """Nothing to call: the thread sees the flag after its next frame and releases the
-        driver itself (every driver call stays in that thread)."""
+        """Ask the driver's process to deactivate and shut the driver down (it ends the stream,
+        which ends the reading thread)."""
+        self._process.stop()
+
+    def close(self) -> None:
+        """Stop the stream; the driver is deactivated and shut down in its process, which then
+        ends. Idempotent; never raises."""
+        already = self._closed
+        super().close()
+        if not already and getattr(self, "_process", None) is not None:
+            self._process.wait(JOIN_TIMEOUT)
 
 
 REGISTRATION = SensorEntry(
@@ -185,5 +190,6 @@ REGISTRATION = SensorEntry(
         SensorOption("config", str, "the sensor's bota_driver JSON configuration file"),
         SensorOption("silence_after", float, "no new frame this long is a fault", "s"),
         SensorOption("connect_timeout", float, "wait this long for the first frame", "s"),
+        SensorOption("driver", str, "the driver class as MODULE:CLASS (default: the vendor's)"),
     ),
 )

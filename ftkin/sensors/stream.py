@@ -13,6 +13,8 @@ The kinds (``SensorError.kind``) an adapter raises:
 * ``"status"``: the sensor flagged the sample (a nonzero status word, an error flag);
 * ``"stall"``: records keep coming but the acquisition is frozen (the same sequence number);
 * ``"silence"``: no new sample for ``silence_after`` [s];
+* ``"lag"``: the sensor streams but the adapter's thread did not deliver a sample for
+  ``silence_after`` (another thread of the process never releases the GIL);
 * ``"not_finite"``: a value that is not a number;
 * ``"units"``: the sensor reports in a unit ftkin does not convert;
 * ``"configuration"``: the sensor's configuration cannot be used;

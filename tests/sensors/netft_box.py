@@ -60,6 +60,7 @@ class _Box:
         self.rdt_sequence = 0
         self.ft_sequence = 0
         self.sent = 0
+        self.first_sent = self.last_sent = None  # [s] monotonic, when records went out
         self.commands: dict[int, int] = {}
         self.http_requests = 0
         self.stream_generation = 0
@@ -128,6 +129,10 @@ class _Box:
             client = self.client
             self.sent += 1
         self.udp.sendto(packet, client)
+        now = time.monotonic()
+        with self.lock:
+            self.first_sent = self.first_sent or now
+            self.last_sent = now
 
     def control(self, message: dict) -> dict:
         with self.lock:
@@ -146,6 +151,8 @@ class _Box:
             if command == "stats":
                 return {
                     "sent": self.sent,
+                    "first_sent": self.first_sent,
+                    "last_sent": self.last_sent,
                     "rdt_sequence": self.rdt_sequence,
                     "commands": {str(k): v for k, v in self.commands.items()},
                     "http_requests": self.http_requests,
@@ -227,7 +234,8 @@ class NetFTBox:
         self._ask(command="set", **settings)
 
     def stats(self) -> dict:
-        """``sent`` records, the last ``rdt_sequence``, RDT ``commands`` by number (as strings),
+        """``sent`` records (``first_sent``, ``last_sent``: when the first and the last went out
+        [s, monotonic]), the last ``rdt_sequence``, RDT ``commands`` by number (as strings),
         ``http_requests``, ``streaming``, the box's ``now`` [s, monotonic]."""
         return self._ask(command="stats")
 

@@ -126,6 +126,17 @@ def test_a_stall_and_silence_are_faults_after_the_limit(box, ports, fault):
             assert sensor.health().ft_stall_count >= 1
 
 
+def test_an_adapter_thread_that_falls_behind_is_a_lag_fault(box, ports):
+    with AtiNetFT(box.host, silence_after=0.05, **ports) as sensor:
+        start = time.monotonic()
+        sum(range(30_000_000))  # one C call: holds the GIL throughout, no switch
+        held = time.monotonic() - start
+        assert held > 0.06, f"the GIL was held only {held:.3f} s: use a larger range"
+        with pytest.raises(SensorError, match="fell behind") as error:
+            sensor.read()  # pynetft's native thread received all along; the adapter's did not
+    assert error.value.kind == "lag"
+
+
 def test_the_box_is_never_biased(box, ports):
     with AtiNetFT(box.host, **ports) as sensor:
         assert not hasattr(sensor, "bias")

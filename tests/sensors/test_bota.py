@@ -1,8 +1,9 @@
 """BotaSensor: the real bota_driver through its ``Bota_Dummy`` interface (no hardware).
 
-Faults the dummy never makes are injected by a subclass of the real ``BotaDriver`` that changes
-what its ``read_frame_blocking`` returns (a frame's status, a repeated frame, a pause) or makes
-the real driver fail (deactivated behind the adapter's back); the driver stack underneath is the
+Faults the dummy never makes are injected by :class:`~bota_dummy.FaultyDriver`, a subclass of
+the real ``BotaDriver`` run in the adapter's driver process (``driver=``) that changes what its
+``read_frame_blocking`` returns (a frame's status, a repeated frame, a pause) or makes the real
+driver fail (deactivated behind the adapter's back); the driver stack underneath is the
 vendor's.
 """
 
@@ -10,7 +11,7 @@ from __future__ import annotations
 
 import sys
 import time
-from types import SimpleNamespace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,66 +22,9 @@ bd = pytest.importorskip("bota_driver", reason="bota-driver is not installed (ex
 
 from ftkin.sensors import BotaSensor  # noqa: E402
 
-from .bota_dummy import DUMMY_JSON, dummy_config  # noqa: E402
+from .bota_dummy import DUMMY_JSON, FAULT_DIRECTORY, Injector, dummy_config  # noqa: E402
 
 FRAME_PERIOD = 3704e-6  # [s] the dummy's get_expected_timestep_us()
-
-
-class Recording(bd.BotaDriver):
-    """The real driver; its lifecycle calls are recorded, and after ``after`` frames ``fault``
-    changes what ``read_frame_blocking`` gives."""
-
-    calls: list[str] = []
-    fault: str | None = None
-    after = 20
-
-    def __init__(self, config):
-        super().__init__(config)
-        self.frames = 0
-        self.held = None
-
-    def _record(self, name):
-        Recording.calls.append(name)
-        return getattr(super(), name)()
-
-    def configure(self):
-        return self._record("configure")
-
-    def activate(self):
-        return self._record("activate")
-
-    def deactivate(self):
-        return self._record("deactivate")
-
-    def shutdown(self):
-        return self._record("shutdown")
-
-    def read_frame_blocking(self):
-        self.frames += 1
-        if self.frames <= self.after or Recording.fault is None:
-            return super().read_frame_blocking()
-        fault = Recording.fault
-        if fault == "driver":  # the real driver, no longer streaming, raises RuntimeError
-            if self.frames == self.after + 1:
-                super().deactivate()
-            return super().read_frame_blocking()
-        if fault == "silence":
-            time.sleep(0.5)
-            return super().read_frame_blocking()
-        frame = super().read_frame_blocking()
-        if fault == "stall":  # frames keep coming, all the last one again
-            self.held = self.held or frame
-            return self.held
-        flags = {name: getattr(frame.status, name) for name in ("invalid", "raw", "throttled")}
-        flags.update(overrange=1, val=1)  # a saturated channel
-        return SimpleNamespace(
-            **{
-                name: getattr(frame, name)
-                for name in ("force", "torque", "acceleration", "angular_rate", "temperature")
-            },
-            timestamp=frame.timestamp,
-            status=SimpleNamespace(**flags),
-        )
 
 
 def wait_for_fault(sensor, timeout: float = 2.0) -> SensorError:
@@ -94,11 +38,16 @@ def wait_for_fault(sensor, timeout: float = 2.0) -> SensorError:
     raise AssertionError(f"no fault within {timeout} s")
 
 
+FAULTY = "tests.sensors.bota_dummy:FaultyDriver"
+ROOT = Path(__file__).resolve().parents[2]
+
+
 @pytest.fixture
-def recording(monkeypatch):
-    Recording.calls, Recording.fault = [], None
-    monkeypatch.setattr(bd, "BotaDriver", Recording)
-    return Recording
+def injector(tmp_path, monkeypatch):
+    """The faults of :class:`~bota_dummy.FaultyDriver`, which runs in the driver's process."""
+    monkeypatch.setenv(FAULT_DIRECTORY, str(tmp_path))
+    monkeypatch.syspath_prepend(str(ROOT))  # the driver's process imports tests.sensors from it
+    return Injector(tmp_path)
 
 
 def test_the_dummy_streams_wrench_imu_and_temperature():
@@ -126,12 +75,12 @@ def test_a_json_configuration_file_opens_the_same_sensor(tmp_path):
         assert "bota.json" in sensor.description
 
 
-def test_the_lifecycle_is_managed(recording):
-    sensor = BotaSensor(dummy_config())
-    assert recording.calls == ["configure", "activate"]
+def test_the_lifecycle_is_managed(injector):
+    sensor = BotaSensor(dummy_config(), driver=FAULTY)
+    assert injector.calls() == ["configure", "activate"]
     sensor.read()
     sensor.close()
-    assert recording.calls == ["configure", "activate", "deactivate", "shutdown"]
+    assert injector.calls() == ["configure", "activate", "deactivate", "shutdown"]
     with pytest.raises(SensorError, match="is closed"):
         sensor.read()
 
@@ -145,18 +94,20 @@ def test_the_lifecycle_is_managed(recording):
         ("silence", "silence", "no new sample"),
     ],
 )
-def test_faults_latch_and_release_the_driver(recording, fault, kind, message):
-    recording.fault = fault
-    with BotaSensor(dummy_config(), silence_after=0.05) as sensor:
+def test_faults_latch_and_release_the_driver(injector, fault, kind, message):
+    injector.set(fault, after=20)
+    with BotaSensor(dummy_config(), silence_after=0.05, driver=FAULTY) as sensor:
         error = wait_for_fault(sensor)
         assert error.kind == kind and message in str(error), error
         with pytest.raises(SensorError) as again:
             sensor.read()
         assert again.value.kind == kind
-        if fault in ("status", "driver"):  # the reading thread ended and released the driver
-            time.sleep(0.05)
-            assert recording.calls[-1] == "shutdown"
-    assert recording.calls.count("shutdown") == 1
+        if kind == "driver":  # the driver's process reported it and shut the driver down
+            time.sleep(0.1)  # (deactivated already, behind the adapter's back)
+            assert injector.calls() == ["configure", "activate", "shutdown"]
+    calls = injector.calls()
+    assert calls.count("shutdown") == 1 and calls[-1] == "shutdown"
+    assert calls.count("deactivate") == (0 if kind == "driver" else 1)
 
 
 def test_a_configuration_the_driver_refuses_is_a_connect_fault(tmp_path):
