@@ -26,9 +26,10 @@ against bota_driver's ``Bota_Dummy`` interface (the real driver stack without ha
    flagged overrange, the real driver failing, a frozen timestamp, no frame) must stop the
    loop with the fault's kind within one tick plus the adapter's limit (``silence_after``,
    0.05 s; 0 for a status word or a driver error; one frame for a flagged frame) plus 2 ms of
-   scheduling (the tick's own work, the scheduler, the pipe from the Bota driver's process). The time is from the injection to the robot's ``stop()`` (for the driver error:
-   from the moment the real driver raised, which it does once the injection has deactivated it,
-   a deactivation that takes the driver itself a few milliseconds).
+   scheduling (the tick's own work, the scheduler, the pipe from the Bota driver's process).
+   The time is from the injection to the robot's ``stop()`` (for the driver error: from the
+   moment the real driver raised, which it does once the injection has deactivated it, a
+   deactivation that takes the driver itself a few milliseconds).
 4. **Units**: every unit pair pynetft knows (5 force × 6 torque), served by the box, scaled by
    pynetft, converted by ftkin, against ``counts / counts-per-unit × factor`` computed here in
    exact rational arithmetic from the definitions (1 lb = 0.45359237 kg, g_n = 9.80665 m/s²,
