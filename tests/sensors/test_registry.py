@@ -99,3 +99,20 @@ def test_the_cli_opens_the_emulated_box_then_meets_the_robot(box, tmp_path, caps
     err = capsys.readouterr().err
     assert "cannot connect to the robot" in err and "Traceback" not in err
     assert box.stats()["commands"].get("2") == 1  # the box was asked to stream
+
+
+@pytest.mark.parametrize(("name", "page"), [("ati", "ati-netft.md"), ("bota", "bota.md")])
+def test_the_sensors_page_lists_every_option_with_its_default(name, page):
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / page).read_text()
+    text = text[text.index("## Options") :]
+    entry = sensor_entry(name)
+    defaults = entry.defaults()
+    for option in entry.options:
+        row = next(
+            (line for line in text.splitlines() if line.startswith(f"| `{option.name}` |")), None
+        )
+        assert row is not None, f"docs/{page} has no row for {option.name}"
+        default = defaults.get(option.name, "(required)")
+        assert str(default) in row, f"docs/{page}: {option.name}'s default {default!r} not in {row}"
