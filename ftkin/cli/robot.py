@@ -9,7 +9,6 @@
 * ``demo``: all of it on franky-sim with a simulated sensor and a push.
 """
 
-import atexit
 import time
 from pathlib import Path
 
@@ -226,9 +225,24 @@ def _sensor(args):
             raise InvalidInput(f"--sensor-option takes KEY=VALUE, got {item!r}")
         options[key] = value
     sensor = open_sensor(args.sensor, options)
-    if callable(getattr(sensor, "close", None)):  # a built-in adapter: release its client (a Bota
-        atexit.register(sensor.close)  # is deactivated and shut down) when the command ends
+    if callable(getattr(sensor, "close", None)):  # a built-in adapter: closed by _closes_sensor
+        vars(args).setdefault("opened_sensors", []).append(sensor)
     return sensor
+
+
+def _closes_sensor(run):
+    """``run(args)``, then close the sensors ``_sensor`` opened for it (a built-in adapter
+    releases its vendor's client: a Bota driver is deactivated and shut down)."""
+
+    def command(args) -> int:
+        try:
+            return run(args)
+        finally:
+            for sensor in vars(args).pop("opened_sensors", []):
+                sensor.close()
+
+    command.__doc__ = run.__doc__
+    return command
 
 
 def _body(values):
@@ -242,6 +256,7 @@ def _print_load(label: str, mass: float, com) -> None:
 
 
 # ------------------------------------------------------------------------------------ commands
+@_closes_sensor
 def run_calibrate(args) -> int:
     from ..robot.session import calibrate_on_robot, default_samples_path, verify_session
 
@@ -302,6 +317,7 @@ def run_payload(args) -> int:
     return 0
 
 
+@_closes_sensor
 def run_guide(args) -> int:
     from ..io.calibration_file import load_calibration
     from ..robot.guiding import GUIDING_FORCE_GAIN, hand_guiding

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import inspect
+import time
 
 import numpy as np
 import pytest
@@ -99,6 +100,8 @@ def test_the_cli_opens_the_emulated_box_then_meets_the_robot(box, tmp_path, caps
     err = capsys.readouterr().err
     assert "cannot connect to the robot" in err and "Traceback" not in err
     assert box.stats()["commands"].get("2") == 1  # the box was asked to stream
+    time.sleep(0.05)
+    assert box.stats()["streaming"] is False  # and to stop, when the command ended
 
 
 @pytest.mark.parametrize(("name", "page"), [("ati", "ati-netft.md"), ("bota", "bota.md")])
