@@ -63,6 +63,11 @@ STAGES = [
         ["arrows", "legend", "server", "viewer", "browser", "report"],
     ),
     (
+        "sensors",
+        "Sensors",
+        ["sample", "units", "stream", "ati", "bota", "bota_process", "registry"],
+    ),
+    (
         "robot",
         "On the robot",
         ["protocols", "franka", "session", "stillness", "samples_log", "loop", "guiding"],

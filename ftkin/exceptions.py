@@ -198,7 +198,11 @@ class SensorError(FtkinError):
     """The force/torque sensor failed: its read raised, a value is not finite, or it is stale.
 
     Attributes:
-        kind: ``"read_failed"``, ``"not_finite"`` or ``"stale"``.
+        kind: What failed. The robot stage's checks raise ``"read_failed"``, ``"not_finite"`` and
+            ``"stale"``; the adapters of :mod:`ftkin.sensors` raise their own (``"status"``,
+            ``"stall"``, ``"silence"``, ``"lag"``, ``"driver"``, ``"units"``, ``"configuration"``,
+            ``"connect"``, ``"closed"``: :mod:`ftkin.sensors.stream` says what each means), and
+            a control loop stops with it as its reason.
     """
 
     def __init__(self, kind: str, message: str):

@@ -39,7 +39,7 @@ def test_exceptions_derive_from_the_root():
         assert issubclass(getattr(ftkin, name), ftkin.FtkinError), name
 
 
-STAGES = ("kinematics", "calibration", "control", "planning", "io", "sim", "viz")
+STAGES = ("kinematics", "calibration", "control", "planning", "io", "sim", "viz", "sensors")
 
 # The public names as they stood before the stages became subpackages: each
 # must still import from ``ftkin`` (the layout moved modules, not the API).

@@ -105,16 +105,20 @@ def _robot_options(parser, sensor: bool = True, required: bool = True) -> None:
             option(
                 "--sensor",
                 required=required,
-                metavar="SENSOR",
-                help="MODULE:FACTORY, an importable factory returning an object with read() -> "
-                "(t, wrench) (ftkin robot sim prints its simulated sensor's)",
+                metavar="NAME|MODULE:FACTORY",
+                help="a built-in sensor (ati: ATI Net F/T, bota: Bota Systems; see "
+                "docs/ati-netft.md and docs/bota.md), or an importable factory returning an "
+                "object with read() -> (t, wrench) (ftkin robot sim prints its simulated "
+                "sensor's)",
             ),
             option(
                 "--sensor-option",
                 action="append",
                 default=[],
                 metavar="KEY=VALUE",
-                help="keyword argument (a string) for the sensor factory; repeatable",
+                help="an option of the built-in sensor (e.g. host=192.168.1.1, config=bota.json; "
+                "an unknown one is refused naming the known ones), or a keyword argument (a "
+                "string) for the factory; repeatable",
             ),
         )
     add_arm_arguments(parser)
@@ -267,7 +271,7 @@ def _robot(args):
 
 
 def _sensor(args):
-    from ..robot.sensor_factory import load_sensor_factory
+    from ..sensors.registry import open_sensor
 
     options = {}
     for item in args.sensor_option:
@@ -275,7 +279,25 @@ def _sensor(args):
         if not equals or not key.isidentifier():
             raise InvalidInput(f"--sensor-option takes KEY=VALUE, got {item!r}")
         options[key] = value
-    return load_sensor_factory(args.sensor, **options)
+    sensor = open_sensor(args.sensor, options)
+    if callable(getattr(sensor, "close", None)):  # a built-in adapter: closed by _closes_sensor
+        vars(args).setdefault("opened_sensors", []).append(sensor)
+    return sensor
+
+
+def _closes_sensor(run):
+    """``run(args)``, then close the sensors ``_sensor`` opened for it (a built-in adapter
+    releases its vendor's client: a Bota driver is deactivated and shut down)."""
+
+    def command(args) -> int:
+        try:
+            return run(args)
+        finally:
+            for sensor in vars(args).pop("opened_sensors", []):
+                sensor.close()
+
+    command.__doc__ = run.__doc__
+    return command
 
 
 def _body(values):
@@ -316,6 +338,7 @@ def _resume_advice(args, error: SessionInterrupted) -> str:
 
 
 # ------------------------------------------------------------------------------------ commands
+@_closes_sensor
 def run_calibrate(args) -> int:
     from ..robot.session import (
         calibrate_on_robot,
@@ -438,6 +461,7 @@ def run_payload(args) -> int:
     return 0
 
 
+@_closes_sensor
 def run_guide(args) -> int:
     from ..io.calibration_file import load_calibration
     from ..robot.guiding import GUIDING_FORCE_GAIN, hand_guiding

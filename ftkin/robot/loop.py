@@ -9,7 +9,10 @@
 It stops the robot, in the tick the fault shows, and returns (never raises for these) on:
 
 * a sensor fault: ``read()`` raising, a value that is not finite (``"read_failed"``,
-  ``"not_finite"``), or a stamp that does not advance for ``stale_after`` (``"stale"``);
+  ``"not_finite"``), or a stamp that does not advance for ``stale_after`` (``"stale"``); a
+  sensor that raises :class:`~ftkin.exceptions.SensorError` itself (the adapters of
+  :mod:`ftkin.sensors`) stops the loop with its own kind (``"status"``, ``"stall"``,
+  ``"silence"``, ``"driver"``, ...);
 * a robot error (``"robot"``) or a lost connection (``"connection"``);
 * the controller's safety stop (contact beyond its limits, ``"safety"``) or an oscillating loop
   (``"oscillation"``): both latch in the controller;
@@ -117,7 +120,8 @@ def run_admittance(
         duration: Run time [s]; None runs until stopped.
         rate_hz: Loop rate [Hz].
         stale_after: The sensor's stamp not advancing this long is a fault [s] (default: 10
-            periods, at least 20 ms).
+            periods, at least 20 ms, and twice the sensor's own ``silence_after`` when it has
+            one, so that an adapter of :mod:`ftkin.sensors` names a silence or a stall itself).
         on_tick: Called after each command with ``(time.monotonic(), q, dq_cmd)`` (logging,
             tests, an end condition); it must be fast. Returning True ends the loop as its
             duration would.
@@ -127,7 +131,12 @@ def run_admittance(
     """
     rate_hz = _check_loop_inputs(rate_hz, duration, controller)
     period = 1.0 / rate_hz
-    stale_after = max(10.0 * period, 0.02) if stale_after is None else float(stale_after)
+    if stale_after is None:  # a sensor that watches its own silence (ftkin.sensors) speaks first
+        own_limit = getattr(sensor, "silence_after", None)
+        numeric = isinstance(own_limit, (int, float)) and not isinstance(own_limit, bool)
+        own_limit = float(own_limit) if numeric else 0.0
+        stale_after = max(10.0 * period, 0.02, 2.0 * own_limit)
+    stale_after = float(stale_after)
     checked = CheckedSensor(sensor, stale_after)
     faults: dict[str, int] = {}
     stamps: list[float] = []

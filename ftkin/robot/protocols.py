@@ -2,8 +2,9 @@
 
 Any object with these methods works (structural typing, :class:`typing.Protocol`): ftkin ships
 :class:`~ftkin.robot.franka.FrankaRobot` (franky-control) and a simulated FR3
-(:mod:`ftkin.robot.franka_sim`); docs/robot.md shows sensor wrappers for a Bota driver, an ATI
-Net F/T and UR's built-in sensor, and docs/other-robots.md a UR recipe.
+(:mod:`ftkin.robot.franka_sim`); :mod:`ftkin.sensors` ships sensors (an ATI Net F/T, a Bota
+Systems sensor), docs/robot.md a wrapper for UR's built-in sensor, and docs/other-robots.md a UR
+recipe.
 """
 
 from __future__ import annotations

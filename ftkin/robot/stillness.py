@@ -11,7 +11,9 @@ only when, at once,
 
 and a recording in which a joint moves again is thrown away and restarted. :class:`CheckedSensor`
 turns a sensor's failures into :class:`~ftkin.exceptions.SensorError`: a read that raises, a
-value that is not finite, a stamp that does not advance for :attr:`Stillness.stale_after`.
+value that is not finite, a stamp that does not advance for :attr:`Stillness.stale_after`; a
+sensor that raises a ``SensorError`` itself (the adapters of :mod:`ftkin.sensors`) keeps its
+``kind`` (``"status"``, ``"stall"``, ``"silence"``, ...).
 """
 
 from __future__ import annotations
@@ -150,6 +152,8 @@ class CheckedSensor:
             stamp, values = self.sensor.read()
             stamp = float(stamp)
             wrench = np.asarray(values, dtype=float).reshape(6)
+        except SensorError:  # a sensor that names its own fault (ftkin.sensors): keep its kind
+            raise
         except Exception as error:  # a vendor driver may raise anything: a sensor fault
             raise SensorError(
                 "read_failed", f"the sensor's read failed: {type(error).__name__}: {error}"
