@@ -500,11 +500,9 @@ def run_guide(args) -> int:
 def run_sim(args) -> int:
     from ..robot.franka_sim import FrankaSim, SimTool
 
-    tool = SimTool(mass=args.tool_mass)
-    print(
-        "starting franky-sim (FR3, wrist sensor between flange and hand, "
-        f"a {args.tool_mass:g} kg tool)"
-    )
+    mass = resolved(args.tool_mass, 1.2)
+    tool = SimTool(mass=mass)
+    print(f"starting franky-sim (FR3, wrist sensor between flange and hand, a {mass:g} kg tool)")
     with FrankaSim(tool) as sim:
         truth = sim.truth
         com = ", ".join(f"{v:+.4f}" for v in truth.center_of_mass)
