@@ -25,8 +25,8 @@ from __future__ import annotations
 import contextlib
 import json
 import math
-import os
 import mmap
+import os
 import subprocess
 import sys
 import tempfile
