@@ -20,7 +20,6 @@ import numpy as np
 
 from ..exceptions import InvalidInput, SuspectConvention, UnobservableParameters
 from ..kinematics.rotations import gravity_in_base_from_tilt
-from ..validation import as_positive
 from .conventions import check_conventions, detect_sign_and_handedness
 from .dynamic_fit import (
     ALL_INDICES,
@@ -43,7 +42,7 @@ from .log_cholesky import (
     nearest_consistent,
     parameters_from_log_cholesky,
 )
-from .model import STANDARD_GRAVITY
+from .model import STANDARD_GRAVITY, check_gravity
 from .regressor import MotionSamples
 from .samples import Samples
 
@@ -212,7 +211,7 @@ def calibrate_dynamic(
     if isinstance(motion, ImuSamples):  # no joints: the IMU's own fit
         from .imu_dynamic import calibrate_imu_dynamic
 
-        if not estimate_inertia or as_positive(g, "g") != motion.g:
+        if not estimate_inertia or check_gravity(g) != motion.g:
             raise InvalidInput(
                 "a dynamic calibration from the IMU always estimates the inertia, with the g of "
                 f"its samples ({motion.g:g} m/s²: Samples.from_imu(..., g=...))"
@@ -221,7 +220,7 @@ def calibrate_dynamic(
     if imu:
         raise InvalidInput(f"unknown calibrate_dynamic option(s) {', '.join(sorted(imu))}")
     motion = _checked_motion(motion, noise)
-    g = as_positive(g, "g")
+    g = check_gravity(g)
     problem = DynamicProblem(
         motion.wrenches,
         motion.rotations,

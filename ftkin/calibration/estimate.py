@@ -11,18 +11,17 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from ..exceptions import InvalidInput, InvalidSamples
-from ..validation import as_float_array, as_positive
+from ..validation import as_float_array
 from .conventions import check_conventions, detect_sign_and_handedness, reading_signs
 from .diagnostics import FitDiagnostics
-from .drift import BiasDrift, drift_candidates
-from .drift_fit import DriftStart, select_drift
+from .drift import BiasDrift, check_drift_spec, drift_candidates
 from .fit_quality import diagnose, log_warnings
 from .imu_samples import ImuSamples
 from .information import SensorNoise, noise_floor
 from .linear import fit_linear
 from .ml import LOSSES, fit_ml
-from .model import STANDARD_GRAVITY, SensorModel
-from .mount import MOUNT_NAMES, POSES_NEEDED, check_mount_mode
+from .model import STANDARD_GRAVITY, SensorModel, check_gravity
+from .mount import MOUNT_NAMES, POSES_NEEDED, MountMode
 from .result import CalibrationResult
 from .samples import PoseAverages, Samples, check_one_visit_per_pose
 
@@ -78,7 +77,7 @@ class CalibrationOptions:
     noise: SensorNoise | None = None
     loss: str = "linear"
     drop_outliers: bool = False
-    estimate_mount: str = "none"
+    estimate_mount: MountMode | str = MountMode.NONE
     sensor_sign: int = 1
     flip_axis: str | None = None
     base_mount: str = "floor"
@@ -87,7 +86,7 @@ class CalibrationOptions:
     resolution: object = None
 
     def __post_init__(self):
-        object.__setattr__(self, "g", as_positive(self.g, "g"))
+        object.__setattr__(self, "g", check_gravity(self.g))
         if self.resolution is not None:
             resolution = as_float_array(self.resolution, "resolution").reshape(-1)
             if resolution.shape != (2,) or not np.all(np.isfinite(resolution) & (resolution > 0)):
@@ -96,9 +95,11 @@ class CalibrationOptions:
                     f"{self.resolution}"
                 )
             object.__setattr__(self, "resolution", resolution)
-        drift_candidates(self.drift)  # an unknown model or a bad argument is refused here
+        check_drift_spec(self.drift)  # refused here; "auto" and "none" build no model
         ml_only = self.noise is not None or self.loss != "linear" or self.drop_outliers
-        drifting, mount = self.drift not in ("auto", "none"), check_mount_mode(self.estimate_mount)
+        mount = MountMode.of(self.estimate_mount)  # the one check of the mode
+        object.__setattr__(self, "estimate_mount", mount)
+        drifting = self.drift not in ("auto", "none")
         for refused, message in (
             (
                 self.method not in METHODS,
@@ -322,6 +323,8 @@ def _fit_drift(static: _Static, fit, models: tuple, floor, noise_free: bool, opt
     """The constant-bias fit ``static`` (by ``fit``) with the best of the drift ``models`` (or
     kept).
     """
+    from .drift_fit import DriftStart, select_drift  # only a calibration that fits a drift
+
     poses = static.poses
     start = DriftStart(
         fit.model.to_vector(),

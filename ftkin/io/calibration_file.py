@@ -65,7 +65,7 @@ from ..calibration.drift import BiasDrift, parse_drift
 from ..calibration.dynamic import DynamicCalibrationResult
 from ..calibration.estimate import CalibrationResult
 from ..calibration.log_cholesky import is_physically_consistent, parameters_from_body
-from ..calibration.model import GRAVITY_RANGE
+from ..calibration.model import check_gravity
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from ..kinematics.record import KinematicsRecord
 from ..validation import MAX_WRENCH
@@ -490,12 +490,10 @@ def _check_plausible(reader, result) -> None:
                 f"{np.asarray(value).tolist()} is beyond ±{MAX_WRENCH:g} (N or N·m): not a load",
                 key,
             )
-    if not GRAVITY_RANGE[0] <= result.g <= GRAVITY_RANGE[1]:
-        reader.fail(
-            f"g = {result.g:g} m/s² is outside {GRAVITY_RANGE[0]:g}..{GRAVITY_RANGE[1]:g} (Earth: "
-            "9.80665)",
-            "g",
-        )
+    try:
+        check_gravity(result.g)
+    except InvalidInput as error:
+        reader.fail(f"{error} (Earth: 9.80665)", "g")
 
 
 def load_calibration(path) -> CalibrationResult:

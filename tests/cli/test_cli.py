@@ -205,4 +205,4 @@ def test_usage_errors_exit_2(capsys):
     assert main([]) == 2
     assert "calibrate" in capsys.readouterr().out
     assert main(["calibrate", "x.csv", "--g", "-1"]) == 2  # argparse's exit becomes the return code
-    assert "expected a finite positive number" in capsys.readouterr().err
+    assert "must be a finite positive number" in capsys.readouterr().err
