@@ -11,8 +11,9 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from ..exceptions import InvalidInput, InvalidSamples
+from ..options import checked, number, option
 from ..validation import as_float_array
-from .conventions import check_conventions, detect_sign_and_handedness, reading_signs
+from .conventions import BASE_MOUNTS, check_conventions, detect_sign_and_handedness, reading_signs
 from .diagnostics import FitDiagnostics
 from .drift import BiasDrift, check_drift_spec, drift_candidates
 from .fit_quality import diagnose, log_warnings
@@ -72,18 +73,82 @@ class CalibrationOptions:
             ``resolution / √12``, so a drift model cannot take all of it.
     """
 
-    method: str = "ml"
-    g: float = STANDARD_GRAVITY
-    noise: SensorNoise | None = None
-    loss: str = "linear"
-    drop_outliers: bool = False
-    estimate_mount: MountMode | str = MountMode.NONE
-    sensor_sign: int = 1
-    flip_axis: str | None = None
-    base_mount: str = "floor"
-    expected_gravity: object = None
-    drift: str = "auto"
-    resolution: object = None
+    method: str = option(
+        "ml",
+        "estimator: ml (joint maximum likelihood, with standard errors) or linear (the paper's "
+        "two-step least squares) (default: ml; ftkin paper: linear, the paper's)",
+        choices=METHODS,
+        cli_default=None,
+    )
+    g: float = option(
+        STANDARD_GRAVITY,
+        "gravity for the tool mass, 1 to 30 (the paper used 9.8, franky-sim and MuJoCo's "
+        "scenes 9.81)",
+        unit="m/s²",
+        parse=checked(lambda text: check_gravity(float(text)), "a number of m/s²"),
+    )
+    noise: SensorNoise | None = option(
+        None, "the noise of one reading (CLI: --noise-force and --noise-torque)", cli=False
+    )
+    loss: str = option(
+        "linear", "loss function; soft_l1 and huber resist outlier poses", choices=LOSSES
+    )
+    drop_outliers: bool = option(
+        False, "refit without the poses flagged as outliers", action="store_true"
+    )
+    estimate_mount: MountMode | str = option(
+        MountMode.NONE,
+        "the sensor's rotation on the flange is estimated too: yaw (about its z axis) or full "
+        "(any rotation); calibrate needs joint-angle samples, plan and evaluate-poses plan and "
+        "predict for it",
+        choices=("yaw", "full"),
+        metavar="yaw|full",
+        cli_default=None,
+    )
+    sensor_sign: int = option(
+        1,
+        "-1: the sensor reports the reaction, not the load on it (calibrate negates every "
+        "reading, simulate writes such readings)",
+        parse=int,
+        choices=(1, -1),
+    )
+    flip_axis: str | None = option(
+        None,
+        "negate this axis's force and torque channels in every reading (a mirrored, left-handed "
+        "sensor axis)",
+        choices=("x", "y", "z"),
+    )
+    base_mount: str = option(
+        "floor",
+        "how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall (no "
+        "check); a fitted weight more than 90° off the expected direction is refused as a "
+        "suspect sign",
+        choices=BASE_MOUNTS,
+    )
+    expected_gravity: object = option(
+        None,
+        "expected gravity direction in the base frame (overrides --base-mount)",
+        parse=number(),
+        nargs=3,
+        metavar=("GX", "GY", "GZ"),
+    )
+    drift: str = option(
+        "auto",
+        "bias drift over time, with a 't' column: auto (the model BIC prefers, said), none, "
+        "poly:N (a polynomial of degree N), random-walk (estimates the rate), random-walk+poly:N, "
+        "or a model registered with register_drift_model",
+        parse=checked(check_drift_spec, "a drift model"),
+        metavar="MODEL",
+    )
+    resolution: object = option(
+        None,
+        "resolution (quantization step) of one force and one torque reading: an estimated noise "
+        "is at least resolution/√12, so a drift model cannot take all of it",
+        unit="N, N·m",
+        parse=number(0.0, above=True),
+        nargs=2,
+        metavar=("N", "N·m"),
+    )
 
     def __post_init__(self):
         object.__setattr__(self, "g", check_gravity(self.g))

@@ -1,22 +1,16 @@
 """``ftkin calibrate SAMPLES.csv [-o CALIB.json]`` (``--dynamic`` for a moving recording)."""
 
-import argparse
 from dataclasses import replace
 from pathlib import Path
 
 from .. import Arm, CalibrationOptions, InvalidInput, SensorNoise, calibrate, save_calibration
-from ..calibration.conventions import BASE_MOUNTS
-from ..calibration.drift import drift_candidates, drift_choices
-from ..calibration.ml import LOSSES
 from ..kinematics import bundled_urdf_path
 from ..kinematics.record import KinematicsRecord
 from .arg_types import (
     add_command,
     add_options,
     bounded_int,
-    finite_float,
     option,
-    positive_float,
     refuse,
 )
 from .common import (
@@ -26,6 +20,7 @@ from .common import (
     column_spelling_from_args,
     load_samples_from_args,
 )
+from .declared import add_declared, declared_values
 from .doctor import refuse_convention_mistakes
 from .shared_options import (
     ESTIMATE_MOUNT,
@@ -37,84 +32,18 @@ from .shared_options import (
     resolved,
 )
 
-
-def drift_spec(text: str) -> str:
-    """argparse type: a drift spec the registry knows (``auto``, ``none``, ``poly:2``, ...)."""
-    try:
-        drift_candidates(text)
-    except InvalidInput as error:
-        raise argparse.ArgumentTypeError(str(error)) from None
-    return text
-
-
-# The ml estimator's options.
-_ML_OPTIONS = (
-    NOISE_FORCE,
-    NOISE_TORQUE,
-    option(
-        "--resolution",
-        type=positive_float,
-        nargs=2,
-        metavar=("N", "N·m"),
-        help="resolution (quantization step) of one force and one torque reading: an estimated "
-        "noise is at least resolution/√12, so a drift model cannot take all of it",
-    ),
-    option(
-        "--loss",
-        choices=LOSSES,
-        default="linear",
-        help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
-    ),
-    option(
-        "--drop-outliers",
-        action="store_true",
-        help="refit without the poses flagged as outliers",
-    ),
-    option(
-        "--drift",
-        type=drift_spec,
-        default="auto",
-        metavar="MODEL",
-        help=f"bias drift over time, with a 't' column: {'|'.join(drift_choices())} (poly:N a "
-        "polynomial of degree N; random-walk estimates the rate; auto picks by BIC and says "
-        "which; default: %(default)s)",
-    ),
-    option(
-        "--cross-validate",
-        type=bounded_int(2, 50, "folds"),
-        metavar="K",
-        default=None,
-        help="also print the K-fold cross-validated compensation error at held-out poses, with "
-        "drift none beside the --drift model (does modelling a drift pay on this sensor?)",
-    ),
-    ESTIMATE_MOUNT,
+CROSS_VALIDATE = option(
+    "--cross-validate",
+    type=bounded_int(2, 50, "folds"),
+    metavar="K",
+    default=None,
+    help="also print the K-fold cross-validated compensation error at held-out poses, with "
+    "drift none beside the --drift model (does modelling a drift pay on this sensor?)",
 )
-
-# Sensor and robot conventions, stored in the calibration file.
-_CONVENTION_OPTIONS = (
-    SENSOR_SIGN,
-    option(
-        "--flip-axis",
-        choices=("x", "y", "z"),
-        help="negate this axis's force and torque channels in every reading (a mirrored, "
-        "left-handed sensor axis)",
-    ),
-    option(
-        "--base-mount",
-        choices=BASE_MOUNTS,
-        default="floor",
-        help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall "
-        "(no check); a fitted weight more than 90° off the expected direction is refused as a "
-        "suspect sign (default: %(default)s)",
-    ),
-    option(
-        "--expected-gravity",
-        type=finite_float,
-        nargs=3,
-        metavar=("GX", "GY", "GZ"),
-        help="expected gravity direction in the base frame (overrides --base-mount)",
-    ),
-)
+ML_FIELDS = ("resolution", "loss", "drop_outliers", "drift")
+"""The ml estimator's options, declared on :class:`~ftkin.calibration.CalibrationOptions`."""
+CONVENTION_FIELDS = ("flip_axis", "base_mount", "expected_gravity")
+"""The sensor and robot conventions stored in the file (with ``sensor_sign``), declared there."""
 
 
 def register(subparsers) -> None:
@@ -135,14 +64,15 @@ def register(subparsers) -> None:
         ),
         run=run,
     )
-    add_options(
-        parser.add_argument_group("ml estimator"),
-        *_ML_OPTIONS,
+    ml = parser.add_argument_group("ml estimator")
+    add_options(ml, NOISE_FORCE, NOISE_TORQUE)
+    add_declared(ml, CalibrationOptions, only=ML_FIELDS)
+    add_options(ml, CROSS_VALIDATE, ESTIMATE_MOUNT)
+    conventions = parser.add_argument_group(
+        "sensor and robot conventions (stored in the calibration file)"
     )
-    add_options(
-        parser.add_argument_group("sensor and robot conventions (stored in the calibration file)"),
-        *_CONVENTION_OPTIONS,
-    )
+    add_options(conventions, SENSOR_SIGN)
+    add_declared(conventions, CalibrationOptions, only=CONVENTION_FIELDS)
     add_options(
         parser.add_argument_group(
             "dynamic calibration (a moving recording: columns t, joints, fx..mz, or a bag)"
@@ -221,19 +151,12 @@ def _options(args, noise) -> CalibrationOptions:
             "--no-inertia and --sg-window apply to --dynamic only",
         ),
     )  # the combinations of the fit's options are CalibrationOptions' to check, once
+    given = declared_values(CalibrationOptions, args, skip=("method", "estimate_mount"))
     return CalibrationOptions(
+        **given,
         method=resolved(args.method, "ml"),
-        g=args.g,
-        noise=noise,
-        loss=args.loss,
-        drop_outliers=args.drop_outliers,
         estimate_mount=args.estimate_mount or "none",
-        sensor_sign=args.sensor_sign,
-        flip_axis=args.flip_axis,
-        base_mount=args.base_mount,
-        expected_gravity=args.expected_gravity,
-        drift=args.drift,
-        resolution=args.resolution,
+        noise=noise,
     )
 
 

@@ -11,12 +11,10 @@ in :mod:`ftkin.cli.pose_options`; options of a library type come from its declar
 import argparse
 import logging
 
-from ..calibration.estimate import METHODS
-from ..calibration.model import STANDARD_GRAVITY
+from ..calibration.estimate import CalibrationOptions
 from ..io.payload_export import END_EFFECTOR, SENSOR_BODY
 from ..planning.evaluation import PAPER_CENTER_OF_MASS
 from .arg_types import (
-    gravity,
     number_list,
     option,
     positive_float,
@@ -24,6 +22,7 @@ from .arg_types import (
     seed,
     whole_number,
 )
+from .declared import declared_option
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -70,20 +69,8 @@ SEED = option(
     help="seed of the random draws (poses, the planner's search, simulated noise): the same seed "
     "gives the same result (default: %(default)s)",
 )
-GRAVITY = option(
-    "--g",
-    type=gravity,
-    default=STANDARD_GRAVITY,
-    help="gravity for the tool mass, 1 to 30 [m/s²] (default: %(default)s; the paper used 9.8, "
-    "franky-sim and MuJoCo's scenes 9.81)",
-)
-METHOD = option(
-    "--method",
-    choices=METHODS,
-    default=None,
-    help="estimator: ml (joint maximum likelihood, with standard errors) or linear (the paper's "
-    "two-step least squares) (default: ml; ftkin paper: linear, the paper's)",
-)
+GRAVITY = declared_option(CalibrationOptions, "g")
+METHOD = declared_option(CalibrationOptions, "method")
 NOISE_FORCE = option(
     "--noise-force",
     type=positive_float,
@@ -116,23 +103,8 @@ TOOL_MASS = option(
     metavar="KG",
     help="mass of the simulated tool [kg] (default: the paper's 0.3217 kg; robot sim: 1.2 kg)",
 )
-ESTIMATE_MOUNT = option(
-    "--estimate-mount",
-    choices=("yaw", "full"),
-    default=None,
-    metavar="yaw|full",
-    help="the sensor's rotation on the flange is estimated too: yaw (about its z axis) or full "
-    "(any rotation); calibrate needs joint-angle samples, plan and evaluate-poses plan and "
-    "predict for it",
-)
-SENSOR_SIGN = option(
-    "--sensor-sign",
-    type=int,
-    choices=(1, -1),
-    default=1,
-    help="-1: the sensor reports the reaction, not the load on it (calibrate negates every "
-    "reading, simulate writes such readings) (default: %(default)s)",
-)
+ESTIMATE_MOUNT = declared_option(CalibrationOptions, "estimate_mount")
+SENSOR_SIGN = declared_option(CalibrationOptions, "sensor_sign")
 DURATION = option(
     "--duration",
     type=positive_float,
