@@ -62,11 +62,13 @@ def check_outputs(args: argparse.Namespace) -> None:
     from ..io.atomic import check_output_path
     from .arg_types import refuse
 
-    inputs = {
-        name: getattr(args, name)
-        for name in INPUT_OPTIONS
-        if isinstance(getattr(args, name, None), str)
-    }
+    inputs = {}
+    for name in INPUT_OPTIONS:
+        value = getattr(args, name, None)
+        values = value if isinstance(value, list) else [value]
+        for index, one in enumerate(values):  # FILE [FILE ...] positionals are lists
+            if isinstance(one, str):
+                inputs[name if len(values) == 1 else f"{name} #{index + 1}"] = one
     refuse(
         InvalidInput,
         *(

@@ -57,7 +57,7 @@ def _number(text: str, accept, expected: str) -> float:
     return value
 
 
-NUMBER_LIST_OPTIONS = ("--sensor-offset", "--mount-rpy-deg", "--com")
+NUMBER_LIST_OPTIONS = ("--sensor-offset", "--mount-rpy-deg", "--com", "--imu-position")
 """Options that take several numbers; their values end at the first token that is not a number."""
 
 

@@ -18,13 +18,17 @@ from .common import (
     add_samples_arguments,
     arm_from_args,
     column_spelling_from_args,
+    input_paths,
     load_samples_from_args,
+    segment_parameters_from_args,
+    stream_reading_from_args,
 )
 from .declared import add_declared, declared_values
 from .doctor import refuse_convention_mistakes
 from .shared_options import (
     ESTIMATE_MOUNT,
     GRAVITY,
+    IMU_POSITION,
     METHOD,
     NOISE_FORCE,
     NOISE_TORQUE,
@@ -57,7 +61,14 @@ def register(subparsers) -> None:
         "(their spread then gives the noise levels of the ml fit); optional 't' column [s] (bags: "
         "the stamps) lets the bias drift with time (--drift).",
         options=(
-            option("samples", metavar="SAMPLES.csv"),
+            option(
+                "samples",
+                nargs="+",
+                metavar="SAMPLES.csv",
+                help="a samples CSV or a ROS 2 bag; or several CSVs on their own clocks (a wrench "
+                "log, an IMU log, a joint or orientation log, any order), joined on their time "
+                "column",
+            ),
             option("-o", "--output", metavar="CALIB.json", help="write the calibration file here"),
             METHOD,
             GRAVITY,
@@ -88,6 +99,13 @@ def register(subparsers) -> None:
             help="with --dynamic: fit the static parameters only",
         ),
         SG_WINDOW,
+        option(
+            "--prior",
+            metavar="CALIB.json",
+            help="with --dynamic from the IMU: a static IMU calibration of the same IMU (its "
+            "accelerometer bias and scale; a motion cannot separate them from the bias)",
+        ),
+        IMU_POSITION,
     )
     parser.add_argument(
         "--no-convention-check",
@@ -127,12 +145,18 @@ def _run_dynamic(args, noise) -> int:
     from ..io.bags import is_bag_path
 
     arm = arm_from_args(args) or Arm.default()
-    if is_bag_path(args.samples):
+    paths = input_paths(args.samples)
+    if len(paths) > 1:
+        raise InvalidInput(
+            "--dynamic with joint angles reads one recording (t, joints, fx..mz); several files "
+            "are joined for the static fit and the IMU's"
+        )
+    if is_bag_path(paths[0]):
         recording = load_motion_bag(
-            args.samples, arm, args.joint_topic, args.wrench_topic, args.wrench_frame
+            paths[0], arm, args.joint_topic, args.wrench_topic, args.wrench_frame
         )
     else:
-        recording = load_motion_csv(args.samples, arm, column_spelling_from_args(args))
+        recording = load_motion_csv(paths[0], arm, column_spelling_from_args(args))
     result = calibrate_dynamic(
         recording.motion_samples(arm, args.sg_window),
         estimate_inertia=not args.no_inertia,
@@ -162,6 +186,14 @@ def _options(args, noise) -> CalibrationOptions:
 
 def run(args) -> int:
     noise = _noise(args)
+    paths = input_paths(args.samples)
+    if _from_imu(args, paths):
+        return _run_imu(args, noise, paths)
+    if args.prior or args.imu_position is not None:
+        raise InvalidInput(
+            "--prior and --imu-position apply to a calibration from the IMU (accelerometer columns "
+            "ax,ay,az and no orientation)"
+        )
     if args.dynamic:
         return _run_dynamic(args, noise)
     options = _options(args, noise)
@@ -199,6 +231,67 @@ def run(args) -> int:
     if validation is not None:
         print(validation.report())
     return 0
+
+
+def _from_imu(args, paths) -> bool:
+    """Whether the inputs are a calibration from the IMU (CSVs, an accelerometer, no
+    orientation)."""
+    from ..io.bags import is_bag_path
+    from ..io.joined_files import imu_only
+
+    if any(is_bag_path(path) for path in paths):
+        return False
+    arm = arm_from_args(args) or Arm.default()
+    return imu_only(paths, column_spelling_from_args(args), arm.joint_names)
+
+
+def _run_imu(args, noise, paths) -> int:
+    """The calibration from the sensor's IMU: static poses, or (``--dynamic``) a motion."""
+    from ..io.calibration_file import load_calibration
+    from ..io.imu_columns import load_imu_samples
+
+    reading = stream_reading_from_args(args)
+    refuse(
+        InvalidInput,
+        (
+            args.estimate_mount or args.method == "linear" or args.cross_validate,
+            "--estimate-mount, --method linear and --cross-validate apply to a calibration from "
+            "joint angles or orientations; the IMU's fit estimates the IMU's rotation itself",
+        ),
+        (
+            args.prior is not None and not args.dynamic,
+            "--prior (a static IMU calibration) applies to --dynamic",
+        ),
+    )
+    samples, joined = load_imu_samples(
+        *paths,
+        accel_unit=reading.accel_unit,
+        g=args.g,
+        max_gap=reading.max_gap,
+        gaps=reading.gaps,
+        spelling=column_spelling_from_args(args),
+        segments=None if args.dynamic else segment_parameters_from_args(args),
+    )
+    print(
+        f"{' + '.join(paths)}: {len(samples)} readings from the sensor's IMU (no orientation: the "
+        "accelerometer gives gravity)"
+    )
+    for note in joined.notes:
+        print(f"  {note}")
+    if args.dynamic:
+        from .. import calibrate_dynamic
+
+        prior = None if args.prior is None else load_calibration(args.prior)
+        result = calibrate_dynamic(
+            samples,
+            prior=prior,
+            imu_position=args.imu_position,
+            noise=noise,
+            window=args.sg_window,
+        )
+    else:
+        result = calibrate(samples, wrench_noise=noise, imu_position=args.imu_position)
+    return _report(result, args)
 
 
 def _report(result, args) -> int:

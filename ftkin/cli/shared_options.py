@@ -105,6 +105,15 @@ TOOL_MASS = option(
 )
 ESTIMATE_MOUNT = declared_option(CalibrationOptions, "estimate_mount")
 SENSOR_SIGN = declared_option(CalibrationOptions, "sensor_sign")
+IMU_POSITION = option(
+    "--imu-position",
+    type=number_list,
+    default=None,
+    metavar="X Y Z",
+    help="the IMU's position in the sensor frame [m] (a datasheet value): its accelerometer "
+    "reads the lever-arm terms of a turning tool (default: calibrate --dynamic estimates it, a "
+    "static IMU calibration records none)",
+)
 DURATION = option(
     "--duration",
     type=positive_float,

@@ -10,6 +10,8 @@ everything, or a wrench log, an IMU log and an orientation log at their own rate
 (:func:`~ftkin.io.stream_join.join_streams`).
 """
 
+import logging
+
 import numpy as np
 
 from ..calibration.imu_samples import ImuSamples, accel_unit_factor, check_specific_force_unit
@@ -17,8 +19,11 @@ from ..calibration.model import STANDARD_GRAVITY, WRENCH_CHANNELS
 from ..exceptions import InvalidInput, InvalidSamples
 from .column_spelling import ColumnSpelling, spelled_table
 from .csv_table import read_table
+from .static_segments import SegmentParameters, segment_index
 from .stream_join import ACCEL_COLUMNS, GYRO_COLUMNS, JoinedStreams, Stream, join_streams
 from .time_columns import TIME_ALIASES, TIME_COLUMN, times_from_table
+
+logger = logging.getLogger(__name__)
 
 
 def _numeric(table, name: str) -> bool:
@@ -36,6 +41,7 @@ def read_stream(
     accel_unit: str = "m/s^2",
     g: float = STANDARD_GRAVITY,
     allow_no_time: bool = False,
+    spelling: ColumnSpelling | None = None,
 ) -> Stream:
     """One CSV as a :class:`~ftkin.io.stream_join.Stream`: its time [s] and numeric columns, the
     accelerometer converted to m/s² and checked (its median norm must be about ``g``).
@@ -43,7 +49,8 @@ def read_stream(
     ``allow_no_time``: a table without a time column is read in row order (a single table of
     static poses), its stream's times the row numbers. Columns in other spellings and units in
     the header are read through :func:`~ftkin.io.column_spelling.spelled_table` (``time_unit``
-    is its :attr:`~ftkin.io.column_spelling.ColumnSpelling.time_unit`).
+    is its :attr:`~ftkin.io.column_spelling.ColumnSpelling.time_unit`; ``spelling``, when given,
+    is the whole spelling, its own time unit included).
 
     Raises:
         InvalidSamples: no time column, a cell that is not a number, stamps that do not
@@ -51,7 +58,8 @@ def read_stream(
         InvalidInput: an unknown ``time_unit`` or ``accel_unit``.
     """
     factor = accel_unit_factor(accel_unit, g)
-    table = spelled_table(read_table(path), ColumnSpelling(time_unit=time_unit))
+    spelling = spelling if spelling is not None else ColumnSpelling(time_unit=time_unit)
+    table = spelled_table(read_table(path), spelling)
     times = times_from_table(table)
     if times is None:
         if not allow_no_time:
@@ -98,8 +106,16 @@ def load_imu_samples(
     g: float = STANDARD_GRAVITY,
     max_gap: float | None = None,
     gaps: str = "drop",
+    spelling: ColumnSpelling | None = None,
+    segments: SegmentParameters | None = None,
 ) -> tuple[ImuSamples, JoinedStreams]:
     """Read one or more CSVs (any order) and join them on time into :class:`ImuSamples`.
+
+    ``segments``: for a static calibration, how a timed table without a ``pose`` column is read
+    (:mod:`ftkin.io.table_layout`, on the direction of the specific force, the IMU's own
+    orientation signal): a continuous recording keeps only its still segments, one pose each;
+    readings one or a few per pose get their pose ids. None (a dynamic calibration, a log to
+    compensate) keeps every reading.
 
     Returns the samples and the join (its :attr:`~ftkin.io.stream_join.JoinedStreams.notes` say
     what was dropped or marked).
@@ -108,11 +124,20 @@ def load_imu_samples(
         raise InvalidInput("load_imu_samples needs at least one file")
     single = len(paths) == 1
     streams = [
-        read_stream(p, time_unit=time_unit, accel_unit=accel_unit, g=g, allow_no_time=single)
+        read_stream(
+            p,
+            time_unit=time_unit,
+            accel_unit=accel_unit,
+            g=g,
+            allow_no_time=single,
+            spelling=spelling,
+        )
         for p in paths
     ]
     joined = join_streams(streams, max_gap=max_gap, gaps=gaps)
     samples = imu_samples_from_joined(joined, g)
+    if segments is not None and "pose" not in joined.columns and _has_time(paths[0]) | (not single):
+        samples = _still_poses(samples, segments, str(paths[0]))
     if single and not _has_time(paths[0]):
         samples = ImuSamples(
             samples.specific_force,
@@ -123,6 +148,51 @@ def load_imu_samples(
             samples.g,
         )
     return samples, joined
+
+
+def _still_poses(samples: ImuSamples, segments: SegmentParameters, source: str) -> ImuSamples:
+    """The static poses of timed IMU readings: the layout of the table read from the direction
+    of the specific force (a still sensor keeps it; a turning one moves it)."""
+    from .table_layout import RECORDING, table_layout
+
+    force = samples.specific_force
+    direction = force / np.linalg.norm(force, axis=1, keepdims=True)
+    # an accelerometer is noisy (a joint encoder is not): the direction averaged over the speed
+    # window, so that consecutive readings of a still sensor agree within the pose tolerance
+    step = float(np.median(np.diff(samples.times))) if len(samples) > 1 else 1.0
+    width = max(1, int(round(segments.speed_window / step)) if step > 0 else 1)
+    if width > 1:
+        kernel = np.ones(width) / width
+        padded = np.pad(direction, ((width // 2, width - 1 - width // 2), (0, 0)), mode="edge")
+        direction = np.stack([np.convolve(c, kernel, mode="valid") for c in padded.T], axis=1)
+        # and the stillness threshold above the noise left: 8 × the speed of the stillest fifth
+        from dataclasses import replace
+
+        from .static_segments import joint_speed
+
+        speed = joint_speed(samples.times, direction, segments.speed_window)
+        floor = 8.0 * float(np.percentile(speed, 20))
+        if floor > segments.speed_threshold:
+            segments = replace(segments, speed_threshold=floor)
+    layout = table_layout(
+        samples.times, direction, segments, "specific-force direction speed", source
+    )
+    logger.info("%s: %s", source, layout.describe())
+    if layout.kind != RECORDING:
+        keep, pose_ids = np.arange(len(samples)), layout.pose_ids
+    else:
+        index = segment_index(samples.times, layout.search.segments)
+        keep = np.flatnonzero(index >= 0)
+        pose_ids = index[keep]
+    gyro = samples.angular_velocity
+    return ImuSamples(
+        samples.specific_force[keep],
+        samples.wrenches[keep],
+        pose_ids,
+        None if gyro is None else gyro[keep],
+        samples.times[keep],
+        samples.g,
+    )
 
 
 def _has_time(path) -> bool:

@@ -111,7 +111,9 @@ def test_demo_prints_truth_beside_estimate(capsys):
 def test_demo_writes_a_calibration_file(tmp_path, capsys):
     path = tmp_path / "demo.json"
     assert (
-        main(["demo", "--readings-per-pose", "5", "--n", "6", "--sim-seconds", "0", "-o", str(path)])
+        main(
+            ["demo", "--readings-per-pose", "5", "--n", "6", "--sim-seconds", "0", "-o", str(path)]
+        )
         == 0
     )
     assert load_calibration(path).pose_count == 6
