@@ -46,6 +46,7 @@ INPUT_OPTIONS = (
     "replay",
     "trajectory",
     "urdf",
+    "prior",
 )
 """Namespace attributes that name files a subcommand reads."""
 
