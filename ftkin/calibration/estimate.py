@@ -17,6 +17,7 @@ from .conventions import BASE_MOUNTS, check_conventions, detect_sign_and_handedn
 from .diagnostics import FitDiagnostics
 from .drift import BiasDrift, check_drift_spec, drift_candidates
 from .fit_quality import diagnose, log_warnings
+from .fused_samples import FusedSamples
 from .imu_samples import ImuSamples
 from .information import SensorNoise, noise_floor
 from .linear import fit_linear
@@ -267,7 +268,9 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
             readings sharing a pose id are averaged first. IMU samples
             (:meth:`Samples.from_imu`) are fitted by
             :func:`~ftkin.calibration.imu_fit.calibrate_imu` (options:
-            :class:`~ftkin.calibration.imu_options.ImuCalibrationOptions`).
+            :class:`~ftkin.calibration.imu_options.ImuCalibrationOptions`); samples with both
+            (:meth:`Samples.with_imu`) by :func:`~ftkin.calibration.fused_fit.calibrate_fused`
+            (options: :class:`~ftkin.calibration.fused_options.FusedCalibrationOptions`).
         options: A :class:`CalibrationOptions` (default: all defaults).
         **keywords: Its fields, given directly (``method="linear"``, ``drift="poly:2"``, ...);
             they replace those of ``options``.
@@ -288,6 +291,10 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
         from .imu_fit import calibrate_imu
 
         return calibrate_imu(samples, options, **keywords)
+    if isinstance(samples, FusedSamples):  # an orientation and the IMU: the fused fit
+        from .fused_fit import calibrate_fused
+
+        return calibrate_fused(samples, options, **keywords)
     unknown = set(keywords) - {f.name for f in fields(CalibrationOptions)}
     if unknown:
         raise InvalidInput(f"unknown calibrate option(s) {', '.join(sorted(unknown))}")

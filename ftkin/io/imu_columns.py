@@ -7,20 +7,31 @@ time column ``t`` [s] (``time_unit`` for ms, µs or ns; or one alias naming its 
 :mod:`ftkin.io.time_columns`). Each file's role is read from its columns
 (:func:`~ftkin.io.stream_join.stream_roles`), so the files may come in any order: one table with
 everything, or a wrench log, an IMU log and an orientation log at their own rates
-(:func:`~ftkin.io.stream_join.join_streams`).
+(:func:`~ftkin.io.stream_join.join_streams`). With an orientation ``qw,qx,qy,qz`` (or, given the
+arm, its joint columns) the samples are fused: an orientation and the IMU
+(:class:`~ftkin.calibration.fused_samples.FusedSamples`).
 """
 
 import logging
 
 import numpy as np
 
+from ..calibration.fused_samples import FusedSamples
 from ..calibration.imu_samples import ImuSamples, accel_unit_factor, check_specific_force_unit
 from ..calibration.model import STANDARD_GRAVITY, WRENCH_CHANNELS
+from ..calibration.samples import Samples
 from ..exceptions import InvalidInput, InvalidSamples
 from .column_spelling import ColumnSpelling, spelled_table
 from .csv_table import read_table
 from .static_segments import SegmentParameters, segment_index
-from .stream_join import ACCEL_COLUMNS, GYRO_COLUMNS, JoinedStreams, Stream, join_streams
+from .stream_join import (
+    ACCEL_COLUMNS,
+    GYRO_COLUMNS,
+    ORIENTATION_COLUMNS,
+    JoinedStreams,
+    Stream,
+    join_streams,
+)
 from .time_columns import TIME_ALIASES, TIME_COLUMN, times_from_table
 
 logger = logging.getLogger(__name__)
@@ -99,6 +110,52 @@ def imu_samples_from_joined(joined: JoinedStreams, g: float = STANDARD_GRAVITY) 
     )
 
 
+def fused_samples_from_joined(
+    imu: ImuSamples, joined: JoinedStreams, arm=None, rows=None
+) -> FusedSamples:
+    """:class:`~ftkin.calibration.fused_samples.FusedSamples` of joined streams that also hold an
+    orientation (``qw,qx,qy,qz`` of the sensor in the base, slerped) or, with ``arm``, its joint
+    angles (the arm's joint names or ``q1..qn`` [rad], interpolated linearly).
+
+    ``imu`` holds the join's rows ``rows`` (indices; None: all of them), e.g. the still ones.
+
+    Raises:
+        InvalidSamples: both an orientation and the arm's joints, the arm's joints missing, or
+            joint angles beyond ±2π (degrees).
+    """
+    names = [] if arm is None else _joint_columns(joined, arm)
+    if joined.has("orientation") and names:
+        raise InvalidSamples(
+            f"both an orientation (qw,qx,qy,qz) and joint columns {names}: the orientation is "
+            "ambiguous; drop one (or do not pass the arm)"
+        )
+    rows = slice(None) if rows is None else rows
+    times, pose = imu.times, imu.pose_ids
+    if names:
+        joints = joined.array(names)[rows]
+        if np.any(np.abs(joints) > 2.0 * np.pi + 0.01):
+            raise InvalidSamples(
+                f"joint columns {names} reach {float(np.max(np.abs(joints))):g}, outside ±2π: "
+                "joint angles must be in radians (these look like degrees)"
+            )
+        samples = Samples.from_joint_positions(arm, joints, imu.wrenches, pose, times=times)
+    else:
+        quaternions = joined.array(ORIENTATION_COLUMNS)[rows]
+        samples = Samples.from_quaternions(quaternions, imu.wrenches, pose, times=times)
+    return FusedSamples(samples, imu.specific_force, imu.angular_velocity, imu.g)
+
+
+def _joint_columns(joined: JoinedStreams, arm) -> list[str]:
+    """The arm's joint columns among the joined ones: its joint names, else ``q1..qn``."""
+    for names in (list(arm.joint_names), [f"q{i + 1}" for i in range(arm.nq)]):
+        if all(name in joined.columns for name in names):
+            return names
+    raise InvalidSamples(
+        f"no joint columns for the arm among the files ({', '.join(joined.columns)}): expected "
+        f"{', '.join(arm.joint_names)} or q1..q{arm.nq} [rad]"
+    )
+
+
 def load_imu_samples(
     *paths,
     time_unit: str | None = None,
@@ -108,8 +165,12 @@ def load_imu_samples(
     gaps: str = "drop",
     spelling: ColumnSpelling | None = None,
     segments: SegmentParameters | None = None,
-) -> tuple[ImuSamples, JoinedStreams]:
-    """Read one or more CSVs (any order) and join them on time into :class:`ImuSamples`.
+    arm=None,
+) -> tuple[ImuSamples | FusedSamples, JoinedStreams]:
+    """Read one or more CSVs (any order) and join them on time into :class:`ImuSamples`, or into
+    :class:`~ftkin.calibration.fused_samples.FusedSamples` when the files also give an
+    orientation (``qw,qx,qy,qz``) or, with ``arm``, its joint angles: ``ftkin.calibrate`` then
+    fits both and checks the mount (:mod:`ftkin.calibration.fused_fit`).
 
     ``segments``: for a static calibration, how a timed table without a ``pose`` column is read
     (:mod:`ftkin.io.table_layout`, on the direction of the specific force, the IMU's own
@@ -135,9 +196,10 @@ def load_imu_samples(
         for p in paths
     ]
     joined = join_streams(streams, max_gap=max_gap, gaps=gaps)
-    samples = imu_samples_from_joined(joined, g)
+    samples, rows = imu_samples_from_joined(joined, g), None
     if segments is not None and "pose" not in joined.columns and _has_time(paths[0]) | (not single):
         samples = _still_poses(samples, segments, str(paths[0]))
+        rows = np.searchsorted(joined.times, samples.times)  # the rows kept (stamps increase)
     if single and not _has_time(paths[0]):
         samples = ImuSamples(
             samples.specific_force,
@@ -147,6 +209,8 @@ def load_imu_samples(
             None,
             samples.g,
         )
+    if joined.has("orientation") or arm is not None:
+        return fused_samples_from_joined(samples, joined, arm, rows), joined
     return samples, joined
 
 
