@@ -209,13 +209,15 @@ def check_observable(problem: FusedStaticProblem, x: np.ndarray) -> None:
     relative, involved = weakest_direction(problem, x)
     if relative >= MIN_RELATIVE_SINGULAR_VALUE:
         return
-    both = any(n.startswith("mount") for n in involved) and problem.imu_rotation_free
+    both = any(n.startswith("mount") for n in involved) and any(
+        n.startswith("imu_rotation") for n in involved
+    )
     raise UnobservableParameters(
         involved,
         f"{POSES_NEEDED}"
         + (
-            "; with R_SI estimated, only the wrench tells the mount from the IMU's rotation "
-            "(give imu_rotation= when the IMU's rotation in the sensor is known)"
+            "; the mount trades against the IMU's rotation: with R_SI estimated only the wrench "
+            "tells them apart (give imu_rotation= when the IMU's rotation in the sensor is known)"
             if both
             else ""
         )
