@@ -101,6 +101,20 @@ def _kabsch(force_in_sensor: np.ndarray, accel: np.ndarray, gravity: np.ndarray)
     return left @ np.diag([1.0, 1.0, -1.0 if mirrored else 1.0]) @ right_t
 
 
+def _rotation_angle_deg(first: np.ndarray, second: np.ndarray) -> float:
+    cosine = np.clip((np.trace(first.T @ second) - 1.0) / 2.0, -1.0, 1.0)
+    return float(np.rad2deg(np.arccos(cosine)))
+
+
+def _imu_start(orientation, accel, g: float, mount0, model):
+    """The specific force FK predicts (real sensor frame, ``f_i = −g R_M Rᵢᵀ â``) at the mount
+    ``R_M0`` and linear fit ``model``, and the Kabsch ``R_SI`` of the accelerometer against it."""
+    gravity = model.gravity_in_base
+    up = -g * gravity_in_sensor(orientation.rotations, gravity / np.linalg.norm(gravity))
+    force_in_sensor = up @ mount0.T
+    return force_in_sensor, _kabsch(force_in_sensor, accel, gravity)
+
+
 def fused_start(poses: FusedPoseAverages, g: float, mount_mode: str, imu_rotation=None):
     """The closed-form start: ``(x0 without the scale, R_M0, R_I0)`` (module docstring).
 
@@ -108,35 +122,33 @@ def fused_start(poses: FusedPoseAverages, g: float, mount_mode: str, imu_rotatio
         UnobservableParameters: the FK fit's own refusals (fewer than three poses, orientations
             alike, gravity along one sensor direction).
         SuspectConvention: a mirrored accelerometer or wrench; a given ``R_SI`` far from the
-            one the data imply.
+            one the data imply, with or without a mount.
     """
-    orientation = poses.orientation
+    orientation, accel = poses.orientation, poses.imu.specific_force
     if mount_mode == "none":
         mount0, model = np.eye(3), fit_linear(orientation, g)
     else:
         mount0, model = mount_start(orientation, g)
-    theta = model.to_vector()
-    gravity = theta[0:3]
-    up = -g * gravity_in_sensor(orientation.rotations, gravity / np.linalg.norm(gravity))
-    force_in_sensor = up @ mount0.T  # f_i = −g R_M Rᵢᵀ â, the real sensor frame
-    accel = poses.imu.specific_force
-    estimated = _kabsch(force_in_sensor, accel, gravity)
+    force_in_sensor, estimated = _imu_start(orientation, accel, g, mount0, model)
     rotation = estimated if imu_rotation is None else np.asarray(imu_rotation, dtype=float)
-    if imu_rotation is not None:
-        cosine = np.clip((np.trace(estimated.T @ rotation) - 1.0) / 2.0, -1.0, 1.0)
-        angle = float(np.rad2deg(np.arccos(cosine)))
-        if angle > MAX_GIVEN_ROTATION_ERROR_DEG:
-            rpy = ", ".join(f"{v:+.1f}" for v in np.rad2deg(rotation_to_rpy(estimated)))
-            raise SuspectConvention(
-                f"the given imu_rotation is {angle:.1f}° from the rotation the accelerometer and "
-                f"the orientations imply (rpy [{rpy}]°): is it R_SI (IMU → sensor frame) and not "
-                "its transpose, and this sensor's IMU? Or is the sensor mounted far from what "
-                "the URDF says (estimate_mount='full')?",
-                fixes=["pass R_SI (IMU → sensor), not R_IS", "imu_rotation=None (estimate it)"],
-            )
+    angle = _rotation_angle_deg(estimated, rotation)
+    if angle > MAX_GIVEN_ROTATION_ERROR_DEG and mount_mode == "none":
+        # a sensor mounted far from the URDF's frame moves the IMU too: the check will name it
+        mounted, mounted_model = mount_start(orientation, g)
+        turned = _imu_start(orientation, accel, g, mounted, mounted_model)[1]
+        angle = _rotation_angle_deg(turned, rotation)
+    if angle > MAX_GIVEN_ROTATION_ERROR_DEG:
+        rpy = ", ".join(f"{v:+.1f}" for v in np.rad2deg(rotation_to_rpy(estimated)))
+        raise SuspectConvention(
+            f"the given imu_rotation is {angle:.1f}° from the rotation the accelerometer and the "
+            f"orientations imply (rpy [{rpy}]°), with the sensor mounted as the URDF says or "
+            "turned on the flange: is it R_SI (IMU → sensor frame) and not its transpose, and "
+            "this sensor's IMU?",
+            fixes=["pass R_SI (IMU → sensor), not R_IS", "imu_rotation=None (estimate it)"],
+        )
     bias = np.mean(accel - force_in_sensor @ rotation, axis=0)  # acc = R_SIᵀ f + b
     x0 = np.concatenate(
-        [theta, np.zeros(len(MOUNT_NAMES[mount_mode]))]
+        [model.to_vector(), np.zeros(len(MOUNT_NAMES[mount_mode]))]
         + ([np.zeros(3)] if imu_rotation is None else [])
         + [bias]
     )

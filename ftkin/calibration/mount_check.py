@@ -174,9 +174,12 @@ class MountCheck:
                 f"the source, {source_fix}"
             )
         else:
+            estimate = "calibrate with estimate_mount='full' (--estimate-mount full), or "
             fix = (
-                "calibrate with estimate_mount='full' (--estimate-mount full), or " if urdf else ""
-            ) + f"{source_fix}; until then F0, M0 and the centre of mass absorb it"
+                (estimate if urdf else "")
+                + f"{source_fix}; until then the offsets and the centre of mass absorb it "
+                "(beyond a few degrees the mass and tilt too)"
+            )
         return (
             f"{who}: {seen} the real sensor frame turned {self.angle_deg:.3f}° ± "
             f"{self.angle_std_deg:.3f}° from {frame}, mostly about its {self.axis} axis (R_M rpy "

@@ -66,25 +66,28 @@ def mujoco_poses():
     return {"arm": arm, "q": q[ids], "wrench": wrench, "accel": accel, "ids": ids, "truth": truth}
 
 
-@pytest.fixture(scope="module")
-def wrong_urdf(tmp_path_factory):
-    """The bundled URDF with its sensor frame turned by MOUNT_ERROR_RPY_DEG (the real sensor is
+def turned_arm(folder, error_rpy_deg):
+    """The bundled URDF with its sensor frame turned by ``error_rpy_deg`` (the real sensor is
     where the bundled URDF says), and the mount ``R_M`` (URDF sensor frame → real) it implies."""
     from ftkin.kinematics.arm import bundled_urdf_path
 
     text = bundled_urdf_path().read_text()
     assert text.count(SENSOR_JOINT) == 1
     placement = Rotation.from_euler("xyz", [0.0, 0.0, 1.570796327])
-    error = Rotation.from_euler("xyz", MOUNT_ERROR_RPY_DEG, degrees=True)
+    error = Rotation.from_euler("xyz", error_rpy_deg, degrees=True)
     rpy = (placement * error).as_euler("xyz")  # URDF rpy: R = Rz(y) Ry(p) Rx(r)
-    path = tmp_path_factory.mktemp("urdf") / "ftkin_c4_turned.urdf"
+    path = folder / "ftkin_c4_turned.urdf"
     path.write_text(
-        text.replace(
-            SENSOR_JOINT, '<origin xyz="0 0 0.02" rpy="{:.12f} {:.12f} {:.12f}"/>'.format(*rpy)
-        )
+        text.replace(SENSOR_JOINT, SENSOR_JOINT.replace("0 0 1.570796327", "{} {} {}".format(*rpy)))
     )
     # R_BS_urdf = R_BS_real · E, so R_M = E (R_BS_real = R_BS_urdf · R_Mᵀ)
     return Arm.from_urdf(path, "ft_sensor"), error.as_matrix()
+
+
+@pytest.fixture(scope="module")
+def wrong_urdf(tmp_path_factory):
+    """A URDF whose sensor frame is off by MOUNT_ERROR_RPY_DEG (3.09°)."""
+    return turned_arm(tmp_path_factory.mktemp("urdf"), MOUNT_ERROR_RPY_DEG)
 
 
 def fused(data, arm=None, **imu) -> FusedSamples:
@@ -210,6 +213,21 @@ def test_wrong_urdf_with_the_mount_estimated_gives_the_parameters_back(mujoco_po
         data["wrench"][::50], data["accel"][::50]
     )
     assert np.sqrt(np.mean(imu_contact[:, :3] ** 2)) < 3 * NOISE[0]
+
+
+def test_an_adapter_turned_35_degrees_is_named_not_refused(mujoco_poses, tmp_path):
+    """A mount far beyond the start's 20° check on a given R_SI: still the warning (the sensor
+    turned, not a wrong R_SI), and with the mount estimated the truth comes back."""
+    arm, mount = turned_arm(tmp_path, [2.0, 3.0, 35.0])
+    truth_deg = float(np.rad2deg(np.linalg.norm(Rotation.from_matrix(mount).as_rotvec())))
+    checked = ftkin.calibrate(fused(mujoco_poses, arm), imu_rotation=IMU_ROTATION)
+    assert checked.mount_check.angle_deg == pytest.approx(truth_deg, abs=0.05)
+    assert "not mounted as the URDF says" in checked.warnings[0]
+    mounted = ftkin.calibrate(
+        fused(mujoco_poses, arm), imu_rotation=IMU_ROTATION, estimate_mount="full"
+    )
+    assert rotation_error_deg(mounted.mount_rotation, mount) < 0.1
+    check_truth(mounted, mujoco_poses)
 
 
 def test_the_tolerance_silences_a_small_mount(mujoco_poses, wrong_urdf):
