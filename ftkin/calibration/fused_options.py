@@ -13,7 +13,7 @@ import numpy as np
 from ..exceptions import InvalidInput
 from .conventions import check_flip_axis, check_sensor_sign
 from .imu_options import ImuCalibrationOptions
-from .mount import check_mount_mode
+from .mount import MountMode
 
 MOUNT_TOLERANCE_DEG = 0.2
 """Default smallest mount angle [deg] the check warns about, beside being beyond the noise: a
@@ -36,14 +36,14 @@ class FusedCalibrationOptions:
             ``wrench_noise``, ``accel_noise``, ``imu_position``).
     """
 
-    estimate_mount: str = "none"
+    estimate_mount: MountMode | str = MountMode.NONE
     mount_tolerance_deg: float = MOUNT_TOLERANCE_DEG
     sensor_sign: int = 1
     flip_axis: str | None = None
     imu: ImuCalibrationOptions = field(default_factory=ImuCalibrationOptions)
 
     def __post_init__(self):
-        check_mount_mode(self.estimate_mount)
+        object.__setattr__(self, "estimate_mount", MountMode.of(self.estimate_mount))
         tolerance = self.mount_tolerance_deg
         if not isinstance(tolerance, int | float) or not (0.0 <= tolerance < 90.0):
             raise InvalidInput(
