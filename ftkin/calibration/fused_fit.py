@@ -309,7 +309,8 @@ def calibrate_fused(samples: FusedSamples, options=None, **keywords) -> FusedCal
     Args:
         samples: :class:`~ftkin.calibration.fused_samples.FusedSamples`
             (``Samples.from_joint_positions(...).with_imu(specific_force)``); readings sharing a
-            pose id are averaged first.
+            pose id are averaged first. Static poses: the bias is constant (no drift model) and
+            the gyro, if any, is not used.
         options: A :class:`~ftkin.calibration.fused_options.FusedCalibrationOptions` (an
             ``ImuCalibrationOptions`` or a default-like FK ``CalibrationOptions`` are taken too).
         **keywords: Fields of either (``estimate_mount="full"``, ``imu_rotation=R_SI``, ...).
