@@ -63,7 +63,15 @@ def mujoco_poses():
     accel = (1 + ACCEL_SCALE) * accel[ids] + ACCEL_BIAS + rng.normal(0, ACCEL_NOISE, (len(ids), 3))
     wrench = wrench[ids] + WRENCH_BIAS + rng.normal(0.0, 1.0, (len(ids), 6)) * NOISE
     truth = recorder.true_parameters()  # θ of everything the sensor carries, sensor frame
-    return {"arm": arm, "q": q[ids], "wrench": wrench, "accel": accel, "ids": ids, "truth": truth}
+    return {
+        "arm": arm,
+        "q": q[ids],
+        "wrench": wrench,
+        "accel": accel,
+        "ids": ids,
+        "truth": truth,
+        "recorder": recorder,
+    }
 
 
 def turned_arm(folder, error_rpy_deg):
@@ -500,3 +508,44 @@ def test_load_imu_samples_with_an_orientation_or_joints_gives_fused_samples(mujo
             arm=arm,
             accel_unit="g",
         )
+
+
+def test_a_continuous_recording_keeps_its_still_rows_with_their_joints(mujoco_poses, tmp_path):
+    """One timed table (wrench, accelerometer, joints; no pose column), the arm still 2 s at each
+    of 12 poses and moving 1 s between them: the still segments found from the specific force
+    keep their own joint angles (the rows of the join), and the fused fit runs on them."""
+    from ftkin.control import ImuCompensator
+    from ftkin.io import load_imu_samples
+    from ftkin.io.csv_table import write_csv
+    from ftkin.io.static_segments import SegmentParameters
+
+    data, rate = mujoco_poses, 100.0  # [Hz]
+    arm, recorder = data["arm"], data["recorder"]
+    poses = data["q"][::READINGS]
+    still, moving = int(2.0 * rate), int(1.0 * rate)
+    q = [np.repeat(poses[:1], still, axis=0)]
+    for before, after in zip(poses[:-1], poses[1:]):
+        fraction = np.linspace(0.0, 1.0, moving + 2)[1:-1, None]
+        q += [before + fraction * (after - before), np.repeat(after[None], still, axis=0)]
+    q = np.concatenate(q)
+    wrench, accel, _ = recorder.readings(q)  # quasi-static: the moves are slow
+    rng = np.random.default_rng(11)
+    accel = accel + ACCEL_BIAS + rng.normal(0.0, ACCEL_NOISE, accel.shape)
+    wrench = wrench + WRENCH_BIAS + rng.normal(0.0, 1.0, wrench.shape) * NOISE
+    times = np.arange(len(q)) / rate
+    joints = [f"q{i + 1}" for i in range(arm.nq)]
+    columns = ["t", "fx", "fy", "fz", "mx", "my", "mz", "ax", "ay", "az", *joints]
+    write_csv(tmp_path / "log.csv", columns, np.column_stack([times, wrench, accel, q]))
+    samples, _ = load_imu_samples(tmp_path / "log.csv", segments=SegmentParameters(), arm=arm)
+    assert isinstance(samples, FusedSamples)
+    assert len(np.unique(samples.pose_ids)) == 12 and len(samples) < len(q)
+    rows = np.round(samples.times * rate).astype(int)  # the table's rows the still ones are
+    np.testing.assert_allclose(samples.joint_positions, q[rows], atol=1e-9)
+    np.testing.assert_allclose(samples.specific_force, accel[rows], atol=1e-9)
+    result = ftkin.calibrate(samples)
+    assert result.tool_mass == pytest.approx(1.5, rel=5e-3)
+    assert not result.mount_check.significant
+    compensator = ImuCompensator(result)  # fused samples compensate from their IMU readings
+    np.testing.assert_array_equal(
+        compensator.compensate_recording(samples), compensator.compensate_recording(samples.imu)
+    )
