@@ -211,7 +211,8 @@ def run(args) -> int:
         or args.estimate_mount
     ):
         refuse_convention_mistakes(loaded, arm)
-    result = calibrate(loaded.samples, options)
+    samples = _with_imu(loaded, args)
+    result = calibrate(samples, options)
     urdf = loaded.samples.urdf
     if urdf and (arm or Path(urdf).resolve() == bundled_urdf_path().resolve()):
         # the arm the joint columns were read with (the bundled one when no option named one)
@@ -231,6 +232,25 @@ def run(args) -> int:
     if validation is not None:
         print(validation.report())
     return 0
+
+
+def _with_imu(loaded, args):
+    """The samples, with the IMU's specific force when the table has ``ax,ay,az`` too: the
+    orientation and the IMU fitted together, the mount checked (:mod:`ftkin.calibration.fused_fit`).
+    """
+    from ..io.stream_join import ACCEL_COLUMNS, GYRO_COLUMNS
+
+    table = loaded.table
+    if loaded.recording is not None or not all(name in table.header for name in ACCEL_COLUMNS):
+        return loaded.samples
+    gyro = table.floats(GYRO_COLUMNS) if all(n in table.header for n in GYRO_COLUMNS) else None
+    print(f"{table.source}: the orientation and the IMU (ax,ay,az) fitted together")
+    return loaded.samples.with_imu(
+        table.floats(ACCEL_COLUMNS),
+        accel_unit=stream_reading_from_args(args).accel_unit,
+        angular_velocity=gyro,
+        g=args.g,
+    )
 
 
 def _from_imu(args, paths) -> bool:

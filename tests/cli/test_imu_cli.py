@@ -87,3 +87,40 @@ def test_calibrate_and_compensate_from_the_imu(streams, tmp_path, capsys):
     forces = contact.floats(["fx", "fy", "fz"])
     assert np.median(np.linalg.norm(forces, axis=1)) < 0.15  # noise 0.05 N per channel
     assert "temperature" in contact.header  # the IMU file's other columns carried along
+
+
+def test_joints_and_an_imu_in_one_file_are_fused_and_the_mount_warned(tmp_path, capsys, caplog):
+    """A samples CSV with joint angles and ax,ay,az: calibrate fits both and warns, naming the
+    angle, when the URDF's sensor frame is off (MuJoCo's accelerometer; a URDF turned 3.09°)."""
+    import logging
+
+    from tests.calibration.test_imu_fused import MOUNT_ERROR_RPY_DEG, turned_arm
+
+    pytest.importorskip("mujoco")
+    from tests.calibration.test_imu_fused import mujoco_poses as fixture
+
+    data = fixture.__wrapped__()
+    arm, _ = turned_arm(tmp_path, MOUNT_ERROR_RPY_DEG)
+    path = tmp_path / "fused.csv"
+    header = ["pose", *arm.joint_names, "fx", "fy", "fz", "mx", "my", "mz", "ax", "ay", "az"]
+    write_csv(
+        path,
+        header,
+        np.column_stack([data["ids"], data["q"], data["wrench"], data["accel"]]).tolist(),
+    )
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        code = main(
+            ["calibrate", str(path), "--urdf", str(arm.urdf_path), "-o", str(tmp_path / "c.json")]
+        )
+    assert code == 0
+    assert "fitted together" in capsys.readouterr().out
+    angle = float(re_search(r"([\d.]+)° ", caplog.text))
+    assert abs(angle - 3.093) < 0.05 and "not mounted as the URDF says" in caplog.text
+
+
+def re_search(pattern, text):
+    import re
+
+    match = re.search(pattern, text)
+    assert match, text
+    return match.group(1)
