@@ -235,7 +235,7 @@ def _run_dynamic(args, noise) -> int:
     arm = arm_from_args(args) or Arm.default()
     if is_bag_path(args.samples):
         recording = load_motion_bag(
-            args.samples, arm, args.joint_topic, args.wrench_topic, args.wrench_frame
+            args.samples, arm, args.joint_topic, args.wrench_topic, args.wrench_frame or "sensor"
         )
     else:
         recording = load_motion_csv(args.samples, arm)
@@ -300,7 +300,9 @@ def run(args) -> int:
         refuse_convention_mistakes(loaded, arm)
     result = calibrate(loaded.samples, options)
     urdf = loaded.samples.urdf
-    if urdf and (arm or Path(urdf).resolve() == bundled_urdf_path().resolve()):
+    # a model built without a URDF (the UR e-Series) records itself by its robot name
+    built = arm is not None and arm.urdf_path is None and loaded.samples.joint_positions is not None
+    if built or (urdf and (arm or Path(urdf).resolve() == bundled_urdf_path().resolve())):
         # the arm the joint columns were read with (the bundled one when no option named one)
         result = replace(result, kinematics=KinematicsRecord.from_arm(arm or Arm.default()))
     validation = None

@@ -1,4 +1,6 @@
-"""``ftkin compensate CALIB.json LOG.csv -o OUT.csv``, with the inertial term for a moving log."""
+"""``ftkin compensate CALIB.json LOG.csv -o OUT.csv``, with the inertial term for a moving log
+(``--ur HOST --live``: a UR arm's readings as they come, :mod:`ftkin.cli.compensate_live`).
+"""
 
 import numpy as np
 
@@ -16,6 +18,7 @@ from .common import (
     logger,
     warn_if_kinematics_differ,
 )
+from .compensate_live import add_live_arguments, check_live_arguments, run_live
 
 
 def register(subparsers) -> None:
@@ -33,22 +36,27 @@ def register(subparsers) -> None:
         "(calibrate --dynamic) "
         "and the log has a time column t and joint columns, the tool's inertial wrench is removed "
         "too (joint "
-        "derivatives from the log, zero-phase).",
+        "derivatives from the log, zero-phase). With --ur HOST --live: a Universal Robots arm's "
+        "readings as they come (its built-in sensor, or --sensor), printed a few times a second "
+        "and with --log written at full rate, until --duration or Ctrl-C.",
         options=(
             option("calibration", metavar="CALIB.json"),
-            option("log", metavar="LOG.csv"),
-            option("-o", "--output", metavar="OUT.csv", required=True),
+            option("log", metavar="LOG.csv", nargs="?"),
+            option("-o", "--output", metavar="OUT.csv"),
             SG_WINDOW,
             ALLOW_OTHER_ARM,
         ),
-        groups=(add_samples_arguments,),
+        groups=(add_samples_arguments, add_live_arguments),
         run=run,
     )
 
 
 def run(args) -> int:
+    check_live_arguments(args)
     calibration = load_calibration(args.calibration)
     arm = arm_for_calibration(args, calibration)
+    if args.live:
+        return run_live(args, calibration, arm)
     compensator = Compensator(
         calibration, arm, allow_other_arm=args.allow_other_arm
     )  # checks arm against the record
@@ -96,7 +104,7 @@ def _compensate_motion(args, calibration, arm: Arm) -> int | None:
 
     if is_bag_path(args.log):
         recording = load_motion_bag(
-            args.log, arm, args.joint_topic, args.wrench_topic, args.wrench_frame
+            args.log, arm, args.joint_topic, args.wrench_topic, args.wrench_frame or "sensor"
         )
         header = ["t", *arm.joint_names, *WRENCH_CHANNELS]
         rows = np.column_stack(

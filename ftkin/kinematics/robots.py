@@ -24,6 +24,7 @@ import numpy as np
 from ..exceptions import InvalidInput, MissingDependency, UrdfError
 from ..validation import as_float_array
 from .arm import Arm, SensorMount
+from .ur_eseries import UR_DH, load_ur
 
 DEFAULT_ROBOT = "ftkin_c4"
 BUNDLED_FLANGE_FRAME = "flange"
@@ -168,6 +169,8 @@ def _load_spec(spec: RobotSpec, sensor_offset=None, tool_frame: str | None = Non
 ROBOTS: dict[str, Callable[..., Arm]] = {
     DEFAULT_ROBOT: _bundled,
     **{name: functools.partial(_load_spec, spec) for name, spec in ROBOT_SPECS.items()},
+    # UR e-Series, UR20, UR30: built from UR's DH parameters (no URDF), flange tool0
+    **{name: functools.partial(load_ur, name) for name in UR_DH},
 }
 """Loaders by robot name; each takes an optional sensor offset and tool frame (see
 :func:`load_robot`).

@@ -100,6 +100,8 @@ class CheckedSensor:
             stamp, values = self.sensor.read()
             stamp = float(stamp)
             wrench = np.asarray(values, dtype=float).reshape(6)
+        except SensorError:  # a sensor that names its own fault keeps its kind
+            raise
         except Exception as error:  # a vendor driver may raise anything: a sensor fault
             raise SensorError(
                 "read_failed", f"the sensor's read failed: {type(error).__name__}: {error}"
