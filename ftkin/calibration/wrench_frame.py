@@ -58,8 +58,8 @@ class WrenchFrameCheck:
         if self.verdict in ("ok", "undetermined"):
             return f"the wrench frame {self.wrench_frame!r} is consistent: {self.report.reason}"
         return (
-            f"the readings fit as a wrench in {self.other_frame} axes, not {self.wrench_frame} "
-            f"({self.report.reason}): {self.fix}"
+            f"the readings fit a wrench recorded in {self.other_frame} axes, not in "
+            f"{self.wrench_frame} axes ({self.report.reason}): read it with {self.fix}"
         )
 
 

@@ -22,7 +22,7 @@ from .compensate_live import add_live_arguments, check_live_arguments, run_live
 
 
 def register(subparsers) -> None:
-    add_command(
+    parser = add_command(
         subparsers,
         "compensate",
         help="remove bias and tool gravity from a log of raw readings",
@@ -49,6 +49,27 @@ def register(subparsers) -> None:
         groups=(add_samples_arguments, add_live_arguments),
         run=run,
     )
+    _parse_intermixed(parser)
+
+
+def _parse_intermixed(parser) -> None:
+    """Let LOG.csv (optional since ``--live``) follow options, as when it was required.
+
+    argparse fills an optional positional with nothing when an option comes between it and the
+    one before (``compensate CALIB --robot ur5 LOG -o OUT`` would leave LOG unrecognized);
+    ``parse_known_intermixed_args`` reads the positionals after the options. It calls
+    ``parse_known_args`` itself: the plain one is put back for the time of the call.
+    """
+    plain = parser.parse_known_args
+
+    def intermixed(args=None, namespace=None):
+        parser.parse_known_args = plain
+        try:
+            return parser.parse_known_intermixed_args(args, namespace)
+        finally:
+            parser.parse_known_args = intermixed
+
+    parser.parse_known_args = intermixed
 
 
 def run(args) -> int:
