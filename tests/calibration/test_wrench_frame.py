@@ -1,4 +1,4 @@
-"""The wrench-frame check: readings recorded in base axes or the sensor's, told apart by the data."""
+"""The wrench-frame check: readings in base axes or the sensor's, told apart by the data."""
 
 from __future__ import annotations
 
