@@ -136,9 +136,9 @@ def test_forward_kinematics_of_actual_q_is_actual_tcp_pose(robot):
             np.testing.assert_allclose(state.q, q, atol=1e-12)
             rotation, position = arm.frame_placement(state.q, "tool0")
             np.testing.assert_allclose(state.tcp_pose[:3], position, atol=1e-6)
-            reported = rotation_from_vector(state.tcp_pose[3:])
-            angle = math.acos(np.clip((np.trace(reported.T @ rotation) - 1.0) / 2.0, -1.0, 1.0))
-            assert angle < 1e-6
+            difference = rotation_from_vector(state.tcp_pose[3:]).T @ rotation
+            sine = np.linalg.norm(difference - difference.T) / (2.0 * math.sqrt(2.0))
+            assert math.atan2(sine, (np.trace(difference) - 1.0) / 2.0) < 1e-6
             np.testing.assert_allclose(ur.flange_pose()[0], rotation, atol=1e-6)
 
 
