@@ -143,7 +143,12 @@ class UrArm:
             ) from None
         self._last_stamp: float | None = None
         self._stamp_changed_at = time.monotonic()
-        self.sensor = UrWristSensor(self)
+
+    @property
+    def sensor(self) -> UrWristSensor:
+        """The built-in wrist sensor (a new light handle on this arm each time: no reference
+        cycle keeps a closed arm's connection alive)."""
+        return UrWristSensor(self)
 
     def __repr__(self) -> str:
         return f"UrArm({self.host!r}, wrench_frame={self.wrench_frame!r})"
@@ -155,13 +160,26 @@ class UrArm:
         self.close()
 
     def close(self) -> None:
-        """Disconnect (never raises)."""
+        """Disconnect (never raises); reads afterwards raise :class:`RobotConnectionLost`.
+
+        ur_rtde's interface disconnects when it is destroyed (about 0.5 s, and as long again for
+        an explicit ``disconnect()`` before): the reference is dropped, once.
+        """
+        rtde, self._rtde = self._rtde, None
         try:
-            self._rtde.disconnect()
+            del rtde
         except Exception as error:  # already gone: nothing more to do
             logger.debug("disconnecting from %s: %s", self.host, error)
 
     # -------------------------------------------------------------- reading
+    def _connection(self, error_type=RobotConnectionLost):
+        if self._rtde is None:
+            message = f"UrArm({self.host!r}) is closed"
+            if error_type is SensorError:
+                raise SensorError("read_failed", message)
+            raise RobotConnectionLost(message, self.host)
+        return self._rtde
+
     def _check(self, stamp: float, error_type) -> None:
         """Raise ``error_type`` when the connection is lost or ``stamp`` has stood still for
         ``stale_after`` (the staleness clock advances here).
@@ -198,7 +216,7 @@ class UrArm:
             RobotConnectionLost: the connection is lost, or the timestamp has stood still for
                 ``stale_after``.
         """
-        rtde = self._rtde
+        rtde = self._connection()
         for _ in range(3):
             stamp = rtde.getTimestamp()
             q, dq = rtde.getActualQ(), rtde.getActualQd()
@@ -224,7 +242,7 @@ class UrArm:
             SensorError: ``"read_failed"`` for a lost connection, ``"stale"`` for a timestamp
                 that has stood still for ``stale_after``.
         """
-        rtde = self._rtde
+        rtde = self._connection(SensorError)
         for _ in range(3):
             stamp = rtde.getTimestamp()
             q, wrench = rtde.getActualQ(), rtde.getFtRawWrench()

@@ -13,7 +13,8 @@ payload, big-endian. The emulator answers
 * ``S`` / ``P`` (start / pause): accepted;
 
 and once started streams ``U`` data packages (recipe id, then the fields in the order asked) at
-the frequency asked, each with ``timestamp`` advanced by one period. It is the arm's state:
+the frequency asked, to every client (a controller serves several), ``timestamp`` being the
+controller's 500 Hz clock. It is the arm's state:
 
 * ``actual_q``, ``target_q``, their speeds: the pose the test sets, or a motion to the next pose;
 * ``actual_TCP_pose``, ``target_TCP_pose``: the flange (zero TCP offset) from this file's own DH
@@ -29,8 +30,8 @@ It runs in a child process (ur_rtde holds the GIL while it connects: a server th
 process would hang it), on TCP port 30004 (ur_rtde has no port argument) of a random loopback
 address ``127.x.y.z`` (Linux routes all of 127/8 to the loopback interface), so parallel runs do
 not collide. The test talks to it through a pipe: poses and motions, the tool, faults (``freeze``:
-the connection stays up and no package is sent; :meth:`EmulatedController.kill`: the process
-dies).
+the connections stay up, the clock stands still and no package is sent;
+:meth:`EmulatedController.kill`: the process dies).
 """
 
 from __future__ import annotations
@@ -236,6 +237,129 @@ class _Arm:
         return self.start + blend * delta, speed * delta
 
 
+DYNAMIC = {
+    "timestamp": "timestamp", "actual_q": "q", "target_q": "q", "actual_qd": "dq",
+    "target_qd": "dq", "actual_TCP_pose": "pose", "target_TCP_pose": "pose",
+    "ft_raw_wrench": "wrench", "actual_tool_accelerometer": "accelerometer",
+}  # fmt: skip
+"""Outputs computed every package, by the key of :meth:`_Server.values`."""
+CONSTANTS = {
+    "robot_mode": 7,  # RUNNING
+    "safety_mode": 1,  # NORMAL
+    "safety_status": 1,
+    "joint_mode": [253] * 6,  # RUNNING
+    "runtime_state": 2,  # PLAYING
+    "robot_status_bits": 0b0011,  # power on, program running
+    "safety_status_bits": 0b1,  # normal mode
+    "speed_scaling": 1.0,
+    "target_speed_fraction": 1.0,
+    "actual_main_voltage": 48.0,
+    "actual_robot_voltage": 48.0,
+    "actual_robot_current": 0.9,
+    "actual_execution_time": 0.3,
+    "joint_temperatures": [31.5] * 6,
+    "actual_joint_voltage": [47.9] * 6,
+    "actual_current": [0.3] * 6,
+    # distinctive values in the last fields: a type of the wrong size before them shows
+    "payload": 0.75,
+    "payload_cog": [0.001, 0.002, 0.003],
+    "output_int_register_19": 19,
+    "output_double_register_19": 19.5,
+}
+"""Outputs with a constant value (every other output reads 0)."""
+CONTROLLER_PERIOD = 0.002  # [s] the controller's clock: 500 Hz
+
+
+class _Client:
+    """One RTDE client: its socket, its output recipe and whether it has started."""
+
+    def __init__(self, connection: socket.socket):
+        self.connection = connection
+        connection.setblocking(False)
+        connection.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.buffer = b""
+        self.names: list[str] = []
+        self.packer: struct.Struct | None = None
+        self.every = 1  # a package every this many controller ticks
+        self.started = False
+
+    def send(self, command: str, payload: bytes = b"") -> None:
+        self.connection.setblocking(True)
+        try:
+            self.connection.sendall(struct.pack(">HB", 3 + len(payload), ord(command)) + payload)
+        finally:
+            self.connection.setblocking(False)
+
+    def packets(self) -> list[tuple[str, bytes]]:
+        """The complete packets received so far (non-blocking)."""
+        try:
+            chunk = self.connection.recv(65536)
+        except BlockingIOError:
+            chunk = None
+        if chunk == b"":
+            raise ConnectionError("the client closed the connection")
+        if chunk:
+            self.buffer += chunk
+        out = []
+        while len(self.buffer) >= 3:
+            size, command = struct.unpack(">HB", self.buffer[:3])
+            if len(self.buffer) < size:
+                break
+            out.append((chr(command), self.buffer[3:size]))
+            self.buffer = self.buffer[size:]
+        return out
+
+    def answer(self, command: str, payload: bytes) -> list[str] | None:
+        """Answer one packet; returns the output names of an output setup."""
+        if command == "V":
+            (version,) = struct.unpack(">H", payload[:2])
+            self.send("V", struct.pack(">B", 1 if version in (1, 2) else 0))
+        elif command == "v":
+            self.send("v", struct.pack(">IIII", *CONTROLLER_VERSION))
+        elif command == "O":
+            (frequency,) = struct.unpack(">d", payload[:8])
+            names = [name for name in payload[8:].decode().split(",") if name]
+            types = [output_type(name) for name in names]
+            if 0.0 < frequency <= 1.0 / CONTROLLER_PERIOD and "NOT_FOUND" not in types:
+                self.names, self.every = names, max(1, round(1.0 / (frequency * CONTROLLER_PERIOD)))
+                self.packer = struct.Struct(">B" + "".join(STRUCT_CODES[t] for t in types))
+                self.layout()
+            self.send("O", struct.pack(">B", 1) + ",".join(types).encode())
+            return names
+        elif command == "I":
+            names = [name for name in payload.decode().split(",") if name]
+            self.send("I", struct.pack(">B", 0) + ",".join(["NOT_FOUND"] * len(names)).encode())
+        elif command == "S":
+            self.started = self.packer is not None
+            self.send("S", struct.pack(">B", int(self.started)))
+        elif command == "P":
+            self.started = False
+            self.send("P", struct.pack(">B", 1))
+        return None  # "U" from the client (inputs) and text messages are ignored
+
+    def layout(self) -> None:
+        """The package as a template: constants filled in, ``(slice, key)`` for the rest."""
+        template, slots = [1], []
+        for name in self.names:
+            kind = output_type(name)
+            size = 6 if kind.startswith("VECTOR6") else 3 if kind.startswith("VECTOR3") else 1
+            if name in DYNAMIC:
+                slots.append((slice(len(template), len(template) + size), DYNAMIC[name]))
+                template.extend([0.0] * size)
+                continue
+            value = CONSTANTS.get(name, 0)
+            values = value if isinstance(value, list) else [value] * size
+            integer = kind not in ("DOUBLE", "VECTOR6D", "VECTOR3D")
+            template.extend(int(v) if integer else float(v) for v in values)
+        self.template, self.slots = template, slots
+
+    def package(self, values: dict) -> bytes:
+        flat = self.template.copy()
+        for where, key in self.slots:
+            flat[where] = values[key]
+        return self.packer.pack(*flat)
+
+
 class _Server:
     def __init__(self, address: str, robot: str, q0, tool: dict, pipe):
         self.robot, self.pipe = robot, pipe
@@ -246,13 +370,9 @@ class _Server:
         self.listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         self.listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         self.listener.bind((address, PORT))
-        self.listener.listen(1)
-        self.connection: socket.socket | None = None
-        self.buffer = b""
-        self.names: list[str] = []
-        self.packer: struct.Struct | None = None
-        self.period = 1 / 125.0
-        self.started = False
+        self.listener.listen(8)
+        self.listener.setblocking(False)
+        self.clients: list[_Client] = []
         self.tick = 0
         self.last: dict = {}
         self.requested: list[str] = []
@@ -260,102 +380,7 @@ class _Server:
         self._kinematics_key, self._kinematics = None, None
         self._noise, self._noise_index = np.zeros((0, 6)), 0
 
-    # -- protocol
-    def send(self, command: str, payload: bytes = b"") -> None:
-        self.connection.sendall(struct.pack(">HB", 3 + len(payload), ord(command)) + payload)
-
-    def packets(self):
-        """Complete packets received so far (non-blocking)."""
-        try:
-            chunk = self.connection.recv(65536)
-        except BlockingIOError:
-            chunk = None
-        except OSError:
-            chunk = b""
-        if chunk == b"":
-            raise ConnectionError("the client closed the connection")
-        if chunk:
-            self.buffer += chunk
-        while len(self.buffer) >= 3:
-            size, command = struct.unpack(">HB", self.buffer[:3])
-            if len(self.buffer) < size:
-                break
-            payload, self.buffer = self.buffer[3:size], self.buffer[size:]
-            yield chr(command), payload
-
-    def answer(self, command: str, payload: bytes) -> None:
-        if command == "V":
-            (version,) = struct.unpack(">H", payload[:2])
-            self.send("V", struct.pack(">B", 1 if version in (1, 2) else 0))
-        elif command == "v":
-            self.send("v", struct.pack(">IIII", *CONTROLLER_VERSION))
-        elif command == "O":
-            (frequency,) = struct.unpack(">d", payload[:8])
-            names = [name for name in payload[8:].decode().split(",") if name]
-            types = [output_type(name) for name in names]
-            self.requested = names
-            if 0.0 < frequency <= 500.0 and "NOT_FOUND" not in types:
-                self.names, self.period = names, 1.0 / frequency
-                self.packer = struct.Struct(">B" + "".join(STRUCT_CODES[t] for t in types))
-                self.layout()
-            self.send("O", struct.pack(">B", 1) + ",".join(types).encode())
-        elif command == "I":
-            names = [name for name in payload.decode().split(",") if name]
-            self.send("I", struct.pack(">B", 0) + ",".join(["NOT_FOUND"] * len(names)).encode())
-        elif command == "S":
-            self.started = self.packer is not None
-            self.send("S", struct.pack(">B", int(self.started)))
-        elif command == "P":
-            self.started = False
-            self.send("P", struct.pack(">B", 1))
-        # "U" from the client (inputs) and text messages are ignored
-
-    # -- state
-    DYNAMIC = {
-        "timestamp": "timestamp", "actual_q": "q", "target_q": "q", "actual_qd": "dq",
-        "target_qd": "dq", "actual_TCP_pose": "pose", "target_TCP_pose": "pose",
-        "ft_raw_wrench": "wrench", "actual_tool_accelerometer": "accelerometer",
-    }  # fmt: skip
-    CONSTANTS = {
-        "robot_mode": 7,  # RUNNING
-        "safety_mode": 1,  # NORMAL
-        "safety_status": 1,
-        "joint_mode": [253] * 6,  # RUNNING
-        "runtime_state": 2,  # PLAYING
-        "robot_status_bits": 0b0011,  # power on, program running
-        "safety_status_bits": 0b1,  # normal mode
-        "speed_scaling": 1.0,
-        "target_speed_fraction": 1.0,
-        "actual_main_voltage": 48.0,
-        "actual_robot_voltage": 48.0,
-        "actual_robot_current": 0.9,
-        "actual_execution_time": 0.3,
-        "joint_temperatures": [31.5] * 6,
-        "actual_joint_voltage": [47.9] * 6,
-        "actual_current": [0.3] * 6,
-        # distinctive values in the last fields: a type of the wrong size before them shows
-        "payload": 0.75,
-        "payload_cog": [0.001, 0.002, 0.003],
-        "output_int_register_19": 19,
-        "output_double_register_19": 19.5,
-    }
-
-    def layout(self) -> None:
-        """The package as a template: constants filled in, ``(slice, key)`` for the rest."""
-        template, slots = [1], []
-        for name in self.names:
-            kind = output_type(name)
-            size = 6 if kind.startswith("VECTOR6") else 3 if kind.startswith("VECTOR3") else 1
-            if name in self.DYNAMIC:
-                slots.append((slice(len(template), len(template) + size), self.DYNAMIC[name]))
-                template.extend([0.0] * size)
-                continue
-            value = self.CONSTANTS.get(name, 0)
-            values = value if isinstance(value, list) else [value] * size
-            integer = kind not in ("DOUBLE", "VECTOR6D", "VECTOR3D")
-            template.extend(int(v) if integer else float(v) for v in values)
-        self.template, self.slots = template, slots
-
+    # -- the arm and the tool
     def kinematics(self, q: np.ndarray) -> tuple:
         """Flange rotation, RTDE pose, accelerometer and the noiseless load on the sensor at ``q``
         (cached: the arm is mostly still; a new tool clears the cache).
@@ -377,7 +402,8 @@ class _Server:
         self._noise_index += 1
         return self._noise[self._noise_index - 1]
 
-    def package(self, now: float) -> bytes:
+    def values(self, now: float) -> dict:
+        """The dynamic outputs of this tick (:data:`DYNAMIC`'s keys)."""
         q, dq = self.arm.state(now)
         rotation, pose, accelerometer, load = self.kinematics(q)
         measured = load + self.noise()
@@ -386,8 +412,9 @@ class _Server:
             if self.tool.wrench_frame == "base"
             else measured
         )
-        timestamp = START_TIMESTAMP + self.tick * self.period
-        values = {
+        timestamp = START_TIMESTAMP + self.tick * CONTROLLER_PERIOD
+        self.last = {"timestamp": timestamp, "q": q.tolist(), "wrench_in_sensor": measured.tolist()}
+        return {
             "timestamp": [timestamp],
             "q": q.tolist(),
             "dq": dq.tolist(),
@@ -395,15 +422,6 @@ class _Server:
             "wrench": reported.tolist(),
             "accelerometer": accelerometer,
         }
-        self.last = {
-            "timestamp": timestamp,
-            "q": values["q"],
-            "wrench_in_sensor": measured.tolist(),
-        }
-        flat = self.template.copy()
-        for where, key in self.slots:
-            flat[where] = values[key]
-        return self.packer.pack(*flat)
 
     # -- control from the test
     def control(self, now: float) -> None:
@@ -425,11 +443,43 @@ class _Server:
                     **self.last,
                     "requested": self.requested,
                     "late": self.late,
-                    "connected": self.connection is not None,
-                    "started": self.started,
-                    "moving": self.arm.state(now)[1].any(),
+                    "clients": len(self.clients),
+                    "started": sum(client.started for client in self.clients),
+                    "moving": bool(self.arm.state(now)[1].any()),
                 }
             self.pipe.send(("ok", reply))
+
+    # -- the network
+    def serve_clients(self) -> None:
+        while True:  # new clients
+            try:
+                connection, _ = self.listener.accept()
+            except BlockingIOError:
+                break
+            self.clients.append(_Client(connection))
+        for client in list(self.clients):
+            try:
+                for command, payload in client.packets():
+                    names = client.answer(command, payload)
+                    if names is not None:
+                        self.requested = names
+            except OSError:  # closed or reset by the client
+                self.drop(client)
+
+    def drop(self, client: _Client) -> None:
+        client.connection.close()
+        self.clients.remove(client)
+
+    def publish(self, now: float) -> None:
+        """One controller tick: a package to every started client due at this tick."""
+        due = [c for c in self.clients if c.started and self.tick % c.every == 0]
+        if due:
+            values = self.values(now)
+            for client in due:
+                try:
+                    client.send("U", client.package(values))
+                except OSError:
+                    self.drop(client)
 
     def run(self) -> None:
         self.pipe.send(("ready", None))
@@ -438,43 +488,17 @@ class _Server:
         while True:
             now = clock()
             self.control(now)
-            self.listener.settimeout(0.002 if self.connection is None else 0.0)
-            try:
-                client, _ = self.listener.accept()
-            except (TimeoutError, BlockingIOError):
-                client = None
-            if client is not None:  # a new client replaces the one served so far
-                if self.connection is not None:
-                    self.connection.close()
-                self.connection = client
-                self.connection.setblocking(False)
-                self.connection.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                self.buffer, self.started, self.packer = b"", False, None
-            if self.connection is None:
-                continue
-            try:
-                for command, payload in self.packets():
-                    self.connection.setblocking(True)
-                    self.answer(command, payload)
-                    self.connection.setblocking(False)
-                if self.started and not self.frozen and now >= next_tick:
-                    self.connection.setblocking(True)
-                    self.send("U", self.package(now))
-                    self.connection.setblocking(False)
+            self.serve_clients()
+            if now >= next_tick:
+                if not self.frozen:  # a frozen controller's clock stands still
+                    self.publish(now)
                     self.tick += 1
-                    if now - next_tick > self.period:  # a package sent a period late or more
-                        self.late += 1
-                    next_tick += self.period
-                    if now - next_tick > 0.5:  # stopped by the scheduler: do not burst
-                        next_tick = now
-            except (ConnectionError, OSError):
-                self.connection.close()
-                self.connection, self.started = None, False
-                continue
-            if not self.started:
-                next_tick = now
-            delay = next_tick - clock()
-            time.sleep(min(max(delay, 0.0), 0.002) if self.started else 0.0005)
+                if now - next_tick > CONTROLLER_PERIOD:  # a tick sent a period late or more
+                    self.late += any(client.started for client in self.clients)
+                next_tick += CONTROLLER_PERIOD
+                if now - next_tick > 0.5:  # stopped by the scheduler: do not burst
+                    next_tick = now
+            time.sleep(min(max(next_tick - clock(), 0.0), 0.0005))
 
 
 def _serve(address: str, robot: str, q0, tool: dict, pipe) -> None:

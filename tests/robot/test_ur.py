@@ -151,6 +151,10 @@ def test_zero_pose_by_hand_through_the_wire(controller):
         np.testing.assert_allclose(
             ur.state().tcp_pose, [-0.8172, -0.2329, 0.0628, math.pi / 2, 0.0, 0.0], atol=1e-12
         )
+    with pytest.raises(RobotConnectionLost, match="is closed"):
+        ur.state()
+    with pytest.raises(SensorError, match="is closed"):
+        ur.sensor.read()
 
 
 # ---------------------------------------------------------------- the wrench frame
@@ -316,7 +320,7 @@ def test_cli_live_log_at_full_rate(tmp_path, controller, calibrated, capsys):
     missed = int(np.sum(np.round(np.diff(stamps) / 0.002) - 1))
     assert len(stamps) + missed == round((stamps[-1] - stamps[0]) / 0.002) + 1
     assert f"{len(stamps)} samples" in out and f"{missed} missed" in out
-    assert len(stamps) > 0.9 * 500  # about a second at 500 Hz, on a loaded machine too
+    assert len(stamps) > 0.5 * 500  # about a second at 500 Hz (fewer on a loaded machine)
     np.testing.assert_allclose(table[:, -6:].mean(axis=0), CONTACT, atol=0.03)
     assert main([*args, "--log", str(log)]) == 2  # never over an existing file
     assert "exists" in capsys.readouterr().err
