@@ -105,10 +105,7 @@ def check_live_arguments(args) -> None:
             "--sensor-option goes with --sensor MODULE:FACTORY",
         ),
     )
-    if args.live_log is not None:
-        from ..io.atomic import check_output_path
-
-        check_output_path(args.live_log, [args.calibration], "--log")
+    if args.live_log is not None:  # (checked against the inputs with every output option)
         if Path(args.live_log).exists():
             raise InvalidInput(
                 f"--log {args.live_log} exists: ftkin never overwrites a file; choose another"
