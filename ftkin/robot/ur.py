@@ -30,7 +30,6 @@ and ``"stale"``), never a stream of old values.
 from __future__ import annotations
 
 import logging
-import math
 import time
 from dataclasses import dataclass
 
@@ -80,14 +79,11 @@ class UrState:
 
 
 def rotation_from_vector(rotation_vector) -> np.ndarray:
-    """The rotation matrix ``(3, 3)`` of a rotation vector (axis × angle [rad]), Rodrigues."""
-    vector = np.asarray(rotation_vector, dtype=float).reshape(3)
-    angle = float(np.linalg.norm(vector))
-    if angle < 1e-12:
-        return np.eye(3)
-    x, y, z = vector / angle
-    skew = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return np.eye(3) + math.sin(angle) * skew + (1.0 - math.cos(angle)) * skew @ skew
+    """The rotation matrix ``(3, 3)`` of a rotation vector (axis × angle [rad], RTDE's pose form):
+    Pinocchio's ``exp3``."""
+    import pinocchio as pin
+
+    return pin.exp3(np.asarray(rotation_vector, dtype=float).reshape(3))
 
 
 class UrArm:
