@@ -25,6 +25,8 @@ from .arg_types import add_options, option, positive_float
 
 FLUSH_EVERY = 250
 """Log rows per flush (half a second at 500 Hz)."""
+SETTLE_STEPS, SETTLE_LIMIT = 25, 0.5
+"""Logging starts after this many consecutive one-period steps of the stamps, or this long [s]."""
 
 
 def add_live_arguments(parser) -> None:
@@ -192,6 +194,8 @@ def run_live(args, calibration, arm) -> int:
             stale_after=args.stale_after,
             allow_other_arm=args.allow_other_arm,
         )
+        _settle(stream)
+        start = time.monotonic()
         for stamp, q, contact in stream:
             stamps.append(stamp)
             if log is not None:
@@ -217,6 +221,21 @@ def run_live(args, calibration, arm) -> int:
         ur.close()
         _summary(np.array(stamps), elapsed, args.live_log, code == 130)
     return code
+
+
+def _settle(stream, steady: int = SETTLE_STEPS, limit: float = SETTLE_LIMIT) -> None:
+    """Skip samples until ``steady`` consecutive steps of the stamps are each the shortest step
+    seen (one period), or ``limit`` [s] has passed: right after connecting, ur_rtde's receive
+    thread works through what queued up meanwhile and its getters skip packages."""
+    deadline, previous, shortest, run = time.monotonic() + limit, None, math.inf, 0
+    for stamp, _, _ in stream:
+        if previous is not None:
+            step = stamp - previous
+            shortest = min(shortest, step)
+            run = run + 1 if step <= 1.25 * shortest else 0
+        previous = stamp
+        if run >= steady or time.monotonic() > deadline:
+            return
 
 
 def _summary(stamps: np.ndarray, elapsed: float, log_path, interrupted: bool) -> None:

@@ -58,7 +58,7 @@ def import_rtde_receive():
 
 @dataclass(frozen=True)
 class UrState:
-    """One RTDE package.
+    """One RTDE package (its arrays are read-only: one package is shared by every read of it).
 
     Attributes:
         timestamp: The controller's clock [s] (advances one period per package).
@@ -139,6 +139,7 @@ class UrArm:
             ) from None
         self._last_stamp: float | None = None
         self._stamp_changed_at = time.monotonic()
+        self._cached: UrState | None = None
 
     @property
     def sensor(self) -> UrWristSensor:
@@ -203,50 +204,49 @@ class UrArm:
         raise RobotConnectionLost(message, self.host)
 
     def state(self) -> UrState:
-        """The latest package: timestamp, joints, TCP pose and wrench, read together.
+        """The latest package: timestamp, joints, TCP pose and wrench, all of one package.
 
         The fields are read between two reads of the timestamp, and again when it changed in
-        between (a new package arrived): they belong to one package.
+        between (a newer package came). A package is read once; further calls before the next
+        one return the same (read-only) arrays.
 
         Raises:
             RobotConnectionLost: the connection is lost, or the timestamp has stood still for
                 ``stale_after``.
         """
-        rtde = self._connection()
-        for _ in range(3):
-            stamp = rtde.getTimestamp()
-            q, dq = rtde.getActualQ(), rtde.getActualQd()
-            pose, wrench = rtde.getActualTCPPose(), rtde.getFtRawWrench()
-            if rtde.getTimestamp() == stamp:
-                break
-        self._check(stamp, RobotConnectionLost)
-        q, raw = self._arrays(q, wrench)
-        return UrState(
-            float(stamp),
-            q,
-            np.array(dq, dtype=float),
-            np.array(pose, dtype=float),
-            raw,
-            self._in_sensor(q, raw),
-        )
+        return self._read(RobotConnectionLost)
 
     def sample(self) -> tuple[float, np.ndarray, np.ndarray]:
         """``(timestamp [s], actual_q (6,) [rad], wrench (6,) [N, N·m] in the sensor frame)`` of
-        one package: the wrist sensor's read, with fewer fields than :meth:`state`.
+        one package (:meth:`state`): the wrist sensor's read.
 
         Raises:
             SensorError: ``"read_failed"`` for a lost connection, ``"stale"`` for a timestamp
                 that has stood still for ``stale_after``.
         """
-        rtde = self._connection(SensorError)
+        state = self._read(SensorError)
+        return state.timestamp, state.q, state.wrench_in_sensor
+
+    def _read(self, error_type) -> UrState:
+        rtde = self._connection(error_type)
+        stamp = rtde.getTimestamp()
+        self._check(stamp, error_type)
+        if self._cached is not None and self._cached.timestamp == stamp:
+            return self._cached
         for _ in range(3):
-            stamp = rtde.getTimestamp()
-            q, wrench = rtde.getActualQ(), rtde.getFtRawWrench()
-            if rtde.getTimestamp() == stamp:
+            q, dq = rtde.getActualQ(), rtde.getActualQd()
+            pose, wrench = rtde.getActualTCPPose(), rtde.getFtRawWrench()
+            latest = rtde.getTimestamp()
+            if latest == stamp:
                 break
-        self._check(stamp, SensorError)
+            stamp = latest  # a newer package came meanwhile: read that one
         q, raw = self._arrays(q, wrench)
-        return float(stamp), q, self._in_sensor(q, raw)
+        arrays = (q, np.array(dq, dtype=float), np.array(pose, dtype=float), raw)
+        state = UrState(float(stamp), *arrays, self._in_sensor(q, raw))
+        for array in (*arrays, state.wrench_in_sensor):
+            array.flags.writeable = False
+        self._cached = state
+        return state
 
     def _arrays(self, q, wrench) -> tuple[np.ndarray, np.ndarray]:
         q, raw = np.array(q, dtype=float), np.array(wrench, dtype=float)

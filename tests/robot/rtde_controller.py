@@ -45,6 +45,7 @@ import struct
 import subprocess
 import sys
 import time
+from collections import deque
 from dataclasses import asdict, dataclass, field
 from multiprocessing.connection import Connection
 
@@ -377,8 +378,10 @@ class _Server:
         self.last: dict = {}
         self.requested: list[str] = []
         self.late = 0
+        self.sent: deque = deque(maxlen=60_000)  # (timestamp, time.monotonic()) of each package
         self._kinematics_key, self._kinematics = None, None
         self._noise, self._noise_index = np.zeros((0, 6)), 0
+        self.kinematics(self.arm.goal)  # imports scipy now, not at the first client's first tick
 
     # -- the arm and the tool
     def kinematics(self, q: np.ndarray) -> tuple:
@@ -438,6 +441,8 @@ class _Server:
                 self._kinematics_key = None
             elif command == "freeze":
                 self.frozen = bool(arguments[0])
+            elif command == "sent":
+                reply = list(self.sent)
             elif command == "state":
                 reply = {
                     **self.last,
@@ -480,6 +485,7 @@ class _Server:
                     client.send("U", client.package(values))
                 except OSError:
                     self.drop(client)
+            self.sent.append((values["timestamp"][0], time.monotonic()))
 
     def run(self) -> None:
         self.pipe.send(("ready", None))
@@ -581,6 +587,10 @@ class EmulatedController:
     def state(self) -> dict:
         """The last package sent (timestamp, q, the wrench in the sensor frame) and more."""
         return self._call("state")
+
+    def sent(self) -> list[tuple[float, float]]:
+        """``(timestamp, time.monotonic() when sent)`` of the packages sent (the last 60 000)."""
+        return self._call("sent")
 
     def kill(self) -> None:
         """SIGKILL the controller process (its socket closes)."""

@@ -195,6 +195,29 @@ def test_a_wrench_read_in_the_wrong_frame_is_refused_naming_the_flag(
     assert check_wrench_frame(samples, controller_frame).verdict == "ok"  # as it was sent
 
 
+def test_a_moving_arm_reads_whole_packages(controller):
+    """During a motion every sample's wrench is the tool's load at that sample's own joint angles
+    (the fields of one package), and the joint speeds are the motion's."""
+    controller.set_tool(force_noise=0.0, torque_noise=0.0)
+    tool = SimulatedTool()
+    with UrArm(controller.host) as ur:
+        controller.move([1.5, -0.6, 1.0, 0.4, 1.8, 1.5], 1.0)
+        last, count, moving = None, 0, 0
+        end = time.monotonic() + 0.8
+        while time.monotonic() < end:
+            state = ur.state()
+            if state.timestamp != last:
+                last, count = state.timestamp, count + 1
+                rotation = flange_transform("ur5e", state.q)[:3, :3]
+                np.testing.assert_allclose(
+                    state.wrench_in_sensor, tool.wrench_in_sensor(rotation), atol=1e-9
+                )
+                moving += bool(np.abs(state.dq).max() > 0.1)
+            time.sleep(0.0002)
+        assert count > 100 and moving > 0.5 * count
+        assert not state.q.flags.writeable  # one package, shared: read-only
+
+
 # ---------------------------------------------------------------- faults
 def test_a_killed_controller_is_a_lost_connection_never_old_values(controller):
     with UrArm(controller.host) as ur:
