@@ -349,6 +349,18 @@ def test_cli_live_log_at_full_rate(tmp_path, controller, calibrated, capsys):
     assert "exists" in capsys.readouterr().err
 
 
+def test_cli_live_with_an_external_sensor(tmp_path, controller, calibrated, capsys):
+    log = tmp_path / "external.csv"
+    args = ["compensate", calibrated[1], "--ur", controller.host, "--live", "--duration", "0.3"]
+    external = ["--sensor", "tests.robot.fakes:FakeSensor", "--log", str(log)]
+    assert main([*args, *external]) == 0
+    assert "tests.robot.fakes:FakeSensor" in capsys.readouterr().out
+    table = np.loadtxt(log, delimiter=",", skiprows=1)
+    assert len(table) > 10 and np.all(np.diff(table[:, 0]) > 0)  # the sensor's own stamps
+    assert main([*args, "--sensor", "tests.robot.fakes:FakeSensor", "--sensor-option", "x"]) == 2
+    assert "KEY=VALUE" in capsys.readouterr().err
+
+
 def test_cli_refuses_live_options_that_do_not_fit(tmp_path, capsys):
     calib = tmp_path / "c.json"
     calib.write_text("{}")
