@@ -21,6 +21,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from ..calibration.model import SensorModel
+from ..calibration.result import CalibrationResult
 from ..control.compensation import Compensator
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
@@ -75,11 +76,12 @@ def compensated_stream(
         RobotConnectionLost: from the joint reader.
     """
     if arm is None:
-        if getattr(calibration, "kinematics", None) is None:
+        recorded = calibration.kinematics if isinstance(calibration, CalibrationResult) else None
+        if recorded is None:
             raise InvalidInput(
                 "the calibration records no arm: pass arm= (e.g. load_robot('ur5e'))"
             )
-        arm = calibration.kinematics.build_arm()
+        arm = recorded.build_arm()
     if not callable(getattr(arm_reader, "joint_positions", None)):
         raise InvalidInput(
             f"arm_reader must have joint_positions() -> q, got {type(arm_reader).__name__}"
