@@ -34,7 +34,13 @@ COMMAND_MODULES = (
 """Subcommand modules of ``ftkin.cli``, in the order ``--help`` lists them."""
 
 
-OUTPUT_OPTIONS = {"output": "-o/--output", "html": "--html", "png": "--png", "plot": "--plot"}
+OUTPUT_OPTIONS = {
+    "output": "-o/--output",
+    "html": "--html",
+    "png": "--png",
+    "plot": "--plot",
+    "live_log": "--log",  # compensate --live
+}
 """Namespace attributes that name files a subcommand writes, and their flags."""
 
 INPUT_OPTIONS = (

@@ -153,7 +153,7 @@ def _run_dynamic(args, noise) -> int:
         )
     if is_bag_path(paths[0]):
         recording = load_motion_bag(
-            paths[0], arm, args.joint_topic, args.wrench_topic, args.wrench_frame
+            paths[0], arm, args.joint_topic, args.wrench_topic, args.wrench_frame or "sensor"
         )
     else:
         recording = load_motion_csv(paths[0], arm, column_spelling_from_args(args))
@@ -214,7 +214,9 @@ def run(args) -> int:
     samples = _with_imu(loaded, args)
     result = calibrate(samples, options)
     urdf = loaded.samples.urdf
-    if urdf and (arm or Path(urdf).resolve() == bundled_urdf_path().resolve()):
+    # a model built without a URDF (the UR e-Series) records itself by its robot name
+    built = arm is not None and arm.urdf_path is None and loaded.samples.joint_positions is not None
+    if built or (urdf and (arm or Path(urdf).resolve() == bundled_urdf_path().resolve())):
         # the arm the joint columns were read with (the bundled one when no option named one)
         result = replace(result, kinematics=KinematicsRecord.from_arm(arm or Arm.default()))
     validation = None

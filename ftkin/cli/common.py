@@ -219,10 +219,10 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
         option(
             "--wrench-frame",
             choices=("sensor", "base"),
-            default="sensor",
-            help="frame the bag's wrenches are expressed in; base: rotate them into the sensor "
-            "frame (a UR TCP force) "
-            "(default: %(default)s)",
+            default=None,
+            help="frame the bag's (or the UR's) wrenches are expressed in; base: rotate them into "
+            "the sensor frame (a UR TCP force) (default: sensor; with compensate --ur: base, "
+            "UR's convention)",
         ),
         option(
             "--speed-threshold",
@@ -411,7 +411,7 @@ def load_samples_from_args(
             wrench_topic=args.wrench_topic,
             parameters=parameters,
             static_only=static_only,
-            wrench_frame=args.wrench_frame,
+            wrench_frame=args.wrench_frame or "sensor",
         )
     if loaded.layout is not None:  # how the table was read: poses, or a recording's segments
         print(f"{path}: {loaded.layout.describe()}")

@@ -1,4 +1,6 @@
-"""``ftkin compensate CALIB.json LOG.csv -o OUT.csv``, with the inertial term for a moving log."""
+"""``ftkin compensate CALIB.json LOG.csv -o OUT.csv``, with the inertial term for a moving log
+(``--ur HOST --live``: a UR arm's readings as they come, :mod:`ftkin.cli.compensate_live`).
+"""
 
 import numpy as np
 
@@ -22,10 +24,11 @@ from .common import (
     warn_if_kinematics_differ,
 )
 from .shared_options import IMU_POSITION
+from .compensate_live import add_live_arguments, check_live_arguments, run_live
 
 
 def register(subparsers) -> None:
-    add_command(
+    parser = add_command(
         subparsers,
         "compensate",
         help="remove bias and tool gravity from a log of raw readings",
@@ -39,33 +42,59 @@ def register(subparsers) -> None:
         "(calibrate --dynamic) "
         "and the log has a time column t and joint columns, the tool's inertial wrench is removed "
         "too (joint "
-        "derivatives from the log, zero-phase).",
+        "derivatives from the log, zero-phase). With --ur HOST --live: a Universal Robots arm's "
+        "readings as they come (its built-in sensor, or --sensor), printed a few times a second "
+        "and with --log written at full rate, until --duration or Ctrl-C.",
         options=(
             option("calibration", metavar="CALIB.json"),
             option(
                 "log",
-                nargs="+",
+                nargs="*",
                 metavar="LOG.csv",
                 help="a log (or a bag); or several CSVs on their own clocks (wrench, IMU, joints "
-                "or orientation, any order), joined on their time column",
+                "or orientation, any order), joined on their time column (none with --live)",
             ),
             IMU_POSITION,
-            option("-o", "--output", metavar="OUT.csv", required=True),
+            option("-o", "--output", metavar="OUT.csv"),
             SG_WINDOW,
             ALLOW_OTHER_ARM,
         ),
-        groups=(add_samples_arguments,),
+        groups=(add_samples_arguments, add_live_arguments),
         run=run,
     )
+    _parse_intermixed(parser)
+
+
+def _parse_intermixed(parser) -> None:
+    """Let LOG.csv (optional since ``--live``) follow options, as when it was required.
+
+    argparse fills an optional positional with nothing when an option comes between it and the
+    one before (``compensate CALIB --robot ur5 LOG -o OUT`` would leave LOG unrecognized);
+    ``parse_known_intermixed_args`` reads the positionals after the options. It calls
+    ``parse_known_args`` itself: the plain one is put back for the time of the call.
+    """
+    plain = parser.parse_known_args
+
+    def intermixed(args=None, namespace=None):
+        parser.parse_known_args = plain
+        try:
+            return parser.parse_known_intermixed_args(args, namespace)
+        finally:
+            parser.parse_known_args = intermixed
+
+    parser.parse_known_args = intermixed
 
 
 def run(args) -> int:
+    check_live_arguments(args)
     calibration = load_calibration(args.calibration)
     if isinstance(calibration, ImuCalibrationResult):  # made from the IMU: its columns compensate
         return _compensate_imu(args, calibration)
     if args.imu_position is not None:
         raise InvalidInput("--imu-position applies to a calibration made from the IMU")
     arm = arm_for_calibration(args, calibration)
+    if args.live:
+        return run_live(args, calibration, arm)
     compensator = Compensator(
         calibration, arm, allow_other_arm=args.allow_other_arm
     )  # checks arm against the record
@@ -152,7 +181,7 @@ def _compensate_motion(args, calibration, arm: Arm) -> int | None:
         return None  # several files: joined, then compensated at rest (the static path)
     if is_bag_path(paths[0]):
         recording = load_motion_bag(
-            paths[0], arm, args.joint_topic, args.wrench_topic, args.wrench_frame
+            paths[0], arm, args.joint_topic, args.wrench_topic, args.wrench_frame or "sensor"
         )
         header = ["t", *arm.joint_names, *WRENCH_CHANNELS]
         rows = np.column_stack(
