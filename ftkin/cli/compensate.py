@@ -23,8 +23,8 @@ from .common import (
     stream_reading_from_args,
     warn_if_kinematics_differ,
 )
-from .shared_options import IMU_POSITION
 from .compensate_live import add_live_arguments, check_live_arguments, run_live
+from .shared_options import IMU_POSITION
 
 
 def register(subparsers) -> None:

@@ -21,7 +21,10 @@ import numpy as np
 
 from ..calibration.model import WRENCH_CHANNELS
 from ..exceptions import InvalidInput
+from ..robot.stillness import Stillness
 from .arg_types import add_options, option, positive_float
+from .declared import declared_option
+from .shared_options import DURATION, SENSOR, SENSOR_OPTION, open_named_sensor
 
 FLUSH_EVERY = 250
 """Log rows per flush (half a second at 500 Hz)."""
@@ -49,7 +52,7 @@ def add_live_arguments(parser) -> None:
             metavar="OUT.csv",
             help="write every compensated sample (t, joints, fx..mz) as it comes",
         ),
-        option("--duration", type=positive_float, metavar="S", help="stop after this long [s]"),
+        DURATION,
         option(
             "--print-rate",
             type=positive_float,
@@ -57,25 +60,9 @@ def add_live_arguments(parser) -> None:
             metavar="HZ",
             help="lines printed per second (default: %(default)s)",
         ),
-        option(
-            "--stale-after",
-            type=positive_float,
-            default=0.1,
-            metavar="S",
-            help="a stamp that stands still this long is a fault [s] (default: %(default)s)",
-        ),
-        option(
-            "--sensor",
-            metavar="MODULE:FACTORY",
-            help="an external sensor (read() -> (t, wrench)) instead of the arm's built-in one",
-        ),
-        option(
-            "--sensor-option",
-            action="append",
-            default=[],
-            metavar="KEY=VALUE",
-            help="keyword argument (a string) for the sensor factory; repeatable",
-        ),
+        declared_option(Stillness, "stale_after"),
+        SENSOR,
+        SENSOR_OPTION,
     )
 
 
@@ -115,17 +102,10 @@ def check_live_arguments(args) -> None:
 
 
 def _sensor(args, ur):
+    """The UR's built-in sensor, or the one ``--sensor`` names (closed with the command)."""
     if args.sensor is None:
         return ur.sensor
-    from ..robot.sensor_factory import load_sensor_factory
-
-    options = {}
-    for item in args.sensor_option:
-        key, separator, value = item.partition("=")
-        if not separator or not key.isidentifier():
-            raise InvalidInput(f"--sensor-option takes KEY=VALUE, got {item!r}")
-        options[key] = value
-    return load_sensor_factory(args.sensor, **options)
+    return open_named_sensor(args)
 
 
 class _Log:

@@ -36,10 +36,13 @@ from .shared_options import (
     POSES,
     POSES_FILE,
     SEED,
+    SENSOR,
     SENSOR_BODY_OPTION,
+    SENSOR_OPTION,
     SPEED,
     TOOL_MASS,
     deprecated,
+    open_named_sensor,
     resolved,
 )
 
@@ -100,27 +103,7 @@ def _robot_options(parser, sensor: bool = True, required: bool = True) -> None:
         ),
     )
     if sensor:
-        add_options(
-            group,
-            option(
-                "--sensor",
-                required=required,
-                metavar="NAME|MODULE:FACTORY",
-                help="a built-in sensor (ati: ATI Net F/T, bota: Bota Systems; see "
-                "docs/ati-netft.md and docs/bota.md), or an importable factory returning an "
-                "object with read() -> (t, wrench) (ftkin robot sim prints its simulated "
-                "sensor's)",
-            ),
-            option(
-                "--sensor-option",
-                action="append",
-                default=[],
-                metavar="KEY=VALUE",
-                help="an option of the built-in sensor (e.g. host=192.168.1.1, config=bota.json; "
-                "an unknown one is refused naming the known ones), or a keyword argument (a "
-                "string) for the factory; repeatable",
-            ),
-        )
+        add_options(group, SENSOR, SENSOR_OPTION)
     add_arm_arguments(parser)
 
 
@@ -271,15 +254,9 @@ def _robot(args):
 
 
 def _sensor(args):
-    from ..sensors.registry import open_sensor
-
-    options = {}
-    for item in args.sensor_option:
-        key, equals, value = item.partition("=")
-        if not equals or not key.isidentifier():
-            raise InvalidInput(f"--sensor-option takes KEY=VALUE, got {item!r}")
-        options[key] = value
-    sensor = open_sensor(args.sensor, options)
+    if args.sensor is None:
+        raise InvalidInput("give --sensor SENSOR (a built-in sensor or MODULE:FACTORY)")
+    sensor = open_named_sensor(args)
     if callable(getattr(sensor, "close", None)):  # a built-in adapter: closed by _closes_sensor
         vars(args).setdefault("opened_sensors", []).append(sensor)
     return sensor

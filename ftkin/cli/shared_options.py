@@ -120,8 +120,40 @@ DURATION = option(
     default=None,
     metavar="S",
     help="length [s] (default: plan --excitation 30; simulate placement and log 5, recording 10; "
-    "robot guide: until Ctrl-C)",
+    "robot guide and compensate --live: until Ctrl-C)",
 )
+SENSOR = option(
+    "--sensor",
+    metavar="NAME|MODULE:FACTORY",
+    help="a built-in sensor (ati: ATI Net F/T, bota: Bota Systems; see docs/ati-netft.md and "
+    "docs/bota.md), or an importable factory returning an object with read() -> (t, wrench) "
+    "(robot sim prints its simulated sensor's; compensate --live: instead of the UR's own)",
+)
+SENSOR_OPTION = option(
+    "--sensor-option",
+    action="append",
+    default=[],
+    metavar="KEY=VALUE",
+    help="an option of the built-in sensor (e.g. host=192.168.1.1, config=bota.json; an unknown "
+    "one is refused naming the known ones), or a keyword argument (a string) for the factory; "
+    "repeatable",
+)
+
+
+def open_named_sensor(args):
+    """The sensor ``--sensor`` and ``--sensor-option`` name (:func:`ftkin.sensors.open_sensor`)."""
+    from ..exceptions import InvalidInput
+    from ..sensors.registry import open_sensor
+
+    options = {}
+    for item in args.sensor_option:
+        key, equals, value = item.partition("=")
+        if not equals or not key.isidentifier():
+            raise InvalidInput(f"--sensor-option takes KEY=VALUE, got {item!r}")
+        options[key] = value
+    return open_sensor(args.sensor, options)
+
+
 SPEED = option(
     "--speed",
     type=positive_float,
