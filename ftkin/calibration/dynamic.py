@@ -31,7 +31,6 @@ from .dynamic_fit import (
     theta_space,
 )
 from .estimate import CalibrationResult
-from .imu_samples import ImuSamples
 from .information import SensorNoise, noise_floor
 from .log_cholesky import (
     body_from_parameters,
@@ -208,6 +207,8 @@ def calibrate_dynamic(
             data with ``estimate_inertia=True`` names the inertia).
         InvalidInput: bad arguments, or a non-positive mass estimate.
     """
+    from .imu_samples import ImuSamples  # (with the dynamic fit, not with this module)
+
     if isinstance(motion, ImuSamples):  # no joints: the IMU's own fit
         from .imu_dynamic import calibrate_imu_dynamic
 

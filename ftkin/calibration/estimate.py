@@ -17,8 +17,6 @@ from .conventions import BASE_MOUNTS, check_conventions, detect_sign_and_handedn
 from .diagnostics import FitDiagnostics
 from .drift import BiasDrift, check_drift_spec, drift_candidates
 from .fit_quality import diagnose, log_warnings
-from .fused_samples import FusedSamples
-from .imu_samples import ImuSamples
 from .information import SensorNoise, noise_floor
 from .linear import fit_linear
 from .ml import LOSSES, fit_ml
@@ -287,14 +285,18 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
         SuspectConvention: the data fit with an axis reversed, or the tool
             weight points more than 90° from the expected gravity direction.
     """
-    if isinstance(samples, ImuSamples):  # no orientation: the IMU's own fit
-        from .imu_fit import calibrate_imu
+    if not isinstance(samples, Samples):  # the IMU's samples (their modules load on demand)
+        from .fused_samples import FusedSamples
+        from .imu_samples import ImuSamples
 
-        return calibrate_imu(samples, options, **keywords)
-    if isinstance(samples, FusedSamples):  # an orientation and the IMU: the fused fit
-        from .fused_fit import calibrate_fused
+        if isinstance(samples, ImuSamples):  # no orientation: the IMU's own fit
+            from .imu_fit import calibrate_imu
 
-        return calibrate_fused(samples, options, **keywords)
+            return calibrate_imu(samples, options, **keywords)
+        if isinstance(samples, FusedSamples):  # an orientation and the IMU: the fused fit
+            from .fused_fit import calibrate_fused
+
+            return calibrate_fused(samples, options, **keywords)
     unknown = set(keywords) - {f.name for f in fields(CalibrationOptions)}
     if unknown:
         raise InvalidInput(f"unknown calibrate option(s) {', '.join(sorted(unknown))}")
