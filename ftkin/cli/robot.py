@@ -50,12 +50,13 @@ logger = logging.getLogger("ftkin.cli")
 
 GUIDING_HOME = (0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785)
 """The demo's hand-guiding start pose [rad] (the hand above the table, pointing down)."""
-SIM_TIMEOUT = 1.0
+SIM_TIMEOUT = 2.0
 """The stale-sensor and robot-state limits [s] for franky-sim (0.1 s on a real robot): a loaded
-machine pauses the simulated physics for longer than 0.1 s (0.73 s was seen at load 2)."""
+machine pauses the simulated physics for longer than 0.1 s (0.73 s was seen at load 2, 1.9 s at
+load 3.6)."""
 DEFAULT_STATE_TIMEOUT = 0.1
 """The robot's clock not advancing this long is a lost connection [s] (a real FR3 at 1 kHz)."""
-SIM_ARM_OPTIONS = "--no-realtime --state-timeout 1 --stale-after 1"
+SIM_ARM_OPTIONS = "--no-realtime --state-timeout 2 --stale-after 2"
 """What a command pointed at ``ftkin robot sim`` adds for the simulator."""
 
 
@@ -493,7 +494,7 @@ def run_sim(args) -> int:
         print(f"  ftkin robot calibrate {robot} {sim.sensor_spec()} --g {truth.g} -o calib.json")
         print(
             f"  ftkin robot payload calib.json --franka {sim.hostname} --no-realtime "
-            f"--state-timeout 1 --sensor-body {body}"
+            f"--state-timeout 2 --sensor-body {body}"
         )
         print(f"  ftkin robot guide calib.json {robot} {sim.sensor_spec()}", flush=True)
         try:

@@ -186,6 +186,7 @@ class FrankaRobot:
         )
         self.state_timeout = float(state_timeout)
         self._robot_time, self._state_at = -1, time.monotonic()
+        self._polled_at = self._state_at
 
     def __repr__(self) -> str:
         return f"FrankaRobot({self.host!r})"
@@ -231,6 +232,11 @@ class FrankaRobot:
         except Exception as error:
             raise self._wrap(error, "reading the joint state") from None
         now, robot_time = time.monotonic(), state.time.to_msec()
+        if now - self._polled_at > self.state_timeout:
+            # we did not ask for a while (a fit, a print): the robot's clock is judged from now
+            # on, not blamed for our absence (franky's state is the last motion's while idle)
+            self._state_at = now
+        self._polled_at = now
         if robot_time != self._robot_time:
             self._robot_time, self._state_at = robot_time, now
         elif now - self._state_at > self.state_timeout:

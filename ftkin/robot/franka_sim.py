@@ -54,8 +54,9 @@ HAND_YAW = -math.pi / 4
 """The hand frame is the flange turned by this angle about z [rad]."""
 SIM_GRAVITY = 9.81
 """franky-sim's gravity [m/s²]."""
-SIM_NICENESS = -5
-"""The simulation process's scheduling priority (where the user may raise it, e.g. as root): its
+SIM_NICENESS = -10
+"""The simulation process's scheduling priority (niceness, where the user may raise it, e.g. as
+root): its
 physics (about half a core at 1 kHz) then keeps the robot's clock going while tests or a
 background load share the cores, as a real robot's controller does on its own machine."""
 

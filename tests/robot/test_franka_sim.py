@@ -365,3 +365,18 @@ def test_connecting_leaves_the_calling_threads_scheduling_alone(robot, sim):
     with pytest.raises(RealtimeUnavailable):
         connect(sim.hostname, realtime=True)
     assert (os.sched_getscheduler(0), os.sched_getparam(0).sched_priority) == SCHEDULING_AT_IMPORT
+
+
+def test_a_pause_of_ours_is_not_a_lost_robot(sim, robot):
+    """franky's state is the last motion's while the arm is idle: a program that does not poll
+    for a while (a fit between the session and its verification) must not take the still clock
+    for a dead robot; a robot that stops while polled still is (test_a_killed_server_...)."""
+    limit = robot.state_timeout  # the module's robot: restored below
+    robot.state_timeout = 0.2
+    try:
+        robot.move_to(HOME)
+        time.sleep(0.6)  # three limits without a poll
+        robot.joint_state()
+        robot.move_to(HOME + np.array([0.0, 0.05, 0.0, 0.0, 0.0, 0.0, 0.0]))
+    finally:
+        robot.state_timeout = limit
