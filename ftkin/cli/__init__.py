@@ -30,11 +30,18 @@ COMMAND_MODULES = (
     "simulate",
     "doctor",
     "robot",
+    "record",
 )
 """Subcommand modules of ``ftkin.cli``, in the order ``--help`` lists them."""
 
 
-OUTPUT_OPTIONS = {"output": "-o/--output", "html": "--html", "png": "--png", "plot": "--plot"}
+OUTPUT_OPTIONS = {
+    "output": "-o/--output",
+    "html": "--html",
+    "png": "--png",
+    "plot": "--plot",
+    "calibration_output": "--calibrate",
+}
 """Namespace attributes that name files a subcommand writes, and their flags."""
 
 INPUT_OPTIONS = (

@@ -139,7 +139,7 @@ DURATION = option(
     default=None,
     metavar="S",
     help="length [s] (default: plan --excitation 30; simulate placement and log 5, recording 10; "
-    "robot guide: until Ctrl-C)",
+    "robot guide and record --raw: until Ctrl-C)",
 )
 SPEED = option(
     "--speed",
@@ -148,6 +148,57 @@ SPEED = option(
     help="fraction of the joint velocity and acceleration limits for moves (default: 0.3; "
     "robot demo: 0.8)",
 )
+
+
+DEFAULT_STATE_TIMEOUT = 0.1
+"""The robot's clock not advancing this long is a lost connection [s] (a real FR3 at 1 kHz)."""
+FRANKA = option(
+    "--franka",
+    metavar="HOST",
+    help="the robot's FCI address (ftkin robot sim prints its own)",
+)
+NO_REALTIME = option(
+    "--no-realtime",
+    action="store_true",
+    help="do not require a real-time kernel (franky RealtimeConfig.Ignore: simulators)",
+)
+STATE_TIMEOUT = option(
+    "--state-timeout",
+    type=positive_float,
+    default=DEFAULT_STATE_TIMEOUT,
+    metavar="S",
+    help="the robot's clock not advancing this long is a lost connection [s] (default: "
+    "%(default)s; 1 for a simulator on a loaded machine)",
+)
+SENSOR = option(
+    "--sensor",
+    metavar="NAME|MODULE:FACTORY",
+    help="a built-in sensor (ati: ATI Net F/T, bota: Bota Systems; see docs/ati-netft.md and "
+    "docs/bota.md), or an importable factory returning an object with read() -> (t, wrench) "
+    "(ftkin robot sim prints its simulated sensor's)",
+)
+SENSOR_OPTION = option(
+    "--sensor-option",
+    action="append",
+    default=[],
+    metavar="KEY=VALUE",
+    help="an option of the built-in sensor (e.g. host=192.168.1.1, config=bota.json; an unknown "
+    "one is refused naming the known ones), or a keyword argument (a string) for the factory; "
+    "repeatable",
+)
+
+RESUME = option(
+    "--resume",
+    action="store_true",
+    help="continue the samples file of a stopped session or recording (robot calibrate: the "
+    "same plan; record: its poses count towards --n)",
+)
+
+
+def as_required(definition: tuple, is_required: bool = True) -> tuple:
+    """A shared option made required (or not) by a command: the same flag, help and default."""
+    flags, keywords = definition
+    return flags, {**keywords, "required": is_required}
 
 
 def payload_body_option(spec) -> tuple:
