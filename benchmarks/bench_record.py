@@ -11,7 +11,7 @@ through the same 12 poses (``robot calibrate``). Targets (issue 32's record/cali
 on franky-sim instead of the UR emulator): mass within 0.5 %, centre of mass within 1 mm, force
 bias within 0.05 N, against the simulation's truth.
 
-Then once, faults while recording (the mover injects them while the arm moves to the third
+Then once, faults while recording (the mover injects them 0.3 s into the move to the third
 pose): a NaN sensor (stop latency from the injection), a killed simulator (from SIGKILL to the
 stop: the robot's clock standing still for its state timeout, 0.3 s here, is the signal; target
 0.5 s as issue 32's killed controller), and SIGINT (calibrated from the poses so far, then
@@ -38,11 +38,12 @@ PLAN = {"joint_ranges": {"fr3_joint1": (-0.8, 0.8)}}
 POSES, READINGS = 12, 50
 STALE_AFTER = 0.5  # Stillness.stale_after (default 0.1 s: a loaded machine pauses the simulation)
 STATE_TIMEOUT = 0.3  # FrankaRobot.state_timeout (default 0.1 s, same reason)
+FAULT_DELAY = 0.3  # [s] into a move: the arm moving, as the user moves it
 
 
 class Mover(threading.Thread):
     """The user: to each pose, wait there until the recorder says it is recorded, go on;
-    ``action()`` once, as the arm starts for pose ``at`` (a fault)."""
+    ``action()`` once, :data:`FAULT_DELAY` into the move to pose ``at`` (a fault)."""
 
     def __init__(self, robot, poses, at=None, action=None):
         super().__init__(daemon=True)
@@ -50,6 +51,10 @@ class Mover(threading.Thread):
         self.recorded = threading.Semaphore(0)
         self.still_at, self.recorded_at, self.fault_time, self.error = [], [], None, None
         self.stopped = False
+
+    def _fault(self):
+        self.fault_time = time.monotonic()
+        self.action()
 
     def stop(self):
         """The recording ended: go no further."""
@@ -69,8 +74,7 @@ class Mover(threading.Thread):
                 if not self.recorded.acquire(timeout=60) or self.stopped:
                     return
                 if index == self.at:
-                    self.fault_time = time.monotonic()
-                    self.action()
+                    threading.Timer(FAULT_DELAY, self._fault).start()
                 self.robot.move_to(q)
                 wait_still(self.robot, Stillness(stale_after=STALE_AFTER))
                 self.still_at.append(time.monotonic())
