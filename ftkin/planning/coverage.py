@@ -13,7 +13,9 @@ maximum-likelihood fit use, evaluated for the tool the readings suggest:
   gravity vector ``a`` the force bound, for the centre of mass the torque bound over the tool
   weight ``G``;
 * the **weakest direction**: the eigenvector of the information, in those ideal units, with the
-  smallest eigenvalue, named by the parameters it involves (the largest components);
+  smallest eigenvalue, named by the parameters it involves (the largest components); while the
+  poses leave parameters undetermined, every parameter in the null space (it may have several
+  directions: three poses that differ by a turn about the vertical leave four);
 * the **next pose**: among :data:`CANDIDATES` gravity directions spread over the sphere, each
   reached from the last pose by the smallest turn of the tool, the one that adds the most
   information (D-optimal, ``log det``, as :mod:`ftkin.planning.design` chooses a plan), and what
@@ -36,6 +38,10 @@ from .evaluation import ExpectedCalibration, PoseEvaluation, evaluate_poses
 
 CANDIDATES = 256
 """Gravity directions tried for the next pose (a Fibonacci sphere: about 13° apart)."""
+
+NULL_EIGENVALUE = 1e-9
+"""An eigenvalue of the information (in ideal units) below this, relative to the largest, is a
+direction the poses leave undetermined."""
 
 DOWN = np.array([0.0, 0.0, -1.0])
 """Gravity's direction in the base frame."""
@@ -96,7 +102,8 @@ class PoseCoverage:
             (:data:`~ftkin.calibration.model.COMPONENT_NAMES`).
         next_gravity: ``(3,)`` gravity's direction in the sensor frame at the suggested pose.
         next_angle: Its angle from the nearest pose so far [rad].
-        next_ratio: The worst ratio after adding that pose (None while still undetermined).
+        next_std: ``(12,)`` standard errors of ``θ`` predicted after adding that pose [N, N,
+            N·m, m] (None while it would still leave parameters undetermined).
         frame: The frame the directions are in, for messages (``"sensor"``, ``"IMU"``).
     """
 
@@ -106,7 +113,7 @@ class PoseCoverage:
     weakest: tuple[str, ...]
     next_gravity: np.ndarray
     next_angle: float
-    next_ratio: float | None
+    next_std: np.ndarray | None
     frame: str = "sensor"
 
     @property
@@ -139,14 +146,15 @@ class PoseCoverage:
             f"axis down), {np.rad2deg(self.next_angle):.0f}° from the nearest pose so far"
         )
         if self.worst is None:
-            then = "" if self.next_ratio is None else ": that pose would determine them"
+            then = "" if self.next_std is None else ": that pose would determine them"
             return (
                 f"{self.pose_count} pose(s) leave {', '.join(self.weakest)} undetermined; "
                 + advice
                 + then
             )
         name, std, ratio, unit = self.worst
-        after = f"; it would bring the worst ratio to {self.next_ratio:.1f}×"
+        i = COMPONENT_NAMES.index(name)
+        after = f"; it would bring {name} to ±{self.next_std[i] * _SCALE_TO_UNIT[i]:.3g} {unit}"
         return (
             f"weakest: {name} ±{std:.3g} {unit} ({ratio:.1f}× what ideally spread poses give; "
             f"the weakest direction involves {', '.join(self.weakest)}); {advice}{after}"
@@ -194,9 +202,12 @@ def assess_coverage(
         evaluation = evaluate_poses(rotations, expected)
     except UnobservableParameters:
         evaluation = None
-    _, vectors = np.linalg.eigh(information)
-    weakest = np.abs(vectors[:, 0])
-    names = tuple(COMPONENT_NAMES[i] for i in np.flatnonzero(weakest > 0.3 * weakest.max()))
+    values, vectors = np.linalg.eigh(information)
+    null = values < NULL_EIGENVALUE * max(values[-1], np.finfo(float).tiny)
+    # undetermined: every entry in the null space (it may have several directions); else the
+    # weakest direction's largest entries
+    weight = np.linalg.norm(vectors[:, null], axis=1) if null.any() else np.abs(vectors[:, 0])
+    names = tuple(COMPONENT_NAMES[i] for i in np.flatnonzero(weight > 0.3 * weight.max()))
     pool = fibonacci_sphere(candidates)
     last, last_direction = rotations[-1], directions[-1]
     tried = np.array([last @ turn_between(d, last_direction) for d in pool])
@@ -211,12 +222,12 @@ def assess_coverage(
     next_gravity = pool[best]
     next_angle = float(np.min(np.arccos(np.clip(directions @ next_gravity, -1.0, 1.0))))
     count = len(rotations)
-    ratios = next_ratio = None
+    ratios = next_std = None
     if evaluation is not None:
         ratios = np.sqrt(count * np.diag(np.linalg.inv(information)))
     after = np.linalg.eigvalsh(added[best])
-    if after[0] > 1e-9 * after[-1]:
-        next_ratio = float(np.sqrt((count + 1) * np.max(np.diag(np.linalg.inv(added[best])))))
+    if after[0] > NULL_EIGENVALUE * after[-1]:
+        next_std = scale * np.sqrt(np.diag(np.linalg.inv(added[best])))
     return PoseCoverage(
-        directions, evaluation, ratios, names, next_gravity, next_angle, next_ratio, frame
+        directions, evaluation, ratios, names, next_gravity, next_angle, next_std, frame
     )

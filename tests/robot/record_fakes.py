@@ -109,10 +109,12 @@ class ScriptedSensor:
         imu: Add the accelerometer, the gyro and a temperature.
         fault_after: From this many seconds on, every read raises (a sensor gone).
         seed: Seed of the noise.
+        noise: ``(6,)`` standard deviation of the wrench noise [N, N·m].
     """
 
-    def __init__(self, orientation, schedule, *, imu=False, fault_after=None, seed=0):
+    def __init__(self, orientation, schedule, *, imu=False, fault_after=None, seed=0, noise=NOISE):
         self.orientation, self.schedule, self.fault_after = orientation, schedule, fault_after
+        self.noise = np.asarray(noise, dtype=float)
         self.rng = np.random.default_rng(seed)
         self.samples: list[SensorSample] = []  # every sample produced, for the raw log's check
         if imu:
@@ -126,7 +128,7 @@ class ScriptedSensor:
         if self.samples and self.samples[-1].t == stamp:
             return self.samples[-1]
         rotation, omega = self.orientation(stamp - self.schedule.start)
-        wrench = reading(rotation) + NOISE * self.rng.standard_normal(6)
+        wrench = reading(rotation) + self.noise * self.rng.standard_normal(6)
         up_in_sensor = rotation.T @ np.array([0.0, 0.0, G])
         accel = IMU_ROTATION.T @ up_in_sensor + ACCEL_BIAS
         accel = accel + ACCEL_NOISE * self.rng.standard_normal(3)

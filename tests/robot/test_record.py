@@ -343,6 +343,7 @@ def test_raw_log_stops_on_a_fault_keeping_the_rows_and_cli_exits_2(tmp_path, cap
 # ---------------------------------------------------------------------- the command line
 def test_cli_records_without_joints_and_saves_the_calibration(tmp_path, capsys):
     argv = ["record", "--sensor", "tests.robot.record_fakes:scripted_imu", "--n", "8"]
+    argv += ["--sensor-option", "hold=0.3", "--sensor-option", "move=0.15"]
     argv += ["-o", str(tmp_path / "s.csv"), "--calibrate", str(tmp_path / "c.json"), "--g", "9.81"]
     argv += ["--readings-per-pose", "30", "--still-settle-time", "0.05", "--still-window", "10"]
     assert main([*argv, "--stale-after", "0.5"]) == 0
@@ -386,6 +387,7 @@ def test_cli_ur_hook_names_what_is_missing(tmp_path, capsys):
 def test_ctrl_c_exits_130_with_whole_poses_then_resume_finishes(tmp_path):
     samples = tmp_path / "s.csv"
     argv = [*FTKIN, "record", "--sensor", "tests.robot.record_fakes:scripted_imu", "--n", "8"]
+    argv += ["--sensor-option", "hold=0.3", "--sensor-option", "move=0.15"]
     argv += ["-o", str(samples), "--still-settle-time", "0.05", "--still-window", "10"]
     argv += ["--readings-per-pose", "30", "--stale-after", "0.5", "--g", "9.81"]
     env = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
@@ -476,7 +478,7 @@ def check_truth(result, truth):
 def test_franky_sim_moved_by_the_test_records_and_calibrates(sim, robot, tmp_path):
     from ftkin.robot.stillness import wait_still
 
-    poses = joint_poses(4, seed=0)
+    poses = joint_poses(3, seed=0)
     robot.move_to(poses[0])  # the user brings the arm to the first pose before starting
     wait_still(robot, SIM_STILL)
     mover = Mover(robot, poses[1:])
@@ -486,7 +488,7 @@ def test_franky_sim_moved_by_the_test_records_and_calibrates(sim, robot, tmp_pat
         robot,  # read only: the mover's thread moves it
         fr3_arm(),
         samples_path=tmp_path / "s.csv",
-        n_poses=4,
+        n_poses=3,
         readings_per_pose=30,
         stillness=SIM_STILL,
         output=tmp_path / "c.json",
@@ -495,10 +497,10 @@ def test_franky_sim_moved_by_the_test_records_and_calibrates(sim, robot, tmp_pat
     )
     mover.join(30)
     assert mover.error is None
-    assert recording.poses_recorded == 4 and (tmp_path / "c.json").is_file()
+    assert recording.poses_recorded == 3 and (tmp_path / "c.json").is_file()
     samples = load_samples(tmp_path / "s.csv", fr3_arm()).samples
     ids, counts = np.unique(samples.pose_ids, return_counts=True)
-    np.testing.assert_allclose(ids, range(4), atol=0.5)
+    np.testing.assert_allclose(ids, range(3), atol=0.5)
     np.testing.assert_allclose(counts, 30, atol=0.5)
     # each pose is one of the planned poses the test moved to, the arm still while recorded
     # (franky-sim's hold sags by ~0.01 rad under the tool its gravity model does not know)
@@ -535,3 +537,57 @@ def test_franky_sim_cli_record_franka(sim, robot, tmp_path, capsys, monkeypatch)
     from ftkin.io.calibration_file import load_calibration
 
     check_truth(load_calibration(tmp_path / "c.json"), sim.truth)
+
+
+def test_joint_sources_and_the_samples_log_columns(tmp_path):
+    from ftkin.robot import FrankaRobot, JointStateSource, Robot
+    from ftkin.robot.samples_log import SamplesLog
+
+    arm, joints, _ = scripted_joints(joint_poses(3))
+    assert isinstance(joints, JointStateSource) and not isinstance(joints, Robot)
+    assert callable(FrankaRobot.joint_state)  # a FrankaRobot is one without being commanded
+    path = tmp_path / "imu.csv"
+    log = SamplesLog(path, (), extra_columns=("ax", "ay", "az"))
+    with pytest.raises(InvalidInput, match=r"\(2, 3\) extra values"):
+        log.append_pose(0, np.zeros((2, 0)), np.zeros((2, 6)), [0.0, 0.1], np.zeros((2, 2)))
+    # stopped before its first pose (the header only): it resumes, with nothing recorded
+    resumed = SamplesLog(path, (), resume=True, extra_columns=("ax", "ay", "az"))
+    assert resumed.recorded_poses() == {}
+    resumed.append_pose(0, np.zeros((2, 0)), np.ones((2, 6)), [0.0, 0.1], [[0, 0, 9.8]] * 2)
+    again = SamplesLog(path, (), resume=True, extra_columns=("ax", "ay", "az"))
+    np.testing.assert_allclose(again.recorded_extra()[0], [0.0, 0.0, 9.8], rtol=1e-15)
+
+
+def test_a_still_arm_whose_readings_never_settle_is_explained(tmp_path):
+    from .record_fakes import NOISE
+
+    arm, joints, schedule = scripted_joints(joint_poses(3))
+    noisy = NOISE * 50.0  # 1 N: above --still-force-std
+    sensor = ScriptedSensor(joint_path(arm, joints), schedule, fault_after=1.0, noise=noisy)
+    events = []
+    with pytest.raises(RecordingInterrupted) as caught:
+        record_poses(
+            sensor,
+            joints,
+            arm,
+            samples_path=tmp_path / "s.csv",
+            n_poses=3,
+            stillness=Stillness(settle_time=0.05, window=10, timeout=0.3, stale_after=0.5),
+            on_event=events.append,
+        )
+    hints = [event.message for event in events if event.kind == "unsettled"]
+    assert len(hints) == 1 and "not stationary" in hints[0] and "--still-force-std" in hints[0]
+    assert caught.value.poses_recorded == 0
+
+
+def test_cli_recording_fault_exits_2_naming_the_resume(tmp_path, capsys):
+    argv = ["record", "--sensor", "tests.robot.record_fakes:scripted_imu", "--n", "8"]
+    argv += ["--sensor-option", "fault_after=1.5", "-o", str(tmp_path / "s.csv")]
+    argv += ["--readings-per-pose", "30", "--still-settle-time", "0.05", "--still-window", "10"]
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert "pose 2 of 8 recorded" in captured.out and "Traceback" not in captured.err
+    assert "the sensor's read failed" in captured.err and "--resume" in captured.err
+    done = poses_in(tmp_path / "s.csv")  # held 0.4 s, moved 0.2 s: three poses by 1.5 s
+    assert done >= 2
+    whole_poses(tmp_path / "s.csv", range(done), 30)
