@@ -39,12 +39,9 @@ from pathlib import Path
 import numpy as np
 
 from ..calibration.estimate import calibrate
-from ..calibration.information import SensorNoise
-from ..calibration.linear import fit_linear
 from ..calibration.model import STANDARD_GRAVITY
 from ..calibration.observability import MIN_POSES
 from ..calibration.result import CalibrationResult
-from ..calibration.samples import PoseAverages
 from ..exceptions import (
     FtkinError,
     InvalidInput,
@@ -58,19 +55,23 @@ from ..io.imu_columns import load_imu_samples
 from ..io.samples_csv import POSE_COLUMN, load_samples
 from ..io.stream_join import ACCEL_COLUMNS, GYRO_COLUMNS
 from ..kinematics.record import KinematicsRecord
-from ..planning.coverage import DOWN, PoseCoverage, assess_coverage, rotations_from_gravity
-from ..planning.evaluation import PAPER_CENTER_OF_MASS, ExpectedCalibration
+from ..planning.coverage import PoseCoverage, assess_coverage
 from ..validation import whole_number
+from .recorded_poses import RecordedPose, expected_calibration, nearest_pose, recorded_pose
 from .samples_log import TIME_COLUMN, SamplesLog, interrupts_held
-from .session import DEFAULT_TOOL_WEIGHT
-from .stillness import CheckedSensor, PoseReadings, Stillness, StillnessDetector, stationary
+from .stillness import (
+    CheckedSensor,
+    PoseReadings,
+    SampleTap,
+    Stillness,
+    StillnessDetector,
+    stationary,
+)
 
 logger = logging.getLogger(__name__)
 
 MIN_POSE_ANGLE = np.deg2rad(5.0)
 """Two poses whose gravity directions in the sensor frame are closer than this [rad] are one."""
-NOISE_FLOOR = (1e-6, 1e-8)
-"""Smallest noise [N, N·m] assumed in the predictions (a simulated sensor may have none)."""
 
 
 @dataclass(frozen=True)
@@ -114,42 +115,6 @@ class Recording:
     note: str = ""
 
 
-@dataclass(frozen=True)
-class _Pose:
-    """A recorded pose as the predictions need it."""
-
-    pose_id: int
-    direction: np.ndarray  # (3,) gravity's unit direction, sensor (or IMU) frame
-    rotation: np.ndarray  # (3, 3) R_BS (from the joints, or rotations_from_gravity)
-    wrench: np.ndarray  # (6,) mean [N, N·m]
-    spread: np.ndarray  # (6,) standard deviation of the readings [N, N·m]
-    count: int
-
-
-class _SampleTap:
-    """``read() -> (t, wrench)`` of a sensor, keeping the IMU part of its full sample
-    (``read_sample()``, :class:`~ftkin.sensors.sample.SensorSample`) where it has one."""
-
-    def __init__(self, sensor):
-        self.sensor = sensor
-        self.full = callable(getattr(sensor, "read_sample", None))
-        self.imu: np.ndarray | None = None
-
-    def read(self):
-        if not self.full:
-            return self.sensor.read()
-        sample = self.sensor.read_sample()
-        parts = [
-            part for part in (sample.specific_force, sample.angular_velocity) if part is not None
-        ]
-        self.imu = np.concatenate(parts) if parts else None
-        return sample.t, sample.wrench
-
-
-def _angle(a: np.ndarray, b: np.ndarray) -> float:
-    return float(np.arccos(np.clip(np.dot(a, b), -1.0, 1.0)))
-
-
 class PoseRecorder:
     """The recording loop of :func:`record_poses` (its arguments; see there)."""
 
@@ -182,17 +147,19 @@ class PoseRecorder:
         self.readings = whole_number(readings_per_pose, "readings_per_pose", 1)
         self.min_pose_angle = float(min_pose_angle)
         self.on_event = on_event
-        self.tap = _SampleTap(sensor)
+        self.frame = "sensor" if joints is not None else "IMU"
+        self.tap = SampleTap(sensor)
         self.sensor = CheckedSensor(self.tap, stillness.stale_after)
         self.sensor.read()  # the first sample says which columns the file has
-        self.has_gyro = self.tap.imu is not None and len(self.tap.imu) == 6
-        if joints is None and self.tap.imu is None:
+        imu = self.tap.imu()
+        self.has_gyro = imu is not None and len(imu) == 6
+        if joints is None and imu is None:
             raise InvalidInput(
                 "without a joint source the recorder needs a sensor with an IMU (read_sample() "
                 "with a specific force, e.g. a Bota sensor); give the arm's joint source "
                 "(--franka, --ur), or log the stream with --raw"
             )
-        columns = () if self.tap.imu is None else ACCEL_COLUMNS + (GYRO_COLUMNS * self.has_gyro)
+        columns = () if imu is None else ACCEL_COLUMNS + (GYRO_COLUMNS * self.has_gyro)
         self.log = SamplesLog(
             samples_path,
             () if joints is None else arm.joint_names,
@@ -217,26 +184,11 @@ class PoseRecorder:
             logger.info("%s", message)
 
     # ------------------------------------------------------------------ poses
-    def _direction(self, q_mean: np.ndarray, imu_mean: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Gravity's direction in the sensor frame and ``R_BS`` of a pose."""
-        if self.joints is not None:
-            rotation = self.arm.rotation_sensor_to_base(q_mean)
-            return rotation.T @ DOWN, rotation
-        up = imu_mean[:3]
-        norm = float(np.linalg.norm(up))
-        if not norm > 0.0:
-            raise SensorError("not_finite", "the accelerometer reads zero: no gravity direction")
-        direction = -up / norm  # the specific force at rest points up
-        return direction, rotations_from_gravity(direction)[0]
+    def _pose(self, pose_id: int, q, wrenches, imu) -> RecordedPose:
+        arm = self.arm if self.joints is not None else None
+        return recorded_pose(pose_id, wrenches, arm, q, imu)
 
-    def _pose(self, pose_id: int, q, wrenches, extra) -> _Pose:
-        wrenches = np.asarray(wrenches, dtype=float)
-        imu = np.zeros(3) if extra is None or not np.size(extra) else np.mean(extra, axis=0)
-        direction, rotation = self._direction(np.mean(q, axis=0), imu)
-        spread = wrenches.std(axis=0, ddof=1) if len(wrenches) > 1 else np.zeros(6)
-        return _Pose(pose_id, direction, rotation, wrenches.mean(axis=0), spread, len(wrenches))
-
-    def _recorded_poses(self) -> list[_Pose]:
+    def _recorded_poses(self) -> list[RecordedPose]:
         """The poses already in the file (a resumed recording), in the order recorded."""
         ids = sorted(self.log.recorded_poses())
         if not ids:
@@ -262,48 +214,10 @@ class PoseRecorder:
             poses.append(self._pose(pose_id, rows[:, :nq], rows[:, nq : nq + 6], extra))
         return poses
 
-    def _same_as(self, pose: _Pose) -> tuple[_Pose, float] | None:
-        """The recorded pose within ``min_pose_angle`` of ``pose`` (the nearest), or None."""
-        if not self.poses:
-            return None
-        angles = [_angle(pose.direction, other.direction) for other in self.poses]
-        nearest = int(np.argmin(angles))
-        return (
-            (self.poses[nearest], angles[nearest])
-            if angles[nearest] < self.min_pose_angle
-            else None
-        )
-
-    def _expected(self) -> ExpectedCalibration:
-        """The tool and noise to predict for: a linear fit of the poses so far where it works."""
-        spread = np.array([pose.spread for pose in self.poses])
-        pooled = np.sqrt(np.mean(spread**2, axis=0))
-        floor = np.repeat(NOISE_FLOOR, 3)
-        noise = SensorNoise(*np.split(np.maximum(pooled, floor), 2))
-        weight, com = DEFAULT_TOOL_WEIGHT, PAPER_CENTER_OF_MASS
-        if len(self.poses) >= MIN_POSES:
-            averages = PoseAverages(
-                np.array([pose.pose_id for pose in self.poses]),
-                np.array([pose.rotation for pose in self.poses]),
-                np.array([pose.wrench for pose in self.poses]),
-                np.array([pose.count for pose in self.poses]),
-                spread,
-            )
-            try:
-                fitted = fit_linear(averages)
-            except FtkinError:  # not determined yet: the defaults
-                fitted = None
-            if fitted is not None and 0.01 < fitted.tool_weight < 1e5:
-                if np.linalg.norm(fitted.center_of_mass) < 2.0:
-                    weight, com = fitted.tool_weight, fitted.center_of_mass
-        return ExpectedCalibration(
-            tool_weight=weight, center_of_mass=com, noise=noise, readings_per_pose=self.readings
-        )
-
     def _assess(self) -> None:
-        frame = "sensor" if self.joints is not None else "IMU"
         rotations = np.array([pose.rotation for pose in self.poses])
-        self.coverage = assess_coverage(rotations, self._expected(), frame=frame)
+        expected = expected_calibration(self.poses, self.readings)
+        self.coverage = assess_coverage(rotations, expected, frame=self.frame)
         self.say("coverage", self.coverage.describe(), coverage=self.coverage)
 
     # ------------------------------------------------------------------ the loop
@@ -328,8 +242,8 @@ class PoseRecorder:
                 )
             speed = float(np.max(np.abs(dq)))
         stamp, wrench, new = self.sensor.read()
-        imu = self.tap.imu
-        if self.tap.imu is not None and self.joints is None and self.has_gyro:
+        imu = self.tap.imu()
+        if imu is not None and self.joints is None and self.has_gyro:
             speed = float(np.max(np.abs(imu[3:])))
         if (imu is None) != (not self.log.extra_columns) or (
             imu is not None and len(imu) != len(self.log.extra_columns)
@@ -411,13 +325,14 @@ class PoseRecorder:
         """Record ``readings`` as the next pose unless it repeats one; True when recorded."""
         pose_id = max((pose.pose_id for pose in self.poses), default=-1) + 1
         pose = self._pose(pose_id, readings.joint_positions, readings.wrenches, readings.extra)
-        same = self._same_as(pose)
-        if same is not None:
-            other, angle = same
+        nearest = nearest_pose(pose, self.poses)
+        if nearest is not None and nearest[1] < self.min_pose_angle:
+            other, angle = nearest
             self.say(
                 "same_pose",
                 f"same pose as pose {other.pose_id} (gravity {np.rad2deg(angle):.1f}° from it in "
-                f"the sensor frame, {np.rad2deg(self.min_pose_angle):g}° needed): move to another",
+                f"the {self.frame} frame, {np.rad2deg(self.min_pose_angle):g}° needed): move to "
+                "another",
                 other.pose_id,
             )
             return False

@@ -175,6 +175,31 @@ class CheckedSensor:
         return stamp, wrench, new
 
 
+class SampleTap:
+    """``read() -> (t, wrench)`` of a sensor for :class:`CheckedSensor`, keeping its full sample
+    (``read_sample()``, a :class:`~ftkin.sensors.sample.SensorSample` with the IMU and the
+    temperature) in :attr:`sample` where the sensor has one (else :attr:`sample` stays None)."""
+
+    def __init__(self, sensor):
+        self.sensor = sensor
+        self.full = callable(getattr(sensor, "read_sample", None))
+        self.sample = None
+
+    def read(self):
+        if not self.full:
+            return self.sensor.read()
+        self.sample = sample = self.sensor.read_sample()
+        return sample.t, sample.wrench
+
+    def imu(self) -> np.ndarray | None:
+        """The last sample's ``[ax, ay, az]`` [m/s²] (and ``[wx, wy, wz]`` [rad/s]), or None."""
+        sample = self.sample
+        if sample is None:
+            return None
+        parts = [v for v in (sample.specific_force, sample.angular_velocity) if v is not None]
+        return np.concatenate(parts) if parts else None
+
+
 @dataclass(frozen=True)
 class PoseReadings:
     """The readings of one still pose.

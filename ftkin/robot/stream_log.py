@@ -32,7 +32,7 @@ from ..io.stream_join import ACCEL_COLUMNS, GYRO_COLUMNS
 from ..io.time_columns import TIME_COLUMN
 from ..progress import Progress
 from .samples_log import interrupts_held
-from .stillness import CheckedSensor
+from .stillness import CheckedSensor, SampleTap
 
 logger = logging.getLogger(__name__)
 
@@ -133,19 +133,11 @@ def log_stream(
         raise InvalidInput(f"duration must be a finite number of seconds > 0, got {duration!r}")
     if path.exists():
         raise InvalidInput(f"{path} already exists: choose another file for the stream")
-    full = callable(getattr(sensor, "read_sample", None))
-    latest = {}
-
-    class _Tap:  # read() for CheckedSensor, keeping the full sample
-        def read(self):
-            if not full:
-                return sensor.read()
-            latest["sample"] = sample = sensor.read_sample()
-            return sample.t, sample.wrench
-
-    checked = CheckedSensor(_Tap(), stale_after)
+    tap = SampleTap(sensor)
+    checked = CheckedSensor(tap, stale_after)
     stamp, wrench, _ = checked.read()
-    extra_columns, extra = _row_parts(latest["sample"]) if full else ((), [])
+    full = tap.sample is not None
+    extra_columns, extra = _row_parts(tap.sample) if full else ((), [])
     columns = (TIME_COLUMN, *WRENCH_CHANNELS, *extra_columns)
     first_stamp, last_stamp, rows = stamp, stamp, 0
     delivered_at_start = _stats_samples(sensor)
@@ -173,7 +165,7 @@ def log_stream(
             while duration is None or time.monotonic() - start < duration:
                 stamp, wrench, new = checked.read()
                 if new:
-                    values = _row_parts(latest["sample"])[1] if full else []
+                    values = _row_parts(tap.sample)[1] if full else []
                     if len(values) != len(extra):
                         raise SensorError("imu", "the sensor's samples changed their channels")
                     pending.append([stamp, *map(float, wrench), *values])

@@ -591,3 +591,24 @@ def test_cli_recording_fault_exits_2_naming_the_resume(tmp_path, capsys):
     done = poses_in(tmp_path / "s.csv")  # held 0.4 s, moved 0.2 s: three poses by 1.5 s
     assert done >= 2
     whole_poses(tmp_path / "s.csv", range(done), 30)
+
+
+def test_a_resumed_sensor_whose_clock_restarted_is_named(tmp_path, caplog):
+    import logging
+
+    poses = joint_poses(3, seed=8)
+    arm, joints, schedule = scripted_joints(poses)
+    sensor = ScriptedSensor(joint_path(arm, joints), schedule)
+    path = tmp_path / "s.csv"
+    options = {"samples_path": path, "n_poses": 3, "readings_per_pose": 10, "stillness": QUICK}
+    record_poses(sensor, joints, arm, **options)
+
+    class Restarted:  # the same sensor, its clock started again (a simulator restarted)
+        def read(self):
+            stamp, wrench = sensor.read()
+            return stamp - 1e6, wrench
+
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        again = record_poses(Restarted(), joints, arm, resume=True, **options)
+    assert "is behind the last stamp" in caplog.text and "--drift none" in caplog.text
+    assert again.poses_recorded == 3 and again.calibration is not None  # nothing more to record
