@@ -161,8 +161,9 @@ def log_stream(
                 os.fsync(stream.fileno())
 
         stream.write(",".join(columns) + "\n")
+        delivered = None
         try:
-            while duration is None or time.monotonic() - start < duration:
+            while True:
                 stamp, wrench, new = checked.read()
                 if new:
                     values = _row_parts(tap.sample)[1] if full else []
@@ -171,6 +172,8 @@ def log_stream(
                     pending.append([stamp, *map(float, wrench), *values])
                     last_stamp = stamp
                 now = time.monotonic()
+                if duration is not None and now - start >= duration:
+                    break
                 if now - last_flush >= flush_period:
                     flush()
                     last_flush = now
@@ -180,8 +183,8 @@ def log_stream(
         except SensorError as error:
             stop_reason, fault = "fault", error
         finally:
+            delivered = _stats_samples(sensor)  # at the last poll: not what came while stopping
             flush()
-    delivered = _stats_samples(sensor)
     missed = None
     if delivered is not None and delivered_at_start is not None:
         missed = (
