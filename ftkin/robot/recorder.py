@@ -72,6 +72,9 @@ logger = logging.getLogger(__name__)
 
 MIN_POSE_ANGLE = np.deg2rad(5.0)
 """Two poses whose gravity directions in the sensor frame are closer than this [rad] are one."""
+CREEP = 10.0
+"""A joint speed above the stillness limit but below this many times it, for the stillness
+timeout, is an arm that creeps (a hold that does not settle), said once."""
 
 
 @dataclass(frozen=True)
@@ -287,9 +290,23 @@ class PoseRecorder:
         motion: deque = deque(maxlen=self.stillness.window)
         hinted = False
         start = time.monotonic()
+        creeping_since: float | None = None
         while True:
             now = time.monotonic()
             speed, q, stamp, wrench, new, imu = self._poll()
+            limit = self.stillness.joint_speed
+            if not limit < speed < CREEP * limit:
+                creeping_since = None
+            elif creeping_since is None:
+                creeping_since = now
+            elif moved and not hinted and now - creeping_since > self.stillness.timeout:
+                hinted = True
+                self.say(
+                    "unsettled",
+                    f"the arm has crept at about {speed:.3g} rad/s for {self.stillness.timeout:g} "
+                    f"s, above the limit of {limit:g}: it is not still; if this is as still as it "
+                    "gets, raise --still-joint-speed",
+                )
             if not moved:
                 if new:
                     motion.append(wrench)

@@ -582,6 +582,32 @@ def test_a_still_arm_whose_readings_never_settle_is_explained(tmp_path):
     assert caught.value.poses_recorded == 0
 
 
+def test_an_arm_that_creeps_is_named(tmp_path):
+    poses = joint_poses(3)
+    arm, joints, schedule = scripted_joints(poses, hold=5.0)
+
+    class Creeping:  # the hold drifts at 0.01 rad/s: twice the stillness limit, never still
+        def joint_state(self):
+            q, _ = joints.joint_state()
+            return q, np.full(7, 0.01)
+
+    sensor = ScriptedSensor(joint_path(arm, joints), schedule, fault_after=0.8)
+    events = []
+    with pytest.raises(RecordingInterrupted):
+        record_poses(
+            sensor,
+            Creeping(),
+            arm,
+            samples_path=tmp_path / "s.csv",
+            n_poses=3,
+            stillness=Stillness(settle_time=0.05, window=10, timeout=0.3, stale_after=0.5),
+            on_event=events.append,
+        )
+    hints = [event.message for event in events if event.kind == "unsettled"]
+    assert len(hints) == 1 and "crept at about 0.01 rad/s" in hints[0]
+    assert "--still-joint-speed" in hints[0]
+
+
 def test_cli_recording_fault_exits_2_naming_the_resume(tmp_path, capsys):
     argv = ["record", "--sensor", "tests.robot.record_fakes:scripted_imu", "--n", "8"]
     argv += ["--sensor-option", "fault_after=1.2", "-o", str(tmp_path / "s.csv")]
