@@ -16,6 +16,15 @@ from typing import Any
 METADATA_KEY = "ftkin.option"
 
 
+class _Unset:
+    def __repr__(self) -> str:
+        return "UNSET"
+
+
+UNSET = _Unset()
+"""A declaration's :attr:`~Declaration.cli_default` when it is the field's default."""
+
+
 @dataclass(frozen=True)
 class Declaration:
     """How one option reads and what it means.
@@ -31,7 +40,10 @@ class Declaration:
         nargs: Number of values (argparse ``nargs``).
         action: An argparse action (``"store_true"``, ``"append"``).
         cli_default: The CLI's default when it differs from the field's (e.g. a list for
-            ``"append"``); None: the field's.
+            ``"append"``, or None where commands resolve it each their way: the help then names
+            the defaults itself); unset: the field's.
+        cli: False for a field the command line builds from other flags (a noise from
+            ``--noise-force`` and ``--noise-torque``).
     """
 
     help: str
@@ -42,7 +54,8 @@ class Declaration:
     choices: tuple | None = None
     nargs: int | str | None = None
     action: str | None = None
-    cli_default: Any = None
+    cli_default: Any = UNSET
+    cli: bool = True
 
     def flag_for(self, name: str) -> str:
         """The flag of the field ``name``."""
@@ -120,5 +133,23 @@ def integer(low: int, high: int):
                 f"expected a whole number in [{low}, {high}], got {text!r}"
             )
         return value
+
+    return parse
+
+
+def checked(convert, what: str = "a number"):
+    """A CLI parser from a library check: ``convert(text)`` (e.g. ``check_gravity(float(text))``)
+    whose :class:`~ftkin.exceptions.InvalidInput` or ``ValueError`` becomes argparse's error,
+    with the library's own message. For :attr:`Declaration.parse`."""
+    import argparse
+
+    def parse(text: str):
+        try:
+            return convert(text)
+        except ValueError as error:  # InvalidInput is a ValueError
+            message = str(error)
+            if "could not convert" in message or "invalid literal" in message:
+                message = f"expected {what}, got {text!r}"
+            raise argparse.ArgumentTypeError(message) from None
 
     return parse

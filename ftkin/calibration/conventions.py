@@ -29,7 +29,7 @@ from ..exceptions import InvalidInput, SuspectConvention
 from ..validation import as_vector
 from .linear import fit_linear
 from .model import STANDARD_GRAVITY
-from .mount import check_mount_mode, force_step_cost, mount_start
+from .mount import MountMode, force_step_cost, mount_start
 from .samples import Samples
 
 FLIP_AXES = (None, "x", "y", "z")
@@ -180,7 +180,7 @@ def detect_sign_and_handedness(
         UnobservableParameters: the poses cannot determine the tool weight at all.
     """
     poses = samples.pose_averages() if isinstance(samples, Samples) else samples
-    check_mount_mode(estimate_mount)
+    estimate_mount = MountMode.of(estimate_mount)  # a MountMode from calibrate passes as is
     expected = expected_gravity_direction(base_mount, expected_gravity)
     # reading_signs checks sensor_sign and flip_axis before any result is formed
     costs = {

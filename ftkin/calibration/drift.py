@@ -190,6 +190,7 @@ def register_drift_model(
 
 def drift_choices() -> tuple[str, ...]:
     """The drift specs :func:`~ftkin.calibration.calibrate` accepts now (``N`` a number)."""
+    _load_built_in()
     entries = DRIFT_MODELS.values()
     trends = [entry.usage for entry in entries if not entry.walk and entry.name != "none"]
     sums = [f"{entry.usage}+{trend}" for entry in entries if entry.walk for trend in trends]
@@ -198,6 +199,7 @@ def drift_choices() -> tuple[str, ...]:
 
 def auto_candidates() -> tuple[str, ...]:
     """The specs ``drift="auto"`` compares, ``"none"`` first."""
+    _load_built_in()
     return ("none", *(spec for entry in DRIFT_MODELS.values() for spec in entry.auto))
 
 
@@ -217,6 +219,8 @@ def parse_drift(spec) -> DriftModel:
     parts = []
     for text in spec.split("+"):
         name, colon, argument = text.partition(":")
+        if name not in DRIFT_MODELS and name in BUILT_IN_MODELS:
+            _load_built_in()
         if name not in DRIFT_MODELS:
             raise InvalidInput(
                 f"unknown drift model {spec!r}; expected one of {', '.join(drift_choices())}"
@@ -395,10 +399,31 @@ def without_argument(model: DriftModel) -> Callable[[str | None], DriftModel]:
 
 register_drift_model("none", without_argument(DriftModel()))
 
-# the built-in models register themselves when their module loads
-from . import drift_poly, random_walk  # noqa: E402, F401
+BUILT_IN_MODELS = {"poly": ".drift_poly", "random-walk": ".random_walk"}
+"""The built-in models' names → their modules, which register them when they load: a model's
+module is imported when a spec, ``auto`` or a listing first needs the registry, never by a
+calibration without times (:func:`check_drift_spec`)."""
 
-DRIFT_CHOICES = drift_choices()
-"""The ``drift=`` values :func:`~ftkin.calibration.calibrate` accepts with the built-in models
-(:func:`drift_choices` includes models registered later).
-"""
+
+def _load_built_in() -> None:
+    import importlib
+
+    for module in BUILT_IN_MODELS.values():
+        importlib.import_module(module, __package__)
+
+
+def check_drift_spec(spec) -> str:
+    """``spec`` if it names a drift the calibration can fit, else :class:`InvalidInput` (the one
+    check of a ``drift=`` value). ``"auto"`` and ``"none"`` are accepted without importing or
+    building any model; another spec is parsed (importing the model it names).
+    """
+    if spec in ("auto", "none"):
+        return spec
+    parse_drift(spec)
+    return spec
+
+
+def __getattr__(name: str):
+    if name == "DRIFT_CHOICES":  # the drift= values with the built-in models (loads them)
+        return drift_choices()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -20,7 +20,6 @@ import numpy as np
 
 from ..exceptions import InvalidInput, SuspectConvention, UnobservableParameters
 from ..kinematics.rotations import gravity_in_base_from_tilt
-from ..validation import as_positive
 from .conventions import check_conventions, detect_sign_and_handedness
 from .dynamic_fit import (
     ALL_INDICES,
@@ -32,7 +31,6 @@ from .dynamic_fit import (
     theta_space,
 )
 from .estimate import CalibrationResult
-from .imu_samples import ImuSamples
 from .information import SensorNoise, noise_floor
 from .log_cholesky import (
     body_from_parameters,
@@ -43,7 +41,7 @@ from .log_cholesky import (
     nearest_consistent,
     parameters_from_log_cholesky,
 )
-from .model import STANDARD_GRAVITY
+from .model import STANDARD_GRAVITY, check_gravity
 from .regressor import MotionSamples
 from .samples import Samples
 
@@ -209,10 +207,12 @@ def calibrate_dynamic(
             data with ``estimate_inertia=True`` names the inertia).
         InvalidInput: bad arguments, or a non-positive mass estimate.
     """
+    from .imu_samples import ImuSamples  # (with the dynamic fit, not with this module)
+
     if isinstance(motion, ImuSamples):  # no joints: the IMU's own fit
         from .imu_dynamic import calibrate_imu_dynamic
 
-        if not estimate_inertia or as_positive(g, "g") != motion.g:
+        if not estimate_inertia or check_gravity(g) != motion.g:
             raise InvalidInput(
                 "a dynamic calibration from the IMU always estimates the inertia, with the g of "
                 f"its samples ({motion.g:g} m/s²: Samples.from_imu(..., g=...))"
@@ -221,7 +221,7 @@ def calibrate_dynamic(
     if imu:
         raise InvalidInput(f"unknown calibrate_dynamic option(s) {', '.join(sorted(imu))}")
     motion = _checked_motion(motion, noise)
-    g = as_positive(g, "g")
+    g = check_gravity(g)
     problem = DynamicProblem(
         motion.wrenches,
         motion.rotations,

@@ -11,18 +11,17 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from ..exceptions import InvalidInput, InvalidSamples
-from ..validation import as_float_array, as_positive
-from .conventions import check_conventions, detect_sign_and_handedness, reading_signs
+from ..options import checked, number, option
+from ..validation import as_float_array
+from .conventions import BASE_MOUNTS, check_conventions, detect_sign_and_handedness, reading_signs
 from .diagnostics import FitDiagnostics
-from .drift import BiasDrift, drift_candidates
-from .drift_fit import DriftStart, select_drift
+from .drift import BiasDrift, check_drift_spec, drift_candidates
 from .fit_quality import diagnose, log_warnings
-from .imu_samples import ImuSamples
 from .information import SensorNoise, noise_floor
 from .linear import fit_linear
 from .ml import LOSSES, fit_ml
-from .model import STANDARD_GRAVITY, SensorModel
-from .mount import MOUNT_NAMES, POSES_NEEDED, check_mount_mode
+from .model import STANDARD_GRAVITY, SensorModel, check_gravity
+from .mount import MOUNT_NAMES, POSES_NEEDED, MountMode
 from .result import CalibrationResult
 from .samples import PoseAverages, Samples, check_one_visit_per_pose
 
@@ -73,21 +72,85 @@ class CalibrationOptions:
             ``resolution / √12``, so a drift model cannot take all of it.
     """
 
-    method: str = "ml"
-    g: float = STANDARD_GRAVITY
-    noise: SensorNoise | None = None
-    loss: str = "linear"
-    drop_outliers: bool = False
-    estimate_mount: str = "none"
-    sensor_sign: int = 1
-    flip_axis: str | None = None
-    base_mount: str = "floor"
-    expected_gravity: object = None
-    drift: str = "auto"
-    resolution: object = None
+    method: str = option(
+        "ml",
+        "estimator: ml (joint maximum likelihood, with standard errors) or linear (the paper's "
+        "two-step least squares) (default: ml; ftkin paper: linear, the paper's)",
+        choices=METHODS,
+        cli_default=None,
+    )
+    g: float = option(
+        STANDARD_GRAVITY,
+        "gravity for the tool mass, 1 to 30 (the paper used 9.8, franky-sim and MuJoCo's "
+        "scenes 9.81)",
+        unit="m/s²",
+        parse=checked(lambda text: check_gravity(float(text)), "a number of m/s²"),
+    )
+    noise: SensorNoise | None = option(
+        None, "the noise of one reading (CLI: --noise-force and --noise-torque)", cli=False
+    )
+    loss: str = option(
+        "linear", "loss function; soft_l1 and huber resist outlier poses", choices=LOSSES
+    )
+    drop_outliers: bool = option(
+        False, "refit without the poses flagged as outliers", action="store_true"
+    )
+    estimate_mount: MountMode | str = option(
+        MountMode.NONE,
+        "the sensor's rotation on the flange is estimated too: yaw (about its z axis) or full "
+        "(any rotation); calibrate needs joint-angle samples, plan and evaluate-poses plan and "
+        "predict for it",
+        choices=("yaw", "full"),
+        metavar="yaw|full",
+        cli_default=None,
+    )
+    sensor_sign: int = option(
+        1,
+        "-1: the sensor reports the reaction, not the load on it (calibrate negates every "
+        "reading, simulate writes such readings)",
+        parse=int,
+        choices=(1, -1),
+    )
+    flip_axis: str | None = option(
+        None,
+        "negate this axis's force and torque channels in every reading (a mirrored, left-handed "
+        "sensor axis)",
+        choices=("x", "y", "z"),
+    )
+    base_mount: str = option(
+        "floor",
+        "how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall (no "
+        "check); a fitted weight more than 90° off the expected direction is refused as a "
+        "suspect sign",
+        choices=BASE_MOUNTS,
+    )
+    expected_gravity: object = option(
+        None,
+        "expected gravity direction in the base frame (overrides --base-mount)",
+        parse=number(),
+        nargs=3,
+        metavar=("GX", "GY", "GZ"),
+    )
+    drift: str = option(
+        "auto",
+        "bias drift over time, with a 't' column: auto (the model BIC prefers, said), none, "
+        "poly:N (a polynomial of degree N), random-walk (estimates the rate), random-walk+poly:N, "
+        "or a model registered with register_drift_model",
+        parse=checked(check_drift_spec, "a drift model"),
+        metavar="MODEL",
+    )
+    resolution: object = option(
+        None,
+        "resolution (quantization step) of one force and one torque reading: an estimated noise "
+        "is at least resolution/√12, so a drift model cannot take all of it",
+        unit="N, N·m",
+        parse=number(0.0, above=True),
+        nargs=2,
+        metavar=("N", "N·m"),
+    )
 
     def __post_init__(self):
-        object.__setattr__(self, "g", as_positive(self.g, "g"))
+        object.__setattr__(self, "g", check_gravity(self.g))
         if self.resolution is not None:
             resolution = as_float_array(self.resolution, "resolution").reshape(-1)
             if resolution.shape != (2,) or not np.all(np.isfinite(resolution) & (resolution > 0)):
@@ -96,9 +159,11 @@ class CalibrationOptions:
                     f"{self.resolution}"
                 )
             object.__setattr__(self, "resolution", resolution)
-        drift_candidates(self.drift)  # an unknown model or a bad argument is refused here
+        check_drift_spec(self.drift)  # refused here; "auto" and "none" build no model
         ml_only = self.noise is not None or self.loss != "linear" or self.drop_outliers
-        drifting, mount = self.drift not in ("auto", "none"), check_mount_mode(self.estimate_mount)
+        mount = MountMode.of(self.estimate_mount)  # the one check of the mode
+        object.__setattr__(self, "estimate_mount", mount)
+        drifting = self.drift not in ("auto", "none")
         for refused, message in (
             (
                 self.method not in METHODS,
@@ -201,7 +266,9 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
             readings sharing a pose id are averaged first. IMU samples
             (:meth:`Samples.from_imu`) are fitted by
             :func:`~ftkin.calibration.imu_fit.calibrate_imu` (options:
-            :class:`~ftkin.calibration.imu_options.ImuCalibrationOptions`).
+            :class:`~ftkin.calibration.imu_options.ImuCalibrationOptions`); samples with both
+            (:meth:`Samples.with_imu`) by :func:`~ftkin.calibration.fused_fit.calibrate_fused`
+            (options: :class:`~ftkin.calibration.fused_options.FusedCalibrationOptions`).
         options: A :class:`CalibrationOptions` (default: all defaults).
         **keywords: Its fields, given directly (``method="linear"``, ``drift="poly:2"``, ...);
             they replace those of ``options``.
@@ -218,10 +285,18 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
         SuspectConvention: the data fit with an axis reversed, or the tool
             weight points more than 90° from the expected gravity direction.
     """
-    if isinstance(samples, ImuSamples):  # no orientation: the IMU's own fit
-        from .imu_fit import calibrate_imu
+    if not isinstance(samples, Samples):  # the IMU's samples (their modules load on demand)
+        from .fused_samples import FusedSamples
+        from .imu_samples import ImuSamples
 
-        return calibrate_imu(samples, options, **keywords)
+        if isinstance(samples, ImuSamples):  # no orientation: the IMU's own fit
+            from .imu_fit import calibrate_imu
+
+            return calibrate_imu(samples, options, **keywords)
+        if isinstance(samples, FusedSamples):  # an orientation and the IMU: the fused fit
+            from .fused_fit import calibrate_fused
+
+            return calibrate_fused(samples, options, **keywords)
     unknown = set(keywords) - {f.name for f in fields(CalibrationOptions)}
     if unknown:
         raise InvalidInput(f"unknown calibrate option(s) {', '.join(sorted(unknown))}")
@@ -322,6 +397,8 @@ def _fit_drift(static: _Static, fit, models: tuple, floor, noise_free: bool, opt
     """The constant-bias fit ``static`` (by ``fit``) with the best of the drift ``models`` (or
     kept).
     """
+    from .drift_fit import DriftStart, select_drift  # only a calibration that fits a drift
+
     poses = static.poses
     start = DriftStart(
         fit.model.to_vector(),

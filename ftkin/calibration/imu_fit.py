@@ -247,6 +247,10 @@ def theta_covariance(covariance: np.ndarray, g: float) -> np.ndarray:
     return transform @ covariance @ transform.T
 
 
+MAX_POSES = 2000
+"""Most static poses of one IMU fit (its Jacobian grows with the square of the poses)."""
+
+
 def calibrate_imu(samples: ImuSamples, options=None, **keywords) -> ImuCalibrationResult:
     """Calibrate from static poses with the sensor's own IMU: no arm, no orientation.
 
@@ -277,6 +281,13 @@ def calibrate_imu(samples: ImuSamples, options=None, **keywords) -> ImuCalibrati
         )
     options = ImuCalibrationOptions.from_keywords(options, **keywords)
     poses = samples.pose_averages()
+    if len(poses) > MAX_POSES:
+        raise InvalidInput(
+            f"{len(poses)} poses: a static calibration from the IMU fits up to {MAX_POSES} (two "
+            "nuisance parameters each); readings of a recording are grouped into poses first "
+            "(pose ids, or ftkin.io.imu_columns.load_imu_samples(..., segments=...) finds the "
+            "still phases), a motion is calibrate_dynamic's"
+        )
     g = samples.g
     fit = fit_imu_static(poses, g, options)
     p = fit.parameters

@@ -136,17 +136,18 @@ class ImuCalibrationResult(CalibrationResult):
         """The IMU fit's warnings."""
         return self.imu_warnings
 
+    def _vector(self, values, names, digits=4, scale=1.0) -> str:
+        """``[v, ...] ± [σ, ...]`` of the named parameters (the ± part when all are estimated)."""
+        errors = self.parameter_std_errors
+        text = "[" + ", ".join(f"{v * scale:+.{digits}f}" for v in values) + "]"
+        sigma = [errors.get(name) for name in names]
+        if all(s is not None for s in sigma):
+            text += " ± [" + ", ".join(f"{s * scale:.{digits}f}" for s in sigma) + "]"
+        return text
+
     def summary(self) -> str:
         """Readable summary with units (± standard error): what the CLI prints."""
-        errors = self.parameter_std_errors
-
-        def vector(values, names, digits=4, scale=1.0):
-            text = "[" + ", ".join(f"{v * scale:+.{digits}f}" for v in values) + "]"
-            sigma = [errors.get(name) for name in names]
-            if all(s is not None for s in sigma):
-                text += " ± [" + ", ".join(f"{s * scale:.{digits}f}" for s in sigma) + "]"
-            return text
-
+        errors, vector = self.parameter_std_errors, self._vector
         axes = ("x", "y", "z")
         mass_error = errors.get("tool_mass")
         lines = [
@@ -165,6 +166,14 @@ class ImuCalibrationResult(CalibrationResult):
             + f" kg (g = {self.g:g} m/s²)",
             "  center_of_mass  c  = "
             f"{vector(self.center_of_mass, [f'center_of_mass[{a}]' for a in axes], 5)} m",
+        ]
+        return "\n".join(lines + self.imu_summary_lines())
+
+    def imu_summary_lines(self) -> list[str]:
+        """The summary's lines on the IMU: ``R_SI``, bias, scale, position, inertia, noise, fit
+        and the warnings."""
+        vector, axes = self._vector, ("x", "y", "z")
+        lines = [
             "  imu_rotation    R_SI rpy = "
             f"{vector(np.deg2rad(self.imu_rotation_rpy_deg), IMU_ROTATION_NAMES, 3, 180 / np.pi)}°"
             " (± about the sensor axes)",
@@ -203,5 +212,4 @@ class ImuCalibrationResult(CalibrationResult):
                 + ", ".join(f"{v:.4g}" for v in self.motion_residual_rms)
                 + " (N, N·m)"
             )
-        lines += [f"  WARNING: {message}" for message in self.imu_warnings]
-        return "\n".join(lines)
+        return lines + [f"  WARNING: {message}" for message in self.imu_warnings]

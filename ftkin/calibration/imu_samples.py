@@ -17,7 +17,7 @@ import numpy as np
 
 from ..exceptions import InvalidInput, InvalidSamples
 from ..validation import as_batch, as_float_array, as_integers, as_positive, check_wrench_magnitude
-from .model import STANDARD_GRAVITY
+from .model import STANDARD_GRAVITY, check_gravity
 from .samples import MAX_POSE_SPREAD, check_time_span
 
 ACCEL_UNITS = {"m/s^2": "m/s^2", "m/s2": "m/s^2", "m/s²": "m/s^2", "mps2": "m/s^2", "g": "g"}
@@ -177,7 +177,7 @@ class ImuSamples:
         g: float = STANDARD_GRAVITY,
     ) -> "ImuSamples":
         """From arrays in the user's accelerometer unit (``"m/s^2"`` or ``"g"``), checked."""
-        g = as_positive(g, "g")
+        g = check_gravity(g)
         factor = accel_unit_factor(accel_unit, g)
         force, _ = as_batch(specific_force, 3, "specific_force [ax, ay, az]")
         check_specific_force_unit(force * factor, g, accel_unit)

@@ -21,13 +21,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..exceptions import InvalidInput
 from .information import SensorNoise, covariance_from_information, noise_floor
 from .linear import fit_linear
 from .model import STANDARD_GRAVITY, SensorModel, parameter_jacobian, predict
 from .mount import (
     MOUNT_AXES,
-    check_mount_mode,
     check_mount_observable,
     mount_jacobian,
     mount_rotation,
@@ -315,13 +313,12 @@ def fit_ml(
         floor: ``(6,)`` lowest noise a residual estimate may take [N, N·m] (default:
             :func:`~ftkin.calibration.information.noise_floor`).
 
+    The options are :class:`~ftkin.calibration.estimate.CalibrationOptions`' (checked there).
+
     Raises:
         UnobservableParameters: the poses cannot determine the parameters (or the mount).
-        InvalidInput: unknown loss or mount mode.
     """
-    if loss not in LOSSES:
-        raise InvalidInput(f"unknown loss {loss!r}; expected one of {', '.join(LOSSES)}")
-    if check_mount_mode(estimate_mount) == "none":
+    if estimate_mount == "none":
         mount0, start = np.eye(3), fit_linear(poses, g)
     else:
         mount0, start = mount_start(poses, g)

@@ -30,6 +30,15 @@ STANDARD_GRAVITY = 9.80665
 GRAVITY_RANGE = (1.0, 30.0)
 """Plausible acceleration of gravity [m/s²] (the Moon 1.6, Jupiter 24.8): beyond, a unit mistake."""
 
+
+def check_gravity(value, name: str = "g") -> float:
+    """``value`` [m/s²] as a float within :data:`GRAVITY_RANGE`, else :class:`InvalidInput`: the
+    one rule for ``g`` (the options, the model, the CLI's ``--g`` and the simulators use it)."""
+    from ..validation import as_in_range
+
+    return as_in_range(value, name, *GRAVITY_RANGE, "m/s²")
+
+
 PARAMETER_NAMES = (
     "gravity_in_base",
     "force_offset",
@@ -93,7 +102,7 @@ class SensorModel:
             ).copy()  # frozen: a copy, never the caller's array
             vector.setflags(write=False)
             object.__setattr__(self, name, vector)
-        object.__setattr__(self, "g", as_positive(self.g, "g"))
+        object.__setattr__(self, "g", check_gravity(self.g))
 
     @classmethod
     def from_tool(
@@ -106,7 +115,7 @@ class SensorModel:
         g: float = STANDARD_GRAVITY,
     ) -> "SensorModel":
         """Build from a tool mass [kg], COM [m, sensor frame], biases and base tilt (U, V) [rad]."""
-        weight = as_positive(tool_mass, "tool_mass") * as_positive(g, "g")  # [N]
+        weight = as_positive(tool_mass, "tool_mass") * check_gravity(g)  # [N]
         gravity = gravity_in_base_from_tilt(weight, float(base_tilt[0]), float(base_tilt[1]))
         return cls(force_offset, torque_offset, gravity, center_of_mass, g)
 

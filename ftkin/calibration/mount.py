@@ -23,6 +23,7 @@ reading. :func:`check_mount_observable` refuses such pose sets by name.
 """
 
 from dataclasses import replace
+from enum import StrEnum
 
 import numpy as np
 import pinocchio as pin
@@ -62,13 +63,35 @@ POSES_NEEDED = {
 """What pose sets each mode needs (said when a mount is refused as unobservable)."""
 
 
-def check_mount_mode(estimate_mount: str) -> str:
-    """``estimate_mount`` if it is one of :data:`MOUNT_MODES`, else :class:`InvalidInput`."""
-    if estimate_mount not in MOUNT_MODES:
-        raise InvalidInput(
-            f"unknown estimate_mount {estimate_mount!r}; expected one of {', '.join(MOUNT_MODES)}"
-        )
-    return estimate_mount
+class MountMode(StrEnum):
+    """What the fit estimates of the sensor's mount on the flange (``estimate_mount``).
+
+    A :class:`~enum.StrEnum`: it compares equal to its text (``MountMode.YAW == "yaw"``). The
+    text is checked once, where it enters (:meth:`of`, called by
+    :class:`~ftkin.calibration.estimate.CalibrationOptions`, the result's and the planner's
+    types and the public entry points); the functions behind them trust a ``MountMode``.
+    """
+
+    NONE = "none"
+    YAW = "yaw"
+    FULL = "full"
+
+    @classmethod
+    def of(cls, value) -> "MountMode":
+        """``value`` as a mode (a mode passes as it is), else :class:`InvalidInput`."""
+        if isinstance(value, cls):
+            return value
+        try:
+            return cls(value)
+        except ValueError:
+            raise InvalidInput(
+                f"unknown estimate_mount {value!r}; expected one of {', '.join(MOUNT_MODES)}"
+            ) from None
+
+
+def check_mount_mode(estimate_mount) -> MountMode:
+    """:meth:`MountMode.of` (the name kept for the callers of the release before)."""
+    return MountMode.of(estimate_mount)
 
 
 def exp_so3(rotation_vector) -> np.ndarray:
@@ -170,7 +193,7 @@ def mount_jacobian(
     mount = np.eye(3) if mount is None else np.asarray(mount, dtype=float)
     gravity, com = np.asarray(gravity_in_base, dtype=float), np.asarray(center_of_mass, dtype=float)
     jac = parameter_jacobian(rotations @ mount.T, gravity, com)
-    axes = MOUNT_AXES[check_mount_mode(mode)]
+    axes = MOUNT_AXES[mode]  # a MountMode (checked where it entered)
     if mode == "none":
         return jac
     if increment is not None:

@@ -19,7 +19,7 @@ from .diagnostics import FitDiagnostics
 from .drift import BiasDrift
 from .information import standard_errors
 from .model import WRENCH_CHANNELS, SensorModel
-from .mount import MOUNT_NAMES, check_mount_mode, rotation_to_rpy
+from .mount import MOUNT_NAMES, MountMode, rotation_to_rpy
 
 
 @dataclass(frozen=True)
@@ -82,7 +82,7 @@ class CalibrationResult(SensorModel):
     covariance: np.ndarray | None = None
     diagnostics: FitDiagnostics | None = None
     mount_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
-    mount_mode: str = "none"
+    mount_mode: MountMode | str = MountMode.NONE
     mount_covariance: np.ndarray | None = None
     sensor_sign: int = 1
     flip_axis: str | None = None
@@ -120,7 +120,7 @@ class CalibrationResult(SensorModel):
             )
         rotation.setflags(write=False)
         object.__setattr__(self, "mount_rotation", rotation)
-        object.__setattr__(self, "mount_mode", check_mount_mode(self.mount_mode))
+        object.__setattr__(self, "mount_mode", MountMode.of(self.mount_mode))
         object.__setattr__(self, "sensor_sign", check_sensor_sign(self.sensor_sign))
         check_flip_axis(self.flip_axis)
 

@@ -40,6 +40,7 @@ OUTPUT_OPTIONS = {
     "html": "--html",
     "png": "--png",
     "plot": "--plot",
+    "live_log": "--log",  # compensate --live
     "calibration_output": "--calibrate",
 }
 """Namespace attributes that name files a subcommand writes, and their flags."""
@@ -53,6 +54,7 @@ INPUT_OPTIONS = (
     "replay",
     "trajectory",
     "urdf",
+    "prior",
 )
 """Namespace attributes that name files a subcommand reads."""
 
@@ -69,11 +71,13 @@ def check_outputs(args: argparse.Namespace) -> None:
     from ..io.atomic import check_output_path
     from .arg_types import refuse
 
-    inputs = {
-        name: getattr(args, name)
-        for name in INPUT_OPTIONS
-        if isinstance(getattr(args, name, None), str)
-    }
+    inputs = {}
+    for name in INPUT_OPTIONS:
+        value = getattr(args, name, None)
+        values = value if isinstance(value, list) else [value]
+        for index, one in enumerate(values):  # FILE [FILE ...] positionals are lists
+            if isinstance(one, str):
+                inputs[name if len(values) == 1 else f"{name} #{index + 1}"] = one
     refuse(
         InvalidInput,
         *(

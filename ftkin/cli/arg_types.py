@@ -7,7 +7,7 @@ Each converter raises :class:`argparse.ArgumentTypeError`, which the CLI reports
 
 import argparse
 
-from ..calibration.model import GRAVITY_RANGE
+from ..calibration.model import check_gravity
 
 
 def option(*flags: str, **keywords) -> tuple:
@@ -57,7 +57,7 @@ def _number(text: str, accept, expected: str) -> float:
     return value
 
 
-NUMBER_LIST_OPTIONS = ("--sensor-offset", "--mount-rpy-deg", "--com")
+NUMBER_LIST_OPTIONS = ("--sensor-offset", "--mount-rpy-deg", "--com", "--imu-position")
 """Options that take several numbers; their values end at the first token that is not a number."""
 
 
@@ -128,15 +128,15 @@ def seed(text: str) -> int:
 
 
 def gravity(text: str) -> float:
-    """argparse type: gravity [m/s²] between 1 and 30 (Earth: 9.81; the Moon 1.6, Jupiter 24.8)."""
-    value = _number(text, lambda v: v > 0, "a finite positive number")
-    if not GRAVITY_RANGE[0] <= value <= GRAVITY_RANGE[1]:
-        raise argparse.ArgumentTypeError(
-            "gravity must be between {:g} and {:g} m/s² (Earth: 9.80665), got {!r}".format(
-                *GRAVITY_RANGE, text
-            )
-        )
-    return value
+    """argparse type: gravity [m/s²] by :func:`~ftkin.calibration.model.check_gravity` (1 to 30;
+    Earth: 9.81; the Moon 1.6, Jupiter 24.8)."""
+    from ..exceptions import InvalidInput
+
+    value = _number(text, lambda v: True, "a finite number")
+    try:
+        return check_gravity(value)
+    except InvalidInput as error:
+        raise argparse.ArgumentTypeError(f"{error} (Earth: 9.80665)") from None
 
 
 def finite_float(text: str) -> float:

@@ -1,22 +1,16 @@
 """``ftkin calibrate SAMPLES.csv [-o CALIB.json]`` (``--dynamic`` for a moving recording)."""
 
-import argparse
 from dataclasses import replace
 from pathlib import Path
 
 from .. import Arm, CalibrationOptions, InvalidInput, SensorNoise, calibrate, save_calibration
-from ..calibration.conventions import BASE_MOUNTS
-from ..calibration.drift import drift_candidates, drift_choices
-from ..calibration.ml import LOSSES
 from ..kinematics import bundled_urdf_path
 from ..kinematics.record import KinematicsRecord
 from .arg_types import (
     add_command,
     add_options,
     bounded_int,
-    finite_float,
     option,
-    positive_float,
     refuse,
 )
 from .common import (
@@ -24,12 +18,17 @@ from .common import (
     add_samples_arguments,
     arm_from_args,
     column_spelling_from_args,
+    input_paths,
     load_samples_from_args,
+    segment_parameters_from_args,
+    stream_reading_from_args,
 )
+from .declared import add_declared, declared_values
 from .doctor import refuse_convention_mistakes
 from .shared_options import (
     ESTIMATE_MOUNT,
     GRAVITY,
+    IMU_POSITION,
     METHOD,
     NOISE_FORCE,
     NOISE_TORQUE,
@@ -37,84 +36,18 @@ from .shared_options import (
     resolved,
 )
 
-
-def drift_spec(text: str) -> str:
-    """argparse type: a drift spec the registry knows (``auto``, ``none``, ``poly:2``, ...)."""
-    try:
-        drift_candidates(text)
-    except InvalidInput as error:
-        raise argparse.ArgumentTypeError(str(error)) from None
-    return text
-
-
-# The ml estimator's options.
-_ML_OPTIONS = (
-    NOISE_FORCE,
-    NOISE_TORQUE,
-    option(
-        "--resolution",
-        type=positive_float,
-        nargs=2,
-        metavar=("N", "N·m"),
-        help="resolution (quantization step) of one force and one torque reading: an estimated "
-        "noise is at least resolution/√12, so a drift model cannot take all of it",
-    ),
-    option(
-        "--loss",
-        choices=LOSSES,
-        default="linear",
-        help="loss function; soft_l1/huber resist outlier poses (default: %(default)s)",
-    ),
-    option(
-        "--drop-outliers",
-        action="store_true",
-        help="refit without the poses flagged as outliers",
-    ),
-    option(
-        "--drift",
-        type=drift_spec,
-        default="auto",
-        metavar="MODEL",
-        help=f"bias drift over time, with a 't' column: {'|'.join(drift_choices())} (poly:N a "
-        "polynomial of degree N; random-walk estimates the rate; auto picks by BIC and says "
-        "which; default: %(default)s)",
-    ),
-    option(
-        "--cross-validate",
-        type=bounded_int(2, 50, "folds"),
-        metavar="K",
-        default=None,
-        help="also print the K-fold cross-validated compensation error at held-out poses, with "
-        "drift none beside the --drift model (does modelling a drift pay on this sensor?)",
-    ),
-    ESTIMATE_MOUNT,
+CROSS_VALIDATE = option(
+    "--cross-validate",
+    type=bounded_int(2, 50, "folds"),
+    metavar="K",
+    default=None,
+    help="also print the K-fold cross-validated compensation error at held-out poses, with "
+    "drift none beside the --drift model (does modelling a drift pay on this sensor?)",
 )
-
-# Sensor and robot conventions, stored in the calibration file.
-_CONVENTION_OPTIONS = (
-    SENSOR_SIGN,
-    option(
-        "--flip-axis",
-        choices=("x", "y", "z"),
-        help="negate this axis's force and torque channels in every reading (a mirrored, "
-        "left-handed sensor axis)",
-    ),
-    option(
-        "--base-mount",
-        choices=BASE_MOUNTS,
-        default="floor",
-        help="how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall "
-        "(no check); a fitted weight more than 90° off the expected direction is refused as a "
-        "suspect sign (default: %(default)s)",
-    ),
-    option(
-        "--expected-gravity",
-        type=finite_float,
-        nargs=3,
-        metavar=("GX", "GY", "GZ"),
-        help="expected gravity direction in the base frame (overrides --base-mount)",
-    ),
-)
+ML_FIELDS = ("resolution", "loss", "drop_outliers", "drift")
+"""The ml estimator's options, declared on :class:`~ftkin.calibration.CalibrationOptions`."""
+CONVENTION_FIELDS = ("flip_axis", "base_mount", "expected_gravity")
+"""The sensor and robot conventions stored in the file (with ``sensor_sign``), declared there."""
 
 
 def register(subparsers) -> None:
@@ -128,21 +61,29 @@ def register(subparsers) -> None:
         "(their spread then gives the noise levels of the ml fit); optional 't' column [s] (bags: "
         "the stamps) lets the bias drift with time (--drift).",
         options=(
-            option("samples", metavar="SAMPLES.csv"),
+            option(
+                "samples",
+                nargs="+",
+                metavar="SAMPLES.csv",
+                help="a samples CSV or a ROS 2 bag; or several CSVs on their own clocks (a wrench "
+                "log, an IMU log, a joint or orientation log, any order), joined on their time "
+                "column",
+            ),
             option("-o", "--output", metavar="CALIB.json", help="write the calibration file here"),
             METHOD,
             GRAVITY,
         ),
         run=run,
     )
-    add_options(
-        parser.add_argument_group("ml estimator"),
-        *_ML_OPTIONS,
+    ml = parser.add_argument_group("ml estimator")
+    add_options(ml, NOISE_FORCE, NOISE_TORQUE)
+    add_declared(ml, CalibrationOptions, only=ML_FIELDS)
+    add_options(ml, CROSS_VALIDATE, ESTIMATE_MOUNT)
+    conventions = parser.add_argument_group(
+        "sensor and robot conventions (stored in the calibration file)"
     )
-    add_options(
-        parser.add_argument_group("sensor and robot conventions (stored in the calibration file)"),
-        *_CONVENTION_OPTIONS,
-    )
+    add_options(conventions, SENSOR_SIGN)
+    add_declared(conventions, CalibrationOptions, only=CONVENTION_FIELDS)
     add_options(
         parser.add_argument_group(
             "dynamic calibration (a moving recording: columns t, joints, fx..mz, or a bag)"
@@ -158,6 +99,13 @@ def register(subparsers) -> None:
             help="with --dynamic: fit the static parameters only",
         ),
         SG_WINDOW,
+        option(
+            "--prior",
+            metavar="CALIB.json",
+            help="with --dynamic from the IMU: a static IMU calibration of the same IMU (its "
+            "accelerometer bias and scale; a motion cannot separate them from the bias)",
+        ),
+        IMU_POSITION,
     )
     parser.add_argument(
         "--no-convention-check",
@@ -197,12 +145,18 @@ def _run_dynamic(args, noise) -> int:
     from ..io.bags import is_bag_path
 
     arm = arm_from_args(args) or Arm.default()
-    if is_bag_path(args.samples):
+    paths = input_paths(args.samples)
+    if len(paths) > 1:
+        raise InvalidInput(
+            "--dynamic with joint angles reads one recording (t, joints, fx..mz); several files "
+            "are joined for the static fit and the IMU's"
+        )
+    if is_bag_path(paths[0]):
         recording = load_motion_bag(
-            args.samples, arm, args.joint_topic, args.wrench_topic, args.wrench_frame
+            paths[0], arm, args.joint_topic, args.wrench_topic, args.wrench_frame or "sensor"
         )
     else:
-        recording = load_motion_csv(args.samples, arm, column_spelling_from_args(args))
+        recording = load_motion_csv(paths[0], arm, column_spelling_from_args(args))
     result = calibrate_dynamic(
         recording.motion_samples(arm, args.sg_window),
         estimate_inertia=not args.no_inertia,
@@ -221,24 +175,25 @@ def _options(args, noise) -> CalibrationOptions:
             "--no-inertia and --sg-window apply to --dynamic only",
         ),
     )  # the combinations of the fit's options are CalibrationOptions' to check, once
+    given = declared_values(CalibrationOptions, args, skip=("method", "estimate_mount"))
     return CalibrationOptions(
+        **given,
         method=resolved(args.method, "ml"),
-        g=args.g,
-        noise=noise,
-        loss=args.loss,
-        drop_outliers=args.drop_outliers,
         estimate_mount=args.estimate_mount or "none",
-        sensor_sign=args.sensor_sign,
-        flip_axis=args.flip_axis,
-        base_mount=args.base_mount,
-        expected_gravity=args.expected_gravity,
-        drift=args.drift,
-        resolution=args.resolution,
+        noise=noise,
     )
 
 
 def run(args) -> int:
     noise = _noise(args)
+    paths = input_paths(args.samples)
+    if _from_imu(args, paths):
+        return _run_imu(args, noise, paths)
+    if args.prior or args.imu_position is not None:
+        raise InvalidInput(
+            "--prior and --imu-position apply to a calibration from the IMU (accelerometer columns "
+            "ax,ay,az and no orientation)"
+        )
     if args.dynamic:
         return _run_dynamic(args, noise)
     options = _options(args, noise)
@@ -256,9 +211,12 @@ def run(args) -> int:
         or args.estimate_mount
     ):
         refuse_convention_mistakes(loaded, arm)
-    result = calibrate(loaded.samples, options)
+    samples = _with_imu(loaded, args)
+    result = calibrate(samples, options)
     urdf = loaded.samples.urdf
-    if urdf and (arm or Path(urdf).resolve() == bundled_urdf_path().resolve()):
+    # a model built without a URDF (the UR e-Series) records itself by its robot name
+    built = arm is not None and arm.urdf_path is None and loaded.samples.joint_positions is not None
+    if built or (urdf and (arm or Path(urdf).resolve() == bundled_urdf_path().resolve())):
         # the arm the joint columns were read with (the bundled one when no option named one)
         result = replace(result, kinematics=KinematicsRecord.from_arm(arm or Arm.default()))
     validation = None
@@ -276,6 +234,86 @@ def run(args) -> int:
     if validation is not None:
         print(validation.report())
     return 0
+
+
+def _with_imu(loaded, args):
+    """The samples, with the IMU's specific force when the table has ``ax,ay,az`` too: the
+    orientation and the IMU fitted together, the mount checked (:mod:`ftkin.calibration.fused_fit`).
+    """
+    from ..io.stream_join import ACCEL_COLUMNS, GYRO_COLUMNS
+
+    table = loaded.table
+    if loaded.recording is not None or not all(name in table.header for name in ACCEL_COLUMNS):
+        return loaded.samples
+    gyro = table.floats(GYRO_COLUMNS) if all(n in table.header for n in GYRO_COLUMNS) else None
+    print(f"{table.source}: the orientation and the IMU (ax,ay,az) fitted together")
+    return loaded.samples.with_imu(
+        table.floats(ACCEL_COLUMNS),
+        accel_unit=stream_reading_from_args(args).accel_unit,
+        angular_velocity=gyro,
+        g=args.g,
+    )
+
+
+def _from_imu(args, paths) -> bool:
+    """Whether the inputs are a calibration from the IMU (CSVs, an accelerometer, no
+    orientation)."""
+    from ..io.bags import is_bag_path
+    from ..io.joined_files import imu_only
+
+    if any(is_bag_path(path) for path in paths):
+        return False
+    arm = arm_from_args(args) or Arm.default()
+    return imu_only(paths, column_spelling_from_args(args), arm.joint_names)
+
+
+def _run_imu(args, noise, paths) -> int:
+    """The calibration from the sensor's IMU: static poses, or (``--dynamic``) a motion."""
+    from ..io.calibration_file import load_calibration
+    from ..io.imu_columns import load_imu_samples
+
+    reading = stream_reading_from_args(args)
+    refuse(
+        InvalidInput,
+        (
+            args.estimate_mount or args.method == "linear" or args.cross_validate,
+            "--estimate-mount, --method linear and --cross-validate apply to a calibration from "
+            "joint angles or orientations; the IMU's fit estimates the IMU's rotation itself",
+        ),
+        (
+            args.prior is not None and not args.dynamic,
+            "--prior (a static IMU calibration) applies to --dynamic",
+        ),
+    )
+    samples, joined = load_imu_samples(
+        *paths,
+        accel_unit=reading.accel_unit,
+        g=args.g,
+        max_gap=reading.max_gap,
+        gaps=reading.gaps,
+        spelling=column_spelling_from_args(args),
+        segments=None if args.dynamic else segment_parameters_from_args(args),
+    )
+    print(
+        f"{' + '.join(paths)}: {len(samples)} readings from the sensor's IMU (no orientation: the "
+        "accelerometer gives gravity)"
+    )
+    for note in joined.notes:
+        print(f"  {note}")
+    if args.dynamic:
+        from .. import calibrate_dynamic
+
+        prior = None if args.prior is None else load_calibration(args.prior)
+        result = calibrate_dynamic(
+            samples,
+            prior=prior,
+            imu_position=args.imu_position,
+            noise=noise,
+            window=args.sg_window,
+        )
+    else:
+        result = calibrate(samples, wrench_noise=noise, imu_position=args.imu_position)
+    return _report(result, args)
 
 
 def _report(result, args) -> int:

@@ -166,10 +166,35 @@ def column_spelling_from_args(args: argparse.Namespace):
     return ColumnSpelling(**declared_values(ColumnSpelling, args))
 
 
+def add_stream_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--accel-unit``, ``--max-gap``, ``--gaps``: IMU columns and files joined on time
+    (:class:`~ftkin.io.joined_files.StreamReading`)."""
+    from ..io.joined_files import StreamReading
+
+    add_declared(
+        parser,
+        StreamReading,
+        group="IMU columns (ax,ay,az [m/s²], wx,wy,wz [rad/s]) and several files joined on time",
+    )
+
+
+def stream_reading_from_args(args: argparse.Namespace):
+    """The :class:`~ftkin.io.joined_files.StreamReading` of :func:`add_stream_arguments`."""
+    from ..io.joined_files import StreamReading
+
+    return StreamReading(**declared_values(StreamReading, args))
+
+
+def input_paths(value) -> list[str]:
+    """The files of a ``FILE [FILE ...]`` positional (one name or a list)."""
+    return [value] if isinstance(value, str) else list(value)
+
+
 def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments about how a samples file or a ROS 2 bag is read."""
     add_arm_arguments(parser)
     add_column_arguments(parser)
+    add_stream_arguments(parser)
     from ..io.static_segments import SegmentParameters
 
     defaults = SegmentParameters()
@@ -194,10 +219,10 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
         option(
             "--wrench-frame",
             choices=("sensor", "base"),
-            default="sensor",
-            help="frame the bag's wrenches are expressed in; base: rotate them into the sensor "
-            "frame (a UR TCP force) "
-            "(default: %(default)s)",
+            default=None,
+            help="frame the bag's (or the UR's) wrenches are expressed in; base: rotate them into "
+            "the sensor frame (a UR TCP force) (default: sensor; with compensate --ur: base, "
+            "UR's convention)",
         ),
         option(
             "--speed-threshold",
@@ -328,10 +353,26 @@ def warn_if_kinematics_differ(loaded, calibration) -> None:
         )
 
 
+def segment_parameters_from_args(args: argparse.Namespace):
+    """The :class:`~ftkin.io.static_segments.SegmentParameters` of :func:`add_samples_arguments`
+    (how still segments of a recording are found), or None with ``--all-rows``."""
+    from ..io.static_segments import SegmentParameters
+
+    if args.all_rows:
+        return None
+    return SegmentParameters(
+        speed_threshold=args.speed_threshold,
+        min_duration=args.min_static_duration,
+        settle_time=args.settle_time,
+        speed_window=args.speed_window,
+    )
+
+
 def load_samples_from_args(
-    path: str, args: argparse.Namespace, *, static_only: bool = True, arm: Arm | None = None
+    path, args: argparse.Namespace, *, static_only: bool = True, arm: Arm | None = None
 ):
-    """Read a samples CSV or a ROS 2 bag named on the command line.
+    """Read a samples CSV or a ROS 2 bag named on the command line (``path``: one file, or several
+    CSVs joined on time, :mod:`ftkin.io.joined_files`).
 
     Returns a :class:`~ftkin.io.samples_csv.LoadedSamples` (a :class:`~ftkin.io.bags.BagSamples`
     for a bag). ``static_only`` (off with ``--all-rows``) applies to bags and continuous
@@ -344,15 +385,24 @@ def load_samples_from_args(
 
     arm = arm_from_args(args) if arm is None else arm
     static_only = static_only and not args.all_rows
-    parameters = SegmentParameters(  # the options of add_samples_arguments
-        speed_threshold=args.speed_threshold,
-        min_duration=args.min_static_duration,
-        settle_time=args.settle_time,
-        speed_window=args.speed_window,
-    )
-    if not is_bag_path(path):
-        spelling = column_spelling_from_args(args)
-        loaded = load_samples(path, arm, parameters if static_only else None, spelling)
+    parameters = segment_parameters_from_args(args) or SegmentParameters()
+    segments = parameters if static_only else None
+    paths = input_paths(path)
+    if len(paths) > 1:  # several files, each on its own clock: joined on time, then one table
+        from ..io.joined_files import joined_table
+        from ..io.samples_csv import samples_from_table
+
+        table, joined = joined_table(
+            paths,
+            spelling=column_spelling_from_args(args),
+            reading=stream_reading_from_args(args),
+        )
+        print(f"joined {len(paths)} files on time: {len(table.rows)} rows at the wrench's stamps")
+        for note in joined.notes:
+            print(f"  {note}")
+        loaded, path = samples_from_table(table, arm, segments), table.source
+    elif not is_bag_path(path := paths[0]):
+        loaded = load_samples(path, arm, segments, column_spelling_from_args(args))
     else:
         loaded = bag_samples(
             path,
@@ -361,7 +411,7 @@ def load_samples_from_args(
             wrench_topic=args.wrench_topic,
             parameters=parameters,
             static_only=static_only,
-            wrench_frame=args.wrench_frame,
+            wrench_frame=args.wrench_frame or "sensor",
         )
     if loaded.layout is not None:  # how the table was read: poses, or a recording's segments
         print(f"{path}: {loaded.layout.describe()}")

@@ -1,8 +1,11 @@
-"""``ftkin compensate CALIB.json LOG.csv -o OUT.csv``, with the inertial term for a moving log."""
+"""``ftkin compensate CALIB.json LOG.csv -o OUT.csv``, with the inertial term for a moving log
+(``--ur HOST --live``: a UR arm's readings as they come, :mod:`ftkin.cli.compensate_live`).
+"""
 
 import numpy as np
 
 from .. import Arm, Compensator, InvalidInput, load_calibration
+from ..calibration.imu_result import ImuCalibrationResult
 from ..calibration.model import WRENCH_CHANNELS
 from ..io.bags import is_bag_path
 from ..io.column_spelling import spelled_table
@@ -14,14 +17,18 @@ from .common import (
     add_samples_arguments,
     arm_for_calibration,
     column_spelling_from_args,
+    input_paths,
     load_samples_from_args,
     logger,
+    stream_reading_from_args,
     warn_if_kinematics_differ,
 )
+from .compensate_live import add_live_arguments, check_live_arguments, run_live
+from .shared_options import IMU_POSITION
 
 
 def register(subparsers) -> None:
-    add_command(
+    parser = add_command(
         subparsers,
         "compensate",
         help="remove bias and tool gravity from a log of raw readings",
@@ -35,22 +42,59 @@ def register(subparsers) -> None:
         "(calibrate --dynamic) "
         "and the log has a time column t and joint columns, the tool's inertial wrench is removed "
         "too (joint "
-        "derivatives from the log, zero-phase).",
+        "derivatives from the log, zero-phase). With --ur HOST --live: a Universal Robots arm's "
+        "readings as they come (its built-in sensor, or --sensor), printed a few times a second "
+        "and with --log written at full rate, until --duration or Ctrl-C.",
         options=(
             option("calibration", metavar="CALIB.json"),
-            option("log", metavar="LOG.csv"),
-            option("-o", "--output", metavar="OUT.csv", required=True),
+            option(
+                "log",
+                nargs="*",
+                metavar="LOG.csv",
+                help="a log (or a bag); or several CSVs on their own clocks (wrench, IMU, joints "
+                "or orientation, any order), joined on their time column (none with --live)",
+            ),
+            IMU_POSITION,
+            option("-o", "--output", metavar="OUT.csv"),
             SG_WINDOW,
             ALLOW_OTHER_ARM,
         ),
-        groups=(add_samples_arguments,),
+        groups=(add_samples_arguments, add_live_arguments),
         run=run,
     )
+    _parse_intermixed(parser)
+
+
+def _parse_intermixed(parser) -> None:
+    """Let LOG.csv (optional since ``--live``) follow options, as when it was required.
+
+    argparse fills an optional positional with nothing when an option comes between it and the
+    one before (``compensate CALIB --robot ur5 LOG -o OUT`` would leave LOG unrecognized);
+    ``parse_known_intermixed_args`` reads the positionals after the options. It calls
+    ``parse_known_args`` itself: the plain one is put back for the time of the call.
+    """
+    plain = parser.parse_known_args
+
+    def intermixed(args=None, namespace=None):
+        parser.parse_known_args = plain
+        try:
+            return parser.parse_known_intermixed_args(args, namespace)
+        finally:
+            parser.parse_known_args = intermixed
+
+    parser.parse_known_args = intermixed
 
 
 def run(args) -> int:
+    check_live_arguments(args)
     calibration = load_calibration(args.calibration)
+    if isinstance(calibration, ImuCalibrationResult):  # made from the IMU: its columns compensate
+        return _compensate_imu(args, calibration)
+    if args.imu_position is not None:
+        raise InvalidInput("--imu-position applies to a calibration made from the IMU")
     arm = arm_for_calibration(args, calibration)
+    if args.live:
+        return run_live(args, calibration, arm)
     compensator = Compensator(
         calibration, arm, allow_other_arm=args.allow_other_arm
     )  # checks arm against the record
@@ -80,6 +124,42 @@ def run(args) -> int:
     return 0
 
 
+def _compensate_imu(args, calibration) -> int:
+    """A calibration from the IMU: the wrench and IMU columns of the files (joined on time),
+    compensated with :class:`~ftkin.control.imu_compensation.ImuCompensator` (with a gyro and
+    times, the rotational terms too, zero-phase)."""
+    from ..control.imu_compensation import ImuCompensator
+    from ..io.imu_columns import load_imu_samples
+
+    paths = input_paths(args.log)
+    reading = stream_reading_from_args(args)
+    samples, joined = load_imu_samples(
+        *paths,
+        accel_unit=reading.accel_unit,
+        g=calibration.g,
+        max_gap=reading.max_gap,
+        gaps=reading.gaps,
+        spelling=column_spelling_from_args(args),
+    )
+    for note in joined.notes:
+        print(f"  {note}")
+    compensator = ImuCompensator(calibration, imu_position=args.imu_position)
+    contact = compensator.compensate_recording(samples, window=args.sg_window)
+    header = ["t", *joined.columns] if samples.times is not None else list(joined.columns)
+    columns = [joined.times] if samples.times is not None else []
+    columns += [np.asarray(joined.columns[name], dtype=float) for name in joined.columns]
+    rows = [list(row) for row in zip(*columns)]
+    count = _write_contact(args.output, header, rows, contact)
+    moving = samples.angular_velocity is not None and samples.times is not None
+    terms = "gravity, linear and rotational terms" if moving else "gravity, linear acceleration"
+    median = np.median(np.linalg.norm(contact[:, :3], axis=1))
+    print(
+        f"wrote {count} compensated rows to {args.output} from the IMU ({terms}); median "
+        f"contact force |F'| {median:.4f} N"
+    )
+    return 0
+
+
 def _write_contact(path: str, header: list[str], rows, contact: np.ndarray) -> int:
     """Write ``rows`` with their fx..mz cells replaced by ``contact`` [N, N·m]; returns how many."""
     columns = [header.index(name) for name in WRENCH_CHANNELS]
@@ -96,20 +176,23 @@ def _compensate_motion(args, calibration, arm: Arm) -> int | None:
     from ..control.dynamic_compensation import DynamicCompensator
     from ..io.motion_recording import is_motion_table, load_motion_bag, motion_from_table
 
-    if is_bag_path(args.log):
+    paths = input_paths(args.log)
+    if len(paths) > 1:
+        return None  # several files: joined, then compensated at rest (the static path)
+    if is_bag_path(paths[0]):
         recording = load_motion_bag(
-            args.log, arm, args.joint_topic, args.wrench_topic, args.wrench_frame
+            paths[0], arm, args.joint_topic, args.wrench_topic, args.wrench_frame or "sensor"
         )
         header = ["t", *arm.joint_names, *WRENCH_CHANNELS]
         rows = np.column_stack(
             [recording.times, recording.joint_positions, recording.wrenches]
         ).tolist()
     else:
-        table = spelled_table(read_table(args.log), column_spelling_from_args(args))
+        table = spelled_table(read_table(paths[0]), column_spelling_from_args(args))
         if not is_motion_table(table, arm):
             logger.warning(
                 "%s has no 't' and joint columns: static compensation only (no inertial term)",
-                args.log,
+                paths[0],
             )
             return None
         recording = motion_from_table(table, arm)

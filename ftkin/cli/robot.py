@@ -47,6 +47,7 @@ from .shared_options import (
     TOOL_MASS,
     as_required,
     deprecated,
+    open_named_sensor,
     resolved,
 )
 
@@ -83,7 +84,7 @@ def _robot_options(parser, sensor: bool = True, required: bool = True) -> None:
     group = parser.add_argument_group("robot and sensor")
     add_options(group, as_required(FRANKA, required), NO_REALTIME, SPEED, STATE_TIMEOUT)
     if sensor:
-        add_options(group, as_required(SENSOR, required), SENSOR_OPTION)
+        add_options(group, SENSOR, SENSOR_OPTION)
     add_arm_arguments(parser)
 
 
@@ -232,15 +233,9 @@ def _robot(args):
 
 
 def _sensor(args):
-    from ..sensors.registry import open_sensor
-
-    options = {}
-    for item in args.sensor_option:
-        key, equals, value = item.partition("=")
-        if not equals or not key.isidentifier():
-            raise InvalidInput(f"--sensor-option takes KEY=VALUE, got {item!r}")
-        options[key] = value
-    sensor = open_sensor(args.sensor, options)
+    if args.sensor is None:
+        raise InvalidInput("give --sensor SENSOR (a built-in sensor or MODULE:FACTORY)")
+    sensor = open_named_sensor(args)
     if callable(getattr(sensor, "close", None)):  # a built-in adapter: closed by _closes_sensor
         vars(args).setdefault("opened_sensors", []).append(sensor)
     return sensor

@@ -11,12 +11,10 @@ in :mod:`ftkin.cli.pose_options`; options of a library type come from its declar
 import argparse
 import logging
 
-from ..calibration.estimate import METHODS
-from ..calibration.model import STANDARD_GRAVITY
+from ..calibration.estimate import CalibrationOptions
 from ..io.payload_export import END_EFFECTOR, SENSOR_BODY
 from ..planning.evaluation import PAPER_CENTER_OF_MASS
 from .arg_types import (
-    gravity,
     number_list,
     option,
     positive_float,
@@ -24,6 +22,7 @@ from .arg_types import (
     seed,
     whole_number,
 )
+from .declared import declared_option
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -70,20 +69,8 @@ SEED = option(
     help="seed of the random draws (poses, the planner's search, simulated noise): the same seed "
     "gives the same result (default: %(default)s)",
 )
-GRAVITY = option(
-    "--g",
-    type=gravity,
-    default=STANDARD_GRAVITY,
-    help="gravity for the tool mass, 1 to 30 [m/s²] (default: %(default)s; the paper used 9.8, "
-    "franky-sim and MuJoCo's scenes 9.81)",
-)
-METHOD = option(
-    "--method",
-    choices=METHODS,
-    default=None,
-    help="estimator: ml (joint maximum likelihood, with standard errors) or linear (the paper's "
-    "two-step least squares) (default: ml; ftkin paper: linear, the paper's)",
-)
+GRAVITY = declared_option(CalibrationOptions, "g")
+METHOD = declared_option(CalibrationOptions, "method")
 NOISE_FORCE = option(
     "--noise-force",
     type=positive_float,
@@ -116,22 +103,16 @@ TOOL_MASS = option(
     metavar="KG",
     help="mass of the simulated tool [kg] (default: the paper's 0.3217 kg; robot sim: 1.2 kg)",
 )
-ESTIMATE_MOUNT = option(
-    "--estimate-mount",
-    choices=("yaw", "full"),
+ESTIMATE_MOUNT = declared_option(CalibrationOptions, "estimate_mount")
+SENSOR_SIGN = declared_option(CalibrationOptions, "sensor_sign")
+IMU_POSITION = option(
+    "--imu-position",
+    type=number_list,
     default=None,
-    metavar="yaw|full",
-    help="the sensor's rotation on the flange is estimated too: yaw (about its z axis) or full "
-    "(any rotation); calibrate needs joint-angle samples, plan and evaluate-poses plan and "
-    "predict for it",
-)
-SENSOR_SIGN = option(
-    "--sensor-sign",
-    type=int,
-    choices=(1, -1),
-    default=1,
-    help="-1: the sensor reports the reaction, not the load on it (calibrate negates every "
-    "reading, simulate writes such readings) (default: %(default)s)",
+    metavar="X Y Z",
+    help="the IMU's position in the sensor frame [m] (a datasheet value): its accelerometer "
+    "reads the lever-arm terms of a turning tool (default: calibrate --dynamic estimates it, a "
+    "static IMU calibration records none)",
 )
 DURATION = option(
     "--duration",
@@ -139,8 +120,40 @@ DURATION = option(
     default=None,
     metavar="S",
     help="length [s] (default: plan --excitation 30; simulate placement and log 5, recording 10; "
-    "robot guide and record --raw: until Ctrl-C)",
+    "robot guide, compensate --live and record --raw: until Ctrl-C)",
 )
+SENSOR = option(
+    "--sensor",
+    metavar="NAME|MODULE:FACTORY",
+    help="a built-in sensor (ati: ATI Net F/T, bota: Bota Systems; see docs/ati-netft.md and "
+    "docs/bota.md), or an importable factory returning an object with read() -> (t, wrench) "
+    "(robot sim prints its simulated sensor's; compensate --live: instead of the UR's own)",
+)
+SENSOR_OPTION = option(
+    "--sensor-option",
+    action="append",
+    default=[],
+    metavar="KEY=VALUE",
+    help="an option of the built-in sensor (e.g. host=192.168.1.1, config=bota.json; an unknown "
+    "one is refused naming the known ones), or a keyword argument (a string) for the factory; "
+    "repeatable",
+)
+
+
+def open_named_sensor(args):
+    """The sensor ``--sensor`` and ``--sensor-option`` name (:func:`ftkin.sensors.open_sensor`)."""
+    from ..exceptions import InvalidInput
+    from ..sensors.registry import open_sensor
+
+    options = {}
+    for item in args.sensor_option:
+        key, equals, value = item.partition("=")
+        if not equals or not key.isidentifier():
+            raise InvalidInput(f"--sensor-option takes KEY=VALUE, got {item!r}")
+        options[key] = value
+    return open_sensor(args.sensor, options)
+
+
 SPEED = option(
     "--speed",
     type=positive_float,
@@ -170,23 +183,6 @@ STATE_TIMEOUT = option(
     help="the robot's clock not advancing this long is a lost connection [s] (default: "
     "%(default)s; 1 for a simulator on a loaded machine)",
 )
-SENSOR = option(
-    "--sensor",
-    metavar="NAME|MODULE:FACTORY",
-    help="a built-in sensor (ati: ATI Net F/T, bota: Bota Systems; see docs/ati-netft.md and "
-    "docs/bota.md), or an importable factory returning an object with read() -> (t, wrench) "
-    "(ftkin robot sim prints its simulated sensor's)",
-)
-SENSOR_OPTION = option(
-    "--sensor-option",
-    action="append",
-    default=[],
-    metavar="KEY=VALUE",
-    help="an option of the built-in sensor (e.g. host=192.168.1.1, config=bota.json; an unknown "
-    "one is refused naming the known ones), or a keyword argument (a string) for the factory; "
-    "repeatable",
-)
-
 RESUME = option(
     "--resume",
     action="store_true",

@@ -207,12 +207,13 @@ class Compensator:
                 the arm's joint limits by more than :data:`JOINT_LIMIT_MARGIN` (degrees given
                 for radians: the message says so).
         """
-        arm = self._require_arm()
-        try:
-            q = np.asarray(q, dtype=np.float64)
+        arm = self.arm if self.arm is not None else self._require_arm()
+        try:  # float64 arrays, the control loop's case, pass without a conversion
+            if type(q) is not np.ndarray or q.dtype is not FLOAT64:
+                q = np.asarray(q, dtype=np.float64)
             raw = (
                 raw_wrench.tolist()
-                if type(raw_wrench) is np.ndarray and raw_wrench.dtype == np.float64
+                if type(raw_wrench) is np.ndarray and raw_wrench.dtype is FLOAT64
                 else np.asarray(raw_wrench, dtype=np.float64).tolist()
             )
         except (TypeError, ValueError) as error:
@@ -227,12 +228,12 @@ class Compensator:
                 f"expected q of shape {self._q_shape} and raw_wrench of shape (6,), "
                 f"got {q.shape} and {np.shape(raw_wrench)}"
             )
-        positions = q.tolist()
-        if not (math.hypot(*raw) <= MAX_WRENCH and math.isfinite(sum(positions))):
-            # NaN, inf or a huge entry (the norm is cheap; the checks name the entry)
-            check_finite(q, "q")
+        if not math.hypot(*raw) <= MAX_WRENCH:  # NaN, inf or a huge entry: named below
             as_wrenches(raw, "raw_wrench")
+        positions = q.tolist()
+        # within the limits, which a NaN or an infinite angle is not (one pass does both checks)
         if not (all(map(le, self._lowest, positions)) and all(map(le, positions, self._highest))):
+            check_finite(q, "q")
             refuse_outside_limits(arm, q)
         return np.array(self.contact_floats(arm.sensor_rotation_unchecked(q).tolist(), raw))
 

@@ -25,6 +25,7 @@ from collections import deque
 import numpy as np
 
 from ..calibration.derivatives import DEFAULT_POLYORDER, CausalDifferentiator, joint_derivatives
+from ..calibration.fused_samples import FusedSamples
 from ..calibration.imu_model import ImuFloatModel, predict_imu, specific_force_in_sensor
 from ..calibration.imu_result import ImuCalibrationResult
 from ..calibration.imu_samples import ImuSamples
@@ -248,8 +249,11 @@ class ImuCompensator:
 
         With times and a gyro: ``w`` and ``a`` smoothed and ``ẇ`` estimated by the zero-phase
         Savitzky–Golay filter (:func:`~ftkin.calibration.derivatives.joint_derivatives`), then
-        :meth:`compensate_batch`; otherwise the tool is taken at rest.
+        :meth:`compensate_batch`; otherwise the tool is taken at rest. Fused samples (an
+        orientation too) are compensated from their IMU readings alone.
         """
+        if isinstance(samples, FusedSamples):
+            samples = samples.imu
         if not isinstance(samples, ImuSamples):
             raise InvalidInput(f"samples must be ftkin ImuSamples, got {type(samples).__name__}")
         if samples.angular_velocity is None or samples.times is None:

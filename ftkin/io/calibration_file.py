@@ -65,12 +65,11 @@ from ..calibration.drift import BiasDrift, parse_drift
 from ..calibration.dynamic import DynamicCalibrationResult
 from ..calibration.estimate import CalibrationResult
 from ..calibration.log_cholesky import is_physically_consistent, parameters_from_body
-from ..calibration.model import GRAVITY_RANGE
+from ..calibration.model import check_gravity
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from ..kinematics.record import KinematicsRecord
 from ..validation import MAX_WRENCH
 from .atomic import atomic_write_text
-from .imu_calibration_file import imu_document, imu_result
 from .json_reader import JsonReader, NestedReader, short_repr
 
 FORMAT_NAME = "ftkin-calibration"
@@ -179,11 +178,19 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         **({"diagnostics": result.diagnostics.to_dict()} if result.diagnostics is not None else {}),
         "drift": _drift_document(result.drift),
         **({"kinematics": result.kinematics.to_dict()} if result.kinematics is not None else {}),
-        **imu_document(result),  # a calibration from the IMU: R_SI, accelerometer bias, ...
+        **_imu_document(result),  # a calibration from the IMU: R_SI, accelerometer bias, ...
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "ftkin_version": __version__,
     }
     return json.loads(json.dumps(document, default=_plain))
+
+
+def _imu_document(result) -> dict:
+    """The ``imu`` entry of a calibration from the IMU (:mod:`ftkin.io.imu_calibration_file`,
+    imported when a file is written, not with this module)."""
+    from .imu_calibration_file import imu_document
+
+    return imu_document(result)
 
 
 def save_calibration(result: CalibrationResult, path, *, rezero: dict | None = None) -> Path:
@@ -406,7 +413,11 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
     _check_consistent(reader, document, result)
     _check_plausible(reader, result)
     result = result if inertia is None else _with_inertia(reader, result, inertia)
-    return imu_result(reader, result) if "imu" in document else result
+    if "imu" not in document:
+        return result
+    from .imu_calibration_file import imu_result  # the IMU's entry: its types load on demand
+
+    return imu_result(reader, result)
 
 
 def _check_consistent(reader, document: dict, result) -> None:
@@ -490,12 +501,10 @@ def _check_plausible(reader, result) -> None:
                 f"{np.asarray(value).tolist()} is beyond ±{MAX_WRENCH:g} (N or N·m): not a load",
                 key,
             )
-    if not GRAVITY_RANGE[0] <= result.g <= GRAVITY_RANGE[1]:
-        reader.fail(
-            f"g = {result.g:g} m/s² is outside {GRAVITY_RANGE[0]:g}..{GRAVITY_RANGE[1]:g} (Earth: "
-            "9.80665)",
-            "g",
-        )
+    try:
+        check_gravity(result.g)
+    except InvalidInput as error:
+        reader.fail(f"{error} (Earth: 9.80665)", "g")
 
 
 def load_calibration(path) -> CalibrationResult:

@@ -7,14 +7,19 @@ Written beside the keys every calibration has (``tool_mass``, ``center_of_mass``
 [m/s², IMU frame], ``accel_scale`` [-] and ``scale_estimated``, ``imu_position`` [m, sensor
 frame] or null and ``imu_position_source``, ``parameter_names`` with ``parameter_covariance``
 and ``std_errors``, ``accel_std`` [m/s²], ``chi_square``, ``dof``, ``warnings``,
-``motion_residual_rms`` [N, N·m] or null, and ``units``.
+``motion_residual_rms`` [N, N·m] or null, and ``units``. A fused calibration (an orientation and
+the IMU) adds ``fused: true`` and ``mount_check``
+(:class:`~ftkin.calibration.mount_check.MountCheck`: ``R_M`` against the URDF, its covariance
+[rad²], chi-square, per-pose angles [deg]; or null).
 """
 
 from dataclasses import fields
 
 import numpy as np
 
+from ..calibration.fused_result import FusedCalibrationResult
 from ..calibration.imu_result import ImuCalibrationResult
+from ..calibration.mount_check import MountCheck
 from ..calibration.result import CalibrationResult
 from ..exceptions import FtkinError
 from .json_reader import NestedReader
@@ -62,8 +67,17 @@ def imu_document(result: CalibrationResult) -> dict:
             "dof": int(result.dof),
             "warnings": list(result.imu_warnings),
             "motion_residual_rms": result.motion_residual_rms,
+            **_fused_document(result),
         }
     }
+
+
+def _fused_document(result: ImuCalibrationResult) -> dict:
+    """A fused calibration's ``mount_check`` (null when its poses could not check the mount)."""
+    if not isinstance(result, FusedCalibrationResult):
+        return {}
+    check = result.mount_check
+    return {"fused": True, "mount_check": None if check is None else check.to_dict()}
 
 
 def imu_result(reader, result: CalibrationResult) -> ImuCalibrationResult:
@@ -79,9 +93,14 @@ def imu_result(reader, result: CalibrationResult) -> ImuCalibrationResult:
     ):
         sub.fail("expected three booleans", "scale_estimated")
     common = {f.name: getattr(result, f.name) for f in fields(CalibrationResult)}
+    fused = {}
+    if data.get("fused") is True:  # a fused calibration: its mount check
+        check = sub.optional_object("mount_check")
+        fused = {"mount_check": None if check is None else _mount_check(sub, check)}
     try:
-        return ImuCalibrationResult(
+        return (FusedCalibrationResult if fused else ImuCalibrationResult)(
             **common,
+            **fused,
             imu_rotation=sub.array("imu_rotation", (3, 3)),
             accel_bias=sub.array("accel_bias", (3,)),
             accel_scale=sub.array("accel_scale", (3,)),
@@ -103,3 +122,11 @@ def imu_result(reader, result: CalibrationResult) -> ImuCalibrationResult:
         )
     except (FtkinError, TypeError, ValueError) as error:
         sub.fail(f"malformed: {str(error)[:200]}")
+
+
+def _mount_check(reader, data: dict) -> MountCheck:
+    """The ``imu.mount_check`` entry (its derived figures are recomputed, not trusted)."""
+    try:
+        return MountCheck.from_dict(data)
+    except (FtkinError, KeyError, TypeError, ValueError) as error:
+        reader.fail(f"malformed: {str(error)[:200]}", "mount_check")

@@ -285,17 +285,26 @@ class FrankaLoadExport(PayloadFormat):
 
 
 def urscript_line(payload: Payload) -> str:
-    """URScript ``set_payload(mass, [cx, cy, cz])`` [kg, m, tool flange frame]."""
+    """The URScript line that sets the payload [kg, m, tool flange frame; kg·m² about the centre
+    of gravity in flange axes]: ``set_target_payload(mass, [cx, cy, cz], [Ixx, Iyy, Izz, Ixy,
+    Ixz, Iyz])`` when the inertia is known (PolyScope 5.10 and later; the e-Series), else
+    ``set_payload(mass, [cx, cy, cz])`` (a point mass: every controller)."""
     cx, cy, cz = _numbers(payload.center_of_mass)
-    return f"set_payload({float(payload.mass)!r}, [{cx!r}, {cy!r}, {cz!r}])"
+    head = f"{float(payload.mass)!r}, [{cx!r}, {cy!r}, {cz!r}]"
+    if payload.inertia is None:
+        return f"set_payload({head})"
+    i = np.asarray(payload.inertia, dtype=float)
+    terms = [i[0, 0], i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2]]
+    return f"set_target_payload({head}, [{', '.join(repr(float(v)) for v in terms)}])"
 
 
 class UrPayloadExport(PayloadFormat):
     name = "ur-payload"
     controller = "ur"
+    options = (FLANGE_FRAME, INERTIA)
     summary = (
-        "ur_msgs/srv/SetPayload request for the ROS 2 UR driver, URScript set_payload as a "
-        "comment; OUT.script: the URScript line only"
+        "ur_msgs/srv/SetPayload request for the ROS 2 UR driver (mass, centre of gravity; the "
+        "inertia, when known, as URScript set_target_payload); OUT.script: the URScript line only"
     )
 
     def document(self, request: ExportRequest) -> dict:
@@ -311,11 +320,23 @@ class UrPayloadExport(PayloadFormat):
             f"URScript: {urscript_line(self.payload(request))}",
         ]
 
+    def notes(self, request: ExportRequest) -> list[str]:
+        if self.payload(request).inertia is not None:
+            return [
+                "the ROS 2 driver's SetPayload takes no inertia: the URScript line above "
+                "(set_target_payload, PolyScope 5.10 or later) carries it"
+            ]
+        return [
+            "a static calibration does not determine the inertia: a point mass (give --inertia, "
+            "or export a dynamic calibration, for set_target_payload)"
+        ]
+
     def text(self, request: ExportRequest) -> str:
         """YAML, or for a ``.script`` / ``.urscript`` path the URScript line alone."""
         if request.path is None or request.path.suffix.lower() not in (".script", ".urscript"):
             return super().text(request)
         return (
-            "# ftkin payload: mass [kg], centre of gravity [m] in the tool flange frame\n"
-            f"{urscript_line(self.payload(request))}\n"
+            "# ftkin payload: mass [kg], centre of gravity [m] in the tool flange frame"
+            + (", inertia [kg*m^2] about it" if self.payload(request).inertia is not None else "")
+            + f"\n{urscript_line(self.payload(request))}\n"
         )

@@ -52,7 +52,7 @@ def wrenches_in_sensor_frame(
         frame_id: The messages' ``header.frame_id`` ("" when unset).
         arm: The arm (its sensor frame and base frame names).
         wrench_frame: ``"sensor"`` (default: taken as they are) or ``"base"`` (rotated into the
-        sensor frame).
+            sensor frame).
         source: Where they came from, for the messages.
 
     Raises:

@@ -31,6 +31,7 @@ import numpy as np
 from ..exceptions import InvalidInput, MissingDependency, UrdfError
 from ..validation import as_float_array
 from .arm import Arm, SensorMount
+from .ur_eseries import UR_DH, load_ur
 
 DEFAULT_ROBOT = "ftkin_c4"
 BUNDLED_FLANGE_FRAME = "flange"
@@ -230,6 +231,8 @@ ROBOTS: dict[str, Callable[..., Arm]] = {
     DEFAULT_ROBOT: _bundled,
     "fr3": _fr3,
     **{name: functools.partial(_load_spec, spec) for name, spec in ROBOT_SPECS.items()},
+    # UR e-Series, UR20, UR30: built from UR's DH parameters (no URDF), flange tool0
+    **{name: functools.partial(load_ur, name) for name in UR_DH},
 }
 """Loaders by robot name; each takes an optional sensor offset and tool frame (see
 :func:`load_robot`).

@@ -19,7 +19,7 @@ from ..calibration.information import (
     standard_errors,
 )
 from ..calibration.model import STANDARD_GRAVITY, SensorModel
-from ..calibration.mount import MOUNT_NAMES, check_mount_mode, split_information
+from ..calibration.mount import MOUNT_NAMES, MountMode, split_information
 from ..calibration.observability import check_pose_count
 from ..calibration.random_walk import walk_gains
 from ..exceptions import InvalidInput
@@ -205,7 +205,7 @@ class ExpectedCalibration:
     center_of_mass: object = None
     noise: SensorNoise | None = None
     readings_per_pose: int = 1
-    estimate_mount: str = "none"
+    estimate_mount: MountMode | str = MountMode.NONE
     drift_rate: object = None
     pose_interval: float = DEFAULT_POSE_INTERVAL
     model: SensorModel = field(init=False, repr=False)
@@ -215,7 +215,7 @@ class ExpectedCalibration:
             raise InvalidInput(
                 f"noise must be an ftkin.SensorNoise, got {type(self.noise).__name__}"
             )
-        check_mount_mode(self.estimate_mount)
+        object.__setattr__(self, "estimate_mount", MountMode.of(self.estimate_mount))
         drift_rate, interval = check_drift_options(
             self.drift_rate, self.pose_interval, self.estimate_mount
         )

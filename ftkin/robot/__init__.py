@@ -7,10 +7,14 @@
   read while someone else moves it), ``ftkin record``;
 * :func:`run_admittance`: the paced loop read state → :class:`~ftkin.JointAdmittance` → joint
   velocities, stopping cleanly on any fault; :func:`hand_guiding` its hand-guiding preset;
+* :class:`UrArm`: a Universal Robots arm read through ur_rtde (extra ``ur``): joints, flange
+  pose and the built-in wrist sensor (:class:`UrWristSensor`); :func:`compensated_stream`: the
+  compensated samples of any joint reader and sensor, for a user's own loop;
 * :class:`FrankaSim`: a franky-sim FR3 with a wrist sensor, a tool and pushes, for tests and
   the demo.
 
-Names load their module on first use; franky is imported only when a robot is created.
+Names load their module on first use; franky and ur_rtde are imported only when a robot is
+created.
 """
 
 from .._lazy import lazy_exports
@@ -27,8 +31,11 @@ _EXPORTS = {
     "SimSensorSpec": ".franka_sim",
     "SimTool": ".franka_sim",
     "Stillness": ".stillness",
+    "UrArm": ".ur",
+    "UrWristSensor": ".ur",
     "Verification": ".session",
     "calibrate_on_robot": ".session",
+    "compensated_stream": ".live_compensation",
     "hand_guiding": ".guiding",
     "load_sensor_factory": ".sensor_factory",
     "record_poses": ".recorder",

@@ -1,11 +1,11 @@
 """What ftkin needs from a robot and from a force/torque sensor: small protocols.
 
 Any object with these methods works (structural typing, :class:`typing.Protocol`): ftkin ships
-:class:`~ftkin.robot.franka.FrankaRobot` (franky-control) and a simulated FR3
-(:mod:`ftkin.robot.franka_sim`); :mod:`ftkin.sensors` ships sensors (an ATI Net F/T, a Bota
-Systems sensor), docs/robot.md a wrapper for UR's built-in sensor, and docs/other-robots.md a UR
-recipe. A :class:`JointStateSource` is the part of a robot that ``ftkin record`` reads from
-an arm it does not drive (:mod:`ftkin.robot.recorder`).
+:class:`~ftkin.robot.franka.FrankaRobot` (franky-control), a simulated FR3
+(:mod:`ftkin.robot.franka_sim`) and a read-only UR arm with its built-in sensor
+(:class:`~ftkin.robot.ur.UrArm`, docs/other-robots.md); :mod:`ftkin.sensors` ships sensors (an
+ATI Net F/T, a Bota Systems sensor). A :class:`JointStateSource` is the part of a robot that
+``ftkin record`` reads from an arm it does not drive (:mod:`ftkin.robot.recorder`).
 """
 
 from __future__ import annotations

@@ -108,7 +108,9 @@ def test_static_recording_and_missing_signals(recording):
     with pytest.raises(InvalidInput, match="always estimates the inertia"):
         ftkin.calibrate_dynamic(samples, estimate_inertia=False, accel_bias=BIAS)
     with pytest.raises(InvalidInput, match="unknown calibrate_dynamic option"):
-        ftkin.calibrate_dynamic(ftkin.MotionSamples.from_static(_fk_samples()), prior=None)
+        ftkin.calibrate_dynamic(
+            ftkin.calibration.MotionSamples.from_static(_fk_samples()), prior=None
+        )
 
 
 def _fk_samples():

@@ -81,7 +81,7 @@ def test_calibrate_with_quaternion_csv_and_explicit_urdf(arm, rng, truth, tmp_pa
 
 
 def test_demo_prints_truth_beside_estimate(capsys):
-    assert main(["demo", "--readings", "20", "--poses", "8", "--seed", "3"]) == 0
+    assert main(["demo", "--readings-per-pose", "20", "--n", "8", "--seed", "3"]) == 0
     out = capsys.readouterr().out
     assert re.search(
         r"parameter\s+truth\s+estimate\s+max \|error\|\s+max \|error\| / std error", out
@@ -111,7 +111,9 @@ def test_demo_prints_truth_beside_estimate(capsys):
 def test_demo_writes_a_calibration_file(tmp_path, capsys):
     path = tmp_path / "demo.json"
     assert (
-        main(["demo", "--readings", "5", "--poses", "6", "--sim-seconds", "0", "-o", str(path)])
+        main(
+            ["demo", "--readings-per-pose", "5", "--n", "6", "--sim-seconds", "0", "-o", str(path)]
+        )
         == 0
     )
     assert load_calibration(path).pose_count == 6
@@ -205,4 +207,4 @@ def test_usage_errors_exit_2(capsys):
     assert main([]) == 2
     assert "calibrate" in capsys.readouterr().out
     assert main(["calibrate", "x.csv", "--g", "-1"]) == 2  # argparse's exit becomes the return code
-    assert "expected a finite positive number" in capsys.readouterr().err
+    assert "must be a finite positive number" in capsys.readouterr().err

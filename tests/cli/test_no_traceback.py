@@ -46,7 +46,7 @@ def _commands(
         "compensate": (["compensate", c, s, "-o", str(folder / "o.csv")], folder / "o.csv"),
         "paper": (["paper"], None),
         "demo": (
-            ["demo", "--poses", "6", "--readings", "3", "-o", str(folder / "d.json")],
+            ["demo", "--n", "6", "--readings-per-pose", "3", "-o", str(folder / "d.json")],
             folder / "d.json",
         ),
         "extract": (["extract", s, "-o", str(folder / "e.csv")], folder / "e.csv"),

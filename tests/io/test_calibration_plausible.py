@@ -35,7 +35,10 @@ def document(tmp_path_factory):
             "centre of mass is 47 m from the sensor",
         ),
         (lambda d: d.update(force_offset=[0.0, 2e6, 0.0]), r"beyond ±1e\+06"),
-        (lambda d: (d.update(g=98.0665), d.pop("tool_mass")), "g = 98.0665 m/s² is outside 1..30"),
+        (
+            lambda d: (d.update(g=98.0665), d.pop("tool_mass")),
+            "g must be between 1 and 30 m/s², got 98.0665",
+        ),
     ],
 )
 def test_implausible_files_are_refused_naming_the_key(document, tmp_path, edit, match):

@@ -231,3 +231,39 @@ def test_franka_load_takes_a_dynamic_calibrations_inertia_into_flange_axes(mount
     np.testing.assert_allclose(
         np.reshape(request["load_inertia"], (3, 3), order="F"), expected, atol=1e-12
     )
+
+
+def test_ur_payload_with_an_inertia_is_set_target_payload(tool, tmp_path):
+    """A known inertia (a dynamic calibration's, or --inertia) goes into URScript's
+    set_target_payload(mass, cog, [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]) in flange axes, about the
+    centre of gravity; without one, set_payload and a note."""
+    import dataclasses
+
+    from ftkin import DynamicCalibrationResult
+    from ftkin.calibration.result import CalibrationResult
+
+    ur5 = load_robot("ur5", [0.0, 0.0, 0.02])  # sensor axes = tool0 axes, 2 cm out
+    base = CalibrationResult(
+        tool.force_offset, tool.torque_offset, tool.gravity_in_base, tool.center_of_mass
+    )
+    inertia = np.array([[0.012, 0.001, -0.002], [0.001, 0.02, 0.0005], [-0.002, 0.0005, 0.03]])
+    fields = {f.name: getattr(base, f.name) for f in dataclasses.fields(base)}
+    fields["inertia_about_com_in_sensor"] = inertia
+    dynamic = DynamicCalibrationResult(**fields)
+    script = export_payload(dynamic, ur5, tmp_path / "p.script", "ur-payload").read_text()
+    match = re.search(r"set_target_payload\(([^,]+), \[([^\]]+)\], \[([^\]]+)\]\)", script)
+    assert match, script
+    terms = [float(v) for v in match.group(3).split(",")]
+    expected = [
+        inertia[0, 0],
+        inertia[1, 1],
+        inertia[2, 2],
+        inertia[0, 1],
+        inertia[0, 2],
+        inertia[1, 2],
+    ]
+    np.testing.assert_allclose(terms, expected, atol=1e-15)
+    cog = [float(v) for v in match.group(2).split(",")]
+    np.testing.assert_allclose(cog, tool.center_of_mass + [0.0, 0.0, 0.02], atol=1e-12)
+    plain = export_payload(base, ur5, tmp_path / "q.script", "ur-payload").read_text()
+    assert "set_payload(" in plain and "set_target_payload" not in plain

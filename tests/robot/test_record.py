@@ -379,7 +379,9 @@ def test_cli_ur_hook_names_what_is_missing(tmp_path, capsys):
     import importlib.util
 
     if importlib.util.find_spec("ftkin.robot.ur") is not None:
-        pytest.skip("ftkin.robot.ur is present: the UR tests cover --ur")
+        pytest.skip(
+            "ftkin.robot.ur is present: test_cli_record_ur_from_the_rtde_emulator covers --ur"
+        )
     argv = ["record", "--ur", "127.0.0.1", "--robot", "ur5", "-o", str(tmp_path / "s.csv")]
     assert main(argv) == 2
     assert "--ur needs ftkin.robot.ur" in capsys.readouterr().err
@@ -485,6 +487,8 @@ def test_franky_sim_moved_by_the_test_records_and_calibrates(sim, robot, tmp_pat
     wait_still(robot, SIM_STILL)
     mover = Mover(robot, poses[1:])
     mover.start()
+    watchdog = threading.Timer(90.0, sim.kill)  # a recording that hangs fails, not waits
+    watchdog.start()
     recording = record_poses(
         sim.sensor,
         robot,  # read only: the mover's thread moves it
@@ -497,6 +501,7 @@ def test_franky_sim_moved_by_the_test_records_and_calibrates(sim, robot, tmp_pat
         g=sim.truth.g,
         on_event=mover.on_event,
     )
+    watchdog.cancel()
     mover.join(30)
     assert mover.error is None
     assert recording.poses_recorded == 3 and (tmp_path / "c.json").is_file()
@@ -528,10 +533,15 @@ def test_franky_sim_cli_record_franka(sim, robot, tmp_path, capsys, monkeypatch)
     said = lambda event: (print(event.message), mover.on_event(event))  # noqa: E731
     monkeypatch.setattr("ftkin.cli.record._print_event", said)
     mover.start()
+    watchdog = threading.Timer(90.0, sim.kill)  # a recording that hangs fails, not waits
+    watchdog.start()
     argv = ["record", "--franka", sim.hostname, "--no-realtime", "--state-timeout", "1"]
     argv += sim.sensor_spec().split() + ["--stale-after", "1", "--n", "4", "--g", str(sim.truth.g)]
     argv += ["-o", str(tmp_path / "s.csv"), "--calibrate", str(tmp_path / "c.json")]
-    assert main([*argv, "--readings-per-pose", "30"]) == 0
+    try:
+        assert main([*argv, "--readings-per-pose", "30"]) == 0
+    finally:
+        watchdog.cancel()
     mover.join(30)
     assert mover.error is None
     out = capsys.readouterr().out
@@ -641,3 +651,61 @@ def test_a_resumed_sensor_whose_clock_restarted_is_named(tmp_path, caplog):
         again = record_poses(Restarted(), joints, arm, resume=True, **options)
     assert "is behind the last stamp" in caplog.text and "--drift none" in caplog.text
     assert again.poses_recorded == 3 and again.calibration is not None  # nothing more to record
+
+
+@pytest.mark.skipif(
+    not __import__("importlib").util.find_spec("rtde_receive"),
+    reason="ur_rtde is not installed (pip install 'ftkin[ur]')",
+)
+def test_cli_record_ur_from_the_rtde_emulator_moved_by_the_test(tmp_path, capsys, monkeypatch):
+    """``ftkin record --ur HOST --robot ur5e``: the real ur_rtde client against the RTDE emulator,
+    the arm moved by the test (the emulator's own motion), its built-in sensor's simulated tool
+    recovered. The UR support's own tests are tests/robot/test_ur.py."""
+    from ftkin.io.calibration_file import load_calibration
+    from ftkin.kinematics.robots import load_robot
+
+    from .rtde_controller import EmulatedController, SimulatedTool, flange_transform
+
+    # four poses whose gravity directions in the flange differ by 30° or more (the emulator's own
+    # kinematics): random joint angles often differ by a turn about the vertical only
+    poses, seen = [], []
+    for q in load_robot("ur5e").random_configurations(200, np.random.default_rng(5), margin=0.5):
+        down = flange_transform("ur5e", q)[:3, :3].T @ [0.0, 0.0, -1.0]
+        if all(np.degrees(np.arccos(np.clip(down @ other, -1, 1))) >= 30.0 for other in seen):
+            poses.append(q)
+            seen.append(down)
+        if len(poses) == 4:
+            break
+    try:
+        emulated = EmulatedController(q=poses[0])
+    except OSError as error:
+        pytest.skip(f"cannot serve RTDE on a loopback address, port 30004: {error}")
+    recorded = threading.Semaphore(0)
+
+    def user():  # waits at each pose until it is recorded, then moves on
+        for q in poses[1:]:
+            if not recorded.acquire(timeout=30):
+                return
+            emulated.move(q, 0.4)
+
+    said = lambda event: (print(event.message), event.kind == "recorded" and recorded.release())  # noqa: E731
+    monkeypatch.setattr("ftkin.cli.record._print_event", said)
+    mover = threading.Thread(target=user, daemon=True)
+    mover.start()
+    watchdog = threading.Timer(60.0, emulated.kill)  # a recording that hangs fails, not waits
+    watchdog.start()
+    argv = ["record", "--ur", emulated.host, "--robot", "ur5e", "--n", "4", "--g", "9.80665"]
+    argv += ["-o", str(tmp_path / "s.csv"), "--calibrate", str(tmp_path / "c.json")]
+    try:
+        code = main([*argv, "--readings-per-pose", "30", "--stale-after", "0.5"])
+    finally:
+        watchdog.cancel()
+        emulated.kill()
+    mover.join(10)
+    assert code == 0, capsys.readouterr().err
+    assert "pose 4 of 4 recorded" in capsys.readouterr().out
+    whole_poses(tmp_path / "s.csv", range(4), 30)
+    tool, result = SimulatedTool(), load_calibration(tmp_path / "c.json")
+    np.testing.assert_allclose(result.tool_mass, tool.mass, rtol=0.01)
+    np.testing.assert_allclose(result.center_of_mass, tool.com, atol=0.002)
+    np.testing.assert_allclose(result.force_offset, tool.bias[:3], atol=0.05)

@@ -61,7 +61,7 @@ def test_cli_samples_from_plan_then_calibrate(tmp_path, capsys):
 
 def test_cli_mount_and_sign_are_recovered(tmp_path):
     samples, calib = tmp_path / "s.csv", tmp_path / "c.json"
-    argv = ["simulate", "samples", "--n", "15", "--readings", "20", "-o", str(samples)]
+    argv = ["simulate", "samples", "--n", "15", "--readings-per-pose", "20", "-o", str(samples)]
     assert main([*argv, "--mount-rpy-deg", "3", "-2", "35", "--sensor-sign", "-1"]) == 0
     assert (
         main(
@@ -99,7 +99,7 @@ def test_cli_tool_options_and_noise_scale(tmp_path):
 
 def test_cli_log_compensated_gives_the_push_back(tmp_path):
     samples, calib, log, out = (tmp_path / name for name in ("s.csv", "c.json", "l.csv", "o.csv"))
-    assert main(["simulate", "samples", "--readings", "50", "-o", str(samples)]) == 0
+    assert main(["simulate", "samples", "--readings-per-pose", "50", "-o", str(samples)]) == 0
     assert main(["calibrate", str(samples), "-o", str(calib)]) == 0
     assert main(["simulate", "log", "--seed", "3", "-o", str(log)]) == 0
     assert main(["compensate", str(calib), str(log), "-o", str(out)]) == 0

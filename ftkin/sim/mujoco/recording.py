@@ -16,11 +16,11 @@ the closed loop is :func:`~ftkin.sim.mujoco.arm_model.build_arm_model`; this mod
 
 import numpy as np
 
-from ...calibration.model import STANDARD_GRAVITY
+from ...calibration.model import STANDARD_GRAVITY, check_gravity
 from ...exceptions import InvalidInput
 from ...kinematics.arm import bundled_urdf_path
 from ...kinematics.rotations import gravity_in_base_from_tilt
-from ...validation import as_batch, as_positive, as_vector
+from ...validation import as_batch, as_vector
 from .arm_model import add_wrench_sensor, import_mujoco, subtree_inertia
 from .tool_inertia import ToolInertia
 
@@ -69,7 +69,7 @@ class MujocoRecorder:
         self._add_sensors(mujoco, spec, body)  # a subclass's own sensors (the IMU's)
         self.model = spec.compile()
         self.model.opt.gravity[:] = gravity_in_base_from_tilt(
-            as_positive(g, "g"), float(base_tilt[0]), float(base_tilt[1])
+            check_gravity(g), float(base_tilt[0]), float(base_tilt[1])
         )
         # Prescribed motion: no contacts (they would add forces where links overlap).
         self.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT

@@ -1,0 +1,231 @@
+"""``ftkin compensate CALIB.json --ur HOST --live [--log OUT.csv] [--duration S]``: a UR arm's
+contact wrench as it comes.
+
+The library loop is :func:`~ftkin.robot.live_compensation.compensated_stream` over a
+:class:`~ftkin.robot.ur.UrArm` (its built-in sensor, or ``--sensor MODULE:FACTORY``). The
+contact wrench is printed a few times a second; ``--log`` writes every sample (``t`` [s, the
+sensor's stamp], the joints [rad], ``fx..mz`` [N, N·m], sensor frame) as it comes, flushed
+every :data:`FLUSH_EVERY` rows; the summary counts the samples and the RTDE packages missed
+(gaps in the controller's timestamps). Ctrl-C ends it with the summary and exit code 130.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..calibration.model import WRENCH_CHANNELS
+from ..exceptions import InvalidInput
+from ..robot.stillness import Stillness
+from .arg_types import add_options, option, positive_float
+from .declared import declared_option
+from .shared_options import DURATION, SENSOR, SENSOR_OPTION, open_named_sensor
+
+FLUSH_EVERY = 250
+"""Log rows per flush (half a second at 500 Hz)."""
+SETTLE_STEPS, SETTLE_LIMIT = 25, 0.5
+"""Logging starts after this many consecutive one-period steps of the stamps, or this long [s]."""
+
+
+def add_live_arguments(parser) -> None:
+    """The options of the live mode (a group of ``ftkin compensate``)."""
+    add_options(
+        parser.add_argument_group(
+            "live, on a Universal Robots arm through ur_rtde (pip install 'ftkin[ur]'); "
+            "--wrench-frame says the axes of its ft_raw_wrench (default: base)"
+        ),
+        option("--ur", metavar="HOST", help="the UR controller's address (RTDE, port 30004)"),
+        option(
+            "--live",
+            action="store_true",
+            help="compensate the arm's readings as they come (instead of LOG.csv), until "
+            "--duration or Ctrl-C",
+        ),
+        option(
+            "--log",
+            dest="live_log",
+            metavar="OUT.csv",
+            help="write every compensated sample (t, joints, fx..mz) as it comes",
+        ),
+        DURATION,
+        option(
+            "--print-rate",
+            type=positive_float,
+            default=5.0,
+            metavar="HZ",
+            help="lines printed per second (default: %(default)s)",
+        ),
+        declared_option(Stillness, "stale_after"),
+        SENSOR,
+        SENSOR_OPTION,
+    )
+
+
+def check_live_arguments(args) -> None:
+    """Refuse option combinations of the live mode before anything connects."""
+    from .arg_types import refuse
+
+    live_only = {"--log": args.live_log, "--duration": args.duration, "--sensor": args.sensor}
+    refuse(
+        InvalidInput,
+        (args.ur is not None and not args.live, "--ur HOST compensates live: add --live"),
+        (args.live and args.ur is None, "--live needs --ur HOST (the UR controller)"),
+        (
+            args.live and (bool(args.log) or args.output is not None),
+            "--live compensates the arm's readings: give no LOG.csv and no -o (write the "
+            "samples with --log OUT.csv)",
+        ),
+        (
+            not args.live and any(v is not None for v in live_only.values()),
+            f"{', '.join(k for k, v in live_only.items() if v is not None)} go with --ur HOST "
+            "--live",
+        ),
+        (
+            not args.live and (not args.log or args.output is None),
+            "give LOG.csv and -o OUT.csv (or --ur HOST --live for a UR arm)",
+        ),
+        (
+            args.sensor_option and args.sensor is None,
+            "--sensor-option goes with --sensor MODULE:FACTORY",
+        ),
+    )
+    if args.live_log is not None:  # (checked against the inputs with every output option)
+        if Path(args.live_log).exists():
+            raise InvalidInput(
+                f"--log {args.live_log} exists: ftkin never overwrites a file; choose another"
+            )
+
+
+def _sensor(args, ur):
+    """The UR's built-in sensor, or the one ``--sensor`` names (closed with the command)."""
+    if args.sensor is None:
+        return ur.sensor
+    return open_named_sensor(args)
+
+
+class _Log:
+    """The live log, written as it comes (never over an existing file)."""
+
+    def __init__(self, path: str, joint_names):
+        self.stream = open(path, "x", encoding="utf-8", newline="")  # noqa: SIM115 (closed below)
+        self.stream.write(",".join(["t", *joint_names, *WRENCH_CHANNELS]) + "\n")
+        self.rows: list[str] = []
+
+    def add(self, stamp: float, q: np.ndarray, contact: np.ndarray) -> None:
+        self.rows.append(",".join(map(repr, [stamp, *q.tolist(), *contact.tolist()])))
+        if len(self.rows) >= FLUSH_EVERY:
+            self.flush()
+
+    def flush(self) -> None:
+        if self.rows:
+            self.stream.write("\n".join(self.rows) + "\n")
+            self.rows = []
+        self.stream.flush()
+
+    def close(self) -> None:
+        self.flush()
+        os.fsync(self.stream.fileno())
+        self.stream.close()
+
+
+def missed_packages(stamps: np.ndarray) -> tuple[int, float]:
+    """Packages missed between consecutive stamps, and the period [s] (the median step)."""
+    if len(stamps) < 2:
+        return 0, math.nan
+    steps = np.diff(stamps)
+    period = float(np.median(steps))
+    if not period > 0.0:
+        return 0, period
+    return int(np.sum(np.maximum(np.round(steps / period) - 1.0, 0.0))), period
+
+
+def run_live(args, calibration, arm) -> int:
+    """The live loop; returns the exit code (130 after Ctrl-C)."""
+    from ..robot.live_compensation import compensated_stream
+    from ..robot.ur import UrArm
+
+    if arm is None or arm.nq != 6:
+        raise InvalidInput(
+            "--ur needs a six-joint arm: the calibration's recorded arm (--robot ur5e, ...) or "
+            f"--robot; got {arm!r}"
+        )
+    ur = UrArm(args.ur, wrench_frame=args.wrench_frame or "base", stale_after=args.stale_after)
+    log = _Log(args.live_log, arm.joint_names) if args.live_log else None
+    stamps: list[float] = []
+    start = time.monotonic()
+    code, interval, next_print = 0, 1.0 / args.print_rate, 0.0
+    print(
+        f"compensating {ur} ({'built-in sensor' if args.sensor is None else args.sensor}); "
+        "contact wrench in the sensor frame, F' [N], M' [N·m]"
+        + (f"; logging to {args.live_log}" if log else "")
+    )
+    try:
+        sensor = _sensor(args, ur)
+        stream = compensated_stream(
+            calibration,
+            ur,
+            sensor,
+            arm=arm,
+            stale_after=args.stale_after,
+            allow_other_arm=args.allow_other_arm,
+        )
+        _settle(stream)
+        start = time.monotonic()
+        for stamp, q, contact in stream:
+            stamps.append(stamp)
+            if log is not None:
+                log.add(stamp, q, contact)
+            now = time.monotonic()
+            if now >= next_print:
+                next_print = now + interval
+                force, torque = contact[:3], contact[3:]
+                print(
+                    f"t {stamp:12.3f} s  F' {force[0]:+9.3f} {force[1]:+9.3f} {force[2]:+9.3f}  "
+                    f"|F'| {np.linalg.norm(force):8.3f}  M' {torque[0]:+8.4f} {torque[1]:+8.4f} "
+                    f"{torque[2]:+8.4f}",
+                    flush=True,
+                )
+            if args.duration is not None and now - start >= args.duration:
+                break
+    except KeyboardInterrupt:
+        code = 130
+    finally:
+        elapsed = time.monotonic() - start
+        if log is not None:
+            log.close()
+        ur.close()
+        _summary(np.array(stamps), elapsed, args.live_log, code == 130)
+    return code
+
+
+def _settle(stream, steady: int = SETTLE_STEPS, limit: float = SETTLE_LIMIT) -> None:
+    """Skip samples until ``steady`` consecutive steps of the stamps are each the shortest step
+    seen (one period), or ``limit`` [s] has passed: right after connecting, ur_rtde's receive
+    thread works through what queued up meanwhile and its getters skip packages."""
+    deadline, previous, shortest, run = time.monotonic() + limit, None, math.inf, 0
+    for stamp, _, _ in stream:
+        if previous is not None:
+            step = stamp - previous
+            shortest = min(shortest, step)
+            run = run + 1 if step <= 1.25 * shortest else 0
+        previous = stamp
+        if run >= steady or time.monotonic() > deadline:
+            return
+
+
+def _summary(stamps: np.ndarray, elapsed: float, log_path, interrupted: bool) -> None:
+    missed, period = missed_packages(stamps)
+    rate = (len(stamps) - 1) / (stamps[-1] - stamps[0]) if len(stamps) > 1 else 0.0
+    line = (
+        f"{len(stamps)} samples in {elapsed:.2f} s ({rate:.1f} Hz by the sensor's stamps), "
+        f"{missed} missed"
+        + (f" (gaps in the stamps, period {period * 1e3:.2f} ms)" if len(stamps) > 1 else "")
+        + (f"; written to {log_path}" if log_path else "")
+        + ("; stopped by Ctrl-C" if interrupted else "")
+    )
+    print(line, file=sys.stdout, flush=True)
