@@ -38,6 +38,7 @@ from .shared_options import (
     SENSOR,
     SENSOR_OPTION,
     STATE_TIMEOUT,
+    UR,
     resolved,
 )
 
@@ -72,12 +73,7 @@ def register(subparsers) -> None:
         FRANKA,
         NO_REALTIME,
         STATE_TIMEOUT,
-        option(
-            "--ur",
-            metavar="HOST",
-            help="a UR controller's address: its joints over RTDE (ftkin.robot.ur.UrArm), and its "
-            "built-in sensor unless --sensor",
-        ),
+        UR,
     )
     add_options(parser.add_argument_group("sensor"), SENSOR, SENSOR_OPTION)
     add_arm_arguments(parser)

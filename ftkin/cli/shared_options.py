@@ -183,6 +183,12 @@ STATE_TIMEOUT = option(
     help="the robot's clock not advancing this long is a lost connection [s] (default: "
     "%(default)s; 1 for a simulator on a loaded machine)",
 )
+UR = option(
+    "--ur",
+    metavar="HOST",
+    help="the UR controller's address (RTDE, port 30004): its joints and, unless --sensor, its "
+    "built-in sensor (compensate --live, record)",
+)
 RESUME = option(
     "--resume",
     action="store_true",
