@@ -242,3 +242,19 @@ class SessionInterrupted(FtkinError):
             f"samples recorded so far are in {samples_path}: calibrate_on_robot(..., "
             "resume=True) finishes the session"
         )
+
+
+class RecordingInterrupted(SessionInterrupted):
+    """A recording from an arm ftkin does not drive (``ftkin record``) stopped by a fault; the
+    recorded poses are kept (whole poses only) and ``resume=True`` (``--resume``) continues it.
+
+    Attributes: those of :class:`SessionInterrupted`.
+    """
+
+    def __init__(self, reason: str, poses_recorded: int, poses_total: int, samples_path):
+        super().__init__(reason, poses_recorded, poses_total, samples_path)
+        self.args = (
+            f"recording stopped after {poses_recorded} of {poses_total} poses: {reason}; the "
+            f"poses recorded so far are in {samples_path}: record_poses(..., resume=True) "
+            "(ftkin record --resume) continues it",
+        )

@@ -11,14 +11,17 @@ class Progress:
     """Context manager around a :class:`tqdm.tqdm` bar on stderr.
 
     Args:
-        total: Number of steps.
+        total: Number of steps; None: open-ended (a count and its rate, e.g. a stream logged
+            until Ctrl-C).
         label: Text before the bar.
         enabled: Force on/off; default: on when the stream is a terminal.
         stream: Where to draw (default ``sys.stderr``).
     """
 
-    def __init__(self, total: int, label: str = "", enabled: bool | None = None, stream=None):
-        self.total = max(int(total), 1)
+    def __init__(
+        self, total: int | None, label: str = "", enabled: bool | None = None, stream=None
+    ):
+        self.total = None if total is None else max(int(total), 1)
         self.label = label
         self.stream = stream if stream is not None else sys.stderr
         self.enabled = (
@@ -45,7 +48,8 @@ class Progress:
 
     def advance(self, steps: int = 1) -> None:
         """Count ``steps`` more done."""
-        steps = min(steps, self.total - self.count)
+        if self.total is not None:
+            steps = min(steps, self.total - self.count)
         self.count += steps
         if self._bar is not None and steps > 0:
             self._bar.update(steps)

@@ -30,6 +30,7 @@ COMMAND_MODULES = (
     "simulate",
     "doctor",
     "robot",
+    "record",
 )
 """Subcommand modules of ``ftkin.cli``, in the order ``--help`` lists them."""
 
@@ -40,6 +41,7 @@ OUTPUT_OPTIONS = {
     "png": "--png",
     "plot": "--plot",
     "live_log": "--log",  # compensate --live
+    "calibration_output": "--calibrate",
 }
 """Namespace attributes that name files a subcommand writes, and their flags."""
 

@@ -40,8 +40,8 @@ def add_arm_arguments(parser: argparse.ArgumentParser) -> None:
         option(
             "--urdf",
             metavar="PATH",
-            help="URDF of the arm (default: the bundled six-axis arm; ftkin robot: the bundled "
-            "FR3)",
+            help="URDF of the arm (default: the bundled six-axis arm; ftkin robot and record "
+            "--franka: the bundled FR3)",
         ),
         option(
             "--sensor-frame",

@@ -24,7 +24,7 @@ from ..exceptions import InvalidInput
 from ..robot.stillness import Stillness
 from .arg_types import add_options, option, positive_float
 from .declared import declared_option
-from .shared_options import DURATION, SENSOR, SENSOR_OPTION, open_named_sensor
+from .shared_options import DURATION, SENSOR, SENSOR_OPTION, UR, open_named_sensor
 
 FLUSH_EVERY = 250
 """Log rows per flush (half a second at 500 Hz)."""
@@ -39,7 +39,7 @@ def add_live_arguments(parser) -> None:
             "live, on a Universal Robots arm through ur_rtde (pip install 'ftkin[ur]'); "
             "--wrench-frame says the axes of its ft_raw_wrench (default: base)"
         ),
-        option("--ur", metavar="HOST", help="the UR controller's address (RTDE, port 30004)"),
+        UR,
         option(
             "--live",
             action="store_true",

@@ -32,15 +32,20 @@ from .shared_options import (
     DEFAULT_POSES,
     DURATION,
     END_EFFECTOR_OPTION,
+    FRANKA,
     GRAVITY,
+    NO_REALTIME,
     POSES,
     POSES_FILE,
+    RESUME,
     SEED,
     SENSOR,
     SENSOR_BODY_OPTION,
     SENSOR_OPTION,
     SPEED,
+    STATE_TIMEOUT,
     TOOL_MASS,
+    as_required,
     deprecated,
     open_named_sensor,
     resolved,
@@ -54,8 +59,6 @@ SIM_TIMEOUT = 2.0
 """The stale-sensor and robot-state limits [s] for franky-sim (0.1 s on a real robot): a loaded
 machine pauses the simulated physics for longer than 0.1 s (0.73 s was seen at load 2, 1.9 s at
 load 3.6)."""
-DEFAULT_STATE_TIMEOUT = 0.1
-"""The robot's clock not advancing this long is a lost connection [s] (a real FR3 at 1 kHz)."""
 SIM_ARM_OPTIONS = "--no-realtime --state-timeout 2 --stale-after 2"
 """What a command pointed at ``ftkin robot sim`` adds for the simulator."""
 
@@ -80,29 +83,7 @@ def register(subparsers) -> None:
 
 def _robot_options(parser, sensor: bool = True, required: bool = True) -> None:
     group = parser.add_argument_group("robot and sensor")
-    add_options(
-        group,
-        option(
-            "--franka",
-            required=required,
-            metavar="HOST",
-            help="the robot's FCI address (ftkin robot sim prints its own)",
-        ),
-        option(
-            "--no-realtime",
-            action="store_true",
-            help="do not require a real-time kernel (franky RealtimeConfig.Ignore: simulators)",
-        ),
-        SPEED,
-        option(
-            "--state-timeout",
-            type=positive_float,
-            default=DEFAULT_STATE_TIMEOUT,
-            metavar="S",
-            help="the robot's clock not advancing this long is a lost connection [s] (default: "
-            "%(default)s; 1 for a simulator on a loaded machine)",
-        ),
-    )
+    add_options(group, as_required(FRANKA, required), NO_REALTIME, SPEED, STATE_TIMEOUT)
     if sensor:
         add_options(group, SENSOR, SENSOR_OPTION)
     add_arm_arguments(parser)
@@ -130,9 +111,7 @@ def _calibrate_parser(commands) -> None:
             metavar="SAMPLES.csv",
             help="samples file written as the session goes (default: CALIB.samples.csv)",
         ),
-        option(
-            "--resume", action="store_true", help="continue the samples file of a stopped session"
-        ),
+        RESUME,
         POSES_FILE,
         POSES,
         option(

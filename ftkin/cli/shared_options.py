@@ -120,7 +120,7 @@ DURATION = option(
     default=None,
     metavar="S",
     help="length [s] (default: plan --excitation 30; simulate placement and log 5, recording 10; "
-    "robot guide and compensate --live: until Ctrl-C)",
+    "robot guide, compensate --live and record --raw: until Ctrl-C)",
 )
 SENSOR = option(
     "--sensor",
@@ -161,6 +161,46 @@ SPEED = option(
     help="fraction of the joint velocity and acceleration limits for moves (default: 0.3; "
     "robot demo: 0.8)",
 )
+
+
+DEFAULT_STATE_TIMEOUT = 0.1
+"""The robot's clock not advancing this long is a lost connection [s] (a real FR3 at 1 kHz)."""
+FRANKA = option(
+    "--franka",
+    metavar="HOST",
+    help="the robot's FCI address (ftkin robot sim prints its own)",
+)
+NO_REALTIME = option(
+    "--no-realtime",
+    action="store_true",
+    help="do not require a real-time kernel (franky RealtimeConfig.Ignore: simulators)",
+)
+STATE_TIMEOUT = option(
+    "--state-timeout",
+    type=positive_float,
+    default=DEFAULT_STATE_TIMEOUT,
+    metavar="S",
+    help="the robot's clock not advancing this long is a lost connection [s] (default: "
+    "%(default)s; 2 for a simulator on a loaded machine)",
+)
+UR = option(
+    "--ur",
+    metavar="HOST",
+    help="the UR controller's address (RTDE, port 30004): its joints and, unless --sensor, its "
+    "built-in sensor (compensate --live, record)",
+)
+RESUME = option(
+    "--resume",
+    action="store_true",
+    help="continue the samples file of a stopped session or recording (robot calibrate: the "
+    "same plan; record: its poses count towards --n)",
+)
+
+
+def as_required(definition: tuple, is_required: bool = True) -> tuple:
+    """A shared option made required (or not) by a command: the same flag, help and default."""
+    flags, keywords = definition
+    return flags, {**keywords, "required": is_required}
 
 
 def payload_body_option(spec) -> tuple:

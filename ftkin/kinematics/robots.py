@@ -31,6 +31,7 @@ import numpy as np
 from ..exceptions import InvalidInput, MissingDependency, UrdfError
 from ..validation import as_float_array
 from .arm import Arm, SensorMount
+from .ur_eseries import FLANGE_FRAME as UR_FLANGE_FRAME
 from .ur_eseries import UR_DH, load_ur
 
 DEFAULT_ROBOT = "ftkin_c4"
@@ -242,6 +243,7 @@ FLANGE_FRAMES: dict[str, tuple[str, str | None]] = {
     DEFAULT_ROBOT: (BUNDLED_FLANGE_FRAME, None),
     "fr3": ("fr3_link8", "franka"),
     **{name: (spec.flange_frame, spec.controller) for name, spec in ROBOT_SPECS.items()},
+    **{name: (UR_FLANGE_FRAME, "ur") for name in UR_DH},
 }
 """``{robot name: (flange frame, controller family)}`` for every name of :data:`ROBOTS`."""
 

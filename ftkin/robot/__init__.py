@@ -3,6 +3,8 @@
 * :class:`Robot` and :class:`ForceTorqueSensor`: what ftkin needs from a robot and a sensor;
 * :class:`FrankaRobot`: a Franka FR3 or Panda through franky-control (extra ``franka``);
 * :func:`calibrate_on_robot`: plan, visit, wait for stillness, record, calibrate, save, verify;
+* :func:`record_poses`: the same from an arm ftkin does not drive (a :class:`JointStateSource`
+  read while someone else moves it), ``ftkin record``;
 * :func:`run_admittance`: the paced loop read state → :class:`~ftkin.JointAdmittance` → joint
   velocities, stopping cleanly on any fault; :func:`hand_guiding` its hand-guiding preset;
 * :class:`UrArm`: a Universal Robots arm read through ur_rtde (extra ``ur``): joints, flange
@@ -22,6 +24,7 @@ _EXPORTS = {
     "ForceTorqueSensor": ".protocols",
     "FrankaRobot": ".franka",
     "FrankaSim": ".franka_sim",
+    "JointStateSource": ".protocols",
     "LoopStats": ".loop",
     "Robot": ".protocols",
     "SamplesLog": ".samples_log",
@@ -35,6 +38,7 @@ _EXPORTS = {
     "compensated_stream": ".live_compensation",
     "hand_guiding": ".guiding",
     "load_sensor_factory": ".sensor_factory",
+    "record_poses": ".recorder",
     "run_admittance": ".loop",
     "verify_on_robot": ".session",
     "verify_session": ".session",

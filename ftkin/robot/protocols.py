@@ -1,10 +1,11 @@
-"""What ftkin needs from a robot and from a force/torque sensor: two small protocols.
+"""What ftkin needs from a robot and from a force/torque sensor: small protocols.
 
 Any object with these methods works (structural typing, :class:`typing.Protocol`): ftkin ships
 :class:`~ftkin.robot.franka.FrankaRobot` (franky-control), a simulated FR3
 (:mod:`ftkin.robot.franka_sim`) and a read-only UR arm with its built-in sensor
 (:class:`~ftkin.robot.ur.UrArm`, docs/other-robots.md); :mod:`ftkin.sensors` ships sensors (an
-ATI Net F/T, a Bota Systems sensor).
+ATI Net F/T, a Bota Systems sensor). A :class:`JointStateSource` is the part of a robot that
+``ftkin record`` reads from an arm it does not drive (:mod:`ftkin.robot.recorder`).
 """
 
 from __future__ import annotations
@@ -25,6 +26,20 @@ class ForceTorqueSensor(Protocol):
     """
 
     def read(self) -> tuple[float, np.ndarray]: ...
+
+
+@runtime_checkable
+class JointStateSource(Protocol):
+    """Where the joint state of an arm comes from, read-only.
+
+    ``joint_state()`` returns the joint positions ``(nq,)`` [rad] and velocities ``(nq,)``
+    [rad/s] of one state, in the arm model's joint order. A :class:`Robot` is one (reading it
+    commands nothing), and so is a reader of a controller ftkin cannot command (UR's RTDE).
+    Errors are ftkin's: :class:`~ftkin.exceptions.RobotConnectionLost` for a source that is
+    gone or frozen.
+    """
+
+    def joint_state(self) -> tuple[np.ndarray, np.ndarray]: ...
 
 
 @runtime_checkable

@@ -2,8 +2,11 @@
 
 Columns: the arm's joint names [rad], ``fx,fy,fz,mx,my,mz`` [N, N·m], ``pose`` (the pose's index
 in the session's plan) and ``t`` [s, the sensor's stamp]: the table ``ftkin calibrate`` reads
-(:mod:`ftkin.io.samples_csv`). Each pose's rows are written in one call, flushed and synced
-before the arm moves on, so an interrupted session loses at most the pose it was on, and a
+(:mod:`ftkin.io.samples_csv`), then any extra columns (``ax,ay,az,wx,wy,wz``: the IMU's, which
+``ftkin record`` writes for a sensor that has one; with no joint columns, the table of a
+calibration from the IMU, :mod:`ftkin.io.imu_columns`). Each pose's rows are written in one
+call, flushed and synced before the arm moves on (Ctrl-C held off meanwhile:
+:func:`interrupts_held`), so an interrupted session loses at most the pose it was on, and a
 resumed one (:meth:`SamplesLog.recorded_poses`) knows which poses are done.
 """
 
@@ -11,6 +14,9 @@ from __future__ import annotations
 
 import logging
 import os
+import signal
+import threading
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +31,24 @@ logger = logging.getLogger(__name__)
 TIME_COLUMN = "t"
 
 
+@contextmanager
+def interrupts_held():
+    """Hold Ctrl-C (SIGINT) off while a block of rows is written, and raise it after: the file
+    and the writer's count of what it holds agree (on the main thread; elsewhere, where Python
+    delivers no signal, it does nothing)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught = []
+    previous = signal.signal(signal.SIGINT, lambda number, frame: caught.append(number))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if caught:
+        raise KeyboardInterrupt
+
+
 class SamplesLog:
     """Append-only samples CSV of a session.
 
@@ -34,17 +58,21 @@ class SamplesLog:
         resume: Continue an existing file (its columns must match); False refuses an existing
             file (ftkin never overwrites an input).
         comments: Lines written as ``#`` comments above the header of a new file.
+        extra_columns: Names of more columns after ``t`` (e.g. the IMU's ``ax,ay,az``), one
+            value each per reading.
 
     Raises:
         InvalidInput: the file exists and ``resume`` is False, or its columns differ, or its last
             line is incomplete.
     """
 
-    def __init__(self, path, joint_names, *, resume: bool = False, comments=()):
+    def __init__(self, path, joint_names, *, resume: bool = False, comments=(), extra_columns=()):
         self.path = Path(path)
-        self.header = [*joint_names, *WRENCH_CHANNELS, POSE_COLUMN, TIME_COLUMN]
+        self.extra_columns = list(extra_columns)
+        self.header = [*joint_names, *WRENCH_CHANNELS, POSE_COLUMN, TIME_COLUMN, *extra_columns]
         self._nq = len(joint_names)
         self._recorded: dict[int, np.ndarray] = {}
+        self._recorded_extra: dict[int, np.ndarray] = {}
         exists = self.path.exists() and self.path.stat().st_size > 0
         if exists and not resume:
             raise InvalidInput(
@@ -65,6 +93,13 @@ class SamplesLog:
                     f"the last line of {self.path} is incomplete (the session was stopped while "
                     "writing it): delete that line, then resume"
                 )
+        lines = [
+            line
+            for line in self.path.read_text(encoding="utf-8").splitlines()
+            if line.strip() and not line.lstrip().startswith("#")
+        ]
+        if lines == [",".join(self.header)]:  # stopped before its first pose: nothing to read
+            return
         table = read_table(self.path)
         if table.header != self.header:
             raise InvalidSamples(
@@ -74,9 +109,11 @@ class SamplesLog:
         if not table.rows:
             return
         q = table.floats(self.header[: self._nq])
+        extra = table.floats(self.extra_columns)
         poses = table.floats([POSE_COLUMN])[:, 0].astype(int)
         for pose in np.unique(poses):
             self._recorded[int(pose)] = q[poses == pose].mean(axis=0)
+            self._recorded_extra[int(pose)] = extra[poses == pose].mean(axis=0)
 
     def _write(self, text: str, mode: str = "a") -> None:
         with open(self.path, mode, encoding="utf-8", newline="") as stream:
@@ -88,8 +125,13 @@ class SamplesLog:
         """``{pose id: mean joint positions (nq,) [rad]}`` of the poses in the file."""
         return dict(self._recorded)
 
-    def append_pose(self, pose_id: int, joint_positions, wrenches, times) -> None:
-        """Write one pose's readings (one write, flushed and synced).
+    def recorded_extra(self) -> dict[int, np.ndarray]:
+        """``{pose id: mean of the extra columns (k,)}`` of the poses in the file."""
+        return dict(self._recorded_extra)
+
+    def append_pose(self, pose_id: int, joint_positions, wrenches, times, extra=None) -> None:
+        """Write one pose's readings (one write, flushed and synced); ``extra``: ``(n, k)``
+        values of the extra columns.
 
         Raises:
             InvalidInput: the pose is already in the file, or the arrays do not match.
@@ -100,15 +142,19 @@ class SamplesLog:
         q = np.asarray(joint_positions, dtype=float)
         w = np.asarray(wrenches, dtype=float)
         t = np.asarray(times, dtype=float).reshape(-1)
-        if q.shape != (len(t), self._nq) or w.shape != (len(t), 6):
+        k = len(self.extra_columns)
+        e = np.zeros((len(t), 0)) if extra is None and not k else np.asarray(extra, dtype=float)
+        if q.shape != (len(t), self._nq) or w.shape != (len(t), 6) or e.shape != (len(t), k):
             raise InvalidInput(
-                f"expected ({len(t)}, {self._nq}) joint positions and ({len(t)}, 6) wrenches, got "
-                f"{q.shape} and {w.shape}"
+                f"expected ({len(t)}, {self._nq}) joint positions, ({len(t)}, 6) wrenches and "
+                f"({len(t)}, {k}) extra values, got {q.shape}, {w.shape} and {e.shape}"
             )
         lines = [
             ",".join([*map(repr, map(float, q[i])), *map(repr, map(float, w[i])), str(pose_id)])
             + f",{float(t[i])!r}"
+            + "".join(f",{float(value)!r}" for value in e[i])
             for i in range(len(t))
         ]
         self._write("\n".join(lines) + "\n")
         self._recorded[pose_id] = q.mean(axis=0)
+        self._recorded_extra[pose_id] = e.mean(axis=0)

@@ -175,21 +175,48 @@ class CheckedSensor:
         return stamp, wrench, new
 
 
+class SampleTap:
+    """``read() -> (t, wrench)`` of a sensor for :class:`CheckedSensor`, keeping its full sample
+    (``read_sample()``, a :class:`~ftkin.sensors.sample.SensorSample` with the IMU and the
+    temperature) in :attr:`sample` where the sensor has one (else :attr:`sample` stays None)."""
+
+    def __init__(self, sensor):
+        self.sensor = sensor
+        self.full = callable(getattr(sensor, "read_sample", None))
+        self.sample = None
+
+    def read(self):
+        if not self.full:
+            return self.sensor.read()
+        self.sample = sample = self.sensor.read_sample()
+        return sample.t, sample.wrench
+
+    def imu(self) -> np.ndarray | None:
+        """The last sample's ``[ax, ay, az]`` [m/s²] (and ``[wx, wy, wz]`` [rad/s]), or None."""
+        sample = self.sample
+        if sample is None:
+            return None
+        parts = [v for v in (sample.specific_force, sample.angular_velocity) if v is not None]
+        return np.concatenate(parts) if parts else None
+
+
 @dataclass(frozen=True)
 class PoseReadings:
     """The readings of one still pose.
 
     Attributes:
-        joint_positions: ``(n, nq)`` [rad], read with each reading.
+        joint_positions: ``(n, nq)`` [rad], read with each reading (``nq`` may be 0: no joints).
         wrenches: ``(n, 6)`` raw readings [N, N·m], sensor frame.
         times: ``(n,)`` sensor stamps [s].
         wait: Time spent waiting for stillness [s].
+        extra: ``(n, k)`` values taken with each reading (e.g. the IMU's), or None.
     """
 
     joint_positions: np.ndarray
     wrenches: np.ndarray
     times: np.ndarray
     wait: float
+    extra: np.ndarray | None = None
 
 
 def stationary(window: np.ndarray, stillness: Stillness) -> bool:
@@ -198,6 +225,70 @@ def stationary(window: np.ndarray, stillness: Stillness) -> bool:
     half = len(window) // 2
     trend = np.abs(window[:half].mean(axis=0) - window[half:].mean(axis=0))
     return bool(np.all(window.std(axis=0) <= bounds) and np.all(trend <= bounds))
+
+
+class StillnessDetector:
+    """The test of :func:`record_still`, one poll at a time (also what a recorder that waits
+    for an arm it does not drive polls: :mod:`ftkin.robot.recorder`).
+
+    Each :meth:`update` takes one poll: the largest joint speed [rad/s] and the sensor's
+    reading. A speed above ``stillness.joint_speed`` restarts everything (a recording in which
+    a joint moves is thrown away); once still for ``settle_time`` with a full stationary
+    window, the next ``count`` new readings are taken.
+
+    Args:
+        count: Readings to take once still.
+        stillness: The thresholds.
+    """
+
+    def __init__(self, count: int, stillness: Stillness):
+        self.count, self.stillness = int(count), stillness
+        self.window: deque = deque(maxlen=stillness.window)
+        self.speed = math.inf
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the window and the readings taken (the arm moved)."""
+        self.still_since: float | None = None
+        self.rows: list[tuple] = []
+        self.window.clear()
+
+    def spread(self) -> np.ndarray:
+        """``(6,)`` standard deviation of the window's readings [N, N·m] (NaN before two)."""
+        return np.array(self.window).std(axis=0) if len(self.window) > 1 else np.full(6, math.nan)
+
+    def update(self, now: float, speed: float, q, stamp, wrench, new: bool, extra=None) -> bool:
+        """One poll at ``now`` [s]; True once ``count`` readings are taken (:meth:`readings`)."""
+        self.speed = speed
+        if speed > self.stillness.joint_speed:
+            if self.rows:
+                logger.info("a joint moved (%.3g rad/s) while recording: recording again", speed)
+            self.reset()
+        elif self.still_since is None:
+            self.still_since = now
+        if new and self.still_since is not None:
+            if self.rows:
+                self.rows.append((q, wrench, stamp, extra))
+            else:
+                self.window.append(wrench)
+                if (
+                    now - self.still_since >= self.stillness.settle_time
+                    and len(self.window) == self.stillness.window
+                    and stationary(np.array(self.window), self.stillness)
+                ):
+                    self.rows = [(q, wrench, stamp, extra)]
+        return len(self.rows) >= self.count
+
+    def readings(self, wait: float) -> PoseReadings:
+        """The readings taken (after :meth:`update` returned True), waited ``wait`` [s]."""
+        q, wrenches, times, extra = zip(*self.rows[: self.count])
+        return PoseReadings(
+            np.array(q),
+            np.array(wrenches),
+            np.array(times),
+            wait,
+            None if extra[0] is None else np.array(extra),
+        )
 
 
 def record_still(robot, sensor: CheckedSensor, count: int, stillness: Stillness) -> PoseReadings:
@@ -209,47 +300,21 @@ def record_still(robot, sensor: CheckedSensor, count: int, stillness: Stillness)
             which test failed), or the robot failed.
     """
     start = time.monotonic()
-    window: deque = deque(maxlen=stillness.window)
-    still_since: float | None = None
-    rows_q, rows_w, rows_t = [], [], []
-    speed = math.inf
+    detector = StillnessDetector(count, stillness)
     while True:
         now = time.monotonic()
         if now - start > stillness.timeout:
-            spread = np.array(window).std(axis=0) if len(window) > 1 else np.full(6, math.nan)
             raise RobotError(
                 f"the arm did not settle within {stillness.timeout:g} s: largest joint speed "
-                f"{speed:.3g} rad/s (limit {stillness.joint_speed:g}), reading spread "
-                f"{np.round(spread, 4).tolist()} (limits {stillness.force_std:g} N, "
+                f"{detector.speed:.3g} rad/s (limit {stillness.joint_speed:g}), reading spread "
+                f"{np.round(detector.spread(), 4).tolist()} (limits {stillness.force_std:g} N, "
                 f"{stillness.torque_std:g} N·m). A noisier sensor needs larger limits "
                 "(Stillness(force_std=..., torque_std=...))"
             )
         q, dq = robot.joint_state()
-        speed = float(np.max(np.abs(dq)))
         stamp, wrench, new = sensor.read()
-        if speed > stillness.joint_speed:
-            if rows_w:
-                logger.info("a joint moved (%.3g rad/s) while recording: recording again", speed)
-            still_since, rows_q, rows_w, rows_t = None, [], [], []
-            window.clear()
-        elif still_since is None:
-            still_since = now
-        if new and still_since is not None:
-            if rows_w:
-                rows_q.append(q)
-                rows_w.append(wrench)
-                rows_t.append(stamp)
-            else:
-                window.append(wrench)
-                if (
-                    now - still_since >= stillness.settle_time
-                    and len(window) == stillness.window
-                    and stationary(np.array(window), stillness)
-                ):
-                    rows_q, rows_w, rows_t = [q], [wrench], [stamp]
-            if len(rows_w) == count:
-                taken = (np.array(rows_q), np.array(rows_w), np.array(rows_t))
-                return PoseReadings(*taken, now - start)
+        if detector.update(now, float(np.max(np.abs(dq))), q, stamp, wrench, new):
+            return detector.readings(now - start)
         time.sleep(stillness.poll_period)
 
 

@@ -85,6 +85,10 @@ def _commands(
             folder / "z.json",
         ),
         "robot": (["robot", "calibrate", "--help"], None),  # the rest needs a robot: tests/robot
+        "record": (
+            ["record", "--help"],
+            None,
+        ),  # the rest needs a sensor: tests/robot/test_record.py
         "--help": (["--help"], None),
     }
 

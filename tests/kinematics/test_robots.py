@@ -25,6 +25,7 @@ from ftkin.kinematics.robots import (
     ROBOT_SPECS,
     ROBOTS,
     example_robot_data_share,
+    flange_frame_name,
     load_robot,
 )
 from ftkin.sim.sensor import SimulatedSensor
@@ -83,6 +84,8 @@ def test_every_registered_robot_loads():
         assert arm.sensor_frame == ("fr3_hand" if name == "fr3" else "ft_sensor")
         assert arm.model.nq == arm.model.nv >= 6
         assert arm.robot_name == name
+        # every robot by name knows its flange, a frame of its own model
+        assert flange_frame_name(arm) in arm.frame_names
 
 
 def test_meshes_resolve_through_share_folder():
