@@ -52,6 +52,10 @@ def as_real(value, name: str) -> float:
     return float(array.reshape(-1)[0])
 
 
+MAX_IMU_VALUE = 1e4
+"""Largest accepted accelerometer [m/s²] or gyro [rad/s, rad/s²] entry: beyond, a unit mistake
+or a corrupt sample."""
+
 MAX_WRENCH = 1e6
 """Largest plausible load on the sensor [N, N·m] (a reading, a sensor offset, a tool weight).
 

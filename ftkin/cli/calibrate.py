@@ -238,21 +238,16 @@ def run(args) -> int:
 
 def _with_imu(loaded, args):
     """The samples, with the IMU's specific force when the table has ``ax,ay,az`` too: the
-    orientation and the IMU fitted together, the mount checked (:mod:`ftkin.calibration.fused_fit`).
-    """
-    from ..io.stream_join import ACCEL_COLUMNS, GYRO_COLUMNS
+    orientation and the IMU fitted together, the mount checked
+    (:func:`~ftkin.io.imu_columns.with_imu_columns`)."""
+    from ..io.imu_columns import with_imu_columns
 
-    table = loaded.table
-    if loaded.recording is not None or not all(name in table.header for name in ACCEL_COLUMNS):
-        return loaded.samples
-    gyro = table.floats(GYRO_COLUMNS) if all(n in table.header for n in GYRO_COLUMNS) else None
-    print(f"{table.source}: the orientation and the IMU (ax,ay,az) fitted together")
-    return loaded.samples.with_imu(
-        table.floats(ACCEL_COLUMNS),
-        accel_unit=stream_reading_from_args(args).accel_unit,
-        angular_velocity=gyro,
-        g=args.g,
+    samples = with_imu_columns(
+        loaded, accel_unit=stream_reading_from_args(args).accel_unit, g=args.g
     )
+    if samples is not loaded.samples:
+        print(f"{loaded.table.source}: the orientation and the IMU (ax,ay,az) fitted together")
+    return samples
 
 
 def _from_imu(args, paths) -> bool:

@@ -23,6 +23,7 @@ from .arg_types import (
     refuse,
 )
 from .declared import add_declared, declared_values
+from .shared_options import WRENCH_FRAME
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -216,14 +217,7 @@ def add_samples_arguments(parser: argparse.ArgumentParser) -> None:
             metavar="TOPIC",
             help="geometry_msgs/WrenchStamped topic (default: the only one)",
         ),
-        option(
-            "--wrench-frame",
-            choices=("sensor", "base"),
-            default=None,
-            help="frame the bag's (or the UR's) wrenches are expressed in; base: rotate them into "
-            "the sensor frame (a UR TCP force) (default: sensor; with compensate --ur: base, "
-            "UR's convention)",
-        ),
+        WRENCH_FRAME,
         option(
             "--speed-threshold",
             type=positive_float,

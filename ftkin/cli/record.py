@@ -20,7 +20,7 @@ import logging
 
 import numpy as np
 
-from ..exceptions import InvalidInput, RecordingInterrupted, SensorError
+from ..exceptions import ConventionMistake, InvalidInput, RecordingInterrupted, SensorError
 from ..robot.stillness import Stillness
 from .arg_types import add_options, finite_float, option, refuse
 from .common import add_arm_arguments, arm_from_args
@@ -39,6 +39,7 @@ from .shared_options import (
     SENSOR_OPTION,
     STATE_TIMEOUT,
     UR,
+    WRENCH_FRAME,
     resolved,
 )
 
@@ -74,6 +75,7 @@ def register(subparsers) -> None:
         NO_REALTIME,
         STATE_TIMEOUT,
         UR,
+        WRENCH_FRAME,
     )
     add_options(parser.add_argument_group("sensor"), SENSOR, SENSOR_OPTION)
     add_arm_arguments(parser)
@@ -119,32 +121,28 @@ def _print_event(event) -> None:
 
 
 def _ur_arm(args):
-    """UR hook (issue 32): ``--ur HOST`` reads the joints through ``ftkin.robot.ur.UrArm``,
-    imported here when asked for; the lead finishes it (``--wrench-frame``) with the UR branch.
-    """
-    try:
-        from ..robot.ur import UrArm
-    except ModuleNotFoundError as error:
-        if error.name != "ftkin.robot.ur":
-            raise
-        raise InvalidInput(
-            "--ur needs ftkin.robot.ur (the UR support, issue 32), which this ftkin does not have "
-            "yet; use --franka, or record without a joint source"
-        ) from None
-    return UrArm(args.ur)
+    """``--ur HOST``: the joints (and the built-in sensor, in ``--wrench-frame``) through
+    :class:`ftkin.robot.ur.UrArm`; its stale limit is ``--stale-after``."""
+    from ..robot.ur import UrArm
+
+    return UrArm(args.ur, wrench_frame=args.wrench_frame or "base", stale_after=args.stale_after)
 
 
 def _joint_source(args):
     """``(joints, arm, sensor, close)`` named by the options (``close()`` releases them)."""
     if args.franka and args.ur:
         raise InvalidInput("give one joint source: --franka HOST or --ur HOST")
-    if args.ur:  # UR hook (issue 32)
+    if args.wrench_frame is not None and not args.ur:
+        raise InvalidInput(
+            "--wrench-frame is the axes of a UR's built-in sensor: it goes with --ur"
+        )
+    if args.ur:
         arm = arm_from_args(args)
         if arm is None:
             raise InvalidInput("--ur needs the arm's kinematics: --robot ur5e (or --urdf)")
         ur = _ur_arm(args)
         sensor = _sensor(args) if args.sensor else ur.sensor
-        return ur, arm, sensor, getattr(ur, "close", lambda: None)
+        return ur, arm, sensor, ur.close
     if not args.sensor:
         raise InvalidInput("give the sensor: --sensor NAME|MODULE:FACTORY (and --sensor-option)")
     if args.franka:
@@ -182,9 +180,17 @@ def run(args) -> int:
             output=args.calibration_output,
             g=args.g,
             on_event=_print_event,
+            # the built-in sensor's wrench came in --wrench-frame axes: checked before the fit
+            wrench_frame=(args.wrench_frame or "base") if args.ur and not args.sensor else None,
         )
     except RecordingInterrupted as error:
         raise InvalidInput(f"{error.reason}; {_resume_advice(args, error)}") from None
+    except ConventionMistake as error:  # the built-in sensor's axes (--wrench-frame)
+        raise InvalidInput(
+            f"{error}; the readings in {args.output} were turned into the sensor frame under "
+            f"--wrench-frame {args.wrench_frame or 'base'}: record again with {error.fix} "
+            "(to another -o)"
+        ) from None
     finally:
         close()
     if recording.calibration is not None:

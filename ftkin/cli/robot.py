@@ -426,10 +426,22 @@ def run_guide(args) -> int:
 
     calibration = load_calibration(args.calibration)
     arm = _arm(args)
-    controller = hand_guiding(
-        arm, calibration, rotation=args.rotation, force_gain=args.gain or GUIDING_FORCE_GAIN
-    )
     sensor = _sensor(args)
+    # a calibration with the IMU's parameters and a sensor that gives its IMU: compensate with it
+    from ..calibration.imu_result import ImuCalibrationResult
+
+    imu = isinstance(calibration, ImuCalibrationResult) and callable(
+        getattr(sensor, "read_sample", None)
+    )
+    if imu:
+        print("compensating with the sensor's IMU (the tool's acceleration removed)")
+    controller = hand_guiding(
+        arm,
+        calibration,
+        rotation=args.rotation,
+        force_gain=args.gain or GUIDING_FORCE_GAIN,
+        imu=imu,
+    )
     robot = _robot(args)
     mass, _, _ = robot.payload()
     if not mass > 0.0:

@@ -183,6 +183,14 @@ STATE_TIMEOUT = option(
     help="the robot's clock not advancing this long is a lost connection [s] (default: "
     "%(default)s; 2 for a simulator on a loaded machine)",
 )
+WRENCH_FRAME = option(
+    "--wrench-frame",
+    choices=("sensor", "base"),
+    default=None,
+    help="frame the bag's (or the UR's) wrenches are expressed in; base: rotate them into "
+    "the sensor frame (a UR TCP force) (default: sensor; with --ur: base, UR's convention for "
+    "ft_raw_wrench, checked against the arm's motion)",
+)
 UR = option(
     "--ur",
     metavar="HOST",

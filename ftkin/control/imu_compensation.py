@@ -30,11 +30,15 @@ from ..calibration.imu_model import ImuFloatModel, predict_imu, specific_force_i
 from ..calibration.imu_result import ImuCalibrationResult
 from ..calibration.imu_samples import ImuSamples
 from ..exceptions import InvalidInput
-from ..validation import FLOAT64, MAX_WRENCH, as_batch, as_vector, as_wrench, as_wrenches
-
-MAX_IMU_VALUE = 1e4
-"""Largest accepted accelerometer [m/s²] or gyro [rad/s, rad/s²] entry: beyond, a unit mistake
-or a corrupt sample."""
+from ..validation import (
+    FLOAT64,
+    MAX_IMU_VALUE,
+    MAX_WRENCH,
+    as_batch,
+    as_vector,
+    as_wrench,
+    as_wrenches,
+)
 
 
 def _floats(values, size: int, name: str, bound: float) -> list:

@@ -37,6 +37,7 @@ non-numeric inputs raise :class:`~ftkin.exceptions.InvalidInput`. Each tick leav
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -44,7 +45,7 @@ import pinocchio as pin
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm, bundled_urdf_path
 from ..kinematics.mounting import mounted_arm
-from ..validation import FLOAT64, as_positive
+from ..validation import FLOAT64, MAX_IMU_VALUE, as_positive
 from .admittance import Admittance
 from .compensation import Compensator
 from .control_frame import control_frame_for
@@ -52,6 +53,9 @@ from .damped_least_squares import damped_least_squares
 from .dynamic_compensation import DynamicCompensator
 from .oscillation import DEFAULT_OSCILLATION_LIMITS, OscillationDetector, OscillationLimits
 from .sensor_faults import FaultMonitor, SensorFault, SensorLimits
+
+if TYPE_CHECKING:  # the IMU's modules load with their first use
+    from .imu_compensation import ImuCompensator
 
 
 @dataclass(frozen=True)
@@ -86,6 +90,23 @@ class StepStatus:
     def held(self) -> bool:
         """True when ``dq`` is zero because of a safety stop or a sensor fault."""
         return self.safety_stop or self.fault is not SensorFault.NONE
+
+
+def _checked_imu(imu, compensator, dynamic) -> "ImuCompensator | None":
+    """``imu`` once it is an :class:`ImuCompensator` that may go with the other compensators."""
+    if imu is None:
+        return None
+    from .imu_compensation import ImuCompensator
+
+    if not isinstance(imu, ImuCompensator):
+        raise InvalidInput(f"imu must be an ftkin ImuCompensator or None, got {type(imu).__name__}")
+    if dynamic is not None or (compensator is not None and compensator.tracker is not None):
+        raise InvalidInput(
+            "an IMU compensator goes with a static Compensator without a bias tracker (or none): "
+            "the tracker re-zeroes the FK compensation only, and a DynamicCompensator is another "
+            "model of the same inertial wrench"
+        )
+    return imu
 
 
 def _real_or_nan(value) -> np.ndarray:
@@ -129,6 +150,13 @@ class JointAdmittance:
             one: its sensor's measuring range is not the paper sensor's.
         oscillation: Thresholds of the oscillation detector
             (:class:`~ftkin.control.oscillation.OscillationLimits`); None disables it.
+        imu: An :class:`~ftkin.control.imu_compensation.ImuCompensator` (a calibration from the
+            sensor's IMU, or the fused one): ticks given the accelerometer's specific force
+            (:meth:`step`'s ``specific_force``) are compensated with it, the tool's weight and
+            its linear acceleration removed as the accelerometer sees them (the arm's motion
+            included, which the static compensation misses). Without a ``compensator`` every
+            tick must give it. Not with a bias tracker (it re-zeroes the FK compensation only)
+            nor with a dynamic compensator (one inertial model per controller).
     """
 
     def __init__(
@@ -146,6 +174,7 @@ class JointAdmittance:
         limit_gain: float = 5.0,
         sensor_limits: SensorLimits | None = None,
         oscillation: OscillationLimits | None = DEFAULT_OSCILLATION_LIMITS,
+        imu: "ImuCompensator | None" = None,
     ):
         if not isinstance(arm, Arm) or not isinstance(admittance, Admittance):
             raise InvalidInput("JointAdmittance needs an ftkin Arm and an ftkin Admittance")
@@ -168,6 +197,7 @@ class JointAdmittance:
         if compensator is not None and compensator.calibration.has_mount:
             # the real sensor frame, folded into the model: no work per tick
             arm = mounted_arm(arm, compensator.calibration.mount_rotation)
+        self.imu = _checked_imu(imu, compensator, self.dynamic)
         self.arm, self.admittance, self.compensator = arm, admittance, compensator
         self.frame = control_frame_for(arm, admittance.frame, control_point)
         # The kinematics and joint limits the tick reads, as Python floats (limit scaling's
@@ -198,6 +228,7 @@ class JointAdmittance:
         self._check, self._update = self.monitor.check, admittance.update_floats
         self._wrench_floats, self._twist_floats = self.frame.wrench_floats, self.frame.twist_floats
         self._contact_floats = compensator.contact_floats if compensator is not None else None
+        self._imu_floats = imu.contact_floats if imu is not None else None
         self._tracked = compensator is not None and compensator.tracker is not None
         self.reset()
 
@@ -248,6 +279,7 @@ class JointAdmittance:
         free: bool | None = None,
         joint_velocities=None,
         joint_accelerations=None,
+        specific_force=None,
     ) -> np.ndarray:
         """Joint velocities ``(nq,)`` [rad/s] for this tick.
 
@@ -262,12 +294,18 @@ class JointAdmittance:
             joint_velocities: ``dq`` ``(nq,)`` [rad/s] measured (or estimated) at ``q``, with
             joint_accelerations: ``ddq`` ``(nq,)`` [rad/s²]: with a dynamic compensator, the
                 contact is raw − bias − (gravity + inertial wrench) this tick.
+            specific_force: The accelerometer's ``[ax, ay, az]`` [m/s², IMU frame] read with
+                ``raw_wrench``: with an ``imu`` compensator, the contact is raw − bias − m ·
+                (specific force in the sensor frame), with its torque. Not finite: a held tick
+                (``SensorFault.NOT_FINITE``).
 
         Raises:
             InvalidInput: ``q``, ``raw_wrench`` or ``dt`` of the wrong shape or not numbers
                 (NaN, inf, a bad ``dt`` are sensor faults: held and reported, not raised);
                 joint velocities or accelerations of the wrong shape or not finite, one
-                without the other, or given without a dynamic compensator.
+                without the other, or given without a dynamic compensator; a specific force
+                without an ``imu`` compensator, not of shape (3,), or missing where there is no
+                other compensation.
         """
         # The tick runs on Python floats (numpy's per-call overhead dominates on 3- and 6-vectors);
         # numpy only for the Jacobian products. The status is built when asked (last_status).
@@ -279,6 +317,13 @@ class JointAdmittance:
             if self._tracked:
                 self.compensator.tracker.interrupt()
             return self._hold(fault, event)
+        accel = None if specific_force is None else self._specific_force(specific_force)
+        if accel is None and specific_force is not None:
+            return self._hold(
+                SensorFault.NOT_FINITE,
+                f"specific force not finite or beyond {MAX_IMU_VALUE:g} m/s²: {specific_force}: "
+                "holding",
+            )
         # 1. kinematics: forward kinematics and the sensor Jacobian (base axes), one Pinocchio call
         jacobian = pin.computeFrameJacobian(
             self._model, self._data, q, self._sensor_id, pin.LOCAL_WORLD_ALIGNED
@@ -288,6 +333,12 @@ class JointAdmittance:
         if joint_velocities is not None:
             contact = self.dynamic.contact_rates_floats(
                 q, raw, joint_velocities, joint_accelerations
+            )
+        elif accel is not None:
+            contact = self._imu_floats(raw, accel)
+        elif self._imu_floats is not None and self._contact_floats is None:
+            raise InvalidInput(
+                "this controller compensates with the IMU only: give specific_force [m/s²]"
             )
         else:
             contact = raw if self._contact_floats is None else self._contact_floats(rotation, raw)
@@ -348,6 +399,26 @@ class JointAdmittance:
                 "DynamicCompensator only (a static compensator has no inertial term to use them)"
             )
         return q, raw_wrench.tolist(), q.tolist(), dt
+
+    def _specific_force(self, specific_force) -> list | None:
+        """The specific force as 3 floats [m/s²], or None when one is not finite.
+
+        Raises:
+            InvalidInput: no ``imu`` compensator, not numbers or not of shape (3,).
+        """
+        if self._imu_floats is None:
+            raise InvalidInput(
+                "specific_force needs an IMU compensator (JointAdmittance(..., imu=ImuCompensator"
+                "(calibration)))"
+            )
+        try:
+            values = _real_or_nan(specific_force)
+        except (TypeError, ValueError) as error:
+            raise InvalidInput(f"specific_force must be numeric: {error}") from None
+        if values.shape != (3,):
+            raise InvalidInput(f"expected specific_force of shape (3,), got {values.shape}")
+        accel = values.tolist()
+        return accel if all(math.isfinite(v) and abs(v) <= MAX_IMU_VALUE for v in accel) else None
 
     def _hold(self, fault: SensorFault, event: str, contact: np.ndarray | None = None):
         """``dq = 0``: a sensor fault, an oscillation or a safety stop (the caller latches those).

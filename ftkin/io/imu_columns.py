@@ -262,3 +262,29 @@ def _still_poses(samples: ImuSamples, segments: SegmentParameters, source: str) 
 def _has_time(path) -> bool:
     header = read_table(path).header
     return TIME_COLUMN in header or any(name.lower() in TIME_ALIASES for name in header)
+
+
+def with_imu_columns(
+    loaded, *, accel_unit: str = "m/s^2", g: float = STANDARD_GRAVITY
+) -> Samples | FusedSamples:
+    """The samples of a CSV read with an orientation (:func:`~ftkin.io.samples_csv.load_samples`),
+    with the table's IMU too when it has ``ax,ay,az`` (and ``wx,wy,wz``):
+    :class:`~ftkin.calibration.fused_samples.FusedSamples`, whose calibration fits the orientation
+    and the IMU together and checks the mount (:mod:`ftkin.calibration.fused_fit`). A table
+    without them, and a bag, give ``loaded.samples`` as read.
+
+    The one rule of ``ftkin calibrate FILE``, ``ftkin record`` and ``ftkin robot calibrate``: a
+    file with IMU columns is calibrated the same way whoever wrote it.
+
+    Args:
+        loaded: A :class:`~ftkin.io.samples_csv.LoadedSamples`.
+        accel_unit: The unit of ``ax,ay,az``: ``"m/s^2"`` or ``"g"``.
+        g: Gravity [m/s²].
+    """
+    table = loaded.table
+    if loaded.recording is not None or not all(name in table.header for name in ACCEL_COLUMNS):
+        return loaded.samples
+    gyro = table.floats(GYRO_COLUMNS) if all(n in table.header for n in GYRO_COLUMNS) else None
+    return loaded.samples.with_imu(
+        table.floats(ACCEL_COLUMNS), accel_unit=accel_unit, angular_velocity=gyro, g=g
+    )

@@ -6,6 +6,11 @@ arm's tool frame) in base axes, translation free and rotation optional. Without 
 gain (``K1 = 0``) nothing is remembered: when the hand lets go, ``F'`` is the compensation's
 residual, inside the deadband, and the command is exactly zero. The payload must be right for
 that: see docs/robot.md (the robot's controller counts every body once).
+
+With ``imu=True`` (a calibration from the sensor's IMU, or the fused one) the contact is
+compensated with the accelerometer each tick (:class:`~ftkin.control.ImuCompensator`): the
+tool's weight and its linear acceleration as the IMU sees them, so the arm's own motion is not
+felt as a push (:func:`~ftkin.robot.loop.run_admittance` reads the sensor's ``read_sample()``).
 """
 
 from __future__ import annotations
@@ -41,6 +46,7 @@ def hand_guiding(
     torque_limit: float = 10.0,
     sensor_limits: SensorLimits | None = None,
     oscillation: OscillationLimits | None = GUIDING_OSCILLATION,
+    imu: bool = False,
 ) -> JointAdmittance:
     """The hand-guiding controller for ``arm`` with the compensation of ``calibration``.
 
@@ -61,6 +67,9 @@ def hand_guiding(
         oscillation: Thresholds of the oscillation stop (None: off). The default counts only
             reversals of more than 4 N: a tool accelerated by a velocity-streaming arm jitters by
             1-2 N tick to tick (franky-sim: ±1.5 N on a 1.2 kg tool).
+        imu: Compensate with the sensor's accelerometer (``calibration`` must be an
+            :class:`~ftkin.calibration.imu_result.ImuCalibrationResult`: from the IMU, or fused).
+            A calibration from the IMU alone has no FK compensation to fall back on.
     """
     if not isinstance(calibration, SensorModel):
         raise InvalidInput(
@@ -83,13 +92,23 @@ def hand_guiding(
         if sensor_limits is not None
         else SensorLimits(force_range=200.0, torque_range=10.0)
     )
+    imu_compensator, from_imu_alone = None, False
+    if imu:
+        from ..calibration.fused_result import FusedCalibrationResult
+        from ..control.imu_compensation import ImuCompensator
+
+        imu_compensator = ImuCompensator(calibration)  # refuses an FK calibration, by name
+        # from the IMU alone there is no base tilt or mount to compensate FK ticks with
+        from_imu_alone = not isinstance(calibration, FusedCalibrationResult)
+    compensator = None if from_imu_alone else Compensator(calibration, arm)
     return JointAdmittance(
         arm,
         law,
-        Compensator(calibration, arm),
+        compensator,
         force_limit=force_limit,
         torque_limit=torque_limit,
         sensor_limits=limits,
         velocity_scale=0.5,
         oscillation=oscillation,
+        imu=imu_compensator,
     )

@@ -6,6 +6,10 @@
     dq_cmd = controller.step(q, wrench, dt);  robot.command_velocity(dq_cmd)
 
 (a :class:`~ftkin.control.joint_admittance.JointAdmittance`), and returns :class:`LoopStats`.
+A controller with an IMU compensator (``JointAdmittance(..., imu=ImuCompensator(calibration))``)
+is given each tick's specific force too: the sensor's ``read_sample()`` (the adapters of
+:mod:`ftkin.sensors` with an IMU), and the tool's acceleration is compensated as the
+accelerometer sees it.
 It stops the robot, in the tick the fault shows, and returns (never raises for these) on:
 
 * a sensor fault: ``read()`` raising, a value that is not finite (``"read_failed"``,
@@ -13,6 +17,7 @@ It stops the robot, in the tick the fault shows, and returns (never raises for t
   sensor that raises :class:`~ftkin.exceptions.SensorError` itself (the adapters of
   :mod:`ftkin.sensors`) stops the loop with its own kind (``"status"``, ``"stall"``,
   ``"silence"``, ``"driver"``, ...);
+* a sample without the accelerometer for a controller that compensates with it (``"imu"``);
 * a robot error (``"robot"``) or a lost connection (``"connection"``);
 * the controller's safety stop (contact beyond its limits, ``"safety"``) or an oscillating loop
   (``"oscillation"``): both latch in the controller;
@@ -36,7 +41,7 @@ import numpy as np
 
 from ..control.sensor_faults import SensorFault
 from ..exceptions import InvalidInput, RobotConnectionLost, RobotError, SensorError
-from .stillness import CheckedSensor
+from .stillness import CheckedSensor, SampleTap
 
 logger = logging.getLogger(__name__)
 
@@ -137,12 +142,13 @@ def run_admittance(
         own_limit = float(own_limit) if numeric else 0.0
         stale_after = max(10.0 * period, 0.02, 2.0 * own_limit)
     stale_after = float(stale_after)
-    checked = CheckedSensor(sensor, stale_after)
+    tap = _imu_tap(sensor, controller)
+    checked = CheckedSensor(sensor if tap is None else tap, stale_after)
     faults: dict[str, int] = {}
     stamps: list[float] = []
     reason, message, fault_time = FINISHED, "", None
     try:
-        _warm_up(robot, checked, controller, period)
+        _warm_up(robot, checked, controller, period, tap)
         start = next_tick = time.monotonic()
         deadline = math.inf if duration is None else start + float(duration)
         previous = start - period
@@ -152,7 +158,12 @@ def run_admittance(
                 break
             q, _ = robot.joint_state()
             _, wrench, _ = checked.read()
-            command = controller.step(q, wrench, now - previous)
+            if tap is None:
+                command = controller.step(q, wrench, now - previous)
+            else:
+                command = controller.step(
+                    q, wrench, now - previous, specific_force=_specific_force(tap)
+                )
             previous = now
             if not command.any():  # a held tick commands exactly zero: ask why
                 ending = _held_tick(controller.last_status, faults)
@@ -186,6 +197,36 @@ def run_admittance(
     return _stats(stamps, rate_hz, faults, reason, message, fault_time, stop_time)
 
 
+def _imu_tap(sensor, controller) -> SampleTap | None:
+    """The tap the loop reads a sensor through when the controller compensates with the IMU.
+
+    Raises:
+        InvalidInput: the controller compensates with the IMU and the sensor has no
+            ``read_sample()``.
+    """
+    if getattr(controller, "imu", None) is None:
+        return None
+    tap = SampleTap(sensor)
+    if not tap.full:
+        raise InvalidInput(
+            "the controller compensates with the IMU, but the sensor has no read_sample() (an "
+            f"adapter of ftkin.sensors with an IMU): {type(sensor).__name__}"
+        )
+    return tap
+
+
+def _specific_force(tap: SampleTap) -> np.ndarray:
+    """The last sample's specific force [m/s², IMU frame].
+
+    Raises:
+        SensorError: the sample has none (``"imu"``).
+    """
+    accel = tap.sample.specific_force
+    if accel is None:
+        raise SensorError("imu", "the sensor's sample has no specific force (no accelerometer)")
+    return accel
+
+
 def _check_loop_inputs(rate_hz, duration, controller) -> float:
     """``rate_hz`` as a float [Hz], once the loop's arguments are checked."""
     rate_hz = float(rate_hz)
@@ -198,7 +239,7 @@ def _check_loop_inputs(rate_hz, duration, controller) -> float:
     return rate_hz
 
 
-def _warm_up(robot, checked: CheckedSensor, controller, period: float) -> None:
+def _warm_up(robot, checked: CheckedSensor, controller, period: float, tap) -> None:
     """A warm-up tick, not commanded: the first step of a controller loads what it needs.
 
     A sensor or robot fault here is met again by the loop's first tick, which stops as for any
@@ -206,7 +247,11 @@ def _warm_up(robot, checked: CheckedSensor, controller, period: float) -> None:
     """
     try:
         q, _ = robot.joint_state()
-        controller.step(q, checked.read()[1], period)
+        wrench = checked.read()[1]
+        if tap is None:
+            controller.step(q, wrench, period)
+        else:
+            controller.step(q, wrench, period, specific_force=_specific_force(tap))
     except (SensorError, RobotError):
         pass
     finally:

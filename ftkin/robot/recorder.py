@@ -33,12 +33,11 @@ import logging
 import time
 from collections import deque
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..calibration.estimate import calibrate
 from ..calibration.model import STANDARD_GRAVITY
 from ..calibration.observability import MIN_POSES
 from ..calibration.result import CalibrationResult
@@ -49,16 +48,14 @@ from ..exceptions import (
     RobotError,
     SensorError,
 )
-from ..io.calibration_file import save_calibration
 from ..io.csv_table import read_table
-from ..io.imu_columns import load_imu_samples
-from ..io.samples_csv import POSE_COLUMN, load_samples
+from ..io.samples_csv import POSE_COLUMN
 from ..io.stream_join import ACCEL_COLUMNS, GYRO_COLUMNS
-from ..kinematics.record import KinematicsRecord
 from ..planning.coverage import PoseCoverage, assess_coverage
 from ..validation import whole_number
 from .recorded_poses import RecordedPose, expected_calibration, nearest_pose, recorded_pose
 from .samples_log import TIME_COLUMN, SamplesLog, interrupts_held
+from .session import calibrate_recording
 from .stillness import (
     CheckedSensor,
     PoseReadings,
@@ -368,32 +365,6 @@ class PoseRecorder:
         return True
 
 
-def calibrate_recording(
-    samples_path,
-    arm=None,
-    *,
-    g: float = STANDARD_GRAVITY,
-    output=None,
-    calibrate_options: Mapping | None = None,
-) -> CalibrationResult:
-    """Calibrate from a recorded samples CSV: from the joints with ``arm``
-    (:func:`~ftkin.io.samples_csv.load_samples`, the arm's kinematics record kept), else from the
-    IMU columns (:func:`~ftkin.io.imu_columns.load_imu_samples`); save it to ``output`` if given.
-    """
-    options = dict(calibrate_options or {})
-    if arm is not None:
-        samples = load_samples(samples_path, arm).samples
-        result = calibrate(samples, g=g, **options)
-        result = replace(result, kinematics=KinematicsRecord.from_arm(arm))
-    else:
-        samples, _ = load_imu_samples(samples_path, g=g)
-        result = calibrate(samples, **options)
-    if output is not None:
-        save_calibration(result, output)
-        logger.info("saved the calibration to %s", output)
-    return result
-
-
 def record_poses(
     sensor,
     joints=None,
@@ -409,6 +380,7 @@ def record_poses(
     g: float = STANDARD_GRAVITY,
     calibrate_options: Mapping | None = None,
     on_event: Callable[[RecorderEvent], None] | None = None,
+    wrench_frame: str | None = None,
 ) -> Recording:
     """Record calibration poses from an arm ftkin does not drive, then calibrate (module
     docstring).
@@ -432,6 +404,10 @@ def record_poses(
         g: Gravity [m/s²].
         calibrate_options: More :func:`~ftkin.calibration.estimate.calibrate` keywords.
         on_event: Called with each :class:`RecorderEvent` (default: logged).
+        wrench_frame: The axes the sensor's driver gave the wrench in before it was turned into
+            the sensor frame (``"base"`` for a UR's built-in sensor read by
+            :class:`~ftkin.robot.ur.UrArm`), checked against the poses before calibrating
+            (:func:`~ftkin.robot.session.calibrate_recording`); None: not checked.
 
     Returns:
         The :class:`Recording`; Ctrl-C ends it early (``interrupted``), calibrated when the
@@ -467,6 +443,7 @@ def record_poses(
                 g=g,
                 output=output,
                 calibrate_options=calibrate_options,
+                wrench_frame=wrench_frame,
             )
         except FtkinError as error:
             if complete:

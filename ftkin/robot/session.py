@@ -29,16 +29,19 @@ import numpy as np
 from ..calibration.estimate import calibrate
 from ..calibration.model import STANDARD_GRAVITY
 from ..calibration.result import CalibrationResult
+from ..calibration.samples import Samples
 from ..control.compensation import Compensator
 from ..exceptions import FtkinError, InvalidInput, SessionInterrupted
 from ..io.calibration_file import save_calibration
+from ..io.imu_columns import load_imu_samples, with_imu_columns
 from ..io.samples_csv import load_samples
+from ..io.stream_join import ACCEL_COLUMNS, GYRO_COLUMNS
 from ..kinematics.record import KinematicsRecord
 from ..planning.constraints import DEFAULT_FLOOR_HEIGHT, FeasibilityChecker, PoseConstraints
 from ..planning.plan import plan_poses
 from ..progress import Progress
 from .samples_log import SamplesLog
-from .stillness import CheckedSensor, Stillness, record_still
+from .stillness import CheckedSensor, SampleTap, Stillness, record_still
 
 logger = logging.getLogger(__name__)
 
@@ -176,6 +179,51 @@ def verification_poses(
     raise InvalidInput(f"found only {len(found)} feasible verification poses of {count}")
 
 
+def calibrate_recording(
+    samples_path,
+    arm=None,
+    *,
+    g: float = STANDARD_GRAVITY,
+    output=None,
+    calibrate_options: Mapping | None = None,
+    wrench_frame: str | None = None,
+) -> CalibrationResult:
+    """Calibrate from a recorded samples CSV: from the joints with ``arm``
+    (:func:`~ftkin.io.samples_csv.load_samples`, the arm's kinematics record kept; with the IMU
+    columns too, the fused fit that checks the mount:
+    :func:`~ftkin.io.imu_columns.with_imu_columns`), else from the IMU columns alone
+    (:func:`~ftkin.io.imu_columns.load_imu_samples`); save it to ``output`` if given.
+
+    ``wrench_frame`` (``"base"`` or ``"sensor"``, with ``arm``): the axes a driver gave the
+    wrench in before it was turned into the sensor frame (a UR's ``ft_raw_wrench``), checked
+    against the poses first (:func:`~ftkin.calibration.wrench_frame.check_wrench_frame`).
+
+    Raises:
+        ConventionMistake: the poses fit the other ``wrench_frame`` (the message names
+            ``--wrench-frame`` and its value).
+    """
+    options = dict(calibrate_options or {})
+    if arm is not None:
+        loaded = load_samples(samples_path, arm)
+        if wrench_frame is not None:
+            from ..calibration.wrench_frame import check_wrench_frame
+
+            check = check_wrench_frame(loaded.samples, wrench_frame)
+            logger.info("%s", check.message)
+        samples = with_imu_columns(loaded, g=g)
+        if isinstance(samples, Samples):
+            options["g"] = g  # fused samples carry their own g
+        result = calibrate(samples, **options)
+        result = replace(result, kinematics=KinematicsRecord.from_arm(arm))
+    else:
+        samples, _ = load_imu_samples(samples_path, g=g)
+        result = calibrate(samples, **options)
+    if output is not None:
+        save_calibration(result, output)
+        logger.info("saved the calibration to %s", output)
+    return result
+
+
 def calibrate_on_robot(
     robot,
     sensor,
@@ -236,6 +284,11 @@ def calibrate_on_robot(
         )
     else:
         poses = check_given_poses(arm, poses, plan_options)
+    tap = SampleTap(sensor)
+    checked = CheckedSensor(tap, stillness.stale_after)
+    checked.read()  # the first sample says whether the sensor has an IMU to record
+    imu = tap.imu()
+    imu_columns = () if imu is None else (ACCEL_COLUMNS + GYRO_COLUMNS)[: len(imu)]
     log = SamplesLog(
         samples_path,
         arm.joint_names,
@@ -243,28 +296,34 @@ def calibrate_on_robot(
         comments=[
             f"ftkin calibration session: {len(poses)} poses, {readings_per_pose} readings each",
             "joints [rad], wrench [N, N·m] in the sensor frame (raw), pose = index in the plan, "
-            "t = sensor stamp [s]",
+            "t = sensor stamp [s]"
+            + (
+                ", the IMU's ax,ay,az [m/s²] and wx,wy,wz [rad/s] (IMU frame)"
+                if imu_columns
+                else ""
+            ),
         ],
+        extra_columns=imu_columns,
     )
     todo = _poses_to_visit(log, poses)
-    checked = CheckedSensor(sensor, stillness.stale_after)
     with Progress(len(poses), "calibration poses", enabled=progress) as bar:
         bar.advance(len(poses) - len(todo))
         for pose_id in todo:
             with _stopping(robot, log, len(poses)):
                 robot.move_to(poses[pose_id], while_moving=checked.read)
-                readings = record_still(robot, checked, readings_per_pose, stillness)
+                readings = record_still(robot, checked, readings_per_pose, stillness, tap)
                 log.append_pose(
-                    pose_id, readings.joint_positions, readings.wrenches, readings.times
+                    pose_id,
+                    readings.joint_positions,
+                    readings.wrenches,
+                    readings.times,
+                    readings.extra if imu_columns else None,
                 )
             logger.info("pose %d recorded (waited %.2f s to settle)", pose_id, readings.wait)
             bar.advance()
-    samples = load_samples(log.path, arm).samples
-    result = calibrate(samples, g=g, **dict(calibrate_options or {}))
-    result = replace(result, kinematics=KinematicsRecord.from_arm(arm))
-    if output is not None:
-        save_calibration(result, output)
-        logger.info("saved the calibration to %s", output)
+    result = calibrate_recording(
+        log.path, arm, g=g, output=output, calibrate_options=calibrate_options
+    )
     if verify_poses:
         verification = verify_session(
             robot,

@@ -291,8 +291,13 @@ class StillnessDetector:
         )
 
 
-def record_still(robot, sensor: CheckedSensor, count: int, stillness: Stillness) -> PoseReadings:
+def record_still(
+    robot, sensor: CheckedSensor, count: int, stillness: Stillness, tap: SampleTap | None = None
+) -> PoseReadings:
     """Wait until the arm is still and the readings stationary, then take ``count`` readings.
+
+    With ``tap`` (the :class:`SampleTap` ``sensor`` reads through) the IMU's values of each
+    reading are taken too (:attr:`PoseReadings.extra`).
 
     Raises:
         SensorError: the sensor failed (see :class:`CheckedSensor`).
@@ -313,7 +318,8 @@ def record_still(robot, sensor: CheckedSensor, count: int, stillness: Stillness)
             )
         q, dq = robot.joint_state()
         stamp, wrench, new = sensor.read()
-        if detector.update(now, float(np.max(np.abs(dq))), q, stamp, wrench, new):
+        extra = None if tap is None else tap.imu()
+        if detector.update(now, float(np.max(np.abs(dq))), q, stamp, wrench, new, extra):
             return detector.readings(now - start)
         time.sleep(stillness.poll_period)
 

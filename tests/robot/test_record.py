@@ -375,16 +375,11 @@ def test_cli_refuses_what_does_not_fit(tmp_path, capsys, extra, pattern):
     assert pattern in err and "Traceback" not in err
 
 
-def test_cli_ur_hook_names_what_is_missing(tmp_path, capsys):
-    import importlib.util
-
-    if importlib.util.find_spec("ftkin.robot.ur") is not None:
-        pytest.skip(
-            "ftkin.robot.ur is present: test_cli_record_ur_from_the_rtde_emulator covers --ur"
-        )
-    argv = ["record", "--ur", "127.0.0.1", "--robot", "ur5", "-o", str(tmp_path / "s.csv")]
-    assert main(argv) == 2
-    assert "--ur needs ftkin.robot.ur" in capsys.readouterr().err
+def test_wrench_frame_goes_with_ur(tmp_path, capsys):
+    argv = ["record", "--sensor", "tests.robot.record_fakes:scripted_imu", "--wrench-frame"]
+    assert main([*argv, "sensor", "-o", str(tmp_path / "s.csv")]) == 2
+    assert "--wrench-frame is the axes of a UR's built-in sensor" in capsys.readouterr().err
+    assert not (tmp_path / "s.csv").exists()
 
 
 @pytest.mark.skipif(os.name != "posix", reason="signals")
@@ -657,10 +652,18 @@ def test_a_resumed_sensor_whose_clock_restarted_is_named(tmp_path, caplog):
     not __import__("importlib").util.find_spec("rtde_receive"),
     reason="ur_rtde is not installed (pip install 'ftkin[ur]')",
 )
-def test_cli_record_ur_from_the_rtde_emulator_moved_by_the_test(tmp_path, capsys, monkeypatch):
-    """``ftkin record --ur HOST --robot ur5e``: the real ur_rtde client against the RTDE emulator,
-    the arm moved by the test (the emulator's own motion), its built-in sensor's simulated tool
-    recovered. The UR support's own tests are tests/robot/test_ur.py."""
+@pytest.mark.parametrize(
+    ("sent_in", "flag", "fits"),
+    [("base", None, True), ("sensor", "sensor", True), ("sensor", None, False)],
+)
+def test_cli_record_ur_from_the_rtde_emulator_moved_by_the_test(
+    tmp_path, capsys, monkeypatch, sent_in, flag, fits
+):
+    """``ftkin record --ur HOST --robot ur5e [--wrench-frame F]``: the real ur_rtde client
+    against the RTDE emulator, the arm moved by the test (the emulator's own motion), its
+    built-in sensor's simulated tool recovered; a controller that sends the wrench in the sensor's
+    axes, read as base axes (the default), is refused after the poses, naming
+    ``--wrench-frame sensor``. The UR support's own tests are tests/robot/test_ur.py."""
     from ftkin.io.calibration_file import load_calibration
     from ftkin.kinematics.robots import load_robot
 
@@ -677,7 +680,7 @@ def test_cli_record_ur_from_the_rtde_emulator_moved_by_the_test(tmp_path, capsys
         if len(poses) == 4:
             break
     try:
-        emulated = EmulatedController(q=poses[0])
+        emulated = EmulatedController(q=poses[0], wrench_frame=sent_in)
     except OSError as error:
         pytest.skip(f"cannot serve RTDE on a loopback address, port 30004: {error}")
     recorded = threading.Semaphore(0)
@@ -696,12 +699,20 @@ def test_cli_record_ur_from_the_rtde_emulator_moved_by_the_test(tmp_path, capsys
     watchdog.start()
     argv = ["record", "--ur", emulated.host, "--robot", "ur5e", "--n", "4", "--g", "9.80665"]
     argv += ["-o", str(tmp_path / "s.csv"), "--calibrate", str(tmp_path / "c.json")]
+    argv += [] if flag is None else ["--wrench-frame", flag]
     try:
         code = main([*argv, "--readings-per-pose", "30", "--stale-after", "0.5"])
     finally:
         watchdog.cancel()
         emulated.kill()
     mover.join(10)
+    if not fits:
+        assert code == 2
+        error = capsys.readouterr().err
+        assert "record again with --wrench-frame sensor" in error and "Traceback" not in error
+        assert not (tmp_path / "c.json").exists()
+        whole_poses(tmp_path / "s.csv", range(4), 30)
+        return
     assert code == 0, capsys.readouterr().err
     assert "pose 4 of 4 recorded" in capsys.readouterr().out
     whole_poses(tmp_path / "s.csv", range(4), 30)
