@@ -16,15 +16,21 @@ loopback address) carries a simulated 1.2 kg tool on the built-in sensor (bias, 
    timestamps and the packages missed in it (gaps in the timestamps). Targets: 500 Hz kept
    (≥ 499 Hz) with 0 missed, a per-sample cost under a tenth of the 2 ms period.
 
+   The log is every RTDE package, read on a connection of its own
+   (:class:`ftkin.robot.live_compensation.PackageLog`): ur_rtde's getters keep the newest
+   package only, and skipped 10 in 5 s at load 1 when the log was written from them.
+3. **Record and calibrate**, each repeat: ``ftkin record --ur HOST --robot ur5e --n 12`` as a
+   user runs it (a subprocess) while the arm is moved to the next of 12 poses whenever the
+   recorder says "recorded" (the emulator's own motion, 0.6 s; gravity directions 20° apart),
+   then ``ftkin calibrate samples.csv --robot ur5e``: the tool's mass (≤ 0.5 %), COM (≤ 1 mm)
+   and force bias (≤ 0.05 N) against the emulator's simulated tool. And a controller killed
+   after 2 poses: ``record`` ends within 0.5 s of the kill (the worst repeat), exit 2 with a
+   message and no traceback, only whole poses in the file.
+
 The emulator and ftkin share the machine's cores: on a loaded machine the scheduler can hold
-either for more than a period, and the missed row shows it.
+either for more than a period.
 
-The record-and-calibrate rows of issue 32 (``ftkin record --ur`` as the user freedrives the arm
-through 12 poses, then ``calibrate --robot ur5e``: mass within 0.5 %, COM within 1 mm, bias
-within 0.05 N, and a killed controller ending ``record`` within 0.5 s with whole poses in the
-file) come with ``ftkin record``: see :func:`record_rows`.
-
-Run: ``python benchmarks/bench_ur.py [--repeats 3]`` (about a minute). Exit code 1 when a target
+Run: ``python benchmarks/bench_ur.py [--repeats 3]`` (about two minutes). Exit code 1 when a target
 row fails, 2 when ur_rtde is missing.
 """
 
@@ -214,13 +220,113 @@ def _per_call(call, count: int = 20000) -> float:
     return (time.perf_counter() - started) / count
 
 
-def record_rows(row) -> None:
-    """The place of the rows of ``ftkin record --ur`` (issue 32 part 3): a 12-pose session
-    freedriven through the emulator (:meth:`EmulatedController.move`), recorded, calibrated with
-    ``--robot ur5e`` (mass ≤ 0.5 %, COM ≤ 1 mm, bias ≤ 0.05 N), and a killed controller ending
-    ``record`` within 0.5 s with whole poses in the file. They come with ``ftkin record``.
-    """
-    print("record/calibrate rows: pending `ftkin record --ur` (issue 32 part 3), not measured")
+def _spread_poses(count: int, seed: int) -> list[np.ndarray]:
+    """``count`` UR5e poses whose gravity directions in the flange differ by 20° or more (the
+    emulator's own kinematics), as a user freedriving the arm would pick them."""
+    from ftkin.kinematics.robots import load_robot
+    from tests.robot.rtde_controller import flange_transform
+
+    poses, seen = [], []
+    candidates = load_robot("ur5e").random_configurations(
+        2000, np.random.default_rng(seed), margin=0.5
+    )
+    for q in candidates:
+        down = flange_transform("ur5e", q)[:3, :3].T @ [0.0, 0.0, -1.0]
+        if all(np.degrees(np.arccos(np.clip(down @ other, -1, 1))) >= 20.0 for other in seen):
+            poses.append(q)
+            seen.append(down)
+        if len(poses) == count:
+            return poses
+    raise RuntimeError(f"no {count} poses 20° apart among the candidates")
+
+
+def _ftkin(*args, **popen):
+    env = {
+        **os.environ,
+        "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+    }
+    return subprocess.Popen(
+        [sys.executable, "-u", "-m", "ftkin.cli", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        **popen,
+    )
+
+
+def record_repeat(seed: int, folder: Path, kill_after: int | None = None) -> dict:
+    """``ftkin record --ur HOST --robot ur5e --n 12`` as a user runs it while the arm is moved
+    (the emulator's motion, to the next pose when the recorder says "recorded"), then
+    ``ftkin calibrate samples.csv --robot ur5e``; or, with ``kill_after``, the controller killed
+    once that many poses are recorded: the time from the kill to the end of ``record``."""
+    from ftkin.io.calibration_file import load_calibration
+    from tests.robot.rtde_controller import EmulatedController, SimulatedTool
+
+    poses = _spread_poses(POSES, seed)
+    samples = folder / f"record{seed}-{kill_after}.csv"
+    with EmulatedController("ur5e", q=poses[0]) as controller:
+        process = _ftkin(
+            "record", "--ur", controller.host, "--robot", "ur5e", "--n", str(POSES),
+            "--readings-per-pose", str(READINGS), "--g", "9.80665", "-o", str(samples),
+        )  # fmt: skip
+        recorded, killed_at = 0, None
+        for line in process.stdout:
+            if " recorded" in line and line.startswith("pose "):
+                recorded += 1
+                if kill_after is not None and recorded == kill_after:
+                    killed_at = time.monotonic()
+                    controller.kill()
+                elif recorded < POSES:
+                    controller.move(poses[recorded], 0.6)
+        process.wait(60)
+        ended = time.monotonic()
+        err = process.stderr.read()
+    lines = [line for line in samples.read_text().splitlines() if not line.startswith("#")]
+    pose = lines[0].split(",").index("pose")
+    counts = np.unique([line.split(",")[pose] for line in lines[1:]], return_counts=True)[1]
+    whole = bool(np.all(counts == READINGS))
+    if kill_after is not None:
+        return {
+            "latency": ended - killed_at,
+            "code": process.returncode,
+            "clear": "Traceback" not in err and "ftkin: error:" in err,
+            "whole": whole and len(counts) == kill_after,
+        }
+    if process.returncode != 0:
+        raise RuntimeError(f"ftkin record --ur failed: {err}")
+    calib = folder / f"calib-record{seed}.json"
+    done = _ftkin("calibrate", str(samples), "--robot", "ur5e", "-o", str(calib))
+    out, err = done.communicate(timeout=120)
+    if done.returncode != 0:
+        raise RuntimeError(f"ftkin calibrate failed: {err}")
+    result, tool = load_calibration(calib), SimulatedTool()
+    return {
+        "mass": abs(result.tool_mass - tool.mass) / tool.mass * 100.0,
+        "com": float(np.linalg.norm(result.center_of_mass - tool.com)) * 1e3,
+        "bias": float(np.linalg.norm(result.force_offset - tool.bias[:3])),
+        "whole": whole and len(counts) == POSES,
+    }
+
+
+def record_rows(row, repeats: int, folder: Path) -> None:
+    """``ftkin record --ur`` then ``ftkin calibrate --robot ur5e``, and a killed controller."""
+    runs = [record_repeat(seed, folder) for seed in range(repeats)]
+    kills = [record_repeat(100 + seed, folder, kill_after=2) for seed in range(repeats)]
+
+    def median(items, key):
+        return float(np.median([item[key] for item in items]))
+
+    mass, com, bias = median(runs, "mass"), median(runs, "com"), median(runs, "bias")
+    row("record --ur + calibrate --robot ur5e: mass error", mass, "≤ 0.5", mass <= 0.5, "%")
+    row("record --ur + calibrate: COM error", com, "≤ 1", com <= 1.0, "mm")
+    row("record --ur + calibrate: force bias error", bias, "≤ 0.05", bias <= 0.05, "N")
+    whole = all(run["whole"] for run in runs)
+    row("record --ur: whole poses, 12 of 12", int(whole), "1", whole, "")
+    latency = max(kill["latency"] for kill in kills)
+    row("killed controller: record ends within (worst)", latency, "≤ 0.5", latency <= 0.5, "s")
+    clean = all(kill["clear"] and kill["code"] == 2 and kill["whole"] for kill in kills)
+    row("killed controller: exit 2, message, whole poses", int(clean), "1", clean, "")
 
 
 def main(argv=None) -> int:
@@ -241,6 +347,7 @@ def main(argv=None) -> int:
     kinematics_rows(row)
     with tempfile.TemporaryDirectory(prefix="ftkin-bench-ur-") as folder:
         runs = [live_repeat(seed, Path(folder)) for seed in range(args.repeats)]
+        record_rows(row, args.repeats, Path(folder))
 
     def median(key):
         return float(np.median([run[key] for run in runs]))
@@ -265,8 +372,7 @@ def main(argv=None) -> int:
         print(f"{name:<50}{text:>12}{(goal + ' ' + unit).strip():>12}  {'PASS' if ok else 'FAIL'}")
     passed = sum(ok for *_, ok, _ in rows)
     print(f"{passed} of {len(rows)} rows pass")
-    record_rows(row)
-    return 0
+    return 0 if passed == len(rows) else 1
 
 
 if __name__ == "__main__":

@@ -4,9 +4,12 @@ contact wrench as it comes.
 The library loop is :func:`~ftkin.robot.live_compensation.compensated_stream` over a
 :class:`~ftkin.robot.ur.UrArm` (its built-in sensor, or ``--sensor MODULE:FACTORY``). The
 contact wrench is printed a few times a second; ``--log`` writes every sample (``t`` [s, the
-sensor's stamp], the joints [rad], ``fx..mz`` [N, N·m], sensor frame) as it comes, flushed
-every :data:`FLUSH_EVERY` rows; the summary counts the samples and the RTDE packages missed
-(gaps in the controller's timestamps). Ctrl-C ends it with the summary and exit code 130.
+sensor's stamp], the joints [rad], ``fx..mz`` [N, N·m], sensor frame) as it comes. With the
+built-in sensor the log is every RTDE package, read on a connection of its own
+(:class:`~ftkin.robot.live_compensation.PackageLog`: ur_rtde's getters skip packages when this
+process is late); with ``--sensor`` it is every new sample the loop sees, flushed every
+:data:`FLUSH_EVERY` rows. The summary counts the samples logged and the packages missed (gaps
+in the controller's timestamps). Ctrl-C ends it with the summary and exit code 130.
 """
 
 from __future__ import annotations
@@ -154,15 +157,30 @@ def run_live(args, calibration, arm) -> int:
             "--ur needs a six-joint arm: the calibration's recorded arm (--robot ur5e, ...) or "
             f"--robot; got {arm!r}"
         )
-    ur = UrArm(args.ur, wrench_frame=args.wrench_frame or "base", stale_after=args.stale_after)
-    log = _Log(args.live_log, arm.joint_names) if args.live_log else None
+    wrench_frame = args.wrench_frame or "base"
+    ur = UrArm(args.ur, wrench_frame=wrench_frame, stale_after=args.stale_after)
+    packages = log = None
+    if args.live_log and args.sensor is None:  # every package, on a connection of its own
+        from ..robot.live_compensation import PackageLog
+
+        packages = PackageLog(
+            calibration,
+            args.ur,
+            args.live_log,
+            arm=arm,
+            wrench_frame=wrench_frame,
+            timeout=max(args.stale_after, 0.5),
+            allow_other_arm=args.allow_other_arm,
+        )
+    elif args.live_log:
+        log = _Log(args.live_log, arm.joint_names)
     stamps: list[float] = []
     start = time.monotonic()
     code, interval, next_print = 0, 1.0 / args.print_rate, 0.0
     print(
         f"compensating {ur} ({'built-in sensor' if args.sensor is None else args.sensor}); "
         "contact wrench in the sensor frame, F' [N], M' [N·m]"
-        + (f"; logging to {args.live_log}" if log else "")
+        + (f"; logging to {args.live_log}" if args.live_log else "")
     )
     try:
         sensor = _sensor(args, ur)
@@ -180,6 +198,8 @@ def run_live(args, calibration, arm) -> int:
             stamps.append(stamp)
             if log is not None:
                 log.add(stamp, q, contact)
+            if packages is not None and packages.error is not None:
+                raise packages.error
             now = time.monotonic()
             if now >= next_print:
                 next_print = now + interval
@@ -198,7 +218,10 @@ def run_live(args, calibration, arm) -> int:
         elapsed = time.monotonic() - start
         if log is not None:
             log.close()
-        ur.close()
+        if packages is not None:
+            packages.close()
+            stamps = packages.timestamps()
+        ur.close(wait=False)  # the command ends with the process: no 0.5 s destructor
         _summary(np.array(stamps), elapsed, args.live_log, code == 130)
     return code
 

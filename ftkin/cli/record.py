@@ -142,7 +142,8 @@ def _joint_source(args):
             raise InvalidInput("--ur needs the arm's kinematics: --robot ur5e (or --urdf)")
         ur = _ur_arm(args)
         sensor = _sensor(args) if args.sensor else ur.sensor
-        return ur, arm, sensor, ur.close
+        # the command ends with the process: no 0.5 s wait for ur_rtde's destructor
+        return ur, arm, sensor, lambda: ur.close(wait=False)
     if not args.sensor:
         raise InvalidInput("give the sensor: --sensor NAME|MODULE:FACTORY (and --sensor-option)")
     if args.franka:

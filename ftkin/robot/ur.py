@@ -47,6 +47,23 @@ DEFAULT_STALE_AFTER = 0.1
 500 Hz; ur_rtde itself gives up after about 2.5 s)."""
 
 
+def wrench_in_sensor(q, raw, wrench_frame: str) -> np.ndarray:
+    """``ft_raw_wrench`` in the sensor (flange) frame: ``(6,)`` or ``(n, 6)`` [N, N·m] from the
+    package's ``actual_q`` ``(6,)`` or ``(n, 6)`` [rad] (module docstring: ``F_S = ᴮR_tool0ᵀ
+    F_B``, the torque alike, for ``"base"``; as it came for ``"sensor"``)."""
+    raw = np.array(raw, dtype=float)
+    if wrench_frame == "sensor":
+        return raw
+    if wrench_frame != "base":
+        raise InvalidInput(f"wrench_frame must be one of {WRENCH_FRAMES}, got {wrench_frame!r}")
+    q = np.asarray(q, dtype=float)
+    if q.ndim == 1:
+        rotation = flange_rotation(q)
+        return np.concatenate([rotation.T @ raw[:3], rotation.T @ raw[3:]])
+    rotations = np.array([flange_rotation(row) for row in q])  # (n, 3, 3) ᴮR_tool0
+    return np.einsum("nji,nkj->nki", rotations, raw.reshape(-1, 2, 3)).reshape(-1, 6)
+
+
 def import_rtde_receive():
     """ur_rtde's ``rtde_receive`` module, or :class:`MissingDependency` naming the ``ur`` extra."""
     try:
@@ -156,17 +173,25 @@ class UrArm:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def close(self) -> None:
+    def close(self, *, wait: bool = True) -> None:
         """Disconnect (never raises); reads afterwards raise :class:`RobotConnectionLost`.
 
-        ur_rtde's interface disconnects when it is destroyed (about 0.5 s, and as long again for
-        an explicit ``disconnect()`` before): the reference is dropped, once.
+        ur_rtde's interface disconnects when it is destroyed, which takes 0.5 s with the GIL
+        held (its receive thread's stop), and as long again for an explicit ``disconnect()``
+        before: the reference is dropped, once. ``wait=False`` is for a process about to exit
+        (the command line): the interface is never destroyed, the operating system closes its
+        socket when the process ends, and a command stopped by a lost controller ends at once
+        instead of 0.5 s later. In a process that goes on, each such close leaves ur_rtde's
+        receive thread behind.
         """
+        if self._rtde is None:
+            return
         rtde, self._rtde = self._rtde, None
-        try:
-            del rtde
-        except Exception as error:  # already gone: nothing more to do
-            logger.debug("disconnecting from %s: %s", self.host, error)
+        if not wait:
+            import ctypes
+
+            ctypes.pythonapi.Py_IncRef(ctypes.py_object(rtde))  # never destroyed: no 0.5 s wait
+        del rtde
 
     # -------------------------------------------------------------- reading
     def _connection(self, error_type=RobotConnectionLost):
@@ -229,17 +254,23 @@ class UrArm:
 
     def _read(self, error_type) -> UrState:
         rtde = self._connection(error_type)
-        stamp = rtde.getTimestamp()
-        self._check(stamp, error_type)
-        if self._cached is not None and self._cached.timestamp == stamp:
-            return self._cached
-        for _ in range(3):
-            q, dq = rtde.getActualQ(), rtde.getActualQd()
-            pose, wrench = rtde.getActualTCPPose(), rtde.getFtRawWrench()
-            latest = rtde.getTimestamp()
-            if latest == stamp:
-                break
-            stamp = latest  # a newer package came meanwhile: read that one
+        try:
+            stamp = rtde.getTimestamp()
+            self._check(stamp, error_type)
+            if self._cached is not None and self._cached.timestamp == stamp:
+                return self._cached
+            for _ in range(3):
+                q, dq = rtde.getActualQ(), rtde.getActualQd()
+                pose, wrench = rtde.getActualTCPPose(), rtde.getFtRawWrench()
+                latest = rtde.getTimestamp()
+                if latest == stamp:
+                    break
+                stamp = latest  # a newer package came meanwhile: read that one
+        except BaseException:
+            # the traceback keeps this frame: it must not keep the interface alive (its
+            # destructor takes 0.5 s, and would run wherever the traceback is dropped)
+            del rtde
+            raise
         q, raw = self._arrays(q, wrench)
         arrays = (q, np.array(dq, dtype=float), np.array(pose, dtype=float), raw)
         state = UrState(float(stamp), *arrays, self._in_sensor(q, raw))
@@ -259,10 +290,9 @@ class UrArm:
         return q, raw
 
     def _in_sensor(self, q: np.ndarray, raw: np.ndarray) -> np.ndarray:
-        if self.wrench_frame == "sensor" or not np.all(np.isfinite(q)):
+        if not np.all(np.isfinite(q)):
             return raw.copy()
-        rotation = flange_rotation(q)
-        return np.concatenate([rotation.T @ raw[:3], rotation.T @ raw[3:]])
+        return wrench_in_sensor(q, raw, self.wrench_frame)
 
     def joint_state(self) -> tuple[np.ndarray, np.ndarray]:
         """``actual_q`` ``(6,)`` [rad] and ``actual_qd`` ``(6,)`` [rad/s] of one package.

@@ -19,7 +19,7 @@ from ftkin.kinematics.arm import Arm
 from ftkin.robot import Stillness, calibrate_on_robot
 
 from .fakes import FakeRobot
-from .record_fakes import ACCEL_BIAS, IMU_ROTATION, TOOL, ScriptedSensor, Schedule
+from .record_fakes import ACCEL_BIAS, IMU_ROTATION, TOOL, Schedule, ScriptedSensor
 
 STILL = Stillness(window=10, settle_time=0.001, poll_period=0.0, force_std=0.1, torque_std=0.01)
 

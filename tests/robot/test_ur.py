@@ -340,10 +340,13 @@ def test_cli_live_log_at_full_rate(tmp_path, controller, calibrated, capsys):
     header = log.read_text().splitlines()[0].split(",")
     assert header[0] == "t" and header[-6:] == ["fx", "fy", "fz", "mx", "my", "mz"]
     stamps = table[:, 0]
-    missed = int(np.sum(np.round(np.diff(stamps) / 0.002) - 1))
-    assert len(stamps) + missed == round((stamps[-1] - stamps[0]) / 0.002) + 1
-    assert f"{len(stamps)} samples" in out and f"{missed} missed" in out
-    assert len(stamps) > 0.5 * 500  # about a second at 500 Hz (fewer on a loaded machine)
+    # every package the controller sent while the log ran is in it, once, in order (the log
+    # reads them on a connection of its own; ur_rtde's getters skip some on a loaded machine)
+    sent = np.array(sorted(stamp for stamp, _ in controller.sent()))
+    sent = sent[(sent >= stamps[0]) & (sent <= stamps[-1])]
+    np.testing.assert_allclose(stamps, sent, rtol=0, atol=1e-9)
+    assert f"{len(stamps)} samples" in out and "0 missed" in out
+    assert len(stamps) > 0.9 * 500  # a second at 500 Hz, all of it
     np.testing.assert_allclose(table[:, -6:].mean(axis=0), CONTACT, atol=0.03)
     assert main([*args, "--log", str(log)]) == 2  # never over an existing file
     assert "exists" in capsys.readouterr().err
@@ -387,13 +390,17 @@ def _ftkin(*args):
     )
 
 
+def _lines(path) -> int:
+    return len(path.read_text().splitlines()) if path.exists() else 0
+
+
 def test_cli_ctrl_c_ends_cleanly_with_130(tmp_path, controller, calibrated):
     calib = calibrated[1]
     log = tmp_path / "live.csv"
     process = _ftkin("compensate", calib, "--ur", controller.host, "--live", "--log", str(log))
     deadline = time.monotonic() + 20.0
-    while (not log.exists() or log.stat().st_size < 2000) and time.monotonic() < deadline:
-        time.sleep(0.05)  # until it runs (the log is flushed every 250 rows)
+    while _lines(log) < 300 and time.monotonic() < deadline:
+        time.sleep(0.05)  # until it runs (the log is flushed with every batch of packages)
     process.send_signal(signal.SIGINT)
     out, err = process.communicate(timeout=20)
     assert process.returncode == 130, err
