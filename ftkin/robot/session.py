@@ -33,7 +33,6 @@ from ..calibration.samples import Samples
 from ..control.compensation import Compensator
 from ..exceptions import FtkinError, InvalidInput, SessionInterrupted
 from ..io.calibration_file import save_calibration
-from ..io.imu_columns import load_imu_samples, with_imu_columns
 from ..io.samples_csv import load_samples
 from ..io.stream_join import ACCEL_COLUMNS, GYRO_COLUMNS
 from ..kinematics.record import KinematicsRecord
@@ -210,12 +209,16 @@ def calibrate_recording(
 
             check = check_wrench_frame(loaded.samples, wrench_frame)
             logger.info("%s", check.message)
+        from ..io.imu_columns import with_imu_columns  # the IMU's modules load when used
+
         samples = with_imu_columns(loaded, g=g)
         if isinstance(samples, Samples):
             options["g"] = g  # fused samples carry their own g
         result = calibrate(samples, **options)
         result = replace(result, kinematics=KinematicsRecord.from_arm(arm))
     else:
+        from ..io.imu_columns import load_imu_samples
+
         samples, _ = load_imu_samples(samples_path, g=g)
         result = calibrate(samples, **options)
     if output is not None:
