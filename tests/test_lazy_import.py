@@ -42,3 +42,18 @@ def test_lazy_names_are_the_modules_objects():
 
     assert ftkin.Compensator is Compensator
     assert "Compensator" in dir(ftkin)
+
+
+def test_the_imus_modules_load_with_their_first_use():
+    """The IMU's and the fused fit's modules stay out of the FK paths (the control loop, the
+    robot session, the calibration file), and load once a calibration from the IMU is asked for.
+    """
+    imu = {"ftkin.calibration.imu_fit", "ftkin.calibration.fused_fit", "ftkin.io.imu_columns"}
+    imu |= {"ftkin.control.imu_compensation", "ftkin.calibration.imu_samples"}
+    code = (
+        "import ftkin\nfrom ftkin import *\nimport ftkin.robot.session, ftkin.robot.loop\n"
+        "import ftkin.control.joint_admittance, ftkin.io.calibration_file"
+    )
+    assert not imu & _modules_after(code)
+    used = code + "\nimport numpy as np\nftkin.Samples.from_imu(np.eye(3) * 9.81, np.zeros((3, 6)))"
+    assert "ftkin.calibration.imu_samples" in _modules_after(used)
