@@ -22,13 +22,10 @@ def _shown(value) -> str:
 def help_text(declaration, default) -> str:
     """The help line: what it does, its unit, and its default (when the field's is the CLI's)."""
     unit = f" [{declaration.unit}]" if declaration.unit else ""
-    if (
-        declaration.action == "store_true"
-        or declaration.cli_default is not UNSET
-        or default in (None, (), [], {})
-    ):
+    shown = default if declaration.cli_default is UNSET else declaration.cli_default
+    if declaration.action in ("store_true", "store_false") or shown in (None, (), [], {}):
         return f"{declaration.help}{unit}"
-    return f"{declaration.help}{unit} (default: {_shown(default)})"
+    return f"{declaration.help}{unit} (default: {_shown(shown)})"
 
 
 def declared_option(options_type, name: str) -> tuple:
@@ -41,12 +38,12 @@ def declared_option(options_type, name: str) -> tuple:
     default = field_default(field)
     cli_default = default if declaration.cli_default is UNSET else declaration.cli_default
     keywords = {"dest": field.name, "help": help_text(declaration, default)}
+    flag_only = declaration.action in ("store_true", "store_false")
     if declaration.action is not None:
         keywords["action"] = declaration.action
-        if declaration.action != "store_true":
-            keywords["default"] = cli_default
-    else:
+    if declaration.action != "store_true":
         keywords["default"] = cli_default
+    if not flag_only:
         for attribute in ("metavar", "choices", "nargs"):
             if getattr(declaration, attribute) is not None:
                 keywords[attribute] = getattr(declaration, attribute)

@@ -243,7 +243,7 @@ def run(args) -> int:
             args.excitation
             and (
                 args.n is not None
-                or args.max_tilt_deg is not None
+                or args.max_tilt is not None
                 or args.format not in (None, "csv")
                 or args.drift_rate is not None
                 or args.pose_interval is not None

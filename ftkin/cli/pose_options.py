@@ -11,18 +11,9 @@ default and help (``tests/cli/test_flags.py`` walks the parsers): ``--margin``,
 import argparse
 import logging
 
-import numpy as np
-
-from ..exceptions import InvalidInput
-from ..planning.constraints import DEFAULT_FLOOR_HEIGHT, DEFAULT_MARGIN, PoseConstraints
-from .arg_types import (
-    add_options,
-    bounded_int,
-    floor_height,
-    non_negative_float,
-    option,
-    refuse,
-)
+from ..planning.constraints import PoseConstraints
+from .arg_types import add_options, bounded_int, option
+from .declared import declared_option, declared_values
 
 logger = logging.getLogger("ftkin.cli")
 
@@ -31,71 +22,21 @@ DEFAULT_READINGS_PER_POSE = 50
 the standard errors for (one value, so that a plan's prediction is the session's)."""
 
 
-def joint_range(text: str) -> tuple[str, float, float]:
-    """argparse type: ``NAME:LO:HI`` [rad]."""
-    parts = text.rsplit(":", 2)
-    try:
-        if len(parts) != 3 or not parts[0]:
-            raise ValueError
-        low, high = float(parts[1]), float(parts[2])
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected NAME:LO:HI with LO, HI in radians, got {text!r}"
-        ) from None
-    refuse(
-        argparse.ArgumentTypeError,
-        (
-            not (np.isfinite(low) and np.isfinite(high)),
-            f"expected finite LO and HI [rad], got {text!r}",
-        ),
-        (
-            max(abs(low), abs(high)) > 2.0 * np.pi,
-            f"{text!r}: LO and HI are beyond 2π: ranges are in radians (these look like degrees)",
-        ),
-        (low > high, f"{text!r}: LO must not exceed HI"),
-    )
-    return parts[0], low, high
-
-
 CONSTRAINT_OPTIONS = (
-    option(
-        "--margin",
-        type=non_negative_float,
-        default=DEFAULT_MARGIN,
-        metavar="RAD",
-        help="distance kept from the joint limits [rad] (default: %(default)s)",
-    ),
-    option(
-        "--floor-height",
-        type=floor_height,
-        default=DEFAULT_FLOOR_HEIGHT,
-        metavar="M",
-        help="sensor and tool origins stay above this height in the base frame [m] (default: "
-        "%(default)s, a floor at base z = 0 with a 10 cm margin)",
-    ),
+    declared_option(PoseConstraints, "margin"),
+    declared_option(PoseConstraints, "floor_height"),
     option(
         "--no-floor",
         action="store_true",
         help="no floor constraint (an arm mounted on a wall or ceiling)",
     ),
-    option(
-        "--max-tilt-deg",
-        type=non_negative_float,
-        default=None,
-        metavar="DEG",
-        help="largest angle of the tool axis from pointing straight down [deg]",
-    ),
-    option(
-        "--joint-range",
-        type=joint_range,
-        action="append",
-        default=[],
-        metavar="NAME:LO:HI",
-        help="extra range for one joint [rad]; repeat for several joints",
-    ),
-    option("--no-self-collision", action="store_true", help="do not check self-collision"),
+    declared_option(PoseConstraints, "max_tilt"),
+    declared_option(PoseConstraints, "joint_ranges"),
+    declared_option(PoseConstraints, "self_collision"),
 )
-"""The pose constraints (:func:`constraints_from_args`)."""
+"""The pose constraints (:func:`constraints_from_args`), declared on
+:class:`~ftkin.planning.constraints.PoseConstraints`; ``--no-floor`` is the command line's way
+to say ``floor_height=None``."""
 
 READINGS_PER_POSE = option(
     "--readings-per-pose",
@@ -146,14 +87,7 @@ def add_readings_argument(parser) -> None:
 
 def constraints_from_args(args) -> PoseConstraints:
     """The pose constraints named on the command line."""
-    if args.max_tilt_deg is not None and args.max_tilt_deg > 180.0:
-        raise InvalidInput(
-            f"--max-tilt-deg must be between 0 and 180 [deg], got {args.max_tilt_deg:g}"
-        )
-    return PoseConstraints(
-        margin=args.margin,
-        floor_height=None if args.no_floor else args.floor_height,
-        max_tilt=None if args.max_tilt_deg is None else float(np.deg2rad(args.max_tilt_deg)),
-        joint_ranges=args.joint_range,
-        self_collision=not args.no_self_collision,
-    )
+    values = declared_values(PoseConstraints, args)
+    if args.no_floor:
+        values["floor_height"] = None
+    return PoseConstraints(**values)

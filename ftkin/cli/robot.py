@@ -27,7 +27,12 @@ from ..robot.stillness import Stillness
 from .arg_types import add_options, bounded_int, finite_float, option, positive_float
 from .common import add_arm_arguments, arm_from_args
 from .declared import add_declared, declared_values
-from .pose_options import add_constraint_arguments, add_readings_argument, constraints_from_args
+from .pose_options import (
+    CONSTRAINT_OPTIONS,
+    add_constraint_arguments,
+    add_readings_argument,
+    constraints_from_args,
+)
 from .shared_options import (
     DEFAULT_POSES,
     DURATION,
@@ -132,6 +137,8 @@ def _calibrate_parser(commands) -> None:
     )
     add_readings_argument(parser)
     add_constraint_arguments(parser)
+    floor_type = CONSTRAINT_OPTIONS[1][1]["type"]
+    add_options(parser, deprecated("--floor", "floor_height", "--floor-height", type=floor_type))
     _stillness_options(parser)
     parser.set_defaults(func=run_calibrate)
 

@@ -16,6 +16,7 @@ any optimization, constraint sets under which no pose set could determine
 every parameter, naming the parameters.
 """
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -27,15 +28,44 @@ from ..calibration.mount import MOUNT_NAMES
 from ..exceptions import InvalidInput, UnobservableParameters
 from ..kinematics.collision import SelfCollision
 from ..kinematics.rotations import euler_zyx_to_matrix
+from ..options import number, option
 from ..validation import as_in_range, as_real, set_checked
 
 _MOUNT_MODE_BY_SIZE = {12: "none", 13: "yaw", 15: "full"}
 
 DEFAULT_MARGIN = 0.05
 """Default distance kept from every joint limit [rad] (about 3°)."""
+_TILT_DEGREES = number(0.0, 180.0)
 DEFAULT_FLOOR_HEIGHT = 0.1
 """Default floor of planned poses and of a robot session [m, base z]: the base plane plus a
 10 cm margin (a tool's length below the sensor is not in the model)."""
+
+
+def joint_range_text(text: str) -> tuple[str, float, float]:
+    """A joint range written ``NAME:LO:HI`` [rad] (the command line's ``--joint-range``), as
+    ``(name, lower, upper)``; a text that is not one raises :class:`argparse.ArgumentTypeError`
+    naming what is expected (radians: values beyond 2π are taken for degrees)."""
+    import argparse
+
+    parts = text.rsplit(":", 2)
+    try:
+        if len(parts) != 3 or not parts[0]:
+            raise ValueError
+        low, high = float(parts[1]), float(parts[2])
+    except ValueError:
+        old = " (JOINT LOW HIGH, three words, is the old spelling)" if ":" not in text else ""
+        raise argparse.ArgumentTypeError(
+            f"expected NAME:LO:HI with LO, HI in radians (e.g. joint1:-0.5:0.5), got {text!r}{old}"
+        ) from None
+    if not (math.isfinite(low) and math.isfinite(high)):
+        raise argparse.ArgumentTypeError(f"expected finite LO and HI [rad], got {text!r}")
+    if max(abs(low), abs(high)) > 2.0 * math.pi:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: LO and HI are beyond 2π: ranges are in radians (these look like degrees)"
+        )
+    if low > high:
+        raise argparse.ArgumentTypeError(f"{text!r}: LO must not exceed HI")
+    return parts[0], low, high
 
 
 @dataclass(frozen=True)
@@ -52,11 +82,47 @@ class PoseConstraints:
         self_collision: Whether to reject self-colliding configurations.
     """
 
-    margin: float = DEFAULT_MARGIN
-    floor_height: float | None = None
-    max_tilt: float | None = None
-    joint_ranges: tuple = ()
-    self_collision: bool = True
+    margin: float = option(
+        DEFAULT_MARGIN,
+        "distance kept from the joint limits",
+        unit="rad",
+        metavar="RAD",
+        parse=number(0.0, 2.0 * np.pi),
+    )
+    floor_height: float | None = option(
+        None,
+        "sensor and tool origins stay above this height in the base frame (on the command "
+        "line a floor at base z = 0 with a 10 cm margin unless --no-floor; in Python none "
+        "unless given)",
+        unit="m",
+        metavar="M",
+        parse=number(-100.0, 100.0),
+        cli_default=DEFAULT_FLOOR_HEIGHT,
+    )
+    max_tilt: float | None = option(
+        None,
+        "largest angle of the tool axis from pointing straight down (the field: radians)",
+        unit="deg",
+        flag="--max-tilt-deg",
+        metavar="DEG",
+        parse=lambda text: math.radians(_TILT_DEGREES(text)),
+    )
+    joint_ranges: tuple = option(
+        (),
+        "extra range for one joint, NAME:LO:HI; repeat for several joints",
+        unit="rad",
+        flag="--joint-range",
+        metavar="NAME:LO:HI",
+        parse=joint_range_text,
+        action="append",
+        cli_default=[],
+    )
+    self_collision: bool = option(
+        True,
+        "do not check self-collision",
+        flag="--no-self-collision",
+        action="store_false",
+    )
 
     def __post_init__(self):
         set_checked(

@@ -4,6 +4,8 @@ named.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -122,7 +124,7 @@ def test_xacro_is_named(tmp_path, capsys):
         (["plan", "-n", "3", "--seed", str(2**64)], "the seed must be below 2**63"),
         (["simulate", "placement", "--dt", "1e-12"], "at most 1,000,000"),
         (["simulate", "placement", "--duration", "1e9"], "at most 1,000,000"),
-        (["plan", "-n", "3", "--floor-height", "nan"], "finite height"),
+        (["plan", "-n", "3", "--floor-height", "nan"], "a number in [-100, 100]"),
     ],
 )
 def test_sizes_and_seeds_are_bounded(argv, pattern, capsys):
@@ -168,7 +170,9 @@ def test_empty_names_are_refused(argv, pattern, capsys):
 )
 def test_no_float_flag_takes_nan_or_inf(argv, capsys):
     """Every float flag is finite at the edge (``type=float`` let ``nan`` through)."""
-    _usage_error(argv, capsys, "expected a finite")
+    assert main([str(a) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert re.search(r"expected a (finite|number in \[)", err) and "Traceback" not in err, err
 
 
 @pytest.mark.parametrize(
@@ -281,3 +285,41 @@ def test_old_spellings_warn_naming_the_new_one(tmp_path, caplog):
     assert "--readings is deprecated" in caplog.text and "use --readings-per-pose" in caplog.text
     assert "--drift is deprecated" in caplog.text and "use --with-drift" in caplog.text
     assert "t," in (tmp_path / "d.csv").read_text() or ",t" in (tmp_path / "d.csv").read_text()
+
+
+def test_pose_constraint_flags_are_the_declarations_of_pose_constraints():
+    """``plan`` and ``robot calibrate`` build their constraint flags from ``PoseConstraints``:
+    the help each parser shows is the declaration's, and the values parse into the field's
+    units (degrees on the command line, radians in the field)."""
+    import argparse
+
+    from ftkin.cli.declared import help_text
+    from ftkin.cli.pose_options import add_constraint_arguments, constraints_from_args
+    from ftkin.options import declared_options, field_default
+    from ftkin.planning.constraints import PoseConstraints
+
+    parser = argparse.ArgumentParser()
+    add_constraint_arguments(parser)
+    shown = {action.dest: action.help for action in parser._actions}
+    for field, declaration in declared_options(PoseConstraints):
+        assert shown[field.name] == help_text(declaration, field_default(field)), field.name
+    given = constraints_from_args(
+        parser.parse_args(["--max-tilt-deg", "30", "--joint-range", "j1:-0.5:0.25"])
+    )
+    assert given.max_tilt == pytest.approx(np.pi / 6, abs=1e-15)
+    assert given.joint_ranges == (("j1", -0.5, 0.25),)
+    assert given.floor_height == pytest.approx(0.1, abs=0)
+    assert constraints_from_args(parser.parse_args(["--no-floor"])).floor_height is None
+    assert constraints_from_args(parser.parse_args(["--no-self-collision"])).self_collision is False
+
+
+def test_robot_calibrates_old_floor_flag_warns_and_its_old_joint_range_is_named(capsys, caplog):
+    from ftkin.cli import build_parser
+
+    argv = ["robot", "calibrate", "--dry-run", "--n", "3", "-o", "c.json"]
+    assert main([*argv, "--joint-range", "fr3_joint1", "-0.5", "0.5"]) == 2
+    assert "(JOINT LOW HIGH, three words, is the old spelling)" in capsys.readouterr().err
+    with caplog.at_level("WARNING", logger="ftkin.cli"):
+        args = build_parser().parse_args([*argv, "--floor", "0.2"])
+    assert args.floor_height == pytest.approx(0.2, abs=0)
+    assert "--floor is deprecated and will be removed: use --floor-height" in caplog.text

@@ -336,7 +336,7 @@ def test_cli_plan_refusals(capsys):
     assert main(["plan", "--n", "4", "--format", "yaml"]) == 2
     assert "--format yaml needs -o" in capsys.readouterr().err
     assert main(["plan", "--n", "4", "--max-tilt-deg", "200"]) == 2
-    assert "between 0 and 180 [deg], got 200" in capsys.readouterr().err
+    assert "--max-tilt-deg: expected a number in [0, 180], got '200'" in capsys.readouterr().err
     assert main(["plan", "--n", "4", "--seed", "-1"]) == 2
     assert "seed must be at least 0" in capsys.readouterr().err
     assert main(["plan", "--n", "9", "--joint-range", "joint9:0:1"]) == 2
