@@ -383,6 +383,7 @@ def load_samples_from_args(
     segments = parameters if static_only else None
     paths = input_paths(path)
     if len(paths) > 1:  # several files, each on its own clock: joined on time, then one table
+        from ..calibration.model import STANDARD_GRAVITY
         from ..io.joined_files import joined_table
         from ..io.samples_csv import samples_from_table
 
@@ -390,10 +391,9 @@ def load_samples_from_args(
             paths,
             spelling=column_spelling_from_args(args),
             reading=stream_reading_from_args(args),
+            g=getattr(args, "g", None) or STANDARD_GRAVITY,
         )
         print(f"joined {len(paths)} files on time: {len(table.rows)} rows at the wrench's stamps")
-        for note in joined.notes:
-            print(f"  {note}")
         loaded, path = samples_from_table(table, arm, segments), table.source
     elif not is_bag_path(path := paths[0]):
         loaded = load_samples(path, arm, segments, column_spelling_from_args(args))

@@ -141,8 +141,6 @@ def _compensate_imu(args, calibration) -> int:
         gaps=reading.gaps,
         spelling=column_spelling_from_args(args),
     )
-    for note in joined.notes:
-        print(f"  {note}")
     compensator = ImuCompensator(calibration, imu_position=args.imu_position)
     contact = compensator.compensate_recording(samples, window=args.sg_window)
     header = ["t", *joined.columns] if samples.times is not None else list(joined.columns)

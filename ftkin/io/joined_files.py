@@ -92,6 +92,10 @@ def imu_only(paths, spelling: ColumnSpelling | None = None, joint_names=()) -> b
     return accel and not oriented and not generic
 
 
+JOINED_ACCEL_UNIT = "m/s^2"
+"""The unit of ``ax,ay,az`` in a :func:`joined_table` (whatever the files' own)."""
+
+
 def joined_table(
     paths,
     *,
@@ -101,6 +105,10 @@ def joined_table(
 ) -> tuple[Table, JoinedStreams]:
     """The files joined on time as one :class:`Table` (``t`` first, then every file's columns;
     ``in_gap`` when gaps are marked), and the join (its ``notes`` say what was dropped).
+
+    The table's values are in SI: ``t`` in seconds and the accelerometer ``ax,ay,az`` in m/s²
+    (:data:`JOINED_ACCEL_UNIT`), converted from ``reading``'s units and checked against ``g``, so
+    a reader of the table must not convert them again.
 
     Raises:
         InvalidSamples: no file holds the wrench or several do, a column in two files, files that

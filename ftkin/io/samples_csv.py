@@ -96,7 +96,7 @@ def detect_orientation(table: Table, joint_names=None) -> tuple[str, list[str]]:
     named = [name for name in (joint_names or []) if name in header]
     if any(angles.values()):  # joint columns of any arm would be mixed in
         named = named or [name for name in header if "joint" in name.lower()]
-    if named and generic:
+    if named and generic and set(named) != set(generic):  # an arm whose joints are q1..qn
         raise InvalidSamples(
             f"both URDF joint-name columns {named} and generic columns {generic}; use one",
             table.source,

@@ -124,3 +124,26 @@ def re_search(pattern, text):
     match = re.search(pattern, text)
     assert match, text
     return match.group(1)
+
+
+def test_three_files_with_an_orientation_convert_the_accelerometer_once(streams, tmp_path, capsys):
+    """Wrench, IMU (in g) and orientation logs at their own rates: the join converts g to m/s²,
+    and the fused fit reads the joined table in m/s² (it had converted it a second time: "median
+    norm 95.6 m/s²")."""
+    wrench_csv, imu_csv = streams
+    poses = Rotation.random(9, random_state=11)  # the fixture's poses (R_WS = R_BS)
+    t = np.arange(0.0, 9 * (HOLD + MOVE) - MOVE, 1 / 100.0) + 0.0007
+    quaternions = Rotation.from_matrix([_orientation(x, poses) for x in t]).as_quat()
+    orientation_csv = tmp_path / "orientation.csv"
+    write_csv(
+        orientation_csv,
+        ["t", "qw", "qx", "qy", "qz"],
+        np.column_stack([EPOCH_US + 1e6 * t, quaternions[:, [3, 0, 1, 2]]]).tolist(),
+    )
+    calib = tmp_path / "calib.json"
+    argv = ["calibrate", str(wrench_csv), str(imu_csv), str(orientation_csv)]
+    assert main([*argv, "--time-unit", "us", "--accel-unit", "g", "-o", str(calib)]) == 0
+    assert "fitted together" in capsys.readouterr().out
+    saved = json.loads(calib.read_text())
+    assert saved["tool_mass"] == pytest.approx(MASS, rel=0.005)
+    np.testing.assert_allclose(saved["center_of_mass"], COM, atol=1e-3)

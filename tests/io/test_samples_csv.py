@@ -324,3 +324,27 @@ def test_excel_byte_order_mark_and_crlf(tmp_path):
         ftkin.kinematics.euler_zyx_deg_to_matrix([0, 30, 180]),
         atol=1e-15,
     )
+
+
+def test_an_arm_whose_joints_are_named_q1_to_qn(tmp_path, arm, rng, truth):
+    """A URDF whose joints are named ``q1..q6``: its joint columns are both the URDF names and
+    the generic ones, one set (they were refused as "both ... use one"). The readings are the
+    simulator's truth at FK poses of the bundled arm, which has the same chain."""
+    text = arm.urdf_path.read_text()
+    for i in range(6, 0, -1):
+        text = text.replace(f'"joint{i}"', f'"q{i}"')
+    urdf = tmp_path / "q_named.urdf"
+    urdf.write_text(text)
+    renamed = ftkin.Arm.from_urdf(urdf, "ft_sensor")
+    assert renamed.joint_names == [f"q{i}" for i in range(1, 7)]
+    configurations = arm.random_configurations(8, rng, margin=0.2)
+    wrenches = truth.predict(arm.rotation_sensor_to_base(configurations))
+    path = _write(
+        tmp_path / "q.csv",
+        [*renamed.joint_names, *WRENCH],
+        np.column_stack([configurations, wrenches]),
+    )
+    loaded = load_samples(path, renamed)
+    np.testing.assert_allclose(
+        loaded.samples.rotations, arm.rotation_sensor_to_base(configurations), atol=1e-12
+    )
