@@ -5,6 +5,7 @@
 import numpy as np
 
 from .. import Arm, Compensator, InvalidInput, load_calibration
+from ..calibration.fused_result import FusedCalibrationResult
 from ..calibration.imu_result import ImuCalibrationResult
 from ..calibration.model import WRENCH_CHANNELS
 from ..io.bags import is_bag_path
@@ -88,7 +89,9 @@ def _parse_intermixed(parser) -> None:
 def run(args) -> int:
     check_live_arguments(args)
     calibration = load_calibration(args.calibration)
-    if isinstance(calibration, ImuCalibrationResult):  # made from the IMU: its columns compensate
+    if isinstance(calibration, ImuCalibrationResult) and (
+        not isinstance(calibration, FusedCalibrationResult) or _logs_an_accelerometer(args)
+    ):  # made from the IMU: its columns compensate (a fused one: with FK when the log has none)
         return _compensate_imu(args, calibration)
     if args.imu_position is not None:
         raise InvalidInput("--imu-position applies to a calibration made from the IMU")
@@ -122,6 +125,22 @@ def run(args) -> int:
             f"{rows - inside} the last bias"
         )
     return 0
+
+
+def _logs_an_accelerometer(args) -> bool:
+    """Whether a file of the log (CSVs; not live) has the accelerometer's ``ax,ay,az``."""
+    from ..io.stream_join import ACCEL_COLUMNS
+
+    if args.live or args.log is None:
+        return False
+    spelling = column_spelling_from_args(args)
+    for path in input_paths(args.log):
+        if is_bag_path(path):
+            return False
+        header = spelled_table(read_table(path), spelling).header
+        if all(name in header for name in ACCEL_COLUMNS):
+            return True
+    return False
 
 
 def _compensate_imu(args, calibration) -> int:

@@ -116,6 +116,16 @@ def test_joints_and_an_imu_in_one_file_are_fused_and_the_mount_warned(tmp_path, 
     assert "fitted together" in capsys.readouterr().out
     angle = float(re_search(r"([\d.]+)° ", caplog.text))
     assert abs(angle - 3.093) < 0.05 and "not mounted as the URDF says" in caplog.text
+    # with the right URDF (the bundled arm, MuJoCo's), the fused calibration compensates a log
+    # of joints and wrench only, with FK: MuJoCo's own readings at rest, the contact the noise
+    assert main(["calibrate", str(path), "-o", str(tmp_path / "right.json")]) == 0
+    log = tmp_path / "joints_only.csv"
+    write_csv(log, header[1:-3], np.column_stack([data["q"], data["wrench"]]).tolist())
+    out = tmp_path / "contact.csv"
+    assert main(["compensate", str(tmp_path / "right.json"), str(log), "-o", str(out)]) == 0
+    assert "from the IMU" not in capsys.readouterr().out
+    forces = read_table(out).floats(["fx", "fy", "fz"])
+    assert np.median(np.linalg.norm(forces, axis=1)) < 0.1
 
 
 def re_search(pattern, text):
