@@ -77,6 +77,13 @@ class FitDiagnostics:
         return not (self.p_value < FIT_ALPHA)
 
     @property
+    def noise_too_large(self) -> bool:
+        """True when the readings fit far better than a given noise says they can (the
+        chi-square's lower tail below ``FIT_ALPHA``): the noise given is too large, and the
+        standard errors with it."""
+        return self.noise_source == "given" and self.dof > 0 and self.p_value > 1.0 - FIT_ALPHA
+
+    @property
     def outlier_threshold(self) -> float:
         """Per-pose p-value below which a pose is an outlier."""
         return OUTLIER_ALPHA / max(len(self.pose_ids), 1)

@@ -65,6 +65,18 @@ RATE_GRID = 10.0 ** np.arange(-4.0, 1.5, 1.0)
 """Multiples of the reference rate (noise of a pose mean over √(pose spacing)) tried before the
 Nelder–Mead search."""
 
+MIN_ORIENTATION_POSES = 10
+"""Fewest poses for the test that a drift's bias path follows the orientation
+(:func:`_follows_orientation`): below, four regressors explain too much by chance."""
+
+ORIENTATION_R2 = 0.9
+"""Share of a drift's bias path (in units of the pose-mean noise) that the gravity direction in
+the sensor frame must explain for the path to be called a model error."""
+
+MIN_PATH_EXCURSION = 3.0
+"""A bias path whose spread is below this many pose-mean noise levels is not tested: it is
+within the noise, and a model error that small changes nothing."""
+
 NOISE_WALK_RATIO = 10.0
 """Walk between consecutive poses [multiples of the noise of a pose mean] beyond which an
 estimated noise cannot be told from the walk."""
@@ -329,7 +341,7 @@ def fit_drift_model(
 def _fit_candidates(models, poses: PoseAverages, start: DriftStart, selected_by: str):
     """Fits and BIC of the candidate ``models`` that can be fitted, and why the others cannot."""
     auto, observations = selected_by == "auto", 6 * len(poses)
-    criteria, fits, notes = {}, {}, []
+    criteria, fits, notes, left_out = {}, {}, [], []
     for model in models:
         count = 12 + 6 * model.columns + 2 * model.walk + 2 * start.estimated
         if model.name == "none":
@@ -351,8 +363,54 @@ def _fit_candidates(models, poses: PoseAverages, start: DriftStart, selected_by:
         if fit.collapse is not None:
             notes.append(f"drift {model.name}: {fit.collapse}")
             continue
+        follows = _follows_orientation(poses, fit)
+        if follows is not None and auto:  # a model error, not a drift: left out, said once
+            left_out.append((model.name, follows))
+            continue
+        if follows is not None:
+            logger.warning("drift %s: %s", model.name, follows)
         fits[model.name], criteria[model.name] = fit, fit.bic
+    if left_out:
+        names = ", ".join(name for name, _ in left_out)
+        logger.warning("drift %s left out: %s", names, left_out[0][1])
     return fits, criteria, notes
+
+
+def _follows_orientation(poses: PoseAverages, fit: DriftFit) -> str | None:
+    """Why the bias path a drift model found is a model error rather than a drift, or None.
+
+    A sensor's drift is a function of time; what a wrong model leaves (a sensor mounted
+    otherwise than the URDF says, a wrong sensor frame, a torque unit) is a function of the
+    orientation, linear in the gravity direction in the sensor frame ``u = R_BSᵀ a / |a|``. With
+    :data:`MIN_ORIENTATION_POSES` poses or more, a path that moves well beyond the noise of a
+    pose mean (its spread over :data:`MIN_PATH_EXCURSION` times that noise) and that ``[1, u]``
+    explains to :data:`ORIENTATION_R2` or more (pooled over the six channels, each in units of
+    its pose-mean noise) follows the orientation, not the clock.
+    """
+    count = len(poses.pose_ids)
+    if count < MIN_ORIENTATION_POSES or fit.drift is None:
+        return None
+    order = np.argsort(poses.times, kind="stable")
+    gravity = fit.model.gravity_in_base
+    direction = np.einsum("pji,j->pi", poses.rotations[order], gravity / np.linalg.norm(gravity))
+    design = np.column_stack([np.ones(count), direction])
+    counts = np.asarray(poses.counts, dtype=float)[order]
+    path = fit.drift.bias / (fit.noise.channel_std[None, :] / np.sqrt(counts)[:, None])
+    centred = path - path.mean(axis=0)
+    total = float(np.sum(centred**2))
+    if total < MIN_PATH_EXCURSION**2 * count:
+        return None
+    coefficients = np.linalg.lstsq(design, path, rcond=None)[0]
+    explained = 1.0 - float(np.sum((path - design @ coefficients) ** 2)) / total
+    if explained < ORIENTATION_R2:
+        return None
+    return (
+        f"the bias it finds follows the sensor's orientation, not time (the gravity direction "
+        f"in the sensor frame explains {100 * explained:.0f} % of it over {count} poses): that "
+        "is a model error, not a drift: a sensor mounted otherwise than the URDF says "
+        "(estimate_mount='yaw' or 'full', --estimate-mount), a wrong sensor frame, or a unit "
+        "or convention of the readings (ftkin doctor)"
+    )
 
 
 def select_drift(models, poses: PoseAverages, start: DriftStart):

@@ -83,6 +83,13 @@ def _f_sf(ratio, dfn, dfd):
         return np.where(large, chi_square, special.fdtrc(dfn, np.where(large, 1.0, dfd), ratio))
 
 
+def _chi_square_cdf(chi_square: float, dof: int) -> float:
+    """``P(X ≤ chi_square)`` for a chi-square with ``dof`` degrees of freedom."""
+    from scipy import special
+
+    return float(special.chdtr(dof, chi_square))
+
+
 def _block_scales(theta: np.ndarray) -> np.ndarray:
     """``(12,)`` scale each parameter's standard error is judged against."""
     weight = float(np.linalg.norm(theta[0:3]))
@@ -221,9 +228,20 @@ def _warnings(
         (
             d.p_value < FIT_ALPHA,
             f"the readings do not fit the model within their noise (chi-square "
-            f"{d.chi_square:.1f} for {d.dof} degrees of freedom, p = {d.p_value:.1e}): sensor "
-            "crosstalk, a contact or cable at some poses, or noise underestimated; standard "
-            f"errors scaled by {np.sqrt(d.covariance_scale):.2f}",
+            f"{d.chi_square:.1f} for {d.dof} degrees of freedom, p = {d.p_value:.1e}): a "
+            "sensor mounted otherwise than the URDF says (estimate_mount='yaw' or 'full', "
+            "--estimate-mount), a reading convention (ftkin doctor), sensor crosstalk, a "
+            "contact or cable at some poses, or noise underestimated; standard errors scaled by "
+            f"{np.sqrt(d.covariance_scale):.2f}",
+        ),
+        (
+            d.noise_too_large,
+            f"the readings fit far better than the noise given says they can (chi-square "
+            f"{d.chi_square:.3g} for {d.dof} degrees of freedom, lower-tail p = "
+            f"{_chi_square_cdf(d.chi_square, d.dof):.1e}): the noise given is about "
+            f"{1.0 / max(np.sqrt(d.chi_square / d.dof), 1e-12):.3g}× what the residuals show "
+            "(check its unit: one reading's standard deviation, N and N·m), so the standard "
+            "errors are too large by as much; leave it out to have it measured",
         ),
         (
             bool(d.outlier_pose_ids),

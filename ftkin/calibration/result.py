@@ -368,6 +368,8 @@ def _diagnostics_lines(diagnostics) -> list[str]:
     ]
     if diagnostics.noise_source == "residuals":
         fit = "not testable (noise estimated from the same residuals)"
+    elif diagnostics.noise_too_large:
+        fit = "FITS FAR BETTER than the noise given (is it too large?)"
     elif diagnostics.fit_ok:
         fit = "consistent with the noise"
     else:

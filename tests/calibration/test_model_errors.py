@@ -1,0 +1,82 @@
+"""What a drift must not swallow and what a given noise must not hide: a sensor mounted otherwise
+than the orientations say is a model error (the bias path follows the orientation, not time),
+and a noise given far above the residuals is said.
+
+The readings are the model's own prediction at the real orientations (a hand-written rotation
+of the sensor frame by a known angle), with seeded Gaussian noise; the fit sees the rotations
+the "URDF" gives, without that turn.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from ftkin import CalibrationOptions, Samples, SensorNoise, calibrate
+
+READINGS = 20
+FORCE_STD, TORQUE_STD = 0.05, 0.002
+
+
+def _timed_samples(arm, truth, rng, mount_yaw_deg, poses=20, drift_per_pose=None):
+    """``poses`` static poses 5 s apart, READINGS readings each; the real sensor frame turned by
+    ``mount_yaw_deg`` about its z axis against the rotations handed to the fit."""
+    configurations = arm.random_configurations(poses, rng, margin=0.3)
+    given = arm.rotation_sensor_to_base(configurations)
+    turn = Rotation.from_euler("z", mount_yaw_deg, degrees=True).as_matrix()
+    real = given @ turn.T  # R_BS_real = R_BS_given · R_Mᵀ
+    wrenches = truth.predict(real)
+    if drift_per_pose is not None:
+        wrenches = wrenches + np.outer(np.arange(poses), drift_per_pose)
+    repeated = np.repeat(wrenches, READINGS, axis=0)
+    noise = rng.normal(size=repeated.shape) * ([FORCE_STD] * 3 + [TORQUE_STD] * 3)
+    times = np.repeat(5.0 * np.arange(poses), READINGS) + np.tile(np.arange(READINGS) * 0.01, poses)
+    return Samples(
+        repeated + noise,
+        np.repeat(given, READINGS, axis=0),
+        pose_ids=np.repeat(np.arange(poses), READINGS),
+        times=times,
+    )
+
+
+GIVEN_NOISE = SensorNoise(FORCE_STD, TORQUE_STD)
+
+
+def test_an_unmodelled_mount_is_not_taken_for_a_drift(arm, truth, rng, caplog):
+    """A sensor turned 5° about z: no walk may absorb it (it did, 'consistent with the noise'),
+    the fit says it does not fit and names the mount."""
+    samples = _timed_samples(arm, truth, rng, mount_yaw_deg=5.0)
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        result = calibrate(samples, CalibrationOptions(noise=GIVEN_NOISE))
+    assert result.drift is None or "walk" not in result.drift.model
+    assert "follows the sensor's orientation, not time" in caplog.text
+    assert not result.diagnostics.fit_ok
+    assert "--estimate-mount" in " ".join(result.diagnostics.warnings)
+
+
+def test_a_real_drift_is_not_called_a_model_error(arm, truth, rng, caplog):
+    """A bias that drifts with time (a steady 0.02 N per pose on fx, 0.001 N·m on mz) at the
+    orientations given: the drift is kept and not called a model error."""
+    drift = np.array([0.02, 0.0, -0.01, 0.0, 0.0, 0.001])
+    samples = _timed_samples(arm, truth, rng, mount_yaw_deg=0.0, drift_per_pose=drift)
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        result = calibrate(samples, CalibrationOptions(noise=GIVEN_NOISE))
+    assert "follows the sensor's orientation" not in caplog.text
+    assert result.drift is not None and result.drift.model != "none"
+    assert result.diagnostics.fit_ok
+
+
+def test_a_noise_given_far_above_the_residuals_is_said(arm, truth, rng):
+    samples = _timed_samples(arm, truth, rng, mount_yaw_deg=0.0, poses=12)
+    samples = Samples(samples.wrenches, samples.rotations, pose_ids=samples.pose_ids)
+    result = calibrate(samples, CalibrationOptions(noise=SensorNoise(2.0, 0.08)))  # 40× too big
+    assert result.diagnostics.noise_too_large
+    (warning,) = [w for w in result.diagnostics.warnings if "fit far better" in w]
+    factor = float(warning.split("the noise given is about ")[1].split("×")[0])
+    assert 25.0 < factor < 60.0  # 40× the real noise, within the chi-square's scatter
+    assert "FITS FAR BETTER" in result.summary()
+    right = calibrate(samples, CalibrationOptions(noise=GIVEN_NOISE))
+    assert not right.diagnostics.noise_too_large
