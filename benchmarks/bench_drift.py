@@ -214,9 +214,9 @@ def control_session(arm, configurations, rng):
                 compensator.compensate(q[i], raw[i])
                 continue
             before = tracker.update_count
-            contact = compensator.compensate(q[i], raw[i])
+            measured = compensator.compensate(q[i], raw[i])  # `contact` is the session's truth
             compensator.observe_bias(
-                contact, dt, q=q[i], free=None if flags is None else bool(flags[i])
+                measured, dt, q=q[i], free=None if flags is None else bool(flags[i])
             )
             if tracker.update_count != before:
                 first, last = (

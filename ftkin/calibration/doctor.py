@@ -49,6 +49,9 @@ EXPLAINED = (0.5, 0.8)
 """Share of the variation a reading must explain to be a suspicion, and to be named as the
 mistake.
 """
+MISFIT_RATIO = 30.0
+"""Pose residuals (RMS) over the noise of a pose mean beyond which, when the data as given also
+explain less than ``EXPLAINED[1]`` of the variation, the doctor is suspicious of them."""
 FAR_COM = (0.5, 2.0)
 """Centre-of-mass distance [m]: beyond the first a suspicion, beyond the second implausible."""
 
@@ -113,7 +116,7 @@ class ConventionReport:
     def message(self) -> str:
         """The sentence an error or warning prints: the reading that fits and the fix."""
         if self.culprit is None:
-            return "the data fit as given"
+            return "the data fit as given" if self.verdict == "ok" else self.reason
         return (
             f"the data fit when read with {self.culprit.reading.name} ({self.reason}): "
             f"{self.culprit.reading.fix}"
@@ -299,4 +302,28 @@ def _plausibility(fits, given: ReadingFit, alternatives) -> ConventionReport:
     ):
         reason = "gravity points up in the base frame as given (or the arm hangs from a ceiling)"
         return ConventionReport(fits, "suspect", reaction, reason)
+    misfit = _misfit_beyond_spread(given)
+    if misfit is not None and given.explained < EXPLAINED[1]:
+        reason = (
+            f"no alternative reading fits better, but the data as given explain only "
+            f"{100 * max(given.explained, 0.0):.0f} % of the variation across poses, with "
+            f"residuals {misfit:.3g}× the spread of repeated readings: a wrong URDF, sensor frame "
+            "or mount, a contact, or a convention not tried here"
+        )
+        return ConventionReport(fits, "suspect", None, reason)
     return ConventionReport(fits, "ok", None, "no alternative reading fits better")
+
+
+def _misfit_beyond_spread(fit: ReadingFit) -> float | None:
+    """The RMS ratio of the pose residuals to the noise of a pose mean (from the spread of its
+    repeated readings), when it is beyond :data:`MISFIT_RATIO`; None without repeated readings
+    or within it."""
+    poses = fit.reading.poses
+    spread = poses.spread * fit.reading.unit_scale
+    if not np.any(np.isfinite(spread)):
+        return None
+    noise = np.nanmedian(spread / np.sqrt(np.asarray(poses.counts))[:, None], axis=0)
+    dof = max(len(poses) - 2, 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = float(np.sqrt(np.median(fit.rss / dof / np.maximum(noise, 1e-300) ** 2)))
+    return ratio if np.isfinite(ratio) and ratio > MISFIT_RATIO else None

@@ -92,6 +92,17 @@ def table_readings(table: Table, arm=None) -> list[Reading]:
         pose_ids,
     )
     readings = [given, _reading(*mistakes[kind], wrenches, pose_ids)]
+    if kind in ("quaternion", "euler"):  # a matrix has its transpose above; FK has no inverse
+        readings.append(
+            _reading(
+                "the orientation inverted (R_SB: base in the sensor frame)",
+                "give the sensor's orientation in the base frame, R_BS"
+                + (" (conjugate the quaternion: negate qx,qy,qz)" if kind == "quaternion" else ""),
+                lambda: np.transpose(orientations_from_table(table, arm).rotations, (0, 2, 1)),
+                wrenches,
+                pose_ids,
+            )
+        )
     if given.poses is not None:
         readings.extend(wrench_readings(given.poses))
     return readings
