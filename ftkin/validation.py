@@ -25,6 +25,12 @@ def as_float_array(value, name: str) -> np.ndarray:
         array = value if isinstance(value, np.ndarray) else np.asarray(value)
     except (TypeError, ValueError) as error:
         raise InvalidInput(f"{name} must be numeric, got {type(value).__name__}: {error}") from None
+    if isinstance(
+        array, np.ma.MaskedArray
+    ):  # numpy would drop the mask: a masked entry is no value
+        if np.ma.is_masked(array):
+            raise InvalidInput(f"{name} has masked entries (no value there): {_short(value)}")
+        array = np.asarray(array.data)
     kind = array.dtype.kind
     if kind not in "iuf" or (isinstance(value, (list, tuple)) and _has_bool(value)):
         what = _KIND_NAMES.get("b" if kind in "iuf" else kind, f"dtype {array.dtype}")

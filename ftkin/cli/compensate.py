@@ -11,6 +11,7 @@ from ..calibration.model import WRENCH_CHANNELS
 from ..io.bags import is_bag_path
 from ..io.column_spelling import spelled_table
 from ..io.csv_table import read_table, write_csv
+from ..io.stream_join import seconds_text
 from .arg_types import add_command, option
 from .common import (
     ALLOW_OTHER_ARM,
@@ -124,7 +125,37 @@ def run(args) -> int:
             "bias at their time, "
             f"{rows - inside} the last bias"
         )
+        _warn_of_other_clocks(loaded.samples.times, calibration, inside)
     return 0
+
+
+def _warn_of_other_clocks(times: np.ndarray, calibration, inside: int) -> None:
+    """Warn when a log's times and a drifting calibration's recording look like two clocks: rows
+    inside the recording of a calibration re-zeroed since (they keep the recording's bias), or a
+    log far before the recording (its rows take the last bias)."""
+    drift = calibration.drift
+    start, end = float(drift.times[0]), float(drift.times[-1])
+    span = max(end - start, 1e-9)
+    where = f"the calibration's recording ({seconds_text(start)}–{seconds_text(end)} s)"
+    moved = float(np.max(np.abs(calibration.bias - drift.bias[-1])))
+    if inside and moved > 1e-9:
+        logger.warning(
+            "%d rows fall inside %s and used the bias it saw, not the bias re-zeroed since (it "
+            "moved by up to %.4g): if the log is of a later session on another clock, shift its "
+            "times past %s s or drop its t column",
+            inside,
+            where,
+            moved,
+            seconds_text(end),
+        )
+    if float(np.min(times)) < start - 10.0 * span:
+        logger.warning(
+            "the log's times (%s–%s s) are long before %s: on another clock or in another unit "
+            "(--time-unit)? its rows used the last bias",
+            seconds_text(float(np.min(times))),
+            seconds_text(float(np.max(times))),
+            where,
+        )
 
 
 def _logs_an_accelerometer(args) -> bool:

@@ -9,12 +9,19 @@ leaves CALIB.json untouched.
 """
 
 import datetime
+import logging
 
 import numpy as np
 
 from .. import Compensator, InvalidInput, load_calibration, save_calibration
 from .arg_types import add_command, finite_float, option, refuse
 from .common import add_arm_arguments, arm_of_calibration
+
+logger = logging.getLogger("ftkin.cli")
+
+REZERO_WARNING_FORCE = 2.0
+"""A re-zero that moves the force bias by more than the tool's weight and this [N] is warned of
+(a contact at the pose, or a sensor tared in its driver: a thermal drift is smaller)."""
 
 
 def register(subparsers) -> None:
@@ -108,4 +115,22 @@ def run(args) -> int:
         f"(changed by {np.linalg.norm(change[:3]):.4f} N, {np.linalg.norm(change[3:]):.5f} N·m)"
     )
     print(f"wrote {output}" + (" (updated in place)" if args.output is None else ""))
+    weight = float(calibration.tool_weight)
+    if np.linalg.norm(change[:3]) > max(weight, REZERO_WARNING_FORCE):
+        logger.warning(
+            "the bias moved by %.4g N, more than the tool's weight (%.4g N): was the tool touching "
+            "something, or the sensor tared in its driver since the calibration? Re-zero at a "
+            "contact-free pose",
+            float(np.linalg.norm(change[:3])),
+            weight,
+        )
+    drift = calibration.drift
+    if drift is not None and drift.model != "none":
+        logger.warning(
+            "this calibration has a drift trajectory (%s) over %.6g–%.6g s: rows of a log timed "
+            "inside it keep the bias the recording saw; the re-zeroed bias applies after it",
+            drift.model,
+            float(drift.times[0]),
+            float(drift.times[-1]),
+        )
     return 0

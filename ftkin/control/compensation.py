@@ -104,6 +104,9 @@ class Compensator:
                 "calibration must be an ftkin SensorModel or CalibrationResult, got "
                 f"{type(calibration).__name__}"
             )
+        if arm is not None and not isinstance(arm, Arm):
+            hint = f" (ftkin.load_robot({arm!r}))" if isinstance(arm, str) else ""
+            raise InvalidInput(f"arm must be an ftkin.Arm or None, got {type(arm).__name__}{hint}")
         if tracker is not None and not isinstance(tracker, BiasTracker):
             raise InvalidInput(
                 f"tracker must be an ftkin BiasTracker or None, got {type(tracker).__name__}"
@@ -208,16 +211,15 @@ class Compensator:
                 for radians: the message says so).
         """
         arm = self.arm if self.arm is not None else self._require_arm()
-        try:  # float64 arrays, the control loop's case, pass without a conversion
-            if type(q) is not np.ndarray or q.dtype is not FLOAT64:
-                q = np.asarray(q, dtype=np.float64)
-            raw = (
-                raw_wrench.tolist()
-                if type(raw_wrench) is np.ndarray and raw_wrench.dtype is FLOAT64
-                else np.asarray(raw_wrench, dtype=np.float64).tolist()
-            )
-        except (TypeError, ValueError) as error:
-            raise InvalidInput(f"q and raw_wrench must be numeric: {error}") from None
+        # float64 arrays, the control loop's case, pass without a conversion; anything else is
+        # checked (booleans, text, complex and masked entries refused, not cast)
+        if type(q) is not np.ndarray or q.dtype is not FLOAT64:
+            q = as_float_array(q, "q [rad]")
+        raw = (
+            raw_wrench.tolist()
+            if type(raw_wrench) is np.ndarray and raw_wrench.dtype is FLOAT64
+            else as_float_array(raw_wrench, "raw_wrench [N, N·m]").tolist()
+        )
         if (
             q.shape != self._q_shape
             or type(raw) is not list
@@ -354,12 +356,17 @@ class Compensator:
         """Bias ``(N, 6)`` [N, N·m] for readings at ``times`` ``(N,)`` [s].
 
         Inside the recording of a drifting calibration: its trajectory
-        (:meth:`~ftkin.calibration.drift.BiasDrift.bias_at`). Outside it (after
-        its end, or before its start, e.g. a log on another clock), or without
-        a drift model: the current bias (calibration's last, or as re-zeroed
-        or tracked since).
+        (:meth:`~ftkin.calibration.drift.BiasDrift.bias_at`; a reading then had the bias the
+        recording saw, whatever a later re-zero found). Outside it (after its end, or before its
+        start, e.g. a log on another clock), or without a drift model: the current bias
+        (calibration's last, or as re-zeroed or tracked since).
+
+        Raises:
+            InvalidInput: a time that is not a finite number of seconds.
         """
-        times = as_float_array(times, "times").reshape(-1)
+        times = as_float_array(times, "times [s]").reshape(-1)
+        if not np.all(np.isfinite(times)):
+            check_finite(times, "times [s]")
         out = np.tile(self._bias, (len(times), 1))
         drift = self.calibration.drift
         if drift is not None and drift.model != "none":

@@ -55,6 +55,7 @@ registry, so a registered model round-trips unchanged.
 import datetime
 import json
 import math
+import os
 from collections import Counter
 from pathlib import Path
 
@@ -514,6 +515,12 @@ def load_calibration(path) -> CalibrationResult:
         CalibrationFileError: missing file, not JSON (with line and column),
             another format, a newer version, or a missing or malformed key.
     """
+    if not isinstance(path, (str, os.PathLike)) or isinstance(path, bytes):
+        raise CalibrationFileError(
+            repr(path),
+            "expected a calibration file's path (a str or a pathlib.Path), got "
+            f"{type(path).__name__}",
+        )
     path = Path(path)
     source = str(path)
 

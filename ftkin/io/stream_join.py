@@ -196,14 +196,14 @@ def slerp(times: np.ndarray, quaternions: np.ndarray, at: np.ndarray) -> np.ndar
     return out / np.linalg.norm(out, axis=1)[:, None]
 
 
-def _seconds(value: float) -> str:
+def seconds_text(value: float) -> str:
     """A time stamp [s] as text: to the millisecond when it is a clock's (since the epoch), so
     that two stamps of one run read apart."""
     return f"{value:.3f}" if abs(value) >= 1e5 else f"{value:.6g}"
 
 
 def _span(stream: Stream) -> str:
-    return f"{stream.name} {_seconds(stream.times[0])}–{_seconds(stream.times[-1])} s"
+    return f"{stream.name} {seconds_text(stream.times[0])}–{seconds_text(stream.times[-1])} s"
 
 
 def _gaps(stream: Stream, limit: float, at: np.ndarray) -> tuple[np.ndarray, list[str]]:
@@ -217,7 +217,9 @@ def _gaps(stream: Stream, limit: float, at: np.ndarray) -> tuple[np.ndarray, lis
         hit = (at > begin) & (at < end)
         inside |= hit
         line = "" if stream.lines is None else f" (after line {int(stream.lines[k])})"
-        described.append(f"{_seconds(begin)}–{_seconds(end)} s{line}: {int(hit.sum())} rows")
+        described.append(
+            f"{seconds_text(begin)}–{seconds_text(end)} s{line}: {int(hit.sum())} rows"
+        )
     return inside, described
 
 
@@ -285,7 +287,7 @@ def join_streams(
     if not keep.all():
         before, after = int(np.sum(base.times < start)), int(np.sum(base.times > end))
         notes.append(
-            f"the output covers the overlap {_seconds(start)}–{_seconds(end)} s of "
+            f"the output covers the overlap {seconds_text(start)}–{seconds_text(end)} s of "
             + "; ".join(_span(s) for s in streams)
             + f": {before} rows of {base.name} before it and {after} after it dropped"
         )

@@ -12,7 +12,6 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-import pytest
 from scipy.spatial.transform import Rotation
 
 from ftkin import CalibrationOptions, Samples, SensorNoise, calibrate

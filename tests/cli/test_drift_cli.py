@@ -163,3 +163,42 @@ def test_view_subtracts_the_bias_at_each_pose_time(samples_csv, tmp_path, capsys
             )  # a constant bias leaves the warm-up in the contact force
         else:
             assert contact.max() < largest  # the bias at each pose's time: only the noise is left
+
+
+def test_a_rezero_of_a_drifting_calibration_and_a_log_on_another_clock_are_said(
+    samples_csv, tmp_path, capsys, caplog
+):
+    """A re-zero with a contact (the bias moves by 40 N, more than the 3.15 N tool) is warned;
+    a log inside the recording after that re-zero keeps the recording's bias, which is said;
+    a log far before the recording (another clock) is said too."""
+    import logging
+
+    calibration = tmp_path / "c.json"
+    assert main(["calibrate", str(samples_csv), "--drift", "poly:1", "-o", str(calibration)]) == 0
+    original = load_calibration(calibration)
+    q = [0.2, -1.1, 1.3, 0.4, 1.2, -0.3]
+    rotation = Arm.default().rotation_sensor_to_base(np.array([q]))[0]
+    pushed = original.tool_gravity_wrench(rotation) + original.bias + [40.0, 0, 0, 0, 0, 0]
+    zeroed = tmp_path / "zeroed.json"
+    argv = ["rezero", str(calibration), "--q", *map(str, q), "--wrench", *map(str, pushed)]
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        assert main([*argv, "-o", str(zeroed)]) == 0
+    assert "more than the tool's weight" in caplog.text
+    assert "keep the bias the recording saw" in caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        assert (
+            main(["compensate", str(zeroed), str(samples_csv), "-o", str(tmp_path / "a.csv")]) == 0
+        )
+    assert "not the bias re-zeroed since (it moved by up to 40" in caplog.text
+    # the same log 1e6 s earlier: another clock
+    rows = [line.split(",") for line in samples_csv.read_text().splitlines()]
+    shifted = [rows[0]] + [[str(float(row[0]) - 1e6), *row[1:]] for row in rows[1:]]
+    early = tmp_path / "early.csv"
+    early.write_text("\n".join(",".join(row) for row in shifted) + "\n")
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        assert (
+            main(["compensate", str(calibration), str(early), "-o", str(tmp_path / "b.csv")]) == 0
+        )
+    assert "are long before the calibration's recording" in caplog.text

@@ -72,3 +72,31 @@ def test_a_complex_q_is_a_held_fault_not_a_cast(arm):
         dq = controller.step(q + 1e-3j, raw, 1e-3)
     np.testing.assert_array_equal(dq, np.zeros(arm.nq))
     assert controller.last_status.fault == "not_finite"
+
+
+@pytest.mark.parametrize(
+    "raw",
+    [
+        np.array([True] * 6),
+        np.array(["1"] * 6),
+        np.zeros(6) + 0j,
+        np.ma.masked_array(np.zeros(6), mask=[1, 0, 0, 0, 0, 0]),
+    ],
+    ids=["booleans", "text", "complex", "masked"],
+)
+def test_compensate_refuses_what_is_not_a_real_reading(arm, raw):
+    """Booleans, text, complex and masked entries were cast (True as 1 N, the mask dropped)."""
+    with pytest.raises(InvalidInput, match="raw_wrench"):
+        Compensator(paper_like_truth(), arm).compensate(np.zeros(arm.nq), raw)
+
+
+def test_the_arm_a_calibration_file_and_drift_times_are_checked(arm, tmp_path):
+    from ftkin import CalibrationFileError, load_calibration
+
+    with pytest.raises(InvalidInput, match=r"ftkin.load_robot\('ur5e'\)"):
+        Compensator(paper_like_truth(), "ur5e")
+    for path in (None, 3, b"calib.json"):
+        with pytest.raises(CalibrationFileError, match="expected a calibration file's path"):
+            load_calibration(path)
+    with pytest.raises(InvalidInput, match="times .* must be finite, found nan at index 1"):
+        Compensator(paper_like_truth(), arm).bias_at([0.0, np.nan, 1.0])
