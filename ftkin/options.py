@@ -108,7 +108,7 @@ def number(low: float | None = None, high: float | None = None, *, above: bool =
 
     def parse(text: str) -> float:
         try:
-            value = float(text)
+            value = float_text(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
         inside = math.isfinite(value) and (low is None or (value > low if above else value >= low))
@@ -125,7 +125,7 @@ def integer(low: int, high: int):
 
     def parse(text: str) -> int:
         try:
-            value = int(text)
+            value = int_text(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
         if not low <= value <= high:
@@ -153,3 +153,20 @@ def checked(convert, what: str = "a number"):
             raise argparse.ArgumentTypeError(message) from None
 
     return parse
+
+
+def float_text(text: str) -> float:
+    """A number written as a file or a command line writes one: ASCII digits, a sign, a point, an
+    exponent (``nan``/``inf`` too, for the callers' own finiteness checks). Python's ``float``
+    also reads ``"1_000"`` and other scripts' digits (``"３"``), which no logger writes: those
+    raise :class:`ValueError`, as any other text."""
+    if not text.isascii() or "_" in text:
+        raise ValueError(f"could not convert string to float: {text!r}")
+    return float(text)
+
+
+def int_text(text: str) -> int:
+    """A whole number in ASCII digits (see :func:`float_text`)."""
+    if not text.isascii() or "_" in text:
+        raise ValueError(f"invalid literal for int() with base 10: {text!r}")
+    return int(text)

@@ -8,6 +8,7 @@ Each converter raises :class:`argparse.ArgumentTypeError`, which the CLI reports
 import argparse
 
 from ..calibration.model import check_gravity
+from ..options import float_text, int_text
 
 
 def option(*flags: str, **keywords) -> tuple:
@@ -49,7 +50,7 @@ def refuse(error: type[Exception], *checks: tuple) -> None:
 
 def _number(text: str, accept, expected: str) -> float:
     try:
-        value = float(text)
+        value = float_text(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
     if not (accept(value) and abs(value) != float("inf")):
@@ -63,7 +64,7 @@ NUMBER_LIST_OPTIONS = ("--sensor-offset", "--mount-rpy-deg", "--com", "--imu-pos
 
 def _is_number(token: str) -> bool:
     try:
-        float(token)
+        float_text(token)
     except ValueError:
         return False
     return True
@@ -97,7 +98,7 @@ def number_list(text: str) -> list[float]:
 def whole_number(text: str, what: str = "") -> int:
     """``text`` as an int, or :class:`argparse.ArgumentTypeError` naming ``what`` (e.g. "poses")."""
     try:
-        return int(text)
+        return int_text(text)
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"expected a whole number{' of ' + what if what else ''}, got {text!r}"

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import InvalidSamples
+from ..options import float_text
 from .atomic import atomic_write_text
 
 logger = logging.getLogger(__name__)
@@ -56,7 +57,7 @@ class Table:
             for c, (index, name) in enumerate(zip(indices, names)):
                 cell = row[index].strip()
                 try:
-                    value = float(cell)
+                    value = float_text(cell)
                 except ValueError:
                     raise InvalidSamples(_not_a_number(name, cell), self.source, line) from None
                 if not np.isfinite(value):

@@ -28,7 +28,7 @@ from ..calibration.mount import MOUNT_NAMES
 from ..exceptions import InvalidInput, UnobservableParameters
 from ..kinematics.collision import SelfCollision
 from ..kinematics.rotations import euler_zyx_to_matrix
-from ..options import number, option
+from ..options import float_text, number, option
 from ..validation import as_in_range, as_real, set_checked
 
 _MOUNT_MODE_BY_SIZE = {12: "none", 13: "yaw", 15: "full"}
@@ -51,7 +51,7 @@ def joint_range_text(text: str) -> tuple[str, float, float]:
     try:
         if len(parts) != 3 or not parts[0]:
             raise ValueError
-        low, high = float(parts[1]), float(parts[2])
+        low, high = float_text(parts[1]), float_text(parts[2])
     except ValueError:
         old = " (JOINT LOW HIGH, three words, is the old spelling)" if ":" not in text else ""
         raise argparse.ArgumentTypeError(

@@ -186,3 +186,23 @@ def test_duplicate_header_check_is_linear(tmp_path):
 def _write(path, text):
     path.write_text(text)
     return path
+
+
+@pytest.mark.parametrize("cell", ["0_3", "３", "٣", "1_000.5"])
+def test_a_cell_is_a_number_as_loggers_write_one(tmp_path, cell):
+    """Python's float reads '0_3' as 3 and other scripts' digits as digits; no logger writes
+    them, so they are text, named with their line."""
+    path = tmp_path / "s.csv"
+    path.write_text(
+        "qw,qx,qy,qz,fx,fy,fz,mx,my,mz\n" + f"1,0,0,0,0,{cell},1,0,0,0\n", encoding="utf-8"
+    )
+    with pytest.raises(ftkin.InvalidSamples, match=f"column 'fy': '{cell}' is not a number"):
+        read_table(path).floats(["fy"])
+
+
+def test_a_flag_is_a_number_as_a_shell_writes_one(capsys):
+    from ftkin.cli import main
+
+    assert main(["plan", "-n", "3", "--noise-force", "0_02", "--noise-torque", "0.002"]) == 2
+    assert "--noise-force: expected a number, got '0_02'" in capsys.readouterr().err
+    assert main(["plan", "-n", "1_2"]) == 2
