@@ -266,8 +266,9 @@ def run(args) -> int:
         seed=args.seed,
         max_travel_ratio=args.max_travel_ratio,
     )
+    arm = load_arm(args)
     try:
-        plan = plan_poses(load_arm(args), spec)
+        plan = plan_poses(arm, spec)
     except UrdfError as error:  # only the collision geometry is loaded here: meshes not found
         raise UrdfError(error.path, [*error.reasons, "or plan with --no-self-collision"]) from None
     print(plan.report(), _pose_lines(plan), sep="\n")

@@ -58,7 +58,58 @@ def xml_reasons(text: str) -> list[str]:
         return [f"not well-formed XML at line {line}, column {column}: {error}"]
     if root.tag != "robot":
         return [f"root element is <{root.tag}>, expected <robot>"]
-    return tree_reasons(root)
+    return tree_reasons(root) or joint_reasons(root)
+
+
+DEGREE_LIMIT = 4.0 * np.pi
+"""A revolute joint limit beyond this [rad] (two turns) is taken for degrees: no arm's joint
+turns that far, and ±170° written as -170 170 reads as 27 turns."""
+MOST_DEGREES = 370.0
+"""Limits beyond this are not degrees but "unbounded" written as a huge number (``1e16``, as
+some URDFs mark a rotor): taken as they are."""
+
+
+def joint_reasons(root) -> list[str]:
+    """Problems of the joints Pinocchio would take as they are: a moving joint whose axis is
+    the zero vector (it would turn about nothing), a revolute joint whose limits look like
+    degrees (URDF limits are radians)."""
+    reasons = []
+    for joint in root.findall("joint"):
+        name, kind = joint.get("name"), joint.get("type")
+        if kind not in ("revolute", "continuous", "prismatic"):
+            continue
+        axis = joint.find("axis")
+        try:
+            direction = [
+                float(v)
+                for v in (axis.get("xyz", "1 0 0") if axis is not None else "1 0 0").split()
+            ]
+        except ValueError:
+            direction = []
+        if (
+            len(direction) != 3
+            or not np.all(np.isfinite(direction))
+            or np.linalg.norm(direction) < 1e-9
+        ):
+            text = axis.get("xyz") if axis is not None else None
+            reasons.append(
+                f"joint [{name}] has axis xyz={text!r}: expected a direction of three finite "
+                'numbers, not all zero (e.g. "0 0 1")'
+            )
+        limit = joint.find("limit")
+        if kind != "revolute" or limit is None:
+            continue
+        try:
+            bounds = [float(limit.get(end, "0")) for end in ("lower", "upper")]
+        except ValueError:
+            continue  # Pinocchio names a limit that is not a number
+        if DEGREE_LIMIT < max(abs(bound) for bound in bounds) <= MOST_DEGREES:
+            reasons.append(
+                f"joint [{name}] has limits lower={bounds[0]:g} upper={bounds[1]:g}, beyond "
+                f"±{DEGREE_LIMIT:.4g} rad (two turns): URDF limits are in radians (these look "
+                f"like degrees: {np.deg2rad(bounds[0]):.4g} {np.deg2rad(bounds[1]):.4g} rad)"
+            )
+    return reasons
 
 
 def tree_reasons(root) -> list[str]:

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import re
+
+import numpy as np
 import pytest
 
 from ftkin import Arm
@@ -61,3 +64,28 @@ def test_a_folder_given_as_a_urdf(tmp_path):
     (tmp_path / "robot.urdf").write_text(urdf(*CHAIN))
     with pytest.raises(UrdfError, match=r"is a folder, expected a URDF file \(it holds \['robot"):
         Arm.from_urdf(tmp_path, "ft_sensor")
+
+
+def test_limits_in_degrees_and_a_zero_axis_are_named(tmp_path):
+    """A URDF whose revolute limits were written in degrees (±170) planned poses beyond the real
+    limits; a joint with axis 0 0 0 leaked a numpy warning and 'not a rotation matrix'."""
+    from ftkin.kinematics.arm import bundled_urdf_path
+
+    text = bundled_urdf_path().read_text()
+    degrees = re.sub(
+        r'<limit([^>]*?)lower="([-\d.e]+)"([^>]*?)upper="([-\d.e]+)"',
+        lambda m: (
+            f'<limit{m[1]}lower="{np.rad2deg(float(m[2])):.1f}"{m[3]}'
+            f'upper="{np.rad2deg(float(m[4])):.1f}"'
+        ),
+        text,
+    )
+    assert degrees != text
+    path = tmp_path / "degrees.urdf"
+    path.write_text(degrees)
+    with pytest.raises(UrdfError, match=r"joint \[joint1\] has limits .* look like degrees"):
+        Arm.from_urdf(path, "ft_sensor")
+    zero = tmp_path / "zero_axis.urdf"
+    zero.write_text(re.sub(r'<axis xyz="[^"]*"', '<axis xyz="0 0 0"', text, count=1))
+    with pytest.raises(UrdfError, match=r"has axis xyz='0 0 0': expected a direction"):
+        Arm.from_urdf(zero, "ft_sensor")
