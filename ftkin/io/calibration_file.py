@@ -69,6 +69,7 @@ from ..calibration.log_cholesky import is_physically_consistent, parameters_from
 from ..calibration.model import check_gravity
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from ..kinematics.record import KinematicsRecord
+from ..kinematics.rotations import euler_zyx_to_matrix
 from ..validation import MAX_WRENCH
 from .atomic import atomic_write_text
 from .json_reader import JsonReader, NestedReader, short_repr
@@ -450,6 +451,27 @@ def _check_consistent(reader, document: dict, result) -> None:
                 "(file edited by hand?)",
                 "base_tilt_deg",
             )
+
+    def turn_deg(rotation) -> float:  # the angle of a rotation [deg]
+        return float(np.rad2deg(np.arccos(np.clip((np.trace(rotation) - 1.0) / 2.0, -1.0, 1.0))))
+
+    if "mount_rpy_deg" in document:  # compared as rotations: a yaw of 180° is one of -180°
+        stated = reader.array("mount_rpy_deg", (3,))
+        roll, pitch, yaw = np.deg2rad(stated)
+        from_rpy = euler_zyx_to_matrix([yaw, pitch, roll])
+        if turn_deg(from_rpy.T @ result.mount_rotation) > 1e-6:
+            reader.fail(
+                f"{stated.tolist()} deg disagrees with mount_rotation, whose roll-pitch-yaw is "
+                f"{np.round(result.mount_rpy_deg, 9).tolist()} deg (file edited by hand?)",
+                "mount_rpy_deg",
+            )
+    turn = turn_deg(result.mount_rotation)
+    if result.mount_mode == "none" and turn > 1e-6:
+        reader.fail(
+            f"mount_mode 'none' but mount_rotation turns the sensor by {turn:.4g}°: a mount is "
+            "only applied when it was estimated (mount_mode 'yaw' or 'full'; file edited by hand?)",
+            "mount_rotation",
+        )
     stated_units = reader.optional_object("units") or {}
     for key, our_unit in UNITS.items():
         if key in stated_units and key in document:

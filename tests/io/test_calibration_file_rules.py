@@ -162,3 +162,38 @@ def test_a_dotted_top_level_key_is_not_the_inertia_std_errors(document):
     changed["std_errors"]["inertia"] = np.full((3, 3), 1e-5).tolist()
     result = calibration_from_dict(changed)
     np.testing.assert_allclose(result.inertia_std_errors, 1e-5, rtol=1e-12)
+
+
+def test_the_mount_fields_must_agree(document, tmp_path):
+    """mount_rotation turned 90° about z (by hand) with mount_rpy_deg left at zero, or with the
+    mode left at 'none', compensated with a 90° error in silence."""
+    yaw90 = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+
+    def turned(document, rpy):
+        document["mount_rotation"] = yaw90
+        document["mount_rpy_deg"] = rpy
+
+    _refused(
+        tmp_path,
+        document,
+        lambda d: turned(d, [0.0, 0.0, 0.0]),
+        "mount_rpy_deg",
+        r"disagrees with mount_rotation, whose roll-pitch-yaw is \[0.0, -?0.0, 90.0\]",
+    )
+    _refused(
+        tmp_path,
+        document,
+        lambda d: turned(d, [0.0, 0.0, 90.0]),
+        "mount_rotation",
+        r"mount_mode 'none' but mount_rotation turns the sensor by 90°",
+    )
+    half = json.loads(json.dumps(document))  # a yaw of 180° is one of -180°: the same rotation
+    half.update(
+        mount_rotation=[[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]],
+        mount_rpy_deg=[0.0, 0.0, -180.0],
+        mount_mode="yaw",
+        mount_covariance=[[1e-6]],
+    )
+    path = tmp_path / "half.json"
+    path.write_text(json.dumps(half))
+    assert load_calibration(path).mount_rotation[0, 0] == pytest.approx(-1.0, abs=1e-12)
