@@ -37,6 +37,11 @@ from .static_segments import SegmentParameters, SegmentSearch, find_static_segme
 
 MAX_GAP = 20.0
 """Longest time step of a continuous recording, in median steps."""
+MAX_STILL_TRAVEL = 0.05
+"""Largest change of the orientation signal [rad, or the entries of ``R_BS``] within one still
+segment (about 3°): more is a motion that the speed did not see."""
+MAX_GAPS = 5
+"""Most steps longer than :data:`MAX_GAP` median steps in a continuous recording."""
 MIN_RUN = 3
 """Shortest median run of rows at one pose in a continuous recording (a recorder samples each
 still phase many times)."""
@@ -83,13 +88,17 @@ class TableLayout:
 
 def uniformly_sampled(times: np.ndarray) -> bool:
     """Whether reading times are a recorder's: 80 % of the steps within half the median step of
-    it, none longer than :data:`MAX_GAP` median steps, and every step positive."""
+    it, every step positive, and steps longer than :data:`MAX_GAP` median steps rare (at most
+    :data:`MAX_GAPS`, and under 1 % of the steps: a recorder that paused, or rows dropped in a
+    gap of one of several joined streams)."""
     steps = np.diff(times)
     if len(steps) < 2 or np.any(steps <= 0):
         return False
     median = np.median(steps)
+    gaps = int(np.count_nonzero(steps > MAX_GAP * median))
     return bool(
-        steps.max() <= MAX_GAP * median and np.mean(np.abs(steps - median) <= 0.5 * median) >= 0.8
+        gaps <= min(MAX_GAPS, 0.01 * len(steps))
+        and np.mean(np.abs(steps - median) <= 0.5 * median) >= 0.8
     )
 
 
@@ -152,6 +161,7 @@ def table_layout(
         search = find_static_segments(times, signal, parameters, quantity)
         if not search.segments:
             _refuse_no_segment(search, source)
+        _refuse_turning_segments(times, signal, search, quantity, source)
         step = float(np.median(np.diff(times)))
         reason = (
             f"rows every {step:.3g} s, {len(grouped)} still run(s) of a median "
@@ -167,6 +177,26 @@ def table_layout(
         len(lengths),
         pose_ids.astype(np.int64),
     )
+
+
+def _refuse_turning_segments(times, signal, search: SegmentSearch, quantity: str, source: str):
+    """Refuse a still segment whose signal moves by more than :data:`MAX_STILL_TRAVEL` within it:
+    still by its speed only because the times are not in seconds (milliseconds read as seconds
+    make every motion 1000 times slower)."""
+    from .static_segments import segment_index
+
+    index = segment_index(times, search.segments)
+    for k, segment in enumerate(search.segments):
+        inside = signal[index == k]
+        travel = float(np.max(np.ptp(inside, axis=0))) if len(inside) else 0.0
+        if travel > MAX_STILL_TRAVEL:
+            raise InvalidSamples(
+                f"still segment {k} ({segment.start:.6g}–{segment.end:.6g} s) is still by its "
+                f"{quantity} but moves by {travel:.3g} within it: are the times in seconds "
+                "(--time-unit ms|us|ns, or a unit in the column name)? Or lower the stillness "
+                "threshold (--speed-threshold)",
+                source,
+            )
 
 
 def _refuse_no_segment(search: SegmentSearch, source: str) -> None:

@@ -139,3 +139,26 @@ def test_a_steady_motion_that_never_holds_still_is_refused(arm, truth, tmp_path)
     path = write_recording(tmp_path / "moving.csv", arm, times, q, wrenches)
     with pytest.raises(InvalidSamples, match="no usable still segment: .* in motion.*rad/s"):
         load_samples(path, arm, STILL)
+
+
+def test_a_stream_with_a_gap_is_still_a_recording(arm, truth, tmp_path):
+    """Rows dropped for a gap of one joined stream (here 8 s in the middle, during a motion)
+    made the times 'not a recorder's steady steps', and every row in motion became a pose."""
+    rng = np.random.default_rng(42)
+    times, q, wrenches, _ = recording(arm, truth, rng)
+    middle = 0.5 * (times[0] + times[-1])
+    keep = np.abs(times - middle) > 4.0
+    path = write_recording(tmp_path / "gap.csv", arm, times[keep], q[keep], wrenches[keep])
+    loaded = load_samples(path, arm, STILL)
+    assert loaded.layout.kind == RECORDING
+    assert 10 <= loaded.layout.poses <= 12  # a still phase inside the gap is lost, no more
+
+
+def test_milliseconds_read_as_seconds_are_named(arm, truth, tmp_path):
+    """The same stream with its times in milliseconds: every motion is 1000 times slower, so a
+    'still' segment turns by a radian; refused, naming the time unit."""
+    rng = np.random.default_rng(42)
+    times, q, wrenches, _ = recording(arm, truth, rng)
+    path = write_recording(tmp_path / "ms.csv", arm, 1000.0 * times, q, wrenches)
+    with pytest.raises(InvalidSamples, match=r"moves by .* within it: are the times in seconds"):
+        load_samples(path, arm, STILL)
