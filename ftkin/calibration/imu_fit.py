@@ -223,7 +223,37 @@ def fit_imu_static(
         )
     covariance = ((vectors / values) @ vectors.T) / np.outer(scale, scale)
     count = problem.global_count
+    misfit = _misfit(problem, x, source)
+    if misfit is not None:
+        factor, note = misfit
+        covariance = covariance * factor
+        notes.append(note)
     return ImuStaticFit(problem, x, covariance[:count, :count], source, tuple(notes))
+
+
+def _misfit(problem, x, source: str) -> tuple[float, str] | None:
+    """``(covariance scale, warning)`` when the readings do not fit the model within a noise
+    that was given or measured by the spread of repeated readings (the chi-square test at
+    ``FIT_ALPHA``, as the FK fit's); None when they do, or the noise came from the residuals."""
+    from scipy import special
+
+    from .diagnostics import FIT_ALPHA
+
+    dof = problem.whitened_residuals(x).size - len(x)
+    if source == "residuals" or dof <= 0:
+        return None
+    chi_square = float(np.sum(problem.whitened_residuals(x) ** 2))
+    p_value = float(special.chdtrc(dof, chi_square))
+    if not p_value < FIT_ALPHA:
+        return None
+    factor = chi_square / dof
+    return factor, (
+        f"the readings do not fit the IMU model within their noise (chi-square {chi_square:.1f} "
+        f"for {dof} degrees of freedom, p = {p_value:.1e}): the IMU's clock off the wrench's "
+        "(files joined by time: check that their stamps share a clock and an origin), the IMU "
+        "not rigid with the sensor, a contact or cable at some poses, or noise underestimated; "
+        f"standard errors scaled by {np.sqrt(factor):.2f}"
+    )
 
 
 def _covariance_in_sensor_axes(fit: ImuStaticFit) -> np.ndarray:

@@ -16,7 +16,7 @@ import numpy as np
 from ..exceptions import InvalidInput
 from .imu_model import IMU_ROTATION_NAMES
 from .mount import rotation_to_rpy
-from .result import CalibrationResult
+from .result import CalibrationResult, scalar_text
 
 
 def _frozen(value, shape, name: str) -> np.ndarray:
@@ -161,9 +161,8 @@ class ImuCalibrationResult(CalibrationResult):
             f"{vector(self.force_offset, [f'force_offset[{a}]' for a in axes])} N (sensor frame)",
             "  torque_offset   M0 = "
             f"{vector(self.torque_offset, [f'torque_offset[{a}]' for a in axes], 5)} N·m",
-            f"  tool_mass       m  = {self.tool_mass:.4f}"
-            + (f" ± {mass_error:.4f}" if mass_error is not None else "")
-            + f" kg (g = {self.g:g} m/s²)",
+            f"  tool_mass       m  = {scalar_text(self.tool_mass, 4, mass_error)} kg (g = "
+            f"{self.g:g} m/s²)",
             "  center_of_mass  c  = "
             f"{vector(self.center_of_mass, [f'center_of_mass[{a}]' for a in axes], 5)} m",
         ]

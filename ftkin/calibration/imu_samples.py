@@ -220,8 +220,10 @@ class ImuSamples:
             raise InvalidSamples(
                 f"the specific force of pose {self.pose_ids[worst]} turns by up to "
                 f"{np.rad2deg(angle[worst]):.2f}° (more than {np.rad2deg(MAX_POSE_SPREAD):.0f}°): "
-                "a pose id must group readings of one static pose; check the pose column (or use "
-                "the moving recording's dynamic calibration)"
+                "a pose id must group readings of one static pose; check the pose column, or, for "
+                "poses found from the still phases of a recording, the time unit and the "
+                "stillness thresholds (--speed-threshold, --settle-time; or use the moving "
+                "recording's dynamic calibration)"
             )
         return ImuPoseAverages(
             unique[order], force_means, wrench_means, counts, accel_spread, wrench_spread

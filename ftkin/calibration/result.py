@@ -251,11 +251,12 @@ class CalibrationResult(SensorModel):
             f"{_vector(self.center_of_mass, 4, errors.get('center_of_mass'))} m (sensor frame)",
             "  gravity_in_base a  = "
             f"{_vector(self.gravity_in_base, 4, errors.get('gravity_in_base'))} N (base frame)",
-            f"  tool_weight     G  = {_scalar(self.tool_weight, 3, errors.get('tool_weight'))} N",
-            f"  tool_mass       m  = {_scalar(self.tool_mass, 4, errors.get('tool_mass'))} kg (g = "
-            f"{self.g:g} m/s²)",
-            f"  base_tilt       U  = {_scalar(tilt_u, 3, tilt_errors[0])}°, V = "
-            f"{_scalar(tilt_v, 3, tilt_errors[1])}°",
+            "  tool_weight     G  = "
+            f"{scalar_text(self.tool_weight, 3, errors.get('tool_weight'))} N",
+            "  tool_mass       m  = "
+            f"{scalar_text(self.tool_mass, 4, errors.get('tool_mass'))} kg (g = {self.g:g} m/s²)",
+            f"  base_tilt       U  = {scalar_text(tilt_u, 3, tilt_errors[0])}°, V = "
+            f"{scalar_text(tilt_v, 3, tilt_errors[1])}°",
         ]
         lines += _mount_lines(self) + _inertia_lines(self)
         if self.drift is not None:
@@ -309,7 +310,7 @@ def _vector(values, decimals: int, errors=None) -> str:
     return text
 
 
-def _scalar(value, decimals: int, error=None) -> str:
+def scalar_text(value, decimals: int, error=None) -> str:
     decimals = _decimals(error, decimals)
     return f"{value:.{decimals}f}" + (f" ± {error:.{decimals}f}" if error is not None else "")
 

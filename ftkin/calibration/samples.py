@@ -278,7 +278,9 @@ class Samples:
                 f"the readings of pose {self.pose_ids[worst]} differ in orientation by up to "
                 f"{np.rad2deg(deviation[worst]):.2f}° (more than "
                 f"{np.rad2deg(MAX_POSE_SPREAD):.0f}°): a pose id must "
-                "group readings of one static pose; check the pose column"
+                "group readings of one static pose; check the pose column, or, for poses found "
+                "from the still phases of a recording, the time unit and the stillness "
+                "thresholds (--speed-threshold, --settle-time)"
             )
         pose_times = None if self.times is None else total(self.times) / counts
         return PoseAverages(unique[order], mean_rotations, means, counts, spread, pose_times)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import logging
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 from ftkin import CalibrationOptions, Samples, SensorNoise, calibrate
@@ -79,3 +80,23 @@ def test_a_noise_given_far_above_the_residuals_is_said(arm, truth, rng):
     assert "FITS FAR BETTER" in result.summary()
     right = calibrate(samples, CalibrationOptions(noise=GIVEN_NOISE))
     assert not right.diagnostics.noise_too_large
+
+
+def test_an_imu_fit_that_does_not_fit_its_noise_is_said(rng):
+    """The accelerometer one pose late against the wrench (two clocks): the IMU fit had no
+    goodness-of-fit test (the mass 37 σ off, no warning). The same readings on one clock fit."""
+    poses, readings, mass, g = 14, 30, 1.2, 9.80665
+    up = Rotation.random(poses, random_state=4).apply([0.0, 0.0, g], inverse=True)  # sensor axes
+    com = np.array([0.01, -0.02, 0.06])
+    weight = -mass * up
+    wrench = np.column_stack([weight, np.cross(com, weight)])
+    count = poses * readings
+    wrenches = np.repeat(wrench, readings, 0) + rng.normal(0, 0.02, (count, 6))
+    ids = np.repeat(np.arange(poses), readings)
+    on_time = np.repeat(up, readings, 0) + rng.normal(0, 0.01, (count, 3))
+    late = np.repeat(np.roll(up, 1, axis=0), readings, 0) + rng.normal(0, 0.01, (count, 3))
+    fitting = calibrate(Samples.from_imu(on_time, wrenches, ids))
+    assert not any("do not fit" in w for w in fitting.imu_warnings)
+    assert fitting.tool_mass == pytest.approx(mass, rel=2e-3)
+    misfit = calibrate(Samples.from_imu(late, wrenches, ids))
+    assert any("do not fit the IMU model within their noise" in w for w in misfit.imu_warnings)
