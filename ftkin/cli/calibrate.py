@@ -30,6 +30,7 @@ from .shared_options import (
     GRAVITY,
     IMU_POSITION,
     METHOD,
+    NO_CONVENTION_CHECK,
     NOISE_FORCE,
     NOISE_TORQUE,
     SENSOR_SIGN,
@@ -107,11 +108,7 @@ def register(subparsers) -> None:
         ),
         IMU_POSITION,
     )
-    parser.add_argument(
-        "--no-convention-check",
-        action="store_true",
-        help="do not refit under the common convention mistakes (see 'ftkin doctor')",
-    )
+    add_options(parser, NO_CONVENTION_CHECK)
     add_samples_arguments(parser)
 
 

@@ -26,7 +26,7 @@ from .common import (
     warn_if_kinematics_differ,
 )
 from .compensate_live import add_live_arguments, check_live_arguments, run_live
-from .shared_options import IMU_POSITION
+from .shared_options import IMU_POSITION, NO_CONVENTION_CHECK
 
 
 def register(subparsers) -> None:
@@ -60,6 +60,7 @@ def register(subparsers) -> None:
             option("-o", "--output", metavar="OUT.csv"),
             SG_WINDOW,
             ALLOW_OTHER_ARM,
+            NO_CONVENTION_CHECK,
         ),
         groups=(add_samples_arguments, add_live_arguments),
         run=run,
@@ -111,6 +112,8 @@ def run(args) -> int:
         )
     loaded = load_samples_from_args(args.log, args, static_only=False, arm=arm)
     warn_if_kinematics_differ(loaded, calibration)
+    if not is_bag_path(input_paths(args.log)[0]):
+        _check_log_conventions(args, loaded.table, arm, calibration)
     contact = compensator.compensate_samples(loaded.samples)
     rows = _write_contact(args.output, loaded.table.header, loaded.table.rows, contact)
     print(
@@ -156,6 +159,28 @@ def _warn_of_other_clocks(times: np.ndarray, calibration, inside: int) -> None:
             seconds_text(float(np.max(times))),
             where,
         )
+
+
+def _check_log_conventions(args, table, arm, calibration) -> None:
+    """Refuse (or warn of) a log that fits the calibration only in another convention or unit
+    (:func:`~ftkin.io.table_readings.log_convention_report`), unless --no-convention-check."""
+    from ..exceptions import ConventionMistake
+    from ..io.table_readings import log_convention_report
+
+    if args.no_convention_check:
+        return
+    report = log_convention_report(table, arm, calibration)
+    if report is None:
+        return
+    verdict, reason, reading = report
+    if verdict == "mistake":
+        raise ConventionMistake(
+            reason + " (--no-convention-check compensates the log as given)",
+            table.source,
+            reading.name,
+            reading.fix,
+        )
+    logger.warning("%s: %s", table.source, reason)
 
 
 def _logs_an_accelerometer(args) -> bool:
@@ -243,6 +268,7 @@ def _compensate_motion(args, calibration, arm: Arm) -> int | None:
                 paths[0],
             )
             return None
+        _check_log_conventions(args, table, arm, calibration)
         recording = motion_from_table(table, arm)
         header, rows = table.header, table.rows
     contact = DynamicCompensator(

@@ -122,6 +122,12 @@ DURATION = option(
     help="length [s] (default: plan --excitation 30; simulate placement and log 5, recording 10; "
     "robot guide, compensate --live and record --raw: until Ctrl-C)",
 )
+NO_CONVENTION_CHECK = option(
+    "--no-convention-check",
+    action="store_true",
+    help="do not refit under the common convention mistakes (see 'ftkin doctor'; compensate: "
+    "do not read the log under them against the calibration)",
+)
 SENSOR = option(
     "--sensor",
     metavar="NAME|MODULE:FACTORY",

@@ -128,3 +128,88 @@ def diagnose_samples(path, arm=None) -> ConventionReport:
     from .csv_table import read_table
 
     return diagnose_table(read_table(path), arm)
+
+
+LOG_CHECK_ROWS = 2000
+"""Rows of a log (evenly spread) that :func:`log_convention_report` reads under each mistake."""
+LOG_QUANTILE = 0.25
+"""The quantile of the squared residual per channel that :func:`log_convention_report` judges:
+a log may be in contact most of the time (up to three quarters) without being questioned."""
+LOG_MISFIT = 5.0
+"""The log's residual against the calibration, in units of the calibration's noise per
+reading (RMS over the six channels), beyond which its conventions are questioned."""
+LOG_RATIO = (4.0, 20.0)
+"""How much smaller (in squared residual) another reading must be to be a suspicion (a
+warning) and to be the mistake (a refusal)."""
+
+
+def log_convention_report(table: Table, arm, calibration) -> tuple[str, str, Reading] | None:
+    """Whether a log to compensate is in the calibration's conventions: ``(verdict, reason,
+    reading)`` when another reading of it (the mistakes of :func:`table_readings`, forces in lbf
+    and torques in lbf·in) fits the calibration far better than the log as given, else None.
+
+    The calibration is known, so unlike a calibration's own check this sees units too: the
+    residual of each reading is its compensated wrench [N, N·m] (per channel, the
+    :data:`LOG_QUANTILE` quantile of its square over up to :data:`LOG_CHECK_ROWS` rows), judged
+    in the calibration's noise. A log with contacts is not questioned by them: no other reading
+    removes a contact.
+    """
+    from dataclasses import replace
+
+    diagnostics = calibration.diagnostics
+    if diagnostics is None or len(table.rows) < 3:
+        return None
+    noise = np.asarray(diagnostics.noise.channel_std, dtype=float)
+    pick = np.unique(np.linspace(0, len(table.rows) - 1, LOG_CHECK_ROWS).astype(int))
+    sample = Table(
+        table.source,
+        table.header,
+        [table.rows[i] for i in pick],
+        [table.lines[i] for i in pick],
+        table.header_line,
+    )
+    readings = table_readings(sample, arm)
+    given = readings[0]
+    if given.poses is None:
+        return None
+    lbf, lbf_in = 4.4482216152605, 0.1129848290276167  # [N], [N·m]
+    for name, factors in (
+        ("forces in lbf", [lbf] * 3 + [1.0] * 3),
+        ("torques in lbf·in", [1.0] * 3 + [lbf_in] * 3),
+        ("forces in lbf and torques in lbf·in", [lbf] * 3 + [lbf_in] * 3),
+    ):
+        readings.append(
+            Reading(
+                name,
+                "give the wrench in N and N·m (or name the units in the header: 'Fx (lbf)', "
+                "'Tx (lbf-in)')",
+                replace(given.poses, wrenches=given.poses.wrenches * factors),
+            )
+        )
+    signs = calibration.reading_signs
+
+    def score(reading) -> float:
+        poses = reading.poses
+        rotations = poses.rotations @ calibration.mount_rotation.T  # the real sensor's
+        raw = poses.wrenches if signs is None else poses.wrenches * signs
+        contact = raw - calibration.predict(rotations)  # METHOD.md §4, as compensation
+        # in SI (the calibration fixes the scale), over the quietest quarter of the rows: a
+        # mistake spoils every row, a contact only the rows in contact
+        rms = np.sqrt(np.quantile(contact**2, LOG_QUANTILE, axis=0))
+        return float(np.sum((rms / noise) ** 2))
+
+    scores = [(score(reading), reading) for reading in readings if reading.poses is not None]
+    as_given = scores[0][0]
+    if not as_given > 6.0 * LOG_MISFIT**2:
+        return None
+    best, reading = min(scores[1:], key=lambda item: item[0])
+    ratio = as_given / max(best, 1e-300)
+    if ratio < LOG_RATIO[0]:
+        return None
+    verdict = "mistake" if ratio >= LOG_RATIO[1] and best < 6.0 * LOG_MISFIT**2 else "suspect"
+    reason = (
+        f"the log fits the calibration when read with {reading.name} ({ratio:.3g} times smaller "
+        f"squared residual; as given its residual is {np.sqrt(as_given / 6.0):.3g}× the "
+        f"calibration's noise): {reading.fix}"
+    )
+    return verdict, reason, reading
