@@ -154,6 +154,7 @@ def _run_dynamic(args, noise) -> int:
         )
     else:
         recording = load_motion_csv(paths[0], arm, column_spelling_from_args(args))
+        _warn_unused_imu(paths[0], args)
     result = calibrate_dynamic(
         recording.motion_samples(arm, args.sg_window),
         estimate_inertia=not args.no_inertia,
@@ -161,6 +162,26 @@ def _run_dynamic(args, noise) -> int:
         noise=noise,
     )  # the file records its arm, as a static one does
     return _report(replace(result, kinematics=KinematicsRecord.from_arm(arm)), args)
+
+
+def _warn_unused_imu(path: str, args) -> None:
+    """Say that a moving recording's IMU columns are not used by the fit from joint angles (the
+    joints' derivatives give the motion)."""
+    import logging
+
+    from ..io.column_spelling import spelled_table
+    from ..io.csv_table import read_table
+    from ..io.stream_join import ACCEL_COLUMNS, GYRO_COLUMNS
+
+    header = spelled_table(read_table(path), column_spelling_from_args(args)).header
+    found = [name for name in (*ACCEL_COLUMNS, *GYRO_COLUMNS) if name in header]
+    if found:
+        logging.getLogger("ftkin.cli").warning(
+            "%s: the IMU columns %s are not used: --dynamic with joint angles takes the motion "
+            "from the joints; drop the joint columns to fit from the IMU",
+            path,
+            ",".join(found),
+        )
 
 
 def _options(args, noise) -> CalibrationOptions:

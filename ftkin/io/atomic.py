@@ -43,8 +43,8 @@ def check_output_path(path, inputs=(), what: str = "output") -> Path:
         what: How the output is named in messages (e.g. ``"-o/--output"``).
 
     Raises:
-        InvalidInput: an empty name, an existing output that is not a regular
-            file, or an output that is the same file as one of ``inputs``.
+        InvalidInput: an empty name, a folder that does not exist, an existing output that is
+            not a regular file, or an output that is the same file as one of ``inputs``.
     """
     if path is None or not str(path).strip():
         raise InvalidInput(f"{what}: the file name is empty; expected a path to write")
@@ -52,6 +52,11 @@ def check_output_path(path, inputs=(), what: str = "output") -> Path:
     try:
         status = os.stat(path)  # follows symlinks: the file that would be written
     except FileNotFoundError:
+        folder = path.parent if str(path.parent) else Path(".")
+        if not folder.is_dir():  # said before the work, not after it
+            raise InvalidInput(
+                f"{what} {path}: the folder {folder} does not exist; create it or name another"
+            ) from None
         return path
     except OSError as error:
         raise InvalidInput(f"{what} {path}: cannot check the output: {error}") from None
