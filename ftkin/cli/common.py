@@ -317,9 +317,16 @@ def arm_of_calibration(args: argparse.Namespace, calibration, purpose: str) -> A
         return arm
     if calibration.urdf and Path(calibration.urdf).resolve() == bundled_urdf_path().resolve():
         return Arm.default()
+    from ..calibration.imu_result import ImuCalibrationResult
+
+    made_from = (
+        "the sensor's IMU"
+        if isinstance(calibration, ImuCalibrationResult) and calibration.method.startswith("imu")
+        else "orientations"
+    )
     raise InvalidInput(
         f"{purpose} needs the arm, and this calibration records none (it was made from "
-        "orientations, not joint angles): name it with --robot NAME or --urdf PATH "
+        f"{made_from}, not joint angles): name it with --robot NAME or --urdf PATH "
         "(--sensor-frame, --sensor-parent, --sensor-offset as the sensor is mounted)"
     )
 
