@@ -243,12 +243,11 @@ def spelled_table(table: Table, spelling: ColumnSpelling | None = None) -> Table
     spelled = {column: name for column, name in spelled.items() if name is not None}
     counts = Counter(spelled.values())
     for column, name in spelled.items():
-        if name in header:
-            continue
-        if counts[name] > 1:
+        if counts[name] > 1 or name in header:
+            same = ([name] if name in header else []) + [c for c, n in spelled.items() if n == name]
             raise InvalidSamples(
-                f"columns {[c for c, n in spelled.items() if n == name]} all spell the wrench "
-                f"channel {name!r}; keep one, or name it with --column {name}=COLUMN",
+                f"columns {same} all spell the wrench channel {name!r}; keep one, or name it "
+                f"with --column {name}=COLUMN",
                 table.source,
                 table.header_line,
             )

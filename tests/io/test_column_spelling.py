@@ -170,3 +170,13 @@ def test_any_other_name_through_column(arm, recorded, tmp_path, capsys):
 def test_bad_column_options(columns, message):
     with pytest.raises(InvalidInput, match=message):
         ColumnSpelling(columns=columns)
+
+
+def test_fx_and_Fx_in_one_file_are_refused(tmp_path):
+    """Both spell the channel fx: one was used and the other carried along, in silence."""
+    from ftkin.io.column_spelling import spelled_table
+
+    path = tmp_path / "both.csv"
+    path.write_text("qw,qx,qy,qz,fx,Fx,fy,fz,mx,my,mz\n1,0,0,0,1,2,0,0,0,0,0\n")
+    with pytest.raises(InvalidSamples, match=r"columns \['fx', 'Fx'\] all spell the wrench"):
+        spelled_table(read_table(path))
