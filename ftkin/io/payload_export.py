@@ -177,10 +177,16 @@ def checked_inertia(value) -> np.ndarray | None:
             f"got {value!r}"
         )
     array = 0.5 * (array + array.T)
-    if np.linalg.eigvalsh(array)[0] < -1e-9 * max(1.0, float(np.abs(array).max())):
+    moments = np.linalg.eigvalsh(array)
+    tolerance = 1e-9 * max(1.0, float(np.abs(array).max()))
+    if moments[0] < -tolerance:
         raise InvalidInput(
-            f"inertia must be positive semidefinite, got principal moments "
-            f"{np.linalg.eigvalsh(array).tolist()} kg·m²"
+            f"inertia must be positive semidefinite, got principal moments {moments.tolist()} kg·m²"
+        )
+    if moments[2] > moments[0] + moments[1] + tolerance:  # no body has one
+        raise InvalidInput(
+            f"inertia's principal moments {moments.tolist()} kg·m² break the triangle inequality "
+            "(the largest must not exceed the sum of the other two): no rigid body has them"
         )
     return array
 

@@ -190,3 +190,13 @@ def test_cli_export(fmt, tmp_path, arm, truth, rng, capsys):
         )
     printed = capsys.readouterr().out
     assert f"wrote {fmt}" in printed
+
+
+def test_an_inertia_no_body_has_is_refused():
+    """Principal moments 1, 1, 10 kg·m²: positive, symmetric, and impossible (10 > 1 + 1)."""
+    from ftkin.io.payload_export import checked_inertia
+
+    with pytest.raises(InvalidInput, match="triangle inequality"):
+        checked_inertia([1.0, 1.0, 10.0, 0.0, 0.0, 0.0])
+    rod = checked_inertia([0.5, 0.5, 1e-12, 0.0, 0.0, 0.0])  # a thin rod: on the boundary
+    np.testing.assert_allclose(np.diag(rod), [0.5, 0.5, 1e-12], atol=0)
