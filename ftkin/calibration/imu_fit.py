@@ -107,7 +107,7 @@ def _noise_from_residuals(problem: ImuStaticProblem, x: np.ndarray, floor: np.nd
     jac = problem.whitened_jacobian(x)
     hat = np.einsum("ij,ji->i", jac, np.linalg.pinv(jac.T @ jac, hermitian=True) @ jac.T)
     dof = np.clip(1.0 - hat, 1e-9, 1.0).reshape(-1, 9)
-    squares = problem.residuals(x) ** 2 * problem.counts[:, None]
+    squares = problem.residuals(x) ** 2 * problem.channel_counts
     std = [np.sqrt(np.sum(squares[:, part]) / np.sum(dof[:, part])) for part in _GROUPS]
     return np.maximum(np.repeat(std, 3), floor)
 
@@ -188,6 +188,7 @@ def fit_imu_static(
             units,
             options.imu_rotation is None,
             scale_free,
+            poses.accel_count_factor,
         )
         x0 = np.concatenate([x0, np.zeros(2 * len(poses))])
         if source == "residuals":  # rough weights before the check: unit noise mixes units

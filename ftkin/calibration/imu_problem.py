@@ -80,6 +80,8 @@ class ImuStaticProblem:
         directions0: ``(P, 3)`` unit directions at ``e = 0``.
         rotation_free: Whether ``δ`` is estimated.
         scale_free: Which scale components are estimated.
+        accel_count_factor: Independent accelerometer readings per reading
+            (:attr:`~ftkin.calibration.imu_samples.ImuSamples.accel_count_factor`).
     """
 
     accel: np.ndarray
@@ -91,6 +93,7 @@ class ImuStaticProblem:
     directions0: np.ndarray
     rotation_free: bool = True
     scale_free: tuple[int, ...] = ()
+    accel_count_factor: float = 1.0
     tangents: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -110,9 +113,16 @@ class ImuStaticProblem:
         return self.global_count + 2 * len(self.accel)
 
     @property
+    def channel_counts(self) -> np.ndarray:
+        """``(P, 9)`` independent readings per pose and channel (the accelerometer's times
+        :attr:`accel_count_factor`)."""
+        factors = np.repeat([self.accel_count_factor, 1.0], [3, 6])
+        return self.counts[:, None] * factors[None, :]
+
+    @property
     def weights(self) -> np.ndarray:
         """``(P, 9)`` whitening ``sqrt(n_i) / σ``."""
-        return np.sqrt(self.counts)[:, None] / self.noise[None, :]
+        return np.sqrt(self.channel_counts) / self.noise[None, :]
 
     def unpack(self, x: np.ndarray) -> dict:
         """The parameters of ``x`` by name: ``F0, M0, m, c, delta, b, s, e``."""

@@ -16,7 +16,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..exceptions import InvalidInput, InvalidSamples
-from ..validation import as_batch, as_float_array, as_integers, as_positive, check_wrench_magnitude
+from ..validation import (
+    as_batch,
+    as_float_array,
+    as_integers,
+    as_positive,
+    as_real,
+    check_wrench_magnitude,
+)
 from .model import STANDARD_GRAVITY, check_gravity
 from .samples import MAX_POSE_SPREAD, check_time_span
 
@@ -83,6 +90,7 @@ class ImuPoseAverages:
         accel_spread: ``(P, 3)`` sample standard deviation of the accelerometer per pose [m/s²]
             (NaN for a single reading).
         wrench_spread: ``(P, 6)`` the same for the wrench [N, N·m].
+        accel_count_factor: The samples' :attr:`ImuSamples.accel_count_factor`.
     """
 
     pose_ids: np.ndarray
@@ -91,6 +99,7 @@ class ImuPoseAverages:
     counts: np.ndarray
     accel_spread: np.ndarray
     wrench_spread: np.ndarray
+    accel_count_factor: float = 1.0
 
     def __len__(self) -> int:
         return len(self.pose_ids)
@@ -108,6 +117,12 @@ class ImuSamples:
         angular_velocity: ``(N, 3)`` gyro readings [rad/s, IMU frame], or None.
         times: ``(N,)`` time of each reading [s], or None.
         g: Magnitude of gravity [m/s²] (the unit check and the sphere ``|a − b| = g``).
+        accel_count_factor: Independent accelerometer readings per reading, in ``(0, 1]``: 1
+            when each reading has its own; below when a slower IMU was interpolated onto the
+            wrench's stamps (:func:`~ftkin.io.imu_columns.load_imu_samples` sets it: the rate
+            ratio, times 2/3 for the spread that linear interpolation hides), so that the static
+            fit weighs the accelerometer by what was measured, not by the rows it was spread
+            over.
     """
 
     specific_force: np.ndarray
@@ -116,6 +131,7 @@ class ImuSamples:
     angular_velocity: np.ndarray | None = None
     times: np.ndarray | None = None
     g: float = STANDARD_GRAVITY
+    accel_count_factor: float = 1.0
 
     def __post_init__(self):
         wrenches, _ = as_batch(self.wrenches, 6, "wrenches [fx, fy, fz, mx, my, mz]")
@@ -155,6 +171,10 @@ class ImuSamples:
                     f"{count} wrenches but {len(array)} {name.replace('_', ' ')}; expected one each"
                 )
         check_specific_force_unit(force, g)
+        factor = as_real(self.accel_count_factor, "accel_count_factor")
+        if not 0.0 < factor <= 1.0:
+            raise InvalidInput(f"accel_count_factor must be in (0, 1], got {factor:g}")
+        object.__setattr__(self, "accel_count_factor", factor)
         object.__setattr__(self, "g", g)
         for name, array in arrays.items():
             array = array.copy()  # frozen copies, never the caller's arrays
@@ -226,5 +246,11 @@ class ImuSamples:
                 "recording's dynamic calibration)"
             )
         return ImuPoseAverages(
-            unique[order], force_means, wrench_means, counts, accel_spread, wrench_spread
+            unique[order],
+            force_means,
+            wrench_means,
+            counts,
+            accel_spread,
+            wrench_spread,
+            self.accel_count_factor,
         )

@@ -13,6 +13,7 @@ arm, its joint columns) the samples are fused: an orientation and the IMU
 """
 
 import logging
+from dataclasses import replace
 
 import numpy as np
 
@@ -209,9 +210,25 @@ def load_imu_samples(
             None,
             samples.g,
         )
+    factor = accel_count_factor(streams)
+    if factor < 1.0:
+        samples = replace(samples, accel_count_factor=factor)
     if joined.has("orientation") or arm is not None:
         return fused_samples_from_joined(samples, joined, arm, rows), joined
     return samples, joined
+
+
+def accel_count_factor(streams) -> float:
+    """Independent accelerometer readings per joined row (``ImuSamples.accel_count_factor``):
+    1 when the accelerometer is in the wrench's file; else the ratio of the wrench's rate to the
+    IMU's when the IMU is slower (its readings interpolated onto the wrench's stamps), times
+    2/3, the variance a linear interpolation leaves of independent noise (the spread it shows)."""
+    wrench = next((s for s in streams if all(n in s.columns for n in WRENCH_CHANNELS)), None)
+    accel = next((s for s in streams if all(n in s.columns for n in ACCEL_COLUMNS)), None)
+    if wrench is None or accel is None or wrench is accel:
+        return 1.0
+    ratio = wrench.period / accel.period
+    return 1.0 if ratio >= 1.0 else ratio * 2.0 / 3.0
 
 
 def _still_poses(samples: ImuSamples, segments: SegmentParameters, source: str) -> ImuSamples:
