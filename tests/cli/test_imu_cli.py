@@ -157,3 +157,13 @@ def test_three_files_with_an_orientation_convert_the_accelerometer_once(streams,
     saved = json.loads(calib.read_text())
     assert saved["tool_mass"] == pytest.approx(MASS, rel=0.005)
     np.testing.assert_allclose(saved["center_of_mass"], COM, atol=1e-3)
+
+
+def test_a_slower_imu_joined_counts_what_it_measured(streams):
+    """700 Hz wrench, 250 Hz IMU: the IMU's readings are spread over 2.8 rows each, and linear
+    interpolation leaves 2/3 of their variance (the mean of w² + (1 − w)² over w in [0, 1])."""
+    from ftkin.io import load_imu_samples
+
+    wrench_csv, imu_csv = streams
+    samples, _ = load_imu_samples(wrench_csv, imu_csv, time_unit="us", accel_unit="g")
+    assert samples.accel_count_factor == pytest.approx(250.0 / 700.0 * 2.0 / 3.0, rel=1e-3)
