@@ -34,6 +34,7 @@ from .shared_options import (
     NOISE_FORCE,
     NOISE_TORQUE,
     SENSOR_SIGN,
+    noise_from_args,
     resolved,
 )
 
@@ -113,11 +114,7 @@ def register(subparsers) -> None:
 
 
 def _noise(args) -> SensorNoise | None:
-    if (args.noise_force is None) != (args.noise_torque is None):
-        raise InvalidInput(
-            "give both --noise-force [N] and --noise-torque [N·m], or neither (then estimated)"
-        )
-    return None if args.noise_force is None else SensorNoise(args.noise_force, args.noise_torque)
+    return noise_from_args(args)
 
 
 def _run_dynamic(args, noise) -> int:

@@ -39,6 +39,7 @@ from .shared_options import (
     NOISE_TORQUE,
     POSES,
     SEED,
+    noise_from_args,
     resolved,
 )
 
@@ -92,11 +93,7 @@ def add_expectation_arguments(parser: argparse.ArgumentParser) -> None:
 
 def expected_noise(args) -> SensorNoise:
     """The noise a prediction assumes: ``--noise-force``/``--noise-torque``, else the paper's."""
-    paper = SensorNoise.paper()
-    return SensorNoise(
-        resolved(args.noise_force, float(paper.force_std[0])),
-        resolved(args.noise_torque, float(paper.torque_std[0])),
-    )
+    return noise_from_args(args, SensorNoise.paper())
 
 
 def expectation_from_args(args) -> ExpectedCalibration:

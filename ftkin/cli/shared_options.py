@@ -87,6 +87,22 @@ NOISE_TORQUE = option(
     help="noise of one torque reading [N·m], with --noise-force (default: calibrate estimates "
     "it; plan and evaluate-poses assume the paper's 0.002 N·m)",
 )
+
+
+def noise_from_args(args, default=None):
+    """The :class:`~ftkin.SensorNoise` of ``--noise-force`` and ``--noise-torque`` (both, or
+    neither: then ``default``); one without the other is refused, by every command alike."""
+    from ..calibration.information import SensorNoise
+    from ..exceptions import InvalidInput
+
+    if (args.noise_force is None) != (args.noise_torque is None):
+        raise InvalidInput(
+            "give both --noise-force [N] and --noise-torque [N·m], or neither (calibrate: "
+            "estimated; plan and evaluate-poses: the paper's)"
+        )
+    return default if args.noise_force is None else SensorNoise(args.noise_force, args.noise_torque)
+
+
 CENTER_OF_MASS = option(
     "--com",
     type=number_list,

@@ -260,7 +260,12 @@ def test_extreme_values_are_refused_before_the_numerics(files, tmp_path, capsys)
         "tool_weight must be between",
     )
     _one_line_error(
-        ["evaluate-poses", samples, "--noise-force", "1e-300"], capsys, "force_std must be between"
+        ["evaluate-poses", samples, "--noise-force", "1e-300", "--noise-torque", "1e-3"],
+        capsys,
+        "force_std must be between",
+    )
+    _one_line_error(  # one without the other: refused, as calibrate refuses it
+        ["evaluate-poses", samples, "--noise-force", "0.05"], capsys, "give both --noise-force"
     )
     text = samples.read_text().splitlines()
     cells = text[2].split(",")
