@@ -34,6 +34,7 @@ from dataclasses import replace
 import numpy as np
 
 from .. import Arm, InvalidInput
+from ..io.calibration_file import MAX_COM_DISTANCE
 from ..io.csv_table import read_table, write_csv
 from ..io.samples_csv import configurations_from_table
 from ..sim import inputs as sim_inputs
@@ -395,6 +396,15 @@ def _inputs(args):
         (
             args.mount_rpy_deg is not None and len(args.mount_rpy_deg) != 3,
             f"--mount-rpy-deg takes R P Y [deg], got {args.mount_rpy_deg}",
+        ),
+        (  # the tool a calibration file would accept (a COM farther is a unit mistake)
+            args.com is not None and float(np.linalg.norm(args.com)) > MAX_COM_DISTANCE,
+            f"--com {' '.join(f'{v:g}' for v in args.com or ())}: the centre of mass is within "
+            f"{MAX_COM_DISTANCE:g} m of the sensor [m] (millimetres given?)",
+        ),
+        (
+            args.mount_rpy_deg is not None and max(map(abs, args.mount_rpy_deg)) > 360.0,
+            f"--mount-rpy-deg takes angles within ±360 [deg], got {args.mount_rpy_deg}",
         ),
     )
     truth = paper_like_truth()

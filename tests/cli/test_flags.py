@@ -323,3 +323,15 @@ def test_robot_calibrates_old_floor_flag_warns_and_its_old_joint_range_is_named(
         args = build_parser().parse_args([*argv, "--floor", "0.2"])
     assert args.floor_height == pytest.approx(0.2, abs=0)
     assert "--floor is deprecated and will be removed: use --floor-height" in caplog.text
+
+
+@pytest.mark.parametrize(
+    "argv, pattern",
+    [
+        (["simulate", "samples", "--com", "0", "0", "47"], "within 10 m of the sensor"),
+        (["simulate", "samples", "--mount-rpy-deg", "0", "0", "1e9"], "within ±360 [deg]"),
+    ],
+)
+def test_a_simulated_tool_is_one_a_calibration_file_accepts(argv, pattern, capsys, tmp_path):
+    _usage_error([*argv, "-o", str(tmp_path / "s.csv")], capsys, pattern)
+    assert not (tmp_path / "s.csv").exists()
