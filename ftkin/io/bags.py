@@ -202,6 +202,12 @@ def _read_messages(path: Path, source: str, joint_topic, wrench_topic, progress)
         raise InvalidSamples(f"cannot read the bag: {error}", source) from None
     except InvalidSamples:
         raise
+    except FileNotFoundError as error:  # a bag's .db3 given without its metadata.yaml beside it
+        raise InvalidSamples(
+            f"cannot read the bag: {error} (a ROS 2 .db3 bag is read from its folder, with its "
+            "metadata.yaml: give the folder)",
+            source,
+        ) from None
     except Exception as error:  # a corrupt bag: rosbags raises struct, decode, index, memory errors
         raise InvalidSamples(
             f"cannot read the bag (corrupt or truncated?): {type(error).__name__}: {error}", source
@@ -244,7 +250,7 @@ def read_bag(
     if missing:
         raise InvalidSamples(
             f"joint names on {joint_topic} do not match the arm: missing {missing}; "
-            f"the bag has {sorted(messages.series)}; the arm ({arm.urdf_path}) expects {expected}",
+            f"the bag has {sorted(messages.series)}; the arm ({arm!r}) expects {expected}",
             source,
         )
     if not messages.wrench_rows:

@@ -147,8 +147,13 @@ def _read_text(path: Path) -> str:
     except FileNotFoundError:
         raise InvalidSamples("file not found", source) from None
     except IsADirectoryError:
+        bag = (path / "metadata.yaml").is_file()
         raise InvalidSamples(
-            "is a folder; expected a CSV file (or a ROS 2 bag folder with metadata.yaml)", source
+            "is a ROS 2 bag folder; this command reads a samples CSV: write one with 'ftkin "
+            "extract BAG -o samples.csv'"
+            if bag
+            else "is a folder; expected a CSV file (or a ROS 2 bag folder with metadata.yaml)",
+            source,
         ) from None
     except UnicodeDecodeError as error:
         raise InvalidSamples(
