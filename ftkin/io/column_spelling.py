@@ -22,6 +22,7 @@ A time column whose values are plainly not seconds (beyond 1e11, the year 5000 i
 :func:`~ftkin.io.time_columns.times_from_table`, naming ``--time-unit``.
 """
 
+import logging
 import re
 from collections import Counter
 from collections.abc import Mapping
@@ -31,6 +32,8 @@ from ..calibration.model import WRENCH_CHANNELS
 from ..exceptions import InvalidInput, InvalidSamples
 from ..options import option
 from .csv_table import Table, format_float
+
+logger = logging.getLogger(__name__)
 
 POUND_FORCE = 4.4482216152605
 """One pound-force in newtons (exact by definition: 0.45359237 kg × 9.80665 m/s²)."""
@@ -243,8 +246,19 @@ def spelled_table(table: Table, spelling: ColumnSpelling | None = None) -> Table
     spelled = {column: name for column, name in spelled.items() if name is not None}
     counts = Counter(spelled.values())
     for column, name in spelled.items():
-        if counts[name] > 1 or name in header:
-            same = ([name] if name in header else []) + [c for c, n in spelled.items() if n == name]
+        if name in header:  # ftkin's own name wins ("tx,ty,tz" may be a translation), said
+            logger.warning(
+                "%s: column %r could spell the wrench channel %r, which the file has under its "
+                "own name: %r is used, %r carried along (rename one to use the other)",
+                table.source,
+                column,
+                name,
+                name,
+                column,
+            )
+            continue
+        if counts[name] > 1:
+            same = [c for c, n in spelled.items() if n == name]
             raise InvalidSamples(
                 f"columns {same} all spell the wrench channel {name!r}; keep one, or name it "
                 f"with --column {name}=COLUMN",

@@ -172,11 +172,16 @@ def test_bad_column_options(columns, message):
         ColumnSpelling(columns=columns)
 
 
-def test_fx_and_Fx_in_one_file_are_refused(tmp_path):
-    """Both spell the channel fx: one was used and the other carried along, in silence."""
+def test_fx_and_Fx_in_one_file_keep_ftkins_own_and_say_so(tmp_path, caplog):
+    """Both could spell fx ("tx,ty,tz" beside mx..mz may be a translation): ftkin's own name is
+    used, and the other named in a warning (it was carried along in silence)."""
+    import logging
+
     from ftkin.io.column_spelling import spelled_table
 
     path = tmp_path / "both.csv"
     path.write_text("qw,qx,qy,qz,fx,Fx,fy,fz,mx,my,mz\n1,0,0,0,1,2,0,0,0,0,0\n")
-    with pytest.raises(InvalidSamples, match=r"columns \['fx', 'Fx'\] all spell the wrench"):
-        spelled_table(read_table(path))
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        table = spelled_table(read_table(path))
+    assert table.header[4:6] == ["fx", "Fx"]
+    assert "column 'Fx' could spell the wrench channel 'fx'" in caplog.text

@@ -108,7 +108,7 @@ def _com_in_flange_by_kinematics(arm, calibration, flange):
 
 def test_franka_load_parsed_back_matches_hand_computation(mounted, arm, tmp_path):
     result, _ = mounted
-    inertia = [0.01, 0.02, 0.03, 0.001, 0.0, -0.002]
+    inertia = [0.02, 0.025, 0.03, 0.001, 0.0, -0.002]  # a body's (triangle inequality)
     path = export_payload(
         result, arm, tmp_path / "load.yaml", "franka-load", flange_frame="flange", inertia=inertia
     )
