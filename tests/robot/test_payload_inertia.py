@@ -69,7 +69,7 @@ def test_nothing_left_is_a_zero_load_and_a_moment_without_mass_is_refused():
 
 
 def test_franka_inertia_is_column_major():
-    inertia = np.array([[1.0, 0.1, 0.2], [0.1, 2.0, 0.3], [0.2, 0.3, 3.0]]) * 1e-3
+    inertia = np.array([[2.0, 0.1, 0.2], [0.1, 2.5, 0.3], [0.2, 0.3, 3.0]]) * 1e-3  # a body's
     body = RigidBody.from_franka(0.5, [0, 0, 0.1], inertia.reshape(-1, order="F"))
     np.testing.assert_allclose(body.inertia, inertia, rtol=1e-12)
     np.testing.assert_allclose(body.franka_inertia(), inertia.reshape(-1, order="F"), rtol=1e-12)
