@@ -46,13 +46,10 @@ from .fused_problem import POSES_NEEDED, FusedStaticProblem, check_observable
 from .fused_result import FusedCalibrationResult
 from .fused_samples import FusedPoseAverages, FusedSamples
 from .imu_fit import (  # the IMU fit's noise estimates and solver serve any 9-channel problem
-    MIN_SCALE_POSES,
-    NOISE_PASSES,
-    _drop_open_scale,
-    _floor,
-    _noise_from_residuals,
-    _noise_from_spread,
-    _solve,
+    covariance_at,
+    solve_with_noise,
+    starting_noise,
+    starting_scale,
 )
 from .imu_model import ACCEL_SCALE_NAMES
 from .linear import fit_linear
@@ -185,24 +182,8 @@ def fit_fused_static(
     """
     imu = options.imu
     notes = []
-    scale_free = (0, 1, 2) if imu.estimate_scale != "no" else ()
-    if imu.estimate_scale == "auto" and len(poses) < MIN_SCALE_POSES:
-        scale_free = ()
-        notes.append(
-            f"accelerometer scale not estimated ({len(poses)} poses, fewer than "
-            f"{MIN_SCALE_POSES}): taken as exact"
-        )
-    fixed = np.repeat([imu.accel_noise is not None, imu.wrench_noise is not None], [3, 6])
-    spread = None if fixed.all() else _noise_from_spread(poses.imu)
-    noise = np.ones(9) if spread is None else spread
-    if imu.accel_noise is not None:
-        noise[0:3] = imu.accel_noise
-    if imu.wrench_noise is not None:
-        noise[3:9] = imu.wrench_noise.channel_std
-    source = "given" if fixed.all() else ("spread" if spread is not None else "residuals")
-
-    def from_residuals(problem, x):  # the given groups stay as given
-        return np.where(fixed, noise, _noise_from_residuals(problem, x, _floor(poses.imu, g)))
+    scale_free = starting_scale(imu, len(poses), notes)
+    noise, source, from_residuals = starting_noise(poses.imu, imu, g)
 
     while True:  # at the start, then at the solution: a scale the poses leave open is dropped
         x0, mount0, rotation0 = fused_start(poses, g, mount_mode, imu.imu_rotation)
@@ -220,37 +201,13 @@ def fit_fused_static(
             scale_free,
         )
         x0 = np.concatenate([x0, np.zeros(len(scale_free))])
-        if source == "residuals":  # rough weights before the check: unit noise mixes units
-            problem = replace(problem, noise=from_residuals(problem, x0))
-        if _drop_open_scale(problem, x0, imu, notes):
+        solved = solve_with_noise(problem, x0, source, from_residuals, imu, notes, check_observable)
+        if solved is None:  # a scale the poses leave open: dropped, and the fit started again
             scale_free = tuple(k for k in scale_free if ACCEL_SCALE_NAMES[k] not in notes[-1])
             continue
-        check_observable(problem, x0)
-        x = _solve(problem, x0)
-        for _ in range(NOISE_PASSES if source == "residuals" else 0):
-            estimate = from_residuals(problem, x)
-            settled = np.allclose(estimate, problem.noise, rtol=1e-2, atol=0.0)
-            problem = replace(problem, noise=estimate)
-            if settled:
-                break
-            x = _solve(problem, x)
-        problem, x = problem.recentred(x)
-        if _drop_open_scale(problem, x, imu, notes):
-            scale_free = tuple(k for k in scale_free if ACCEL_SCALE_NAMES[k] not in notes[-1])
-            continue
-        check_observable(problem, x)
+        problem, x = solved
         break
-    jac = problem.whitened_jacobian(x)
-    information = jac.T @ jac
-    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
-    values, vectors = np.linalg.eigh(information / np.outer(scale, scale))
-    if values[0] <= 1e-12 * values[-1]:
-        weakest = np.abs(vectors[:, 0])
-        raise UnobservableParameters(
-            [problem.names[i] for i in np.flatnonzero(weakest > 0.3 * weakest.max())],
-            f"the information at the solution is singular: {POSES_NEEDED}",
-        )
-    covariance = ((vectors / values) @ vectors.T) / np.outer(scale, scale)
+    covariance = covariance_at(problem, x, len(x), POSES_NEEDED)
     return FusedStaticFit(problem, x, covariance, source, tuple(notes))
 
 

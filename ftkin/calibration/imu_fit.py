@@ -116,6 +116,82 @@ def _floor(poses: ImuPoseAverages, g: float) -> np.ndarray:
     return np.concatenate([np.full(3, 1e-7 * g), noise_floor(poses.wrenches)])
 
 
+def starting_scale(options, pose_count: int, notes: list) -> tuple[int, ...]:
+    """The accelerometer scale components to estimate (all, unless ``estimate_scale`` is
+    ``"no"``, or ``"auto"`` with fewer than :data:`MIN_SCALE_POSES` poses: said in ``notes``)."""
+    if options.estimate_scale == "auto" and pose_count < MIN_SCALE_POSES:
+        notes.append(
+            f"accelerometer scale not estimated ({pose_count} poses, fewer than "
+            f"{MIN_SCALE_POSES}): taken as exact"
+        )
+        return ()
+    return (0, 1, 2) if options.estimate_scale != "no" else ()
+
+
+def starting_noise(poses: ImuPoseAverages, options, g: float):
+    """``(noise (9,), source, from_residuals)``: the per-reading noise to start from (given, or
+    the spread of repeated readings, else ones), where it came from (``"given"``, ``"spread"``,
+    ``"residuals"``), and the function that re-estimates it from a fit's residuals (the given
+    groups stay as given)."""
+    fixed = np.repeat([options.accel_noise is not None, options.wrench_noise is not None], [3, 6])
+    spread = None if fixed.all() else _noise_from_spread(poses)
+    noise = np.ones(9) if spread is None else spread
+    if options.accel_noise is not None:
+        noise[0:3] = options.accel_noise
+    if options.wrench_noise is not None:
+        noise[3:9] = options.wrench_noise.channel_std
+    source = "given" if fixed.all() else ("spread" if spread is not None else "residuals")
+
+    def from_residuals(problem, x):
+        return np.where(fixed, noise, _noise_from_residuals(problem, x, _floor(poses, g)))
+
+    return noise, source, from_residuals
+
+
+def solve_with_noise(problem, x0, source: str, from_residuals, options, notes: list, check):
+    """``(problem, x)`` solved from ``x0``, the noise re-estimated with the fit when it comes
+    from the residuals; None when a scale component the poses leave open was dropped (said in
+    ``notes``: the caller starts again without it). ``check(problem, x)`` raises for a
+    parameter the poses leave open (at the start and at the solution: the start's directions
+    can hide a degeneracy that holds at the measured ones)."""
+    if source == "residuals":  # rough weights before the check: unit noise mixes units
+        problem = replace(problem, noise=from_residuals(problem, x0))
+    if _drop_open_scale(problem, x0, options, notes):
+        return None
+    check(problem, x0)
+    x = _solve(problem, x0)
+    for _ in range(NOISE_PASSES if source == "residuals" else 0):
+        estimate = from_residuals(problem, x)
+        settled = np.allclose(estimate, problem.noise, rtol=1e-2, atol=0.0)
+        problem = replace(problem, noise=estimate)
+        if settled:
+            break
+        x = _solve(problem, x)
+    problem, x = problem.recentred(x)
+    if _drop_open_scale(problem, x, options, notes):
+        return None
+    check(problem, x)
+    return problem, x
+
+
+def covariance_at(problem, x, count: int, needed: str) -> np.ndarray:
+    """The covariance of every parameter at the solution ``x`` (the whitened information,
+    inverted in unit-diagonal scaling), or :class:`UnobservableParameters` naming the first
+    ``count`` parameters of its weakest direction (``needed``: what poses would determine
+    them)."""
+    jac = problem.whitened_jacobian(x)
+    information = jac.T @ jac
+    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
+    values, vectors = np.linalg.eigh(information / np.outer(scale, scale))
+    if values[0] <= 1e-12 * values[-1]:
+        weakest = np.abs(vectors[:count, 0])
+        raise UnobservableParameters(
+            [problem.names[i] for i in np.flatnonzero(weakest > 0.3 * weakest.max())],
+            f"the information at the solution is singular: {needed}",
+        )
+    return ((vectors / values) @ vectors.T) / np.outer(scale, scale)
+
+
 @dataclass(frozen=True)
 class ImuStaticFit:
     """What :func:`fit_imu_static` found.
@@ -157,24 +233,8 @@ def fit_imu_static(
             f"(12 recommended): {POSES_NEEDED}",
         )
     notes = []
-    scale_free = (0, 1, 2) if options.estimate_scale != "no" else ()
-    if options.estimate_scale == "auto" and len(poses) < MIN_SCALE_POSES:
-        scale_free = ()
-        notes.append(
-            f"accelerometer scale not estimated ({len(poses)} poses, fewer than "
-            f"{MIN_SCALE_POSES}): taken as exact"
-        )
-    fixed = np.repeat([options.accel_noise is not None, options.wrench_noise is not None], [3, 6])
-    spread = None if fixed.all() else _noise_from_spread(poses)
-    noise = np.ones(9) if spread is None else spread
-    if options.accel_noise is not None:
-        noise[0:3] = options.accel_noise
-    if options.wrench_noise is not None:
-        noise[3:9] = options.wrench_noise.channel_std
-    source = "given" if fixed.all() else ("spread" if spread is not None else "residuals")
-
-    def from_residuals(problem, x):  # the given groups stay as given
-        return np.where(fixed, noise, _noise_from_residuals(problem, x, _floor(poses, g)))
+    scale_free = starting_scale(options, len(poses), notes)
+    noise, source, from_residuals = starting_noise(poses, options, g)
 
     while True:  # at the start, then at the solution: a scale the poses leave open is dropped
         x0, rotation0, units = start(poses, g, options, scale_free)
@@ -191,40 +251,17 @@ def fit_imu_static(
             poses.accel_count_factor,
         )
         x0 = np.concatenate([x0, np.zeros(2 * len(poses))])
-        if source == "residuals":  # rough weights before the check: unit noise mixes units
-            problem = replace(problem, noise=from_residuals(problem, x0))
-        if _drop_open_scale(problem, x0, options, notes):
-            scale_free = tuple(k for k in scale_free if ACCEL_SCALE_NAMES[k] not in notes[-1])
-            continue
-        check_observable(problem, x0)
-        x = _solve(problem, x0)
-        for _ in range(NOISE_PASSES if source == "residuals" else 0):
-            estimate = from_residuals(problem, x)
-            settled = np.allclose(estimate, problem.noise, rtol=1e-2, atol=0.0)
-            problem = replace(problem, noise=estimate)
-            if settled:
-                break
-            x = _solve(problem, x)
-        problem, x = problem.recentred(x)
-        # the start's directions can hide a degeneracy that holds at the measured ones
-        if _drop_open_scale(problem, x, options, notes):
-            scale_free = tuple(k for k in scale_free if ACCEL_SCALE_NAMES[k] not in notes[-1])
-            continue
-        check_observable(problem, x)
-        break
-    jac = problem.whitened_jacobian(x)
-    information = jac.T @ jac
-    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
-    values, vectors = np.linalg.eigh(information / np.outer(scale, scale))
-    if values[0] <= 1e-12 * values[-1]:
-        weakest = np.abs(vectors[: problem.global_count, 0])
-        raise UnobservableParameters(
-            [problem.names[i] for i in np.flatnonzero(weakest > 0.3 * weakest.max())],
-            f"the information at the solution is singular: {POSES_NEEDED}",
+        solved = solve_with_noise(
+            problem, x0, source, from_residuals, options, notes, check_observable
         )
-    covariance = ((vectors / values) @ vectors.T) / np.outer(scale, scale)
+        if solved is None:  # a scale the poses leave open: dropped, and the fit started again
+            scale_free = tuple(k for k in scale_free if ACCEL_SCALE_NAMES[k] not in notes[-1])
+            continue
+        problem, x = solved
+        break
+    covariance = covariance_at(problem, x, problem.global_count, POSES_NEEDED)
     count = problem.global_count
-    misfit = _misfit(problem, x, source)
+    misfit = misfit_scale(problem, x, source)
     if misfit is not None:
         factor, note = misfit
         covariance = covariance * factor
@@ -232,7 +269,7 @@ def fit_imu_static(
     return ImuStaticFit(problem, x, covariance[:count, :count], source, tuple(notes))
 
 
-def _misfit(problem, x, source: str) -> tuple[float, str] | None:
+def misfit_scale(problem, x, source: str) -> tuple[float, str] | None:
     """``(covariance scale, warning)`` when the readings do not fit the model within a noise
     that was given or measured by the spread of repeated readings (the chi-square test at
     ``FIT_ALPHA``, as the FK fit's); None when they do, or the noise came from the residuals."""
