@@ -1,7 +1,8 @@
-"""Every pose of a 9-pose plan, in headless Chromium: the arrows are on screen and outside the
-legend.
+"""Every other pose of a 9-pose plan (5 poses), in headless Chromium: the arrows are on screen
+and outside the legend.
 
-For the bundled arm and UR5, each pose of ``plan_poses(arm, 9)`` is drawn with
+For the bundled arm and UR5, poses 0, 2, 4, 6 and 8 of ``plan_poses(arm, 9)`` (spread over the
+plan, each framed on its own; all nine took 40 s of the suite) are drawn with
 simulated readings of a calibrated tool, saved as a static page with the
 legend and screenshotted at 1024 × 768 (two Chromium processes at a time).
 The measured-force (magenta) and predicted-gravity (cyan) arrows are found
@@ -85,19 +86,21 @@ def test_arrows_are_visible_outside_the_legend_at_every_pose(robot, tmp_path):
             screenshot_html(pages[k][0], tmp_path / f"pose{k}.png", window_size=SIZE, timeout=240)
         )
 
+    shown = range(0, len(pages), 2)
     with ThreadPoolExecutor(max_workers=2) as pool:
-        counts = list(pool.map(shoot, range(len(pages))))
+        counts = list(pool.map(shoot, shown))
+    pages = [pages[k] for k in shown]
     print(
         f"\n{robot}: pixels outside the legend per pose (magenta measured / cyan predicted; legend "
         "swatch)"
     )
-    for k, ((measured, gravity, swatch), (_, view)) in enumerate(zip(counts, pages)):
+    for k, (measured, gravity, swatch), (_, view) in zip(shown, counts, pages):
         print(
             f"  pose {k}: measured {measured:5d}  predicted {gravity:5d}  legend swatch "
             f"{swatch:3d}  "
             f"camera offset {np.round(view.offset, 2)} m, floor "
             f"{'shown' if view.floor_visible else 'hidden'}"
         )
-    for k, (measured, gravity, swatch) in enumerate(counts):
-        assert measured >= MIN_PIXELS and gravity >= MIN_PIXELS, (robot, k, counts[k])
+    for k, (measured, gravity, swatch) in zip(shown, counts):
+        assert measured >= MIN_PIXELS and gravity >= MIN_PIXELS, (robot, k, measured, gravity)
         assert swatch >= 50, (robot, k, "the legend is not inside LEGEND_BOX")
