@@ -169,6 +169,17 @@ def wrench_readings(given: Samples | PoseAverages) -> list[Reading]:
             np.array([1, 1, 1, 1e3, 1e3, 1e3], dtype=float),
         ),
     ]
+    for axis in "xyz":  # a proper turn: the two other axes' forces and torques negated
+        signs = np.array([-1.0 if a != axis else 1.0 for a in "xyz"] * 2)
+        out.append(
+            Reading(
+                f"the sensor turned 180° about its {axis} axis",
+                f"the sensor is mounted turned 180° about {axis} against the sensor frame the "
+                f"URDF (or --sensor-offset) gives: correct that frame, or estimate the mount "
+                f"(--estimate-mount {'yaw' if axis == 'z' else 'full'})",
+                replace(poses, wrenches=wrenches * signs),
+            )
+        )
     for axis in "xyz":
         others = [a for a in "xyz" if a != axis]
         out.append(
@@ -250,7 +261,11 @@ def _verdict(fits: tuple[ReadingFit, ...]) -> ConventionReport:
         if np.linalg.norm(fit.model.center_of_mass) < FAR_COM[0] and fit.explained >= EXPLAINED[0]
     ]
     if plausible:
-        best = min(plausible, key=lambda fit: fit.chi_square)
+        # readings that fit alike (a mirror and a turn differ by the sign of the forces, which
+        # the fitted gravity absorbs): the one whose gravity points down, as on a floor
+        least = min(fit.chi_square for fit in plausible)
+        alike = [fit for fit in plausible if fit.chi_square <= 1.01 * least]
+        best = min(alike, key=lambda fit: (fit.model.gravity_in_base[2] > 0, fit.chi_square))
         ratio = given.chi_square / max(best.chi_square, 1e-300)
         if ratio >= SUSPECT_RATIO:
             return ConventionReport(

@@ -100,3 +100,38 @@ def test_an_imu_fit_that_does_not_fit_its_noise_is_said(rng):
     assert fitting.tool_mass == pytest.approx(mass, rel=2e-3)
     misfit = calibrate(Samples.from_imu(late, wrenches, ids))
     assert any("do not fit the IMU model within their noise" in w for w in misfit.imu_warnings)
+
+
+def test_a_sensor_turned_180_degrees_is_named_as_such(tmp_path, capsys):
+    """A sensor bolted on turned 180° about z: a mirror (--flip-axis z) fits the static data
+    alike, with gravity pointing up; the turn, with gravity down, is what is named, and the mount
+    it names recovers the tool."""
+    from ftkin import SensorNoise, SimulatedSensor, load_robot
+    from ftkin.cli import main
+    from ftkin.io.csv_table import write_csv
+    from ftkin.sim.sensor import paper_like_truth
+
+    arm = load_robot("ur5e")
+    rng = np.random.default_rng(11)
+    q = arm.random_configurations(12, rng, margin=0.3)
+    turn = Rotation.from_euler("z", 180.0, degrees=True).as_matrix()
+    real = arm.rotation_sensor_to_base(q) @ turn.T
+    truth = paper_like_truth()
+    raw = SimulatedSensor(truth, SensorNoise.paper()).read(np.repeat(real, 20, axis=0), rng)
+    path = tmp_path / "turned.csv"
+    header = ["pose", *arm.joint_names, "fx", "fy", "fz", "mx", "my", "mz"]
+    ids = np.repeat(np.arange(12), 20)
+    write_csv(path, header, np.column_stack([ids, np.repeat(q, 20, axis=0), raw]).tolist())
+    assert main(["calibrate", str(path), "--robot", "ur5e"]) == 2
+    err = capsys.readouterr().err
+    assert "the sensor turned 180° about its z axis" in err and "--estimate-mount yaw" in err
+    out = tmp_path / "c.json"
+    assert (
+        main(["calibrate", str(path), "--robot", "ur5e", "--estimate-mount", "yaw", "-o", str(out)])
+        == 0
+    )
+    from ftkin import load_calibration
+
+    fitted = load_calibration(out)
+    assert fitted.tool_mass == pytest.approx(truth.tool_mass, rel=0.01)
+    assert abs(abs(fitted.mount_rpy_deg[2]) - 180.0) < 1.0
