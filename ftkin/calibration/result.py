@@ -7,7 +7,7 @@ reading signs, and the bias trajectory of a drifting sensor; and its readable su
 (what the CLI prints).
 """
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
@@ -150,6 +150,12 @@ class CalibrationResult(SensorModel):
         ``flip_axis``).
         """
         return reading_signs(self.sensor_sign, self.flip_axis)
+
+    def base_fields(self) -> dict:
+        """The fields :class:`CalibrationResult` declares, by name (a subclass's own left out):
+        the keywords that build another kind of result from this one (a file's inertia or IMU
+        entry read onto its common part)."""
+        return {name: self.__dict__[name] for name in _BASE_FIELDS}
 
     @classmethod
     def from_model(cls, model: SensorModel) -> "CalibrationResult":
@@ -414,3 +420,7 @@ def _diagnostics_lines(diagnostics) -> list[str]:
         f"{weakest}",
         *(f"  WARNING: {message}" for message in diagnostics.warnings),
     ]
+
+
+_BASE_FIELDS = tuple(item.name for item in fields(CalibrationResult))
+"""The names of :class:`CalibrationResult`'s fields (:meth:`CalibrationResult.base_fields`)."""

@@ -366,7 +366,7 @@ def _with_inertia(reader, result: CalibrationResult, inertia: np.ndarray) -> Cal
         "inertia_std_errors": inertia_errors,
         "inertial_parameters": theta,
     }
-    return DynamicCalibrationResult(**{**vars(result), **inertia_fields})
+    return DynamicCalibrationResult(**{**result.base_fields(), **inertia_fields})
 
 
 def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationResult:

@@ -13,8 +13,6 @@ the IMU) adds ``fused: true`` and ``mount_check``
 [rad²], chi-square, per-pose angles [deg]; or null).
 """
 
-from dataclasses import fields
-
 import numpy as np
 
 from ..calibration.fused_result import FusedCalibrationResult
@@ -92,7 +90,7 @@ def imu_result(reader, result: CalibrationResult) -> ImuCalibrationResult:
         isinstance(flags, list) and len(flags) == 3 and all(isinstance(v, bool) for v in flags)
     ):
         sub.fail("expected three booleans", "scale_estimated")
-    common = {f.name: getattr(result, f.name) for f in fields(CalibrationResult)}
+    common = result.base_fields()
     fused = {}
     if data.get("fused") is True:  # a fused calibration: its mount check
         check = sub.optional_object("mount_check")

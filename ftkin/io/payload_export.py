@@ -43,6 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..calibration.log_cholesky import is_physically_consistent, parameters_from_body
 from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from ..kinematics.robots import flange_frame_name
@@ -183,7 +184,9 @@ def checked_inertia(value) -> np.ndarray | None:
         raise InvalidInput(
             f"inertia must be positive semidefinite, got principal moments {moments.tolist()} kg·m²"
         )
-    if moments[2] > moments[0] + moments[1] + tolerance:  # no body has one
+    # a body has it when its pseudo-inertia is (the calibration's own test; the COM's own
+    # inertia is independent of the mass and the COM, so a unit point mass at the origin)
+    if not is_physically_consistent(parameters_from_body(1.0, np.zeros(3), array), -tolerance):
         raise InvalidInput(
             f"inertia's principal moments {moments.tolist()} kg·m² break the triangle inequality "
             "(the largest must not exceed the sum of the other two): no rigid body has them"
