@@ -341,7 +341,10 @@ def calibrate_imu(samples: ImuSamples, options=None, **keywords) -> ImuCalibrati
         raise InvalidInput(
             f"samples must be ftkin ImuSamples (Samples.from_imu), got {type(samples).__name__}"
         )
-    given_g = keywords.pop("g", getattr(options, "g", samples.g))
+    from .estimate import CalibrationOptions  # the FK options (a cycle: imported where used)
+
+    stated = options.g if isinstance(options, CalibrationOptions) else samples.g
+    given_g = keywords.pop("g", stated)  # ImuCalibrationOptions has none: the samples carry g
     if not np.isclose(float(given_g), samples.g, rtol=1e-12):
         raise InvalidInput(
             f"g = {given_g} m/s² differs from the samples' {samples.g:g} m/s²: give it once, to "

@@ -213,7 +213,7 @@ def run(args) -> int:
         return _run_dynamic(args, noise)
     options = _options(args, noise)
     arm = arm_from_args(args)
-    loaded = load_samples_from_args(args.samples, args, arm=arm)
+    loaded = load_samples_from_args(args.samples, args, arm=arm, g=args.g)
     # The doctor refits the readings as given, on a floor-mounted base with the URDF's sensor
     # frame; with a stated sign, axis, base mount or an estimated mount calibrate() checks the
     # conventions itself.

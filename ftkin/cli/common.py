@@ -370,7 +370,12 @@ def segment_parameters_from_args(args: argparse.Namespace):
 
 
 def load_samples_from_args(
-    path, args: argparse.Namespace, *, static_only: bool = True, arm: Arm | None = None
+    path,
+    args: argparse.Namespace,
+    *,
+    static_only: bool = True,
+    arm: Arm | None = None,
+    g: float | None = None,
 ):
     """Read a samples CSV or a ROS 2 bag named on the command line (``path``: one file, or several
     CSVs joined on time, :mod:`ftkin.io.joined_files`).
@@ -379,7 +384,8 @@ def load_samples_from_args(
     for a bag). ``static_only`` (off with ``--all-rows``) applies to bags and continuous
     recordings: True keeps the readings of the static segments (calibration), False every
     reading (compensation). ``arm`` overrides the arm the options name (see
-    :func:`arm_for_calibration`).
+    :func:`arm_for_calibration`). ``g`` [m/s²] is what an accelerometer among joined files is
+    checked against (``--g``, or the calibration's; default standard gravity).
     """
     from ..io.bags import bag_samples, is_bag_path
     from ..io.static_segments import SegmentParameters
@@ -398,7 +404,7 @@ def load_samples_from_args(
             paths,
             spelling=column_spelling_from_args(args),
             reading=stream_reading_from_args(args),
-            g=getattr(args, "g", None) or STANDARD_GRAVITY,
+            g=STANDARD_GRAVITY if g is None else g,
         )
         print(f"joined {len(paths)} files on time: {len(table.rows)} rows at the wrench's stamps")
         loaded, path = samples_from_table(table, arm, segments), table.source

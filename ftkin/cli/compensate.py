@@ -110,7 +110,7 @@ def run(args) -> int:
         raise InvalidInput(
             "--sg-window applies to a calibration with an inertia (ftkin calibrate --dynamic)"
         )
-    loaded = load_samples_from_args(args.log, args, static_only=False, arm=arm)
+    loaded = load_samples_from_args(args.log, args, static_only=False, arm=arm, g=calibration.g)
     warn_if_kinematics_differ(loaded, calibration)
     if not is_bag_path(input_paths(args.log)[0]):
         _check_log_conventions(args, loaded.table, arm, calibration)
