@@ -166,11 +166,10 @@ def _warn_unused_imu(path: str, args) -> None:
     joints' derivatives give the motion)."""
     import logging
 
-    from ..io.column_spelling import spelled_table
-    from ..io.csv_table import read_table
+    from ..io.column_spelling import spelled_header
     from ..io.stream_join import ACCEL_COLUMNS, GYRO_COLUMNS
 
-    header = spelled_table(read_table(path), column_spelling_from_args(args)).header
+    header = spelled_header(path, column_spelling_from_args(args))
     found = [name for name in (*ACCEL_COLUMNS, *GYRO_COLUMNS) if name in header]
     if found:
         logging.getLogger("ftkin.cli").warning(

@@ -9,7 +9,7 @@ from ..calibration.fused_result import FusedCalibrationResult
 from ..calibration.imu_result import ImuCalibrationResult
 from ..calibration.model import WRENCH_CHANNELS
 from ..io.bags import is_bag_path
-from ..io.column_spelling import spelled_table
+from ..io.column_spelling import spelled_header, spelled_table
 from ..io.csv_table import read_table, write_csv
 from ..io.stream_join import seconds_text
 from .arg_types import add_command, option
@@ -193,7 +193,7 @@ def _logs_an_accelerometer(args) -> bool:
     for path in input_paths(args.log):
         if is_bag_path(path):
             return False
-        header = spelled_table(read_table(path), spelling).header
+        header = spelled_header(path, spelling)
         if all(name in header for name in ACCEL_COLUMNS):
             return True
     return False

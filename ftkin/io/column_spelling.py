@@ -31,7 +31,7 @@ from dataclasses import dataclass, replace
 from ..calibration.model import WRENCH_CHANNELS
 from ..exceptions import InvalidInput, InvalidSamples
 from ..options import option
-from .csv_table import Table, format_float
+from .csv_table import Table, format_float, read_header
 
 logger = logging.getLogger(__name__)
 
@@ -205,6 +205,13 @@ def _scaled(table: Table, name: str, factor: float) -> Table:
         for row, value in zip(table.rows, values)
     ]
     return replace(table, rows=rows)
+
+
+def spelled_header(path, spelling: ColumnSpelling | None = None) -> list[str]:
+    """The header a file has in ftkin's names (:func:`spelled_table`'s), read without its rows
+    (:func:`~ftkin.io.csv_table.read_header`)."""
+    header = read_header(path)
+    return spelled_table(Table(str(path), header, [], [], 1), spelling).header
 
 
 def spelled_table(table: Table, spelling: ColumnSpelling | None = None) -> Table:

@@ -139,6 +139,24 @@ def read_table(path) -> Table:
     return Table(source, header, rows, lines, header_line)
 
 
+def read_header(path) -> list[str]:
+    """The header row of a CSV (its first line neither blank nor a ``#`` comment), read without
+    its rows: to decide how to read a file before reading it. A file :func:`read_table` would
+    refuse gets :func:`read_table`'s error."""
+    try:
+        with open(path, encoding="utf-8-sig") as stream:
+            for line in stream:
+                if line.strip() and not line.lstrip().startswith("#"):
+                    record = next(csv.reader([line], delimiter=sniff_delimiter(line)))
+                    header = [cell.strip() for cell in record]
+                    if len(set(header)) == len(header):
+                        return header
+                    break  # duplicated names: read_table names them
+    except (OSError, UnicodeDecodeError, csv.Error, StopIteration):
+        pass
+    return read_table(path).header
+
+
 def _read_text(path: Path) -> str:
     """The text of a CSV file, or :class:`InvalidSamples` (missing, a folder, binary, JSON)."""
     source = str(path)

@@ -23,7 +23,7 @@ from ..calibration.model import STANDARD_GRAVITY, WRENCH_CHANNELS
 from ..calibration.samples import Samples
 from ..exceptions import InvalidInput, InvalidSamples
 from .column_spelling import ColumnSpelling, spelled_table
-from .csv_table import read_table
+from .csv_table import read_header, read_table
 from .static_segments import SegmentParameters, segment_index
 from .stream_join import (
     ACCEL_COLUMNS,
@@ -277,7 +277,7 @@ def _still_poses(samples: ImuSamples, segments: SegmentParameters, source: str) 
 
 
 def _has_time(path) -> bool:
-    header = read_table(path).header
+    header = read_header(path)
     return TIME_COLUMN in header or any(name.lower() in TIME_ALIASES for name in header)
 
 

@@ -21,8 +21,8 @@ import numpy as np
 from ..calibration.model import STANDARD_GRAVITY
 from ..exceptions import InvalidInput, InvalidSamples
 from ..options import number, option
-from .column_spelling import ColumnSpelling, spelled_table
-from .csv_table import Table, format_float, read_table
+from .column_spelling import ColumnSpelling, spelled_header
+from .csv_table import Table, format_float
 from .imu_columns import read_stream
 from .stream_join import ACCEL_COLUMNS, GAP_POLICIES, JoinedStreams, join_streams
 from .time_columns import TIME_COLUMN
@@ -82,7 +82,7 @@ def imu_only(paths, spelling: ColumnSpelling | None = None, joint_names=()) -> b
 
     from .samples_csv import EULER_COLUMNS, MATRIX_COLUMNS, QUATERNION_COLUMNS
 
-    headers = [spelled_table(read_table(path), spelling).header for path in paths]
+    headers = [spelled_header(path, spelling) for path in paths]
     columns = {name for header in headers for name in header}
     accel = any(all(name in header for name in ACCEL_COLUMNS) for header in headers)
     oriented = columns & set(

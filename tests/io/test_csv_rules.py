@@ -206,3 +206,33 @@ def test_a_flag_is_a_number_as_a_shell_writes_one(capsys):
     assert main(["plan", "-n", "3", "--noise-force", "0_02", "--noise-torque", "0.002"]) == 2
     assert "--noise-force: expected a number, got '0_02'" in capsys.readouterr().err
     assert main(["plan", "-n", "1_2"]) == 2
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "# a comment\n\nt,fx,fy\n0,1,2\n",
+        "\ufefft;fx;fy\n0;1;2\n",
+        "t\tfx\tfy\n0\t1\t2\n",
+        '"t", fx ,"fy"\n0,1,2\n',
+    ],
+    ids=["comment", "bom-semicolon", "tab", "quoted"],
+)
+def test_the_header_read_alone_is_the_tables(tmp_path, text):
+    """read_header (the first line only) is read_table's header (the whole file)."""
+    from ftkin.io.csv_table import read_header
+
+    path = tmp_path / "h.csv"
+    path.write_text(text, encoding="utf-8")
+    assert read_header(path) == read_table(path).header == ["t", "fx", "fy"]
+
+
+def test_a_header_that_read_table_refuses_gets_its_error(tmp_path):
+    from ftkin.io.csv_table import read_header
+
+    path = tmp_path / "dup.csv"
+    path.write_text("t,fx,fx\n0,1,2\n")
+    with pytest.raises(ftkin.InvalidSamples, match="duplicated column"):
+        read_header(path)
+    with pytest.raises(ftkin.InvalidSamples, match="file not found"):
+        read_header(tmp_path / "none.csv")
