@@ -255,10 +255,8 @@ def _with_imu(loaded, args):
     orientation and the IMU fitted together, the mount checked
     (:func:`~ftkin.io.imu_columns.with_imu_columns`)."""
     from ..io.imu_columns import with_imu_columns
-    from ..io.joined_files import JOINED_ACCEL_UNIT
 
-    joined = len(input_paths(args.samples)) > 1  # the join converted the accelerometer already
-    unit = JOINED_ACCEL_UNIT if joined else stream_reading_from_args(args).accel_unit
+    unit = stream_reading_from_args(args).accel_unit
     samples = with_imu_columns(loaded, accel_unit=unit, g=args.g)
     if samples is not loaded.samples:
         print(f"{loaded.table.source}: the orientation and the IMU (ax,ay,az) fitted together")

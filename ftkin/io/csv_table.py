@@ -38,13 +38,19 @@ def _not_a_number(name: str, cell: str) -> str:
 
 @dataclass(frozen=True)
 class Table:
-    """A parsed CSV: header, string cells and the file line of each row (and of the header)."""
+    """A parsed CSV: header, string cells and the file line of each row (and of the header).
+
+    ``accel_unit``: the unit its ``ax,ay,az`` are already in when the table's maker converted them
+    (the join of several files: ``"m/s^2"``), so that a reader does not convert them again; None
+    for a file as read (its reader is told the unit, ``--accel-unit``).
+    """
 
     source: str
     header: list[str]
     rows: list[list[str]]
     lines: list[int]
     header_line: int | None = None
+    accel_unit: str | None = None
 
     def column_index(self, name: str) -> int:
         return self.header.index(name)

@@ -295,13 +295,15 @@ def with_imu_columns(
 
     Args:
         loaded: A :class:`~ftkin.io.samples_csv.LoadedSamples`.
-        accel_unit: The unit of ``ax,ay,az``: ``"m/s^2"`` or ``"g"``.
+        accel_unit: The unit of ``ax,ay,az``: ``"m/s^2"`` or ``"g"`` (a table that states its
+            own, a join's, keeps it).
         g: Gravity [m/s²].
     """
     table = loaded.table
     if loaded.recording is not None or not all(name in table.header for name in ACCEL_COLUMNS):
         return loaded.samples
     gyro = table.floats(GYRO_COLUMNS) if all(n in table.header for n in GYRO_COLUMNS) else None
+    unit = table.accel_unit or accel_unit  # a join's table is converted already
     return loaded.samples.with_imu(
-        table.floats(ACCEL_COLUMNS), accel_unit=accel_unit, angular_velocity=gyro, g=g
+        table.floats(ACCEL_COLUMNS), accel_unit=unit, angular_velocity=gyro, g=g
     )

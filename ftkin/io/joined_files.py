@@ -130,4 +130,5 @@ def joined_table(
     if not rows:
         raise InvalidSamples("the files share no time: nothing to join", str(paths[0]))
     source = " + ".join(str(path) for path in paths)
-    return Table(source, header, rows, list(range(2, len(rows) + 2)), 1), joined
+    table = Table(source, header, rows, list(range(2, len(rows) + 2)), 1, JOINED_ACCEL_UNIT)
+    return table, joined
