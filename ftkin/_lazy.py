@@ -4,11 +4,17 @@ A package lists ``{name: relative module}`` and gets the module-level
 ``__getattr__`` and ``__dir__`` that import the defining module only when a
 name is first used, so ``import ftkin`` (and the CLI's start) stay light.
 
+Every submodule and subpackage of the package resolves on attribute access too
+(``ftkin.kinematics.rotations`` after ``import ftkin``, whatever was imported before): the
+interpreter sets a submodule as its package's attribute only once something has imported it, so
+without this, a module's attribute would depend on import order.
+
 ``moved`` lists names that left the package for another (``{name: relative package}``): they
 still resolve, with a ``FutureWarning`` that names where to import them from, for one release.
 """
 
 import importlib
+import importlib.util
 import warnings
 
 
@@ -16,14 +22,16 @@ def lazy_exports(
     package: str, exports: dict[str, str], namespace: dict, moved=None, subpackages=()
 ):
     """``(__getattr__, __dir__)`` for the package ``package`` whose globals are ``namespace``;
-    ``subpackages`` (names) import on first access too (``ftkin.control`` after ``import ftkin``).
+    its submodules and ``subpackages`` (names, listed by ``__dir__``) import on first access
+    (``ftkin.control`` after ``import ftkin``, ``ftkin.kinematics.rotations`` after
+    ``import ftkin.kinematics``).
     """
     moved = dict(moved or {})
     subpackages = frozenset(subpackages)
 
     def __getattr__(name: str):
         module = exports.get(name)
-        if module is None and name in subpackages:
+        if module is None and (name in subpackages or _is_submodule(package, name)):
             value = namespace[name] = importlib.import_module(f".{name}", package)
             return value
         if module is None:
@@ -45,3 +53,11 @@ def lazy_exports(
         return sorted(set(namespace) | set(namespace.get("__all__", ())))
 
     return __getattr__, __dir__
+
+
+def _is_submodule(package: str, name: str) -> bool:
+    """Whether ``package.name`` is a module or package on disk (dunder names never are: they are
+    the interpreter's probes, such as ``__wrapped__``)."""
+    if name.startswith("__") or not name.isidentifier():
+        return False
+    return importlib.util.find_spec(f"{package}.{name}") is not None

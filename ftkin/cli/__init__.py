@@ -13,7 +13,11 @@ import os
 import shlex
 import sys
 
+from .._lazy import lazy_exports
 from ..exceptions import FtkinError, InvalidInput
+
+__getattr__, _ = lazy_exports(__name__, {}, globals())
+"""Each subcommand's module loads on first access (``ftkin.cli.calibrate``)."""
 
 COMMAND_MODULES = (
     "calibrate",
