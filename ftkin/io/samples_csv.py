@@ -23,16 +23,17 @@ it [s], and ``t_ms``/``time_ms``, ``t_us``/``time_us``, ``t_ns``/``time_ns``
 are converted from the unit their name gives.
 Other columns are carried along untouched (``ftkin compensate`` copies them).
 
-A table with a time column and no ``pose`` column whose orientation stays put
-over consecutive rows is a *continuous recording* (the arm moving between still
-phases): its still segments are found from the orientation by the bag reader's
-algorithm (:mod:`ftkin.io.static_segments`), each becomes one pose, and the
-moving rows are left out, when ``segments``
-(:class:`~ftkin.io.static_segments.SegmentParameters`) is
-given: ``ftkin calibrate``, ``report``, ``extract`` and ``view`` give it unless
-``--all-rows``. Without it (the library's default: a log to compensate is read
-whole) every row is kept. A recording in motion with no usable still segment is
-refused.
+A table with a time column and no ``pose`` column is read as a *pose table* or a
+*continuous recording* from how its rows were taken (:mod:`ftkin.io.table_layout`: a
+recorder's steady steps of at most 0.25 s, rows repeating an orientation within noise). A
+pose table keeps every row, consecutive rows at one orientation being one pose. A continuous
+recording (the arm moving between still phases) is cut into its still segments, found from
+the orientation by the bag reader's algorithm (:mod:`ftkin.io.static_segments`), each one
+pose, the moving rows left out. This happens when ``segments``
+(:class:`~ftkin.io.static_segments.SegmentParameters`) is given: ``ftkin calibrate``,
+``report``, ``extract`` and ``view`` give it unless ``--all-rows``. Without it (the library's
+default: a log to compensate is read whole) every row is kept. A recording in motion with no
+usable still segment is refused. ``LoadedSamples.layout`` says how the table was read.
 """
 
 import logging
