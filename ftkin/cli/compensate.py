@@ -8,10 +8,10 @@ from .. import Arm, Compensator, InvalidInput, load_calibration
 from ..calibration.fused_result import FusedCalibrationResult
 from ..calibration.imu_result import ImuCalibrationResult
 from ..calibration.model import WRENCH_CHANNELS
+from ..control.bias_checks import check_log_times, drifting
 from ..io.bags import is_bag_path
 from ..io.column_spelling import spelled_header, spelled_table
 from ..io.csv_table import read_table, write_csv
-from ..io.stream_join import seconds_text
 from .arg_types import add_command, option
 from .common import (
     ALLOW_OTHER_ARM,
@@ -120,45 +120,14 @@ def run(args) -> int:
         f"wrote {rows} compensated rows to {args.output} (median contact force |F'| "
         f"{np.median(Compensator.payload_weight(contact)):.4f} N)"
     )
-    drift = calibration.drift
-    if loaded.samples.times is not None and drift is not None and drift.model != "none":
-        inside = int(np.sum(drift.covers(loaded.samples.times)))
+    if loaded.samples.times is not None and drifting(calibration.drift):
+        # the clock warnings came from the library (Compensator.bias_at); this is the count
+        check = check_log_times(calibration.drift, loaded.samples.times, calibration.bias)
         print(
-            f"bias drift {drift.model}: {inside} rows inside the calibration recording used the "
-            "bias at their time, "
-            f"{rows - inside} the last bias"
+            f"bias drift {calibration.drift.model}: {check.inside} rows inside the calibration "
+            f"recording used the bias at their time, {check.outside} the last bias"
         )
-        _warn_of_other_clocks(loaded.samples.times, calibration, inside)
     return 0
-
-
-def _warn_of_other_clocks(times: np.ndarray, calibration, inside: int) -> None:
-    """Warn when a log's times and a drifting calibration's recording look like two clocks: rows
-    inside the recording of a calibration re-zeroed since (they keep the recording's bias), or a
-    log far before the recording (its rows take the last bias)."""
-    drift = calibration.drift
-    start, end = float(drift.times[0]), float(drift.times[-1])
-    span = max(end - start, 1e-9)
-    where = f"the calibration's recording ({seconds_text(start)}–{seconds_text(end)} s)"
-    moved = float(np.max(np.abs(calibration.bias - drift.bias[-1])))
-    if inside and moved > 1e-9:
-        logger.warning(
-            "%d rows fall inside %s and used the bias it saw, not the bias re-zeroed since (it "
-            "moved by up to %.4g): if the log is of a later session on another clock, shift its "
-            "times past %s s or drop its t column",
-            inside,
-            where,
-            moved,
-            seconds_text(end),
-        )
-    if float(np.min(times)) < start - 10.0 * span:
-        logger.warning(
-            "the log's times (%s–%s s) are long before %s: on another clock or in another unit "
-            "(--time-unit)? its rows used the last bias",
-            seconds_text(float(np.min(times))),
-            seconds_text(float(np.max(times))),
-            where,
-        )
 
 
 def _check_log_conventions(args, table, arm, calibration) -> None:

@@ -20,6 +20,7 @@ drifting calibration).
 """
 
 import functools
+import logging
 import math
 import warnings
 from operator import le
@@ -45,7 +46,10 @@ from ..validation import (
     is_rotation_rows,
     rotation_rows,
 )
+from .bias_checks import check_log_times, rezero_warnings
 from .bias_tracker import BiasTracker
+
+logger = logging.getLogger(__name__)
 
 JOINT_LIMIT_MARGIN = 0.05
 """How far past its URDF limit a joint angle is still taken as measured [rad or m] (encoder
@@ -320,6 +324,11 @@ class Compensator:
             rotations, _ = as_rotation_batch(orientation)
             return rotations[0]
         arm = self._require_arm()
+        if len(shape) == 1 and shape != (arm.nq,):
+            raise InvalidInput(
+                f"{what} takes the arm's {arm.nq} joint angles q [rad] "
+                f"({', '.join(arm.joint_names)}) or R_BS (3, 3), got {shape[0]} numbers"
+            )
         q = as_vector(orientation, arm.nq, f"{what}: joint angles q")
         refuse_outside_limits(arm, q)
         return arm.sensor_rotation_unchecked(q).copy()
@@ -336,9 +345,17 @@ class Compensator:
         reading, which would subtract the tool's weight at this pose and make it appear at every
         other). The tool must be free of contact and the arm still. Returns the new bias ``(6,)``
         [N, N·m].
+
+        Warns (logging) when the force bias moved by more than the tool's weight, and when the
+        calibration has a drift trajectory the re-zero leaves in place
+        (:func:`~ftkin.control.bias_checks.rezero_warnings`, the texts of ``ftkin rezero``).
         """
         rotation = self._rotation_of(orientation, "rezero")
-        return self._zero_at(rotation, as_wrench(raw_wrench, "raw_wrench"), "rezero")
+        previous = self._bias
+        bias = self._zero_at(rotation, as_wrench(raw_wrench, "raw_wrench"), "rezero")
+        for text in rezero_warnings(self.calibration, previous, bias):
+            logger.warning("%s", text)
+        return bias
 
     def driver_zeroed_at(self, orientation) -> np.ndarray:
         """The sensor driver was zeroed (tool on, no contact) at this pose: joint angles
@@ -361,6 +378,11 @@ class Compensator:
         start, e.g. a log on another clock), or without a drift model: the current bias
         (calibration's last, or as re-zeroed or tracked since).
 
+        With a drift trajectory, warns (logging) of times that look like another clock: rows
+        inside the recording while the current bias differs from the trajectory's end (a re-zero
+        since), or times long before the recording
+        (:func:`~ftkin.control.bias_checks.check_log_times`, the texts of ``ftkin compensate``).
+
         Raises:
             InvalidInput: a time that is not a finite number of seconds.
         """
@@ -372,6 +394,8 @@ class Compensator:
         if drift is not None and drift.model != "none":
             inside = drift.covers(times)
             out[inside] = drift.bias_at(times[inside])
+            for text in check_log_times(drift, times, self._bias).warnings:
+                logger.warning("%s", text)
         return out
 
     def observe_bias(

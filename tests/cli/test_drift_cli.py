@@ -82,7 +82,7 @@ def test_rezero_updates_the_file_in_place_or_writes_elsewhere(samples_csv, tmp_p
     assert document["rezero"]["previous_bias"] == original.bias.tolist()
     np.testing.assert_allclose(load_calibration(calibration_path).bias, other.bias)
     assert main(["rezero", str(calibration_path), "--q", "0", "1", "--wrench", *["0"] * 6]) == 2
-    assert "6 joint angles" in capsys.readouterr().err
+    assert "takes the arm's 6 joint angles q [rad]" in capsys.readouterr().err
     # a pose the arm cannot be in: degrees, or past a joint limit (joint2's upper limit is 1.134
     # rad)
     unchanged = calibration_path.read_text()
@@ -104,7 +104,7 @@ def test_rezero_updates_the_file_in_place_or_writes_elsewhere(samples_csv, tmp_p
         )
         == 2
     )
-    assert "joint6 = 90 is beyond ±2π" in capsys.readouterr().err
+    assert "joint6 = 90 is outside its limits" in capsys.readouterr().err
     assert (
         main(
             [
@@ -123,7 +123,7 @@ def test_rezero_updates_the_file_in_place_or_writes_elsewhere(samples_csv, tmp_p
         )
         == 2
     )
-    assert "joint2 = 1.5 rad is outside its limits" in capsys.readouterr().err
+    assert "joint2 = 1.5 is outside its limits" in capsys.readouterr().err
     assert calibration_path.read_text() == unchanged
     # a JSON file where a CSV is expected
     assert (
@@ -202,3 +202,58 @@ def test_a_rezero_of_a_drifting_calibration_and_a_log_on_another_clock_are_said(
             main(["compensate", str(calibration), str(early), "-o", str(tmp_path / "b.csv")]) == 0
         )
     assert "are long before the calibration's recording" in caplog.text
+
+
+def test_the_api_and_the_cli_say_the_same_of_a_rezero_and_of_a_log_on_another_clock(
+    samples_csv, tmp_path, caplog
+):
+    """The checks live in the library: ``ftkin rezero``/``ftkin compensate`` and
+    Compensator.rezero/compensate_batch given the same numbers log the same texts."""
+    import functools
+    import logging
+
+    from ftkin import Compensator
+
+    calibration_path = tmp_path / "c.json"
+    assert (
+        main(["calibrate", str(samples_csv), "--drift", "poly:1", "-o", str(calibration_path)]) == 0
+    )
+    calibration = load_calibration(calibration_path)
+    q = [0.2, -1.1, 1.3, 0.4, 1.2, -0.3]
+    rotation = Arm.default().rotation_sensor_to_base(np.array([q]))[0]
+    pushed = calibration.tool_gravity_wrench(rotation) + calibration.bias + [0, 25.0, 0, 0, 0, 0]
+
+    def said(call) -> list[str]:
+        caplog.clear()
+        with caplog.at_level(logging.WARNING, logger="ftkin"):
+            call()
+        return [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+
+    zeroed = tmp_path / "zeroed.json"
+    argv = [
+        "rezero",
+        str(calibration_path),
+        "--q",
+        *map(repr, q),
+        "--wrench",
+        *map(repr, pushed.tolist()),
+    ]
+    by_cli = said(lambda: main([*argv, "-o", str(zeroed)]))
+    by_api = said(lambda: Compensator(calibration).rezero(np.array(q), pushed))
+    assert len(by_api) == 2 and "the bias moved by 25 N" in by_api[0]
+    assert by_cli == by_api
+    # the re-zeroed file, and the samples 1e6 s earlier: rows inside, then another clock
+    table = np.loadtxt(samples_csv, delimiter=",", skiprows=1)
+    times, joints, wrenches = table[:, 0], table[:, 2:8], table[:, 8:14]
+    for shift in (0.0, -1e6):
+        log = tmp_path / f"log{shift:g}.csv"
+        rows = np.column_stack([times + shift, table[:, 1:]])
+        write_csv(log, samples_csv.read_text().splitlines()[0].split(","), rows.tolist())
+        command = ["compensate", str(zeroed), str(log), "-o", f"{log}.out.csv"]
+        by_cli = said(functools.partial(main, command))
+        compensator = Compensator(load_calibration(zeroed), Arm.default())
+        by_api = said(
+            functools.partial(compensator.compensate_batch, joints, wrenches, times=times + shift)
+        )
+        assert len(by_api) == 1 and by_cli == by_api
+    assert "are long before the calibration's recording" in by_api[0]
