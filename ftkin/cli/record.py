@@ -8,7 +8,13 @@
 * ``record --raw --sensor SENSOR -o STREAM.csv [--duration S]``: the sensor's stream with its
   stamps, IMU and temperature (:func:`~ftkin.robot.stream_log.log_stream`);
 * ``--ur HOST``: a UR controller's joints (and its built-in sensor unless ``--sensor``) through
-  ``ftkin.robot.ur.UrArm`` (the UR support of issue 32, imported when asked for).
+  ``ftkin.robot.ur.UrArm`` (the UR support of issue 32, imported when asked for). The arm's model
+  is ``--robot``, else what the controller's dashboard says it is
+  (:func:`~ftkin.robot.ur_dashboard.ask_controller_model`; a ``--robot`` it contradicts is
+  refused); with neither, the poses are recorded with the flange orientation any UR shares
+  (:class:`~ftkin.kinematics.ur_flange.UrFlange`), not calibrated, and the ``ftkin calibrate``
+  command that finishes the job is printed, its ``--robot`` the model whose kinematics reproduce
+  the controller's TCP poses (:func:`~ftkin.kinematics.ur_flange.identify_ur_arm`).
 
 Ctrl-C keeps whole poses, calibrates from them when it can, says how to continue (``--resume``)
 and exits 130; a sensor fault or a lost joint source exits 2 with the same advice. The robot
@@ -17,6 +23,8 @@ commands' helpers (the sensor by name, the bundled FR3, the resume advice) are s
 """
 
 import logging
+import shlex
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -120,6 +128,21 @@ def _print_event(event) -> None:
     print(("  " if event.kind in INDENTED else "") + event.message, flush=True)
 
 
+@dataclass
+class JointSource:
+    """What ``record`` reads: the joints, the arm model, the sensor, ``close()`` to release them;
+    for a UR also what is known of the arm (comments for the samples file), whether the model is
+    known (else record only), and the ``(actual_q, actual_TCP_pose)`` seen (the model's check)."""
+
+    joints: object
+    arm: object
+    sensor: object
+    close: object
+    comments: tuple = ()
+    calibrate: bool = True
+    tcp_poses: list = field(default_factory=list)
+
+
 def _ur_arm(args):
     """``--ur HOST``: the joints (and the built-in sensor, in ``--wrench-frame``) through
     :class:`ftkin.robot.ur.UrArm`; its stale limit is ``--stale-after``."""
@@ -128,8 +151,34 @@ def _ur_arm(args):
     return UrArm(args.ur, wrench_frame=args.wrench_frame or "base", stale_after=args.stale_after)
 
 
-def _joint_source(args):
-    """``(joints, arm, sensor, close)`` named by the options (``close()`` releases them)."""
+def _ur_model(args, controller):
+    """``(arm, comments)`` of ``--ur``: ``--robot``/``--urdf`` (checked against the controller's
+    dashboard), else the dashboard's model, else None (record with the flange orientation)."""
+    from ..io.recorded_robot import robot_comment
+    from ..kinematics.robots import load_robot
+
+    arm = arm_from_args(args)
+    said = f"the controller's dashboard: {controller.describe()}"
+    if arm is not None:
+        controller.check_robot(arm.robot_name)
+        if arm.robot_name is None:  # a URDF: kept as given, the controller's word noted
+            return arm, (said,)
+        agrees = f"; {said}" if controller.robot is not None else ""
+        return arm, (robot_comment(arm.robot_name, f"--robot{agrees}"),)
+    if controller.robot is not None:
+        print(f"the arm's model from {said}", flush=True)
+        return load_robot(controller.robot), (robot_comment(controller.robot, said),)
+    print(
+        f"no --robot and no model from the controller ({controller.reason}): recording with the "
+        "flange orientation, the same for every UR; the controller's TCP poses name the model "
+        "after the recording",
+        flush=True,
+    )
+    return None, (said,)
+
+
+def _joint_source(args) -> JointSource:
+    """The joint source, arm and sensor the options name (``close()`` releases them)."""
     if args.franka and args.ur:
         raise InvalidInput("give one joint source: --franka HOST or --ur HOST")
     if args.wrench_frame is not None and not args.ur:
@@ -137,13 +186,17 @@ def _joint_source(args):
             "--wrench-frame is the axes of a UR's built-in sensor: it goes with --ur"
         )
     if args.ur:
-        arm = arm_from_args(args)
-        if arm is None:
-            raise InvalidInput("--ur needs the arm's kinematics: --robot ur5e (or --urdf)")
+        from ..kinematics.ur_flange import UrFlange
+        from ..robot.ur_dashboard import ask_controller_model
+
+        arm, comments = _ur_model(args, ask_controller_model(args.ur))
         ur = _ur_arm(args)
         sensor = _sensor(args) if args.sensor else ur.sensor
         # the command ends with the process: no 0.5 s wait for ur_rtde's destructor
-        return ur, arm, sensor, lambda: ur.close(wait=False)
+        close = lambda: ur.close(wait=False)  # noqa: E731
+        if arm is None:
+            return JointSource(ur, UrFlange(), sensor, close, comments, calibrate=False)
+        return JointSource(ur, arm, sensor, close, comments)
     if not args.sensor:
         raise InvalidInput("give the sensor: --sensor NAME|MODULE:FACTORY (and --sensor-option)")
     if args.franka:
@@ -154,8 +207,8 @@ def _joint_source(args):
         robot = FrankaRobot(
             args.franka, realtime=not args.no_realtime, state_timeout=args.state_timeout
         )
-        return robot, arm, sensor, lambda: None
-    return None, None, _sensor(args), lambda: None
+        return JointSource(robot, arm, sensor, lambda: None)
+    return JointSource(None, None, _sensor(args), lambda: None)
 
 
 @_closes_sensor
@@ -166,12 +219,13 @@ def run(args) -> int:
         raise InvalidInput("--duration goes with --raw (a recording ends at --n poses)")
     from ..robot.recorder import record_poses
 
-    joints, arm, sensor, close = _joint_source(args)
+    source = _joint_source(args)
+    on_event = _print_event if source.calibrate else _tcp_pose_keeper(source)
     try:
         recording = record_poses(
-            sensor,
-            joints,
-            arm,
+            source.sensor,
+            source.joints,
+            source.arm,
             samples_path=args.output,
             n_poses=resolved(args.n, DEFAULT_POSES),
             readings_per_pose=args.readings_per_pose,
@@ -180,9 +234,11 @@ def run(args) -> int:
             min_pose_angle=float(np.deg2rad(args.min_pose_angle)),
             output=args.calibration_output,
             g=args.g,
-            on_event=_print_event,
+            on_event=on_event,
             # the built-in sensor's wrench came in --wrench-frame axes: checked before the fit
             wrench_frame=(args.wrench_frame or "base") if args.ur and not args.sensor else None,
+            calibrate=source.calibrate,
+            comments=source.comments,
         )
     except RecordingInterrupted as error:
         raise InvalidInput(f"{error.reason}; {_resume_advice(args, error)}") from None
@@ -193,8 +249,10 @@ def run(args) -> int:
             "(to another -o)"
         ) from None
     finally:
-        close()
-    if recording.calibration is not None:
+        source.close()
+    if not source.calibrate:
+        _print_calibrate_command(args, recording, source)
+    elif recording.calibration is not None:
         print(recording.calibration.summary())
         if args.calibration_output:
             print(f"wrote {args.calibration_output} (samples in {recording.samples_path})")
@@ -204,6 +262,57 @@ def run(args) -> int:
         print(f"ftkin: interrupted: {_resume_advice(args, recording)}", flush=True)
         return 130
     return 0
+
+
+def _tcp_pose_keeper(source: JointSource):
+    """``on_event`` that prints the event and keeps the UR's ``(actual_q, actual_TCP_pose)`` of
+    one package (at the pose or on the way: any package will do)."""
+
+    def on_event(event) -> None:
+        _print_event(event)
+        if event.kind in ("start", "recorded", "same_pose"):
+            state = source.joints.state()
+            source.tcp_poses.append((state.q, state.tcp_pose))
+
+    return on_event
+
+
+def _print_calibrate_command(args, recording, source: JointSource) -> None:
+    """Without a model: which UR the controller's TCP poses say it is (written to the samples
+    file), and the ``ftkin calibrate`` command that finishes the job."""
+    from ..calibration.model import STANDARD_GRAVITY
+    from ..io.recorded_robot import robot_comment
+    from ..kinematics.ur_eseries import UR_DH
+    from ..kinematics.ur_flange import identify_ur_arm
+    from ..robot.samples_log import append_comment
+
+    if recording.poses_recorded < 3:
+        return
+    robot = None
+    if len(source.tcp_poses) >= 3:
+        q, tcp = (np.array(column) for column in zip(*source.tcp_poses))
+        identification = identify_ur_arm(q, tcp)
+        print(identification.describe())
+        robot = identification.robot
+        if robot is not None:
+            append_comment(
+                recording.samples_path,
+                robot_comment(robot, f"actual_TCP_pose: {identification.describe()}"),
+            )
+    words = ["ftkin", "calibrate", str(recording.samples_path), "--robot", robot or "ur5e"]
+    if args.calibration_output:
+        words += ["-o", args.calibration_output]
+    if args.g is not None and args.g != STANDARD_GRAVITY:
+        words += ["--g", repr(float(args.g))]
+    if robot is None:
+        others = ", ".join(name for name in UR_DH if name != "ur5e")
+        print(
+            "not calibrated: the arm's model is not known; calibrate with its --robot: "
+            f"{shlex.join(words)} on a UR5e (--robot {others} for the others, --urdf for a "
+            "model of your own)"
+        )
+    else:
+        print(f"not calibrated here (no --robot); finish with: {shlex.join(words)}")
 
 
 def _run_raw(args) -> int:

@@ -217,7 +217,8 @@ UR = option(
     "--ur",
     metavar="HOST",
     help="the UR controller's address (RTDE, port 30004): its joints and, unless --sensor, its "
-    "built-in sensor (compensate --live, record)",
+    "built-in sensor (compensate --live, record; record asks its dashboard, port 29999, for the "
+    "arm's model when --robot is not given)",
 )
 RESUME = option(
     "--resume",

@@ -43,6 +43,10 @@ class Table:
     ``accel_unit``: the unit its ``ax,ay,az`` are already in when the table's maker converted them
     (the join of several files: ``"m/s^2"``), so that a reader does not convert them again; None
     for a file as read (its reader is told the unit, ``--accel-unit``).
+
+    ``comments``: the text of its ``#`` lines, wherever they are, ``#`` and the spaces after it
+    taken off (a recording's notes, e.g. the arm it was recorded on:
+    :mod:`ftkin.io.recorded_robot`).
     """
 
     source: str
@@ -51,6 +55,7 @@ class Table:
     lines: list[int]
     header_line: int | None = None
     accel_unit: str | None = None
+    comments: tuple[str, ...] = ()
 
     def column_index(self, name: str) -> int:
         return self.header.index(name)
@@ -110,12 +115,15 @@ def read_table(path) -> Table:
             source,
             DELIMITER_NAMES[delimiter],
         )
-    header, header_line, rows, lines = None, None, [], []
+    header, header_line, rows, lines, comments = None, None, [], [], []
     reader = csv.reader(io.StringIO(text), delimiter=delimiter)
     try:
         for record in reader:
             number = reader.line_num
-            if not record or not "".join(record).strip() or record[0].lstrip().startswith("#"):
+            if record and record[0].lstrip().startswith("#"):
+                comments.append(delimiter.join(record).lstrip().lstrip("#").strip())
+                continue
+            if not record or not "".join(record).strip():
                 continue
             if header is None:
                 header, header_line = [cell.strip() for cell in record], number
@@ -142,7 +150,7 @@ def read_table(path) -> Table:
         raise InvalidSamples("file is empty; expected a header row and data rows", source)
     if not rows:
         raise InvalidSamples("no data rows after the header", source)
-    return Table(source, header, rows, lines, header_line)
+    return Table(source, header, rows, lines, header_line, comments=tuple(comments))
 
 
 def read_header(path) -> list[str]:

@@ -54,6 +54,7 @@ from ..kinematics.rotations import (
 from ..validation import MAX_ID, MAX_WRENCH, as_names
 from .column_spelling import ColumnSpelling, spelled_table
 from .csv_table import Table, missing_columns, read_table
+from .recorded_robot import check_recorded_robot
 from .static_segments import SegmentParameters, SegmentSearch, segment_index
 from .table_layout import POSE_COLUMN_LAYOUT, RECORDING, TableLayout, table_layout
 from .time_columns import times_from_table
@@ -378,7 +379,9 @@ def samples_from_table(
 ) -> LoadedSamples:
     """Build :class:`Samples` from a table; ``arm`` is needed for joint columns.
 
-    When the table has joint columns and ``arm`` is None, the bundled arm is used.
+    When the table has joint columns and ``arm`` is None, the bundled arm is used. A table whose
+    comments name the arm it was recorded on is refused with another ``--robot``
+    (:func:`~ftkin.io.recorded_robot.check_recorded_robot`).
     The table's columns are read through ``spelling`` first (:func:`~ftkin.io.column_spelling.
     spelled_table`: other names, units in the header, the time unit).
     ``segments``: how still segments of a continuous recording are found (see
@@ -386,6 +389,7 @@ def samples_from_table(
     """
     table = spelled_table(table, spelling)
     missing_columns(table, WRENCH_CHANNELS, "wrench")
+    check_recorded_robot(table, arm)  # a recording that names its arm is read with that arm
     orientations = orientations_from_table(table, arm)
     times = times_from_table(table)
     layout = None

@@ -20,8 +20,10 @@ program; ftkin only reads it:
    (:func:`~ftkin.planning.coverage.assess_coverage`, for the tool a linear fit of the readings
    so far suggests);
 6. at ``n_poses`` poses, or on Ctrl-C, it calibrates (:func:`~ftkin.calibration.estimate.calibrate`)
-   and saves. A sensor fault or a lost joint source stops it with
-   :class:`~ftkin.exceptions.RecordingInterrupted`, the poses recorded kept.
+   and saves (``calibrate=False``: it records only, for an arm whose model is not known yet, such
+   as a UR read with :class:`~ftkin.kinematics.ur_flange.UrFlange`). A sensor fault or a lost
+   joint source stops it with :class:`~ftkin.exceptions.RecordingInterrupted`, the poses recorded
+   kept.
 
 What it says goes to ``on_event`` (a :class:`RecorderEvent` each; the CLI prints them), else to
 the log.
@@ -38,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.model import STANDARD_GRAVITY
+from ..calibration.model import STANDARD_GRAVITY, WRENCH_CHANNELS
 from ..calibration.observability import MIN_POSES
 from ..calibration.result import CalibrationResult
 from ..exceptions import (
@@ -131,6 +133,7 @@ class PoseRecorder:
         stillness: Stillness,
         min_pose_angle: float,
         on_event: Callable[[RecorderEvent], None] | None,
+        comments=(),
     ):
         if joints is not None and not callable(getattr(joints, "joint_state", None)):
             raise InvalidInput(
@@ -170,6 +173,7 @@ class PoseRecorder:
                 "ftkin does not drive",
                 "joints [rad], wrench [N, N·m] in the sensor frame (raw), pose = order recorded, "
                 "t = sensor stamp [s], ax..az specific force [m/s², IMU frame], wx..wz [rad/s]",
+                *comments,
             ],
         )
         self.poses = self._recorded_poses()
@@ -365,6 +369,26 @@ class PoseRecorder:
         return True
 
 
+def check_recorded_wrench_frame(log: SamplesLog, arm, wrench_frame: str) -> None:
+    """:func:`~ftkin.calibration.wrench_frame.check_wrench_frame` on every reading of ``log``,
+    the orientations from ``arm.rotation_sensor_to_base`` (an orientation-only model will do).
+
+    Raises:
+        ConventionMistake: the poses fit the other ``wrench_frame``.
+    """
+    from ..calibration.samples import Samples
+    from ..calibration.wrench_frame import check_wrench_frame
+
+    table = read_table(log.path)
+    joints = table.floats(log.header[: arm.nq])
+    samples = Samples(
+        table.floats(WRENCH_CHANNELS),
+        arm.rotation_sensor_to_base(joints).reshape(-1, 3, 3),
+        table.floats([POSE_COLUMN])[:, 0].astype(int),
+    )
+    logger.info("%s", check_wrench_frame(samples, wrench_frame).message)
+
+
 def record_poses(
     sensor,
     joints=None,
@@ -381,6 +405,8 @@ def record_poses(
     calibrate_options: Mapping | None = None,
     on_event: Callable[[RecorderEvent], None] | None = None,
     wrench_frame: str | None = None,
+    calibrate: bool = True,
+    comments=(),
 ) -> Recording:
     """Record calibration poses from an arm ftkin does not drive, then calibrate (module
     docstring).
@@ -408,6 +434,12 @@ def record_poses(
             the sensor frame (``"base"`` for a UR's built-in sensor read by
             :class:`~ftkin.robot.ur.UrArm`), checked against the poses before calibrating
             (:func:`~ftkin.robot.session.calibrate_recording`); None: not checked.
+        calibrate: False records only (``arm`` may then be an orientation-only model such as
+            :class:`~ftkin.kinematics.ur_flange.UrFlange`: a UR whose model is not known yet);
+            ``wrench_frame`` is checked all the same, and ``Recording.note`` says it was not
+            calibrated.
+        comments: More ``#`` lines above the header of a new file (what is known of the arm:
+            :func:`~ftkin.io.recorded_robot.robot_comment`).
 
     Returns:
         The :class:`Recording`; Ctrl-C ends it early (``interrupted``), calibrated when the
@@ -429,12 +461,17 @@ def record_poses(
         stillness=Stillness() if stillness is None else stillness,
         min_pose_angle=min_pose_angle,
         on_event=on_event,
+        comments=comments,
     )
     complete = recorder.record()
     count = len(recorder.poses)
     calibration, note = None, ""
     if count < MIN_POSES:
         note = f"{count} pose(s) recorded: a calibration needs at least {MIN_POSES}"
+    elif not calibrate:
+        if wrench_frame is not None and joints is not None:
+            check_recorded_wrench_frame(recorder.log, arm, wrench_frame)
+        note = f"recorded only (calibrate=False): the {count} poses are in {recorder.log.path}"
     else:
         try:
             calibration = calibrate_recording(

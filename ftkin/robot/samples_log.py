@@ -49,6 +49,17 @@ def interrupts_held():
         raise KeyboardInterrupt
 
 
+def append_comment(path, text: str) -> None:
+    """Write ``text`` as one ``#`` line at the end of the samples file ``path`` (a note learnt from
+    its poses, e.g. the arm they were recorded on: :mod:`ftkin.io.recorded_robot`), flushed and
+    synced; readers skip it wherever it is, and a resumed log appends after it."""
+    line = " ".join(str(text).split())  # one line, whatever it held
+    with open(path, "a", encoding="utf-8", newline="") as stream:
+        stream.write(f"# {line}\n")
+        stream.flush()
+        os.fsync(stream.fileno())
+
+
 class SamplesLog:
     """Append-only samples CSV of a session.
 

@@ -26,6 +26,12 @@ controller's 500 Hz clock. It is the arm's state:
   sensor's wrench: see docs/other-robots.md) or in the sensor's (``"sensor"``, to test the check);
 * every other output of the guide with a plausible constant (robot mode RUNNING, safety NORMAL).
 
+With ``dashboard`` set, it also serves a minimal Dashboard Server on TCP port 29999 (UR's
+Dashboard Server article; the command list of UR's client library): a greeting line, then one
+line per command: ``get robot model`` answers ``dashboard`` (``"UR5"``), ``PolyscopeVersion``
+``URSoftware 5.15.0.12345 (Dec 01 2026)`` (:data:`CONTROLLER_VERSION`), anything else
+``could not understand: '...'``. Without it nothing listens on 29999.
+
 It runs in a child process (ur_rtde holds the GIL while it connects: a server thread in the test
 process would hang it), on TCP port 30004 (ur_rtde has no port argument) of a random loopback
 address ``127.x.y.z`` (Linux routes all of 127/8 to the loopback interface), so parallel runs do
@@ -55,6 +61,9 @@ PORT = 30004
 STANDARD_GRAVITY = 9.80665  # [m/s²]
 CONTROLLER_VERSION = (5, 15, 0, 12345)
 START_TIMESTAMP = 1000.0  # [s] the controller's clock at the first package
+DASHBOARD_PORT = 29999
+DASHBOARD_GREETING = "Connected: Universal Robots Dashboard Server"
+POLYSCOPE_VERSION = "URSoftware {}.{}.{}.{} (Dec 01 2026)".format(*CONTROLLER_VERSION)
 
 # UR's published DH parameters [m]: d1, a2, a3, d4, d5, d6 (a1 = a4 = a5 = a6 = 0, d2 = d3 = 0),
 # typed in again here so that the test does not read them from ftkin
@@ -361,9 +370,58 @@ class _Client:
         return self.packer.pack(*flat)
 
 
+class _Dashboard:
+    """The Dashboard Server (module docstring): line-based, non-blocking, served each tick."""
+
+    def __init__(self, address: str, model: str):
+        self.model = model
+        self.listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        self.listener.bind((address, DASHBOARD_PORT))
+        self.listener.listen(4)
+        self.listener.setblocking(False)
+        self.clients: dict[socket.socket, bytes] = {}
+
+    def answer(self, command: str) -> str:
+        if command == "get robot model":
+            return self.model
+        if command == "PolyscopeVersion":
+            return POLYSCOPE_VERSION
+        return f"could not understand: '{command}'"
+
+    def serve(self) -> None:
+        while True:
+            try:
+                connection, _ = self.listener.accept()
+            except BlockingIOError:
+                break
+            connection.sendall(DASHBOARD_GREETING.encode() + b"\n")
+            connection.setblocking(False)
+            self.clients[connection] = b""
+        for connection in list(self.clients):
+            try:
+                chunk = connection.recv(4096)
+            except BlockingIOError:
+                continue
+            except OSError:
+                chunk = b""
+            if not chunk:
+                connection.close()
+                del self.clients[connection]
+                continue
+            buffer = self.clients[connection] + chunk
+            *lines, self.clients[connection] = buffer.split(b"\n")
+            for line in lines:
+                reply = self.answer(line.decode(errors="replace").strip())
+                connection.setblocking(True)
+                connection.sendall(reply.encode() + b"\n")
+                connection.setblocking(False)
+
+
 class _Server:
-    def __init__(self, address: str, robot: str, q0, tool: dict, pipe):
+    def __init__(self, address: str, robot: str, q0, tool: dict, pipe, dashboard=None):
         self.robot, self.pipe = robot, pipe
+        self.dashboard = None if dashboard is None else _Dashboard(address, dashboard)
         self.arm = _Arm(q0)
         self.tool = SimulatedTool(**tool)
         self.rng = np.random.default_rng(self.tool.seed)
@@ -495,6 +553,8 @@ class _Server:
             now = clock()
             self.control(now)
             self.serve_clients()
+            if self.dashboard is not None:
+                self.dashboard.serve()
             if now >= next_tick:
                 if not self.frozen:  # a frozen controller's clock stands still
                     self.publish(now)
@@ -507,9 +567,9 @@ class _Server:
             time.sleep(min(max(next_tick - clock(), 0.0), 0.0005))
 
 
-def _serve(address: str, robot: str, q0, tool: dict, pipe) -> None:
+def _serve(address: str, robot: str, q0, tool: dict, pipe, dashboard=None) -> None:
     try:
-        server = _Server(address, robot, q0, tool, pipe)
+        server = _Server(address, robot, q0, tool, pipe, dashboard)
     except OSError as error:
         pipe.send(("error", f"{type(error).__name__}: {error}"))
         return
@@ -525,7 +585,12 @@ def main(argv: list[str]) -> None:
 
     config = json.loads(argv[2])
     _serve(
-        config["address"], config["robot"], config["q"], config["tool"], Connection(int(argv[1]))
+        config["address"],
+        config["robot"],
+        config["q"],
+        config["tool"],
+        Connection(int(argv[1])),
+        config.get("dashboard"),
     )
 
 
@@ -536,15 +601,25 @@ class EmulatedController:
     Args:
         robot: Which arm's kinematics (a key of :data:`DH`).
         q: Start pose ``(6,)`` [rad].
+        dashboard: What its Dashboard Server answers to ``get robot model`` (``"UR5"``); None:
+            no Dashboard Server (nothing listens on port 29999).
         tool: :class:`SimulatedTool` fields.
     """
 
-    def __init__(self, robot: str = "ur5e", q=(0.0, -1.5, 1.4, -1.2, -1.6, 0.3), **tool):
+    def __init__(
+        self,
+        robot: str = "ur5e",
+        q=(0.0, -1.5, 1.4, -1.2, -1.6, 0.3),
+        *,
+        dashboard: str | None = None,
+        **tool,
+    ):
         self.robot = robot
         rng = random.Random(os.getpid() * 7919 + time.monotonic_ns())
         self.host = f"127.{rng.randint(1, 254)}.{rng.randint(1, 254)}.{rng.randint(1, 254)}"
         ours, theirs = socket.socketpair()
         config = {"address": self.host, "robot": robot, "q": list(map(float, q)), "tool": tool}
+        config["dashboard"] = dashboard
         self.process = subprocess.Popen(
             [sys.executable, __file__, str(theirs.fileno()), json.dumps(config)],
             pass_fds=(theirs.fileno(),),
