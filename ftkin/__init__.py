@@ -72,6 +72,7 @@ _GROUPS = {
         "CalibrationFileError": ".exceptions",
         "MissingDependency": ".exceptions",
         "ConventionMistake": ".exceptions",
+        "UnexplainedReadings": ".exceptions",
     },
 }
 """The top-level names by group, in the user's order: ``{group: {name: defining module}}``."""

@@ -55,6 +55,23 @@ class ConventionMistake(InvalidSamples):
         self.fix = fix
 
 
+class UnexplainedReadings(InvalidSamples):
+    """The calibration explains almost none of the variation of the readings across poses: the
+    columns hold something other than their names say (forces and torques swapped, channels in
+    another order), or the orientations belong to other readings.
+
+    Attributes:
+        explained: Share of the variation across poses the fit explains (pooled over the six
+            channels in N and N·m; 1: all of it).
+        threshold: The least share accepted.
+    """
+
+    def __init__(self, message: str, explained: float, threshold: float, source=None):
+        super().__init__(message, source)
+        self.explained = explained
+        self.threshold = threshold
+
+
 class FrameNotFound(FtkinError, KeyError):
     """A frame name is not in the robot model.
 

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..exceptions import InvalidInput, SuspectConvention
 from ..validation import as_vector
+from .explained import MIN_EXPLAINED, explained_share
 from .linear import fit_linear
 from .model import STANDARD_GRAVITY
 from .mount import MountMode, force_step_cost, mount_start
@@ -40,7 +41,19 @@ BASE_MOUNTS = ("floor", "ceiling", "wall")
 
 MAX_GRAVITY_ANGLE_DEG = 90.0
 """Largest accepted angle [deg] between the fitted tool weight and the expected gravity
-direction.
+direction: beyond it the weight points away from gravity, a reversed sign or another mount.
+"""
+
+TILT_WARNING_DEG = 5.0
+"""Angle [deg] between the fitted tool weight and the expected (declared or default) gravity
+direction beyond which the calibration warns: a floor is rarely levelled worse than 1-2°, so
+more is orientations in another frame than the base, or a kinematic model that disagrees with
+the arm.
+"""
+
+TILT_REFUSAL_DEG = 15.0
+"""Angle [deg] beyond which a *declared* expectation (``base_mount`` or ``expected_gravity``
+given) is refused, unless ``allow_tilt`` says the base really is tilted so far.
 """
 
 FLIP_COST_RATIO = 0.1
@@ -79,14 +92,15 @@ def reading_signs(sensor_sign: int = 1, flip_axis: str | None = None) -> np.ndar
 
 
 def expected_gravity_direction(
-    base_mount: str = "floor", expected_gravity=None
+    base_mount: str | None = None, expected_gravity=None
 ) -> np.ndarray | None:
     """Unit vector [base frame] the tool weight should point along, or None (a wall mount without a
     direction).
 
-    ``expected_gravity`` (any non-zero 3-vector in the base frame) overrides ``base_mount``.
+    ``expected_gravity`` (any non-zero 3-vector in the base frame) overrides ``base_mount``;
+    ``base_mount`` None is a floor mount nobody declared.
     """
-    if base_mount not in BASE_MOUNTS:
+    if base_mount is not None and base_mount not in BASE_MOUNTS:
         raise InvalidInput(
             f"base_mount must be one of {', '.join(BASE_MOUNTS)}, got {base_mount!r}"
         )
@@ -99,7 +113,7 @@ def expected_gravity_direction(
     return (
         None
         if base_mount == "wall"
-        else np.array([0.0, 0.0, -1.0 if base_mount == "floor" else 1.0])
+        else np.array([0.0, 0.0, 1.0 if base_mount == "ceiling" else -1.0])
     )
 
 
@@ -113,12 +127,18 @@ class ConventionCheck:
         assumed_flip: The ``flip_axis`` the readings were taken with.
         best_flip: The alternative with the smallest cost.
         gravity_angle_deg: Angle [deg] between the fitted tool weight and the
-            expected gravity direction (NaN when none is expected).
+            expected gravity direction (NaN when none is expected, or when the fit explains
+            less than :data:`~ftkin.calibration.explained.MIN_EXPLAINED` of the readings'
+            variation: a direction fitted to what it does not explain is not judged, and the
+            calibration refuses such a fit itself).
         gravity_in_base: The tool weight [N, base frame] of the linear fit with the assumed
         convention.
         equivalent_flips: Other axes whose reversal the data cannot tell from
             ``best_flip`` (with a yaw mount estimated, x and y).
         estimate_mount: The mount mode the alternatives were fitted with.
+        expectation_declared: The expected gravity direction was declared (``base_mount`` or
+            ``expected_gravity`` given), not the default floor mount.
+        expected_direction: The expected gravity direction [base frame, unit], or None.
     """
 
     flip_costs: dict
@@ -128,6 +148,8 @@ class ConventionCheck:
     gravity_in_base: np.ndarray
     equivalent_flips: tuple = ()
     estimate_mount: str = "none"
+    expectation_declared: bool = False
+    expected_direction: np.ndarray | None = None
 
     @property
     def flip_suspected(self) -> bool:
@@ -145,6 +167,20 @@ class ConventionCheck:
         """
         return bool(self.gravity_angle_deg > MAX_GRAVITY_ANGLE_DEG)
 
+    @property
+    def tilt_warned(self) -> bool:
+        """True when the tool weight is more than :data:`TILT_WARNING_DEG` (and at most
+        :data:`MAX_GRAVITY_ANGLE_DEG`) from the expected gravity direction."""
+        return bool(TILT_WARNING_DEG < self.gravity_angle_deg <= MAX_GRAVITY_ANGLE_DEG)
+
+    @property
+    def tilt_refused(self) -> bool:
+        """True when the tilt is beyond :data:`TILT_REFUSAL_DEG` from a *declared* direction."""
+        return bool(
+            self.expectation_declared
+            and TILT_REFUSAL_DEG < self.gravity_angle_deg <= MAX_GRAVITY_ANGLE_DEG
+        )
+
 
 def detect_sign_and_handedness(
     samples,
@@ -152,7 +188,7 @@ def detect_sign_and_handedness(
     sensor_sign: int = 1,
     flip_axis: str | None = None,
     estimate_mount: str = "none",
-    base_mount: str = "floor",
+    base_mount: str | None = None,
     expected_gravity=None,
     g: float = STANDARD_GRAVITY,
 ) -> ConventionCheck:
@@ -172,7 +208,7 @@ def detect_sign_and_handedness(
             scored with the best yaw mount of a grid, and a reversed x axis
             cannot be told from a reversed y axis (a 180° yaw turns one into the other).
         base_mount: ``"floor"`` (gravity along base −z), ``"ceiling"`` (+z) or ``"wall"`` (no
-        check).
+            check); None: a floor mount, not declared (a tilt is warned, never refused).
         expected_gravity: Expected gravity direction in the base frame; overrides ``base_mount``.
         g: Gravity [m/s²] (for the linear fit's reported mass only).
 
@@ -193,20 +229,33 @@ def detect_sign_and_handedness(
     }
     best = min(costs, key=costs.get)
     corrected = replace(poses, wrenches=poses.wrenches * reading_signs(sensor_sign, flip_axis))
-    fit = fit_linear(corrected, g) if estimate_mount == "none" else mount_start(corrected, g)[1]
+    mount = np.eye(3) if estimate_mount == "none" else mount_start(corrected, g)[0]
+    fit = fit_linear(replace(corrected, rotations=corrected.rotations @ mount.T), g)
+    residuals = corrected.wrenches - fit.predict(corrected.rotations @ mount.T)
+    # a weight fitted to readings it does not explain has no direction to judge
+    explained = explained_share(corrected.wrenches, residuals) >= MIN_EXPLAINED
     gravity, angle = fit.gravity_in_base, np.nan
-    if expected is not None and np.linalg.norm(gravity) > 0.0:
+    if explained and expected is not None and np.linalg.norm(gravity) > 0.0:
         cosine = float(gravity @ expected / np.linalg.norm(gravity))
         angle = float(np.rad2deg(np.arccos(np.clip(cosine, -1.0, 1.0))))
     # with a yaw estimated, a reversed x axis reads as a reversed y axis turned 180° about z
     equivalent = {"x": ("y",), "y": ("x",)}.get(best, ()) if estimate_mount != "none" else ()
-    return ConventionCheck(costs, flip_axis, best, angle, gravity, equivalent, estimate_mount)
+    declared = base_mount is not None or expected_gravity is not None
+    return ConventionCheck(
+        costs, flip_axis, best, angle, gravity, equivalent, estimate_mount, declared, expected
+    )
 
 
 def check_conventions(
-    check: ConventionCheck, sensor_sign: int = 1, base_mount: str = "floor"
-) -> None:
-    """Raise :class:`~ftkin.exceptions.SuspectConvention` for a suspected reversed axis or sign."""
+    check: ConventionCheck,
+    sensor_sign: int = 1,
+    base_mount: str | None = None,
+    allow_tilt: bool = False,
+) -> tuple[str, ...]:
+    """Raise :class:`~ftkin.exceptions.SuspectConvention` for a suspected reversed axis or sign, or
+    a tilt beyond :data:`TILT_REFUSAL_DEG` from a declared gravity direction (unless
+    ``allow_tilt``); return the warning of a tilt beyond :data:`TILT_WARNING_DEG` (else ``()``).
+    """
     if check.flip_suspected:
         found = (
             f"the sensor's {check.best_flip} axis reversed"
@@ -236,7 +285,7 @@ def check_conventions(
             flip_axis=check.best_flip,
         )
     if check.sign_suspected:
-        other = "ceiling" if base_mount == "floor" else "floor"
+        other = "floor" if base_mount == "ceiling" else "ceiling"
         sign_fix = f"--sensor-sign {-sensor_sign}"
         if check.estimate_mount != "none" and check.assumed_flip is None:
             # −I = diag(1, 1, −1) · Rz(π): with the yaw estimated, a reversed z axis reads the same
@@ -260,6 +309,52 @@ def check_conventions(
             fixes=[sign_fix, f"--base-mount {other}"],
             sensor_sign=-sensor_sign,
         )
+    if not check.tilt_warned:
+        return ()
+    text = tilt_text(check.gravity_angle_deg, check.gravity_in_base, check.expected_direction)
+    if not check.expectation_declared:
+        text += " (the default floor mount: base_mount and expected_gravity not given)"
+    if check.tilt_refused and not allow_tilt:
+        raise SuspectConvention(
+            f"{text}; refused because the direction was declared (base_mount, expected_gravity): "
+            f"beyond {TILT_REFUSAL_DEG:g}° from it the data contradict the declaration. "
+            f"{TILT_CAUSES}. If the base really is tilted so far, say so: --allow-tilt "
+            "(allow_tilt=True)",
+            explanations=list(TILT_EXPLANATIONS),
+            fixes=list(TILT_FIXES) + ["--allow-tilt"],
+        )
+    return (f"{text}. {TILT_CAUSES}",)
+
+
+TILT_EXPLANATIONS = (
+    "the orientations are in another frame than the robot base (a world or tool frame)",
+    "the kinematic model disagrees with the arm (another robot or URDF, joint offsets, signs or "
+    "order)",
+    "the base really is tilted or mounted on a wall",
+)
+"""The likely causes of a tool weight far from the expected gravity direction, most likely first."""
+TILT_FIXES = ("--robot/--urdf", "--expected-gravity GX GY GZ", "--base-mount wall")
+"""The options that answer each of :data:`TILT_EXPLANATIONS`."""
+TILT_CAUSES = (
+    "A floor is rarely more than 1-2° off level: are the orientations in another frame than the "
+    "robot base, or does the kinematic model (--robot, --urdf, joint order, offsets, signs) "
+    "disagree with the arm? If the base really is tilted, give the direction of gravity in the "
+    "base frame (--expected-gravity GX GY GZ, expected_gravity=) or --base-mount wall "
+    "(base_mount='wall', no direction check)"
+)
+"""What a tilt warning or refusal advises, after the angle."""
+
+
+def tilt_text(angle_deg: float, gravity_in_base, expected_direction=None) -> str:
+    """One clause: the fitted weight [N, base frame], the expected direction [base frame, unit;
+    None: base −z] and the angle [deg] between them."""
+    direction = [0.0, 0.0, -1.0] if expected_direction is None else expected_direction
+    expected = "[" + ", ".join(f"{value + 0.0:+.3g}" for value in direction) + "]"
+    return (
+        "the fitted tool weight gravity_in_base = "
+        f"[{', '.join(f'{value:+.3g}' for value in gravity_in_base)}] N points "
+        f"{angle_deg:.1f}° away from the expected gravity direction {expected} (base frame)"
+    )
 
 
 def as_real_sensor(samples: Samples, calibration) -> Samples:

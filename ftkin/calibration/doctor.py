@@ -19,7 +19,8 @@ each), and names the alternative that explains the data:
   "explained" by some convention).
 * **plausibility** (readings that fit exactly as well, by construction): a
   centre of mass metres away that becomes millimetres when the torques are
-  read as N·mm; a tool that weighs nothing as given but the expected weight
+  read as N·mm (a doubt only, said as such, when the header declares the torques' unit: what
+  the file declares wins); a tool that weighs nothing as given but the expected weight
   when the wrench is read in the sensor frame; gravity pointing up that points
   down when the readings are negated (the sensor reports the reaction, or the
   arm hangs from a ceiling: a suspicion only).
@@ -35,9 +36,15 @@ import numpy as np
 
 from ..exceptions import UnobservableParameters
 from ..kinematics.rotations import wrenches_base_to_sensor
-from .conventions import reading_signs
+from .conventions import (
+    MAX_GRAVITY_ANGLE_DEG,
+    TILT_CAUSES,
+    TILT_WARNING_DEG,
+    reading_signs,
+    tilt_text,
+)
 from .linear import fit_linear
-from .model import STANDARD_GRAVITY, SensorModel
+from .model import STANDARD_GRAVITY, WRENCH_CHANNELS, SensorModel
 from .observability import MIN_POSES
 from .samples import PoseAverages, Samples
 
@@ -52,6 +59,13 @@ mistake.
 MISFIT_RATIO = 30.0
 """Pose residuals (RMS) over the noise of a pose mean beyond which, when the data as given also
 explain less than ``EXPLAINED[1]`` of the variation, the doctor is suspicious of them."""
+COLUMN_MIX_UPS = {
+    "force and torque columns swapped": (3, 4, 5, 0, 1, 2),
+    "the columns in the order fx,mx,fy,my,fz,mz": (0, 2, 4, 1, 3, 5),
+    "the header in the order fx,mx,fy,my,fz,mz": (0, 3, 1, 4, 2, 5),
+}
+"""Column mix-ups tried: ``{reading: the given channel each true channel fx..mz is in}`` (the
+columns in that order under a header fx..mz; the header in that order over columns fx..mz)."""
 FAR_COM = (0.5, 2.0)
 """Centre-of-mass distance [m]: beyond the first a suspicion, beyond the second implausible."""
 
@@ -67,6 +81,8 @@ class Reading:
         poses: The pose-averaged readings under this assumption, or None when they cannot be formed.
         unit_scale: ``(6,)`` factors that turn this reading's wrench units into the given ones.
         failure: Why the readings could not be formed, when ``poses`` is None.
+        channels: ``(6,)`` the given channel each of this reading's channels was read from (a
+            reading that mixes up the columns); residuals are compared in the given channels.
     """
 
     name: str
@@ -74,6 +90,7 @@ class Reading:
     poses: PoseAverages | None
     unit_scale: np.ndarray = field(default_factory=lambda: np.ones(6))
     failure: str | None = None
+    channels: tuple[int, ...] = (0, 1, 2, 3, 4, 5)
 
 
 @dataclass(frozen=True)
@@ -105,18 +122,30 @@ class ConventionReport:
             cannot be fitted under any reading, e.g. too few poses: the fit itself says why).
         culprit: The alternative that explains the data, when the verdict is not ok.
         reason: One sentence of evidence for the verdict.
+        by_fit: The culprit fits better than the data as given (by the chi-square); False when
+            it only makes the result plausible, fitting no better (a unit, a sign).
+        tilted: The suspicion is the tool weight's direction alone: more than
+            :data:`~ftkin.calibration.conventions.TILT_WARNING_DEG` from base −z (the floor mount
+            the doctor assumes), which ``calibrate`` warns of itself.
     """
 
     fits: tuple[ReadingFit, ...]
     verdict: str
     culprit: ReadingFit | None
     reason: str
+    by_fit: bool = True
+    tilted: bool = False
 
     @property
     def message(self) -> str:
         """The sentence an error or warning prints: the reading that fits and the fix."""
         if self.culprit is None:
             return "the data fit as given" if self.verdict == "ok" else self.reason
+        if not self.by_fit:  # plausible, fitting no better: say so, not "it fits"
+            return (
+                f"the data are plausible only when read with {self.culprit.reading.name}, which "
+                f"fits them no better than as given ({self.reason}): {self.culprit.reading.fix}"
+            )
         return (
             f"the data fit when read with {self.culprit.reading.name} ({self.reason}): "
             f"{self.culprit.reading.fix}"
@@ -146,8 +175,13 @@ class ConventionReport:
         return "\n".join(lines)
 
 
-def wrench_readings(given: Samples | PoseAverages) -> list[Reading]:
-    """Alternatives that change only the wrench: base frame, reaction, N·mm, one axis reversed."""
+def wrench_readings(given: Samples | PoseAverages, joints: bool = True) -> list[Reading]:
+    """Alternatives that change only the wrench: base frame, reaction, N·mm, columns mixed up,
+    the sensor turned, one axis reversed.
+
+    ``joints``: the orientations come from joint angles (a turned sensor is then fixed by
+    estimating the mount; given directly, by turning the readings).
+    """
     poses = given.pose_averages() if isinstance(given, Samples) else given
     wrenches = poses.wrenches
     out = [
@@ -164,19 +198,44 @@ def wrench_readings(given: Samples | PoseAverages) -> list[Reading]:
         ),
         Reading(
             "torques in N·mm",
-            "give the torques in N·m (divide mx, my, mz by 1000)",
+            "give the torques in N·m (divide mx, my, mz by 1000) or declare their unit in the "
+            "header (mx [N·mm], my [N·mm], mz [N·mm]); if they are in N·m and the centre of mass "
+            "is that far, declare that instead (mx [N·m], ...)",
             replace(poses, wrenches=wrenches * [1, 1, 1, 1e-3, 1e-3, 1e-3]),
             np.array([1, 1, 1, 1e3, 1e3, 1e3], dtype=float),
         ),
     ]
+    for name, channels in COLUMN_MIX_UPS.items():  # the columns hold other channels
+        held = ", ".join(
+            f"{WRENCH_CHANNELS[given]} holds {WRENCH_CHANNELS[true]}"
+            for true, given in enumerate(channels)
+            if given != true
+        )
+        out.append(
+            Reading(
+                name,
+                f"the columns hold other channels than their names: rename them in the header "
+                f"(the column named {held})",
+                replace(poses, wrenches=wrenches[:, list(channels)]),
+                channels=channels,
+            )
+        )
     for axis in "xyz":  # a proper turn: the two other axes' forces and torques negated
         signs = np.array([-1.0 if a != axis else 1.0 for a in "xyz"] * 2)
+        others = ", ".join(f"{kind}{a}" for kind in "fm" for a in "xyz" if a != axis)
+        fix = (
+            f"the sensor is mounted turned 180° about {axis} against the sensor frame the "
+            f"URDF (or --sensor-offset) gives: correct that frame, or estimate the mount "
+            f"(--estimate-mount {'yaw' if axis == 'z' else 'full'})"
+            if joints
+            else f"the orientations are of a frame turned 180° about {axis} against the "
+            f"sensor's: negate the columns {others} (the readings turned into that frame), or "
+            f"give the sensor's own orientation"
+        )
         out.append(
             Reading(
                 f"the sensor turned 180° about its {axis} axis",
-                f"the sensor is mounted turned 180° about {axis} against the sensor frame the "
-                f"URDF (or --sensor-offset) gives: correct that frame, or estimate the mount "
-                f"(--estimate-mount {'yaw' if axis == 'z' else 'full'})",
+                fix,
                 replace(poses, wrenches=wrenches * signs),
             )
         )
@@ -215,7 +274,8 @@ def _fit(reading: Reading, g: float = STANDARD_GRAVITY) -> ReadingFit:
     residuals = (measured - model.predict(poses.rotations)) * reading.unit_scale
     if not np.all(np.isfinite(residuals)):
         return ReadingFit(reading, None, None, failure="non-finite residuals")
-    rss = np.sum(residuals**2, axis=0)
+    rss = np.empty(6)
+    rss[list(reading.channels)] = np.sum(residuals**2, axis=0)  # in the given channels
     spread = np.sum(((measured - measured.mean(axis=0)) * reading.unit_scale) ** 2, axis=0)
     explained = min(
         1.0 - rss[part].sum() / max(spread[part].sum(), 1e-300) for part in (slice(3), slice(3, 6))
@@ -223,10 +283,14 @@ def _fit(reading: Reading, g: float = STANDARD_GRAVITY) -> ReadingFit:
     return ReadingFit(reading, model, rss, explained=float(explained))
 
 
-def diagnose_readings(readings: list[Reading]) -> ConventionReport:
+def diagnose_readings(
+    readings: list[Reading], declared_torque_unit: str | None = None
+) -> ConventionReport:
     """Fit every reading (the first is the data as given) and name the one that explains the data.
 
-    See the module docstring for the rules.
+    ``declared_torque_unit``: the torques' unit as the file's header declares it (``"N·m"``),
+    None when it declares none; a declared unit is doubted aloud, never overridden. See the
+    module docstring for the rules.
     """
     fits = [_fit(reading) for reading in readings]
     valid = [fit for fit in fits if fit.rss is not None]
@@ -249,11 +313,12 @@ def diagnose_readings(readings: list[Reading]) -> ConventionReport:
         tuple(
             fit if fit.rss is None else replace(fit, chi_square=float(np.sum(fit.rss / variance)))
             for fit in fits
-        )
+        ),
+        declared_torque_unit,
     )
 
 
-def _verdict(fits: tuple[ReadingFit, ...]) -> ConventionReport:
+def _verdict(fits: tuple[ReadingFit, ...], declared_torque_unit=None) -> ConventionReport:
     given, alternatives = fits[0], [fit for fit in fits[1:] if fit.model is not None]
     plausible = [
         fit
@@ -282,20 +347,31 @@ def _verdict(fits: tuple[ReadingFit, ...]) -> ConventionReport:
         return ConventionReport(
             fits, "undetermined", None, f"the data as given cannot be fitted: {given.failure}"
         )
-    return _plausibility(fits, given, alternatives)
+    return _plausibility(fits, given, alternatives, declared_torque_unit)
 
 
-def _plausibility(fits, given: ReadingFit, alternatives) -> ConventionReport:
+def _plausibility(fits, given: ReadingFit, alternatives, declared_torque_unit) -> ConventionReport:
     by_name = {fit.reading.name: fit for fit in alternatives}
     distance = float(np.linalg.norm(given.model.center_of_mass))
     millimetres = by_name.get("torques in N·mm")
-    if millimetres is not None and distance >= FAR_COM[0] and given.explained >= EXPLAINED[0]:
+    far = distance >= FAR_COM[0] and given.explained >= EXPLAINED[0]
+    if millimetres is not None and far and declared_torque_unit is not None:
+        reason = (
+            f"the header declares the torques in {declared_torque_unit}, and they are read so; "
+            f"but the centre of mass is then {distance:.3g} m from the sensor ({distance:.3g} mm "
+            "were the torques 1000 times smaller, in N·mm: the data fit equally well either "
+            "way). If the tool does not reach that far, the declared unit is wrong: declare "
+            "N·mm (mx [N·mm], ...)"
+        )
+        return ConventionReport(fits, "suspect", None, reason)
+    if millimetres is not None and far:
         return ConventionReport(
             fits,
             "mistake" if distance >= FAR_COM[1] and given.explained >= EXPLAINED[1] else "suspect",
             millimetres,
             f"the centre of mass would be {distance:.3g} m from the sensor, {distance:.3g} mm in "
-            "N·mm",
+            "N·mm, and the header declares no unit",
+            by_fit=False,
         )
     base = by_name.get("the wrench in the base frame")
     if (
@@ -308,7 +384,8 @@ def _plausibility(fits, given: ReadingFit, alternatives) -> ConventionReport:
                 f"as given the tool weighs {given.model.tool_weight:.3g} N, in the sensor frame "
                 f"{base.model.tool_weight:.3g} N"
             )
-            return ConventionReport(fits, "mistake", base, reason)
+            by_fit = given.chi_square / max(base.chi_square, 1e-300) >= SUSPECT_RATIO
+            return ConventionReport(fits, "mistake", base, reason, by_fit=by_fit)
     reaction = by_name.get("the readings negated (the reaction)")
     if (
         reaction is not None
@@ -316,7 +393,7 @@ def _plausibility(fits, given: ReadingFit, alternatives) -> ConventionReport:
         and given.model.gravity_in_base[2] > 0 > reaction.model.gravity_in_base[2]
     ):
         reason = "gravity points up in the base frame as given (or the arm hangs from a ceiling)"
-        return ConventionReport(fits, "suspect", reaction, reason)
+        return ConventionReport(fits, "suspect", reaction, reason, by_fit=False)
     misfit = _misfit_beyond_spread(given)
     if misfit is not None and given.explained < EXPLAINED[1]:
         reason = (
@@ -326,6 +403,13 @@ def _plausibility(fits, given: ReadingFit, alternatives) -> ConventionReport:
             "or mount, a contact, or a convention not tried here"
         )
         return ConventionReport(fits, "suspect", None, reason)
+    gravity = given.model.gravity_in_base
+    weight = float(np.linalg.norm(gravity))
+    angle = np.rad2deg(np.arccos(np.clip(-gravity[2] / max(weight, 1e-300), -1.0, 1.0)))
+    explained = given.explained >= EXPLAINED[1]  # a direction fitted to noise means nothing
+    if explained and weight > 0.0 and TILT_WARNING_DEG < angle <= MAX_GRAVITY_ANGLE_DEG:
+        reason = f"{tilt_text(angle, gravity)} (a floor mount assumed). {TILT_CAUSES}"
+        return ConventionReport(fits, "suspect", None, reason, tilted=True)
     return ConventionReport(fits, "ok", None, "no alternative reading fits better")
 
 

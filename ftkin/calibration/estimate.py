@@ -16,6 +16,7 @@ from ..validation import as_float_array
 from .conventions import BASE_MOUNTS, check_conventions, detect_sign_and_handedness, reading_signs
 from .diagnostics import FitDiagnostics
 from .drift import BiasDrift, check_drift_spec, drift_candidates
+from .explained import check_explained
 from .fit_quality import diagnose, log_warnings
 from .information import SensorNoise, noise_floor
 from .linear import fit_linear
@@ -58,9 +59,15 @@ class CalibrationOptions:
             reporting the reaction); see :mod:`ftkin.calibration.conventions`.
         flip_axis: None or ``"x"``, ``"y"``, ``"z"``: negate that axis's force
             and torque channels (a mirrored axis).
-        base_mount: ``"floor"`` (default: gravity along base −z),
-            ``"ceiling"`` (+z) or ``"wall"`` (no direction check).
+        base_mount: ``"floor"`` (gravity along base −z), ``"ceiling"`` (+z) or ``"wall"`` (no
+            direction check); None (default): a floor mount nobody declared. A fitted tool
+            weight more than :data:`~ftkin.calibration.conventions.TILT_WARNING_DEG` (5°) from
+            the expected direction is warned; from a *declared* one (``base_mount`` or
+            ``expected_gravity`` given), more than
+            :data:`~ftkin.calibration.conventions.TILT_REFUSAL_DEG` (15°) is refused.
         expected_gravity: Expected gravity direction [base frame]; overrides ``base_mount``.
+        allow_tilt: Accept a tool weight more than 15° from a declared gravity direction (the
+            base really is tilted so far; still warned).
         drift: How the bias may change with time when the samples carry
             times (:mod:`ftkin.calibration.drift`): ``"auto"`` (default: the
             model the information criterion prefers; the constant bias without
@@ -117,19 +124,27 @@ class CalibrationOptions:
         "sensor axis)",
         choices=("x", "y", "z"),
     )
-    base_mount: str = option(
-        "floor",
+    base_mount: str | None = option(
+        None,
         "how the robot base is mounted: floor (gravity along base -z), ceiling (+z), wall (no "
         "check); a fitted weight more than 90° off the expected direction is refused as a "
-        "suspect sign",
+        "suspect sign, more than 5° warned, and more than 15° from a declared mount refused "
+        "(--allow-tilt) (default: floor, not declared: a tilt is warned, not refused)",
         choices=BASE_MOUNTS,
     )
     expected_gravity: object = option(
         None,
-        "expected gravity direction in the base frame (overrides --base-mount)",
+        "expected gravity direction in the base frame (overrides --base-mount); a fitted weight "
+        "more than 15° from it is refused (--allow-tilt)",
         parse=number(),
         nargs=3,
         metavar=("GX", "GY", "GZ"),
+    )
+    allow_tilt: bool = option(
+        False,
+        "accept a fitted weight more than 15° from the declared gravity direction (--base-mount, "
+        "--expected-gravity): the base really is tilted so far (still warned)",
+        action="store_true",
     )
     drift: str = option(
         "auto",
@@ -283,7 +298,10 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
         InvalidInput: an option or a combination of options
             (:class:`CalibrationOptions`), or options the samples do not support.
         SuspectConvention: the data fit with an axis reversed, or the tool
-            weight points more than 90° from the expected gravity direction.
+            weight points more than 90° from the expected gravity direction, or more than 15°
+            from a declared one without ``allow_tilt``.
+        UnexplainedReadings: the fit explains less than half of the readings' variation
+            across poses (:mod:`ftkin.calibration.explained`): mislabelled columns.
     """
     if not isinstance(samples, Samples):  # the IMU's samples (their modules load on demand)
         from .fused_samples import FusedSamples
@@ -307,7 +325,7 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
         raw_poses,
         wrenches=raw_poses.wrenches * reading_signs(options.sensor_sign, options.flip_axis),
     )
-    check_conventions(
+    tilt_warnings = check_conventions(
         detect_sign_and_handedness(
             raw_poses,
             sensor_sign=options.sensor_sign,
@@ -319,16 +337,27 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
         ),
         options.sensor_sign,
         options.base_mount,
+        options.allow_tilt,
     )
     if options.method == "linear":
         static = _Static(fit_linear(poses, options.g), None, np.eye(3), None, None, poses)
     else:
         static = _fit_static(poses, options, drift_models)
+    if tilt_warnings and static.diagnostics is None:
+        for message in tilt_warnings:
+            logger.warning(message)
+    elif tilt_warnings:  # with the fit's warnings: in the summary and the file
+        added = replace(static.diagnostics, warnings=tilt_warnings)
+        log_warnings(added)
+        warnings = static.diagnostics.warnings + tilt_warnings
+        static = replace(static, diagnostics=replace(static.diagnostics, warnings=warnings))
     if samples.times is not None:  # the bias trajectory (constant without a drift model)
         drift = static.drift or _constant_trajectory(static, {})
         span = np.array([np.min(samples.times), np.max(samples.times)])
         static = replace(static, drift=replace(drift, recorded_span=span))
-    return _result(samples, options, static)
+    result = _result(samples, options, static)
+    check_explained(result)  # a fit that explains nothing is no calibration
+    return result
 
 
 @dataclass(frozen=True)

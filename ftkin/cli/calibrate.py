@@ -48,7 +48,7 @@ CROSS_VALIDATE = option(
 )
 ML_FIELDS = ("resolution", "loss", "drop_outliers", "drift")
 """The ml estimator's options, declared on :class:`~ftkin.calibration.CalibrationOptions`."""
-CONVENTION_FIELDS = ("flip_axis", "base_mount", "expected_gravity")
+CONVENTION_FIELDS = ("flip_axis", "base_mount", "expected_gravity", "allow_tilt")
 """The sensor and robot conventions stored in the file (with ``sensor_sign``), declared there."""
 
 
@@ -220,11 +220,11 @@ def run(args) -> int:
         args.no_convention_check
         or args.sensor_sign != 1
         or args.flip_axis
-        or args.base_mount != "floor"
+        or args.base_mount is not None
         or args.expected_gravity
         or args.estimate_mount
     ):
-        refuse_convention_mistakes(loaded, arm)
+        refuse_convention_mistakes(loaded, arm, _declared_units(paths, args))
     samples = _with_imu(loaded, args)
     result = calibrate(samples, options)
     urdf = loaded.samples.urdf
@@ -248,6 +248,19 @@ def run(args) -> int:
     if validation is not None:
         print(validation.report())
     return 0
+
+
+def _declared_units(paths, args) -> dict:
+    """The wrench units the CSVs' headers declare (``mx [N·m]``), by channel."""
+    from ..io.bags import is_bag_path
+    from ..io.column_spelling import declared_wrench_units
+    from ..io.csv_table import read_header
+
+    spelling, units = column_spelling_from_args(args), {}
+    for path in paths:
+        if not is_bag_path(path):
+            units.update(declared_wrench_units(read_header(path), spelling))
+    return units
 
 
 def _with_imu(loaded, args):

@@ -1,7 +1,7 @@
 """``ftkin doctor SAMPLES.csv [robot options]``: which convention the data fit, on demand."""
 
 from ..exceptions import ConventionMistake
-from ..io.column_spelling import spelled_table
+from ..io.column_spelling import declared_wrench_units, spelled_table
 from ..io.csv_table import read_table
 from ..io.table_readings import diagnose_table
 from .arg_types import add_command, option
@@ -24,7 +24,9 @@ def register(subparsers) -> None:
         "radians, a quaternion "
         "stored x,y,z,w, the wrench in the base frame, the reaction instead of the load, one "
         "sensor axis reversed, "
-        "joint angles in degrees, torques in N·mm; print the fit of each and name the reading that "
+        "joint angles in degrees, torques in N·mm, force and torque columns swapped or "
+        "interleaved, a tool weight tilted from base -z; print the fit of each and name the "
+        "reading that "
         "explains the data. "
         "Exit code 0 when the data fit as given (or only a suspicion), 1 when a mistake is named.",
         options=(option("samples", metavar="SAMPLES.csv"),),
@@ -34,8 +36,9 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
-    table = spelled_table(read_table(args.samples), column_spelling_from_args(args))
-    report = diagnose_table(table, arm_from_args(args))
+    raw, spelling = read_table(args.samples), column_spelling_from_args(args)
+    table = spelled_table(raw, spelling)
+    report = diagnose_table(table, arm_from_args(args), declared_wrench_units(raw.header, spelling))
     print(
         f"{args.samples}: {len(table.rows)} readings; linear fit under each reading (chi² with the "
         "noise of the best):",
@@ -47,13 +50,14 @@ def run(args) -> int:
     return 1 if report.verdict == "mistake" else 0
 
 
-def refuse_convention_mistakes(loaded, arm) -> None:
+def refuse_convention_mistakes(loaded, arm, declared_units: dict | None = None) -> None:
     """Refuse samples whose data fit only under a common mistake; warn on a suspicion
-    (``calibrate``).
+    (``calibrate``). ``declared_units``: the units the files' headers declare
+    (:func:`~ftkin.io.column_spelling.declared_wrench_units`; ``loaded.table`` is already in SI).
     """
     if loaded.recording is not None:  # bags carry their own conventions
         return
-    report = diagnose_table(loaded.table, arm)
+    report = diagnose_table(loaded.table, arm, declared_units)
     if report.verdict == "mistake":
         raise ConventionMistake(
             report.message + " (run 'ftkin doctor' for the fit of every reading)",
@@ -61,5 +65,5 @@ def refuse_convention_mistakes(loaded, arm) -> None:
             report.culprit.reading.name,
             report.culprit.reading.fix,
         )
-    if report.verdict == "suspect":
+    if report.verdict == "suspect" and not report.tilted:  # calibrate() warns of a tilt itself
         logger.warning("%s: %s", loaded.table.source, report.message)

@@ -207,6 +207,25 @@ def _scaled(table: Table, name: str, factor: float) -> Table:
     return replace(table, rows=rows)
 
 
+def declared_wrench_units(header, spelling: ColumnSpelling | None = None) -> dict[str, str]:
+    """``{wrench channel: unit as written}`` for the wrench columns whose header names a unit
+    (``mx [N·m]``, ``Fx (lbf)``), read from a header as the file has it (before
+    :func:`spelled_table`). What a file declares wins over what the data look like: the doctor
+    doubts a declared unit aloud, it does not override it.
+    """
+    spelling = spelling or ColumnSpelling()
+    out: dict[str, str] = {}
+    for column in header:
+        match = _HEADER_UNIT.match(column)
+        if match is None or column in spelling.columns.values():
+            continue
+        bare = match["name"].strip()
+        name = bare if bare in WRENCH_CHANNELS else wrench_name(bare)
+        if name in WRENCH_CHANNELS:
+            out[name] = match["unit"].strip()
+    return out
+
+
 def spelled_header(path, spelling: ColumnSpelling | None = None) -> list[str]:
     """The header a file has in ftkin's names (:func:`spelled_table`'s), read without its rows
     (:func:`~ftkin.io.csv_table.read_header`)."""

@@ -18,7 +18,7 @@ from ..kinematics.rotations import (
     matrix_entries_to_matrix,
     quaternion_to_matrix,
 )
-from .column_spelling import spelled_table
+from .column_spelling import declared_wrench_units, spelled_table
 from .csv_table import Table, missing_columns
 from .samples_csv import (
     EULER_COLUMNS,
@@ -104,13 +104,23 @@ def table_readings(table: Table, arm=None) -> list[Reading]:
             )
         )
     if given.poses is not None:
-        readings.extend(wrench_readings(given.poses))
+        readings.extend(wrench_readings(given.poses, joints=kind == "joints"))
     return readings
 
 
-def diagnose_table(table: Table, arm=None) -> ConventionReport:
-    """Which convention the table's data fit: see :mod:`ftkin.calibration.conventions`."""
-    return diagnose_readings(table_readings(table, arm))
+def diagnose_table(table: Table, arm=None, declared_units=None) -> ConventionReport:
+    """Which convention the table's data fit: see :mod:`ftkin.calibration.doctor`.
+
+    ``declared_units``: ``{channel: unit}`` the file's header declares
+    (:func:`~ftkin.io.column_spelling.declared_wrench_units`; read here from ``table``'s own
+    header when None): a declared torque unit is doubted, never overridden.
+    """
+    if declared_units is None:
+        declared_units = declared_wrench_units(table.header)
+    torque_unit = next(
+        (declared_units[c] for c in WRENCH_CHANNELS[3:] if c in declared_units), None
+    )
+    return diagnose_readings(table_readings(table, arm), torque_unit)
 
 
 def diagnose_samples(path, arm=None) -> ConventionReport:
