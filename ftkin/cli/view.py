@@ -3,16 +3,18 @@ calibration in 3D.
 """
 
 import argparse
-import dataclasses
-import math
 import time
-from dataclasses import dataclass
-
-import numpy as np
 
 from .. import Arm, InvalidInput, load_calibration
-from ..calibration.conventions import as_real_sensor
 from ..kinematics import mounted_arm
+from ..viz.view_frames import (
+    ViewFrames,
+    evenly,
+    outlier_indices,
+    pose_frames,
+    replay_frames,
+    vector_table,
+)
 from .arg_types import add_command, bounded_int, option, positive_float
 from .common import (
     add_samples_arguments,
@@ -111,112 +113,14 @@ def register(subparsers) -> None:
     )
 
 
-@dataclass(frozen=True)
-class Frames:
-    """What to show: one entry per pose (or log row)."""
-
-    labels: list[str]
-    raw_wrenches: np.ndarray
-    configurations: np.ndarray | None
-    rotations: np.ndarray
-    times: np.ndarray | None
-
-
-def _calibration_poses(loaded) -> Frames:
-    samples = loaded.samples
-    averages = samples.pose_averages()
-    configurations = (
-        None
-        if samples.joint_positions is None
-        else np.array(
-            [
-                samples.joint_positions[samples.pose_ids == pid].mean(axis=0)
-                for pid in averages.pose_ids
-            ]
-        )
-    )
-    return Frames(
-        [f"pose {int(pid)}" for pid in averages.pose_ids],
-        averages.wrenches,
-        configurations,
-        averages.rotations,
-        None,
-    )
-
-
-def _replay_rows(loaded, max_frames: int) -> Frames:
-    samples, times = loaded.samples, loaded.samples.times
-    if times is not None and np.any(np.diff(times) < 0):
-        raise InvalidInput(
-            f"{loaded.table.source}: the time column must not decrease (seconds since the start)"
-        )
-    rows = _evenly(len(samples), max_frames)
-    times = rows / 30.0 if times is None else times[rows]  # no clock: 30 rows per second
-    return Frames(
-        [f"row {int(r)}" for r in rows],
-        samples.wrenches[rows],
-        None if samples.joint_positions is None else samples.joint_positions[rows],
-        samples.rotations[rows],
-        times,
-    )
-
-
-def _evenly(count: int, most: int) -> np.ndarray:
-    """Indices of at most ``most`` of ``count`` rows, evenly spaced (all of them if they fit)."""
-    return np.unique(np.linspace(0, count - 1, min(count, most)).round().astype(int))
-
-
-def _pick(frames: Frames, pose: int, replay: bool) -> int:
-    wanted = f"row {pose}" if replay else f"pose {pose}"
-    if wanted not in frames.labels:
-        shown = ", ".join(frames.labels[:12]) + (" ..." if len(frames.labels) > 12 else "")
-        raise InvalidInput(f"--pose {pose}: no {wanted}; available: {shown}")
-    return frames.labels.index(wanted)
-
-
-def _where(frames: Frames, rows=slice(None)) -> dict:
-    """The frames' placement for the viewer: joint angles when known, else sensor orientations."""
-    if frames.configurations is None:
-        return {"rotations": frames.rotations[rows]}
-    return {"configurations": frames.configurations[rows]}
-
-
-def _angle_deg(a: np.ndarray, b: np.ndarray) -> float:
-    if np.linalg.norm(a) == 0 or np.linalg.norm(b) == 0:
-        return math.nan  # no direction to compare
-    return math.degrees(math.atan2(np.linalg.norm(np.cross(a, b)), float(a @ b)))
-
-
-def _print_table(labels: list[str], vectors) -> None:
-    print(
-        f"  {'':<10}{'|F-F0| N':>10}{'|Gs| N':>10}{'angle deg':>11}{'|F′| N':>10}{'|M′| N·m':>10}"
-    )
-    for label, v in list(zip(labels, vectors))[:40]:
-        print(
-            "  "
-            f"{label:<10}{np.linalg.norm(v.measured_force):>10.4f}"
-            f"{np.linalg.norm(v.gravity_force):>10.4f}"
-            f"{_angle_deg(v.measured_force, v.gravity_force):>11.3f}"
-            f"{np.linalg.norm(v.contact_wrench[:3]):>10.4f}"
-            f"{np.linalg.norm(v.contact_wrench[3:]):>10.4f}"
-        )
-    if len(labels) > 40:
-        print(f"  ... {len(labels) - 40} more")
-
-
-def _contact_sheet(viewer, frames: Frames, calibration, path: str, title: str) -> None:
+def _contact_sheet(viewer, frames: ViewFrames, calibration, path: str, title: str) -> None:
     from ..viz.contact_sheet import save_contact_sheet, sheet_cells
 
-    rows = _evenly(len(frames.labels), SHEET_CELLS)
-    diagnostics = calibration.diagnostics
-    flagged = {
-        f"pose {int(pid)}"
-        for pid in (diagnostics.outlier_pose_ids if diagnostics is not None else ())
-    }
+    rows = evenly(len(frames.labels), SHEET_CELLS)
     labels = [frames.labels[k] for k in rows]
-    outliers = [i for i, label in enumerate(labels) if label in flagged]
+    outliers = outlier_indices(labels, calibration)
     cells = sheet_cells(
-        viewer, labels, frames.raw_wrenches[rows], outliers=outliers, **_where(frames, rows)
+        viewer, labels, frames.raw_wrenches[rows], outliers=outliers, **frames.placement(rows)
     )
     save_contact_sheet(cells, path, title=title)
     print(
@@ -230,25 +134,19 @@ def _load_frames(args, calibration, source: str):
     arm = arm_for_calibration(args, calibration) or Arm.default()
     loaded = load_samples_from_args(source, args, static_only=not args.replay, arm=arm)
     warn_if_kinematics_differ(loaded, calibration)
-    # the real sensor: stored sign and axis flip applied to the readings, the mount to the
-    # sensor frame
-    loaded = dataclasses.replace(loaded, samples=as_real_sensor(loaded.samples, calibration))
-    frames = _replay_rows(loaded, args.max_frames) if args.replay else _calibration_poses(loaded)
-    if loaded.samples.times is not None and calibration.drift is not None:
-        # A drift-aware calibration: each frame's reading shifted by bias(t) − bias(end) at its
-        # time [s] (the row's own, or the pose's mean time). The viewer subtracts the
-        # calibration's bias (the one at the end of its recording); with this shift it
-        # effectively subtracts the bias at the reading's time, as ``ftkin compensate`` does
-        # (held outside the recording).
-        times = frames.times if args.replay else loaded.samples.pose_averages().times
-        shift = calibration.bias_at(times) - calibration.bias
-        frames = dataclasses.replace(frames, raw_wrenches=frames.raw_wrenches - shift)
+    frames = (
+        replay_frames(loaded.samples, calibration, args.max_frames, loaded.table.source)
+        if args.replay
+        else pose_frames(loaded.samples, calibration)
+    )
     if frames.configurations is None:
         return frames, None  # orientations without joint angles: no arm to draw
     return frames, mounted_arm(arm, calibration.mount_rotation)
 
 
-def _write_outputs(viewer, frames: Frames, chosen: int | None, shown, args, source: str) -> None:
+def _write_outputs(
+    viewer, frames: ViewFrames, chosen: int | None, shown, args, source: str
+) -> None:
     """The screenshot or contact sheet, the animation (or the one pose ``shown``) and the page."""
     if args.png and chosen is not None:
         from ..viz.browser import screenshot_html
@@ -260,11 +158,11 @@ def _write_outputs(viewer, frames: Frames, chosen: int | None, shown, args, sour
         _contact_sheet(viewer, frames, viewer.calibration, args.png, title=str(source))
     if chosen is None:
         vectors = viewer.animate(
-            frames.raw_wrenches, times=frames.times, hold=args.hold, **_where(frames)
+            frames.raw_wrenches, times=frames.times, hold=args.hold, **frames.placement()
         )
-        _print_table(frames.labels, vectors)
+        print(vector_table(frames.labels, vectors))
     else:
-        _print_table([frames.labels[chosen]], [shown])
+        print(vector_table([frames.labels[chosen]], [shown]))
     if args.html:
         caption = f"{source}: " + (
             frames.labels[chosen] if chosen is not None else f"{len(frames.labels)} poses, animated"
@@ -281,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
     calibration = load_calibration(args.calibration)
     source = args.replay or args.samples
     frames, arm = _load_frames(args, calibration, source)
-    chosen = _pick(frames, args.pose, bool(args.replay)) if args.pose is not None else None
+    chosen = frames.index(args.pose, bool(args.replay)) if args.pose is not None else None
     with CalibrationViewer(
         calibration, arm, scale=args.scale, tilt_exaggeration=args.tilt_exaggeration
     ) as viewer:

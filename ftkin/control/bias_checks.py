@@ -1,9 +1,11 @@
-"""Checks of a bias against the calibration it belongs to: one rule for the API and the CLI.
+"""The bias a reading at its time had, and checks of a bias against its calibration: one rule
+for the API and the CLI.
 
-Two mistakes look right in the numbers and are warned of (through :mod:`logging`, logger
-``ftkin.control.bias_checks``), by :meth:`~ftkin.control.compensation.Compensator.rezero` and
+Two mistakes look right in the numbers and are warned of (through :mod:`logging`), by
+:meth:`~ftkin.control.compensation.Compensator.rezero` and
 :meth:`~ftkin.control.compensation.Compensator.bias_at` (so by ``compensate_batch`` and
-``compensate_samples`` with times) as by ``ftkin rezero`` and ``ftkin compensate``:
+``compensate_samples`` with times, and the viewer's readings) as by ``ftkin rezero``,
+``ftkin compensate`` and ``ftkin view``:
 
 * **a re-zero that moved the force bias by more than the tool's weight** (and at least
   :data:`REZERO_WARNING_FORCE`): a contact at the pose, or a sensor tared in its driver since the
@@ -14,14 +16,18 @@ Two mistakes look right in the numbers and are warned of (through :mod:`logging`
   re-zeroed one), or times more than :data:`EARLY_SPANS` recording spans before its start (another
   clock or another unit: every row takes the last bias).
 
-The functions here return the texts (empty when all is well); the callers log them.
+The check functions return the texts (empty when all is well); :func:`bias_at_times` and
+:meth:`~ftkin.control.compensation.Compensator.rezero` log them.
 """
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..calibration.drift import BiasDrift
+
+logger = logging.getLogger(__name__)
 
 REZERO_WARNING_FORCE = 2.0
 """A re-zero that moves the force bias by more than the tool's weight and this [N] is warned of
@@ -103,6 +109,22 @@ def check_log_times(drift: BiasDrift | None, times, bias) -> LogTimesCheck:
             "used the last bias"
         )
     return LogTimesCheck(len(times), inside, tuple(texts))
+
+
+def bias_at_times(drift: BiasDrift | None, bias, times: np.ndarray) -> np.ndarray:
+    """The bias ``(N, 6)`` [N, N·m] readings at ``times`` ``(N,)`` [s] (finite, checked by the
+    caller) had: inside a drifting calibration's recording its trajectory, elsewhere (or without
+    a trajectory) ``bias`` ``(6,)``, the bias applied now. Logs the clock warnings of
+    :func:`check_log_times`. The one rule of
+    :meth:`~ftkin.control.compensation.Compensator.bias_at` and of the viewer's readings.
+    """
+    out = np.tile(np.asarray(bias, dtype=float), (len(times), 1))
+    if drifting(drift):
+        inside = drift.covers(times)
+        out[inside] = drift.bias_at(times[inside])
+        for text in check_log_times(drift, times, bias).warnings:
+            logger.warning("%s", text)
+    return out
 
 
 def rezero_warnings(calibration, previous_bias, bias) -> tuple[str, ...]:

@@ -46,7 +46,7 @@ from ..validation import (
     is_rotation_rows,
     rotation_rows,
 )
-from .bias_checks import check_log_times, rezero_warnings
+from .bias_checks import bias_at_times, rezero_warnings
 from .bias_tracker import BiasTracker
 
 logger = logging.getLogger(__name__)
@@ -389,14 +389,7 @@ class Compensator:
         times = as_float_array(times, "times [s]").reshape(-1)
         if not np.all(np.isfinite(times)):
             check_finite(times, "times [s]")
-        out = np.tile(self._bias, (len(times), 1))
-        drift = self.calibration.drift
-        if drift is not None and drift.model != "none":
-            inside = drift.covers(times)
-            out[inside] = drift.bias_at(times[inside])
-            for text in check_log_times(drift, times, self._bias).warnings:
-                logger.warning("%s", text)
-        return out
+        return bias_at_times(self.calibration.drift, self._bias, times)
 
     def observe_bias(
         self, contact_wrench, dt: float, *, q=None, free: bool | None = None, fault: bool = False
