@@ -260,6 +260,7 @@ def calibrate_dynamic(
         sample_count=len(motion),
         urdf=motion.urdf,
         sensor_frame=motion.sensor_frame,
+        kinematics=motion.kinematics,
         covariance=covariance[:12, :12],
         inertia_about_com_in_sensor=inertia_matrix(values[22:28]) if estimate_inertia else None,
         inertia_std_errors=(

@@ -493,6 +493,7 @@ def _result(samples: Samples, options: CalibrationOptions, static: _Static) -> C
         sample_count=int(np.sum(poses.counts)),
         urdf=samples.urdf,
         sensor_frame=samples.sensor_frame,
+        kinematics=samples.kinematics,
         covariance=static.covariance,
         diagnostics=static.diagnostics,
         mount_rotation=static.mount,

@@ -352,6 +352,7 @@ def _result(samples, options, fit: FusedStaticFit, check, warnings) -> FusedCali
         sample_count=len(samples),
         urdf=samples.samples.urdf,
         sensor_frame=samples.samples.sensor_frame,
+        kinematics=samples.samples.kinematics,
         covariance=fit.covariance[:12, :12],
         mount_rotation=problem.mount0 if estimated else np.eye(3),
         mount_mode=problem.mount_mode,

@@ -19,6 +19,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import InvalidInput
+from ..kinematics.record import KinematicsRecord
 from ..validation import as_batch, as_rotation_batch, as_wrenches
 from .model import cross_rows, skew
 from .samples import Samples
@@ -80,6 +81,8 @@ class MotionSamples:
         [m/s², rad/s²].
         times: ``(N,)`` stamps [s], or None.
         urdf, sensor_frame: Provenance when built from joint angles.
+        kinematics: The arm's record (:class:`~ftkin.kinematics.record.KinematicsRecord`) when
+            built from joint angles, recorded by the calibration.
     """
 
     wrenches: np.ndarray
@@ -89,6 +92,7 @@ class MotionSamples:
     times: np.ndarray | None = None
     urdf: str | None = None
     sensor_frame: str | None = None
+    kinematics: KinematicsRecord | None = None
 
     def __post_init__(self):
         arrays = {
@@ -129,6 +133,7 @@ class MotionSamples:
             None,
             samples.urdf,
             samples.sensor_frame,
+            samples.kinematics,
         )
 
     @classmethod
@@ -148,7 +153,10 @@ class MotionSamples:
             )
         rotations, velocities, accelerations = sensor_motion(arm, q, dq, ddq)
         urdf = str(arm.urdf_path) if arm.urdf_path is not None else None
-        return cls(wrenches, rotations, velocities, accelerations, times, urdf, arm.sensor_frame)
+        record = KinematicsRecord.from_arm(arm)
+        return cls(
+            wrenches, rotations, velocities, accelerations, times, urdf, arm.sensor_frame, record
+        )
 
     def regressor(self) -> np.ndarray:
         """``(N, 6, 10)`` inertial part ``Y(v, a)`` (gravity excluded)."""

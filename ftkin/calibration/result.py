@@ -53,8 +53,10 @@ class CalibrationResult(SensorModel):
             reaction): applied to every raw reading.
         flip_axis: None, or the sensor axis (``"x"``, ``"y"``, ``"z"``) whose
             force and torque channels are negated in every raw reading.
-        kinematics: How the sensor frame was obtained (robot or URDF, mount, URDF hash:
-            :class:`~ftkin.kinematics.record.KinematicsRecord`), or None when unknown.
+        kinematics: The arm the samples' joint angles were read with (robot or URDF, mount,
+            the chain from the base to the sensor frame:
+            :class:`~ftkin.kinematics.record.KinematicsRecord`), or None when unknown (samples
+            from orientations or the IMU).
         drift: The bias over time (:class:`~ftkin.calibration.drift.BiasDrift`)
             when the samples had times, else None. With a drift model the
             ``force_offset``/``torque_offset`` are the bias at the end of the

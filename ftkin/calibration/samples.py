@@ -16,6 +16,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from ..exceptions import InvalidInput, InvalidSamples
+from ..kinematics.record import KinematicsRecord
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from ..validation import (
     as_batch,
@@ -112,6 +113,9 @@ class Samples:
         sensor_frame: The arm's sensor frame, recorded likewise.
         times: ``(N,)`` time of each reading [s] (any origin; need not be
             sorted), or None when not recorded.
+        kinematics: The arm's record (:class:`~ftkin.kinematics.record.KinematicsRecord`)
+            when the orientations came from its joint angles, else None: every calibration
+            made from these samples records it.
     """
 
     wrenches: np.ndarray
@@ -121,6 +125,7 @@ class Samples:
     urdf: str | None = None
     sensor_frame: str | None = None
     times: np.ndarray | None = None
+    kinematics: KinematicsRecord | None = None
 
     def __post_init__(self):
         wrenches, _ = as_batch(self.wrenches, 6, "wrenches [fx, fy, fz, mx, my, mz]")
@@ -190,7 +195,10 @@ class Samples:
         if rotations is None:
             rotations = arm.rotation_sensor_to_base(configurations)
         urdf = None if arm.urdf_path is None else str(arm.urdf_path)
-        return cls(wrenches, rotations, pose_ids, configurations, urdf, arm.sensor_frame, times)
+        record = KinematicsRecord.from_arm(arm)  # the calibration records the arm it came from
+        return cls(
+            wrenches, rotations, pose_ids, configurations, urdf, arm.sensor_frame, times, record
+        )
 
     @classmethod
     def from_quaternions(cls, quaternions_wxyz, wrenches, pose_ids=None, times=None) -> "Samples":

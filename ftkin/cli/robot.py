@@ -408,9 +408,12 @@ def _dry_run(args, arm, poses: np.ndarray) -> int:
 
 def run_payload(args) -> int:
     from ..io.calibration_file import load_calibration
+    from ..io.export import recorded_arm
 
     calibration = load_calibration(args.calibration)
-    arm = _arm(args)
+    arm = _arm(args)  # the options checked; none given: the calibration's arm, else the FR3
+    if args.urdf is None and args.robot is None:
+        arm = recorded_arm(calibration) or arm
     robot = _robot(args)
     load = robot.set_payload(
         calibration,

@@ -30,7 +30,7 @@ import numpy as np
 from ..calibration.model import FloatModel, SensorModel, contact_batch, gravity_in_sensor
 from ..calibration.result import CalibrationResult
 from ..calibration.samples import Samples
-from ..exceptions import InvalidInput
+from ..exceptions import InvalidInput, MissingDependency, UrdfError
 from ..kinematics.arm import Arm
 from ..kinematics.mounting import mounted_arm
 from ..validation import (
@@ -82,11 +82,12 @@ class Compensator:
         calibration: Parameters (a :class:`~ftkin.calibration.CalibrationResult`
             or any :class:`~ftkin.calibration.model.SensorModel`).
         arm: Kinematics for the joint-angle entry points; not needed when the
-            caller supplies ``R_BS`` itself. With a calibration that carries a
-            mount, :attr:`arm` is a copy with the real sensor frame. When the
-            calibration records the arm it was made with
-            (``calibration.kinematics``), ``arm`` must be that arm: same URDF
-            (SHA-256), sensor frame and mount.
+            caller supplies ``R_BS`` itself; default: the arm the calibration records
+            (``calibration.kinematics``), when it can be rebuilt. With a calibration that
+            carries a mount, :attr:`arm` is a copy with the real sensor frame. When the
+            calibration records the arm it was made with, ``arm`` must have its kinematics
+            (the chain from the base to the sensor frame, within
+            :data:`~ftkin.kinematics.record.KINEMATICS_TOLERANCE`), whatever its URDF file.
         tracker: Optional :class:`~ftkin.control.bias_tracker.BiasTracker`
             (off by default); it is restarted from the calibration's bias.
         allow_other_arm: Accept an arm that differs from the recorded one (deliberate reuse).
@@ -117,17 +118,20 @@ class Compensator:
             )
         calibration = CalibrationResult.from_model(calibration)
         record = calibration.kinematics
-        if (
-            arm is not None
-            and record is not None
-            and not allow_other_arm
-            and record.mismatches(arm)
-        ):
-            raise InvalidInput(
-                f"this arm is not the one the calibration was made with ({record.describe()}): "
-                f"{'; '.join(record.mismatches(arm))}. Pass allow_other_arm=True (ftkin "
-                "compensate: --allow-other-arm) if that is deliberate."
-            )
+        self._no_arm = "pass arm= to use joint angles, or give R_BS"
+        if arm is None and record is not None:  # the calibration's own arm, if it can be rebuilt
+            try:
+                arm = record.build_arm()
+            except (InvalidInput, UrdfError, MissingDependency) as error:
+                self._no_arm = f"the calibration's arm cannot be rebuilt ({error}); {self._no_arm}"
+        elif arm is not None and record is not None and not allow_other_arm:
+            problems = record.mismatches(arm)
+            if problems:
+                raise InvalidInput(
+                    f"this arm is not the one the calibration was made with ({record.describe()}): "
+                    f"{'; '.join(problems)}. Pass allow_other_arm=True (ftkin "
+                    "compensate: --allow-other-arm) if that is deliberate."
+                )
         self.calibration = calibration
         self.arm = mounted_arm(arm, calibration.mount_rotation) if arm is not None else arm
         signs = calibration.reading_signs  # the tick's copy is _sign_floats (no conversion)
@@ -197,9 +201,7 @@ class Compensator:
 
     def _require_arm(self) -> Arm:
         if self.arm is None:
-            raise InvalidInput(
-                "this Compensator has no Arm: pass arm= to use joint angles, or give R_BS"
-            )
+            raise InvalidInput(f"this Compensator has no Arm: {self._no_arm}")
         return self.arm
 
     # ------------------------------------------------------------ one sample

@@ -14,8 +14,8 @@ per-pose normalized residuals, outliers, condition number, warnings; see
 centre of mass, sensor axes [kg·m²]) and ``std_errors.inertia`` and loads as a
 :class:`~ftkin.calibration.dynamic.DynamicCalibrationResult`; ``imu`` (a
 calibration from the sensor's IMU: :mod:`ftkin.io.imu_calibration_file`); ``kinematics``
-(how the sensor frame was obtained: robot or URDF path, its SHA-256, sensor
-parent and offset, see :class:`~ftkin.kinematics.record.KinematicsRecord`;
+(the arm: robot or URDF path, sensor parent and offset, and the chain from the base to the
+sensor frame that arms are compared by, see :class:`~ftkin.kinematics.record.KinematicsRecord`;
 absent when unknown). Files without ``covariance``/``diagnostics`` (written by
 ``linear`` or an older ftkin) load with those set to None.
 

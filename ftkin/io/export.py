@@ -64,12 +64,27 @@ def export_format(name: str) -> ExportFormat:
     return EXPORT_FORMATS[name]
 
 
-def arm_problems(calibration, arm) -> list[str]:
-    """How ``arm`` differs from the arm ``calibration`` was made with (empty: the same, or no
-    record); a sensor offset the arm lacks comes first, with the error it would cause.
+def recorded_arm(calibration):
+    """The arm ``calibration`` records, rebuilt
+    (:meth:`~ftkin.kinematics.record.KinematicsRecord.build_arm`), or None when it records none:
+    the default wherever an arm is optional.
+
+    Raises:
+        InvalidInput: the record cannot be rebuilt (its URDF is gone or its kinematics changed).
     """
     record = CalibrationResult.from_model(calibration).kinematics
-    if record is None:
+    return None if record is None else record.build_arm()
+
+
+def arm_problems(calibration, arm) -> list[str]:
+    """How ``arm`` differs from the arm ``calibration`` was made with (empty: the same
+    kinematics, :meth:`~ftkin.kinematics.record.KinematicsRecord.mismatches`, or no record); when
+    they differ, another robot name and a sensor offset the arm lacks come first, with the error
+    it would cause.
+    """
+    record = CalibrationResult.from_model(calibration).kinematics
+    differences = [] if record is None else record.mismatches(arm)
+    if not differences:
         return []
     problems = []
     if record.robot is not None and arm.robot_name not in (None, record.robot):
@@ -86,7 +101,7 @@ def arm_problems(calibration, arm) -> list[str]:
                 + " ".join(f"{value:g}" for value in given)
                 + f": the centre of mass would be off by {shift * 1e3:.1f} mm"
             )
-    return problems + record.mismatches(arm)
+    return problems + differences
 
 
 def export_request(
@@ -118,7 +133,12 @@ def export_request(
             f"{fmt} takes no {', '.join(named)}; its options: {', '.join(takes) or 'none'}"
         )
     if chosen.needs_arm and arm is None:
-        raise InvalidInput(f"{fmt} needs the arm (the centre of mass is written in its flange)")
+        arm = recorded_arm(calibration)  # the calibration's own arm, when it records one
+    if chosen.needs_arm and arm is None:
+        raise InvalidInput(
+            f"{fmt} needs the arm (the centre of mass is written in its flange) and this "
+            "calibration records none: pass arm= (ftkin export: --robot NAME or --urdf PATH)"
+        )
     problems = [] if arm is None or allow_other_arm else arm_problems(calibration, arm)
     if problems:
         record = CalibrationResult.from_model(calibration).kinematics.describe()

@@ -32,7 +32,7 @@ from ..exceptions import (
     RobotConnectionLost,
     RobotError,
 )
-from ..io.export import arm_problems
+from ..io.export import arm_problems, recorded_arm
 from ..io.payload_export import Payload, payload_in_flange
 from ..io.payload_inertia import RigidBody, controller_load
 from ..validation import as_vector
@@ -366,8 +366,8 @@ class FrankaRobot:
 
         Args:
             calibration: The calibration (its tool mass and centre of mass).
-            arm: The arm the calibration was made with (default: the bundled FR3, sensor at
-                the hand frame).
+            arm: The arm the calibration was made with (default: the one it records, else the
+                bundled FR3, sensor at the hand frame).
             end_effector: What the controller already models; default: what the robot reports
                 (``m_ee``, ``F_x_Cee``, ``I_ee``).
             sensor_mass: The sensor's own mass above its measuring plane [kg] (datasheet).
@@ -386,6 +386,8 @@ class FrankaRobot:
                 by the sensor offset), or a negative sensor mass.
             RobotError: the robot refused the load.
         """
+        if arm is None:
+            arm = recorded_arm(calibration)
         if arm is None:
             from ..kinematics.fr3 import fr3_arm
 
