@@ -30,7 +30,7 @@ import numpy as np
 from ..calibration.model import FloatModel, SensorModel, contact_batch, gravity_in_sensor
 from ..calibration.result import CalibrationResult
 from ..calibration.samples import Samples
-from ..exceptions import InvalidInput, MissingDependency, UrdfError
+from ..exceptions import FrameNotFound, InvalidInput, MissingDependency, UrdfError
 from ..kinematics.arm import Arm
 from ..kinematics.mounting import mounted_arm
 from ..validation import (
@@ -122,7 +122,7 @@ class Compensator:
         if arm is None and record is not None:  # the calibration's own arm, if it can be rebuilt
             try:
                 arm = record.build_arm()
-            except (InvalidInput, UrdfError, MissingDependency) as error:
+            except (InvalidInput, FrameNotFound, UrdfError, MissingDependency) as error:
                 self._no_arm = f"the calibration's arm cannot be rebuilt ({error}); {self._no_arm}"
         elif arm is not None and record is not None and not allow_other_arm:
             problems = record.mismatches(arm)

@@ -143,3 +143,24 @@ def test_a_model_without_a_record_keeps_no_arm(tool):
     assert compensator.arm is None
     with pytest.raises(ftkin.InvalidInput, match="pass arm= to use joint angles"):
         compensator.compensate(np.zeros(6), np.zeros(6))
+
+
+def test_a_record_that_cannot_be_rebuilt_leaves_the_compensator_without_arm(
+    arm, tool, poses, tmp_path
+):
+    """A URDF deleted since: R_BS still works; joint angles say why there is no arm."""
+    copy = tmp_path / "copy.urdf"
+    copy.write_bytes(arm.urdf_path.read_bytes())
+    moved = ftkin.Arm.from_urdf(copy, "ft_sensor")
+    result = calibrate(static_samples(moved, tool, poses))
+    assert result.kinematics.urdf == str(copy.resolve())
+    copy.unlink()
+    compensator = ftkin.Compensator(result)
+    assert compensator.arm is None
+    rotation = arm.rotation_sensor_to_base(poses[0])
+    raw = tool.predict(rotation)
+    np.testing.assert_allclose(
+        compensator.compensate_rotation(rotation, raw), raw - result.predict(rotation), atol=1e-12
+    )
+    with pytest.raises(ftkin.InvalidInput, match="cannot be rebuilt .*is not there any more"):
+        compensator.compensate(poses[0], raw)
