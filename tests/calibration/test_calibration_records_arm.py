@@ -164,3 +164,19 @@ def test_a_record_that_cannot_be_rebuilt_leaves_the_compensator_without_arm(
     )
     with pytest.raises(ftkin.InvalidInput, match="cannot be rebuilt .*is not there any more"):
         compensator.compensate(poses[0], raw)
+
+
+def test_a_payload_export_in_python_defaults_to_the_recorded_arm(tool):
+    """A Panda with the sensor 3 cm out of the flange, axes as the flange's: the COM in
+    panda_link8 is the sensor-frame COM plus 3 cm on z (by hand)."""
+    import yaml
+
+    panda = load_robot("panda", [0.0, 0.0, 0.03])
+    q = panda.random_configurations(12, np.random.default_rng(32), margin=0.3)
+    result = calibrate(
+        Samples.from_joint_positions(panda, q, tool.predict(panda.rotation_sensor_to_base(q))),
+        method="linear",
+    )
+    written = yaml.safe_load(export_text(result, "franka-load"))  # no arm given
+    expected = np.asarray(result.center_of_mass) + [0.0, 0.0, 0.03]
+    np.testing.assert_allclose(written["center_of_mass"], expected, rtol=0, atol=1e-9)

@@ -162,3 +162,19 @@ def test_the_chain_round_trips_and_a_malformed_one_is_refused(folder, record, to
         path.write_text(json.dumps(broken))
         with pytest.raises(ftkin.CalibrationFileError, match=message):
             load_calibration(path)
+
+
+@pytest.mark.parametrize("factor", [0.5, 2.0])
+def test_a_sensor_offset_is_judged_by_the_same_tolerance(factor):
+    """The sensor moved along the UR5's flange z by ``factor`` tolerances: only the sensor frame
+    moves, by exactly that distance."""
+    shift = factor * TOLERANCE  # [m]
+    record = KinematicsRecord.from_arm(ftkin.load_robot("ur5", [0.0, 0.0, 0.05]))
+    problems = record.mismatches(ftkin.load_robot("ur5", [0.0, 0.0, 0.05 + shift]))
+    if factor < 1.0:
+        assert problems == []
+    else:
+        assert len(problems) == 1
+        assert problems[0].startswith(
+            f"at zero joint angles the sensor frame 'ft_sensor' is moved {shift * 1e3:.3g} mm "
+        )
