@@ -199,6 +199,7 @@ def fit_fused_static(
             mount_mode,
             imu.imu_rotation is None,
             scale_free,
+            poses.imu.accel_count_factor,
         )
         x0 = np.concatenate([x0, np.zeros(len(scale_free))])
         solved = solve_with_noise(problem, x0, source, from_residuals, imu, notes, check_observable)

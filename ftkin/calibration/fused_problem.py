@@ -31,6 +31,7 @@ import numpy as np
 from ..exceptions import UnobservableParameters
 from .imu_model import ACCEL_BIAS_NAMES, ACCEL_SCALE_NAMES, IMU_ROTATION_NAMES
 from .imu_problem import weakest_direction
+from .imu_problem_base import NineChannelProblem
 from .model import COMPONENT_NAMES, gravity_in_sensor, predict, skew
 from .mount import MOUNT_AXES, MOUNT_NAMES, exp_so3, mount_jacobian, right_jacobian_so3
 from .observability import MIN_RELATIVE_SINGULAR_VALUE
@@ -44,8 +45,9 @@ POSES_NEEDED = (
 
 
 @dataclass(frozen=True)
-class FusedStaticProblem:
-    """The whitened least squares of the fused static calibration (inspectable on its own).
+class FusedStaticProblem(NineChannelProblem):
+    """The whitened least squares of the fused static calibration (inspectable on its own; its
+    whitening and residuals are :class:`~ftkin.calibration.imu_problem_base.NineChannelProblem`'s).
 
     Attributes:
         rotations: ``(P, 3, 3)`` orientations ``R_i`` of the sensor frame U (URDF) in the base.
@@ -60,6 +62,8 @@ class FusedStaticProblem:
             (:data:`~ftkin.calibration.mount.MOUNT_NAMES`).
         imu_rotation_free: Whether ``δ_I`` is estimated.
         scale_free: Which accelerometer scale components are estimated.
+        accel_count_factor: Independent accelerometer readings per reading
+            (:attr:`~ftkin.calibration.imu_samples.ImuSamples.accel_count_factor`).
     """
 
     rotations: np.ndarray
@@ -73,6 +77,7 @@ class FusedStaticProblem:
     mount_mode: str = "none"
     imu_rotation_free: bool = True
     scale_free: tuple[int, ...] = ()
+    accel_count_factor: float = 1.0
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -86,22 +91,13 @@ class FusedStaticProblem:
         )
 
     @property
-    def parameter_count(self) -> int:
-        return len(self.names)
-
-    @property
     def global_count(self) -> int:
         """All parameters are global (no per-pose nuisance: the orientation gives the direction)."""
-        return self.parameter_count
+        return len(self.names)
 
     @property
     def mount_count(self) -> int:
         return len(MOUNT_NAMES[self.mount_mode])
-
-    @property
-    def weights(self) -> np.ndarray:
-        """``(P, 9)`` whitening ``sqrt(n_i) / σ``."""
-        return np.sqrt(self.counts)[:, None] / self.noise[None, :]
 
     def unpack(self, x: np.ndarray) -> dict:
         """The parameters of ``x`` by name: ``theta, mount_delta, imu_delta, b, s``."""
@@ -141,10 +137,6 @@ class FusedStaticProblem:
         accel = (1.0 + p["s"]) * self.specific_force_in_imu(x) + p["b"]
         return np.concatenate([accel, wrench], axis=1)
 
-    def residuals(self, x: np.ndarray) -> np.ndarray:
-        """``(P, 9)`` measured minus predicted."""
-        return np.concatenate([self.accel, self.wrenches], axis=1) - self.predict(x)
-
     def jacobian(self, x: np.ndarray) -> np.ndarray:
         """``(P, 9, n)`` derivative of :meth:`predict` with respect to ``x`` (tested against
         finite differences)."""
@@ -182,12 +174,6 @@ class FusedStaticProblem:
             jac[:, axis, i] = in_imu[:, axis]
             i += 1
         return jac
-
-    def whitened_residuals(self, x: np.ndarray) -> np.ndarray:
-        return (self.residuals(x) * self.weights).reshape(-1)
-
-    def whitened_jacobian(self, x: np.ndarray) -> np.ndarray:
-        return (self.jacobian(x) * self.weights[:, :, None]).reshape(-1, self.parameter_count)
 
     def recentred(self, x: np.ndarray) -> "tuple[FusedStaticProblem, np.ndarray]":
         """The same problem with ``R_M0``, ``R_I0`` moved to ``x`` (``δ_M = δ_I = 0``)."""

@@ -45,6 +45,9 @@ class FusedSamples:
             rest (bias and scale errors included: the calibration estimates them).
         angular_velocity: ``(N, 3)`` gyro readings [rad/s, IMU frame], or None.
         g: Magnitude of gravity [m/s²] (the unit check and the accelerometer's norm).
+        accel_count_factor: Independent accelerometer readings per reading, in ``(0, 1]``
+            (:attr:`ImuSamples.accel_count_factor <ftkin.calibration.imu_samples.ImuSamples>`:
+            below 1 when a slower IMU was interpolated onto the wrench's stamps).
         imu: The same readings as :class:`~ftkin.calibration.imu_samples.ImuSamples` (no
             orientation): the IMU-only fit, or :class:`~ftkin.control.ImuCompensator`.
     """
@@ -53,6 +56,7 @@ class FusedSamples:
     specific_force: np.ndarray
     angular_velocity: np.ndarray | None = None
     g: float = STANDARD_GRAVITY
+    accel_count_factor: float = 1.0
     imu: ImuSamples = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -69,8 +73,10 @@ class FusedSamples:
             self.angular_velocity,
             samples.times,
             self.g,
+            self.accel_count_factor,
         )
         object.__setattr__(self, "imu", imu)
+        object.__setattr__(self, "accel_count_factor", imu.accel_count_factor)
         object.__setattr__(self, "specific_force", imu.specific_force)
         object.__setattr__(self, "angular_velocity", imu.angular_velocity)
         object.__setattr__(self, "g", imu.g)

@@ -38,6 +38,7 @@ from .imu_model import (
 )
 from .imu_options import ImuCalibrationOptions
 from .imu_problem import POSES_NEEDED, ImuStaticProblem, check_observable, weakest_direction
+from .imu_problem_base import NineChannelProblem
 from .imu_result import ImuCalibrationResult
 from .imu_samples import ImuPoseAverages, ImuSamples
 from .imu_start import start
@@ -56,7 +57,9 @@ NOISE_PASSES = 3
 """Re-estimations of residual-based noise (each followed by a refit)."""
 
 
-def _drop_open_scale(problem, x, options: ImuCalibrationOptions, notes: list) -> bool:
+def _drop_open_scale(
+    problem: NineChannelProblem, x, options: ImuCalibrationOptions, notes: list
+) -> bool:
     """With ``estimate_scale="auto"``: True (and a note naming them) when the weakest direction
     at ``x`` is degenerate and involves scale components, which are then left out."""
     if options.estimate_scale != "auto" or not problem.scale_free:
@@ -72,7 +75,7 @@ def _drop_open_scale(problem, x, options: ImuCalibrationOptions, notes: list) ->
     return True
 
 
-def _solve(problem: ImuStaticProblem, x0: np.ndarray) -> np.ndarray:
+def _solve(problem: NineChannelProblem, x0: np.ndarray) -> np.ndarray:
     from scipy.optimize import least_squares  # scipy.optimize loads where it is used
 
     return least_squares(
@@ -101,7 +104,7 @@ def _noise_from_spread(poses: ImuPoseAverages) -> np.ndarray | None:
 _GROUPS = (slice(0, 3), slice(3, 6), slice(6, 9))
 
 
-def _noise_from_residuals(problem: ImuStaticProblem, x: np.ndarray, floor: np.ndarray):
+def _noise_from_residuals(problem: NineChannelProblem, x: np.ndarray, floor: np.ndarray):
     """``(9,)`` per-reading noise, accelerometer, force and torque each pooled, corrected by the
     leverages."""
     jac = problem.whitened_jacobian(x)
@@ -148,7 +151,9 @@ def starting_noise(poses: ImuPoseAverages, options, g: float):
     return noise, source, from_residuals
 
 
-def solve_with_noise(problem, x0, source: str, from_residuals, options, notes: list, check):
+def solve_with_noise(
+    problem: NineChannelProblem, x0, source: str, from_residuals, options, notes: list, check
+):
     """``(problem, x)`` solved from ``x0``, the noise re-estimated with the fit when it comes
     from the residuals; None when a scale component the poses leave open was dropped (said in
     ``notes``: the caller starts again without it). ``check(problem, x)`` raises for a
@@ -174,7 +179,7 @@ def solve_with_noise(problem, x0, source: str, from_residuals, options, notes: l
     return problem, x
 
 
-def covariance_at(problem, x, count: int, needed: str) -> np.ndarray:
+def covariance_at(problem: NineChannelProblem, x, count: int, needed: str) -> np.ndarray:
     """The covariance of every parameter at the solution ``x`` (the whitened information,
     inverted in unit-diagonal scaling), or :class:`UnobservableParameters` naming the first
     ``count`` parameters of its weakest direction (``needed``: what poses would determine
@@ -269,7 +274,7 @@ def fit_imu_static(
     return ImuStaticFit(problem, x, covariance[:count, :count], source, tuple(notes))
 
 
-def misfit_scale(problem, x, source: str) -> tuple[float, str] | None:
+def misfit_scale(problem: NineChannelProblem, x, source: str) -> tuple[float, str] | None:
     """``(covariance scale, warning)`` when the readings do not fit the model within a noise
     that was given or measured by the spread of repeated readings (the chi-square test at
     ``FIT_ALPHA``, as the FK fit's); None when they do, or the noise came from the residuals."""

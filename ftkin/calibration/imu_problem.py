@@ -26,6 +26,7 @@ from .imu_model import (
     point_mass_parameters,
     predict_imu,
 )
+from .imu_problem_base import NineChannelProblem
 from .model import skew
 from .mount import exp_so3, right_jacobian_so3
 from .observability import MIN_RELATIVE_SINGULAR_VALUE
@@ -65,8 +66,9 @@ def tangent_bases(directions: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class ImuStaticProblem:
-    """The whitened least squares of the static IMU calibration (inspectable on its own).
+class ImuStaticProblem(NineChannelProblem):
+    """The whitened least squares of the static IMU calibration (inspectable on its own; its
+    whitening and residuals are :class:`~ftkin.calibration.imu_problem_base.NineChannelProblem`'s).
 
     Parameters ``x = [F0, M0, m, c, δ (if free), b, s_free, e (2P)]`` (:attr:`names`).
 
@@ -112,18 +114,6 @@ class ImuStaticProblem:
     def parameter_count(self) -> int:
         return self.global_count + 2 * len(self.accel)
 
-    @property
-    def channel_counts(self) -> np.ndarray:
-        """``(P, 9)`` independent readings per pose and channel (the accelerometer's times
-        :attr:`accel_count_factor`)."""
-        factors = np.repeat([self.accel_count_factor, 1.0], [3, 6])
-        return self.counts[:, None] * factors[None, :]
-
-    @property
-    def weights(self) -> np.ndarray:
-        """``(P, 9)`` whitening ``sqrt(n_i) / σ``."""
-        return np.sqrt(self.channel_counts) / self.noise[None, :]
-
     def unpack(self, x: np.ndarray) -> dict:
         """The parameters of ``x`` by name: ``F0, M0, m, c, delta, b, s, e``."""
         i = 10
@@ -168,10 +158,6 @@ class ImuStaticProblem:
         )
         return np.concatenate([accel, wrench], axis=1)
 
-    def residuals(self, x: np.ndarray) -> np.ndarray:
-        """``(P, 9)`` measured minus predicted."""
-        return np.concatenate([self.accel, self.wrenches], axis=1) - self.predict(x)
-
     def jacobian(self, x: np.ndarray) -> np.ndarray:
         """``(P, 9, n)`` derivative of :meth:`predict` with respect to ``x``."""
         p = self.unpack(x)
@@ -207,12 +193,6 @@ class ImuStaticProblem:
             jac[rows, 3:6, column] = -mass * d_force_e[:, :, j]
             jac[rows, 6:9, column] = -mass * (com_skew @ d_force_e[:, :, j].T).T
         return jac
-
-    def whitened_residuals(self, x: np.ndarray) -> np.ndarray:
-        return (self.residuals(x) * self.weights).reshape(-1)
-
-    def whitened_jacobian(self, x: np.ndarray) -> np.ndarray:
-        return (self.jacobian(x) * self.weights[:, :, None]).reshape(-1, self.parameter_count)
 
     def recentred(self, x: np.ndarray) -> "tuple[ImuStaticProblem, np.ndarray]":
         """The same problem with ``R0`` and the directions moved to ``x`` (``δ = 0``, ``e = 0``)."""

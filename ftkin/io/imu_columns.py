@@ -143,7 +143,9 @@ def fused_samples_from_joined(
     else:
         quaternions = joined.array(ORIENTATION_COLUMNS)[rows]
         samples = Samples.from_quaternions(quaternions, imu.wrenches, pose, times=times)
-    return FusedSamples(samples, imu.specific_force, imu.angular_velocity, imu.g)
+    return FusedSamples(
+        samples, imu.specific_force, imu.angular_velocity, imu.g, imu.accel_count_factor
+    )
 
 
 def _joint_columns(joined: JoinedStreams, arm) -> list[str]:
