@@ -14,13 +14,18 @@ when not given) are fitted as in :mod:`ftkin.calibration.dynamic_fit`: linear le
 the start rotation and position, the unconstrained nonlinear fit, then the maximum likelihood
 over physically consistent bodies (log-Cholesky coordinates).
 
-The accelerometer's bias and scale come from a static IMU calibration (``prior``) or are given:
-a moving recording cannot separate them, since ``F0`` absorbs ``m R_SI b`` and ``M0`` absorbs
-``m c × R_SI b`` at every sample; without them the fit refuses to report ``F0`` and ``M0``.
-``accel_bias=(0, 0, 0)`` is the explicit choice of absorbed offsets (they then compensate this
-IMU exactly, but are not the sensor's own).
+The accelerometer's bias and scale come from a static IMU calibration (``prior``) or are given.
+A moving recording cannot separate the bias from the sensor's offsets: ``F0`` absorbs
+``m R_SI b`` and ``M0`` absorbs ``m c × (R_SI b)`` at every sample, whatever the motion. It does
+determine the mass, the centre of mass, the inertia, ``R_SI``, the IMU's position and those
+combined offsets, which are all that compensating this tool with this IMU needs. Without a bias
+the fit takes ``b = 0``, reports the combined offsets, and names the combination it cannot split
+(:attr:`~ftkin.calibration.imu_result.ImuCalibrationResult.inseparable`, :data:`UNSPLIT`) with
+the way to split it: a static IMU calibration of the same IMU (``prior=``; ``--prior`` on the
+command line).
 """
 
+import logging
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -56,6 +61,21 @@ from .observability import MIN_RELATIVE_SINGULAR_VALUE
 BIAS_NAMES = tuple(
     f"{'force' if c[0] == 'f' else 'torque'}_offset[{c[1]}]" for c in WRENCH_CHANNELS
 )
+
+logger = logging.getLogger(__name__)
+
+UNSPLIT = ("accel_bias", "force_offset", "torque_offset")
+"""What a moving recording without the accelerometer's bias determines only in combination."""
+
+UNSPLIT_NOTE = (
+    "the accelerometer's bias is not separated from the sensor's offsets (a motion cannot split "
+    "them: F0 absorbs m·R_SI·b, M0 absorbs m·c × R_SI·b): accel_bias is taken as 0 and "
+    "force_offset, torque_offset are the combined offsets, which compensate this tool with this "
+    "IMU; to split them, calibrate the same IMU from static poses first and give that "
+    "calibration as the prior (ftkin calibrate ... --dynamic --prior STATIC.json; "
+    "calibrate_dynamic(samples, prior=static) in Python)"
+)
+"""The warning of a moving recording calibrated without the accelerometer's bias."""
 
 
 @dataclass(frozen=True)
@@ -282,15 +302,19 @@ def calibrate_imu_dynamic(
         prior: A static IMU calibration of the same IMU: its accelerometer bias and scale are
             used, its ``R_SI`` starts the fit (and its ``imu_position``, when given, is kept).
         accel_bias, accel_scale: ``(3,)`` [m/s², -]: the accelerometer's (override ``prior``'s).
+            With neither ``prior`` nor ``accel_bias`` the bias is taken as 0: the offsets
+            reported are then combined with it (:data:`UNSPLIT`, named in the result's
+            ``inseparable`` and its warnings); the scale, when not given, is taken as 0.
         imu_rotation: ``R_SI`` ``(3, 3)`` when known: held fixed.
         imu_position: ``r`` ``(3,)`` [m, sensor frame] when known: held fixed (else estimated).
         noise: Per-reading wrench noise; None estimates it per channel from the residuals.
         window, polyorder: The Savitzky–Golay filter (default window about 51 ms).
 
     Raises:
-        UnobservableParameters: no accelerometer bias (``F0``, ``M0`` named), a recording that
-            does not turn the sensor, or a motion that leaves parameters open.
-        InvalidInput: no times or gyro, non-uniform times, a non-positive mass.
+        UnobservableParameters: a recording that does not turn the sensor, or a motion that
+            leaves parameters open (named).
+        InvalidInput: no times or gyro, non-uniform times, a non-positive mass, a prior that is
+            not a calibration from the IMU or whose own bias was not separated.
     """
     if not isinstance(samples, ImuSamples):
         raise InvalidInput(f"samples must be ftkin ImuSamples, got {type(samples).__name__}")
@@ -300,16 +324,21 @@ def calibrate_imu_dynamic(
             "angular velocity (wx, wy, wz)"
         )
     if prior is not None and not isinstance(prior, ImuCalibrationResult):
-        raise InvalidInput(f"prior must be a calibration from the IMU, got {type(prior).__name__}")
-    if accel_bias is None and prior is None:
-        raise UnobservableParameters(
-            ["accel_bias", "force_offset", "torque_offset"],
-            "a moving recording cannot separate the accelerometer's bias from the sensor's "
-            "offsets (F0 absorbs m·R_SI·b): pass prior= a static IMU calibration (12 poses) or "
-            "accel_bias= (a datasheet's); accel_bias=(0, 0, 0) reports offsets with the bias "
-            "absorbed",
+        raise InvalidInput(
+            "the prior (prior=, --prior) must be a static calibration from the IMU (ftkin "
+            f"calibrate of static poses with ax,ay,az), got {type(prior).__name__}"
         )
-    bias = as_vector(accel_bias if accel_bias is not None else prior.accel_bias, 3, "accel_bias")
+    if prior is not None and accel_bias is None and "accel_bias" in prior.inseparable:
+        raise InvalidInput(
+            "the prior (prior=, --prior) did not separate the accelerometer's bias (it is a "
+            "moving recording's, its offsets combined with the bias): give a static calibration "
+            "from the IMU (ftkin calibrate of static poses with ax,ay,az)"
+        )
+    unsplit = accel_bias is None and prior is None  # b = 0: the offsets absorb m R_SI b
+    if accel_bias is not None:
+        bias = as_vector(accel_bias, 3, "accel_bias")
+    else:
+        bias = np.zeros(3) if unsplit else as_vector(prior.accel_bias, 3, "accel_bias")
     scale_given = (
         accel_scale
         if accel_scale is not None
@@ -370,10 +399,12 @@ def calibrate_imu_dynamic(
     x = theta_space(_least_squares(problem, x_phi, True))
     if noise is None:
         problem = replace(problem, channel_std=_noise(problem, x))
-    return _result(samples, problem, x, bias, scale, position_given is None)
+    if unsplit:
+        logger.warning("%s", UNSPLIT_NOTE)
+    return _result(samples, problem, x, bias, scale, position_given is None, unsplit)
 
 
-def _result(samples, problem: ImuDynamicProblem, x, bias, scale, position_estimated):
+def _result(samples, problem: ImuDynamicProblem, x, bias, scale, position_estimated, unsplit):
     jac = problem.whitened_jacobian(x)
     information = jac.T @ jac
     norm = np.sqrt(np.maximum(np.diag(information), 1e-300))
@@ -444,4 +475,6 @@ def _result(samples, problem: ImuDynamicProblem, x, bias, scale, position_estima
         chi_square=float(np.sum(whitened**2)),
         dof=int(residual.size - len(x)),
         motion_residual_rms=np.sqrt(np.mean(residual**2, axis=0)),
+        imu_warnings=(UNSPLIT_NOTE,) if unsplit else (),
+        inseparable=UNSPLIT if unsplit else (),
     )

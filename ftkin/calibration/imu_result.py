@@ -53,6 +53,12 @@ class ImuCalibrationResult(CalibrationResult):
         dof: Residuals minus parameters.
         imu_warnings: What the fit found doubtful.
         motion_residual_rms: ``(6,)`` RMS residual over a moving recording [N, N·m], or None.
+        inseparable: Parameters the data determine only in combination (empty when every one
+            was separated). A moving recording without the accelerometer's bias gives
+            ``("accel_bias", "force_offset", "torque_offset")``: ``accel_bias`` is then taken as 0
+            and ``force_offset``, ``torque_offset`` hold the combined offsets ``F0 + m R_SI b``,
+            ``M0 + m c × (R_SI b)``, which compensate this tool with this IMU exactly; a static IMU
+            calibration of the same IMU splits them (``prior=``, ``--prior``).
     """
 
     imu_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
@@ -68,6 +74,7 @@ class ImuCalibrationResult(CalibrationResult):
     dof: int = 0
     imu_warnings: tuple[str, ...] = ()
     motion_residual_rms: np.ndarray | None = None
+    inseparable: tuple[str, ...] = ()
 
     def __post_init__(self):
         super().__post_init__()
@@ -107,6 +114,11 @@ class ImuCalibrationResult(CalibrationResult):
             residual = _frozen(self.motion_residual_rms, (6,), "motion_residual_rms")
             object.__setattr__(self, "motion_residual_rms", residual)
         object.__setattr__(self, "imu_warnings", tuple(str(w) for w in self.imu_warnings))
+        if isinstance(self.inseparable, str):
+            raise InvalidInput(
+                f"inseparable must be a sequence of parameter names, got {self.inseparable!r}"
+            )
+        object.__setattr__(self, "inseparable", tuple(str(name) for name in self.inseparable))
 
     @property
     def imu_rotation_rpy_deg(self) -> np.ndarray:
@@ -177,8 +189,14 @@ class ImuCalibrationResult(CalibrationResult):
             f"{vector(np.deg2rad(self.imu_rotation_rpy_deg), IMU_ROTATION_NAMES, 3, 180 / np.pi)}°"
             " (± about the sensor axes)",
             "  accel_bias      b  = "
-            f"{vector(self.accel_bias, [f'accel_bias[{a}]' for a in axes])} m/s² (IMU frame)",
+            f"{vector(self.accel_bias, [f'accel_bias[{a}]' for a in axes])} m/s² (IMU frame"
+            + ("; taken as 0, not separated)" if "accel_bias" in self.inseparable else ")"),
         ]
+        if self.inseparable:
+            lines.append(
+                f"  not separated   {', '.join(self.inseparable)}: only their combination is "
+                "determined (the offsets include the accelerometer's bias; see the warning)"
+            )
         if any(self.scale_estimated):
             lines.append(
                 "  accel_scale     s  = "

@@ -7,7 +7,9 @@ Written beside the keys every calibration has (``tool_mass``, ``center_of_mass``
 [m/s², IMU frame], ``accel_scale`` [-] and ``scale_estimated``, ``imu_position`` [m, sensor
 frame] or null and ``imu_position_source``, ``parameter_names`` with ``parameter_covariance``
 and ``std_errors``, ``accel_std`` [m/s²], ``chi_square``, ``dof``, ``warnings``,
-``motion_residual_rms`` [N, N·m] or null, and ``units``. A fused calibration (an orientation and
+``motion_residual_rms`` [N, N·m] or null, ``inseparable`` (the parameters only determined in
+combination, e.g. the accelerometer's bias and the offsets of a moving recording without a
+prior) and ``units``. A fused calibration (an orientation and
 the IMU) adds ``fused: true`` and ``mount_check``
 (:class:`~ftkin.calibration.mount_check.MountCheck`: ``R_M`` against the URDF, its covariance
 [rad²], chi-square, per-pose angles [deg]; or null).
@@ -37,6 +39,7 @@ IMU_TYPES = {
     "parameter_names": "strings",
     "imu_position_source": "string?",
     "warnings": "strings",
+    "inseparable": "strings",
     "dof": "integer",
     "chi_square": "number?",
     "accel_std": "numbers?",
@@ -65,6 +68,7 @@ def imu_document(result: CalibrationResult) -> dict:
             "dof": int(result.dof),
             "warnings": list(result.imu_warnings),
             "motion_residual_rms": result.motion_residual_rms,
+            "inseparable": list(result.inseparable),
             **_fused_document(result),
         }
     }
@@ -117,6 +121,7 @@ def imu_result(reader, result: CalibrationResult) -> ImuCalibrationResult:
             dof=int(data.get("dof", 0)),
             imu_warnings=tuple(data.get("warnings") or ()),
             motion_residual_rms=sub.array("motion_residual_rms", (6,), required=False),
+            inseparable=tuple(data.get("inseparable") or ()),
         )
     except (FtkinError, TypeError, ValueError) as error:
         sub.fail(f"malformed: {str(error)[:200]}")

@@ -167,3 +167,67 @@ def test_a_slower_imu_joined_counts_what_it_measured(streams):
     wrench_csv, imu_csv = streams
     samples, _ = load_imu_samples(wrench_csv, imu_csv, time_unit="us", accel_unit="g")
     assert samples.accel_count_factor == pytest.approx(250.0 / 700.0 * 2.0 / 3.0, rel=1e-3)
+
+
+@pytest.fixture(scope="module")
+def moving_and_static(tmp_path_factory):
+    """MuJoCo's tool and IMU (tests.calibration.test_imu_dynamic): a moving recording
+    (t, fx..mz, ax..az, wx..wz at 250 Hz) and twelve static poses of the same tool and IMU
+    (pose, fx..mz, ax..az; 50 readings each), as CSVs; and MuJoCo's body θ."""
+    from tests.calibration import test_imu_dynamic as dynamic
+
+    arm, recorder = dynamic.tool_recorder()
+    folder = tmp_path_factory.mktemp("moving")
+    times, wrench, accel, gyro = dynamic.motion(arm, recorder, 3)
+    moving = folder / "moving.csv"
+    header = ["t", "fx", "fy", "fz", "mx", "my", "mz", "ax", "ay", "az", "wx", "wy", "wz"]
+    write_csv(moving, header, np.column_stack([times, wrench, accel, gyro]).tolist())
+    rng = np.random.default_rng(21)
+    q = arm.random_configurations(12, rng, margin=0.05)
+    wrench, accel, _ = recorder.readings(q)
+    ids = np.repeat(np.arange(12), 50)
+    accel = (1.0 + dynamic.SCALE) * accel[ids] + dynamic.BIAS + rng.normal(0.0, 0.02, (600, 3))
+    wrench = wrench[ids] + dynamic.WRENCH_BIAS + rng.normal(0.0, 1.0, (600, 6)) * dynamic.NOISE
+    static = folder / "static.csv"
+    write_csv(static, ["pose", *header[1:10]], np.column_stack([ids, wrench, accel]).tolist())
+    return moving, static, recorder.true_parameters()
+
+
+def test_a_moving_imu_recording_without_a_prior_and_the_advice_followed(
+    moving_and_static, tmp_path, capsys
+):
+    """Issue 37, item 6: ``calibrate --dynamic`` of a moving IMU recording without --prior gives
+    the mass and COM (MuJoCo's) and names the bias it cannot split, on screen and in the file;
+    the advice it prints (``--dynamic --prior STATIC.json``) works when followed."""
+    from ftkin.calibration.log_cholesky import body_from_parameters
+    from tests.calibration.test_imu_dynamic import BIAS, WRENCH_BIAS
+
+    moving, static, theta = moving_and_static
+    mass, com, _ = body_from_parameters(theta)
+    combined = tmp_path / "combined.json"
+    assert main(["calibrate", str(moving), "--dynamic", "-o", str(combined)]) == 0
+    out = capsys.readouterr().out
+    assert "not separated   accel_bias, force_offset, torque_offset" in out
+    assert "--dynamic --prior STATIC.json" in out
+    saved = json.loads(combined.read_text())
+    assert saved["imu"]["inseparable"] == ["accel_bias", "force_offset", "torque_offset"]
+    assert saved["tool_mass"] == pytest.approx(mass, rel=0.01)
+    np.testing.assert_allclose(saved["center_of_mass"], com, atol=2e-3)
+    # the advice: a static calibration of the same IMU, then the motion with it as the prior
+    prior = tmp_path / "static.json"
+    assert main(["calibrate", str(static), "-o", str(prior)]) == 0
+    np.testing.assert_allclose(json.loads(prior.read_text())["imu"]["accel_bias"], BIAS, atol=0.02)
+    split = tmp_path / "split.json"
+    argv = ["calibrate", str(moving), "--dynamic", "--prior", str(prior), "-o", str(split)]
+    assert main(argv) == 0
+    assert "not separated" not in capsys.readouterr().out
+    saved = json.loads(split.read_text())
+    assert saved["imu"]["inseparable"] == []
+    np.testing.assert_allclose(saved["force_offset"], WRENCH_BIAS[:3], atol=0.05)
+    np.testing.assert_allclose(saved["torque_offset"], WRENCH_BIAS[3:], atol=5e-3)
+    # a moving calibration is no prior: said, no traceback
+    argv[4] = str(combined)
+    assert main([*argv[:-1], str(tmp_path / "again.json")]) == 2
+    err = capsys.readouterr().err
+    assert "did not separate the accelerometer's bias" in err and "Traceback" not in err
+    assert not (tmp_path / "again.json").exists()
