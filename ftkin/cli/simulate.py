@@ -67,7 +67,6 @@ from .shared_options import (
     SEED,
     SENSOR_SIGN,
     TOOL_MASS,
-    deprecated,
     resolved,
 )
 
@@ -369,7 +368,6 @@ SENSOR_OPTIONS = (
         help="a drifting bias (warm-up and random walk, SensorDrift.typical()); samples get a "
         "t column",
     ),
-    deprecated("--drift", "with_drift", "--with-drift", nargs=0, const=True, default=False),
     option(
         "--mount-rpy-deg",
         type=number_list,

@@ -77,7 +77,7 @@ def test_cli_mount_and_sign_are_recovered(tmp_path):
 
 def test_cli_drift_has_times_and_is_found(tmp_path):
     samples, calib = tmp_path / "s.csv", tmp_path / "c.json"
-    assert main(["simulate", "samples", "--drift", "--n", "30", "-o", str(samples)]) == 0
+    assert main(["simulate", "samples", "--with-drift", "--n", "30", "-o", str(samples)]) == 0
     loaded = load_samples(samples)
     times = loaded.samples.times
     assert times is not None and times.max() > 200.0  # 30 poses, 10 s apart [s]
