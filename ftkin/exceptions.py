@@ -10,6 +10,7 @@ boundary; they should never reach a user as a bare traceback.
 """
 
 from collections.abc import Sequence
+from pathlib import Path
 
 
 class FtkinError(Exception):
@@ -154,9 +155,16 @@ class MissingDependency(FtkinError, ImportError):
         self.package = package
         self.extra = extra
         super().__init__(
-            f"{purpose} needs the optional package {package!r}; "
-            f"install it with: pip install 'ftkin[{extra}]'"
+            f"{purpose} needs the optional package {package!r} (the extra ftkin[{extra}]); "
+            f"install it with: {install_command(extra)}"
         )
+
+
+def install_command(extra: str) -> str:
+    """The command that installs ftkin's ``extra`` (ftkin is installed from its checkout, not
+    from PyPI): ``pip install -e '<the checkout>[extra]'``, a path that works from any folder."""
+    checkout = Path(__file__).resolve().parents[1]
+    return f"pip install -e '{checkout}[{extra}]'"
 
 
 class SuspectConvention(FtkinError):

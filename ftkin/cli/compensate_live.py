@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..calibration.model import WRENCH_CHANNELS
-from ..exceptions import InvalidInput
+from ..exceptions import InvalidInput, install_command
 from ..robot.stillness import Stillness
 from .arg_types import add_options, option, positive_float
 from .declared import declared_option
@@ -39,7 +39,7 @@ def add_live_arguments(parser) -> None:
     """The options of the live mode (a group of ``ftkin compensate``)."""
     add_options(
         parser.add_argument_group(
-            "live, on a Universal Robots arm through ur_rtde (pip install 'ftkin[ur]'); "
+            f"live, on a Universal Robots arm through ur_rtde ({install_command('ur')}); "
             "--wrench-frame says the axes of its ft_raw_wrench (default: base)"
         ),
         UR,

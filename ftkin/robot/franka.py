@@ -1,6 +1,6 @@
 """A Franka FR3 (or Panda) through franky-control, as a :class:`~ftkin.robot.protocols.Robot`.
 
-franky (``pip install 'ftkin[franka]'``) bundles libfranka and talks to the robot's FCI, or to
+franky (``pip install -e '.[franka]'``) bundles libfranka and talks to the robot's FCI, or to
 franky-sim on localhost. libfranka refuses to run its control thread without real-time
 scheduling unless told to ignore it: ``realtime=False`` maps to ``RealtimeConfig.Ignore`` (for a
 simulator or a kernel without ``PREEMPT_RT``; on a real arm a control loop without it may miss

@@ -1,7 +1,7 @@
 """A Universal Robots arm through ur_rtde, read-only: joints, flange pose, built-in wrist sensor.
 
 :class:`UrArm` reads RTDE (TCP port 30004) with ur_rtde's ``RTDEReceiveInterface``
-(``pip install 'ftkin[ur]'``): ``actual_q``, ``actual_qd``, ``actual_TCP_pose`` and
+(``pip install -e '.[ur]'``): ``actual_q``, ``actual_qd``, ``actual_TCP_pose`` and
 ``ft_raw_wrench`` with the controller's ``timestamp``, all from one RTDE package
 (:meth:`UrArm.state`). It commands nothing: moving the arm needs URScript running on the
 controller, which ftkin leaves to the pendant (freedrive, a program) or to ``RTDEControlInterface``.

@@ -98,7 +98,7 @@ class AtiNetFT(StreamingSensor):
 
     Raises:
         InvalidInput: an argument of the wrong type or range.
-        MissingDependency: pynetft is not installed (``pip install 'ftkin[ati]'``).
+        MissingDependency: pynetft is not installed (``pip install -e '.[ati]'``).
         SensorError: ``"connect"``: no sample within ``connect_timeout``, or the first
             records showed a fault (nothing listening, a unit pynetft does not know, a status
             word: the message says which).

@@ -74,7 +74,7 @@ class BotaSensor(StreamingSensor):
     Raises:
         InvalidInput: ``config`` is neither an existing file nor a ``BotaDriverConfig``, or
             ``driver`` is not ``MODULE:CLASS``.
-        MissingDependency: bota_driver is not installed (``pip install 'ftkin[bota]'``).
+        MissingDependency: bota_driver is not installed (``pip install -e '.[bota]'``).
         SensorError: ``"connect"``: the driver refused the configuration, ``configure()`` or
             ``activate()`` failed (its log says why), or no frame came in time.
     """

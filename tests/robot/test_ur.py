@@ -42,7 +42,7 @@ from .rtde_controller import (
     pose_vector,
 )
 
-pytest.importorskip("rtde_receive", reason="ur_rtde is not installed (pip install 'ftkin[ur]')")
+pytest.importorskip("rtde_receive", reason="ur_rtde is not installed (pip install -e '.[ur]')")
 
 STALE = 0.1  # [s] UrArm's default stale limit
 CONTACT = (1.0, -2.0, 3.0, 0.1, 0.2, -0.3)  # [N, N·m] sensor frame

@@ -24,7 +24,7 @@ from .rtde_controller import DH, EmulatedController, SimulatedTool, flange_trans
 
 UR_RTDE = pytest.mark.skipif(
     not __import__("importlib").util.find_spec("rtde_receive"),
-    reason="ur_rtde is not installed (pip install 'ftkin[ur]')",
+    reason="ur_rtde is not installed (pip install -e '.[ur]')",
 )
 E_SERIES = "URSoftware 5.15.0.12345 (Dec 01 2026)"
 REFUSED = "Command is not allowed due to safety reasons. Switch to remote control mode."

@@ -134,6 +134,6 @@ def test_a_config_that_is_neither_a_file_nor_a_driver_config_is_refused(config, 
 
 def test_a_missing_bota_driver_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "bota_driver", None)
-    with pytest.raises(MissingDependency, match=r"pip install 'ftkin\[bota\]'") as error:
+    with pytest.raises(MissingDependency, match=r"pip install -e '.*\[bota\]'") as error:
         BotaSensor("bota.json")
     assert error.value.package == "bota-driver" and error.value.extra == "bota"

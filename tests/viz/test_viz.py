@@ -226,7 +226,7 @@ def test_animation_tracks_hold_each_pose_and_scale_the_shaft(arm, truth):
 # --------------------------------------------------------- missing meshcat
 def test_missing_meshcat_names_the_extra(monkeypatch, truth, tmp_path):
     monkeypatch.setitem(sys.modules, "meshcat", None)
-    with pytest.raises(MissingDependency, match=r"meshcat.*pip install 'ftkin\[viz\]'"):
+    with pytest.raises(MissingDependency, match=r"meshcat.*pip install -e '.*\[viz\]'"):
         import_meshcat()
     with pytest.raises(MissingDependency, match="viz"):
         CalibrationViewer(truth)
