@@ -17,7 +17,7 @@ joined by ``+``, or ``"auto"``. The built-in models:
 * ``"poly:N"``: a polynomial of degree ``N`` (``1 ≤ N ≤ 5``, :mod:`ftkin.calibration.drift_poly`);
 * ``"random-walk"``: ``b(t) − b(s) ~ N(0, q² |t − s|)`` per channel with a rate ``q``
   [N/√s] shared by the forces and one [N·m/√s] by the torques
-  (:mod:`ftkin.calibration.random_walk`);
+  (:mod:`ftkin.calibration.drift_walk`; its filter in :mod:`ftkin.calibration.random_walk`);
 * ``"random-walk+poly:N"``: a random walk around a polynomial trend (a warm-up plus wandering);
 * ``"auto"``: the candidate with the lowest Bayesian information criterion among the
   registered ``auto`` candidates (:mod:`ftkin.calibration.drift_fit`).
@@ -71,12 +71,13 @@ class DriftModel:
         return np.zeros((len(tau), 0))
 
     def fit(self, poses, start, selected_by: str = "given"):
-        """Fit ``θ`` and this drift from a constant-bias start
-        (:func:`~ftkin.calibration.drift_fit.fit_drift_model`).
+        """A fit of its own, for a model whose basis has parameters of its own: a
+        :class:`~ftkin.calibration.drift_fit.DriftFit` of ``θ`` and this drift from a
+        constant-bias start. The base returns None: the generic Gauss–Newton fit
+        (:func:`~ftkin.calibration.drift_fit.fit_drift_model`) then serves the model (the fit
+        imports the models; a model never imports the fit).
         """
-        from .drift_fit import fit_drift_model  # the fit imports this module
-
-        return fit_drift_model(self, poses, start, selected_by)
+        return None
 
     def bias_at(self, drift: "BiasDrift", times: np.ndarray) -> np.ndarray:
         """``(N, 6)`` bias [N, N·m] at ``times`` ``(N,)`` [s] inside the pose times.
@@ -399,7 +400,7 @@ def without_argument(model: DriftModel) -> Callable[[str | None], DriftModel]:
 
 register_drift_model("none", without_argument(DriftModel()))
 
-BUILT_IN_MODELS = {"poly": ".drift_poly", "random-walk": ".random_walk"}
+BUILT_IN_MODELS = {"poly": ".drift_poly", "random-walk": ".drift_walk"}
 """The built-in models' names → their modules, which register them when they load: a model's
 module is imported when a spec, ``auto`` or a listing first needs the registry, never by a
 calibration without times (:func:`check_drift_spec`)."""

@@ -355,7 +355,9 @@ def _fit_candidates(models, poses: PoseAverages, start: DriftStart, selected_by:
         if auto and (count > observations - 6 or (model.walk and len(poses) > MAX_AUTO_WALK_POSES)):
             continue  # the walk's filter costs a Python pass per pose and evaluation
         try:
-            fit = model.fit(poses, start, selected_by)
+            fit = model.fit(poses, start, selected_by)  # a model's own fit, else the generic one
+            if fit is None:
+                fit = fit_drift_model(model, poses, start, selected_by)
         except UnobservableParameters:
             if not auto:
                 raise

@@ -18,15 +18,16 @@ channels at once. With a zero rate the filter is plain weighting by the noise
 (gain 0): the fits of :mod:`ftkin.calibration.drift_fit` use the same code for
 every model.
 
-The model registers as ``"random-walk"``; ``"random-walk+poly:N"`` is a walk
-around a polynomial trend (a warm-up that a walk alone would take for a fast one).
+The model itself registers as ``"random-walk"`` in :mod:`ftkin.calibration.drift_walk`
+(``"random-walk+poly:N"`` is a walk around a polynomial trend: a warm-up that a walk alone
+would take for a fast one); this module is the filter alone, below every drift model, so
+that :meth:`~ftkin.calibration.drift.DriftModel.information` and the fit use it without
+importing a model.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
-
-from .drift import DriftModel, register_drift_model, without_argument
 
 
 @dataclass(frozen=True)
@@ -113,11 +114,3 @@ def smooth(
         mean[i] = filtered[i] + gain * (mean[i - 1] - filtered[i])
         variance[i] = gains.filtered_variance[i] + gain**2 * (variance[i - 1] - predicted_variance)
     return mean, np.clip(variance, 0.0, None)
-
-
-register_drift_model(
-    "random-walk",
-    without_argument(DriftModel("random-walk", walk=True)),
-    auto=("random-walk", "random-walk+poly:1", "random-walk+poly:2"),
-    walk=True,
-)

@@ -38,7 +38,7 @@ print(sorted(m for m in sys.modules if m.startswith("ftkin.calibration")))
     )
     assert done.returncode == 0, done.stderr
     loaded = done.stdout
-    for module in ("drift_poly", "random_walk", "drift_fit", "cross_validation"):
+    for module in ("drift_poly", "drift_walk", "random_walk", "drift_fit", "cross_validation"):
         assert f"ftkin.calibration.{module}" not in loaded, module
 
 

@@ -150,3 +150,35 @@ def test_the_cli_takes_the_new_model(registered, recording, tmp_path, capsys):
     assert load_calibration(output).drift.model == "warmup"
     assert main(["calibrate", str(tmp_path / "s.csv"), "--drift", "wobble"]) == 2
     assert "unknown drift model 'wobble'" in capsys.readouterr().err
+
+
+# ------------------------------------------------- a model with a fit of its own (the hook)
+@dataclass(frozen=True)
+class WarmupSearch(DriftModel):
+    """The warm-up with its time constant unknown: it overrides ``fit`` with a search over the
+    ratio (a nonlinear parameter of its own), each candidate fitted by the generic fit.
+    """
+
+    def fit(self, poses, start, selected_by="given"):
+        from ftkin.calibration.drift_fit import fit_drift_model
+
+        fits = [fit_drift_model(warmup(text), poses, start, selected_by) for text in SEARCHED]
+        return max(fits, key=lambda fit: fit.log_likelihood)
+
+
+SEARCHED = ("1", "4", "16")  # ratios [-]: the truth (RATIO) and a factor 4 either side
+
+
+def test_a_model_with_a_fit_of_its_own_is_fitted_by_it(registered, recording):
+    """The base ``DriftModel.fit`` returns None (the generic fit serves it); an override is used.
+
+    The search picks the simulator's time constant (span / 4) among span, span / 4 and span / 16,
+    and the file's model is the one it chose.
+    """
+    register_drift_model("warmup-search", lambda argument: WarmupSearch("warmup-search", 1))
+    try:
+        assert DriftModel().fit(None, None) is None
+        result = calibrate(recording[0], drift="warmup-search")
+    finally:
+        DRIFT_MODELS.pop("warmup-search")
+    assert result.drift.model == "warmup:4" and result.drift.kind.ratio == RATIO
