@@ -100,21 +100,14 @@ def expectation_from_args(args) -> ExpectedCalibration:
     """The calibration :func:`ftkin.planning.plan_poses` and
     :func:`ftkin.planning.evaluation.evaluate_poses` predict for.
     """
-    if args.pose_interval is not None and args.drift_rate is None:
-        raise InvalidInput(
-            "--pose-interval applies with --drift-rate (the time between poses matters only to a "
-            "drift)"
-        )
-    if args.com is not None and len(args.com) != 3:
-        raise InvalidInput(f"--com takes X Y Z [m], got {len(args.com)} numbers")
-    return ExpectedCalibration(
+    return ExpectedCalibration(  # it checks them (--com's length, --pose-interval's --drift-rate)
         tool_weight=args.tool_weight,
         center_of_mass=resolved(args.com, PAPER_CENTER_OF_MASS),
         noise=expected_noise(args),
         readings_per_pose=args.readings_per_pose,
         estimate_mount=args.estimate_mount or "none",
         drift_rate=args.drift_rate,
-        pose_interval=DEFAULT_POSE_INTERVAL if args.pose_interval is None else args.pose_interval,
+        pose_interval=args.pose_interval,
     )
 
 

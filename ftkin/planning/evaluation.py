@@ -197,7 +197,9 @@ class ExpectedCalibration:
             ``random-walk`` calibration (the walk integrated out,
             :mod:`ftkin.planning.drift_order`; stored per channel, ``(6,)``).
             Not with ``estimate_mount``.
-        pose_interval: Time from one pose to the next [s] (with ``drift_rate``).
+        pose_interval: Time from one pose to the next [s] (with ``drift_rate``; None:
+            :data:`~ftkin.planning.drift_order.DEFAULT_POSE_INTERVAL`). Refused without
+            ``drift_rate`` (the time between poses matters only to a drift); None then.
         model: The expected tool as a :class:`SensorModel` (derived; biases play no role).
     """
 
@@ -207,7 +209,7 @@ class ExpectedCalibration:
     readings_per_pose: int = 1
     estimate_mount: MountMode | str = MountMode.NONE
     drift_rate: object = None
-    pose_interval: float = DEFAULT_POSE_INTERVAL
+    pose_interval: float | None = None
     model: SensorModel = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -216,8 +218,15 @@ class ExpectedCalibration:
                 f"noise must be an ftkin.SensorNoise, got {type(self.noise).__name__}"
             )
         object.__setattr__(self, "estimate_mount", MountMode.of(self.estimate_mount))
+        if self.drift_rate is None and self.pose_interval is not None:
+            raise InvalidInput(
+                f"pose_interval ({self.pose_interval!r} s) applies with drift_rate (the time "
+                "between poses matters only to a drift): give drift_rate, or no pose_interval"
+            )
         drift_rate, interval = check_drift_options(
-            self.drift_rate, self.pose_interval, self.estimate_mount
+            self.drift_rate,
+            DEFAULT_POSE_INTERVAL if self.pose_interval is None else self.pose_interval,
+            self.estimate_mount,
         )
         set_checked(
             self,
@@ -225,7 +234,7 @@ class ExpectedCalibration:
             noise=self.noise if self.noise is not None else SensorNoise.paper(),
             readings_per_pose=whole_number(self.readings_per_pose, "readings_per_pose", 1),
             drift_rate=drift_rate,
-            pose_interval=interval,
+            pose_interval=None if drift_rate is None else interval,
         )
 
 

@@ -239,7 +239,7 @@ def test_pose_times_replace_the_interval(pose_set, tmp_path, capsys):
     assert main(["evaluate-poses", str(path), "--drift-rate", "0.002", "4e-5"]) == 0
     assert "poses at their times (0 to 150 s)" in capsys.readouterr().out
     assert main(["evaluate-poses", str(path), "--pose-interval", "5"]) == 2
-    assert "--pose-interval applies with --drift-rate" in capsys.readouterr().err
+    assert "pose_interval (5.0 s) applies with drift_rate" in capsys.readouterr().err
 
 
 def test_the_travel_bound_is_kept(arm, pose_set):
@@ -279,3 +279,29 @@ def test_the_travel_bound_is_kept(arm, pose_set):
             rng=np.random.default_rng(0),
             max_length=10.0,
         )
+
+
+def test_a_pose_interval_without_a_drift_rate_is_refused_by_the_library_as_by_the_cli(
+    pose_set, capsys
+):
+    """The interval matters only to a drift: ExpectedCalibration refuses it alone (the API
+    silently dropped it, the CLI refused it), and ``plan``/``evaluate-poses`` say the same."""
+    import dataclasses
+
+    from ftkin.planning.evaluation import ExpectedCalibration
+
+    with pytest.raises(InvalidInput) as refused:
+        ExpectedCalibration(tool_weight=15.0, pose_interval=5.0)
+    text = str(refused.value)
+    assert text.startswith("pose_interval (5.0 s) applies with drift_rate")
+    with pytest.raises(InvalidInput, match=r"pose_interval \(5.0 s\) applies with drift_rate"):
+        evaluate_poses(pose_set, pose_interval=5.0)
+    assert main(["plan", "--n", "8", "--pose-interval", "5"]) == 2
+    assert text in capsys.readouterr().err
+    # given with a rate it is kept; a rate alone takes the documented 10 s; without a rate None,
+    # so that a copy of an expectation without a drift is valid
+    assert ExpectedCalibration(drift_rate=[0.002, 4e-5], pose_interval=5.0).pose_interval == 5.0
+    assert ExpectedCalibration(drift_rate=[0.002, 4e-5]).pose_interval == 10.0
+    plain = ExpectedCalibration(tool_weight=15.0)
+    assert plain.pose_interval is None
+    assert dataclasses.replace(plain, tool_weight=2.0).model.tool_weight == pytest.approx(2.0)
