@@ -3,15 +3,13 @@ trajectory for ``calibrate --dynamic``).
 """
 
 import argparse
-import json
 
 import numpy as np
 
 from .. import Arm, InvalidInput, PlanSpec, SensorNoise, UrdfError, plan_poses
-from ..io.atomic import atomic_write_text
 from ..io.csv_table import write_csv
+from ..io.plan_file import PLAN_FORMATS, write_plan
 from ..io.samples_csv import POSE_COLUMN
-from ..io.yaml_text import yaml_text
 from ..planning.drift_order import DEFAULT_POSE_INTERVAL
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT, ExpectedCalibration
 from ..planning.excitation import (
@@ -42,10 +40,6 @@ from .shared_options import (
     noise_from_args,
     resolved,
 )
-
-FORMATS = {"csv": (), "yaml": (".yaml", ".yml"), "json": (".json",)}
-"""Output formats of ``plan -o`` and the file name endings that choose them (default: csv)."""
-
 
 # The expected tool and sensor noise (defaults: the paper's).
 _TOOL_OPTIONS = (
@@ -186,7 +180,7 @@ def register(subparsers) -> None:
             option("-o", "--output", metavar="POSES.csv", help="write the poses here"),
             option(
                 "--format",
-                choices=tuple(FORMATS),
+                choices=tuple(PLAN_FORMATS),
                 default=None,
                 help="output format (default: from the file name, else csv)",
             ),
@@ -263,12 +257,7 @@ def run(args) -> int:
         raise UrdfError(error.path, [*error.reasons, "or plan with --no-self-collision"]) from None
     print(plan.report(), _pose_lines(plan), sep="\n")
     if args.output:
-        fmt = args.format or next(
-            (fmt for fmt, endings in FORMATS.items() if args.output.lower().endswith(endings)),
-            "csv",
-        )
-        write_plan(plan, args.output, fmt)
-        print(f"wrote {args.output} ({fmt})")
+        print(f"wrote {args.output} ({write_plan(plan, args.output, args.format)})")
     return 0
 
 
@@ -279,44 +268,6 @@ def _pose_lines(plan) -> str:
         for i, q in enumerate(plan.joint_positions)
     ]
     return "joint positions [rad], in visiting order:\n" + "\n".join([header, *rows])
-
-
-def plan_document(plan) -> dict:
-    """The plan as plain data (YAML/JSON output)."""
-    return {
-        "joint_names": list(plan.joint_names),
-        "joint_positions_rad": plan.joint_positions.tolist(),
-        "seed": plan.seed,
-        "constraints": plan.constraints.describe(),
-        "criterion": plan.criterion,
-        "criterion_value": plan.criterion_value,
-        "predicted_standard_errors": {
-            key: np.atleast_1d(value).tolist() for key, value in plan.standard_errors.items()
-        },
-        "joint_travel_rad": plan.joint_travel,
-        **(
-            {}
-            if plan.evaluation.drift_rate is None
-            else {
-                "drift_rate": plan.evaluation.drift_rate.tolist(),
-                "pose_interval_s": plan.evaluation.pose_interval,
-            }
-        ),
-    }
-
-
-def write_plan(plan, path: str, fmt: str) -> None:
-    """Write the poses as CSV (``pose`` plus one column per joint [rad]), YAML or JSON."""
-    if fmt == "csv":
-        write_csv(
-            path,
-            [POSE_COLUMN, *plan.joint_names],
-            [[i, *map(float, q)] for i, q in enumerate(plan.joint_positions)],
-        )
-    elif fmt == "json":
-        atomic_write_text(path, json.dumps(plan_document(plan), indent=2) + "\n")
-    else:
-        atomic_write_text(path, yaml_text(plan_document(plan)))
 
 
 def _run_excitation(args, arm: Arm) -> int:
