@@ -203,7 +203,8 @@ def check_observable(problem: FusedStaticProblem, x: np.ndarray) -> None:
         f"{POSES_NEEDED}"
         + (
             "; the mount trades against the IMU's rotation: with R_SI estimated only the wrench "
-            "tells them apart (give imu_rotation= when the IMU's rotation in the sensor is known)"
+            "tells them apart (in Python, calibrate(..., imu_rotation=R_SI) holds a known "
+            "rotation of the IMU in the sensor; the command line takes none: add poses)"
             if both
             else ""
         )

@@ -360,9 +360,11 @@ def calibrate_imu(samples: ImuSamples, options=None, **keywords) -> ImuCalibrati
     if len(poses) > MAX_POSES:
         raise InvalidInput(
             f"{len(poses)} poses: a static calibration from the IMU fits up to {MAX_POSES} (two "
-            "nuisance parameters each); readings of a recording are grouped into poses first "
-            "(pose ids, or ftkin.io.imu_columns.load_imu_samples(..., segments=...) finds the "
-            "still phases), a motion is calibrate_dynamic's"
+            "nuisance parameters each); group the readings into poses first: a 'pose' column "
+            "(pose_ids in Python), or a time column 't' from which ftkin calibrate finds the "
+            "still phases (ftkin.io.load_imu_samples(..., segments=ftkin.io.static_segments."
+            "SegmentParameters()) in Python); a motion is calibrated with --dynamic "
+            "(ftkin.calibrate_dynamic in Python)"
         )
     g = samples.g
     fit = fit_imu_static(poses, g, options)

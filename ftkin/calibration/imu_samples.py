@@ -64,7 +64,7 @@ def check_specific_force_unit(
             "(--accel-unit g)"
         )
     elif abs(median / g**2 - 1.0) <= UNIT_TOLERANCE and given == "g":
-        hint = "about g²: the values were in m/s² already; drop accel_unit='g'"
+        hint = "about g²: the values were in m/s² already; drop accel_unit='g' (--accel-unit g)"
     elif median < 0.3 * g:
         hint = (
             "far below g: is it a linear acceleration with gravity removed? ftkin needs the raw "

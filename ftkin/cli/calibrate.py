@@ -105,7 +105,8 @@ def register(subparsers) -> None:
             "--prior",
             metavar="CALIB.json",
             help="with --dynamic from the IMU: a static IMU calibration of the same IMU (its "
-            "accelerometer bias and scale; a motion cannot separate them from the bias)",
+            "accelerometer bias and scale): a motion cannot split the bias from the sensor's "
+            "offsets, so without it the offsets are reported combined with the bias",
         ),
         IMU_POSITION,
     )

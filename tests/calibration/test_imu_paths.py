@@ -185,3 +185,64 @@ def test_a_problem_missing_a_member_fails_where_it_is_declared():
 
     with pytest.raises(TypeError, match="abstract"):
         NoModel(np.zeros((1, 3)), np.zeros((1, 6)), np.ones(1), np.ones(9), G)
+
+
+def test_too_many_poses_advise_what_each_door_takes(tmp_path, capsys):
+    """Beyond MAX_POSES ungrouped rows: the message names the command line's pose column, time
+    column and --dynamic, and the API's pose_ids and calibrate_dynamic (no keyword a flag user
+    cannot give, no flag an API user cannot)."""
+    from ftkin.calibration.imu_fit import MAX_POSES
+
+    rotations = Rotation.random(MAX_POSES + 1, random_state=2).as_matrix()
+    up = np.einsum("pji,j->pi", rotations, [0.0, 0.0, G])
+    wrench = np.hstack([-MASS * up, np.cross(COM, -MASS * up)])
+    accel = up @ IMU_ROTATION
+    with pytest.raises(ftkin.InvalidInput, match="pose_ids in Python") as caught:
+        ftkin.calibrate(Samples.from_imu(accel, wrench))
+    assert "ftkin.calibrate_dynamic" in str(caught.value)
+    path = tmp_path / "rows.csv"
+    write_csv(
+        path, ["fx", "fy", "fz", "mx", "my", "mz", "ax", "ay", "az"], np.hstack([wrench, accel])
+    )
+    assert main(["calibrate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "'pose' column" in err and "--dynamic" in err and "Traceback" not in err
+
+
+def test_a_joined_slower_imu_is_counted_in_the_fused_fit_too(tmp_path):
+    """Wrench at 500 Hz, IMU at 100 Hz and an orientation log, joined: the fused samples keep the
+    accelerometer's count factor (the rate ratio times 2/3: linear interpolation), and the fused
+    problem weighs the accelerometer by it."""
+    from ftkin.calibration.fused_fit import fit_fused_static
+    from ftkin.calibration.fused_options import FusedCalibrationOptions
+    from ftkin.io import load_imu_samples
+
+    rotations, _, _, _ = readings(1)
+    hold = 2.0  # [s] per pose, still
+    t_wrench, t_imu = np.arange(0.0, POSES * hold, 1 / 500), np.arange(0.0, POSES * hold, 1 / 100)
+    pose_of = lambda t: np.minimum((t // hold).astype(int), POSES - 1)  # noqa: E731
+    up = np.einsum("pji,j->pi", rotations, [0.0, 0.0, G])
+    rng = np.random.default_rng(9)
+    weight = -MASS * up[pose_of(t_wrench)]
+    wrench = np.hstack([weight, np.cross(COM, weight)]) + WRENCH_BIAS
+    wrench += rng.normal(0.0, 1.0, wrench.shape) * NOISE
+    accel = up[pose_of(t_imu)] @ IMU_ROTATION + BIAS + rng.normal(0.0, ACCEL_NOISE, (len(t_imu), 3))
+    quaternions = Rotation.from_matrix(rotations[pose_of(t_imu)]).as_quat()[:, [3, 0, 1, 2]]
+    files = []
+    for name, header, values in (
+        ("wrench", ["t", "fx", "fy", "fz", "mx", "my", "mz"], np.column_stack([t_wrench, wrench])),
+        ("imu", ["t", "ax", "ay", "az"], np.column_stack([t_imu + 1e-4, accel])),
+        ("pose", ["t", "qw", "qx", "qy", "qz"], np.column_stack([t_imu + 2e-4, quaternions])),
+    ):
+        files.append(tmp_path / f"{name}.csv")
+        write_csv(files[-1], header, values.tolist())
+    samples, _ = load_imu_samples(*files)
+    factor = (100.0 / 500.0) * 2.0 / 3.0
+    assert samples.accel_count_factor == pytest.approx(factor, rel=1e-3)
+    assert samples.imu.accel_count_factor == pytest.approx(factor, rel=1e-3)
+    fit = fit_fused_static(samples.pose_averages(), G, FusedCalibrationOptions(), "none")
+    counts = fit.problem.counts[:, None]
+    np.testing.assert_allclose(
+        fit.problem.channel_counts[:, :3], np.tile(factor * counts, 3), rtol=1e-3
+    )
+    np.testing.assert_allclose(fit.problem.channel_counts[:, 3:], np.tile(counts, 6), rtol=1e-12)
