@@ -334,7 +334,10 @@ def test_raw_log_stops_on_a_fault_keeping_the_rows_and_cli_exits_2(tmp_path, cap
     sensor = ScriptedSensor(rotation_path(spread_rotations(2), schedule), schedule, fault_after=0.3)
     log = log_stream(sensor, tmp_path / "stream.csv", flush_period=0.05)
     assert log.stop_reason == "fault" and log.fault.kind == "read_failed"
-    assert log.rows == len(read_table(tmp_path / "stream.csv").rows) > 200
+    # every sample read before the fault is in the file, however few a busy machine allowed
+    stamps = read_table(tmp_path / "stream.csv").floats(["t"])[:, 0]
+    assert log.rows == len(stamps) == len(sensor.samples) > 0
+    np.testing.assert_allclose(stamps, [sample.t for sample in sensor.samples], atol=5e-4)
     argv = ["record", "--raw", "--sensor", "tests.robot.record_fakes:scripted_imu"]
     assert main([*argv, "--sensor-option", "fault_after=0.2", "-o", str(tmp_path / "r.csv")]) == 2
     out, err = capsys.readouterr()
@@ -650,7 +653,7 @@ def test_a_resumed_sensor_whose_clock_restarted_is_named(tmp_path, caplog):
 
 @pytest.mark.skipif(
     not __import__("importlib").util.find_spec("rtde_receive"),
-    reason="ur_rtde is not installed (pip install 'ftkin[ur]')",
+    reason="ur_rtde is not installed (pip install -e '.[ur]')",
 )
 @pytest.mark.parametrize(
     ("sent_in", "flag", "fits"),

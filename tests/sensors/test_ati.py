@@ -24,14 +24,28 @@ from .netft_box import BIAS, NetFTBox, dither  # noqa: E402
 COUNTS = [1_500_000, -2_500_000, 9_810_000, 120_000, -340_000, 56_000]  # 1e6 counts per N, N·m
 
 
-def wait_for_fault(sensor, timeout: float = 1.0) -> tuple[SensorError, float]:
+def wait_for_fault(sensor, timeout: float = 5.0) -> tuple[SensorError, float]:
     """Read every millisecond until a read raises; the error and when it raised [s]."""
+    error, seen, _ = read_until_fault(sensor, timeout)
+    return error, seen
+
+
+def read_until_fault(sensor, timeout: float = 5.0):
+    """Read every millisecond until a read raises: the error, when it raised [s], and each
+    successful read's ``(start [s], stamp of the sample it returned [s])`` (monotonic clock).
+
+    The limits of a sensor are checked against these stamps, not against how fast this
+    thread was scheduled: on a busy machine a read may come late, but it must never return a
+    sample older than the limit, and must not raise while the newest one is younger."""
+    reads = []
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
+        start = time.monotonic()
         try:
-            sensor.read()
+            t, _ = sensor.read()
         except SensorError as error:
-            return error, time.monotonic()
+            return error, time.monotonic(), reads
+        reads.append((start, t))
         time.sleep(0.001)
     raise AssertionError(f"no fault within {timeout} s")
 
@@ -62,21 +76,38 @@ def test_read_gives_the_newest_wrench_in_si_with_a_monotonic_stamp(box, ports):
         assert sample.specific_force is None and sample.temperature is None
 
 
+def quiet_totals(box, sensor) -> tuple[int, int, int]:
+    """Silence the box and wait until the adapter has taken every record sent: ``(records sent,
+    samples delivered, records counted lost)`` since the start, read while nothing moves."""
+    box.set(fault="silence")
+    deadline, previous = time.monotonic() + 30.0, None
+    while time.monotonic() < deadline:
+        time.sleep(0.05)
+        totals = (box.stats()["sent"], sensor.stats().samples, sensor.stats().lost)
+        if totals == previous and totals[0] == totals[1] + totals[2]:
+            return totals
+        previous = totals
+    return totals  # not settled: the caller's comparison shows what is missing
+
+
 @pytest.mark.parametrize("rate", [1000.0, 7000.0])
 def test_every_streamed_record_is_delivered(box, ports, rate):
+    """Every record the box sent reaches ``read()``'s stream once, in order (counted by its
+    rdt_sequence: a gap or a step back would be counted lost), at 1 and 7 kHz. The records
+    are counted with the box silent, so the count does not depend on when this thread runs;
+    how fast the box paces them is the box's business, not the adapter's (not checked)."""
     box.set(rate=rate, dither=5)
-    with AtiNetFT(box.host, **ports) as sensor:
-        time.sleep(0.1)
-        first, sent_first = sensor.stats(), box.stats()["sent"]
-        time.sleep(0.6)
-        last, sent_last = sensor.stats(), box.stats()["sent"]
+    with AtiNetFT(box.host, silence_after=30.0, **ports) as sensor:  # silent while counting
+        sent_first, delivered_first, lost_first = quiet_totals(box, sensor)
+        box.set(fault=None)
+        deadline = time.monotonic() + 30.0
+        while box.stats()["sent"] - sent_first < 0.5 * rate and time.monotonic() < deadline:
+            time.sleep(0.05)  # half a second of records, however long the box takes for them
+        sent, delivered, lost = quiet_totals(box, sensor)
         health = sensor.health()
-    delivered = last.samples - first.samples
-    assert abs(delivered - (sent_last - sent_first)) <= 0.01 * rate  # the reads are not atomic
-    assert last.lost == 0 and health.lost_count == 0 and health.python_queue_dropped_count == 0
-    np.testing.assert_allclose(
-        delivered / (last.last_t - first.last_t), rate, rtol=0.03
-    )  # the box's own pacing
+    assert sent - sent_first >= 0.5 * rate
+    assert (delivered - delivered_first, lost - lost_first) == (sent - sent_first, 0)
+    assert health.lost_count == 0 and health.python_queue_dropped_count == 0
 
 
 def test_records_lost_on_the_wire_are_counted(box, ports):
@@ -90,12 +121,11 @@ def test_records_lost_on_the_wire_are_counted(box, ports):
 
 @pytest.mark.parametrize("status", [0x80020000, 0x80010000, 0x00000001])
 def test_a_nonzero_status_word_is_a_latched_status_fault(box, ports, status):
-    with AtiNetFT(box.host, **ports) as sensor:
+    with AtiNetFT(box.host, silence_after=30.0, **ports) as sensor:
         box.set(status=status)
-        injected = time.monotonic()
-        error, seen = wait_for_fault(sensor)
+        error, _ = wait_for_fault(sensor, timeout=20.0)
+        # the first bad record, not a timeout: the silence limit is far away
         assert error.kind == "status" and f"0x{status:08x}" in str(error)
-        assert seen - injected < 0.02  # the first bad record, not a timeout
         box.set(fault=None)  # the box recovers; the adapter stays faulted
         time.sleep(0.02)
         with pytest.raises(SensorError, match="status word") as again:
@@ -114,24 +144,31 @@ def test_ignored_status_bits_are_not_a_fault(box, ports):
 
 @pytest.mark.parametrize("fault", ["stall", "silence"])
 def test_a_stall_and_silence_are_faults_after_the_limit(box, ports, fault):
-    limit = 0.05
+    """No read returns a sample older than the limit, and none raises before the newest
+    sample is that old: both measured on the samples' own stamps, so a busy machine that
+    runs this thread late changes when the fault is seen, not whether it is right."""
+    limit = 0.05  # [s] the adapter's default
     with AtiNetFT(box.host, silence_after=limit, **ports) as sensor:
-        time.sleep(0.05)
         box.set(fault=fault)
-        injected = time.monotonic()
-        error, seen = wait_for_fault(sensor)
-        assert error.kind == fault, error
-        assert limit - 0.005 < seen - injected < limit + 0.05
-        if fault == "stall":  # records kept coming: pynetft counted the stall
-            assert sensor.health().ft_stall_count >= 1
+        error, seen, reads = read_until_fault(sensor)
+        newest = sensor.stats().last_t  # the stamp of the last new sample
+    assert error.kind == fault, error
+    assert seen - newest > limit  # not before the limit
+    assert all(start - t <= limit for start, t in reads)  # never an older sample
+    if fault == "stall":  # records kept coming: pynetft counted the stall
+        assert sensor.health().ft_stall_count >= 1
 
 
 def test_an_adapter_thread_that_falls_behind_is_a_lag_fault(box, ports):
-    with AtiNetFT(box.host, silence_after=0.05, **ports) as sensor:
+    # The emulated box is another process: on a busy machine it may pause for tens of ms,
+    # which pynetft (its receive timeout is silence_after) would rightly call a silence. A
+    # limit of 0.3 s leaves the box room; the GIL is held for longer than it.
+    limit = 0.3  # [s]
+    with AtiNetFT(box.host, silence_after=limit, **ports) as sensor:
         start = time.monotonic()
-        sum(range(30_000_000))  # one C call: holds the GIL throughout, no switch
+        sum(range(50_000_000))  # one C call: holds the GIL throughout, no switch
         held = time.monotonic() - start
-        assert held > 0.06, f"the GIL was held only {held:.3f} s: use a larger range"
+        assert held > limit + 0.05, f"the GIL was held only {held:.3f} s: use a larger range"
         with pytest.raises(SensorError, match="fell behind") as error:
             sensor.read()  # pynetft's native thread received all along; the adapter's did not
     assert error.value.kind == "lag"
@@ -198,7 +235,7 @@ def test_bad_arguments_are_refused_before_connecting(arguments, message):
 
 def test_a_missing_pynetft_names_the_extra(monkeypatch):
     monkeypatch.setitem(sys.modules, "pynetft", None)  # import pynetft raises ImportError
-    with pytest.raises(MissingDependency, match=r"pip install 'ftkin\[ati\]'") as error:
+    with pytest.raises(MissingDependency, match=r"pip install -e '.*\[ati\]'") as error:
         AtiNetFT("127.0.0.1")
     assert error.value.package == "pynetft" and error.value.extra == "ati"
 

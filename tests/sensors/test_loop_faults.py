@@ -3,9 +3,14 @@
 The emulated Net F/T box streams what the sensor reads at the home pose (the controller's tool
 compensated to a 2 N push along x, beyond hand-guiding's 1 N deadband: the arm moves) until a
 fault is injected: a status word, a stalled ft_sequence, silence. The loop must stop with the
-fault's kind as its reason, within one tick plus the adapter's limit, and command nothing after.
+fault's kind as its reason, in the tick whose read shows it, and command nothing after.
 First against a fake robot (fast), then against franky-sim through franky, as on a real FR3.
-"""
+
+The bound is stated in the loop's own ticks and the samples' own stamps, not in wall time (a
+busy machine runs a tick late; it must still be the right tick): every read is logged with
+what the robot was told, in order. The stopping tick is the first whose read raised; no tick
+used a sample older than the adapter's limit; a latched fault (a status word) raised at the
+first read after it latched."""
 
 from __future__ import annotations
 
@@ -15,6 +20,7 @@ import numpy as np
 import pytest
 
 from ftkin.calibration.model import SensorModel
+from ftkin.exceptions import SensorError
 from ftkin.kinematics.fr3 import fr3_arm
 from ftkin.robot.guiding import hand_guiding
 from ftkin.robot.loop import run_admittance
@@ -27,7 +33,8 @@ from ..robot.fakes import FakeRobot  # noqa: E402
 
 HOME = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 1.9, 0.785])
 RATE = 250.0  # [Hz] the loop
-LIMIT = 0.05  # [s] the adapter's silence_after (the loop's default stale limit is twice it)
+LIMIT = 0.25  # [s] the adapter's silence_after: the emulated box is another process, which a
+# busy machine pauses for tens of ms (the loop's default stale limit is twice it)
 FAULTS = [("status", {"status": 0x80020000}), ("stall", {"fault": "stall"})]
 FAULTS += [("silence", {"fault": "silence"})]
 TOOL = SensorModel.from_tool(1.0, [0.0, 0.0, 0.05], [1.0, -2.0, 0.5], [0.02, 0.01, -0.03])
@@ -44,40 +51,84 @@ def home_counts(arm) -> list[int]:
     return [int(round(value * 1e6)) for value in reading]
 
 
+class LoggedSensor:
+    """The adapter, each read logged in ``events`` as ``("read", start [s], stamp [s], latched)``
+    or ``("raised", start [s], kind)``; ``latched``: a fault was latched before the read."""
+
+    def __init__(self, sensor, events: list):
+        self.sensor, self.events = sensor, events
+
+    def read(self):
+        start, latched = time.monotonic(), self.sensor.fault is not None
+        try:
+            t, wrench = self.sensor.read()
+        except SensorError as error:
+            self.events.append(("raised", start, error.kind))
+            raise
+        self.events.append(("read", start, t, latched))
+        return t, wrench
+
+    def __getattr__(self, name):
+        return getattr(self.sensor, name)
+
+
 def run_with_fault(robot, box, ports, arm, settings, at_tick=40):
-    """Run the loop; inject ``settings`` into the box at tick ``at_tick``; the stats, when the
-    fault was injected and the commands' times."""
-    injected, commands = [], []
+    """Run the loop; inject ``settings`` into the box at tick ``at_tick``; the stats and the
+    log of reads, commands (``("command", dq)``), the injection and the stop, in order."""
+    events = []
+    command, stop = robot.command_velocity, robot.stop
+    robot.command_velocity = lambda dq: (events.append(("command", dq.copy())), command(dq))
+    robot.stop = lambda: (events.append(("stop",)), stop())
+
+    ticks = []
 
     def on_tick(now, q, dq):
-        commands.append((now, dq.copy()))
-        if len(commands) == at_tick:
+        ticks.append(now)
+        if len(ticks) == at_tick:
             box.set(**settings)
-            injected.append(time.monotonic())
+            events.append(("injected",))
 
     box.set(counts=home_counts(arm), dither=20)  # ±20 µN: a live reading is never bit-identical
-    with AtiNetFT(box.host, silence_after=LIMIT, **ports) as sensor:
-        stats = run_admittance(
-            robot,
-            sensor,
-            hand_guiding(arm, TOOL),
-            duration=5.0,
-            rate_hz=RATE,
-            on_tick=on_tick,
-        )
-    return stats, injected[0], commands
+    try:
+        with AtiNetFT(box.host, silence_after=LIMIT, **ports) as sensor:
+            stats = run_admittance(
+                robot,
+                LoggedSensor(sensor, events),
+                hand_guiding(arm, TOOL),
+                duration=30.0,
+                rate_hz=RATE,
+                on_tick=on_tick,
+            )
+    finally:
+        del robot.command_velocity, robot.stop
+    return stats, events
+
+
+def check_stopped_in_its_tick(stats, events, kind) -> None:
+    """The fault stopped the loop in the tick whose read showed it, after the injection; the
+    arm moved before; no sample older than LIMIT was used; a latched fault raised at once."""
+    assert stats.stop_reason == kind and stats.faults[kind] == 1, stats.report()
+    names = [event[0] for event in events]
+    assert names.count("injected") == 1 and names.count("raised") == 1, names[-10:]
+    injected, raised = names.index("injected"), names.index("raised")
+    assert injected < raised and names[raised + 1 :] == ["stop"]  # nothing commanded after
+    moved = [event[1] for event in events[:injected] if event[0] == "command"]
+    assert any(dq.any() for dq in moved)  # it moved, then stopped
+    reads = [event for event in events if event[0] == "read"]
+    assert all(start - t <= LIMIT for _, start, t, _ in reads)  # never a stale sample
+    assert not any(latched for *_, latched in reads)  # a latched fault raises at the next read
+    if kind == "silence":  # not early: the newest sample was older than the limit (a stall
+        # and a status word are latched by pynetft from the records themselves)
+        assert stats.fault_time - reads[-1][2] > LIMIT
 
 
 @pytest.mark.parametrize(("kind", "settings"), FAULTS)
 def test_each_box_fault_stops_a_fake_robot_by_its_kind(box, ports, arm, kind, settings):
     robot = FakeRobot()
     robot.q = HOME.copy()
-    stats, injected, commands = run_with_fault(robot, box, ports, arm, settings)
-    assert stats.stop_reason == kind and stats.faults[kind] == 1, stats.report()
-    assert len(robot.stops) == 1 and any(dq.any() for _, dq in commands)  # it moved, then stopped
-    bound = (0.0 if kind == "status" else LIMIT) + 1.0 / RATE + 0.03  # + scheduling
-    assert robot.stops[0] - injected < bound, (robot.stops[0] - injected, stats.message)
-    assert all(t < stats.fault_time for t, _ in commands)  # nothing commanded once it showed
+    stats, events = run_with_fault(robot, box, ports, arm, settings)
+    check_stopped_in_its_tick(stats, events, kind)
+    assert len(robot.stops) == 1
 
 
 franky = pytest.importorskip("franky", reason="franky-control is not installed (extra 'franka')")
@@ -95,24 +146,25 @@ def franka():
         yield sim, robot
 
 
+def simulated(sim, seconds: float) -> None:
+    """Wait until the simulation has run ``seconds`` [s] of its own time (a busy machine runs it
+    slower than the wall clock: the arm settles in simulated time)."""
+    start, deadline = sim.time, time.monotonic() + 120.0
+    while sim.time - start < seconds:
+        if time.monotonic() > deadline:
+            raise AssertionError(f"franky-sim ran {sim.time - start:.3f} s in 120 s")
+        time.sleep(0.01)
+
+
 @pytest.mark.parametrize(("kind", "settings"), FAULTS)
 def test_each_box_fault_holds_the_franky_sim_arm(box, ports, arm, franka, kind, settings):
     sim, robot = franka
-    stops = []
-    stop = robot.stop
-    robot.stop = lambda: (stops.append(time.monotonic()), stop())
-    try:
-        stats, injected, commands = run_with_fault(robot, box, ports, arm, settings)
-    finally:
-        del robot.stop
-    assert stats.stop_reason == kind, stats.report()
-    assert len(stops) == 1 and any(dq.any() for _, dq in commands)
-    bound = (0.0 if kind == "status" else LIMIT) + 1.0 / RATE + 0.05  # a loaded machine
-    assert stops[0] - injected < bound, (stops[0] - injected, stats.message)
-    moving = max(np.max(np.abs(dq)) for _, dq in commands)  # [rad/s] commanded while guided
-    time.sleep(0.3)  # the arm holds where it stopped: it settles, as after any move, and
+    stats, events = run_with_fault(robot, box, ports, arm, settings)
+    check_stopped_in_its_tick(stats, events, kind)
+    moving = max(np.max(np.abs(e[1])) for e in events if e[0] == "command")  # [rad/s] guided
+    simulated(sim, 0.3)  # the arm holds where it stopped: it settles, as after any move, and
     held = robot.joint_positions()  # does not follow the last command
     assert np.max(np.abs(robot.joint_velocities())) < 0.25 * moving
-    time.sleep(0.3)
+    simulated(sim, 0.3)
     assert np.max(np.abs(robot.joint_positions() - held)) < 1e-3  # [rad]
     robot.move_to(HOME)
