@@ -73,6 +73,7 @@ _GROUPS = {
         "MissingDependency": ".exceptions",
         "ConventionMistake": ".exceptions",
         "UnexplainedReadings": ".exceptions",
+        "InconsistentPoses": ".exceptions",
     },
 }
 """The top-level names by group, in the user's order: ``{group: {name: defining module}}``."""

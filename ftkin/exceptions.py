@@ -283,3 +283,28 @@ class RecordingInterrupted(SessionInterrupted):
             f"poses recorded so far are in {samples_path}: record_poses(..., resume=True) "
             "(ftkin record --resume) continues it",
         )
+
+
+class InconsistentPoses(FtkinError):
+    """Poses of a calibration session whose readings do not fit the others, measured again and
+    still off (something touched the tool or the arm there): nothing is calibrated, written or
+    sent.
+
+    Attributes:
+        pose_ids: The poses (indices in the session's plan).
+        details: One line per pose: its residuals against a fit of the others, and its score.
+        samples_path: The samples file (it holds the poses that fit, not these).
+    """
+
+    def __init__(self, pose_ids: Sequence[int], details: Sequence[str], samples_path):
+        self.pose_ids = [int(pose) for pose in pose_ids]
+        self.details = list(details)
+        self.samples_path = samples_path
+        super().__init__(
+            f"pose(s) {', '.join(map(str, self.pose_ids))} do not fit the other poses, measured "
+            f"again and still off ({'; '.join(self.details)}): something touches the tool or "
+            "the arm there (a cable, a link of the arm, a hand), or the tool moved on the sensor. "
+            f"Nothing was calibrated or written; {samples_path} holds the poses that fit. Remove "
+            "the cause and resume the session (resume=True, --resume) to measure them again, or "
+            "plan anew with a larger clearance (clearance=, --clearance) in a new samples file"
+        )

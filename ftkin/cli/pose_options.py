@@ -4,7 +4,7 @@
 Every command that plans or visits calibration poses takes these flags with the same spelling,
 default and help (``tests/cli/test_flags.py`` walks the parsers): ``--margin``,
 ``--floor-height`` / ``--no-floor``, ``--max-tilt-deg``, ``--joint-range NAME:LO:HI``,
-``--no-self-collision`` (:class:`~ftkin.planning.constraints.PoseConstraints`) and
+``--no-self-collision``, ``--clearance`` (:class:`~ftkin.planning.constraints.PoseConstraints`) and
 ``--readings-per-pose``.
 """
 
@@ -33,6 +33,7 @@ CONSTRAINT_OPTIONS = (
     declared_option(PoseConstraints, "max_tilt"),
     declared_option(PoseConstraints, "joint_ranges"),
     declared_option(PoseConstraints, "self_collision"),
+    declared_option(PoseConstraints, "clearance"),
 )
 """The pose constraints (:func:`constraints_from_args`), declared on
 :class:`~ftkin.planning.constraints.PoseConstraints`; ``--no-floor`` is the command line's way

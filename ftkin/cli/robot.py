@@ -285,6 +285,7 @@ def _plan_options(args) -> dict:
         "max_tilt": constraints.max_tilt,
         "joint_ranges": constraints.joint_ranges,
         "self_collision": constraints.self_collision,
+        "clearance": constraints.clearance,
     }
 
 

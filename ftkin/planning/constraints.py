@@ -9,7 +9,8 @@ applies them to configurations, cheapest test first:
    frame) at least ``floor_height`` [m] above the base frame's origin (base z);
 3. tilt: the tool axis (z axis of the tool frame, else of the sensor frame)
    within ``max_tilt`` [rad] of pointing straight down (base −z);
-4. no self-collision (:class:`~ftkin.kinematics.collision.SelfCollision`).
+4. no self-collision: the links (their meshes' convex hulls) at least ``clearance`` [m]
+   apart (:class:`~ftkin.kinematics.collision.SelfCollision`).
 
 :func:`check_tilt_observability` and :func:`check_information` refuse, before
 any optimization, constraint sets under which no pose set could determine
@@ -26,7 +27,7 @@ import pinocchio as pin
 from ..calibration.model import COMPONENT_NAMES
 from ..calibration.mount import MOUNT_NAMES
 from ..exceptions import InvalidInput, UnobservableParameters
-from ..kinematics.collision import SelfCollision
+from ..kinematics.collision import DEFAULT_CLEARANCE, SelfCollision
 from ..kinematics.rotations import euler_zyx_to_matrix
 from ..options import float_text, number, option
 from ..validation import as_in_range, as_real, set_checked
@@ -80,6 +81,9 @@ class PoseConstraints:
             [rad], or None.
         joint_ranges: ``((joint name, lower, upper), ...)`` extra ranges [rad].
         self_collision: Whether to reject self-colliding configurations.
+        clearance: Smallest distance kept between the arm's own links (their collision meshes'
+            convex hulls) [m]: a robot's own collision model (and a simulator's) is not the
+            URDF's meshes, so poses that only just miss in the URDF touch on the robot.
     """
 
     margin: float = option(
@@ -123,6 +127,14 @@ class PoseConstraints:
         flag="--no-self-collision",
         action="store_false",
     )
+    clearance: float = option(
+        DEFAULT_CLEARANCE,
+        "smallest distance kept between the arm's own links (convex hulls of the URDF's "
+        "collision meshes)",
+        unit="m",
+        metavar="M",
+        parse=number(0.0, 1.0),
+    )
 
     def __post_init__(self):
         set_checked(
@@ -131,6 +143,7 @@ class PoseConstraints:
             floor_height=_optional(self.floor_height, "floor_height", 100.0, "m"),
             max_tilt=_optional(self.max_tilt, "max_tilt", np.pi, "rad", low=0.0),
             joint_ranges=_joint_ranges(self.joint_ranges),
+            clearance=as_in_range(self.clearance, "clearance", 0.0, 1.0, "m"),
         )
         if not isinstance(self.self_collision, bool | np.bool_):
             raise InvalidInput(f"self_collision must be True or False, got {self.self_collision!r}")
@@ -145,7 +158,11 @@ class PoseConstraints:
             parts.append(f"sensor and tool above {self.floor_height:g} m (base z)")
         if self.max_tilt is not None:
             parts.append(f"tool axis within {np.rad2deg(self.max_tilt):g}° of straight down")
-        parts.append("no self-collision" if self.self_collision else "self-collision not checked")
+        parts.append(
+            f"no self-collision (links at least {self.clearance:g} m apart)"
+            if self.self_collision
+            else "self-collision not checked"
+        )
         return "; ".join(parts)
 
 
@@ -220,7 +237,11 @@ class FeasibilityChecker:
         tool = [] if arm.tool_frame_id is None else [arm.tool_frame_id]
         self.axis_frame_id = (tool or [arm.sensor_frame_id])[0]
         self.height_frame_ids = [arm.sensor_frame_id, *tool]
-        self.collision = SelfCollision(arm) if constraints.self_collision else None
+        self.collision = (
+            SelfCollision(arm, clearance=constraints.clearance)
+            if constraints.self_collision
+            else None
+        )
         self.rejected = {"floor": 0, "tilt": 0, "self-collision": 0}
 
     def sample(self, count: int, rng: np.random.Generator) -> np.ndarray:

@@ -155,7 +155,9 @@ class ExcitationSpec:
             configuration clipped into the joint bounds); the optimiser may shift it.
         amplitude: Largest excursion of each joint from the centre [rad], scalar or ``(nq,)``.
         constraints: Joint margin, floor height, self-collision (:class:`PoseConstraints`;
-            the tilt limit does not apply to a moving tool and is dropped).
+            the tilt limit does not apply to a moving tool and is dropped, and so is the
+            clearance kept at calibration poses: the links' convex hulls must not touch, a
+            compact wrist's hulls are within 2 cm nearly everywhere).
         noise: Sensor noise weighting the information (None: the paper's sensor).
         candidates: Random starts.
         optimize: False: the first random candidate that meets the constraints,
@@ -202,7 +204,9 @@ class ExcitationSpec:
             period=duration if self.period is None else as_positive(self.period, "period"),
             velocity_fraction=as_positive(self.velocity_fraction, "velocity_fraction"),
             constraints=dataclasses.replace(
-                PoseConstraints() if self.constraints is None else self.constraints, max_tilt=None
+                PoseConstraints() if self.constraints is None else self.constraints,
+                max_tilt=None,
+                clearance=0.0,
             ),
             noise=self.noise if self.noise is not None else SensorNoise.paper(),
         )

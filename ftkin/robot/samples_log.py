@@ -23,6 +23,7 @@ import numpy as np
 
 from ..calibration.model import WRENCH_CHANNELS
 from ..exceptions import InvalidInput, InvalidSamples
+from ..io.atomic import atomic_write_text
 from ..io.csv_table import read_table
 from ..io.samples_csv import POSE_COLUMN
 
@@ -169,3 +170,29 @@ class SamplesLog:
         self._write("\n".join(lines) + "\n")
         self._recorded[pose_id] = q.mean(axis=0)
         self._recorded_extra[pose_id] = e.mean(axis=0)
+
+    def remove_pose(self, pose_id: int, reason: str) -> None:
+        """Take one pose's rows out of the file (rewritten atomically, a ``#`` line saying why):
+        a pose that did not fit the others, to be measured again.
+
+        Raises:
+            InvalidInput: the pose is not in the file.
+        """
+        pose_id = int(pose_id)
+        if pose_id not in self._recorded:
+            raise InvalidInput(f"pose {pose_id} is not recorded in {self.path}")
+        column = self.header.index(POSE_COLUMN)
+        kept = []
+        for line in self.path.read_text(encoding="utf-8").splitlines():
+            cells = line.split(",")
+            data = (
+                line.strip() and not line.lstrip().startswith("#") and line != ",".join(self.header)
+            )
+            if data and len(cells) > column and cells[column].strip() == str(pose_id):
+                continue
+            kept.append(line)
+        header = kept.index(",".join(self.header))
+        kept.insert(header, f"# pose {pose_id} removed: {reason}")
+        with interrupts_held():
+            atomic_write_text(self.path, "\n".join(kept) + "\n")
+            del self._recorded[pose_id], self._recorded_extra[pose_id]

@@ -6,8 +6,12 @@
    self-collision checks) unless given, and visit them in the plan's order;
 2. at each pose wait until the arm is still and the readings stationary, never recording while
    a joint moves (:mod:`ftkin.robot.stillness`);
-3. append the pose's readings to the samples CSV, flushed and synced before the arm moves on
-   (:mod:`ftkin.robot.samples_log`); ``resume=True`` skips the poses already in it;
+3. check the pose against the others (:mod:`ftkin.calibration.pose_consistency`: a fit of the
+   others predicts its reading), then append its readings to the samples CSV, flushed and synced
+   before the arm moves on (:mod:`ftkin.robot.samples_log`); ``resume=True`` skips the poses
+   already in it. A pose that does not fit (something touched the tool or the arm) is not
+   written, or is taken out of the file, and is measured again after the others; one that still
+   does not fit stops the session (:class:`~ftkin.exceptions.InconsistentPoses`);
 4. calibrate (:func:`~ftkin.calibration.estimate.calibrate`) from that file, save the calibration
    (:func:`~ftkin.io.calibration_file.save_calibration`), and check it at a few other poses:
    the compensated force there should be the sensor's noise (:func:`verify_on_robot`).
@@ -20,6 +24,7 @@ recorded pose.
 from __future__ import annotations
 
 import logging
+from collections import Counter, deque
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -28,10 +33,11 @@ import numpy as np
 
 from ..calibration.estimate import calibrate
 from ..calibration.model import STANDARD_GRAVITY
+from ..calibration.pose_consistency import PoseConsistency, check_pose_consistency
 from ..calibration.result import CalibrationResult
-from ..calibration.samples import Samples
+from ..calibration.samples import PoseAverages, Samples
 from ..control.compensation import Compensator
-from ..exceptions import FtkinError, InvalidInput, SessionInterrupted
+from ..exceptions import FtkinError, InconsistentPoses, InvalidInput, SessionInterrupted
 from ..io.calibration_file import save_calibration
 from ..io.samples_csv import load_samples
 from ..io.stream_join import ACCEL_COLUMNS, GYRO_COLUMNS
@@ -130,7 +136,7 @@ def check_given_poses(arm, poses, plan_options: Mapping | None = None) -> np.nda
                 f"[{low[j]:.4g}, {high[j]:.4g}] rad{degrees}: the arm will not move there"
             )
     options = {"floor_height": DEFAULT_FLOOR_HEIGHT, **(plan_options or {})}
-    keys = {"floor_height", "max_tilt", "joint_ranges", "self_collision"}
+    keys = {"floor_height", "max_tilt", "joint_ranges", "self_collision", "clearance"}
     constraints = PoseConstraints(
         margin=0.0,
         **{key: value for key, value in options.items() if key in keys and value is not None},
@@ -162,7 +168,7 @@ def verification_poses(
 ) -> np.ndarray:
     """``count`` random configurations ``(count, nq)`` [rad] that meet the planner's constraints."""
     options = {"floor_height": DEFAULT_FLOOR_HEIGHT, **(plan_options or {})}
-    keys = {"margin", "floor_height", "max_tilt", "joint_ranges", "self_collision"}
+    keys = {"margin", "floor_height", "max_tilt", "joint_ranges", "self_collision", "clearance"}
     constraints = PoseConstraints(
         **{key: value for key, value in options.items() if key in keys and value is not None}
     )
@@ -245,6 +251,7 @@ def calibrate_on_robot(
     g: float = STANDARD_GRAVITY,
     calibrate_options: Mapping | None = None,
     progress: bool | None = None,
+    remeasure: int = 2,
 ) -> CalibrationResult:
     """Calibrate the wrist sensor on the robot (see the module docstring).
 
@@ -268,6 +275,8 @@ def calibrate_on_robot(
         g: Gravity for the tool mass [m/s²].
         calibrate_options: More :func:`~ftkin.calibration.estimate.calibrate` keywords.
         progress: Draw a progress bar (default: when stderr is a terminal).
+        remeasure: Times a pose whose readings do not fit the others is measured again before
+            the session stops (:mod:`ftkin.calibration.pose_consistency`).
 
     Returns:
         The calibration (with the arm's kinematics record).
@@ -277,7 +286,11 @@ def calibrate_on_robot(
             is stopped; the samples file keeps every recorded pose).
         InvalidInput: bad arguments, an existing samples file without ``resume``, or a
             resumed file recorded with another plan.
+        InconsistentPoses: a pose still does not fit the others after ``remeasure`` more
+            visits (nothing calibrated or written; the samples file holds the poses that fit).
     """
+    if isinstance(remeasure, bool) or not isinstance(remeasure, int) or remeasure < 0:
+        raise InvalidInput(f"remeasure must be a whole number >= 0 of visits, got {remeasure!r}")
     stillness = stillness if stillness is not None else Stillness()
     if not isinstance(stillness, Stillness):
         raise InvalidInput(f"stillness must be an ftkin Stillness, got {stillness!r}")
@@ -309,12 +322,46 @@ def calibrate_on_robot(
         extra_columns=imu_columns,
     )
     todo = _poses_to_visit(log, poses)
+    means = _recorded_means(log, arm) if len(todo) < len(poses) else {}
+    queue, attempts = deque(todo), Counter()
+
+    def take_out(check: PoseConsistency, pose_ids) -> None:
+        """Count a visit of each flagged pose; measured too often: stop, nothing calibrated."""
+        attempts.update(pose_ids)
+        failed = [pose for pose in pose_ids if attempts[pose] > remeasure]
+        if failed:
+            raise InconsistentPoses(failed, [check.describe(pose) for pose in failed], log.path)
+        for pose in pose_ids:
+            logger.warning(
+                "%s: measuring it again (something touched the tool or the arm?)",
+                check.describe(pose),
+            )
+
+    def revisit(check: PoseConsistency, pose_ids) -> None:
+        """Take flagged poses out of the file and queue them to be measured again."""
+        pose_ids = list(check.flagged if pose_ids is None else pose_ids)
+        if pose_ids:
+            take_out(check, pose_ids)
+        for pose in pose_ids:
+            log.remove_pose(pose, "did not fit the other poses; measured again")
+            del means[pose]
+            queue.append(pose)
+
+    if not queue:  # a finished file, resumed: checked as well
+        revisit(_consistency(means, g), None)
     with Progress(len(poses), "calibration poses", enabled=progress) as bar:
         bar.advance(len(poses) - len(todo))
-        for pose_id in todo:
-            with _stopping(robot, log, len(poses)):
+        while queue:
+            pose_id = queue.popleft()
+            with _stopping(robot, log, len(poses)):  # Ctrl-C anywhere here: resumable
                 robot.move_to(poses[pose_id], while_moving=checked.read)
                 readings = record_still(robot, checked, readings_per_pose, stillness, tap)
+                mean = _pose_mean(arm, readings)
+                check = _consistency({**means, pose_id: mean}, g)
+                if pose_id in check.flagged:  # not written; measured again after the others
+                    take_out(check, [pose_id])  # (a contact that ends, ends meanwhile)
+                    queue.append(pose_id)
+                    continue
                 log.append_pose(
                     pose_id,
                     readings.joint_positions,
@@ -322,8 +369,14 @@ def calibrate_on_robot(
                     readings.times,
                     readings.extra if imu_columns else None,
                 )
-            logger.info("pose %d recorded (waited %.2f s to settle)", pose_id, readings.wait)
-            bar.advance()
+                means[pose_id] = mean
+                logger.info("pose %d recorded (waited %.2f s to settle)", pose_id, readings.wait)
+                if not attempts[pose_id]:
+                    bar.advance()
+                # poses recorded before there were enough to check them, now out of line
+                revisit(check, [pose for pose in check.flagged if pose != pose_id])
+                if not queue:  # the whole file, resumed poses too: a calibration if it holds
+                    revisit(_consistency(means, g), None)
     result = calibrate_recording(
         log.path, arm, g=g, output=output, calibrate_options=calibrate_options
     )
@@ -341,6 +394,31 @@ def calibrate_on_robot(
         if verification is not None:
             logger.info("%s", verification.report())
     return result
+
+
+def _pose_mean(arm, readings) -> tuple[np.ndarray, np.ndarray]:
+    """``(R_BS (3, 3), mean raw wrench (6,) [N, N·m])`` of one pose's readings."""
+    q = readings.joint_positions.mean(axis=0)
+    return arm.rotation_sensor_to_base(q), readings.wrenches.mean(axis=0)
+
+
+def _recorded_means(log: SamplesLog, arm) -> dict:
+    """``{pose id: (R_BS, mean wrench)}`` of the poses already in a resumed samples file."""
+    averages = load_samples(log.path, arm).samples.pose_averages()
+    return {
+        int(pose): (rotation, wrench)
+        for pose, rotation, wrench in zip(averages.pose_ids, averages.rotations, averages.wrenches)
+    }
+
+
+def _consistency(means: Mapping, g: float) -> PoseConsistency:
+    """The leave-one-out check (:mod:`ftkin.calibration.pose_consistency`) of pose means."""
+    ids = np.array(sorted(means))
+    rotations = np.array([means[pose][0] for pose in ids]).reshape(-1, 3, 3)
+    wrenches = np.array([means[pose][1] for pose in ids]).reshape(-1, 6)
+    count = np.ones(len(ids))
+    averages = PoseAverages(ids, rotations, wrenches, count, np.full((len(ids), 6), np.nan))
+    return check_pose_consistency(averages, g=g)
 
 
 def verify_session(
@@ -397,10 +475,12 @@ class _stopping:
         self.robot.stop()
         if isinstance(error, KeyboardInterrupt):
             reason = "interrupted (Ctrl-C)"
-        elif isinstance(error, FtkinError) and not isinstance(error, InvalidInput):
+        elif isinstance(error, FtkinError) and not isinstance(
+            error, InvalidInput | InconsistentPoses
+        ):
             reason = str(error)
         else:
-            return False  # a programming error or bad input: the arm is stopped, the error stays
+            return False  # a programming error, bad input or poses that do not fit: stays
         raise SessionInterrupted(
             reason, len(self.log.recorded_poses()), self.total, self.log.path
         ) from error
