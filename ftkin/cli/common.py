@@ -331,29 +331,6 @@ def arm_of_calibration(args: argparse.Namespace, calibration, purpose: str) -> A
     )
 
 
-def warn_if_kinematics_differ(loaded, calibration) -> None:
-    """Log a warning when samples were read with another URDF or sensor frame than the
-    calibration's.
-    """
-    samples = loaded.samples
-    if (
-        samples.urdf is not None
-        and calibration.urdf is not None
-        and (
-            Path(samples.urdf).name != Path(calibration.urdf).name
-            or samples.sensor_frame != calibration.sensor_frame
-        )
-    ):
-        logger.warning(
-            "the calibration was made with %s (sensor frame %s) but these samples were read with "
-            "%s (sensor frame %s)",
-            calibration.urdf,
-            calibration.sensor_frame,
-            samples.urdf,
-            samples.sensor_frame,
-        )
-
-
 def segment_parameters_from_args(args: argparse.Namespace):
     """The :class:`~ftkin.io.static_segments.SegmentParameters` of :func:`add_samples_arguments`
     (how still segments of a recording are found), or None with ``--all-rows``."""

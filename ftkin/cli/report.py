@@ -7,7 +7,6 @@ from .common import (
     add_samples_arguments,
     arm_for_calibration,
     load_samples_from_args,
-    warn_if_kinematics_differ,
 )
 
 
@@ -39,7 +38,6 @@ def register(subparsers) -> None:
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
     loaded = load_samples_from_args(args.samples, args, arm=arm_for_calibration(args, calibration))
-    warn_if_kinematics_differ(loaded, calibration)
     save_report(calibration, loaded.samples, args.output, args.title)
     print(f"wrote report of {len(set(loaded.samples.pose_ids.tolist()))} poses to {args.output}")
     return 0

@@ -20,7 +20,6 @@ from .common import (
     add_samples_arguments,
     arm_for_calibration,
     load_samples_from_args,
-    warn_if_kinematics_differ,
 )
 
 SHEET_CELLS = 25
@@ -133,7 +132,6 @@ def _load_frames(args, calibration, source: str):
     """The frames to show and the arm to draw them on (None: orientations only)."""
     arm = arm_for_calibration(args, calibration) or Arm.default()
     loaded = load_samples_from_args(source, args, static_only=not args.replay, arm=arm)
-    warn_if_kinematics_differ(loaded, calibration)
     frames = (
         replay_frames(loaded.samples, calibration, args.max_frames, loaded.table.source)
         if args.replay

@@ -30,6 +30,7 @@ import numpy as np
 from ..calibration.model import FloatModel, SensorModel, contact_batch, gravity_in_sensor
 from ..calibration.result import CalibrationResult
 from ..calibration.samples import Samples
+from ..calibration.samples_arm import warn_if_samples_arm_differs
 from ..exceptions import FrameNotFound, InvalidInput, MissingDependency, UrdfError
 from ..kinematics.arm import Arm
 from ..kinematics.mounting import mounted_arm
@@ -464,6 +465,7 @@ class Compensator:
         Samples read from joint angles hold the URDF's ``R_BS``: the calibration's mount is applied
         to them.
         """
+        warn_if_samples_arm_differs(samples, self.calibration)  # read with another arm?
         rotations = samples.rotations
         if samples.joint_positions is not None and self.calibration.has_mount:
             rotations = rotations @ self.calibration.mount_rotation.T

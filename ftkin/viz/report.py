@@ -20,6 +20,8 @@ from ..calibration.conventions import as_real_sensor
 from ..calibration.model import WRENCH_CHANNELS, SensorModel
 from ..calibration.result import CalibrationResult
 from ..calibration.samples import Samples
+from ..calibration.samples_arm import warn_if_samples_arm_differs
+from ..control.bias_checks import bias_at_times
 from ..exceptions import InvalidInput, MissingDependency
 from ..io.atomic import atomic_write_bytes
 from .report_series import draw_series, report_series
@@ -94,7 +96,8 @@ def report_data(calibration, samples: Samples) -> dict[str, np.ndarray]:
     Returns a dict with ``pose_ids`` ``(P,)``, ``measured`` ``(P, 6)`` (mean raw
     wrench [N, N·m]), ``predicted`` ``(P, 6)`` (model prediction at the pose's
     mean orientation; for a drift-aware calibration and samples with times,
-    with the bias at the pose's time), ``residuals`` = measured − predicted, and
+    with the bias at the pose's time, :func:`~ftkin.control.bias_checks.bias_at_times`),
+    ``residuals`` = measured − predicted, and
     ``standard_error`` ``(P, 6)`` (spread / √count; NaN for single readings).
     """
     calibration = _as_calibration(calibration)
@@ -103,10 +106,13 @@ def report_data(calibration, samples: Samples) -> dict[str, np.ndarray]:
     poses = as_real_sensor(
         samples, calibration
     ).pose_averages()  # the stored sign, axis flip and mount applied
+    warn_if_samples_arm_differs(samples, calibration)
     predicted = calibration.predict(poses.rotations)
     if poses.times is not None and calibration.drift is not None:
-        predicted = calibration.tool_gravity_wrench(poses.rotations) + calibration.bias_at(
-            poses.times
+        # the bias a reading at that time had, by compensate's rule (the trajectory inside the
+        # recording, the calibration's bias, re-zeroed perhaps, elsewhere)
+        predicted = calibration.tool_gravity_wrench(poses.rotations) + bias_at_times(
+            calibration.drift, calibration.bias, poses.times
         )
     return {
         "pose_ids": poses.pose_ids,

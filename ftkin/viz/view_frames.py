@@ -7,7 +7,8 @@ Readings are those of the real sensor (the calibration's reading signs and mount
 times, each reading is shifted by ``bias(t) − bias`` so that the viewer, which subtracts the
 calibration's bias, subtracts the bias the reading had: the rule of ``ftkin compensate``
 (:func:`~ftkin.control.bias_checks.bias_at_times`: the trajectory inside the recording, the
-calibration's bias elsewhere; its clock warnings included).
+calibration's bias elsewhere; its clock warnings included). Samples read with another arm than
+the calibration's are warned of (:mod:`ftkin.calibration.samples_arm`).
 """
 
 from collections.abc import Sequence
@@ -17,6 +18,7 @@ import numpy as np
 
 from ..calibration.conventions import as_real_sensor
 from ..calibration.samples import Samples
+from ..calibration.samples_arm import warn_if_samples_arm_differs
 from ..control.bias_checks import bias_at_times
 from ..exceptions import InvalidInput
 from .contact_sheet import force_angle_deg
@@ -81,6 +83,7 @@ def _at_reading_bias(calibration, wrenches: np.ndarray, times) -> np.ndarray:
 def pose_frames(samples: Samples, calibration) -> ViewFrames:
     """One frame per pose of calibration ``samples``: the mean reading, orientation and joint
     angles of each pose, in the order the poses first appear."""
+    warn_if_samples_arm_differs(samples, calibration)
     samples = as_real_sensor(samples, calibration)
     averages = samples.pose_averages()
     configurations = (
@@ -111,6 +114,7 @@ def replay_frames(
     Raises:
         InvalidInput: the time column decreases somewhere (``source`` names the file).
     """
+    warn_if_samples_arm_differs(samples, calibration)
     samples = as_real_sensor(samples, calibration)
     times = samples.times
     if times is not None and np.any(np.diff(times) < 0):

@@ -101,3 +101,21 @@ def test_the_table_has_the_norms_and_the_angle_of_the_drawn_vectors():
     assert line.split() == ["pose", "3", "14.1421", "10.0000", "45.000", "10.0000", "0.5000"]
     table = vector_table([f"row {i}" for i in range(42)], [vectors] * 42)
     assert len(table.splitlines()) == 1 + 40 + 1 and table.endswith("... 2 more")
+
+
+def test_the_report_predicts_with_the_bias_of_compensate_after_a_re_zero():
+    """The report's prediction at a pose's time takes the bias by the same rule: a pose after
+    the recording of a re-zeroed calibration has the re-zeroed bias (its residual is its
+    contact, zero here), not the trajectory's end."""
+    from ftkin.viz.report import report_data
+
+    rezeroed = END_BIAS + [0.4, 0.0, 0.0, 0.0, 0.0, 0.0]
+    calibration = _calibration(rezeroed)
+    had = np.array([END_BIAS - 0.05, rezeroed])  # at 150 s (inside) and 300 s (after)
+    samples = Samples(
+        _readings(had, np.zeros((2, 6))),
+        np.repeat(np.eye(3)[None], 2, axis=0),
+        np.arange(2),
+        times=np.array([150.0, 300.0]),
+    )
+    np.testing.assert_allclose(report_data(calibration, samples)["residuals"], 0.0, atol=1e-12)
