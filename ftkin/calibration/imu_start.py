@@ -58,7 +58,7 @@ def kabsch_start(units: np.ndarray, forces: np.ndarray, g: float):
                 "an accelerometer at rest must read +g upward (specific force)",
                 "a raw reading is the load on the sensor (a tool hanging below pulls it down)",
             ],
-            fixes=["negate specific_force (ax, ay, az)", "negate the wrench (sensor_sign -1)"],
+            fixes=["negate specific_force (ax, ay, az)", "negate the wrench (fx..mz)"],
         )
     rotation = left @ np.diag([1.0, 1.0, -1.0 if mirrored else 1.0]) @ right_t
     spread = float(np.sum(centred_units**2))

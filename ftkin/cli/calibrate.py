@@ -306,6 +306,12 @@ def _run_imu(args, noise, paths) -> int:
             args.prior is not None and not args.dynamic,
             "--prior (a static IMU calibration) applies to --dynamic",
         ),
+        (
+            args.sensor_sign != 1 or args.flip_axis is not None,
+            "--sensor-sign and --flip-axis apply to a calibration with an orientation; the IMU's "
+            "fit takes the wrench as the load on the sensor: for a sensor that reports the "
+            "reaction, negate the wrench columns (fx..mz) of the file",
+        ),
     )
     samples, joined = load_imu_samples(
         *paths,

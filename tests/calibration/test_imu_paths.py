@@ -21,6 +21,7 @@ from ftkin.calibration.imu_fit import covariance_at
 from ftkin.calibration.imu_problem import ImuStaticProblem
 from ftkin.calibration.imu_problem_base import NineChannelProblem
 from ftkin.cli import main
+from ftkin.exceptions import InvalidInput, SuspectConvention
 from ftkin.io.csv_table import write_csv
 from tests.calibration.test_imu_fit import BIAS, IMU_ROTATION, SCALE, WRENCH_BIAS
 
@@ -197,7 +198,7 @@ def test_too_many_poses_advise_what_each_door_takes(tmp_path, capsys):
     up = np.einsum("pji,j->pi", rotations, [0.0, 0.0, G])
     wrench = np.hstack([-MASS * up, np.cross(COM, -MASS * up)])
     accel = up @ IMU_ROTATION
-    with pytest.raises(ftkin.InvalidInput, match="pose_ids in Python") as caught:
+    with pytest.raises(InvalidInput, match="pose_ids in Python") as caught:
         ftkin.calibrate(Samples.from_imu(accel, wrench))
     assert "ftkin.calibrate_dynamic" in str(caught.value)
     path = tmp_path / "rows.csv"
@@ -246,3 +247,24 @@ def test_a_joined_slower_imu_is_counted_in_the_fused_fit_too(tmp_path):
         fit.problem.channel_counts[:, :3], np.tile(factor * counts, 3), rtol=1e-3
     )
     np.testing.assert_allclose(fit.problem.channel_counts[:, 3:], np.tile(counts, 6), rtol=1e-12)
+
+
+def test_a_reaction_wrench_from_the_imu_alone_is_named_and_the_fix_works(tmp_path, capsys):
+    """The IMU's fit takes no sensor sign: ``--sensor-sign -1`` was accepted and ignored; it is
+    refused, and the fix both doors are given (negate the wrench columns) calibrates."""
+    _, ids, wrench, accel = readings(4)
+    with pytest.raises(SuspectConvention) as caught:
+        ftkin.calibrate(Samples.from_imu(accel, -wrench, ids))
+    assert "negate the wrench (fx..mz)" in caught.value.fixes
+    header = ["pose", "fx", "fy", "fz", "mx", "my", "mz", "ax", "ay", "az"]
+    reaction = tmp_path / "reaction.csv"
+    write_csv(reaction, header, np.column_stack([ids, -wrench, accel]).tolist())
+    assert main(["calibrate", str(reaction), "--sensor-sign", "-1"]) == 2
+    err = capsys.readouterr().err
+    assert "negate the wrench columns (fx..mz)" in err and "Traceback" not in err
+    negated = tmp_path / "negated.csv"  # the advice followed
+    write_csv(negated, header, np.column_stack([ids, wrench, accel]).tolist())
+    out = tmp_path / "calib.json"
+    assert main(["calibrate", str(negated), "-o", str(out)]) == 0
+    saved = json.loads(out.read_text())
+    check_truth(saved["tool_mass"], saved["center_of_mass"])
