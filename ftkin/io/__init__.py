@@ -16,7 +16,7 @@ from .._lazy import lazy_exports
 
 _EXPORTS = {
     "MotionRecording": ".motion_recording",
-    "Payload": ".payload_export",
+    "Payload": ".payload_inertia",
     "Stream": ".stream_join",
     "diagnose_samples": ".table_readings",
     "export_payload": ".export",

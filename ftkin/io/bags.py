@@ -88,6 +88,8 @@ class BagSamples(LoadedSamples):
     (``recording``).
     """
 
+    recording: BagRecording | None = None  # the base's property (None for a CSV), as a field
+
 
 def _rosbags():
     try:

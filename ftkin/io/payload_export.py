@@ -38,18 +38,16 @@ A static calibration does not determine the inertia: it is written when given
 (``inertia=``, CLI ``--inertia``), else as zeros (a point mass) with a note.
 """
 
-from dataclasses import dataclass
-
 import numpy as np
 import pinocchio as pin
 
-from ..calibration.log_cholesky import is_physically_consistent, parameters_from_body
 from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from ..kinematics.robots import flange_frame_name
 from ..options import number
 from ..validation import as_float_array
 from .export_format import ExportFormat, ExportOption, ExportRequest
+from .payload_inertia import Payload, RigidBody, checked_inertia, controller_load
 
 UR_SET_PAYLOAD_SERVICE = "/io_and_status_controller/set_payload"
 FRANKA_SET_LOAD_SERVICE = "/service_server/set_load"
@@ -83,24 +81,6 @@ SENSOR_BODY = ExportOption(
     "add the sensor's own body above its measuring plane (datasheet) [kg, m, flange frame]",
     {"type": number(), "nargs": 4, "metavar": ("MASS", "CX", "CY", "CZ")},
 )
-
-
-@dataclass(frozen=True)
-class Payload:
-    """The tool as a robot controller's payload.
-
-    Attributes:
-        mass: Tool mass [kg].
-        center_of_mass: Centre of mass in the flange frame [m].
-        flange_frame: Name of that frame in the URDF.
-        inertia: ``(3, 3)`` inertia about the centre of mass, flange axes [kg·m²], or None
-            (unknown).
-    """
-
-    mass: float
-    center_of_mass: np.ndarray
-    flange_frame: str
-    inertia: np.ndarray | None = None
 
 
 def sensor_in_flange(arm, flange_frame: str) -> pin.SE3:
@@ -159,47 +139,10 @@ def payload_in_flange(
     return Payload(mass, com + placement.translation, flange_frame, checked_inertia(inertia))
 
 
-def checked_inertia(value) -> np.ndarray | None:
-    """A rotational inertia [kg·m²] as a symmetric positive semidefinite ``(3, 3)`` matrix, from
-    a ``(3, 3)`` matrix or ``[ixx, iyy, izz, ixy, ixz, iyz]``; None stays None.
-
-    Raises:
-        InvalidInput: another shape, not finite, not symmetric, or a negative principal moment.
-    """
-    if value is None:
-        return None
-    array = as_float_array(value, "inertia [kg·m²]")
-    if array.shape == (6,):
-        ixx, iyy, izz, ixy, ixz, iyz = array
-        array = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-    if array.shape != (3, 3) or not np.all(np.isfinite(array)) or not np.allclose(array, array.T):
-        raise InvalidInput(
-            "inertia must be a symmetric (3, 3) matrix or [ixx, iyy, izz, ixy, ixz, iyz] [kg·m²], "
-            f"got {value!r}"
-        )
-    array = 0.5 * (array + array.T)
-    moments = np.linalg.eigvalsh(array)
-    tolerance = 1e-9 * max(1.0, float(np.abs(array).max()))
-    if moments[0] < -tolerance:
-        raise InvalidInput(
-            f"inertia must be positive semidefinite, got principal moments {moments.tolist()} kg·m²"
-        )
-    # a body has it when its pseudo-inertia is (the calibration's own test; the COM's own
-    # inertia is independent of the mass and the COM, so a unit point mass at the origin)
-    if not is_physically_consistent(parameters_from_body(1.0, np.zeros(3), array), -tolerance):
-        raise InvalidInput(
-            f"inertia's principal moments {moments.tolist()} kg·m² break the triangle inequality "
-            "(the largest must not exceed the sum of the other two): no rigid body has them"
-        )
-    return array
-
-
 def _body(value):
     """A :class:`~ftkin.io.payload_inertia.RigidBody`, or ``[mass, cx, cy, cz]`` [kg, m, flange
     frame] as a point mass; None stays None.
     """
-    from .payload_inertia import RigidBody  # it imports this module
-
     if value is None or isinstance(value, RigidBody):
         return value
     numbers = as_float_array(value, "a body [mass, cx, cy, cz]")
@@ -271,8 +214,6 @@ class FrankaLoadExport(PayloadFormat):
         bodies = [_body(request.option(name)) for name in ("end_effector", "sensor_body")]
         if all(body is None for body in bodies):
             return measured
-        from .payload_inertia import controller_load  # it imports this module
-
         return controller_load(measured, *bodies)
 
     def document(self, request: ExportRequest) -> dict:

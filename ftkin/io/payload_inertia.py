@@ -15,6 +15,10 @@ model is wrong by that weight, and an arm under velocity or torque control drift
 
 A static calibration does not see rotational inertia: when the measured inertia is unknown,
 the difference ``Y_measured − Y_end_effector`` is sent as a point mass at its centre of mass.
+
+The load itself (:class:`Payload`) and the check of a rotational inertia
+(:func:`checked_inertia`) live here, below the export formats of
+:mod:`ftkin.io.payload_export` that write them.
 """
 
 from dataclasses import dataclass, replace
@@ -22,15 +26,68 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pinocchio as pin
 
+from ..calibration.log_cholesky import is_physically_consistent, parameters_from_body
 from ..exceptions import InvalidInput, NonPhysicalPayload
-from ..validation import as_vector
-from .payload_export import Payload, checked_inertia
+from ..validation import as_float_array, as_vector
 
 MASS_TOLERANCE = 1e-4
 """Masses within this of zero are zero [kg] (float32 round trips, calibration noise)."""
 MAX_COM_DISTANCE = 1.0
 """A load's centre of mass farther than this from the flange origin is refused [m]."""
 END_EFFECTOR_SETTING = "the robot's end-effector setting (libfranka m_ee, F_x_Cee, I_ee)"
+
+
+@dataclass(frozen=True)
+class Payload:
+    """The tool as a robot controller's payload.
+
+    Attributes:
+        mass: Tool mass [kg].
+        center_of_mass: Centre of mass in the flange frame [m].
+        flange_frame: Name of that frame in the URDF.
+        inertia: ``(3, 3)`` inertia about the centre of mass, flange axes [kg·m²], or None
+            (unknown).
+    """
+
+    mass: float
+    center_of_mass: np.ndarray
+    flange_frame: str
+    inertia: np.ndarray | None = None
+
+
+def checked_inertia(value) -> np.ndarray | None:
+    """A rotational inertia [kg·m²] as a symmetric positive semidefinite ``(3, 3)`` matrix, from
+    a ``(3, 3)`` matrix or ``[ixx, iyy, izz, ixy, ixz, iyz]``; None stays None.
+
+    Raises:
+        InvalidInput: another shape, not finite, not symmetric, or a negative principal moment.
+    """
+    if value is None:
+        return None
+    array = as_float_array(value, "inertia [kg·m²]")
+    if array.shape == (6,):
+        ixx, iyy, izz, ixy, ixz, iyz = array
+        array = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    if array.shape != (3, 3) or not np.all(np.isfinite(array)) or not np.allclose(array, array.T):
+        raise InvalidInput(
+            "inertia must be a symmetric (3, 3) matrix or [ixx, iyy, izz, ixy, ixz, iyz] [kg·m²], "
+            f"got {value!r}"
+        )
+    array = 0.5 * (array + array.T)
+    moments = np.linalg.eigvalsh(array)
+    tolerance = 1e-9 * max(1.0, float(np.abs(array).max()))
+    if moments[0] < -tolerance:
+        raise InvalidInput(
+            f"inertia must be positive semidefinite, got principal moments {moments.tolist()} kg·m²"
+        )
+    # a body has it when its pseudo-inertia is (the calibration's own test; the COM's own
+    # inertia is independent of the mass and the COM, so a unit point mass at the origin)
+    if not is_physically_consistent(parameters_from_body(1.0, np.zeros(3), array), -tolerance):
+        raise InvalidInput(
+            f"inertia's principal moments {moments.tolist()} kg·m² break the triangle inequality "
+            "(the largest must not exceed the sum of the other two): no rigid body has them"
+        )
+    return array
 
 
 @dataclass(frozen=True)

@@ -39,7 +39,6 @@ usable still segment is refused. ``LoadedSamples.layout`` says how the table was
 import logging
 import re
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -58,9 +57,6 @@ from .recorded_robot import check_recorded_robot
 from .static_segments import SegmentParameters, SegmentSearch, segment_index
 from .table_layout import POSE_COLUMN_LAYOUT, RECORDING, TableLayout, table_layout
 from .time_columns import times_from_table
-
-if TYPE_CHECKING:  # the bag reader imports this module
-    from .bags import BagRecording
 
 logger = logging.getLogger(__name__)
 
@@ -321,8 +317,8 @@ class LoadedSamples:
     its pose column, one reading per pose, readings grouped by pose, or a continuous recording
     whose still segments are the poses; ``table`` then has a ``pose`` column), None when the
     table has no times or every row was kept as read. ``search`` holds the still segments of a
-    continuous recording. ``recording`` is what a bag held (:class:`~ftkin.io.bags.BagSamples`),
-    None for a CSV.
+    continuous recording. A bag's reader returns the specialization
+    :class:`~ftkin.io.bags.BagSamples`, which adds :attr:`recording`.
     """
 
     samples: Samples
@@ -330,7 +326,14 @@ class LoadedSamples:
     orientation: str
     orientation_columns: list[str]
     layout: "TableLayout | None" = None
-    recording: "BagRecording | None" = None
+
+    @property
+    def recording(self):
+        """What a bag held (:class:`~ftkin.io.bags.BagRecording`): None here, for a CSV; a
+        :class:`~ftkin.io.bags.BagSamples` carries it (this module does not know the bag reader,
+        which imports it).
+        """
+        return None
 
     @property
     def search(self) -> SegmentSearch | None:

@@ -32,7 +32,7 @@ from ..exceptions import InvalidInput, MissingDependency, UrdfError
 from ..validation import as_float_array
 from .arm import Arm, SensorMount
 from .ur_eseries import FLANGE_FRAME as UR_FLANGE_FRAME
-from .ur_eseries import UR_DH, load_ur
+from .ur_eseries import UR_DH, ur_arm
 
 DEFAULT_ROBOT = "ftkin_c4"
 BUNDLED_FLANGE_FRAME = "flange"
@@ -217,6 +217,13 @@ def _load_spec(spec: RobotSpec, sensor_offset=None, tool_frame: str | None = Non
     )
 
 
+def _load_ur(name: str, sensor_offset=None, tool_frame: str | None = None) -> Arm:
+    """The ``--robot`` loader of a UR arm: :func:`~ftkin.kinematics.ur_eseries.ur_arm` with the
+    sensor offset of :func:`sensor_mount_from_offset` on ``tool0``.
+    """
+    return ur_arm(name, sensor_mount_from_offset(UR_FLANGE_FRAME, sensor_offset), tool_frame)
+
+
 def _fr3(sensor_offset=None, tool_frame: str | None = None) -> Arm:
     from .fr3 import FR3_TOOL_FRAME, fr3_arm
 
@@ -233,7 +240,7 @@ ROBOTS: dict[str, Callable[..., Arm]] = {
     "fr3": _fr3,
     **{name: functools.partial(_load_spec, spec) for name, spec in ROBOT_SPECS.items()},
     # UR e-Series, UR20, UR30: built from UR's DH parameters (no URDF), flange tool0
-    **{name: functools.partial(load_ur, name) for name in UR_DH},
+    **{name: functools.partial(_load_ur, name) for name in UR_DH},
 }
 """Loaders by robot name; each takes an optional sensor offset and tool frame (see
 :func:`load_robot`).

@@ -173,15 +173,6 @@ def ur_arm(
     return arm
 
 
-def load_ur(name: str, sensor_offset=None, tool_frame: str | None = None) -> Arm:
-    """The ``--robot`` loader: :func:`ur_arm` with the sensor offset of
-    :func:`~ftkin.kinematics.robots.sensor_mount_from_offset` (on ``tool0``).
-    """
-    from .robots import sensor_mount_from_offset  # robots imports this module
-
-    return ur_arm(name, sensor_mount_from_offset(FLANGE_FRAME, sensor_offset), tool_frame)
-
-
 def flange_rotation(q) -> np.ndarray:
     """``ᴮR_tool0`` ``(3, 3)`` of any UR arm at ``q`` ``(6,)`` [rad] (the DH lengths do not rotate:
     ``R = ∏ Rz(qᵢ) Rx(αᵢ)``; computed on one model, cached).

@@ -33,8 +33,8 @@ from ..exceptions import (
     RobotError,
 )
 from ..io.export import arm_problems, recorded_arm
-from ..io.payload_export import Payload, payload_in_flange
-from ..io.payload_inertia import RigidBody, controller_load
+from ..io.payload_export import payload_in_flange
+from ..io.payload_inertia import Payload, RigidBody, controller_load
 from ..validation import as_vector
 
 logger = logging.getLogger(__name__)

@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from ftkin.exceptions import NonPhysicalPayload
-from ftkin.io.payload_export import Payload
-from ftkin.io.payload_inertia import RigidBody, controller_load
+from ftkin.io.payload_inertia import Payload, RigidBody, controller_load
 
 
 def _steiner(mass, com, inertia_about_com):
