@@ -23,6 +23,7 @@ from .linear import fit_linear
 from .ml import LOSSES, fit_ml
 from .model import STANDARD_GRAVITY, SensorModel, check_gravity
 from .mount import MOUNT_NAMES, POSES_NEEDED, MountMode
+from .orientation_mistakes import refuse_orientation_mistakes
 from .result import CalibrationResult
 from .samples import PoseAverages, Samples, check_one_visit_per_pose
 
@@ -77,6 +78,10 @@ class CalibrationOptions:
         resolution: ``ml`` only: ``(force [N], torque [N·m])`` resolution of one
             reading (its quantization step): an estimated noise is at least
             ``resolution / √12``, so a drift model cannot take all of it.
+        convention_check: Read orientations given directly (Euler angles, quaternions,
+            matrices) under their common mistakes and refuse data that fit only so
+            (:mod:`ftkin.calibration.orientation_mistakes`); False: fit as given (CLI:
+            ``--no-convention-check``).
     """
 
     method: str = option(
@@ -164,6 +169,10 @@ class CalibrationOptions:
         metavar=("N", "N·m"),
     )
 
+    convention_check: bool = option(
+        True, "refit orientations under their common mistakes (--no-convention-check)", cli=False
+    )
+
     def __post_init__(self):
         object.__setattr__(self, "g", check_gravity(self.g))
         if self.resolution is not None:
@@ -183,6 +192,10 @@ class CalibrationOptions:
             (
                 self.method not in METHODS,
                 f"unknown calibration method {self.method!r}; expected one of {', '.join(METHODS)}",
+            ),
+            (
+                not isinstance(self.convention_check, bool),
+                f"convention_check must be True or False, got {self.convention_check!r}",
             ),
             (
                 self.loss not in LOSSES,
@@ -297,6 +310,9 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
             direction); the error names them.
         InvalidInput: an option or a combination of options
             (:class:`CalibrationOptions`), or options the samples do not support.
+        ConventionMistake: orientations that fit only when read in another convention (Euler
+            angles in radians, a quaternion x,y,z,w, ``R_SB`` for ``R_BS``), with the fix;
+            ``convention_check=False`` fits them as given.
         SuspectConvention: the data fit with an axis reversed, or the tool
             weight points more than 90° from the expected gravity direction, or more than 15°
             from a declared one without ``allow_tilt``.
@@ -320,11 +336,11 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
         raise InvalidInput(f"unknown calibrate option(s) {', '.join(sorted(unknown))}")
     options = replace(options or CalibrationOptions(), **keywords)
     drift_models = options.check(samples)
+    signs = reading_signs(options.sensor_sign, options.flip_axis)
+    if options.convention_check:  # before the sign's check: a wrong order is no sign
+        refuse_orientation_mistakes(samples, signs)
     raw_poses = samples.pose_averages()
-    poses = replace(
-        raw_poses,
-        wrenches=raw_poses.wrenches * reading_signs(options.sensor_sign, options.flip_axis),
-    )
+    poses = replace(raw_poses, wrenches=raw_poses.wrenches * signs)
     tilt_warnings = check_conventions(
         detect_sign_and_handedness(
             raw_poses,

@@ -94,7 +94,8 @@ def _from_calibration_options(options) -> FusedCalibrationOptions:
         raise InvalidInput(
             f"options must be an ftkin FusedCalibrationOptions, got {type(options).__name__}"
         )
-    carried = ("noise", "g", "estimate_mount", "sensor_sign", "flip_axis")
+    # convention_check: the fused fit reads no orientation under its mistakes (nothing to skip)
+    carried = ("noise", "g", "estimate_mount", "sensor_sign", "flip_axis", "convention_check")
     default = CalibrationOptions()
     changed = [
         f.name

@@ -16,6 +16,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from ..exceptions import InvalidInput, InvalidSamples
+from ..kinematics.joint_units import degrees_for_radians
 from ..kinematics.record import KinematicsRecord
 from ..kinematics.rotations import euler_zyx_deg_to_matrix, quaternion_to_matrix
 from ..validation import (
@@ -62,6 +63,38 @@ def check_time_span(times: np.ndarray) -> None:
         raise InvalidSamples(message)
     logger.warning(message)
 
+
+def check_joint_radians(arm, joint_positions: np.ndarray) -> None:
+    """Refuse joint angles ``(N, nq)`` that can only be degrees
+    (:func:`~ftkin.kinematics.joint_units.degrees_for_radians`), and warn once per joint with
+    values outside the arm's limits (the first reading named).
+
+    Raises:
+        InvalidSamples: joint angles in degrees, naming the joint and the reading.
+    """
+    found = degrees_for_radians(arm, joint_positions)
+    if found is not None:
+        row, _, message = found
+        raise InvalidSamples(f"reading {row}: {message}")
+    lower, upper = np.asarray(arm.lower_limits, float), np.asarray(arm.upper_limits, float)
+    if lower.shape != (joint_positions.shape[1],):
+        return
+    outside = (joint_positions < lower - 1e-9) | (joint_positions > upper + 1e-9)
+    for column in np.flatnonzero(outside.any(axis=0)):
+        row = int(np.argmax(outside[:, column]))
+        logger.warning(
+            "joint %r has %d value(s) outside the URDF limits [%g, %g] rad (first %g, reading %d)",
+            arm.joint_names[column],
+            int(np.count_nonzero(outside[:, column])),
+            lower[column],
+            upper[column],
+            joint_positions[row, column],
+            row,
+        )
+
+
+ORIENTATION_KINDS = ("joints", "euler", "quaternion", "matrix")
+"""How a :class:`Samples`' orientations may have been given (``Samples.orientation``)."""
 
 MAX_POSE_SPREAD = np.deg2rad(2.0)
 """Largest accepted angle [rad] between a reading's orientation and its pose's mean."""
@@ -116,6 +149,11 @@ class Samples:
         kinematics: The arm's record (:class:`~ftkin.kinematics.record.KinematicsRecord`)
             when the orientations came from its joint angles, else None: every calibration
             made from these samples records it.
+        orientation: How the orientations were given, one of :data:`ORIENTATION_KINDS`
+            (``"joints"``, ``"euler"``, ``"quaternion"``, ``"matrix"``; set by each
+            constructor and the CSV reader), or None: rotations given directly. ``calibrate``
+            reads them under that input's common mistakes
+            (:mod:`ftkin.calibration.orientation_mistakes`).
     """
 
     wrenches: np.ndarray
@@ -126,8 +164,14 @@ class Samples:
     sensor_frame: str | None = None
     times: np.ndarray | None = None
     kinematics: KinematicsRecord | None = None
+    orientation: str | None = None
 
     def __post_init__(self):
+        if self.orientation is not None and self.orientation not in ORIENTATION_KINDS:
+            raise InvalidSamples(
+                f"orientation must be one of {', '.join(ORIENTATION_KINDS)} or None, got "
+                f"{self.orientation!r}"
+            )
         wrenches, _ = as_batch(self.wrenches, 6, "wrenches [fx, fy, fz, mx, my, mz]")
         try:  # before any fit: an absurd load is a unit mistake, not an unobservable parameter
             check_wrench_magnitude(wrenches, "wrenches")
@@ -180,7 +224,7 @@ class Samples:
         cls, rotation_sensor_to_base, wrenches, pose_ids=None, times=None
     ) -> "Samples":
         """From ``(N, 3, 3)`` sensor orientations ``R_BS`` (and optional times ``(N,)`` [s])."""
-        return cls(wrenches, rotation_sensor_to_base, pose_ids, times=times)
+        return cls(wrenches, rotation_sensor_to_base, pose_ids, times=times, orientation="matrix")
 
     @classmethod
     def from_joint_positions(
@@ -190,14 +234,29 @@ class Samples:
 
         ``rotations``: their ``R_BS`` ``(N, 3, 3)`` when the caller computed them
         already (forward kinematics is then skipped). ``times``: ``(N,)`` [s].
+
+        Raises:
+            InvalidSamples: joint angles in degrees: a value beyond ±2π, or one outside the arm's
+                limits where every value read as degrees is within them
+                (:mod:`ftkin.kinematics.joint_units`; a samples CSV is read by the same rule).
+                Other values outside the limits are warned (a URDF narrower than the robot).
         """
         configurations, _ = as_batch(joint_positions, arm.nq, "joint positions q")
+        check_joint_radians(arm, configurations)
         if rotations is None:
             rotations = arm.rotation_sensor_to_base(configurations)
         urdf = None if arm.urdf_path is None else str(arm.urdf_path)
         record = KinematicsRecord.from_arm(arm)  # the calibration records the arm it came from
         return cls(
-            wrenches, rotations, pose_ids, configurations, urdf, arm.sensor_frame, times, record
+            wrenches,
+            rotations,
+            pose_ids,
+            configurations,
+            urdf,
+            arm.sensor_frame,
+            times,
+            record,
+            orientation="joints",
         )
 
     @classmethod
@@ -208,6 +267,7 @@ class Samples:
             quaternion_to_matrix(quaternions_wxyz).reshape(-1, 3, 3),
             pose_ids,
             times=times,
+            orientation="quaternion",
         )
 
     @classmethod
@@ -251,7 +311,11 @@ class Samples:
         Rx``.
         """
         return cls(
-            wrenches, euler_zyx_deg_to_matrix(angles_deg).reshape(-1, 3, 3), pose_ids, times=times
+            wrenches,
+            euler_zyx_deg_to_matrix(angles_deg).reshape(-1, 3, 3),
+            pose_ids,
+            times=times,
+            orientation="euler",
         )
 
     # -------------------------------------------------------------- grouping

@@ -196,6 +196,7 @@ def _options(args, noise) -> CalibrationOptions:
         method=resolved(args.method, "ml"),
         estimate_mount=args.estimate_mount or "none",
         noise=noise,
+        convention_check=not args.no_convention_check,
     )
 
 

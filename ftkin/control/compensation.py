@@ -33,6 +33,7 @@ from ..calibration.samples import Samples
 from ..calibration.samples_arm import warn_if_samples_arm_differs
 from ..exceptions import FrameNotFound, InvalidInput, MissingDependency, UrdfError
 from ..kinematics.arm import Arm
+from ..kinematics.joint_units import JOINT_LIMIT_MARGIN  # the one margin (re-exported here)
 from ..kinematics.mounting import mounted_arm
 from ..validation import (
     FLOAT64,
@@ -52,17 +53,25 @@ from .bias_tracker import BiasTracker
 
 logger = logging.getLogger(__name__)
 
-JOINT_LIMIT_MARGIN = 0.05
-"""How far past its URDF limit a joint angle is still taken as measured [rad or m] (encoder
-overshoot at a hard stop); beyond it, ``q`` is refused (degrees, a wrong joint order)."""
-
 
 def refuse_outside_limits(arm: Arm, q: np.ndarray) -> None:
     """Raise :class:`InvalidInput` naming the first joint of ``q`` outside the arm's limits."""
+    message = outside_limits_text(arm, q)
+    if message is not None:
+        raise InvalidInput(message)
+
+
+def outside_limits_text(arm: Arm, q: np.ndarray) -> str | None:
+    """What is wrong with ``q`` ``(nq,)`` [rad] when a joint is outside the arm's limits (by more
+    than :data:`JOINT_LIMIT_MARGIN`), else None: the first such joint, and degrees named when
+    ``q`` read as degrees is within them (a wrong joint order otherwise). One text for the
+    refusal of :meth:`Compensator.compensate` and the held tick of
+    :class:`~ftkin.control.joint_admittance.JointAdmittance`.
+    """
     lows, highs = arm.lower_limits - JOINT_LIMIT_MARGIN, arm.upper_limits + JOINT_LIMIT_MARGIN
-    outside = np.flatnonzero((q < lows) | (q > highs))
+    outside = np.flatnonzero(~((q >= lows) & (q <= highs)))  # NaN is outside
     if not outside.size:
-        return
+        return None
     i = int(outside[0])
     degrees = np.all(np.abs(np.deg2rad(q)) <= np.maximum(np.abs(lows), np.abs(highs)))
     hint = (
@@ -70,7 +79,7 @@ def refuse_outside_limits(arm: Arm, q: np.ndarray) -> None:
         if degrees
         else "; is q in the arm's joint order (" + ", ".join(arm.joint_names) + ")?"
     )
-    raise InvalidInput(
+    return (
         f"q: {arm.joint_names[i]} = {q[i]:.6g} is outside its limits "
         f"[{arm.lower_limits[i]:.4g}, {arm.upper_limits[i]:.4g}] rad{hint}"
     )

@@ -24,7 +24,10 @@ Before all that, a :class:`~ftkin.control.sensor_faults.FaultMonitor` checks the
 (NaN/inf in ``q`` or the reading, a ``dt`` jump or a ``dt`` below
 :data:`~ftkin.control.sensor_faults.MIN_DT`, a saturated channel, a stuck
 sensor); a tick whose ``dq`` comes out non-finite (huge but finite inputs
-overflowing on the way) is held the same way, its filter restarted. A faulty
+overflowing on the way) is held the same way, its filter restarted; so is a ``q`` outside the
+arm's joint limits by more than :data:`~ftkin.kinematics.joint_units.JOINT_LIMIT_MARGIN`
+(``fault = SensorFault.JOINT_RANGE``, the event naming the joint, and degrees when ``q`` read as
+degrees fits: what :meth:`~ftkin.control.compensation.Compensator.compensate` refuses). A faulty
 tick commands ``dq = 0``, names the fault in
 ``last_status.fault`` and leaves the admittance filter untouched, so no bad
 sample enters the state; faults are not latched: after
@@ -37,6 +40,7 @@ non-numeric inputs raise :class:`~ftkin.exceptions.InvalidInput`. Each tick leav
 
 import math
 from dataclasses import dataclass
+from operator import le
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -47,7 +51,7 @@ from ..kinematics.arm import Arm, bundled_urdf_path
 from ..kinematics.mounting import mounted_arm
 from ..validation import FLOAT64, MAX_IMU_VALUE, as_positive
 from .admittance import Admittance
-from .compensation import Compensator
+from .compensation import JOINT_LIMIT_MARGIN, Compensator, outside_limits_text
 from .control_frame import control_frame_for
 from .damped_least_squares import damped_least_squares
 from .dynamic_compensation import DynamicCompensator
@@ -209,6 +213,9 @@ class JointAdmittance:
         self._model, self._data, self._sensor_id = arm.model, arm.data, arm.sensor_frame_id
         self._rotation = arm.data.oMf[arm.sensor_frame_id].rotation  # a view: follows every FK call
         self._lower, self._upper = arm.lower_limits.tolist(), arm.upper_limits.tolist()
+        # the range a measured q may be in (encoder overshoot allowed), as the Compensator's
+        self._lowest = (arm.lower_limits - JOINT_LIMIT_MARGIN).tolist()
+        self._highest = (arm.upper_limits + JOINT_LIMIT_MARGIN).tolist()
         self._nq = arm.nq
         if sensor_limits is None and (
             arm.urdf_path is None or arm.urdf_path != bundled_urdf_path().resolve()
@@ -284,7 +291,8 @@ class JointAdmittance:
         """Joint velocities ``(nq,)`` [rad/s] for this tick.
 
         Args:
-            q: Joint positions ``(nq,)`` [rad].
+            q: Joint positions ``(nq,)`` [rad]; outside the joint limits (degrees, a wrong
+                joint order): a held tick (``SensorFault.JOINT_RANGE``), not an error.
             raw_wrench: Raw sensor reading ``(6,)`` [N, N·m], sensor frame.
             dt: Time since the previous tick [s].
             free: For the compensator's bias tracker, if it has one
@@ -313,6 +321,11 @@ class JointAdmittance:
             q, raw_wrench, dt, joint_velocities, joint_accelerations
         )
         fault, event = self._check(positions, raw, dt)
+        if fault is SensorFault.NONE and not (
+            all(map(le, self._lowest, positions)) and all(map(le, positions, self._highest))
+        ):  # degrees for radians, a wrong joint order: what Compensator.compensate refuses
+            fault = SensorFault.JOINT_RANGE
+            event = f"{outside_limits_text(self.arm, q)}: holding"
         if fault is not SensorFault.NONE:
             if self._tracked:
                 self.compensator.tracker.interrupt()

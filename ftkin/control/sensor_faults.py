@@ -46,6 +46,12 @@ class SensorFault(StrEnum):
     """Not a sensor fault: the loop itself oscillates (:mod:`ftkin.control.oscillation`); latched
     until reset.
     """
+    JOINT_RANGE = "joint_range"
+    """Not a sensor fault: ``q`` is outside the arm's joint limits by more than
+    :data:`~ftkin.kinematics.joint_units.JOINT_LIMIT_MARGIN` (degrees given for radians, a wrong
+    joint order), which :meth:`~ftkin.control.compensation.Compensator.compensate` refuses; held
+    while it lasts.
+    """
 
 
 _OK = (SensorFault.NONE, "")

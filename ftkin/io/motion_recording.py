@@ -117,7 +117,7 @@ def motion_from_table(table: Table, arm, spelling: ColumnSpelling | None = None)
             table.source,
         )
     joints = table.floats(columns)
-    check_radians(table, columns, joints)
+    check_radians(table, columns, joints, arm)
     if len(times) < 3:
         raise InvalidSamples(
             f"{len(times)} row(s); a moving recording needs at least 3 (its derivatives)",

@@ -45,6 +45,7 @@ import numpy as np
 from ..calibration.model import WRENCH_CHANNELS
 from ..calibration.samples import Samples
 from ..exceptions import InvalidSamples
+from ..kinematics.joint_units import degrees_for_radians
 from ..kinematics.rotations import (
     euler_zyx_deg_to_matrix,
     matrix_entries_to_matrix,
@@ -66,7 +67,6 @@ MATRIX_COLUMNS = tuple(f"r{row}{column}" for row in (1, 2, 3) for column in (1, 
 """``r11, r12, ..., r33``: the entries of ``R_BS``, row-major (``r12``: row 1, column 2)."""
 POSE_COLUMN = "pose"
 _GENERIC_JOINT = re.compile(r"^q(\d+)$")
-_DEGREES_THRESHOLD = 2.0 * np.pi + 0.01
 _ANGLE_COLUMNS = {
     "euler": (EULER_COLUMNS, "Euler angle"),
     "quaternion": (QUATERNION_COLUMNS, "quaternion"),
@@ -150,17 +150,15 @@ def _no_orientation(table: Table, joint_names) -> None:
     )
 
 
-def check_radians(table: Table, columns, values: np.ndarray) -> None:
-    """Refuse joint angles that can only be degrees (``|q| > 2π``)."""
-    _refuse_beyond(
-        table,
-        values,
-        _DEGREES_THRESHOLD,
-        lambda row, column: (
-            f"joint column {columns[column]!r} holds {values[row, column]:g}, outside ±2π: joint "
-            "angles must be in radians (these look like degrees)"
-        ),
-    )
+def check_radians(table: Table, columns, values: np.ndarray, arm=None) -> None:
+    """Refuse joint angles that can only be degrees, with their line: the rule of
+    :func:`~ftkin.kinematics.joint_units.degrees_for_radians` (``|q| > 2π``, or with ``arm``
+    far outside its limits that degrees fit), which ``Samples.from_joint_positions`` applies too.
+    """
+    found = degrees_for_radians(arm, values, columns, "joint column")
+    if found is not None:
+        row, _, message = found
+        raise InvalidSamples(message, table.source, table.lines[row])
 
 
 def _refuse_beyond(table: Table, values: np.ndarray, limit: float, describe) -> None:
@@ -171,29 +169,6 @@ def _refuse_beyond(table: Table, values: np.ndarray, limit: float, describe) -> 
     if bad.size:
         row, column = bad[0]
         raise InvalidSamples(describe(row, column), table.source, table.lines[row])
-
-
-def warn_outside_limits(table: Table, columns, values: np.ndarray, arm) -> None:
-    """Log one warning per joint column with values outside the arm's position limits, naming the
-    limit.
-    """
-    lower, upper = np.asarray(arm.lower_limits, float), np.asarray(arm.upper_limits, float)
-    if lower.shape != (values.shape[1],):
-        return
-    outside = (values < lower - 1e-9) | (values > upper + 1e-9)
-    for c in np.flatnonzero(outside.any(axis=0)):
-        row = int(np.argmax(outside[:, c]))
-        logger.warning(
-            "%s: joint column %r has %d value(s) outside the URDF limits [%g, %g] rad (first "
-            "%g at line %d)",
-            table.source,
-            columns[c],
-            int(np.count_nonzero(outside[:, c])),
-            lower[c],
-            upper[c],
-            values[row, c],
-            table.lines[row],
-        )
 
 
 @dataclass(frozen=True)
@@ -241,8 +216,7 @@ def orientations_from_table(table: Table, arm=None) -> TableOrientations:
     try:
         if convert is not None:
             return TableOrientations(convert(values).reshape(-1, 3, 3), kind, columns)
-        check_radians(table, columns, values)
-        warn_outside_limits(table, columns, values, arm)
+        check_radians(table, columns, values, arm)  # its line; the limits warned by Samples
         return TableOrientations(arm.rotation_sensor_to_base(values), kind, columns, values, arm)
     except InvalidSamples:
         raise
@@ -264,7 +238,7 @@ def configurations_from_table(table, arm) -> np.ndarray:
             table.source,
         )
     values = table.floats(columns)
-    check_radians(table, columns, values)
+    check_radians(table, columns, values, arm)
     if "pose" not in table.header:
         return values
     _, first = np.unique(table.floats(["pose"])[:, 0], return_index=True)
@@ -402,7 +376,9 @@ def samples_from_table(
     check_wrench_magnitude(table, wrenches)
     pose_ids = pose_ids_from_table(table)
     if orientations.arm is None:
-        samples = Samples(wrenches, orientations.rotations, pose_ids, times=times)
+        samples = Samples(
+            wrenches, orientations.rotations, pose_ids, times=times, orientation=orientations.kind
+        )
     else:
         samples = Samples.from_joint_positions(
             orientations.arm,

@@ -11,6 +11,13 @@ import numpy as np
 
 from ..calibration.doctor import ConventionReport, Reading, diagnose_readings, wrench_readings
 from ..calibration.model import WRENCH_CHANNELS
+from ..calibration.orientation_mistakes import (  # their names and fixes, the API's too
+    CONJUGATE,
+    EULER_RADIANS,
+    MATRIX_TRANSPOSED,
+    ORIENTATION_INVERTED,
+    QUATERNION_XYZW,
+)
 from ..calibration.samples import Samples
 from ..exceptions import FtkinError
 from ..kinematics.rotations import (
@@ -64,18 +71,15 @@ def table_readings(table: Table, arm=None) -> list[Reading]:
 
     mistakes = {  # the orientation columns read the way people get them wrong
         "euler": (
-            "Euler angles in radians",
-            "give alpha, beta, gamma in degrees (multiply by 180/π)",
+            *EULER_RADIANS,
             lambda: euler_zyx_deg_to_matrix(np.rad2deg(values)),
         ),
         "quaternion": (
-            "the quaternion as x,y,z,w",
-            "name the columns qx,qy,qz,qw (the order they hold)",
+            *QUATERNION_XYZW,
             lambda: quaternion_to_matrix(values[:, [3, 0, 1, 2]]),
         ),
         "matrix": (
-            "the matrix transposed (R_SB, or the entries column-major)",
-            "write R_BS row-major: r12 is row 1, column 2 (swap rIJ and rJI)",
+            *MATRIX_TRANSPOSED,
             lambda: np.transpose(matrix_entries_to_matrix(values), (0, 2, 1)),
         ),
         "joints": (
@@ -95,9 +99,8 @@ def table_readings(table: Table, arm=None) -> list[Reading]:
     if kind in ("quaternion", "euler"):  # a matrix has its transpose above; FK has no inverse
         readings.append(
             _reading(
-                "the orientation inverted (R_SB: base in the sensor frame)",
-                "give the sensor's orientation in the base frame, R_BS"
-                + (" (conjugate the quaternion: negate qx,qy,qz)" if kind == "quaternion" else ""),
+                ORIENTATION_INVERTED[0],
+                ORIENTATION_INVERTED[1] + (CONJUGATE if kind == "quaternion" else ""),
                 lambda: np.transpose(orientations_from_table(table, arm).rotations, (0, 2, 1)),
                 wrenches,
                 pose_ids,

@@ -76,7 +76,8 @@ class PoseConstraints:
     Attributes:
         margin: Distance kept from the URDF joint limits [rad].
         floor_height: Lowest allowed height of the sensor and tool origins
-            in the base frame [m], or None.
+            in the base frame [m] (default :data:`DEFAULT_FLOOR_HEIGHT`, 0.1 m, as ``ftkin
+            plan``), or None (no floor: an arm on a wall or a ceiling).
         max_tilt: Largest angle between the tool axis and straight down
             [rad], or None.
         joint_ranges: ``((joint name, lower, upper), ...)`` extra ranges [rad].
@@ -94,14 +95,12 @@ class PoseConstraints:
         parse=number(0.0, 2.0 * np.pi),
     )
     floor_height: float | None = option(
-        None,
-        "sensor and tool origins stay above this height in the base frame (on the command "
-        "line a floor at base z = 0 with a 10 cm margin unless --no-floor; in Python none "
-        "unless given)",
+        DEFAULT_FLOOR_HEIGHT,
+        "sensor and tool origins stay above this height in the base frame (default: a floor at "
+        "base z = 0 with a 10 cm margin; None, --no-floor: no floor)",
         unit="m",
         metavar="M",
         parse=number(-100.0, 100.0),
-        cli_default=DEFAULT_FLOOR_HEIGHT,
     )
     max_tilt: float | None = option(
         None,

@@ -159,10 +159,10 @@ def test_joint_values_outside_limits_warn_once_per_column(arm, data, tmp_path, c
     ]
     assert len(warnings) == 2
     assert (
-        f"'q2' has 2 value(s) outside the URDF limits [{lower[1]:g}, {upper[1]:g}] rad"
+        f"'joint2' has 2 value(s) outside the URDF limits [{lower[1]:g}, {upper[1]:g}] rad"
         in warnings[0]
-    )
-    assert "'q5' has 1 value(s)" in warnings[1]
+    )  # warned by Samples.from_joint_positions, by the arm's joint names
+    assert "'joint5' has 1 value(s)" in warnings[1]
     q[3, 0] = 90.0  # beyond 2π: still refused as degrees
     path = _write(
         tmp_path / "degrees.csv",
