@@ -6,7 +6,10 @@ Per reading (:mod:`ftkin.calibration.imu_model`)::
     contact = raw − [F0, M0] + Y([0, ω], [f_S, α]) θ
     f_S = R_SI (a − b) ⊘ (1 + s) − α × r − ω × (ω × r),   ω = R_SI w,  α = R_SI ẇ
 
-At rest, or without a gyro: ``F' = F − F0 + m f_S``, ``M' = M − M0 + m c × f_S``. θ is the
+At rest, or without a gyro: ``F' = F − F0 + m f_S``, ``M' = M − M0 + m c × f_S``. ``raw`` is the
+reading times the calibration's :attr:`~ftkin.calibration.CalibrationResult.reading_signs` (a
+fused calibration of a sensor that reports the reaction, ``sensor_sign=-1``, or a reversed axis),
+as in :class:`~ftkin.control.Compensator`. θ is the
 calibration's inertia (a dynamic calibration) or its point mass ``[m, m c, 0…]``; ``r`` is the
 calibration's ``imu_position`` (given or estimated) or zero.
 
@@ -88,6 +91,9 @@ class ImuCompensator:
             else as_vector(inertial_parameters, 10, "inertial_parameters")
         )
         self._bias = np.array(calibration.bias)
+        signs = calibration.reading_signs  # the tick's copy is _sign_floats (no conversion)
+        self._reading_signs = None if np.all(signs == 1.0) else signs
+        self._sign_floats = tuple(signs.tolist())
         self._model = ImuFloatModel(
             calibration.imu_rotation,
             calibration.accel_bias,
@@ -96,10 +102,26 @@ class ImuCompensator:
             self.inertial_parameters,
             self.imu_position,
         )
-        self.contact_floats = self._model.contact  # the unchecked kernels (six floats out)
-        self.contact_moving_floats = self._model.contact_moving
+        # the unchecked kernels (six floats out), the stored signs applied to the reading
+        signed = self._reading_signs is not None
+        self.contact_floats = self._signed_contact if signed else self._model.contact
+        self.contact_moving_floats = (
+            self._signed_contact_moving if signed else self._model.contact_moving
+        )
         self._stream: CausalDifferentiator | None = None
         self._raw_buffer: deque = deque()
+
+    def _signed(self, raw) -> tuple[float, ...]:
+        """The six floats of a reading times the stored signs (a reading of another length
+        raises instead of being cut)."""
+        (s0, s1, s2, s3, s4, s5), (w0, w1, w2, w3, w4, w5) = self._sign_floats, raw
+        return (w0 * s0, w1 * s1, w2 * s2, w3 * s3, w4 * s4, w5 * s5)
+
+    def _signed_contact(self, raw, accel):
+        return self._model.contact(self._signed(raw), accel)
+
+    def _signed_contact_moving(self, raw, accel, gyro, rate):
+        return self._model.contact_moving(self._signed(raw), accel, gyro, rate)
 
     def __repr__(self) -> str:
         calibration = self.calibration
@@ -136,7 +158,7 @@ class ImuCompensator:
         """
         raw = _floats(raw_wrench, 6, "raw_wrench", MAX_WRENCH)
         accel = _floats(specific_force, 3, "specific_force [m/s²]", MAX_IMU_VALUE)
-        return np.array(self._model.contact(raw, accel))
+        return np.array(self.contact_floats(raw, accel))
 
     def compensate_moving(
         self, raw_wrench, specific_force, angular_velocity, angular_acceleration
@@ -166,14 +188,14 @@ class ImuCompensator:
                     and math.hypot(*raw) <= MAX_WRENCH
                     and math.hypot(*accel, *gyro, *rate) <= MAX_IMU_VALUE
                 ):
-                    return np.array(self._model.contact_moving(raw, accel, gyro, rate))
+                    return np.array(self.contact_moving_floats(raw, accel, gyro, rate))
             except TypeError:
                 pass
         raw = _floats(raw_wrench, 6, "raw_wrench", MAX_WRENCH)
         accel = _floats(specific_force, 3, "specific_force [m/s²]", MAX_IMU_VALUE)
         gyro = _floats(angular_velocity, 3, "angular_velocity [rad/s]", MAX_IMU_VALUE)
         rate = _floats(angular_acceleration, 3, "angular_acceleration [rad/s²]", MAX_IMU_VALUE)
-        return np.array(self._model.contact_moving(raw, accel, gyro, rate))
+        return np.array(self.contact_moving_floats(raw, accel, gyro, rate))
 
     # ---------------------------------------------------------------- stream
     def start_stream(
@@ -201,7 +223,7 @@ class ImuCompensator:
             return None
         smooth, rate = estimate[0].tolist(), estimate[1].tolist()
         return np.array(
-            self._model.contact_moving(
+            self.contact_moving_floats(
                 self._raw_buffer[(self._stream.window - 1) // 2], smooth[3:], smooth[:3], rate[:3]
             )
         )
@@ -216,6 +238,8 @@ class ImuCompensator:
         ``angular_acceleration`` is needed too (see :meth:`compensate_recording` to estimate it).
         """
         raw, _ = as_wrenches(raw_wrenches, "raw_wrenches")
+        if self._reading_signs is not None:
+            raw = raw * self._reading_signs
         accel, _ = as_batch(specific_force, 3, "specific_force [m/s²]")
         if len(accel) != len(raw):
             raise InvalidInput(

@@ -268,3 +268,30 @@ def test_a_reaction_wrench_from_the_imu_alone_is_named_and_the_fix_works(tmp_pat
     assert main(["calibrate", str(negated), "-o", str(out)]) == 0
     saved = json.loads(out.read_text())
     check_truth(saved["tool_mass"], saved["center_of_mass"])
+
+
+def test_a_fused_calibration_of_a_reaction_sensor_compensates_with_the_imu():
+    """A fused calibration made with ``sensor_sign=-1`` stores the sign; the IMU's compensator
+    ignored it (35 N of contact where there is none). Every path of it now reads the raw
+    reading times the stored signs: with no contact, the contact is the noise."""
+    from ftkin.control import ImuCompensator
+
+    rotations, ids, wrench, accel = readings(4)
+    calibration = ftkin.calibrate(
+        Samples.from_rotations(rotations, -wrench, ids).with_imu(accel), sensor_sign=-1
+    )
+    assert calibration.sensor_sign == -1
+    compensator = ImuCompensator(calibration)
+    batch = compensator.compensate_batch(-wrench, accel)
+    single = np.array([compensator.compensate(w, a) for w, a in zip(-wrench, accel)])
+    still = np.zeros(3)
+    moving = np.array(
+        [compensator.compensate_moving(w, a, still, still) for w, a in zip(-wrench, accel)]
+    )
+    floats = np.array(
+        [compensator.contact_floats(list(w), list(a)) for w, a in zip(-wrench, accel)]
+    )
+    for contact in (batch, single, moving, floats):
+        assert np.median(np.linalg.norm(contact[:, :3], axis=1)) < 3 * NOISE[0]
+        assert np.median(np.linalg.norm(contact[:, 3:], axis=1)) < 3 * NOISE[3]
+    np.testing.assert_allclose(single, batch, atol=1e-9)
