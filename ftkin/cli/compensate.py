@@ -129,25 +129,16 @@ def run(args) -> int:
 
 
 def _check_log_conventions(args, table, arm, calibration) -> None:
-    """Refuse (or warn of) a log that fits the calibration only in another convention or unit
-    (:func:`~ftkin.io.table_readings.log_convention_report`), unless --no-convention-check."""
-    from ..exceptions import ConventionMistake
-    from ..io.table_readings import log_convention_report
+    """:func:`~ftkin.io.log_conventions.check_log_conventions`, unless --no-convention-check."""
+    from ..io.log_conventions import check_log_conventions
 
-    if args.no_convention_check:
-        return
-    report = log_convention_report(table, arm, calibration)
-    if report is None:
-        return
-    verdict, reason, reading = report
-    if verdict == "mistake":
-        raise ConventionMistake(
-            reason + " (--no-convention-check compensates the log as given)",
-            table.source,
-            reading.name,
-            reading.fix,
+    if not args.no_convention_check:
+        check_log_conventions(
+            table,
+            arm,
+            calibration,
+            advice=" (--no-convention-check compensates the log as given)",
         )
-    logger.warning("%s: %s", table.source, reason)
 
 
 def _logs_an_accelerometer(args) -> bool:

@@ -78,3 +78,22 @@ def test_a_log_in_another_convention_is_refused_naming_it(setup, arm, capsys, na
     assert not out.exists()
     flag = ["--no-convention-check"]
     assert main(["compensate", str(calibration), str(log), "-o", str(out), *flag]) == 0
+
+
+def test_the_library_refuses_as_the_command_does(setup, arm, capsys):
+    """The decision is the library's (ftkin.io.log_conventions): the same spoiled log raises
+    ConventionMistake from Python with the words the command prints, plus the command's advice;
+    the log as given passes both."""
+    from ftkin import ConventionMistake, load_calibration
+    from ftkin.io.log_conventions import check_log_conventions
+
+    folder, calibration, q, raw, _ = setup
+    log = _log(folder, arm, "agree_nmm.csv", q, raw * ([1] * 3 + [1000] * 3))
+    with pytest.raises(ConventionMistake) as refused:
+        check_log_conventions(read_table(log), arm, load_calibration(calibration))
+    assert "torques in N·mm" in refused.value.reading
+    out = folder / "agree_out.csv"
+    assert main(["compensate", str(calibration), str(log), "-o", str(out)]) == 2
+    assert str(refused.value) in capsys.readouterr().err
+    good = _log(folder, arm, "agree_ok.csv", q, raw)
+    assert check_log_conventions(read_table(good), arm, load_calibration(calibration)) is None
