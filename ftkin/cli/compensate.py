@@ -25,7 +25,13 @@ from .common import (
     stream_reading_from_args,
 )
 from .compensate_live import add_live_arguments, check_live_arguments, run_live
-from .shared_options import IMU_POSITION, NO_CONVENTION_CHECK
+from .shared_options import (
+    IMU_POSITION,
+    NO_CONVENTION_CHECK,
+    NOISE_FORCE,
+    NOISE_TORQUE,
+    noise_from_args,
+)
 
 
 def register(subparsers) -> None:
@@ -60,6 +66,17 @@ def register(subparsers) -> None:
             SG_WINDOW,
             ALLOW_OTHER_ARM,
             NO_CONVENTION_CHECK,
+            option(
+                "--track-load",
+                action="store_true",
+                help="identify the load in the hand row by row (ftkin.control.LoadTracker): "
+                "adds load_mass, load_mass_std [kg], load_com_x/y/z [m, sensor frame] and "
+                "load_event (empty, grasp, holding, release, contact, tool_change) and writes "
+                "the contact after tool and load; a 'gripper' column (1 closed, 0 open) is used "
+                "when the log has one",
+            ),
+            NOISE_FORCE,
+            NOISE_TORQUE,
         ),
         groups=(add_samples_arguments, add_live_arguments),
         run=run,
@@ -89,10 +106,17 @@ def _parse_intermixed(parser) -> None:
 
 def run(args) -> int:
     check_live_arguments(args)
+    if args.track_load and args.live:
+        raise InvalidInput("--track-load works on a log file, not with --live")
     calibration = load_calibration(args.calibration)
     if isinstance(calibration, ImuCalibrationResult) and (
         not isinstance(calibration, FusedCalibrationResult) or _logs_an_accelerometer(args)
     ):  # made from the IMU: its columns compensate (a fused one: with FK when the log has none)
+        if args.track_load:
+            raise InvalidInput(
+                "--track-load needs the sensor's orientation from poses (joint or R_BS columns); "
+                "a calibration made from the IMU compensates without them"
+            )
         return _compensate_imu(args, calibration)
     if args.imu_position is not None:
         raise InvalidInput("--imu-position applies to a calibration made from the IMU")
@@ -113,7 +137,18 @@ def run(args) -> int:
     if not is_bag_path(input_paths(args.log)[0]):
         _check_log_conventions(args, loaded.table, arm, calibration)
     contact = compensator.compensate_samples(loaded.samples)
-    rows = _write_contact(args.output, loaded.table.header, loaded.table.rows, contact)
+    header, table_rows = loaded.table.header, loaded.table.rows
+    if args.track_load:
+        header, table_rows, contact = _track_load(
+            calibration,
+            noise_from_args(args),
+            compensator.sensor_rotations(loaded.samples),
+            contact,
+            loaded.samples.times,
+            header,
+            table_rows,
+        )
+    rows = _write_contact(args.output, header, table_rows, contact)
     print(
         f"wrote {rows} compensated rows to {args.output} (median contact force |F'| "
         f"{np.median(Compensator.payload_weight(contact)):.4f} N)"
@@ -191,6 +226,40 @@ def _compensate_imu(args, calibration) -> int:
     return 0
 
 
+LOAD_COLUMNS = ("load_mass", "load_mass_std", "load_com_x", "load_com_y", "load_com_z")
+
+
+def _track_load(calibration, noise, rotations, contact, times, header, rows):
+    """``(header, rows, contact)`` with the load's columns and the contact after tool and load
+    (:func:`~ftkin.control.load_track.track_load`); prints the events."""
+    from ..control.load_events import LoadTracker
+    from ..control.load_track import track_load
+
+    gripper = None
+    if "gripper" in header:
+        column = header.index("gripper")
+        cells = [row[column].strip() for row in rows]
+        wrong = next((i for i, cell in enumerate(cells) if cell not in ("0", "1")), None)
+        if wrong is not None:
+            raise InvalidInput(
+                f"the gripper column must hold 1 (closed) or 0 (open); row {wrong + 1} has "
+                f"{cells[wrong]!r}"
+            )
+        gripper = np.array([cell == "1" for cell in cells], dtype=bool)
+    tracker = LoadTracker.for_calibration(calibration, noise)
+    track = track_load(tracker, rotations, contact, times, gripper)
+    names = [*LOAD_COLUMNS, "load_event"]
+    kept = [i for i, name in enumerate(header) if name not in names]  # a rerun's are replaced
+    values = np.column_stack([track.mass, track.mass_std, track.com_in_sensor])
+    out = [
+        [row[i] for i in kept] + [*map(float, numbers), label]
+        for row, numbers, label in zip(rows, values, track.labels)
+    ]
+    for event in track.events:
+        print(f"t {event.time:.3f} s: {event.kind} (mass step {event.mass:.4g} kg; {event.reason})")
+    return [header[i] for i in kept] + names, out, track.contact
+
+
 def _write_contact(path: str, header: list[str], rows, contact: np.ndarray) -> int:
     """Write ``rows`` with their fx..mz cells replaced by ``contact`` [N, N·m]; returns how many."""
     columns = [header.index(name) for name in WRENCH_CHANNELS]
@@ -232,6 +301,16 @@ def _compensate_motion(args, calibration, arm: Arm) -> int | None:
     contact = DynamicCompensator(
         calibration, arm, allow_other_arm=args.allow_other_arm
     ).compensate_motion(recording.motion_samples(arm, args.sg_window))
+    if args.track_load:
+        header, rows, contact = _track_load(
+            calibration,
+            noise_from_args(args),
+            recording.motion_samples(arm, args.sg_window).rotations @ calibration.mount_rotation.T,
+            contact,
+            recording.times,
+            header,
+            rows,
+        )
     count = _write_contact(args.output, header, rows, contact)
     print(
         f"wrote {count} compensated rows to {args.output} with the inertial term (zero-phase "

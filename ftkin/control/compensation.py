@@ -50,6 +50,7 @@ from ..validation import (
 )
 from .bias_checks import bias_at_times, rezero_warnings
 from .bias_tracker import BiasTracker
+from .load_events import LoadTracker
 
 logger = logging.getLogger(__name__)
 
@@ -101,6 +102,16 @@ class Compensator:
         tracker: Optional :class:`~ftkin.control.bias_tracker.BiasTracker`
             (off by default); it is restarted from the calibration's bias.
         allow_other_arm: Accept an arm that differs from the recorded one (deliberate reuse).
+        load: The load in the hand (:mod:`ftkin.control.load_events`): a
+            :class:`~ftkin.control.load_events.LoadTracker`, or True for one from the calibration
+            (:meth:`~ftkin.control.load_events.LoadTracker.for_calibration`). Each
+            :meth:`compensate` / :meth:`compensate_rotation` tick (and every user of
+            :attr:`contact_floats`, e.g. :class:`~ftkin.control.JointAdmittance`) then feeds it
+            and returns the contact after the tool and the load it holds (after a grasp the tool
+            and load, after a release the tool alone); its clock advances by its ``period`` per
+            tick and the gripper's state is its ``gripper`` attribute. The batch paths stay
+            stateless (tool only): a recording goes through
+            :func:`~ftkin.control.load_track.track_load`.
 
     Raises:
         InvalidInput: ``arm`` differs from the calibration's record (the message says how).
@@ -113,6 +124,7 @@ class Compensator:
         tracker: BiasTracker | None = None,
         *,
         allow_other_arm: bool = False,
+        load: "LoadTracker | bool | None" = None,
     ):
         if not isinstance(calibration, SensorModel):
             raise InvalidInput(
@@ -163,6 +175,12 @@ class Compensator:
         if self.arm is not None:  # the joint limits widened by a margin, as floats (one pass)
             self._lowest = (self.arm.lower_limits - JOINT_LIMIT_MARGIN).tolist()
             self._highest = (self.arm.upper_limits + JOINT_LIMIT_MARGIN).tolist()
+        self.load = _load_part(load, calibration)
+        self.tool_contact_floats = self.contact_floats  # the tool alone (a moving arm's inertia
+        # goes between it and the load: DynamicCompensator)
+        if self.load is not None:  # the tool's kernel, then the load's tick (same floats)
+            tool_floats, load_tick = self.contact_floats, self.load.tick
+            self.contact_floats = lambda rows, raw: load_tick(rows, tool_floats(rows, raw))
         self.tracker = tracker
         if tracker is not None:
             tracker.reset(self._bias, tracker.std)
@@ -472,17 +490,22 @@ class Compensator:
         times, if any).
 
         Samples read from joint angles hold the URDF's ``R_BS``: the calibration's mount is applied
-        to them.
+        to them (:meth:`sensor_rotations`).
         """
         warn_if_samples_arm_differs(samples, self.calibration)  # read with another arm?
-        rotations = samples.rotations
-        if samples.joint_positions is not None and self.calibration.has_mount:
-            rotations = rotations @ self.calibration.mount_rotation.T
         return self._batch_unchecked(
-            rotations,
+            self.sensor_rotations(samples),
             samples.wrenches,
             None if samples.times is None else self.bias_at(samples.times),
         )
+
+    def sensor_rotations(self, samples: Samples) -> np.ndarray:
+        """The real sensor's ``R_BS`` ``(N, 3, 3)`` of samples: read from joint angles, the URDF's
+        with the calibration's mount applied; else as given."""
+        rotations = samples.rotations
+        if samples.joint_positions is not None and self.calibration.has_mount:
+            rotations = rotations @ self.calibration.mount_rotation.T
+        return rotations
 
     @staticmethod
     def payload_weight(contact_wrench) -> np.ndarray | float:
@@ -492,6 +515,19 @@ class Compensator:
         wrench, single = as_batch(contact_wrench, 6, "contact_wrench")
         norms = np.linalg.norm(wrench[:, :3], axis=1)
         return float(norms[0]) if single else norms
+
+
+def _load_part(load, calibration) -> LoadTracker | None:
+    """The :class:`LoadTracker` of :class:`Compensator`'s ``load`` argument."""
+    if load is None or load is False:
+        return None
+    if load is True:
+        return LoadTracker.for_calibration(calibration)
+    if not isinstance(load, LoadTracker):
+        raise InvalidInput(
+            f"load must be an ftkin LoadTracker, True or None, got {type(load).__name__}"
+        )
+    return load
 
 
 def _tracked(compensator: Compensator, q, raw_wrench, dt: float, *, free=None) -> np.ndarray:

@@ -24,12 +24,24 @@ import numpy as np
 import pinocchio as pin
 
 from ..calibration.derivatives import CausalDifferentiator
+from ..calibration.log_cholesky import inertia_entries
 from ..calibration.model import SensorModel
 from ..calibration.regressor import MotionSamples
 from ..exceptions import InvalidInput
 from ..kinematics.arm import Arm
 from ..validation import FLOAT64, MAX_WRENCH, as_vector, as_wrench, as_wrenches, check_finite
 from .compensation import Compensator
+
+
+def point_mass_parameters(mass_and_moment) -> np.ndarray:
+    """θ ``(10,)`` of a point mass from ``[m, m c]`` ``(4,)`` [kg, kg·m]: its inertia about the
+    sensor origin is ``m (|c|² I − c cᵀ)`` (zero for ``m ≤ 0``: then only ``[m, m c]``)."""
+    theta = np.zeros(10)
+    theta[:4] = mass_and_moment
+    mass, moment = float(theta[0]), theta[1:4]
+    if mass > 0:
+        theta[4:] = inertia_entries((moment @ moment * np.eye(3) - np.outer(moment, moment)) / mass)
+    return theta
 
 
 class DynamicCompensator:
@@ -43,6 +55,9 @@ class DynamicCompensator:
             :mod:`ftkin.calibration.log_cholesky`).
         allow_other_arm: Accept an arm other than the one the calibration
             records (as :class:`~ftkin.control.compensation.Compensator`).
+        load: The load in the hand, as :class:`~ftkin.control.compensation.Compensator` takes
+            it (a :class:`~ftkin.control.load_events.LoadTracker` or True): it is given the
+            contact after the tool's weight and inertia, and its load is removed too.
     """
 
     def __init__(
@@ -52,10 +67,11 @@ class DynamicCompensator:
         inertial_parameters=None,
         *,
         allow_other_arm: bool = False,
+        load=None,
     ):
         if not isinstance(arm, Arm):
             raise InvalidInput(f"arm must be an ftkin Arm, got {type(arm).__name__}")
-        self.static = Compensator(calibration, arm, allow_other_arm=allow_other_arm)
+        self.static = Compensator(calibration, arm, allow_other_arm=allow_other_arm, load=load)
         # the arm with the calibration's mount folded into the sensor frame, if any
         self.calibration, self.arm = self.static.calibration, self.static.arm
         self.inertial_parameters = (
@@ -65,8 +81,13 @@ class DynamicCompensator:
         )
         self._model, self._frame = self.arm.model, self.arm.sensor_frame_id
         self._data, self._q_shape = self._model.createData(), (arm.nq,)
-        # the static kernel: current bias (re-zeroed or tracked), reading signs
-        self._contact_floats = self.static.contact_floats
+        # the static kernel: current bias (re-zeroed or tracked), reading signs; the static
+        # compensator's load part, if any, ticks on the contact after the tool's inertia too
+        self._contact_floats = self.static.tool_contact_floats
+        self._load_tick = None if self.static.load is None else self.static.load.tick
+        self._load_version, self._theta = None, self.inertial_parameters
+        if self._load_tick is not None:
+            self._load_noise = tuple(self.static.load.noise.channel_std.tolist())
         self._stream: CausalDifferentiator | None = None
         self._raw_buffer: deque = deque()
 
@@ -153,8 +174,28 @@ class DynamicCompensator:
         regressor = pin.bodyRegressor(
             pin.getFrameVelocity(model, data, frame), pin.getFrameAcceleration(model, data, frame)
         )
-        i0, i1, i2, i3, i4, i5 = regressor.dot(self.inertial_parameters).tolist()
-        c0, c1, c2, c3, c4, c5 = self._contact_floats(rotation.tolist(), raw)
+        theta = self.inertial_parameters
+        if self._load_tick is not None:  # the held load's inertial wrench as a point mass too
+            load = self.static.load
+            if load.version != self._load_version:
+                self._load_version = load.version
+                self._theta = theta + point_mass_parameters(load.load_parameters + load.tool_offset)
+            theta = self._theta
+        i0, i1, i2, i3, i4, i5 = regressor.dot(theta).tolist()
+        if self._load_tick is not None:  # moving: the inertial wrench beyond a reading's noise
+            s0, s1, s2, s3, s4, s5 = self._load_noise
+            self.static.load.moving = (
+                abs(i0) > s0
+                or abs(i1) > s1
+                or abs(i2) > s2
+                or abs(i3) > s3
+                or abs(i4) > s4
+                or abs(i5) > s5
+            )
+        rows = rotation.tolist()
+        c0, c1, c2, c3, c4, c5 = self._contact_floats(rows, raw)
+        if self._load_tick is not None:  # the load, identified from the contact after the tool
+            return self._load_tick(rows, (c0 + i0, c1 + i1, c2 + i2, c3 + i3, c4 + i4, c5 + i5))
         return c0 + i0, c1 + i1, c2 + i2, c3 + i3, c4 + i4, c5 + i5
 
     # ---------------------------------------------------------------- stream
