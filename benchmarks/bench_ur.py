@@ -119,10 +119,10 @@ def record_and_calibrate(controller, ur, seed: int):
 
 
 def live_repeat(seed: int, folder: Path) -> dict:
-    from ftkin.cli.compensate_live import missed_packages
     from ftkin.control.compensation import Compensator
     from ftkin.io.calibration_file import save_calibration
     from ftkin.robot import UrArm, compensated_stream
+    from ftkin.robot.live_log import missed_packages
     from tests.robot.rtde_controller import EmulatedController
 
     with EmulatedController("ur5e", contact=(1.0, -2.0, 3.0, 0.1, 0.2, -0.3)) as controller:

@@ -8,31 +8,26 @@ sensor's stamp], the joints [rad], ``fx..mz`` [N, N·m], sensor frame) as it com
 built-in sensor the log is every RTDE package, read on a connection of its own
 (:class:`~ftkin.robot.live_compensation.PackageLog`: ur_rtde's getters skip packages when this
 process is late); with ``--sensor`` it is every new sample the loop sees, flushed every
-:data:`FLUSH_EVERY` rows. The summary counts the samples logged and the packages missed (gaps
-in the controller's timestamps). Ctrl-C ends it with the summary and exit code 130.
+:data:`~ftkin.robot.live_log.FLUSH_EVERY` rows (:class:`~ftkin.robot.live_log.SampleLog`).
+The summary counts the samples logged and the packages missed (gaps in the controller's
+timestamps, :func:`~ftkin.robot.live_log.missed_packages`). Ctrl-C ends it with the summary and
+exit code 130.
 """
 
 from __future__ import annotations
 
-import math
-import os
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from ..calibration.model import WRENCH_CHANNELS
 from ..exceptions import InvalidInput, install_command
+from ..robot.live_log import SampleLog, missed_packages, settle
 from ..robot.stillness import Stillness
 from .arg_types import add_options, option, positive_float
 from .declared import declared_option
 from .shared_options import DURATION, SENSOR, SENSOR_OPTION, UR, open_named_sensor
-
-FLUSH_EVERY = 250
-"""Log rows per flush (half a second at 500 Hz)."""
-SETTLE_STEPS, SETTLE_LIMIT = 25, 0.5
-"""Logging starts after this many consecutive one-period steps of the stamps, or this long [s]."""
 
 
 def add_live_arguments(parser) -> None:
@@ -111,42 +106,6 @@ def _sensor(args, ur):
     return open_named_sensor(args)
 
 
-class _Log:
-    """The live log, written as it comes (never over an existing file)."""
-
-    def __init__(self, path: str, joint_names):
-        self.stream = open(path, "x", encoding="utf-8", newline="")  # noqa: SIM115 (closed below)
-        self.stream.write(",".join(["t", *joint_names, *WRENCH_CHANNELS]) + "\n")
-        self.rows: list[str] = []
-
-    def add(self, stamp: float, q: np.ndarray, contact: np.ndarray) -> None:
-        self.rows.append(",".join(map(repr, [stamp, *q.tolist(), *contact.tolist()])))
-        if len(self.rows) >= FLUSH_EVERY:
-            self.flush()
-
-    def flush(self) -> None:
-        if self.rows:
-            self.stream.write("\n".join(self.rows) + "\n")
-            self.rows = []
-        self.stream.flush()
-
-    def close(self) -> None:
-        self.flush()
-        os.fsync(self.stream.fileno())
-        self.stream.close()
-
-
-def missed_packages(stamps: np.ndarray) -> tuple[int, float]:
-    """Packages missed between consecutive stamps, and the period [s] (the median step)."""
-    if len(stamps) < 2:
-        return 0, math.nan
-    steps = np.diff(stamps)
-    period = float(np.median(steps))
-    if not period > 0.0:
-        return 0, period
-    return int(np.sum(np.maximum(np.round(steps / period) - 1.0, 0.0))), period
-
-
 def run_live(args, calibration, arm) -> int:
     """The live loop; returns the exit code (130 after Ctrl-C)."""
     from ..robot.live_compensation import compensated_stream
@@ -173,7 +132,7 @@ def run_live(args, calibration, arm) -> int:
             allow_other_arm=args.allow_other_arm,
         )
     elif args.live_log:
-        log = _Log(args.live_log, arm.joint_names)
+        log = SampleLog(args.live_log, arm.joint_names)
     stamps: list[float] = []
     start = time.monotonic()
     code, interval, next_print = 0, 1.0 / args.print_rate, 0.0
@@ -192,7 +151,7 @@ def run_live(args, calibration, arm) -> int:
             stale_after=args.stale_after,
             allow_other_arm=args.allow_other_arm,
         )
-        _settle(stream)
+        settle(stream)
         start = time.monotonic()
         for stamp, q, contact in stream:
             stamps.append(stamp)
@@ -224,21 +183,6 @@ def run_live(args, calibration, arm) -> int:
         ur.close(wait=False)  # the command ends with the process: no 0.5 s destructor
         _summary(np.array(stamps), elapsed, args.live_log, code == 130)
     return code
-
-
-def _settle(stream, steady: int = SETTLE_STEPS, limit: float = SETTLE_LIMIT) -> None:
-    """Skip samples until ``steady`` consecutive steps of the stamps are each the shortest step
-    seen (one period), or ``limit`` [s] has passed: right after connecting, ur_rtde's receive
-    thread works through what queued up meanwhile and its getters skip packages."""
-    deadline, previous, shortest, run = time.monotonic() + limit, None, math.inf, 0
-    for stamp, _, _ in stream:
-        if previous is not None:
-            step = stamp - previous
-            shortest = min(shortest, step)
-            run = run + 1 if step <= 1.25 * shortest else 0
-        previous = stamp
-        if run >= steady or time.monotonic() > deadline:
-            return
 
 
 def _summary(stamps: np.ndarray, elapsed: float, log_path, interrupted: bool) -> None:
