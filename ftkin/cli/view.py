@@ -8,11 +8,11 @@ import time
 from .. import Arm, InvalidInput, load_calibration
 from ..kinematics import mounted_arm
 from ..viz.view_frames import (
+    SHEET_CELLS,
     ViewFrames,
-    evenly,
-    outlier_indices,
     pose_frames,
     replay_frames,
+    save_frames_sheet,
     vector_table,
 )
 from .arg_types import add_command, bounded_int, option, positive_float
@@ -21,10 +21,6 @@ from .common import (
     arm_for_calibration,
     load_samples_from_args,
 )
-
-SHEET_CELLS = 25
-"""Most cells of a contact sheet (more poses or log rows are subsampled evenly)."""
-
 
 # The calibration, what to show and how, and where to write it.
 _OPTIONS = (
@@ -112,22 +108,6 @@ def register(subparsers) -> None:
     )
 
 
-def _contact_sheet(viewer, frames: ViewFrames, calibration, path: str, title: str) -> None:
-    from ..viz.contact_sheet import save_contact_sheet, sheet_cells
-
-    rows = evenly(len(frames.labels), SHEET_CELLS)
-    labels = [frames.labels[k] for k in rows]
-    outliers = outlier_indices(labels, calibration)
-    cells = sheet_cells(
-        viewer, labels, frames.raw_wrenches[rows], outliers=outliers, **frames.placement(rows)
-    )
-    save_contact_sheet(cells, path, title=title)
-    print(
-        f"wrote {path} (contact sheet of {len(cells)} poses, {len(outliers)} outliers outlined in "
-        "red)"
-    )
-
-
 def _load_frames(args, calibration, source: str):
     """The frames to show and the arm to draw them on (None: orientations only)."""
     arm = arm_for_calibration(args, calibration) or Arm.default()
@@ -153,7 +133,13 @@ def _write_outputs(
         screenshot_html(viewer.static_html(caption=f"{source}: {label}"), args.png)
         print(f"wrote {args.png} ({label})")
     elif args.png:
-        _contact_sheet(viewer, frames, viewer.calibration, args.png, title=str(source))
+        cells, outliers = save_frames_sheet(
+            viewer, frames, viewer.calibration, args.png, title=str(source)
+        )
+        print(
+            f"wrote {args.png} (contact sheet of {cells} poses, {outliers} outliers outlined in "
+            "red)"
+        )
     if chosen is None:
         vectors = viewer.animate(
             frames.raw_wrenches, times=frames.times, hold=args.hold, **frames.placement()

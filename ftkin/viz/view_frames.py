@@ -25,6 +25,8 @@ from .contact_sheet import force_angle_deg
 
 TABLE_ROWS = 40
 """Rows of :func:`vector_table` (the rest are counted on a last line)."""
+SHEET_CELLS = 25
+"""Most cells of a contact sheet (more poses or log rows are subsampled evenly)."""
 REPLAY_RATE = 30.0
 """Rows per second [1/s] a replayed log without a time column is shown at."""
 
@@ -139,6 +141,24 @@ def outlier_indices(labels: Sequence[str], calibration) -> list[int]:
         for pid in (diagnostics.outlier_pose_ids if diagnostics is not None else ())
     }
     return [i for i, label in enumerate(labels) if label in flagged]
+
+
+def save_frames_sheet(
+    viewer, frames: ViewFrames, calibration, path, *, title: str = "", most: int = SHEET_CELLS
+) -> tuple[int, int]:
+    """Write a contact sheet (.png) of at most ``most`` evenly spaced frames drawn in ``viewer``
+    (a :class:`~ftkin.viz.viewer.CalibrationViewer`), the calibration's outlier poses outlined;
+    returns ``(cells, outliers)``."""
+    from .contact_sheet import save_contact_sheet, sheet_cells
+
+    rows = evenly(len(frames.labels), most)
+    labels = [frames.labels[k] for k in rows]
+    outliers = outlier_indices(labels, calibration)
+    cells = sheet_cells(
+        viewer, labels, frames.raw_wrenches[rows], outliers=outliers, **frames.placement(rows)
+    )
+    save_contact_sheet(cells, path, title=title)
+    return len(cells), len(outliers)
 
 
 @dataclass(frozen=True)

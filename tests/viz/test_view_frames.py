@@ -119,3 +119,14 @@ def test_the_report_predicts_with_the_bias_of_compensate_after_a_re_zero():
         times=np.array([150.0, 300.0]),
     )
     np.testing.assert_allclose(report_data(calibration, samples)["residuals"], 0.0, atol=1e-12)
+
+
+def test_the_outlined_cells_are_the_calibration_s_outlier_poses():
+    from types import SimpleNamespace
+
+    from ftkin.viz.view_frames import outlier_indices
+
+    flagged = SimpleNamespace(diagnostics=SimpleNamespace(outlier_pose_ids=np.array([3, 7])))
+    labels = ["pose 1", "pose 3", "pose 5", "pose 7", "row 3"]
+    assert outlier_indices(labels, flagged) == [1, 3]  # a replay's "row 3" is not pose 3
+    assert outlier_indices(labels, SimpleNamespace(diagnostics=None)) == []
