@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import Compensator, load_calibration, save_calibration
 from .arg_types import add_command, finite_float, option
-from .common import add_arm_arguments, arm_of_calibration
+from .common import ALLOW_OTHER_ARM, add_arm_arguments, arm_of_calibration
 
 
 def register(subparsers) -> None:
@@ -55,6 +55,7 @@ def register(subparsers) -> None:
                 metavar="OUT.json",
                 help="write the re-zeroed calibration here instead of in place",
             ),
+            ALLOW_OTHER_ARM,
         ),
         groups=(add_arm_arguments,),
         run=run,
@@ -67,7 +68,8 @@ def run(args) -> int:
     # the library checks the pose (its joint count, radians, the joint limits) and warns of a
     # bias moved beyond the tool's weight and of a drift trajectory left in place
     previous = calibration.bias
-    bias = Compensator(calibration, arm).rezero(np.array(args.q), np.array(args.wrench))
+    compensator = Compensator(calibration, arm, allow_other_arm=args.allow_other_arm)
+    bias = compensator.rezero(np.array(args.q), np.array(args.wrench))
     output = args.output or args.calibration
     save_calibration(
         calibration.with_bias(bias),

@@ -257,3 +257,18 @@ def test_the_api_and_the_cli_say_the_same_of_a_rezero_and_of_a_log_on_another_cl
         )
         assert len(by_api) == 1 and by_cli == by_api
     assert "are long before the calibration's recording" in by_api[0]
+
+
+def test_rezero_on_another_arm_is_refused_and_the_advice_works(samples_csv, tmp_path, capsys):
+    """A re-zero with robot options that differ from the calibration's arm is refused naming
+    --allow-other-arm, which rezero takes (it was compensate's alone)."""
+    calibration = tmp_path / "c.json"
+    assert main(["calibrate", str(samples_csv), "--drift", "none", "-o", str(calibration)]) == 0
+    capsys.readouterr()
+    argv = ["rezero", str(calibration), "--robot", "ur5", "--sensor-offset", "0", "0", "0.05"]
+    argv += ["--q", "0", "-1", "1", "0", "1", "0", "--wrench", *["0"] * 6]
+    assert main([*argv, "-o", str(tmp_path / "a.json")]) == 2
+    assert "--allow-other-arm" in capsys.readouterr().err
+    assert not (tmp_path / "a.json").exists()
+    assert main([*argv, "-o", str(tmp_path / "b.json"), "--allow-other-arm"]) == 0
+    assert (tmp_path / "b.json").exists()
