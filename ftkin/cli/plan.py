@@ -9,7 +9,6 @@ import numpy as np
 from .. import Arm, InvalidInput, PlanSpec, SensorNoise, UrdfError, plan_poses
 from ..io.csv_table import write_csv
 from ..io.plan_file import PLAN_FORMATS, write_plan
-from ..io.samples_csv import POSE_COLUMN
 from ..planning.drift_order import DEFAULT_POSE_INTERVAL
 from ..planning.evaluation import PAPER_CENTER_OF_MASS, PAPER_TOOL_WEIGHT, ExpectedCalibration
 from ..planning.excitation import (
@@ -255,19 +254,10 @@ def run(args) -> int:
         plan = plan_poses(arm, spec)
     except UrdfError as error:  # only the collision geometry is loaded here: meshes not found
         raise UrdfError(error.path, [*error.reasons, "or plan with --no-self-collision"]) from None
-    print(plan.report(), _pose_lines(plan), sep="\n")
+    print(plan.report(), plan.pose_table(), sep="\n")
     if args.output:
         print(f"wrote {args.output} ({write_plan(plan, args.output, args.format)})")
     return 0
-
-
-def _pose_lines(plan) -> str:
-    header = f"{POSE_COLUMN:>4} " + " ".join(f"{name[:12]:>12}" for name in plan.joint_names)
-    rows = [
-        f"{i:>4} " + " ".join(f"{value:>12.4f}" for value in q)
-        for i, q in enumerate(plan.joint_positions)
-    ]
-    return "joint positions [rad], in visiting order:\n" + "\n".join([header, *rows])
 
 
 def _run_excitation(args, arm: Arm) -> int:

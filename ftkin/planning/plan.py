@@ -121,6 +121,16 @@ class PosePlan:
         ]
         return "\n".join(lines)
 
+    def pose_table(self) -> str:
+        """The joint positions [rad] in visiting order, one line per pose (``ftkin plan``
+        prints it after :meth:`report`); joint names cut to 12 characters."""
+        header = f"{'pose':>4} " + " ".join(f"{name[:12]:>12}" for name in self.joint_names)
+        rows = [
+            f"{i:>4} " + " ".join(f"{value:>12.4f}" for value in q)
+            for i, q in enumerate(self.joint_positions)
+        ]
+        return "joint positions [rad], in visiting order:\n" + "\n".join([header, *rows])
+
 
 @dataclass(frozen=True, eq=False)
 class PlanSpec:

@@ -53,3 +53,12 @@ def test_each_format_holds_the_plan(plan, tmp_path):
             document["predicted_standard_errors"]["tool_weight"],
             np.atleast_1d(plan.standard_errors["tool_weight"]),
         )
+
+
+def test_the_printed_pose_table_holds_the_joint_positions_to_four_decimals(plan):
+    lines = plan.pose_table().splitlines()
+    assert lines[0] == "joint positions [rad], in visiting order:"
+    assert lines[1].split() == ["pose", *[name[:12] for name in plan.joint_names]]
+    values = np.array([[float(v) for v in line.split()] for line in lines[2:]])
+    np.testing.assert_array_equal(values[:, 0], np.arange(4))
+    np.testing.assert_allclose(values[:, 1:], plan.joint_positions, atol=5e-5)
