@@ -9,8 +9,7 @@ The top level holds the names of the main path, in the order a user meets them
 (:data:`_GROUPS`, the groups of docs/api.md): the arm, samples, calibrate and its
 result, load and save, compensate, control, plan, the simulated sensor, the errors.
 Everything else is imported from its stage (``ftkin.calibration``, ``ftkin.control``,
-``ftkin.io``, ...); a name that used to be at the top level still works there for
-one release, with a ``FutureWarning`` naming its stage (:data:`_MOVED`).
+``ftkin.io``, ...).
 
 Importing ftkin is cheap: each public name loads its module on first use
 (PEP 562), so ``ftkin --version`` and a script using only the compensation
@@ -81,73 +80,9 @@ _GROUPS = {
 _EXPORTS = {name: module for names in _GROUPS.values() for name, module in names.items()}
 """Public name → the module defining it (imported on first access)."""
 
-_MOVED = {
-    "ArmSimulation": ".sim.mujoco",
-    "BiasDrift": ".calibration",
-    "BiasTracker": ".control",
-    "CausalDifferentiator": ".calibration",
-    "ClosedLoopRun": ".sim.mujoco",
-    "ControlFrame": ".control",
-    "ConventionCheck": ".calibration",
-    "ConventionReport": ".calibration",
-    "CrossValidation": ".calibration",
-    "DRIFT_CHOICES": ".calibration",
-    "DriftModel": ".calibration",
-    "ExcitationPlan": ".planning",
-    "ExcitationSpec": ".planning",
-    "ExpectedCalibration": ".planning",
-    "FaultMonitor": ".control",
-    "FitDiagnostics": ".calibration",
-    "FourierTrajectory": ".planning",
-    "GraspedObject": ".sim.mujoco",
-    "METHODS": ".calibration",
-    "MOUNT_MODES": ".calibration",
-    "MotionRecording": ".io",
-    "MotionSamples": ".calibration",
-    "MujocoRecorder": ".sim",
-    "MujocoSensor": ".sim.mujoco",
-    "OscillationDetector": ".control",
-    "OscillationLimits": ".control",
-    "Payload": ".io",
-    "PlacementRun": ".sim",
-    "PlacementScenario": ".sim",
-    "PoseEvaluation": ".planning",
-    "PosePlan": ".planning",
-    "ROBOTS": ".kinematics",
-    "STANDARD_GRAVITY": ".calibration",
-    "SensorDrift": ".sim",
-    "SensorFault": ".control",
-    "SensorLimits": ".control",
-    "StepStatus": ".control",
-    "Surface": ".sim",
-    "SuspectConvention": ".exceptions",
-    "ToolInertia": ".sim",
-    "build_arm_model": ".sim",
-    "bundled_urdf_path": ".kinematics",
-    "cross_validate": ".calibration",
-    "detect_sign_and_handedness": ".calibration",
-    "diagnose_samples": ".io",
-    "euler_zyx_deg_to_matrix": ".kinematics",
-    "export_payload": ".io",
-    "fisher_information": ".calibration",
-    "joint_derivatives": ".calibration",
-    "load_motion_bag": ".io",
-    "load_motion_csv": ".io",
-    "max_stable_k1": ".control",
-    "mounted_arm": ".kinematics",
-    "payload_in_flange": ".io",
-    "quaternion_to_matrix": ".kinematics",
-    "recording_times": ".sim",
-    "register_drift_model": ".calibration",
-    "run_closed_loop": ".sim",
-    "simulate_placement": ".sim",
-    "simulate_placement_mujoco": ".sim",
-}
-"""Names that left the top level → the stage that exports them (deprecated here)."""
-
 __all__ = sorted(_EXPORTS)
 
 STAGES = ("kinematics", "calibration", "control", "planning", "io", "sim", "viz", "robot")
 """The subpackages, in data-path order (each imports on first access: ``ftkin.control``)."""
 
-__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals(), moved=_MOVED, subpackages=STAGES)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals(), subpackages=STAGES)

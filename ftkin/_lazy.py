@@ -8,25 +8,18 @@ Every submodule and subpackage of the package resolves on attribute access too
 (``ftkin.kinematics.rotations`` after ``import ftkin``, whatever was imported before): the
 interpreter sets a submodule as its package's attribute only once something has imported it, so
 without this, a module's attribute would depend on import order.
-
-``moved`` lists names that left the package for another (``{name: relative package}``): they
-still resolve, with a ``FutureWarning`` that names where to import them from, for one release.
 """
 
 import importlib
 import importlib.util
-import warnings
 
 
-def lazy_exports(
-    package: str, exports: dict[str, str], namespace: dict, moved=None, subpackages=()
-):
+def lazy_exports(package: str, exports: dict[str, str], namespace: dict, subpackages=()):
     """``(__getattr__, __dir__)`` for the package ``package`` whose globals are ``namespace``;
     its submodules and ``subpackages`` (names, listed by ``__dir__``) import on first access
     (``ftkin.control`` after ``import ftkin``, ``ftkin.kinematics.rotations`` after
     ``import ftkin.kinematics``).
     """
-    moved = dict(moved or {})
     subpackages = frozenset(subpackages)
 
     def __getattr__(name: str):
@@ -35,16 +28,6 @@ def lazy_exports(
             value = namespace[name] = importlib.import_module(f".{name}", package)
             return value
         if module is None:
-            if name in moved:
-                home = importlib.import_module(moved[name], package)
-                warnings.warn(
-                    f"{package}.{name} is no longer exported by {package}: import it from "
-                    f"{home.__name__} (from {home.__name__} import {name}); the old import "
-                    "works for this release only",
-                    FutureWarning,
-                    stacklevel=2,
-                )
-                return getattr(home, name)
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
         value = namespace[name] = getattr(importlib.import_module(module, package), name)
         return value
