@@ -19,10 +19,8 @@ The bias is an attribute the caller can move without slowing the control path
 drifting calibration).
 """
 
-import functools
 import logging
 import math
-import warnings
 from operator import le
 
 import numpy as np
@@ -193,17 +191,6 @@ class Compensator:
         return self._floats.contact(
             rotation_rows, (w0 * s0, w1 * s1, w2 * s2, w3 * s3, w4 * s4, w5 * s5)
         )
-
-    def __getattr__(self, name: str):
-        """The names this class had before it kept one method per input kind: each works for one
-        release, with a ``FutureWarning`` naming its replacement (:data:`DEPRECATED_METHODS`)."""
-        if name not in DEPRECATED_METHODS:
-            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
-        replacement, forward = DEPRECATED_METHODS[name]
-        warnings.warn(
-            f"Compensator.{name} is deprecated: use {replacement}", FutureWarning, stacklevel=2
-        )
-        return functools.partial(forward, self)
 
     def __repr__(self) -> str:
         path = None if self.arm is None else self.arm.urdf_path
@@ -528,38 +515,3 @@ def _load_part(load, calibration) -> LoadTracker | None:
             f"load must be an ftkin LoadTracker, True or None, got {type(load).__name__}"
         )
     return load
-
-
-def _tracked(compensator: Compensator, q, raw_wrench, dt: float, *, free=None) -> np.ndarray:
-    contact = compensator.compensate(q, raw_wrench)
-    compensator.observe_bias(contact, dt, q=q, free=free)
-    return contact
-
-
-DEPRECATED_METHODS = {
-    "compensate_rotation_unchecked": (
-        "compensate_unchecked(R_BS, raw)",
-        lambda self, rotation, raw: self.compensate_unchecked(rotation, raw),
-    ),
-    "compensate_joint_positions": (
-        "compensate_batch(joint_positions, raw_wrenches)",
-        lambda self, q, raw: self.compensate_batch(q, raw),
-    ),
-    "compensate_batch_unchecked": (
-        "compensate_batch(rotations, raw_wrenches)",
-        lambda self, rotations, raw, bias=None: self._batch_unchecked(rotations, raw, bias),
-    ),
-    "compensate_tracked": (
-        "compensate(q, raw), then observe_bias(contact, dt, q=q)",
-        lambda self, q, raw, dt, *, free=None: _tracked(self, q, raw, dt, free=free),
-    ),
-    "rezero_rotation": (
-        "rezero(R_BS, raw): rezero takes joint angles or a rotation",
-        lambda self, rotation, raw: self.rezero(rotation, raw),
-    ),
-    "driver_zeroed_at_rotation": (
-        "driver_zeroed_at(R_BS): it takes joint angles or a rotation",
-        lambda self, rotation: self.driver_zeroed_at(rotation),
-    ),
-}
-"""Removed method → (its replacement, the forwarding function), deprecated for one release."""
