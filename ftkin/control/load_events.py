@@ -46,6 +46,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..calibration.information import SensorNoise, at_noise_floor
+from ..calibration.model import SensorModel
+from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
 from ..validation import as_float_array, as_rotation_batch, as_wrench
 from .load_estimator import (
@@ -203,27 +205,33 @@ class LoadTracker:
         """A tracker with a calibration's gravity and noise.
 
         The noise is ``noise`` if given, else the calibration's (``diagnostics.noise`` of a
-        maximum-likelihood fit), else its per-pose residual RMS times ``√(readings per pose)``
-        (the per-pose readings were means); the model floor is the residual RMS when the noise
-        did not come from it.
+        maximum-likelihood fit, the ``channel_std`` of a dynamic one), else its per-pose residual
+        RMS times ``√(readings per pose)`` (the per-pose readings were means); the model floor is
+        the residual RMS when the noise did not come from it.
 
         Raises:
-            InvalidInput: no noise given and none in the calibration (no diagnostics, no
-                residuals): pass ``noise=SensorNoise(force_std, torque_std)``.
+            InvalidInput: not a calibration, or no noise given and none in the calibration (no
+                diagnostics, no residuals above rounding): pass ``noise=SensorNoise(force_std,
+                torque_std)``.
         """
+        if not isinstance(calibration, SensorModel):
+            raise InvalidInput(
+                f"calibration must be an ftkin SensorModel, got {type(calibration).__name__}"
+            )
+        calibration = CalibrationResult.from_model(calibration)
         a = np.asarray(calibration.gravity_in_base, dtype=float)
         gravity = a / np.linalg.norm(a) * calibration.g
-        residuals = np.asarray(calibration.residuals) if hasattr(calibration, "residuals") else None
-        rms = (
-            np.sqrt(np.mean(residuals**2, axis=0))
-            if residuals is not None and len(residuals)
-            else None
-        )
+        residuals = np.asarray(calibration.residuals)
+        rms = np.sqrt(np.mean(residuals**2, axis=0)) if len(residuals) else None
         floor = rms
         if noise is None:
-            diagnostics = getattr(calibration, "diagnostics", None)
-            if diagnostics is not None:
-                noise = diagnostics.noise
+            from ..calibration.dynamic import DynamicCalibrationResult  # on first use (its fit)
+
+            dynamic = isinstance(calibration, DynamicCalibrationResult)
+            if calibration.diagnostics is not None:
+                noise = calibration.diagnostics.noise
+            elif dynamic and calibration.channel_std is not None:
+                noise = SensorNoise(calibration.channel_std[:3], calibration.channel_std[3:])
             elif rms is not None and not at_noise_floor(rms, calibration.pose_wrenches):
                 per_pose = max(calibration.sample_count / max(len(residuals), 1), 1.0)
                 noise, floor = SensorNoise(rms[:3] * per_pose**0.5, rms[3:] * per_pose**0.5), None

@@ -215,3 +215,24 @@ def test_the_tick_stays_finite_and_the_checked_path_names_bad_input():
         LoadThresholds(k_sigma=float("inf"))
     with pytest.raises(InvalidInput, match="period"):
         LoadTracker(NOISE, period=0)
+
+
+def test_for_calibration_takes_the_noise_a_calibration_records(tool, rotations):
+    """An ml calibration's noise, a linear one's residuals scaled to one reading, or advice."""
+    from ftkin import calibrate
+    from ftkin.sim.sensor import SimulatedSensor
+
+    samples = SimulatedSensor(tool, NOISE).samples(rotations, np.random.default_rng(8), 50)
+    ml = calibrate(samples, method="ml", noise=NOISE)
+    tracker = LoadTracker.for_calibration(ml)
+    np.testing.assert_allclose(tracker.noise.channel_std, ml.diagnostics.noise.channel_std)
+    direction = ml.gravity_in_base / np.linalg.norm(ml.gravity_in_base)
+    np.testing.assert_allclose(tracker.gravity_in_base, direction * ml.g, rtol=1e-12)
+    linear = calibrate(samples, method="linear")
+    # per-pose residuals of 50-reading means: about the noise over √50, scaled back by √50
+    ratio = LoadTracker.for_calibration(linear).noise.channel_std / NOISE.channel_std
+    assert np.all((ratio > 0.5) & (ratio < 1.6))
+    given = LoadTracker.for_calibration(linear, SensorNoise(0.1, 0.01))
+    np.testing.assert_allclose(given.noise.channel_std, [0.1] * 3 + [0.01] * 3)
+    with pytest.raises(InvalidInput, match="SensorModel"):
+        LoadTracker.for_calibration("calib.json")
