@@ -236,3 +236,36 @@ def test_for_calibration_takes_the_noise_a_calibration_records(tool, rotations):
     np.testing.assert_allclose(given.noise.channel_std, [0.1] * 3 + [0.01] * 3)
     with pytest.raises(InvalidInput, match="SensorModel"):
         LoadTracker.for_calibration("calib.json")
+
+
+def test_track_load_checks_a_recording_and_labels_every_row():
+    from ftkin.control.load_track import track_load
+
+    rotations = np.tile(np.eye(3), (900, 1, 1))
+    contact = np.zeros((900, 6))
+    contact[300:600] = _wrench(np.eye(3), 0.2, [0.01, 0.0, 0.05])
+    track = track_load(LoadTracker(NOISE, GRAVITY), rotations, contact)
+    assert len(track.labels) == 900 and track.labels.count("grasp") == 1
+    assert track.labels.count("release") == 1 and [e.kind for e in track.events] == [
+        "grasp",
+        "release",
+    ]
+    grasped = track.labels.index("grasp")
+    np.testing.assert_allclose(track.mass[grasped:599], 0.2, rtol=1e-9)
+    assert np.all(track.mass[:grasped] == 0) and np.all(np.isnan(track.com_in_sensor[:grasped]))
+    # x is across gravity (determined), z along it (not, at one orientation)
+    np.testing.assert_allclose(track.com_in_sensor[500, 0], 0.01, rtol=1e-9)
+    assert np.isnan(track.com_in_sensor[500, 2])
+    # the tick's solve has a ridge of 1e-9 of the trace (solve_still_floats)
+    np.testing.assert_allclose(track.contact[grasped + 1 : 599], 0.0, atol=1e-9)
+    tracker = LoadTracker(NOISE, GRAVITY)
+    with pytest.raises(InvalidInput, match="900 rotations but 899 wrenches"):
+        track_load(tracker, rotations, contact[:-1])
+    with pytest.raises(InvalidInput, match="times must be 900 finite"):
+        track_load(tracker, rotations, contact, times=np.full(900, np.nan))
+    with pytest.raises(InvalidInput, match="go back"):
+        track_load(tracker, rotations, contact, times=np.arange(900)[::-1] * 1e-3)
+    with pytest.raises(InvalidInput, match="gripper must be 900 booleans"):
+        track_load(tracker, rotations, contact, gripper=np.ones(900))
+    with pytest.raises(InvalidInput, match="contact_wrenches"):
+        track_load(tracker, rotations, np.full((900, 6), np.inf))
