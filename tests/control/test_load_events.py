@@ -269,3 +269,17 @@ def test_track_load_checks_a_recording_and_labels_every_row():
         track_load(tracker, rotations, contact, gripper=np.ones(900))
     with pytest.raises(InvalidInput, match="contact_wrenches"):
         track_load(tracker, rotations, np.full((900, 6), np.inf))
+
+
+@pytest.mark.parametrize("factor, kind", [(K - 0.5, "grasp"), (K + 0.5, "contact")])
+def test_a_step_still_changing_beyond_k_sigma_between_blocks_is_a_contact(factor, kind):
+    """Consecutive block means of a ramp differ by its slope times a block's 6 ms: within
+    k √(2σ²/n) the step has settled (a gravity load), beyond it it is still changing."""
+    rotation = np.eye(3)
+    change = factor * math.sqrt(2.0) * SIGMA[2]  # [N] between consecutive block means
+    per_tick = change / BLOCK
+    readings = np.zeros((400, 6))
+    readings[100:, 2] = -(np.arange(300) + 1) * per_tick  # a force growing along gravity (−z)
+    tracker = LoadTracker(NOISE, GRAVITY)
+    _run(tracker, rotation, readings)
+    assert _kinds(tracker)[:1] == [kind]
