@@ -32,7 +32,8 @@ one before (within ``k √(2σ²/n + μ²)``). A settled step is:
 
 A steady push straight down along gravity with a consistent moment cannot be told from a grasp
 without the gripper's state: give it when there is one. A lighter tool (an upward step) is a
-contact: recalibrate after changing tools.
+contact: recalibrate after changing tools. A bias drifting beyond the bound reads as a step too
+(re-zero, or track it: :class:`~ftkin.control.bias_tracker.BiasTracker`).
 
 The tick (:meth:`LoadTracker.tick`) is a few dozen float operations; at the end of a block a
 3×3 solve in floats. It never raises and never returns NaN for finite input; the events are kept
