@@ -103,16 +103,28 @@ def check_outputs(args: argparse.Namespace) -> None:
             seen[key] = flag
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser that takes a flag only as spelled (``allow_abbrev=False``), it and every
+    subcommand's parser (``add_subparsers`` builds them of the same class): argparse's default
+    would take ``--readings`` for ``--readings-per-pose`` and ``--floor`` for ``--floor-height``,
+    so a spelling that was never a flag, or a prefix that a new flag makes ambiguous, would be
+    read as another."""
+
+    def __init__(self, *args, allow_abbrev: bool = False, **keywords):
+        super().__init__(*args, allow_abbrev=allow_abbrev, **keywords)
+
+
 def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     """The argument parser with every subcommand registered.
 
     Given the command line ``argv`` whose command is known, only that
     subcommand is registered (its module, and the library behind it, alone
-    are imported: the other subcommands cost ~0.3 s of imports).
+    are imported: the other subcommands cost ~0.3 s of imports). No flag is
+    taken by a prefix of its name (:class:`_Parser`).
     """
     from .._version import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="ftkin",
         description="Calibrate and compensate a robot's wrist force/torque sensor.",
     )
@@ -123,6 +135,11 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     for name in (command,) if command in COMMAND_MODULES else COMMAND_MODULES:
         importlib.import_module(f".{name.replace('-', '_')}", __name__).register(subparsers)
     return parser
+
+
+_SUMMARIZED_LOGS = ("fit_quality", "goodness_of_fit")
+"""Loggers of ``ftkin.calibration`` whose warnings every fitting command's summary prints (the
+static fits' diagnostics, every kind's fit test): kept out of the CLI's log, printed once."""
 
 
 def main(argv=None) -> int:
@@ -143,9 +160,11 @@ def main(argv=None) -> int:
         return 0
     stdout, sys.stdout = sys.stdout, _QuietPipe(sys.stdout)
     once = {}  # a filter per handler: each handler sees each record once
-    fit_log = logging.getLogger("ftkin.calibration.fit_quality")
+    fit_logs = [logging.getLogger(f"ftkin.calibration.{name}") for name in _SUMMARIZED_LOGS]
     # every command that fits prints the summary, which lists these warnings
-    fit_log_disabled, fit_log.disabled = fit_log.disabled, True
+    fit_logs_disabled = [log.disabled for log in fit_logs]
+    for log in fit_logs:
+        log.disabled = True
     try:
         from .arg_types import join_number_lists
 
@@ -179,7 +198,8 @@ def main(argv=None) -> int:
         return _unexpected(error)
     finally:
         sys.stdout = stdout
-        fit_log.disabled = fit_log_disabled
+        for log, disabled in zip(fit_logs, fit_logs_disabled):
+            log.disabled = disabled
         for handler, once_filter in once.items():
             handler.removeFilter(once_filter)
 

@@ -14,7 +14,7 @@ from .. import Arm, Compensator, SensorNoise, calibrate, save_calibration
 from ..sim.sensor import SimulatedSensor, paper_like_truth
 from .arg_types import add_command, non_negative_float, option
 from .pose_options import add_readings_argument
-from .shared_options import DEFAULT_POSES, METHOD, POSES, SEED, deprecated, resolved
+from .shared_options import DEFAULT_POSES, METHOD, POSES, SEED, resolved
 
 
 def register(subparsers) -> None:
@@ -24,7 +24,6 @@ def register(subparsers) -> None:
         help="simulated sensor on the bundled arm: calibrate, compare with the truth, compensate",
         options=(
             POSES,
-            deprecated("--poses", "n", "--n", type=POSES[1]["type"]),
             SEED,
             METHOD,
             option("-o", "--output", metavar="CALIB.json", help="also write the calibration file"),

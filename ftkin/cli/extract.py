@@ -5,7 +5,6 @@ import numpy as np
 from ..io.csv_table import write_csv
 from .arg_types import add_command, option
 from .common import add_samples_arguments, load_samples_from_args
-from .shared_options import deprecated
 
 
 def register(subparsers) -> None:
@@ -18,12 +17,10 @@ def register(subparsers) -> None:
         "(static segment number), the arm's joint angles [rad] and fx..mz [N, N·m]. A continuous "
         "recording in a CSV (a time column, no pose column) gets the same search; its still rows "
         "are written with a pose column. The CSV is a valid input of 'ftkin calibrate'. With "
-        "--all, every reading (no pose column) is written.",
+        "--all-rows, every reading (no pose column) is written.",
         options=(
             option("recording", metavar="RECORDING"),
             option("-o", "--output", metavar="SAMPLES.csv", required=True),
-            # the older name of the samples option --all-rows: one setting
-            deprecated("--all", "all_rows", "--all-rows", nargs=0, const=True, default=False),
         ),
         groups=(add_samples_arguments,),
         run=run,

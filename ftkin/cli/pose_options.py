@@ -8,14 +8,9 @@ default and help (``tests/cli/test_flags.py`` walks the parsers): ``--margin``,
 ``--readings-per-pose``.
 """
 
-import argparse
-import logging
-
 from ..planning.constraints import PoseConstraints
 from .arg_types import add_options, bounded_int, option
 from .declared import declared_option, declared_values
-
-logger = logging.getLogger("ftkin.cli")
 
 DEFAULT_READINGS_PER_POSE = 50
 """Readings per pose: what ``robot calibrate`` records at each pose and what ``plan`` predicts
@@ -49,41 +44,14 @@ READINGS_PER_POSE = option(
 )
 
 
-class DeprecatedFlag(argparse.Action):
-    """An old spelling of a flag: works as the new one for one release, with a warning naming
-    it."""
-
-    def __init__(self, option_strings, dest, replacement: str, **keywords):
-        self.replacement = replacement
-        super().__init__(option_strings, dest, **keywords)
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        logger.warning(
-            "%s is deprecated and will be removed: use %s", option_string, self.replacement
-        )
-        setattr(namespace, self.dest, self.const if self.nargs == 0 else values)
-
-
 def add_constraint_arguments(parser) -> None:
     """The pose constraint flags (:data:`CONSTRAINT_OPTIONS`) as a group of ``parser``."""
     add_options(parser.add_argument_group("pose constraints"), *CONSTRAINT_OPTIONS)
 
 
-def deprecated_readings() -> tuple:
-    """``--readings``, the old spelling of ``--readings-per-pose`` (one release)."""
-    return option(
-        "--readings",
-        dest="readings_per_pose",
-        type=READINGS_PER_POSE[1]["type"],
-        action=DeprecatedFlag,
-        replacement="--readings-per-pose",
-        help=argparse.SUPPRESS,
-    )
-
-
 def add_readings_argument(parser) -> None:
-    """``--readings-per-pose`` (and ``--readings``, its deprecated spelling)."""
-    add_options(parser, READINGS_PER_POSE, deprecated_readings())
+    """``--readings-per-pose`` (:data:`READINGS_PER_POSE`)."""
+    add_options(parser, READINGS_PER_POSE)
 
 
 def constraints_from_args(args) -> PoseConstraints:

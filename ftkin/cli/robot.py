@@ -28,7 +28,6 @@ from .arg_types import add_options, bounded_int, finite_float, option, positive_
 from .common import add_arm_arguments, arm_from_args
 from .declared import add_declared, declared_values
 from .pose_options import (
-    CONSTRAINT_OPTIONS,
     add_constraint_arguments,
     add_readings_argument,
     constraints_from_args,
@@ -51,7 +50,6 @@ from .shared_options import (
     STATE_TIMEOUT,
     TOOL_MASS,
     as_required,
-    deprecated,
     open_named_sensor,
     resolved,
 )
@@ -137,8 +135,6 @@ def _calibrate_parser(commands) -> None:
     )
     add_readings_argument(parser)
     add_constraint_arguments(parser)
-    floor_type = CONSTRAINT_OPTIONS[1][1]["type"]
-    add_options(parser, deprecated("--floor", "floor_height", "--floor-height", type=floor_type))
     _stillness_options(parser)
     parser.set_defaults(func=run_calibrate)
 
@@ -172,7 +168,6 @@ def _guide_parser(commands) -> None:
             metavar="HZ",
             help="control loop rate [Hz] (default: %(default)s)",
         ),
-        deprecated("--rate", "loop_rate", "--loop-rate", type=positive_float),
         option("--rotation", action="store_true", help="let the hand turn the tool"),
         option("--gain", type=positive_float, help="translation gain [m/(s·N)] (default: 0.0035)"),
     )
@@ -203,7 +198,6 @@ def _demo_parser(commands) -> None:
     add_options(
         parser,
         POSES,
-        deprecated("--poses", "n", "--n", type=POSES[1]["type"]),
         SPEED,
         option("--push", type=finite_float, default=15.0, metavar="N", help="push force [N]"),
         option(
@@ -316,12 +310,6 @@ def run_calibrate(args) -> int:
     arm = _arm(args)
     plan_options = _plan_options(args)
     stillness = Stillness(**declared_values(Stillness, args))
-    if args.poses is not None and args.poses.isdigit() and not Path(args.poses).exists():
-        logger.warning(
-            "--poses N (a count) is deprecated: --poses names a poses file now; use --n %s",
-            args.poses,
-        )
-        args.n, args.poses = int(args.poses), None
     if args.poses is not None:
         from ..io.csv_table import read_table
         from ..io.samples_csv import configurations_from_table

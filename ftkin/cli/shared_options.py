@@ -10,6 +10,7 @@ in :mod:`ftkin.cli.pose_options`; options of a library type come from its declar
 
 import argparse
 import logging
+import os
 
 from ..calibration.estimate import CalibrationOptions
 from ..io.payload_export import END_EFFECTOR, SENSOR_BODY
@@ -47,6 +48,17 @@ def pose_count(text: str) -> int:
     return value
 
 
+def poses_file(text: str) -> str:
+    """argparse type: the name of a poses file (``--poses``). A whole number that names no file
+    is refused with ``--n`` named: the number of poses is ``--n N``, not ``--poses N``."""
+    if text.strip().isdigit() and not os.path.exists(text):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is no file: --poses names a poses file (ftkin plan -o POSES.csv); the "
+            f"number of poses is --n {text.strip()}"
+        )
+    return text
+
+
 POSES = option(
     "--n",
     type=pose_count,
@@ -57,6 +69,7 @@ POSES = option(
 )
 POSES_FILE = option(
     "--poses",
+    type=poses_file,
     metavar="POSES.csv",
     help="a poses file (ftkin plan -o POSES.csv): simulate writes readings at these poses, robot "
     "calibrate visits them, checked against the constraints before the arm moves (default: "
@@ -248,18 +261,3 @@ SENSOR_BODY_OPTION = payload_body_option(SENSOR_BODY)
 def resolved(value, default):
     """``value``, or the command's ``default`` when the option was not given (None)."""
     return default if value is None else value
-
-
-def deprecated(old: str, dest: str, replacement: str, **keywords) -> tuple:
-    """An old spelling kept for one release: hidden from ``--help``, it warns naming
-    ``replacement`` and sets ``dest``."""
-    from .pose_options import DeprecatedFlag
-
-    return option(
-        old,
-        dest=dest,
-        action=DeprecatedFlag,
-        replacement=replacement,
-        help=argparse.SUPPRESS,
-        **keywords,
-    )

@@ -57,7 +57,7 @@ from .arg_types import (
     refuse,
 )
 from .common import add_arm_arguments, arm_from_args
-from .pose_options import READINGS_PER_POSE, deprecated_readings
+from .pose_options import READINGS_PER_POSE
 from .shared_options import (
     CENTER_OF_MASS,
     DEFAULT_POSES,
@@ -335,7 +335,7 @@ KINDS = {
 
 _POSES = (POSES_FILE, POSES)
 INPUT_OPTIONS = {
-    "samples": (*_POSES, READINGS_PER_POSE, deprecated_readings()),
+    "samples": (*_POSES, READINGS_PER_POSE),
     "log": (DURATION,),
     "recording": (
         DURATION,

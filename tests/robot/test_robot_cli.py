@@ -71,16 +71,7 @@ def test_pose_flags_are_spelled_defaulted_and_explained_as_plan_does():
         assert flag in robot, flag
         assert robot[flag].help == plan[flag].help, flag
         assert robot[flag].default == plan[flag].default, flag
-    assert "--floor" not in robot and "--readings" not in robot or robot["--readings"].help
-
-
-def test_the_old_readings_spelling_works_with_a_warning(tmp_path, caplog):
-    import logging
-
-    argv = ["robot", "calibrate", "--dry-run", "--n", "4", "-o", str(tmp_path / "c.json")]
-    with caplog.at_level(logging.WARNING, logger="ftkin"):
-        assert main([*argv, "--readings", "7"]) == 0
-    assert "--readings is deprecated" in caplog.text and "--readings-per-pose" in caplog.text
+    assert "--floor" not in robot and "--readings" not in robot
 
 
 def _serve(tmp_path):
