@@ -246,8 +246,13 @@ def _track_load(calibration, noise, rotations, contact, times, header, rows):
                 f"{cells[wrong]!r}"
             )
         gripper = np.array([cell == "1" for cell in cells], dtype=bool)
-    tracker = LoadTracker.for_calibration(calibration, noise)
+    tracker = LoadTracker.for_calibration(calibration, noise, readings=contact)
     track = track_load(tracker, rotations, contact, times, gripper)
+    force, torque = tracker.noise.force_std, tracker.noise.torque_std
+    print(
+        f"load tracking: noise per reading {np.array2string(force, precision=4)} N, "
+        f"{np.array2string(torque, precision=5)} N·m; bounds {tracker.thresholds.k_sigma:g}σ"
+    )
     names = [*LOAD_COLUMNS, "load_event"]
     kept = [i for i, name in enumerate(header) if name not in names]  # a rerun's are replaced
     values = np.column_stack([track.mass, track.mass_std, track.com_in_sensor])

@@ -46,11 +46,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..calibration.information import SensorNoise, at_noise_floor
+from ..calibration.information import NOISE_RANGE, SensorNoise, at_noise_floor
 from ..calibration.model import SensorModel
 from ..calibration.result import CalibrationResult
 from ..exceptions import InvalidInput
-from ..validation import as_float_array, as_rotation_batch, as_wrench
+from ..validation import as_float_array, as_rotation_batch, as_wrench, as_wrenches
 from .load_estimator import (
     LoadEstimate,
     add_still_floats,
@@ -202,13 +202,17 @@ class LoadTracker:
         self.reset()
 
     @classmethod
-    def for_calibration(cls, calibration, noise: SensorNoise | None = None, **options):
+    def for_calibration(
+        cls, calibration, noise: SensorNoise | None = None, readings=None, **options
+    ):
         """A tracker with a calibration's gravity and noise.
 
         The noise is ``noise`` if given, else the calibration's (``diagnostics.noise`` of a
-        maximum-likelihood fit, the ``channel_std`` of a dynamic one), else its per-pose residual
-        RMS times ``√(readings per pose)`` (the per-pose readings were means); the model floor is
-        the residual RMS when the noise did not come from it.
+        maximum-likelihood fit, the ``channel_std`` of a dynamic one), else, when ``readings``
+        ``(N, 6)`` of a recording (3 or more) are given, estimated from them
+        (:func:`noise_from_readings`), else the calibration's per-pose residual RMS times
+        ``√(readings per pose)`` (the per-pose readings were means: model error counts as
+        noise). The model floor is the residual RMS unless the noise came from it.
 
         Raises:
             InvalidInput: not a calibration, or no noise given and none in the calibration (no
@@ -233,6 +237,8 @@ class LoadTracker:
                 noise = calibration.diagnostics.noise
             elif dynamic and calibration.channel_std is not None:
                 noise = SensorNoise(calibration.channel_std[:3], calibration.channel_std[3:])
+            elif readings is not None and len(readings) >= 3:
+                noise = noise_from_readings(readings)
             elif rms is not None and not at_noise_floor(rms, calibration.pose_wrenches):
                 per_pose = max(calibration.sample_count / max(len(residuals), 1), 1.0)
                 noise, floor = SensorNoise(rms[:3] * per_pose**0.5, rms[3:] * per_pose**0.5), None
@@ -480,6 +486,29 @@ class LoadTracker:
         Not for the tick: a solve with standard errors (an eigendecomposition).
         """
         return estimate_from(self._load_sums) if self._state == HOLDING else None
+
+
+def noise_from_readings(readings) -> SensorNoise:
+    """One reading's noise per channel estimated from a recording ``(N, 6)`` [N, N·m].
+
+    From consecutive differences, robustly: ``σ = 1.4826 · MAD(Δw) / √2`` per channel (white noise
+    doubles its variance in a difference; the median ignores the few steps of grasps and
+    contacts; a motion slow beside the reading rate adds little). A channel that does not change
+    gets the floor of :data:`~ftkin.calibration.information.NOISE_RANGE`.
+
+    Raises:
+        InvalidInput: fewer than 3 readings, or readings not finite.
+    """
+    wrenches, _ = as_wrenches(readings, "readings")
+    if len(wrenches) < 3:
+        raise InvalidInput(
+            f"estimating the noise needs at least 3 readings, got {len(wrenches)}: give it "
+            "(ftkin compensate: --noise-force N --noise-torque NM)"
+        )
+    differences = np.diff(wrenches, axis=0)
+    spread = np.median(np.abs(differences - np.median(differences, axis=0)), axis=0)
+    sigma = np.maximum(1.4826 * spread / math.sqrt(2.0), NOISE_RANGE[0])
+    return SensorNoise(sigma[:3], sigma[3:])
 
 
 def _residual(y, g, theta) -> tuple[float, ...]:

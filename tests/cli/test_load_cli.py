@@ -94,14 +94,28 @@ def test_track_load_writes_the_load_columns_and_the_contact_after_it(recording, 
     assert _read(again)[0] == header + LOAD
 
 
-def test_a_calibration_without_noise_is_told_what_to_add(recording, capsys):
+def test_without_a_recorded_noise_it_is_estimated_from_the_log(recording, capsys):
     calibration, log, _, _, _, folder = recording
     argv = ["compensate", str(calibration), str(log), "-o", str(folder / "x.csv"), "--track-load"]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    line = re.search(r"noise per reading \[(.*)\] N, \[(.*)\] N·m", printed)
+    force, torque = (np.array(group.split(), dtype=float) for group in line.groups())
+    np.testing.assert_allclose(force, 0.02, rtol=0.1)  # the log's seeded noise
+    np.testing.assert_allclose(torque, 0.002, rtol=0.1)
+
+
+def test_a_log_too_short_for_a_noise_is_told_what_to_add(recording, capsys):
+    calibration, log, header, _, _, folder = recording
+    with open(log, newline="") as stream:
+        rows = list(csv.reader(stream))[1:3]
+    short = write_csv(folder / "short.csv", header, rows)
+    argv = ["compensate", str(calibration), str(short), "-o", str(folder / "s.csv"), "--track-load"]
     assert main(argv) == 2
     error = capsys.readouterr().err
     assert error.startswith("ftkin: error: ") and "Traceback" not in error
-    assert "--noise-force N --noise-torque NM" in error
-    assert not (folder / "x.csv").exists()
+    assert "--noise-force N --noise-torque NM" in error and len(error.strip().splitlines()) == 1
+    assert not (folder / "s.csv").exists()
     assert main(argv + NOISE_ARGS) == 0  # the advice, followed
 
 

@@ -232,6 +232,13 @@ def test_for_calibration_takes_the_noise_a_calibration_records(tool, rotations):
     # per-pose residuals of 50-reading means: about the noise over √50, scaled back by √50
     ratio = LoadTracker.for_calibration(linear).noise.channel_std / NOISE.channel_std
     assert np.all((ratio > 0.5) & (ratio < 1.6))
+    # a recording's readings, when the calibration records no noise, are preferred to residuals
+    rng = np.random.default_rng(3)
+    readings = rng.normal(size=(3000, 6)) * NOISE.channel_std
+    estimated = LoadTracker.for_calibration(linear, readings=readings).noise.channel_std
+    np.testing.assert_allclose(estimated, NOISE.channel_std, rtol=0.1)
+    recorded = LoadTracker.for_calibration(ml, readings=readings * 10).noise.channel_std
+    np.testing.assert_allclose(recorded, ml.diagnostics.noise.channel_std)  # the fit's own first
     given = LoadTracker.for_calibration(linear, SensorNoise(0.1, 0.01))
     np.testing.assert_allclose(given.noise.channel_std, [0.1] * 3 + [0.01] * 3)
     with pytest.raises(InvalidInput, match="SensorModel"):
@@ -283,3 +290,21 @@ def test_a_step_still_changing_beyond_k_sigma_between_blocks_is_a_contact(factor
     tracker = LoadTracker(NOISE, GRAVITY)
     _run(tracker, rotation, readings)
     assert _kinds(tracker)[:1] == [kind]
+
+
+def test_the_noise_of_a_recording_is_estimated_through_its_steps_and_motion():
+    from ftkin.control.load_events import noise_from_readings
+
+    rng = np.random.default_rng(21)
+    time = np.arange(20000) * 1e-3
+    slow = np.outer(np.sin(2 * np.pi * 0.5 * time), [1.0, -2.0, 0.5, 0.05, 0.02, -0.03])
+    steps = np.outer((time > 5) & (time < 12), [3.0, 0.0, -6.0, 0.2, 0.1, 0.0])
+    readings = slow + steps + rng.normal(size=(len(time), 6)) * NOISE.channel_std
+    estimate = noise_from_readings(readings)
+    np.testing.assert_allclose(estimate.channel_std, NOISE.channel_std, rtol=0.05)
+    constant = noise_from_readings(np.ones((10, 6)))  # a channel that never changes: the floor
+    assert np.all(constant.channel_std > 0)
+    with pytest.raises(InvalidInput, match="at least 3 readings"):
+        noise_from_readings(np.zeros((2, 6)))
+    with pytest.raises(InvalidInput, match="readings"):
+        noise_from_readings(np.full((5, 6), np.nan))
