@@ -109,13 +109,6 @@ class LoadTrial:
     release_delay: float
     events: tuple[LoadEvent, ...]
 
-    @property
-    def unexpected_events(self) -> tuple[LoadEvent, ...]:
-        """Events other than the one grasp and the one release (contacts included)."""
-        kinds = [event.kind for event in self.events]
-        expected = kinds == [GRASP, RELEASE]
-        return () if expected else tuple(self.events)
-
 
 def _noisy(readings, noise: SensorNoise, seed: int) -> np.ndarray:
     rng = np.random.default_rng(seed)
