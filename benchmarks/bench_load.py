@@ -21,7 +21,11 @@ Rows:
    as ``contact``, the mass after them within 0.5 %;
 3. cost: ``LoadTracker.tick`` (the per-tick update, a block end every sixth call) against
    ``Compensator.compensate`` (FK and the tool's compensation), alternating blocks, CPU time, the
-   median of per-repeat ratios (target ≤ 2×); and the whole ``compensate`` with a load part.
+   median of per-repeat ratios (target ≤ 2×); and the whole ``compensate`` with a load part;
+4. the placement (``run_placement``): admittance lowers the 2.214 N object onto the sponge and the
+   book while a tracker (gripper closed) identifies it; "placed" when the force along gravity is
+   back within ±0.05 N of the empty tool's, beside the truth's settle time (MuJoCo's compensated
+   force and the tool's speed); targets: mass ≤ 0.5 %, only grasp and contact, ≤ 0.1 s apart.
 
 Run: ``.venv/bin/python benchmarks/bench_load.py``
 """
@@ -43,9 +47,11 @@ from ftkin.sim.mujoco.load_experiment import (
     TABLE4_WEIGHTS,
     run_guiding,
     run_load_trial,
+    run_placement,
 )
 from ftkin.sim.mujoco.load_recording import MujocoLoadRecorder
 from ftkin.sim.sensor import paper_like_truth
+from ftkin.sim.surfaces import BOOK, SPONGE
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from _targets import verdict  # noqa: E402
@@ -171,11 +177,27 @@ def cost(arm) -> None:
     )
 
 
+def placement(arm) -> None:
+    print("\n4. placement by admittance, the 2.214 N object identified, the gripper closed")
+    print(f"{'surface':<9}{'mass err %':>11}{'placed s':>10}{'truth s':>9}  events")
+    for surface in (SPONGE, BOOK):
+        run = run_placement(2.214, surface, arm=arm)
+        error = abs(run.identified_mass / run.true_mass - 1) * 100
+        kinds = [event.kind for event in run.events]
+        gap = abs(run.placed_time - run.run.settle_time)
+        ok = error <= 0.5 and kinds == ["grasp", "contact"] and gap <= 0.1
+        print(
+            f"{surface.name:<9}{error:>11.3f}{run.placed_time:>10.3f}{run.run.settle_time:>9.3f}"
+            f"  {', '.join(kinds)} {verdict(ok)}"
+        )
+
+
 def main() -> None:
     arm = Arm.default()
     table4(arm)
     guiding(arm)
     cost(arm)
+    placement(arm)
 
 
 if __name__ == "__main__":

@@ -122,15 +122,24 @@ class UnobservableParameters(FtkinError):
 
     Attributes:
         names: Parameters (or parameter groups) that are not determined.
-        singular_values: Singular values of the (normalized) regressor or
-            information matrix, largest first, when available.
+        singular_values: Singular values of the whitened Jacobian (or regressor) with unit-norm
+            columns, relative to the largest, largest first, when available.
+        combination: The direction the data cannot see, ``((name, coefficient), ...)`` in each
+            parameter's own unit, the first coefficient 1: moving the parameters along it leaves
+            every prediction as it was (e.g. ``(("gravity_in_base[z]", 1.0),
+            ("force_offset[z]", -1.0))``); empty when not computed.
     """
 
-    def __init__(self, names: Sequence[str], reason: str, singular_values=None):
+    def __init__(self, names: Sequence[str], reason: str, singular_values=None, combination=()):
         self.names = list(names)
         self.reason = reason
         self.singular_values = singular_values
-        super().__init__("the poses cannot determine " + ", ".join(self.names) + f": {reason}")
+        self.combination = tuple((str(name), float(value)) for name, value in combination)
+        text = "the poses cannot determine " + ", ".join(self.names) + f": {reason}"
+        if self.combination:
+            along = " ".join(f"{value:+.3g} {name}" for name, value in self.combination)
+            text += f" (the readings stay the same along {along})"
+        super().__init__(text)
 
 
 class CalibrationFileError(FtkinError):

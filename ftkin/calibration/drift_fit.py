@@ -36,8 +36,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..exceptions import UnobservableParameters
+from .covariance import invert_information
 from .drift import BiasDrift, DriftModel, auto_candidates, parse_drift, trend_columns
-from .information import SensorNoise, invert_information
+from .information import SensorNoise
 from .ml import RESIDUAL_NOISE_GROUPS, WhitenedFit, pooled_noise
 from .model import COMPONENT_NAMES, SensorModel, parameter_jacobian, predict
 from .random_walk import log_likelihood, smooth, walk_gains, whiten

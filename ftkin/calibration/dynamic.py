@@ -18,9 +18,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..exceptions import InvalidInput, SuspectConvention, UnobservableParameters
+from ..exceptions import InvalidInput, SuspectConvention
 from ..kinematics.rotations import gravity_in_base_from_tilt
 from .conventions import check_conventions, detect_sign_and_handedness
+from .covariance import delta_method, invert_information
 from .dynamic_fit import (
     ALL_INDICES,
     STATIC_INDICES,
@@ -28,10 +29,11 @@ from .dynamic_fit import (
     check_observability,
     fit_linear,
     fit_nonlinear,
+    noise_from_residuals,
     theta_space,
 )
 from .estimate import CalibrationResult
-from .information import SensorNoise, noise_floor
+from .information import SensorNoise
 from .log_cholesky import (
     body_from_parameters,
     inertia_entries,
@@ -100,9 +102,7 @@ class DynamicCalibrationResult(CalibrationResult):
 def _with_noise_estimate(problem: DynamicProblem, x: np.ndarray) -> DynamicProblem:
     """``problem`` weighted by the noise per channel [N, N·m] of its residuals at ``x`` (θ)."""
     residuals = problem.wrenches - problem.predict(x)
-    std = np.sqrt(np.sum(residuals**2, axis=0) / max(len(residuals) - len(x) / 6.0, 1.0))
-    # the static fits' floor: exact data stays finite
-    return replace(problem, channel_std=np.maximum(std, noise_floor(problem.wrenches)))
+    return replace(problem, channel_std=noise_from_residuals(residuals, len(x), problem.wrenches))
 
 
 def _outputs(problem: DynamicProblem, x: np.ndarray, phi: bool) -> np.ndarray:
@@ -118,28 +118,13 @@ def _covariance(problem: DynamicProblem, x: np.ndarray, phi: bool) -> np.ndarray
     ``x``.
     """
     jac = problem.whitened_jacobian(x, phi)
-    information = jac.T @ jac
-    scale = np.sqrt(np.diag(information))
-    # a parameter without information: named below, not a NaN
-    scale = np.where(scale > 0.0, scale, 1.0)
-    values, vectors = np.linalg.eigh(information / np.outer(scale, scale))
-    if values[0] <= 1e-14 * values[-1]:
-        raise UnobservableParameters(
-            [problem.names[i] for i in np.flatnonzero(np.abs(vectors[:, 0]) > 0.3)],
-            "the information at the solution is singular (the estimate sits on the boundary of "
-            "physical consistency "
-            "or the motion does not excite these parameters)",
-        )
-    cov_x = ((vectors / values) @ vectors.T) / np.outer(scale, scale)
-    steps = np.diag(1e-6 * np.maximum(1.0, np.abs(x)))  # one central difference per column
-    gradient = np.stack(
-        [
-            (_outputs(problem, x + step, phi) - _outputs(problem, x - step, phi)) / (2 * step[i])
-            for i, step in enumerate(steps)
-        ],
-        axis=1,
+    cov_x = invert_information(
+        jac.T @ jac,
+        problem.names,
+        "the information at the solution is singular (the estimate sits on the boundary of "
+        "physical consistency or the motion does not excite these parameters)",
     )
-    return gradient @ cov_x @ gradient.T
+    return delta_method(lambda point: _outputs(problem, point, phi), x, cov_x)[1]
 
 
 def _refuse_non_positive_mass(motion: MotionSamples, mass: float, g: float) -> None:

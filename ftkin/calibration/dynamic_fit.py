@@ -23,6 +23,8 @@ import numpy as np
 
 from ..exceptions import UnobservableParameters
 from ..kinematics.rotations import gravity_in_base_from_tilt
+from .covariance import RCOND, check_determined
+from .information import noise_floor
 from .log_cholesky import (
     INERTIAL_PARAMETER_NAMES,
     log_cholesky_jacobian,
@@ -115,8 +117,9 @@ class DynamicProblem:
         ).ravel()
 
     def whitened_jacobian(self, x: np.ndarray, phi: bool = False) -> np.ndarray:
-        """``(6N, len(x))`` derivative of :meth:`whitened_residuals` (θ-space, or φ-space)."""
-        jac = (-self.jacobian(theta_space(x) if phi else x) / self.channel_std[:, None]).reshape(
+        """``(6N, len(x))`` derivative of the whitened prediction ``predict / σ`` (θ-space, or
+        φ-space; ftkin's one sign, :mod:`ftkin.calibration.covariance`)."""
+        jac = (self.jacobian(theta_space(x) if phi else x) / self.channel_std[:, None]).reshape(
             -1, len(x)
         )
         if phi:
@@ -129,13 +132,14 @@ def theta_space(x_phi: np.ndarray) -> np.ndarray:
     return np.concatenate([x_phi[:8], parameters_from_log_cholesky(x_phi[8:])])
 
 
-def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
+def check_observability(problem: DynamicProblem) -> None:
     """Refuse a recording that cannot determine the free parameters.
 
     Raises:
         UnobservableParameters: the recording is static while the inertia is
             free (its columns of the regressor vanish), or the normalized
-            information at zero tilt is singular along some parameters.
+            information at zero tilt is singular along some parameters
+            (:func:`~ftkin.calibration.covariance.check_determined` at ``sqrt(RCOND)``).
     """
     inertia = [i for i in problem.free if i >= 4]
     if inertia:
@@ -151,24 +155,13 @@ def check_observability(problem: DynamicProblem, rcond: float = 1e-12) -> None:
             )
     x = np.zeros(8 + len(problem.free))
     x[8] = 1.0  # a unit mass: the tilt and moment columns need weight to act on
-    jac = problem.whitened_jacobian(x)
-    scale = np.linalg.norm(jac, axis=0)
-    names = problem.names
-    if np.any(scale == 0.0):
-        raise UnobservableParameters(
-            [names[i] for i in np.flatnonzero(scale == 0.0)],
-            "the recording carries no information about them",
-        )
-    normalized = jac / scale
-    # the normal matrix: cheap for tall regressors
-    eigenvalues, eigenvectors = np.linalg.eigh(normalized.T @ normalized)
-    if eigenvalues[0] <= rcond * eigenvalues[-1]:
-        raise UnobservableParameters(
-            [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)],
-            "the regressor is singular along a combination of them (too few distinct orientations "
-            "or motions)",
-            singular_values=np.sqrt(np.clip(eigenvalues[::-1], 0.0, None)),
-        )
+    check_determined(
+        problem.whitened_jacobian(x),
+        problem.names,
+        "the regressor is singular along a combination of them (too few distinct orientations "
+        "or motions)",
+        np.sqrt(RCOND),
+    )
 
 
 def fit_linear(problem: DynamicProblem) -> np.ndarray:
@@ -176,8 +169,8 @@ def fit_linear(problem: DynamicProblem) -> np.ndarray:
     x0 = np.zeros(8 + len(problem.free))
     columns = [i for i in range(len(x0)) if i not in (6, 7)]
     target = (problem.wrenches / problem.channel_std).ravel()
-    # At fixed tilt the prediction is linear in [bias, θ]: residual = target + J x.
-    x0[columns] = np.linalg.lstsq(problem.whitened_jacobian(x0)[:, columns], -target, rcond=None)[0]
+    # At fixed tilt the whitened prediction is linear in [bias, θ]: J x.
+    x0[columns] = np.linalg.lstsq(problem.whitened_jacobian(x0)[:, columns], target, rcond=None)[0]
     return x0
 
 
@@ -192,7 +185,7 @@ def fit_nonlinear(problem: DynamicProblem, x0: np.ndarray, phi: bool = False) ->
     return least_squares(
         problem.whitened_residuals,
         x0,
-        jac=problem.whitened_jacobian,
+        jac=lambda x, phi: -problem.whitened_jacobian(x, phi),
         args=(phi,),
         method="lm",
         xtol=1e-14,
@@ -200,3 +193,13 @@ def fit_nonlinear(problem: DynamicProblem, x0: np.ndarray, phi: bool = False) ->
         gtol=1e-14,
         max_nfev=2000 if phi else None,
     ).x
+
+
+def noise_from_residuals(residuals: np.ndarray, parameter_count: int, wrenches) -> np.ndarray:
+    """``(6,)`` noise per reading and channel [N, N·m] of a motion fit's ``residuals`` ``(N, 6)``:
+    ``sqrt(Σ e² / (N − n/6))`` (the ``n`` fitted parameters' degrees of freedom shared by the six
+    channels), at least :func:`~ftkin.calibration.information.noise_floor` of ``wrenches`` (exact
+    data stays finite). The dynamic fits' (joints and IMU)."""
+    dof = max(len(residuals) - parameter_count / 6.0, 1.0)
+    std = np.sqrt(np.sum(residuals**2, axis=0) / dof)
+    return np.maximum(std, noise_floor(wrenches))

@@ -41,6 +41,7 @@ import numpy as np
 
 from ..exceptions import InvalidInput, SuspectConvention, UnobservableParameters
 from .conventions import check_conventions, detect_sign_and_handedness, reading_signs
+from .covariance import covariance_in_sensor_axes
 from .fused_options import FusedCalibrationOptions
 from .fused_problem import POSES_NEEDED, FusedStaticProblem, check_observable
 from .fused_result import FusedCalibrationResult
@@ -249,18 +250,6 @@ def check_mount(
     return check, None
 
 
-def _covariance_in_sensor_axes(fit: FusedStaticFit) -> np.ndarray:
-    """The covariance with ``R_SI``'s increment turned into the sensor's axes
-    (``R Exp(δ) = Exp(R δ) R``), as the IMU fit reports it."""
-    covariance, problem = fit.covariance.copy(), fit.problem
-    if problem.imu_rotation_free:
-        i = 12 + problem.mount_count
-        transform = np.eye(len(covariance))
-        transform[i : i + 3, i : i + 3] = problem.imu_rotation0
-        covariance = transform @ covariance @ transform.T
-    return covariance
-
-
 def calibrate_fused(samples: FusedSamples, options=None, **keywords) -> FusedCalibrationResult:
     """Calibrate from static poses with both an orientation and the sensor's IMU.
 
@@ -367,7 +356,11 @@ def _result(samples, options, fit: FusedStaticFit, check, warnings) -> FusedCali
         imu_position=options.imu.imu_position,
         imu_position_source=None if options.imu.imu_position is None else "given",
         parameter_names=problem.names,
-        parameter_covariance=_covariance_in_sensor_axes(fit),
+        parameter_covariance=covariance_in_sensor_axes(  # R_SI's increment, as the IMU fit's
+            fit.covariance,
+            problem.imu_rotation0,
+            12 + k if problem.imu_rotation_free else None,
+        ),
         accel_std=problem.noise[0:3],
         chi_square=float(np.sum(problem.whitened_residuals(x) ** 2)),
         dof=int(9 * len(problem.accel) - problem.parameter_count),

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..exceptions import InvalidInput
 from .conventions import check_flip_axis, check_sensor_sign
-from .imu_options import ImuCalibrationOptions
+from .imu_options import ImuCalibrationOptions, checked_calibration_options
 from .mount import MountMode
 
 MOUNT_TOLERANCE_DEG = 0.2
@@ -88,35 +88,17 @@ class FusedCalibrationOptions:
 def _from_calibration_options(options) -> FusedCalibrationOptions:
     """An FK ``CalibrationOptions``: its noise, mount mode, sign and flip carry over; any other
     setting is refused."""
-    from .estimate import CalibrationOptions  # the FK options: imported where used (a cycle)
-
-    if not isinstance(options, CalibrationOptions):
-        raise InvalidInput(
-            f"options must be an ftkin FusedCalibrationOptions, got {type(options).__name__}"
-        )
     # convention_check: the fused fit reads no orientation under its mistakes (nothing to skip)
-    carried = ("noise", "g", "estimate_mount", "sensor_sign", "flip_axis", "convention_check")
-    default = CalibrationOptions()
-    changed = [
-        f.name
-        for f in fields(CalibrationOptions)
-        if f.name not in carried and not _same(getattr(options, f.name), getattr(default, f.name))
-    ]
-    if changed:
-        raise InvalidInput(
-            f"{', '.join(changed)}: not options of the fused calibration (an orientation and the "
-            "IMU: one maximum-likelihood fit, the base's gravity measured); use "
-            "FusedCalibrationOptions"
-        )
+    options = checked_calibration_options(
+        options,
+        ("noise", "g", "estimate_mount", "sensor_sign", "flip_axis", "convention_check"),
+        "the fused calibration (an orientation and the IMU: one maximum-likelihood fit, the "
+        "base's gravity measured)",
+        "FusedCalibrationOptions",
+    )
     return FusedCalibrationOptions(
         estimate_mount=options.estimate_mount,
         sensor_sign=options.sensor_sign,
         flip_axis=options.flip_axis,
         imu=ImuCalibrationOptions(wrench_noise=options.noise),
     )
-
-
-def _same(value, default) -> bool:
-    if value is None or default is None:
-        return value is default
-    return bool(np.array_equal(np.asarray(value), np.asarray(default)))

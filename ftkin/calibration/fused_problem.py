@@ -28,7 +28,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..exceptions import UnobservableParameters
 from .imu_model import ACCEL_BIAS_NAMES, ACCEL_SCALE_NAMES, IMU_ROTATION_NAMES
 from .imu_problem import weakest_direction
 from .imu_problem_base import NineChannelProblem
@@ -192,14 +191,14 @@ def check_observable(problem: FusedStaticProblem, x: np.ndarray) -> None:
         UnobservableParameters: naming the parameters of the weakest direction (a mount angle
             with the tilt and offsets it trades against, the IMU's rotation with the mount, ...).
     """
-    relative, involved = weakest_direction(problem, x)
+    directions = weakest_direction(problem, x)
+    relative, involved = directions.relative, directions.names
     if relative >= MIN_RELATIVE_SINGULAR_VALUE:
         return
     both = any(n.startswith("mount") for n in involved) and any(
         n.startswith("imu_rotation") for n in involved
     )
-    raise UnobservableParameters(
-        involved,
+    raise directions.error(
         f"{POSES_NEEDED}"
         + (
             "; the mount trades against the IMU's rotation: with R_SI estimated only the wrench "

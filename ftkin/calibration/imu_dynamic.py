@@ -32,8 +32,15 @@ import numpy as np
 
 from ..exceptions import InvalidInput, UnobservableParameters
 from ..validation import as_vector
+from .covariance import (
+    check_determined,
+    covariance_in_sensor_axes,
+    delta_method,
+    invert_information,
+)
 from .derivatives import DEFAULT_POLYORDER, joint_derivatives
-from .dynamic_fit import THETA_NAMES
+from .dynamic_fit import THETA_NAMES, noise_from_residuals
+from .imu_fit import theta_covariance
 from .imu_model import (
     IMU_POSITION_NAMES,
     IMU_ROTATION_NAMES,
@@ -43,7 +50,7 @@ from .imu_model import (
 from .imu_result import ImuCalibrationResult
 from .imu_samples import ImuSamples
 from .imu_start import kabsch_start
-from .information import SensorNoise, noise_floor
+from .information import SensorNoise
 from .log_cholesky import (
     body_from_parameters,
     inertia_entries,
@@ -205,8 +212,10 @@ class ImuDynamicProblem:
         return ((self.motion.wrenches - self.predict(x, phi)) / self.channel_std).ravel()
 
     def whitened_jacobian(self, x: np.ndarray, phi: bool = False) -> np.ndarray:
+        """``(6N, len(x))`` derivative of the whitened prediction ``predict / σ`` (θ-space, or
+        φ-space; ftkin's one sign, :mod:`ftkin.calibration.covariance`)."""
         x_theta = theta_space(x) if phi else x
-        jac = (-self.jacobian(x_theta) / self.channel_std[:, None]).reshape(-1, len(x))
+        jac = (self.jacobian(x_theta) / self.channel_std[:, None]).reshape(-1, len(x))
         if phi:
             jac[:, 6:16] = jac[:, 6:16] @ log_cholesky_jacobian(x[6:16])
         return jac
@@ -226,7 +235,7 @@ def _lstsq_start(problem: ImuDynamicProblem) -> np.ndarray:
         x[-3:] = problem.position0
     jac = problem.whitened_jacobian(x)[:, :16]
     target = (problem.motion.wrenches / problem.channel_std).ravel()
-    x[:16] = np.linalg.lstsq(-jac, -target, rcond=None)[0]
+    x[:16] = np.linalg.lstsq(jac, target, rcond=None)[0]
     return x
 
 
@@ -236,7 +245,7 @@ def _least_squares(problem: ImuDynamicProblem, x0: np.ndarray, phi: bool) -> np.
     return least_squares(
         problem.whitened_residuals,
         x0,
-        jac=problem.whitened_jacobian,
+        jac=lambda x, phi: -problem.whitened_jacobian(x, phi),
         args=(phi,),
         method="lm",
         x_scale="jac",
@@ -257,24 +266,18 @@ def check_observable(problem: ImuDynamicProblem, x: np.ndarray) -> None:
             "the recording does not turn the sensor (angular acceleration ~0): record a moving "
             "excitation (ftkin plan --excitation), or calibrate from static poses",
         )
-    jac = problem.whitened_jacobian(x)
-    scale = np.linalg.norm(jac, axis=0)
-    scale[scale == 0.0] = 1.0
-    _, singular, vt = np.linalg.svd(jac / scale, full_matrices=False)
-    relative = singular[-1] / singular[0]
-    if relative < MIN_RELATIVE_SINGULAR_VALUE:
-        weakest = np.abs(vt[-1])
-        raise UnobservableParameters(
-            [problem.names[i] for i in np.flatnonzero(weakest > 0.3 * weakest.max())],
-            f"the motion does not excite them apart (smallest relative singular value "
-            f"{relative:.1e}): a richer excitation turns the sensor about every axis",
-        )
+    check_determined(
+        problem.whitened_jacobian(x),
+        problem.names,
+        "the motion does not excite them apart (a richer excitation turns the sensor about every "
+        "axis)",
+        MIN_RELATIVE_SINGULAR_VALUE,
+    )
 
 
 def _noise(problem: ImuDynamicProblem, x: np.ndarray) -> np.ndarray:
     residuals = problem.motion.wrenches - problem.predict(x)
-    std = np.sqrt(np.sum(residuals**2, axis=0) / max(len(residuals) - len(x) / 6.0, 1.0))
-    return np.maximum(std, noise_floor(problem.motion.wrenches))
+    return noise_from_residuals(residuals, len(x), problem.motion.wrenches)
 
 
 def _outputs(x: np.ndarray) -> np.ndarray:
@@ -406,33 +409,15 @@ def calibrate_imu_dynamic(
 
 def _result(samples, problem: ImuDynamicProblem, x, bias, scale, position_estimated, unsplit):
     jac = problem.whitened_jacobian(x)
-    information = jac.T @ jac
-    norm = np.sqrt(np.maximum(np.diag(information), 1e-300))
-    values, vectors = np.linalg.eigh(information / np.outer(norm, norm))
-    if values[0] <= 1e-14 * values[-1]:
-        weakest = np.abs(vectors[:, 0])
-        raise UnobservableParameters(
-            [problem.names[i] for i in np.flatnonzero(weakest > 0.3 * weakest.max())],
-            "the information at the solution is singular",
-        )
-    covariance = ((vectors / values) @ vectors.T) / np.outer(norm, norm)
+    covariance = invert_information(
+        jac.T @ jac, problem.names, "the information at the solution is singular"
+    )
     _, theta, delta, position = problem.unpack(x)
     rotation = problem.rotation0 @ exp_so3(delta)
-    steps = 1e-7 * np.maximum(1.0, np.abs(x[:16]))
-    gradient = np.zeros((16, len(x)))
-    for i in range(16):
-        step = np.zeros(len(x))
-        step[i] = steps[i]
-        gradient[:, i] = (_outputs(x + step) - _outputs(x - step)) / (2.0 * steps[i])
+    gradient, body_covariance = delta_method(_outputs, x, covariance)
     outputs = _outputs(x)
-    body_covariance = gradient @ covariance @ gradient.T
     mass, com, g = outputs[6], outputs[7:10], samples.g
-    theta_cov = np.zeros((12, 12))  # [a, F0, M0, P] with a = [0, 0, −m g]
-    transform = np.zeros((12, 16))
-    transform[2, 6] = -g
-    transform[3:9, 0:6] = np.eye(6)
-    transform[9:12, 7:10] = np.eye(3)
-    theta_cov = transform @ body_covariance @ transform.T
+    theta_cov = theta_covariance(body_covariance, g)  # [a, F0, M0, P] with a = [0, 0, −m g]
     # the reported parameters: [F0, M0, m, c] and the IMU's, rotation about the sensor axes
     names = BIAS_NAMES + (
         "tool_mass",
@@ -444,9 +429,11 @@ def _result(samples, problem: ImuDynamicProblem, x, bias, scale, position_estima
     rows = np.zeros((10 + len(x) - 16, len(x)))
     rows[:10] = gradient[:10]
     rows[10:, rest] = np.eye(len(x) - 16)
-    if problem.rotation_free:
-        rows[10:13, 16:19] = rotation @ right_jacobian_so3(delta)  # δ → sensor-axes increment
-    parameter_covariance = rows @ covariance @ rows.T
+    parameter_covariance = covariance_in_sensor_axes(  # δ → sensor-axes increment R J_r(δ) δ
+        rows @ covariance @ rows.T,
+        rotation @ right_jacobian_so3(delta),
+        10 if problem.rotation_free else None,
+    )
     names += problem.names[16:]
     inertia_sigma = np.sqrt(np.clip(np.diag(body_covariance)[10:16], 0.0, None))
     residual = problem.motion.wrenches - problem.predict(x)

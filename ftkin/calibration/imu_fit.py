@@ -30,6 +30,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..exceptions import InvalidInput, UnobservableParameters
+from .covariance import covariance_in_sensor_axes, invert_information
 from .imu_model import (
     ACCEL_SCALE_NAMES,
     corrected_specific_force,
@@ -64,9 +65,9 @@ def _drop_open_scale(
     at ``x`` is degenerate and involves scale components, which are then left out."""
     if options.estimate_scale != "auto" or not problem.scale_free:
         return False
-    relative, involved = weakest_direction(problem, x)
-    scale_names = [name for name in involved if name.startswith("accel_scale")]
-    if relative >= MIN_RELATIVE_SINGULAR_VALUE or not scale_names:
+    directions = weakest_direction(problem, x)
+    scale_names = [name for name in directions.names if name.startswith("accel_scale")]
+    if directions.relative >= MIN_RELATIVE_SINGULAR_VALUE or not scale_names:
         return False
     notes.append(
         f"{', '.join(scale_names)} not determined by these poses: taken as 0 (gravity never seen "
@@ -181,20 +182,16 @@ def solve_with_noise(
 
 def covariance_at(problem: NineChannelProblem, x, count: int, needed: str) -> np.ndarray:
     """The covariance of every parameter at the solution ``x`` (the whitened information,
-    inverted in unit-diagonal scaling), or :class:`UnobservableParameters` naming the first
-    ``count`` parameters of its weakest direction (``needed``: what poses would determine
-    them)."""
+    :func:`~ftkin.calibration.covariance.invert_information`), or
+    :class:`UnobservableParameters` naming the undetermined ones among the first ``count``
+    parameters (``needed``: what poses would determine them)."""
     jac = problem.whitened_jacobian(x)
-    information = jac.T @ jac
-    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
-    values, vectors = np.linalg.eigh(information / np.outer(scale, scale))
-    if values[0] <= 1e-12 * values[-1]:
-        weakest = np.abs(vectors[:count, 0])
-        raise UnobservableParameters(
-            [problem.names[i] for i in np.flatnonzero(weakest > 0.3 * weakest.max())],
-            f"the information at the solution is singular: {needed}",
-        )
-    return ((vectors / values) @ vectors.T) / np.outer(scale, scale)
+    return invert_information(
+        jac.T @ jac,
+        problem.names,
+        f"the information at the solution is singular: {needed}",
+        named=count,
+    )
 
 
 @dataclass(frozen=True)
@@ -299,17 +296,6 @@ def misfit_scale(problem: NineChannelProblem, x, source: str) -> tuple[float, st
     )
 
 
-def _covariance_in_sensor_axes(fit: ImuStaticFit) -> np.ndarray:
-    """The global covariance with the rotation increment turned into the sensor's axes
-    (``R Exp(δ) = Exp(R δ) R``)."""
-    covariance, problem = fit.covariance.copy(), fit.problem
-    if problem.rotation_free:
-        transform = np.eye(len(covariance))
-        transform[10:13, 10:13] = problem.rotation0
-        covariance = transform @ covariance @ transform.T
-    return covariance
-
-
 def theta_covariance(covariance: np.ndarray, g: float) -> np.ndarray:
     """``(12, 12)`` covariance over ``[a, F0, M0, P]`` with ``a = [0, 0, −m g]`` from the global
     covariance (its first ten rows ``[F0, M0, m, c]``)."""
@@ -375,7 +361,9 @@ def calibrate_imu(samples: ImuSamples, options=None, **keywords) -> ImuCalibrati
     residuals = poses.wrenches - predict_imu(
         bias_wrench, point_mass_parameters(p["m"], p["c"]), measured
     )
-    covariance = _covariance_in_sensor_axes(fit)
+    covariance = covariance_in_sensor_axes(
+        fit.covariance, rotation, 10 if fit.problem.rotation_free else None
+    )
     chi_square = float(np.sum(fit.problem.whitened_residuals(fit.x) ** 2))
     dof = 9 * len(poses) - fit.problem.parameter_count
     warnings = list(fit.notes)

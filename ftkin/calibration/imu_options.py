@@ -89,21 +89,35 @@ class ImuCalibrationOptions:
 
 def _from_calibration_options(options) -> ImuCalibrationOptions:
     """An FK ``CalibrationOptions`` carries only its noise over; any other setting is refused."""
+    options = checked_calibration_options(
+        options,
+        ("noise", "g"),
+        "a calibration from the IMU (samples from Samples.from_imu)",
+        "ImuCalibrationOptions",
+    )
+    return ImuCalibrationOptions(wrench_noise=options.noise)
+
+
+def checked_calibration_options(options, carried: tuple[str, ...], kind: str, use: str):
+    """``options``, an FK ``CalibrationOptions`` whose settings other than ``carried`` are the
+    defaults (the IMU and fused fits take those over), or :class:`InvalidInput` naming the
+    others: they are not options of ``kind``; ``use`` names the options class to use instead."""
     from .estimate import CalibrationOptions  # the FK options: imported where used (a cycle)
 
     if not isinstance(options, CalibrationOptions):
-        raise InvalidInput(
-            f"options must be an ftkin ImuCalibrationOptions, got {type(options).__name__}"
-        )
+        raise InvalidInput(f"options must be an ftkin {use}, got {type(options).__name__}")
     default = CalibrationOptions()
     changed = [
         f.name
         for f in fields(CalibrationOptions)
-        if f.name not in ("noise", "g") and getattr(options, f.name) != getattr(default, f.name)
+        if f.name not in carried and not _same(getattr(options, f.name), getattr(default, f.name))
     ]
     if changed:
-        raise InvalidInput(
-            f"{', '.join(changed)}: not options of a calibration from the IMU (samples from "
-            "Samples.from_imu); use ImuCalibrationOptions"
-        )
-    return ImuCalibrationOptions(wrench_noise=options.noise)
+        raise InvalidInput(f"{', '.join(changed)}: not options of {kind}; use {use}")
+    return options
+
+
+def _same(value, default) -> bool:
+    if value is None or default is None:
+        return value is default
+    return bool(np.array_equal(np.asarray(value), np.asarray(default)))

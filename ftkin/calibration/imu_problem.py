@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..exceptions import UnobservableParameters
+from .covariance import WeakestDirections, weakest_directions
 from .imu_model import (
     ACCEL_BIAS_NAMES,
     ACCEL_SCALE_NAMES,
@@ -206,24 +206,16 @@ class ImuStaticProblem(NineChannelProblem):
         return problem, out
 
 
-def weakest_direction(problem: ImuStaticProblem, x: np.ndarray) -> tuple[float, list[str]]:
-    """Smallest relative singular value of the column-normalised whitened Jacobian, and the global
-    parameters its open directions involve: entries above 0.3 of the largest in any direction
-    below :data:`~ftkin.calibration.observability.MIN_RELATIVE_SINGULAR_VALUE` (else the weakest).
-    """
-    jac = problem.whitened_jacobian(x)
-    scale = np.linalg.norm(jac, axis=0)
-    scale[scale == 0.0] = 1.0
-    _, singular, vt = np.linalg.svd(jac / scale, full_matrices=False)
-    relative = singular / singular[0]
-    open_rows = np.flatnonzero(relative < MIN_RELATIVE_SINGULAR_VALUE)
-    involved = []
-    for row in open_rows if len(open_rows) else [len(relative) - 1]:
-        weakest = np.abs(vt[row, : problem.global_count])
-        if weakest.max() > 0.0:
-            picked = np.flatnonzero(weakest > 0.3 * weakest.max())
-            involved += [problem.names[i] for i in picked if problem.names[i] not in involved]
-    return float(relative[-1]), involved
+def weakest_direction(problem: NineChannelProblem, x: np.ndarray) -> WeakestDirections:
+    """The spectrum of the column-normalised whitened Jacobian and the global parameters its open
+    directions (below :data:`~ftkin.calibration.observability.MIN_RELATIVE_SINGULAR_VALUE`, else
+    the weakest) involve (:func:`~ftkin.calibration.covariance.weakest_directions`)."""
+    return weakest_directions(
+        problem.whitened_jacobian(x),
+        problem.names,
+        MIN_RELATIVE_SINGULAR_VALUE,
+        named=problem.global_count,
+    )
 
 
 def check_observable(problem: ImuStaticProblem, x: np.ndarray) -> None:
@@ -233,11 +225,10 @@ def check_observable(problem: ImuStaticProblem, x: np.ndarray) -> None:
         UnobservableParameters: naming the parameters of the weakest direction (the accelerometer
             bias with the offsets it trades against, a scale, the rotation, ...).
     """
-    relative, involved = weakest_direction(problem, x)
-    if relative >= MIN_RELATIVE_SINGULAR_VALUE:
+    directions = weakest_direction(problem, x)
+    if directions.relative >= MIN_RELATIVE_SINGULAR_VALUE:
         return
-    raise UnobservableParameters(
-        involved,
-        f"{POSES_NEEDED} (smallest relative singular value {relative:.1e}, need at least "
-        f"{MIN_RELATIVE_SINGULAR_VALUE:.0e})",
+    raise directions.error(
+        f"{POSES_NEEDED} (smallest relative singular value {directions.relative:.1e}, need at "
+        f"least {MIN_RELATIVE_SINGULAR_VALUE:.0e})"
     )

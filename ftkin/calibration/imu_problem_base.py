@@ -96,6 +96,6 @@ class NineChannelProblem(ABC):
         return (self.residuals(x) * self.weights).reshape(-1)
 
     def whitened_jacobian(self, x: np.ndarray) -> np.ndarray:
-        """``(9 P, n)`` :meth:`jacobian` of the prediction times :attr:`weights` (the residuals'
-        derivative is its negative)."""
+        """``(9 P, n)`` :meth:`jacobian` of the prediction times :attr:`weights` (ftkin's one sign,
+        :mod:`ftkin.calibration.covariance`; the residuals' derivative is its negative)."""
         return (self.jacobian(x) * self.weights[:, :, None]).reshape(-1, self.parameter_count)

@@ -11,8 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import InvalidInput, UnobservableParameters
+from ..exceptions import InvalidInput
 from ..validation import as_float_array, as_rotation_batch, check_finite
+from .covariance import invert_information
 from .model import COMPONENT_NAMES, SensorModel
 from .mount import mount_jacobian
 
@@ -142,37 +143,15 @@ def _as_parameter_matrix(value, name: str) -> np.ndarray:
     return matrix
 
 
-def invert_information(
-    information: np.ndarray, names, reason: str, rcond: float = 1e-12
-) -> np.ndarray:
-    """Inverse of an information matrix over the parameters ``names``, or
-    :class:`UnobservableParameters` naming those it cannot determine (``reason`` says why).
-    """
-    scale = np.sqrt(np.diag(information))
-    if np.any(scale == 0):
-        raise UnobservableParameters(
-            [names[i] for i in np.flatnonzero(scale == 0)],
-            "the poses carry no information about them",
-        )
-    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
-    if eigenvalues[0] <= rcond * eigenvalues[-1]:
-        raise UnobservableParameters(
-            [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)],
-            reason,
-            singular_values=eigenvalues[::-1],
-        )
-    return (eigenvectors / eigenvalues) @ eigenvectors.T / np.outer(scale, scale)
-
-
-def covariance_from_information(information: np.ndarray, rcond: float = 1e-12) -> np.ndarray:
-    """Invert a ``(12, 12)`` information matrix; raise :class:`UnobservableParameters` if
-    singular.
+def covariance_from_information(information: np.ndarray) -> np.ndarray:
+    """Invert a ``(12, 12)`` information matrix over ``θ``
+    (:func:`~ftkin.calibration.covariance.invert_information`); raise
+    :class:`~ftkin.exceptions.UnobservableParameters` if singular.
     """
     return invert_information(
         _as_parameter_matrix(information, "information"),
         COMPONENT_NAMES,
         "the information matrix is singular along a combination of them",
-        rcond,
     )
 
 

@@ -116,7 +116,8 @@ class WeightedProblem:
         return (self.residuals(x) * self.weights).reshape(-1)
 
     def whitened_jacobian(self, x: np.ndarray) -> np.ndarray:
-        """``(6P, 12 + k)`` derivative of the whitened *prediction*."""
+        """``(6P, 12 + k)`` derivative of the whitened *prediction* (ftkin's one sign,
+        :mod:`ftkin.calibration.covariance`; the residuals' is its negative)."""
         return (self.jacobian(x) * self.weights[:, :, None]).reshape(-1, self.parameter_count)
 
     def hat_blocks(self, x: np.ndarray) -> np.ndarray:

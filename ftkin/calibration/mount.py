@@ -29,6 +29,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import InvalidInput, UnobservableParameters
+from .covariance import invert_information, weakest_directions
 from .linear import fit_linear
 from .model import COMPONENT_NAMES, gravity_in_sensor, parameter_jacobian, skew
 from .observability import MIN_RELATIVE_SINGULAR_VALUE, force_regressor
@@ -154,28 +155,25 @@ def check_mount_observable(problem, x: np.ndarray) -> None:
     relative to its largest; the error names the mount angles (and any other
     parameter) in the weakest direction and says which poses are needed.
     """
-    jac = problem.whitened_jacobian(x)
-    scale = np.linalg.norm(jac, axis=0)
-    scale[scale == 0] = 1.0
-    _, singular_values, vt = np.linalg.svd(jac / scale, full_matrices=False)
-    relative = singular_values / singular_values[0]
-    if relative[-1] >= MIN_RELATIVE_SINGULAR_VALUE:
-        return
     names = COMPONENT_NAMES + MOUNT_NAMES[problem.mode]
-    weakest = np.abs(vt[-1]) / np.abs(vt[-1]).max()
-    involved = [names[i] for i in np.flatnonzero(weakest > 0.3)]
+    directions = weakest_directions(
+        problem.whitened_jacobian(x), names, MIN_RELATIVE_SINGULAR_VALUE
+    )
+    relative = directions.relative
+    if relative >= MIN_RELATIVE_SINGULAR_VALUE:
+        return
+    involved = directions.names
     mount_involved = [name for name in involved if name.startswith("mount")] or list(
         MOUNT_NAMES[problem.mode]
     )
     others = [name for name in involved if not name.startswith("mount")]
-    raise UnobservableParameters(
-        mount_involved,
-        f"{POSES_NEEDED[problem.mode]} (smallest relative singular value {relative[-1]:.1e}, need "
+    raise directions.error(
+        f"{POSES_NEEDED[problem.mode]} (smallest relative singular value {relative:.1e}, need "
         "at least "
         f"{MIN_RELATIVE_SINGULAR_VALUE:.0e}"
         + (f"; traded against {', '.join(others)}" if others else "")
         + ")",
-        singular_values=relative,
+        mount_involved,
     )
 
 
@@ -211,26 +209,27 @@ def split_information(information: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     covariance of the mount increments [rad²] (the mount block of the inverse).
 
     Raises:
-        UnobservableParameters: the information matrix is singular (relative to 1e-10), naming
-            the weak parameters (and the poses a mount needs).
+        UnobservableParameters: the information matrix is singular
+            (:func:`~ftkin.calibration.covariance.invert_information`), naming the weak
+            parameters (and the poses a mount needs).
     """
     mode = "yaw" if information.shape[0] == 13 else "full"
-    names = COMPONENT_NAMES + MOUNT_NAMES[mode]
-    scale = np.sqrt(np.maximum(np.diag(information), 1e-300))
-    eigenvalues, eigenvectors = np.linalg.eigh(information / np.outer(scale, scale))
-    if eigenvalues[0] <= 1e-10 * eigenvalues[-1]:
-        involved = [names[i] for i in np.flatnonzero(np.abs(eigenvectors[:, 0]) > 0.3)]
-        raise UnobservableParameters(
-            involved,
-            POSES_NEEDED[mode]
-            if any(name.startswith("mount") for name in involved)
-            else "the information matrix is singular along a combination of them",
-            singular_values=eigenvalues[::-1],
+    try:
+        covariance = invert_information(
+            information,
+            COMPONENT_NAMES + MOUNT_NAMES[mode],
+            "the information matrix is singular along a combination of them",
         )
+    except UnobservableParameters as error:
+        if not any(name.startswith("mount") for name in error.names):
+            raise
+        raise UnobservableParameters(
+            error.names, POSES_NEEDED[mode], error.singular_values, error.combination
+        ) from None
     theta, mount, cross = information[:12, :12], information[12:, 12:], information[:12, 12:]
     marginal = theta - cross @ np.linalg.solve(mount, cross.T)
-    mount_marginal = mount - cross.T @ np.linalg.solve(theta, cross)
-    return 0.5 * (marginal + marginal.T), np.linalg.inv(0.5 * (mount_marginal + mount_marginal.T))
+    mount_covariance = covariance[12:, 12:]
+    return 0.5 * (marginal + marginal.T), 0.5 * (mount_covariance + mount_covariance.T)
 
 
 def rotation_to_rpy(rotation) -> np.ndarray:

@@ -14,6 +14,7 @@ parameters that direction involves.
 import numpy as np
 
 from ..exceptions import UnobservableParameters
+from .covariance import check_determined
 from .model import skew
 
 MIN_POSES = 3
@@ -23,8 +24,12 @@ MIN_RELATIVE_SINGULAR_VALUE = 1e-3
 """Smallest accepted singular value of a normalized regressor, relative to the
 largest (about the smallest angle, in radians, by which the poses must differ)."""
 
-FORCE_STEP_NAMES = ("gravity_in_base",) * 3 + ("force_offset",) * 3
-TORQUE_STEP_NAMES = ("center_of_mass",) * 3 + ("torque_offset",) * 3
+FORCE_STEP_NAMES = tuple(
+    f"{name}[{axis}]" for name in ("gravity_in_base", "force_offset") for axis in "xyz"
+)
+TORQUE_STEP_NAMES = tuple(
+    f"{name}[{axis}]" for name in ("center_of_mass", "torque_offset") for axis in "xyz"
+)
 
 
 def _beside_identity(blocks: np.ndarray) -> np.ndarray:
@@ -43,18 +48,15 @@ def torque_regressor(forces: np.ndarray) -> np.ndarray:
 
 
 def _check_rank(regressor: np.ndarray, names: tuple[str, ...], reason: str) -> None:
-    scale = np.linalg.norm(regressor, axis=0)
-    scale[scale == 0] = 1.0
-    _, singular_values, vt = np.linalg.svd(regressor / scale, full_matrices=False)
-    relative = singular_values / singular_values[0]
-    if relative[-1] < MIN_RELATIVE_SINGULAR_VALUE:
-        weakest = np.abs(vt[-1]) / np.abs(vt[-1]).max()
+    """Refuse a regressor that leaves a direction open; the error names the parameter groups
+    (``"gravity_in_base"``, ...) and carries the components' combination."""
+    try:
+        check_determined(regressor, names, reason, MIN_RELATIVE_SINGULAR_VALUE)
+    except UnobservableParameters as error:
+        groups = sorted({name.split("[")[0] for name in error.names})
         raise UnobservableParameters(
-            sorted({names[i] for i in np.flatnonzero(weakest > 0.3)}),
-            f"{reason} (smallest relative singular value {relative[-1]:.1e}, "
-            f"need at least {MIN_RELATIVE_SINGULAR_VALUE:.0e})",
-            singular_values=relative,
-        )
+            groups, error.reason, error.singular_values, error.combination
+        ) from None
 
 
 def check_pose_count(pose_count: int) -> None:

@@ -8,7 +8,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import ftkin
-from ftkin.calibration.imu_dynamic import ImuDynamicProblem, ImuMotion, calibrate_imu_dynamic
+from ftkin.calibration.imu_dynamic import calibrate_imu_dynamic
 from ftkin.calibration.imu_samples import ImuSamples
 from ftkin.calibration.log_cholesky import body_from_parameters
 from ftkin.exceptions import InvalidInput, UnobservableParameters
@@ -176,31 +176,3 @@ def test_static_recording_and_missing_signals(recording):
 def _fk_samples():
     rotations = Rotation.random(4, random_state=0).as_matrix()
     return ftkin.Samples.from_rotations(rotations, np.tile([0.0, 0.0, -10.0, 0, 0, 0], (4, 1)))
-
-
-def test_jacobian_matches_finite_differences(rng):
-    count = 40
-    motion = ImuMotion(
-        rng.normal(0.0, 5.0, (count, 6)),
-        rng.normal(0.0, 5.0, (count, 3)),
-        rng.normal(0.0, 2.0, (count, 3)),
-        rng.normal(0.0, 10.0, (count, 3)),
-    )
-    problem = ImuDynamicProblem(
-        motion, np.array([0.05] * 3 + [0.003] * 3), IMU_ROTATION, np.zeros(3), True, True
-    )
-    x = np.concatenate(
-        [
-            WRENCH_BIAS,
-            [1.5, 0.009, -0.018, 0.108, 0.0137, 2e-4, 0.0129, 1e-4, 2e-3, 2.8e-3],
-            [0.2, -0.1, 0.3],  # δ
-            IMU_POSITION,
-        ]
-    )
-    analytic = problem.jacobian(x).reshape(-1, len(x))
-    numeric = np.empty_like(analytic)
-    for i in range(len(x)):
-        step = np.zeros(len(x))
-        step[i] = 1e-6
-        numeric[:, i] = ((problem.predict(x + step) - problem.predict(x - step)) / 2e-6).ravel()
-    np.testing.assert_allclose(analytic, numeric, atol=1e-6 * np.abs(numeric).max())

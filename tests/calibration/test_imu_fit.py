@@ -11,7 +11,6 @@ import ftkin
 from ftkin import Samples
 from ftkin.calibration.imu_fit import calibrate_imu
 from ftkin.calibration.imu_options import ImuCalibrationOptions
-from ftkin.calibration.imu_problem import ImuStaticProblem
 from ftkin.calibration.imu_samples import ImuSamples
 from ftkin.calibration.imu_start import sphere_fit
 from ftkin.exceptions import InvalidInput, InvalidSamples, SuspectConvention, UnobservableParameters
@@ -224,37 +223,3 @@ def test_bad_inputs(rng):
     with pytest.raises(InvalidInput, match="differs"):
         ftkin.calibrate(samples, g=9.81)
 
-
-def test_jacobian_matches_finite_differences(rng):
-    """Every column of the analytic Jacobian, at a point away from the recentred zero."""
-    rotations = Rotation.random(6, random_state=11).as_matrix()
-    accel, wrenches, ids = hand_built(rotations, rng, readings=1)
-    directions = accel / np.linalg.norm(accel, axis=1)[:, None]
-    problem = ImuStaticProblem(
-        accel,
-        wrenches,
-        np.full(len(accel), 3.0),
-        np.array([0.02] * 3 + [0.05] * 3 + [0.003] * 3),
-        G,
-        IMU_ROTATION,
-        directions,
-        rotation_free=True,
-        scale_free=(0, 1, 2),
-    )
-    x = np.concatenate(
-        [
-            WRENCH_BIAS,
-            [1.7, 0.01, -0.02, 0.08],
-            [0.3, -0.2, 0.1],  # δ
-            BIAS,
-            SCALE,
-            rng.normal(0.0, 0.05, 2 * len(accel)),  # e
-        ]
-    )
-    analytic = problem.jacobian(x).reshape(-1, problem.parameter_count)
-    numeric = np.empty_like(analytic)
-    for i in range(len(x)):
-        step = np.zeros(len(x))
-        step[i] = 1e-6
-        numeric[:, i] = ((problem.predict(x + step) - problem.predict(x - step)) / 2e-6).ravel()
-    np.testing.assert_allclose(analytic, numeric, atol=2e-5 * np.abs(numeric).max())

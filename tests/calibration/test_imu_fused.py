@@ -16,7 +16,6 @@ import ftkin
 from ftkin import Arm, Samples
 from ftkin.calibration.fused_fit import calibrate_fused
 from ftkin.calibration.fused_options import FusedCalibrationOptions
-from ftkin.calibration.fused_problem import FusedStaticProblem
 from ftkin.calibration.fused_result import FusedCalibrationResult
 from ftkin.calibration.fused_samples import FusedSamples
 from ftkin.exceptions import InvalidInput, InvalidSamples, SuspectConvention, UnobservableParameters
@@ -392,36 +391,6 @@ def test_options_and_samples_are_checked(mujoco_poses):
         base.with_imu(data["accel"][:-1])
     with pytest.raises(InvalidInput, match="ftkin.Samples"):
         FusedSamples(samples.imu, data["accel"])
-
-
-# ------------------------------------------------------------------------------ the problem
-@pytest.mark.parametrize(
-    "mode, free, scale", [("none", True, ()), ("yaw", False, (0, 2)), ("full", True, (0, 1, 2))]
-)
-def test_jacobian_matches_finite_differences(mode, free, scale, rng):
-    count = 7
-    problem = FusedStaticProblem(
-        Rotation.random(count, random_state=5).as_matrix(),
-        rng.normal(0, 5, (count, 3)),
-        rng.normal(0, 5, (count, 6)),
-        np.full(count, 10.0),
-        np.array([0.02] * 3 + [0.05] * 3 + [0.003] * 3),
-        G,
-        Rotation.random(random_state=6).as_matrix(),
-        IMU_ROTATION,
-        mode,
-        free,
-        scale,
-    )
-    x = rng.normal(0, 0.1, problem.parameter_count)
-    x[0:3] = [0.3, -0.2, -14.0]  # a [N]
-    jac = problem.jacobian(x)
-    numeric = np.zeros_like(jac)
-    for j in range(problem.parameter_count):
-        step = np.zeros_like(x)
-        step[j] = 1e-6
-        numeric[:, :, j] = (problem.predict(x + step) - problem.predict(x - step)) / 2e-6
-    np.testing.assert_allclose(jac, numeric, atol=1e-6)
 
 
 # -------------------------------------------------------------------------- file and reader

@@ -63,25 +63,6 @@ def test_solver_reaches_the_truth_from_a_poor_start(tool, rotations):
     np.testing.assert_allclose(theta, tool.to_vector(), rtol=0, atol=1e-9)
 
 
-def test_whitened_jacobian_matches_finite_differences(tool, rotations):
-    problem = WeightedProblem(
-        rotations, tool.predict(rotations) + 0.1, np.arange(1, 13), NOISE.channel_std
-    )
-    theta = tool.to_vector()
-    step = 1e-6
-    numeric = np.column_stack(
-        [
-            -(
-                problem.whitened_residuals(theta + step * e)
-                - problem.whitened_residuals(theta - step * e)
-            )
-            / (2 * step)
-            for e in np.eye(12)
-        ]
-    )
-    np.testing.assert_allclose(problem.whitened_jacobian(theta), numeric, rtol=1e-6, atol=1e-4)
-
-
 def test_fit_on_pose_means_equals_fit_on_every_reading(tool, rotations, rng):
     """Weighting pose means by counts is the fit over all raw readings (brute force, numeric
     Jacobian).

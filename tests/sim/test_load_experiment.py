@@ -76,3 +76,17 @@ def test_hand_guiding_with_pushes_and_a_surface_makes_no_false_grasp_or_release(
         assert np.mean(labels[inside] == "contact") > 0.5
     # the pushes and the surface were not absorbed into the load
     assert abs(guiding.mass_after / guiding.true_mass - 1) < 0.005
+
+
+def test_placement_decided_from_the_identified_load_agrees_with_the_truth(arm):
+    """The object set on the book by admittance: identified before it touches, and "placed" when
+    the force along gravity is back to the empty tool's, within 0.1 s of the truth's settle time
+    (MuJoCo's true compensated force and the tool's speed); the gripper closed: no release."""
+    from ftkin.sim.mujoco.load_experiment import run_placement
+    from ftkin.sim.surfaces import BOOK
+
+    placement = run_placement(2.214, BOOK, arm=arm)
+    assert abs(placement.identified_mass / placement.true_mass - 1) < 0.005
+    assert [event.kind for event in placement.events] == ["grasp", "contact"]
+    assert np.isfinite(placement.run.settle_time)
+    assert abs(placement.placed_time - placement.run.settle_time) < 0.1

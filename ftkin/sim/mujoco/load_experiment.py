@@ -18,6 +18,7 @@ import numpy as np
 
 from ...calibration.information import SensorNoise
 from ...calibration.model import SensorModel
+from ...control.compensation import Compensator
 from ...control.dynamic_compensation import DynamicCompensator
 from ...control.load_events import GRASP, RELEASE, LoadEvent, LoadTracker
 from ...kinematics.arm import Arm
@@ -305,4 +306,86 @@ def run_guiding(
         released,
         true_mass,
         mass_after,
+    )
+
+
+@dataclass(frozen=True)
+class IdentifiedPlacement:
+    """The placement experiment with the object's weight identified instead of known.
+
+    Attributes:
+        run: The :class:`~ftkin.sim.placement.PlacementRun` (admittance on the tool's z, the
+            object's weight driving it down onto the surface).
+        true_mass: The object's mass in MuJoCo [kg].
+        identified_mass: The tracker's mass before the object touched the surface [kg].
+        placed_time: The first time [s] from which the surface carries the identified load: the
+            force along gravity after the tool (the load's weight ``m̂ g`` while it hangs) stays
+            within ±0.05 N of the empty tool's (a 20 ms trailing mean) to the end; inf if never.
+        events: Every :class:`LoadEvent` (the gripper given as closed throughout).
+    """
+
+    run: object
+    true_mass: float
+    identified_mass: float
+    placed_time: float
+    events: tuple[LoadEvent, ...]
+
+
+class _Watched:
+    """A controller whose every tick also feeds a load tracker the contact after the tool."""
+
+    def __init__(self, controller, compensator, tracker, gravity_in_base):
+        self.controller, self.compensator, self.tracker = controller, compensator, tracker
+        self.down = np.asarray(gravity_in_base) / np.linalg.norm(gravity_in_base)
+        self.mass_before_contact = math.nan
+        self.along = []  # per tick: the force along gravity after the tool [N] (the load's weight)
+
+    def step(self, q, raw_wrench, dt: float):
+        rotation = self.compensator.arm.rotation_sensor_to_base(np.asarray(q)[None])[0]
+        contact = self.compensator.compensate_rotation(rotation, raw_wrench)
+        self.tracker.tick(rotation.tolist(), contact.tolist())
+        if self.tracker.state == "holding" and all(e.kind == GRASP for e in self.tracker.events):
+            self.mass_before_contact = float(self.tracker.load_parameters[0])
+        self.along.append(float(contact[:3] @ (rotation.T @ self.down)))
+        return self.controller.step(q, raw_wrench, dt)
+
+
+def run_placement(weight: float = 2.214, surface=None, *, seed: int = 0, arm: Arm | None = None):
+    """The paper's placement (admittance, desired force 0, the object's weight driving the tool
+    down) with a :class:`LoadTracker` beside the controller (the gripper closed): it identifies
+    the held object, and "placed" is decided from the identified weight (see
+    :class:`IdentifiedPlacement`).
+    """
+    from ..placement import PLACED_FORCE, PlacementScenario, admittance_controller
+    from ..sensor import paper_like_truth
+    from ..surfaces import SPONGE
+    from .mujoco_placement import placement_scene, simulate_placement_mujoco
+
+    arm = Arm.default() if arm is None else arm
+    scenario = PlacementScenario(
+        surface=SPONGE if surface is None else surface, object_weight=weight, seed=seed
+    )
+    sim = placement_scene(scenario, arm)
+    tool = sim.tool_sensor_model(paper_like_truth().bias)
+    gravity = tool.gravity_in_base / np.linalg.norm(tool.gravity_in_base) * tool.g
+    tracker = LoadTracker(scenario.noise, gravity, period=scenario.dt)
+    tracker.gripper = True
+    watched = _Watched(
+        admittance_controller(scenario, arm, tool), Compensator(tool, arm), tracker, gravity
+    )
+    run, _ = simulate_placement_mujoco(scenario, arm, sim=sim, controller=watched)
+    window = max(1, int(round(0.02 / scenario.dt)))  # a 20 ms trailing mean against the noise
+    along = np.convolve(watched.along, np.ones(window) / window)[: len(watched.along)]
+    carried = np.abs(along) <= PLACED_FORCE
+    unplaced = np.flatnonzero(~carried)
+    placed = (
+        math.inf
+        if not carried[-1]
+        else float(run.time[min(unplaced[-1] + 1, len(run.time) - 1)])
+        if unplaced.size
+        else 0.0
+    )
+    true_mass = float(sim.model.body_mass[sim.object_body_id])
+    return IdentifiedPlacement(
+        run, true_mass, watched.mass_before_contact, placed, tuple(tracker.events)
     )
