@@ -1,16 +1,14 @@
 """``ftkin doctor SAMPLES.csv [robot options]``: which convention the data fit, on demand."""
 
-from ..exceptions import ConventionMistake
 from ..io.column_spelling import declared_wrench_units, spelled_table
 from ..io.csv_table import read_table
-from ..io.table_readings import diagnose_table
+from ..io.table_readings import check_sample_conventions, diagnose_table
 from .arg_types import add_command, option
 from .common import (
     add_arm_arguments,
     add_column_arguments,
     arm_from_args,
     column_spelling_from_args,
-    logger,
 )
 
 
@@ -51,19 +49,10 @@ def run(args) -> int:
 
 
 def refuse_convention_mistakes(loaded, arm, declared_units: dict | None = None) -> None:
-    """Refuse samples whose data fit only under a common mistake; warn on a suspicion
-    (``calibrate``). ``declared_units``: the units the files' headers declare
+    """``calibrate``'s check of a samples file (bags carry their own conventions): the library's
+    :func:`~ftkin.io.table_readings.check_sample_conventions`, so the API refuses the same file
+    with the same words. ``declared_units``: the units the files' headers declare
     (:func:`~ftkin.io.column_spelling.declared_wrench_units`; ``loaded.table`` is already in SI).
     """
-    if loaded.recording is not None:  # bags carry their own conventions
-        return
-    report = diagnose_table(loaded.table, arm, declared_units)
-    if report.verdict == "mistake":
-        raise ConventionMistake(
-            report.message + " (run 'ftkin doctor' for the fit of every reading)",
-            loaded.table.source,
-            report.culprit.reading.name,
-            report.culprit.reading.fix,
-        )
-    if report.verdict == "suspect" and not report.tilted:  # calibrate() warns of a tilt itself
-        logger.warning("%s: %s", loaded.table.source, report.message)
+    if loaded.recording is None:
+        check_sample_conventions(loaded.table, arm, declared_units)

@@ -127,7 +127,9 @@ def motion_from_table(table: Table, arm, spelling: ColumnSpelling | None = None)
     if stalled.size:
         row = int(stalled[0]) + 1
         raise InvalidSamples(
-            f"time {times[row]!r} s does not increase; expected strictly increasing stamps",
+            f"time stamps do not increase: t = {times[row]:.9g} s after {times[row - 1]:.9g} s; "
+            "expected strictly increasing stamps (rows out of order or repeated; sort the file "
+            "or fix its clock)",
             table.source,
             table.lines[row],
         )

@@ -7,6 +7,8 @@ reversed), the orientation columns are read the way people get them wrong:
 columns holding degrees.
 """
 
+import logging
+
 import numpy as np
 
 from ..calibration.doctor import ConventionReport, Reading, diagnose_readings, wrench_readings
@@ -19,7 +21,7 @@ from ..calibration.orientation_mistakes import (  # their names and fixes, the A
     QUATERNION_XYZW,
 )
 from ..calibration.samples import Samples
-from ..exceptions import FtkinError
+from ..exceptions import ConventionMistake, FtkinError
 from ..kinematics.rotations import (
     euler_zyx_deg_to_matrix,
     matrix_entries_to_matrix,
@@ -36,6 +38,8 @@ from .samples_csv import (
     orientations_from_table,
     pose_ids_from_table,
 )
+
+logger = logging.getLogger(__name__)
 
 
 def _reading(name: str, fix: str, rotations, wrenches, pose_ids) -> Reading:
@@ -124,6 +128,36 @@ def diagnose_table(table: Table, arm=None, declared_units=None) -> ConventionRep
         (declared_units[c] for c in WRENCH_CHANNELS[3:] if c in declared_units), None
     )
     return diagnose_readings(table_readings(table, arm), torque_unit)
+
+
+def check_sample_conventions(table: Table, arm=None, declared_units=None) -> None:
+    """Refuse a samples table whose data fit only under a common mistake; warn (logging) of a
+    suspicion: the check ``ftkin calibrate`` makes before fitting, for any caller with a table
+    (``load_samples(path).table``), so both refuse the same file with the same words.
+
+    :func:`~ftkin.calibration.estimate.calibrate` reads the orientations under their mistakes
+    itself (``convention_check``); the table also shows joint angles in degrees, torques in
+    N·mm and force and torque columns swapped or interleaved, which the samples alone do not.
+
+    Args:
+        table: The samples table (its ``source`` names it in the message).
+        arm: Reads joint columns (None: the bundled arm).
+        declared_units: ``{channel: unit}`` the files' headers declare (see
+            :func:`diagnose_table`; ``table`` already in SI).
+
+    Raises:
+        ConventionMistake: the data fit under another reading (its ``reading`` and ``fix``).
+    """
+    report = diagnose_table(table, arm, declared_units)
+    if report.verdict == "mistake":
+        raise ConventionMistake(
+            report.message + " (run 'ftkin doctor' for the fit of every reading)",
+            table.source,
+            report.culprit.reading.name,
+            report.culprit.reading.fix,
+        )
+    if report.verdict == "suspect" and not report.tilted:  # calibrate() warns of a tilt itself
+        logger.warning("%s: %s", table.source, report.message)
 
 
 def diagnose_samples(path, arm=None) -> ConventionReport:
