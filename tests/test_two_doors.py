@@ -600,8 +600,8 @@ CASES = [
         "still.csv",
         "calibrate --dynamic",
         lambda b: b.motion_text(amplitude=0.0),
-        UnobservableParameters,
-        "the recording has no angular velocity or acceleration",
+        UnobservableParameters,  # one orientation: no advice to drop the inertia (it fails too)
+        "too few distinct orientations or motions",
     ),
     Case(
         "milliseconds.csv",  # 100 Hz stamped in ms: 10 "s" apart
@@ -731,3 +731,30 @@ def test_convention_check_is_the_librarys(base):
     assert str(info.value).startswith(f"{path}: ")
     good = base.folder / "good.csv"
     check_sample_conventions(ftkin.load_samples(good).table)  # nothing raised
+
+
+@pytest.mark.parametrize("orientations", [1, 8], ids=["one orientation", "eight orientations"])
+def test_static_recording_advice_works_when_followed(base, truth, orientations):
+    """A recording without angular motion cannot give the inertia. Still at one orientation it
+    cannot give the static parameters either: the refusal says so, and offers no advice to drop
+    the inertia (which failed the same way). At several orientations (static poses, ``dq = ddq =
+    0``) it names the inertia and advises calibrating without it, which then gives the tool's
+    mass: 3.15 N / 9.80665 m/s² (the simulated truth's)."""
+    from ftkin.calibration.regressor import MotionSamples
+
+    q = np.repeat(base.q[:orientations], 400 // orientations, axis=0)
+    zeros = np.zeros_like(q)
+    wrenches = truth.predict(base.arm.rotation_sensor_to_base(q))
+    motion = MotionSamples.from_joint_trajectory(base.arm, q, zeros, zeros, wrenches)
+    with pytest.raises(UnobservableParameters) as info:
+        ftkin.calibrate_dynamic(motion)
+    advice = "calibrate without the inertia (--no-inertia; estimate_inertia=False)"
+    if orientations == 1:
+        assert "too few distinct orientations" in str(info.value)
+        assert advice not in str(info.value)
+        with pytest.raises(UnobservableParameters, match="too few distinct orientations"):
+            ftkin.calibrate_dynamic(motion, estimate_inertia=False)
+        return
+    assert "no angular velocity or acceleration" in str(info.value) and advice in str(info.value)
+    result = ftkin.calibrate_dynamic(motion, estimate_inertia=False)
+    np.testing.assert_allclose(result.tool_mass, truth.tool_weight / 9.80665, rtol=1e-6)

@@ -141,27 +141,31 @@ def check_observability(problem: DynamicProblem) -> None:
             information at zero tilt is singular along some parameters
             (:func:`~ftkin.calibration.covariance.check_determined` at ``sqrt(RCOND)``).
     """
+    x = np.zeros(8 + len(problem.free))
+    x[8] = 1.0  # a unit mass: the tilt and moment columns need weight to act on
+    jacobian = problem.whitened_jacobian(x)
+    singular = (
+        "the regressor is singular along a combination of them (too few distinct orientations "
+        "or motions)"
+    )
     inertia = [i for i in problem.free if i >= 4]
     if inertia:
         columns = problem.inertial_regressor[:, :, inertia]
         rms = np.sqrt(np.sum(columns**2, axis=(0, 1)) / len(problem.wrenches))
         if np.all(rms < MIN_INERTIAL_EXCITATION):
+            # without the inertia the static parameters must be determined, or the advice to
+            # calibrate without it would fail too (a recording at one orientation)
+            static = [k for k in range(len(x)) if k < 8 or problem.free[k - 8] < 4]
+            check_determined(
+                jacobian[:, static], [problem.names[k] for k in static], singular, np.sqrt(RCOND)
+            )
             raise UnobservableParameters(
                 ["inertia_about_com_in_sensor"] + [THETA_NAMES[i] for i in inertia],
                 "the recording has no angular velocity or acceleration (static data): the inertia "
-                "cannot be "
-                "identified; record a moving excitation (ftkin plan --excitation) or calibrate "
-                "without the inertia",
+                "cannot be identified; record a moving excitation (ftkin plan --excitation) or "
+                "calibrate without the inertia (--no-inertia; estimate_inertia=False)",
             )
-    x = np.zeros(8 + len(problem.free))
-    x[8] = 1.0  # a unit mass: the tilt and moment columns need weight to act on
-    check_determined(
-        problem.whitened_jacobian(x),
-        problem.names,
-        "the regressor is singular along a combination of them (too few distinct orientations "
-        "or motions)",
-        np.sqrt(RCOND),
-    )
+    check_determined(jacobian, problem.names, singular, np.sqrt(RCOND))
 
 
 def fit_linear(problem: DynamicProblem) -> np.ndarray:
