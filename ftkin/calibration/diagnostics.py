@@ -6,11 +6,15 @@ observability and the warnings. The thresholds it is judged by live here.
 """
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .information import SensorNoise
 from .model import COMPONENT_NAMES
+
+if TYPE_CHECKING:
+    from .goodness_of_fit import FitTest
 
 FIT_ALPHA = 1e-3
 """p-value below which the chi-square test says the model does not fit."""
@@ -48,6 +52,10 @@ class FitDiagnostics:
         weakest_direction: ``(12,)`` its eigenvector of the smallest eigenvalue.
         relative_std_errors: ``(12,)`` standard error over the block's scale.
         warnings: Human-readable warnings (also logged).
+        fit_test: The test every calibration kind reports
+            (:class:`~ftkin.calibration.goodness_of_fit.FitTest`, the source of ``chi_square``,
+            ``dof``, ``p_value`` and ``channel_chi_square`` here), or None (read from a file's
+            ``diagnostics`` alone; the file keeps it under ``fit_test``).
     """
 
     loss: str
@@ -68,6 +76,7 @@ class FitDiagnostics:
     weakest_direction: np.ndarray
     relative_std_errors: np.ndarray
     warnings: tuple[str, ...]
+    fit_test: "FitTest | None" = None
 
     @property
     def fit_ok(self) -> bool:

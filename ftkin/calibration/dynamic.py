@@ -33,6 +33,7 @@ from .dynamic_fit import (
     theta_space,
 )
 from .estimate import CalibrationResult
+from .goodness_of_fit import WRENCH_CHANNELS, fit_test
 from .information import SensorNoise
 from .log_cholesky import (
     body_from_parameters,
@@ -235,6 +236,15 @@ def calibrate_dynamic(
         problem = _with_noise_estimate(problem, x_theta)
     values = _outputs(problem, x, estimate_inertia)
     covariance = _covariance(problem, x, estimate_inertia)
+    test = fit_test(
+        "the dynamic fit from joints",
+        problem.whitened_residuals(x_theta).reshape(-1, 6),
+        problem.whitened_jacobian(x_theta),
+        channel_names=WRENCH_CHANNELS,
+        noise_source="residuals" if noise is None else "given",
+        times=np.arange(len(motion), dtype=float) if motion.times is None else motion.times,
+        parameter_count=len(x),
+    )
     return DynamicCalibrationResult(
         force_offset=values[3:6],
         torque_offset=values[6:9],
@@ -261,4 +271,5 @@ def calibrate_dynamic(
         channel_std=problem.channel_std,
         unconstrained_parameters=theta_unconstrained if estimate_inertia else None,
         unconstrained_consistent=consistent,
+        fit_test=test,
     )

@@ -358,7 +358,7 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
     if options.method == "linear":
         static = _Static(fit_linear(poses, options.g), None, np.eye(3), None, None, poses)
     else:
-        static = _fit_static(poses, options, drift_models)
+        static = _fit_static(poses, options, drift_models, static_fit_name(samples, options))
     if tilt_warnings and static.diagnostics is None:
         for message in tilt_warnings:
             logger.warning(message)
@@ -391,9 +391,22 @@ class _Static:
     drift: BiasDrift | None = None
 
 
-def _fit_static(poses: PoseAverages, options: CalibrationOptions, drift_models) -> _Static:
+def static_fit_name(samples: Samples, options) -> str:
+    """How warnings name a static fit: ``"the static fit from joints"`` (or ``"from rotations"``),
+    ``" with the mount (yaw)"`` added when the mount is estimated."""
+    source = "joints" if samples.joint_positions is not None else "rotations"
+    mount = str(getattr(options.estimate_mount, "value", options.estimate_mount))
+    return f"the static fit from {source}" + (
+        f" with the mount ({mount})" if mount != "none" else ""
+    )
+
+
+def _fit_static(
+    poses: PoseAverages, options: CalibrationOptions, drift_models, fit_name="the static fit"
+) -> _Static:
     """The ``ml`` fit with a constant bias (and any mount), refitted without outliers if asked,
-    then with the best of the ``drift_models`` (:func:`_fit_drift`) if any.
+    then with the best of the ``drift_models`` (:func:`_fit_drift`) if any; ``fit_name`` names
+    it in the fit test (:func:`static_fit_name`).
     """
     floor = options.noise_floor(poses.wrenches)
     # noise-free raw readings: repeated readings per pose, all identical
@@ -401,7 +414,12 @@ def _fit_static(poses: PoseAverages, options: CalibrationOptions, drift_models) 
     noise_free = bool(np.any(repeated) and np.all(poses.spread[repeated] <= 1e-12 * scale))
     fit = fit_ml(poses, options.g, options.noise, options.loss, options.estimate_mount, floor)
     diagnostics, covariance = diagnose(
-        fit, poses.pose_ids, log=not drift_models, wrenches=poses.wrenches, noise_free=noise_free
+        fit,
+        poses.pose_ids,
+        log=not drift_models,
+        wrenches=poses.wrenches,
+        noise_free=noise_free,
+        fit_name=fit_name,
     )
     if options.drop_outliers and diagnostics.outlier_pose_ids:
         keep = ~np.isin(poses.pose_ids, diagnostics.outlier_pose_ids)
@@ -413,6 +431,7 @@ def _fit_static(poses: PoseAverages, options: CalibrationOptions, drift_models) 
             diagnostics.outlier_pose_ids,
             wrenches=poses.wrenches,
             noise_free=noise_free,
+            fit_name=fit_name,
         )
     mount_covariance = fit.mount_covariance
     if mount_covariance is not None:  # the same goodness-of-fit scaling as θ
@@ -435,10 +454,12 @@ def _fit_static(poses: PoseAverages, options: CalibrationOptions, drift_models) 
     )
     if not drift_models:
         return static
-    return _fit_drift(static, fit, drift_models, floor, noise_free, options)
+    return _fit_drift(static, fit, drift_models, floor, noise_free, options, fit_name)
 
 
-def _fit_drift(static: _Static, fit, models: tuple, floor, noise_free: bool, options) -> _Static:
+def _fit_drift(
+    static: _Static, fit, models: tuple, floor, noise_free: bool, options, fit_name: str
+) -> _Static:
     """The constant-bias fit ``static`` (by ``fit``) with the best of the drift ``models`` (or
     kept).
     """
@@ -464,6 +485,7 @@ def _fit_drift(static: _Static, fit, models: tuple, floor, noise_free: bool, opt
             parameter_count=drift_fit.parameter_count,
             wrenches=poses.wrenches,
             noise_free=noise_free,
+            fit_name=f"{fit_name} with the {drift_fit.drift.model} drift",
         )
         static = replace(
             static,
@@ -512,6 +534,7 @@ def _result(samples: Samples, options: CalibrationOptions, static: _Static) -> C
         kinematics=samples.kinematics,
         covariance=static.covariance,
         diagnostics=static.diagnostics,
+        fit_test=None if static.diagnostics is None else static.diagnostics.fit_test,
         mount_rotation=static.mount,
         mount_mode=options.estimate_mount,
         mount_covariance=static.mount_covariance,

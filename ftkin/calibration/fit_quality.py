@@ -30,6 +30,7 @@ from .diagnostics import (
     RELATIVE_STD_ERROR_WARNING,
     FitDiagnostics,
 )
+from .goodness_of_fit import WRENCH_CHANNELS, _f_sf, fit_test
 from .information import NOISE_FLOOR_RELATIVE, at_noise_floor
 from .model import PARAMETER_NAMES
 
@@ -70,17 +71,6 @@ _UNITS = {
     "torque_offset": "N·m",
     "center_of_mass": "m",
 }
-
-
-def _f_sf(ratio, dfn, dfd):
-    """Survival function of F(dfn, dfd) (vectorized), the chi-square limit for infinite ``dfd``."""
-    from scipy import special  # here, not at import: scipy.special takes ~0.2 s to import
-
-    ratio, dfn, dfd = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (ratio, dfn, dfd)))
-    large = ~np.isfinite(dfd) | (dfd > 1e7)
-    with np.errstate(invalid="ignore"):
-        chi_square = special.chdtrc(dfn, ratio * dfn)
-        return np.where(large, chi_square, special.fdtrc(dfn, np.where(large, 1.0, dfd), ratio))
 
 
 def _chi_square_cdf(chi_square: float, dof: int) -> float:
@@ -139,6 +129,7 @@ def diagnose(
     log: bool = True,
     wrenches=None,
     noise_free: bool = False,
+    fit_name: str = "the static fit",
 ) -> tuple[FitDiagnostics, np.ndarray]:
     """Assess a fit (:class:`~ftkin.calibration.ml.WhitenedFit`: the ML or a drift model's);
     returns its diagnostics and the (scaled) covariance.
@@ -154,19 +145,32 @@ def diagnose(
     is said in a warning, and no pose is called an outlier for a rounding error.
     ``noise_free``: the raw readings themselves are noise-free (repeated readings
     identical); only then does the warning call the data noise-free.
+    ``fit_name``: how the misfit warning names the fit (``"the static fit from joints"``).
+
+    The chi-square, its degrees of freedom, p-value and per-channel chi-square are those of
+    :func:`~ftkin.calibration.goodness_of_fit.fit_test` (every calibration kind's one test, kept
+    as :attr:`FitDiagnostics.fit_test` with this function's outlier poses).
 
     Warnings are also sent to the ``ftkin.calibration.fit_quality`` logger.
     """
     theta, source, whitened, hat = fit.model.to_vector(), fit.noise_source, fit.whitened, fit.hat
-    dof = whitened.size - (parameter_count or fit.problem.parameter_count)
-    chi_square = float(np.sum(whitened**2))
+    test = fit_test(
+        fit_name,
+        whitened,
+        channel_names=WRENCH_CHANNELS,
+        noise_source=source,
+        noise_dof=fit.noise_dof,
+        group_ids=pose_ids,
+        leverage=np.einsum("pkk->pk", hat),
+        information=fit.information,
+        parameter_count=parameter_count or fit.problem.parameter_count,
+        log=False,
+    )
+    dof, chi_square, channel_chi_square = test.dof, test.chi_square, test.channel_chi_square
     # the fit test does not apply to noise from the residuals or without degrees of freedom
-    tested = source != "residuals" and dof > 0
-    p_value = float(_f_sf(chi_square / dof, dof, fit.noise_dof)) if tested else np.nan
-    fit_ok = not (p_value < FIT_ALPHA)
+    p_value = np.nan if test.p_value is None else test.p_value
+    fit_ok = test.fits
     normalized, pose_p = _pose_statistics(whitened, hat, fit_ok, source, fit.noise_dof, dof)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        channel_chi_square = np.sum(whitened**2, 0) / np.sum(1 - np.einsum("pkk->pk", hat), 0)
     scale = chi_square / dof if (not fit_ok and chi_square > dof) else 1.0
     covariance = fit.covariance * scale
     # condition number and weakest direction (largest entry positive), unit-diagonal information
@@ -200,6 +204,8 @@ def diagnose(
         weakest_direction=weakest,
         relative_std_errors=np.sqrt(np.clip(np.diag(covariance), 0.0, None)) / scales,
         warnings=(),
+        # the studentized pose test above (full 6×6 hat blocks) names the outliers
+        fit_test=replace(test, outliers=tuple(int(i) for i in outliers)),
     )
     diagnostics = replace(diagnostics, warnings=_warnings(diagnostics, exact, noise_free, scales))
     if log:
@@ -227,9 +233,9 @@ def _warnings(
         (exact, _NOISE_FREE_WARNING if noise_free else _ROUNDING_WARNING),
         (
             d.p_value < FIT_ALPHA,
-            f"the readings do not fit the model within their noise (chi-square "
-            f"{d.chi_square:.1f} for {d.dof} degrees of freedom, p = {d.p_value:.1e}): a "
-            "sensor mounted otherwise than the URDF says (estimate_mount='yaw' or 'full', "
+            f"{d.fit_test.warning if d.fit_test is not None else 'the readings do not fit'}. "
+            "The readings do not fit the model within their noise: a sensor mounted otherwise "
+            "than the URDF says (estimate_mount='yaw' or 'full', "
             "--estimate-mount), a reading convention (ftkin doctor), sensor crosstalk, a "
             "contact or cable at some poses, or noise underestimated; standard errors scaled by "
             f"{np.sqrt(d.covariance_scale):.2f}",

@@ -46,9 +46,13 @@ from .fused_options import FusedCalibrationOptions
 from .fused_problem import POSES_NEEDED, FusedStaticProblem, check_observable
 from .fused_result import FusedCalibrationResult
 from .fused_samples import FusedPoseAverages, FusedSamples
+from .goodness_of_fit import FitTest
 from .imu_fit import (  # the IMU fit's noise estimates and solver serve any 9-channel problem
     covariance_at,
+    misfit_note,
+    nine_channel_fit_test,
     solve_with_noise,
+    spread_dof,
     starting_noise,
     starting_scale,
 )
@@ -56,7 +60,7 @@ from .imu_model import ACCEL_SCALE_NAMES
 from .linear import fit_linear
 from .model import gravity_in_sensor
 from .mount import MOUNT_NAMES, mount_start, rotation_to_rpy
-from .mount_check import MountCheck
+from .mount_check import MOUNT_CHECK_P, MountCheck
 
 logger = logging.getLogger(__name__)
 
@@ -163,6 +167,8 @@ class FusedStaticFit:
         covariance: ``(n, n)`` covariance of every parameter (rotation increments on the right).
         noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
         notes: What the fit decided on its own (a scale left out).
+        fit_test: Its goodness of fit (:class:`~ftkin.calibration.goodness_of_fit.FitTest`);
+            the covariance is scaled by ``χ²/ν`` when it rejects the model.
     """
 
     problem: FusedStaticProblem
@@ -170,6 +176,7 @@ class FusedStaticFit:
     covariance: np.ndarray
     noise_source: str
     notes: tuple[str, ...]
+    fit_test: FitTest | None = None
 
 
 def fit_fused_static(
@@ -210,7 +217,15 @@ def fit_fused_static(
         problem, x = solved
         break
     covariance = covariance_at(problem, x, len(x), POSES_NEEDED)
-    return FusedStaticFit(problem, x, covariance, source, tuple(notes))
+    test, factor = nine_channel_fit_test(
+        "the fused fit (orientation and IMU)",
+        problem,
+        x,
+        source,
+        spread_dof(poses.imu),
+        poses.orientation.pose_ids,
+    )
+    return FusedStaticFit(problem, x, covariance * factor, source, tuple(notes), test)
 
 
 def _pose_angles_deg(fit: FusedStaticFit) -> np.ndarray:
@@ -319,6 +334,21 @@ def calibrate_fused(samples: FusedSamples, options=None, **keywords) -> FusedCal
         warnings.append(undetermined)
     elif check.significant:
         warnings.append(check.message(estimated=options.estimate_mount != "none"))
+    test = fit.fit_test
+    if not test.fits:  # after the mount's warning, which names a likely cause
+        note = misfit_note(test, test.chi_square / test.dof)
+        if check is not None and check.p_value < MOUNT_CHECK_P and not check.significant:
+            note += (
+                f" (the mount check sees the sensor turned {check.angle_deg:.3g}° from the "
+                "orientation's frame, within mount_tolerance_deg: that turn alone makes such "
+                "a misfit; "
+                + (
+                    "estimate_mount='yaw' or 'full' (--estimate-mount) fits it)"
+                    if samples.samples.joint_positions is not None
+                    else "correct the rotations' source)"
+                )
+            )
+        warnings.append(note)
     for message in warnings:
         logger.warning("%s", message)
     return _result(samples, options, fit, check, warnings)
@@ -362,8 +392,7 @@ def _result(samples, options, fit: FusedStaticFit, check, warnings) -> FusedCali
             12 + k if problem.imu_rotation_free else None,
         ),
         accel_std=problem.noise[0:3],
-        chi_square=float(np.sum(problem.whitened_residuals(x) ** 2)),
-        dof=int(9 * len(problem.accel) - problem.parameter_count),
+        fit_test=fit.fit_test,
         imu_warnings=tuple(warnings),
         mount_check=check,
     )

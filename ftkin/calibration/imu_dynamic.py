@@ -40,6 +40,7 @@ from .covariance import (
 )
 from .derivatives import DEFAULT_POLYORDER, joint_derivatives
 from .dynamic_fit import THETA_NAMES, noise_from_residuals
+from .goodness_of_fit import fit_test
 from .imu_fit import theta_covariance
 from .imu_model import (
     IMU_POSITION_NAMES,
@@ -275,6 +276,57 @@ def check_observable(problem: ImuDynamicProblem, x: np.ndarray) -> None:
     )
 
 
+def smoothed_noise_variance(times, raw, smooth, rate, window, polyorder, scale) -> dict:
+    """Noise variance of the smoothed IMU signals the model is fed, per axis: ``{"gyro": (3,)
+    [(rad/s)²], "gyro_rate": (3,) [(rad/s²)²], "corrected": (3,) [(m/s²)²]}``.
+
+    Each raw signal's white noise ``σ²`` is measured from its scatter about the
+    Savitzky–Golay fit (``raw`` ``(N, 6)``: gyro then accelerometer; ``smooth``, ``rate`` its
+    filtered value and derivative): ``Σ (raw − smooth)² / (N (1 − c₀))``, ``c₀`` the filter's
+    weight on the centre sample; the filter passes ``σ² Σ c_k²`` of it to the smoothed value and
+    ``σ² Σ d_k²`` to the derivative (``c``, ``d`` its coefficients). The accelerometer's is
+    divided by ``(1 + s)²`` as its correction is.
+    """
+    from scipy.signal import savgol_coeffs
+
+    from .derivatives import uniform_period, window_samples
+
+    period = uniform_period(times)
+    window = window_samples(period, polyorder=polyorder) if window is None else int(window)
+    smoothing = savgol_coeffs(window, polyorder)
+    derivative = savgol_coeffs(window, polyorder, deriv=1, delta=period)
+    centre = smoothing[window // 2]
+    raw_variance = np.mean((raw - smooth) ** 2, axis=0) / max(1.0 - centre, 1e-12)
+    accel = raw_variance[3:6] / (1.0 + np.asarray(scale)) ** 2
+    return {
+        "gyro": raw_variance[0:3] * np.sum(smoothing**2),
+        "gyro_rate": raw_variance[0:3] * np.sum(derivative**2),
+        "corrected": accel * np.sum(smoothing**2),
+    }
+
+
+def propagated_variance(problem: ImuDynamicProblem, x: np.ndarray, variance: dict) -> np.ndarray:
+    """``(6,)`` mean variance [N², (N·m)²] the smoothed IMU signals' noise (``variance``, per
+    signal and axis, :func:`smoothed_noise_variance`) adds to :meth:`ImuDynamicProblem.predict`
+    at ``x``: ``Σ_k (∂prediction/∂u_k)² σ_k²`` over the nine inputs, by central differences (each
+    reading's prediction depends on its own inputs only), averaged over the readings."""
+    added = np.zeros(6)
+    for name, values in variance.items():
+        signal = getattr(problem.motion, name)
+        for axis in range(3):
+            step = 1e-6 * max(1.0, float(np.max(np.abs(signal[:, axis]))))
+            shifted = []
+            for sign in (1.0, -1.0):
+                moved = signal.copy()
+                moved[:, axis] += sign * step
+                shifted.append(
+                    replace(problem, motion=replace(problem.motion, **{name: moved})).predict(x)
+                )
+            slope = (shifted[0] - shifted[1]) / (2.0 * step)
+            added += np.mean(slope**2, axis=0) * values[axis]
+    return added
+
+
 def _noise(problem: ImuDynamicProblem, x: np.ndarray) -> np.ndarray:
     residuals = problem.motion.wrenches - problem.predict(x)
     return noise_from_residuals(residuals, len(x), problem.motion.wrenches)
@@ -310,7 +362,11 @@ def calibrate_imu_dynamic(
             ``inseparable`` and its warnings); the scale, when not given, is taken as 0.
         imu_rotation: ``R_SI`` ``(3, 3)`` when known: held fixed.
         imu_position: ``r`` ``(3,)`` [m, sensor frame] when known: held fixed (else estimated).
-        noise: Per-reading wrench noise; None estimates it per channel from the residuals.
+        noise: Per-reading wrench noise; None estimates it per channel from the residuals. A
+            given noise is the wrench's alone: the IMU's own noise, measured from its readings'
+            scatter about the smoothed signals, is added as it propagates through the model
+            (:func:`propagated_variance`), so the fit test (``fit_test``) judges the model and
+            not the IMU's noise.
         window, polyorder: The Savitzky–Golay filter (default window about 51 ms).
 
     Raises:
@@ -402,9 +458,26 @@ def calibrate_imu_dynamic(
     x = theta_space(_least_squares(problem, x_phi, True))
     if noise is None:
         problem = replace(problem, channel_std=_noise(problem, x))
+    else:  # the IMU's own noise reaches the prediction: the readings' scatter is larger
+        signal_variance = smoothed_noise_variance(
+            samples.times[order], signals, smooth, rate, window, polyorder, scale
+        )
+        added = propagated_variance(problem, x, signal_variance)
+        problem = replace(problem, channel_std=np.sqrt(noise.channel_std**2 + added))
     if unsplit:
         logger.warning("%s", UNSPLIT_NOTE)
-    return _result(samples, problem, x, bias, scale, position_given is None, unsplit)
+    test = fit_test(
+        "the dynamic fit from the IMU",
+        problem.whitened_residuals(x).reshape(-1, 6),
+        problem.whitened_jacobian(x),
+        channel_names=WRENCH_CHANNELS,
+        noise_source="residuals" if noise is None else "given",
+        times=samples.times[order],
+        parameter_count=len(x),
+    )
+    result = _result(samples, problem, x, bias, scale, position_given is None, unsplit)
+    warnings = result.imu_warnings + (() if test.fits else (test.warning,))
+    return replace(result, fit_test=test, imu_warnings=warnings)
 
 
 def _result(samples, problem: ImuDynamicProblem, x, bias, scale, position_estimated, unsplit):
@@ -437,7 +510,6 @@ def _result(samples, problem: ImuDynamicProblem, x, bias, scale, position_estima
     names += problem.names[16:]
     inertia_sigma = np.sqrt(np.clip(np.diag(body_covariance)[10:16], 0.0, None))
     residual = problem.motion.wrenches - problem.predict(x)
-    whitened = residual / problem.channel_std
     return ImuCalibrationResult(
         force_offset=outputs[0:3],
         torque_offset=outputs[3:6],
@@ -459,8 +531,6 @@ def _result(samples, problem: ImuDynamicProblem, x, bias, scale, position_estima
         imu_position_source="estimated" if position_estimated else "given",
         parameter_names=names,
         parameter_covariance=parameter_covariance,
-        chi_square=float(np.sum(whitened**2)),
-        dof=int(residual.size - len(x)),
         motion_residual_rms=np.sqrt(np.mean(residual**2, axis=0)),
         imu_warnings=(UNSPLIT_NOTE,) if unsplit else (),
         inseparable=UNSPLIT if unsplit else (),

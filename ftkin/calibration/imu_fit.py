@@ -31,6 +31,7 @@ import numpy as np
 
 from ..exceptions import InvalidInput, UnobservableParameters
 from .covariance import covariance_in_sensor_axes, invert_information
+from .goodness_of_fit import ACCEL_CHANNELS, WRENCH_CHANNELS, FitTest, fit_test
 from .imu_model import (
     ACCEL_SCALE_NAMES,
     corrected_specific_force,
@@ -203,7 +204,8 @@ class ImuStaticFit:
         x: The parameters at the solution.
         covariance: ``(n, n)`` covariance of the global parameters (directions marginalised).
         noise_source: ``"given"``, ``"spread"`` or ``"residuals"``.
-        notes: What the fit decided on its own (a scale left out).
+        notes: What the fit decided on its own (a scale left out, a misfit).
+        fit_test: Its goodness of fit (:class:`~ftkin.calibration.goodness_of_fit.FitTest`).
     """
 
     problem: ImuStaticProblem
@@ -211,6 +213,7 @@ class ImuStaticFit:
     covariance: np.ndarray
     noise_source: str
     notes: tuple[str, ...]
+    fit_test: FitTest | None = None
 
     @property
     def parameters(self) -> dict:
@@ -263,36 +266,50 @@ def fit_imu_static(
         break
     covariance = covariance_at(problem, x, problem.global_count, POSES_NEEDED)
     count = problem.global_count
-    misfit = misfit_scale(problem, x, source)
-    if misfit is not None:
-        factor, note = misfit
-        covariance = covariance * factor
-        notes.append(note)
-    return ImuStaticFit(problem, x, covariance[:count, :count], source, tuple(notes))
+    test, factor = nine_channel_fit_test(
+        "the static fit from the IMU", problem, x, source, spread_dof(poses), poses.pose_ids
+    )
+    if factor != 1.0:
+        notes.append(misfit_note(test, factor))
+    covariance = covariance * factor
+    return ImuStaticFit(problem, x, covariance[:count, :count], source, tuple(notes), test)
 
 
-def misfit_scale(problem: NineChannelProblem, x, source: str) -> tuple[float, str] | None:
-    """``(covariance scale, warning)`` when the readings do not fit the model within a noise
-    that was given or measured by the spread of repeated readings (the chi-square test at
-    ``FIT_ALPHA``, as the FK fit's); None when they do, or the noise came from the residuals."""
-    from scipy import special
+def spread_dof(poses: ImuPoseAverages) -> float:
+    """Degrees of freedom of the noise measured by the spread of repeated readings
+    (:func:`_noise_from_spread`): ``Σ (n_i − 1)`` over the poses read more than once."""
+    repeated = poses.counts > 1
+    return float(np.sum(poses.counts[repeated] - 1))
 
-    from .diagnostics import FIT_ALPHA
 
-    dof = problem.whitened_residuals(x).size - len(x)
-    if source == "residuals" or dof <= 0:
-        return None
-    chi_square = float(np.sum(problem.whitened_residuals(x) ** 2))
-    p_value = float(special.chdtrc(dof, chi_square))
-    if not p_value < FIT_ALPHA:
-        return None
-    factor = chi_square / dof
-    return factor, (
-        f"the readings do not fit the IMU model within their noise (chi-square {chi_square:.1f} "
-        f"for {dof} degrees of freedom, p = {p_value:.1e}): the IMU's clock off the wrench's "
-        "(files joined by time: check that their stamps share a clock and an origin), the IMU "
-        "not rigid with the sensor, a contact or cable at some poses, or noise underestimated; "
-        f"standard errors scaled by {np.sqrt(factor):.2f}"
+def nine_channel_fit_test(
+    fit_name: str, problem: NineChannelProblem, x, source: str, noise_dof: float, pose_ids
+) -> tuple[FitTest, float]:
+    """``(test, covariance scale)`` of a static IMU or fused fit at ``x``: the goodness of fit
+    over the nine channels (:func:`~ftkin.calibration.goodness_of_fit.fit_test`) and ``χ²/ν``
+    when it rejects the model (the standard errors then stay honest), else 1."""
+    whitened = problem.whitened_residuals(x).reshape(-1, 9)
+    test = fit_test(
+        fit_name,
+        whitened,
+        problem.whitened_jacobian(x),
+        channel_names=ACCEL_CHANNELS + WRENCH_CHANNELS,
+        noise_source=source,
+        noise_dof=np.inf if source == "given" else noise_dof,
+        group_ids=pose_ids,
+        parameter_count=len(x),
+        log=False,  # the fits log their notes
+    )
+    return test, (test.chi_square / test.dof if not test.fits else 1.0)
+
+
+def misfit_note(test: FitTest, factor: float) -> str:
+    """The warning of an IMU or fused fit that does not fit: the test's and the IMU's causes."""
+    return (
+        f"{test.warning}. The readings do not fit the IMU model within their noise: the IMU's "
+        "clock off the wrench's (files joined by time: check that their stamps share a clock and "
+        "an origin), the IMU not rigid with the sensor, a contact or cable at some poses, or "
+        f"noise underestimated; standard errors scaled by {np.sqrt(factor):.2f}"
     )
 
 
@@ -364,8 +381,6 @@ def calibrate_imu(samples: ImuSamples, options=None, **keywords) -> ImuCalibrati
     covariance = covariance_in_sensor_axes(
         fit.covariance, rotation, 10 if fit.problem.rotation_free else None
     )
-    chi_square = float(np.sum(fit.problem.whitened_residuals(fit.x) ** 2))
-    dof = 9 * len(poses) - fit.problem.parameter_count
     warnings = list(fit.notes)
     for note in warnings:
         logger.warning("%s", note)
@@ -390,8 +405,7 @@ def calibrate_imu(samples: ImuSamples, options=None, **keywords) -> ImuCalibrati
         parameter_names=fit.problem.names,
         parameter_covariance=covariance,
         accel_std=fit.problem.noise[0:3],
-        chi_square=chi_square,
-        dof=int(dof),
+        fit_test=fit.fit_test,
         imu_warnings=tuple(warnings),
     )
 

@@ -3,7 +3,7 @@
 A :class:`~ftkin.calibration.CalibrationResult` (so it saves, loads and summarises like any other,
 with the JSON keys ``tool_mass``, ``center_of_mass``, ``force_offset``, ``torque_offset``) plus
 the IMU's own parameters: ``R_SI``, the accelerometer's bias and scale, the IMU's position, their
-covariance and the fit's noise and chi-square.
+covariance and the fit's noise (its test, ``fit_test``, is every calibration's).
 
 An IMU calibration has no base frame: ``gravity_in_base`` is ``[0, 0, −m g]`` of a level world,
 so ``tool_mass`` and ``tool_weight`` read as usual and the base tilt is zero by construction.
@@ -49,9 +49,8 @@ class ImuCalibrationResult(CalibrationResult):
         parameter_covariance: Covariance of the estimated parameters (their units: N, N·m, kg,
             m, rad, m/s², -), or None.
         accel_std: ``(3,)`` noise of one accelerometer reading [m/s²] used by the fit.
-        chi_square: Sum of the squared whitened residuals at the fit.
-        dof: Residuals minus parameters.
-        imu_warnings: What the fit found doubtful.
+        imu_warnings: What the fit found doubtful (a misfit's warning of :attr:`fit_test`
+            among them).
         motion_residual_rms: ``(6,)`` RMS residual over a moving recording [N, N·m], or None.
         inseparable: Parameters the data determine only in combination (empty when every one
             was separated). A moving recording without the accelerometer's bias gives
@@ -70,11 +69,11 @@ class ImuCalibrationResult(CalibrationResult):
     parameter_names: tuple[str, ...] = ()
     parameter_covariance: np.ndarray | None = None
     accel_std: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
-    chi_square: float = float("nan")
-    dof: int = 0
     imu_warnings: tuple[str, ...] = ()
     motion_residual_rms: np.ndarray | None = None
     inseparable: tuple[str, ...] = ()
+
+    _summary_has_fit_test = False  # in imu_summary_lines
 
     def __post_init__(self):
         super().__post_init__()
@@ -222,7 +221,9 @@ class ImuCalibrationResult(CalibrationResult):
             if np.all(np.isfinite(self.accel_std))
             else ""
         )
-        lines.append(f"  {noise}chi-square {self.chi_square:.1f} for {self.dof} dof")
+        if noise:
+            lines.append(f"  {noise.removesuffix('; ')}")
+        lines += self.fit_test_lines(with_warning=False)  # the warning is among imu_warnings
         if self.motion_residual_rms is not None:
             lines.append(
                 "  residual RMS over the motion: "

@@ -17,6 +17,7 @@ from ..validation import as_vector
 from .conventions import check_flip_axis, check_sensor_sign, reading_signs
 from .diagnostics import FitDiagnostics
 from .drift import BiasDrift
+from .goodness_of_fit import FitTest
 from .information import standard_errors
 from .model import WRENCH_CHANNELS, SensorModel
 from .mount import MOUNT_NAMES, MountMode, rotation_to_rpy
@@ -43,6 +44,9 @@ class CalibrationResult(SensorModel):
             the estimator provides one (``ml``), else None.
         diagnostics: Fit quality, outlier poses, observability and warnings
             (:class:`~ftkin.calibration.diagnostics.FitDiagnostics`) for ``ml``, else None.
+        fit_test: Whether the model fits the readings, the same test for every calibration kind
+            (:class:`~ftkin.calibration.goodness_of_fit.FitTest`: chi-square, p-value or why
+            none, per-channel chi-square, outliers, verdict), or None (``linear``).
         mount_rotation: ``R_M`` ``(3, 3)``: coordinates in the URDF's sensor
             frame → the real sensor frame; the real orientation is
             ``R_BS = R_BS_urdf · R_Mᵀ`` (identity unless estimated).
@@ -83,6 +87,7 @@ class CalibrationResult(SensorModel):
     sensor_frame: str | None = None
     covariance: np.ndarray | None = None
     diagnostics: FitDiagnostics | None = None
+    fit_test: FitTest | None = None
     mount_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
     mount_mode: MountMode | str = MountMode.NONE
     mount_covariance: np.ndarray | None = None
@@ -221,7 +226,10 @@ class CalibrationResult(SensorModel):
     @property
     def warnings(self) -> tuple[str, ...]:
         """Warnings about fit quality, outlier poses and poorly determined parameters."""
-        return self.diagnostics.warnings if self.diagnostics is not None else ()
+        if self.diagnostics is not None:
+            return self.diagnostics.warnings
+        warning = None if self.fit_test is None else self.fit_test.warning
+        return () if warning is None else (warning,)
 
     def bias_at(self, times) -> np.ndarray:
         """Bias ``[F0, M0]`` [N, N·m] at ``times`` [s]: ``(N, 6)``, or ``(6,)`` for a scalar time.
@@ -240,6 +248,16 @@ class CalibrationResult(SensorModel):
         """
         bias = as_vector(bias, 6, "bias [F0, M0]")
         return replace(self, force_offset=bias[:3], torque_offset=bias[3:])
+
+    _summary_has_fit_test = True  # the IMU's results print it with their own lines
+
+    def fit_test_lines(self, with_warning: bool = True) -> list[str]:
+        """The summary's lines of :attr:`fit_test` (none without it): the test and, with
+        ``with_warning``, its misfit warning."""
+        if self.fit_test is None:
+            return []
+        warning = self.fit_test.warning if with_warning else None
+        return [self.fit_test.summary_line()] + ([f"  WARNING: {warning}"] if warning else [])
 
     def summary(self) -> str:
         """Human-readable summary with units (± standard error), fit and provenance: what the
@@ -296,6 +314,8 @@ class CalibrationResult(SensorModel):
             ]
         if self.diagnostics is not None:
             lines += _diagnostics_lines(self.diagnostics)
+        elif self._summary_has_fit_test:
+            lines += self.fit_test_lines()
         if self.urdf:
             lines.append(f"  kinematics: {self.urdf} (sensor frame {self.sensor_frame})")
         return "\n".join(lines)

@@ -137,6 +137,11 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+_SUMMARIZED_LOGS = ("fit_quality", "goodness_of_fit")
+"""Loggers of ``ftkin.calibration`` whose warnings every fitting command's summary prints (the
+static fits' diagnostics, every kind's fit test): kept out of the CLI's log, printed once."""
+
+
 def main(argv=None) -> int:
     """Run the CLI; returns the exit code (0 success, 2 bad input or usage, 3 internal error).
 
@@ -155,9 +160,11 @@ def main(argv=None) -> int:
         return 0
     stdout, sys.stdout = sys.stdout, _QuietPipe(sys.stdout)
     once = {}  # a filter per handler: each handler sees each record once
-    fit_log = logging.getLogger("ftkin.calibration.fit_quality")
+    fit_logs = [logging.getLogger(f"ftkin.calibration.{name}") for name in _SUMMARIZED_LOGS]
     # every command that fits prints the summary, which lists these warnings
-    fit_log_disabled, fit_log.disabled = fit_log.disabled, True
+    fit_logs_disabled = [log.disabled for log in fit_logs]
+    for log in fit_logs:
+        log.disabled = True
     try:
         from .arg_types import join_number_lists
 
@@ -191,7 +198,8 @@ def main(argv=None) -> int:
         return _unexpected(error)
     finally:
         sys.stdout = stdout
-        fit_log.disabled = fit_log_disabled
+        for log, disabled in zip(fit_logs, fit_logs_disabled):
+            log.disabled = disabled
         for handler, once_filter in once.items():
             handler.removeFilter(once_filter)
 

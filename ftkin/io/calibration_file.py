@@ -9,7 +9,12 @@ Keys (units): ``force_offset`` [N], ``torque_offset`` [N·m],
 (12×12 over ``[a, F0, M0, P]`` or null), ``std_errors`` (same keys as the
 values), ``diagnostics`` (``ml`` only, else absent: noise used, chi-square,
 per-pose normalized residuals, outliers, condition number, warnings; see
-:class:`~ftkin.calibration.diagnostics.FitDiagnostics`), ``created`` (UTC, ISO 8601),
+:class:`~ftkin.calibration.diagnostics.FitDiagnostics`), ``fit_test`` (every calibration kind
+but ``linear``, the same fields: ``fit_name``, ``chi_square``, ``dof``, ``p_value`` or null with
+``untested_reason``, ``verdict``, ``noise_source``, ``noise_dof``, ``channel_names`` with
+``channel_chi_square``, ``outlier_kind`` with ``outliers`` (pose ids, or ``[start, end]`` time
+spans [s]), ``condition_number``, ``parameter_count``; see
+:class:`~ftkin.calibration.goodness_of_fit.FitTest`), ``created`` (UTC, ISO 8601),
 ``ftkin_version``; a dynamic calibration adds ``inertia`` (3×3 about the
 centre of mass, sensor axes [kg·m²]) and ``std_errors.inertia`` and loads as a
 :class:`~ftkin.calibration.dynamic.DynamicCalibrationResult`; ``imu`` (a
@@ -57,6 +62,7 @@ import json
 import math
 import os
 from collections import Counter
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -65,6 +71,7 @@ from ..calibration.diagnostics import FitDiagnostics
 from ..calibration.drift import BiasDrift, parse_drift
 from ..calibration.dynamic import DynamicCalibrationResult
 from ..calibration.estimate import CalibrationResult
+from ..calibration.goodness_of_fit import FIT_TEST_TYPES, FitTest
 from ..calibration.log_cholesky import is_physically_consistent, parameters_from_body
 from ..calibration.model import check_gravity
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
@@ -178,6 +185,7 @@ def calibration_to_dict(result: CalibrationResult) -> dict:
         "sensor_sign": result.sensor_sign,
         "flip_axis": result.flip_axis,
         **({"diagnostics": result.diagnostics.to_dict()} if result.diagnostics is not None else {}),
+        **({"fit_test": result.fit_test.to_dict()} if result.fit_test is not None else {}),
         "drift": _drift_document(result.drift),
         **({"kinematics": result.kinematics.to_dict()} if result.kinematics is not None else {}),
         **_imu_document(result),  # a calibration from the IMU: R_SI, accelerometer bias, ...
@@ -400,6 +408,7 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
             sensor_frame=reader.optional("sensor_frame", str),
             covariance=reader.array("covariance", (12, 12), required=False),
             diagnostics=_part(reader, "diagnostics", FitDiagnostics.from_dict, DIAGNOSTICS_TYPES),
+            fit_test=_part(reader, "fit_test", FitTest.from_dict, FIT_TEST_TYPES),
             drift=_drift(reader),
             kinematics=_part(reader, "kinematics", KinematicsRecord.from_dict),
             **poses,
@@ -407,6 +416,8 @@ def calibration_from_dict(document, path: str = "<calibration>") -> CalibrationR
         )
     except (ValueError, TypeError) as error:
         raise CalibrationFileError(path, str(error)) from None
+    if result.diagnostics is not None and result.fit_test is not None:  # as the fit made them
+        result = replace(result, diagnostics=replace(result.diagnostics, fit_test=result.fit_test))
     if not (np.isfinite(result.tool_weight) and result.tool_weight > 0.0):
         reader.fail(
             f"|gravity_in_base| must be finite and positive, got {result.tool_weight}",

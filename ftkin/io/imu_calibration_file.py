@@ -6,10 +6,12 @@ Written beside the keys every calibration has (``tool_mass``, ``center_of_mass``
 (3×3 ``R_SI``, IMU → sensor frame), ``imu_rotation_rpy_deg`` (for reading), ``accel_bias``
 [m/s², IMU frame], ``accel_scale`` [-] and ``scale_estimated``, ``imu_position`` [m, sensor
 frame] or null and ``imu_position_source``, ``parameter_names`` with ``parameter_covariance``
-and ``std_errors``, ``accel_std`` [m/s²], ``chi_square``, ``dof``, ``warnings``,
+and ``std_errors``, ``accel_std`` [m/s²], ``warnings``,
 ``motion_residual_rms`` [N, N·m] or null, ``inseparable`` (the parameters only determined in
 combination, e.g. the accelerometer's bias and the offsets of a moving recording without a
-prior) and ``units``. A fused calibration (an orientation and
+prior) and ``units``. The goodness of fit is every calibration's ``fit_test`` (beside
+``imu``, the accelerometer's channels ``ax``..``az`` among its ``channel_names``). A fused
+calibration (an orientation and
 the IMU) adds ``fused: true`` and ``mount_check``
 (:class:`~ftkin.calibration.mount_check.MountCheck`: ``R_M`` against the URDF, its covariance
 [rad²], chi-square, per-pose angles [deg]; or null).
@@ -40,8 +42,6 @@ IMU_TYPES = {
     "imu_position_source": "string?",
     "warnings": "strings",
     "inseparable": "strings",
-    "dof": "integer",
-    "chi_square": "number?",
     "accel_std": "numbers?",
 }
 
@@ -64,8 +64,6 @@ def imu_document(result: CalibrationResult) -> dict:
             "parameter_covariance": result.parameter_covariance,
             "std_errors": result.parameter_std_errors,
             "accel_std": [None if not np.isfinite(v) else float(v) for v in result.accel_std],
-            "chi_square": float(result.chi_square) if np.isfinite(result.chi_square) else None,
-            "dof": int(result.dof),
             "warnings": list(result.imu_warnings),
             "motion_residual_rms": result.motion_residual_rms,
             "inseparable": list(result.inseparable),
@@ -117,8 +115,6 @@ def imu_result(reader, result: CalibrationResult) -> ImuCalibrationResult:
                 [np.nan if v is None else v for v in data.get("accel_std") or [None] * 3],
                 dtype=float,
             ),
-            chi_square=np.nan if data.get("chi_square") is None else float(data["chi_square"]),
-            dof=int(data.get("dof", 0)),
             imu_warnings=tuple(data.get("warnings") or ()),
             motion_residual_rms=sub.array("motion_residual_rms", (6,), required=False),
             inseparable=tuple(data.get("inseparable") or ()),

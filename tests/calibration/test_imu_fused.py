@@ -135,8 +135,9 @@ def test_correct_urdf_recovers_mujoco_truth_without_warning(mujoco_poses, caplog
     assert not [r for r in caplog.records if "not mounted" in r.getMessage()]
     assert result.warnings == ()
     assert "mount check" in result.summary() and "within the noise" in result.summary()
-    assert result.dof == 9 * 12 - len(result.parameter_names)
-    assert result.chi_square / result.dof == pytest.approx(1.0, abs=0.4)  # noise from the spread
+    assert result.fit_test.dof == 9 * 12 - len(result.parameter_names)
+    test = result.fit_test
+    assert test.chi_square / test.dof == pytest.approx(1.0, abs=0.4)  # noise from the spread
 
 
 def test_the_imu_gives_the_base_tilt(mujoco_poses):
@@ -178,7 +179,9 @@ def test_wrong_urdf_warns_naming_the_angle(mujoco_poses, wrong_urdf, caplog):
     np.testing.assert_allclose(check.rpy_deg, MOUNT_ERROR_RPY_DEG, atol=0.1)
     assert np.all(check.pose_angles_deg < truth_deg + 0.1) and check.pose_angles_deg.max() > 2.0
     messages = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
-    assert len(messages) == 1 and messages[0] in result.warnings
+    # the mount's warning, then the misfit it makes (the mount not estimated), both in warnings
+    assert len(messages) == 2 and messages == list(result.warnings)
+    assert messages[1].startswith("the fused fit (orientation and IMU) does not fit")
     message = messages[0]
     assert "the sensor is not mounted as the URDF says" in message
     assert f"turned {check.angle_deg:.3f}°" in message and "about its z axis" in message
@@ -186,7 +189,7 @@ def test_wrong_urdf_warns_naming_the_angle(mujoco_poses, wrong_urdf, caplog):
     assert "correct the URDF" in message
     # the URDF's error is absorbed: F0 and the COM are off by far more than their noise
     assert np.max(np.abs(result.force_offset - WRENCH_BIAS[:3])) > 0.05
-    assert result.chi_square > 50 * result.dof
+    assert result.fit_test.chi_square > 50 * result.fit_test.dof
 
 
 def test_wrong_urdf_with_a_given_imu_rotation_names_the_imu_too(mujoco_poses, wrong_urdf):
@@ -241,7 +244,13 @@ def test_the_tolerance_silences_a_small_mount(mujoco_poses, wrong_urdf):
     arm, _ = wrong_urdf
     result = ftkin.calibrate(fused(mujoco_poses, arm), mount_tolerance_deg=5.0)
     assert result.mount_check.p_value < 1e-12 and not result.mount_check.significant
-    assert result.warnings == ()
+    # no mount warning; the fit itself does not fit (the mount is not estimated), said once,
+    # naming the tolerated turn and the fix that works from joint angles
+    (warning,) = result.warnings
+    assert warning.startswith("the fused fit (orientation and IMU) does not fit")
+    assert "within mount_tolerance_deg" in warning and "estimate_mount='yaw'" in warning
+    fixed = ftkin.calibrate(fused(mujoco_poses, arm), estimate_mount="full")
+    assert fixed.fit_test.fits, fixed.fit_test.warning
 
 
 # ------------------------------------------------------------------- hand-built physics
