@@ -190,6 +190,16 @@ def _evaluate_api(base: Base, path: Path):
     return evaluate_poses(poses.rotations, expected)
 
 
+def _report_api(base: Base, path: Path):
+    from ftkin.io.static_segments import SegmentParameters
+    from ftkin.viz.report import save_report
+
+    calibration = ftkin.load_calibration(base.calibration)
+    arm = calibration.kinematics.build_arm()
+    loaded = ftkin.load_samples(path, arm, SegmentParameters())
+    return save_report(calibration, loaded.samples, base.folder / "report.png")
+
+
 def _doctor_api(base: Base, path: Path):
     from ftkin.io import diagnose_samples
 
@@ -226,6 +236,10 @@ DOORS: dict[str, Door] = {
         _rezero_api,
     ),
     "doctor": (lambda b, p: ["doctor", p], _doctor_api),
+    "report": (
+        lambda b, p: ["report", b.calibration, p, "-o", b.folder / "report.png"],
+        _report_api,
+    ),
     "evaluate-poses": (lambda b, p: ["evaluate-poses", p], _evaluate_api),
 }
 
@@ -373,7 +387,18 @@ CASES = [
             b.rotations.reshape(POSES, 9) * np.where(np.arange(POSES) == 2, 1.1, 1.0)[:, None],
         ),
         InvalidSamples,
-        "is not a rotation: RᵀR off the identity by 0.21",
+        "line 4: rotation matrix r11..r33 is not a rotation: RᵀR off the identity by 0.21",
+    ),
+    Case(
+        "not_unit_quaternion.csv",  # the fifth quaternion (line 6) scaled by 1.1: norm 1.1
+        "calibrate",
+        lambda b: b.rotation_text(
+            ["qw", "qx", "qy", "qz"],
+            _quaternion_xyzw(b.rotations)[:, [3, 0, 1, 2]]
+            * np.where(np.arange(POSES) == 4, 1.1, 1.0)[:, None],
+        ),
+        InvalidSamples,
+        "line 6: quaternion [qw, qx, qy, qz] has norm 1.100000; expected a unit quaternion",
     ),
     Case(
         "transposed.csv",
@@ -473,7 +498,7 @@ CASES = [
             b.rotations.reshape(POSES, 9) * np.where(np.arange(POSES) == 2, 1.1, 1.0)[:, None],
         ),
         InvalidSamples,
-        "RᵀR off the identity by 0.21",
+        "line 4: rotation matrix r11..r33 is not a rotation",
     ),
     Case(
         "one_orientation.csv",
@@ -481,6 +506,20 @@ CASES = [
         lambda b: b.samples_text(q=np.repeat(b.q[:1], POSES, axis=0)),
         UnobservableParameters,
         "the poses cannot determine",
+    ),
+    Case(
+        "five_joints.csv",
+        "report",
+        lambda b: _columns(b.samples_text(), lambda name: name != "q6"),
+        InvalidSamples,
+        "do not match the arm's 6 joints",
+    ),
+    Case(
+        "nan_cell.csv",
+        "report",
+        lambda b: _cell(b.samples_text(), LINE_3, "mz", "nan"),
+        InvalidSamples,
+        "line 3: column 'mz': 'nan' is not finite",
     ),
     # a log to compensate with the calibration of the bundled six-joint arm
     Case(
@@ -758,3 +797,22 @@ def test_static_recording_advice_works_when_followed(base, truth, orientations):
     assert "no angular velocity or acceleration" in str(info.value) and advice in str(info.value)
     result = ftkin.calibrate_dynamic(motion, estimate_inertia=False)
     np.testing.assert_allclose(result.tool_mass, truth.tool_weight / 9.80665, rtol=1e-6)
+
+
+def test_times_in_milliseconds_warn_alike(base, capsys, caplog):
+    """Eight poses 150 s apart stamped in ms read as seconds span 1.05e6 s (12 days: beyond the
+    week that warns, within the year that refuses): both doors calibrate and give the same
+    warning, with the factor (divide by 1000: 1050 s)."""
+    import logging
+
+    path = base.folder / "milliseconds.csv"
+    rows = [[150_000.0 * i, *base.q[i], *base.wrenches[i]] for i in range(POSES)]
+    path.write_text(_csv(["t", *JOINTS, *WRENCH], rows))
+    with caplog.at_level(logging.WARNING, logger="ftkin"):
+        _calibrate_api(base, path)
+    warned = [r.getMessage() for r in caplog.records if "milliseconds" in r.getMessage()]
+    assert len(warned) == 1 and "divide by 1000: 1050 s" in warned[0], caplog.text
+    caplog.clear()
+    assert main(["calibrate", str(path)]) == 0
+    err = capsys.readouterr().err + caplog.text
+    assert warned[0] in err, err

@@ -220,8 +220,23 @@ def orientations_from_table(table: Table, arm=None) -> TableOrientations:
         return TableOrientations(arm.rotation_sensor_to_base(values), kind, columns, values, arm)
     except InvalidSamples:
         raise
-    except ValueError as error:  # InvalidInput from the converters
-        raise InvalidSamples(str(error), table.source) from None
+    except ValueError as error:  # InvalidInput from the converters: their index becomes the line
+        row = None if convert is None else _first_refused_row(convert, values)
+        if row is None:
+            raise InvalidSamples(str(error), table.source) from None
+        message = re.sub(rf" #{row}\b", "", str(error))  # "#2" (0-based) beside "line 4" misleads
+        raise InvalidSamples(message, table.source, table.lines[row]) from None
+
+
+def _first_refused_row(convert, values: np.ndarray) -> int | None:
+    """The first row of ``values`` that ``convert`` refuses, or None (only on the error path: one
+    row at a time)."""
+    for row, value in enumerate(values):
+        try:
+            convert(value)
+        except ValueError:
+            return row
+    return None
 
 
 def configurations_from_table(table, arm) -> np.ndarray:

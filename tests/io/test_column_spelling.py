@@ -86,7 +86,7 @@ def test_rotation_matrix_columns_row_major(arm, recorded, tmp_path):
     path = write(
         tmp_path / "bad.csv", [*names, "fx", "fy", "fz", "mx", "my", "mz"], [bad, wrenches]
     )
-    with pytest.raises(InvalidSamples, match="#3 is not a rotation"):
+    with pytest.raises(InvalidSamples, match="line 5: rotation matrix r11..r33 is not a rotation"):
         load_samples(path)
 
 
