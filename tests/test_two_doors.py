@@ -166,6 +166,14 @@ def _compensate_api(base: Base, calibration: Path, log: Path):
     return compensator.compensate_samples(loaded.samples)
 
 
+def _track_load_api(base: Base, path: Path):
+    """``compensate --track-load``: the compensation's calls, then the gripper column."""
+    from ftkin.control.load_track import GRIPPER_COLUMN, GRIPPER_STATES
+
+    _compensate_api(base, base.calibration, path)
+    return ftkin.load_samples(path).table.booleans(GRIPPER_COLUMN, GRIPPER_STATES)
+
+
 def _export_api(base: Base, path: Path):
     from ftkin.io.export import export_text
 
@@ -218,6 +226,13 @@ DOORS: dict[str, Door] = {
         lambda b, p: ["compensate", p, b.folder / "good.csv", "-o", b.folder / "out.csv"],
         lambda b, p: _compensate_api(b, p, b.folder / "good.csv"),
     ),
+    "compensate --track-load": (
+        lambda b, p: [
+            *("compensate", b.calibration, p, "-o", b.folder / "out.csv", "--track-load"),
+            *("--noise-force", "0.02", "--noise-torque", "0.002"),
+        ],
+        _track_load_api,
+    ),
     "export": (
         lambda b, p: ["export", p, "--format", "ft-calib", "-o", b.folder / "out.yaml"],
         _export_api,
@@ -264,6 +279,13 @@ def _columns(text: str, keep: Callable[[str], bool], extra: str | None = None) -
     if extra is not None:
         indices.append(lines[0].index(extra))
     return "".join(",".join(cells[i] for i in indices) + "\n" for cells in lines)
+
+
+def _columns_added(text: str, name: str, cells: list[str]) -> str:
+    """``text`` with a column ``name`` of ``cells`` (one per data row) appended."""
+    lines = text.splitlines()
+    out = [lines[0] + "," + name] + [line + "," + cell for line, cell in zip(lines[1:], cells)]
+    return "\n".join(out) + "\n"
 
 
 def _flip_rows(rows, i: int, j: int):
@@ -582,6 +604,13 @@ CASES = [
         lambda b: b.samples_text(wrenches=-b.wrenches),
         ConventionMistake,
         "read with the readings negated",
+    ),
+    Case(
+        "gripper_yes.csv",  # the fourth row (line 5) says 'yes'
+        "compensate --track-load",
+        lambda b: _columns_added(b.samples_text(), "gripper", ["1", "1", "1", "yes"] + ["0"] * 4),
+        InvalidSamples,
+        "line 5: column 'gripper': 'yes' is not 1 or 0; expected 1 (gripper closed) or 0 (open)",
     ),
     # a calibration JSON
     Case("empty.json", "export", lambda b: "", CalibrationFileError, "file is empty"),

@@ -147,6 +147,7 @@ def run(args) -> int:
             loaded.samples.times,
             header,
             table_rows,
+            loaded.table,
         )
     rows = _write_contact(args.output, header, table_rows, contact)
     print(
@@ -229,23 +230,16 @@ def _compensate_imu(args, calibration) -> int:
 LOAD_COLUMNS = ("load_mass", "load_mass_std", "load_com_x", "load_com_y", "load_com_z")
 
 
-def _track_load(calibration, noise, rotations, contact, times, header, rows):
+def _track_load(calibration, noise, rotations, contact, times, header, rows, table=None):
     """``(header, rows, contact)`` with the load's columns and the contact after tool and load
-    (:func:`~ftkin.control.load_track.track_load`); prints the events."""
+    (:func:`~ftkin.control.load_track.track_load`); prints the events. ``table``: the log's
+    :class:`~ftkin.io.csv_table.Table` (None for a bag), whose ``gripper`` column is read."""
     from ..control.load_events import LoadTracker
-    from ..control.load_track import track_load
+    from ..control.load_track import GRIPPER_COLUMN, GRIPPER_STATES, track_load
 
     gripper = None
-    if "gripper" in header:
-        column = header.index("gripper")
-        cells = [row[column].strip() for row in rows]
-        wrong = next((i for i, cell in enumerate(cells) if cell not in ("0", "1")), None)
-        if wrong is not None:
-            raise InvalidInput(
-                f"the gripper column must hold 1 (closed) or 0 (open); row {wrong + 1} has "
-                f"{cells[wrong]!r}"
-            )
-        gripper = np.array([cell == "1" for cell in cells], dtype=bool)
+    if table is not None and GRIPPER_COLUMN in table.header:
+        gripper = table.booleans(GRIPPER_COLUMN, GRIPPER_STATES)
     tracker = LoadTracker.for_calibration(calibration, noise, readings=contact)
     track = track_load(tracker, rotations, contact, times, gripper)
     force, torque = tracker.noise.force_std, tracker.noise.torque_std
@@ -284,6 +278,7 @@ def _compensate_motion(args, calibration, arm: Arm) -> int | None:
     paths = input_paths(args.log)
     if len(paths) > 1:
         return None  # several files: joined, then compensated at rest (the static path)
+    table = None  # a bag's: no gripper column
     if is_bag_path(paths[0]):
         recording = load_motion_bag(
             paths[0], arm, args.joint_topic, args.wrench_topic, args.wrench_frame or "sensor"
@@ -315,6 +310,7 @@ def _compensate_motion(args, calibration, arm: Arm) -> int | None:
             recording.times,
             header,
             rows,
+            table,
         )
     count = _write_contact(args.output, header, rows, contact)
     print(

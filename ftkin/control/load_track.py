@@ -12,6 +12,10 @@ from ..exceptions import InvalidInput
 from ..validation import as_float_array, as_rotation_batch, as_wrenches
 from .load_events import LoadEvent, LoadTracker
 
+GRIPPER_COLUMN, GRIPPER_STATES = "gripper", "1 (gripper closed) or 0 (open)"
+"""A log's gripper column and what its cells hold (read by
+:meth:`~ftkin.io.csv_table.Table.booleans` into :func:`track_load`'s ``gripper``)."""
+
 
 @dataclass(frozen=True)
 class LoadTrack:

@@ -80,6 +80,20 @@ class Table:
                 out[r, c] = value
         return out
 
+    def booleans(self, name: str, meaning: str) -> np.ndarray:
+        """The column ``name`` of ``1``/``0`` cells as ``(N,)`` booleans (``meaning``: what they
+        stand for, e.g. ``"1 (closed) or 0 (open)"``), or :class:`InvalidSamples` at the first
+        other cell, with its line."""
+        index = self.column_index(name)
+        for row, line in zip(self.rows, self.lines):
+            if (cell := row[index].strip()) not in ("0", "1"):
+                raise InvalidSamples(
+                    f"column {name!r}: {cell!r} is not 1 or 0; expected {meaning}",
+                    self.source,
+                    line,
+                )
+        return np.array([row[index].strip() == "1" for row in self.rows], dtype=bool)
+
 
 def sniff_delimiter(text: str) -> str:
     """The separator of a CSV text: comma, semicolon or tab, judged by its header line.

@@ -128,4 +128,4 @@ def test_a_malformed_gripper_column_is_named(recording, capsys):
     argv = ["compensate", str(calibration), str(bad), "-o", str(folder / "g.csv"), "--track-load"]
     assert main(argv + NOISE_ARGS) == 2
     error = capsys.readouterr().err
-    assert "gripper column must hold 1 (closed) or 0 (open); row 8 has 'yes'" in error
+    assert "gripper.csv, line 9: column 'gripper': 'yes' is not 1 or 0" in error
