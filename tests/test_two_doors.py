@@ -174,10 +174,10 @@ def _track_load_api(base: Base, path: Path):
     return ftkin.load_samples(path).table.booleans(GRIPPER_COLUMN, GRIPPER_STATES)
 
 
-def _export_api(base: Base, path: Path):
+def _export_api(base: Base, path: Path, fmt: str = "ft-calib"):
     from ftkin.io.export import export_text
 
-    return export_text(ftkin.load_calibration(path), "ft-calib")
+    return export_text(ftkin.load_calibration(path), fmt)
 
 
 REZERO_Q, REZERO_WRENCH = [0.3] * 6, [0.5, -0.2, -3.0, 0.01, 0.02, 0.0]
@@ -237,6 +237,10 @@ DOORS: dict[str, Door] = {
         lambda b, p: ["export", p, "--format", "ft-calib", "-o", b.folder / "out.yaml"],
         _export_api,
     ),
+    "export franka-load": (
+        lambda b, p: ["export", p, "--format", "franka-load", "-o", b.folder / "out.yaml"],
+        lambda b, p: _export_api(b, p, "franka-load"),
+    ),
     "rezero": (
         lambda b, p: [
             "rezero",
@@ -286,6 +290,12 @@ def _columns_added(text: str, name: str, cells: list[str]) -> str:
     lines = text.splitlines()
     out = [lines[0] + "," + name] + [line + "," + cell for line, cell in zip(lines[1:], cells)]
     return "\n".join(out) + "\n"
+
+
+def _drop_arm(document: dict) -> None:
+    """A calibration document as made from orientations: no arm recorded."""
+    for key in ("kinematics", "urdf", "sensor_frame"):
+        document.pop(key, None)
 
 
 def _flip_rows(rows, i: int, j: int):
@@ -655,6 +665,21 @@ CASES = [
         lambda b: b.calibration_text(lambda d: d.__setitem__("center_of_mass", [0.0, 0.0, 47.0])),
         CalibrationFileError,
         "key 'center_of_mass'",
+    ),
+    Case(
+        "no_arm.json",  # as made from orientations: no kinematics, URDF or sensor frame
+        "rezero",
+        lambda b: b.calibration_text(_drop_arm),
+        InvalidInput,
+        "this Compensator has no Arm: pass arm= to use joint angles (ftkin: --robot NAME",
+    ),
+    Case(
+        "no_arm.json",
+        "export franka-load",
+        lambda b: b.calibration_text(_drop_arm),
+        InvalidInput,
+        "franka-load needs the arm (the centre of mass is written in its flange) and this "
+        "calibration records none: pass arm= (ftkin export: --robot NAME or --urdf PATH)",
     ),
     # a moving recording (100 Hz, t in seconds; header on line 1, row k on line k + 2)
     Case(

@@ -307,28 +307,19 @@ def arm_for_calibration(args: argparse.Namespace, calibration) -> Arm | None:
         ) from None
 
 
-def arm_of_calibration(args: argparse.Namespace, calibration, purpose: str) -> Arm:
+def arm_of_calibration(args: argparse.Namespace, calibration) -> Arm | None:
     """The arm of :func:`arm_for_calibration`, or the bundled arm when the calibration was made
-    on it; a calibration that records no arm (made from orientation columns) and no robot option
-    is refused: joint angles or a flange of another arm would give a wrong result in silence.
+    on it; None when the calibration records no arm (made from orientation columns or the IMU)
+    and no robot option names one. The library then refuses what needs the arm (joint angles or a
+    flange of another arm would give a wrong result in silence), naming ``arm=`` and the flags:
+    :class:`~ftkin.control.compensation.Compensator`, :func:`~ftkin.io.export.export_request`.
     """
     arm = arm_for_calibration(args, calibration)
     if arm is not None:
         return arm
     if calibration.urdf and Path(calibration.urdf).resolve() == bundled_urdf_path().resolve():
         return Arm.default()
-    from ..calibration.imu_result import ImuCalibrationResult
-
-    made_from = (
-        "the sensor's IMU"
-        if isinstance(calibration, ImuCalibrationResult) and calibration.method.startswith("imu")
-        else "orientations"
-    )
-    raise InvalidInput(
-        f"{purpose} needs the arm, and this calibration records none (it was made from "
-        f"{made_from}, not joint angles): name it with --robot NAME or --urdf PATH "
-        "(--sensor-frame, --sensor-parent, --sensor-offset as the sensor is mounted)"
-    )
+    return None
 
 
 def segment_parameters_from_args(args: argparse.Namespace):

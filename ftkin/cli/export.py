@@ -53,7 +53,7 @@ def register(subparsers) -> None:
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
     arm = (  # the options' arm, else (for a format that needs one) the calibration's
-        arm_of_calibration(args, calibration, f"--format {args.fmt}")
+        arm_of_calibration(args, calibration)
         if EXPORT_FORMATS[args.fmt].needs_arm
         else arm_from_args(args)
     )

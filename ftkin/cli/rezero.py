@@ -64,7 +64,7 @@ def register(subparsers) -> None:
 
 def run(args) -> int:
     calibration = load_calibration(args.calibration)
-    arm = arm_of_calibration(args, calibration, "rezero --q")
+    arm = arm_of_calibration(args, calibration)  # None: the library says what to name
     # the library checks the pose (its joint count, radians, the joint limits) and warns of a
     # bias moved beyond the tool's weight and of a drift trajectory left in place
     previous = calibration.bias

@@ -138,7 +138,17 @@ class Compensator:
             )
         calibration = CalibrationResult.from_model(calibration)
         record = calibration.kinematics
-        self._no_arm = "pass arm= to use joint angles, or give R_BS"
+        self._no_arm = (  # both doors' spellings: ftkin rezero prints it as it is
+            "pass arm= to use joint angles (ftkin: --robot NAME or --urdf PATH, with "
+            "--sensor-frame, --sensor-parent, --sensor-offset as the sensor is mounted), or give "
+            "R_BS"
+            + (
+                ""
+                if record is not None
+                else "; this calibration records no arm (it was made from orientations or the "
+                "sensor's IMU, not joint angles)"
+            )
+        )
         if arm is None and record is not None:  # the calibration's own arm, if it can be rebuilt
             try:
                 arm = record.build_arm()
