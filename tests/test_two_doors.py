@@ -11,12 +11,15 @@ calls that command makes, in the same order:
   ``calibrate_dynamic``;
 * ``compensate C.json L.csv``: ``load_calibration(C)``, the arm it records, ``Compensator``,
   ``load_samples(L, arm)``, ``check_log_conventions(loaded.table, arm, calibration)``,
-  ``compensate_samples``;
-* ``export C.json --format ft-calib``: ``export_text(load_calibration(C), "ft-calib")``;
+  ``compensate_samples``; with ``--track-load`` then
+  ``loaded.table.booleans(GRIPPER_COLUMN, GRIPPER_STATES)``;
+* ``export C.json --format F``: ``export_text(load_calibration(C), F)``;
 * ``rezero C.json --q .. --wrench ..``: ``Compensator(load_calibration(C)).rezero(q, wrench)``;
+* ``report C.json S.csv``: ``load_calibration``, ``load_samples(S, arm, SegmentParameters())``,
+  ``save_report``;
 * ``doctor S.csv``: ``diagnose_samples(S)``;
 * ``evaluate-poses P.csv``: ``pose_set_from_table(read_table(P))``, then ``evaluate_poses`` with
-  the command's default expectation.
+  the command's default expectation (50 readings per pose; the library's default is 1).
 
 The rule both doors keep, checked for every case:
 
