@@ -245,6 +245,7 @@ def calibrate_dynamic(
         times=np.arange(len(motion), dtype=float) if motion.times is None else motion.times,
         parameter_count=len(x),
     )
+    covariance = covariance * test.covariance_scale  # honest standard errors on a misfit
     return DynamicCalibrationResult(
         force_offset=values[3:6],
         torque_offset=values[6:9],

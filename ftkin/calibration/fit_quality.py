@@ -165,6 +165,8 @@ def diagnose(
         information=fit.information,
         parameter_count=parameter_count or fit.problem.parameter_count,
         log=False,
+        noise_advice="record several readings per pose (a pose column: their spread gives the "
+        "noise) or give the noise (noise=, --noise-force/--noise-torque) to have it tested",
     )
     dof, chi_square, channel_chi_square = test.dof, test.chi_square, test.channel_chi_square
     # the fit test does not apply to noise from the residuals or without degrees of freedom

@@ -58,9 +58,11 @@ VERDICTS = ("fits", "does not fit", "not tested")
 
 RESIDUALS_REASON = (
     "the noise was estimated from this fit's own residuals, so the chi-square equals its degrees "
-    "of freedom by construction and cannot test the model; give the noise (noise=, "
-    "--noise-force/--noise-torque) or record several readings per pose to test it"
+    "of freedom by construction and cannot test the model"
 )
+NOISE_ADVICE = "give the noise (noise=, --noise-force/--noise-torque) to have it tested"
+"""How to have a fit tested whose noise came from its residuals (a moving recording's, which has
+no repeated readings); the static fits add the spread of repeated readings."""
 NO_DOF_REASON = "no degrees of freedom left: as many parameters as residuals"
 
 
@@ -146,6 +148,12 @@ class FitTest:
     def fits(self) -> bool:
         """False only when the test rejects the model (True when not tested)."""
         return self.verdict != "does not fit"
+
+    @property
+    def covariance_scale(self) -> float:
+        """``χ²/ν`` when the test rejects the model (and ``χ² > ν``), else 1: the factor a fit's
+        covariance is scaled by (Birge ratio) so its standard errors stay honest."""
+        return self.chi_square / self.dof if not self.fits and self.chi_square > self.dof else 1.0
 
     @property
     def worst_channel(self) -> tuple[str, float]:
@@ -326,6 +334,7 @@ def fit_test(
     information=None,
     parameter_count: int | None = None,
     log: bool = True,
+    noise_advice: str = NOISE_ADVICE,
 ) -> FitTest:
     """The goodness of fit of a calibration (module docstring): the one computation every kind
     runs.
@@ -345,6 +354,8 @@ def fit_test(
         information: ``(n, n)`` the information ``JᵀJ``, instead of ``jacobian``.
         parameter_count: Parameters fitted (default: the Jacobian's rank).
         log: False keeps a misfit's warning out of the log (the caller logs it).
+        noise_advice: What to do to have the fit tested when the noise came from its residuals
+            (it ends :attr:`FitTest.untested_reason`; the fit's own keywords and flags).
 
     Returns:
         A frozen :class:`FitTest`; a misfit's :attr:`FitTest.warning` is logged to
@@ -373,7 +384,7 @@ def fit_test(
         parameter_count = rank
     chi_square = float(np.sum(whitened**2))
     dof = int(whitened.size - parameter_count)
-    reason = RESIDUALS_REASON if noise_source == "residuals" else None
+    reason = f"{RESIDUALS_REASON}; {noise_advice}" if noise_source == "residuals" else None
     reason = reason or (NO_DOF_REASON if dof <= 0 else None)
     p_value = None if reason else float(_f_sf(chi_square / dof, dof, noise_dof))
     free = np.clip(1.0 - leverage, 0.0, 1.0)
