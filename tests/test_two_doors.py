@@ -339,6 +339,7 @@ class Case:
 
 
 LINE_3 = 3  # the second data row (line 1 is the header)
+LATIN1_NOTE = "# recorded at 20 \udcb0C\n"  # a lone surrogate: written as the raw byte 0xb0
 
 CASES = [
     # samples CSV: the file and its cells
@@ -412,6 +413,20 @@ CASES = [
         lambda b: b.samples_text(wrenches=b.wrenches * 1e6),
         InvalidSamples,
         "beyond ±1e+06: expected N (fx, fy, fz) and N·m",
+    ),
+    Case(
+        "decimal_commas.csv",  # a spreadsheet's export: semicolons, decimal commas
+        "calibrate",
+        lambda b: b.samples_text().replace(",", ";").replace(".", ","),
+        InvalidSamples,
+        "line 2: column 'q1'",
+    ),
+    Case(
+        "latin1.csv",  # a note in Latin-1 (the ° of 20 °C is the byte 0xb0)
+        "calibrate",
+        lambda b: LATIN1_NOTE + b.samples_text(),
+        InvalidSamples,
+        "line 1: byte 0xb0 is not UTF-8 text (invalid start byte): save the file as UTF-8",
     ),
     # samples CSV: orientations given directly
     Case(
@@ -649,6 +664,36 @@ CASES = [
         "key 'tool_mass': -",
     ),
     Case(
+        "nan_offset.json",  # JSON's NaN literal, which Python's json reads
+        "export",
+        lambda b: b.calibration_text(
+            lambda d: d.__setitem__("force_offset", [0.1, 0.2, 0.3])
+        ).replace("0.1, 0.2, 0.3", "NaN, 0.2, 0.3"),
+        CalibrationFileError,
+        "key 'force_offset'",
+    ),
+    Case(
+        "overflow_weight.json",  # 1e999 reads as inf
+        "rezero",
+        lambda b: b.calibration_text(lambda d: d.__setitem__("g", 9.5)).replace("9.5", "1e999"),
+        CalibrationFileError,
+        "key 'g'",
+    ),
+    Case(
+        "a_list.json",
+        "compensate CALIB",
+        lambda b: "[1, 2, 3]\n",
+        CalibrationFileError,
+        "expected a JSON object, got list",
+    ),
+    Case(
+        "duplicate_key.json",
+        "export",
+        lambda b: b.calibration_text(lambda d: None).replace('{"format"', '{"g": 9.8, "format"', 1),
+        CalibrationFileError,
+        "duplicate key in a JSON object",
+    ),
+    Case(
         "future_version.json",
         "export",
         lambda b: b.calibration_text(lambda d: d.__setitem__("version", 99)),
@@ -751,8 +796,8 @@ def test_both_doors_refuse_with_the_same_words(case, base, capsys):
     folder = base.folder / case.door.replace(" ", "_")
     folder.mkdir(exist_ok=True)
     path = folder / case.name
-    text = case.text(base)
-    path.write_text(text)
+    data = case.text(base).encode("utf-8", "surrogateescape")  # a lone surrogate: a raw byte
+    path.write_bytes(data)
     argv, api = DOORS[case.door]
     with pytest.raises(case.error) as info:
         api(base, path)
@@ -766,7 +811,7 @@ def test_both_doors_refuse_with_the_same_words(case, base, capsys):
     cli_message = line.removeprefix("ftkin: error: ")
     assert cli_message.startswith(message), f"\nCLI: {cli_message}\nAPI: {message}"
     assert cli_message.removeprefix(message) in ("", *CLI_SUFFIXES), cli_message
-    assert path.read_text() == text  # an input is never written over
+    assert path.read_bytes() == data  # an input is never written over
 
 
 # --- the rule's own edges -------------------------------------------------------------------
@@ -873,3 +918,15 @@ def test_times_in_milliseconds_warn_alike(base, capsys, caplog):
     assert main(["calibrate", str(path)]) == 0
     err = capsys.readouterr().err + caplog.text
     assert warned[0] in err, err
+
+
+def test_a_latin1_file_saved_as_utf8_calibrates(base, capsys):
+    """The advice for a file in Latin-1 ("save the file as UTF-8"), followed: the same text
+    encoded as UTF-8 is read by both doors (the note is a comment) and calibrates."""
+    path = base.folder / "latin1_saved_as_utf8.csv"
+    text = (LATIN1_NOTE + base.samples_text()).encode("utf-8", "surrogateescape").decode("latin-1")
+    path.write_text(text, encoding="utf-8")
+    assert "20 °C" in text
+    result = _calibrate_api(base, path)
+    assert abs(result.tool_weight - 3.15) < 0.1  # the paper-like tool, with noise
+    assert main(["calibrate", str(path)]) == 0, capsys.readouterr().err

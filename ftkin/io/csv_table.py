@@ -202,8 +202,13 @@ def _read_text(path: Path) -> str:
             source,
         ) from None
     except UnicodeDecodeError as error:
+        line = error.object[: error.start].count(b"\n") + 1
         raise InvalidSamples(
-            f"not UTF-8 text (a binary file?): {error.reason} at byte {error.start}", source
+            f"byte 0x{error.object[error.start]:02x} is not UTF-8 text ({error.reason}): save the "
+            "file as UTF-8 (Latin-1 and Windows-1252 write µ, ° and ² in other bytes), unless it "
+            "is not a CSV at all",
+            source,
+            line,
         ) from None
     except OSError as error:
         raise InvalidSamples(f"cannot read: {error.strerror or error}", source) from None
