@@ -43,8 +43,6 @@ from .dynamic_fit import THETA_NAMES, noise_from_residuals
 from .goodness_of_fit import fit_test
 from .imu_fit import theta_covariance
 from .imu_model import (
-    ACCEL_BIAS_NAMES,
-    ACCEL_SCALE_NAMES,
     IMU_POSITION_NAMES,
     IMU_ROTATION_NAMES,
     corrected_specific_force,
@@ -329,46 +327,6 @@ def propagated_variance(problem: ImuDynamicProblem, x: np.ndarray, variance: dic
     return added
 
 
-def prior_covariance(
-    problem: ImuDynamicProblem, x: np.ndarray, accel: np.ndarray, bias, scale, prior
-) -> np.ndarray:
-    """``(len(x), len(x))`` covariance the prior's accelerometer bias and scale add to ``x``.
-
-    The fit holds ``b`` and ``s`` at the prior's estimates, which carry their own errors (their
-    covariance in ``prior.parameter_covariance``; a component the prior did not estimate adds
-    nothing). Linearised at the solution, ``x`` moves by ``G δp`` with ``G = −(JᵀJ)⁻¹ Jᵀ P``,
-    ``J`` the whitened Jacobian and ``P`` the whitened prediction's derivative in ``p = [b, s]``
-    (``accel`` ``(N, 3)`` the smoothed raw accelerometer [m/s², IMU frame]): ``G Σ_p Gᵀ``. The
-    prior's readings are not the recording's, so the two errors are independent and add.
-    """
-    names = ACCEL_BIAS_NAMES + ACCEL_SCALE_NAMES
-    known = {name: i for i, name in enumerate(prior.parameter_names)}
-    rows = [known.get(name) for name in names]
-    sigma = np.zeros((6, 6))
-    if prior.parameter_covariance is not None:
-        for i, row in enumerate(rows):
-            for j, column in enumerate(rows):
-                if row is not None and column is not None:
-                    sigma[i, j] = prior.parameter_covariance[row, column]
-    if not np.any(sigma):
-        return np.zeros((len(x), len(x)))
-    p0 = np.concatenate([np.asarray(bias, dtype=float), np.asarray(scale, dtype=float)])
-    slopes = []
-    for k in range(6):  # the prediction is linear in the corrected signal: central differences
-        step = 1e-4 * max(1.0, abs(p0[k]))
-        shifted = []
-        for sign in (1.0, -1.0):
-            p = p0.copy()
-            p[k] += sign * step
-            corrected = corrected_specific_force(accel, p[:3], p[3:])
-            moved = replace(problem, motion=replace(problem.motion, corrected=corrected))
-            shifted.append(moved.predict(x) / problem.channel_std)
-        slopes.append(((shifted[0] - shifted[1]) / (2.0 * step)).ravel())
-    jac = problem.whitened_jacobian(x)
-    gain = -np.linalg.lstsq(jac, np.stack(slopes, axis=1), rcond=None)[0]
-    return gain @ sigma @ gain.T
-
-
 def _noise(problem: ImuDynamicProblem, x: np.ndarray) -> np.ndarray:
     residuals = problem.motion.wrenches - problem.predict(x)
     return noise_from_residuals(residuals, len(x), problem.motion.wrenches)
@@ -517,45 +475,21 @@ def calibrate_imu_dynamic(
         times=samples.times[order],
         parameter_count=len(x),
     )
-    from_prior = (  # the prior's b and s are estimates: their errors reach x (issue 38)
-        prior_covariance(problem, x, smooth[:, 3:6], bias, scale, prior)
-        if prior is not None and accel_bias is None and accel_scale is None
-        else None
-    )
     result = _result(
-        samples,
-        problem,
-        x,
-        bias,
-        scale,
-        position_given is None,
-        unsplit,
-        test.covariance_scale,
-        from_prior,
+        samples, problem, x, bias, scale, position_given is None, unsplit, test.covariance_scale
     )
     warnings = result.imu_warnings + (() if test.fits else (test.warning,))
     return replace(result, fit_test=test, imu_warnings=warnings)
 
 
 def _result(
-    samples,
-    problem: ImuDynamicProblem,
-    x,
-    bias,
-    scale,
-    position_estimated,
-    unsplit,
-    factor=1.0,
-    from_prior=None,
+    samples, problem: ImuDynamicProblem, x, bias, scale, position_estimated, unsplit, factor=1.0
 ):
-    """The result at ``x``, its covariance scaled by ``factor`` (a misfit's ``χ²/ν``), plus
-    ``from_prior`` (:func:`prior_covariance`) when given."""
+    """The result at ``x``, its covariance scaled by ``factor`` (a misfit's ``χ²/ν``)."""
     jac = problem.whitened_jacobian(x)
     covariance = factor * invert_information(
         jac.T @ jac, problem.names, "the information at the solution is singular"
     )
-    if from_prior is not None:
-        covariance = covariance + from_prior
     _, theta, delta, position = problem.unpack(x)
     rotation = problem.rotation0 @ exp_so3(delta)
     gradient, body_covariance = delta_method(_outputs, x, covariance)
