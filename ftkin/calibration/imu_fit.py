@@ -45,6 +45,7 @@ from .imu_result import ImuCalibrationResult
 from .imu_samples import ImuPoseAverages, ImuSamples
 from .imu_start import start
 from .information import noise_floor
+from .ml import pooled_noise
 from .observability import MIN_RELATIVE_SINGULAR_VALUE
 
 logger = logging.getLogger(__name__)
@@ -113,8 +114,7 @@ def _noise_from_residuals(problem: NineChannelProblem, x: np.ndarray, floor: np.
     hat = np.einsum("ij,ji->i", jac, np.linalg.pinv(jac.T @ jac, hermitian=True) @ jac.T)
     dof = np.clip(1.0 - hat, 1e-9, 1.0).reshape(-1, 9)
     squares = problem.residuals(x) ** 2 * problem.channel_counts
-    std = [np.sqrt(np.sum(squares[:, part]) / np.sum(dof[:, part])) for part in _GROUPS]
-    return np.maximum(np.repeat(std, 3), floor)
+    return pooled_noise(np.sum(squares, axis=0), np.sum(dof, axis=0), floor, _GROUPS)
 
 
 def _floor(poses: ImuPoseAverages, g: float) -> np.ndarray:

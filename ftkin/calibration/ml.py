@@ -240,12 +240,14 @@ def noise_from_residuals(
     return std, min(float(np.sum(dof[:, g])) for g in RESIDUAL_NOISE_GROUPS)
 
 
-def pooled_noise(squares: np.ndarray, dof: np.ndarray, floor: np.ndarray) -> np.ndarray:
-    """``(6,)`` noise ``σ_g = √(Σ n e² / Σ dof)`` per group of :data:`RESIDUAL_NOISE_GROUPS`,
-    from ``Σ n e²`` and the degrees of freedom per channel ``(6,)``, at least ``floor`` ``(6,)``
-    [N, N·m].
+def pooled_noise(
+    squares: np.ndarray, dof: np.ndarray, floor: np.ndarray, groups=RESIDUAL_NOISE_GROUPS
+) -> np.ndarray:
+    """``(3 G,)`` noise ``σ_g = √(Σ n e² / Σ dof)`` per group of three channels (``groups``,
+    default :data:`RESIDUAL_NOISE_GROUPS`; the IMU's fits add the accelerometer's), from ``Σ n e²``
+    and the degrees of freedom per channel, at least ``floor`` [N, N·m, m/s²].
     """
-    std = [np.sqrt(np.sum(squares[g]) / max(np.sum(dof[g]), 1e-12)) for g in RESIDUAL_NOISE_GROUPS]
+    std = [np.sqrt(np.sum(squares[g]) / max(np.sum(dof[g]), 1e-12)) for g in groups]
     return np.maximum(np.repeat(std, 3), floor)
 
 
