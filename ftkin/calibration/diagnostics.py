@@ -2,25 +2,18 @@
 
 :class:`FitDiagnostics` is what :func:`ftkin.calibration.fit_quality.diagnose` finds: the
 noise used, the chi-square test, per-pose normalized residuals and outliers,
-observability and the warnings. The thresholds it is judged by live here.
+observability and the warnings. The thresholds it is judged by live here (the fit test's,
+``FIT_ALPHA`` and ``OUTLIER_ALPHA``, in :mod:`ftkin.calibration.goodness_of_fit`, every
+calibration kind's).
 """
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .goodness_of_fit import FIT_ALPHA, OUTLIER_ALPHA, FitTest
 from .information import SensorNoise
 from .model import COMPONENT_NAMES
-
-if TYPE_CHECKING:
-    from .goodness_of_fit import FitTest
-
-FIT_ALPHA = 1e-3
-"""p-value below which the chi-square test says the model does not fit."""
-
-OUTLIER_ALPHA = 1e-3
-"""Family-wise false-alarm rate of the outlier test (per pose: ``OUTLIER_ALPHA / P``)."""
 
 RELATIVE_STD_ERROR_WARNING = 0.02
 """Warn when a parameter's standard error exceeds this fraction of its block's scale."""
@@ -76,7 +69,7 @@ class FitDiagnostics:
     weakest_direction: np.ndarray
     relative_std_errors: np.ndarray
     warnings: tuple[str, ...]
-    fit_test: "FitTest | None" = None
+    fit_test: FitTest | None = None
 
     @property
     def fit_ok(self) -> bool:

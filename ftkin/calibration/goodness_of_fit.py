@@ -17,10 +17,10 @@ one column per channel) and its **whitened Jacobian** ``J``
   :data:`SPAN_SECONDS`): a group's ``Σ r² / Σ (1 − h)`` tested against the noise, or against the
   scatter of the other groups when the noise came from the residuals or the fit fails (so one bad
   group cannot hide itself), at a family-wise rate of
-  :data:`~ftkin.calibration.diagnostics.OUTLIER_ALPHA`;
+  :data:`OUTLIER_ALPHA`;
 * the condition number of the information ``JᵀJ`` in unit-diagonal scaling;
 * the verdict: ``"fits"``, ``"does not fit"`` (``p <``
-  :data:`~ftkin.calibration.diagnostics.FIT_ALPHA`) or ``"not tested"``, and for a misfit one
+  :data:`FIT_ALPHA`) or ``"not tested"``, and for a misfit one
   warning that names the fit and the channel.
 
 Each result exposes it as ``fit_test``; each calibration file writes it under the key
@@ -33,11 +33,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..exceptions import InvalidInput
-from .diagnostics import FIT_ALPHA, OUTLIER_ALPHA
+from .covariance import RCOND
 from .model import WRENCH_CHANNELS
 
 __all__ = [
     "ACCEL_CHANNELS",
+    "FIT_ALPHA",
+    "OUTLIER_ALPHA",
     "SPAN_SECONDS",
     "WRENCH_CHANNELS",
     "FitTest",
@@ -45,6 +47,13 @@ __all__ = [
 ]
 
 logger = logging.getLogger(__name__)
+
+FIT_ALPHA = 1e-3
+"""p-value below which the chi-square test says the model does not fit."""
+
+OUTLIER_ALPHA = 1e-3
+"""Family-wise false-alarm rate of the outlier test (per pose or time span: ``OUTLIER_ALPHA / G``
+for ``G`` of them)."""
 
 ACCEL_CHANNELS = ("ax", "ay", "az")
 """The accelerometer's channels [m/s²]."""
@@ -291,16 +300,23 @@ def _json_float(value) -> float | None:
 
 def _leverage_and_spectrum(jacobian: np.ndarray) -> tuple[np.ndarray, int, float]:
     """``(leverages (rows,), rank, condition number)`` of a whitened Jacobian: the hat matrix's
-    diagonal, the rank at a relative singular value of 1e-9 (unit-norm columns), and the
-    condition number of ``JᵀJ`` in unit-diagonal scaling."""
+    diagonal, the rank (eigenvalues of ``JᵀJ`` in unit-diagonal scaling above
+    :data:`~ftkin.calibration.covariance.RCOND` of the largest, where rounding starts to decide),
+    and its condition number. The leverages ``h_i = ‖J_i V Λ^(-1/2)‖²`` are summed in blocks of
+    rows, so a long recording needs no second Jacobian-sized array."""
     norms = np.linalg.norm(jacobian, axis=0)
-    unit = jacobian / np.where(norms > 0.0, norms, 1.0)
-    u, singular, _ = np.linalg.svd(unit, full_matrices=False)
-    kept = singular > 1e-9 * singular[0] if len(singular) else np.zeros(0, dtype=bool)
-    leverage = np.sum(u[:, kept] ** 2, axis=1)
-    smallest = singular[-1] if len(singular) else 0.0
-    condition = float((singular[0] / smallest) ** 2) if smallest > 0.0 else np.inf
+    scale = np.where(norms > 0.0, norms, 1.0)
+    values, vectors = np.linalg.eigh((jacobian.T @ jacobian) / np.outer(scale, scale))
+    kept = values > RCOND * values[-1]
+    basis = vectors[:, kept] / scale[:, None] / np.sqrt(values[kept])
+    blocks = np.array_split(jacobian, max(1, len(jacobian) // LEVERAGE_BLOCK_ROWS))
+    leverage = np.concatenate([np.sum((block @ basis) ** 2, axis=1) for block in blocks])
+    condition = float(values[-1] / values[0]) if values[0] > 0.0 else np.inf
     return leverage, int(np.sum(kept)), condition
+
+
+LEVERAGE_BLOCK_ROWS = 100_000
+"""Rows of the Jacobian per block when its leverages are summed."""
 
 
 def _groups(rows: int, group_ids, times) -> tuple[np.ndarray, list, str]:
