@@ -29,8 +29,8 @@ from ..exceptions import InvalidInput, SuspectConvention
 from ..validation import as_vector
 from .explained import MIN_EXPLAINED, explained_share
 from .linear import fit_linear
-from .model import STANDARD_GRAVITY
-from .mount import MountMode, force_step_cost, mount_start
+from .model import STANDARD_GRAVITY, SensorModel
+from .mount import MountMode, force_step_costs, mount_start
 from .samples import Samples
 
 FLIP_AXES = (None, "x", "y", "z")
@@ -139,6 +139,9 @@ class ConventionCheck:
         expectation_declared: The expected gravity direction was declared (``base_mount`` or
             ``expected_gravity`` given), not the default floor mount.
         expected_direction: The expected gravity direction [base frame, unit], or None.
+        linear_fit: The two-step linear fit (:func:`~ftkin.calibration.linear.fit_linear`) of
+            the readings with the assumed convention, at the mount's start with a mount (the
+            ``ml`` fit starts from it without fitting it again).
     """
 
     flip_costs: dict
@@ -150,6 +153,7 @@ class ConventionCheck:
     estimate_mount: str = "none"
     expectation_declared: bool = False
     expected_direction: np.ndarray | None = None
+    linear_fit: SensorModel | None = None
 
     @property
     def flip_suspected(self) -> bool:
@@ -191,6 +195,7 @@ def detect_sign_and_handedness(
     base_mount: str | None = None,
     expected_gravity=None,
     g: float = STANDARD_GRAVITY,
+    linear_fit: SensorModel | None = None,
 ) -> ConventionCheck:
     """Fit the reflected alternatives and compare the fitted weight with the expected gravity.
 
@@ -211,6 +216,9 @@ def detect_sign_and_handedness(
             check); None: a floor mount, not declared (a tilt is warned, never refused).
         expected_gravity: Expected gravity direction in the base frame; overrides ``base_mount``.
         g: Gravity [m/s²] (for the linear fit's reported mass only).
+        linear_fit: The two-step fit of the readings with the assumed convention, when at hand
+            (``estimate_mount="none"`` only; the orientation check of
+            :mod:`ftkin.calibration.orientation_mistakes` returns it); None fits it.
 
     Raises:
         UnobservableParameters: the poses cannot determine the tool weight at all.
@@ -219,18 +227,17 @@ def detect_sign_and_handedness(
     estimate_mount = MountMode.of(estimate_mount)  # a MountMode from calibrate passes as is
     expected = expected_gravity_direction(base_mount, expected_gravity)
     # reading_signs checks sensor_sign and flip_axis before any result is formed
-    costs = {
-        alternative: force_step_cost(
-            poses.rotations,
-            poses.wrenches[:, :3] * reading_signs(sensor_sign, alternative)[:3],
-            estimate_mount,
-        )[0]
-        for alternative in (FLIP_AXES if len(poses) >= MIN_POSES_FOR_FLIP else (flip_axis,))
-    }
+    alternatives = FLIP_AXES if len(poses) >= MIN_POSES_FOR_FLIP else (flip_axis,)
+    force_sets = [poses.wrenches[:, :3] * reading_signs(sensor_sign, a)[:3] for a in alternatives]
+    step_costs, _ = force_step_costs(poses.rotations, np.array(force_sets), estimate_mount)
+    costs = {alternative: float(cost) for alternative, cost in zip(alternatives, step_costs)}
     best = min(costs, key=costs.get)
     corrected = replace(poses, wrenches=poses.wrenches * reading_signs(sensor_sign, flip_axis))
     mount = np.eye(3) if estimate_mount == "none" else mount_start(corrected, g)[0]
-    fit = fit_linear(replace(corrected, rotations=corrected.rotations @ mount.T), g)
+    if linear_fit is None or estimate_mount != "none":
+        fit = fit_linear(replace(corrected, rotations=corrected.rotations @ mount.T), g)
+    else:
+        fit = SensorModel.from_vector(linear_fit.to_vector(), g)
     residuals = corrected.wrenches - fit.predict(corrected.rotations @ mount.T)
     # a weight fitted to readings it does not explain has no direction to judge
     explained = explained_share(corrected.wrenches, residuals) >= MIN_EXPLAINED
@@ -242,7 +249,7 @@ def detect_sign_and_handedness(
     equivalent = {"x": ("y",), "y": ("x",)}.get(best, ()) if estimate_mount != "none" else ()
     declared = base_mount is not None or expected_gravity is not None
     return ConventionCheck(
-        costs, flip_axis, best, angle, gravity, equivalent, estimate_mount, declared, expected
+        costs, flip_axis, best, angle, gravity, equivalent, estimate_mount, declared, expected, fit
     )
 
 

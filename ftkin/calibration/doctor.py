@@ -255,7 +255,7 @@ def wrench_readings(given: Samples | PoseAverages, joints: bool = True) -> list[
     return out
 
 
-def _fit(reading: Reading, g: float = STANDARD_GRAVITY) -> ReadingFit:
+def fit_reading(reading: Reading, g: float = STANDARD_GRAVITY) -> ReadingFit:
     """The paper's two-step linear fit (:func:`~ftkin.calibration.linear.fit_linear`) of one
     reading, with its residual sum of squares per channel in the given units; a pose set that
     cannot determine the parameters fails that reading.
@@ -292,7 +292,7 @@ def diagnose_readings(
     None when it declares none; a declared unit is doubted aloud, never overridden. See the
     module docstring for the rules.
     """
-    fits = [_fit(reading) for reading in readings]
+    fits = [fit_reading(reading) for reading in readings]
     valid = [fit for fit in fits if fit.rss is not None]
     if not valid:
         return ConventionReport(

@@ -19,7 +19,6 @@ from .drift import BiasDrift, check_drift_spec, drift_candidates
 from .explained import check_explained
 from .fit_quality import diagnose, log_warnings
 from .information import SensorNoise, noise_floor
-from .linear import fit_linear
 from .ml import LOSSES, fit_ml
 from .model import STANDARD_GRAVITY, SensorModel, check_gravity
 from .mount import MOUNT_NAMES, POSES_NEEDED, MountMode
@@ -337,28 +336,31 @@ def calibrate(samples: Samples, options: CalibrationOptions | None = None, **key
     options = replace(options or CalibrationOptions(), **keywords)
     drift_models = options.check(samples)
     signs = reading_signs(options.sensor_sign, options.flip_axis)
-    if options.convention_check:  # before the sign's check: a wrong order is no sign
-        refuse_orientation_mistakes(samples, signs)
     raw_poses = samples.pose_averages()
     poses = replace(raw_poses, wrenches=raw_poses.wrenches * signs)
-    tilt_warnings = check_conventions(
-        detect_sign_and_handedness(
-            raw_poses,
-            sensor_sign=options.sensor_sign,
-            flip_axis=options.flip_axis,
-            estimate_mount=options.estimate_mount,
-            base_mount=options.base_mount,
-            expected_gravity=options.expected_gravity,
-            g=options.g,
-        ),
-        options.sensor_sign,
-        options.base_mount,
-        options.allow_tilt,
+    given = None  # the two-step fit of ``poses``, fitted once (the checks' and ml's start)
+    if options.convention_check:  # before the sign's check: a wrong order is no sign
+        given = refuse_orientation_mistakes(samples, signs, poses)
+    convention = detect_sign_and_handedness(
+        raw_poses,
+        sensor_sign=options.sensor_sign,
+        flip_axis=options.flip_axis,
+        estimate_mount=options.estimate_mount,
+        base_mount=options.base_mount,
+        expected_gravity=options.expected_gravity,
+        g=options.g,
+        linear_fit=given,
     )
+    tilt_warnings = check_conventions(
+        convention, options.sensor_sign, options.base_mount, options.allow_tilt
+    )
+    # the check's two-step fit of ``poses`` (without a mount): the linear answer and ml's start
+    linear = convention.linear_fit if options.estimate_mount == "none" else None
     if options.method == "linear":
-        static = _Static(fit_linear(poses, options.g), None, np.eye(3), None, None, poses)
+        static = _Static(linear, None, np.eye(3), None, None, poses)
     else:
-        static = _fit_static(poses, options, drift_models, static_fit_name(samples, options))
+        name = static_fit_name(samples, options)
+        static = _fit_static(poses, options, drift_models, name, start=linear)
     if tilt_warnings and static.diagnostics is None:
         for message in tilt_warnings:
             logger.warning(message)
@@ -402,17 +404,23 @@ def static_fit_name(samples: Samples, options) -> str:
 
 
 def _fit_static(
-    poses: PoseAverages, options: CalibrationOptions, drift_models, fit_name="the static fit"
+    poses: PoseAverages,
+    options: CalibrationOptions,
+    drift_models,
+    fit_name="the static fit",
+    start: SensorModel | None = None,
 ) -> _Static:
     """The ``ml`` fit with a constant bias (and any mount), refitted without outliers if asked,
     then with the best of the ``drift_models`` (:func:`_fit_drift`) if any; ``fit_name`` names
-    it in the fit test (:func:`static_fit_name`).
+    it in the fit test (:func:`static_fit_name`); ``start``: the two-step fit of ``poses``
+    (:func:`~ftkin.calibration.ml.fit_ml`'s), when at hand.
     """
     floor = options.noise_floor(poses.wrenches)
     # noise-free raw readings: repeated readings per pose, all identical
     repeated, scale = poses.counts > 1, np.maximum(np.abs(poses.wrenches).max(axis=0), 1.0)
     noise_free = bool(np.any(repeated) and np.all(poses.spread[repeated] <= 1e-12 * scale))
-    fit = fit_ml(poses, options.g, options.noise, options.loss, options.estimate_mount, floor)
+    mount = options.estimate_mount
+    fit = fit_ml(poses, options.g, options.noise, options.loss, mount, floor, start=start)
     diagnostics, covariance = diagnose(
         fit,
         poses.pose_ids,

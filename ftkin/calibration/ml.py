@@ -251,10 +251,59 @@ def pooled_noise(
     return np.maximum(np.repeat(std, 3), floor)
 
 
+GAUSS_NEWTON_STEPS = 20
+"""Most Gauss–Newton steps :func:`gauss_newton` takes before it leaves the fit to scipy."""
+
+GAUSS_NEWTON_TOLERANCE = 1e-12
+"""Relative step (in unit-column scaling) at which :func:`gauss_newton` has converged."""
+
+COST_ROUNDING = 1e-12
+"""Relative rise of the cost that :func:`gauss_newton` takes for rounding (at the minimum, the
+cost of 12 poses varies by ~1e-14 from step to step); a larger rise is a diverging step."""
+
+
+def gauss_newton(problem: WeightedProblem, start: np.ndarray) -> tuple[np.ndarray, int] | None:
+    """Minimize the whitened residuals (the Gaussian likelihood) from ``start`` by undamped
+    Gauss–Newton steps; ``(x, residual evaluations)``, or None (scipy's Levenberg–Marquardt
+    then) when a step raises the cost by more than :data:`COST_ROUNDING` (relative) or it has not
+    converged within :data:`GAUSS_NEWTON_STEPS`.
+
+    The same minimum as ``least_squares(method="lm")`` without its per-call overhead (the fit of
+    12 poses is a few steps from the linear start). Each step solves ``J δ = r`` by least squares
+    with ``J``'s columns at unit norm; converged when ``|δ| ≤`` :data:`GAUSS_NEWTON_TOLERANCE`
+    ``· |x|`` in that scaling (the steps shrink quadratically, ~1e-4, 1e-7, 1e-10, 1e-13 from the
+    linear start), so the minimum is found to rounding; ``least_squares`` stops up to ~1e-7
+    (relative) earlier on its ``ftol``.
+    """
+    x = np.asarray(start, dtype=float)
+    residuals = problem.whitened_residuals(x)
+    cost, evaluations = float(residuals @ residuals), 1
+    for _ in range(GAUSS_NEWTON_STEPS):
+        jacobian = problem.whitened_jacobian(x)  # of the prediction: the residuals' is −J
+        scale = np.linalg.norm(jacobian, axis=0)
+        scale[scale == 0.0] = 1.0
+        scaled_step, *_ = np.linalg.lstsq(jacobian / scale, residuals, rcond=None)
+        x_new = x + scaled_step / scale
+        residuals_new = problem.whitened_residuals(x_new)
+        cost_new, evaluations = float(residuals_new @ residuals_new), evaluations + 1
+        small = np.linalg.norm(scaled_step) <= GAUSS_NEWTON_TOLERANCE * np.linalg.norm(x * scale)
+        if not cost_new <= cost * (1.0 + COST_ROUNDING):  # diverging, or NaN: scipy decides
+            return None
+        if small:
+            return (x_new, evaluations) if cost_new <= cost else (x, evaluations)
+        x, residuals, cost = x_new, residuals_new, cost_new
+    return None
+
+
 def _solve(problem: WeightedProblem, start: np.ndarray, loss: str) -> tuple[np.ndarray, int]:
     """Minimize the (robust) whitened residuals from ``start``; ``θ`` and the function evaluations
-    used.
+    used: :func:`gauss_newton` for the Gaussian likelihood, scipy's ``least_squares`` for a
+    robust loss or when Gauss–Newton does not converge.
     """
+    if loss == "linear":
+        solved = gauss_newton(problem, start)
+        if solved is not None:
+            return solved
     from scipy.optimize import (
         least_squares,
     )  # here, not at import: scipy.optimize takes ~0.3 s to import
@@ -303,6 +352,7 @@ def fit_ml(
     loss: str = "linear",
     estimate_mount: str = "none",
     floor=None,
+    start: SensorModel | None = None,
 ) -> MlFit:
     """Maximum-likelihood fit of all channels on per-pose mean readings.
 
@@ -315,6 +365,9 @@ def fit_ml(
             ``R_M`` (``poses.rotations`` are then the URDF's ``R_BS``).
         floor: ``(6,)`` lowest noise a residual estimate may take [N, N·m] (default:
             :func:`~ftkin.calibration.information.noise_floor`).
+        start: ``estimate_mount="none"`` only: the two-step linear fit of these ``poses`` and
+            ``g`` when it is at hand (``ConventionCheck.linear_fit``,
+            :mod:`ftkin.calibration.conventions`); None fits it.
 
     The options are :class:`~ftkin.calibration.estimate.CalibrationOptions`' (checked there).
 
@@ -322,7 +375,7 @@ def fit_ml(
         UnobservableParameters: the poses cannot determine the parameters (or the mount).
     """
     if estimate_mount == "none":
-        mount0, start = np.eye(3), fit_linear(poses, g)
+        mount0, start = np.eye(3), fit_linear(poses, g) if start is None else start
     else:
         mount0, start = mount_start(poses, g)
     problem = WeightedProblem(

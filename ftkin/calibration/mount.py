@@ -121,16 +121,29 @@ def force_step_cost(
     :data:`YAW_START_GRID` (a fixed mount keeps the force step linear, with
     rotations ``R_i R_Mᵀ``).
     """
-    values = forces.reshape(-1)
-    best_cost, best_rotation = np.inf, np.eye(3)
-    for yaw in YAW_START_GRID if mode != "none" else np.zeros(1):
-        rotation = mount_rotation(np.eye(3), "yaw", [yaw])
+    costs, mounts = force_step_costs(rotations, np.asarray(forces)[None], mode)
+    return float(costs[0]), mounts[0]
+
+
+def force_step_costs(
+    rotations: np.ndarray, force_sets: np.ndarray, mode: str = "none"
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`force_step_cost` of several force sets ``(k, N, 3)`` [N] at the same ``rotations``
+    (one regressor and one factorization per yaw for all of them): costs ``(k,)`` [N²] and
+    mounts ``(k, 3, 3)``."""
+    force_sets = np.asarray(force_sets, dtype=float)
+    values = force_sets.reshape(len(force_sets), -1).T  # (3N, k): one column per set
+    best_costs = np.full(len(force_sets), np.inf)
+    best_rotations = np.tile(np.eye(3), (len(force_sets), 1, 1))
+    grid = YAW_START_GRID if mode != "none" else np.zeros(1)
+    for yaw in grid:
+        rotation = np.eye(3) if mode == "none" else mount_rotation(np.eye(3), "yaw", [yaw])
         regressor = force_regressor(rotations @ rotation.T)
         fitted = regressor @ np.linalg.lstsq(regressor, values, rcond=None)[0]
-        cost = float(np.sum((values - fitted) ** 2))
-        if cost < best_cost:
-            best_cost, best_rotation = cost, rotation
-    return best_cost, best_rotation
+        costs = np.sum((values - fitted) ** 2, axis=0)
+        better = costs < best_costs
+        best_costs[better], best_rotations[better] = costs[better], rotation
+    return best_costs, best_rotations
 
 
 def mount_start(poses: PoseAverages, g: float):

@@ -28,8 +28,16 @@ from ..kinematics.rotations import (
     matrix_to_quaternion,
     quaternion_to_matrix,
 )
-from .doctor import Reading, diagnose_readings, wrench_readings
-from .samples import Samples
+from .doctor import (
+    MISTAKE_RATIO,
+    Reading,
+    ReadingFit,
+    diagnose_readings,
+    fit_reading,
+    wrench_readings,
+)
+from .model import SensorModel
+from .samples import PoseAverages, Samples
 
 EULER_RADIANS = (
     "Euler angles in radians",
@@ -98,9 +106,16 @@ def orientation_readings(samples: Samples, signs=None) -> list[Reading]:
     wrench's mistakes (:func:`~ftkin.calibration.doctor.wrench_readings`). ``signs``: ``(6,)``
     factors of the readings (a stated sensor sign or flipped axis), applied first.
     """
+    readings = _orientation_readings(samples, signs)
+    return readings + wrench_readings(readings[0].poses, joints=samples.joint_positions is not None)
+
+
+def _orientation_readings(samples: Samples, signs=None, poses=None) -> list[Reading]:
+    """``samples`` as given (first; ``poses`` when at hand) and under each orientation mistake of
+    their kind."""
     wrenches = samples.wrenches if signs is None else samples.wrenches * signs
-    given = Reading("the data as given", "", _poses(samples.rotations, wrenches, samples))
-    readings = [given]
+    given = _poses(samples.rotations, wrenches, samples) if poses is None else poses
+    readings = [Reading("the data as given", "", given)]
     for name, fix, true_rotations in orientation_alternatives(orientation_kind(samples)):
         try:
             poses = _poses(true_rotations(samples.rotations), wrenches, samples)
@@ -108,25 +123,64 @@ def orientation_readings(samples: Samples, signs=None) -> list[Reading]:
             readings.append(Reading(name, fix, None, failure=str(error).split(": ")[-1][:80]))
             continue
         readings.append(Reading(name, fix, poses))
-    return readings + wrench_readings(given.poses, joints=samples.joint_positions is not None)
+    return readings
 
 
 def _poses(rotations, wrenches, samples: Samples):
     return Samples(wrenches, rotations, samples.pose_ids).pose_averages()
 
 
-def refuse_orientation_mistakes(samples: Samples, signs=None) -> None:
+def refuse_orientation_mistakes(
+    samples: Samples, signs=None, poses: PoseAverages | None = None
+) -> SensorModel | None:
     """Refuse samples whose orientations fit only when read in another convention (see the
     module docstring); nothing for joint angles or when another reading is the doctor's.
+
+    ``poses``: ``samples.pose_averages()`` with ``signs`` applied, when at hand. Returns the
+    two-step linear fit of the data as given (:func:`~ftkin.calibration.linear.fit_linear`, at
+    standard gravity) when the check fitted one, else None (joint angles, or poses it cannot
+    determine): :func:`~ftkin.calibration.estimate.calibrate` fits it only once.
 
     Raises:
         ConventionMistake: the reading that explains the data and its fix.
     """
     kind = orientation_kind(samples)
     if kind == "joints":
-        return
+        return None
     names = {name for name, _, _ in orientation_alternatives(kind)}
-    report = diagnose_readings(orientation_readings(samples, signs))
+    readings = _orientation_readings(samples, signs, poses)
+    fits = [fit_reading(reading) for reading in readings]
+    if cannot_name_a_mistake(fits):
+        return fits[0].model  # nor can the doctor's other readings: not fitted (the hot path)
+    joints = samples.joint_positions is not None
+    report = diagnose_readings(readings + wrench_readings(readings[0].poses, joints=joints))
     culprit = report.culprit
     if report.verdict == "mistake" and culprit is not None and culprit.reading.name in names:
         raise ConventionMistake(report.message, None, culprit.reading.name, culprit.reading.fix)
+    return fits[0].model
+
+
+def cannot_name_a_mistake(fits: list[ReadingFit]) -> bool:
+    """True when none of ``fits[1:]`` can be the doctor's mistake against ``fits[0]`` (the data as
+    given), whatever other readings the doctor fits beside them.
+
+    The doctor (:func:`~ftkin.calibration.doctor.diagnose_readings`) names an alternative a
+    mistake only when the given reading's chi-square is at least
+    :data:`~ftkin.calibration.doctor.MISTAKE_RATIO` times the alternative's. Both chi-squares
+    weigh the channels' residual sums of squares ``rss_c`` with one positive variance ``v_c`` per
+    channel (set by whichever reading fits best), and ``Σ_c g_c / v_c ÷ Σ_c a_c / v_c`` is at most
+    ``max_c g_c / a_c`` for every positive ``v``: an alternative no channel of which fits
+    ``MISTAKE_RATIO`` times better than as given is never named, and the other readings need not
+    be fitted to know it. False (ask the doctor) when the data as given cannot be fitted.
+    """
+    given = fits[0]
+    if given.rss is None:
+        return False
+    for fit in fits[1:]:
+        if fit.rss is None:  # a reading that cannot be fitted is never the culprit
+            continue
+        with np.errstate(divide="ignore", invalid="ignore"):
+            bound = np.max(given.rss / fit.rss)  # inf or nan (0/0) when a channel fits exactly
+        if not bound < MISTAKE_RATIO:
+            return False
+    return True
