@@ -128,9 +128,12 @@ class WeightedProblem:
         """
         jac = self.whitened_jacobian(x)
         blocks = jac.reshape(-1, 6, jac.shape[1])
-        return (
-            blocks @ np.linalg.pinv(jac.T @ jac, hermitian=True) @ np.transpose(blocks, (0, 2, 1))
-        )
+        # (JᵀJ)⁺ from its eigen-decomposition: numpy's pinv(hermitian=True) (cut at 1e-15 of the
+        # largest), without its overhead on a 12 × 12 matrix
+        values, vectors = np.linalg.eigh(jac.T @ jac)
+        kept = np.abs(values) > 1e-15 * np.abs(values).max()
+        inverse = (vectors[:, kept] / values[kept]) @ vectors[:, kept].T
+        return blocks @ inverse @ np.transpose(blocks, (0, 2, 1))
 
     def recentred(self, x: np.ndarray) -> "tuple[WeightedProblem, np.ndarray]":
         """The same problem with ``R_M0`` moved to ``x``'s mount, and ``θ`` (12,)."""
@@ -270,10 +273,10 @@ def gauss_newton(problem: WeightedProblem, start: np.ndarray) -> tuple[np.ndarra
 
     The same minimum as ``least_squares(method="lm")`` without its per-call overhead (the fit of
     12 poses is a few steps from the linear start). Each step solves ``J δ = r`` by least squares
-    with ``J``'s columns at unit norm; converged when ``|δ| ≤`` :data:`GAUSS_NEWTON_TOLERANCE`
-    ``· |x|`` in that scaling (the steps shrink quadratically, ~1e-4, 1e-7, 1e-10, 1e-13 from the
-    linear start), so the minimum is found to rounding; ``least_squares`` stops up to ~1e-7
-    (relative) earlier on its ``ftol``.
+    (its normal equations) with ``J``'s columns at unit norm; converged when ``|δ| ≤``
+    :data:`GAUSS_NEWTON_TOLERANCE` ``· |x|`` in that scaling (the steps shrink fast, ~1e-4, 1e-7,
+    1e-10, 1e-13 from the linear start), so the minimum is found to rounding; ``least_squares``
+    stops up to ~1e-7 (relative) earlier on its ``ftol``.
     """
     x = np.asarray(start, dtype=float)
     residuals = problem.whitened_residuals(x)
@@ -282,7 +285,11 @@ def gauss_newton(problem: WeightedProblem, start: np.ndarray) -> tuple[np.ndarra
         jacobian = problem.whitened_jacobian(x)  # of the prediction: the residuals' is −J
         scale = np.linalg.norm(jacobian, axis=0)
         scale[scale == 0.0] = 1.0
-        scaled_step, *_ = np.linalg.lstsq(jacobian / scale, residuals, rcond=None)
+        scaled = jacobian / scale  # unit columns: a normal matrix of condition ≤ 1e6 here
+        try:  # (the observability checks refused poses with a relative singular value < 1e-3)
+            scaled_step = np.linalg.solve(scaled.T @ scaled, scaled.T @ residuals)
+        except np.linalg.LinAlgError:  # singular: scipy decides
+            return None
         x_new = x + scaled_step / scale
         residuals_new = problem.whitened_residuals(x_new)
         cost_new, evaluations = float(residuals_new @ residuals_new), evaluations + 1

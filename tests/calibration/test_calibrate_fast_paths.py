@@ -143,6 +143,46 @@ def test_a_diverging_start_is_left_to_scipy(tool, rotations):
     np.testing.assert_allclose(theta, reference, rtol=1e-7, atol=1e-9)
 
 
+def test_a_singular_step_is_left_to_scipy():
+    """A Jacobian with a column of zeros (a parameter nothing depends on): no normal-equation
+    step exists, and Gauss–Newton hands the fit over rather than guess."""
+
+    class Flat(_Line):
+        def whitened_jacobian(self, x):
+            return np.array([[1.0, 0.0]])
+
+    assert gauss_newton(Flat(1.0), np.array([1.0, 0.0])) is None
+
+
+@pytest.mark.parametrize("mode", ["none", "full"])
+def test_hat_blocks_are_the_projection_onto_the_jacobians_columns(tool, rotations, mode):
+    """The per-pose blocks of ``J (JᵀJ)⁺ Jᵀ`` against ``Q Qᵀ`` of a QR factorization (full rank)
+    and against numpy's SVD-based ``pinv`` with a column repeated (rank deficient)."""
+    poses = _poses(tool, rotations, 6)
+    problem = WeightedProblem(
+        poses.rotations, poses.wrenches, poses.counts, NOISE.channel_std, mode=mode
+    )
+    x = np.concatenate([fit_linear(poses).to_vector(), np.zeros(problem.parameter_count - 12)])
+    jacobian = problem.whitened_jacobian(x)
+    q, _ = np.linalg.qr(jacobian)
+    blocks = q.reshape(-1, 6, q.shape[1])
+    expected = blocks @ np.transpose(blocks, (0, 2, 1))
+    np.testing.assert_allclose(problem.hat_blocks(x), expected, rtol=0, atol=1e-10)
+
+    class Repeated(WeightedProblem):  # the last column twice: rank one short
+        def whitened_jacobian(self, x):
+            full = super().whitened_jacobian(x)
+            return np.concatenate([full, full[:, -1:]], axis=1)
+
+    repeated = Repeated(poses.rotations, poses.wrenches, poses.counts, NOISE.channel_std, mode=mode)
+    wide = repeated.whitened_jacobian(x)
+    rows = wide.reshape(-1, 6, wide.shape[1])
+    inverse = np.linalg.pinv(wide.T @ wide, rcond=1e-12)
+    reference = rows @ inverse @ np.transpose(rows, (0, 2, 1))
+    np.testing.assert_allclose(repeated.hat_blocks(x), reference, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(repeated.hat_blocks(x), expected, rtol=0, atol=1e-6)
+
+
 # ------------------------------------------------------------------ the doctor's bound
 def _fit(rss) -> ReadingFit:
     return ReadingFit(Reading("r", "", None), None, np.asarray(rss, dtype=float))
