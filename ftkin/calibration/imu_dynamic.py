@@ -38,11 +38,13 @@ from .covariance import (
     delta_method,
     invert_information,
 )
-from .derivatives import DEFAULT_POLYORDER, joint_derivatives
+from .derivatives import DEFAULT_POLYORDER, joint_derivatives, uniform_period, window_samples
 from .dynamic_fit import THETA_NAMES, noise_from_residuals
 from .goodness_of_fit import fit_test
 from .imu_fit import theta_covariance
 from .imu_model import (
+    ACCEL_BIAS_NAMES,
+    ACCEL_SCALE_NAMES,
     IMU_POSITION_NAMES,
     IMU_ROTATION_NAMES,
     corrected_specific_force,
@@ -71,6 +73,14 @@ BIAS_NAMES = tuple(
 )
 
 logger = logging.getLogger(__name__)
+
+IMU_WINDOW_SECONDS = 0.101
+"""Default Savitzky–Golay window [s] of the IMU's signals (25 samples at 250 Hz).
+
+Longer than the joints' 51 ms: the gyro's rate ``ẇ`` is its derivative, and the derivative's
+noise sits in the regressor (errors in the variables), which biases the fit. With a gyro of
+0.005 rad/s per reading at 250 Hz the 51 ms window biased mass, COM and offsets by several
+standard errors (``benchmarks/bench_standard_errors.py``, issue 38); at 101 ms no bias shows."""
 
 UNSPLIT = ("accel_bias", "force_offset", "torque_offset")
 """What a moving recording without the accelerometer's bias determines only in combination."""
@@ -305,6 +315,33 @@ def smoothed_noise_variance(times, raw, smooth, rate, window, polyorder, scale) 
     }
 
 
+def hidden_noise_variance(times, raw, smooth, window, polyorder, scale) -> dict:
+    """The IMU's noise variance, per axis, that reaches the estimate but not the residuals:
+    ``{"gyro": (3,) [(rad/s)²], "corrected": (3,) [(m/s²)²]}``, ``σ² (1 − Σ c_k²)``.
+
+    A smoothed reading carries ``σ² Σ c_k²`` of its signal's white noise
+    (:func:`smoothed_noise_variance`), and that is all the wrench residuals show; but the
+    smoothed noise is correlated over the window, and the parameters, constant over the
+    recording, see it through the filter's gain at zero frequency, ``Σ c_k = 1``: the full
+    ``σ²``. Added to the residuals' variance it gives the covariance the noise the estimate
+    has. The derivative's noise (``Σ d_k = 0``) is left in the residuals' variance: that
+    overstates its share, so the covariance errs on the safe side.
+    """
+    from scipy.signal import savgol_coeffs
+
+    from .derivatives import uniform_period, window_samples
+
+    period = uniform_period(times)
+    window = window_samples(period, polyorder=polyorder) if window is None else int(window)
+    smoothing = savgol_coeffs(window, polyorder)
+    hidden = 1.0 - np.sum(smoothing**2)
+    raw_variance = np.mean((raw - smooth) ** 2, axis=0) / max(1.0 - smoothing[window // 2], 1e-12)
+    return {
+        "gyro": raw_variance[0:3] * hidden,
+        "corrected": raw_variance[3:6] / (1.0 + np.asarray(scale)) ** 2 * hidden,
+    }
+
+
 def propagated_variance(problem: ImuDynamicProblem, x: np.ndarray, variance: dict) -> np.ndarray:
     """``(6,)`` mean variance [N², (N·m)²] the smoothed IMU signals' noise (``variance``, per
     signal and axis, :func:`smoothed_noise_variance`) adds to :meth:`ImuDynamicProblem.predict`
@@ -325,6 +362,46 @@ def propagated_variance(problem: ImuDynamicProblem, x: np.ndarray, variance: dic
             slope = (shifted[0] - shifted[1]) / (2.0 * step)
             added += np.mean(slope**2, axis=0) * values[axis]
     return added
+
+
+def prior_covariance(
+    problem: ImuDynamicProblem, x: np.ndarray, accel: np.ndarray, bias, scale, prior
+) -> np.ndarray:
+    """``(len(x), len(x))`` covariance the prior's accelerometer bias and scale add to ``x``.
+
+    The fit holds ``b`` and ``s`` at the prior's estimates, which carry their own errors (their
+    covariance in ``prior.parameter_covariance``; a component the prior did not estimate adds
+    nothing). Linearised at the solution, ``x`` moves by ``G δp`` with ``G = −(JᵀJ)⁻¹ Jᵀ P``,
+    ``J`` the whitened Jacobian and ``P`` the whitened prediction's derivative in ``p = [b, s]``
+    (``accel`` ``(N, 3)`` the smoothed raw accelerometer [m/s², IMU frame]): ``G Σ_p Gᵀ``. The
+    prior's readings are not the recording's, so the two errors are independent and add.
+    """
+    names = ACCEL_BIAS_NAMES + ACCEL_SCALE_NAMES
+    known = {name: i for i, name in enumerate(prior.parameter_names)}
+    rows = [known.get(name) for name in names]
+    sigma = np.zeros((6, 6))
+    if prior.parameter_covariance is not None:
+        for i, row in enumerate(rows):
+            for j, column in enumerate(rows):
+                if row is not None and column is not None:
+                    sigma[i, j] = prior.parameter_covariance[row, column]
+    if not np.any(sigma):
+        return np.zeros((len(x), len(x)))
+    p0 = np.concatenate([np.asarray(bias, dtype=float), np.asarray(scale, dtype=float)])
+    slopes = []
+    for k in range(6):  # the prediction is linear in the corrected signal: central differences
+        step = 1e-4 * max(1.0, abs(p0[k]))
+        shifted = []
+        for sign in (1.0, -1.0):
+            p = p0.copy()
+            p[k] += sign * step
+            corrected = corrected_specific_force(accel, p[:3], p[3:])
+            moved = replace(problem, motion=replace(problem.motion, corrected=corrected))
+            shifted.append(moved.predict(x) / problem.channel_std)
+        slopes.append(((shifted[0] - shifted[1]) / (2.0 * step)).ravel())
+    jac = problem.whitened_jacobian(x)
+    gain = -np.linalg.lstsq(jac, np.stack(slopes, axis=1), rcond=None)[0]
+    return gain @ sigma @ gain.T
 
 
 def _noise(problem: ImuDynamicProblem, x: np.ndarray) -> np.ndarray:
@@ -367,7 +444,8 @@ def calibrate_imu_dynamic(
             scatter about the smoothed signals, is added as it propagates through the model
             (:func:`propagated_variance`), so the fit test (``fit_test``) judges the model and
             not the IMU's noise.
-        window, polyorder: The Savitzky–Golay filter (default window about 51 ms).
+        window, polyorder: The Savitzky–Golay filter (default window about
+            :data:`IMU_WINDOW_SECONDS`, 101 ms).
 
     Raises:
         UnobservableParameters: a recording that does not turn the sensor, or a motion that
@@ -405,6 +483,9 @@ def calibrate_imu_dynamic(
     )
     scale = as_vector(scale_given, 3, "accel_scale")
     order = np.argsort(samples.times, kind="stable")
+    if window is None:
+        period = uniform_period(samples.times[order])
+        window = window_samples(period, IMU_WINDOW_SECONDS, polyorder)
     signals = np.concatenate([samples.angular_velocity, samples.specific_force], axis=1)[order]
     smooth, rate, _ = joint_derivatives(samples.times[order], signals, window, polyorder)
     motion = ImuMotion(
@@ -475,21 +556,49 @@ def calibrate_imu_dynamic(
         times=samples.times[order],
         parameter_count=len(x),
     )
+    hidden = hidden_noise_variance(  # the covariance's noise is the estimate's (issue 38)
+        samples.times[order], signals, smooth, window, polyorder, scale
+    )
+    estimate_std = np.sqrt(problem.channel_std**2 + propagated_variance(problem, x, hidden))
+    from_prior = (  # the prior's b and s are estimates: their errors reach x (issue 38)
+        prior_covariance(problem, x, smooth[:, 3:6], bias, scale, prior)
+        if prior is not None and accel_bias is None and accel_scale is None
+        else None
+    )
     result = _result(
-        samples, problem, x, bias, scale, position_given is None, unsplit, test.covariance_scale
+        samples,
+        replace(problem, channel_std=estimate_std),
+        x,
+        bias,
+        scale,
+        position_given is None,
+        unsplit,
+        test.covariance_scale,
+        from_prior,
     )
     warnings = result.imu_warnings + (() if test.fits else (test.warning,))
     return replace(result, fit_test=test, imu_warnings=warnings)
 
 
 def _result(
-    samples, problem: ImuDynamicProblem, x, bias, scale, position_estimated, unsplit, factor=1.0
+    samples,
+    problem: ImuDynamicProblem,
+    x,
+    bias,
+    scale,
+    position_estimated,
+    unsplit,
+    factor=1.0,
+    from_prior=None,
 ):
-    """The result at ``x``, its covariance scaled by ``factor`` (a misfit's ``χ²/ν``)."""
+    """The result at ``x``, its covariance scaled by ``factor`` (a misfit's ``χ²/ν``), plus
+    ``from_prior`` (:func:`prior_covariance`) when given."""
     jac = problem.whitened_jacobian(x)
     covariance = factor * invert_information(
         jac.T @ jac, problem.names, "the information at the solution is singular"
     )
+    if from_prior is not None:
+        covariance = covariance + from_prior
     _, theta, delta, position = problem.unpack(x)
     rotation = problem.rotation0 @ exp_so3(delta)
     gradient, body_covariance = delta_method(_outputs, x, covariance)
