@@ -6,7 +6,9 @@
   prints without moving; ``--resume`` finishes an interrupted session;
 * ``payload CALIB.json --franka HOST``: the load below the sensor, minus the configured end
   effector, plus the sensor body, sent with ``set_load`` and read back;
-* ``guide CALIB.json --franka HOST --sensor SENSOR``: hand-guiding until Ctrl-C;
+* ``guide CALIB.json --franka HOST --sensor SENSOR``: hand-guiding until Ctrl-C; with
+  ``--track-load`` the load in the hand is identified and removed as it is taken (events printed
+  as they happen), with ``--send-load`` also sent to the controller with the tool;
 * ``sim``: franky-sim's FR3 with its sensor served on a loopback address until Ctrl-C, with the
   ``--franka`` and ``--sensor`` options to use from another terminal;
 * ``demo``: all of it on franky-sim with a simulated sensor and a push.
@@ -39,6 +41,8 @@ from .shared_options import (
     FRANKA,
     GRAVITY,
     NO_REALTIME,
+    NOISE_FORCE,
+    NOISE_TORQUE,
     POSES,
     POSES_FILE,
     RESUME,
@@ -172,6 +176,26 @@ def _guide_parser(commands) -> None:
         option("--gain", type=positive_float, help="translation gain [m/(s·N)] (default: 0.0035)"),
     )
     add_declared(parser, Stillness, only=("stale_after",))
+    load = parser.add_argument_group("the load in the hand (docs/load.md)")
+    add_options(
+        load,
+        option(
+            "--track-load",
+            action="store_true",
+            help="identify a load the gripper takes and remove it from the contact as the hand "
+            "guides (grasp, release, contact printed as they happen)",
+        ),
+        option(
+            "--send-load",
+            action="store_true",
+            help="with --track-load: send the tool's payload at the start and the tool and the "
+            "held load on each settled grasp (again once the wrist turned), the tool alone on a "
+            "release (franky set_load, flange frame fr3_link8)",
+        ),
+        NOISE_FORCE,
+        NOISE_TORQUE,
+    )
+    _payload_options(parser)
     parser.set_defaults(func=run_guide)
 
 
@@ -434,14 +458,19 @@ def run_guide(args) -> int:
     )
     if imu:
         print("compensating with the sensor's IMU (the tool's acceleration removed)")
+    tracker = _load_tracker(args, calibration)
     controller = hand_guiding(
         arm,
         calibration,
         rotation=args.rotation,
         force_gain=args.gain or GUIDING_FORCE_GAIN,
         imu=imu,
+        load=tracker,
     )
     robot = _robot(args)
+    on_tick = None
+    if tracker is not None:
+        on_tick = _LoadReport(tracker, _load_handoff(args, robot, arm, calibration, tracker))
     mass, _, _ = robot.payload()
     if not mass > 0.0:
         logger.warning(
@@ -458,11 +487,92 @@ def run_guide(args) -> int:
         duration=args.duration,
         rate_hz=args.loop_rate,
         stale_after=args.stale_after,
+        on_tick=on_tick,
     )
     print(stats.report())
     if stats.stop_reason == "interrupt":
         return 130
     return 0 if stats.stop_reason == "duration" else 1
+
+
+def _load_tracker(args, calibration):
+    """The guide's load tracker (``--track-load``), its noise the flags' or the calibration's."""
+    from ..calibration.information import SensorNoise
+    from ..control.load_events import LoadTracker
+
+    noise_given = (args.noise_force is None) + (args.noise_torque is None)
+    if not args.track_load:
+        if args.send_load or noise_given < 2:
+            raise InvalidInput("--send-load, --noise-force and --noise-torque go with --track-load")
+        return None
+    if noise_given == 1:
+        raise InvalidInput("give --noise-force and --noise-torque together")
+    noise = None if args.noise_force is None else SensorNoise(args.noise_force, args.noise_torque)
+    tracker = LoadTracker.for_calibration(calibration, noise, period=1.0 / args.loop_rate)
+    print(
+        f"load tracking: noise per reading {np.array2string(tracker.noise.force_std, precision=4)}"
+        f" N, {np.array2string(tracker.noise.torque_std, precision=5)} N·m; bounds "
+        f"{tracker.thresholds.k_sigma:g}σ"
+    )
+    return tracker
+
+
+def _load_handoff(args, robot, arm, calibration, tracker):
+    """``--send-load``: the hand-off, after sending the tool alone; None without the flag."""
+    if not args.send_load:
+        return None
+    from ..robot.load_handoff import LoadHandoff
+
+    handoff = LoadHandoff(
+        robot,
+        calibration,
+        tracker,
+        arm,
+        end_effector=_body(args.end_effector),
+        sensor_mass=0.0 if args.sensor_body is None else args.sensor_body[0],
+        sensor_com=(0.0, 0.0, 0.0) if args.sensor_body is None else args.sensor_body[1:],
+    )
+    load = handoff.send("start", robot.joint_positions())
+    _print_load("sent the tool", load.mass, load.center_of_mass)
+    return handoff
+
+
+class _LoadReport:
+    """The guide loop's ``on_tick`` with ``--track-load``: each event printed as it is decided
+    (seconds since the loop's first tick), and with ``--send-load`` the load sent."""
+
+    def __init__(self, tracker, handoff):
+        from ..robot.load_handoff import MotionFlag
+
+        self.tracker, self.handoff, self.motion = tracker, handoff, MotionFlag(tracker)
+        self.seen, self.start, self.holding, self.refreshed = 0, None, None, -1.0
+
+    def __call__(self, now: float, q, command) -> None:
+        if self.start is None:
+            self.start = now
+        self.motion.update(now, command)  # the hand moves the arm: not a still reading
+        if self.tracker.state == "holding" and now - self.refreshed > 0.5:
+            self.holding, self.refreshed = self.tracker.estimate(), now  # for a release's line
+        events = self.tracker.events
+        for event in events[self.seen :]:
+            print(f"t {now - self.start:.3f} s: {event.kind} ({self._mass(event)})", flush=True)
+        self.seen = len(events)
+        if self.handoff is not None:
+            count = len(self.handoff.sent)
+            load = self.handoff.update(q)
+            if load is not None:
+                why = self.handoff.sent[count][0]
+                _print_load(f"sent the tool and the load ({why})", load.mass, load.center_of_mass)
+
+    def _mass(self, event) -> str:
+        estimate = self.tracker.estimate()
+        if event.kind == "grasp" and estimate is not None:
+            self.holding, self.refreshed = estimate, -1.0
+            return f"mass {estimate.mass:.4f} ± {estimate.mass_std:.2g} kg"
+        if event.kind == "release" and self.holding is not None:
+            held, self.holding = self.holding, None
+            return f"the load of {held.mass:.4f} ± {held.mass_std:.2g} kg set down"
+        return f"mass step {event.mass:.4f} kg: {event.reason}"
 
 
 def run_sim(args) -> int:

@@ -173,7 +173,9 @@ def export_payload(calibration, arm, path, fmt: str, flange_frame=None, inertia=
 
     ``bodies``: ``end_effector=`` and ``sensor_body=`` (``franka-load``; flange-frame
     :class:`~ftkin.io.payload_inertia.RigidBody`): write ``measured − end_effector +
-    sensor_body``, the load for a controller that already models the end effector.
+    sensor_body``, the load for a controller that already models the end effector; and
+    ``held_load=`` (both formats; a :class:`~ftkin.io.payload_held_load.HeldLoad` or its JSON
+    file): a load the gripper holds, added to the tool as one rigid body.
     """
     return export_calibration(
         calibration, path, fmt, arm, flange_frame=flange_frame, inertia=inertia, **bodies

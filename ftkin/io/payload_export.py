@@ -47,6 +47,7 @@ from ..kinematics.robots import flange_frame_name
 from ..options import number
 from ..validation import as_float_array
 from .export_format import ExportFormat, ExportOption, ExportRequest
+from .payload_held_load import HeldLoad, combined_payload, read_held_load
 from .payload_inertia import Payload, RigidBody, checked_inertia, controller_load
 
 UR_SET_PAYLOAD_SERVICE = "/io_and_status_controller/set_payload"
@@ -80,6 +81,14 @@ SENSOR_BODY = ExportOption(
     "--sensor-body",
     "add the sensor's own body above its measuring plane (datasheet) [kg, m, flange frame]",
     {"type": number(), "nargs": 4, "metavar": ("MASS", "CX", "CY", "CZ")},
+)
+HELD_LOAD = ExportOption(
+    "held_load",
+    "--held-load",
+    'add a load the gripper holds below the tool: its JSON {"mass": KG, "center_of_mass": '
+    "[X, Y, Z]} (sensor frame, m; e.g. what ftkin's load tracker identified), combined with the "
+    "tool as one rigid body",
+    {"metavar": "LOAD.json"},
 )
 
 
@@ -139,6 +148,35 @@ def payload_in_flange(
     return Payload(mass, com + placement.translation, flange_frame, checked_inertia(inertia))
 
 
+def held_load_in_flange(calibration, arm, held: HeldLoad, flange_frame: str) -> RigidBody:
+    """A held load (sensor frame) as a rigid body in ``flange_frame``.
+
+    Its centre of mass moves as the tool's does (``P_F = R_FS · R_Mᵀ · P + t_FS``, the module
+    docstring); its inertia turns with the axes (a point mass when not given).
+    """
+    if not isinstance(held, HeldLoad):
+        raise InvalidInput(f"held must be an ftkin HeldLoad, got {type(held).__name__}")
+    calibration = CalibrationResult.from_model(calibration)
+    placement = sensor_in_flange(arm, flange_frame)
+    sensor_to_flange = placement.rotation @ calibration.mount_rotation.T
+    com = sensor_to_flange @ held.center_of_mass + placement.translation
+    inertia = np.zeros((3, 3)) if held.inertia is None else held.inertia
+    return RigidBody(held.mass, com, sensor_to_flange @ inertia @ sensor_to_flange.T)
+
+
+def with_held_load(payload: Payload, calibration, arm, held) -> Payload:
+    """``payload`` (flange frame) and the held load as one rigid body (None: ``payload``).
+
+    ``held``: a :class:`~ftkin.io.payload_held_load.HeldLoad` or the path of its JSON.
+    """
+    if held is None:
+        return payload
+    if not isinstance(held, HeldLoad):
+        held = read_held_load(held)
+    body = held_load_in_flange(calibration, arm, held, payload.flange_frame)
+    return combined_payload(payload, body)
+
+
 def _body(value):
     """A :class:`~ftkin.io.payload_inertia.RigidBody`, or ``[mass, cx, cy, cz]`` [kg, m, flange
     frame] as a point mass; None stays None.
@@ -168,8 +206,8 @@ class PayloadFormat(ExportFormat):
     controller: str | None = None
     """The controller family the format is for (its flange rule)."""
 
-    def payload(self, request: ExportRequest) -> Payload:
-        """The request's calibration as a payload in the flange frame."""
+    def tool_payload(self, request: ExportRequest) -> Payload:
+        """The request's calibration (the tool) as a payload in the flange frame."""
         return payload_in_flange(
             request.calibration,
             request.arm,
@@ -177,6 +215,11 @@ class PayloadFormat(ExportFormat):
             request.option("inertia"),
             self.controller,
         )
+
+    def payload(self, request: ExportRequest) -> Payload:
+        """:meth:`tool_payload` and the held load (``held_load``), when given, as one body."""
+        tool = self.tool_payload(request)
+        return with_held_load(tool, request.calibration, request.arm, request.option("held_load"))
 
     def header(self, request: ExportRequest) -> list[str]:
         return [
@@ -197,7 +240,7 @@ class PayloadFormat(ExportFormat):
 class FrankaLoadExport(PayloadFormat):
     name = "franka-load"
     controller = "franka"
-    options = (FLANGE_FRAME, INERTIA, END_EFFECTOR, SENSOR_BODY)
+    options = (FLANGE_FRAME, INERTIA, END_EFFECTOR, SENSOR_BODY, HELD_LOAD)
     summary = "franka_msgs/srv/SetLoad request: mass, center_of_mass, load_inertia"
     header_lines = (
         f"franka_msgs/srv/SetLoad request (ros2 service call {FRANKA_SET_LOAD_SERVICE} "
@@ -206,11 +249,11 @@ class FrankaLoadExport(PayloadFormat):
         "(column-major 3x3 [kg*m^2])",
     )
 
-    def payload(self, request: ExportRequest) -> Payload:
+    def tool_payload(self, request: ExportRequest) -> Payload:
         """The measured payload, minus ``end_effector`` plus ``sensor_body`` when given
-        (:func:`ftkin.io.payload_inertia.controller_load`).
+        (:func:`ftkin.io.payload_inertia.controller_load`); the held load is added after.
         """
-        measured = super().payload(request)
+        measured = super().tool_payload(request)
         bodies = [_body(request.option(name)) for name in ("end_effector", "sensor_body")]
         if all(body is None for body in bodies):
             return measured
@@ -251,7 +294,7 @@ def urscript_line(payload: Payload) -> str:
 class UrPayloadExport(PayloadFormat):
     name = "ur-payload"
     controller = "ur"
-    options = (FLANGE_FRAME, INERTIA)
+    options = (FLANGE_FRAME, INERTIA, HELD_LOAD)
     summary = (
         "ur_msgs/srv/SetPayload request for the ROS 2 UR driver (mass, centre of gravity; the "
         "inertia, when known, as URScript set_target_payload); OUT.script: the URScript line only"

@@ -10,6 +10,8 @@
 * :class:`UrArm`: a Universal Robots arm read through ur_rtde (extra ``ur``): joints, flange
   pose and the built-in wrist sensor (:class:`UrWristSensor`); :func:`compensated_stream`: the
   compensated samples of any joint reader and sensor, for a user's own loop;
+* :class:`LoadHandoff`: the tool and the load a tracker identified in the hand, kept up to date in
+  the robot's controller (:meth:`FrankaRobot.set_load_from` once);
 * :class:`FrankaSim`: a franky-sim FR3 with a wrist sensor, a tool and pushes, for tests and
   the demo.
 
@@ -25,9 +27,11 @@ _EXPORTS = {
     "FrankaRobot": ".franka",
     "FrankaSim": ".franka_sim",
     "JointStateSource": ".protocols",
+    "LoadHandoff": ".load_handoff",
     "LoopStats": ".loop",
     "Robot": ".protocols",
     "SamplesLog": ".samples_log",
+    "SimHeld": ".franka_sim",
     "SimSensorSpec": ".franka_sim",
     "SimTool": ".franka_sim",
     "Stillness": ".stillness",
@@ -37,6 +41,7 @@ _EXPORTS = {
     "calibrate_on_robot": ".session",
     "compensated_stream": ".live_compensation",
     "hand_guiding": ".guiding",
+    "held_load_of": ".load_handoff",
     "load_sensor_factory": ".sensor_factory",
     "record_poses": ".recorder",
     "run_admittance": ".loop",

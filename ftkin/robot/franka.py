@@ -33,7 +33,8 @@ from ..exceptions import (
     RobotError,
 )
 from ..io.export import arm_problems, recorded_arm
-from ..io.payload_export import payload_in_flange
+from ..io.payload_export import payload_in_flange, with_held_load
+from ..io.payload_held_load import HeldLoad
 from ..io.payload_inertia import Payload, RigidBody, controller_load
 from ..validation import as_vector
 
@@ -357,6 +358,7 @@ class FrankaRobot:
         sensor_com=(0.0, 0.0, 0.0),
         inertia=None,
         allow_other_arm: bool = False,
+        held_load: HeldLoad | None = None,
     ) -> Payload:
         """Send the load below the sensor, minus the configured end effector, to the robot.
 
@@ -376,6 +378,10 @@ class FrankaRobot:
                 [kg·m²] (default: the calibration's, if dynamic, else a point mass).
             allow_other_arm: Accept an ``arm`` other than the one the calibration recorded
                 (another robot, URDF or sensor offset), as ``ftkin export --allow-other-arm``.
+            held_load: A load the gripper holds below the tool (sensor frame; e.g.
+                :func:`~ftkin.robot.load_handoff.held_load_of` a load tracker), added to the
+                tool as one rigid body (:func:`~ftkin.io.payload_held_load.combined_payload`);
+                None: the tool alone (:meth:`set_load_from` does this from a tracker).
 
         Returns:
             The load sent (flange frame).
@@ -404,6 +410,7 @@ class FrankaRobot:
             end_effector = self.end_effector()
         sensor_body = RigidBody.point(sensor_mass, sensor_com)  # refuses a negative mass
         load = controller_load(measured, end_effector, sensor_body, setting=END_EFFECTOR_SETTING)
+        load = with_held_load(load, calibration, arm, held_load)
         body = RigidBody(
             load.mass,
             load.center_of_mass,
@@ -426,6 +433,36 @@ class FrankaRobot:
             self.host,
         )
         return load
+
+    def set_load_from(self, tracker, calibration: SensorModel, **options) -> Payload:
+        """Send the tool and what ``tracker`` holds now (the tool alone when it holds nothing).
+
+        Args:
+            tracker: A :class:`~ftkin.control.load_events.LoadTracker` (its load, and what tool
+                changes added to the tool), or a :class:`~ftkin.control.load_estimator.
+                LoadEstimate` (its centre of mass must be determined).
+            calibration: The calibration the tracker's compensation uses.
+            **options: Those of :meth:`set_payload` (``arm``, ``end_effector``,
+                ``sensor_mass``, ...).
+
+        A held load's centre of mass not yet known along gravity (held at one orientation) is
+        sent across the present gravity direction only
+        (:func:`~ftkin.robot.load_handoff.held_load_of`).
+
+        Returns:
+            The load sent (flange frame).
+        """
+        from .load_handoff import held_load_of  # the control layer's types, on first use
+
+        arm = options.pop("arm", None) or recorded_arm(calibration)
+        if arm is None:
+            from ..kinematics.fr3 import fr3_arm
+
+            arm = fr3_arm()
+        rotation = arm.rotation_sensor_to_base(self.joint_positions()[None])[0]
+        down = rotation.T @ np.asarray(calibration.gravity_in_base, dtype=float)  # the weight's
+        held = held_load_of(tracker, down)
+        return self.set_payload(calibration, arm=arm, held_load=held, **options)
 
     def payload(self) -> tuple[float, np.ndarray, np.ndarray]:
         """The load the robot reports: ``(mass [kg], com_flange (3,) [m], inertia_flange (3, 3)

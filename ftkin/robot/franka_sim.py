@@ -43,6 +43,7 @@ from ..validation import as_vector
 HAND_BODY = "robot0_hand"
 SENSOR_BODY = "robot0_ft_sensor"
 TOOL_BODY = "robot0_tool"
+HELD_BODY = "robot0_held"
 SENSOR_SITE = "robot0_ft_site"
 HAND_MASS = 0.73
 """Mass of franky-sim's hand body [kg] (the fingers add 2 × 0.015 kg)."""
@@ -74,6 +75,19 @@ class SimTool:
     mass: float = 1.2
     center_of_mass: tuple = (0.02, -0.01, 0.09)
     inertia: tuple = (0.004, 0.005, 0.002)
+
+
+@dataclass(frozen=True)
+class SimHeld:
+    """A place for an object the gripper may hold, below the hand: a body without mass until
+    :meth:`FrankaSim.set_held_mass` gives it one while the simulation runs (MuJoCo's
+    ``body_mass`` changed between physics steps), a point mass.
+
+    Attributes:
+        center_of_mass: ``(3,)`` [m], hand (= sensor) frame.
+    """
+
+    center_of_mass: tuple = (0.015, -0.02, 0.16)
 
 
 @dataclass(frozen=True)
@@ -133,7 +147,8 @@ def hand_end_effector() -> tuple[float, tuple, tuple]:
 
 # Shared state between the simulation process and this one: float64 slots of a RawArray.
 _SEQ, _TIME, _WRENCH, _HAND, _PUSH, _PUSH_START, _PUSH_END = 0, 1, 2, 8, 11, 14, 15
-_SLOTS = 16
+_HELD_MASS = 16
+_SLOTS = 17
 
 
 def _snapshot(shared: np.ndarray) -> np.ndarray:
@@ -205,6 +220,9 @@ class FrankaSim:
         initial_q: Start configuration ``(7,)`` [rad] (default: franky-sim's).
         realtime: Run the physics at wall-clock rate (1 kHz); False: as fast as it goes.
         start_timeout: Give up starting after this long [s].
+        held: A place below the hand for an object taken mid-session (:meth:`set_held_mass`);
+            None: none. Its centre of mass in the flange frame, from MuJoCo's bodies, is
+            ``truth.bodies_in_flange[HELD_BODY]`` (mass 0 there: the mass given at start).
     """
 
     def __init__(
@@ -215,6 +233,7 @@ class FrankaSim:
         initial_q=None,
         realtime: bool = True,
         start_timeout: float = 60.0,
+        held: SimHeld | None = None,
     ):
         try:
             import franky_sim  # noqa: F401
@@ -223,7 +242,7 @@ class FrankaSim:
             raise MissingDependency(
                 "franky-sim", "franka-sim", "the simulated Franka robot"
             ) from error
-        self.tool, self.spec = tool, sensor
+        self.tool, self.spec, self.held = tool, sensor, held
         self.initial_q = None if initial_q is None else as_vector(initial_q, 7, "initial_q [rad]")
         self.realtime = bool(realtime)
         self.start_timeout = float(start_timeout)
@@ -250,6 +269,7 @@ class FrankaSim:
         """Start the simulation process and wait until its server listens."""
         config = {
             "tool": None if self.tool is None else vars_of(self.tool),
+            "held": None if self.held is None else vars_of(self.held),
             "sensor": vars_of(self.spec),
             "initial_q": None if self.initial_q is None else self.initial_q.tolist(),
             "realtime": self.realtime,
@@ -357,6 +377,21 @@ class FrankaSim:
         self._shared[_PUSH_END] = start + float(duration)
         self._shared[_PUSH_START] = start
 
+    def set_held_mass(self, mass: float) -> None:
+        """Give the held object (``held=SimHeld(...)``) this mass [kg] from the next physics
+        step on (0: released): a grasp or a release, as the sensor and the arm feel it."""
+        if self.held is None:
+            raise InvalidInput("this simulation has no held object: FrankaSim(held=SimHeld())")
+        mass = float(mass)
+        if not (math.isfinite(mass) and mass >= 0.0):
+            raise InvalidInput(f"the held mass must be finite and >= 0 kg, got {mass!r}")
+        self._shared[_HELD_MASS] = mass
+
+    @property
+    def held_mass(self) -> float:
+        """The held object's mass now [kg]."""
+        return float(self._shared[_HELD_MASS])
+
     def hand_position(self) -> np.ndarray:
         """Position of the hand frame's origin (the sensor's) in the base frame [m], MuJoCo's."""
         return _snapshot(self._shared)[_HAND : _HAND + 3].copy()
@@ -423,6 +458,7 @@ def main(argv=None) -> int:
         from franky_sim.mujoco_simulator import MujocoSimulator
 
         tool = None if config["tool"] is None else SimTool(**config["tool"])
+        held = None if config.get("held") is None else SimHeld(**config["held"])
         spec = SimSensorSpec(**config["sensor"])
         m_ee, com_ee, inertia_ee = hand_end_effector()
         sim = MujocoSimulator(enable_visualization=False)
@@ -432,7 +468,7 @@ def main(argv=None) -> int:
         if config["initial_q"] is not None:
             options["initial_q"] = tuple(config["initial_q"])
         robot = sim.add_robot(**options)
-        _edit_scene(sim, tool, spec)
+        _edit_scene(sim, tool, spec, held)
         server = SimulationServer(sim)
         server.init()
         mass, com = _bind(sim, shared)
@@ -455,8 +491,9 @@ def main(argv=None) -> int:
     return 0
 
 
-def _edit_scene(sim, tool: SimTool | None, spec: SimSensorSpec) -> None:
-    """Sensor body between flange and hand, a site and F/T sensors at the hand, the tool."""
+def _edit_scene(sim, tool: SimTool | None, spec: SimSensorSpec, held: SimHeld | None) -> None:
+    """Sensor body between flange and hand, a site and F/T sensors at the hand, the tool, the
+    held object's body (massless until given a mass)."""
     bodies = {body.get("name"): body for body in sim.worldbody.iter("body")}
     for joint in sim.worldbody.iter("joint"):
         if joint.get("name") == "robot0_fr3_joint7":
@@ -504,6 +541,10 @@ def _edit_scene(sim, tool: SimTool | None, spec: SimSensorSpec) -> None:
             mass="0",
             rgba="0.9 0.5 0.1 1",
         )
+    if held is not None:  # a fixed child: no degree of freedom, so a zero mass is allowed
+        body = ET.SubElement(hand, "body", name=HELD_BODY, pos="0 0 0")
+        where = " ".join(str(v) for v in held.center_of_mass)
+        ET.SubElement(body, "inertial", pos=where, mass="0", diaginertia="0 0 0")
     sensors = ET.SubElement(sim.scene, "sensor")
     ET.SubElement(sensors, "force", name="robot0_ft_force", site=SENSOR_SITE)
     ET.SubElement(sensors, "torque", name="robot0_ft_torque", site=SENSOR_SITE)
@@ -550,8 +591,18 @@ def _bind(sim, shared: np.ndarray) -> tuple[float, np.ndarray]:
     com = rotation.T @ (data.subtree_com[hand] - data.xpos[hand])
     mass = float(model.body_subtreemass[hand])
     pushed = body_id(TOOL_BODY) if body_id(TOOL_BODY) >= 0 else hand
+    held = body_id(HELD_BODY)
+    ancestors = []  # the held body and its parents: their subtree masses follow its mass
+    body = held
+    while body > 0:
+        ancestors.append(body)
+        body = int(model.body_parentid[body])
 
     def before_step(_sim) -> None:
+        if held >= 0 and model.body_mass[held] != shared[_HELD_MASS]:
+            change = shared[_HELD_MASS] - model.body_mass[held]
+            model.body_mass[held] = shared[_HELD_MASS]
+            model.body_subtreemass[ancestors] += change
         if shared[_PUSH_START] <= data.time < shared[_PUSH_END]:
             data.xfrc_applied[pushed, :3] = shared[_PUSH : _PUSH + 3]
         else:

@@ -19,6 +19,7 @@ from ..calibration.model import SensorModel
 from ..control.admittance import Admittance
 from ..control.compensation import Compensator
 from ..control.joint_admittance import JointAdmittance
+from ..control.load_events import LoadTracker
 from ..control.oscillation import OscillationLimits
 from ..control.sensor_faults import SensorLimits
 from ..exceptions import InvalidInput
@@ -47,6 +48,7 @@ def hand_guiding(
     sensor_limits: SensorLimits | None = None,
     oscillation: OscillationLimits | None = GUIDING_OSCILLATION,
     imu: bool = False,
+    load: LoadTracker | None = None,
 ) -> JointAdmittance:
     """The hand-guiding controller for ``arm`` with the compensation of ``calibration``.
 
@@ -70,10 +72,20 @@ def hand_guiding(
         imu: Compensate with the sensor's accelerometer (``calibration`` must be an
             :class:`~ftkin.calibration.imu_result.ImuCalibrationResult`: from the IMU, or fused).
             A calibration from the IMU alone has no FK compensation to fall back on.
+        load: A :class:`~ftkin.control.load_events.LoadTracker` for the load in the hand: the
+            compensation removes what it identifies (a grasped object) and it follows the hand
+            (docs/load.md); its ``period`` should be the loop's. Not with ``imu``.
     """
     if not isinstance(calibration, SensorModel):
         raise InvalidInput(
             f"calibration must be an ftkin calibration, got {type(calibration).__name__}"
+        )
+    if load is not None and not isinstance(load, LoadTracker):
+        raise InvalidInput(f"load must be an ftkin LoadTracker or None, got {type(load).__name__}")
+    if load is not None and imu:
+        raise InvalidInput(
+            "the load tracker runs on the FK compensation, not with the IMU's (imu=True): "
+            "track the load without imu"
         )
     angular = 1.0 if rotation else 0.0
     law = Admittance(
@@ -100,7 +112,7 @@ def hand_guiding(
         imu_compensator = ImuCompensator(calibration)  # refuses an FK calibration, by name
         # from the IMU alone there is no base tilt or mount to compensate FK ticks with
         from_imu_alone = not isinstance(calibration, FusedCalibrationResult)
-    compensator = None if from_imu_alone else Compensator(calibration, arm)
+    compensator = None if from_imu_alone else Compensator(calibration, arm, load=load)
     return JointAdmittance(
         arm,
         law,
