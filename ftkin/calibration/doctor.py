@@ -43,8 +43,8 @@ from .conventions import (
     reading_signs,
     tilt_text,
 )
-from .linear import fit_linear
-from .model import STANDARD_GRAVITY, WRENCH_CHANNELS, SensorModel
+from .linear import fit_linear, two_step
+from .model import STANDARD_GRAVITY, WRENCH_CHANNELS, SensorModel, predict
 from .observability import MIN_POSES
 from .samples import PoseAverages, Samples
 
@@ -271,16 +271,37 @@ def fit_reading(reading: Reading, g: float = STANDARD_GRAVITY) -> ReadingFit:
         what = "centre of mass" if "center_of_mass" in error.names else "tool's weight"
         return ReadingFit(reading, None, None, failure=f"the poses cannot determine the {what}")
     measured = poses.wrenches
-    residuals = (measured - model.predict(poses.rotations)) * reading.unit_scale
+    residuals = (measured - predict(poses.rotations, model.to_vector())) * reading.unit_scale
     if not np.all(np.isfinite(residuals)):
         return ReadingFit(reading, None, None, failure="non-finite residuals")
-    rss = np.empty(6)
-    rss[list(reading.channels)] = np.sum(residuals**2, axis=0)  # in the given channels
+    rss = _rss(reading, residuals)
     spread = np.sum(((measured - measured.mean(axis=0)) * reading.unit_scale) ** 2, axis=0)
     explained = min(
         1.0 - rss[part].sum() / max(spread[part].sum(), 1e-300) for part in (slice(3), slice(3, 6))
     )
     return ReadingFit(reading, model, rss, explained=float(explained))
+
+
+def _rss(reading: Reading, residuals: np.ndarray) -> np.ndarray:
+    """``(6,)`` residual sums of squares of ``reading``'s ``residuals`` ``(N, 6)`` (given units),
+    in the given channels."""
+    rss = np.empty(6)
+    rss[list(reading.channels)] = np.sum(residuals**2, axis=0)  # in the given channels
+    return rss
+
+
+def unchecked_rss(reading: Reading) -> np.ndarray | None:
+    """The :attr:`ReadingFit.rss` :func:`fit_reading` gives ``reading`` when it fits it, from
+    the two-step fit without the observability checks (:func:`~ftkin.calibration.linear.two_step`);
+    None when its poses could not be formed or are too few. A reading the checks would fail gets
+    a number all the same (possibly NaN): only for a bound that such a reading cannot
+    tighten (:func:`~ftkin.calibration.orientation_mistakes.cannot_name_a_mistake`).
+    """
+    poses = reading.poses
+    if poses is None or len(poses) < MIN_POSES:
+        return None
+    predicted = predict(poses.rotations, two_step(poses.rotations, poses.wrenches))
+    return _rss(reading, (poses.wrenches - predicted) * reading.unit_scale)
 
 
 def diagnose_readings(

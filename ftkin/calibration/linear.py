@@ -30,11 +30,20 @@ def fit_linear(poses: PoseAverages, g: float = STANDARD_GRAVITY) -> SensorModel:
     """
     check_pose_count(len(poses))
     check_orientations(poses.rotations)
-    forces, torques = poses.wrenches[:, :3], poses.wrenches[:, 3:]
-    step1, *_ = np.linalg.lstsq(force_regressor(poses.rotations), forces.reshape(-1), rcond=None)
+    theta = two_step(poses.rotations, poses.wrenches)
+    check_gravity_directions(poses.rotations, theta[0:3])
+    return SensorModel(theta[3:6], theta[6:9], theta[0:3], theta[9:12], g)
+
+
+def two_step(rotations: np.ndarray, wrenches: np.ndarray) -> np.ndarray:
+    """``θ = [a, F0, M0, P]`` (12,) of :func:`fit_linear` without its checks (poses it would
+    refuse get numpy's minimum-norm answer): ``rotations`` ``(N, 3, 3)`` ``R_BS``, ``wrenches``
+    ``(N, 6)`` per-pose means [N, N·m].
+    """
+    forces, torques = wrenches[:, :3], wrenches[:, 3:]
+    step1, *_ = np.linalg.lstsq(force_regressor(rotations), forces.reshape(-1), rcond=None)
     gravity_in_base, force_offset = step1[:3], step1[3:]
-    check_gravity_directions(poses.rotations, gravity_in_base)
     step2, *_ = np.linalg.lstsq(torque_regressor(forces), torques.reshape(-1), rcond=None)
     center_of_mass, auxiliary = step2[:3], step2[3:]
     torque_offset = auxiliary - cross_rows(force_offset, center_of_mass)  # M0 = b − F0 × P
-    return SensorModel(force_offset, torque_offset, gravity_in_base, center_of_mass, g)
+    return np.concatenate([gravity_in_base, force_offset, torque_offset, center_of_mass])

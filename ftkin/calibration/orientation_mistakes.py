@@ -34,6 +34,7 @@ from .doctor import (
     ReadingFit,
     diagnose_readings,
     fit_reading,
+    unchecked_rss,
     wrench_readings,
 )
 from .model import SensorModel
@@ -149,15 +150,18 @@ def refuse_orientation_mistakes(
         return None
     names = {name for name, _, _ in orientation_alternatives(kind)}
     readings = _orientation_readings(samples, signs, poses)
-    fits = [fit_reading(reading) for reading in readings]
-    if cannot_name_a_mistake(fits):
-        return fits[0].model  # nor can the doctor's other readings: not fitted (the hot path)
+    given = fit_reading(readings[0])
+    # the alternatives' checks unrun: one they would fail is never named, so its number can only
+    # make the bound ask the doctor
+    others = [ReadingFit(reading, None, unchecked_rss(reading)) for reading in readings[1:]]
+    if cannot_name_a_mistake([given, *others]):
+        return given.model  # nor can the doctor's other readings: not fitted (the hot path)
     joints = samples.joint_positions is not None
     report = diagnose_readings(readings + wrench_readings(readings[0].poses, joints=joints))
     culprit = report.culprit
     if report.verdict == "mistake" and culprit is not None and culprit.reading.name in names:
         raise ConventionMistake(report.message, None, culprit.reading.name, culprit.reading.fix)
-    return fits[0].model
+    return given.model
 
 
 def cannot_name_a_mistake(fits: list[ReadingFit]) -> bool:
@@ -171,7 +175,10 @@ def cannot_name_a_mistake(fits: list[ReadingFit]) -> bool:
     channel (set by whichever reading fits best), and ``Σ_c g_c / v_c ÷ Σ_c a_c / v_c`` is at most
     ``max_c g_c / a_c`` for every positive ``v``: an alternative no channel of which fits
     ``MISTAKE_RATIO`` times better than as given is never named, and the other readings need not
-    be fitted to know it. False (ask the doctor) when the data as given cannot be fitted.
+    be fitted to know it. False (ask the doctor) when the data as given cannot be fitted. An
+    alternative's ``rss`` may come from its fit without the observability checks
+    (:func:`~ftkin.calibration.doctor.unchecked_rss`): one the checks would fail is never named,
+    so its number can only send the question to the doctor.
     """
     given = fits[0]
     if given.rss is None:

@@ -17,6 +17,7 @@ independent computation:
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -241,7 +242,8 @@ def test_skipping_the_doctor_never_changes_its_verdict(tool):
                 report.verdict == "mistake"
                 and report.culprit.reading.name == (MATRIX_TRANSPOSED[0])
             )
-            skipped = cannot_name_a_mistake([doctor.fit_reading(r) for r in readings[:2]])
+            unchecked = [ReadingFit(r, None, doctor.unchecked_rss(r)) for r in readings[1:2]]
+            skipped = cannot_name_a_mistake([doctor.fit_reading(readings[0]), *unchecked])
             assert not (skipped and named)
             seen.add("refused" if named else "skipped" if skipped else "asked")
             if named:
@@ -250,6 +252,26 @@ def test_skipping_the_doctor_never_changes_its_verdict(tool):
             else:
                 refuse_orientation_mistakes(samples)
     assert seen == {"refused", "asked", "skipped"}
+
+
+def test_the_unchecked_sums_of_squares_are_the_fits(tool, rotations):
+    """Where the checks pass, :func:`unchecked_rss` is :func:`fit_reading`'s ``rss`` (with a
+    unit scale and mixed-up channels too); where they fail (every pose alike), it gives a number
+    that can only send the bound to the doctor, who does not name that reading."""
+    poses = _poses(tool, rotations, 7)
+    for reading in doctor.wrench_readings(poses, joints=False)[:6]:
+        fitted = doctor.fit_reading(reading)
+        if fitted.rss is not None:
+            np.testing.assert_allclose(doctor.unchecked_rss(reading), fitted.rss, rtol=1e-10)
+    same = replace(poses, rotations=np.repeat(poses.rotations[:1], len(poses), axis=0))
+    alike = Reading("every pose alike", "", same)
+    assert doctor.fit_reading(alike).rss is None  # refused by the checks: never named
+    given = doctor.fit_reading(Reading("as given", "", poses))
+    unchecked = ReadingFit(alike, None, doctor.unchecked_rss(alike))
+    assert np.all(np.isfinite(unchecked.rss))
+    if not cannot_name_a_mistake([given, unchecked]):  # asked: the doctor names no failed reading
+        report = diagnose_readings([given.reading, alike])
+        assert report.culprit is None or report.culprit.reading.name != alike.name
 
 
 def test_clean_data_skip_the_doctor(tool, rotations, monkeypatch):
