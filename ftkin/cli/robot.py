@@ -449,6 +449,7 @@ def run_guide(args) -> int:
 
     calibration = load_calibration(args.calibration)
     arm = _arm(args)
+    tracker = _load_tracker(args, calibration)  # its options checked before a sensor opens
     sensor = _sensor(args)
     # a calibration with the IMU's parameters and a sensor that gives its IMU: compensate with it
     from ..calibration.imu_result import ImuCalibrationResult
@@ -458,7 +459,6 @@ def run_guide(args) -> int:
     )
     if imu:
         print("compensating with the sensor's IMU (the tool's acceleration removed)")
-    tracker = _load_tracker(args, calibration)
     controller = hand_guiding(
         arm,
         calibration,

@@ -203,3 +203,19 @@ def test_the_motion_flag_holds_after_the_arm_stops():
     assert flag.update(0.249, np.zeros(6))  # within the settle time
     assert not flag.update(0.251, np.zeros(6))
     assert not flag.update(0.3, [0, 0, 0.0099, 0, 0, 0])  # just below
+
+
+@pytest.mark.parametrize(
+    "flags, words",
+    [
+        (["--send-load"], "go with --track-load"),
+        (["--noise-force", "0.02"], "go with --track-load"),
+        (["--track-load", "--noise-force", "0.02"], "together"),
+        (["--track-load"], "records no noise"),  # a calibration without noise, none given
+    ],
+)
+def test_guide_load_options_are_checked_before_anything_opens(tmp_path, capsys, flags, words):
+    calib = save_calibration(CalibrationResult.from_model(TOOL), tmp_path / "calib.json")
+    argv = ["robot", "guide", str(calib), "--franka", "192.0.2.1", "--sensor", "nowhere:none"]
+    assert main([*argv, *flags]) == 2
+    assert words in capsys.readouterr().err

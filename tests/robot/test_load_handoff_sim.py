@@ -196,6 +196,8 @@ def test_guide_track_load_prints_a_grasp_and_sends_the_load(sim, calibration, tm
     finally:
         grasp.join()
     out = capsys.readouterr().out
+    with capsys.disabled():  # seen with -s: what the command printed
+        print("\n" + out)
     assert code == 0, out
     assert "sent the tool:" in out
     grasps = [line for line in out.splitlines() if ": grasp (mass" in line]
