@@ -125,15 +125,12 @@ def test_a_priors_accelerometer_bias_error_reaches_the_dynamic_offsets():
     np.testing.assert_allclose(added_torque, expected_torque, rtol=0.02, atol=1e-11)
 
 
-def test_the_gyros_noise_does_not_bias_the_dynamic_imu_fit():
-    """The gyro's derivative sits in the regressor: with the default window too short its noise
-    biased mass, COM and offsets by several standard errors (errors in the variables). Six
-    seeded 6 s recordings at 250 Hz, gyro 0.005 rad/s, accelerometer 0.02 m/s², wrench
-    0.05 N / 0.003 N·m per reading, ``b`` and ``s`` given exactly: unbiased and honest, each
-    component's mean z over the six has standard deviation 1/√6 ≈ 0.41; |mean z| ≤ 2 is 4.9 of
-    them (the 51 ms window gave mean z up to 4.7 on this motion)."""
+@pytest.fixture(scope="module")
+def moving_recording():
+    """``benchmarks/bench_standard_errors.py``'s motion (6 s at 250 Hz) in MuJoCo, noise-free:
+    ``(times, wrench, specific force, gyro, truth [m, c, F0, M0])``."""
     arm, recorder = tool_recorder()
-    plan = plan_excitation(  # benchmarks/bench_standard_errors.py's motion
+    plan = plan_excitation(
         arm,
         6.0,
         rate=250.0,
@@ -143,33 +140,57 @@ def test_the_gyros_noise_does_not_bias_the_dynamic_imu_fit():
         candidates=20,
         optimize=False,
     )
-    times, q, dq, ddq = (
-        plan.times,
-        plan.joint_positions,
-        plan.joint_velocities,
-        plan.joint_accelerations,
+    wrench, accel, gyro = recorder.readings(
+        plan.joint_positions, plan.joint_velocities, plan.joint_accelerations
     )
-    wrench, accel, gyro = recorder.readings(q, dq, ddq)
     mass, com, _ = body_from_parameters(recorder.true_parameters())
-    truth = np.concatenate([[mass], com, WRENCH_BIAS])
+    return plan.times, wrench, accel, gyro, np.concatenate([[mass], com, WRENCH_BIAS])
+
+
+def _dynamic_imu_z(recording, rng, trials, accel_std, gyro_std, wrench_scale) -> np.ndarray:
+    """``(trials, 10)`` z of [m, c, F0, M0] of ``calibrate_imu_dynamic`` with ``b``, ``s`` given
+    exactly, on the recording with fresh white noise [m/s², rad/s; × WRENCH_STD]."""
+    times, wrench, accel, gyro, truth = recording
     names = ["tool_mass"] + [
         f"{block}[{axis}]"
         for block in ("center_of_mass", "force_offset", "torque_offset")
         for axis in "xyz"
     ]
-    rng = np.random.default_rng(12)
-    z = []
-    for _ in range(6):
+    z = np.empty((trials, 10))
+    for trial in range(trials):
         samples = ImuSamples(
-            (1.0 + SCALE) * accel + BIAS + rng.normal(0.0, 0.02, accel.shape),
-            wrench + WRENCH_BIAS + rng.normal(size=wrench.shape) * WRENCH_STD,
-            angular_velocity=gyro + rng.normal(0.0, 0.005, gyro.shape),
+            (1.0 + SCALE) * accel + BIAS + rng.normal(0.0, accel_std, accel.shape),
+            wrench + WRENCH_BIAS + rng.normal(size=wrench.shape) * WRENCH_STD * wrench_scale,
+            angular_velocity=gyro + rng.normal(0.0, gyro_std, gyro.shape),
             times=times,
         )
         result = calibrate_imu_dynamic(samples, accel_bias=BIAS, accel_scale=SCALE)
         estimate = np.concatenate(
             [[result.tool_mass], result.center_of_mass, result.force_offset, result.torque_offset]
         )
-        z.append((estimate - truth) / result.std_error_of(names))
+        z[trial] = (estimate - truth) / result.std_error_of(names)
+    return z
+
+
+def test_the_gyros_noise_does_not_bias_the_dynamic_imu_fit(moving_recording):
+    """The gyro's derivative sits in the regressor: with the default window too short its noise
+    biased mass, COM and offsets by several standard errors (errors in the variables). Six
+    seeded recordings, gyro 0.005 rad/s, accelerometer 0.02 m/s², wrench 0.05 N / 0.003 N·m per
+    reading: unbiased and honest, each component's mean z over the six has standard deviation
+    1/√6 ≈ 0.41; |mean z| ≤ 2 is 4.9 of them (the 51 ms window gave mean z up to 4.0 here)."""
+    z = _dynamic_imu_z(moving_recording, np.random.default_rng(12), 6, 0.02, 0.005, 1.0)
     mean = np.mean(z, axis=0)
     assert np.all(np.abs(mean) <= 2.0), f"mean z {np.round(mean, 2)}"
+
+
+def test_the_smoothed_accelerometer_noise_is_counted_at_its_full_variance(moving_recording):
+    """The accelerometer's noise dominating (0.05 m/s² per reading, the wrench's a thousandth of
+    its usual): the smoothed signal shows the residuals ``σ² Σ c_k²`` (0.14 of it at 25
+    samples) but the constant parameters see ``σ²`` (the filter's gain at zero frequency is 1).
+    Counted at the smoothed variance the standard errors were ``1/√0.14 ≈ 2.7`` times too small.
+    Ten trials: the 100 z values hold at least 10 independent ones, so with honest errors
+    RMS z² · 10 ~ χ²(10) at worst: RMS z within [0.28, 1.93] (two-sided 1e-4)."""
+    z = _dynamic_imu_z(moving_recording, np.random.default_rng(21), 10, 0.05, 1e-6, 1e-3)
+    band = np.sqrt(chi2.ppf([5e-5, 1 - 5e-5], 10) / 10)
+    rms = float(np.sqrt(np.mean(z**2)))
+    assert band[0] <= rms <= band[1], f"RMS z {rms:.3f} outside {np.round(band, 2)}"
