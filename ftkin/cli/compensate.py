@@ -106,8 +106,6 @@ def _parse_intermixed(parser) -> None:
 
 def run(args) -> int:
     check_live_arguments(args)
-    if args.track_load and args.live:
-        raise InvalidInput("--track-load works on a log file, not with --live")
     calibration = load_calibration(args.calibration)
     if isinstance(calibration, ImuCalibrationResult) and (
         not isinstance(calibration, FusedCalibrationResult) or _logs_an_accelerometer(args)

@@ -27,7 +27,14 @@ from ..robot.live_log import SampleLog, missed_packages, settle
 from ..robot.stillness import Stillness
 from .arg_types import add_options, option, positive_float
 from .declared import declared_option
-from .shared_options import DURATION, SENSOR, SENSOR_OPTION, UR, open_named_sensor
+from .shared_options import (
+    DURATION,
+    SENSOR,
+    SENSOR_OPTION,
+    UR,
+    noise_from_args,
+    open_named_sensor,
+)
 
 
 def add_live_arguments(parser) -> None:
@@ -133,6 +140,7 @@ def run_live(args, calibration, arm) -> int:
         )
     elif args.live_log:
         log = SampleLog(args.live_log, arm.joint_names)
+    tracker = _load_tracker(args, calibration)
     stamps: list[float] = []
     start = time.monotonic()
     code, interval, next_print = 0, 1.0 / args.print_rate, 0.0
@@ -150,8 +158,10 @@ def run_live(args, calibration, arm) -> int:
             arm=arm,
             stale_after=args.stale_after,
             allow_other_arm=args.allow_other_arm,
+            load=tracker,
         )
         settle(stream)
+        seen = 0 if tracker is None else len(tracker.events)
         start = time.monotonic()
         for stamp, q, contact in stream:
             stamps.append(stamp)
@@ -159,6 +169,14 @@ def run_live(args, calibration, arm) -> int:
                 log.add(stamp, q, contact)
             if packages is not None and packages.error is not None:
                 raise packages.error
+            if tracker is not None and len(tracker.events) > seen:
+                for event in tracker.events[seen:]:  # as compensate --track-load on a log
+                    print(
+                        f"t {stamp:.3f} s: {event.kind} (mass step {event.mass:.4g} kg; "
+                        f"{event.reason})",
+                        flush=True,
+                    )
+                seen = len(tracker.events)
             now = time.monotonic()
             if now >= next_print:
                 next_print = now + interval
@@ -183,6 +201,24 @@ def run_live(args, calibration, arm) -> int:
         ur.close(wait=False)  # the command ends with the process: no 0.5 s destructor
         _summary(np.array(stamps), elapsed, args.live_log, code == 130)
     return code
+
+
+def _load_tracker(args, calibration):
+    """``--track-load``'s tracker (the noise: the flags', else the calibration's), else None.
+
+    The built-in sensor of a UR sends a package every 2 ms: the tracker's clock is that.
+    """
+    if not args.track_load:
+        return None
+    from ..control.load_events import LoadTracker
+
+    tracker = LoadTracker.for_calibration(calibration, noise_from_args(args), period=0.002)
+    force, torque = tracker.noise.force_std, tracker.noise.torque_std
+    print(
+        f"load tracking: noise per reading {np.array2string(force, precision=4)} N, "
+        f"{np.array2string(torque, precision=5)} N·m; bounds {tracker.thresholds.k_sigma:g}σ"
+    )
+    return tracker
 
 
 def _summary(stamps: np.ndarray, elapsed: float, log_path, interrupted: bool) -> None:

@@ -54,6 +54,7 @@ from .shared_options import (
     STATE_TIMEOUT,
     TOOL_MASS,
     as_required,
+    noise_from_args,
     open_named_sensor,
     resolved,
 )
@@ -497,17 +498,13 @@ def run_guide(args) -> int:
 
 def _load_tracker(args, calibration):
     """The guide's load tracker (``--track-load``), its noise the flags' or the calibration's."""
-    from ..calibration.information import SensorNoise
     from ..control.load_events import LoadTracker
 
-    noise_given = (args.noise_force is None) + (args.noise_torque is None)
+    noise = noise_from_args(args)
     if not args.track_load:
-        if args.send_load or noise_given < 2:
+        if args.send_load or noise is not None:
             raise InvalidInput("--send-load, --noise-force and --noise-torque go with --track-load")
         return None
-    if noise_given == 1:
-        raise InvalidInput("give --noise-force and --noise-torque together")
-    noise = None if args.noise_force is None else SensorNoise(args.noise_force, args.noise_torque)
     tracker = LoadTracker.for_calibration(calibration, noise, period=1.0 / args.loop_rate)
     print(
         f"load tracking: noise per reading {np.array2string(tracker.noise.force_std, precision=4)}"

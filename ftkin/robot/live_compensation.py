@@ -52,6 +52,7 @@ def compensated_stream(
     stale_after: float = 0.1,
     poll_period: float = DEFAULT_POLL_PERIOD,
     allow_other_arm: bool = False,
+    load=None,
 ) -> Iterator[tuple[float, np.ndarray, np.ndarray]]:
     """Yield ``(t [s], q (nq,) [rad], contact (6,) [N, N·m])`` for each new sensor sample.
 
@@ -66,6 +67,9 @@ def compensated_stream(
         stale_after: The sensor's stamp not advancing for this long is a fault [s].
         poll_period: Sleep between polls while no new sample has come [s].
         allow_other_arm: Accept an ``arm`` other than the recorded one.
+        load: A :class:`~ftkin.control.load_events.LoadTracker` (docs/load.md): the contact is
+            then also free of the load the gripper holds, and the tracker's events follow the
+            samples (its clock advances by its ``period`` per sample: give the sensor's).
 
     The contact wrench is in the sensor frame, about its origin: what the environment exerts on
     the tool. The stream ends only when the caller stops iterating (or on a fault).
@@ -84,7 +88,7 @@ def compensated_stream(
         )
     if not (isinstance(poll_period, int | float) and 0.0 <= poll_period < 0.1):
         raise InvalidInput(f"poll_period must be in [0, 0.1) s, got {poll_period!r}")
-    compensator = Compensator(calibration, arm, allow_other_arm=allow_other_arm)
+    compensator = Compensator(calibration, arm, allow_other_arm=allow_other_arm, load=load)
     paired = _PairedSensor(sensor) if callable(getattr(sensor, "read_with_joints", None)) else None
     checked = CheckedSensor(paired or sensor, stale_after)
     return _stream(compensator, arm_reader, checked, paired, float(poll_period))

@@ -209,8 +209,8 @@ def test_the_motion_flag_holds_after_the_arm_stops():
     "flags, words",
     [
         (["--send-load"], "go with --track-load"),
-        (["--noise-force", "0.02"], "go with --track-load"),
-        (["--track-load", "--noise-force", "0.02"], "together"),
+        (["--noise-force", "0.02", "--noise-torque", "0.002"], "go with --track-load"),
+        (["--track-load", "--noise-force", "0.02"], "give both --noise-force"),
         (["--track-load"], "records no noise"),  # a calibration without noise, none given
     ],
 )

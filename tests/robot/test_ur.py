@@ -366,6 +366,33 @@ def test_cli_live_with_an_external_sensor(tmp_path, controller, calibrated, caps
     assert "KEY=VALUE" in capsys.readouterr().err
 
 
+def test_cli_live_track_load_reports_a_grasp(controller, calibrated, capsys):
+    """``compensate --live --track-load``: an object taken at a fixed pose (0.4 kg, its COM at
+    (0.01, 0, 0.1) m; its weight given as the emulator's contact, from the emulator's own flange
+    rotation) is printed as one grasp with its mass as it happens (issue 39)."""
+    import re
+    import threading
+
+    q = [0.2, -1.3, 1.1, -0.9, 1.4, 0.5]
+    controller.set_pose(q)
+    rotation = flange_transform(controller.robot, np.array(q))[:3, :3]
+    weight = rotation.T @ np.array([0.0, 0.0, -0.4 * STANDARD_GRAVITY])
+    contact = tuple(np.concatenate([weight, np.cross([0.01, 0.0, 0.1], weight)]).tolist())
+    grasp = threading.Timer(0.8, controller.set_tool, kwargs={"contact": contact})
+    grasp.start()
+    args = ["compensate", calibrated[1], "--ur", controller.host, "--live", "--duration", "2"]
+    try:
+        code = main([*args, "--track-load", "--noise-force", "0.05", "--noise-torque", "0.002"])
+    finally:
+        grasp.join()
+    out = capsys.readouterr().out
+    assert code == 0, out
+    grasps = [line for line in out.splitlines() if ": grasp (mass step" in line]
+    assert len(grasps) == 1, out
+    mass = float(re.search(r"mass step ([0-9.]+) kg", grasps[0]).group(1))
+    assert abs(mass - 0.4) < 0.01, out  # a block's mean: 0.05 N noise is 0.005 kg
+
+
 def test_cli_refuses_live_options_that_do_not_fit(tmp_path, capsys):
     calib = tmp_path / "c.json"
     calib.write_text("{}")
