@@ -219,3 +219,27 @@ def test_guide_load_options_are_checked_before_anything_opens(tmp_path, capsys, 
     argv = ["robot", "guide", str(calib), "--franka", "192.0.2.1", "--sensor", "nowhere:none"]
     assert main([*argv, *flags]) == 2
     assert words in capsys.readouterr().err
+
+
+def test_an_identified_inertia_is_moved_to_the_load_com():
+    """A LoadEstimate's inertia (about the sensor origin, Pinocchio's order) becomes the held
+    load's about its own COM: a solid sphere (2/5 m r²) 0.1 m below the origin, by hand."""
+    from ftkin.control.load_estimator import LoadEstimate
+
+    mass, radius, com = 0.5, 0.03, np.array([0.0, 0.0, 0.1])
+    own = 0.4 * mass * radius**2
+    about_origin = own * np.eye(3) + mass * (com @ com * np.eye(3) - np.outer(com, com))
+    i = about_origin
+    parameters = [mass, *(mass * com), i[0, 0], i[0, 1], i[1, 1], i[0, 2], i[1, 2], i[2, 2]]
+    estimate = LoadEstimate(
+        mass, 1e-4, com, np.full(3, 1e-4), parameters, np.full(6, 1e-6), 1000, 5994.0, 5990
+    )
+    held = held_load_of(estimate)
+    assert held.mass == pytest.approx(mass, rel=1e-12)
+    np.testing.assert_allclose(held.center_of_mass, com, atol=1e-15)
+    np.testing.assert_allclose(held.inertia, own * np.eye(3), atol=1e-15)
+    undetermined = LoadEstimate(
+        mass, 1e-4, [0.0, 0.0, np.nan], [1e-4, 1e-4, np.inf], None, None, 10, 0.0, 57
+    )
+    with pytest.raises(InvalidInput, match="turn the wrist"):
+        held_load_of(undetermined)
