@@ -117,8 +117,10 @@ class Tracking:
 
     def run(self, seconds: float) -> None:
         """Track for ``seconds`` [s] of simulated time (a loaded machine slows the simulation)."""
-        start = self.sim.time
+        start, give_up = self.sim.time, time.monotonic() + 20.0 * seconds + 10.0
         while self.sim.time - start < seconds:
+            if time.monotonic() > give_up:  # the simulation stopped: fail, do not hang
+                raise AssertionError(f"the simulation did not advance {seconds} s")
             self.tick()
             time.sleep(0.0005)
 
