@@ -37,7 +37,7 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ftkin import Arm, Compensator, Samples, calibrate, calibrate_dynamic
+from ftkin import Arm, Compensator, calibrate, calibrate_dynamic
 from ftkin.calibration.derivatives import joint_derivatives
 from ftkin.calibration.imu_dynamic import calibrate_imu_dynamic
 from ftkin.calibration.imu_samples import ImuSamples
@@ -89,7 +89,7 @@ def static_run(recorder, poses, rng, readings=100):
     wrench, accel, gyro = recorder.readings(poses)
     ids = np.repeat(np.arange(len(poses)), readings)
     accel, _ = imu_noise(accel[ids], gyro[ids], rng)
-    return calibrate(Samples.from_imu(accel, wrench_noise(wrench[ids], rng), ids))
+    return calibrate(ImuSamples.from_arrays(accel, wrench_noise(wrench[ids], rng), ids))
 
 
 def moving_samples(recorder, times, trajectory, rng):

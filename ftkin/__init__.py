@@ -31,9 +31,9 @@ _GROUPS = {
         "load_samples": ".io.samples_csv",
     },
     "Calibrate": {
-        "calibrate": ".calibration.estimate",
-        "CalibrationOptions": ".calibration.estimate",
-        "CalibrationResult": ".calibration.estimate",
+        "calibrate": ".calibration.fit_registry",
+        "CalibrationOptions": ".calibration.fit_options",
+        "CalibrationResult": ".calibration.result",
         "SensorModel": ".calibration.model",
         "SensorNoise": ".calibration.information",
         "calibrate_dynamic": ".calibration.dynamic",

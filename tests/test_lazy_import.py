@@ -55,7 +55,8 @@ def test_the_imus_modules_load_with_their_first_use():
         "import ftkin.control.joint_admittance, ftkin.io.calibration_file"
     )
     assert not imu & _modules_after(code)
-    used = code + "\nimport numpy as np\nftkin.Samples.from_imu(np.eye(3) * 9.81, np.zeros((3, 6)))"
+    used = code + "\nimport numpy as np\nimu = ftkin.calibration.ImuSamples"
+    used += "\nimu.from_arrays(np.eye(3) * 9.81, np.zeros((3, 6)))"
     assert "ftkin.calibration.imu_samples" in _modules_after(used)
 
 

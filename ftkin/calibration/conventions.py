@@ -199,7 +199,7 @@ def detect_sign_and_handedness(
 ) -> ConventionCheck:
     """Fit the reflected alternatives and compare the fitted weight with the expected gravity.
 
-    Cheap (linear force steps only), so :func:`~ftkin.calibration.estimate.calibrate`
+    Cheap (linear force steps only), so :func:`~ftkin.calibration.fit_registry.calibrate`
     runs it before its maximum-likelihood fit; other checks (a general
     "doctor") can call it on their own.
 

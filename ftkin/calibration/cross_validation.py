@@ -123,11 +123,11 @@ def cross_validate(
 
     Args:
         samples: The calibration samples (several readings per pose are averaged per pose).
-        drifts: Drift settings to compare (:func:`~ftkin.calibration.estimate.calibrate`'s
+        drifts: Drift settings to compare (:func:`~ftkin.calibration.fit_registry.calibrate`'s
             ``drift``).
         folds: Number of folds ``k`` (2..50, at most the number of poses).
         seed: Seed of the random split into folds.
-        options: :class:`~ftkin.calibration.estimate.CalibrationOptions` of every fit (its
+        options: :class:`~ftkin.calibration.fit_options.CalibrationOptions` of every fit (its
             drift replaced by each setting).
         **keywords: Further calibrate options (method, noise, mount, signs, ...), not ``drift``.
 
@@ -135,7 +135,7 @@ def cross_validate(
         InvalidInput: bad ``folds`` or drift settings, or too few poses for
             ``k`` folds (each training set must determine the parameters).
     """
-    from .estimate import calibrate  # estimate imports the whole estimator; keep this module light
+    from .fit_registry import calibrate  # the fits import the whole estimator: loaded when used
 
     # refused in this order: each check reads only what the ones before it accepted
     if "drift" in keywords:

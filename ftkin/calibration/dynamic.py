@@ -32,7 +32,6 @@ from .dynamic_fit import (
     noise_from_residuals,
     theta_space,
 )
-from .estimate import CalibrationResult
 from .goodness_of_fit import WRENCH_CHANNELS, fit_test
 from .information import SensorNoise
 from .log_cholesky import (
@@ -46,6 +45,7 @@ from .log_cholesky import (
 )
 from .model import STANDARD_GRAVITY, check_gravity
 from .regressor import MotionSamples
+from .result import CalibrationResult
 from .samples import Samples
 
 
@@ -182,7 +182,7 @@ def calibrate_dynamic(
             static calibration as the special case.
         g: Magnitude of gravity [m/s²] (known; its direction is estimated).
         noise: Per-reading noise [N, N·m]; None estimates it per channel from the residuals.
-        **imu: For IMU samples (:meth:`Samples.from_imu`, no joints): the options of
+        **imu: For IMU samples (``ImuSamples.from_arrays``, no joints): the options of
             :func:`~ftkin.calibration.imu_dynamic.calibrate_imu_dynamic` (``prior``, ...).
 
     Returns:
@@ -201,7 +201,7 @@ def calibrate_dynamic(
         if not estimate_inertia or check_gravity(g) != motion.g:
             raise InvalidInput(
                 "a dynamic calibration from the IMU always estimates the inertia, with the g of "
-                f"its samples ({motion.g:g} m/s²: Samples.from_imu(..., g=...))"
+                f"its samples ({motion.g:g} m/s²: ImuSamples.from_arrays(..., g=...))"
             )
         return calibrate_imu_dynamic(motion, noise=noise, **imu)
     if imu:

@@ -270,7 +270,7 @@ def calibrate_fused(samples: FusedSamples, options=None, **keywords) -> FusedCal
 
     Args:
         samples: :class:`~ftkin.calibration.fused_samples.FusedSamples`
-            (``Samples.from_joint_positions(...).with_imu(specific_force)``); readings sharing a
+            (``FusedSamples.from_arrays(samples, specific_force)``); readings sharing a
             pose id are averaged first. Static poses: the bias is constant (no drift model) and
             the gyro, if any, is not used.
         options: A :class:`~ftkin.calibration.fused_options.FusedCalibrationOptions` (an
@@ -292,14 +292,14 @@ def calibrate_fused(samples: FusedSamples, options=None, **keywords) -> FusedCal
     """
     if not isinstance(samples, FusedSamples):
         raise InvalidInput(
-            "samples must be ftkin FusedSamples (Samples...with_imu(specific_force)), got "
+            "samples must be ftkin FusedSamples (FusedSamples.from_arrays), got "
             f"{type(samples).__name__}"
         )
     given_g = keywords.pop("g", getattr(options, "g", samples.g))
     if not np.isclose(float(given_g), samples.g, rtol=1e-12):
         raise InvalidInput(
             f"g = {given_g} m/s² differs from the samples' {samples.g:g} m/s²: give it once, to "
-            "Samples.with_imu(..., g=...)"
+            "FusedSamples.from_arrays(..., g=...)"
         )
     options = FusedCalibrationOptions.from_keywords(options, **keywords)
     if options.estimate_mount != "none" and samples.joint_positions is None:

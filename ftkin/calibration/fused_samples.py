@@ -5,7 +5,7 @@ reading: joint angles through an arm, or rotations, quaternions, Euler angles gi
 accelerometer's specific force of the same readings ``[ax, ay, az]`` [m/s², IMU frame; ``+g``
 upward at rest], checked as :class:`~ftkin.calibration.imu_samples.ImuSamples` checks it (one
 per reading, the median norm about ``g``). Build it with
-:meth:`Samples.with_imu <ftkin.calibration.samples.Samples.with_imu>`; :func:`ftkin.calibrate`
+:meth:`FusedSamples.from_arrays`; :func:`ftkin.calibrate`
 then fits both together (:mod:`ftkin.calibration.fused_fit`).
 """
 

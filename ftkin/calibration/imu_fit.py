@@ -31,6 +31,7 @@ import numpy as np
 
 from ..exceptions import InvalidInput, UnobservableParameters
 from .covariance import covariance_in_sensor_axes, invert_information
+from .fit_options import CalibrationOptions
 from .goodness_of_fit import ACCEL_CHANNELS, WRENCH_CHANNELS, FitTest, fit_test
 from .imu_model import (
     ACCEL_SCALE_NAMES,
@@ -334,7 +335,7 @@ def calibrate_imu(samples: ImuSamples, options=None, **keywords) -> ImuCalibrati
 
     Args:
         samples: :class:`~ftkin.calibration.imu_samples.ImuSamples`
-            (:meth:`ftkin.Samples.from_imu`); readings sharing a pose id are averaged first.
+            (:meth:`ImuSamples.from_arrays`); readings sharing a pose id are averaged first.
         options: An :class:`ImuCalibrationOptions` (default: all defaults).
         **keywords: Its fields, given directly.
 
@@ -349,16 +350,15 @@ def calibrate_imu(samples: ImuSamples, options=None, **keywords) -> ImuCalibrati
     """
     if not isinstance(samples, ImuSamples):
         raise InvalidInput(
-            f"samples must be ftkin ImuSamples (Samples.from_imu), got {type(samples).__name__}"
+            "samples must be ftkin ImuSamples (ImuSamples.from_arrays), got "
+            f"{type(samples).__name__}"
         )
-    from .estimate import CalibrationOptions  # the FK options (a cycle: imported where used)
-
     stated = options.g if isinstance(options, CalibrationOptions) else samples.g
     given_g = keywords.pop("g", stated)  # ImuCalibrationOptions has none: the samples carry g
     if not np.isclose(float(given_g), samples.g, rtol=1e-12):
         raise InvalidInput(
             f"g = {given_g} m/s² differs from the samples' {samples.g:g} m/s²: give it once, to "
-            "Samples.from_imu(..., g=...)"
+            "ImuSamples.from_arrays(..., g=...)"
         )
     options = ImuCalibrationOptions.from_keywords(options, **keywords)
     poses = samples.pose_averages()

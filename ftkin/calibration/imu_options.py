@@ -10,6 +10,7 @@ import numpy as np
 
 from ..exceptions import InvalidInput
 from ..validation import as_float_array, as_rotation_batch, as_vector
+from .fit_options import CalibrationOptions
 from .information import SensorNoise
 
 SCALE_MODES = ("auto", "yes", "no")
@@ -92,7 +93,7 @@ def _from_calibration_options(options) -> ImuCalibrationOptions:
     options = checked_calibration_options(
         options,
         ("noise", "g"),
-        "a calibration from the IMU (samples from Samples.from_imu)",
+        "a calibration from the IMU (ImuSamples.from_arrays)",
         "ImuCalibrationOptions",
     )
     return ImuCalibrationOptions(wrench_noise=options.noise)
@@ -102,8 +103,6 @@ def checked_calibration_options(options, carried: tuple[str, ...], kind: str, us
     """``options``, an FK ``CalibrationOptions`` whose settings other than ``carried`` are the
     defaults (the IMU and fused fits take those over), or :class:`InvalidInput` naming the
     others: they are not options of ``kind``; ``use`` names the options class to use instead."""
-    from .estimate import CalibrationOptions  # the FK options: imported where used (a cycle)
-
     if not isinstance(options, CalibrationOptions):
         raise InvalidInput(f"options must be an ftkin {use}, got {type(options).__name__}")
     default = CalibrationOptions()

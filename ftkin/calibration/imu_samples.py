@@ -3,7 +3,7 @@
 :class:`ImuSamples` holds ``N`` raw readings ``[fx, fy, fz, mx, my, mz]`` [N, N·m] (sensor frame),
 the accelerometer's specific force ``[ax, ay, az]`` [m/s², IMU frame; ``+g`` upward at rest], and
 optionally the gyro's ``[wx, wy, wz]`` [rad/s, IMU frame], pose ids (readings of one static pose)
-and times [s]. Build it with :meth:`ftkin.Samples.from_imu` (which converts ``accel_unit="g"``);
+and times [s]. Build it with :meth:`ImuSamples.from_arrays` (which converts ``accel_unit="g"``);
 :func:`ftkin.calibrate` then fits the IMU model (:mod:`ftkin.calibration.imu_fit`).
 
 The unit is checked here, once: the median norm of the specific force must be about ``g``. A

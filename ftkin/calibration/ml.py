@@ -376,7 +376,7 @@ def fit_ml(
             ``g`` when it is at hand (``ConventionCheck.linear_fit``,
             :mod:`ftkin.calibration.conventions`); None fits it.
 
-    The options are :class:`~ftkin.calibration.estimate.CalibrationOptions`' (checked there).
+    The options are :class:`~ftkin.calibration.fit_options.CalibrationOptions`' (checked there).
 
     Raises:
         UnobservableParameters: the poses cannot determine the parameters (or the mount).

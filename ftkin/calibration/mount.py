@@ -69,7 +69,7 @@ class MountMode(StrEnum):
 
     A :class:`~enum.StrEnum`: it compares equal to its text (``MountMode.YAW == "yaw"``). The
     text is checked once, where it enters (:meth:`of`, called by
-    :class:`~ftkin.calibration.estimate.CalibrationOptions`, the result's and the planner's
+    :class:`~ftkin.calibration.fit_options.CalibrationOptions`, the result's and the planner's
     types and the public entry points); the functions behind them trust a ``MountMode``.
     """
 

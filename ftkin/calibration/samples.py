@@ -271,41 +271,6 @@ class Samples:
         )
 
     @classmethod
-    def from_imu(cls, specific_force, wrenches, pose_ids=None, **imu):
-        """From the sensor's own IMU instead of an orientation: ``(N, 3)`` specific force
-        ``[ax, ay, az]`` [m/s², IMU frame; ``+g`` upward at rest] and ``(N, 6)`` raw wrenches.
-
-        ``imu``: ``accel_unit`` (``"m/s^2"`` or ``"g"``), ``angular_velocity`` ``(N, 3)``
-        [rad/s, IMU frame], ``times`` ``(N,)`` [s], ``g`` [m/s²]. Returns
-        :class:`~ftkin.calibration.imu_samples.ImuSamples` (:func:`ftkin.calibrate` fits the IMU
-        model: :mod:`ftkin.calibration.imu_fit`).
-        """
-        from .imu_samples import ImuSamples  # the IMU's own samples type
-
-        return ImuSamples.from_arrays(specific_force, wrenches, pose_ids, **imu)
-
-    def with_imu(self, specific_force, *, accel_unit: str = "m/s^2", angular_velocity=None, g=None):
-        """These readings with the sensor's IMU too: ``(N, 3)`` specific force ``[ax, ay, az]``
-        [m/s², IMU frame; ``+g`` upward at rest], one per reading.
-
-        ``accel_unit`` (``"m/s^2"`` or ``"g"``), ``angular_velocity`` ``(N, 3)`` [rad/s, IMU
-        frame], ``g`` [m/s²] (default standard gravity). Returns
-        :class:`~ftkin.calibration.fused_samples.FusedSamples` (:func:`ftkin.calibrate` fits
-        the orientation and the IMU together and checks the mount:
-        :mod:`ftkin.calibration.fused_fit`).
-        """
-        from .fused_samples import FusedSamples  # the fused samples type
-        from .model import STANDARD_GRAVITY
-
-        return FusedSamples.from_arrays(
-            self,
-            specific_force,
-            accel_unit=accel_unit,
-            angular_velocity=angular_velocity,
-            g=STANDARD_GRAVITY if g is None else g,
-        )
-
-    @classmethod
     def from_euler_zyx_deg(cls, angles_deg, wrenches, pose_ids=None, times=None) -> "Samples":
         """From the paper's commanded ``(N, 3)`` Euler angles ``[α, β, γ]`` [deg], ``R = Rz Ry
         Rx``.

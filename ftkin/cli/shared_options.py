@@ -12,7 +12,7 @@ import argparse
 import logging
 import os
 
-from ..calibration.estimate import CalibrationOptions
+from ..calibration.fit_options import CalibrationOptions
 from ..io.payload_export import END_EFFECTOR, SENSOR_BODY
 from ..planning.evaluation import PAPER_CENTER_OF_MASS
 from .arg_types import (

@@ -68,7 +68,7 @@ class ImuCompensator:
 
     Args:
         calibration: An :class:`~ftkin.calibration.imu_result.ImuCalibrationResult`
-            (``ftkin.calibrate`` of :meth:`ftkin.Samples.from_imu`, or the dynamic fit).
+            (``ftkin.calibrate`` of ``ImuSamples.from_arrays``, or the dynamic fit).
         imu_position: ``r`` ``(3,)`` [m, sensor frame] overriding the calibration's (a datasheet
             value); the lever arm needs the gyro.
         inertial_parameters: θ ``(10,)`` overriding the calibration's (sensor frame).

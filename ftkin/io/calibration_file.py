@@ -70,10 +70,10 @@ import numpy as np
 from ..calibration.diagnostics import FitDiagnostics
 from ..calibration.drift import BiasDrift, parse_drift
 from ..calibration.dynamic import DynamicCalibrationResult
-from ..calibration.estimate import CalibrationResult
 from ..calibration.goodness_of_fit import FIT_TEST_TYPES, FitTest
 from ..calibration.log_cholesky import is_physically_consistent, parameters_from_body
 from ..calibration.model import check_gravity
+from ..calibration.result import CalibrationResult
 from ..exceptions import CalibrationFileError, FtkinError, InvalidInput
 from ..kinematics.record import KinematicsRecord
 from ..kinematics.rotations import euler_zyx_to_matrix

@@ -306,6 +306,6 @@ def with_imu_columns(
         return loaded.samples
     gyro = table.floats(GYRO_COLUMNS) if all(n in table.header for n in GYRO_COLUMNS) else None
     unit = table.accel_unit or accel_unit  # a join's table is converted already
-    return loaded.samples.with_imu(
-        table.floats(ACCEL_COLUMNS), accel_unit=unit, angular_velocity=gyro, g=g
+    return FusedSamples.from_arrays(
+        loaded.samples, table.floats(ACCEL_COLUMNS), accel_unit=unit, angular_velocity=gyro, g=g
     )

@@ -19,7 +19,7 @@ program; ftkin only reads it:
    weakest direction named and the gravity direction that would help most suggested
    (:func:`~ftkin.planning.coverage.assess_coverage`, for the tool a linear fit of the readings
    so far suggests);
-6. at ``n_poses`` poses, or on Ctrl-C, it calibrates (:func:`~ftkin.calibration.estimate.calibrate`)
+6. at ``n_poses`` poses, or on Ctrl-C, it calibrates (:func:`ftkin.calibrate`)
    and saves (``calibrate=False``: it records only, for an arm whose model is not known yet, such
    as a UR read with :class:`~ftkin.kinematics.ur_flange.UrFlange`). A sensor fault or a lost
    joint source stops it with :class:`~ftkin.exceptions.RecordingInterrupted`, the poses recorded
@@ -428,7 +428,7 @@ def record_poses(
             refused [rad].
         output: Save the calibration there (atomically); None: not saved.
         g: Gravity [m/s²].
-        calibrate_options: More :func:`~ftkin.calibration.estimate.calibrate` keywords.
+        calibrate_options: More :func:`ftkin.calibrate` keywords.
         on_event: Called with each :class:`RecorderEvent` (default: logged).
         wrench_frame: The axes the sensor's driver gave the wrench in before it was turned into
             the sensor frame (``"base"`` for a UR's built-in sensor read by

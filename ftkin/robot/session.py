@@ -12,7 +12,7 @@
    already in it. A pose that does not fit (something touched the tool or the arm) is not
    written, or is taken out of the file, and is measured again after the others; one that still
    does not fit stops the session (:class:`~ftkin.exceptions.InconsistentPoses`);
-4. calibrate (:func:`~ftkin.calibration.estimate.calibrate`) from that file, save the calibration
+4. calibrate (:func:`ftkin.calibrate`) from that file, save the calibration
    (:func:`~ftkin.io.calibration_file.save_calibration`), and check it at a few other poses:
    the compensated force there should be the sensor's noise (:func:`verify_on_robot`).
 
@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration.estimate import calibrate
+from ..calibration.fit_registry import calibrate
 from ..calibration.model import STANDARD_GRAVITY
 from ..calibration.pose_consistency import PoseConsistency, check_pose_consistency
 from ..calibration.result import CalibrationResult
@@ -273,7 +273,7 @@ def calibrate_on_robot(
             height 0.1 m, tool weight 15 N), e.g. ``joint_ranges``.
         stillness: When the arm is still (default :class:`Stillness`).
         g: Gravity for the tool mass [m/s²].
-        calibrate_options: More :func:`~ftkin.calibration.estimate.calibrate` keywords.
+        calibrate_options: More :func:`ftkin.calibrate` keywords.
         progress: Draw a progress bar (default: when stderr is a terminal).
         remeasure: Times a pose whose readings do not fit the others is measured again before
             the session stops (:mod:`ftkin.calibration.pose_consistency`).

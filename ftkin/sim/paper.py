@@ -9,7 +9,8 @@ from importlib import resources
 
 import numpy as np
 
-from ..calibration.estimate import CalibrationResult, calibrate
+from ..calibration.fit_registry import calibrate
+from ..calibration.result import CalibrationResult
 from ..calibration.samples import Samples
 from ..io.samples_csv import load_samples
 

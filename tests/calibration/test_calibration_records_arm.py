@@ -14,6 +14,7 @@ import pytest
 
 import ftkin
 from ftkin import Samples, calibrate, load_calibration, load_robot, save_calibration
+from ftkin.calibration.fused_samples import FusedSamples
 from ftkin.calibration.information import SensorNoise
 from ftkin.calibration.model import SensorModel
 from ftkin.calibration.regressor import MotionSamples
@@ -42,7 +43,7 @@ def fused_samples(arm, tool, poses) -> Samples:
     up_in_base = -np.asarray(tool.gravity_in_base) / np.linalg.norm(tool.gravity_in_base)
     specific_force = tool.g * np.einsum("nji,j->ni", samples.rotations, up_in_base)
     noise = np.random.default_rng(6).normal(0.0, 0.01, specific_force.shape)  # [m/s²]
-    return samples.with_imu(specific_force + noise)
+    return FusedSamples.from_arrays(samples, specific_force + noise)
 
 
 def dynamic_samples(arm, tool) -> MotionSamples:

@@ -65,7 +65,7 @@ def test_one_rule_for_g_loss_and_the_mount_mode():
     rules = {
         r"GRAVITY_RANGE\[|\*GRAVITY_RANGE": "calibration/model.py",  # check_gravity
         r"as_positive\(\s*g\b": None,  # no other rule for g
-        r"not in LOSSES": "calibration/estimate.py",
+        r"not in LOSSES": "calibration/fit_options.py",
         r"not in MOUNT_MODES|return cls\(value\)": "calibration/mount.py",
     }
     for pattern, home in rules.items():

@@ -21,6 +21,7 @@ from scipy.spatial.transform import Rotation
 
 import ftkin
 from ftkin.calibration.dynamic import calibrate_dynamic
+from ftkin.calibration.fused_samples import FusedSamples
 from ftkin.calibration.imu_dynamic import calibrate_imu_dynamic
 from ftkin.calibration.imu_samples import ImuSamples
 from ftkin.calibration.information import SensorNoise
@@ -145,7 +146,7 @@ def calibrate(kind: str, static, moving, gain: float):
         return ftkin.calibrate(joints, estimate_mount="yaw")
     if kind == "IMU alone":
         return ftkin.calibrate(ImuSamples(static["a"], wrench, static["ids"]))
-    return ftkin.calibrate(joints.with_imu(static["a"]))
+    return ftkin.calibrate(FusedSamples.from_arrays(joints, static["a"]))
 
 
 @pytest.mark.parametrize("kind", list(KINDS))

@@ -8,7 +8,6 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import ftkin
-from ftkin import Samples
 from ftkin.calibration.imu_fit import calibrate_imu
 from ftkin.calibration.imu_options import ImuCalibrationOptions
 from ftkin.calibration.imu_samples import ImuSamples
@@ -69,7 +68,7 @@ def mujoco_static():
     accel = (1.0 + SCALE) * accel[ids] + BIAS + rng.normal(0.0, ACCEL_NOISE, (len(ids), 3))
     wrench = wrench[ids] + WRENCH_BIAS + rng.normal(0.0, 1.0, (len(ids), 6)) * NOISE
     truth = recorder.true_parameters()
-    return Samples.from_imu(accel, wrench, ids), truth
+    return ImuSamples.from_arrays(accel, wrench, ids), truth
 
 
 def test_recovers_mujoco_truth(mujoco_static):
@@ -177,8 +176,8 @@ def test_a_negated_accelerometer_is_named(rng):
 
 def test_units_g_and_ms2_give_the_same_fit(rng):
     accel, wrenches, ids = hand_built(Rotation.random(12, random_state=9).as_matrix(), rng)
-    in_si = ftkin.calibrate(Samples.from_imu(accel, wrenches, ids))
-    in_g = ftkin.calibrate(Samples.from_imu(accel / G, wrenches, ids, accel_unit="g"))
+    in_si = ftkin.calibrate(ImuSamples.from_arrays(accel, wrenches, ids))
+    in_g = ftkin.calibrate(ImuSamples.from_arrays(accel / G, wrenches, ids, accel_unit="g"))
     np.testing.assert_allclose(in_g.accel_bias, in_si.accel_bias, rtol=1e-6, atol=1e-9)
     np.testing.assert_allclose(in_g.tool_mass, in_si.tool_mass, rtol=1e-9)
 
@@ -195,17 +194,17 @@ def test_units_g_and_ms2_give_the_same_fit(rng):
 def test_wrong_units_are_refused(rng, factor, unit, message):
     accel, wrenches, ids = hand_built(Rotation.random(6, random_state=1).as_matrix(), rng)
     with pytest.raises(InvalidSamples, match=message):
-        Samples.from_imu(accel * factor, wrenches, ids, accel_unit=unit)
+        ImuSamples.from_arrays(accel * factor, wrenches, ids, accel_unit=unit)
 
 
 def test_bad_inputs(rng):
     accel, wrenches, ids = hand_built(Rotation.random(6, random_state=1).as_matrix(), rng)
     with pytest.raises(InvalidInput, match="unknown accelerometer unit"):
-        Samples.from_imu(accel, wrenches, ids, accel_unit="ft/s^2")
+        ImuSamples.from_arrays(accel, wrenches, ids, accel_unit="ft/s^2")
     with pytest.raises(InvalidSamples, match="expected one each"):
-        Samples.from_imu(accel[:-1], wrenches, ids)
+        ImuSamples.from_arrays(accel[:-1], wrenches, ids)
     with pytest.raises(InvalidSamples, match="°/s"):
-        Samples.from_imu(accel, wrenches, ids, angular_velocity=np.full((len(ids), 3), 90.0))
+        ImuSamples.from_arrays(accel, wrenches, ids, angular_velocity=np.full((len(ids), 3), 90.0))
     moved = accel.copy()
     moved[ids == 2] = moved[ids == 3][: np.sum(ids == 2)]  # pose 2 half of another pose's
     moved[np.flatnonzero(ids == 2)[:5]] = accel[np.flatnonzero(ids == 2)[:5]]

@@ -101,7 +101,7 @@ def fused(data, arm=None, **imu) -> FusedSamples:
     samples = Samples.from_joint_positions(
         arm or data["arm"], data["q"], data["wrench"], data["ids"]
     )
-    return samples.with_imu(data["accel"], **imu)
+    return FusedSamples.from_arrays(samples, data["accel"], **imu)
 
 
 def check_truth(result, data, sigmas=4.0):
@@ -276,8 +276,8 @@ def hand_built(rotations_bs, rng, *, mount=None, tilt=(0.0, 0.0), readings=40):
     given = np.asarray(rotations_bs)[ids] @ (
         np.eye(3) if mount is None else mount
     )  # the orientations a frame turned by R_Mᵀ gives
-    return Samples.from_rotations(given, np.concatenate(wrenches), ids).with_imu(
-        np.concatenate(accel)
+    return FusedSamples.from_arrays(
+        Samples.from_rotations(given, np.concatenate(wrenches), ids), np.concatenate(accel)
     )
 
 
@@ -329,8 +329,8 @@ def test_a_mount_the_poses_cannot_see_is_refused_or_left_unchecked(tilt_spin_arm
     np.testing.assert_allclose(z_axes[:, :2], np.tile(z_axes[0, :2], (len(q), 1)), atol=1e-12)
     physics = hand_built(arm.rotation_sensor_to_base(q), rng)
     ids = np.repeat(np.arange(len(q)), 40)
-    samples = Samples.from_joint_positions(arm, q[ids], physics.wrenches, ids).with_imu(
-        physics.specific_force
+    samples = FusedSamples.from_arrays(
+        Samples.from_joint_positions(arm, q[ids], physics.wrenches, ids), physics.specific_force
     )
     for rotation in (None, IMU_ROTATION):
         with pytest.raises(UnobservableParameters) as error:
@@ -358,12 +358,12 @@ def test_a_negated_accelerometer_or_a_reaction_wrench_is_named(mujoco_poses):
     data = mujoco_poses
     samples = Samples.from_joint_positions(data["arm"], data["q"], data["wrench"], data["ids"])
     with pytest.raises(SuspectConvention, match="most likely the accelerometer reports"):
-        ftkin.calibrate(samples.with_imu(-data["accel"]))
+        ftkin.calibrate(FusedSamples.from_arrays(samples, -data["accel"]))
     reaction = Samples.from_joint_positions(data["arm"], data["q"], -data["wrench"], data["ids"])
     with pytest.raises(SuspectConvention, match="most likely the wrench is the reaction") as error:
-        ftkin.calibrate(reaction.with_imu(data["accel"]))
+        ftkin.calibrate(FusedSamples.from_arrays(reaction, data["accel"]))
     assert error.value.sensor_sign == -1
-    result = ftkin.calibrate(reaction.with_imu(data["accel"]), sensor_sign=-1)
+    result = ftkin.calibrate(FusedSamples.from_arrays(reaction, data["accel"]), sensor_sign=-1)
     assert result.sensor_sign == -1 and result.tool_mass == pytest.approx(1.5, rel=5e-3)
 
 
@@ -392,12 +392,13 @@ def test_options_and_samples_are_checked(mujoco_poses):
     assert carried.estimate_mount == "yaw" and np.all(carried.imu.accel_noise == 0.02)
     base = Samples.from_joint_positions(data["arm"], data["q"], data["wrench"], data["ids"])
     with pytest.raises(InvalidSamples, match="accel_unit='g'"):
-        base.with_imu(data["accel"] / G)
+        FusedSamples.from_arrays(base, data["accel"] / G)
     assert np.allclose(
-        base.with_imu(data["accel"] / G, accel_unit="g").specific_force, data["accel"]
+        FusedSamples.from_arrays(base, data["accel"] / G, accel_unit="g").specific_force,
+        data["accel"],
     )
     with pytest.raises(InvalidSamples, match="one each"):
-        base.with_imu(data["accel"][:-1])
+        FusedSamples.from_arrays(base, data["accel"][:-1])
     with pytest.raises(InvalidInput, match="ftkin.Samples"):
         FusedSamples(samples.imu, data["accel"])
 

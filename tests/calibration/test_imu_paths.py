@@ -17,9 +17,11 @@ from scipy.spatial.transform import Rotation
 import ftkin
 from ftkin import Samples
 from ftkin.calibration.fused_problem import FusedStaticProblem
+from ftkin.calibration.fused_samples import FusedSamples
 from ftkin.calibration.imu_fit import covariance_at
 from ftkin.calibration.imu_problem import ImuStaticProblem
 from ftkin.calibration.imu_problem_base import NineChannelProblem
+from ftkin.calibration.imu_samples import ImuSamples
 from ftkin.cli import main
 from ftkin.exceptions import InvalidInput, SuspectConvention
 from ftkin.io.csv_table import write_csv
@@ -110,9 +112,9 @@ def test_every_shared_path_calibrates_through_the_api(case):
     pose_ids = ids if case.pose_column else None
     if case.orientation:
         samples = Samples.from_rotations(rotations, wrench, pose_ids)
-        samples = samples.with_imu(logged, accel_unit=case.unit)
+        samples = FusedSamples.from_arrays(samples, logged, accel_unit=case.unit)
     else:
-        samples = Samples.from_imu(logged, wrench, pose_ids, accel_unit=case.unit)
+        samples = ImuSamples.from_arrays(logged, wrench, pose_ids, accel_unit=case.unit)
     result = ftkin.calibrate(samples)
     assert result.method == ("fused" if case.orientation else "imu")
     check_truth(result.tool_mass, result.center_of_mass)
@@ -199,7 +201,7 @@ def test_too_many_poses_advise_what_each_door_takes(tmp_path, capsys):
     wrench = np.hstack([-MASS * up, np.cross(COM, -MASS * up)])
     accel = up @ IMU_ROTATION
     with pytest.raises(InvalidInput, match="pose_ids in Python") as caught:
-        ftkin.calibrate(Samples.from_imu(accel, wrench))
+        ftkin.calibrate(ImuSamples.from_arrays(accel, wrench))
     assert "ftkin.calibrate_dynamic" in str(caught.value)
     path = tmp_path / "rows.csv"
     write_csv(
@@ -254,7 +256,7 @@ def test_a_reaction_wrench_from_the_imu_alone_is_named_and_the_fix_works(tmp_pat
     refused, and the fix both doors are given (negate the wrench columns) calibrates."""
     _, ids, wrench, accel = readings(4)
     with pytest.raises(SuspectConvention) as caught:
-        ftkin.calibrate(Samples.from_imu(accel, -wrench, ids))
+        ftkin.calibrate(ImuSamples.from_arrays(accel, -wrench, ids))
     assert "negate the wrench (fx..mz)" in caught.value.fixes
     header = ["pose", "fx", "fy", "fz", "mx", "my", "mz", "ax", "ay", "az"]
     reaction = tmp_path / "reaction.csv"
@@ -278,7 +280,8 @@ def test_a_fused_calibration_of_a_reaction_sensor_compensates_with_the_imu():
 
     rotations, ids, wrench, accel = readings(4)
     calibration = ftkin.calibrate(
-        Samples.from_rotations(rotations, -wrench, ids).with_imu(accel), sensor_sign=-1
+        FusedSamples.from_arrays(Samples.from_rotations(rotations, -wrench, ids), accel),
+        sensor_sign=-1,
     )
     assert calibration.sensor_sign == -1
     compensator = ImuCompensator(calibration)

@@ -16,6 +16,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from ftkin import CalibrationOptions, Samples, SensorNoise, calibrate
+from ftkin.calibration.imu_samples import ImuSamples
 
 READINGS = 20
 FORCE_STD, TORQUE_STD = 0.05, 0.002
@@ -95,10 +96,10 @@ def test_an_imu_fit_that_does_not_fit_its_noise_is_said(rng):
     ids = np.repeat(np.arange(poses), readings)
     on_time = np.repeat(up, readings, 0) + rng.normal(0, 0.01, (count, 3))
     late = np.repeat(np.roll(up, 1, axis=0), readings, 0) + rng.normal(0, 0.01, (count, 3))
-    fitting = calibrate(Samples.from_imu(on_time, wrenches, ids))
+    fitting = calibrate(ImuSamples.from_arrays(on_time, wrenches, ids))
     assert not any("do not fit" in w for w in fitting.imu_warnings)
     assert fitting.tool_mass == pytest.approx(mass, rel=2e-3)
-    misfit = calibrate(Samples.from_imu(late, wrenches, ids))
+    misfit = calibrate(ImuSamples.from_arrays(late, wrenches, ids))
     assert any("do not fit the IMU model within their noise" in w for w in misfit.imu_warnings)
 
 

@@ -19,6 +19,7 @@ from ftkin.calibration.covariance import (
 from ftkin.calibration.dynamic_fit import ALL_INDICES, STATIC_INDICES, DynamicProblem
 from ftkin.calibration.dynamic_fit import theta_space as dynamic_theta_space
 from ftkin.calibration.fused_problem import FusedStaticProblem
+from ftkin.calibration.fused_samples import FusedSamples
 from ftkin.calibration.imu_dynamic import ImuDynamicProblem, ImuMotion
 from ftkin.calibration.imu_fit import calibrate_imu
 from ftkin.calibration.imu_problem import ImuStaticProblem
@@ -319,7 +320,7 @@ def _fused_fit(rng):
         _readings(TURNED_ABOUT_X, rng),
         pose_ids=np.repeat(np.arange(len(up)), 5),
     )
-    ftkin.calibrate(samples.with_imu(accel))
+    ftkin.calibrate(FusedSamples.from_arrays(samples, accel))
 
 
 def _imu(rng):

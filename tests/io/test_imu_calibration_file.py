@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 
 import ftkin
 from ftkin.calibration.imu_result import ImuCalibrationResult
+from ftkin.calibration.imu_samples import ImuSamples
 from ftkin.calibration.log_cholesky import parameters_from_body
 from ftkin.control.imu_compensation import ImuCompensator
 from ftkin.exceptions import CalibrationFileError
@@ -39,7 +40,7 @@ def readings(rotations_ws, rng, count=30):
 def test_static_file_holds_the_truth_and_loads_back(tmp_path, rng):
     accel, wrenches, ids = readings(Rotation.random(12, random_state=2).as_matrix(), rng)
     result = ftkin.calibrate(
-        ftkin.Samples.from_imu(accel, wrenches, ids), imu_position=[0.02, 0, 0.03]
+        ImuSamples.from_arrays(accel, wrenches, ids), imu_position=[0.02, 0, 0.03]
     )
     path = save_calibration(result, tmp_path / "imu.json")
     document = json.loads(path.read_text())
@@ -94,7 +95,7 @@ def test_dynamic_file_keeps_inertia_and_position(tmp_path):
 def test_a_broken_imu_entry_is_named(tmp_path, rng):
     accel, wrenches, ids = readings(Rotation.random(8, random_state=3).as_matrix(), rng, 5)
     path = save_calibration(
-        ftkin.calibrate(ftkin.Samples.from_imu(accel, wrenches, ids)), tmp_path / "c.json"
+        ftkin.calibrate(ImuSamples.from_arrays(accel, wrenches, ids)), tmp_path / "c.json"
     )
     document = json.loads(path.read_text())
     document["imu"]["imu_rotation"][0][0] = 2.0  # not a rotation

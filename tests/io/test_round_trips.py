@@ -43,7 +43,7 @@ def test_excitation_rates_are_read_as_the_recordings_rates(excitation, arm, trut
 
 def test_compensated_log_keeps_the_input_columns(tmp_path, arm, truth, rng):
     from ftkin import save_calibration
-    from ftkin.calibration.estimate import CalibrationResult
+    from ftkin.calibration.result import CalibrationResult
 
     q = arm.random_configurations(5, rng, margin=0.3)
     wrenches = truth.predict(arm.rotation_sensor_to_base(q))

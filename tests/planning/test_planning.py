@@ -13,7 +13,7 @@ import pinocchio as pin
 import pytest
 
 from ftkin import calibrate
-from ftkin.calibration.estimate import METHODS
+from ftkin.calibration.fit_options import METHODS
 from ftkin.calibration.information import SensorNoise
 from ftkin.cli import main
 from ftkin.exceptions import InvalidInput, UnobservableParameters

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ftkin.calibration import SensorModel
-from ftkin.calibration.estimate import calibrate
+from ftkin.calibration.fit_registry import calibrate
 from ftkin.calibration.information import SensorNoise
 from ftkin.exceptions import InvalidInput, RobotConnectionLost, SensorError
 from ftkin.kinematics.record import KinematicsRecord

@@ -12,7 +12,7 @@ import json
 import numpy as np
 import pytest
 
-from ftkin.calibration.estimate import calibrate
+from ftkin.calibration.fit_registry import calibrate
 from ftkin.cli import main
 from ftkin.io.calibration_file import load_calibration
 from ftkin.io.csv_table import read_table
