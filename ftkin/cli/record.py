@@ -118,7 +118,7 @@ def register(subparsers) -> None:
     add_declared(
         parser,
         Stillness,
-        skip=("poll_period", "timeout"),
+        skip=("poll_period",),
         group="when a pose is still (a loaded simulator needs a larger --stale-after)",
     )
     parser.set_defaults(func=run)

@@ -72,8 +72,9 @@ logger = logging.getLogger(__name__)
 MIN_POSE_ANGLE = np.deg2rad(5.0)
 """Two poses whose gravity directions in the sensor frame are closer than this [rad] are one."""
 CREEP = 10.0
-"""A joint speed above the stillness limit but below this many times it, for the stillness
-timeout, is an arm that creeps (a hold that does not settle), said once."""
+"""An arm whose joints are all slower than this many times the stillness limit has arrived at a
+pose: from then on it has ``Stillness.timeout`` to give one (else a joint that creeps, a hold
+that does not settle, or readings that are not stationary stop the recording, said why)."""
 
 
 @dataclass(frozen=True)
@@ -156,6 +157,7 @@ class PoseRecorder:
         self.sensor.read()  # the first sample says which columns the file has
         imu = self.tap.imu()
         self.has_gyro = imu is not None and len(imu) == 6
+        self.speeds = joints is not None or self.has_gyro  # else motion and noise look alike
         if joints is None and imu is None:
             raise InvalidInput(
                 "without a joint source the recorder needs a sensor with an IMU (read_sample() "
@@ -286,28 +288,31 @@ class PoseRecorder:
     def _next_pose(self, moved: bool) -> None:
         """Wait for the next still phase at a new pose and record it (a phase at a pose already
         recorded is refused, once, and the arm must move before the next try). ``moved``: look
-        for a still phase at once, without waiting for the arm to move first."""
+        for a still phase at once, without waiting for the arm to move first.
+
+        Waiting for the arm to be moved is not bounded (the operator's pace; Ctrl-C ends it).
+        An arm that has arrived (every joint slower than ``CREEP`` times the stillness limit)
+        but gives no pose is: one ``"unsettled"`` event after half ``stillness.timeout``, and
+        :class:`~ftkin.exceptions.RecordingInterrupted` at ``stillness.timeout``, naming the
+        pose and why (the joint speed or the readings' spread against their limits). Without
+        joints or a gyro there is no speed: a sensor carried about and a noisy one look alike,
+        and only the event is given.
+        """
         detector = StillnessDetector(self.readings, self.stillness)
         motion: deque = deque(maxlen=self.stillness.window)
         hinted = False
         start = time.monotonic()
-        creeping_since: float | None = None
+        arrived: float | None = None  # since when the arm, moved, is slower than CREEP × limit
+        fastest = 0.0  # the largest joint speed since then [rad/s]
         while True:
             now = time.monotonic()
             speed, q, stamp, wrench, new, imu = self._poll()
-            limit = self.stillness.joint_speed
-            if not limit < speed < CREEP * limit:
-                creeping_since = None
-            elif creeping_since is None:
-                creeping_since = now
-            elif moved and not hinted and now - creeping_since > self.stillness.timeout:
-                hinted = True
-                self.say(
-                    "unsettled",
-                    f"the arm has crept at about {speed:.3g} rad/s for {self.stillness.timeout:g} "
-                    f"s, above the limit of {limit:g}: it is not still; if this is as still as it "
-                    "gets, raise --still-joint-speed",
-                )
+            if not moved or speed >= CREEP * self.stillness.joint_speed:
+                arrived, fastest, hinted = None, 0.0, False
+            elif arrived is None:
+                arrived, fastest = now, speed
+            else:
+                fastest = max(fastest, speed)
             if not moved:
                 if new:
                     motion.append(wrench)
@@ -320,24 +325,42 @@ class PoseRecorder:
             elif detector.update(now, speed, q, stamp, wrench, new, imu):
                 if self._take(detector.readings(now - start)):
                     return
-                moved, hinted = False, False
+                moved, hinted, arrived = False, False, None
                 motion.clear()
                 detector.reset()
-            elif (
-                not hinted
-                and detector.still_since is not None
-                and now - detector.still_since > self.stillness.timeout
-            ):
+            elif arrived is not None and now - arrived > self.stillness.timeout and self.speeds:
+                raise RecordingInterrupted(
+                    f"pose {len(self.poses) + 1} did not settle within {self.stillness.timeout:g} "
+                    f"s (Stillness.timeout, --pose-timeout): {self._unsettled(detector, fastest)}",
+                    len(self.poses),
+                    self.n_poses,
+                    self.log.path,
+                )
+            elif not hinted and arrived is not None and now - arrived > self.stillness.timeout / 2:
                 hinted = True
-                spread = np.round(detector.spread(), 4).tolist()
                 self.say(
                     "unsettled",
-                    f"still for {self.stillness.timeout:g} s but the readings are not "
-                    f"stationary: spread {spread} (limits {self.stillness.force_std:g} N, "
-                    f"{self.stillness.torque_std:g} N·m); a noisier sensor needs larger "
-                    "--still-force-std/--still-torque-std",
+                    f"pose {len(self.poses) + 1} of {self.n_poses}: "
+                    f"{self._unsettled(detector, fastest)}",
                 )
             time.sleep(self.stillness.poll_period)
+
+    def _unsettled(self, detector: StillnessDetector, fastest: float) -> str:
+        """Why an arm that has arrived gives no pose: its joints creep, or it is still and the
+        readings are not stationary."""
+        still = self.stillness
+        if detector.still_since is None or detector.speed > still.joint_speed:
+            return (
+                f"the arm has crept at about {fastest:.3g} rad/s, above the limit of "
+                f"{still.joint_speed:g}: it is not still; if this is as still as it gets, raise "
+                "--still-joint-speed"
+            )
+        spread = np.round(detector.spread(), 4).tolist()
+        return (
+            f"the arm is still but the readings are not stationary: spread {spread} (limits "
+            f"{still.force_std:g} N, {still.torque_std:g} N·m); a noisier sensor needs larger "
+            "--still-force-std/--still-torque-std"
+        )
 
     def _take(self, readings: PoseReadings) -> bool:
         """Record ``readings`` as the next pose unless it repeats one; True when recorded."""
@@ -422,8 +445,13 @@ def record_poses(
         n_poses: Poses to record (with ``resume``: in all, those in the file included).
         readings_per_pose: Readings recorded at each pose.
         resume: Continue ``samples_path`` (same columns); False refuses an existing file.
-        stillness: When a phase is still (default :class:`Stillness`); its ``timeout`` is when
-            to say why a still arm gives no pose (a noisy sensor), not a limit.
+        stillness: When a phase is still (default :class:`Stillness`). Its ``timeout`` bounds
+            the wait at a pose the arm has arrived at (every joint slower than :data:`CREEP`
+            times ``joint_speed``) and that gives none: halfway an ``"unsettled"`` event says
+            why (a joint creeps, the readings are not stationary), at ``timeout`` the recording
+            stops (``RecordingInterrupted``, the poses kept; not for a sensor without a gyro
+            and no joints, whose motion and noise look alike). Waiting for the arm to be moved
+            is not bounded (Ctrl-C ends it).
         min_pose_angle: A pose whose gravity direction is within this of a recorded one is
             refused [rad].
         output: Save the calibration there (atomically); None: not saved.
@@ -446,7 +474,8 @@ def record_poses(
         poses so far allow it.
 
     Raises:
-        RecordingInterrupted: a sensor fault or a failed joint source (whole poses kept).
+        RecordingInterrupted: a sensor fault, a failed joint source, or a pose that did not
+            settle within ``stillness.timeout`` (whole poses kept).
         InvalidInput: bad arguments, an existing file without ``resume``, or one whose columns
             are not this recording's.
     """

@@ -1,5 +1,8 @@
-"""An arm moved by someone else, for ``ftkin record``'s tests: poses held and left on a wall-clock
-schedule, with a sensor (and its IMU) that reads a known tool at the orientation of the moment.
+"""An arm moved by someone else, for ``ftkin record``'s tests: poses held and left on a schedule
+driven by the reads (each read of the sensor is the next sample of a 1 kHz stream, and the
+motion advances by one sample period with it), with a sensor (and its IMU) that reads a known
+tool at the orientation of the moment. A busy machine that pauses the test sees the same
+sequence of readings as an idle one: the motion does not run ahead while nobody reads.
 
 The readings are written from first principles here, not with ftkin's model: gravity
 ``[0, 0, −g]`` in the base; the tool's weight on the sensor ``w = −m g R_BSᵀ e_z``; the reading
@@ -11,7 +14,6 @@ what tells motion apart is the joint speed, the gyro and the wrench changing.
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
@@ -57,12 +59,18 @@ def spread_rotations(count: int, seed: int = 0) -> np.ndarray:
 
 class Schedule:
     """Pose ``k`` held for ``hold`` s, then ``move`` s of motion to pose ``k + 1``; the last one
-    is held for ever. ``at(t)`` gives ``(k, s)``: the segment and its fraction (0 when held)."""
+    is held for ever. ``at(t)`` gives ``(k, s)``: the segment and its fraction (0 when held).
+
+    Its clock is the sensor's: :meth:`advance` (one read of the sensor) moves it on by one
+    sample period ``1 / RATE``; the wall clock plays no part. ``start`` is the host's clock at
+    construction, the origin of the samples' stamps (as ftkin's adapters stamp on the host).
+    """
 
     def __init__(self, count: int, hold: float, move: float, order=None):
         self.order = list(range(count)) if order is None else list(order)
         self.hold, self.move = float(hold), float(move)
         self.start = time.monotonic()
+        self.reads = 0  # samples produced so far
 
     def at(self, t: float) -> tuple[int, int, float]:
         """``(from pose, to pose, fraction [0, 1))`` at ``t`` [s] since the start."""
@@ -74,15 +82,22 @@ class Schedule:
         fraction = 0.0 if phase < self.hold else (phase - self.hold) / self.move
         return self.order[k], self.order[k + 1], fraction
 
+    def advance(self) -> float:
+        """One sample later: the new time since the start [s]."""
+        self.reads += 1
+        return self.elapsed()
+
     def elapsed(self) -> float:
-        return time.monotonic() - self.start
+        """Time since the start [s]: the samples produced, one sample period each."""
+        return self.reads / RATE
 
 
 class ScriptedArm:
     """A joint source moved on a :class:`Schedule` through joint poses (linear in joint space).
 
     ``lost_after``: ``joint_state`` raises :class:`RobotConnectionLost` once that many seconds
-    have passed (a controller gone).
+    have passed on the schedule's clock (a controller gone). The state is that of the sensor's
+    last sample (the clock moves with the sensor's reads).
     """
 
     def __init__(self, poses, schedule: Schedule, lost_after: float | None = None):
@@ -107,7 +122,8 @@ class ScriptedSensor:
         orientation: ``f(t) -> (R_BS (3, 3), ω (3,) [rad/s, sensor frame])`` at ``t`` [s].
         schedule: The motion's schedule (its clock).
         imu: Add the accelerometer, the gyro and a temperature.
-        fault_after: From this many seconds on, every read raises (a sensor gone).
+        fault_after: From this many seconds on (the schedule's clock: samples read), every read
+            raises (a sensor gone).
         seed: Seed of the noise.
         noise: ``(6,)`` standard deviation of the wrench noise [N, N·m].
     """
@@ -121,13 +137,11 @@ class ScriptedSensor:
             self.read_sample = self._read_sample
 
     def _sample(self) -> SensorSample:
-        now = time.monotonic()  # stamped on the host's clock, as ftkin's adapters do
-        if self.fault_after is not None and now - self.schedule.start > self.fault_after:
+        t = self.schedule.advance()  # each read is the stream's next sample: the motion moves on
+        if self.fault_after is not None and t > self.fault_after:
             raise OSError("the scripted sensor stopped answering")
-        stamp = math.floor(now * RATE) / RATE
-        if self.samples and self.samples[-1].t == stamp:
-            return self.samples[-1]
-        rotation, omega = self.orientation(stamp - self.schedule.start)
+        stamp = self.schedule.start + t
+        rotation, omega = self.orientation(t)
         wrench = reading(rotation) + self.noise * self.rng.standard_normal(6)
         up_in_sensor = rotation.T @ np.array([0.0, 0.0, G])
         accel = IMU_ROTATION.T @ up_in_sensor + ACCEL_BIAS

@@ -1,7 +1,8 @@
 """``ftkin record``: calibration data from an arm ftkin does not drive.
 
-The arm is moved by the test, never by ftkin: a scripted arm and sensor on a wall-clock schedule
-(:mod:`tests.robot.record_fakes`, readings written from first principles), and franky-sim's FR3
+The arm is moved by the test, never by ftkin: a scripted arm and sensor on a schedule driven by
+the sensor's reads (:mod:`tests.robot.record_fakes`, readings written from first principles: a
+busy machine sees the same readings as an idle one), and franky-sim's FR3
 moved through planned poses by a thread of the test while the recorder reads the same robot
 (franky-sim serves one client at a time: a second ``franky.Robot`` blocks). The recorder finds
 the still phases itself; the tolerances on franky-sim are those of ``robot calibrate``'s
@@ -33,6 +34,7 @@ from ftkin.robot.stream_log import log_stream
 from .record_fakes import (
     ACCEL_BIAS,
     IMU_ROTATION,
+    RATE,
     TOOL,
     Schedule,
     ScriptedArm,
@@ -45,7 +47,9 @@ from .record_fakes import (
 ROOT = Path(__file__).resolve().parents[2]
 FTKIN = [sys.executable, "-m", "ftkin.cli"]
 QUICK = Stillness(settle_time=0.05, window=10, stale_after=0.5)
-"""Stillness for the scripted arm (1 kHz readings, poses held 0.3 s: a pose needs about 0.1 s)."""
+"""Stillness for the scripted arm (1 kHz readings, poses held 0.3 s: a pose needs at most 0.05 s
+of wall clock, hence at most 50 reads as each poll sleeps 1 ms, plus the window and the readings,
+well within the 300 reads of a hold however busy the machine)."""
 HOLD, MOVE = 0.3, 0.15
 """The scripted arm's schedule [s]: each pose held, then the move to the next."""
 PLAN = {"joint_ranges": {"fr3_joint1": (-0.8, 0.8)}}
@@ -205,7 +209,6 @@ def test_a_fault_stops_the_recording_with_whole_poses(tmp_path, what):
     sensor = ScriptedSensor(
         joint_path(arm, joints), schedule, fault_after=lost if what == "sensor" else None
     )
-    started = time.monotonic()
     with pytest.raises(RecordingInterrupted) as caught:
         record_poses(
             sensor,
@@ -216,7 +219,9 @@ def test_a_fault_stops_the_recording_with_whole_poses(tmp_path, what):
             readings_per_pose=20,
             stillness=QUICK,
         )
-    assert time.monotonic() - started < lost + 1.0  # at once, not after a timeout
+    # at once, not after a timeout: the poll that met the fault was the last (the clock is the
+    # samples read, one per poll: the first sample after ``lost`` is the last one read)
+    assert lost < schedule.elapsed() <= lost + 1.0 / RATE + 1e-12
     error = caught.value
     assert error.poses_recorded == 2 and error.poses_total == 4
     assert ("read failed" in error.reason or "read_failed" in error.reason) == (what == "sensor")
@@ -568,12 +573,30 @@ def test_joint_sources_and_the_samples_log_columns(tmp_path):
     np.testing.assert_allclose(again.recorded_extra()[0], [0.0, 0.0, 9.8], rtol=1e-15)
 
 
-def test_a_still_arm_whose_readings_never_settle_is_explained(tmp_path):
+def clocked(monkeypatch, schedule) -> None:
+    """The recorder's clock is the schedule's (the samples read), and its polls do not sleep:
+    the wall clock plays no part, so the bound on a pose is tested to the sample."""
+    from types import SimpleNamespace
+
+    import ftkin.robot.recorder
+
+    clock = SimpleNamespace(
+        monotonic=lambda: schedule.start + schedule.elapsed(), sleep=lambda s: None
+    )
+    monkeypatch.setattr(ftkin.robot.recorder, "time", clock)
+
+
+UNSETTLED = Stillness(settle_time=0.05, window=10, timeout=0.3, stale_after=0.5)
+
+
+def test_a_still_arm_whose_readings_never_settle_is_explained_then_stopped(tmp_path, monkeypatch):
     from .record_fakes import NOISE
 
     arm, joints, schedule = scripted_joints(joint_poses(3), hold=2.0)
+    clocked(monkeypatch, schedule)
     noisy = NOISE * 50.0  # 1 N: above --still-force-std
-    sensor = ScriptedSensor(joint_path(arm, joints), schedule, fault_after=0.8, noise=noisy)
+    # a backstop: the sensor fails at 1.5 s, where a recorder without a bound would end
+    sensor = ScriptedSensor(joint_path(arm, joints), schedule, noise=noisy, fault_after=1.5)
     events = []
     with pytest.raises(RecordingInterrupted) as caught:
         record_poses(
@@ -582,38 +605,124 @@ def test_a_still_arm_whose_readings_never_settle_is_explained(tmp_path):
             arm,
             samples_path=tmp_path / "s.csv",
             n_poses=3,
-            stillness=Stillness(settle_time=0.05, window=10, timeout=0.3, stale_after=0.5),
+            stillness=UNSETTLED,
             on_event=events.append,
         )
-    hints = [event.message for event in events if event.kind == "unsettled"]
-    assert len(hints) == 1 and "not stationary" in hints[0] and "--still-force-std" in hints[0]
-    assert caught.value.poses_recorded == 0
+    hints = [event for event in events if event.kind == "unsettled"]
+    assert len(hints) == 1 and "not stationary" in hints[0].message
+    assert hints[0].message.startswith("pose 1 of 3:") and "--still-force-std" in hints[0].message
+    error = caught.value
+    assert error.poses_recorded == 0 and "pose 1 did not settle within 0.3 s" in error.reason
+    assert "not stationary" in error.reason and "--still-force-std" in error.reason
+    # stopped at the bound: the first poll more than 0.3 s after the first (the arm stood
+    # still from the start; the clock is the samples read, one per poll, the first at 1 ms)
+    assert 0.301 < schedule.elapsed() <= 0.301 + 2.0 / RATE + 1e-12
 
 
-def test_an_arm_that_creeps_is_named(tmp_path):
-    poses = joint_poses(3)
-    arm, joints, schedule = scripted_joints(poses, hold=5.0)
+def test_without_joints_or_a_gyro_a_pose_that_does_not_settle_is_explained_only(
+    tmp_path, monkeypatch
+):
+    """No speed: a sensor carried about and a noisy one look alike, so the bound does not stop
+    the recording (the line is given); the sensor's fault at 1 s ends it here."""
+    from ftkin.sensors.sample import SensorSample
 
-    class Creeping:  # the hold drifts at 0.01 rad/s: twice the stillness limit, never still
-        def joint_state(self):
-            q, _ = joints.joint_state()
-            return q, np.full(7, 0.01)
+    from .record_fakes import NOISE
 
-    sensor = ScriptedSensor(joint_path(arm, joints), schedule, fault_after=0.8)
+    schedule = Schedule(3, 2.0, MOVE)
+    clocked(monkeypatch, schedule)
+    path = rotation_path(spread_rotations(3), schedule)
+    noisy = ScriptedSensor(path, schedule, imu=True, noise=NOISE * 50.0, fault_after=1.0)
+
+    class NoGyro:  # the accelerometer only
+        def read(self):
+            sample = self.read_sample()
+            return sample.t, sample.wrench
+
+        def read_sample(self):
+            sample = noisy.read_sample()
+            return SensorSample(sample.t, sample.wrench, sample.specific_force)
+
     events = []
-    with pytest.raises(RecordingInterrupted):
+    with pytest.raises(RecordingInterrupted) as caught:
+        record_poses(
+            NoGyro(),
+            None,
+            samples_path=tmp_path / "s.csv",
+            n_poses=3,
+            stillness=UNSETTLED,
+            on_event=events.append,
+        )
+    assert "read failed" in caught.value.reason and "did not settle" not in caught.value.reason
+    hints = [event.message for event in events if event.kind == "unsettled"]
+    assert len(hints) == 1 and "not stationary" in hints[0]
+
+
+class Creeping:
+    """The scripted arm, ``speed`` [rad/s] added to every joint's until ``until`` [s] on the
+    schedule's clock (a hold that drifts), the scripted speeds alone after."""
+
+    def __init__(self, joints, speed: float, until: float = np.inf):
+        self.joints, self.speed, self.until = joints, speed, until
+
+    def joint_state(self):
+        q, dq = self.joints.joint_state()
+        creeping = self.joints.schedule.elapsed() < self.until
+        return q, dq + (self.speed if creeping else 0.0)
+
+
+def test_an_arm_that_creeps_is_named_then_stopped(tmp_path, monkeypatch):
+    arm, joints, schedule = scripted_joints(joint_poses(3), hold=1.0)
+    clocked(monkeypatch, schedule)
+    sensor = ScriptedSensor(joint_path(arm, joints), schedule)
+    events = []
+    with pytest.raises(RecordingInterrupted) as caught:  # 0.01 rad/s: twice the limit
         record_poses(
             sensor,
-            Creeping(),
+            Creeping(joints, 0.01),
             arm,
             samples_path=tmp_path / "s.csv",
             n_poses=3,
-            stillness=Stillness(settle_time=0.05, window=10, timeout=0.3, stale_after=0.5),
+            stillness=UNSETTLED,
             on_event=events.append,
         )
     hints = [event.message for event in events if event.kind == "unsettled"]
     assert len(hints) == 1 and "crept at about 0.01 rad/s" in hints[0]
     assert "--still-joint-speed" in hints[0]
+    reason = caught.value.reason
+    assert "pose 1 did not settle within 0.3 s" in reason and "crept at about 0.01 rad/s" in reason
+    assert "ftkin record --resume" in str(caught.value) and poses_in(tmp_path / "s.csv") == 0
+    # the advice followed: a limit above the creep records the pose
+    followed = Stillness(joint_speed=0.02, settle_time=0.05, window=10, timeout=0.3)
+    recording = record_poses(
+        sensor,
+        Creeping(joints, 0.01),
+        arm,
+        samples_path=tmp_path / "t.csv",
+        n_poses=3,
+        readings_per_pose=10,
+        stillness=followed,
+    )
+    assert recording.poses_recorded == 3
+
+
+@pytest.mark.parametrize(("creep", "recorded"), [(0.40, True), (0.45, False)])
+def test_a_pose_that_settles_within_its_timeout_is_recorded(tmp_path, monkeypatch, creep, recorded):
+    """Both sides of the bound. The arm creeps until ``creep`` s, then is still: the detector
+    has it still from the first poll after (``creep``), a pose ``settle_time`` later plus the
+    19 samples after the first reading: at ``creep + 0.069`` s; the bound is 0.5 s after the
+    first poll (1 ms): recorded up to ``creep`` 0.432 s."""
+    arm, joints, schedule = scripted_joints(joint_poses(3), hold=1.0)
+    clocked(monkeypatch, schedule)
+    sensor = ScriptedSensor(joint_path(arm, joints), schedule)
+    stillness = Stillness(settle_time=0.05, window=10, timeout=0.5)
+    options = {"samples_path": tmp_path / "s.csv", "n_poses": 3, "readings_per_pose": 20}
+    if recorded:  # then the two other poses, held still
+        record_poses(sensor, Creeping(joints, 0.01, creep), arm, stillness=stillness, **options)
+        whole_poses(tmp_path / "s.csv", range(3), 20)
+    else:
+        with pytest.raises(RecordingInterrupted, match="pose 1 did not settle within 0.5 s"):
+            record_poses(sensor, Creeping(joints, 0.01, creep), arm, stillness=stillness, **options)
+        assert poses_in(tmp_path / "s.csv") == 0
 
 
 def test_cli_recording_fault_exits_2_naming_the_resume(tmp_path, capsys):
