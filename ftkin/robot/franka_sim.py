@@ -266,7 +266,18 @@ class FrankaSim:
         self.close()
 
     def start(self) -> None:
-        """Start the simulation process and wait until its server listens."""
+        """Start the simulation process and wait until its server listens.
+
+        Raises:
+            InvalidInput: it runs already (``with FrankaSim() as sim`` starts it): a second
+                process would write the same shared state, and :attr:`time`, the sensor and
+                :meth:`hand_position` would read the two simulations in turn.
+        """
+        if self.alive:
+            raise InvalidInput(
+                "this FrankaSim runs already (a `with FrankaSim() as sim:` block starts it): "
+                "start() it once, or close() it first"
+            )
         config = {
             "tool": None if self.tool is None else vars_of(self.tool),
             "held": None if self.held is None else vars_of(self.held),
