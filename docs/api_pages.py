@@ -33,7 +33,9 @@ STAGES = [
             "diagnostics",
             "observability",
             "summary",
+            "fit_options",
             "estimate",
+            "fit_registry",
         ],
     ),
     (
