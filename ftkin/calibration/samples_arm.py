@@ -13,13 +13,17 @@ compensate``, ``ftkin report`` and ``ftkin view`` alike.
 import logging
 from pathlib import Path
 
+from .result import CalibrationResult
+
 logger = logging.getLogger(__name__)
 
 
 def samples_arm_mismatch(samples, calibration) -> str | None:
     """What differs between the arm ``samples`` were read with and ``calibration``'s (URDF file
     name or sensor frame), as a warning text; None when they agree or one is not known."""
-    urdf, frame = getattr(calibration, "urdf", None), getattr(calibration, "sensor_frame", None)
+    if not isinstance(calibration, CalibrationResult):  # a model alone records no arm
+        return None
+    urdf, frame = calibration.urdf, calibration.sensor_frame
     if samples.urdf is None or urdf is None:
         return None
     if Path(samples.urdf).name == Path(urdf).name and samples.sensor_frame == frame:

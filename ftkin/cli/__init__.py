@@ -59,6 +59,7 @@ INPUT_OPTIONS = (
     "trajectory",
     "urdf",
     "prior",
+    "held_load",
 )
 """Namespace attributes that name files a subcommand reads."""
 

@@ -30,6 +30,7 @@ from .shared_options import (
     NO_CONVENTION_CHECK,
     NOISE_FORCE,
     NOISE_TORQUE,
+    TRACK_LOAD,
     noise_from_args,
 )
 
@@ -66,15 +67,7 @@ def register(subparsers) -> None:
             SG_WINDOW,
             ALLOW_OTHER_ARM,
             NO_CONVENTION_CHECK,
-            option(
-                "--track-load",
-                action="store_true",
-                help="identify the load in the hand row by row (ftkin.control.LoadTracker): "
-                "adds load_mass, load_mass_std [kg], load_com_x/y/z [m, sensor frame] and "
-                "load_event (empty, grasp, holding, release, contact, tool_change) and writes "
-                "the contact after tool and load; a 'gripper' column (1 closed, 0 open) is used "
-                "when the log has one",
-            ),
+            TRACK_LOAD,
             NOISE_FORCE,
             NOISE_TORQUE,
         ),

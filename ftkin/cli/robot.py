@@ -53,6 +53,7 @@ from .shared_options import (
     SPEED,
     STATE_TIMEOUT,
     TOOL_MASS,
+    TRACK_LOAD,
     as_required,
     noise_from_args,
     open_named_sensor,
@@ -180,12 +181,7 @@ def _guide_parser(commands) -> None:
     load = parser.add_argument_group("the load in the hand (docs/load.md)")
     add_options(
         load,
-        option(
-            "--track-load",
-            action="store_true",
-            help="identify a load the gripper takes and remove it from the contact as the hand "
-            "guides (grasp, release, contact printed as they happen)",
-        ),
+        TRACK_LOAD,
         option(
             "--send-load",
             action="store_true",

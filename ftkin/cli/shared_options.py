@@ -84,6 +84,15 @@ SEED = option(
 )
 GRAVITY = declared_option(CalibrationOptions, "g")
 METHOD = declared_option(CalibrationOptions, "method")
+TRACK_LOAD = option(
+    "--track-load",
+    action="store_true",
+    help="identify the load in the hand as it is taken and remove it with the tool "
+    "(ftkin.control.LoadTracker; docs/load.md): compensate adds load_mass, load_mass_std [kg], "
+    "load_com_x/y/z [m, sensor frame] and load_event (empty, grasp, holding, release, contact, "
+    "tool_change) per row and writes the contact after tool and load (a 'gripper' column, 1 "
+    "closed, 0 open, is used when the log has one); live, the events print as they happen",
+)
 NOISE_FORCE = option(
     "--noise-force",
     type=positive_float,

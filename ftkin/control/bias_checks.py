@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..calibration.drift import BiasDrift
+from ..calibration.result import CalibrationResult
 
 logger = logging.getLogger(__name__)
 
@@ -142,7 +143,7 @@ def rezero_warnings(calibration, previous_bias, bias) -> tuple[str, ...]:
             "the tool touching something, or the sensor tared in its driver since the "
             "calibration? Re-zero at a contact-free pose"
         )
-    drift = getattr(calibration, "drift", None)
+    drift = calibration.drift if isinstance(calibration, CalibrationResult) else None
     if drifting(drift):
         start, end = recording_span(drift)
         texts.append(

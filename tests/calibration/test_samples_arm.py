@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import logging
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -31,14 +32,25 @@ LOGGER = "ftkin.calibration.samples_arm"
 
 
 def test_the_urdf_file_name_and_the_sensor_frame_decide():
-    calibration = SimpleNamespace(urdf="/a/arm.urdf", sensor_frame="ft_sensor")
+    rng = np.random.default_rng(3)
+    made = calibrate(
+        SimulatedSensor(paper_like_truth(), SensorNoise.paper()).samples(
+            Arm.default().rotation_sensor_to_base(
+                Arm.default().random_configurations(8, rng, margin=0.3)
+            ),
+            rng,
+            3,
+        )
+    )
+    calibration = replace(made, urdf="/a/arm.urdf", sensor_frame="ft_sensor")
 
     def read_with(urdf, frame="ft_sensor"):
         return SimpleNamespace(urdf=urdf, sensor_frame=frame)
 
     assert samples_arm_mismatch(read_with("/elsewhere/arm.urdf"), calibration) is None  # a copy
     assert samples_arm_mismatch(read_with(None), calibration) is None  # orientations: not known
-    assert samples_arm_mismatch(read_with("/a/arm.urdf"), SimpleNamespace()) is None
+    assert samples_arm_mismatch(read_with("/a/arm.urdf"), made) is None  # records no arm
+    assert samples_arm_mismatch(read_with("/a/arm.urdf"), paper_like_truth()) is None  # a model
     assert samples_arm_mismatch(read_with("/a/other.urdf"), calibration) == (
         "the calibration was made with /a/arm.urdf (sensor frame ft_sensor) but these samples "
         "were read with /a/other.urdf (sensor frame ft_sensor)"

@@ -124,7 +124,7 @@ def test_file_round_trip_and_old_files(recorded, tmp_path):
     )
 
 
-def test_dynamic_calibration_of_a_still_recording_at_one_orientation_is_refused(tmp_path, arm, capsys):
+def test_a_still_recording_at_one_orientation_is_refused(tmp_path, arm, capsys):
     recorder = mujoco_recording.MujocoRecorder(joint_names=arm.joint_names, tool=TOOL)
     q = np.tile([0.1, -0.2, 0.3, 0.2, -0.5, 0.4], (200, 1))
     log = tmp_path / "still.csv"

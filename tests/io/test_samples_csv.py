@@ -297,7 +297,9 @@ def test_non_integer_pose_id(tmp_path):
 
 def test_non_unit_quaternion(tmp_path):
     text = "qw,qx,qy,qz,fx,fy,fz,mx,my,mz\n1,0,0,0,1,2,3,4,5,6\n0.5,0.5,0,0,1,2,3,4,5,6\n"
-    _assert_error(tmp_path, text, r"quaternion \[qw, qx, qy, qz\] #1 has norm 0.70")
+    _assert_error(
+        tmp_path, text, r"line 3: quaternion \[qw, qx, qy, qz\] has norm 0.707107; expected a unit"
+    )
 
 
 def test_missing_column_points_at_the_header_line(tmp_path):
