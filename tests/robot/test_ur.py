@@ -427,9 +427,13 @@ def test_cli_ctrl_c_ends_cleanly_with_130(tmp_path, controller, calibrated):
     calib = calibrated[1]
     log = tmp_path / "live.csv"
     process = _ftkin("compensate", calib, "--ur", controller.host, "--live", "--log", str(log))
-    deadline = time.monotonic() + 20.0
-    while _lines(log) < 300 and time.monotonic() < deadline:
-        time.sleep(0.05)  # until it runs (the log is flushed with every batch of packages)
+    # until it runs (the log is flushed with every batch of packages): a Ctrl-C before the command
+    # has started is Python's, not ftkin's, so the signal waits for the log however slow the
+    # machine; the deadline only keeps a broken run from hanging
+    deadline = time.monotonic() + 120.0
+    while _lines(log) < 300 and time.monotonic() < deadline and process.poll() is None:
+        time.sleep(0.05)
+    assert _lines(log) >= 300, f"the live run logged {_lines(log)} lines: {process.poll()}"
     process.send_signal(signal.SIGINT)
     out, err = process.communicate(timeout=20)
     assert process.returncode == 130, err
