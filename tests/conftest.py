@@ -2,11 +2,20 @@
 
 from __future__ import annotations
 
+import signal
+
 import numpy as np
 import pytest
 
 from ftkin import Arm, SensorModel
 from ftkin.sim.sensor import paper_like_truth
+
+# A command started in the background of a non-interactive shell (`make test &`, a CI step run
+# that way) inherits SIGINT ignored, and so does every process it starts: the Ctrl-C tests (a
+# session interrupted, `ftkin ... ` exiting 130) would then test nothing but the shell. The suite
+# restores Python's own handler, so its child processes start with Ctrl-C as a user has it.
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(scope="session")
