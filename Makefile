@@ -28,7 +28,7 @@ test: $(STAMP)
 	$(MAKE) lint
 	$(MAKE) docs
 	$(PY) benchmarks/fuzz_readers.py --seconds 20
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q --durations=25
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff format --check ftkin tests benchmarks docs scripts conftest.py
