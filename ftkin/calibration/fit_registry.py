@@ -95,18 +95,11 @@ def calibrate(samples, options=None, **keywords) -> CalibrationResult:
         :class:`~ftkin.calibration.fused_result.FusedCalibrationResult` for the IMU's fits).
 
     Raises:
-        InvalidInput: samples of no registered type; an option or a combination of options
-            the fit refuses, or options the samples do not support.
-        UnobservableParameters: the poses cannot determine the parameters
-            (fewer than three, orientations alike, gravity along one sensor
-            direction); the error names them.
-        ConventionMistake: orientations that fit only when read in another convention (Euler
-            angles in radians, a quaternion x,y,z,w, ``R_SB`` for ``R_BS``), with the fix;
-            ``convention_check=False`` fits them as given.
-        SuspectConvention: the data fit with an axis reversed, or the tool
-            weight points more than 90° from the expected gravity direction, or more than 15°
-            from a declared one without ``allow_tilt``.
-        UnexplainedReadings: the fit explains less than half of the readings' variation
-            across poses (:mod:`ftkin.calibration.explained`): mislabelled columns.
+        InvalidInput: samples of no registered type.
+        FtkinError: what the chosen fit raises, listed in its own docstring
+            (:func:`~ftkin.calibration.estimate.calibrate_static`,
+            :func:`~ftkin.calibration.imu_fit.calibrate_imu`,
+            :func:`~ftkin.calibration.fused_fit.calibrate_fused`): one list for each fit, kept
+            where the fit is.
     """
     return fit_for(samples)(samples, options, **keywords)
